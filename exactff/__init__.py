@@ -1,0 +1,16 @@
+"""exactff: exact form factors for scenes of planar polygons (continuous PPBH).
+
+The flat API re-exports each module's ``__all__``; see ``docs/reference``.
+"""
+
+from . import scenes
+from .geometry import *  # noqa: F401,F403
+from .integrate import *  # noqa: F401,F403
+from .io import *  # noqa: F401,F403
+from .scene import *  # noqa: F401,F403
+from . import geometry as _geometry, integrate as _integrate, io as _io, scene as _scene
+
+__version__ = "0.1.0"
+
+__all__ = ["scenes", "__version__"] + _scene.__all__ + _geometry.__all__ + \
+    _integrate.__all__ + _io.__all__

@@ -1,0 +1,37 @@
+"""Every tolerance exactff uses: named, relative, and with its reason."""
+
+import numpy as np
+
+__all__ = [
+    "EPS",
+    "PLANARITY_RTOL",
+    "PLANARITY_ULPS",
+    "DEGENERATE_AREA_RTOL",
+    "PLANE_SIDE_ULPS",
+    "ROUNDING_OVERSHOOT",
+]
+
+#: Unit roundoff of IEEE double precision, 2**-53.
+EPS = float(np.finfo(float).eps) / 2
+
+#: A polygon is planar when no vertex lies farther than this fraction of its diameter
+#: from its Newell plane (the same figure as ``shared/scenes/check_scene.py``).
+PLANARITY_RTOL = 1e-6
+
+#: On top of PLANARITY_RTOL, a vertex may deviate by this many ulps of the largest
+#: coordinate magnitude: a tiny polygon far from the origin is planar up to the rounding
+#: of its own coordinates.
+PLANARITY_ULPS = 64.0
+
+#: A polygon whose area is below this fraction of its squared diameter is degenerate
+#: (collinear up to rounding): its area vector is then pure rounding noise.
+DEGENERATE_AREA_RTOL = 256 * EPS
+
+#: The receiving point lies in a polygon's plane when its signed distance is below this
+#: many ulps of the coordinates' magnitude: the side cannot be decided from float input,
+#: and the polygon is seen edge-on (form factor 0).
+PLANE_SIDE_ULPS = 16.0
+
+#: A value that rounding pushed below 0 (or a sine or cosine above 1) by at most this
+#: many ulps of its terms is clamped; beyond it, an AssertionError flags a bug.
+ROUNDING_OVERSHOOT = 1e3

@@ -1,0 +1,126 @@
+"""Planar-polygon geometry: Newell area vectors, normals, centroids and receiver frames."""
+
+import math
+
+import numpy as np
+
+__all__ = [
+    "area_vector",
+    "polygon_area",
+    "unit_normal",
+    "polygon_centroid",
+    "polygon_diameter",
+    "receiver_frame",
+]
+
+
+def area_vector(polygon):
+    """Newell area vector of a closed polygon, computed relative to its first vertex.
+
+    Parameters
+    ----------
+    polygon : array_like of shape (K, 3)
+        Vertices, counter-clockwise seen from the front.
+
+    Returns
+    -------
+    ndarray of shape (3,)
+        Half the sum of ``(v_i - v_0) x (v_{i+1} - v_0)``: its length is the area of a
+        planar polygon and its direction the front (right-hand) normal. Working relative
+        to a vertex keeps the result accurate far from the origin.
+
+    Examples
+    --------
+    >>> area_vector([[0, 0, 0], [2, 0, 0], [2, 1, 0], [0, 1, 0]]).tolist()
+    [0.0, 0.0, 2.0]
+    """
+    P = np.asarray(polygon, dtype=float)
+    Q = P - P[0]
+    return 0.5 * np.cross(Q, np.roll(Q, -1, axis=0)).sum(axis=0)
+
+
+def polygon_area(polygon):
+    """Area of a planar polygon, the length of its Newell area vector.
+
+    Examples
+    --------
+    >>> polygon_area([[0, 0, 5], [3, 0, 5], [0, 4, 5]])
+    6.0
+    """
+    return float(np.linalg.norm(area_vector(polygon)))
+
+
+def unit_normal(polygon):
+    """Unit front normal (right-hand rule, Newell's normal for K > 3).
+
+    Examples
+    --------
+    >>> unit_normal([[0, 0, 0], [0, 1, 0], [0, 0, 1]]).tolist()
+    [1.0, 0.0, 0.0]
+    """
+    A = area_vector(polygon)
+    return A / np.linalg.norm(A)
+
+
+def polygon_centroid(polygon):
+    """Area centroid of a planar polygon (triangle fan from the first vertex).
+
+    For a non-convex polygon the centroid may lie outside the polygon.
+
+    Examples
+    --------
+    >>> polygon_centroid([[0, 0, 0], [2, 0, 0], [2, 2, 0], [0, 2, 0]]).tolist()
+    [1.0, 1.0, 0.0]
+    """
+    P = np.asarray(polygon, dtype=float)
+    Q = P - P[0]
+    N = area_vector(P)
+    # fan triangles (0, i, i+1): signed area along N, centroid (q_i + q_{i+1}) / 3
+    w = np.cross(Q[1:-1], Q[2:]) @ N
+    c = ((Q[1:-1] + Q[2:]) / 3.0 * w[:, None]).sum(axis=0) / w.sum()
+    return P[0] + c
+
+
+def polygon_diameter(polygon):
+    """Largest distance between two vertices.
+
+    Examples
+    --------
+    >>> polygon_diameter([[0, 0, 0], [3, 0, 0], [3, 4, 0]])
+    5.0
+    """
+    P = np.asarray(polygon, dtype=float)
+    D = P[:, None, :] - P[None, :, :]
+    return float(np.sqrt((D * D).sum(axis=-1)).max())
+
+
+def receiver_frame(normal):
+    """Orthonormal frame ``(t1, t2, n)`` with ``n`` the unit receiver normal.
+
+    The rows of the result map world vectors into the local frame of a receiver:
+    ``local = R @ v`` has z along ``n``. Uses the branch-free construction of
+    Duff et al., "Building an Orthonormal Basis, Revisited", JCGT 6(1), 2017.
+
+    Parameters
+    ----------
+    normal : array_like of shape (3,)
+        Unit normal.
+
+    Returns
+    -------
+    ndarray of shape (3, 3)
+        Rows t1, t2, n; a rotation (determinant +1).
+
+    Examples
+    --------
+    >>> R = receiver_frame([0.0, 0.0, 1.0])
+    >>> bool(np.allclose(R, np.eye(3)))
+    True
+    """
+    x, y, z = (float(c) for c in normal)
+    sign = math.copysign(1.0, z)
+    a = -1.0 / (sign + z)
+    b = x * y * a
+    t1 = (1.0 + sign * x * x * a, sign * b, -sign * x)
+    t2 = (b, sign + y * y * a, -y)
+    return np.array([t1, t2, (x, y, z)])

@@ -1,0 +1,521 @@
+"""Exact unoccluded point-to-polygon form factors: the sector (Lambert) form and Eq. 3.
+
+Every function here works in the local frame of the receiving point ``p``: origin at
+``p``, z along the unit normal ``n``. A polygon is first clipped to the upper half-space
+(horizon clipping); each remaining edge ``a -> b`` projects onto the hemisphere as a
+great-circle arc, whose orthographic image on the base disk is an ellipse arc. The form
+factor is the area of the image of the polygon divided by pi.
+
+Two exact evaluations of that area are provided:
+
+* the **sector form** (Lambert's contour formula, DESIGN 2.1)
+  ``F = (1 / 2 pi) sum_k theta_k (m_k . n)`` with ``m_k = (a x b) / |a x b|`` and
+  ``theta_k = atan2(|a x b|, a . b)``; it needs no special cases and is the hot path;
+* the paper's **Eq. 3, corrected**, integrated span by span between the x-extremes of
+  each arc (monotone-span splitting), in :func:`eq3_form_factor`.
+
+See ``docs/explanation/conventions.md`` for the orientation conventions.
+"""
+
+import math
+
+import numpy as np
+
+from . import _tolerances as tol
+from .geometry import receiver_frame
+
+__all__ = [
+    "point_polygon_form_factor",
+    "point_polygon_form_factors",
+    "sector_form_factor",
+    "eq3_form_factor",
+    "eq3_edge_integral",
+    "sector_edge_terms",
+]
+
+TWO_PI = 2.0 * math.pi
+
+
+# ---------------------------------------------------------------------------------------
+# argument checks shared by every entry point
+# ---------------------------------------------------------------------------------------
+def as_point(point, name="point"):
+    """Return ``point`` as a finite float array of shape (..., 3), or raise ValueError."""
+    p = np.asarray(point, dtype=float)
+    if p.shape[-1:] != (3,):
+        raise ValueError(f"{name} must have shape (..., 3), got shape {p.shape}")
+    if not np.all(np.isfinite(p)):
+        raise ValueError(f"{name} must be finite, got {point!r}")
+    return p
+
+
+def as_normal(normal, name="normal"):
+    """Return ``normal`` scaled to unit length, shape (..., 3), or raise ValueError.
+
+    Any finite non-zero vector is accepted and normalised.
+    """
+    n = as_point(normal, name)
+    length = np.linalg.norm(n, axis=-1, keepdims=True)
+    if np.any(length == 0) or not np.all(np.isfinite(length)):
+        raise ValueError(f"{name} must be a non-zero finite vector, got {normal!r}")
+    return n / length
+
+
+# ---------------------------------------------------------------------------------------
+# sector (Lambert) form, vectorised over edges
+# ---------------------------------------------------------------------------------------
+def sector_edge_terms(a, b):
+    """Sector-form edge terms ``theta (m . z)`` for arcs ``a -> b`` in the local frame.
+
+    Parameters
+    ----------
+    a, b : ndarray of shape (E, 3)
+        Edge end points relative to the receiving point, in its local frame (z along
+        the normal). Only the directions matter.
+
+    Returns
+    -------
+    ndarray of shape (E,)
+        ``atan2(|a x b|, a . b) * (a x b)_z / |a x b|``; twice the signed area (on the
+        base disk) between the origin and the image of the arc. 0 where ``a x b = 0``.
+
+    Examples
+    --------
+    A quarter of the horizon, from x to y, bounds a quarter disk of area pi / 4:
+
+    >>> float(sector_edge_terms(np.array([[1.0, 0, 0]]), np.array([[0, 1.0, 0]]))[0]) / 2
+    0.7853981633974483
+    """
+    m = np.cross(a, b)
+    s = np.sqrt(np.einsum("ij,ij->i", m, m))
+    theta = np.arctan2(s, np.einsum("ij,ij->i", a, b))
+    out = np.zeros(len(s))
+    ok = s > 0
+    out[ok] = theta[ok] * m[ok, 2] / s[ok]
+    return out
+
+
+def _clipped_sector_sums(V, nxt, owner, foot, m):
+    """Sum of sector terms of each horizon-clipped polygon.
+
+    V : (E, 3) vertices in the local frame; nxt : (E,) index of the next vertex of the
+    same polygon; owner : (E,) polygon id in [0, m); foot : (m, 2) unit direction from the
+    origin towards the line where each polygon's plane meets z = 0.
+    """
+    a = V
+    b = V[nxt]
+    za, zb = a[:, 2], b[:, 2]
+    above_a, above_b = za > 0, zb > 0
+    cross = above_a != above_b
+    # horizon crossing of the edge (z set to exactly 0)
+    t = za[cross] / (za[cross] - zb[cross])
+    X = a[cross] + t[:, None] * (b[cross] - a[cross])
+    X[:, 2] = 0.0
+    a2 = a.copy()
+    b2 = b.copy()
+    ci = np.flatnonzero(cross)
+    enter = ~above_a[cross]
+    a2[ci[enter]] = X[enter]
+    b2[ci[~enter]] = X[~enter]
+    keep = above_a | above_b
+    terms = np.zeros(len(a))
+    terms[keep] = sector_edge_terms(a2[keep], b2[keep])
+    # horizon arcs: each runs from an exit point to the next entry point along the line
+    # where the polygon's plane meets z = 0; its term is the signed angle between them,
+    # phi(entry) - phi(exit), with phi measured from the foot direction (no wrap-around)
+    f = foot[owner[ci]]
+    phi = np.arctan2(f[:, 0] * X[:, 1] - f[:, 1] * X[:, 0], f[:, 0] * X[:, 0] + f[:, 1] * X[:, 1])
+    terms[ci] += np.where(enter, phi, -phi)
+    sums = np.bincount(owner, weights=terms, minlength=m)
+    mags = np.bincount(owner, weights=np.abs(terms), minlength=m)
+    return sums, mags
+
+
+def _finish(S, mags, d0, one_sided):
+    """Form factors from signed sector sums ``S`` (front-facing polygons have S < 0)."""
+    F = np.sign(d0) * S / TWO_PI
+    if one_sided:
+        F[d0 >= 0] = 0.0
+    # rounding can leave a value a few ulps of its terms below 0, never more
+    floor = -tol.ROUNDING_OVERSHOOT * tol.EPS * (mags + 1e-300)
+    assert np.all(F >= floor), "negative form factor beyond rounding"
+    return np.maximum(F, 0.0)
+
+
+class _Polygons:
+    """Flat (ragged) polygon arrays of a scene, shared by the vectorised kernels."""
+
+    __slots__ = ("V", "nxt", "owner", "normals", "centroids", "counts", "offsets")
+
+    def __init__(self, scene):
+        self.V = scene.vertices
+        self.offsets = scene.offsets
+        self.counts = np.diff(scene.offsets)
+        self.owner = np.repeat(np.arange(len(scene)), self.counts)
+        nxt = np.arange(len(self.V)) + 1
+        nxt[scene.offsets[1:] - 1] = scene.offsets[:-1]
+        self.nxt = nxt
+        self.normals = scene.normals
+        self.centroids = scene.centroids
+
+    @classmethod
+    def of(cls, scene):
+        cache = scene._cache
+        if "flat" not in cache:
+            cache["flat"] = cls(scene)
+        return cache["flat"]
+
+
+def plane_distances(flat, p):
+    """Signed distances of ``p`` from each polygon's plane (> 0: in front), and the
+    tolerance below which the side is undecidable from float input."""
+    rel = flat.centroids - p
+    d = -np.einsum("ij,ij->i", flat.normals, rel)
+    scale = np.abs(p).max() + np.abs(flat.centroids).max(axis=1) + np.abs(rel).max(axis=1)
+    return d, tol.PLANE_SIDE_ULPS * tol.EPS * scale
+
+
+def unoccluded_row(flat, p, n, *, one_sided=True, subset=None):
+    """Unoccluded form factors from ``p`` (normal ``n``) to every polygon of ``flat``.
+
+    The hot path: culls polygons seen edge-on, facing away (one-sided) or wholly below
+    the horizon, then evaluates the sector form over all remaining edges at once.
+    ``subset`` restricts the work to a boolean mask of polygons. Returns (N,) values.
+    """
+    N = len(flat.normals)
+    d, dtol = plane_distances(flat, p)
+    live = (d > dtol) if one_sided else (np.abs(d) > dtol)
+    if subset is not None:
+        live &= subset
+    F = np.zeros(N)
+    if not live.any():
+        return F
+    R = receiver_frame(n)
+    vmask = live[flat.owner]
+    idx = np.flatnonzero(vmask)
+    newpos = np.cumsum(vmask) - 1
+    V = (flat.V[idx] - p) @ R.T
+    owner_all = flat.owner[idx]
+    # wholly below the horizon: nothing to integrate
+    zmax = np.full(N, -np.inf)
+    np.maximum.at(zmax, owner_all, V[:, 2])
+    live &= zmax > 0
+    if not live.any():
+        return F
+    keep_v = live[owner_all]
+    if not keep_v.all():
+        sel = np.flatnonzero(keep_v)
+        newpos2 = np.cumsum(keep_v) - 1
+        nxt = newpos2[newpos[flat.nxt[idx[sel]]]]
+        V = V[sel]
+        owner_all = owner_all[sel]
+    else:
+        nxt = newpos[flat.nxt[idx]]
+    ids = np.flatnonzero(live)
+    local_id = np.full(N, -1)
+    local_id[ids] = np.arange(len(ids))
+    owner = local_id[owner_all]
+    Nloc = flat.normals[ids] @ R.T
+    # foot direction: from the origin towards the line {z = 0, N . x = N . c}
+    foot = Nloc[:, :2] * -np.sign(d[ids])[:, None]
+    fl = np.hypot(foot[:, 0], foot[:, 1])
+    foot = np.divide(foot, fl[:, None], out=np.zeros_like(foot), where=fl[:, None] > 0)
+    S, mags = _clipped_sector_sums(V, nxt, owner, foot, len(ids))
+    F[ids] = _finish(S, mags, -d[ids], one_sided)
+    return F
+
+
+def point_polygon_form_factors(point, normal, polygons, *, one_sided=True):
+    """Unoccluded form factors from one point to many polygons (vectorised).
+
+    Parameters
+    ----------
+    point : array_like of shape (3,)
+        Receiving point ``p``.
+    normal : array_like of shape (3,)
+        Receiver normal ``n`` (normalised if not unit).
+    polygons : Scene or sequence of array_like of shape (K_i, 3)
+        The polygons; a sequence is validated as by :meth:`exactff.Scene.from_polygons`.
+    one_sided : bool, default True
+        If True, a polygon receives only when its front faces ``p``.
+
+    Returns
+    -------
+    ndarray of shape (M,)
+        ``F(p -> polygon_j)`` with horizon clipping and no occlusion.
+
+    See Also
+    --------
+    point_polygon_form_factor : the same for one polygon, as a float.
+
+    Examples
+    --------
+    Two unit squares facing down at height 1, one centred over ``p``:
+
+    >>> sq = np.array([[-.5, -.5, 1], [-.5, .5, 1], [.5, .5, 1], [.5, -.5, 1]])
+    >>> point_polygon_form_factors([0, 0, 0], [0, 0, 1], [sq, sq + [1, 0, 0]]).round(6)
+    array([0.239456, 0.084354])
+    """
+    from .scene import Scene
+
+    p = as_point(point)
+    n = as_normal(normal)
+    if p.shape != (3,) or n.shape != (3,):
+        raise ValueError("point and normal must have shape (3,)")
+    scene = polygons if isinstance(polygons, Scene) else Scene.from_polygons(polygons)
+    return unoccluded_row(_Polygons.of(scene), p, n, one_sided=one_sided)
+
+
+# ---------------------------------------------------------------------------------------
+# scalar paths: horizon clipping and the two exact edge integrals
+# ---------------------------------------------------------------------------------------
+def _local_clipped(point, normal, polygon, one_sided):
+    """Validated polygon in the local frame of ``p``, clipped to z >= 0, and the sign
+    that turns its signed image area into a form factor (0: nothing received)."""
+    from .scene import validate_polygon
+    from .geometry import area_vector
+
+    p = as_point(point)
+    n = as_normal(normal)
+    if p.shape != (3,) or n.shape != (3,):
+        raise ValueError("point and normal must have shape (3,)")
+    P = validate_polygon(polygon, 0)
+    R = receiver_frame(n)
+    Q = (P - p) @ R.T
+    N = area_vector(Q)
+    N /= np.linalg.norm(N)
+    c = Q.mean(axis=0)
+    d = float(N @ c)  # < 0: p is in front of the polygon
+    dtol = tol.PLANE_SIDE_ULPS * tol.EPS * (np.abs(p).max() + np.abs(P).max() + np.abs(Q).max())
+    if abs(d) <= dtol or (one_sided and d > 0):
+        return [], 0.0
+    # Sutherland-Hodgman against z >= 0; crossings get z = 0 exactly
+    out = []
+    k = len(Q)
+    for i in range(k):
+        a, b = Q[i], Q[(i + 1) % k]
+        if a[2] > 0:
+            out.append(tuple(a))
+        if (a[2] > 0) != (b[2] > 0):
+            t = a[2] / (a[2] - b[2])
+            X = a + t * (b - a)
+            out.append((X[0], X[1], 0.0))
+    return out, (1.0 if d < 0 else -1.0)
+
+
+def sector_form_factor(point, normal, polygon, *, one_sided=True):
+    """Unoccluded form factor by the sector (Lambert) form, one polygon, scalar code.
+
+    ``F = (1 / 2 pi) sum_k atan2(|a_k x b_k|, a_k . b_k) (a_k x b_k)_z / |a_k x b_k|``
+    over the edges of the horizon-clipped polygon (DESIGN 2.1), summed with
+    ``math.fsum``.
+
+    Parameters
+    ----------
+    point : array_like of shape (3,)
+    normal : array_like of shape (3,)
+    polygon : array_like of shape (K, 3)
+    one_sided : bool, default True
+
+    Returns
+    -------
+    float
+
+    Examples
+    --------
+    >>> sq = [[-.5, -.5, 1], [-.5, .5, 1], [.5, .5, 1], [.5, -.5, 1]]
+    >>> round(sector_form_factor([0, 0, 0], [0, 0, 1], sq), 12)
+    0.239456470461
+    """
+    C, sign = _local_clipped(point, normal, polygon, one_sided)
+    if not sign or len(C) < 2:
+        return 0.0
+    terms = []
+    for i in range(len(C)):
+        a, b = C[i], C[(i + 1) % len(C)]
+        mx = a[1] * b[2] - a[2] * b[1]
+        my = a[2] * b[0] - a[0] * b[2]
+        mz = a[0] * b[1] - a[1] * b[0]
+        s = math.sqrt(mx * mx + my * my + mz * mz)
+        if s > 0:
+            theta = math.atan2(s, a[0] * b[0] + a[1] * b[1] + a[2] * b[2])
+            terms.append(theta * mz / s)
+    F = -sign * math.fsum(terms) / TWO_PI
+    floor = -tol.ROUNDING_OVERSHOOT * tol.EPS * (math.fsum(map(abs, terms)) + 1e-300)
+    assert F >= floor, "negative form factor beyond rounding"
+    return max(F, 0.0)
+
+
+def point_polygon_form_factor(point, normal, polygon, *, one_sided=True):
+    """Unoccluded form factor from a differential area to one planar polygon.
+
+    ``F(p -> j) = (1 / pi) * integral over j of cos(theta_p) cos(theta_j) / r^2 dA``,
+    with the part of the polygon below the tangent plane of ``p`` clipped away.
+
+    Parameters
+    ----------
+    point : array_like of shape (3,)
+        Receiving point ``p``.
+    normal : array_like of shape (3,)
+        Receiver normal ``n``; normalised if not unit.
+    polygon : array_like of shape (K, 3)
+        Planar simple polygon, counter-clockwise seen from its front.
+    one_sided : bool, default True
+        If True (the default), the polygon receives only when its front faces ``p``;
+        if False, either side does.
+
+    Returns
+    -------
+    float
+        In [0, 1]. Exactly 0 for a polygon behind ``p``, in its tangent plane, seen
+        edge-on, or (one-sided) facing away.
+
+    Raises
+    ------
+    SceneError
+        The polygon is ill-formed (the error names polygon 0).
+    ValueError
+        ``point`` or ``normal`` is not finite, or the normal is zero.
+
+    Notes
+    -----
+    Evaluated with the sector form (:func:`sector_form_factor`); :func:`eq3_form_factor`
+    gives the same value by the paper's Eq. 3. Conventions:
+    ``docs/explanation/conventions.md``.
+
+    Examples
+    --------
+    Point under the corner of a parallel 1 x 2 rectangle at height 1 (Howell's
+    "plane element to parallel rectangle, normal through a corner"):
+
+    >>> rect = [[0, 0, 1], [0, 2, 1], [1, 2, 1], [1, 0, 1]]
+    >>> round(point_polygon_form_factor([0, 0, 0], [0, 0, 1], rect), 10)
+    0.1673750099
+    """
+    return sector_form_factor(point, normal, polygon, one_sided=one_sided)
+
+
+# ---------------------------------------------------------------------------------------
+# Eq. 3 (corrected) with monotone-span splitting
+# ---------------------------------------------------------------------------------------
+def eq3_edge_integral(a, b):
+    """Integral of ``y dx`` along the image of the great-circle arc ``a -> b``.
+
+    The image of the arc on the base disk lies on the ellipse of Eq. 2,
+    ``y(x) = (-A B x +- C sqrt(eta^2 - kappa^2 x^2)) / eta^2`` with ``(A, B, C) = a x b``,
+    ``eta^2 = B^2 + C^2`` and ``kappa^2 = A^2 + B^2 + C^2``. The arc is split at its
+    x-extremes (``x = +- eta / kappa``) into monotone spans, each integrated on its own
+    branch ``s = +-1`` with the corrected Eq. 3,
+
+    ``Area_s(x) = (1 / 2 kappa) [ s C asin(kappa x / eta)
+    + s (kappa C x / eta^2) sqrt(eta^2 - kappa^2 x^2) - (kappa A B / eta^2) x^2 ]``.
+
+    ``asin(kappa x / eta)`` and ``sqrt(eta^2 - kappa^2 x^2)`` are evaluated from the
+    point's coordinates in the arc's own plane (``kappa x / eta = cos t`` and
+    ``sqrt(...) = eta |sin t|``), which keeps them accurate next to the x-extremes.
+
+    Parameters
+    ----------
+    a, b : array_like of shape (3,)
+        End points in the local frame, ``z >= 0``; only their directions matter.
+
+    Returns
+    -------
+    float
+        The signed integral; minus the sum over a closed contour is the signed
+        (counter-clockwise positive) area of its image.
+
+    Examples
+    --------
+    The image of the quarter horizon from x to y is the quarter circle, and the
+    integral of ``y dx`` along it (x from 1 to 0) is ``-pi / 4``:
+
+    >>> round(eq3_edge_integral([1, 0, 0], [0, 1, 0]), 12)
+    -0.785398163397
+    """
+    a = np.asarray(a, dtype=float)
+    b = np.asarray(b, dtype=float)
+    m = np.cross(a, b)
+    kappa = float(np.linalg.norm(m))
+    if kappa == 0.0:
+        # a and b parallel: a point (or an edge through p, excluded upstream)
+        return 0.0
+    A, B, C = m / kappa  # normalised so that kappa = 1 below
+    eta = math.hypot(B, C)
+    if eta == 0.0:
+        # B = C = 0: the plane x = 0, a vertical segment on the disk, dx = 0
+        return 0.0
+    if C == 0.0:
+        # C = 0: the plane holds the zenith; the image is the segment y = -A x / B
+        xa = a[0] / np.linalg.norm(a)
+        xb = b[0] / np.linalg.norm(b)
+        return float(-A / B * (xb * xb - xa * xa) / 2.0)
+    mhat = np.array([A, B, C])
+    # orthonormal basis of the arc's plane: w at the x-maximum (x = eta), w_perp = m x w
+    w = (np.array([1.0, 0.0, 0.0]) - A * mhat) / eta
+    w_perp = np.cross(mhat, w)
+    ua = a / np.linalg.norm(a)
+    ub = b / np.linalg.norm(b)
+    ta = math.atan2(float(ua @ w_perp), float(ua @ w))
+    theta = math.atan2(kappa, float(a @ b))  # arc length, in (0, pi)
+    # span ends as (t, x, cos t, |sin t|): the arc's end points, and its x-extremes
+    # t = k pi (x = +- eta, cos t = +- 1, sin t = 0) where the arc passes them
+    ends = [(ta, float(ua[0]), float(ua @ w), abs(float(ua @ w_perp)))]
+    for k in range(-1, 4):
+        if ta < k * math.pi < ta + theta:
+            c = 1.0 if k % 2 == 0 else -1.0
+            ends.append((k * math.pi, eta * c, c, 0.0))
+    ends.append((ta + theta, float(ub[0]), float(ub @ w), abs(float(ub @ w_perp))))
+
+    def area(s, x, cos_t, abs_sin_t):
+        # corrected Eq. 3 with kappa = 1: asin(x / eta) = atan2(cos t, |sin t|),
+        # sqrt(eta^2 - x^2) = eta |sin t|
+        return 0.5 * (s * C * math.atan2(cos_t, abs_sin_t)
+                      + s * (C * x / eta) * abs_sin_t
+                      - (A * B / eta ** 2) * x * x)
+
+    total = []
+    for (t0, *P0), (t1, *P1) in zip(ends[:-1], ends[1:]):
+        # branch of this span, from its midpoint: s C sqrt(...) = eta^2 y + A B x
+        tm = 0.5 * (t0 + t1)
+        um = math.cos(tm) * w + math.sin(tm) * w_perp
+        s = 1.0 if C * (eta ** 2 * um[1] + A * B * um[0]) >= 0 else -1.0
+        total.append(area(s, *P1) - area(s, *P0))
+    return math.fsum(total)
+
+
+def eq3_form_factor(point, normal, polygon, *, one_sided=True):
+    """Unoccluded form factor by the paper's Eq. 3 (corrected), with span splitting.
+
+    The frame is first rotated about ``n`` (which changes no area) so that no edge
+    plane is close to ``x = 0``, where ``eta -> 0`` makes Eq. 3 ill-conditioned.
+
+    Parameters and return value as :func:`point_polygon_form_factor`.
+
+    Examples
+    --------
+    >>> sq = [[-.5, -.5, 1], [-.5, .5, 1], [.5, .5, 1], [.5, -.5, 1]]
+    >>> round(eq3_form_factor([0, 0, 0], [0, 0, 1], sq), 12)
+    0.239456470461
+    """
+    C, sign = _local_clipped(point, normal, polygon, one_sided)
+    if not sign or len(C) < 2:
+        return 0.0
+    Q = np.array(C)
+    M = np.cross(Q, np.roll(Q, -1, axis=0))
+    Ml = np.linalg.norm(M, axis=1)
+    M = M[Ml > 0] / Ml[Ml > 0, None]
+    # rotation about z maximising the smallest eta = sqrt(1 - m_x^2) over the edges
+    k = 2 * len(Q) + 2
+    phis = np.arange(k) * math.pi / k
+    mx = np.cos(phis)[:, None] * M[None, :, 0] + np.sin(phis)[:, None] * M[None, :, 1]
+    phi = phis[int(np.argmin(np.abs(mx).max(axis=1)))]
+    c, s = math.cos(phi), math.sin(phi)
+    Rz = np.array([[c, s, 0.0], [-s, c, 0.0], [0.0, 0.0, 1.0]])
+    Q = Q @ Rz.T
+    Q[:, 2] = np.array(C)[:, 2]
+    parts = [eq3_edge_integral(Q[i], Q[(i + 1) % len(Q)]) for i in range(len(Q))]
+    # image area (counter-clockwise positive) = - sum of y dx; F = area / pi
+    F = sign * math.fsum(parts) / math.pi
+    assert F >= -tol.ROUNDING_OVERSHOOT * tol.EPS, "negative form factor beyond rounding"
+    return max(F, 0.0)

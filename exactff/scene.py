@@ -1,0 +1,277 @@
+"""Planar polygons and scenes: validation, immutable storage, per-polygon planes."""
+
+import numpy as np
+import shapely
+
+from . import _tolerances as tol
+from .geometry import area_vector
+
+__all__ = ["SceneError", "Scene", "validate_polygon", "describe"]
+
+
+class SceneError(ValueError):
+    """A polygon of a scene is ill-formed; the message names the polygon and the reason.
+
+    Attributes
+    ----------
+    index : int or None
+        Index of the offending polygon in input order.
+    reason : str
+        What is wrong with it.
+    """
+
+    def __init__(self, index, reason, name=None):
+        self.index = index
+        self.reason = reason
+        label = f"polygon {index}" if name is None else f"polygon {index} ({name!r})"
+        super().__init__(f"{label}: {reason}")
+
+
+def _distinct_consecutive(P):
+    """Vertices with consecutive repeats (cyclically) removed."""
+    keep = np.any(P != np.roll(P, -1, axis=0), axis=1)
+    return P[keep] if keep.any() else P[:1]
+
+
+def validate_polygon(polygon, index=0, name=None, *, planarity_rtol=tol.PLANARITY_RTOL):
+    """Check one polygon and return it as a read-only float array.
+
+    Parameters
+    ----------
+    polygon : array_like of shape (K, 3)
+        Vertices, counter-clockwise seen from the front. Non-convex simple polygons are
+        valid.
+    index : int
+        Index reported in the error.
+    name : str, optional
+        Name reported in the error.
+    planarity_rtol : float, optional
+        Allowed distance of a vertex from the Newell plane, relative to the diameter.
+
+    Returns
+    -------
+    ndarray of shape (K, 3)
+        The vertices as given (consecutive repeats kept), float64, read-only.
+
+    Raises
+    ------
+    SceneError
+        Fewer than 3 vertices; NaN or infinite coordinates; fewer than 3 distinct
+        consecutive vertices; zero area (collinear); non-planar beyond
+        ``PLANARITY_RTOL`` of the diameter plus ``PLANARITY_ULPS`` of the coordinates'
+        magnitude; self-intersecting.
+
+    Examples
+    --------
+    >>> validate_polygon([[0, 0, 0], [1, 0, 0], [2, 0, 0]], index=7)
+    Traceback (most recent call last):
+    ...
+    exactff.scene.SceneError: polygon 7: zero area (the vertices are collinear)
+    """
+    try:
+        P = np.array(polygon, dtype=float)
+    except (TypeError, ValueError) as exc:
+        raise SceneError(index, f"not an array of 3-D vertices ({exc})", name) from None
+    if P.ndim != 2 or P.shape[1] != 3:
+        raise SceneError(index, f"expected an array of shape (K, 3), got shape {P.shape}", name)
+    if P.shape[0] < 3:
+        raise SceneError(index, f"fewer than 3 vertices ({P.shape[0]})", name)
+    if not np.all(np.isfinite(P)):
+        raise SceneError(index, "NaN or infinite coordinates", name)
+    D = _distinct_consecutive(P)
+    if D.shape[0] < 3:
+        raise SceneError(index, f"fewer than 3 distinct consecutive vertices ({D.shape[0]})", name)
+    diam = float(np.sqrt(((D[:, None, :] - D[None, :, :]) ** 2).sum(-1)).max())
+    A = area_vector(D)
+    area = float(np.linalg.norm(A))
+    if not area > tol.DEGENERATE_AREA_RTOL * diam * diam:
+        raise SceneError(index, "zero area (the vertices are collinear)", name)
+    N = A / area
+    c = D.mean(axis=0)
+    dev = float(np.abs((D - c) @ N).max())
+    allowed = planarity_rtol * diam + tol.PLANARITY_ULPS * tol.EPS * float(np.abs(D).max())
+    if dev > allowed:
+        raise SceneError(
+            index,
+            f"not planar: a vertex lies {dev:.3g} from the Newell plane, more than "
+            f"{planarity_rtol:g} of the diameter {diam:.3g}",
+            name,
+        )
+    # simplicity, in the coordinate plane most parallel to the polygon
+    drop = int(np.argmax(np.abs(N)))
+    ring = shapely.linearrings(np.delete(D, drop, axis=1))
+    if not shapely.is_simple(ring):
+        raise SceneError(index, "self-intersecting", name)
+    P.setflags(write=False)
+    return P
+
+
+def _readonly(a):
+    a = np.ascontiguousarray(a)
+    a.setflags(write=False)
+    return a
+
+
+class Scene:
+    """An immutable list of planar polygons with their planes.
+
+    Build one with :meth:`Scene.from_polygons`, :func:`exactff.load_scene` or a
+    function of :mod:`exactff.scenes`.
+
+    Attributes
+    ----------
+    polygons : tuple of ndarray of shape (K_i, 3)
+        Read-only vertex arrays in input order.
+    normals : ndarray of shape (N, 3)
+        Unit front normals (right-hand rule, Newell).
+    areas : ndarray of shape (N,)
+    centroids : ndarray of shape (N, 3)
+        Area centroids (the receiving points of ``form_factor_matrix``).
+    offsets : ndarray of shape (N + 1,)
+        Polygon ``i`` owns rows ``offsets[i]:offsets[i + 1]`` of ``vertices``.
+    vertices : ndarray of shape (V, 3)
+        All vertices, concatenated.
+    names, groups, materials : tuple of str or None
+
+    Notes
+    -----
+    Conventions: see ``docs/explanation/conventions.md``. A polygon's vertices run
+    counter-clockwise seen from its front.
+    """
+
+    __slots__ = ("polygons", "normals", "areas", "centroids", "offsets", "vertices",
+                 "names", "groups", "materials", "_cache")
+
+    def __init__(self, polygons, names=None, groups=None, materials=None,
+                 planarity_rtol=tol.PLANARITY_RTOL):
+        n = len(polygons)
+        labels = {}
+        for key, val in (("names", names), ("groups", groups), ("materials", materials)):
+            labels[key] = tuple(val) if val is not None else (None,) * n
+            if len(labels[key]) != n:
+                raise ValueError(f"{key} must have one entry per polygon ({n}), "
+                                 f"got {len(labels[key])}")
+        if n == 0:
+            raise ValueError("polygons: a scene needs at least one polygon")
+        names = labels["names"]
+        P = tuple(validate_polygon(p, i, names[i], planarity_rtol=planarity_rtol)
+                  for i, p in enumerate(polygons))
+        counts = np.array([len(p) for p in P])
+        offsets = np.concatenate([[0], np.cumsum(counts)])
+        V = np.concatenate(P, axis=0)
+        # Newell area vectors relative to each polygon's first vertex
+        first = np.repeat(V[offsets[:-1]], counts, axis=0)
+        Q = V - first
+        nxt = np.arange(len(V)) + 1
+        nxt[offsets[1:] - 1] = offsets[:-1]
+        cross = np.cross(Q, Q[nxt])
+        A = 0.5 * np.add.reduceat(cross, offsets[:-1], axis=0)
+        areas = np.linalg.norm(A, axis=1)
+        normals = A / areas[:, None]
+        # area centroids: fan triangles (0, i, i+1), weights along the normal
+        w = np.einsum("ij,ij->i", cross, np.repeat(normals, counts, axis=0))
+        cen = np.add.reduceat((Q + Q[nxt]) / 3.0 * w[:, None], offsets[:-1], axis=0)
+        centroids = V[offsets[:-1]] + cen / np.add.reduceat(w, offsets[:-1])[:, None]
+        set_ = object.__setattr__
+        set_(self, "polygons", P)
+        set_(self, "normals", _readonly(normals))
+        set_(self, "areas", _readonly(areas))
+        set_(self, "centroids", _readonly(centroids))
+        set_(self, "offsets", _readonly(offsets))
+        set_(self, "vertices", _readonly(V))
+        set_(self, "names", names)
+        set_(self, "groups", labels["groups"])
+        set_(self, "materials", labels["materials"])
+        set_(self, "_cache", {})
+
+    def __setattr__(self, key, value):
+        raise AttributeError("Scene is immutable")
+
+    @classmethod
+    def from_polygons(cls, polygons, *, names=None, groups=None, materials=None,
+                      planarity_rtol=tol.PLANARITY_RTOL):
+        """Validate polygons and build a scene.
+
+        Parameters
+        ----------
+        polygons : sequence of array_like of shape (K_i, 3)
+            Planar simple polygons, counter-clockwise seen from the front.
+        names, groups, materials : sequence of str, optional
+            One per polygon.
+        planarity_rtol : float, optional
+            Allowed distance of a vertex from its polygon's Newell plane, relative to
+            the polygon's diameter (default ``exactff._tolerances.PLANARITY_RTOL``).
+
+        Raises
+        ------
+        SceneError
+            A polygon is ill-formed; the message names its index and the reason.
+
+        Examples
+        --------
+        >>> s = Scene.from_polygons([[[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]]])
+        >>> len(s), float(s.areas[0])
+        (1, 1.0)
+        """
+        return cls(list(polygons), names=names, groups=groups, materials=materials,
+                   planarity_rtol=planarity_rtol)
+
+    def __len__(self):
+        return len(self.polygons)
+
+    def __repr__(self):
+        return f"<Scene: {len(self)} polygons, {len(self.vertices)} vertices>"
+
+    @property
+    def bounds(self):
+        """``(min_xyz, max_xyz)`` of all vertices."""
+        return self.vertices.min(axis=0), self.vertices.max(axis=0)
+
+    @property
+    def plane_offsets(self):
+        """``normals[i] . centroids[i]``: the plane of polygon i is ``n . x = d``."""
+        return np.einsum("ij,ij->i", self.normals, self.centroids)
+
+
+def describe(scene):
+    """Summary of a scene: size, area, bounds, planarity and closure.
+
+    Returns
+    -------
+    dict
+        ``polygons``, ``vertices``, ``total_area``, ``bounds_min``, ``bounds_max``,
+        ``max_planarity_deviation`` (largest vertex distance from its Newell plane over
+        the polygon's diameter), ``closure_residual`` (``|sum A_i n_i| / sum A_i``,
+        0 for a closed surface), ``unpaired_edges`` (directed edges whose reverse is
+        not an edge of another polygon; 0 for a watertight mesh without T-junctions).
+
+    Examples
+    --------
+    >>> from exactff.scenes import subdivided_box
+    >>> d = describe(subdivided_box(2))
+    >>> d["polygons"], d["unpaired_edges"], d["closure_residual"] < 1e-15
+    (24, 0, True)
+    """
+    devs = []
+    edges = {}
+    for P in scene.polygons:
+        D = _distinct_consecutive(P)
+        diam = float(np.sqrt(((D[:, None, :] - D[None, :, :]) ** 2).sum(-1)).max())
+        N = area_vector(D)
+        N /= np.linalg.norm(N)
+        devs.append(float(np.abs((D - D.mean(axis=0)) @ N).max()) / diam)
+        for a, b in zip(map(tuple, D), map(tuple, np.roll(D, -1, axis=0))):
+            edges[(a, b)] = edges.get((a, b), 0) + 1
+    unpaired = sum(c for (a, b), c in edges.items() if edges.get((b, a), 0) != c)
+    vector_area = (scene.normals * scene.areas[:, None]).sum(axis=0)
+    lo, hi = scene.bounds
+    return {
+        "polygons": len(scene),
+        "vertices": int(len(scene.vertices)),
+        "total_area": float(scene.areas.sum()),
+        "bounds_min": lo.tolist(),
+        "bounds_max": hi.tolist(),
+        "max_planarity_deviation": max(devs),
+        "closure_residual": float(np.linalg.norm(vector_area) / scene.areas.sum()),
+        "unpaired_edges": int(unpaired),
+    }

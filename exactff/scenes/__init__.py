@@ -1,0 +1,123 @@
+"""Built-in scenes: the Cornell box (measured data) and procedural test rooms."""
+
+import json
+from importlib import resources
+
+import numpy as np
+
+from ..scene import Scene
+
+__all__ = ["cornell_box", "cornell_box_data", "subdivided_box"]
+
+
+def cornell_box_data():
+    """The Cornell box document (``exactff-scene/1``, millimetres, y up), as a dict.
+
+    Source: "Cornell Box Data", Cornell University Program of Computer Graphics,
+    http://www.graphics.cornell.edu/online/box/data.html, with the derived helpers
+    described in ``shared/scenes/README.md``.
+    """
+    text = resources.files(__package__).joinpath("cornell_box.json").read_text("utf-8")
+    return json.loads(text)
+
+
+def cornell_box(*, left_wall="triangles", ceiling="cut", closed=False):
+    """The Cornell box as a scene (millimetres, y up; 16 to 22 polygons).
+
+    Parameters
+    ----------
+    left_wall : {"triangles", "quad"}, default "triangles"
+        The official left (red) wall is not planar (one vertex lies 3.2 mm off the
+        plane of the other three). ``"triangles"`` splits it along its v0-v2 diagonal
+        into two planar triangles with the same boundary; ``"quad"`` keeps the official
+        quad and relaxes the planarity check to 2e-3 of the diameter for the whole scene
+        (its form factors then belong to the quad's boundary, not to a planar wall).
+    ceiling : {"cut", "whole"}, default "cut"
+        The light lies in the ceiling plane on top of the ceiling quad. ``"cut"``
+        replaces the ceiling with four rectangles tiling the ceiling minus the light;
+        ``"whole"`` keeps the official quad (light and ceiling then overlap).
+    closed : bool, default False
+        The real box is open at z = 0; True adds the wall that closes it, so that every
+        row from inside sums to 1.
+
+    Returns
+    -------
+    Scene
+        Names, groups (``room``, ``light``, ``short_block``, ``tall_block``, ``front``)
+        and materials from the data.
+
+    Examples
+    --------
+    >>> len(cornell_box()), len(cornell_box(closed=True))
+    (20, 21)
+    """
+    if left_wall not in ("triangles", "quad"):
+        raise ValueError(f"left_wall must be 'triangles' or 'quad', got {left_wall!r}")
+    if ceiling not in ("cut", "whole"):
+        raise ValueError(f"ceiling must be 'cut' or 'whole', got {ceiling!r}")
+    data = cornell_box_data()
+    derived = data["derived"]
+    polys, names, groups, materials = [], [], [], []
+
+    def add(vertices, name, group, material):
+        polys.append(np.array(vertices, dtype=float))
+        names.append(name)
+        groups.append(group)
+        materials.append(material)
+
+    for s in data["surfaces"]:
+        if s["name"] == "left_wall" and left_wall == "triangles":
+            for k, tri in enumerate(derived["left_wall_triangles"]["polygons"], start=1):
+                add(tri, f"left_wall_{k}", s["group"], s["material"])
+        elif s["name"] == "ceiling" and ceiling == "cut":
+            for k, quad in enumerate(derived["ceiling_around_light"]["polygons"], start=1):
+                add(quad, f"ceiling_{k}", s["group"], s["material"])
+        else:
+            add(s["vertices"], s["name"], s["group"], s["material"])
+    if closed:
+        for k, quad in enumerate(derived["front_closing_wall"]["polygons"], start=1):
+            add(quad, "front_wall" if k == 1 else f"front_wall_{k}", "front", None)
+    options = {"planarity_rtol": 2e-3} if left_wall == "quad" else {}
+    return Scene.from_polygons(polys, names=names, groups=groups, materials=materials,
+                               **options)
+
+
+def subdivided_box(k, size=(1.0, 1.0, 1.0)):
+    """A closed box whose six faces are each split into ``k x k`` quads, facing inwards.
+
+    Parameters
+    ----------
+    k : int
+        Subdivisions per face edge; the scene has ``6 k^2`` polygons.
+    size : tuple of 3 float
+        Edge lengths along x, y, z; the box spans ``[0, size]``.
+
+    Examples
+    --------
+    >>> len(subdivided_box(4))
+    96
+    """
+    k = int(k)
+    if k < 1:
+        raise ValueError(f"k must be a positive integer, got {k}")
+    sx, sy, sz = (float(v) for v in size)
+    u = np.linspace(0.0, 1.0, k + 1)
+    polys = []
+    # each face: origin, two edge vectors whose cross product points outwards;
+    # the quads run along e2 then e1, so their right-hand normals point inwards
+    faces = [
+        ((0, 0, 0), (0, sy, 0), (sx, 0, 0)),      # z = 0
+        ((0, 0, sz), (sx, 0, 0), (0, sy, 0)),     # z = sz
+        ((0, 0, 0), (sx, 0, 0), (0, 0, sz)),      # y = 0
+        ((0, sy, 0), (0, 0, sz), (sx, 0, 0)),     # y = sy
+        ((0, 0, 0), (0, 0, sz), (0, sy, 0)),      # x = 0
+        ((sx, 0, 0), (0, sy, 0), (0, 0, sz)),     # x = sx
+    ]
+    for o, e1, e2 in faces:
+        o, e1, e2 = (np.array(v, dtype=float) for v in (o, e1, e2))
+        for i in range(k):
+            for j in range(k):
+                a0, a1, b0, b1 = u[i], u[i + 1], u[j], u[j + 1]
+                polys.append([o + a0 * e1 + b0 * e2, o + a0 * e1 + b1 * e2,
+                              o + a1 * e1 + b1 * e2, o + a1 * e1 + b0 * e2])
+    return Scene.from_polygons(polys)
