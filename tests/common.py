@@ -1,0 +1,60 @@
+"""Scene zoo and closed forms shared by the tests (independent of exactff's kernels)."""
+
+import math
+
+import numpy as np
+
+UP = np.array([0.0, 0.0, 1.0])
+ORIGIN = np.zeros(3)
+
+
+def rect_xy(x0, x1, y0, y1, z, facing_down=True):
+    """Axis-aligned rectangle in the plane z, front facing -z (down) or +z."""
+    P = np.array([[x0, y0, z], [x0, y1, z], [x1, y1, z], [x1, y0, z]], dtype=float)
+    return P if facing_down else P[::-1].copy()
+
+
+def parallel_rect_corner(a, b, c):
+    """Howell's catalogue, plane element to a parallel a x b rectangle at distance c,
+    the element's normal through a corner of the rectangle."""
+    A, B = a / c, b / c
+    return (A / math.sqrt(1 + A * A) * math.atan(B / math.sqrt(1 + A * A))
+            + B / math.sqrt(1 + B * B) * math.atan(A / math.sqrt(1 + B * B))) / (2 * math.pi)
+
+
+def perpendicular_rect(b, h, d):
+    """Howell's catalogue, plane element to a rectangle in a perpendicular plane at
+    distance d, the element on the line through one edge's end, normal to that plane:
+    F = (1 / 2 pi) [atan(1 / Y) - Y / sqrt(X^2 + Y^2) atan(1 / sqrt(X^2 + Y^2))],
+    X = h / b, Y = d / b (rectangle b wide, h high, one edge on the element's plane)."""
+    X, Y = h / b, d / b
+    R = math.sqrt(X * X + Y * Y)
+    return (math.atan(1 / Y) - Y / R * math.atan(1 / R)) / (2 * math.pi)
+
+
+def coaxial_disc(r, h):
+    """Plane element to a parallel coaxial disc of radius r at distance h."""
+    return r * r / (h * h + r * r)
+
+
+def coaxial_regular_polygon(n, R, h):
+    """Plane element to a coaxial regular n-gon of circumradius R at height h: the
+    polar integral of h^2 / (h^2 + rho^2)^2 over 2n right triangles with apothem a,
+    F = (n / pi) (a / sqrt(a^2 + h^2)) atan(a tan(pi / n) / sqrt(a^2 + h^2))."""
+    a = R * math.cos(math.pi / n)
+    s = math.sqrt(a * a + h * h)
+    return n / math.pi * a / s * math.atan(a * math.tan(math.pi / n) / s)
+
+
+def regular_polygon(n, R, z, facing_down=True):
+    ang = 2 * math.pi * np.arange(n) / n
+    P = np.column_stack([R * np.cos(ang), R * np.sin(ang), np.full(n, float(z))])
+    return P[::-1].copy() if facing_down else P
+
+
+def rotation(axis, angle):
+    """Rotation matrix (Rodrigues)."""
+    k = np.asarray(axis, dtype=float)
+    k = k / np.linalg.norm(k)
+    K = np.array([[0, -k[2], k[1]], [k[2], 0, -k[0]], [-k[1], k[0], 0]])
+    return np.eye(3) + math.sin(angle) * K + (1 - math.cos(angle)) * K @ K
