@@ -145,7 +145,7 @@ def _finish(S, mags, d0, one_sided):
 class _Polygons:
     """Flat (ragged) polygon arrays of a scene, shared by the vectorised kernels."""
 
-    __slots__ = ("V", "nxt", "owner", "normals", "centroids", "counts", "offsets")
+    __slots__ = ("V", "nxt", "owner", "normals", "centroids", "counts", "offsets", "vmax")
 
     def __init__(self, scene):
         self.V = scene.vertices
@@ -157,6 +157,8 @@ class _Polygons:
         self.nxt = nxt
         self.normals = scene.normals
         self.centroids = scene.centroids
+        # largest coordinate magnitude of each polygon: the scale of its rounding
+        self.vmax = np.maximum.reduceat(np.abs(self.V).max(axis=1), scene.offsets[:-1])
 
     @classmethod
     def of(cls, scene):
@@ -171,7 +173,7 @@ def plane_distances(flat, p):
     tolerance below which the side is undecidable from float input."""
     rel = flat.centroids - p
     d = -np.einsum("ij,ij->i", flat.normals, rel)
-    scale = np.abs(p).max() + np.abs(flat.centroids).max(axis=1) + np.abs(rel).max(axis=1)
+    scale = np.abs(p).max() + flat.vmax
     return d, tol.PLANE_SIDE_ULPS * tol.EPS * scale
 
 
@@ -286,7 +288,7 @@ def _local_clipped(point, normal, polygon, one_sided):
     N /= np.linalg.norm(N)
     c = Q.mean(axis=0)
     d = float(N @ c)  # < 0: p is in front of the polygon
-    dtol = tol.PLANE_SIDE_ULPS * tol.EPS * (np.abs(p).max() + np.abs(P).max() + np.abs(Q).max())
+    dtol = tol.PLANE_SIDE_ULPS * tol.EPS * (np.abs(p).max() + np.abs(P).max())
     if abs(d) <= dtol or (one_sided and d > 0):
         return [], 0.0
     # Sutherland-Hodgman against z >= 0; crossings get z = 0 exactly

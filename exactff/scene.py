@@ -57,7 +57,7 @@ def validate_polygon(polygon, index=0, name=None, *, planarity_rtol=tol.PLANARIT
     ------
     SceneError
         Fewer than 3 vertices; NaN or infinite coordinates; fewer than 3 distinct
-        consecutive vertices; zero area (collinear); non-planar beyond
+        consecutive vertices; zero area (collinear); non-planar (best-fit plane) beyond
         ``PLANARITY_RTOL`` of the diameter plus ``PLANARITY_ULPS`` of the coordinates'
         magnitude; self-intersecting.
 
@@ -82,26 +82,27 @@ def validate_polygon(polygon, index=0, name=None, *, planarity_rtol=tol.PLANARIT
     if D.shape[0] < 3:
         raise SceneError(index, f"fewer than 3 distinct consecutive vertices ({D.shape[0]})", name)
     diam = float(np.sqrt(((D[:, None, :] - D[None, :, :]) ** 2).sum(-1)).max())
-    A = area_vector(D)
-    area = float(np.linalg.norm(A))
-    if not area > tol.DEGENERATE_AREA_RTOL * diam * diam:
-        raise SceneError(index, "zero area (the vertices are collinear)", name)
-    N = A / area
+    # best-fit plane (SVD): robust for any vertex set, including bow ties of zero area
     c = D.mean(axis=0)
-    dev = float(np.abs((D - c) @ N).max())
+    _, sv, vt = np.linalg.svd(D - c)
+    if not sv[1] > tol.DEGENERATE_AREA_RTOL * sv[0]:
+        raise SceneError(index, "zero area (the vertices are collinear)", name)
+    dev = float(np.abs((D - c) @ vt[2]).max())
     allowed = planarity_rtol * diam + tol.PLANARITY_ULPS * tol.EPS * float(np.abs(D).max())
     if dev > allowed:
         raise SceneError(
             index,
-            f"not planar: a vertex lies {dev:.3g} from the Newell plane, more than "
+            f"not planar: a vertex lies {dev:.3g} from the best-fit plane, more than "
             f"{planarity_rtol:g} of the diameter {diam:.3g}",
             name,
         )
-    # simplicity, in the coordinate plane most parallel to the polygon
-    drop = int(np.argmax(np.abs(N)))
-    ring = shapely.linearrings(np.delete(D, drop, axis=1))
+    # simplicity in the coordinate plane most parallel to the polygon (exact coordinates)
+    ring = shapely.linearrings(np.delete(D, int(np.argmax(np.abs(vt[2]))), axis=1))
     if not shapely.is_simple(ring):
         raise SceneError(index, "self-intersecting", name)
+    area = float(np.linalg.norm(area_vector(D)))
+    if not area > tol.DEGENERATE_AREA_RTOL * diam * diam:
+        raise SceneError(index, "zero area", name)
     P.setflags(write=False)
     return P
 

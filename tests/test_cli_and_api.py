@@ -1,0 +1,45 @@
+"""The command line and the flat public API."""
+
+import subprocess
+import sys
+
+import pytest
+
+import exactff as ef
+from exactff.cli import main
+
+
+def test_exports_are_the_documented_list():
+    documented = {"Scene", "SceneError", "load_scene", "point_polygon_form_factor",
+                  "point_polygon_form_factors", "scenes"}
+    assert documented <= set(ef.__all__)
+    for name in ef.__all__:
+        assert hasattr(ef, name), name
+    for mod in (ef.scene, ef.geometry, ef.integrate, ef.io):
+        assert mod.__doc__ and mod.__all__
+        assert set(mod.__all__) <= set(ef.__all__)
+
+
+def test_cli_help_runs_as_a_console_script():
+    out = subprocess.run([sys.executable, "-m", "exactff.cli", "--help"],
+                         capture_output=True, text=True, check=True).stdout
+    assert "info" in out
+
+
+def test_cli_info_cornell_box(capsys):
+    assert main(["info", "cornell_box"]) == 0
+    out = capsys.readouterr().out
+    assert "polygons         20" in out and "open" in out
+    assert main(["info", "box:2"]) == 0
+    assert "polygons         24" in capsys.readouterr().out
+
+
+def test_cli_ff_prints_row(capsys):
+    assert main(["ff", "box:1", "--point", "0.5", "0.5", "0.5", "--normal", "0", "0", "1"]) == 0
+    out = capsys.readouterr().out
+    assert "sum" in out and "1.000000000000000" in out
+
+
+def test_cli_reports_errors(capsys, tmp_path):
+    assert main(["info", str(tmp_path / "missing.obj")]) == 2
+    assert "error" in capsys.readouterr().err

@@ -1,0 +1,95 @@
+"""Scene model: validation of every bad-input kind, immutability, derived arrays."""
+
+import numpy as np
+import pytest
+from hypothesis import given
+
+import exactff as ef
+from exactff.testing.strategies import planar_polygons
+
+SQUARE = [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]]
+
+
+@pytest.mark.parametrize("bad,reason", [
+    ([[0, 0, 0], [1, 0, 0]], "fewer than 3 vertices"),
+    ([[0, 0, 0], [1, np.nan, 0], [1, 1, 0]], "NaN or infinite"),
+    ([[0, 0, 0], [1, np.inf, 0], [1, 1, 0]], "NaN or infinite"),
+    ([[0, 0, 0], [1, 1, 1], [1, 1, 1], [0, 0, 0]], "fewer than 3 distinct"),
+    ([[0, 0, 0], [1, 0, 0], [2, 0, 0]], "zero area"),
+    ([[0, 0, 0], [1, 1, 1], [2, 2, 2], [3, 3, 3]], "zero area"),
+    ([[0, 0, 0], [1, 0, 0], [1, 1, 0.01], [0, 1, 0]], "not planar"),
+    ([[0, 0, 0], [1, 1, 0], [1, 0, 0], [0, 1, 0]], "self-intersecting"),   # bow tie
+    ([[0, 0, 0], [2, 0, 0], [2, 2, 0], [1, 0, 0], [0, 2, 0]], "self-intersecting"),
+    ([[0, 0, 0], [1, 0], [1, 1, 0]], "not an array of 3-D vertices"),
+    ([[0, 0], [1, 0], [1, 1]], "shape"),
+])
+def test_bad_polygon_raises_scene_error_with_index(bad, reason):
+    with pytest.raises(ef.SceneError, match=f"polygon 2: .*{reason}") as info:
+        ef.Scene.from_polygons([SQUARE, SQUARE, bad])
+    assert info.value.index == 2
+    assert isinstance(info.value, ValueError)
+
+
+def test_scene_error_names_the_polygon():
+    with pytest.raises(ef.SceneError, match=r"polygon 0 \('wall'\): zero area"):
+        ef.Scene.from_polygons([[[0, 0, 0], [1, 0, 0], [2, 0, 0]]], names=["wall"])
+
+
+def test_repeated_vertices_and_nonconvex_polygons_are_valid():
+    L = [[0, 0, 0], [2, 0, 0], [2, 1, 0], [1, 1, 0], [1, 2, 0], [0, 2, 0], [0, 2, 0]]
+    s = ef.Scene.from_polygons([L])
+    assert s.areas[0] == pytest.approx(3.0, rel=1e-15)
+    assert len(s.polygons[0]) == 7  # kept as given
+
+
+def test_tiny_polygon_far_away_is_planar():
+    # planar up to the rounding of its coordinates (DESIGN 5)
+    c = np.array([1e7, -3e6, 2e7])
+    rng = np.random.default_rng(0)
+    R = np.linalg.qr(rng.normal(size=(3, 3)))[0]
+    P = c + 1e-3 * np.array(SQUARE, dtype=float) @ R.T
+    s = ef.Scene.from_polygons([P])
+    # coordinates rounded at 2e7 (ulp 4e-9) move the 1e-3 edges by ~4e-6 relative
+    assert s.areas[0] == pytest.approx(1e-6, rel=2e-5)
+
+
+def test_planarity_tolerance_is_an_option():
+    warped = [[0, 0, 0], [1, 0, 0], [1, 1, 1e-4], [0, 1, 0]]
+    with pytest.raises(ef.SceneError, match="not planar"):
+        ef.Scene.from_polygons([warped])
+    assert len(ef.Scene.from_polygons([warped], planarity_rtol=1e-3)) == 1
+
+
+def test_scene_is_immutable():
+    s = ef.Scene.from_polygons([SQUARE])
+    with pytest.raises(AttributeError):
+        s.normals = None
+    for arr in (s.polygons[0], s.normals, s.areas, s.centroids, s.vertices):
+        with pytest.raises(ValueError):
+            arr[0] = 1.0
+
+
+@given(P=planar_polygons())
+def test_scene_normal_area_centroid_vs_triangulation(P):
+    s = ef.Scene.from_polygons([P])
+    # independent: shapely area and centroid in the polygon's own 2-D frame
+    import shapely
+    n = s.normals[0]
+    R = ef.receiver_frame(n)
+    Q = (P - P[0]) @ R.T
+    assert np.abs(Q[:, 2]).max() < 1e-12 * np.abs(P).max()
+    poly = shapely.Polygon(Q[:, :2])
+    assert s.areas[0] == pytest.approx(poly.area, rel=1e-12)
+    c = poly.centroid
+    expect = P[0] + c.x * R[0] + c.y * R[1]
+    assert np.allclose(s.centroids[0], expect, rtol=0, atol=1e-12 * (1 + np.abs(P).max()))
+    # counter-clockwise in the frame of the front normal: positive orientation
+    assert shapely.is_ccw(shapely.LinearRing(Q[:, :2]))
+
+
+def test_describe_cornell_box():
+    d = ef.describe(ef.scenes.cornell_box())
+    assert d["polygons"] == 20
+    assert d["max_planarity_deviation"] < 1e-15
+    assert d["closure_residual"] > 0.1      # the box is open
+    assert ef.describe(ef.scenes.subdivided_box(3))["closure_residual"] < 1e-15
