@@ -14,7 +14,7 @@ from exactff.testing.strategies import convex_polygons, planar_polygons, points,
 
 from common import (ORIGIN, UP, coaxial_disc, coaxial_regular_polygon, parallel_rect_corner,
                     perpendicular_rect, rect_xy, regular_polygon, rotation)
-from mp_oracle import area_form_factor, boundary_form_factor
+from exactff.testing.mp_reference import area_form_factor, boundary_form_factor
 
 KERNELS = {
     "sector": sector_form_factor,

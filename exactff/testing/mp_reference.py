@@ -1,4 +1,4 @@
-"""Independent high-precision references, written apart from exactff's kernels.
+"""Independent high-precision reference values (mpmath), written apart from the kernels.
 
 ``boundary_form_factor``: Green's theorem on the image in the base disk, the line
 integral 1/2 (x dy - y dx) along each edge's image evaluated by mpmath quadrature
@@ -9,6 +9,8 @@ over the (horizon-clipped) polygon, by mpmath 2-D quadrature on a triangle fan.
 """
 
 import mpmath as mp
+
+__all__ = ["boundary_form_factor", "area_form_factor"]
 
 
 def _frame(n):
