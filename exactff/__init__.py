@@ -4,13 +4,17 @@ The flat API re-exports each module's ``__all__``; see ``docs/reference``.
 """
 
 from . import scenes
+from .formfactors import *  # noqa: F401,F403
 from .geometry import *  # noqa: F401,F403
 from .integrate import *  # noqa: F401,F403
 from .io import *  # noqa: F401,F403
+from .methods import Exact, FormFactorMethod, METHODS  # noqa: F401
 from .scene import *  # noqa: F401,F403
-from . import geometry as _geometry, integrate as _integrate, io as _io, scene as _scene
+from . import (formfactors as _formfactors, geometry as _geometry, integrate as _integrate,
+               io as _io, scene as _scene)
 
 __version__ = "0.1.0"
 
-__all__ = ["scenes", "__version__"] + _scene.__all__ + _geometry.__all__ + \
-    _integrate.__all__ + _io.__all__
+__all__ = (["scenes", "__version__", "Exact", "FormFactorMethod", "METHODS"]
+           + _scene.__all__ + _geometry.__all__ + _integrate.__all__ + _io.__all__
+           + _formfactors.__all__)

@@ -9,6 +9,8 @@ __all__ = [
     "DEGENERATE_AREA_RTOL",
     "PLANE_SIDE_ULPS",
     "ROUNDING_OVERSHOOT",
+    "BSP_COPLANAR_ULPS",
+    "COVERED_RTOL",
 ]
 
 #: Unit roundoff of IEEE double precision, 2**-53.
@@ -35,3 +37,13 @@ PLANE_SIDE_ULPS = 16.0
 #: A value that rounding pushed below 0 (or a sine or cosine above 1) by at most this
 #: many ulps of its terms is clamped; beyond it, an AssertionError flags a bug.
 ROUNDING_OVERSHOOT = 1e3
+
+#: In the BSP tree, a vertex within this many ulps of the magnitudes in ``n . x - d``
+#: lies on the splitting plane: coordinates rounded to float cannot place it more
+#: precisely, and splitting there would only cut rounding-thin slivers.
+BSP_COPLANAR_ULPS = 64.0
+
+#: A gnomonic chart whose uncovered area is below this fraction of the chart is full:
+#: whatever lies behind can change a form factor by less than that fraction of the
+#: chart's projected solid angle, far below the 1e-11 accuracy target.
+COVERED_RTOL = 1e-13

@@ -188,6 +188,11 @@ class Scene:
     def __setattr__(self, key, value):
         raise AttributeError("Scene is immutable")
 
+    def __reduce__(self):
+        # rebuild from validated arrays without validating again (for process pools)
+        state = {k: getattr(self, k) for k in self.__slots__ if k != "_cache"}
+        return (_restore_scene, (state,))
+
     @classmethod
     def from_polygons(cls, polygons, *, names=None, groups=None, materials=None,
                       planarity_rtol=tol.PLANARITY_RTOL):
@@ -232,6 +237,16 @@ class Scene:
     def plane_offsets(self):
         """``normals[i] . centroids[i]``: the plane of polygon i is ``n . x = d``."""
         return np.einsum("ij,ij->i", self.normals, self.centroids)
+
+
+def _restore_scene(state):
+    scene = object.__new__(Scene)
+    for key, value in state.items():
+        if isinstance(value, np.ndarray):
+            value = _readonly(value)
+        object.__setattr__(scene, key, value)
+    object.__setattr__(scene, "_cache", {})
+    return scene
 
 
 def describe(scene):

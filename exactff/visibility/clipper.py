@@ -1,0 +1,226 @@
+"""Area-sorting clipper in projected space: gnomonic charts, covered regions, pieces.
+
+The upper hemisphere of the receiver is covered by five charts, the faces of the
+hemicube frustum. In a chart the central projection maps every great-circle arc to a
+straight segment, so straight-line clipping in the chart (shapely, full double
+precision) gives the exact topology of the visible graph; each boundary segment of a
+visible piece is the image of an exact great-circle arc, which the sector form
+integrates exactly.
+"""
+
+import numpy as np
+import shapely
+
+from .. import _tolerances as tol
+from ..integrate import TWO_PI, sector_edge_terms
+
+__all__ = ["CHARTS", "clip_halfspace", "chart_polygons", "visible_pieces", "pieces_form_factors"]
+
+_X, _Y, _Z = np.eye(3)
+
+#: Charts as (e_u, e_v, e_w, side): a direction d maps to (e_u.d / e_w.d, e_v.d / e_w.d);
+#: the chart is |u| <= 1 and |v| <= 1 (top), or |u| <= 1 and 0 <= v <= 1 (sides, v = z).
+CHARTS = (
+    (_X, _Y, _Z, False),
+    (_Y, _Z, _X, True),
+    (_Y, _Z, -_X, True),
+    (_X, _Z, _Y, True),
+    (_X, _Z, -_Y, True),
+)
+
+
+def _chart_planes(chart):
+    """Inward normals of the half-spaces (through the origin) bounding a chart's frustum."""
+    eu, ev, ew, side = chart
+    planes = [ew - eu, ew + eu, ew - ev, ev if side else ew + ev]
+    return planes
+
+
+def chart_area(chart):
+    return 2.0 if chart[3] else 4.0
+
+
+def clip_halfspace(V, counts, h):
+    """Clip a batch of polygons to the half-space ``h . x > 0`` (points on it kept).
+
+    Parameters
+    ----------
+    V : ndarray of shape (M, K, 3)
+        Padded vertices; polygon m uses ``V[m, :counts[m]]``.
+    counts : ndarray of shape (M,)
+    h : ndarray of shape (3,)
+
+    Returns
+    -------
+    (ndarray of shape (M, K', 3), ndarray of shape (M,))
+        The clipped polygons, padded; a count below 3 means nothing is left.
+    """
+    M, K, _ = V.shape
+    slot = np.arange(K)
+    valid = slot[None, :] < counts[:, None]
+    nxt = (slot[None, :] + 1) % np.maximum(counts[:, None], 1)
+    W = np.take_along_axis(V, nxt[:, :, None], axis=1)
+    s = V @ h
+    sn = np.take_along_axis(s, nxt, axis=1)
+    inside = (s > 0) & valid
+    inside_n = (sn > 0) & valid
+    cross = (inside != inside_n) & valid
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = np.where(cross, s / (s - sn), 0.0)
+    X = V + t[:, :, None] * (W - V)
+    out = np.empty((M, 2 * K, 3))
+    out[:, 0::2] = V
+    out[:, 1::2] = X
+    keep = np.empty((M, 2 * K), dtype=bool)
+    keep[:, 0::2] = inside
+    keep[:, 1::2] = cross
+    new_counts = keep.sum(axis=1)
+    Kn = max(int(new_counts.max(initial=0)), 1)
+    order = np.argsort(~keep, axis=1, kind="stable")[:, :Kn]
+    return np.take_along_axis(out, order[:, :, None], axis=1), new_counts
+
+
+def chart_polygons(V, counts, chart):
+    """Clip polygons (local frame) to a chart's frustum and project them into the chart.
+
+    Returns
+    -------
+    (ndarray of int, ndarray of shapely.Polygon, ndarray of shape (M', 4))
+        Indices (into V) of the polygons that reach the chart, their images, and
+        their bounds.
+    """
+    for h in _chart_planes(chart):
+        live = counts >= 3
+        if not live.any():
+            return np.zeros(0, int), np.empty(0, object), np.zeros((0, 4))
+        V, counts = clip_halfspace(V, np.where(live, counts, 0), h)
+    live = np.flatnonzero(counts >= 3)
+    if len(live) == 0:
+        return live, np.empty(0, object), np.zeros((0, 4))
+    eu, ev, ew, _ = chart
+    Vl, cl = V[live], counts[live]
+    w = Vl @ ew
+    mask = np.arange(Vl.shape[1])[None, :] < cl[:, None]
+    u = np.where(mask, (Vl @ eu) / np.where(mask, w, 1.0), 0.0)
+    v = np.where(mask, (Vl @ ev) / np.where(mask, w, 1.0), 0.0)
+    coords = np.column_stack([u[mask], v[mask]])
+    ring_index = np.repeat(np.arange(len(live)), cl)
+    rings = shapely.linearrings(coords, indices=ring_index)
+    polys = shapely.polygons(rings)
+    bad = ~shapely.is_valid(polys)
+    if bad.any():
+        # rounding-thin slivers or self-touching images: repair, keep only areas
+        polys[bad] = shapely.make_valid(polys[bad])
+        polys[bad] = [shapely.union_all(shapely.get_parts(g)[shapely.get_type_id(shapely.get_parts(g)) >= 3])
+                      if not g.is_empty else g for g in polys[bad]]
+    return live, polys, shapely.bounds(polys)
+
+
+def visible_pieces(order_V, order_counts, receives, stats=None, early_stop=True):
+    """Visible pieces of polygons given front to back, per chart.
+
+    Parameters
+    ----------
+    order_V : ndarray of shape (M, K, 3)
+        Fragments in front-to-back order, in the local frame of the point.
+    order_counts : ndarray of shape (M,)
+    receives : ndarray of shape (M,), bool
+        Whether each fragment's visible part is wanted (it occludes either way).
+    early_stop : bool, default True
+        Stop filling a chart once it is covered (up to ``COVERED_RTOL``).
+    stats : dict, optional
+        Filled with counters: ``chart_fragments``, ``differences``, ``bbox_rejections``,
+        ``hidden``, ``charts_full``, ``skipped_after_full``.
+
+    Returns
+    -------
+    list of (int, int, shapely geometry)
+        ``(fragment index, chart index, visible piece)`` for receiving fragments.
+    """
+    out = []
+    st = stats if stats is not None else {}
+    for key in ("chart_fragments", "differences", "bbox_rejections", "hidden", "charts_full",
+                "skipped_after_full"):
+        st.setdefault(key, 0)
+    for ci, chart in enumerate(CHARTS):
+        idx, polys, bounds = chart_polygons(order_V, order_counts, chart)
+        st["chart_fragments"] += len(idx)
+        full_area = chart_area(chart) * (1.0 - tol.COVERED_RTOL)
+        covered = None
+        cb = None
+        since_check = 0
+        for j in range(len(idx)):
+            g = polys[j]
+            if g.is_empty:
+                continue
+            b = bounds[j]
+            if covered is None:
+                vis, covered, cb = g, g, b.copy()
+            elif b[0] >= cb[2] or b[2] <= cb[0] or b[1] >= cb[3] or b[3] <= cb[1]:
+                st["bbox_rejections"] += 1
+                vis = g
+                covered = covered.union(g)
+                cb = np.array([min(cb[0], b[0]), min(cb[1], b[1]), max(cb[2], b[2]), max(cb[3], b[3])])
+            else:
+                st["differences"] += 1
+                vis = g.difference(covered)
+                if vis.is_empty or vis.area == 0.0:
+                    st["hidden"] += 1
+                    continue
+                covered = covered.union(g)
+                cb = np.array([min(cb[0], b[0]), min(cb[1], b[1]), max(cb[2], b[2]), max(cb[3], b[3])])
+            if receives[idx[j]]:
+                out.append((int(idx[j]), ci, vis))
+            since_check += 1
+            if early_stop and (since_check >= 8 or j == len(idx) - 1):
+                since_check = 0
+                if covered.area >= full_area:
+                    st["charts_full"] += 1
+                    st["skipped_after_full"] += len(idx) - j - 1
+                    break
+    return out
+
+
+def _lift(coords, chart):
+    """Chart coordinates (u, v) back to directions ``u e_u + v e_v + e_w``."""
+    eu, ev, ew, _ = chart
+    return coords[:, :1] * eu + coords[:, 1:2] * ev + ew
+
+
+def pieces_form_factors(pieces, m):
+    """Form factors of visible pieces, summed per fragment: ``(m,)`` array.
+
+    Every ring of a piece is a closed chain of great-circle arcs; its sector sum is
+    twice the signed area of its image on the base disk. Exterior rings add and holes
+    subtract the absolute values, so the result does not depend on ring orientation.
+    """
+    F = np.zeros(m)
+    if not pieces:
+        return F
+    for ci, chart in enumerate(CHARTS):
+        sel = [(k, g) for k, c, g in pieces if c == ci]
+        if not sel:
+            continue
+        frag = np.array([k for k, _ in sel])
+        geoms = np.array([g for _, g in sel], dtype=object)
+        parts, part_of = shapely.get_parts(geoms, return_index=True)
+        polys = parts[shapely.get_type_id(parts) == 3]
+        poly_of = part_of[shapely.get_type_id(parts) == 3]
+        if len(polys) == 0:
+            continue
+        # rings of each polygon: the exterior first, then its holes
+        rings, ring_poly = shapely.get_rings(polys, return_index=True)
+        is_hole = np.ones(len(rings), dtype=bool)
+        n_rings = shapely.get_num_interior_rings(polys) + 1
+        is_hole[np.concatenate([[0], np.cumsum(n_rings)[:-1]])] = False
+        coords, ring_of = shapely.get_coordinates(rings, return_index=True)
+        D = _lift(coords, chart)
+        # consecutive points of one ring form an edge (rings are closed)
+        same = ring_of[1:] == ring_of[:-1]
+        terms = sector_edge_terms(D[:-1][same], D[1:][same])
+        S = np.bincount(ring_of[:-1][same], weights=terms, minlength=len(rings))
+        signed = np.where(is_hole, -np.abs(S), np.abs(S))
+        per_poly = np.bincount(ring_poly, weights=signed, minlength=len(polys))
+        per_geom = np.bincount(poly_of, weights=per_poly, minlength=len(geoms))
+        F += np.bincount(frag, weights=per_geom, minlength=m)
+    return F / TWO_PI
