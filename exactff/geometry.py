@@ -5,6 +5,7 @@ import math
 import numpy as np
 
 __all__ = [
+    "to_local",
     "area_vector",
     "polygon_area",
     "unit_normal",
@@ -124,3 +125,27 @@ def receiver_frame(normal):
     t1 = (1.0 + sign * x * x * a, sign * b, -sign * x)
     t2 = (b, sign + y * y * a, -y)
     return np.array([t1, t2, (x, y, z)])
+
+
+def to_local(X, p, R):
+    """``(X - p) @ R.T`` evaluated elementwise, the same rounding for every row.
+
+    A matrix product may round a row differently depending on where it sits in the
+    array (blocked kernels, fused multiply-adds); here a vertex shared by several
+    polygons always maps to the same local coordinates.
+
+    Parameters
+    ----------
+    X : ndarray of shape (..., 3)
+    p : ndarray of shape (3,)
+    R : ndarray of shape (3, 3)
+        Rows are the local axes (see :func:`receiver_frame`).
+
+    Examples
+    --------
+    >>> to_local(np.array([[1.0, 2.0, 3.0]]), np.zeros(3), np.eye(3)).tolist()
+    [[1.0, 2.0, 3.0]]
+    """
+    D = X - p
+    x, y, z = D[..., 0], D[..., 1], D[..., 2]
+    return np.stack([x * R[k, 0] + y * R[k, 1] + z * R[k, 2] for k in range(3)], axis=-1)

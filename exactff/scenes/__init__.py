@@ -7,7 +7,8 @@ import numpy as np
 
 from ..scene import Scene
 
-__all__ = ["cornell_box", "cornell_box_data", "subdivided_box"]
+__all__ = ["cornell_box", "cornell_box_data", "subdivided_box", "box_polygons",
+           "furnished_box"]
 
 
 def cornell_box_data():
@@ -82,6 +83,62 @@ def cornell_box(*, left_wall="triangles", ceiling="cut", closed=False):
                                **options)
 
 
+def box_polygons(lo, hi, k=1, *, facing="in"):
+    """The six faces of an axis-aligned box, each split into ``k x k`` quads.
+
+    Parameters
+    ----------
+    lo, hi : array_like of shape (3,)
+        Opposite corners.
+    k : int
+        Subdivisions per face edge.
+    facing : {"in", "out"}
+        ``"in"``: fronts face the inside (a room); ``"out"``: a solid obstacle.
+
+    Returns
+    -------
+    list of ndarray of shape (4, 3)
+        ``6 k^2`` quads, face by face (z = lo, z = hi, y = lo, y = hi, x = lo, x = hi).
+
+    Examples
+    --------
+    >>> len(box_polygons([0, 0, 0], [1, 2, 3], 2, facing="out"))
+    24
+    """
+    k = int(k)
+    if k < 1:
+        raise ValueError(f"k must be a positive integer, got {k}")
+    if facing not in ("in", "out"):
+        raise ValueError(f"facing must be 'in' or 'out', got {facing!r}")
+    lo = np.asarray(lo, dtype=float)
+    hi = np.asarray(hi, dtype=float)
+    if lo.shape != (3,) or hi.shape != (3,) or not np.all(hi > lo):
+        raise ValueError(f"need lo < hi componentwise, got lo={lo.tolist()}, hi={hi.tolist()}")
+    sx, sy, sz = hi - lo
+    u = np.linspace(0.0, 1.0, k + 1)
+    polys = []
+    # each face: origin, two edge vectors whose cross product points outwards;
+    # the quads run along e2 then e1, so their right-hand normals point inwards
+    faces = [
+        ((0, 0, 0), (0, sy, 0), (sx, 0, 0)),      # z = lo
+        ((0, 0, sz), (sx, 0, 0), (0, sy, 0)),     # z = hi
+        ((0, 0, 0), (sx, 0, 0), (0, 0, sz)),      # y = lo
+        ((0, sy, 0), (0, 0, sz), (sx, 0, 0)),     # y = hi
+        ((0, 0, 0), (0, 0, sz), (0, sy, 0)),      # x = lo
+        ((sx, 0, 0), (0, sy, 0), (0, 0, sz)),     # x = hi
+    ]
+    for o, e1, e2 in faces:
+        o, e1, e2 = (np.array(v, dtype=float) for v in (o, e1, e2))
+        o = o + lo
+        for i in range(k):
+            for j in range(k):
+                a0, a1, b0, b1 = u[i], u[i + 1], u[j], u[j + 1]
+                q = np.array([o + a0 * e1 + b0 * e2, o + a0 * e1 + b1 * e2,
+                              o + a1 * e1 + b1 * e2, o + a1 * e1 + b0 * e2])
+                polys.append(q if facing == "in" else q[::-1].copy())
+    return polys
+
+
 def subdivided_box(k, size=(1.0, 1.0, 1.0)):
     """A closed box whose six faces are each split into ``k x k`` quads, facing inwards.
 
@@ -97,27 +154,35 @@ def subdivided_box(k, size=(1.0, 1.0, 1.0)):
     >>> len(subdivided_box(4))
     96
     """
-    k = int(k)
-    if k < 1:
-        raise ValueError(f"k must be a positive integer, got {k}")
-    sx, sy, sz = (float(v) for v in size)
-    u = np.linspace(0.0, 1.0, k + 1)
-    polys = []
-    # each face: origin, two edge vectors whose cross product points outwards;
-    # the quads run along e2 then e1, so their right-hand normals point inwards
-    faces = [
-        ((0, 0, 0), (0, sy, 0), (sx, 0, 0)),      # z = 0
-        ((0, 0, sz), (sx, 0, 0), (0, sy, 0)),     # z = sz
-        ((0, 0, 0), (sx, 0, 0), (0, 0, sz)),      # y = 0
-        ((0, sy, 0), (0, 0, sz), (sx, 0, 0)),     # y = sy
-        ((0, 0, 0), (0, 0, sz), (0, sy, 0)),      # x = 0
-        ((sx, 0, 0), (0, sy, 0), (0, 0, sz)),     # x = sx
-    ]
-    for o, e1, e2 in faces:
-        o, e1, e2 = (np.array(v, dtype=float) for v in (o, e1, e2))
-        for i in range(k):
-            for j in range(k):
-                a0, a1, b0, b1 = u[i], u[i + 1], u[j], u[j + 1]
-                polys.append([o + a0 * e1 + b0 * e2, o + a0 * e1 + b1 * e2,
-                              o + a1 * e1 + b1 * e2, o + a1 * e1 + b0 * e2])
-    return Scene.from_polygons(polys)
+    return Scene.from_polygons(box_polygons((0, 0, 0), size, k))
+
+
+def furnished_box(k, boxes, size=(1.0, 1.0, 1.0), box_k=1):
+    """A closed room (``subdivided_box(k, size)``) with solid box obstacles inside.
+
+    Parameters
+    ----------
+    k : int
+        Subdivisions per room face edge.
+    boxes : sequence of (lo, hi)
+        Obstacle corners; obstacles may float, touch or interpenetrate.
+    box_k : int
+        Subdivisions per obstacle face edge.
+
+    Returns
+    -------
+    Scene
+        Room polygons first (group ``"room"``), then each obstacle's (``"box<i>"``).
+
+    Examples
+    --------
+    >>> len(furnished_box(2, [((0.2, 0.2, 0.0), (0.5, 0.4, 0.3))]))
+    30
+    """
+    polys = box_polygons((0, 0, 0), size, k)
+    groups = ["room"] * len(polys)
+    for i, (lo, hi) in enumerate(boxes):
+        b = box_polygons(lo, hi, box_k, facing="out")
+        polys += b
+        groups += [f"box{i}"] * len(b)
+    return Scene.from_polygons(polys, groups=groups)

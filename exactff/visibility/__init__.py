@@ -11,7 +11,7 @@ import numpy as np
 from scipy.spatial import ConvexHull, QhullError
 
 from .. import _tolerances as tol
-from ..geometry import receiver_frame
+from ..geometry import receiver_frame, to_local
 from ..integrate import _Polygons, plane_distances, unoccluded_row
 from .bsp import build_bsp, front_to_back
 from .clipper import pieces_form_factors, visible_pieces
@@ -69,8 +69,9 @@ def visible_form_factors(scene, point, normal, *, two_sided=False, stats=None,
         shortcut applied, else ``"clipper"``), ``fragments``, ``culled_edge_on``,
         ``culled_below_horizon``, and the clipper's counters.
     shortcuts : bool, default True
-        False disables the convex-scene shortcut and the early stop on full charts
-        (for testing that they never change a result).
+        False disables every shortcut: the convex-scene path, the culling of fragments
+        below the horizon, the bounding-box rejection and the early stop on full
+        charts (for testing that they never change a result).
 
     Returns
     -------
@@ -91,19 +92,19 @@ def visible_form_factors(scene, point, normal, *, two_sided=False, stats=None,
     # cull: fragments seen edge-on have no image and hide nothing
     edge_on = np.abs(d[src]) <= dtol[src]
     R = receiver_frame(normal)
-    V = (Vf[order] - p) @ R.T
+    V = to_local(Vf[order], p, R)
     c = counts[order]
     slot = np.arange(V.shape[1])[None, :] < c[:, None]
     below = np.where(slot, V[:, :, 2], -np.inf).max(axis=1) <= 0
-    keep = ~edge_on & ~below
+    keep = ~edge_on & ~below if shortcuts else ~edge_on
     st["fragments"] = len(order)
     st["culled_edge_on"] = int(edge_on.sum())
-    st["culled_below_horizon"] = int((below & ~edge_on).sum())
+    st["culled_below_horizon"] = int((below & ~edge_on).sum()) if shortcuts else 0
     order, src, V, c = order[keep], src[keep], V[keep], c[keep]
     receives = d[src] > dtol[src]
     if two_sided:
         receives |= d[src] < -dtol[src]
-    pieces = visible_pieces(V, c, receives, stats=st, early_stop=shortcuts)
+    pieces = visible_pieces(V, c, receives, stats=st, shortcuts=shortcuts)
     Ff = pieces_form_factors(pieces, len(order))
     F = np.bincount(src, weights=Ff, minlength=len(scene))
     return np.maximum(F, 0.0)

@@ -66,8 +66,9 @@ def _split(P, sign, s):
         if sign[i] <= 0:
             back.append(P[i])
         if sign[i] * sign[j] < 0:
-            t = s[i] / (s[i] - s[j])
-            X = P[i] + t * (P[j] - P[i])
+            # from the front end point, so that a shared edge splits identically
+            a, b = (i, j) if sign[i] > 0 else (j, i)
+            X = P[a] + (s[a] / (s[a] - s[b])) * (P[b] - P[a])
             front.append(X)
             back.append(X)
     f = np.array(front) if len(front) >= 3 else None

@@ -65,9 +65,16 @@ def clip_halfspace(V, counts, h):
     inside = (s > 0) & valid
     inside_n = (sn > 0) & valid
     cross = (inside != inside_n) & valid
+    # crossing point computed from the inside end point, whichever way the edge runs:
+    # an edge shared by two polygons gets bit-identical clip points in both (GEOS then
+    # sees exactly shared vertices instead of rounding-thin slivers)
+    A = np.where(inside[:, :, None], V, W)
+    B = np.where(inside[:, :, None], W, V)
+    sa = np.where(inside, s, sn)
+    sb = np.where(inside, sn, s)
     with np.errstate(divide="ignore", invalid="ignore"):
-        t = np.where(cross, s / (s - sn), 0.0)
-    X = V + t[:, :, None] * (W - V)
+        t = np.where(cross, sa / (sa - sb), 0.0)
+    X = A + t[:, :, None] * (B - A)
     out = np.empty((M, 2 * K, 3))
     out[:, 0::2] = V
     out[:, 1::2] = X
@@ -116,7 +123,7 @@ def chart_polygons(V, counts, chart):
     return live, polys, shapely.bounds(polys)
 
 
-def visible_pieces(order_V, order_counts, receives, stats=None, early_stop=True):
+def visible_pieces(order_V, order_counts, receives, stats=None, shortcuts=True):
     """Visible pieces of polygons given front to back, per chart.
 
     Parameters
@@ -126,8 +133,9 @@ def visible_pieces(order_V, order_counts, receives, stats=None, early_stop=True)
     order_counts : ndarray of shape (M,)
     receives : ndarray of shape (M,), bool
         Whether each fragment's visible part is wanted (it occludes either way).
-    early_stop : bool, default True
-        Stop filling a chart once it is covered (up to ``COVERED_RTOL``).
+    shortcuts : bool, default True
+        Skip the difference for fragments whose bounds miss the covered region, and
+        stop filling a chart once it is covered (up to ``COVERED_RTOL``).
     stats : dict, optional
         Filled with counters: ``chart_fragments``, ``differences``, ``bbox_rejections``,
         ``hidden``, ``charts_full``, ``skipped_after_full``.
@@ -156,7 +164,7 @@ def visible_pieces(order_V, order_counts, receives, stats=None, early_stop=True)
             b = bounds[j]
             if covered is None:
                 vis, covered, cb = g, g, b.copy()
-            elif b[0] >= cb[2] or b[2] <= cb[0] or b[1] >= cb[3] or b[3] <= cb[1]:
+            elif shortcuts and (b[0] >= cb[2] or b[2] <= cb[0] or b[1] >= cb[3] or b[3] <= cb[1]):
                 st["bbox_rejections"] += 1
                 vis = g
                 covered = covered.union(g)
@@ -172,7 +180,7 @@ def visible_pieces(order_V, order_counts, receives, stats=None, early_stop=True)
             if receives[idx[j]]:
                 out.append((int(idx[j]), ci, vis))
             since_check += 1
-            if early_stop and (since_check >= 8 or j == len(idx) - 1):
+            if shortcuts and (since_check >= 8 or j == len(idx) - 1):
                 since_check = 0
                 if covered.area >= full_area:
                     st["charts_full"] += 1
