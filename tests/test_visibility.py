@@ -56,9 +56,11 @@ def layered_reference(p, n, polygons):
 def layered_scenes(draw):
     m = draw(st.integers(2, 6))
     polys = []
+    # subnormal coordinates (below 2.2e-308) are left to the stiff-case catalogue
+    coord = st.floats(-1.5, 1.0, allow_subnormal=False)
     for _ in range(m):
-        x0 = draw(st.floats(-1.5, 1.0))
-        y0 = draw(st.floats(-1.5, 1.0))
+        x0 = draw(coord)
+        y0 = draw(coord)
         w = draw(st.floats(0.1, 1.5))
         d = draw(st.floats(0.1, 1.5))
         z = draw(st.floats(0.3, 3.0))
