@@ -67,6 +67,56 @@ def cmd_ff(args):
     return 0
 
 
+def parse_rows(text, n):
+    """Row selection: ``"all"``, ``"A:B"`` (a slice) or ``"i,j,k"``."""
+    if text in (None, "all"):
+        return np.arange(n)
+    try:
+        if ":" in text:
+            a, b = text.split(":", 1)
+            return np.arange(n)[slice(int(a) if a else None, int(b) if b else None)]
+        return np.array([int(v) for v in text.split(",")])
+    except ValueError:
+        raise ValueError(f"--rows: expected 'all', 'A:B' or 'i,j,...', got {text!r}") from None
+
+
+def cmd_matrix(args):
+    import time
+
+    from .formfactors import form_factor_matrix
+
+    scene = open_scene(args.scene)
+    rows = parse_rows(args.rows, len(scene))
+    out = args.output
+    if out is None:
+        stem = args.scene.split(":")[0].rsplit("/", 1)[-1].rsplit(".", 1)[0]
+        out = f"{stem}_ff.npy"
+    executor = None
+    if args.jobs > 1:
+        from concurrent.futures import ProcessPoolExecutor
+
+        executor = ProcessPoolExecutor(args.jobs)
+    t0 = time.perf_counter()
+    try:
+        M = form_factor_matrix(scene, rows=rows, two_sided=args.two_sided, executor=executor,
+                               progress=not args.no_progress, out=out)
+    finally:
+        if executor is not None:
+            executor.shutdown()
+    elapsed = time.perf_counter() - t0
+    M = np.asarray(M)
+    if args.csv:
+        np.savetxt(args.csv, M, delimiter=",", fmt="%.17g")
+    sums = M.sum(axis=1)
+    print(f"scene            {args.scene} ({len(scene)} polygons)")
+    print(f"matrix           {M.shape[0]} x {M.shape[1]} rows from the polygons' centroids "
+          f"-> {out}" + (f" and {args.csv}" if args.csv else ""))
+    print(f"time             {elapsed:.3f} s ({elapsed / max(len(rows), 1) * 1e3:.2f} ms per row)")
+    print(f"row sums         min {sums.min():.15f}  max {sums.max():.15f}")
+    print(f"zero entries     {np.mean(M == 0):.1%}")
+    return 0
+
+
 def build_parser():
     parser = argparse.ArgumentParser(
         prog="exactff",
@@ -81,6 +131,17 @@ def build_parser():
     p.add_argument("--point", nargs=3, type=float, required=True, metavar=("X", "Y", "Z"))
     p.add_argument("--normal", nargs=3, type=float, required=True, metavar=("X", "Y", "Z"))
     p.set_defaults(func=cmd_ff)
+    p = sub.add_parser("matrix", help="exact form-factor matrix (rows from the polygons' "
+                                      "centroids), written to .npy")
+    p.add_argument("scene")
+    p.add_argument("-o", "--output", help="output .npy (default: SCENE_ff.npy); an "
+                                          "interrupted run resumes from it")
+    p.add_argument("--csv", help="also write the matrix as CSV")
+    p.add_argument("--rows", default="all", help="'all', 'A:B' or 'i,j,...'")
+    p.add_argument("--two-sided", action="store_true", help="polygons receive on both sides")
+    p.add_argument("--jobs", type=int, default=1, help="worker processes")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.set_defaults(func=cmd_matrix)
     return parser
 
 

@@ -156,7 +156,6 @@ def visible_pieces(order_V, order_counts, receives, stats=None, shortcuts=True):
         full_area = chart_area(chart) * (1.0 - tol.COVERED_RTOL)
         covered = None
         cb = None
-        since_check = 0
         for j in range(len(idx)):
             g = polys[j]
             if g.is_empty:
@@ -179,13 +178,11 @@ def visible_pieces(order_V, order_counts, receives, stats=None, shortcuts=True):
                 cb = np.array([min(cb[0], b[0]), min(cb[1], b[1]), max(cb[2], b[2]), max(cb[3], b[3])])
             if receives[idx[j]]:
                 out.append((int(idx[j]), ci, vis))
-            since_check += 1
-            if shortcuts and (since_check >= 8 or j == len(idx) - 1):
-                since_check = 0
-                if covered.area >= full_area:
-                    st["charts_full"] += 1
-                    st["skipped_after_full"] += len(idx) - j - 1
-                    break
+            # early stop: once the chart is covered, nothing behind can be seen in it
+            if shortcuts and covered.area >= full_area:
+                st["charts_full"] += 1
+                st["skipped_after_full"] += len(idx) - j - 1
+                break
     return out
 
 
