@@ -16,7 +16,8 @@ from ..integrate import _Polygons, plane_distances, unoccluded_row
 from .bsp import build_bsp, front_to_back
 from .clipper import pieces_form_factors, visible_pieces
 
-__all__ = ["visible_form_factors", "is_convex_enclosure", "scene_bsp"]
+__all__ = ["visible_form_factors", "is_convex_enclosure", "scene_bsp", "build_bsp",
+           "front_to_back"]
 
 
 def scene_bsp(scene):

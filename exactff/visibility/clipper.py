@@ -96,16 +96,33 @@ def chart_polygons(V, counts, chart):
         Indices (into V) of the polygons that reach the chart, their images, and
         their bounds.
     """
-    for h in _chart_planes(chart):
-        live = counts >= 3
-        if not live.any():
-            return np.zeros(0, int), np.empty(0, object), np.zeros((0, 4))
-        V, counts = clip_halfspace(V, np.where(live, counts, 0), h)
-    live = np.flatnonzero(counts >= 3)
+    planes = np.array(_chart_planes(chart))
+    slot = np.arange(V.shape[1])[None, :] < counts[:, None]
+    S = V @ planes.T  # (M, K, 4): differences of two coordinates, their signs exact
+    outside = np.any(np.all((S <= 0) | ~slot[:, :, None], axis=1), axis=1)
+    inside = np.all((S > 0) | ~slot[:, :, None], axis=(1, 2))
+    # only fragments that straddle a frustum plane need clipping
+    reach = np.flatnonzero(~outside & (counts >= 3))
+    straddle = reach[~inside[reach]]
+    Vc, cc = V[straddle], counts[straddle]
+    for h in planes:
+        if not np.any(cc >= 3):
+            break
+        Vc, cc = clip_halfspace(Vc, np.where(cc >= 3, cc, 0), h)
+    K = max(V.shape[1], Vc.shape[1])
+    Vr = np.zeros((len(reach), K, 3))
+    cr = counts[reach].copy()
+    pos = np.searchsorted(reach, straddle)
+    whole = np.flatnonzero(inside[reach])
+    Vr[whole, : V.shape[1]] = V[reach[whole]]
+    Vr[pos, : Vc.shape[1]] = Vc
+    cr[pos] = cc
+    live_r = np.flatnonzero(cr >= 3)
+    live = reach[live_r]
     if len(live) == 0:
         return live, np.empty(0, object), np.zeros((0, 4))
+    Vl, cl = Vr[live_r], cr[live_r]
     eu, ev, ew, _ = chart
-    Vl, cl = V[live], counts[live]
     w = Vl @ ew
     mask = np.arange(Vl.shape[1])[None, :] < cl[:, None]
     u = np.where(mask, (Vl @ eu) / np.where(mask, w, 1.0), 0.0)
@@ -117,9 +134,11 @@ def chart_polygons(V, counts, chart):
     bad = ~shapely.is_valid(polys)
     if bad.any():
         # rounding-thin slivers or self-touching images: repair, keep only areas
-        polys[bad] = shapely.make_valid(polys[bad])
-        polys[bad] = [shapely.union_all(shapely.get_parts(g)[shapely.get_type_id(shapely.get_parts(g)) >= 3])
-                      if not g.is_empty else g for g in polys[bad]]
+        fixed = []
+        for g in shapely.make_valid(polys[bad]):
+            parts = shapely.get_parts(g)
+            fixed.append(shapely.union_all(parts[shapely.get_type_id(parts) >= 3]))
+        polys[bad] = fixed
     return live, polys, shapely.bounds(polys)
 
 
