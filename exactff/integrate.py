@@ -284,10 +284,10 @@ def _local_clipped(point, normal, polygon, one_sided):
     P = validate_polygon(polygon, 0)
     R = receiver_frame(n)
     Q = (P - p) @ R.T
-    N = area_vector(Q)
+    # the side of p, from the validated polygon's own (world) plane
+    N = area_vector(P)
     N /= np.linalg.norm(N)
-    c = Q.mean(axis=0)
-    d = float(N @ c)  # < 0: p is in front of the polygon
+    d = float(N @ (P.mean(axis=0) - p))  # < 0: p is in front of the polygon
     dtol = tol.PLANE_SIDE_ULPS * tol.EPS * (np.abs(p).max() + np.abs(P).max())
     if abs(d) <= dtol or (one_sided and d > 0):
         return [], 0.0

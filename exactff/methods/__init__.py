@@ -1,12 +1,27 @@
 """Form-factor methods by name: the registry and ``resolve(method)``."""
 
 from ._base import FormFactorMethod
+from .cubic_tetrahedron import CubicTetrahedron
 from .exact import Exact
+from .hemicube import Hemicube
+from .monte_carlo import MonteCarlo
+from .polar_plane import PolarPlane
+from .ppbh import DiscretePPBH
+from .single_plane import SinglePlane
 
-__all__ = ["METHODS", "resolve", "FormFactorMethod", "Exact"]
+__all__ = ["METHODS", "resolve", "FormFactorMethod", "Exact", "DiscretePPBH", "Hemicube",
+           "CubicTetrahedron", "SinglePlane", "PolarPlane", "MonteCarlo"]
 
 #: Method classes by name.
-METHODS = {"exact": Exact}
+METHODS = {
+    "exact": Exact,
+    "ppbh": DiscretePPBH,
+    "hemicube": Hemicube,
+    "cubic_tetrahedron": CubicTetrahedron,
+    "single_plane": SinglePlane,
+    "polar_plane": PolarPlane,
+    "monte_carlo": MonteCarlo,
+}
 
 
 def resolve(method, **options):

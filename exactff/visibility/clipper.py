@@ -14,7 +14,7 @@ import shapely
 from .. import _tolerances as tol
 from ..integrate import TWO_PI, sector_edge_terms
 
-__all__ = ["CHARTS", "clip_halfspace", "chart_polygons", "visible_pieces", "pieces_form_factors"]
+__all__ = ["CHARTS", "clip_halfspace", "chart_clip", "chart_polygons", "visible_pieces", "pieces_form_factors"]
 
 _X, _Y, _Z = np.eye(3)
 
@@ -29,11 +29,12 @@ CHARTS = (
 )
 
 
-def _chart_planes(chart):
-    """Inward normals of the half-spaces (through the origin) bounding a chart's frustum."""
+def _chart_planes(chart, margin=0.0):
+    """Inward normals of the half-spaces (through the origin) bounding a chart's frustum,
+    widened by ``margin`` in chart units (0: the exact frustum)."""
     eu, ev, ew, side = chart
-    planes = [ew - eu, ew + eu, ew - ev, ev if side else ew + ev]
-    return planes
+    g = 1.0 + margin
+    return [g * ew - eu, g * ew + eu, g * ew - ev, ev + margin * ew if side else g * ew + ev]
 
 
 def chart_area(chart):
@@ -87,18 +88,32 @@ def clip_halfspace(V, counts, h):
     return np.take_along_axis(out, order[:, :, None], axis=1), new_counts
 
 
-def chart_polygons(V, counts, chart):
-    """Clip polygons (local frame) to a chart's frustum and project them into the chart.
+def chart_clip(V, counts, chart, margin=0.0):
+    """Clip polygons (local frame) to a chart's frustum; project them into the chart.
+
+    Parameters
+    ----------
+    V : ndarray of shape (M, K, 3)
+        Padded polygons in the local frame of the point.
+    counts : ndarray of shape (M,)
+    chart : one of CHARTS
+    margin : float, default 0
+        Widen the frustum by this much in chart units. The exact engine needs the exact
+        frustum (its pieces tile the hemisphere); the sampling z-buffer widens it a little
+        so that a cell on a chart's edge is strictly inside the images that cover it.
 
     Returns
     -------
-    (ndarray of int, ndarray of shapely.Polygon, ndarray of shape (M', 4))
-        Indices (into V) of the polygons that reach the chart, their images, and
-        their bounds.
+    live : ndarray of int
+        Indices (into V) of the polygons that reach the chart.
+    UV : ndarray of shape (len(live), K', 2)
+        Their chart coordinates, padded by repeating the last vertex.
+    cl : ndarray of shape (len(live),)
+        Vertex counts.
     """
-    planes = np.array(_chart_planes(chart))
+    planes = np.array(_chart_planes(chart, margin))
     slot = np.arange(V.shape[1])[None, :] < counts[:, None]
-    S = V @ planes.T  # (M, K, 4): differences of two coordinates, their signs exact
+    S = V @ planes.T  # (M, K, 4); with margin 0, differences of two coordinates: exact signs
     outside = np.any(np.all((S <= 0) | ~slot[:, :, None], axis=1), axis=1)
     inside = np.all((S > 0) | ~slot[:, :, None], axis=(1, 2))
     # only fragments that straddle a frustum plane need clipping
@@ -119,15 +134,32 @@ def chart_polygons(V, counts, chart):
     cr[pos] = cc
     live_r = np.flatnonzero(cr >= 3)
     live = reach[live_r]
-    if len(live) == 0:
-        return live, np.empty(0, object), np.zeros((0, 4))
     Vl, cl = Vr[live_r], cr[live_r]
     eu, ev, ew, _ = chart
+    K = Vl.shape[1]
+    # pad by repeating each polygon's last vertex (zero-length closing edges)
+    last = np.take_along_axis(Vl, np.maximum(cl - 1, 0)[:, None, None].repeat(3, axis=2), axis=1)
+    mask = np.arange(K)[None, :] < cl[:, None]
+    Vl = np.where(mask[:, :, None], Vl, last)
     w = Vl @ ew
-    mask = np.arange(Vl.shape[1])[None, :] < cl[:, None]
-    u = np.where(mask, (Vl @ eu) / np.where(mask, w, 1.0), 0.0)
-    v = np.where(mask, (Vl @ ev) / np.where(mask, w, 1.0), 0.0)
-    coords = np.column_stack([u[mask], v[mask]])
+    UV = np.stack([(Vl @ eu) / w, (Vl @ ev) / w], axis=-1)
+    return live, UV, cl
+
+
+def chart_polygons(V, counts, chart):
+    """Clip polygons (local frame) to a chart's frustum and project them into the chart.
+
+    Returns
+    -------
+    (ndarray of int, ndarray of shapely.Polygon, ndarray of shape (M', 4))
+        Indices (into V) of the polygons that reach the chart, their images, and
+        their bounds.
+    """
+    live, UV, cl = chart_clip(V, counts, chart)
+    if len(live) == 0:
+        return live, np.empty(0, object), np.zeros((0, 4))
+    mask = np.arange(UV.shape[1])[None, :] < cl[:, None]
+    coords = UV[mask]
     ring_index = np.repeat(np.arange(len(live)), cl)
     rings = shapely.linearrings(coords, indices=ring_index)
     polys = shapely.polygons(rings)

@@ -1,0 +1,258 @@
+"""The shared sampling core of the discrete methods: cells as directions, a z-buffer.
+
+Every discrete method (discrete PPBH, hemicube, cubic tetrahedron, single plane, polar
+plane, Monte Carlo) is a *cell layout*: unit directions in the local frame of the
+receiving point (z along its normal) and a delta form factor per cell. Visibility is the
+same for all: for each cell direction, the nearest polygon along it (exact depth along
+the direction). The row is the sum of the delta form factors per polygon.
+
+The z-buffer is evaluated without a Python loop over cells: cell directions are sorted
+into the five gnomonic charts of the engine (where polygon images are straight-edged),
+bucketed on a uniform grid per chart; each polygon's image is clipped to the chart
+(the engine's ``chart_clip``), its bounding box selects candidate cells bucket by
+bucket, a vectorised crossing-number test over its edges keeps the cells inside it, and
+the depth ``t = (n . (c - p)) / (n . d)`` picks the nearest polygon per cell (ties by
+the lower polygon index).
+"""
+
+import numpy as np
+
+from ..geometry import receiver_frame, to_local
+from ..integrate import _Polygons, plane_distances
+from ..visibility.clipper import CHARTS, chart_clip
+from ._base import FormFactorMethod
+
+__all__ = ["CellLayout", "SampledMethod", "nearest_polygons", "samples_to_resolution"]
+
+#: candidate (polygon, cell) pairs examined at once; bounds the memory of a row
+PAIR_CHUNK = 2_000_000
+
+#: polygons are clipped to chart frusta widened by this much (chart units), so that cells
+#: on a chart's edge fall strictly inside the images covering them
+CHART_MARGIN = 1e-6
+
+
+class CellLayout:
+    """Cells of a discrete method in the local frame of the receiving point.
+
+    Attributes
+    ----------
+    directions : ndarray of shape (C, 3)
+        Cell directions (unit vectors, z >= 0 along the receiver normal).
+    weights : ndarray of shape (C,)
+        Delta form factor of each cell.
+    covered : float
+        Exact form factor of the region the cells cover (1 for the whole hemisphere).
+    """
+
+    def __init__(self, directions, weights, covered):
+        D = np.asarray(directions, dtype=float)
+        self.directions = D / np.linalg.norm(D, axis=1, keepdims=True)
+        self.weights = np.asarray(weights, dtype=float)
+        self.covered = float(covered)
+
+    def __len__(self):
+        return len(self.weights)
+
+    @property
+    def missed(self):
+        """Form factor of the part of the hemisphere no cell covers."""
+        return 1.0 - self.covered
+
+
+def samples_to_resolution(samples, cells_per_resolution_squared, even=False, name="samples"):
+    """Resolution r with about ``samples`` cells when a layout has ``c r^2`` cells."""
+    if not (isinstance(samples, (int, np.integer)) and samples > 0):
+        raise ValueError(f"{name} must be a positive integer, got {samples!r}")
+    r = max(1, int(round(np.sqrt(samples / cells_per_resolution_squared))))
+    if even:
+        r = max(2, r + (r % 2))
+    return r
+
+
+def check_resolution(value, name="resolution", even=False):
+    if not (isinstance(value, (int, np.integer)) and value > 0):
+        raise ValueError(f"{name} must be a positive integer, got {value!r}")
+    if even and value % 2:
+        raise ValueError(f"{name} must be even, got {value!r}")
+    return int(value)
+
+
+def _chart_of(D):
+    """Chart index and chart coordinates (u, v) of each direction."""
+    ax, ay, az = np.abs(D[:, 0]), np.abs(D[:, 1]), D[:, 2]
+    top = az >= np.maximum(ax, ay)
+    xside = ~top & (ax >= ay)
+    chart = np.where(top, 0, np.where(xside, np.where(D[:, 0] > 0, 1, 2),
+                                      np.where(D[:, 1] > 0, 3, 4)))
+    u = np.empty(len(D))
+    v = np.empty(len(D))
+    for ci, (eu, ev, ew, _) in enumerate(CHARTS):
+        m = chart == ci
+        w = D[m] @ ew
+        u[m] = (D[m] @ eu) / w
+        v[m] = (D[m] @ ev) / w
+    return chart, u, v
+
+
+def _padded_polygons(scene):
+    cache = scene._cache
+    if "padded" not in cache:
+        counts = np.diff(scene.offsets)
+        V = np.empty((len(scene), counts.max(), 3))
+        for i, P in enumerate(scene.polygons):
+            V[i, : len(P)] = P
+            V[i, len(P):] = P[-1]
+        cache["padded"] = (V, counts)
+    return cache["padded"]
+
+
+def nearest_polygons(scene, point, normal, directions):
+    """Index of the nearest polygon along each direction from ``point`` (-1 for none).
+
+    Parameters
+    ----------
+    scene : Scene
+    point : ndarray of shape (3,)
+    normal : ndarray of shape (3,)
+        Unit receiver normal.
+    directions : ndarray of shape (C, 3)
+        Directions in the local frame of the point (z along the normal), z > 0.
+
+    Returns
+    -------
+    ndarray of shape (C,), int
+        Polygons seen edge-on or wholly below the horizon are never returned.
+    """
+    p = np.asarray(point, dtype=float)
+    flat = _Polygons.of(scene)
+    d, dtol = plane_distances(flat, p)
+    Vw, counts = _padded_polygons(scene)
+    R = receiver_frame(normal)
+    V = to_local(Vw, p, R)
+    slot = np.arange(V.shape[1])[None, :] < counts[:, None]
+    live = (np.abs(d) > dtol) & (np.where(slot, V[:, :, 2], -np.inf).max(axis=1) > 0)
+    ids = np.flatnonzero(live)
+    V, counts = V[ids], counts[ids]
+    nl = flat.normals[ids] @ R.T
+    dl = -d[ids]  # n . (c - p)
+    D = np.asarray(directions, dtype=float)
+    chart, u, v = _chart_of(D)
+    best_t = np.full(len(D), np.inf)
+    best = np.full(len(D), -1)
+    for ci, ch in enumerate(CHARTS):
+        cells = np.flatnonzero(chart == ci)
+        if len(cells) == 0:
+            continue
+        live_c, UV, cl = chart_clip(V, counts, ch, margin=CHART_MARGIN)
+        if len(live_c) == 0:
+            continue
+        _zbuffer_chart(cells, u[cells], v[cells], ch[3], live_c, UV, cl, D, nl, dl,
+                       best_t, best)
+    out = np.where(best >= 0, ids[np.maximum(best, 0)], -1)
+    return out
+
+
+def _zbuffer_chart(cells, cu, cv, side, live, UV, cl, D, nl, dl, best_t, best):
+    """Nearest polygon per cell within one chart (updates best_t / best in place)."""
+    v_lo = -CHART_MARGIN if side else -1.0 - CHART_MARGIN
+    nb = max(1, int(np.sqrt(len(cells) / 16.0)))
+    # cells into an nb x nb bucket grid over the chart, in CSR order
+    bx = np.clip(((cu + 1.0) * 0.5 * nb).astype(int), 0, nb - 1)
+    by = np.clip(((cv - v_lo) / (1.0 - v_lo) * nb).astype(int), 0, nb - 1)
+    bucket = bx * nb + by
+    order = np.argsort(bucket, kind="stable")
+    starts = np.searchsorted(bucket[order], np.arange(nb * nb + 1))
+    lo = UV.min(axis=1)
+    hi = UV.max(axis=1)
+    bx0 = np.clip(((lo[:, 0] + 1.0) * 0.5 * nb).astype(int), 0, nb - 1)
+    bx1 = np.clip(((hi[:, 0] + 1.0) * 0.5 * nb).astype(int), 0, nb - 1)
+    by0 = np.clip(((lo[:, 1] - v_lo) / (1.0 - v_lo) * nb).astype(int), 0, nb - 1)
+    by1 = np.clip(((hi[:, 1] - v_lo) / (1.0 - v_lo) * nb).astype(int), 0, nb - 1)
+    nby = by1 - by0 + 1
+    nbk = (bx1 - bx0 + 1) * nby
+    # (polygon, bucket) pairs
+    pb_poly = np.repeat(np.arange(len(live)), nbk)
+    k = np.arange(len(pb_poly)) - np.repeat(np.cumsum(nbk) - nbk, nbk)
+    b = (bx0[pb_poly] + k // nby[pb_poly]) * nb + by0[pb_poly] + k % nby[pb_poly]
+    ncell = starts[b + 1] - starts[b]
+    # process the (polygon, cell) pairs in chunks of about PAIR_CHUNK
+    cum = np.cumsum(ncell)
+    total = int(cum[-1]) if len(cum) else 0
+    bounds = [0] + list(np.searchsorted(cum, np.arange(PAIR_CHUNK, total, PAIR_CHUNK),
+                                        side="right")) + [len(b)]
+    K = UV.shape[1]
+    for s0, s1 in zip(bounds[:-1], bounds[1:]):
+        if s1 <= s0:
+            continue
+        nc = ncell[s0:s1]
+        poly = np.repeat(pb_poly[s0:s1], nc)
+        j = np.arange(nc.sum()) - np.repeat(np.cumsum(nc) - nc, nc)
+        cell_local = order[np.repeat(starts[b[s0:s1]], nc) + j]
+        # bounding-box rejection
+        uu, vv = cu[cell_local], cv[cell_local]
+        ok = (uu >= lo[poly, 0]) & (uu <= hi[poly, 0]) & (vv >= lo[poly, 1]) & (vv <= hi[poly, 1])
+        poly, cell_local, uu, vv = poly[ok], cell_local[ok], uu[ok], vv[ok]
+        if len(poly) == 0:
+            continue
+        # crossing number over the polygon's edges (padding repeats the last vertex)
+        inside = np.zeros(len(poly), dtype=bool)
+        P = UV[poly]
+        for e in range(K):
+            a = P[:, e]
+            c = P[:, (e + 1) % K]
+            straddles = (a[:, 1] > vv) != (c[:, 1] > vv)
+            with np.errstate(divide="ignore", invalid="ignore"):
+                ux = a[:, 0] + (vv - a[:, 1]) * (c[:, 0] - a[:, 0]) / (c[:, 1] - a[:, 1])
+            inside ^= straddles & (uu < ux)
+        poly, cell_local = poly[inside], cell_local[inside]
+        cell = cells[cell_local]
+        src = live[poly]
+        t = dl[src] / np.einsum("ij,ij->i", nl[src], D[cell])
+        # z-buffer: nearest first, ties to the lower polygon index
+        srt = np.lexsort((src, t, cell))
+        cell, t, src = cell[srt], t[srt], src[srt]
+        first = np.ones(len(cell), dtype=bool)
+        first[1:] = cell[1:] != cell[:-1]
+        cell, t, src = cell[first], t[first], src[first]
+        better = (t < best_t[cell]) | ((t == best_t[cell]) & (src < best[cell]))
+        best_t[cell[better]] = t[better]
+        best[cell[better]] = src[better]
+
+
+class SampledMethod(FormFactorMethod):
+    """A discrete method defined by its cell layout (built once per instance)."""
+
+    def layout(self):
+        """The method's :class:`CellLayout` in the local frame (cached)."""
+        if getattr(self, "_layout", None) is None:
+            self._layout = self.build_layout()
+        return self._layout
+
+    def build_layout(self):
+        raise NotImplementedError
+
+    @property
+    def samples(self):
+        """Number of cells (or rays)."""
+        return len(self.layout())
+
+    def directions_for(self, point):
+        """Cell directions and weights for a row (fixed per instance by default)."""
+        L = self.layout()
+        return L.directions, L.weights
+
+    def point_form_factors(self, scene, point, normal, *, two_sided=False, stats=None):
+        D, w = self.directions_for(point)
+        hit = nearest_polygons(scene, point, normal, D)
+        flat = _Polygons.of(scene)
+        d, dtol = plane_distances(flat, np.asarray(point, dtype=float))
+        receives = d > dtol
+        if two_sided:
+            receives |= d < -dtol
+        ok = hit >= 0
+        ok[ok] = receives[hit[ok]]
+        if stats is not None:
+            stats["cells"] = len(w)
+            stats["cells_hit"] = int((hit >= 0).sum())
+        return np.bincount(hit[ok], weights=w[ok], minlength=len(scene))

@@ -1,0 +1,72 @@
+"""The hemicube (Cohen & Greenberg 1985)."""
+
+import numpy as np
+
+from ._sampling import CellLayout, SampledMethod, check_resolution, samples_to_resolution
+
+__all__ = ["Hemicube"]
+
+
+def _grid(n, lo, hi):
+    h = (hi - lo) / n
+    return lo + (np.arange(n) + 0.5) * h, h
+
+
+class Hemicube(SampledMethod):
+    """The hemicube: five faces of a cube around the point, analytic delta FFs per cell.
+
+    Cell layout: the top face ``z = 1`` over ``[-1, 1]^2`` with ``r x r`` cells, and the
+    four half side faces (e.g. ``x = 1``, ``y`` in ``[-1, 1]``, ``z`` in ``[0, 1]``) with
+    ``r x r/2`` cells each: ``3 r^2`` cells. Delta form factors at the cell centres
+    (Cohen & Greenberg, "The hemi-cube", SIGGRAPH 1985, doi:10.1145/325165.325171):
+    top ``dA / (pi (x^2 + y^2 + 1)^2)``, side ``z dA / (pi (y^2 + z^2 + 1)^2)``, with
+    ``dA = (2 / r)^2``. Their sum differs from 1 by the midpoint rule's error
+    (``O(1 / r^2)``).
+
+    What it misses: visibility is sampled at cell centres (aliasing), and the delta FFs
+    are point values.
+
+    Parameters
+    ----------
+    resolution : int, optional
+        Cells per edge of the top face (even).
+    samples : int, optional
+        About this many cells, if ``resolution`` is not given (default 65,536).
+
+    Examples
+    --------
+    >>> import exactff as ef
+    >>> box = ef.scenes.subdivided_box(2)
+    >>> F = ef.form_factors(box, [0.5, 0.5, 0.0], [0, 0, 1], method=Hemicube(resolution=8))
+    >>> round(float(F[4:8].sum()), 4)  # coarse: 1.2 % high; exact 0.2395
+    0.2423
+    """
+
+    name = "hemicube"
+
+    def __init__(self, resolution=None, *, samples=None):
+        if resolution is None:
+            resolution = samples_to_resolution(samples if samples is not None else 65536, 3.0,
+                                               even=True)
+        self.resolution = check_resolution(resolution, even=True)
+        self._layout = None
+
+    def build_layout(self):
+        r = self.resolution
+        c, h = _grid(r, -1.0, 1.0)
+        dA = h * h
+        x, y = (a.ravel() for a in np.meshgrid(c, c, indexing="ij"))
+        dirs = [np.column_stack([x, y, np.ones_like(x)])]
+        wts = [dA / (np.pi * (x * x + y * y + 1.0) ** 2)]
+        cz, _ = _grid(r // 2, 0.0, 1.0)
+        s, z = (a.ravel() for a in np.meshgrid(c, cz, indexing="ij"))
+        side_w = z * dA / (np.pi * (s * s + z * z + 1.0) ** 2)
+        one = np.ones_like(s)
+        for D in (np.column_stack([one, s, z]), np.column_stack([-one, s, z]),
+                  np.column_stack([s, one, z]), np.column_stack([s, -one, z])):
+            dirs.append(D)
+            wts.append(side_w)
+        return CellLayout(np.vstack(dirs), np.concatenate(wts), 1.0)
+
+    def __repr__(self):
+        return f"Hemicube(resolution={self.resolution})"
