@@ -3,7 +3,7 @@
 The flat API re-exports each module's ``__all__``; see ``docs/reference``.
 """
 
-from . import scenes
+from . import catalog, scenes
 from .formfactors import *  # noqa: F401,F403
 from .geometry import *  # noqa: F401,F403
 from .integrate import *  # noqa: F401,F403
@@ -16,7 +16,7 @@ from . import (formfactors as _formfactors, geometry as _geometry, integrate as 
 
 __version__ = "0.1.0"
 
-__all__ = (["scenes", "__version__", "METHODS", "FormFactorMethod", "Exact", "DiscretePPBH",
+__all__ = (["catalog", "scenes", "__version__", "METHODS", "FormFactorMethod", "Exact", "DiscretePPBH",
             "Hemicube", "CubicTetrahedron", "SinglePlane", "PolarPlane", "MonteCarlo"]
            + _scene.__all__ + _geometry.__all__ + _integrate.__all__ + _io.__all__
            + _formfactors.__all__)

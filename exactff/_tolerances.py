@@ -11,6 +11,7 @@ __all__ = [
     "ROUNDING_OVERSHOOT",
     "BSP_COPLANAR_ULPS",
     "COVERED_RTOL",
+    "DEFAULT_RTOL",
 ]
 
 #: Unit roundoff of IEEE double precision, 2**-53.
@@ -47,3 +48,8 @@ BSP_COPLANAR_ULPS = 64.0
 #: whatever lies behind can change a form factor by less than that fraction of the
 #: chart's projected solid angle, far below the 1e-11 accuracy target.
 COVERED_RTOL = 1e-13
+
+#: Default relative accuracy requested of every unoccluded form factor: where the
+#: rounding-error estimate of the double-precision value exceeds it, the value is
+#: re-evaluated with mpmath (DESIGN 2.2).
+DEFAULT_RTOL = 1e-12

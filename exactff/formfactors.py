@@ -59,7 +59,8 @@ def form_factors(scene, point, normal, *, method="exact", two_sided=False, **opt
     """
     m = resolve(method, **options)
     p = as_point(point, "point")
-    n = as_normal(normal, "normal")
+    as_normal(normal, "normal")  # validates; the methods normalise the raw input
+    n = np.asarray(normal, dtype=float)
     try:
         p, n = np.broadcast_arrays(p, n)
     except ValueError:

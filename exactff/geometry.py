@@ -105,7 +105,7 @@ def receiver_frame(normal):
     Parameters
     ----------
     normal : array_like of shape (3,)
-        Unit normal.
+        Normal (scaled to unit length here).
 
     Returns
     -------
@@ -118,7 +118,8 @@ def receiver_frame(normal):
     >>> bool(np.allclose(R, np.eye(3)))
     True
     """
-    x, y, z = (float(c) for c in normal)
+    nv = np.asarray(normal, dtype=float)
+    x, y, z = (float(c) for c in nv / np.linalg.norm(nv))
     sign = math.copysign(1.0, z)
     a = -1.0 / (sign + z)
     b = x * y * a

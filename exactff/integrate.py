@@ -22,9 +22,10 @@ import math
 import numpy as np
 
 from . import _tolerances as tol
-from .geometry import receiver_frame
+from .geometry import receiver_frame, to_local
 
 __all__ = [
+    "mp_form_factor",
     "point_polygon_form_factor",
     "point_polygon_form_factors",
     "sector_form_factor",
@@ -95,57 +96,93 @@ def sector_edge_terms(a, b):
     return out
 
 
-def _clipped_sector_sums(V, nxt, owner, foot, m):
-    """Sum of sector terms of each horizon-clipped polygon.
+#: constants of the rounding-error estimate (DESIGN 2.2): per edge term, the relative
+#: error of its angle and sum (C1 ulps), and of its plane's direction (C2 ulps per unit
+#: of the cross product's condition number)
+_C1, _C2 = 8.0, 8.0
 
-    V : (E, 3) vertices in the local frame; nxt : (E,) index of the next vertex of the
-    same polygon; owner : (E,) polygon id in [0, m); foot : (m, 2) unit direction from the
-    origin towards the line where each polygon's plane meets z = 0.
+
+def _clipped_sector_sums(A0, E, nxt, owner, foot, m):
+    """Sector sums of horizon-clipped polygons, with their rounding-error estimates.
+
+    The polygons are given in *offset form* (DESIGN 2.2): ``A0`` (m, 3) is a reference
+    vertex of each polygon relative to the point, in the local frame, and ``E`` (V, 3)
+    are the vertices' offsets from it. The edge plane ``m = a x b`` is evaluated as
+    ``A0 x (e_b - e_a) + e_a x e_b``, which stays accurate for polygons small next to
+    their distance (the plain cross product loses ``log10(distance / size)`` digits).
+
+    Returns ``(S, mags, errs)``: per polygon the sum of the sector terms, the sum of
+    their absolute values, and the estimated error of the plane directions.
     """
-    a = V
-    b = V[nxt]
-    za, zb = a[:, 2], b[:, 2]
+    A = A0[owner]
+    Ea = E
+    Eb = E[nxt]
+    za = A[:, 2] + Ea[:, 2]
+    zb = A[:, 2] + Eb[:, 2]
     above_a, above_b = za > 0, zb > 0
     cross = above_a != above_b
-    # horizon crossing of the edge (z set to exactly 0)
-    t = za[cross] / (za[cross] - zb[cross])
-    X = a[cross] + t[:, None] * (b[cross] - a[cross])
-    X[:, 2] = 0.0
-    a2 = a.copy()
-    b2 = b.copy()
     ci = np.flatnonzero(cross)
-    enter = ~above_a[cross]
-    a2[ci[enter]] = X[enter]
-    b2[ci[~enter]] = X[~enter]
-    keep = above_a | above_b
-    terms = np.zeros(len(a))
-    terms[keep] = sector_edge_terms(a2[keep], b2[keep])
+    # horizon crossing of the edge, as an offset (its height is exactly 0)
+    t = za[ci] / (za[ci] - zb[ci])
+    EX = Ea[ci] + t[:, None] * (Eb[ci] - Ea[ci])
+    enter = ~above_a[ci]
+    Ea2 = Ea.copy()
+    Eb2 = Eb.copy()
+    Ea2[ci[enter]] = EX[enter]
+    Eb2[ci[~enter]] = EX[~enter]
+    keep = np.flatnonzero(above_a | above_b)
+    A, Ea2, Eb2 = A[keep], Ea2[keep], Eb2[keep]
+    D = Eb2 - Ea2
+    M = np.cross(A, D) + np.cross(Ea2, Eb2)
+    s = np.sqrt(np.einsum("ij,ij->i", M, M))
+    a = A + Ea2
+    b = A + Eb2
+    theta = np.arctan2(s, np.einsum("ij,ij->i", a, b))
+    ok = s > 0
+    terms = np.zeros(len(owner))
+    kt = np.zeros(len(keep))
+    kt[ok] = theta[ok] * M[ok, 2] / s[ok]
+    terms[keep] = kt
+    # error of the plane direction: condition of the cross product in offset form
+    magn = np.linalg.norm(A, axis=1) * np.linalg.norm(D, axis=1) + \
+        np.linalg.norm(Ea2, axis=1) * np.linalg.norm(Eb2, axis=1)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        kappa = np.where(ok, magn / s, np.where(magn > 0, np.inf, 0.0))
+    err = np.zeros(len(owner))
+    err[keep] = np.where(np.isfinite(kappa), theta * np.minimum(2.0, _C2 * tol.EPS * kappa),
+                         2.0 * theta)
     # horizon arcs: each runs from an exit point to the next entry point along the line
     # where the polygon's plane meets z = 0; its term is the signed angle between them,
     # phi(entry) - phi(exit), with phi measured from the foot direction (no wrap-around)
     f = foot[owner[ci]]
+    X = A0[owner[ci]] + EX
     phi = np.arctan2(f[:, 0] * X[:, 1] - f[:, 1] * X[:, 0], f[:, 0] * X[:, 0] + f[:, 1] * X[:, 1])
     terms[ci] += np.where(enter, phi, -phi)
     sums = np.bincount(owner, weights=terms, minlength=m)
     mags = np.bincount(owner, weights=np.abs(terms), minlength=m)
-    return sums, mags
+    errs = np.bincount(owner, weights=err, minlength=m)
+    return sums, mags, errs
 
 
-def _finish(S, mags, d0, one_sided):
-    """Form factors from signed sector sums ``S`` (front-facing polygons have S < 0)."""
+def _finish(S, mags, errs, d0, one_sided):
+    """Form factors and their error estimates from signed sector sums ``S``
+    (front-facing polygons have S < 0)."""
     F = np.sign(d0) * S / TWO_PI
+    err = (_C1 * tol.EPS * mags + errs) / TWO_PI
     if one_sided:
         F[d0 >= 0] = 0.0
-    # rounding can leave a value a few ulps of its terms below 0, never more
-    floor = -tol.ROUNDING_OVERSHOOT * tol.EPS * (mags + 1e-300)
-    assert np.all(F >= floor), "negative form factor beyond rounding"
-    return np.maximum(F, 0.0)
+        err[d0 >= 0] = 0.0
+    # rounding can leave a value below 0 by at most its error estimate
+    assert np.all(F >= -tol.ROUNDING_OVERSHOOT * (err + 1e-300)), \
+        "negative form factor beyond rounding"
+    return np.maximum(F, 0.0), err
 
 
 class _Polygons:
     """Flat (ragged) polygon arrays of a scene, shared by the vectorised kernels."""
 
-    __slots__ = ("V", "nxt", "owner", "normals", "centroids", "counts", "offsets", "vmax")
+    __slots__ = ("V", "nxt", "owner", "normals", "centroids", "counts", "offsets", "vmax",
+                 "first", "E")
 
     def __init__(self, scene):
         self.V = scene.vertices
@@ -159,6 +196,9 @@ class _Polygons:
         self.centroids = scene.centroids
         # largest coordinate magnitude of each polygon: the scale of its rounding
         self.vmax = np.maximum.reduceat(np.abs(self.V).max(axis=1), scene.offsets[:-1])
+        # offset form: each polygon's first vertex, and every vertex relative to it
+        self.first = self.V[scene.offsets[:-1]]
+        self.E = self.V - self.first[self.owner]
 
     @classmethod
     def of(cls, scene):
@@ -177,39 +217,48 @@ def plane_distances(flat, p):
     return d, tol.PLANE_SIDE_ULPS * tol.EPS * scale
 
 
-def unoccluded_row(flat, p, n, *, one_sided=True, subset=None):
+def unoccluded_row(flat, p, n, *, one_sided=True, subset=None, tolerance=None,
+                   return_error=False):
     """Unoccluded form factors from ``p`` (normal ``n``) to every polygon of ``flat``.
 
     The hot path: culls polygons seen edge-on, facing away (one-sided) or wholly below
-    the horizon, then evaluates the sector form over all remaining edges at once.
-    ``subset`` restricts the work to a boolean mask of polygons. Returns (N,) values.
+    the horizon, then evaluates the sector form over all remaining edges at once, in
+    offset form, with a rounding-error estimate per polygon. With a ``tolerance``, every
+    value whose estimate exceeds ``tolerance * F`` is re-evaluated with mpmath from the
+    original float input (:func:`mp_form_factor`). ``subset`` restricts the work to a
+    boolean mask of polygons. Returns (N,) values, and their error estimates if
+    ``return_error``.
     """
     N = len(flat.normals)
+    p = np.asarray(p, dtype=float)
+    n_raw = np.asarray(n, dtype=float)
     d, dtol = plane_distances(flat, p)
     live = (d > dtol) if one_sided else (np.abs(d) > dtol)
     if subset is not None:
         live &= subset
     F = np.zeros(N)
+    err = np.zeros(N)
     if not live.any():
-        return F
-    R = receiver_frame(n)
+        return (F, err) if return_error else F
+    R = receiver_frame(n_raw / np.linalg.norm(n_raw))
     vmask = live[flat.owner]
     idx = np.flatnonzero(vmask)
     newpos = np.cumsum(vmask) - 1
-    V = (flat.V[idx] - p) @ R.T
     owner_all = flat.owner[idx]
+    A0_all = to_local(flat.first, p, R)
+    E = to_local(flat.E[idx], np.zeros(3), R)
     # wholly below the horizon: nothing to integrate
     zmax = np.full(N, -np.inf)
-    np.maximum.at(zmax, owner_all, V[:, 2])
+    np.maximum.at(zmax, owner_all, A0_all[owner_all, 2] + E[:, 2])
     live &= zmax > 0
     if not live.any():
-        return F
+        return (F, err) if return_error else F
     keep_v = live[owner_all]
     if not keep_v.all():
         sel = np.flatnonzero(keep_v)
         newpos2 = np.cumsum(keep_v) - 1
         nxt = newpos2[newpos[flat.nxt[idx[sel]]]]
-        V = V[sel]
+        E = E[sel]
         owner_all = owner_all[sel]
     else:
         nxt = newpos[flat.nxt[idx]]
@@ -222,12 +271,20 @@ def unoccluded_row(flat, p, n, *, one_sided=True, subset=None):
     foot = Nloc[:, :2] * -np.sign(d[ids])[:, None]
     fl = np.hypot(foot[:, 0], foot[:, 1])
     foot = np.divide(foot, fl[:, None], out=np.zeros_like(foot), where=fl[:, None] > 0)
-    S, mags = _clipped_sector_sums(V, nxt, owner, foot, len(ids))
-    F[ids] = _finish(S, mags, -d[ids], one_sided)
-    return F
+    S, mags, errs = _clipped_sector_sums(A0_all[ids], E, nxt, owner, foot, len(ids))
+    F[ids], err[ids] = _finish(S, mags, errs, -d[ids], one_sided)
+    if tolerance is not None:
+        # automatic escalation (DESIGN 2.2): where double precision cannot promise the
+        # tolerance, re-evaluate from the original float input with mpmath
+        for i in ids[err[ids] > tolerance * F[ids]]:
+            P = flat.V[flat.offsets[i]:flat.offsets[i + 1]]
+            F[i], err[i] = mp_form_factor(p, n_raw, P, one_sided=one_sided,
+                                          tolerance=tolerance, error=True)
+    return (F, err) if return_error else F
 
 
-def point_polygon_form_factors(point, normal, polygons, *, one_sided=True):
+def point_polygon_form_factors(point, normal, polygons, *, one_sided=True,
+                               tolerance=tol.DEFAULT_RTOL, error=False):
     """Unoccluded form factors from one point to many polygons (vectorised).
 
     Parameters
@@ -240,11 +297,18 @@ def point_polygon_form_factors(point, normal, polygons, *, one_sided=True):
         The polygons; a sequence is validated as by :meth:`exactff.Scene.from_polygons`.
     one_sided : bool, default True
         If True, a polygon receives only when its front faces ``p``.
+    tolerance : float or None, default 1e-12
+        Requested relative accuracy. Values whose rounding-error estimate exceeds
+        ``tolerance * F`` are re-evaluated with mpmath from the float input (see
+        ``docs/explanation/robustness.md``). None: plain double precision.
+    error : bool, default False
+        Also return the error estimates.
 
     Returns
     -------
     ndarray of shape (M,)
-        ``F(p -> polygon_j)`` with horizon clipping and no occlusion.
+        ``F(p -> polygon_j)`` with horizon clipping and no occlusion; with
+        ``error=True``, a pair ``(F, err)``.
 
     See Also
     --------
@@ -261,11 +325,120 @@ def point_polygon_form_factors(point, normal, polygons, *, one_sided=True):
     from .scene import Scene
 
     p = as_point(point)
-    n = as_normal(normal)
+    as_normal(normal)
+    n = np.asarray(normal, dtype=float)
     if p.shape != (3,) or n.shape != (3,):
         raise ValueError("point and normal must have shape (3,)")
+    _check_tolerance(tolerance)
     scene = polygons if isinstance(polygons, Scene) else Scene.from_polygons(polygons)
-    return unoccluded_row(_Polygons.of(scene), p, n, one_sided=one_sided)
+    F, err = unoccluded_row(_Polygons.of(scene), p, n, one_sided=one_sided,
+                            tolerance=tolerance, return_error=True)
+    return (F, err) if error else F
+
+
+def _check_tolerance(tolerance):
+    if tolerance is not None and not (np.isfinite(tolerance) and tolerance > 0):
+        raise ValueError(f"tolerance must be a positive number or None, got {tolerance!r}")
+
+
+# ---------------------------------------------------------------------------------------
+# high precision: the sector form in mpmath, from the original float input
+# ---------------------------------------------------------------------------------------
+def _mp_sector(point, normal, polygon, one_sided, dps):
+    import mpmath as mp
+
+    with mp.workdps(dps):
+        nv = [mp.mpf(float(c)) for c in normal]
+        ln = mp.sqrt(sum(c * c for c in nv))
+        nz = [c / ln for c in nv]
+        k = min(range(3), key=lambda i: abs(nz[i]))
+        e = [mp.mpf(0)] * 3
+        e[k] = mp.mpf(1)
+        dot = nz[k]
+        t1 = [e[i] - dot * nz[i] for i in range(3)]
+        l1 = mp.sqrt(sum(c * c for c in t1))
+        t1 = [c / l1 for c in t1]
+        t2 = [nz[1] * t1[2] - nz[2] * t1[1], nz[2] * t1[0] - nz[0] * t1[2],
+              nz[0] * t1[1] - nz[1] * t1[0]]
+        pv = [mp.mpf(float(c)) for c in point]
+        Q = []
+        for v in polygon:
+            r = [mp.mpf(float(v[i])) - pv[i] for i in range(3)]
+            Q.append([sum(r[i] * ax[i] for i in range(3)) for ax in (t1, t2, nz)])
+        # side of p: Newell normal . (centroid - p), exact up to the working precision
+        K = len(Q)
+        Nw = [mp.mpf(0)] * 3
+        for i in range(K):
+            a, b = Q[i], Q[(i + 1) % K]
+            Nw[0] += (a[1] - b[1]) * (a[2] + b[2])
+            Nw[1] += (a[2] - b[2]) * (a[0] + b[0])
+            Nw[2] += (a[0] - b[0]) * (a[1] + b[1])
+        side = sum(Nw[i] * sum(q[i] for q in Q) for i in range(3))
+        if side == 0 or (one_sided and side > 0):
+            return mp.mpf(0)
+        C = []
+        for i in range(K):
+            a, b = Q[i], Q[(i + 1) % K]
+            if a[2] > 0:
+                C.append(a)
+            if (a[2] > 0) != (b[2] > 0):
+                t = a[2] / (a[2] - b[2])
+                C.append([a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1]), mp.mpf(0)])
+        total = mp.mpf(0)
+        for i in range(len(C)):
+            a, b = C[i], C[(i + 1) % len(C)]
+            m = [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+            sm = mp.sqrt(sum(c * c for c in m))
+            if sm != 0:
+                total += mp.atan2(sm, sum(a[j] * b[j] for j in range(3))) * m[2] / sm
+        F = -total / (2 * mp.pi) if side < 0 else total / (2 * mp.pi)
+        return F
+
+
+def mp_form_factor(point, normal, polygon, *, one_sided=True, tolerance=tol.DEFAULT_RTOL,
+                   dps=None, error=False):
+    """Unoccluded form factor with mpmath, from the float input taken as exact.
+
+    The sector form evaluated at ``dps`` decimal digits and again 20 digits higher; the
+    precision grows until the two agree to ``tolerance`` (relative), up to 400 digits.
+    This is what automatic escalation calls.
+
+    Parameters
+    ----------
+    point, normal : array_like of shape (3,)
+    polygon : array_like of shape (K, 3)
+    one_sided : bool, default True
+    tolerance : float, default 1e-12
+    dps : int, optional
+        Starting precision (default 30 digits).
+    error : bool, default False
+        Also return the error estimate (the difference of the two evaluations).
+
+    Returns
+    -------
+    float, or (float, float) with ``error=True``
+
+    Examples
+    --------
+    A 1e-9 square at distance 1, where double precision keeps only a few digits:
+
+    >>> sq = np.array([[0, 0, 1], [0, 1e-9, 1], [1e-9, 1e-9, 1], [1e-9, 0, 1]])
+    >>> mp_form_factor([0, 0, 0], [0, 0, 1], sq)  # F = A / pi to first order
+    3.183098861837907e-19
+    """
+    import mpmath as mp
+
+    P = np.asarray(polygon, dtype=float)
+    prec = 30 if dps is None else int(dps)
+    while True:
+        lo = _mp_sector(point, normal, P, one_sided, prec)
+        hi = _mp_sector(point, normal, P, one_sided, prec + 20)
+        diff = abs(hi - lo)
+        if diff <= (tolerance if tolerance else 1e-15) * abs(hi) * 1e-3 or hi == lo or prec >= 400:
+            break
+        prec += 40
+    value = max(float(hi), 0.0)
+    return (value, float(diff) + abs(value) * tol.EPS) if error else value
 
 
 # ---------------------------------------------------------------------------------------
@@ -305,12 +478,13 @@ def _local_clipped(point, normal, polygon, one_sided):
     return out, (1.0 if d < 0 else -1.0)
 
 
-def sector_form_factor(point, normal, polygon, *, one_sided=True):
-    """Unoccluded form factor by the sector (Lambert) form, one polygon, scalar code.
+def sector_form_factor(point, normal, polygon, *, one_sided=True,
+                       tolerance=tol.DEFAULT_RTOL, error=False):
+    """Unoccluded form factor by the sector (Lambert) form, one polygon.
 
     ``F = (1 / 2 pi) sum_k atan2(|a_k x b_k|, a_k . b_k) (a_k x b_k)_z / |a_k x b_k|``
-    over the edges of the horizon-clipped polygon (DESIGN 2.1), summed with
-    ``math.fsum``.
+    over the edges of the horizon-clipped polygon (DESIGN 2.1), in offset form, with a
+    rounding-error estimate and automatic escalation to mpmath (DESIGN 2.2).
 
     Parameters
     ----------
@@ -318,6 +492,10 @@ def sector_form_factor(point, normal, polygon, *, one_sided=True):
     normal : array_like of shape (3,)
     polygon : array_like of shape (K, 3)
     one_sided : bool, default True
+    tolerance : float or None, default 1e-12
+        Requested relative accuracy (None: plain double precision, no escalation).
+    error : bool, default False
+        Return ``(value, error_estimate)``.
 
     Returns
     -------
@@ -329,26 +507,22 @@ def sector_form_factor(point, normal, polygon, *, one_sided=True):
     >>> round(sector_form_factor([0, 0, 0], [0, 0, 1], sq), 12)
     0.239456470461
     """
-    C, sign = _local_clipped(point, normal, polygon, one_sided)
-    if not sign or len(C) < 2:
-        return 0.0
-    terms = []
-    for i in range(len(C)):
-        a, b = C[i], C[(i + 1) % len(C)]
-        mx = a[1] * b[2] - a[2] * b[1]
-        my = a[2] * b[0] - a[0] * b[2]
-        mz = a[0] * b[1] - a[1] * b[0]
-        s = math.sqrt(mx * mx + my * my + mz * mz)
-        if s > 0:
-            theta = math.atan2(s, a[0] * b[0] + a[1] * b[1] + a[2] * b[2])
-            terms.append(theta * mz / s)
-    F = -sign * math.fsum(terms) / TWO_PI
-    floor = -tol.ROUNDING_OVERSHOOT * tol.EPS * (math.fsum(map(abs, terms)) + 1e-300)
-    assert F >= floor, "negative form factor beyond rounding"
-    return max(F, 0.0)
+    from .scene import Scene
+
+    p = as_point(point)
+    as_normal(normal)
+    n = np.asarray(normal, dtype=float)
+    if p.shape != (3,) or n.shape != (3,):
+        raise ValueError("point and normal must have shape (3,)")
+    _check_tolerance(tolerance)
+    scene = Scene.from_polygons([polygon])
+    F, err = unoccluded_row(_Polygons.of(scene), p, n, one_sided=one_sided,
+                            tolerance=tolerance, return_error=True)
+    return (float(F[0]), float(err[0])) if error else float(F[0])
 
 
-def point_polygon_form_factor(point, normal, polygon, *, one_sided=True):
+def point_polygon_form_factor(point, normal, polygon, *, one_sided=True,
+                              tolerance=tol.DEFAULT_RTOL, error=False):
     """Unoccluded form factor from a differential area to one planar polygon.
 
     ``F(p -> j) = (1 / pi) * integral over j of cos(theta_p) cos(theta_j) / r^2 dA``,
@@ -365,6 +539,12 @@ def point_polygon_form_factor(point, normal, polygon, *, one_sided=True):
     one_sided : bool, default True
         If True (the default), the polygon receives only when its front faces ``p``;
         if False, either side does.
+    tolerance : float or None, default 1e-12
+        Requested relative accuracy. When the rounding-error estimate of the double
+        precision value exceeds ``tolerance * F``, the value is re-evaluated with
+        mpmath from the float input. None: plain double precision.
+    error : bool, default False
+        Return ``(value, error_estimate)`` (in the spirit of mpmath's ``error=True``).
 
     Returns
     -------
@@ -394,7 +574,8 @@ def point_polygon_form_factor(point, normal, polygon, *, one_sided=True):
     >>> round(point_polygon_form_factor([0, 0, 0], [0, 0, 1], rect), 10)
     0.1673750099
     """
-    return sector_form_factor(point, normal, polygon, one_sided=one_sided)
+    return sector_form_factor(point, normal, polygon, one_sided=one_sided,
+                              tolerance=tolerance, error=error)
 
 
 # ---------------------------------------------------------------------------------------
