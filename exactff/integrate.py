@@ -65,6 +65,12 @@ def as_normal(normal, name="normal"):
 # ---------------------------------------------------------------------------------------
 # sector (Lambert) form, vectorised over edges
 # ---------------------------------------------------------------------------------------
+def offset_cross(A, Ea, Eb):
+    """``(A + Ea) x (A + Eb)`` in offset form, ``A x (Eb - Ea) + Ea x Eb``: accurate when
+    the offsets are small next to ``A`` (a small polygon far from the point)."""
+    return np.cross(A, Eb - Ea) + np.cross(Ea, Eb)
+
+
 def sector_edge_terms(a, b):
     """Sector-form edge terms ``theta (m . z)`` for arcs ``a -> b`` in the local frame.
 
@@ -99,10 +105,10 @@ def sector_edge_terms(a, b):
 #: constants of the rounding-error estimate (DESIGN 2.2): per edge term, the relative
 #: error of its angle and sum (C1 ulps), and of its plane's direction (C2 ulps per unit
 #: of the cross product's condition number)
-_C1, _C2 = 8.0, 8.0
+_C1, _C2 = 10.0, 10.0
 
 
-def _clipped_sector_sums(A0, E, nxt, owner, foot, m):
+def _clipped_sector_sums(A0, E, nxt, owner, m, eps=tol.EPS):
     """Sector sums of horizon-clipped polygons, with their rounding-error estimates.
 
     The polygons are given in *offset form* (DESIGN 2.2): ``A0`` (m, 3) is a reference
@@ -112,8 +118,11 @@ def _clipped_sector_sums(A0, E, nxt, owner, foot, m):
     their distance (the plain cross product loses ``log10(distance / size)`` digits).
 
     Returns ``(S, mags, errs)``: per polygon the sum of the sector terms, the sum of
-    their absolute values, and the estimated error of the plane directions.
+    their absolute values, and the estimated error of the plane directions. Works in the
+    dtype of ``A0`` and ``E`` (float64, or longdouble for the second tier), with unit
+    roundoff ``eps``; ``owner`` must be sorted (each polygon's vertices contiguous).
     """
+    dt = A0.dtype
     A = A0[owner]
     Ea = E
     Eb = E[nxt]
@@ -133,48 +142,65 @@ def _clipped_sector_sums(A0, E, nxt, owner, foot, m):
     keep = np.flatnonzero(above_a | above_b)
     A, Ea2, Eb2 = A[keep], Ea2[keep], Eb2[keep]
     D = Eb2 - Ea2
-    M = np.cross(A, D) + np.cross(Ea2, Eb2)
+    M = offset_cross(A, Ea2, Eb2)
     s = np.sqrt(np.einsum("ij,ij->i", M, M))
     a = A + Ea2
     b = A + Eb2
     theta = np.arctan2(s, np.einsum("ij,ij->i", a, b))
     ok = s > 0
-    terms = np.zeros(len(owner))
-    kt = np.zeros(len(keep))
+    terms = np.zeros(len(owner), dtype=dt)
+    kt = np.zeros(len(keep), dtype=dt)
     kt[ok] = theta[ok] * M[ok, 2] / s[ok]
     terms[keep] = kt
-    # error of the plane direction: condition of the cross product in offset form
-    magn = np.linalg.norm(A, axis=1) * np.linalg.norm(D, axis=1) + \
+    # rounding error of each term theta m_z / |m| (first order): for small theta the term
+    # is about m_z / (a . b), so the error of m_z dominates, bounded componentwise by the
+    # magnitudes of its summands (Z); the error of |m| enters at relative order theta^2,
+    # bounded by the norms of the summands (N, the cross product's condition)
+    Z = (np.abs(A[:, 0] * D[:, 1]) + np.abs(A[:, 1] * D[:, 0])
+         + np.abs(Ea2[:, 0] * Eb2[:, 1]) + np.abs(Ea2[:, 1] * Eb2[:, 0]))
+    Nm = np.linalg.norm(A, axis=1) * np.linalg.norm(D, axis=1) + \
         np.linalg.norm(Ea2, axis=1) * np.linalg.norm(Eb2, axis=1)
     with np.errstate(divide="ignore", invalid="ignore"):
-        kappa = np.where(ok, magn / s, np.where(magn > 0, np.inf, 0.0))
-    err = np.zeros(len(owner))
-    err[keep] = np.where(np.isfinite(kappa), theta * np.minimum(2.0, _C2 * tol.EPS * kappa),
-                         2.0 * theta)
+        rel = np.where(ok, _C2 * eps * (Z + theta * theta * Nm) / s,
+                       np.where(Nm > 0, np.inf, 0.0))
+    err = np.zeros(len(owner), dtype=dt)
+    err[keep] = theta * np.minimum(2.0, rel)
     # horizon arcs: each runs from an exit point to the next entry point along the line
     # where the polygon's plane meets z = 0; its term is the signed angle between them,
-    # phi(entry) - phi(exit), with phi measured from the foot direction (no wrap-around)
-    f = foot[owner[ci]]
+    # phi(entry) - phi(exit). phi is measured from the polygon's first crossing point:
+    # the crossing points lie on one line not through the origin, so their angles from
+    # any one of them stay within (-pi, pi), and short horizon arcs give small angles
+    # (no cancellation between large ones)
     X = A0[owner[ci]] + EX
+    oc = owner[ci]
+    first_of = np.full(m, -1)
+    first_of[oc[::-1]] = np.arange(len(ci))[::-1]
+    f = X[first_of[oc], :2]
     phi = np.arctan2(f[:, 0] * X[:, 1] - f[:, 1] * X[:, 0], f[:, 0] * X[:, 0] + f[:, 1] * X[:, 1])
     terms[ci] += np.where(enter, phi, -phi)
-    sums = np.bincount(owner, weights=terms, minlength=m)
-    mags = np.bincount(owner, weights=np.abs(terms), minlength=m)
-    errs = np.bincount(owner, weights=err, minlength=m)
+    # per-polygon sums over contiguous blocks (reduceat keeps the dtype; bincount
+    # would round longdouble to double)
+    starts = np.searchsorted(owner, np.arange(m))
+    sums = np.add.reduceat(terms, starts)
+    mags = np.add.reduceat(np.abs(terms), starts)
+    errs = np.add.reduceat(err, starts)
     return sums, mags, errs
 
 
-def _finish(S, mags, errs, d0, one_sided):
+def _finish(S, mags, errs, d0, one_sided, eps=tol.EPS, unchecked=None):
     """Form factors and their error estimates from signed sector sums ``S``
-    (front-facing polygons have S < 0)."""
+    (front-facing polygons have S < 0). ``unchecked`` marks values known to be
+    unreliable, exempt from the sign check."""
     F = np.sign(d0) * S / TWO_PI
-    err = (_C1 * tol.EPS * mags + errs) / TWO_PI
+    err = (_C1 * eps * mags + errs) / TWO_PI
     if one_sided:
         F[d0 >= 0] = 0.0
         err[d0 >= 0] = 0.0
     # rounding can leave a value below 0 by at most its error estimate
-    assert np.all(F >= -tol.ROUNDING_OVERSHOOT * (err + 1e-300)), \
-        "negative form factor beyond rounding"
+    ok = F >= -tol.ROUNDING_OVERSHOOT * (err + 1e-300)
+    if unchecked is not None:
+        ok |= unchecked
+    assert np.all(ok), "negative form factor beyond rounding"
     return np.maximum(F, 0.0), err
 
 
@@ -210,15 +236,91 @@ class _Polygons:
 
 def plane_distances(flat, p):
     """Signed distances of ``p`` from each polygon's plane (> 0: in front), and the
-    tolerance below which the side is undecidable from float input."""
+    tolerance below which their float value cannot decide the side."""
     rel = flat.centroids - p
     d = -np.einsum("ij,ij->i", flat.normals, rel)
     scale = np.abs(p).max() + flat.vmax
     return d, tol.PLANE_SIDE_ULPS * tol.EPS * scale
 
 
+def exact_side(P, p):
+    """Exact sign of ``A . (p - c)`` with ``A`` the Newell area vector and ``c`` the
+    vertex mean of polygon ``P``, in rational arithmetic (the float input is exact):
+    +1 when ``p`` is in front of the polygon's plane, -1 behind, 0 in it."""
+    from fractions import Fraction
+
+    Q = [[Fraction(float(c)) for c in v] for v in P]
+    q0 = Q[0]
+    A = [Fraction(0)] * 3
+    for a, b in zip(Q[1:-1], Q[2:]):
+        u = [a[i] - q0[i] for i in range(3)]
+        w = [b[i] - q0[i] for i in range(3)]
+        A[0] += u[1] * w[2] - u[2] * w[1]
+        A[1] += u[2] * w[0] - u[0] * w[2]
+        A[2] += u[0] * w[1] - u[1] * w[0]
+    k = len(Q)
+    val = sum(A[i] * (Fraction(float(p[i])) - sum(v[i] for v in Q) / k) for i in range(3))
+    return (val > 0) - (val < 0)
+
+
+def plane_sides(flat, p, exact=True):
+    """Side of ``p`` for every polygon (+1 front, -1 back, 0 in the plane), and the mask
+    of polygons whose plane passes within rounding of ``p`` (the band).
+
+    Beyond the band the float value decides. Inside it, ``exact=True`` decides in
+    rational arithmetic (the double-precision form factor is then unreliable), and
+    ``exact=False`` gives 0: seen edge-on, as the visibility engine counts them."""
+    d, dtol = plane_distances(flat, p)
+    side = np.sign(d).astype(np.int8)
+    band = np.abs(d) <= dtol
+    side[band] = 0
+    if exact:
+        for i in np.flatnonzero(band):
+            side[i] = exact_side(flat.V[flat.offsets[i]:flat.offsets[i + 1]], p)
+    return side, band
+
+
+_LONGDOUBLE_EPS = float(np.finfo(np.longdouble).eps) / 2
+
+
+def _extended_values(flat, ids, p, n_raw, d0, one_sided):
+    """Form factors and error estimates of polygons ``ids`` in long double arithmetic."""
+    ld = np.longdouble
+    counts = flat.counts[ids]
+    owner = np.repeat(np.arange(len(ids)), counts)
+    starts = np.concatenate([[0], np.cumsum(counts)[:-1]])
+    vidx = flat.offsets[ids][owner] + np.arange(len(owner)) - starts[owner]
+    nxt = np.arange(len(vidx)) + 1
+    nxt[starts + counts - 1] = starts
+    nv = n_raw.astype(ld)
+    nv = nv / np.sqrt(np.sum(nv * nv))
+    R = _frame_longdouble(nv)
+    V = flat.V[vidx].astype(ld)
+    first = V[starts]
+    A0 = _local_ld(first - p.astype(ld), R)
+    E = _local_ld(V - first[owner], R)
+    S, mags, errs = _clipped_sector_sums(A0, E, nxt, owner, len(ids), eps=_LONGDOUBLE_EPS)
+    F, err = _finish(S, mags, errs, d0, one_sided, eps=_LONGDOUBLE_EPS)
+    return F.astype(float), err.astype(float)
+
+
+def _frame_longdouble(n):
+    """Duff et al.'s orthonormal frame (as :func:`receiver_frame`) in long double."""
+    x, y, z = n
+    sign = np.longdouble(1) if z >= 0 else np.longdouble(-1)
+    a = -1 / (sign + z)
+    b = x * y * a
+    return np.array([[1 + sign * x * x * a, sign * b, -sign * x],
+                     [b, sign + y * y * a, -y], [x, y, z]], dtype=np.longdouble)
+
+
+def _local_ld(D, R):
+    x, y, z = D[:, 0], D[:, 1], D[:, 2]
+    return np.stack([x * R[k, 0] + y * R[k, 1] + z * R[k, 2] for k in range(3)], axis=-1)
+
+
 def unoccluded_row(flat, p, n, *, one_sided=True, subset=None, tolerance=None,
-                   return_error=False):
+                   return_error=False, in_band="exact"):
     """Unoccluded form factors from ``p`` (normal ``n``) to every polygon of ``flat``.
 
     The hot path: culls polygons seen edge-on, facing away (one-sided) or wholly below
@@ -228,12 +330,19 @@ def unoccluded_row(flat, p, n, *, one_sided=True, subset=None, tolerance=None,
     original float input (:func:`mp_form_factor`). ``subset`` restricts the work to a
     boolean mask of polygons. Returns (N,) values, and their error estimates if
     ``return_error``.
+
+    ``in_band`` says what happens to polygons whose plane passes within rounding of
+    ``p``: ``"exact"`` decides the side exactly and evaluates them with mpmath (their
+    double value is unreliable); ``"edge_on"`` counts them as seen edge-on (0), as the
+    visibility engine does.
     """
     N = len(flat.normals)
     p = np.asarray(p, dtype=float)
     n_raw = np.asarray(n, dtype=float)
-    d, dtol = plane_distances(flat, p)
-    live = (d > dtol) if one_sided else (np.abs(d) > dtol)
+    side, band = plane_sides(flat, p, exact=(in_band == "exact"))
+    if in_band == "edge_on":
+        band[:] = False
+    live = (side > 0) if one_sided else (side != 0)
     if subset is not None:
         live &= subset
     F = np.zeros(N)
@@ -266,17 +375,25 @@ def unoccluded_row(flat, p, n, *, one_sided=True, subset=None, tolerance=None,
     local_id = np.full(N, -1)
     local_id[ids] = np.arange(len(ids))
     owner = local_id[owner_all]
-    Nloc = flat.normals[ids] @ R.T
-    # foot direction: from the origin towards the line {z = 0, N . x = N . c}
-    foot = Nloc[:, :2] * -np.sign(d[ids])[:, None]
-    fl = np.hypot(foot[:, 0], foot[:, 1])
-    foot = np.divide(foot, fl[:, None], out=np.zeros_like(foot), where=fl[:, None] > 0)
-    S, mags, errs = _clipped_sector_sums(A0_all[ids], E, nxt, owner, foot, len(ids))
-    F[ids], err[ids] = _finish(S, mags, errs, -d[ids], one_sided)
+    S, mags, errs = _clipped_sector_sums(A0_all[ids], E, nxt, owner, len(ids))
+    F[ids], err[ids] = _finish(S, mags, errs, -side[ids].astype(float), one_sided,
+                               unchecked=band[ids])
+    # p within rounding of the polygon's plane (its side decided exactly): the double
+    # value can be anything; only the high-precision tier can give it
+    err[ids[band[ids]]] = np.inf
     if tolerance is not None:
-        # automatic escalation (DESIGN 2.2): where double precision cannot promise the
-        # tolerance, re-evaluate from the original float input with mpmath
-        for i in ids[err[ids] > tolerance * F[ids]]:
+        flagged = ids[err[ids] > tolerance * F[ids]]
+        extended = flagged[~band[flagged]]
+        if len(extended) and _LONGDOUBLE_EPS < tol.EPS / 100:
+            # second tier: the same vectorised sums in extended precision (x87 80-bit
+            # long double where the platform has it), from the original float input
+            Fl, el = _extended_values(flat, extended, p, n_raw,
+                                      -side[extended].astype(float), one_sided)
+            good = el <= tolerance * Fl
+            F[extended[good]], err[extended[good]] = Fl[good], el[good]
+            flagged = np.setdiff1d(flagged, extended[good])
+        # last tier (DESIGN 2.2): mpmath at the digits the value needs
+        for i in flagged:
             P = flat.V[flat.offsets[i]:flat.offsets[i + 1]]
             F[i], err[i] = mp_form_factor(p, n_raw, P, one_sided=one_sided,
                                           tolerance=tolerance, error=True)
@@ -462,7 +579,9 @@ def _local_clipped(point, normal, polygon, one_sided):
     N /= np.linalg.norm(N)
     d = float(N @ (P.mean(axis=0) - p))  # < 0: p is in front of the polygon
     dtol = tol.PLANE_SIDE_ULPS * tol.EPS * (np.abs(p).max() + np.abs(P).max())
-    if abs(d) <= dtol or (one_sided and d > 0):
+    if abs(d) <= dtol:
+        d = -float(exact_side(P, p))  # decided exactly
+    if d == 0 or (one_sided and d > 0):
         return [], 0.0
     # Sutherland-Hodgman against z >= 0; crossings get z = 0 exactly
     out = []

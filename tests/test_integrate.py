@@ -101,6 +101,9 @@ def test_convex_polygons_vs_area_integral(seed):
 # ---------------------------------------------------------------------------------------
 @given(P=planar_polygons(max_vertices=10), n=unit_vectors(), p=points(0.5))
 def test_eq3_vs_sector_form(P, n, p):
+    # Eq. 3 has no escalation: keep p clear of the polygon's plane (there only the
+    # sector form's high-precision tier is reliable)
+    assume(abs(ef.unit_normal(P) @ (P.mean(axis=0) - p)) > 1e-9)
     for one_sided in (True, False):
         assert_form_factors_close(eq3_form_factor(p, n, P, one_sided=one_sided),
                                   sector_form_factor(p, n, P, one_sided=one_sided),
@@ -177,6 +180,9 @@ def test_eq3_horizon_edges_after_clipping():
 # ---------------------------------------------------------------------------------------
 @given(P=planar_polygons(), n=unit_vectors(), angle=st.floats(0, 2 * math.pi))
 def test_form_factor_invariant_under_rotation_about_normal(P, n, angle):
+    # p within rounding of the polygon's plane: the value jumps with the rounding of the
+    # rotated input (the exact side changes), so no invariance to test there
+    assume(abs(ef.unit_normal(P) @ P.mean(axis=0)) > 1e-9)
     Rm = rotation(n, angle)
     for kernel in (sector_form_factor, eq3_form_factor):
         assert_form_factors_close(kernel(ORIGIN, n, P @ Rm.T), kernel(ORIGIN, n, P),
@@ -186,6 +192,7 @@ def test_form_factor_invariant_under_rotation_about_normal(P, n, angle):
 @given(P=planar_polygons(), n=unit_vectors(), p=points(1.0), axis=unit_vectors(),
        angle=st.floats(0, 2 * math.pi), shift=points(10.0))
 def test_form_factor_invariant_under_rigid_motion(P, n, p, axis, angle, shift):
+    assume(abs(ef.unit_normal(P) @ (P.mean(axis=0) - p)) > 1e-9)
     Rm = rotation(axis, angle)
     F0 = sector_form_factor(p, n, P, one_sided=False)
     F1 = sector_form_factor(Rm @ p + shift, Rm @ n, P @ Rm.T + shift, one_sided=False)
@@ -209,6 +216,7 @@ def test_splitting_a_polygon_keeps_the_total(P, n, p, cut):
 
 @given(P=planar_polygons(), n=unit_vectors(), p=points(0.5))
 def test_reversed_winding(P, n, p):
+    assume(abs(ef.unit_normal(P) @ (P.mean(axis=0) - p)) > 1e-9)
     Rv = P[::-1].copy()
     for kernel in KERNELS.values():
         front, back = kernel(p, n, P), kernel(p, n, Rv)

@@ -35,7 +35,7 @@ def resolve(method, **options):
     Examples
     --------
     >>> resolve("exact")
-    Exact(shortcuts=True)
+    Exact(tolerance=1e-12, shortcuts=True)
     """
     if isinstance(method, FormFactorMethod):
         if options:

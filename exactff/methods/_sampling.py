@@ -18,7 +18,7 @@ the lower polygon index).
 import numpy as np
 
 from ..geometry import receiver_frame, to_local
-from ..integrate import _Polygons, plane_distances
+from ..integrate import _Polygons, plane_sides
 from ..visibility.clipper import CHARTS, chart_clip
 from ._base import FormFactorMethod
 
@@ -126,16 +126,16 @@ def nearest_polygons(scene, point, normal, directions):
     """
     p = np.asarray(point, dtype=float)
     flat = _Polygons.of(scene)
-    d, dtol = plane_distances(flat, p)
+    side, _ = plane_sides(flat, p, exact=False)  # in the band: edge-on, as the engine
     Vw, counts = _padded_polygons(scene)
     R = receiver_frame(normal)
     V = to_local(Vw, p, R)
     slot = np.arange(V.shape[1])[None, :] < counts[:, None]
-    live = (np.abs(d) > dtol) & (np.where(slot, V[:, :, 2], -np.inf).max(axis=1) > 0)
+    live = (side != 0) & (np.where(slot, V[:, :, 2], -np.inf).max(axis=1) > 0)
     ids = np.flatnonzero(live)
     V, counts = V[ids], counts[ids]
     nl = flat.normals[ids] @ R.T
-    dl = -d[ids]  # n . (c - p)
+    dl = np.einsum("ij,ij->i", flat.normals[ids], flat.centroids[ids] - p)  # n . (c - p)
     D = np.asarray(directions, dtype=float)
     chart, u, v = _chart_of(D)
     best_t = np.full(len(D), np.inf)
@@ -246,10 +246,10 @@ class SampledMethod(FormFactorMethod):
         D, w = self.directions_for(point)
         hit = nearest_polygons(scene, point, normal, D)
         flat = _Polygons.of(scene)
-        d, dtol = plane_distances(flat, np.asarray(point, dtype=float))
-        receives = d > dtol
+        side, _ = plane_sides(flat, np.asarray(point, dtype=float), exact=False)
+        receives = side > 0
         if two_sided:
-            receives |= d < -dtol
+            receives |= side < 0
         ok = hit >= 0
         ok[ok] = receives[hit[ok]]
         if stats is not None:

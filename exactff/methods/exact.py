@@ -1,5 +1,8 @@
 """The exact method: continuous PPBH with BSP ordering and the area-sorting clipper."""
 
+import numpy as np
+
+from .._tolerances import DEFAULT_RTOL
 from ..visibility import visible_form_factors
 from ._base import FormFactorMethod
 
@@ -11,6 +14,11 @@ class Exact(FormFactorMethod):
 
     Parameters
     ----------
+    tolerance : float or None, default 1e-12
+        Requested relative accuracy of unoccluded values (rows where nothing can hide
+        anything): values whose rounding-error estimate exceeds it are re-evaluated with
+        mpmath. Occluded visible pieces are integrated in double precision from their
+        clipped chart coordinates (see ``docs/explanation/robustness.md``).
     shortcuts : bool, default True
         Use the convex-scene shortcut and stop filling charts once they are covered.
         Results do not depend on it (tested); False is for checking that.
@@ -25,12 +33,15 @@ class Exact(FormFactorMethod):
 
     name = "exact"
 
-    def __init__(self, *, shortcuts=True):
+    def __init__(self, *, tolerance=DEFAULT_RTOL, shortcuts=True):
+        if tolerance is not None and not (np.isfinite(tolerance) and tolerance > 0):
+            raise ValueError(f"tolerance must be a positive number or None, got {tolerance!r}")
+        self.tolerance = tolerance
         self.shortcuts = bool(shortcuts)
 
     def point_form_factors(self, scene, point, normal, *, two_sided=False, stats=None):
         return visible_form_factors(scene, point, normal, two_sided=two_sided, stats=stats,
-                                    shortcuts=self.shortcuts)
+                                    shortcuts=self.shortcuts, tolerance=self.tolerance)
 
     def __repr__(self):
-        return f"Exact(shortcuts={self.shortcuts})"
+        return f"Exact(tolerance={self.tolerance}, shortcuts={self.shortcuts})"

@@ -12,7 +12,7 @@ from scipy.spatial import ConvexHull, QhullError
 
 from .. import _tolerances as tol
 from ..geometry import receiver_frame, to_local
-from ..integrate import _Polygons, plane_distances, unoccluded_row
+from ..integrate import _Polygons, plane_sides, unoccluded_row
 from .bsp import build_bsp, front_to_back
 from .clipper import pieces_form_factors, visible_pieces
 
@@ -53,7 +53,7 @@ def is_convex_enclosure(scene):
 
 
 def visible_form_factors(scene, point, normal, *, two_sided=False, stats=None,
-                         shortcuts=True):
+                         shortcuts=True, tolerance=None):
     """Exact form factors with occlusion from one point to every polygon of a scene.
 
     Parameters
@@ -69,6 +69,9 @@ def visible_form_factors(scene, point, normal, *, two_sided=False, stats=None,
         Filled with what the row did: ``path`` (``"unoccluded"`` when the convex-scene
         shortcut applied, else ``"clipper"``), ``fragments``, ``culled_edge_on``,
         ``culled_below_horizon``, and the clipper's counters.
+    tolerance : float or None
+        Relative accuracy requested on the unoccluded (convex-scene) path; values whose
+        error estimate exceeds it are re-evaluated with mpmath.
     shortcuts : bool, default True
         False disables every shortcut: the convex-scene path, the culling of fragments
         below the horizon, the bounding-box rejection and the early stop on full
@@ -81,18 +84,21 @@ def visible_form_factors(scene, point, normal, *, two_sided=False, stats=None,
     st = stats if stats is not None else {}
     flat = _Polygons.of(scene)
     p = np.asarray(point, dtype=float)
-    d, dtol = plane_distances(flat, p)
+    # polygons whose plane passes within rounding of p count as edge-on: their images
+    # are arcs up to rounding and cannot be clipped reliably in double precision
+    side, _ = plane_sides(flat, p, exact=False)
     # shortcut: a convex enclosure seen from inside has no occlusion at all
-    if shortcuts and is_convex_enclosure(scene) and np.all(d >= -dtol):
+    if shortcuts and is_convex_enclosure(scene) and np.all(side >= 0):
         st["path"] = "unoccluded"
-        return unoccluded_row(flat, p, normal, one_sided=not two_sided)
+        return unoccluded_row(flat, p, normal, one_sided=not two_sided, tolerance=tolerance,
+                              in_band="edge_on")
     st["path"] = "clipper"
     tree, Vf, counts = scene_bsp(scene)
     order = np.array(front_to_back(tree, p), dtype=int)
     src = tree.source[order]
     # cull: fragments seen edge-on have no image and hide nothing
-    edge_on = np.abs(d[src]) <= dtol[src]
-    R = receiver_frame(normal)
+    edge_on = side[src] == 0
+    R = receiver_frame(normal)  # normalises
     V = to_local(Vf[order], p, R)
     c = counts[order]
     slot = np.arange(V.shape[1])[None, :] < c[:, None]
@@ -102,9 +108,9 @@ def visible_form_factors(scene, point, normal, *, two_sided=False, stats=None,
     st["culled_edge_on"] = int(edge_on.sum())
     st["culled_below_horizon"] = int((below & ~edge_on).sum()) if shortcuts else 0
     order, src, V, c = order[keep], src[keep], V[keep], c[keep]
-    receives = d[src] > dtol[src]
+    receives = side[src] > 0
     if two_sided:
-        receives |= d[src] < -dtol[src]
+        receives |= side[src] < 0
     pieces = visible_pieces(V, c, receives, stats=st, shortcuts=shortcuts)
     Ff = pieces_form_factors(pieces, len(order))
     F = np.bincount(src, weights=Ff, minlength=len(scene))

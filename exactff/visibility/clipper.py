@@ -12,7 +12,7 @@ import numpy as np
 import shapely
 
 from .. import _tolerances as tol
-from ..integrate import TWO_PI, sector_edge_terms
+from ..integrate import TWO_PI, offset_cross
 
 __all__ = ["CHARTS", "clip_halfspace", "chart_clip", "chart_polygons", "visible_pieces", "pieces_form_factors"]
 
@@ -271,9 +271,17 @@ def pieces_form_factors(pieces, m):
         is_hole[np.concatenate([[0], np.cumsum(n_rings)[:-1]])] = False
         coords, ring_of = shapely.get_coordinates(rings, return_index=True)
         D = _lift(coords, chart)
-        # consecutive points of one ring form an edge (rings are closed)
+        # sector terms in offset form from each ring's first point (small pieces keep
+        # their digits); consecutive points of one ring form an edge (rings are closed)
+        ring_start = np.searchsorted(ring_of, np.arange(len(rings)))
+        ref = D[ring_start][ring_of]
+        E = D - ref
         same = ring_of[1:] == ring_of[:-1]
-        terms = sector_edge_terms(D[:-1][same], D[1:][same])
+        A = ref[:-1][same]
+        M = offset_cross(A, E[:-1][same], E[1:][same])
+        s = np.sqrt(np.einsum("ij,ij->i", M, M))
+        theta = np.arctan2(s, np.einsum("ij,ij->i", D[:-1][same], D[1:][same]))
+        terms = np.divide(theta * M[:, 2], s, out=np.zeros_like(s), where=s > 0)
         S = np.bincount(ring_of[:-1][same], weights=terms, minlength=len(rings))
         signed = np.where(is_hole, -np.abs(S), np.abs(S))
         per_poly = np.bincount(ring_poly, weights=signed, minlength=len(polys))
