@@ -6,6 +6,7 @@ import numpy as np
 
 __all__ = [
     "to_local",
+    "rotate",
     "area_vector",
     "polygon_area",
     "unit_normal",
@@ -147,6 +148,19 @@ def to_local(X, p, R):
     >>> to_local(np.array([[1.0, 2.0, 3.0]]), np.zeros(3), np.eye(3)).tolist()
     [[1.0, 2.0, 3.0]]
     """
-    D = X - p
+    return rotate(X - p, R)
+
+
+def rotate(D, R):
+    """``D @ R.T`` evaluated elementwise (see :func:`to_local`).
+
+    Examples
+    --------
+    >>> rotate(np.array([[1.0, 2.0, 3.0]]), np.eye(3)[[1, 2, 0]]).tolist()
+    [[2.0, 3.0, 1.0]]
+    """
     x, y, z = D[..., 0], D[..., 1], D[..., 2]
-    return np.stack([x * R[k, 0] + y * R[k, 1] + z * R[k, 2] for k in range(3)], axis=-1)
+    out = np.empty(D.shape, dtype=np.result_type(D, R))
+    for k in range(3):
+        out[..., k] = x * R[k, 0] + y * R[k, 1] + z * R[k, 2]
+    return out

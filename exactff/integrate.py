@@ -22,7 +22,7 @@ import math
 import numpy as np
 
 from . import _tolerances as tol
-from .geometry import receiver_frame, to_local
+from .geometry import receiver_frame, rotate, to_local
 
 __all__ = [
     "mp_form_factor",
@@ -123,56 +123,62 @@ def _clipped_sector_sums(A0, E, nxt, owner, m, eps=tol.EPS):
     roundoff ``eps``; ``owner`` must be sorted (each polygon's vertices contiguous).
     """
     dt = A0.dtype
-    A = A0[owner]
-    Ea = E
-    Eb = E[nxt]
-    za = A[:, 2] + Ea[:, 2]
-    zb = A[:, 2] + Eb[:, 2]
+    n_e = len(owner)
+    Ax, Ay, Az = (A0[owner, k] for k in range(3))
+    Eax, Eay, Eaz = (E[:, k].copy() for k in range(3))
+    Ebx, Eby, Ebz = Eax[nxt], Eay[nxt], Eaz[nxt]
+    za = Az + Eaz
+    zb = Az + Ebz
     above_a, above_b = za > 0, zb > 0
-    cross = above_a != above_b
-    ci = np.flatnonzero(cross)
+    ci = np.flatnonzero(above_a != above_b)
     # horizon crossing of the edge, as an offset (its height is exactly 0)
     t = za[ci] / (za[ci] - zb[ci])
-    EX = Ea[ci] + t[:, None] * (Eb[ci] - Ea[ci])
+    EX = np.column_stack([Ea[ci] + t * (Eb[ci] - Ea[ci])
+                          for Ea, Eb in ((Eax, Ebx), (Eay, Eby), (Eaz, Ebz))])
     enter = ~above_a[ci]
-    Ea2 = Ea.copy()
-    Eb2 = Eb.copy()
-    Ea2[ci[enter]] = EX[enter]
-    Eb2[ci[~enter]] = EX[~enter]
-    keep = np.flatnonzero(above_a | above_b)
-    A, Ea2, Eb2 = A[keep], Ea2[keep], Eb2[keep]
-    D = Eb2 - Ea2
-    M = offset_cross(A, Ea2, Eb2)
-    s = np.sqrt(np.einsum("ij,ij->i", M, M))
-    a = A + Ea2
-    b = A + Eb2
-    theta = np.arctan2(s, np.einsum("ij,ij->i", a, b))
+    ce, cx = ci[enter], ci[~enter]
+    for k, (Ea, Eb) in enumerate(((Eax, Ebx), (Eay, Eby), (Eaz, Ebz))):
+        Ea[ce] = EX[enter, k]
+        Eb[cx] = EX[~enter, k]
+    keep = above_a | above_b
+    if not keep.all():
+        kk = np.flatnonzero(keep)
+        Ax, Ay, Az, Eax, Eay, Eaz, Ebx, Eby, Ebz = (
+            v[kk] for v in (Ax, Ay, Az, Eax, Eay, Eaz, Ebx, Eby, Ebz))
+    else:
+        kk = slice(None)
+    # the edge's plane in offset form: m = A x (Eb - Ea) + Ea x Eb
+    Dx, Dy, Dz = Ebx - Eax, Eby - Eay, Ebz - Eaz
+    p1, p2, p3, p4 = Ax * Dy, Ay * Dx, Eax * Eby, Eay * Ebx
+    Mz = (p1 - p2) + (p3 - p4)
+    Mx = (Ay * Dz - Az * Dy) + (Eay * Ebz - Eaz * Eby)
+    My = (Az * Dx - Ax * Dz) + (Eaz * Ebx - Eax * Ebz)
+    s = np.sqrt(Mx * Mx + My * My + Mz * Mz)
+    ax, ay, az = Ax + Eax, Ay + Eay, Az + Eaz
+    bx, by, bz = Ax + Ebx, Ay + Eby, Az + Ebz
+    theta = np.arctan2(s, ax * bx + ay * by + az * bz)
     ok = s > 0
-    terms = np.zeros(len(owner), dtype=dt)
-    kt = np.zeros(len(keep), dtype=dt)
-    kt[ok] = theta[ok] * M[ok, 2] / s[ok]
-    terms[keep] = kt
+    terms = np.zeros(n_e, dtype=dt)
+    terms[kk] = np.divide(theta * Mz, s, out=np.zeros_like(s), where=ok)
     # rounding error of each term theta m_z / |m| (first order): for small theta the term
     # is about m_z / (a . b), so the error of m_z dominates, bounded componentwise by the
     # magnitudes of its summands (Z); the error of |m| enters at relative order theta^2,
-    # bounded by the norms of the summands (N, the cross product's condition)
-    Z = (np.abs(A[:, 0] * D[:, 1]) + np.abs(A[:, 1] * D[:, 0])
-         + np.abs(Ea2[:, 0] * Eb2[:, 1]) + np.abs(Ea2[:, 1] * Eb2[:, 0]))
-    Nm = np.linalg.norm(A, axis=1) * np.linalg.norm(D, axis=1) + \
-        np.linalg.norm(Ea2, axis=1) * np.linalg.norm(Eb2, axis=1)
+    # bounded by |a| |b| (at least the cross product's condition)
+    Z = np.abs(p1) + np.abs(p2) + np.abs(p3) + np.abs(p4)
+    Nm = np.sqrt((ax * ax + ay * ay + az * az) * (bx * bx + by * by + bz * bz))
     with np.errstate(divide="ignore", invalid="ignore"):
         rel = np.where(ok, _C2 * eps * (Z + theta * theta * Nm) / s,
                        np.where(Nm > 0, np.inf, 0.0))
-    err = np.zeros(len(owner), dtype=dt)
-    err[keep] = theta * np.minimum(2.0, rel)
+    err = np.zeros(n_e, dtype=dt)
+    err[kk] = theta * np.minimum(2.0, rel)
     # horizon arcs: each runs from an exit point to the next entry point along the line
     # where the polygon's plane meets z = 0; its term is the signed angle between them,
     # phi(entry) - phi(exit). phi is measured from the polygon's first crossing point:
     # the crossing points lie on one line not through the origin, so their angles from
     # any one of them stay within (-pi, pi), and short horizon arcs give small angles
     # (no cancellation between large ones)
-    X = A0[owner[ci]] + EX
     oc = owner[ci]
+    X = A0[oc] + EX
     first_of = np.full(m, -1)
     first_of[oc[::-1]] = np.arange(len(ci))[::-1]
     f = X[first_of[oc], :2]
@@ -274,8 +280,13 @@ def plane_sides(flat, p, exact=True):
     side = np.sign(d).astype(np.int8)
     band = np.abs(d) <= dtol
     side[band] = 0
-    if exact:
-        for i in np.flatnonzero(band):
+    if exact and band.any():
+        # exactly coplanar and axis-aligned (all vertices share p's coordinate on some
+        # axis): side 0 without rational arithmetic, the common case in rooms
+        same = np.zeros(len(band), dtype=bool)
+        for k in range(3):
+            same |= np.logical_and.reduceat(flat.V[:, k] == p[k], flat.offsets[:-1])
+        for i in np.flatnonzero(band & ~same):
             side[i] = exact_side(flat.V[flat.offsets[i]:flat.offsets[i + 1]], p)
     return side, band
 
@@ -297,8 +308,8 @@ def _extended_values(flat, ids, p, n_raw, d0, one_sided):
     R = _frame_longdouble(nv)
     V = flat.V[vidx].astype(ld)
     first = V[starts]
-    A0 = _local_ld(first - p.astype(ld), R)
-    E = _local_ld(V - first[owner], R)
+    A0 = rotate(first - p.astype(ld), R)
+    E = rotate(V - first[owner], R)
     S, mags, errs = _clipped_sector_sums(A0, E, nxt, owner, len(ids), eps=_LONGDOUBLE_EPS)
     F, err = _finish(S, mags, errs, d0, one_sided, eps=_LONGDOUBLE_EPS)
     return F.astype(float), err.astype(float)
@@ -312,11 +323,6 @@ def _frame_longdouble(n):
     b = x * y * a
     return np.array([[1 + sign * x * x * a, sign * b, -sign * x],
                      [b, sign + y * y * a, -y], [x, y, z]], dtype=np.longdouble)
-
-
-def _local_ld(D, R):
-    x, y, z = D[:, 0], D[:, 1], D[:, 2]
-    return np.stack([x * R[k, 0] + y * R[k, 1] + z * R[k, 2] for k in range(3)], axis=-1)
 
 
 def unoccluded_row(flat, p, n, *, one_sided=True, subset=None, tolerance=None,
@@ -355,7 +361,7 @@ def unoccluded_row(flat, p, n, *, one_sided=True, subset=None, tolerance=None,
     newpos = np.cumsum(vmask) - 1
     owner_all = flat.owner[idx]
     A0_all = to_local(flat.first, p, R)
-    E = to_local(flat.E[idx], np.zeros(3), R)
+    E = rotate(flat.E[idx], R)
     # wholly below the horizon: nothing to integrate
     zmax = np.full(N, -np.inf)
     np.maximum.at(zmax, owner_all, A0_all[owner_all, 2] + E[:, 2])
