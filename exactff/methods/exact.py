@@ -15,10 +15,10 @@ class Exact(FormFactorMethod):
     Parameters
     ----------
     tolerance : float or None, default 1e-12
-        Requested relative accuracy of unoccluded values (rows where nothing can hide
-        anything): values whose rounding-error estimate exceeds it are re-evaluated with
-        mpmath. Occluded visible pieces are integrated in double precision from their
-        clipped chart coordinates (see ``docs/explanation/robustness.md``).
+        Requested relative accuracy: values (and visible pieces) whose rounding-error
+        estimate exceeds it are re-evaluated in long double or mpmath. Visible pieces
+        start from double-precision clip coordinates, which bounds thin slivers to about
+        1e-16 absolute (see ``docs/explanation/robustness.md``).
     shortcuts : bool, default True
         Use the convex-scene shortcut and stop filling charts once they are covered.
         Results do not depend on it (tested); False is for checking that.

@@ -70,8 +70,9 @@ def visible_form_factors(scene, point, normal, *, two_sided=False, stats=None,
         shortcut applied, else ``"clipper"``), ``fragments``, ``culled_edge_on``,
         ``culled_below_horizon``, and the clipper's counters.
     tolerance : float or None
-        Relative accuracy requested on the unoccluded (convex-scene) path; values whose
-        error estimate exceeds it are re-evaluated with mpmath.
+        Relative accuracy requested of every unoccluded value (convex-scene path) and of
+        every visible piece: values whose error estimate exceeds it are re-evaluated in
+        higher precision (pieces from their clipped float coordinates).
     shortcuts : bool, default True
         False disables every shortcut: the convex-scene path, the culling of fragments
         below the horizon, the bounding-box rejection and the early stop on full
@@ -112,6 +113,12 @@ def visible_form_factors(scene, point, normal, *, two_sided=False, stats=None,
     if two_sided:
         receives |= side[src] < 0
     pieces = visible_pieces(V, c, receives, stats=st, shortcuts=shortcuts)
-    Ff = pieces_form_factors(pieces, len(order))
+    Ff, ef_ = pieces_form_factors(pieces, len(order), tolerance=tolerance, owner=src)
     F = np.bincount(src, weights=Ff, minlength=len(scene))
+    E = np.bincount(src, weights=ef_, minlength=len(scene))
+    # holes subtract: a value may fall below 0 by rounding, never by more than its estimate
+    assert np.all(F >= -tol.ROUNDING_OVERSHOOT * (E + 1e-300)), \
+        "negative form factor beyond rounding"
+    if stats is not None:
+        stats["max_error_estimate"] = float(E.max(initial=0.0))
     return np.maximum(F, 0.0)

@@ -12,7 +12,7 @@ import numpy as np
 import shapely
 
 from .. import _tolerances as tol
-from ..integrate import TWO_PI, offset_cross
+from ..integrate import TWO_PI
 
 __all__ = ["CHARTS", "clip_halfspace", "chart_clip", "chart_polygons", "visible_pieces", "pieces_form_factors"]
 
@@ -247,16 +247,51 @@ def _lift(coords, chart):
     return coords[:, :1] * eu + coords[:, 1:2] * ev + ew
 
 
-def pieces_form_factors(pieces, m):
-    """Form factors of visible pieces, summed per fragment: ``(m,)`` array.
+def _rings_long_double(D, start, count):
+    """Absolute image areas / pi (form factors) of closed rings of directions, and their
+    error estimates, in long double arithmetic."""
+    from ..integrate import _C1, _LONGDOUBLE_EPS as u, _clipped_sector_sums
 
-    Every ring of a piece is a closed chain of great-circle arcs; its sector sum is
-    twice the signed area of its image on the base disk. Exterior rings add and holes
-    subtract the absolute values, so the result does not depend on ring orientation.
+    owner = np.repeat(np.arange(len(start)), count)
+    first = np.concatenate([[0], np.cumsum(count)[:-1]])
+    idx = start[owner] + np.arange(len(owner)) - first[owner]
+    nxt = np.arange(len(owner)) + 1
+    nxt[first + count - 1] = first
+    Dl = D[idx].astype(np.longdouble)
+    A0 = Dl[first]
+    S, mags, errs = _clipped_sector_sums(A0, Dl - A0[owner], nxt, owner, len(start), eps=u)
+    val = (np.abs(S) / (2 * np.pi)).astype(float)
+    return val, ((_C1 * u * mags + errs) / (2 * np.pi)).astype(float)
+
+
+def pieces_form_factors(pieces, m, tolerance=None, owner=None):
+    """Form factors of visible pieces, summed per fragment, with error estimates.
+
+    Every ring of a piece is a closed chain of great-circle arcs (its chart coordinates
+    lifted to directions ``u e_u + v e_v + e_w``, exactly). Its sector sum, evaluated in
+    offset form by the kernel's own ``_clipped_sector_sums`` (an edge on the horizon
+    becomes its horizon arc), is twice the signed area of its image on the base disk.
+    Exterior rings add and holes subtract the absolute values, so the result does not
+    depend on ring orientation.
+
+    With a ``tolerance``: where the summed estimate of a polygon (fragments grouped by
+    ``owner``, default one group per fragment) exceeds ``tolerance`` times its value,
+    its pieces that carry a share of that error are re-evaluated with mpmath from their
+    (float, exact) lifted coordinates.
+
+    Returns
+    -------
+    (ndarray of shape (m,), ndarray of shape (m,))
+        Form factors and error estimates per fragment.
     """
+    from .. import _tolerances as tol
+    from ..integrate import _C1, _LONGDOUBLE_EPS, _clipped_sector_sums, mp_form_factor
+
     F = np.zeros(m)
+    err = np.zeros(m)
     if not pieces:
-        return F
+        return F, err
+    vals, errs_, frags, ring_sets = [], [], [], []
     for ci, chart in enumerate(CHARTS):
         sel = [(k, g) for k, c, g in pieces if c == ci]
         if not sel:
@@ -274,21 +309,67 @@ def pieces_form_factors(pieces, m):
         n_rings = shapely.get_num_interior_rings(polys) + 1
         is_hole[np.concatenate([[0], np.cumsum(n_rings)[:-1]])] = False
         coords, ring_of = shapely.get_coordinates(rings, return_index=True)
+        # drop each ring's closing point; offsets from its first point
+        last = np.ones(len(ring_of), dtype=bool)
+        last[:-1] = ring_of[1:] != ring_of[:-1]
+        coords, ring_of = coords[~last], ring_of[~last]
         D = _lift(coords, chart)
-        # sector terms in offset form from each ring's first point (small pieces keep
-        # their digits); consecutive points of one ring form an edge (rings are closed)
-        ring_start = np.searchsorted(ring_of, np.arange(len(rings)))
-        ref = D[ring_start][ring_of]
-        E = D - ref
-        same = ring_of[1:] == ring_of[:-1]
-        A = ref[:-1][same]
-        M = offset_cross(A, E[:-1][same], E[1:][same])
-        s = np.sqrt(np.einsum("ij,ij->i", M, M))
-        theta = np.arctan2(s, np.einsum("ij,ij->i", D[:-1][same], D[1:][same]))
-        terms = np.divide(theta * M[:, 2], s, out=np.zeros_like(s), where=s > 0)
-        S = np.bincount(ring_of[:-1][same], weights=terms, minlength=len(rings))
-        signed = np.where(is_hole, -np.abs(S), np.abs(S))
-        per_poly = np.bincount(ring_poly, weights=signed, minlength=len(polys))
-        per_geom = np.bincount(poly_of, weights=per_poly, minlength=len(geoms))
-        F += np.bincount(frag, weights=per_geom, minlength=m)
-    return F / TWO_PI
+        start = np.searchsorted(ring_of, np.arange(len(rings)))
+        count = np.diff(np.append(start, len(ring_of)))
+        nxt = np.arange(len(ring_of)) + 1
+        nxt[start + count - 1] = start
+        A0 = D[start]
+        S, mags, errs = _clipped_sector_sums(A0, D - A0[ring_of], nxt, ring_of, len(rings))
+        val = np.abs(S) / TWO_PI
+        e_ring = (_C1 * tol.EPS * mags + errs) / TWO_PI
+        geom_of_ring = poly_of[ring_poly]
+        vals.append(np.bincount(geom_of_ring, weights=np.where(is_hole, -val, val),
+                                minlength=len(geoms)))
+        errs_.append(np.bincount(geom_of_ring, weights=e_ring, minlength=len(geoms)))
+        frags.append(frag)
+        ring_sets.append((D, start, count, is_hole, geom_of_ring))
+    if not vals:
+        return F, err
+    if tolerance is not None:
+        group = np.arange(m) if owner is None else np.asarray(owner)
+        Fg = np.zeros(group.max() + 1)
+        Eg = np.zeros(group.max() + 1)
+        for v, e, fr in zip(vals, errs_, frags):
+            np.add.at(Fg, group[fr], v)
+            np.add.at(Eg, group[fr], e)
+        for v, e, fr, (D, start, count, is_hole, geom_of_ring) in zip(vals, errs_, frags,
+                                                                      ring_sets):
+            g_of = group[fr]
+            # escalate the pieces of polygons that miss the tolerance, where the piece
+            # carries at least a tenth of the allowed error
+            bad = np.flatnonzero((Eg[g_of] > tolerance * Fg[g_of])
+                                 & (e > 0.1 * tolerance * Fg[g_of]))
+            if len(bad) == 0:
+                continue
+            # second tier: the flagged pieces' rings in long double, all at once
+            rsel = np.flatnonzero(np.isin(geom_of_ring, bad))
+            if _LONGDOUBLE_EPS < tol.EPS / 100:
+                rv, re = _rings_long_double(D, start[rsel], count[rsel])
+                signed = np.where(is_hole[rsel], -rv, rv)
+                gv = np.zeros(len(v))
+                ge = np.zeros(len(v))
+                np.add.at(gv, geom_of_ring[rsel], signed)
+                np.add.at(ge, geom_of_ring[rsel], re)
+                good = bad[ge[bad] <= 0.1 * tolerance * Fg[g_of[bad]]]
+                v[good], e[good] = gv[good], ge[good]
+                bad = np.setdiff1d(bad, good)
+            # last tier: mpmath, ring by ring
+            for g in bad:
+                total = e_total = 0.0
+                for r in np.flatnonzero(geom_of_ring == g):
+                    ring = D[start[r]:start[r] + count[r]]
+                    rv1, re1 = mp_form_factor(np.zeros(3), np.array([0.0, 0.0, 1.0]), ring,
+                                              one_sided=False, tolerance=tolerance,
+                                              error=True)
+                    total += -rv1 if is_hole[r] else rv1
+                    e_total += re1
+                v[g], e[g] = total, e_total
+    for v, e, fr in zip(vals, errs_, frags):
+        F += np.bincount(fr, weights=v, minlength=m)
+        err += np.bincount(fr, weights=e, minlength=m)
+    return F, err
