@@ -5,6 +5,7 @@ import math
 import numpy as np
 
 __all__ = [
+    "padded",
     "to_local",
     "rotate",
     "area_vector",
@@ -164,3 +165,29 @@ def rotate(D, R):
     for k in range(3):
         out[..., k] = x * R[k, 0] + y * R[k, 1] + z * R[k, 2]
     return out
+
+
+def padded(polygons):
+    """Polygons as one padded array, each padded by repeating its last vertex.
+
+    Parameters
+    ----------
+    polygons : sequence of ndarray of shape (K_i, 3)
+
+    Returns
+    -------
+    (ndarray of shape (M, max K_i, 3), ndarray of shape (M,))
+        The vertices and the counts ``K_i``.
+
+    Examples
+    --------
+    >>> V, k = padded([np.zeros((3, 3)), np.ones((4, 3))])
+    >>> V.shape, k.tolist()
+    ((2, 4, 3), [3, 4])
+    """
+    counts = np.array([len(P) for P in polygons])
+    V = np.empty((len(counts), counts.max(), 3))
+    for i, P in enumerate(polygons):
+        V[i, : len(P)] = P
+        V[i, len(P):] = P[-1]
+    return V, counts

@@ -31,7 +31,6 @@ __all__ = [
     "sector_form_factor",
     "eq3_form_factor",
     "eq3_edge_integral",
-    "sector_edge_terms",
 ]
 
 TWO_PI = 2.0 * math.pi
@@ -65,43 +64,6 @@ def as_normal(normal, name="normal"):
 # ---------------------------------------------------------------------------------------
 # sector (Lambert) form, vectorised over edges
 # ---------------------------------------------------------------------------------------
-def offset_cross(A, Ea, Eb):
-    """``(A + Ea) x (A + Eb)`` in offset form, ``A x (Eb - Ea) + Ea x Eb``: accurate when
-    the offsets are small next to ``A`` (a small polygon far from the point)."""
-    return np.cross(A, Eb - Ea) + np.cross(Ea, Eb)
-
-
-def sector_edge_terms(a, b):
-    """Sector-form edge terms ``theta (m . z)`` for arcs ``a -> b`` in the local frame.
-
-    Parameters
-    ----------
-    a, b : ndarray of shape (E, 3)
-        Edge end points relative to the receiving point, in its local frame (z along
-        the normal). Only the directions matter.
-
-    Returns
-    -------
-    ndarray of shape (E,)
-        ``atan2(|a x b|, a . b) * (a x b)_z / |a x b|``; twice the signed area (on the
-        base disk) between the origin and the image of the arc. 0 where ``a x b = 0``.
-
-    Examples
-    --------
-    A quarter of the horizon, from x to y, bounds a quarter disk of area pi / 4:
-
-    >>> float(sector_edge_terms(np.array([[1.0, 0, 0]]), np.array([[0, 1.0, 0]]))[0]) / 2
-    0.7853981633974483
-    """
-    m = np.cross(a, b)
-    s = np.sqrt(np.einsum("ij,ij->i", m, m))
-    theta = np.arctan2(s, np.einsum("ij,ij->i", a, b))
-    out = np.zeros(len(s))
-    ok = s > 0
-    out[ok] = theta[ok] * m[ok, 2] / s[ok]
-    return out
-
-
 #: constants of the rounding-error estimate (DESIGN 2.2): per edge term, the relative
 #: error of its angle and sum (C1 ulps), and of its plane's direction (C2 ulps per unit
 #: of the cross product's condition number)
@@ -549,8 +511,6 @@ def mp_form_factor(point, normal, polygon, *, one_sided=True, tolerance=tol.DEFA
     >>> mp_form_factor([0, 0, 0], [0, 0, 1], sq)  # F = A / pi to first order
     3.183098861837907e-19
     """
-    import mpmath as mp
-
     P = np.asarray(polygon, dtype=float)
     prec = 30 if dps is None else int(dps)
     while True:
@@ -632,17 +592,8 @@ def sector_form_factor(point, normal, polygon, *, one_sided=True,
     >>> round(sector_form_factor([0, 0, 0], [0, 0, 1], sq), 12)
     0.239456470461
     """
-    from .scene import Scene
-
-    p = as_point(point)
-    as_normal(normal)
-    n = np.asarray(normal, dtype=float)
-    if p.shape != (3,) or n.shape != (3,):
-        raise ValueError("point and normal must have shape (3,)")
-    _check_tolerance(tolerance)
-    scene = Scene.from_polygons([polygon])
-    F, err = unoccluded_row(_Polygons.of(scene), p, n, one_sided=one_sided,
-                            tolerance=tolerance, return_error=True)
+    F, err = point_polygon_form_factors(point, normal, [polygon], one_sided=one_sided,
+                                        tolerance=tolerance, error=True)
     return (float(F[0]), float(err[0])) if error else float(F[0])
 
 

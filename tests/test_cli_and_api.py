@@ -3,8 +3,6 @@
 import subprocess
 import sys
 
-import pytest
-
 import exactff as ef
 from exactff.cli import main
 

@@ -27,12 +27,7 @@ def test_cornell_front_wall_row_for_every_bsp_tree(candidates, seed):
     # edges are now bit-identical
     scene = ef.scenes.cornell_box(closed=True)
     tree = bsp.build_bsp(scene, candidates=candidates, seed=seed)
-    counts = np.array([len(f) for f in tree.fragments])
-    V = np.zeros((len(counts), counts.max(), 3))
-    for k, f in enumerate(tree.fragments):
-        V[k, : len(f)] = f
-        V[k, len(f):] = f[-1]
-    scene._cache["bsp"] = (tree, V, counts)
+    scene._cache["bsp"] = (tree, *ef.geometry.padded(tree.fragments))
     i = scene.names.index("front_wall")
     F = ef.form_factors(scene, scene.centroids[i], scene.normals[i])
     assert abs(F.sum() - 1.0) < 1e-13

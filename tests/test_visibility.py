@@ -13,7 +13,6 @@ import exactff as ef
 from exactff.methods import Exact
 from exactff.testing import assert_form_factors_close
 from exactff.testing.strategies import unit_vectors
-from exactff.visibility import visible_form_factors
 
 from common import rect_xy, rotation
 

@@ -17,7 +17,7 @@ the lower polygon index).
 
 import numpy as np
 
-from ..geometry import receiver_frame, to_local
+from ..geometry import padded, receiver_frame, to_local
 from ..integrate import _Polygons, plane_sides
 from ..visibility.clipper import CHARTS, chart_clip
 from ._base import FormFactorMethod
@@ -70,6 +70,14 @@ def samples_to_resolution(samples, cells_per_resolution_squared, even=False, nam
     return r
 
 
+def resolution_from(resolution, samples, cells_per_resolution_squared, even=False):
+    """The resolution given, or the one with about ``samples`` cells (default 65,536)."""
+    if resolution is None:
+        resolution = samples_to_resolution(samples if samples is not None else 65536,
+                                           cells_per_resolution_squared, even=even)
+    return check_resolution(resolution, even=even)
+
+
 def check_resolution(value, name="resolution", even=False):
     if not (isinstance(value, (int, np.integer)) and value > 0):
         raise ValueError(f"{name} must be a positive integer, got {value!r}")
@@ -98,12 +106,7 @@ def _chart_of(D):
 def _padded_polygons(scene):
     cache = scene._cache
     if "padded" not in cache:
-        counts = np.diff(scene.offsets)
-        V = np.empty((len(scene), counts.max(), 3))
-        for i, P in enumerate(scene.polygons):
-            V[i, : len(P)] = P
-            V[i, len(P):] = P[-1]
-        cache["padded"] = (V, counts)
+        cache["padded"] = padded(scene.polygons)
     return cache["padded"]
 
 

@@ -2,7 +2,7 @@
 
 import numpy as np
 
-from ._sampling import CellLayout, SampledMethod, check_resolution, samples_to_resolution
+from ._sampling import CellLayout, SampledMethod, resolution_from
 
 __all__ = ["CubicTetrahedron", "cubic_tetrahedron_frame"]
 
@@ -58,9 +58,7 @@ class CubicTetrahedron(SampledMethod):
     name = "cubic_tetrahedron"
 
     def __init__(self, resolution=None, *, samples=None):
-        if resolution is None:
-            resolution = samples_to_resolution(samples if samples is not None else 65536, 1.5)
-        self.resolution = check_resolution(resolution)
+        self.resolution = resolution_from(resolution, samples, 1.5)
         self._layout = None
 
     def build_layout(self):

@@ -2,7 +2,7 @@
 
 import numpy as np
 
-from ._sampling import CellLayout, SampledMethod, check_resolution, samples_to_resolution
+from ._sampling import CellLayout, SampledMethod, resolution_from
 
 __all__ = ["Hemicube"]
 
@@ -45,10 +45,7 @@ class Hemicube(SampledMethod):
     name = "hemicube"
 
     def __init__(self, resolution=None, *, samples=None):
-        if resolution is None:
-            resolution = samples_to_resolution(samples if samples is not None else 65536, 3.0,
-                                               even=True)
-        self.resolution = check_resolution(resolution, even=True)
+        self.resolution = resolution_from(resolution, samples, 3.0, even=True)
         self._layout = None
 
     def build_layout(self):

@@ -2,7 +2,7 @@
 
 import numpy as np
 
-from ._sampling import CellLayout, SampledMethod, check_resolution, samples_to_resolution
+from ._sampling import CellLayout, SampledMethod, resolution_from
 
 __all__ = ["DiscretePPBH"]
 
@@ -42,10 +42,7 @@ class DiscretePPBH(SampledMethod):
     name = "ppbh"
 
     def __init__(self, resolution=None, *, samples=None):
-        if resolution is None:
-            resolution = samples_to_resolution(samples if samples is not None else 65536,
-                                               np.pi / 4)
-        self.resolution = check_resolution(resolution)
+        self.resolution = resolution_from(resolution, samples, np.pi / 4)
         self._layout = None
 
     def build_layout(self):

@@ -2,7 +2,7 @@
 
 import numpy as np
 
-from ._sampling import CellLayout, SampledMethod, check_resolution, samples_to_resolution
+from ._sampling import CellLayout, SampledMethod, check_resolution, resolution_from
 
 __all__ = ["SinglePlane", "parallel_rectangle_form_factor"]
 
@@ -84,9 +84,7 @@ class SinglePlane(SampledMethod):
                              f"got {cells!r}")
         if not (np.isfinite(extent) and extent > 0):
             raise ValueError(f"extent must be a positive finite number, got {extent!r}")
-        if resolution is None:
-            resolution = samples_to_resolution(samples if samples is not None else 65536, 1.0)
-        self.resolution = check_resolution(resolution)
+        self.resolution = resolution_from(resolution, samples, 1.0)
         self.refine = check_resolution(refine, "refine")
         self.extent = float(extent)
         self.cells = cells

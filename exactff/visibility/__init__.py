@@ -11,7 +11,7 @@ import numpy as np
 from scipy.spatial import ConvexHull, QhullError
 
 from .. import _tolerances as tol
-from ..geometry import receiver_frame, to_local
+from ..geometry import padded, receiver_frame, to_local
 from ..integrate import _Polygons, plane_sides, unoccluded_row
 from .bsp import build_bsp, front_to_back
 from .clipper import pieces_form_factors, visible_pieces
@@ -25,12 +25,7 @@ def scene_bsp(scene):
     cache = scene._cache
     if "bsp" not in cache:
         tree = build_bsp(scene)
-        counts = np.array([len(f) for f in tree.fragments])
-        V = np.zeros((len(counts), counts.max(), 3))
-        for i, f in enumerate(tree.fragments):
-            V[i, : len(f)] = f
-            V[i, len(f):] = f[-1]
-        cache["bsp"] = (tree, V, counts)
+        cache["bsp"] = (tree, *padded(tree.fragments))
     return cache["bsp"]
 
 
