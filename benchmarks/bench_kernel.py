@@ -9,13 +9,17 @@ scalar paths validate the polygon and escalate as by default.
 """
 
 import argparse
+import os
 import platform
-import time
+import sys
 
 import numpy as np
 
 import exactff as ef
 from exactff.integrate import eq3_form_factor, sector_form_factor
+
+sys.path.insert(0, os.path.dirname(__file__))
+from scenes_bench import best_of  # noqa: E402
 
 
 def random_quads(n, seed=0):
@@ -29,15 +33,6 @@ def random_quads(n, seed=0):
         c = rng.uniform(-2, 2, size=3)
         out[i] = c + base @ Rm[:2]
     return out
-
-
-def best(f, repeat):
-    times = []
-    for _ in range(repeat):
-        t = time.perf_counter()
-        f()
-        times.append(time.perf_counter() - t)
-    return min(times)
 
 
 def main():
@@ -57,12 +52,12 @@ def main():
 
     ns = args.scalar_quads
     rows = []
-    t_sector = best(lambda: [sector_form_factor(p, n, q) for q in quads[:ns]], max(1, args.repeat // 2))
-    t_eq3 = best(lambda: [eq3_form_factor(p, n, q) for q in quads[:ns]], 1)
-    t_vec = best(lambda: ef.point_polygon_form_factors(p, n, scene, tolerance=None), args.repeat)
-    t_vec2 = best(lambda: ef.point_polygon_form_factors(p, n, scene, one_sided=False,
+    t_sector = best_of(lambda: [sector_form_factor(p, n, q) for q in quads[:ns]], max(1, args.repeat // 2))
+    t_eq3 = best_of(lambda: [eq3_form_factor(p, n, q) for q in quads[:ns]], 1)
+    t_vec = best_of(lambda: ef.point_polygon_form_factors(p, n, scene, tolerance=None), args.repeat)
+    t_vec2 = best_of(lambda: ef.point_polygon_form_factors(p, n, scene, one_sided=False,
                                                         tolerance=None), args.repeat)
-    t_esc = best(lambda: ef.point_polygon_form_factors(p, n, scene, one_sided=False), args.repeat)
+    t_esc = best_of(lambda: ef.point_polygon_form_factors(p, n, scene, one_sided=False), args.repeat)
     F2, err2 = ef.point_polygon_form_factors(p, n, scene, one_sided=False, tolerance=None,
                                              error=True)
     flagged = int(np.sum(err2 > 1e-12 * F2))

@@ -23,18 +23,9 @@ from exactff.catalog import stiff_cases
 from exactff.integrate import _Polygons, unoccluded_row
 
 sys.path.insert(0, os.path.dirname(__file__))
-from scenes_bench import furnished_room  # noqa: E402
+from scenes_bench import best_of, furnished_room  # noqa: E402
 
 TOL = 1e-12
-
-
-def best_of(f, k=3):
-    ts = []
-    for _ in range(k):
-        t = time.perf_counter()
-        f()
-        ts.append(time.perf_counter() - t)
-    return min(ts)
 
 
 def paired(f0, f1, k=7):

@@ -1,6 +1,18 @@
-"""Benchmark scenes shared by the benchmark scripts."""
+"""Benchmark scenes and timing helpers shared by the benchmark scripts."""
+
+import time
 
 import exactff as ef
+
+
+def best_of(f, k=3):
+    """Best wall time of ``k`` calls of ``f`` (the machines are shared and noisy)."""
+    ts = []
+    for _ in range(k):
+        t = time.perf_counter()
+        f()
+        ts.append(time.perf_counter() - t)
+    return min(ts)
 
 #: an 8 x 6 x 2.8 m room (z up) with 6 desks, 3 partitions and 2 bookshelves as boxes;
 #: the shelves stand against the wall y = 6 (their back faces lie in the wall's plane)
