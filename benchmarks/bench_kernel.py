@@ -12,6 +12,7 @@ import argparse
 import os
 import platform
 import sys
+import time
 
 import numpy as np
 

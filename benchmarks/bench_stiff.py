@@ -13,7 +13,6 @@ Usage: python benchmarks/bench_stiff.py [--rows 40]
 import argparse
 import os
 import sys
-import time
 
 import mpmath as mp
 import numpy as np
