@@ -91,6 +91,15 @@ def cmd_matrix(args):
     if out is None:
         stem = args.scene.split(":")[0].rsplit("/", 1)[-1].rsplit(".", 1)[0]
         out = f"{stem}_ff.npy"
+    import os
+
+    stem = out[:-4] if out.endswith(".npy") else out
+    if args.overwrite:
+        for path in (out, stem + ".done.npy", stem + ".meta.json"):
+            if os.path.exists(path):
+                os.remove(path)
+    elif os.path.exists(out):
+        print(f"resuming {out} (rows already written are kept; --overwrite to start over)")
     executor = None
     if args.jobs > 1:
         from concurrent.futures import ProcessPoolExecutor
@@ -141,6 +150,8 @@ def build_parser():
     p.add_argument("--two-sided", action="store_true", help="polygons receive on both sides")
     p.add_argument("--jobs", type=int, default=1, help="worker processes")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.add_argument("--overwrite", action="store_true",
+                   help="start over instead of resuming an existing output file")
     p.set_defaults(func=cmd_matrix)
     return parser
 

@@ -1,5 +1,7 @@
 """Form factors of a scene: rows from points (broadcasting) and whole matrices."""
 
+import hashlib
+import json
 import os
 import sys
 import time
@@ -116,6 +118,22 @@ class _Progress:
             self.bar.close()
 
 
+def _fingerprint(scene, rows):
+    """A hash of the scene's vertices and polygon sizes and of the rows."""
+    h = hashlib.sha256()
+    for a in (scene.vertices, scene.offsets, np.asarray(rows)):
+        h.update(np.ascontiguousarray(a).tobytes())
+    return h.hexdigest()
+
+
+def _read_meta(path):
+    try:
+        with open(path, encoding="utf-8") as fh:
+            return json.load(fh)
+    except (OSError, ValueError):
+        return None
+
+
 def form_factor_matrix(scene, *, method="exact", rows=None, two_sided=False, executor=None,
                        progress=False, out=None, chunk_rows=None, **options):
     """The form-factor matrix of a scene, row ``i`` from the centroid of polygon ``i``.
@@ -138,9 +156,11 @@ def form_factor_matrix(scene, *, method="exact", rows=None, two_sided=False, exe
         Show a progress bar (tqdm when installed).
     out : str or os.PathLike, optional
         Stream rows to this ``.npy`` file (a memory map). A ``.done.npy`` file beside it
-        records the finished rows; calling again with the same ``out`` resumes an
-        interrupted run and recomputes nothing that was written. It is removed once
-        every row is done.
+        records the finished rows (removed once every row is done) and a ``.meta.json``
+        file what is computed (a hash of the scene and rows, the method, the options).
+        Calling again with the same ``out`` and the same computation resumes an
+        interrupted run and recomputes nothing that was written; with a different
+        computation it raises ``ValueError`` instead of mixing results.
     chunk_rows : int, optional
         Rows per task (default: about 4 tasks per worker, at most 64 rows).
     **options
@@ -166,16 +186,25 @@ def form_factor_matrix(scene, *, method="exact", rows=None, two_sided=False, exe
     shape = (len(rows), n)
     if out is not None:
         out = os.fspath(out)
-        done_path = out[:-4] + ".done.npy" if out.endswith(".npy") else out + ".done.npy"
+        stem = out[:-4] if out.endswith(".npy") else out
+        done_path, meta_path = stem + ".done.npy", stem + ".meta.json"
+        # what the file holds: a resumed run must be the same computation
+        meta = {"scene": _fingerprint(scene, rows), "method": repr(m), "two_sided": two_sided,
+                "shape": list(shape)}
         if os.path.exists(out):
+            old = _read_meta(meta_path)
+            if old != meta:
+                raise ValueError(
+                    f"out: {out!r} was not written by this computation (scene, rows, method "
+                    f"or options differ, or {os.path.basename(meta_path)!r} is missing); "
+                    f"remove it or choose another path")
             M = np.lib.format.open_memmap(out, mode="r+")
-            if M.shape != shape:
-                raise ValueError(f"out: {out!r} holds an array of shape {M.shape}, "
-                                 f"expected {shape}; remove it or choose another path")
             done = np.load(done_path) if os.path.exists(done_path) else np.ones(len(rows), bool)
         else:
             M = np.lib.format.open_memmap(out, mode="w+", dtype=float, shape=shape)
             done = np.zeros(len(rows), bool)
+            with open(meta_path, "w", encoding="utf-8") as fh:
+                json.dump(meta, fh)
         np.save(done_path, done)
     else:
         M = np.empty(shape)

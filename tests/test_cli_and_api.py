@@ -41,3 +41,28 @@ def test_cli_ff_prints_row(capsys):
 def test_cli_reports_errors(capsys, tmp_path):
     assert main(["info", str(tmp_path / "missing.obj")]) == 2
     assert "error" in capsys.readouterr().err
+
+
+def test_cli_matrix_writes_resumes_and_overwrites(tmp_path, capsys):
+    import numpy as np
+
+    import exactff as ef
+
+    out = tmp_path / "m.npy"
+    csv = tmp_path / "m.csv"
+    assert main(["matrix", "cornell_box_closed", "-o", str(out), "--csv", str(csv),
+                 "--no-progress"]) == 0
+    text = capsys.readouterr().out
+    assert "21 x 21" in text and "min 1.000000000000000" in text
+    M = np.load(out)
+    ref = ef.form_factor_matrix(ef.scenes.cornell_box(closed=True))
+    assert np.array_equal(M, ref)
+    assert np.allclose(np.loadtxt(csv, delimiter=","), ref, rtol=0, atol=0)
+    assert main(["matrix", "cornell_box_closed", "-o", str(out), "--no-progress"]) == 0
+    assert "resuming" in capsys.readouterr().out
+    # another scene into the same file: refused, unless --overwrite
+    assert main(["matrix", "box:1", "-o", str(out), "--no-progress"]) == 2
+    assert "not written by this computation" in capsys.readouterr().err
+    assert main(["matrix", "box:1", "-o", str(out), "--no-progress", "--overwrite",
+                 "--rows", "0:3"]) == 0
+    assert np.load(out).shape == (3, 6)

@@ -335,7 +335,7 @@ def test_bad_arguments():
         ef.form_factor_matrix(scene, rows=[0, 6])
 
 
-def test_matrix_executor_progress_and_resume(tmp_path, capsys):
+def test_matrix_executor_progress_and_resume(tmp_path):
     from concurrent.futures import ThreadPoolExecutor
 
     scene = ef.scenes.furnished_box(1, FURNITURE[0])
@@ -357,4 +357,10 @@ def test_matrix_executor_progress_and_resume(tmp_path, capsys):
     np.save(tmp_path / "m.done.npy", done)
     M2 = ef.form_factor_matrix(scene, out=path, progress=True)
     assert np.array_equal(np.asarray(M2), ref)
-    assert "rows" in capsys.readouterr().err or True  # tqdm or the plain line
+    # a different computation does not silently reuse the file
+    other = ef.scenes.furnished_box(1, [((0.1, 0.2, 0.3), (0.4, 0.5, 0.6))])
+    assert len(other) == len(scene)
+    with pytest.raises(ValueError, match="not written by this computation"):
+        ef.form_factor_matrix(other, out=path)
+    with pytest.raises(ValueError, match="not written by this computation"):
+        ef.form_factor_matrix(scene, out=path, two_sided=True)
