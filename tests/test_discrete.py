@@ -283,3 +283,24 @@ def test_unknown_method_lists_the_choices():
         ef.form_factors(ef.scenes.cornell_box(), [1, 1, 1], [0, 1, 0], method="radiosity")
     for name in METHODS:
         assert name in str(info.value)
+
+
+def test_compare_records_against_an_independent_loop():
+    scene = ef.scenes.cornell_box(closed=True)
+    rows = [0, 1, 7]
+    recs = ef.compare(scene, ["ppbh", ef.Hemicube(resolution=16)], samples=[1000, 4000],
+                      rows=rows)
+    assert [r["method"] for r in recs] == ["ppbh", "ppbh", "hemicube"]
+    exact = np.array([ef.form_factors(scene, scene.centroids[i], scene.normals[i])
+                      for i in rows])
+    for r, m in zip(recs, [ef.DiscretePPBH(samples=1000), ef.DiscretePPBH(samples=4000),
+                           ef.Hemicube(resolution=16)]):
+        M = np.array([m.point_form_factors(scene, scene.centroids[i], scene.normals[i])
+                      for i in rows])
+        assert r["samples"] == m.samples and r["rows"] == 3
+        assert r["mean_abs_error"] == pytest.approx(np.abs(M - exact).mean(), rel=1e-12)
+        assert r["max_abs_error"] == pytest.approx(np.abs(M - exact).max(), rel=1e-12)
+        assert r["time_per_row"] > 0
+    assert "| ppbh | " in ef.to_markdown(recs)
+    with pytest.raises(ValueError, match="reference"):
+        ef.compare(scene, ["ppbh"], rows=rows, reference=np.zeros((2, 2)))
