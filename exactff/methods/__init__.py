@@ -43,6 +43,9 @@ def resolve(method, **options):
                              f"not the configured instance {method!r}")
         return method
     if isinstance(method, str) and method in METHODS:
-        return METHODS[method](**options)
+        try:
+            return METHODS[method](**options)
+        except TypeError as exc:
+            raise ValueError(f"options {sorted(options)} for method {method!r}: {exc}") from None
     raise ValueError(f"method must be one of {sorted(METHODS)} or a FormFactorMethod "
                      f"instance, got {method!r}")
