@@ -364,7 +364,8 @@ def unoccluded_row(flat, p, n, *, one_sided=True, subset=None, tolerance=None,
         for i in flagged:
             P = flat.V[flat.offsets[i]:flat.offsets[i + 1]]
             F[i], err[i] = mp_form_factor(p, n_raw, P, one_sided=one_sided,
-                                          tolerance=tolerance, error=True)
+                                          tolerance=tolerance, error=True,
+                                          side=int(side[i]))
     return (F, err) if return_error else F
 
 
@@ -429,7 +430,7 @@ def _check_tolerance(tolerance):
 # ---------------------------------------------------------------------------------------
 # high precision: the sector form in mpmath, from the original float input
 # ---------------------------------------------------------------------------------------
-def _mp_sector(point, normal, polygon, one_sided, dps):
+def _mp_sector(point, normal, polygon, one_sided, dps, side_hint=None):
     import mpmath as mp
 
     with mp.workdps(dps):
@@ -459,6 +460,10 @@ def _mp_sector(point, normal, polygon, one_sided, dps):
             Nw[1] += (a[2] - b[2]) * (a[0] + b[0])
             Nw[2] += (a[0] - b[0]) * (a[1] + b[1])
         side = sum(Nw[i] * sum(q[i] for q in Q) for i in range(3))
+        if side_hint is not None:
+            # the exact side (rational arithmetic): the working precision may not resolve
+            # a point extremely close to the plane (side < 0 means p in front)
+            side = -side_hint
         if side == 0 or (one_sided and side > 0):
             return mp.mpf(0)
         C = []
@@ -481,7 +486,7 @@ def _mp_sector(point, normal, polygon, one_sided, dps):
 
 
 def mp_form_factor(point, normal, polygon, *, one_sided=True, tolerance=tol.DEFAULT_RTOL,
-                   dps=None, error=False):
+                   dps=None, error=False, side=None):
     """Unoccluded form factor with mpmath, from the float input taken as exact.
 
     The sector form evaluated at ``dps`` decimal digits and again 20 digits higher; the
@@ -498,6 +503,8 @@ def mp_form_factor(point, normal, polygon, *, one_sided=True, tolerance=tol.DEFA
         Starting precision (default 30 digits).
     error : bool, default False
         Also return the error estimate (the difference of the two evaluations).
+    side : {-1, 0, 1}, optional
+        The side of the point, if already decided exactly (+1: in front).
 
     Returns
     -------
@@ -514,8 +521,8 @@ def mp_form_factor(point, normal, polygon, *, one_sided=True, tolerance=tol.DEFA
     P = np.asarray(polygon, dtype=float)
     prec = 30 if dps is None else int(dps)
     while True:
-        lo = _mp_sector(point, normal, P, one_sided, prec)
-        hi = _mp_sector(point, normal, P, one_sided, prec + 20)
+        lo = _mp_sector(point, normal, P, one_sided, prec, side)
+        hi = _mp_sector(point, normal, P, one_sided, prec + 20, side)
         diff = abs(hi - lo)
         if diff <= (tolerance if tolerance else 1e-15) * abs(hi) * 1e-3 or hi == lo or prec >= 400:
             break
