@@ -97,7 +97,7 @@ def polygon_diameter(polygon):
     return float(np.sqrt((D * D).sum(axis=-1)).max())
 
 
-def receiver_frame(normal):
+def receiver_frame(normal, dtype=float):
     """Orthonormal frame ``(t1, t2, n)`` with ``n`` the unit receiver normal.
 
     The rows of the result map world vectors into the local frame of a receiver:
@@ -108,6 +108,8 @@ def receiver_frame(normal):
     ----------
     normal : array_like of shape (3,)
         Normal (scaled to unit length here).
+    dtype : numpy float type, default float
+        Working precision (``numpy.longdouble`` for the second escalation tier).
 
     Returns
     -------
@@ -120,14 +122,15 @@ def receiver_frame(normal):
     >>> bool(np.allclose(R, np.eye(3)))
     True
     """
-    nv = np.asarray(normal, dtype=float)
-    x, y, z = (float(c) for c in nv / np.linalg.norm(nv))
-    sign = math.copysign(1.0, z)
-    a = -1.0 / (sign + z)
+    nv = np.asarray(normal).astype(dtype)
+    x, y, z = nv / np.sqrt(np.sum(nv * nv))
+    one = nv.dtype.type(1)
+    sign = one if z >= 0 else -one
+    a = -one / (sign + z)
     b = x * y * a
-    t1 = (1.0 + sign * x * x * a, sign * b, -sign * x)
-    t2 = (b, sign + y * y * a, -y)
-    return np.array([t1, t2, (x, y, z)])
+    return np.array([[one + sign * x * x * a, sign * b, -sign * x],
+                     [b, sign + y * y * a, -y],
+                     [x, y, z]], dtype=dtype)
 
 
 def to_local(X, p, R):

@@ -14,7 +14,11 @@ Two exact evaluations of that area are provided:
 * the paper's **Eq. 3, corrected**, integrated span by span between the x-extremes of
   each arc (monotone-span splitting), in :func:`eq3_form_factor`.
 
-See ``docs/explanation/conventions.md`` for the orientation conventions.
+The sector sums are evaluated in offset form with a rounding-error estimate per
+polygon; where the estimate misses the requested ``tolerance``, the value is evaluated
+again from the float input in long double and, if need be, with mpmath
+(``docs/explanation/robustness.md``). See ``docs/explanation/conventions.md`` for the
+orientation conventions.
 """
 
 import math
@@ -265,9 +269,7 @@ def _extended_values(flat, ids, p, n_raw, d0, one_sided):
     vidx = flat.offsets[ids][owner] + np.arange(len(owner)) - starts[owner]
     nxt = np.arange(len(vidx)) + 1
     nxt[starts + counts - 1] = starts
-    nv = n_raw.astype(ld)
-    nv = nv / np.sqrt(np.sum(nv * nv))
-    R = _frame_longdouble(nv)
+    R = receiver_frame(n_raw, dtype=ld)
     V = flat.V[vidx].astype(ld)
     first = V[starts]
     A0 = rotate(first - p.astype(ld), R)
@@ -275,16 +277,6 @@ def _extended_values(flat, ids, p, n_raw, d0, one_sided):
     S, mags, errs = _clipped_sector_sums(A0, E, nxt, owner, len(ids), eps=_LONGDOUBLE_EPS)
     F, err = _finish(S, mags, errs, d0, one_sided, eps=_LONGDOUBLE_EPS)
     return F.astype(float), err.astype(float)
-
-
-def _frame_longdouble(n):
-    """Duff et al.'s orthonormal frame (as :func:`receiver_frame`) in long double."""
-    x, y, z = n
-    sign = np.longdouble(1) if z >= 0 else np.longdouble(-1)
-    a = -1 / (sign + z)
-    b = x * y * a
-    return np.array([[1 + sign * x * x * a, sign * b, -sign * x],
-                     [b, sign + y * y * a, -y], [x, y, z]], dtype=np.longdouble)
 
 
 def unoccluded_row(flat, p, n, *, one_sided=True, subset=None, tolerance=None,
@@ -317,7 +309,7 @@ def unoccluded_row(flat, p, n, *, one_sided=True, subset=None, tolerance=None,
     err = np.zeros(N)
     if not live.any():
         return (F, err) if return_error else F
-    R = receiver_frame(n_raw / np.linalg.norm(n_raw))
+    R = receiver_frame(n_raw)
     vmask = live[flat.owner]
     idx = np.flatnonzero(vmask)
     newpos = np.cumsum(vmask) - 1
