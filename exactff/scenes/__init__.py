@@ -8,7 +8,7 @@ import numpy as np
 from ..scene import Scene
 
 __all__ = ["cornell_box", "cornell_box_data", "subdivided_box", "box_polygons",
-           "furnished_box"]
+           "furnished_box", "office", "office_solids", "OFFICE_REFLECTANCE"]
 
 
 def cornell_box_data():
@@ -186,3 +186,6 @@ def furnished_box(k, boxes, size=(1.0, 1.0, 1.0), box_k=1):
         polys += b
         groups += [f"box{i}"] * len(b)
     return Scene.from_polygons(polys, groups=groups)
+
+
+from .procedural import OFFICE_REFLECTANCE, office, office_solids  # noqa: E402

@@ -1,0 +1,50 @@
+"""The procedural office: the spec's validation (planarity, orientation, closure, rows)."""
+
+import numpy as np
+import pytest
+
+import exactff as ef
+
+
+@pytest.fixture(scope="module")
+def office():
+    return ef.scenes.office(1000)
+
+
+def test_office_size_and_groups(office):
+    assert abs(len(office) - 1000) <= 10
+    assert set(office.groups) == {"floor", "ceiling", "wall", "door", "window", "light",
+                                  "desk", "partition", "shelf"}
+    light = np.array(office.groups) == "light"
+    assert office.areas[light].sum() == pytest.approx(1.2 * 0.6, rel=1e-12)
+    assert np.allclose(office.normals[light], [0, -1, 0])
+    door = np.array(office.groups) == "door"
+    assert office.areas[door].sum() == pytest.approx(0.9 * 2.1, rel=1e-12)
+
+
+def test_office_orientation(office):
+    # the centroid moved a little along the normal is inside the room, outside every solid
+    h = 1e-6
+    x = office.centroids + h * office.normals
+    assert np.all((x > 0) & (x < [8.0, 2.8, 6.0]))
+    for lo, hi, _ in ef.scenes.office_solids():
+        inside = np.all((x > lo) & (x < hi), axis=1)
+        assert not inside.any()
+
+
+def test_office_closure_and_planarity(office):
+    d = ef.describe(office)
+    assert d["closure_residual"] <= 1e-12
+    assert d["max_planarity_deviation"] == 0.0
+
+
+def test_office_rows_sum_to_one(office):
+    rows = np.random.default_rng(0).choice(len(office), 20, replace=False)
+    M = ef.form_factor_matrix(office, rows=rows)
+    assert np.all(M >= 0)
+    assert np.abs(M.sum(axis=1) - 1).max() <= 1e-11
+
+
+def test_office_bad_n():
+    with pytest.raises(ValueError, match="n must be"):
+        ef.scenes.office(10)
