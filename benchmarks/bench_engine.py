@@ -5,7 +5,8 @@ Usage: python benchmarks/bench_engine.py [--quick] [--rows 40]
 Cases: the open and the closed Cornell box (full matrices); closed cubes with k x k quads
 per face, N = 1,536 and N = 6,144 (full matrices, convex: the clipper is skipped), also
 timed with the shortcuts off on a sample of rows as the in-run baseline; and a furnished
-room of about 4,300 polygons (sampled rows, occluded). Memory: the tracemalloc
+room of about 4,300 polygons and the procedural office of shared/scenes (4,478 quads;
+sampled rows, occluded). Memory: the tracemalloc
 peak of one row (Python and numpy allocations; GEOS allocations are not counted), and
 the process's peak resident set at the end (it includes the 6,144 x 6,144 matrix).
 """
@@ -82,6 +83,9 @@ def main():
                     "baseline")
     if not args.quick:
         case("cube k=32 (N=6,144)", ef.scenes.subdivided_box(32))
+    office = ef.scenes.office()
+    case("office (procedural, spec)", office,
+         np.random.default_rng(0).choice(len(office), args.rows, replace=False))
     room = furnished_room()
     ids = np.random.default_rng(1).choice(len(room), args.rows, replace=False)
     case("furnished room", room, ids)

@@ -10,6 +10,7 @@ __all__ = ["main"]
 BUILTIN = {
     "cornell_box": lambda: _scenes().cornell_box(),
     "cornell_box_closed": lambda: _scenes().cornell_box(closed=True),
+    "office": lambda: _scenes().office(),
 }
 
 
@@ -21,13 +22,16 @@ def _scenes():
 
 def open_scene(spec):
     """A scene from a file path or a built-in name (``cornell_box``, ``cornell_box_closed``,
-    ``box:K`` for a closed unit box with K x K quads per face)."""
+    ``office``, ``office:N`` for about N quads, ``box:K`` for a closed unit box with K x K
+    quads per face)."""
     from .io import load_scene
 
     if spec in BUILTIN:
         return BUILTIN[spec]()
     if spec.startswith("box:"):
         return _scenes().subdivided_box(int(spec[4:]))
+    if spec.startswith("office:"):
+        return _scenes().office(int(spec[7:]))
     return load_scene(spec)
 
 
@@ -133,7 +137,7 @@ def build_parser():
     sub = parser.add_subparsers(dest="command", required=True)
     p = sub.add_parser("info", help="size, area, bounds, planarity and closure of a scene")
     p.add_argument("scene", help="scene file (.obj, .json) or built-in name "
-                                 "(cornell_box, cornell_box_closed, box:K)")
+                                 "(cornell_box, cornell_box_closed, office, office:N, box:K)")
     p.set_defaults(func=cmd_info)
     p = sub.add_parser("ff", help="unoccluded form factors from one point to every polygon")
     p.add_argument("scene")
