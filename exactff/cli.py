@@ -11,6 +11,7 @@ BUILTIN = {
     "cornell_box": lambda: _scenes().cornell_box(),
     "cornell_box_closed": lambda: _scenes().cornell_box(closed=True),
     "office": lambda: _scenes().office(),
+    "cloister": lambda: _scenes().cloister(),
 }
 
 
@@ -22,7 +23,7 @@ def _scenes():
 
 def open_scene(spec):
     """A scene from a file path or a built-in name (``cornell_box``, ``cornell_box_closed``,
-    ``office``, ``office:N`` for about N quads, ``box:K`` for a closed unit box with K x K
+    ``office``, ``office:N`` for about N quads, ``cloister``, ``cloister:N``, ``box:K`` for a closed unit box with K x K
     quads per face)."""
     from .io import load_scene
 
@@ -32,6 +33,8 @@ def open_scene(spec):
         return _scenes().subdivided_box(int(spec[4:]))
     if spec.startswith("office:"):
         return _scenes().office(int(spec[7:]))
+    if spec.startswith("cloister:"):
+        return _scenes().cloister(int(spec[9:]))
     return load_scene(spec)
 
 
@@ -137,7 +140,7 @@ def build_parser():
     sub = parser.add_subparsers(dest="command", required=True)
     p = sub.add_parser("info", help="size, area, bounds, planarity and closure of a scene")
     p.add_argument("scene", help="scene file (.obj, .json) or built-in name "
-                                 "(cornell_box, cornell_box_closed, office, office:N, box:K)")
+                                 "(cornell_box, cornell_box_closed, office[:N], cloister[:N], box:K)")
     p.set_defaults(func=cmd_info)
     p = sub.add_parser("ff", help="unoccluded form factors from one point to every polygon")
     p.add_argument("scene")

@@ -48,3 +48,37 @@ def test_office_rows_sum_to_one(office):
 def test_office_bad_n():
     with pytest.raises(ValueError, match="n must be"):
         ef.scenes.office(10)
+
+
+@pytest.fixture(scope="module")
+def cloister():
+    return ef.scenes.cloister(4000)
+
+
+def test_cloister_size_groups_and_light(cloister):
+    assert abs(len(cloister) - 4000) <= 400
+    assert cloister.groups.count("light") == 1
+    light = cloister.groups.index("light")
+    assert cloister.areas[light] == pytest.approx(400.0, rel=1e-15)
+    assert np.allclose(cloister.normals[light], [0, -1, 0])
+    assert {"garth", "walk_floor", "walk_ceiling", "outer_wall", "arcade", "pier"} <= \
+        set(cloister.groups)
+
+
+def test_cloister_closure_and_planarity(cloister):
+    d = ef.describe(cloister)
+    assert d["closure_residual"] <= 1e-12
+    assert d["max_planarity_deviation"] <= 1e-12
+
+
+def test_cloister_rows_sum_to_one_and_walks_see_the_sky_through_arches(cloister):
+    rows = np.random.default_rng(3).choice(len(cloister), 12, replace=False)
+    M = ef.form_factor_matrix(cloister, rows=rows)
+    assert np.all(M >= 0)
+    assert np.abs(M.sum(axis=1) - 1).max() <= 1e-11
+    light = cloister.groups.index("light")
+    walk = [i for i, g in enumerate(cloister.groups) if g == "walk_floor"]
+    i = walk[len(walk) // 2]
+    F = ef.form_factors(cloister, cloister.centroids[i], cloister.normals[i])
+    U = ef.point_polygon_form_factors(cloister.centroids[i], cloister.normals[i], cloister)
+    assert 0 < F[light] < U[light]      # partly hidden by the arcade

@@ -45,3 +45,13 @@ def test_point_within_rounding_of_a_far_plane_is_decided_exactly():
     from exactff.testing.mp_reference import boundary_form_factor
     ref = float(boundary_form_factor(p, [0, 0, 1], P, one_sided=False, dps=40))
     assert ref > 0.9 and abs(F - ref) <= 1e-10 * ref
+
+
+def test_cloister_row_where_geos_returned_a_wrong_difference():
+    # GEOS returned a difference that did not remove a fully covered image (no exception,
+    # valid output); the union that followed had nested shells. The area-conservation
+    # check of the clipper now recomputes such steps with snap-rounding.
+    scene = ef.scenes.cloister(4000)
+    i = 3894
+    F = ef.form_factors(scene, scene.centroids[i], scene.normals[i])
+    assert abs(F.sum() - 1) < 1e-13

@@ -8,7 +8,7 @@ import numpy as np
 from ..scene import Scene
 
 __all__ = ["cornell_box", "cornell_box_data", "subdivided_box", "box_polygons",
-           "furnished_box", "office", "office_solids", "OFFICE_REFLECTANCE"]
+           "furnished_box", "office", "office_solids", "OFFICE_REFLECTANCE", "cloister"]
 
 
 def cornell_box_data():
@@ -188,4 +188,4 @@ def furnished_box(k, boxes, size=(1.0, 1.0, 1.0), box_k=1):
     return Scene.from_polygons(polys, groups=groups)
 
 
-from .procedural import OFFICE_REFLECTANCE, office, office_solids  # noqa: E402
+from .procedural import OFFICE_REFLECTANCE, cloister, office, office_solids  # noqa: E402

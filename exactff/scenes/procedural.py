@@ -1,4 +1,4 @@
-"""Procedural scenes of axis-aligned boxes in a room (the office of shared/scenes).
+"""Procedural scenes of shared/scenes/README.md: the office and the cloister.
 
 Faces are axis-aligned rectangles. Where a face rests on or against another (same plane,
 opposite facing, one inside the other), the smaller is omitted and becomes a hole of the
@@ -14,7 +14,7 @@ import numpy as np
 
 from ..scene import Scene
 
-__all__ = ["office", "office_solids", "OFFICE_REFLECTANCE"]
+__all__ = ["office", "office_solids", "OFFICE_REFLECTANCE", "cloister"]
 
 #: reflectances of the office's groups: walls, floor and ceiling from the spec; the
 #: others are not specified there and are chosen here
@@ -245,4 +245,240 @@ def office(n=4428):
         faces += _box(lo, hi, group)
     faces = _resolve_contacts(faces)
     quads, groups, _ = _mesh_to_target(faces, int(n))
+    return Scene.from_polygons(quads, groups=groups, materials=groups)
+
+
+# ---------------------------------------------------------------------------------------
+# the cloister
+# ---------------------------------------------------------------------------------------
+def _orient(P, normal):
+    """P with its right-hand normal turned towards ``normal``."""
+    P = np.asarray(P, dtype=float)
+    Q = P - P[0]
+    A = 0.5 * np.cross(Q, np.roll(Q, -1, axis=0)).sum(axis=0)
+    return P if A @ np.asarray(normal, dtype=float) > 0 else P[::-1].copy()
+
+
+def _mesh_quad(P, h):
+    """Bilinear ``nu x nv`` grid of a planar convex quad (sub-quads stay planar, convex)."""
+    P = np.asarray(P, dtype=float)
+    nu = max(1, math.ceil(max(np.linalg.norm(P[1] - P[0]), np.linalg.norm(P[2] - P[3])) / h - 1e-9))
+    nv = max(1, math.ceil(max(np.linalg.norm(P[3] - P[0]), np.linalg.norm(P[2] - P[1])) / h - 1e-9))
+    s = np.linspace(0.0, 1.0, nu + 1)
+    t = np.linspace(0.0, 1.0, nv + 1)
+    G = ((1 - s)[:, None, None] * (1 - t)[None, :, None] * P[0]
+         + s[:, None, None] * (1 - t)[None, :, None] * P[1]
+         + s[:, None, None] * t[None, :, None] * P[2]
+         + (1 - s)[:, None, None] * t[None, :, None] * P[3])
+    out = []
+    for i in range(nu):
+        for j in range(nv):
+            out.append(np.array([G[i, j], G[i + 1, j], G[i + 1, j + 1], G[i, j + 1]]))
+    return out
+
+
+def _quad_count(P, h):
+    P = np.asarray(P, dtype=float)
+    nu = max(1, math.ceil(max(np.linalg.norm(P[1] - P[0]), np.linalg.norm(P[2] - P[3])) / h - 1e-9))
+    nv = max(1, math.ceil(max(np.linalg.norm(P[3] - P[0]), np.linalg.norm(P[2] - P[1])) / h - 1e-9))
+    return nu * nv
+
+
+def _ring_pieces(c, y, a, r, up):
+    """The square ``[-a, a]^2`` around ``c`` (x, z) at height y minus the inscribed
+    octagon of circumradius r (vertices at 22.5 + 45 k degrees), as 8 convex pieces,
+    facing up (``up=True``) or down."""
+    ang = np.radians(22.5 + 45.0 * np.arange(8))
+    cs, sn = np.cos(ang), np.sin(ang)
+    V = np.column_stack([c[0] + r * cs, np.full(8, y), c[1] + r * sn])
+    # where the rays through the octagon's vertices leave the square
+    k = a / np.maximum(np.abs(cs), np.abs(sn))
+    S = np.column_stack([c[0] + k * cs, np.full(8, y), c[1] + k * sn])
+    pieces = []
+    for i in range(8):
+        j = (i + 1) % 8
+        poly = [V[i], S[i]]
+        mid = np.radians(22.5 + 45.0 * i + 22.5)
+        if abs(abs(math.cos(mid)) - abs(math.sin(mid))) < 1e-12:
+            # the square's corner lies between the two rays
+            poly.append([c[0] + a * np.sign(math.cos(mid)), y, c[1] + a * np.sign(math.sin(mid))])
+        poly += [S[j], V[j]]
+        pieces.append(_orient(poly, (0, 1 if up else -1, 0)))
+    return pieces
+
+
+def _octagon_facets(c, y0, y1, r):
+    ang = np.radians(22.5 + 45.0 * np.arange(9))
+    facets = []
+    for i in range(8):
+        a0 = (c[0] + r * math.cos(ang[i]), c[1] + r * math.sin(ang[i]))
+        a1 = (c[0] + r * math.cos(ang[i + 1]), c[1] + r * math.sin(ang[i + 1]))
+        out = (math.cos(ang[i] + np.radians(22.5)), 0.0, math.sin(ang[i] + np.radians(22.5)))
+        P = [(a0[0], y0, a0[1]), (a1[0], y0, a1[1]), (a1[0], y1, a1[1]), (a0[0], y1, a0[1])]
+        facets.append(_orient(P, out))
+    return facets
+
+
+def cloister(n=80884, n_arc=12):
+    """The procedural cloister of ``shared/scenes/README.md`` (metres, y up), ~n elements.
+
+    A 20 x 20 m garth ringed by 0.5 m arcade walls (centre lines at +-10.25) and four
+    3.5 m walks under flat ceilings at 4.5 m; outer walls at +-14 (inner faces only).
+    Each side has 6 bays: piers at the corners and 5 between, octagonal shafts
+    (circumradius 0.25, 2.5 tall) on 0.7 x 0.7 x 0.2 bases under 0.7 x 0.7 x 0.2
+    capitals (springing at 2.9); semicircular arches of ``n_arc`` segments (span 2.92),
+    each with ``n_arc`` soffit rectangles and ``n_arc`` spandrel trapezoids on both wall
+    faces up to 4.5. The garth's opening at 4.5 is ONE emitting polygon (group
+    ``"light"``, facing down, not meshed). Garth ground, arcade strips and walk floors are
+    separate surfaces; bases are cut out of them.
+
+    Parameters
+    ----------
+    n : int, default 80884
+        Target number of elements (the closest count a single global element size
+        gives; the arches, piers and rings force at least about 3,000).
+    n_arc : int, default 12
+
+    Returns
+    -------
+    Scene
+        Groups: ``garth``, ``walk_floor``, ``walk_ceiling``, ``outer_wall``, ``arcade``
+        (walls, spandrels, soffits), ``pier`` (shafts, bases, capitals), ``light``.
+
+    Examples
+    --------
+    >>> s = cloister(4000)
+    >>> abs(len(s) - 4000) < 400, s.groups.count("light")
+    (True, 1)
+    """
+    if not (isinstance(n, (int, np.integer)) and n >= 1000):
+        raise ValueError(f"n must be an integer of at least 1000, got {n!r}")
+    if not (isinstance(n_arc, (int, np.integer)) and n_arc >= 2):
+        raise ValueError(f"n_arc must be an integer of at least 2, got {n_arc!r}")
+    G, T, C, O, H = 10.0, 0.5, 10.25, 14.0, 4.5
+    spring, half, r_oct = 2.9, 0.35, 0.25
+    step = 2 * C / 6
+    rect = []      # axis-aligned faces (contacts resolved, holes, grids)
+    general = []   # (polygon, group, mesh?) convex polygons in any plane
+
+    def floor(x0, x1, z0, z1, group, y=0.0, up=True):
+        # axis 1: (u, v) = (z, x)
+        rect.append(_Face(1, y, 1 if up else -1, (z0, x0), (z1, x1), group))
+
+    floor(-G, G, -G, G, "garth")
+    for sgn in (-1, 1):
+        floor(-G - T, G + T, min(sgn * G, sgn * (G + T)), max(sgn * G, sgn * (G + T)), "arcade")
+        floor(min(sgn * G, sgn * (G + T)), max(sgn * G, sgn * (G + T)), -G, G, "arcade")
+        floor(-O, O, min(sgn * (G + T), sgn * O), max(sgn * (G + T), sgn * O), "walk_floor")
+        floor(min(sgn * (G + T), sgn * O), max(sgn * (G + T), sgn * O), -G - T, G + T,
+              "walk_floor")
+        floor(-O, O, min(sgn * (G + T), sgn * O), max(sgn * (G + T), sgn * O),
+              "walk_ceiling", y=H, up=False)
+        floor(min(sgn * (G + T), sgn * O), max(sgn * (G + T), sgn * O), -G - T, G + T,
+              "walk_ceiling", y=H, up=False)
+        # outer walls, facing in: axis 0 (u, v) = (y, z); axis 2 (u, v) = (x, y)
+        rect.append(_Face(0, sgn * O, -sgn, (0.0, -O), (H, O), "outer_wall"))
+        rect.append(_Face(2, sgn * O, -sgn, (-O, 0.0), (O, H), "outer_wall"))
+    general.append((_orient([(-G, H, -G), (G, H, -G), (G, H, G), (-G, H, G)], (0, -1, 0)),
+                    "light", False))
+    # piers: the four corners and five between on each side
+    centres = {(sx * C, sz * C) for sx in (-1, 1) for sz in (-1, 1)}
+    for k in range(1, 6):
+        t = -C + k * step
+        centres |= {(t, C), (t, -C), (C, t), (-C, t)}
+    for cx, cz in sorted(centres):
+        base = [f for f in _box((cx - half, 0.0, cz - half), (cx + half, 0.2, cz + half), "pier")
+                if not (f.axis == 1)]
+        cap = [f for f in _box((cx - half, 2.7, cz - half), (cx + half, spring, cz + half), "pier")
+               if not (f.axis == 1 and f.sign < 0)]
+        rect.extend(base + cap)
+        general += [(P, "pier", True) for P in _octagon_facets((cx, cz), 0.2, 2.7, r_oct)]
+        general += [(P, "pier", False) for P in _ring_pieces((cx, cz), 0.2, half, r_oct, True)]
+        general += [(P, "pier", False) for P in _ring_pieces((cx, cz), 2.7, half, r_oct, False)]
+        # the base stands on the floors: cut its footprint out of each
+        for f in rect:
+            if f.axis == 1 and f.c == 0.0 and f.sign > 0:
+                lo, hi = (cz - half, cx - half), (cz + half, cx + half)
+                if np.all(np.maximum(f.lo, lo) < np.minimum(f.hi, hi)):
+                    f.holes.append((np.array(lo), np.array(hi)))
+    # arcade walls: north/south run along x (with the corner blocks), east/west along z
+    ang = np.pi * np.arange(n_arc + 1) / n_arc
+    cos_a, sin_a = np.cos(ang), np.sin(ang)
+
+    def side(along, across, corners):
+        # along: 0 (x) or 2 (z); across: +-1, the wall's side; coordinates map (t, y, w)
+        # with w = distance of the wall face from the centre (G or G + T)
+        def P(t, y, w):
+            p = [0.0, y, 0.0]
+            p[along] = t
+            p[2 - along] = across * w
+            return p
+
+        out_dir = [0.0, 0.0, 0.0]
+        out_dir[2 - along] = across
+        ts = [-C + k * step for k in range(7)]
+        blocks = range(7) if corners else range(1, 6)
+        for k in blocks:
+            lo, hi = [0.0, spring, 0.0], [0.0, H, 0.0]
+            lo[along], hi[along] = ts[k] - r_oct, ts[k] + r_oct
+            w0, w1 = sorted((across * G, across * (G + T)))
+            lo[2 - along], hi[2 - along] = w0, w1
+            rect.extend(f for f in _box(lo, hi, "arcade") if not (f.axis == 1 and f.sign > 0))
+        for k in range(6):
+            t0, t1 = ts[k] + r_oct, ts[k + 1] - r_oct
+            m, rad = 0.5 * (t0 + t1), 0.5 * (t1 - t0)
+            xs = m - rad * cos_a
+            ys = spring + rad * sin_a
+            xs[0], xs[-1], ys[0], ys[-1] = t0, t1, spring, spring
+            for i in range(n_arc):
+                a = (xs[i], ys[i])
+                b = (xs[i + 1], ys[i + 1])
+                centre = np.array(P(m, spring, G + T / 2))
+                sof = [P(a[0], a[1], G), P(b[0], b[1], G), P(b[0], b[1], G + T),
+                       P(a[0], a[1], G + T)]
+                mid = np.mean(np.array(sof), axis=0)
+                general.append((_orient(sof, centre - mid), "arcade", True))
+                for w, facing in ((G, -1), (G + T, 1)):
+                    nrm = np.array(out_dir) * facing
+                    sp = [P(a[0], a[1], w), P(b[0], b[1], w), P(b[0], H, w), P(a[0], H, w)]
+                    general.append((_orient(sp, nrm), "arcade", True))
+            # the bay's end faces against the pier blocks (removed by contact)
+            for tt, sgn in ((t0, -1), (t1, 1)):
+                lo = [0.0, spring, 0.0]
+                hi = [0.0, H, 0.0]
+                w0, w1 = sorted((across * G, across * (G + T)))
+                lo[2 - along], hi[2 - along] = w0, w1
+                u, v = _uv_axes(along)
+                f = _Face(along, tt, sgn, (lo[u], lo[v]), (hi[u], hi[v]), "arcade")
+                rect.append(f)
+
+    for across in (-1, 1):
+        side(0, across, True)
+        side(2, across, False)
+    rect = _resolve_contacts(rect)
+
+    def count(h):
+        return (sum(_count(f, h) for f in rect)
+                + sum(_quad_count(P, h) if m else 1 for P, _, m in general))
+
+    lo_h, hi_h = 1e-3, 10.0
+    best = None
+    for _ in range(60):
+        h = math.sqrt(lo_h * hi_h)
+        c = count(h)
+        if best is None or abs(c - n) < abs(best[1] - n):
+            best = (h, c)
+        if abs(c - n) <= 0.01 * n:
+            break
+        lo_h, hi_h = (h, hi_h) if c > n else (lo_h, h)
+    h = best[0]
+    quads, groups = [], []
+    for f in rect:
+        q, g = _mesh(f, h)
+        quads += q
+        groups += g
+    for P, g, m in general:
+        parts = _mesh_quad(P, h) if m else [P]
+        quads += parts
+        groups += [g] * len(parts)
     return Scene.from_polygons(quads, groups=groups, materials=groups)

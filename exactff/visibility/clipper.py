@@ -178,6 +178,81 @@ def chart_polygons(V, counts, chart):
     return live, polys, shapely.bounds(polys)
 
 
+def _repair(geom):
+    """Repair a region with union semantics (overlapping or nested shells are merged, not
+    turned into holes): GEOS's ``make_valid`` with the "structure" method, or the union
+    of the parts on shapely < 2.1."""
+    try:
+        return shapely.make_valid(geom, method="structure")
+    except TypeError:
+        return shapely.union_all(shapely.get_parts(geom))
+
+
+def _cut(g, covered, stats, disjoint=False):
+    """The visible part of image ``g`` behind ``covered``, and the grown covered region.
+
+    Checked by area conservation, ``area(covered | g) = area(covered) + area(g - covered)``
+    to rounding: GEOS's floating-point overlay has been seen to return a wrong
+    difference, or a union with nested shells, on near-degenerate input without raising.
+    When the check fails, both are recomputed with snap-rounding on a grid of 2**-50
+    chart units (vertices move by less than 1e-15); recomputations count in
+    ``stats["overlay_repairs"]``. ``disjoint``: the bounds do not overlap, so the
+    difference is ``g`` itself.
+    """
+    vis = g if disjoint else _overlay(shapely.difference, g, covered, stats)[0]
+    if not disjoint and (vis.is_empty or vis.area == 0.0):
+        return vis, covered
+    grown = _overlay(shapely.union, covered, g, stats)[0]
+    a_cov, a_vis, a_new = covered.area, vis.area, grown.area
+    if abs(a_new - a_cov - a_vis) > 1e-12 * (a_cov + g.area) + 1e-300 or not (
+            shapely.get_type_id(grown) != 6 or shapely.is_valid(grown)):
+        stats["overlay_repairs"] = stats.get("overlay_repairs", 0) + 1
+        grid = _SNAP_GRID
+        cs, gs = _snap(covered), _snap(g)
+        vis = _polygonal(shapely.difference(gs, cs, grid_size=grid))
+        grown = _polygonal(shapely.union(cs, gs, grid_size=grid))
+        if not shapely.is_valid(grown):
+            grown = _repair(grown)
+    return vis, grown
+
+
+#: snap-rounding grid of the overlay fallbacks, in chart units (|u|, |v| <= 1)
+_SNAP_GRID = 2.0 ** -50
+
+
+def _polygonal(geom):
+    """The areal part of a geometry (snapping can collapse slivers to lines or points)."""
+    if shapely.get_type_id(geom) in (3, 6):
+        return geom
+    parts = shapely.get_parts(geom)
+    return shapely.union_all(parts[np.isin(shapely.get_type_id(parts), (3, 6))])
+
+
+def _snap(geom):
+    return _polygonal(shapely.set_precision(geom, _SNAP_GRID))
+
+
+def _overlay(op, a, b, stats):
+    """A shapely overlay with a fallback for GEOS's robustness failures.
+
+    GEOS can throw (``TopologyException``) on near-degenerate input, typically after an
+    earlier overlay returned a region with nested shells. The operands are then repaired
+    with union semantics (:func:`_repair`) and, failing that, snapped to a grid of
+    2**-50 chart units, which moves vertices by less than 1e-15. Returns the result and
+    the (possibly repaired) operands; repairs are counted in ``stats["overlay_repairs"]``.
+    """
+    try:
+        return op(a, b), a, b
+    except shapely.errors.GEOSException:
+        stats["overlay_repairs"] = stats.get("overlay_repairs", 0) + 1
+    a, b = _repair(a), _repair(b)
+    try:
+        return op(a, b), a, b
+    except shapely.errors.GEOSException:
+        a, b = _snap(a), _snap(b)
+        return _polygonal(op(a, b, grid_size=_SNAP_GRID)), a, b
+
+
 def visible_pieces(order_V, order_counts, receives, stats=None, shortcuts=True):
     """Visible pieces of polygons given front to back, per chart.
 
@@ -218,18 +293,14 @@ def visible_pieces(order_V, order_counts, receives, stats=None, shortcuts=True):
             b = bounds[j]
             if covered is None:
                 vis, covered, cb = g, g, b.copy()
-            elif shortcuts and (b[0] >= cb[2] or b[2] <= cb[0] or b[1] >= cb[3] or b[3] <= cb[1]):
-                st["bbox_rejections"] += 1
-                vis = g
-                covered = covered.union(g)
-                cb = np.array([min(cb[0], b[0]), min(cb[1], b[1]), max(cb[2], b[2]), max(cb[3], b[3])])
             else:
-                st["differences"] += 1
-                vis = g.difference(covered)
+                disjoint = shortcuts and (b[0] >= cb[2] or b[2] <= cb[0] or b[1] >= cb[3]
+                                          or b[3] <= cb[1])
+                st["bbox_rejections" if disjoint else "differences"] += 1
+                vis, covered = _cut(g, covered, st, disjoint)
                 if vis.is_empty or vis.area == 0.0:
                     st["hidden"] += 1
                     continue
-                covered = covered.union(g)
                 cb = np.array([min(cb[0], b[0]), min(cb[1], b[1]), max(cb[2], b[2]), max(cb[3], b[3])])
             if receives[idx[j]]:
                 out.append((int(idx[j]), ci, vis))
