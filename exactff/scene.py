@@ -6,7 +6,7 @@ import shapely
 from . import _tolerances as tol
 from .geometry import area_vector
 
-__all__ = ["SceneError", "Scene", "validate_polygon", "describe"]
+__all__ = ["SceneError", "Scene", "validate_polygon", "validate_polygons", "describe"]
 
 
 class SceneError(ValueError):
@@ -107,6 +107,69 @@ def validate_polygon(polygon, index=0, name=None, *, planarity_rtol=tol.PLANARIT
     return P
 
 
+def validate_polygons(polygons, names=None, planarity_rtol=tol.PLANARITY_RTOL):
+    """Validate many polygons at once (as :func:`validate_polygon`, vectorised).
+
+    Polygons with the same number of vertices are checked together; any polygon that a
+    batch check flags, or that has repeated consecutive vertices, goes through
+    :func:`validate_polygon`, so errors and their messages are the same. The first
+    ill-formed polygon in input order raises.
+
+    Returns
+    -------
+    tuple of ndarray of shape (K_i, 3)
+        Read-only float arrays.
+    """
+    n = len(polygons)
+    names = names if names is not None else (None,) * n
+    arrays = [None] * n
+    slow = []
+    by_k = {}
+    for i, p in enumerate(polygons):
+        try:
+            a = np.array(p, dtype=float)
+        except (TypeError, ValueError):
+            slow.append(i)
+            continue
+        if a.ndim != 2 or a.shape[1] != 3 or a.shape[0] < 3:
+            slow.append(i)
+            continue
+        arrays[i] = a
+        by_k.setdefault(a.shape[0], []).append(i)
+    for k, idx in by_k.items():
+        P = np.stack([arrays[i] for i in idx])
+        ok = np.all(np.isfinite(P), axis=(1, 2))
+        ok &= np.all(np.any(P != np.roll(P, -1, axis=1), axis=2), axis=1)
+        Pc = np.where(ok[:, None, None], P, 0.0)
+        diff = Pc[:, :, None, :] - Pc[:, None, :, :]
+        diam = np.sqrt((diff * diff).sum(-1)).max(axis=(1, 2))
+        c = Pc.mean(axis=1, keepdims=True)
+        _, sv, vt = np.linalg.svd(Pc - c)
+        ok &= sv[:, 1] > tol.DEGENERATE_AREA_RTOL * sv[:, 0]
+        normal = vt[:, 2]
+        dev = np.abs(np.einsum("mkj,mj->mk", Pc - c, normal)).max(axis=1)
+        allowed = planarity_rtol * diam + tol.PLANARITY_ULPS * tol.EPS * np.abs(Pc).max(axis=(1, 2))
+        ok &= dev <= allowed
+        Q = Pc - Pc[:, :1]
+        A = 0.5 * np.cross(Q, np.roll(Q, -1, axis=1)).sum(axis=1)
+        ok &= np.linalg.norm(A, axis=1) > tol.DEGENERATE_AREA_RTOL * diam * diam
+        if k > 3:
+            # simplicity in the coordinate plane most parallel to each polygon
+            drop = np.argmax(np.abs(normal), axis=1)
+            keep_axes = np.array([[1, 2], [0, 2], [0, 1]])[drop]
+            flat = np.take_along_axis(Pc, keep_axes[:, None, :].repeat(k, axis=1), axis=2)
+            rings = shapely.linearrings(flat.reshape(-1, 2), indices=np.repeat(np.arange(len(idx)), k))
+            ok &= shapely.is_simple(rings)
+        for j, i in enumerate(idx):
+            if not ok[j]:
+                slow.append(i)
+    for i in sorted(slow):
+        arrays[i] = validate_polygon(polygons[i], i, names[i], planarity_rtol=planarity_rtol)
+    for a in arrays:
+        a.setflags(write=False)
+    return tuple(arrays)
+
+
 def _readonly(a):
     a = np.ascontiguousarray(a)
     a.setflags(write=False)
@@ -155,8 +218,7 @@ class Scene:
         if n == 0:
             raise ValueError("polygons: a scene needs at least one polygon")
         names = labels["names"]
-        P = tuple(validate_polygon(p, i, names[i], planarity_rtol=planarity_rtol)
-                  for i, p in enumerate(polygons))
+        P = validate_polygons(polygons, names, planarity_rtol)
         counts = np.array([len(p) for p in P])
         offsets = np.concatenate([[0], np.cumsum(counts)])
         V = np.concatenate(P, axis=0)

@@ -3,6 +3,7 @@
 import numpy as np
 import pytest
 from hypothesis import given
+from hypothesis import strategies as st
 
 import exactff as ef
 from exactff.testing.strategies import planar_polygons
@@ -93,3 +94,18 @@ def test_describe_cornell_box():
     assert d["max_planarity_deviation"] < 1e-15
     assert d["closure_residual"] > 0.1      # the box is open
     assert ef.describe(ef.scenes.subdivided_box(3))["closure_residual"] < 1e-15
+
+
+@given(polys=st.lists(planar_polygons(max_vertices=6), min_size=1, max_size=8),
+       bad_at=st.integers(0, 7))
+def test_batch_validation_matches_per_polygon(polys, bad_at):
+    # the vectorised validation accepts what the per-polygon one accepts, and reports the
+    # same first ill-formed polygon
+    s = ef.Scene.from_polygons(polys)
+    for P, Q in zip(s.polygons, polys):
+        assert np.array_equal(P, Q)
+    k = bad_at % (len(polys) + 1)
+    broken = list(polys)
+    broken.insert(k, [[0, 0, 0], [1, 0, 0], [2, 0, 0], [3, 0, 0]])
+    with pytest.raises(ef.SceneError, match=f"polygon {k}: zero area"):
+        ef.Scene.from_polygons(broken)
