@@ -141,30 +141,32 @@ def _count(face, h):
     return int(inside.size - inside.sum())
 
 
-def _mesh_to_target(faces, target):
-    """Bisect the global element size until the count is within 1 % of the target."""
+def _fit_element_size(count, target):
+    """The global element size ``h`` whose element count ``count(h)`` is closest to the
+    target: bisection, then (the count being a staircase in h) a scan around the best."""
     lo_h, hi_h = 1e-3, 10.0
     best = None
     for _ in range(60):
         h = math.sqrt(lo_h * hi_h)
-        n = sum(_count(f, h) for f in faces)
+        n = count(h)
         if best is None or abs(n - target) < abs(best[1] - target):
             best = (h, n)
         if abs(n - target) <= 0.01 * target:
+            return h
+        lo_h, hi_h = (h, hi_h) if n > target else (lo_h, h)
+    for h in np.geomspace(best[0] / 1.15, best[0] * 1.15, 120):
+        n = count(h)
+        if abs(n - target) < abs(best[1] - target):
+            best = (h, n)
+        if abs(n - target) <= 0.01 * target:
             break
-        if n > target:
-            lo_h = h
-        else:
-            hi_h = h
-    if abs(best[1] - target) > 0.01 * target:
-        # the count is a staircase in h (ceil): scan around the best value
-        for h in np.geomspace(best[0] / 1.15, best[0] * 1.15, 120):
-            n = sum(_count(f, h) for f in faces)
-            if abs(n - target) < abs(best[1] - target):
-                best = (h, n)
-            if abs(n - target) <= 0.01 * target:
-                break
-    h = best[0]
+    return best[0]
+
+
+def _mesh_to_target(faces, target, extra=None):
+    """Mesh axis-aligned faces with the element size that best meets the target
+    (``extra``: the count of all elements, when more than these faces are meshed)."""
+    h = _fit_element_size(extra or (lambda h: sum(_count(f, h) for f in faces)), target)
     quads, groups = [], []
     for f in faces:
         q, g = _mesh(f, h)
@@ -461,22 +463,7 @@ def cloister(n=80884, n_arc=12):
         return (sum(_count(f, h) for f in rect)
                 + sum(_quad_count(P, h) if m else 1 for P, _, m in general))
 
-    lo_h, hi_h = 1e-3, 10.0
-    best = None
-    for _ in range(60):
-        h = math.sqrt(lo_h * hi_h)
-        c = count(h)
-        if best is None or abs(c - n) < abs(best[1] - n):
-            best = (h, c)
-        if abs(c - n) <= 0.01 * n:
-            break
-        lo_h, hi_h = (h, hi_h) if c > n else (lo_h, h)
-    h = best[0]
-    quads, groups = [], []
-    for f in rect:
-        q, g = _mesh(f, h)
-        quads += q
-        groups += g
+    quads, groups, h = _mesh_to_target(rect, n, extra=count)
     for P, g, m in general:
         parts = _mesh_quad(P, h) if m else [P]
         quads += parts
