@@ -12,6 +12,9 @@ __all__ = [
     "BSP_COPLANAR_ULPS",
     "COVERED_RTOL",
     "DEFAULT_RTOL",
+    "CHART_MARGIN",
+    "AREA_CONSERVATION_RTOL",
+    "OVERLAY_SNAP_GRID",
 ]
 
 #: Unit roundoff of IEEE double precision, 2**-53.
@@ -53,3 +56,16 @@ COVERED_RTOL = 1e-13
 #: rounding-error estimate of the double-precision value exceeds it, the value is
 #: re-evaluated with mpmath (DESIGN 2.2).
 DEFAULT_RTOL = 1e-12
+
+#: The sampling z-buffer clips polygons to chart frusta widened by this much (chart
+#: units), so that a cell on a chart's edge falls strictly inside the images covering it.
+CHART_MARGIN = 1e-6
+
+#: Every clipping step must conserve area, area(covered | g) = area(covered) +
+#: area(g - covered), to this fraction of the areas involved: more is a GEOS overlay
+#: failure (seen without an exception on near-degenerate input), and the step is redone.
+AREA_CONSERVATION_RTOL = 1e-12
+
+#: Snap-rounding grid (chart units, |u|, |v| <= 1) of the overlay fallbacks: vertices move
+#: by less than 1e-15, far below the 1e-11 accuracy target of occluded values.
+OVERLAY_SNAP_GRID = 2.0 ** -50

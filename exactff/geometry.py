@@ -1,7 +1,5 @@
 """Planar-polygon geometry: Newell area vectors, normals, centroids and receiver frames."""
 
-import math
-
 import numpy as np
 
 __all__ = [

@@ -279,7 +279,7 @@ def _extended_values(flat, ids, p, n_raw, d0, one_sided):
     return F.astype(float), err.astype(float)
 
 
-def unoccluded_row(flat, p, n, *, one_sided=True, subset=None, tolerance=None,
+def unoccluded_row(flat, p, n, *, one_sided=True, tolerance=None,
                    return_error=False, in_band="exact"):
     """Unoccluded form factors from ``p`` (normal ``n``) to every polygon of ``flat``.
 
@@ -287,8 +287,7 @@ def unoccluded_row(flat, p, n, *, one_sided=True, subset=None, tolerance=None,
     the horizon, then evaluates the sector form over all remaining edges at once, in
     offset form, with a rounding-error estimate per polygon. With a ``tolerance``, every
     value whose estimate exceeds ``tolerance * F`` is re-evaluated with mpmath from the
-    original float input (:func:`mp_form_factor`). ``subset`` restricts the work to a
-    boolean mask of polygons. Returns (N,) values, and their error estimates if
+    original float input (:func:`mp_form_factor`). Returns (N,) values, and their error estimates if
     ``return_error``.
 
     ``in_band`` says what happens to polygons whose plane passes within rounding of
@@ -303,8 +302,6 @@ def unoccluded_row(flat, p, n, *, one_sided=True, subset=None, tolerance=None,
     if in_band == "edge_on":
         band[:] = False
     live = (side > 0) if one_sided else (side != 0)
-    if subset is not None:
-        live &= subset
     F = np.zeros(N)
     err = np.zeros(N)
     if not live.any():

@@ -17,6 +17,7 @@ the lower polygon index).
 
 import numpy as np
 
+from .. import _tolerances as tol
 from ..geometry import padded, receiver_frame, to_local
 from ..integrate import _Polygons, plane_sides
 from ..visibility.clipper import CHARTS, chart_clip
@@ -27,9 +28,7 @@ __all__ = ["CellLayout", "SampledMethod", "nearest_polygons", "samples_to_resolu
 #: candidate (polygon, cell) pairs examined at once; bounds the memory of a row
 PAIR_CHUNK = 2_000_000
 
-#: polygons are clipped to chart frusta widened by this much (chart units), so that cells
-#: on a chart's edge fall strictly inside the images covering them
-CHART_MARGIN = 1e-6
+
 
 
 class CellLayout:
@@ -147,7 +146,7 @@ def nearest_polygons(scene, point, normal, directions):
         cells = np.flatnonzero(chart == ci)
         if len(cells) == 0:
             continue
-        live_c, UV, cl = chart_clip(V, counts, ch, margin=CHART_MARGIN)
+        live_c, UV, cl = chart_clip(V, counts, ch, margin=tol.CHART_MARGIN)
         if len(live_c) == 0:
             continue
         _zbuffer_chart(cells, u[cells], v[cells], ch[3], live_c, UV, cl, D, nl, dl,
@@ -158,7 +157,7 @@ def nearest_polygons(scene, point, normal, directions):
 
 def _zbuffer_chart(cells, cu, cv, side, live, UV, cl, D, nl, dl, best_t, best):
     """Nearest polygon per cell within one chart (updates best_t / best in place)."""
-    v_lo = -CHART_MARGIN if side else -1.0 - CHART_MARGIN
+    v_lo = -tol.CHART_MARGIN if side else -1.0 - tol.CHART_MARGIN
     nb = max(1, int(np.sqrt(len(cells) / 16.0)))
     # cells into an nb x nb bucket grid over the chart, in CSR order
     bx = np.clip(((cu + 1.0) * 0.5 * nb).astype(int), 0, nb - 1)

@@ -6,6 +6,7 @@ from importlib import resources
 import numpy as np
 
 from ..scene import Scene
+from .procedural import OFFICE_REFLECTANCE, cloister, office, office_solids
 
 __all__ = ["cornell_box", "cornell_box_data", "subdivided_box", "box_polygons",
            "furnished_box", "office", "office_solids", "OFFICE_REFLECTANCE", "cloister"]
@@ -187,5 +188,3 @@ def furnished_box(k, boxes, size=(1.0, 1.0, 1.0), box_k=1):
         groups += [f"box{i}"] * len(b)
     return Scene.from_polygons(polys, groups=groups)
 
-
-from .procedural import OFFICE_REFLECTANCE, cloister, office, office_solids  # noqa: E402

@@ -199,25 +199,20 @@ def _cut(g, covered, stats, disjoint=False):
     ``stats["overlay_repairs"]``. ``disjoint``: the bounds do not overlap, so the
     difference is ``g`` itself.
     """
-    vis = g if disjoint else _overlay(shapely.difference, g, covered, stats)[0]
+    vis = g if disjoint else _overlay(shapely.difference, g, covered, stats)
     if not disjoint and (vis.is_empty or vis.area == 0.0):
         return vis, covered
-    grown = _overlay(shapely.union, covered, g, stats)[0]
+    grown = _overlay(shapely.union, covered, g, stats)
     a_cov, a_vis, a_new = covered.area, vis.area, grown.area
-    if abs(a_new - a_cov - a_vis) > 1e-12 * (a_cov + g.area) + 1e-300 or not (
+    if abs(a_new - a_cov - a_vis) > tol.AREA_CONSERVATION_RTOL * (a_cov + g.area) + 1e-300 or not (
             shapely.get_type_id(grown) != 6 or shapely.is_valid(grown)):
         stats["overlay_repairs"] = stats.get("overlay_repairs", 0) + 1
-        grid = _SNAP_GRID
         cs, gs = _snap(covered), _snap(g)
-        vis = _polygonal(shapely.difference(gs, cs, grid_size=grid))
-        grown = _polygonal(shapely.union(cs, gs, grid_size=grid))
+        vis = _polygonal(shapely.difference(gs, cs, grid_size=tol.OVERLAY_SNAP_GRID))
+        grown = _polygonal(shapely.union(cs, gs, grid_size=tol.OVERLAY_SNAP_GRID))
         if not shapely.is_valid(grown):
             grown = _repair(grown)
     return vis, grown
-
-
-#: snap-rounding grid of the overlay fallbacks, in chart units (|u|, |v| <= 1)
-_SNAP_GRID = 2.0 ** -50
 
 
 def _polygonal(geom):
@@ -229,7 +224,7 @@ def _polygonal(geom):
 
 
 def _snap(geom):
-    return _polygonal(shapely.set_precision(geom, _SNAP_GRID))
+    return _polygonal(shapely.set_precision(geom, tol.OVERLAY_SNAP_GRID))
 
 
 def _overlay(op, a, b, stats):
@@ -238,19 +233,18 @@ def _overlay(op, a, b, stats):
     GEOS can throw (``TopologyException``) on near-degenerate input, typically after an
     earlier overlay returned a region with nested shells. The operands are then repaired
     with union semantics (:func:`_repair`) and, failing that, snapped to a grid of
-    2**-50 chart units, which moves vertices by less than 1e-15. Returns the result and
-    the (possibly repaired) operands; repairs are counted in ``stats["overlay_repairs"]``.
+    2**-50 chart units, which moves vertices by less than 1e-15. Repairs are counted in
+    ``stats["overlay_repairs"]``.
     """
     try:
-        return op(a, b), a, b
+        return op(a, b)
     except shapely.errors.GEOSException:
         stats["overlay_repairs"] = stats.get("overlay_repairs", 0) + 1
     a, b = _repair(a), _repair(b)
     try:
-        return op(a, b), a, b
+        return op(a, b)
     except shapely.errors.GEOSException:
-        a, b = _snap(a), _snap(b)
-        return _polygonal(op(a, b, grid_size=_SNAP_GRID)), a, b
+        return _polygonal(op(_snap(a), _snap(b), grid_size=tol.OVERLAY_SNAP_GRID))
 
 
 def visible_pieces(order_V, order_counts, receives, stats=None, shortcuts=True):
