@@ -15,6 +15,7 @@ __all__ = [
     "CHART_MARGIN",
     "AREA_CONSERVATION_RTOL",
     "OVERLAY_SNAP_GRID",
+    "OVERLAP_RTOL",
 ]
 
 #: Unit roundoff of IEEE double precision, 2**-53.
@@ -69,3 +70,8 @@ AREA_CONSERVATION_RTOL = 1e-12
 #: Snap-rounding grid (chart units, |u|, |v| <= 1) of the overlay fallbacks: vertices move
 #: by less than 1e-15, far below the 1e-11 accuracy target of occluded values.
 OVERLAY_SNAP_GRID = 2.0 ** -50
+
+#: Two coplanar polygons overlap (a tie in depth that the scene summary reports) when
+#: they share more than this fraction of the smaller one's area: polygons that only
+#: touch along an edge share zero area up to the rounding of their coordinates.
+OVERLAP_RTOL = 1e-9

@@ -24,7 +24,7 @@ def _scenes():
 def open_scene(spec):
     """A scene from a file path or a built-in name (``cornell_box``, ``cornell_box_closed``,
     ``office``, ``office:N`` for about N quads, ``cloister``, ``cloister:N``, ``box:K`` for a closed unit box with K x K
-    quads per face)."""
+    quads per face, ``building:NXxNY`` for rooms with zero-thickness walls)."""
     from .io import load_scene
 
     if spec in BUILTIN:
@@ -33,6 +33,9 @@ def open_scene(spec):
         return _scenes().subdivided_box(int(spec[4:]))
     if spec.startswith("office:"):
         return _scenes().office(int(spec[7:]))
+    if spec.startswith("building:"):
+        nx, _, ny = spec[9:].partition("x")
+        return _scenes().building(int(nx), int(ny or 1))
     if spec.startswith("cloister:"):
         return _scenes().cloister(int(spec[9:]))
     return load_scene(spec)
@@ -56,6 +59,17 @@ def cmd_info(args):
     print(f"closure          |sum A n| / sum A = {d['closure_residual']:.3g} "
           f"({'closed' if closed else 'open: rows need not sum to 1'}); "
           f"unpaired directed edges {d['unpaired_edges']} (T-junctions count too)")
+    b2b, same = d["back_to_back_pairs"], d["same_facing_overlaps"]
+    print(f"coplanar overlaps {len(b2b)} back-to-back pairs (zero-thickness walls: each "
+          f"side is seen from its own side)")
+    name = lambda i: scene.names[i] or f"polygon {i}"
+    print(f"                 {len(same)} same-facing pairs"
+          + (" (usually a modelling mistake; the first in input order is in front)"
+             if same else ""))
+    for i, j in same[:5]:
+        print(f"                   {name(i)} and {name(j)}")
+    if len(same) > 5:
+        print(f"                   ... and {len(same) - 5} more")
     return 0
 
 
@@ -140,7 +154,8 @@ def build_parser():
     sub = parser.add_subparsers(dest="command", required=True)
     p = sub.add_parser("info", help="size, area, bounds, planarity and closure of a scene")
     p.add_argument("scene", help="scene file (.obj, .json) or built-in name "
-                                 "(cornell_box, cornell_box_closed, office[:N], cloister[:N], box:K)")
+                                 "(cornell_box, cornell_box_closed, office[:N], cloister[:N], box:K, "
+                                 "building:NXxNY)")
     p.set_defaults(func=cmd_info)
     p = sub.add_parser("ff", help="unoccluded form factors from one point to every polygon")
     p.add_argument("scene")

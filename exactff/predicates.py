@@ -9,7 +9,7 @@ import numpy as np
 
 from ._tolerances import EPS
 
-__all__ = ["side_of_plane", "gamma"]
+__all__ = ["side_of_plane", "gamma", "tie_priority"]
 
 
 def gamma(n):
@@ -58,3 +58,37 @@ def side_of_plane(points, normal, offset):
                  + nf[2] * Fraction(float(x[2])) - of)
             out[i] = (e > 0) - (e < 0)
     return out
+
+
+def tie_priority(facing, index=None):
+    """Which of several coplanar overlapping polygons is in front: lower is nearer.
+
+    The one rule for depth ties, shared by the visibility engine (the order of a BSP
+    node's coplanar fragments) and the discrete methods' z-buffer: a polygon whose front
+    faces the point comes before one whose back faces it (the back of a zero-thickness
+    wall is inside the wall), and among polygons facing the point the same way the
+    first in input order is in front (a light on a ceiling).
+
+    Parameters
+    ----------
+    facing : array_like of shape (N,), int
+        Side of the point for each polygon, in input order: > 0 when its front faces
+        the point, < 0 when its back does (0, seen edge-on, sorts with the fronts).
+    index : array_like of shape (N,), int, optional
+        The polygons' indices in input order (default ``0 .. N-1``), for a subset or
+        for fragments that carry their source polygon's index.
+
+    Returns
+    -------
+    ndarray of shape (N,), int
+        A priority per polygon; among tied polygons the lowest is in front.
+
+    Examples
+    --------
+    >>> tie_priority([1, -1, 1, -1]).tolist()
+    [0, 5, 2, 7]
+    """
+    s = np.asarray(facing).reshape(-1)
+    i = np.arange(len(s)) if index is None else np.asarray(index).reshape(-1)
+    big = int(i.max(initial=-1)) + 1
+    return i + big * (s < 0)

@@ -321,7 +321,12 @@ def describe(scene):
         ``max_planarity_deviation`` (largest vertex distance from its Newell plane over
         the polygon's diameter), ``closure_residual`` (``|sum A_i n_i| / sum A_i``,
         0 for a closed surface), ``unpaired_edges`` (directed edges whose reverse is
-        not an edge of another polygon; 0 for a watertight mesh without T-junctions).
+        not an edge of another polygon; 0 for a watertight mesh without T-junctions),
+        ``back_to_back_pairs`` (coplanar overlapping pairs facing opposite ways: the two
+        faces of a zero-thickness wall, legitimate) and ``same_facing_overlaps``
+        (coplanar overlapping pairs facing the same way: usually a modelling mistake),
+        both as lists of ``[i, j]`` (see
+        :func:`exactff.visibility.coplanar_overlaps`).
 
     Examples
     --------
@@ -329,7 +334,12 @@ def describe(scene):
     >>> d = describe(subdivided_box(2))
     >>> d["polygons"], d["unpaired_edges"], d["closure_residual"] < 1e-15
     (24, 0, True)
+    >>> d["back_to_back_pairs"], d["same_facing_overlaps"]
+    ([], [])
     """
+    from .visibility import coplanar_overlaps
+
+    back_to_back, same_facing = coplanar_overlaps(scene)
     devs = []
     edges = {}
     for P in scene.polygons:
@@ -352,4 +362,6 @@ def describe(scene):
         "max_planarity_deviation": max(devs),
         "closure_residual": float(np.linalg.norm(vector_area) / scene.areas.sum()),
         "unpaired_edges": int(unpaired),
+        "back_to_back_pairs": back_to_back.tolist(),
+        "same_facing_overlaps": same_facing.tolist(),
     }

@@ -55,3 +55,16 @@ def test_cloister_row_where_geos_returned_a_wrong_difference():
     i = 3894
     F = ef.form_factors(scene, scene.centroids[i], scene.normals[i])
     assert abs(F.sum() - 1) < 1e-13
+
+
+def test_zbuffer_cell_on_a_shared_edge_is_inside_one_polygon():
+    # found by the rigid-motion test of zero-thickness walls: moved by 1e-13, four
+    # hemicube cells of a floor row lay on the vertical corner edge of two walls to
+    # rounding, and the crossing test (which evaluated the shared edge from opposite
+    # end points in the two polygons) put them in neither: the row lost 1.6e-3
+    base = ef.scenes.building(2, 1)
+    scene = ef.Scene.from_polygons([P + [0.0, 1e-13, 0.0] for P in base.polygons])
+    i = base.names.index("room0_0_floor")
+    m = ef.Hemicube(resolution=32)
+    H = ef.form_factors(scene, scene.centroids[i], scene.normals[i], method=m)
+    assert abs(H.sum() - m.layout().weights.sum()) <= 1e-12

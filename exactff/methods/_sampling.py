@@ -11,8 +11,10 @@ into the five gnomonic charts of the engine (where polygon images are straight-e
 bucketed on a uniform grid per chart; each polygon's image is clipped to the chart
 (the engine's ``chart_clip``), its bounding box selects candidate cells bucket by
 bucket, a vectorised crossing-number test over its edges keeps the cells inside it, and
-the depth ``t = (n . (c - p)) / (n . d)`` picks the nearest polygon per cell (ties by
-the lower polygon index).
+the depth ``t = (n . (c - p)) / (n . d)`` picks the nearest polygon per cell. Depth
+ties (the nearest hit point lies in several polygons' planes to rounding: coplanar
+overlaps, zero-thickness walls) go by the engine's rule,
+:func:`exactff.predicates.tie_priority`.
 """
 
 import numpy as np
@@ -20,6 +22,7 @@ import numpy as np
 from .. import _tolerances as tol
 from ..geometry import padded, receiver_frame, to_local
 from ..integrate import _Polygons, plane_sides
+from ..predicates import tie_priority
 from ..visibility.clipper import CHARTS, chart_clip
 from ._base import FormFactorMethod
 
@@ -137,7 +140,14 @@ def nearest_polygons(scene, point, normal, directions):
     ids = np.flatnonzero(live)
     V, counts = V[ids], counts[ids]
     nl = flat.normals[ids] @ R.T
-    dl = np.einsum("ij,ij->i", flat.normals[ids], flat.centroids[ids] - p)  # n . (c - p)
+    rel = flat.centroids[ids] - p
+    dl = np.einsum("ij,ij->i", flat.normals[ids], rel)  # n . (c - p)
+    # depth ties: a polygon ties with the nearest hit X when X lies in its plane to the
+    # rounding of n . (X - c) (the BSP's coplanar band; unit normals)
+    band = tol.BSP_COPLANAR_ULPS * tol.EPS * (np.linalg.norm(rel, axis=1)
+                                              + np.linalg.norm(flat.centroids[ids], axis=1)
+                                              + np.linalg.norm(p))
+    prio = tie_priority(side)[ids]
     D = np.asarray(directions, dtype=float)
     chart, u, v = _chart_of(D)
     best_t = np.full(len(D), np.inf)
@@ -150,13 +160,24 @@ def nearest_polygons(scene, point, normal, directions):
         if len(live_c) == 0:
             continue
         _zbuffer_chart(cells, u[cells], v[cells], ch[3], live_c, UV, cl, D, nl, dl,
-                       best_t, best)
+                       band, prio, best_t, best)
     out = np.where(best >= 0, ids[np.maximum(best, 0)], -1)
     return out
 
 
-def _zbuffer_chart(cells, cu, cv, side, live, UV, cl, D, nl, dl, best_t, best):
-    """Nearest polygon per cell within one chart (updates best_t / best in place)."""
+def _ties(src, cell, t_near, D, nl, dl, band):
+    """Whether polygon ``src`` passes through the hit point ``t_near D[cell]``."""
+    X = t_near[:, None] * D[cell]
+    r = np.einsum("ij,ij->i", nl[src], X) - dl[src]
+    return np.abs(r) <= band[src] + tol.BSP_COPLANAR_ULPS * tol.EPS * np.abs(t_near)
+
+
+def _zbuffer_chart(cells, cu, cv, side, live, UV, cl, D, nl, dl, band, prio, best_t, best):
+    """Nearest polygon per cell within one chart (updates best_t / best in place).
+
+    ``best_t`` is the depth of the nearest hit; ``best`` the polygon shown there: of the
+    polygons through the nearest hit point (depth ties), the one with the lowest
+    ``prio``."""
     v_lo = -tol.CHART_MARGIN if side else -1.0 - tol.CHART_MARGIN
     nb = max(1, int(np.sqrt(len(cells) / 16.0)))
     # cells into an nb x nb bucket grid over the chart, in CSR order
@@ -204,6 +225,11 @@ def _zbuffer_chart(cells, cu, cv, side, live, UV, cl, D, nl, dl, best_t, best):
             a = P[:, e]
             c = P[:, (e + 1) % K]
             straddles = (a[:, 1] > vv) != (c[:, 1] > vv)
+            # from the lower end point, whichever way the edge runs: an edge shared by
+            # two polygons gives the same crossing in both, so a cell on it is inside
+            # exactly one of them (the half-open rule), never in neither
+            swap = (a[:, 1] > c[:, 1])[:, None]
+            a, c = np.where(swap, c, a), np.where(swap, a, c)
             with np.errstate(divide="ignore", invalid="ignore"):
                 ux = a[:, 0] + (vv - a[:, 1]) * (c[:, 0] - a[:, 0]) / (c[:, 1] - a[:, 1])
             inside ^= straddles & (uu < ux)
@@ -211,15 +237,36 @@ def _zbuffer_chart(cells, cu, cv, side, live, UV, cl, D, nl, dl, best_t, best):
         cell = cells[cell_local]
         src = live[poly]
         t = dl[src] / np.einsum("ij,ij->i", nl[src], D[cell])
-        # z-buffer: nearest first, ties to the lower polygon index
-        srt = np.lexsort((src, t, cell))
+        # z-buffer: the nearest depth per cell, then of the polygons tied with it (the hit
+        # point in their planes) the one of lowest priority
+        srt = np.lexsort((prio[src], t, cell))
         cell, t, src = cell[srt], t[srt], src[srt]
         first = np.ones(len(cell), dtype=bool)
         first[1:] = cell[1:] != cell[:-1]
-        cell, t, src = cell[first], t[first], src[first]
-        better = (t < best_t[cell]) | ((t == best_t[cell]) & (src < best[cell]))
-        best_t[cell[better]] = t[better]
-        best[cell[better]] = src[better]
+        group = np.cumsum(first) - 1
+        t_near = t[first][group]
+        tied = first | _ties(src, cell, t_near, D, nl, dl, band)
+        key = np.where(tied, prio[src], np.iinfo(np.int64).max)
+        # cells stay in the same order (and groups in the same places): the group's first
+        # entry is now the tied polygon of lowest priority
+        src = src[np.lexsort((key, cell))][first]
+        cell, t = cell[first], t_near[first]
+        # merge with the cells' best so far (other chunks): the nearer wins unless the
+        # other passes through its hit point with a lower priority
+        old = best[cell]
+        has_old = old >= 0
+        old_s = np.maximum(old, 0)
+        new_nearer = t < best_t[cell]
+        old_ties = np.zeros(len(cell), dtype=bool)
+        new_ties = np.zeros(len(cell), dtype=bool)
+        k = np.flatnonzero(has_old & new_nearer)
+        old_ties[k] = _ties(old_s[k], cell[k], t[k], D, nl, dl, band)
+        k = np.flatnonzero(has_old & ~new_nearer)
+        new_ties[k] = _ties(src[k], cell[k], best_t[cell[k]], D, nl, dl, band)
+        take = np.where(new_nearer, ~old_ties | (prio[src] < prio[old_s]),
+                        ~has_old | (new_ties & (prio[src] < prio[old_s])))
+        best_t[cell] = np.minimum(best_t[cell], t)
+        best[cell[take]] = src[take]
 
 
 class SampledMethod(FormFactorMethod):

@@ -9,7 +9,8 @@ from ..scene import Scene
 from .procedural import OFFICE_REFLECTANCE, cloister, office, office_solids
 
 __all__ = ["cornell_box", "cornell_box_data", "subdivided_box", "box_polygons",
-           "furnished_box", "office", "office_solids", "OFFICE_REFLECTANCE", "cloister"]
+           "furnished_box", "office", "office_solids", "OFFICE_REFLECTANCE", "cloister",
+           "building"]
 
 
 def cornell_box_data():
@@ -188,3 +189,118 @@ def furnished_box(k, boxes, size=(1.0, 1.0, 1.0), box_k=1):
         groups += [f"box{i}"] * len(b)
     return Scene.from_polygons(polys, groups=groups)
 
+
+
+def _axis_rect(axis, c, lo, hi, facing):
+    """Rectangle in the plane ``x[axis] = c`` spanning ``lo..hi`` in the other two axes
+    (in cyclic order axis+1, axis+2), its front facing ``facing`` (+1 or -1) along axis."""
+    u, v = (axis + 1) % 3, (axis + 2) % 3
+    P = np.zeros((4, 3))
+    P[:, axis] = c
+    P[:, u] = [lo[0], hi[0], hi[0], lo[0]]
+    P[:, v] = [lo[1], lo[1], hi[1], hi[1]]
+    # (e_u x e_v) = e_axis: this order faces +axis
+    return P if facing > 0 else P[::-1].copy()
+
+
+def _wall_with_door(span, height, door):
+    """Rectangles (lo, hi) in (along, up) tiling a wall of ``span`` x ``height`` minus a
+    centred door of ``door = (width, height)`` standing on the floor."""
+    a0, a1 = span
+    if door is None:
+        return [((a0, 0.0), (a1, height))]
+    w, h = door
+    m = 0.5 * (a0 + a1)
+    d0, d1 = m - 0.5 * w, m + 0.5 * w
+    return [((a0, 0.0), (d0, height)), ((d1, 0.0), (a1, height)), ((d0, h), (d1, height))]
+
+
+def building(nx=2, ny=1, *, size=1.0, height=1.0, door=(0.2, 0.7), walls_first="low"):
+    """A closed building of ``nx x ny`` square rooms with zero-thickness interior walls.
+
+    Every interior wall is written the way building models write it: two sets of
+    coincident rectangles facing opposite ways, one set for each room, around a centred
+    door (the rooms connect through the doors). Outer walls, floors and ceilings face the
+    inside. Rows from any point inside sum to 1 (each room sees the face of a shared
+    wall that faces it; see ``docs/explanation/conventions.md``, coplanar ties).
+
+    Parameters
+    ----------
+    nx, ny : int
+        Rooms along x and y; room (i, j) spans ``[i, i+1] x [j, j+1]`` times ``size``.
+    size, height : float
+        Room edge and storey height.
+    door : (float, float) or None
+        Door width and height (centred in every interior wall); None for no doors.
+    walls_first : {"low", "high"}
+        Of each back-to-back pair, which face comes first in input order: the one facing
+        the room with the lower index (``"low"``) or the higher. The results do not
+        depend on it.
+
+    Returns
+    -------
+    Scene
+        Groups ``floor``, ``ceiling``, ``outer_wall``, ``inner_wall``; names
+        ``"room<i>_<j>_<surface>"`` and, for the faces of interior walls, the room faced.
+
+    Examples
+    --------
+    >>> b = building(2, 1)
+    >>> len(b), b.groups.count("inner_wall")
+    (16, 6)
+    """
+    for name, val in (("nx", nx), ("ny", ny)):
+        if not (isinstance(val, (int, np.integer)) and val >= 1):
+            raise ValueError(f"{name} must be a positive integer, got {val!r}")
+    if not (size > 0 and height > 0):
+        raise ValueError(f"size and height must be positive, got {size!r}, {height!r}")
+    if door is not None:
+        w, h = door
+        if not (0 < w < size and 0 < h < height):
+            raise ValueError(f"door must fit in a wall (0 < width < size, 0 < height < "
+                             f"height), got {door!r}")
+    if walls_first not in ("low", "high"):
+        raise ValueError(f"walls_first must be 'low' or 'high', got {walls_first!r}")
+    polys, names, groups = [], [], []
+
+    def add(P, name, group):
+        polys.append(P)
+        names.append(name)
+        groups.append(group)
+
+    L = size
+    for i in range(nx):
+        for j in range(ny):
+            room = f"room{i}_{j}"
+            lo, hi = (i * L, j * L), ((i + 1) * L, (j + 1) * L)
+            add(_axis_rect(2, 0.0, lo, hi, +1), f"{room}_floor", "floor")
+            add(_axis_rect(2, height, lo, hi, -1), f"{room}_ceiling", "ceiling")
+    # walls: planes x = i L (axis 0, spanning (y, z)) and y = j L (axis 1, spanning (z, x))
+    for axis, n_planes, n_along in ((0, nx, ny), (1, ny, nx)):
+        for k in range(n_planes + 1):
+            c = k * L
+            for m in range(n_along):
+                span = (m * L, (m + 1) * L)
+                if axis == 0:
+                    rooms = (f"room{k - 1}_{m}", f"room{k}_{m}")
+                    to_2d = lambda lo, hi: (lo, hi)                     # (y, z)
+                else:
+                    rooms = (f"room{m}_{k - 1}", f"room{m}_{k}")
+                    to_2d = lambda lo, hi: ((lo[1], lo[0]), (hi[1], hi[0]))  # (z, x)
+                if k in (0, n_planes):
+                    facing = +1 if k == 0 else -1
+                    for (a0, z0), (a1, z1) in _wall_with_door(span, height, None):
+                        lo2, hi2 = to_2d((a0, z0), (a1, z1))
+                        add(_axis_rect(axis, c, lo2, hi2, facing),
+                            f"{rooms[1] if k == 0 else rooms[0]}_outer_wall", "outer_wall")
+                    continue
+                # the two faces of the interior wall: facing -axis (the low room) and +axis
+                sides = [(-1, rooms[0]), (+1, rooms[1])]
+                if walls_first == "high":
+                    sides.reverse()
+                for facing, room in sides:
+                    for (a0, z0), (a1, z1) in _wall_with_door(span, height, door):
+                        lo2, hi2 = to_2d((a0, z0), (a1, z1))
+                        add(_axis_rect(axis, c, lo2, hi2, facing), f"{room}_inner_wall",
+                            "inner_wall")
+    return Scene.from_polygons(polys, names=names, groups=groups)

@@ -13,11 +13,11 @@ from scipy.spatial import ConvexHull, QhullError
 from .. import _tolerances as tol
 from ..geometry import padded, receiver_frame, to_local
 from ..integrate import _Polygons, plane_sides, unoccluded_row
-from .bsp import build_bsp, front_to_back
+from .bsp import build_bsp, coplanar_overlaps, front_to_back
 from .clipper import pieces_form_factors, visible_pieces
 
 __all__ = ["visible_form_factors", "is_convex_enclosure", "scene_bsp", "build_bsp",
-           "front_to_back"]
+           "front_to_back", "coplanar_overlaps"]
 
 
 def scene_bsp(scene):

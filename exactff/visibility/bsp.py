@@ -3,9 +3,9 @@
 import numpy as np
 
 from .. import _tolerances as tol
-from ..predicates import gamma, side_of_plane
+from ..predicates import gamma, side_of_plane, tie_priority
 
-__all__ = ["BSPTree", "build_bsp", "front_to_back"]
+__all__ = ["BSPTree", "build_bsp", "front_to_back", "coplanar_overlaps"]
 
 
 class BSPTree:
@@ -19,7 +19,10 @@ class BSPTree:
     front, back : ndarray of shape (M,), int
         Child node indices, -1 for none.
     node_fragments : list of list of int
-        Fragments lying in each node's plane.
+        Fragments lying in each node's plane, in the order they are in front when the
+        point is on the node's front side (:func:`exactff.predicates.tie_priority`).
+    node_fragments_behind : list of list of int
+        The same fragments in their order for a point behind the node's plane.
     fragments : list of ndarray of shape (K, 3)
         Polygons and pieces of polygons cut by splitting planes.
     source : ndarray of shape (F,), int
@@ -28,15 +31,29 @@ class BSPTree:
         Number of fragment splits made while building.
     """
 
-    def __init__(self, normals, offsets, front, back, node_fragments, fragments, source, splits):
+    def __init__(self, normals, offsets, front, back, node_fragments, fragments, source, splits,
+                 source_normals):
         self.normals = normals
         self.offsets = offsets
         self.front = front
         self.back = back
-        self.node_fragments = node_fragments
         self.fragments = fragments
         self.source = source
         self.splits = splits
+        # coplanar ties (one rule, exactff.predicates.tie_priority): fragments whose
+        # front faces the point first, then input order of their source polygons
+        self.node_fragments, self.node_fragments_behind = [], []
+        for k, here in enumerate(node_fragments):
+            here = np.asarray(here, dtype=int)
+            if len(here) > 1:
+                orient = np.sign(source_normals[source[here]] @ normals[k])
+                for facing, dest in ((orient, self.node_fragments),
+                                     (-orient, self.node_fragments_behind)):
+                    dest.append(here[np.argsort(tie_priority(facing, source[here]),
+                                                kind="stable")].tolist())
+            else:
+                self.node_fragments.append(here.tolist())
+                self.node_fragments_behind.append(self.node_fragments[-1])
 
     def __len__(self):
         return len(self.offsets)
@@ -170,14 +187,15 @@ def build_bsp(scene, *, candidates=8, seed=0):
     node_frags = [[new_id[i] for i in here] for here in node_frags]
     return BSPTree(np.array(nodes_n), np.array(nodes_d), np.array(front), np.array(back),
                    node_frags, [fragments[i] for i in live],
-                   np.array([source[i] for i in live]), splits)
+                   np.array([source[i] for i in live]), splits, normals_src)
 
 
 def front_to_back(tree, point):
     """Fragment indices in front-to-back order as seen from ``point``.
 
     At each node the side holding the point is visited first, then the node's own
-    fragments, then the far side. The side is decided exactly
+    fragments (coplanar: those facing the point first, then input order), then the far
+    side. The side is decided exactly
     (:func:`exactff.predicates.side_of_plane`); a point on a node's plane sees the
     node's fragments edge-on and either order is correct.
 
@@ -194,11 +212,12 @@ def front_to_back(tree, point):
     side = _sides(tree, p)
     order = []
     stack = [(0, False)]
-    front, back, frags = tree.front, tree.back, tree.node_fragments
+    front, back = tree.front, tree.back
+    frags_front, frags_behind = tree.node_fragments, tree.node_fragments_behind
     while stack:
         node, emit = stack.pop()
         if emit:
-            order.extend(frags[node])
+            order.extend(frags_front[node] if side[node] >= 0 else frags_behind[node])
             continue
         if side[node] >= 0:
             near, far = front[node], back[node]
@@ -220,3 +239,62 @@ def _sides(tree, p):
     for k in np.flatnonzero(np.abs(v) <= bound):
         side[k] = side_of_plane(p[None, :], tree.normals[k], tree.offsets[k])[0]
     return side
+
+
+def coplanar_overlaps(scene, tree=None):
+    """Pairs of polygons that lie in one plane and overlap (share area), by facing.
+
+    Coplanar overlapping polygons all sit in one node of the BSP tree (polygons in one
+    plane but in different nodes are separated by a splitting plane), so only the
+    nodes' own fragments are compared, in the node's plane.
+
+    Parameters
+    ----------
+    scene : Scene
+    tree : BSPTree, optional
+        The scene's tree (default: built, or taken from the scene's cache).
+
+    Returns
+    -------
+    back_to_back : ndarray of shape (P, 2), int
+        Pairs ``i < j`` facing opposite ways: the two faces of a zero-thickness wall
+        (legitimate; each side is seen from its own side).
+    same_facing : ndarray of shape (Q, 2), int
+        Pairs ``i < j`` facing the same way: usually a modelling mistake (a light on a
+        ceiling); the first in input order is in front.
+
+    Examples
+    --------
+    >>> from exactff.scenes import building
+    >>> b2b, same = coplanar_overlaps(building(2, 1))
+    >>> len(b2b), len(same)
+    (3, 0)
+    """
+    import shapely
+
+    if tree is None:
+        from . import scene_bsp
+
+        tree = scene_bsp(scene)[0]
+    pairs = {+1: set(), -1: set()}
+    for k, here in enumerate(tree.node_fragments):
+        if len(here) < 2 or len(set(tree.source[here].tolist())) < 2:
+            continue
+        n = tree.normals[k]
+        keep = [a for a in range(3) if a != int(np.argmax(np.abs(n)))]
+        polys = np.array([shapely.Polygon(tree.fragments[f][:, keep]) for f in here])
+        polys = shapely.make_valid(polys)
+        area = shapely.area(polys)
+        a, b = shapely.STRtree(polys).query(polys, predicate="intersects")
+        sel = a < b
+        a, b = a[sel], b[sel]
+        shared = shapely.area(shapely.intersection(polys[a], polys[b]))
+        overlap = shared > tol.OVERLAP_RTOL * np.minimum(area[a], area[b])
+        src = tree.source[here]
+        orient = np.sign(scene.normals[src] @ n)
+        for i, j in zip(a[overlap], b[overlap]):
+            si, sj = int(src[i]), int(src[j])
+            if si != sj:
+                pairs[int(orient[i] * orient[j])].add((min(si, sj), max(si, sj)))
+    as_array = lambda s: np.array(sorted(s), dtype=int).reshape(-1, 2)
+    return as_array(pairs[-1]), as_array(pairs[+1])

@@ -1,0 +1,143 @@
+"""Depth ties between coplanar polygons: zero-thickness walls (two coincident polygons
+facing opposite ways) and same-facing overlaps, for the exact engine and every discrete
+method alike (one rule, ``exactff.predicates.tie_priority``)."""
+
+import numpy as np
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+
+import exactff as ef
+from exactff.methods import METHODS
+from exactff.testing import assert_form_factors_close
+from exactff.testing.strategies import unit_vectors
+
+from common import rotation
+
+OCC_ATOL = 1e-11
+DISCRETE = [name for name in METHODS if name != "exact"]
+
+
+def floor_rows(scene):
+    return [i for i, g in enumerate(scene.groups) if g == "floor"]
+
+
+def permutation(a, b):
+    """perm with ``b.polygons[k] == a.polygons[perm[k]]`` (same polygons, other order)."""
+    key = {tuple(np.round(P, 12).ravel()): i for i, P in enumerate(a.polygons)}
+    return np.array([key[tuple(np.round(P, 12).ravel())] for P in b.polygons])
+
+
+def test_tie_priority_fronts_first_then_input_order():
+    from exactff.predicates import tie_priority
+
+    facing = np.array([-1, 1, -1, 1, 0])
+    order = np.argsort(tie_priority(facing))
+    assert order.tolist() == [1, 3, 4, 0, 2]
+    # fragments carrying their source polygons' indices
+    assert np.argsort(tie_priority([-1, 1], index=[3, 7])).tolist() == [1, 0]
+
+
+@pytest.mark.parametrize("walls_first", ["low", "high"])
+def test_two_rooms_exact_rows_sum_to_one_in_either_order(walls_first):
+    scene = ef.scenes.building(2, 1, walls_first=walls_first)
+    for i in floor_rows(scene):
+        F = ef.form_factors(scene, scene.centroids[i], scene.normals[i])
+        assert abs(F.sum() - 1.0) <= 1e-12
+        # the wall face seen is the one facing the room: its back receives nothing
+        room = scene.names[i].rsplit("_", 1)[0]
+        for j, name in enumerate(scene.names):
+            if scene.groups[j] == "inner_wall" and not name.startswith(room):
+                assert F[j] == 0.0
+
+
+def test_two_rooms_results_do_not_depend_on_input_order():
+    low = ef.scenes.building(2, 1, walls_first="low")
+    high = ef.scenes.building(2, 1, walls_first="high")
+    perm = permutation(low, high)
+    for i in floor_rows(low):
+        k = int(np.flatnonzero(perm == i)[0])
+        Fl = ef.form_factors(low, low.centroids[i], low.normals[i])
+        Fh = ef.form_factors(high, high.centroids[k], high.normals[k])
+        assert_form_factors_close(Fh, Fl[perm], rtol=0, atol=1e-15)
+
+
+@pytest.mark.parametrize("method", DISCRETE)
+@pytest.mark.parametrize("walls_first", ["low", "high"])
+def test_two_rooms_discrete_every_cell_sees_a_receiving_face(method, walls_first):
+    # in a closed scene every cell (ray) hits a polygon; with the tie rule it is always
+    # one whose front faces the point, so the row sums to the cells' total weight
+    # (the layout's covered fraction: 1 for the methods that cover the hemisphere)
+    scene = ef.scenes.building(2, 1, walls_first=walls_first)
+    m = METHODS[method]()
+    for i in floor_rows(scene):
+        p, n = scene.centroids[i], scene.normals[i]
+        _, w = m.directions_for(p)
+        F = ef.form_factors(scene, p, n, method=m)
+        assert abs(F.sum() - w.sum()) <= 1e-12
+
+
+@pytest.mark.parametrize("method", DISCRETE)
+def test_discrete_same_facing_tie_first_in_input_order(method):
+    # the light on the whole ceiling (same facing): the light, earlier in input order,
+    # is in front, exactly as with the ceiling cut around it
+    whole = ef.scenes.cornell_box(ceiling="whole", closed=True)
+    cut = ef.scenes.cornell_box(closed=True)
+    i = whole.names.index("floor")
+    p, n = whole.centroids[i], whole.normals[i]
+    m = METHODS[method]()
+    Fw = ef.form_factors(whole, p, n, method=m)
+    Fc = ef.form_factors(cut, p, n, method=m)
+    assert Fw[whole.names.index("light")] > 0
+    assert_form_factors_close(Fw[whole.names.index("light")], Fc[cut.names.index("light")],
+                              rtol=0, atol=1e-12)
+
+
+@given(axis=unit_vectors(), angle=st.floats(0, 2 * np.pi),
+       shift=st.tuples(*[st.floats(-50, 50)] * 3), walls_first=st.sampled_from(["low", "high"]))
+def test_back_to_back_walls_under_rigid_motions(axis, angle, shift, walls_first):
+    base = ef.scenes.building(2, 1, walls_first=walls_first)
+    R = rotation(axis, angle)
+    t = np.array(shift)
+    scene = ef.Scene.from_polygons([P @ R.T + t for P in base.polygons], names=base.names,
+                                   groups=base.groups)
+    for i in floor_rows(scene):
+        p, n = scene.centroids[i], scene.normals[i]
+        F = ef.form_factors(scene, p, n)
+        assert abs(F.sum() - 1.0) <= OCC_ATOL
+        H = ef.form_factors(scene, p, n, method=ef.Hemicube(resolution=32))
+        _, w = ef.Hemicube(resolution=32).directions_for(p)
+        assert abs(H.sum() - w.sum()) <= 1e-12
+
+
+def test_building_of_rooms_with_doors_rows_sum_to_one():
+    scene = ef.scenes.building(3, 2)
+    M = ef.form_factor_matrix(scene)
+    assert np.all(M >= 0)
+    assert_form_factors_close(M.sum(axis=1), np.ones(len(scene)), rtol=0, atol=OCC_ATOL)
+    # through the doors: a floor sees the ceiling of the neighbouring room
+    a = scene.names.index("room0_0_floor")
+    b = scene.names.index("room1_0_ceiling")
+    assert M[a, b] > 0
+
+
+def test_describe_reports_back_to_back_and_same_facing_overlaps():
+    d = ef.scene.describe(ef.scenes.building(2, 2))
+    # 4 interior walls of 3 rectangles each, no same-facing overlap
+    assert len(d["back_to_back_pairs"]) == 12 and d["same_facing_overlaps"] == []
+    whole = ef.scenes.cornell_box(ceiling="whole")
+    d = ef.scene.describe(whole)
+    assert d["back_to_back_pairs"] == []
+    assert d["same_facing_overlaps"] == [sorted([whole.names.index("light"),
+                                                 whole.names.index("ceiling")])]
+    # touching (edge-sharing) coplanar polygons do not overlap
+    d = ef.scene.describe(ef.scenes.subdivided_box(3))
+    assert d["back_to_back_pairs"] == [] and d["same_facing_overlaps"] == []
+
+
+def test_info_prints_the_overlaps(capsys):
+    from exactff.cli import main
+
+    assert main(["info", "building:2x1"]) == 0
+    out = capsys.readouterr().out
+    assert "3 back-to-back pairs" in out and "0 same-facing pairs" in out
