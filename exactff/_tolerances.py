@@ -16,6 +16,8 @@ __all__ = [
     "AREA_CONSERVATION_RTOL",
     "OVERLAY_SNAP_GRID",
     "OVERLAP_RTOL",
+    "TILE_FRAGMENTS",
+    "MAX_TILES",
 ]
 
 #: Unit roundoff of IEEE double precision, 2**-53.
@@ -75,3 +77,11 @@ OVERLAY_SNAP_GRID = 2.0 ** -50
 #: they share more than this fraction of the smaller one's area: polygons that only
 #: touch along an edge share zero area up to the rounding of their coordinates.
 OVERLAP_RTOL = 1e-9
+
+#: The clipper's covered region is kept per tile of a grid over each chart, with about
+#: this many fragment images per tile (not a tolerance: a cost trade-off, measured in
+#: benchmarks/bench_engine.py; results do not depend on it beyond rounding).
+TILE_FRAGMENTS = 8
+
+#: At most this many tiles per side of a chart.
+MAX_TILES = 64
