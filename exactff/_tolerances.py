@@ -18,6 +18,7 @@ __all__ = [
     "OVERLAP_RTOL",
     "TILE_FRAGMENTS",
     "MAX_TILES",
+    "CLIP_BATCH",
 ]
 
 #: Unit roundoff of IEEE double precision, 2**-53.
@@ -81,7 +82,11 @@ OVERLAP_RTOL = 1e-9
 #: The clipper's covered region is kept per tile of a grid over each chart, with about
 #: this many fragment images per tile (not a tolerance: a cost trade-off, measured in
 #: benchmarks/bench_engine.py; results do not depend on it beyond rounding).
-TILE_FRAGMENTS = 8
+TILE_FRAGMENTS = 256
 
 #: At most this many tiles per side of a chart.
 MAX_TILES = 64
+
+#: Fragments decided together (vectorised) by the tiled clipper: a cost trade-off
+#: (larger batches have more parts that wait for an earlier part of the batch).
+CLIP_BATCH = 128
