@@ -345,8 +345,8 @@ class TiledRegion:
         self.area = np.zeros(n * n)                 # covered area, region + pending
         self.bounds = np.tile([np.inf, np.inf, -np.inf, -np.inf], (n * n, 1))
         self.full = np.zeros(n * n, dtype=bool)
-        self.unchecked = np.zeros(n * n, dtype=bool)  # pending parts from overlays
         self.out = None                               # the caller's output list
+        self.chart_index = None
 
     def is_full(self):
         return bool(self.full.all())
@@ -440,7 +440,7 @@ class TiledRegion:
         if len(rel):
             M = shapely.relate(self.region[tile[rel]], parts[rel])
             M = np.array(M, dtype="U9").view("U1").reshape(-1, 9)
-            covered = (M[:, 6] == "F") & (M[:, 7] == "F")     # nothing outside the region
+            covered = M[:, 6] == "F"      # no interior point of the part outside the region
             apart = (M[:, 0] == "F") & ~covered             # interiors do not meet
             stats["covered_rejections"] += int(covered.sum())
             stats["disjoint_accepts"] += int(apart.sum())
@@ -453,27 +453,39 @@ class TiledRegion:
                 except shapely.errors.GEOSException:
                     vis[cut] = [_overlay(shapely.difference, q, r, stats)
                                 for q, r in zip(parts[cut], self.region[tile[cut]])]
-                self.unchecked[tile[cut]] = True
+                # the predicate found interior points outside the region: an empty
+                # difference is a GEOS failure (seen), redone with the checked overlays
+                for k in cut[shapely.area(vis[cut]) == 0.0]:
+                    stats["overlay_repairs"] = stats.get("overlay_repairs", 0) + 1
+                    vis[k] = _cut(parts[k], self.region[tile[k]], stats)[0]
         # waiting parts, in order: against the region and the earlier parts they meet
         for k in np.flatnonzero(waits):
             U = self.region[tile[k]]
             U = _overlay(shapely.union_all, ([U] if U is not None else []) + list(parts[b[a == k]]),
                          None, stats)
             stats["differences"] += 1
-            vis[k] = _overlay(shapely.difference, parts[k], _fill_cracks(_polygonal(U)), stats)
-            self.unchecked[tile[k]] = True
+            U = _fill_cracks(_polygonal(U))
+            vis[k] = _overlay(shapely.difference, parts[k], U, stats)
+            if vis[k].area == 0.0 and shapely.relate(U, parts[k])[6] != "F":
+                stats["overlay_repairs"] = stats.get("overlay_repairs", 0) + 1
+                vis[k] = _cut(parts[k], U, stats)[0]
         return np.array([None if (v is None or v.is_empty or v.area == 0.0) else v for v in vis],
                         dtype=object)
 
-    def record(self, tile, parts, vis, slots, stats):
-        """Add the visible parts (``slots``: where each stands in the caller's output
-        list, or -1) to the tiles' pending lists; they are unioned into the regions
-        when a region is needed, checked then (:meth:`_merge`)."""
-        for k in np.flatnonzero(vis != None):  # noqa: E711 (object array)
+    def record(self, tile, parts, vis, slots, frags, receives, stats):
+        """Record the batch's decisions: every part (hidden or not) joins its tile's
+        pending list, with its visible part, where that stands in the caller's output
+        list (``slots``, -1 for none), its fragment and whether it receives. They are
+        unioned into the tile's region when the region is needed, and every decision
+        is checked then (:meth:`_merge`)."""
+        for k in range(len(parts)):
             t = int(tile[k])
-            self.pending[t].append((parts[k], vis[k], int(slots[k])))
-            self.area[t] += vis[k].area
-            vb = vis[k].bounds
+            v = vis[k]
+            self.pending[t].append((parts[k], v, int(slots[k]), int(frags[k]), bool(receives[k])))
+            if v is None:
+                continue
+            self.area[t] += v.area
+            vb = v.bounds
             cb = self.bounds[t]
             self.bounds[t] = (min(cb[0], vb[0]), min(cb[1], vb[1]), max(cb[2], vb[2]),
                               max(cb[3], vb[3]))
@@ -483,41 +495,47 @@ class TiledRegion:
                 self.full[t] = self.area[t] >= self.full_area
 
     def finish(self, stats):
-        """Check the tiles whose pending parts came from overlays (GEOS can fail
-        silently); corrects the caller's output where a check fails."""
-        for t in np.flatnonzero(self.unchecked):
-            self._merge(int(t), stats)
+        """Check the decisions still pending (every tile with pending parts is merged);
+        corrects the caller's output where a check fails."""
+        for t in range(len(self.pending)):
+            if self.pending[t]:
+                self._merge(t, stats)
 
     def _merge(self, t, stats):
-        """Union tile t's pending visible parts into its region, checked by area
-        conservation (the parts' interiors are disjoint from each other and from the
-        region). When the check fails, an overlay went wrong: the pending parts are
-        decided again one by one with the checked overlays of :func:`_cut`, and the
-        caller's output is corrected."""
+        """Union tile t's pending parts into its region, checking every decision taken
+        for them since the last merge by area conservation: the new region must have
+        the old region's area plus the visible parts' (hidden parts add nothing).
+
+        The decisions come from exact predicates and floating-point overlays, and GEOS
+        has been seen to get both wrong on near-degenerate input without raising (a
+        ``relate`` that put an image inside a region with a hole where part of it was
+        visible; differences that came back empty). When the check fails, the pending
+        parts are decided again one by one with the checked, snap-rounding overlays of
+        :func:`_cut`, and the caller's output is corrected."""
         pend = self.pending[t]
         if not pend:
             return
         old = self.region[t]
-        geoms = [v for _, v, _ in pend] + ([old] if old is not None else [])
+        geoms = [q for q, *_ in pend] + ([old] if old is not None else [])
         grown = geoms[0] if len(geoms) == 1 else _overlay(shapely.union_all, geoms, None, stats)
         if abs(grown.area - self.area[t]) > tol.AREA_CONSERVATION_RTOL * self.area[t] or not (
                 shapely.get_type_id(grown) != 6 or shapely.is_valid(grown)):
             stats["overlay_repairs"] = stats.get("overlay_repairs", 0) + 1
             grown = old
-            for q, _, slot in pend:
+            for q, _, slot, frag, rec in pend:
                 if grown is None:
                     v, grown = q, q
                 else:
                     v, grown = _cut(q, grown, stats)
                 if slot >= 0:
-                    f, ci, _ = self.out[slot]
-                    self.out[slot] = (f, ci, v)
+                    self.out[slot] = (frag, self.chart_index, v)
+                elif rec and not v.is_empty and v.area > 0.0:
+                    self.out.append((frag, self.chart_index, v))
         grown = _fill_cracks(_polygonal(grown))
         shapely.prepare(grown)
         self.region[t] = grown
         self.area[t] = grown.area
         self.pending[t] = []
-        self.unchecked[t] = False
 
 
 def visible_pieces(order_V, order_counts, receives, stats=None, shortcuts=True):
@@ -567,7 +585,7 @@ def visible_pieces(order_V, order_counts, receives, stats=None, shortcuts=True):
 
 def _tiled_chart(ci, chart, idx, polys, bounds, receives, st, out):
     region = TiledRegion(chart, tiles_per_side(len(idx)))
-    region.out = out
+    region.out, region.chart_index = out, ci
     ranges = region.tile_ranges(bounds)
     live = ~shapely.is_empty(polys)
     for j0 in range(0, len(idx), tol.CLIP_BATCH):
@@ -593,13 +611,13 @@ def _tiled_chart(ci, chart, idx, polys, bounds, receives, st, out):
             vis = region.decide(tile, parts, st)
             seen = vis != None  # noqa: E711 (object array)
             st["hidden"] += len(sel) - len(np.unique(owner[seen]))
+            frag = idx[sel[owner]]
+            rec = receives[frag]
             slots = np.full(len(parts), -1)
-            for k in np.flatnonzero(seen):
-                f = idx[sel[owner[k]]]
-                if receives[f]:
-                    slots[k] = len(out)
-                    out.append((int(f), ci, vis[k]))
-            region.record(tile, parts, vis, slots, st)
+            for k in np.flatnonzero(seen & rec):
+                slots[k] = len(out)
+                out.append((int(frag[k]), ci, vis[k]))
+            region.record(tile, parts, vis, slots, frag, rec, st)
     else:
         if region.is_full():
             st["charts_full"] += 1
