@@ -82,7 +82,7 @@ OVERLAP_RTOL = 1e-9
 #: The clipper's covered region is kept per tile of a grid over each chart, with about
 #: this many fragment images per tile (not a tolerance: a cost trade-off, measured in
 #: benchmarks/bench_engine.py; results do not depend on it beyond rounding).
-TILE_FRAGMENTS = 256
+TILE_FRAGMENTS = 1024
 
 #: At most this many tiles per side of a chart.
 MAX_TILES = 64

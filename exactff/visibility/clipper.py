@@ -422,20 +422,25 @@ class TiledRegion:
         a, b = shapely.STRtree(parts).query(parts)     # bounds meet
         sel = (b < a) & (tile[a] == tile[b])
         a, b = a[sel], b[sel]
+        pb = shapely.bounds(parts)
+        sel = ((pb[a, 0] < pb[b, 2]) & (pb[b, 0] < pb[a, 2]) & (pb[a, 1] < pb[b, 3])
+               & (pb[b, 1] < pb[a, 3]))               # bounds overlap in area
+        a, b = a[sel], b[sel]
         if len(a):
             meet = shapely.relate_pattern(parts[b], parts[a], "T********")
             a, b = a[meet], b[meet]
         waits = np.zeros(m, dtype=bool)
         waits[a] = True
-        # independent parts against their tile's region as it was before the batch
-        ind = np.flatnonzero(~waits)
-        cb, pb = self.bounds[tile[ind]], shapely.bounds(parts[ind])
+        # every part against its tile's region as it was before the batch (parts that
+        # meet earlier parts of the batch lose those afterwards)
+        ind = np.arange(m)
+        cb, pb = self.bounds[tile[ind]], pb[ind]
         apart = ((pb[:, 0] >= cb[:, 2]) | (pb[:, 2] <= cb[:, 0]) | (pb[:, 1] >= cb[:, 3])
                  | (pb[:, 3] <= cb[:, 1]))     # includes empty tiles (inf bounds)
         stats["bbox_rejections"] += int(apart.sum())
         vis[ind[apart]] = parts[ind[apart]]
         rel = ind[~apart]
-        for t in np.unique(tile[np.r_[rel, np.flatnonzero(waits)]]):
+        for t in np.unique(tile[rel]):
             self._merge(int(t), stats)
         if len(rel):
             M = shapely.relate(self.region[tile[rel]], parts[rel])
@@ -458,17 +463,20 @@ class TiledRegion:
                 for k in cut[shapely.area(vis[cut]) == 0.0]:
                     stats["overlay_repairs"] = stats.get("overlay_repairs", 0) + 1
                     vis[k] = _cut(parts[k], self.region[tile[k]], stats)[0]
-        # waiting parts, in order: against the region and the earlier parts they meet
+        # parts that meet earlier parts of the batch: minus those (the earlier parts
+        # are wholly in front, whatever of them is visible)
         for k in np.flatnonzero(waits):
-            U = self.region[tile[k]]
-            U = _overlay(shapely.union_all, ([U] if U is not None else []) + list(parts[b[a == k]]),
-                         None, stats)
+            if vis[k] is None or vis[k].is_empty:
+                continue
             stats["differences"] += 1
-            U = _fill_cracks(_polygonal(U))
-            vis[k] = _overlay(shapely.difference, parts[k], U, stats)
-            if vis[k].area == 0.0 and shapely.relate(U, parts[k])[6] != "F":
+            earlier = list(parts[b[a == k]])
+            E = earlier[0] if len(earlier) == 1 else _fill_cracks(_polygonal(
+                _overlay(shapely.union_all, earlier, None, stats)))
+            v = _overlay(shapely.difference, vis[k], E, stats)
+            if v.area == 0.0 and shapely.relate(E, vis[k])[6] != "F":
                 stats["overlay_repairs"] = stats.get("overlay_repairs", 0) + 1
-                vis[k] = _cut(parts[k], U, stats)[0]
+                v = _cut(vis[k], E, stats)[0]
+            vis[k] = v
         return np.array([None if (v is None or v.is_empty or v.area == 0.0) else v for v in vis],
                         dtype=object)
 
