@@ -709,8 +709,8 @@ def pieces_form_factors(pieces, m, tolerance=None, owner=None):
         frag = np.array([k for k, _ in sel])
         geoms = np.array([g for _, g in sel], dtype=object)
         parts, part_of = shapely.get_parts(geoms, return_index=True)
-        polys = parts[shapely.get_type_id(parts) == 3]
-        poly_of = part_of[shapely.get_type_id(parts) == 3]
+        areal = (shapely.get_type_id(parts) == 3) & ~shapely.is_empty(parts)
+        polys, poly_of = parts[areal], part_of[areal]
         if len(polys) == 0:
             continue
         # rings of each polygon: the exterior first, then its holes
