@@ -437,7 +437,7 @@ class TiledRegion:
         cb, pb = self.bounds[tile[ind]], pb[ind]
         apart = ((pb[:, 0] >= cb[:, 2]) | (pb[:, 2] <= cb[:, 0]) | (pb[:, 1] >= cb[:, 3])
                  | (pb[:, 3] <= cb[:, 1]))     # includes empty tiles (inf bounds)
-        stats["bbox_rejections"] += int(apart.sum())
+        stats["bbox_rejections"] += int((apart & ~waits).sum())
         vis[ind[apart]] = parts[ind[apart]]
         rel = ind[~apart]
         for t in np.unique(tile[rel]):
@@ -453,7 +453,7 @@ class TiledRegion:
                 covered[c] = shapely.covers(self.region[tile[rel[c]]], parts[rel[c]])
             apart = (M[:, 0] == "F") & ~covered             # interiors do not meet
             stats["covered_rejections"] += int(covered.sum())
-            stats["disjoint_accepts"] += int(apart.sum())
+            stats["disjoint_accepts"] += int((apart & ~waits[rel]).sum())
             vis[rel[apart]] = parts[rel[apart]]
             cut = rel[~covered & ~apart]
             if len(cut):
@@ -473,12 +473,17 @@ class TiledRegion:
         for k in np.flatnonzero(waits):
             if vis[k] is None or vis[k].is_empty:
                 continue
-            stats["differences"] += 1
             earlier = list(parts[b[a == k]])
             E = earlier[0] if len(earlier) == 1 else _fill_cracks(_polygonal(
                 _overlay(shapely.union_all, earlier, None, stats)))
+            inside = shapely.relate(E, vis[k])[6] == "F"
+            if inside and shapely.covers(E, vis[k]):   # hidden by earlier parts
+                stats["covered_rejections"] += 1
+                vis[k] = None
+                continue
+            stats["differences"] += 1
             v = _overlay(shapely.difference, vis[k], E, stats)
-            if v.area == 0.0 and shapely.relate(E, vis[k])[6] != "F":
+            if v.area == 0.0 and not inside:
                 stats["overlay_repairs"] = stats.get("overlay_repairs", 0) + 1
                 v = _cut(vis[k], E, stats)[0]
             vis[k] = v

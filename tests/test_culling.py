@@ -1,0 +1,118 @@
+"""Output-sensitive visibility: the tiled clipper and its shortcuts never change a result
+(against ``Exact(shortcuts=False)``, one covered region per chart and every fragment
+overlaid), and its counters fire only when work is really left out."""
+
+import numpy as np
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+
+import exactff as ef
+from exactff.methods import Exact
+from exactff.testing import assert_form_factors_close
+from exactff.testing.strategies import unit_vectors
+
+from common import rect_xy
+from test_visibility import layered_scenes
+
+# the shortcuts decide what to compute, never how: values agree to rounding
+NEUTRAL_ATOL = 1e-15
+
+
+def neutral_rows(scene, rows):
+    for i in rows:
+        p, n = scene.centroids[i], scene.normals[i]
+        on = Exact().point_form_factors(scene, p, n)
+        off = Exact(shortcuts=False).point_form_factors(scene, p, n)
+        assert_form_factors_close(on, off, rtol=0, atol=NEUTRAL_ATOL)
+
+
+@pytest.fixture(scope="module")
+def cloister():
+    return ef.scenes.cloister(4000)
+
+
+def test_neutral_on_office_rows():
+    scene = ef.scenes.office(1500)
+    neutral_rows(scene, np.random.default_rng(0).choice(len(scene), 4, replace=False))
+
+
+def test_neutral_on_cloister_rows_of_every_group(cloister):
+    rng = np.random.default_rng(0)
+    groups = np.array(cloister.groups)
+    rows = [rng.choice(np.flatnonzero(groups == g)) for g in sorted(set(cloister.groups))]
+    neutral_rows(cloister, rows)
+
+
+def test_neutral_with_coplanar_overlaps():
+    neutral_rows(ef.scenes.building(2, 2), range(0, 40, 5))
+    whole = ef.scenes.cornell_box(ceiling="whole", closed=True)
+    neutral_rows(whole, range(len(whole)))
+
+
+@given(polys=layered_scenes(), n=unit_vectors())
+def test_neutral_on_layered_scenes(polys, n):
+    scene = ef.Scene.from_polygons(polys)
+    p = np.zeros(3)
+    on = Exact().point_form_factors(scene, p, n)
+    off = Exact(shortcuts=False).point_form_factors(scene, p, n)
+    assert_form_factors_close(on, off, rtol=0, atol=NEUTRAL_ATOL)
+
+
+@given(seed=st.integers(0, 2**32 - 1))
+def test_neutral_on_random_furnished_rooms(seed):
+    rng = np.random.default_rng(seed)
+    boxes = []
+    for _ in range(rng.integers(1, 5)):
+        lo = rng.uniform(0.05, 0.7, 3)
+        boxes.append((lo, lo + rng.uniform(0.05, 0.3, 3)))
+    scene = ef.scenes.furnished_box(3, boxes, box_k=2)
+    i = int(rng.integers(len(scene)))
+    p = scene.centroids[i]
+    if any(np.all(p + 1e-9 * scene.normals[i] > lo) and np.all(p + 1e-9 * scene.normals[i] < hi)
+           for lo, hi in boxes):
+        return  # inside an obstacle: a row of zeros either way
+    neutral_rows(scene, [i])
+
+
+def grid_behind_wall(k=8):
+    """A k x k grid of small squares at z = 2 facing down, behind a wide square at z = 1
+    (facing down too) that hides all of them from the origin."""
+    polys = [rect_xy(-4, 4, -4, 4, 1.0)]
+    edges = np.linspace(-1, 1, k + 1)
+    for a, b in zip(edges[:-1], edges[1:]):
+        for c, d in zip(edges[:-1], edges[1:]):
+            polys.append(rect_xy(a, b, c, d, 2.0))
+    return ef.Scene.from_polygons(polys)
+
+
+def test_hidden_fragments_are_left_out_without_overlays():
+    scene = grid_behind_wall()
+    stats = {}
+    F = Exact().point_form_factors(scene, np.zeros(3), np.array([0, 0, 1.0]), stats=stats)
+    assert np.all(F[1:] == 0) and F[0] > 0
+    # every grid square was hidden by a full tile or an exact predicate: no overlay
+    left_out = stats["tile_rejections"] + stats["covered_rejections"]
+    assert left_out >= 64 and stats["differences"] == 0
+    assert stats["hidden"] >= 64
+
+
+def test_counters_do_not_fire_when_nothing_is_left_out():
+    # the same grid with the wall moved aside: nothing hides anything
+    scene = grid_behind_wall()
+    moved = ef.Scene.from_polygons([rect_xy(5, 6, 5, 6, 1.0)] + list(scene.polygons[1:]))
+    stats = {}
+    F = Exact().point_form_factors(moved, np.zeros(3), np.array([0, 0, 1.0]), stats=stats)
+    U = ef.point_polygon_form_factors(np.zeros(3), [0, 0, 1], moved)
+    assert_form_factors_close(F, U, rtol=0, atol=1e-15)
+    assert stats["tile_rejections"] == 0 and stats["covered_rejections"] == 0
+    assert stats["hidden"] == 0 and stats["differences"] == 0
+
+
+def test_shortcuts_off_overlays_every_fragment():
+    scene = grid_behind_wall()
+    stats = {}
+    Exact(shortcuts=False).point_form_factors(scene, np.zeros(3), np.array([0, 0, 1.0]),
+                                              stats=stats)
+    assert stats["tile_rejections"] == stats["covered_rejections"] == 0
+    assert stats["differences"] >= 64
