@@ -34,6 +34,7 @@ __all__ = [
     "point_polygon_form_factors",
     "sector_form_factor",
     "eq3_form_factor",
+    "eq3_ring_area",
     "eq3_edge_integral",
 ]
 
@@ -756,10 +757,49 @@ def eq3_form_factor(point, normal, polygon, *, one_sided=True):
     C, sign = _local_clipped(point, normal, polygon, one_sided)
     if not sign or len(C) < 2:
         return 0.0
-    Q = np.array(C)
+    area, _ = eq3_ring_area(np.array(C))
+    # a polygon whose front faces p has a clockwise image (seen from above the disk)
+    F = -sign * area / math.pi
+    assert F >= -tol.ROUNDING_OVERSHOOT * tol.EPS, "negative form factor beyond rounding"
+    return max(F, 0.0)
+
+
+def eq3_ring_area(ring):
+    """Signed area (counter-clockwise positive) of the image on the base disk of a closed
+    chain of great-circle arcs, by Eq. 3 (corrected) with monotone-span splitting.
+
+    The frame is rotated about z (which changes no area) so that no arc's plane is
+    close to ``x = 0``, where ``eta -> 0`` makes Eq. 3 ill-conditioned.
+
+    Parameters
+    ----------
+    ring : ndarray of shape (K, 3)
+        Vertices in the local frame of the point (z along its normal), ``z >= 0``;
+        consecutive vertices (and the last and first) are joined by great-circle arcs.
+        Only directions matter: a polygon clipped to the upper half-space, or
+        directions lifted from a gnomonic chart.
+
+    Returns
+    -------
+    (float, float)
+        The signed area and the sum of the absolute edge integrals (the scale of its
+        rounding error).
+
+    Examples
+    --------
+    The quarter of the upper hemisphere over the first quadrant projects onto a
+    quarter of the unit disk:
+
+    >>> a, m = eq3_ring_area(np.array([[0, 0, 1.0], [1, 0, 0], [0, 1, 0]]))
+    >>> round(a / (math.pi / 4), 12)
+    1.0
+    """
+    Q = np.array(ring, dtype=float)
     M = np.cross(Q, np.roll(Q, -1, axis=0))
     Ml = np.linalg.norm(M, axis=1)
     M = M[Ml > 0] / Ml[Ml > 0, None]
+    if len(M) == 0:
+        return 0.0, 0.0
     # rotation about z maximising the smallest eta = sqrt(1 - m_x^2) over the edges
     k = 2 * len(Q) + 2
     phis = np.arange(k) * math.pi / k
@@ -767,10 +807,9 @@ def eq3_form_factor(point, normal, polygon, *, one_sided=True):
     phi = phis[int(np.argmin(np.abs(mx).max(axis=1)))]
     c, s = math.cos(phi), math.sin(phi)
     Rz = np.array([[c, s, 0.0], [-s, c, 0.0], [0.0, 0.0, 1.0]])
+    z = Q[:, 2].copy()
     Q = Q @ Rz.T
-    Q[:, 2] = np.array(C)[:, 2]
+    Q[:, 2] = z
     parts = [eq3_edge_integral(Q[i], Q[(i + 1) % len(Q)]) for i in range(len(Q))]
-    # image area (counter-clockwise positive) = - sum of y dx; F = area / pi
-    F = sign * math.fsum(parts) / math.pi
-    assert F >= -tol.ROUNDING_OVERSHOOT * tol.EPS, "negative form factor beyond rounding"
-    return max(F, 0.0)
+    # image area (counter-clockwise positive) = - sum of y dx
+    return -math.fsum(parts), math.fsum(abs(x) for x in parts)

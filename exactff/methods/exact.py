@@ -6,7 +6,10 @@ from .._tolerances import DEFAULT_RTOL
 from ..visibility import visible_form_factors
 from ._base import FormFactorMethod
 
-__all__ = ["Exact"]
+__all__ = ["Exact", "INTEGRATORS"]
+
+#: How visible pieces can be integrated (both exact; DESIGN 2).
+INTEGRATORS = ("sector", "eq3")
 
 
 class Exact(FormFactorMethod):
@@ -20,8 +23,16 @@ class Exact(FormFactorMethod):
         start from double-precision clip coordinates, which bounds thin slivers to about
         1e-16 absolute (see ``docs/explanation/robustness.md``).
     shortcuts : bool, default True
-        Use the convex-scene shortcut and stop filling charts once they are covered.
-        Results do not depend on it (tested); False is for checking that.
+        Leave out what a row does not need: the convex-scene shortcut, the tiled
+        clipper (fragments hidden by full tiles or decided by exact predicates instead
+        of overlays) and the early stop once a chart is covered. Results do not depend
+        on it (tested to 1e-15); False is for checking that.
+    integrator : {"sector", "eq3"}, default "sector"
+        How visible pieces are integrated: Lambert's sector form (vectorised over all
+        pieces, with error estimates and escalation) or the paper's Eq. 3, corrected,
+        with monotone-span splitting (one ring at a time in Python, no escalation).
+        Both are exact; the sector form is the default because it is faster (see
+        ``docs/benchmarks.md``) and escalates where double precision falls short.
 
     Examples
     --------
@@ -33,15 +44,20 @@ class Exact(FormFactorMethod):
 
     name = "exact"
 
-    def __init__(self, *, tolerance=DEFAULT_RTOL, shortcuts=True):
+    def __init__(self, *, tolerance=DEFAULT_RTOL, shortcuts=True, integrator="sector"):
         if tolerance is not None and not (np.isfinite(tolerance) and tolerance > 0):
             raise ValueError(f"tolerance must be a positive number or None, got {tolerance!r}")
+        if integrator not in INTEGRATORS:
+            raise ValueError(f"integrator must be one of {INTEGRATORS}, got {integrator!r}")
         self.tolerance = tolerance
         self.shortcuts = bool(shortcuts)
+        self.integrator = integrator
 
     def point_form_factors(self, scene, point, normal, *, two_sided=False, stats=None):
         return visible_form_factors(scene, point, normal, two_sided=two_sided, stats=stats,
-                                    shortcuts=self.shortcuts, tolerance=self.tolerance)
+                                    shortcuts=self.shortcuts, tolerance=self.tolerance,
+                                    integrator=self.integrator)
 
     def __repr__(self):
-        return f"Exact(tolerance={self.tolerance}, shortcuts={self.shortcuts})"
+        extra = "" if self.integrator == "sector" else f", integrator={self.integrator!r}"
+        return f"Exact(tolerance={self.tolerance}, shortcuts={self.shortcuts}{extra})"

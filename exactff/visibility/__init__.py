@@ -12,7 +12,7 @@ from scipy.spatial import ConvexHull, QhullError
 
 from .. import _tolerances as tol
 from ..geometry import padded, receiver_frame, to_local
-from ..integrate import _Polygons, plane_sides, unoccluded_row
+from ..integrate import _Polygons, eq3_form_factor, plane_sides, unoccluded_row
 from .bsp import build_bsp, coplanar_overlaps, front_to_back
 from .clipper import pieces_form_factors, visible_pieces
 
@@ -48,7 +48,7 @@ def is_convex_enclosure(scene):
 
 
 def visible_form_factors(scene, point, normal, *, two_sided=False, stats=None,
-                         shortcuts=True, tolerance=None):
+                         shortcuts=True, tolerance=None, integrator="sector"):
     """Exact form factors with occlusion from one point to every polygon of a scene.
 
     Parameters
@@ -70,8 +70,14 @@ def visible_form_factors(scene, point, normal, *, two_sided=False, stats=None,
         higher precision (pieces from their clipped float coordinates).
     shortcuts : bool, default True
         False disables every shortcut: the convex-scene path, the culling of fragments
-        below the horizon, the bounding-box rejection and the early stop on full
-        charts (for testing that they never change a result).
+        below the horizon, the tiled clipper (full tiles, predicates instead of
+        overlays, bounding-box rejection) and the early stop on full charts (for
+        testing that they never change a result).
+    integrator : {"sector", "eq3"}, default "sector"
+        How visible pieces (and, on the convex-scene path, whole polygons) are
+        integrated: Lambert's sector form (vectorised, with escalation) or the paper's
+        Eq. 3, corrected, with monotone-span splitting (one ring at a time, no
+        escalation).
 
     Returns
     -------
@@ -86,6 +92,10 @@ def visible_form_factors(scene, point, normal, *, two_sided=False, stats=None,
     # shortcut: a convex enclosure seen from inside has no occlusion at all
     if shortcuts and is_convex_enclosure(scene) and np.all(side >= 0):
         st["path"] = "unoccluded"
+        if integrator == "eq3":
+            return np.array([0.0 if s == 0 else eq3_form_factor(p, normal, P,
+                                                                one_sided=not two_sided)
+                             for P, s in zip(scene.polygons, side)])
         return unoccluded_row(flat, p, normal, one_sided=not two_sided, tolerance=tolerance,
                               in_band="edge_on")
     st["path"] = "clipper"
@@ -108,7 +118,8 @@ def visible_form_factors(scene, point, normal, *, two_sided=False, stats=None,
     if two_sided:
         receives |= side[src] < 0
     pieces = visible_pieces(V, c, receives, stats=st, shortcuts=shortcuts)
-    Ff, ef_ = pieces_form_factors(pieces, len(order), tolerance=tolerance, owner=src)
+    Ff, ef_ = pieces_form_factors(pieces, len(order), tolerance=tolerance, owner=src,
+                                  integrator=integrator)
     F = np.bincount(src, weights=Ff, minlength=len(scene))
     E = np.bincount(src, weights=ef_, minlength=len(scene))
     # holes subtract: a value may fall below 0 by rounding, never by more than its estimate

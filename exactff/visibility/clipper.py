@@ -697,7 +697,7 @@ def _rings_long_double(D, start, count):
     return val, ((_C1 * u * mags + errs) / (2 * np.pi)).astype(float)
 
 
-def pieces_form_factors(pieces, m, tolerance=None, owner=None):
+def pieces_form_factors(pieces, m, tolerance=None, owner=None, integrator="sector"):
     """Form factors of visible pieces, summed per fragment, with error estimates.
 
     Every ring of a piece is a closed chain of great-circle arcs (its chart coordinates
@@ -706,6 +706,11 @@ def pieces_form_factors(pieces, m, tolerance=None, owner=None):
     becomes its horizon arc), is twice the signed area of its image on the base disk.
     Exterior rings add and holes subtract the absolute values, so the result does not
     depend on ring orientation.
+
+    ``integrator="eq3"`` integrates every ring with the paper's Eq. 3 (corrected, with
+    monotone-span splitting; :func:`exactff.integrate.eq3_ring_area`) instead, one ring
+    at a time; its estimate is ``C1 u`` times the sum of the absolute edge integrals,
+    and it is not escalated.
 
     With a ``tolerance``: where the summed estimate of a polygon (fragments grouped by
     ``owner``, default one group per fragment) exceeds ``tolerance`` times its value,
@@ -718,7 +723,8 @@ def pieces_form_factors(pieces, m, tolerance=None, owner=None):
         Form factors and error estimates per fragment.
     """
     from .. import _tolerances as tol
-    from ..integrate import _C1, _LONGDOUBLE_EPS, _clipped_sector_sums, mp_form_factor
+    from ..integrate import (_C1, _LONGDOUBLE_EPS, _clipped_sector_sums, eq3_ring_area,
+                             mp_form_factor)
 
     F = np.zeros(m)
     err = np.zeros(m)
@@ -751,10 +757,15 @@ def pieces_form_factors(pieces, m, tolerance=None, owner=None):
         count = np.diff(np.append(start, len(ring_of)))
         nxt = np.arange(len(ring_of)) + 1
         nxt[start + count - 1] = start
-        A0 = D[start]
-        S, mags, errs = _clipped_sector_sums(A0, D - A0[ring_of], nxt, ring_of, len(rings))
-        val = np.abs(S) / TWO_PI
-        e_ring = (_C1 * tol.EPS * mags + errs) / TWO_PI
+        if integrator == "eq3":
+            res = np.array([eq3_ring_area(D[a:a + c]) for a, c in zip(start, count)])
+            val = np.abs(res[:, 0]) / np.pi
+            e_ring = _C1 * tol.EPS * res[:, 1] / np.pi
+        else:
+            A0 = D[start]
+            S, mags, errs = _clipped_sector_sums(A0, D - A0[ring_of], nxt, ring_of, len(rings))
+            val = np.abs(S) / TWO_PI
+            e_ring = (_C1 * tol.EPS * mags + errs) / TWO_PI
         geom_of_ring = poly_of[ring_poly]
         vals.append(np.bincount(geom_of_ring, weights=np.where(is_hole, -val, val),
                                 minlength=len(geoms)))
@@ -763,7 +774,7 @@ def pieces_form_factors(pieces, m, tolerance=None, owner=None):
         ring_sets.append((D, start, count, is_hole, geom_of_ring))
     if not vals:
         return F, err
-    if tolerance is not None:
+    if tolerance is not None and integrator != "eq3":
         group = np.arange(m) if owner is None else np.asarray(owner)
         Fg = np.zeros(group.max() + 1)
         Eg = np.zeros(group.max() + 1)
