@@ -1,6 +1,12 @@
 """Visibility-engine benchmark: time per row, BSP build, fragments, peak memory.
 
-Usage: python benchmarks/bench_engine.py [--quick] [--rows 40]
+Usage: python benchmarks/bench_engine.py [--quick] [--rows 40] [--visibility-only]
+
+Output-sensitivity (issue 9): for the procedural office and cloister, exact ms per row
+against ``Hemicube(resolution=256)`` ms per row on the same rows (the in-run baseline),
+what the clipper left out (tile rejections, predicate decisions) and did (overlays), the
+row's tracemalloc peak, the estimated time of the full cloister matrix on 1 and 64
+cores, and the two integrators (sector form, Eq. 3) on the same rows.
 
 Cases: the open and the closed Cornell box (full matrices); closed cubes with k x k quads
 per face, N = 1,536 and N = 6,144 (full matrices, convex: the clipper is skipped), also
@@ -45,13 +51,99 @@ def row_peak_memory(scene, method, i):
     return peak
 
 
+def cloister_rows(scene, per_group=2, seed=0):
+    """Rows drawn with a fixed seed, ``per_group`` from every group (floors, walls,
+    ceilings, piers, arches, the garth) and the sky polygon's."""
+    rng = np.random.default_rng(seed)
+    groups = np.array(scene.groups)
+    rows = []
+    for g in sorted(set(scene.groups)):
+        members = np.flatnonzero(groups == g)
+        rows += rng.choice(members, min(per_group, len(members)), replace=False).tolist()
+    return rows
+
+
+def output_sensitivity(name, scene, rows, eq3_rows):
+    """Exact against hemicube-256 on the same rows; returns the table rows."""
+    exact, hemi = Exact(), ef.Hemicube(resolution=256)
+    exact.point_form_factors(scene, scene.centroids[rows[0]], scene.normals[rows[0]])  # caches
+    hemi.point_form_factors(scene, scene.centroids[rows[0]], scene.normals[rows[0]])
+    out = []
+    for i in rows:
+        p, n = scene.centroids[i], scene.normals[i]
+        st = {}
+        F, te = timed(lambda: exact.point_form_factors(scene, p, n, stats=st))
+        _, th = timed(lambda: hemi.point_form_factors(scene, p, n))
+        out.append((name, i, scene.groups[i], te, th, te / th, F.sum(), st))
+    peak = row_peak_memory(scene, exact, rows[0])
+    integ = []
+    for i in eq3_rows:
+        p, n = scene.centroids[i], scene.normals[i]
+        Fs, ts = timed(lambda: exact.point_form_factors(scene, p, n))
+        Fe, tq = timed(lambda: Exact(integrator="eq3").point_form_factors(scene, p, n))
+        integ.append((name, i, ts, tq, float(np.abs(Fs - Fe).max())))
+    return out, peak, integ
+
+
+def visibility_report(n_office_rows=12):
+    office = ef.scenes.office()
+    t = time.perf_counter()
+    cloister = ef.scenes.cloister()
+    t_gen = time.perf_counter() - t
+    t = time.perf_counter()
+    from exactff.visibility import scene_bsp
+    scene_bsp(cloister)
+    t_bsp = time.perf_counter() - t
+    print(f"cloister: {len(cloister)} polygons, generation {t_gen:.2f} s, BSP {t_bsp:.2f} s")
+    o_rows = np.random.default_rng(0).choice(len(office), n_office_rows, replace=False).tolist()
+    c_rows = cloister_rows(cloister)
+    res_o, peak_o, int_o = output_sensitivity("office", office, o_rows, o_rows[:4])
+    res_c, peak_c, int_c = output_sensitivity("cloister", cloister, c_rows, c_rows[:2])
+    keys = ["fragments", "culled_below_horizon", "chart_fragments", "tile_rejections",
+            "covered_rejections", "bbox_rejections", "disjoint_accepts", "differences",
+            "skipped_after_full", "overlay_repairs"]
+    print()
+    print("| scene | row | group | exact (ms) | hemicube-256 (ms) | ratio | row sum - 1 | "
+          + " | ".join(keys) + " |")
+    print("|---|---|---|---|---|---|---|" + "---|" * len(keys))
+    for name, i, g, te, th, r, s_, st in res_o + res_c:
+        print(f"| {name} | {i} | {g} | {1e3 * te:.0f} | {1e3 * th:.0f} | {r:.2f} | {s_ - 1:.1e} | "
+              + " | ".join(str(st.get(k, 0)) for k in keys) + " |")
+    print()
+    print("| scene | rows | median exact (ms) | median hemicube-256 (ms) | median ratio | "
+          "max ratio | max exact (s) | row peak memory (MiB) | peak / polygon (bytes) |")
+    print("|---|---|---|---|---|---|---|---|---|")
+    for name, res, peak, scene in (("office", res_o, peak_o, office),
+                                   ("cloister", res_c, peak_c, cloister)):
+        te = np.array([r[3] for r in res])
+        th = np.array([r[4] for r in res])
+        ratio = np.array([r[5] for r in res])
+        print(f"| {name} | {len(res)} | {1e3 * np.median(te):.0f} | {1e3 * np.median(th):.0f} | "
+              f"{np.median(ratio):.2f} | {ratio.max():.2f} | {te.max():.2f} | "
+              f"{peak / 2**20:.1f} | {peak / len(scene):.0f} |")
+    te = np.array([r[3] for r in res_c])
+    total = len(cloister) * te.mean()
+    print(f"\nfull cloister matrix from the sampled rows' mean ({te.mean():.2f} s/row): "
+          f"{total / 3600:.1f} h on 1 core, {total / 64 / 3600:.2f} h on 64 cores")
+    print()
+    print("| scene | row | sector form (s) | Eq. 3 (s) | Eq. 3 / sector | max abs difference |")
+    print("|---|---|---|---|---|---|")
+    for name, i, ts, tq, d in int_o + int_c:
+        print(f"| {name} | {i} | {ts:.3f} | {tq:.3f} | {tq / ts:.1f} | {d:.1e} |")
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="skip the N = 6,144 cube")
     ap.add_argument("--rows", type=int, default=40, help="sampled rows of the furnished room")
+    ap.add_argument("--visibility-only", action="store_true",
+                    help="only the office / cloister output-sensitivity tables")
     args = ap.parse_args()
     print(f"machine: {platform.machine()}, {os.cpu_count()} cores, python "
           f"{platform.python_version()}, numpy {np.__version__}")
+    visibility_report()
+    if args.visibility_only:
+        return
     rows = []
 
     def case(name, scene, row_ids=None, method=Exact(), note=""):

@@ -89,4 +89,4 @@ MAX_TILES = 64
 
 #: Fragments decided together (vectorised) by the tiled clipper: a cost trade-off
 #: (larger batches have more parts that wait for an earlier part of the batch).
-CLIP_BATCH = 128
+CLIP_BATCH = 256

@@ -412,12 +412,15 @@ class TiledRegion:
         return owner[keep], tile[keep], parts[keep]
 
     def decide(self, tile, parts, stats):
-        """Visible part of each part (in batch order), or None.
+        """Visible part of each part (in batch order), or None, and whether a hidden
+        part still needs the merge's check (an empty difference where a predicate saw
+        area outside the region).
 
-        The caller records the visible parts with :meth:`record` (which grows the
-        covered region) before the next batch."""
+        The caller records the decisions with :meth:`record` (which grows the covered
+        region) before the next batch."""
         m = len(parts)
         vis = np.full(m, None, dtype=object)
+        check = np.zeros(m, dtype=bool)   # hidden by an empty difference: merge checks it
         # parts whose interiors meet an earlier part's (same tile) wait for it
         a, b = shapely.STRtree(parts).query(parts)     # bounds meet
         sel = (b < a) & (tile[a] == tile[b])
@@ -464,10 +467,9 @@ class TiledRegion:
                     vis[cut] = [_overlay(shapely.difference, q, r, stats)
                                 for q, r in zip(parts[cut], self.region[tile[cut]])]
                 # the predicate found interior points outside the region: an empty
-                # difference is a GEOS failure (seen), redone with the checked overlays
-                for k in cut[shapely.area(vis[cut]) == 0.0]:
-                    stats["overlay_repairs"] = stats.get("overlay_repairs", 0) + 1
-                    vis[k] = _cut(parts[k], self.region[tile[k]], stats)[0]
+                # difference may be a GEOS failure (seen) or a rounding sliver; the part
+                # joins the merge's area check, which tells the two apart
+                check[cut[shapely.area(vis[cut]) == 0.0]] = True
         # parts that meet earlier parts of the batch: minus those (the earlier parts
         # are wholly in front, whatever of them is visible)
         for k in np.flatnonzero(waits):
@@ -484,13 +486,13 @@ class TiledRegion:
             stats["differences"] += 1
             v = _overlay(shapely.difference, vis[k], E, stats)
             if v.area == 0.0 and not inside:
-                stats["overlay_repairs"] = stats.get("overlay_repairs", 0) + 1
-                v = _cut(vis[k], E, stats)[0]
+                check[k] = True
             vis[k] = v
-        return np.array([None if (v is None or v.is_empty or v.area == 0.0) else v for v in vis],
-                        dtype=object)
+        vis = np.array([None if (v is None or v.is_empty or v.area == 0.0) else v for v in vis],
+                       dtype=object)
+        return vis, check
 
-    def record(self, tile, parts, vis, slots, frags, receives, stats):
+    def record(self, tile, parts, vis, check, slots, frags, receives, stats):
         """Record the batch's decisions: every part (hidden or not) joins its tile's
         pending list, with its visible part, where that stands in the caller's output
         list (``slots``, -1 for none), its fragment and whether it receives. They are
@@ -499,7 +501,8 @@ class TiledRegion:
         for k in range(len(parts)):
             t = int(tile[k])
             v = vis[k]
-            self.pending[t].append((parts[k], v, int(slots[k]), int(frags[k]), bool(receives[k])))
+            self.pending[t].append((parts[k], v, int(slots[k]), int(frags[k]), bool(receives[k]),
+                                    bool(check[k])))
             if v is None:
                 continue
             self.area[t] += v.area
@@ -524,10 +527,10 @@ class TiledRegion:
         for them since the last merge by area conservation: the new region must have
         the old region's area plus the visible parts'.
 
-        Parts found hidden add nothing: they were checked when hidden (a prepared
-        ``covers`` confirms every ``relate`` that hides a part; an empty difference is
-        recomputed with the checked overlays of :func:`_cut` unless a predicate
-        confirms it).
+        Parts found hidden add nothing: those hidden by predicates were checked then
+        (a prepared ``covers`` confirms every ``relate`` that hides a part), those
+        hidden by an empty difference where a predicate saw area outside the region
+        join the union here.
 
         The decisions come from exact predicates and floating-point overlays, and GEOS
         has been seen to get both wrong on near-degenerate input without raising (a
@@ -540,8 +543,10 @@ class TiledRegion:
             return
         old = self.region[t]
         # the region grows by the parts with a visible part (whole, not just the visible
-        # part: that checks the differences too); hidden parts were checked when hidden
-        geoms = [q for q, v, *_ in pend if v is not None] + ([old] if old is not None else [])
+        # part: that checks the differences too) and by the parts hidden by an empty
+        # difference (they must add nothing); the others were checked when hidden
+        geoms = ([q for q, v, *_, chk in pend if v is not None or chk]
+                 + ([old] if old is not None else []))
         if not geoms:
             grown = None
             ok = False   # hidden parts in an empty tile: a wrong decision
@@ -553,7 +558,7 @@ class TiledRegion:
         if not ok:
             stats["overlay_repairs"] = stats.get("overlay_repairs", 0) + 1
             grown = old
-            for q, _, slot, frag, rec in pend:
+            for q, _, slot, frag, rec, _ in pend:
                 if grown is None:
                     v, grown = q, q
                 else:
@@ -639,7 +644,7 @@ def _tiled_chart(ci, chart, idx, polys, bounds, receives, st, out):
             if len(parts) == 0:
                 st["hidden"] += len(sel)
                 continue
-            vis = region.decide(tile, parts, st)
+            vis, check = region.decide(tile, parts, st)
             seen = vis != None  # noqa: E711 (object array)
             st["hidden"] += len(sel) - len(np.unique(owner[seen]))
             frag = idx[sel[owner]]
@@ -648,7 +653,7 @@ def _tiled_chart(ci, chart, idx, polys, bounds, receives, st, out):
             for k in np.flatnonzero(seen & rec):
                 slots[k] = len(out)
                 out.append((int(frag[k]), ci, vis[k]))
-            region.record(tile, parts, vis, slots, frag, rec, st)
+            region.record(tile, parts, vis, check, slots, frag, rec, st)
     else:
         if region.is_full():
             st["charts_full"] += 1
