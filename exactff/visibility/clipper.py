@@ -498,22 +498,21 @@ class TiledRegion:
         list (``slots``, -1 for none), its fragment and whether it receives. They are
         unioned into the tile's region when the region is needed, and every decision
         is checked then (:meth:`_merge`)."""
-        for k in range(len(parts)):
-            t = int(tile[k])
-            v = vis[k]
-            self.pending[t].append((parts[k], v, int(slots[k]), int(frags[k]), bool(receives[k]),
-                                    bool(check[k])))
-            if v is None:
-                continue
-            self.area[t] += v.area
-            vb = v.bounds
-            cb = self.bounds[t]
-            self.bounds[t] = (min(cb[0], vb[0]), min(cb[1], vb[1]), max(cb[2], vb[2]),
-                              max(cb[3], vb[3]))
-            if self.area[t] >= self.full_area and not self.full[t]:
-                # a tile is declared full only from a checked region
-                self._merge(t, stats)
-                self.full[t] = self.area[t] >= self.full_area
+        for t, q, v, sl, f, r, c in zip(tile.tolist(), parts, vis, slots.tolist(),
+                                        frags.tolist(), receives.tolist(), check.tolist()):
+            self.pending[t].append((q, v, sl, f, r, c))
+        seen = np.flatnonzero(vis != None)  # noqa: E711 (object array)
+        if len(seen) == 0:
+            return
+        ts = tile[seen]
+        np.add.at(self.area, ts, shapely.area(vis[seen]))
+        vb = shapely.bounds(vis[seen])
+        for col, ufunc in ((0, np.minimum), (1, np.minimum), (2, np.maximum), (3, np.maximum)):
+            ufunc.at(self.bounds[:, col], ts, vb[:, col])
+        # a tile is declared full only from a checked region
+        for t in np.unique(ts[(self.area[ts] >= self.full_area) & ~self.full[ts]]):
+            self._merge(int(t), stats)
+            self.full[t] = self.area[t] >= self.full_area
 
     def finish(self, stats):
         """Check the decisions still pending (every tile with pending parts is merged);
