@@ -19,6 +19,8 @@ __all__ = [
     "TILE_FRAGMENTS",
     "MAX_TILES",
     "CLIP_BATCH",
+    "LONG_POLYGON",
+    "BATCH_VALIDATION_MAX_VERTICES",
 ]
 
 #: Unit roundoff of IEEE double precision, 2**-53.
@@ -90,3 +92,13 @@ MAX_TILES = 64
 #: Fragments decided together (vectorised) by the tiled clipper: a cost trade-off
 #: (larger batches have more parts that wait for an earlier part of the batch).
 CLIP_BATCH = 256
+
+#: The discrete methods' z-buffer tests cells against polygon images with a vectorised
+#: crossing-number loop over the edges; images with more vertices than this use a
+#: prepared point-in-polygon test instead (not a tolerance: a cost threshold).
+LONG_POLYGON = 64
+
+#: Scene validation checks polygons with the same vertex count together, with O(k^2)
+#: pairwise distances; longer polygons are checked one by one (not a tolerance: a cost
+#: threshold).
+BATCH_VALIDATION_MAX_VERTICES = 128

@@ -4,6 +4,7 @@ import numpy as np
 
 __all__ = [
     "padded",
+    "padded_buckets",
     "to_local",
     "rotate",
     "area_vector",
@@ -85,14 +86,48 @@ def polygon_centroid(polygon):
 def polygon_diameter(polygon):
     """Largest distance between two vertices.
 
+    Exact (all pairs) up to 128 vertices. Beyond, in O(K log K) time and O(K) memory:
+    the vertices are projected onto their best-fit plane, and the farthest pair among
+    the vertices of their convex hull is found by rotating calipers (the distance is
+    then measured in 3-D between the original vertices; for a planar polygon the pair
+    is the diameter's, up to the vertices' distances from the plane).
+
     Examples
     --------
     >>> polygon_diameter([[0, 0, 0], [3, 0, 0], [3, 4, 0]])
     5.0
+    >>> t = np.linspace(0, 2 * np.pi, 5000, endpoint=False)
+    >>> round(polygon_diameter(np.column_stack([np.cos(t), np.sin(t), 0 * t])), 12)
+    2.0
     """
     P = np.asarray(polygon, dtype=float)
-    D = P[:, None, :] - P[None, :, :]
-    return float(np.sqrt((D * D).sum(axis=-1)).max())
+    if len(P) <= 128:
+        D = P[:, None, :] - P[None, :, :]
+        return float(np.sqrt((D * D).sum(axis=-1)).max())
+    from scipy.spatial import ConvexHull, QhullError
+
+    c = P.mean(axis=0)
+    _, _, vt = np.linalg.svd(P - c, full_matrices=False)
+    Q = (P - c) @ vt[:2].T
+    try:
+        H = ConvexHull(Q).vertices          # counter-clockwise
+    except QhullError:                      # collinear: the extreme points along vt[0]
+        return float(np.linalg.norm(P[np.argmax(Q[:, 0])] - P[np.argmin(Q[:, 0])]))
+    h, Qh, Ph = len(H), Q[H], P[H]
+    best, j = 0.0, 1
+    for i in range(h):
+        e = Qh[(i + 1) % h] - Qh[i]
+        # advance the antipodal vertex while it moves away from edge i
+        while True:
+            a = Qh[j] - Qh[i]
+            b = Qh[(j + 1) % h] - Qh[i]
+            if e[0] * b[1] - e[1] * b[0] > e[0] * a[1] - e[1] * a[0]:
+                j = (j + 1) % h
+            else:
+                break
+        for k in (i, (i + 1) % h):
+            best = max(best, float(np.linalg.norm(Ph[k] - Ph[j])))
+    return best
 
 
 def receiver_frame(normal, dtype=float):
@@ -192,3 +227,37 @@ def padded(polygons):
         V[i, : len(P)] = P
         V[i, len(P):] = P[-1]
     return V, counts
+
+
+def padded_buckets(polygons):
+    """Polygons as padded arrays, one per bucket of similar vertex counts.
+
+    A single padded array costs every polygon as much as the longest one (a 5,000-gon
+    in a scene of quads multiplies the work and memory of every row by thousands);
+    buckets of vertex counts up to 4, 8, 16, ... (powers of two) keep the padding
+    within a factor 2 of each polygon's own count.
+
+    Parameters
+    ----------
+    polygons : sequence of ndarray of shape (K_i, 3)
+
+    Returns
+    -------
+    list of (ndarray of int, ndarray of shape (M_b, K_b, 3), ndarray of shape (M_b,))
+        For each bucket: the polygons' indices (increasing), their vertices padded
+        as by :func:`padded`, and their counts.
+
+    Examples
+    --------
+    >>> b = padded_buckets([np.zeros((3, 3)), np.ones((40, 3)), np.ones((4, 3))])
+    >>> [(ids.tolist(), V.shape) for ids, V, k in b]
+    [([0, 2], (2, 4, 3)), ([1], (1, 40, 3))]
+    """
+    counts = np.array([len(P) for P in polygons])
+    size = np.maximum(4, 2 ** np.ceil(np.log2(np.maximum(counts, 1)))).astype(int)
+    out = []
+    for s in np.unique(size):
+        ids = np.flatnonzero(size == s)
+        V, c = padded([polygons[i] for i in ids])
+        out.append((ids, V, c))
+    return out

@@ -4,7 +4,7 @@ import numpy as np
 import shapely
 
 from . import _tolerances as tol
-from .geometry import area_vector
+from .geometry import area_vector, polygon_diameter
 
 __all__ = ["SceneError", "Scene", "validate_polygon", "validate_polygons", "describe"]
 
@@ -81,10 +81,10 @@ def validate_polygon(polygon, index=0, name=None, *, planarity_rtol=tol.PLANARIT
     D = _distinct_consecutive(P)
     if D.shape[0] < 3:
         raise SceneError(index, f"fewer than 3 distinct consecutive vertices ({D.shape[0]})", name)
-    diam = float(np.sqrt(((D[:, None, :] - D[None, :, :]) ** 2).sum(-1)).max())
+    diam = polygon_diameter(D)
     # best-fit plane (SVD): robust for any vertex set, including bow ties of zero area
     c = D.mean(axis=0)
-    _, sv, vt = np.linalg.svd(D - c)
+    _, sv, vt = np.linalg.svd(D - c, full_matrices=False)
     if not sv[1] > tol.DEGENERATE_AREA_RTOL * sv[0]:
         raise SceneError(index, "zero area (the vertices are collinear)", name)
     dev = float(np.abs((D - c) @ vt[2]).max())
@@ -137,6 +137,9 @@ def validate_polygons(polygons, names=None, planarity_rtol=tol.PLANARITY_RTOL):
         arrays[i] = a
         by_k.setdefault(a.shape[0], []).append(i)
     for k, idx in by_k.items():
+        if k > tol.BATCH_VALIDATION_MAX_VERTICES:
+            slow.extend(idx)   # long polygons one by one (the batch check is O(k^2))
+            continue
         P = np.stack([arrays[i] for i in idx])
         ok = np.all(np.isfinite(P), axis=(1, 2))
         ok &= np.all(np.any(P != np.roll(P, -1, axis=1), axis=2), axis=1)
@@ -144,7 +147,7 @@ def validate_polygons(polygons, names=None, planarity_rtol=tol.PLANARITY_RTOL):
         diff = Pc[:, :, None, :] - Pc[:, None, :, :]
         diam = np.sqrt((diff * diff).sum(-1)).max(axis=(1, 2))
         c = Pc.mean(axis=1, keepdims=True)
-        _, sv, vt = np.linalg.svd(Pc - c)
+        _, sv, vt = np.linalg.svd(Pc - c, full_matrices=False)
         ok &= sv[:, 1] > tol.DEGENERATE_AREA_RTOL * sv[:, 0]
         normal = vt[:, 2]
         dev = np.abs(np.einsum("mkj,mj->mk", Pc - c, normal)).max(axis=1)
@@ -344,7 +347,7 @@ def describe(scene):
     edges = {}
     for P in scene.polygons:
         D = _distinct_consecutive(P)
-        diam = float(np.sqrt(((D[:, None, :] - D[None, :, :]) ** 2).sum(-1)).max())
+        diam = polygon_diameter(D)
         N = area_vector(D)
         N /= np.linalg.norm(N)
         devs.append(float(np.abs((D - D.mean(axis=0)) @ N).max()) / diam)

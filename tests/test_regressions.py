@@ -27,7 +27,7 @@ def test_cornell_front_wall_row_for_every_bsp_tree(candidates, seed):
     # edges are now bit-identical
     scene = ef.scenes.cornell_box(closed=True)
     tree = bsp.build_bsp(scene, candidates=candidates, seed=seed)
-    scene._cache["bsp"] = (tree, *ef.geometry.padded(tree.fragments))
+    scene._cache["bsp"] = (tree, ef.geometry.padded_buckets(tree.fragments))
     i = scene.names.index("front_wall")
     F = ef.form_factors(scene, scene.centroids[i], scene.normals[i])
     assert abs(F.sum() - 1.0) < 1e-13

@@ -18,9 +18,10 @@ overlaps, zero-thickness walls) go by the engine's rule,
 """
 
 import numpy as np
+import shapely
 
 from .. import _tolerances as tol
-from ..geometry import padded, receiver_frame, to_local
+from ..geometry import padded_buckets, receiver_frame, to_local
 from ..integrate import _Polygons, plane_sides
 from ..predicates import tie_priority
 from ..visibility.clipper import CHARTS, chart_clip
@@ -105,11 +106,12 @@ def _chart_of(D):
     return chart, u, v
 
 
-def _padded_polygons(scene):
+def _polygon_buckets(scene):
+    """The scene's polygons padded bucket by bucket of vertex counts (cached)."""
     cache = scene._cache
-    if "padded" not in cache:
-        cache["padded"] = padded(scene.polygons)
-    return cache["padded"]
+    if "padded_buckets" not in cache:
+        cache["padded_buckets"] = padded_buckets(scene.polygons)
+    return cache["padded_buckets"]
 
 
 def nearest_polygons(scene, point, normal, directions):
@@ -132,13 +134,21 @@ def nearest_polygons(scene, point, normal, directions):
     p = np.asarray(point, dtype=float)
     flat = _Polygons.of(scene)
     side, _ = plane_sides(flat, p, exact=False)  # in the band: edge-on, as the engine
-    Vw, counts = _padded_polygons(scene)
     R = receiver_frame(normal)
-    V = to_local(Vw, p, R)
-    slot = np.arange(V.shape[1])[None, :] < counts[:, None]
-    live = (side != 0) & (np.where(slot, V[:, :, 2], -np.inf).max(axis=1) > 0)
-    ids = np.flatnonzero(live)
-    V, counts = V[ids], counts[ids]
+    # bucket by bucket of vertex counts (one long polygon pads only its own bucket);
+    # the live polygons get indices 0, 1, ... across the buckets
+    local, ids = [], []
+    start = 0
+    for b_ids, Vb, cb in _polygon_buckets(scene):
+        V = to_local(Vb, p, R)
+        slot = np.arange(V.shape[1])[None, :] < cb[:, None]
+        live = (side[b_ids] != 0) & (np.where(slot, V[:, :, 2], -np.inf).max(axis=1) > 0)
+        if live.any():
+            n_live = int(live.sum())
+            local.append((start + np.arange(n_live), V[live], cb[live]))
+            ids.append(b_ids[live])
+            start += n_live
+    ids = np.concatenate(ids) if ids else np.zeros(0, dtype=int)
     nl = flat.normals[ids] @ R.T
     rel = flat.centroids[ids] - p
     dl = np.einsum("ij,ij->i", flat.normals[ids], rel)  # n . (c - p)
@@ -156,11 +166,13 @@ def nearest_polygons(scene, point, normal, directions):
         cells = np.flatnonzero(chart == ci)
         if len(cells) == 0:
             continue
-        live_c, UV, cl = chart_clip(V, counts, ch, margin=tol.CHART_MARGIN)
-        if len(live_c) == 0:
-            continue
-        _zbuffer_chart(cells, u[cells], v[cells], ch[3], live_c, UV, cl, D, nl, dl,
-                       band, prio, best_t, best)
+        grid = _cell_grid(u[cells], v[cells], ch[3])
+        for g_ids, V, counts in local:
+            live_c, UV, cl = chart_clip(V, counts, ch, margin=tol.CHART_MARGIN)
+            if len(live_c) == 0:
+                continue
+            _zbuffer_chart(cells, u[cells], v[cells], grid, g_ids[live_c], UV, cl, D, nl,
+                           dl, band, prio, best_t, best)
     out = np.where(best >= 0, ids[np.maximum(best, 0)], -1)
     return out
 
@@ -172,20 +184,26 @@ def _ties(src, cell, t_near, D, nl, dl, band):
     return np.abs(r) <= band[src] + tol.BSP_COPLANAR_ULPS * tol.EPS * np.abs(t_near)
 
 
-def _zbuffer_chart(cells, cu, cv, side, live, UV, cl, D, nl, dl, band, prio, best_t, best):
-    """Nearest polygon per cell within one chart (updates best_t / best in place).
-
-    ``best_t`` is the depth of the nearest hit; ``best`` the polygon shown there: of the
-    polygons through the nearest hit point (depth ties), the one with the lowest
-    ``prio``."""
+def _cell_grid(cu, cv, side):
+    """A chart's cells on an nb x nb grid of buckets, in CSR order: (nb, v_lo, order,
+    starts)."""
     v_lo = -tol.CHART_MARGIN if side else -1.0 - tol.CHART_MARGIN
-    nb = max(1, int(np.sqrt(len(cells) / 16.0)))
-    # cells into an nb x nb bucket grid over the chart, in CSR order
+    nb = max(1, int(np.sqrt(len(cu) / 16.0)))
     bx = np.clip(((cu + 1.0) * 0.5 * nb).astype(int), 0, nb - 1)
     by = np.clip(((cv - v_lo) / (1.0 - v_lo) * nb).astype(int), 0, nb - 1)
     bucket = bx * nb + by
     order = np.argsort(bucket, kind="stable")
     starts = np.searchsorted(bucket[order], np.arange(nb * nb + 1))
+    return nb, v_lo, order, starts
+
+
+def _zbuffer_chart(cells, cu, cv, grid, live, UV, cl, D, nl, dl, band, prio, best_t, best):
+    """Nearest polygon per cell within one chart (updates best_t / best in place).
+
+    ``grid`` is the chart's :func:`_cell_grid`. ``best_t`` is the depth of the nearest
+    hit; ``best`` the polygon shown there: of the polygons through the nearest hit point
+    (depth ties), the one with the lowest ``prio``."""
+    nb, v_lo, order, starts = grid
     lo = UV.min(axis=1)
     hi = UV.max(axis=1)
     bx0 = np.clip(((lo[:, 0] + 1.0) * 0.5 * nb).astype(int), 0, nb - 1)
@@ -205,6 +223,7 @@ def _zbuffer_chart(cells, cu, cv, side, live, UV, cl, D, nl, dl, band, prio, bes
     bounds = [0] + list(np.searchsorted(cum, np.arange(PAIR_CHUNK, total, PAIR_CHUNK),
                                         side="right")) + [len(b)]
     K = UV.shape[1]
+    shapes = {}   # prepared images of long polygons
     for s0, s1 in zip(bounds[:-1], bounds[1:]):
         if s1 <= s0:
             continue
@@ -218,10 +237,26 @@ def _zbuffer_chart(cells, cu, cv, side, live, UV, cl, D, nl, dl, band, prio, bes
         poly, cell_local, uu, vv = poly[ok], cell_local[ok], uu[ok], vv[ok]
         if len(poly) == 0:
             continue
+        if K > tol.LONG_POLYGON:
+            # long polygons (a bucket of its own): a prepared point-in-polygon test per
+            # polygon, boundary included (a cell on a shared edge then hits both, and
+            # depth decides), instead of a loop over thousands of edges
+            inside = np.zeros(len(poly), dtype=bool)
+            for j in np.unique(poly):
+                sel = np.flatnonzero(poly == j)
+                g = shapes.get(j)
+                if g is None:
+                    g = shapes[j] = shapely.polygons(UV[j, :cl[j]])
+                    shapely.prepare(g)
+                inside[sel] = shapely.intersects_xy(g, uu[sel], vv[sel])
+            poly, cell_local = poly[inside], cell_local[inside]
+            K_loop = 0
+        else:
+            K_loop = K
         # crossing number over the polygon's edges (padding repeats the last vertex)
-        inside = np.zeros(len(poly), dtype=bool)
-        P = UV[poly]
-        for e in range(K):
+        inside = np.zeros(len(poly), dtype=bool) if K_loop else np.ones(len(poly), dtype=bool)
+        P = UV[poly] if K_loop else None
+        for e in range(K_loop):
             a = P[:, e]
             c = P[:, (e + 1) % K]
             straddles = (a[:, 1] > vv) != (c[:, 1] > vv)

@@ -11,7 +11,7 @@ import numpy as np
 from scipy.spatial import ConvexHull, QhullError
 
 from .. import _tolerances as tol
-from ..geometry import padded, receiver_frame, to_local
+from ..geometry import padded_buckets, receiver_frame, to_local
 from ..integrate import _Polygons, eq3_form_factor, plane_sides, unoccluded_row
 from .bsp import build_bsp, coplanar_overlaps, front_to_back
 from .clipper import pieces_form_factors, visible_pieces
@@ -21,11 +21,12 @@ __all__ = ["visible_form_factors", "is_convex_enclosure", "scene_bsp", "build_bs
 
 
 def scene_bsp(scene):
-    """The scene's BSP tree and its fragments as padded arrays (built once, cached)."""
+    """The scene's BSP tree and its fragments as padded arrays bucketed by vertex count
+    (:func:`exactff.geometry.padded_buckets`; built once, cached)."""
     cache = scene._cache
     if "bsp" not in cache:
         tree = build_bsp(scene)
-        cache["bsp"] = (tree, *padded(tree.fragments))
+        cache["bsp"] = (tree, padded_buckets(tree.fragments))
     return cache["bsp"]
 
 
@@ -99,25 +100,37 @@ def visible_form_factors(scene, point, normal, *, two_sided=False, stats=None,
         return unoccluded_row(flat, p, normal, one_sided=not two_sided, tolerance=tolerance,
                               in_band="edge_on")
     st["path"] = "clipper"
-    tree, Vf, counts = scene_bsp(scene)
+    tree, buckets = scene_bsp(scene)
     order = np.array(front_to_back(tree, p), dtype=int)
+    position = np.empty(len(order), dtype=int)
+    position[order] = np.arange(len(order))
     src = tree.source[order]
     # cull: fragments seen edge-on have no image and hide nothing
     edge_on = side[src] == 0
     R = receiver_frame(normal)  # normalises
-    V = to_local(Vf[order], p, R)
-    c = counts[order]
-    slot = np.arange(V.shape[1])[None, :] < c[:, None]
-    below = np.where(slot, V[:, :, 2], -np.inf).max(axis=1) <= 0
+    # local coordinates bucket by bucket (one long polygon pads only its own bucket)
+    local, below = [], np.zeros(len(order), dtype=bool)
+    for ids, Vb, cb in buckets:
+        Vl = to_local(Vb, p, R)
+        slot = np.arange(Vl.shape[1])[None, :] < cb[:, None]
+        below[position[ids]] = np.where(slot, Vl[:, :, 2], -np.inf).max(axis=1) <= 0
+        local.append((position[ids], Vl, cb))
     keep = ~edge_on & ~below if shortcuts else ~edge_on
     st["fragments"] = len(order)
     st["culled_edge_on"] = int(edge_on.sum())
     st["culled_below_horizon"] = int((below & ~edge_on).sum()) if shortcuts else 0
-    order, src, V, c = order[keep], src[keep], V[keep], c[keep]
+    new_position = np.full(len(order), -1)
+    new_position[keep] = np.arange(int(keep.sum()))
+    kept = []
+    for pos, Vl, cb in local:
+        k = keep[pos]
+        if k.any():
+            kept.append((new_position[pos[k]], Vl[k], cb[k]))
+    order, src = order[keep], src[keep]
     receives = side[src] > 0
     if two_sided:
         receives |= side[src] < 0
-    pieces = visible_pieces(V, c, receives, stats=st, shortcuts=shortcuts)
+    pieces = visible_pieces(kept, receives, stats=st, shortcuts=shortcuts)
     Ff, ef_ = pieces_form_factors(pieces, len(order), tolerance=tolerance, owner=src,
                                   integrator=integrator)
     F = np.bincount(src, weights=Ff, minlength=len(scene))

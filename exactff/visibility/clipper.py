@@ -151,23 +151,36 @@ def chart_clip(V, counts, chart, margin=0.0):
     return live, UV, cl
 
 
-def chart_polygons(V, counts, chart):
+def chart_polygons(buckets, chart):
     """Clip polygons (local frame) to a chart's frustum and project them into the chart.
+
+    Parameters
+    ----------
+    buckets : list of (ndarray of int, ndarray of shape (M_b, K_b, 3), ndarray of shape (M_b,))
+        Positions, padded vertices and counts of the polygons, bucket by bucket (as
+        :func:`exactff.geometry.padded_buckets`, in the local frame of the point).
+    chart : one of CHARTS
 
     Returns
     -------
     (ndarray of int, ndarray of shapely.Polygon, ndarray of shape (M', 4))
-        Indices (into V) of the polygons that reach the chart, their images, and
+        Positions of the polygons that reach the chart (increasing), their images, and
         their bounds.
     """
-    live, UV, cl = chart_clip(V, counts, chart)
-    if len(live) == 0:
-        return live, np.empty(0, object), np.zeros((0, 4))
-    mask = np.arange(UV.shape[1])[None, :] < cl[:, None]
-    coords = UV[mask]
-    ring_index = np.repeat(np.arange(len(live)), cl)
-    rings = shapely.linearrings(coords, indices=ring_index)
-    polys = shapely.polygons(rings)
+    idx, polys = [], []
+    for pos, V, counts in buckets:
+        live, UV, cl = chart_clip(V, counts, chart)
+        if len(live) == 0:
+            continue
+        mask = np.arange(UV.shape[1])[None, :] < cl[:, None]
+        rings = shapely.linearrings(UV[mask], indices=np.repeat(np.arange(len(live)), cl))
+        idx.append(pos[live])
+        polys.append(shapely.polygons(rings))
+    if not idx:
+        return np.zeros(0, dtype=int), np.empty(0, object), np.zeros((0, 4))
+    idx, polys = np.concatenate(idx), np.concatenate(polys)
+    order = np.argsort(idx, kind="stable")
+    idx, polys = idx[order], polys[order]
     bad = ~shapely.is_valid(polys)
     if bad.any():
         # rounding-thin slivers or self-touching images: repair, keep only areas
@@ -176,7 +189,7 @@ def chart_polygons(V, counts, chart):
             parts = shapely.get_parts(g)
             fixed.append(shapely.union_all(parts[shapely.get_type_id(parts) >= 3]))
         polys[bad] = fixed
-    return live, polys, shapely.bounds(polys)
+    return idx, polys, shapely.bounds(polys)
 
 
 def _repair(geom):
@@ -573,14 +586,14 @@ class TiledRegion:
         self.pending[t] = []
 
 
-def visible_pieces(order_V, order_counts, receives, stats=None, shortcuts=True):
+def visible_pieces(buckets, receives, stats=None, shortcuts=True):
     """Visible pieces of polygons given front to back, per chart.
 
     Parameters
     ----------
-    order_V : ndarray of shape (M, K, 3)
-        Fragments in front-to-back order, in the local frame of the point.
-    order_counts : ndarray of shape (M,)
+    buckets : list of (ndarray of int, ndarray of shape (M_b, K_b, 3), ndarray of shape (M_b,))
+        The fragments bucket by bucket: their positions in the front-to-back order
+        (0 is nearest), padded vertices in the local frame of the point, and counts.
     receives : ndarray of shape (M,), bool
         Whether each fragment's visible part is wanted (it occludes either way).
     shortcuts : bool, default True
@@ -609,7 +622,7 @@ def visible_pieces(order_V, order_counts, receives, stats=None, shortcuts=True):
                 "skipped_after_full", "overlay_repairs"):
         st.setdefault(key, 0)
     for ci, chart in enumerate(CHARTS):
-        idx, polys, bounds = chart_polygons(order_V, order_counts, chart)
+        idx, polys, bounds = chart_polygons(buckets, chart)
         st["chart_fragments"] += len(idx)
         if shortcuts:
             _tiled_chart(ci, chart, idx, polys, bounds, receives, st, out)
