@@ -21,6 +21,7 @@ __all__ = [
     "CLIP_BATCH",
     "LONG_POLYGON",
     "BATCH_VALIDATION_MAX_VERTICES",
+    "BSP_AXIS_CANDIDATE_MIN",
 ]
 
 #: Unit roundoff of IEEE double precision, 2**-53.
@@ -102,3 +103,7 @@ LONG_POLYGON = 64
 #: pairwise distances; longer polygons are checked one by one (not a tolerance: a cost
 #: threshold).
 BATCH_VALIDATION_MAX_VERTICES = 128
+
+#: BSP nodes with more fragments than this also try a plane through the median of the
+#: fragments' vertex means along their widest axis (not a tolerance: a cost threshold).
+BSP_AXIS_CANDIDATE_MIN = 512

@@ -10,7 +10,7 @@ from .procedural import OFFICE_REFLECTANCE, cloister, office, office_solids
 
 __all__ = ["cornell_box", "cornell_box_data", "subdivided_box", "box_polygons",
            "furnished_box", "office", "office_solids", "OFFICE_REFLECTANCE", "cloister",
-           "building"]
+           "building", "geodesic_sphere", "room_with_sphere"]
 
 
 def cornell_box_data():
@@ -304,3 +304,73 @@ def building(nx=2, ny=1, *, size=1.0, height=1.0, door=(0.2, 0.7), walls_first="
                         add(_axis_rect(axis, c, lo2, hi2, facing), f"{room}_inner_wall",
                             "inner_wall")
     return Scene.from_polygons(polys, names=names, groups=groups)
+
+
+def geodesic_sphere(level, centre=(0.0, 0.0, 0.0), radius=1.0, *, facing="out"):
+    """Triangles of a geodesic sphere: the icosahedron with every face split ``level``
+    times into four (``20 * 4**level`` triangles), vertices on the sphere.
+
+    Parameters
+    ----------
+    level : int
+        Subdivision level, 0 to 7.
+    centre : array_like of shape (3,)
+    radius : float
+    facing : {"out", "in"}
+        Fronts facing away from the centre (a solid ball) or towards it.
+
+    Returns
+    -------
+    list of ndarray of shape (3, 3)
+
+    Examples
+    --------
+    >>> len(geodesic_sphere(2))
+    320
+    """
+    if not (isinstance(level, (int, np.integer)) and 0 <= level <= 7):
+        raise ValueError(f"level must be an integer from 0 to 7, got {level!r}")
+    if facing not in ("out", "in"):
+        raise ValueError(f"facing must be 'out' or 'in', got {facing!r}")
+    t = (1.0 + 5.0 ** 0.5) / 2.0
+    V = np.array([(-1, t, 0), (1, t, 0), (-1, -t, 0), (1, -t, 0), (0, -1, t), (0, 1, t),
+                  (0, -1, -t), (0, 1, -t), (t, 0, -1), (t, 0, 1), (-t, 0, -1), (-t, 0, 1)],
+                 dtype=float)
+    F = np.array([(0, 11, 5), (0, 5, 1), (0, 1, 7), (0, 7, 10), (0, 10, 11), (1, 5, 9),
+                  (5, 11, 4), (11, 10, 2), (10, 7, 6), (7, 1, 8), (3, 9, 4), (3, 4, 2),
+                  (3, 2, 6), (3, 6, 8), (3, 8, 9), (4, 9, 5), (2, 4, 11), (6, 2, 10),
+                  (8, 6, 7), (9, 8, 1)])
+    V /= np.linalg.norm(V, axis=1, keepdims=True)
+    for _ in range(level):
+        # midpoints of the edges, shared between the two faces of each edge
+        E = np.sort(np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]]), axis=1)
+        edges, inv = np.unique(E, axis=0, return_inverse=True)
+        M = V[edges[:, 0]] + V[edges[:, 1]]
+        mid = len(V) + inv.reshape(3, -1).T          # (faces, 3): ab, bc, ca
+        V = np.concatenate([V, M / np.linalg.norm(M, axis=1, keepdims=True)])
+        a, b, c = F.T
+        ab, bc, ca = mid.T
+        F = np.concatenate([np.column_stack(x) for x in
+                            ((a, ab, ca), (b, bc, ab), (c, ca, bc), (ab, bc, ca))])
+    T = V[F] * float(radius) + np.asarray(centre, dtype=float)
+    # orient: the right-hand normal of the face must point away from the centre
+    n = np.cross(T[:, 1] - T[:, 0], T[:, 2] - T[:, 0])
+    out = np.einsum("ij,ij->i", n, T.mean(axis=1) - np.asarray(centre, dtype=float)) > 0
+    flip = out != (facing == "out")
+    T[flip] = T[flip][:, ::-1]
+    return list(T)
+
+
+def room_with_sphere(level=4, k=16):
+    """A closed unit room of ``k x k`` quads per face with a solid geodesic sphere of
+    ``20 * 4**level`` triangles (radius 0.25) floating in its middle: a tessellated
+    curved object, whose facets' own planes make a chain of a BSP tree.
+
+    Examples
+    --------
+    >>> len(room_with_sphere(2, 2))
+    344
+    """
+    polys = box_polygons((0, 0, 0), (1, 1, 1), k)
+    ball = geodesic_sphere(level, (0.5, 0.5, 0.5), 0.25)
+    return Scene.from_polygons(polys + ball, groups=["room"] * len(polys) + ["sphere"] * len(ball))

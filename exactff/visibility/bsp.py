@@ -123,71 +123,96 @@ def build_bsp(scene, *, candidates=8, seed=0):
     normals_src = scene.normals
     offsets_src = scene.plane_offsets
     fragments = [np.array(P, dtype=float) for P in scene.polygons]
-    source = list(range(len(scene)))
+    source = np.arange(len(scene))          # grows with the split parts (doubling)
+    n_frag = len(scene)
     nodes_n, nodes_d, front, back, node_frags = [], [], [], [], []
     splits = 0
-    # work items: (fragment ids, parent node, which child)
-    stack = [(list(range(len(fragments))), -1, 0)]
+    # work items: (fragment ids, their concatenated vertices, their counts, parent node,
+    # which child); a node's fragments are classified and distributed with array
+    # operations, only the fragments it splits go through Python
+    counts0 = np.array([len(P) for P in fragments])
+    stack = [(np.arange(n_frag), np.concatenate(fragments), counts0, -1, 0)]
     while stack:
-        ids, parent, child = stack.pop()
+        ids, V, counts, parent, child = stack.pop()
         node = len(nodes_d)
         if parent >= 0:
             (front if child > 0 else back)[parent] = node
-        counts = np.array([len(fragments[i]) for i in ids])
-        V = np.concatenate([fragments[i] for i in ids])
-        owner = np.repeat(np.arange(len(ids)), counts)
-        pool = ids if len(ids) <= candidates else [ids[0]] + list(
-            rng.choice(ids, size=candidates - 1, replace=False))
+        m = len(ids)
+        owner = np.repeat(np.arange(m), counts)
+        pool = ids.tolist() if m <= candidates else [int(ids[0])] + [
+            int(x) for x in rng.choice(ids, size=candidates - 1, replace=False)]
+        cands = [(normals_src[source[c]], offsets_src[source[c]], c) for c in dict.fromkeys(pool)]
+        starts = np.concatenate([[0], np.cumsum(counts)])
         best = None
-        for c in dict.fromkeys(pool):
-            n, d = normals_src[source[c]], offsets_src[source[c]]
+        for cand in cands + [None]:
+            if cand is not None:
+                n, d, c = cand
+            else:
+                # the polygons' own planes leave this node badly unbalanced (a convex
+                # tessellation has every other facet on one side of each facet, and
+                # the tree becomes a chain as deep as the object has facets): also try
+                # a plane through the median of the fragments' vertex means along
+                # their widest axis
+                if m <= tol.BSP_AXIS_CANDIDATE_MIN or best[7] <= 0.75 * m:
+                    break
+                cen = np.add.reduceat(V, starts[:-1], axis=0) / counts[:, None]
+                axis = int(np.argmax(np.ptp(cen, axis=0)))
+                n, d, c = np.eye(3)[axis], float(np.median(cen[:, axis])), None
             sign, _ = _classify(V, n, d)
-            has_pos = np.bincount(owner, weights=sign > 0, minlength=len(ids)) > 0
-            has_neg = np.bincount(owner, weights=sign < 0, minlength=len(ids)) > 0
+            has_pos = np.bincount(owner, weights=sign > 0, minlength=m) > 0
+            has_neg = np.bincount(owner, weights=sign < 0, minlength=m) > 0
             nsplit = int(np.sum(has_pos & has_neg))
             nfront = int(np.sum(has_pos & ~has_neg))
             nback = int(np.sum(has_neg & ~has_pos))
-            ncop = len(ids) - nsplit - nfront - nback
+            ncop = m - nsplit - nfront - nback
             score = 5 * nsplit + abs(nfront - nback) - 2 * ncop
             if best is None or score < best[0]:
-                best = (score, c, sign)
-        _, c, sign = best
-        n, d = normals_src[source[c]], offsets_src[source[c]]
+                best = (score, n, d, c, sign, has_pos, has_neg, abs(nfront - nback))
+        _, n, d, c, sign, has_pos, has_neg, _ = best
         _, s = _classify(V, n, d)
         nodes_n.append(n)
         nodes_d.append(d)
         front.append(-1)
         back.append(-1)
-        here, fr, bk = [], [], []
-        starts = np.concatenate([[0], np.cumsum(counts)])
-        for k, i in enumerate(ids):
-            sg = sign[starts[k]:starts[k + 1]]
-            if source[i] == source[c] or not sg.any():
-                here.append(i)          # in the plane (or the splitter's own pieces)
-            elif sg.min() >= 0:
-                fr.append(i)
-            elif sg.max() <= 0:
-                bk.append(i)
-            else:
-                f, b = _split(fragments[i], sg, s[starts[k]:starts[k + 1]])
-                splits += 1
-                for part, dest in ((f, fr), (b, bk)):
-                    if part is not None:
-                        fragments.append(part)
-                        source.append(source[i])
-                        dest.append(len(fragments) - 1)
-        node_frags.append(here)
-        if fr:
-            stack.append((fr, node, 1))
-        if bk:
-            stack.append((bk, node, -1))
+        # in the plane (or the splitter's own pieces), wholly in front, behind, split
+        here = ~has_pos & ~has_neg
+        if c is not None:
+            here |= source[ids] == source[c]
+        to_front = has_pos & ~has_neg & ~here
+        to_back = has_neg & ~has_pos & ~here
+        cut = has_pos & has_neg & ~here
+        node_frags.append(ids[here].tolist())
+        parts = {1: [], -1: []}
+        for k in np.flatnonzero(cut).tolist():
+            a, b = starts[k], starts[k + 1]
+            f, bk = _split(V[a:b], sign[a:b], s[a:b])
+            splits += 1
+            for part, side in ((f, 1), (bk, -1)):
+                if part is not None:
+                    if n_frag == len(source):
+                        source = np.concatenate([source, np.zeros(len(source), dtype=int)])
+                    fragments.append(part)
+                    source[n_frag] = source[ids[k]]
+                    parts[side].append((n_frag, part))
+                    n_frag += 1
+        for mask, side in ((to_front, 1), (to_back, -1)):
+            if not mask.any() and not parts[side]:
+                continue
+            child_ids = ids[mask]
+            child_V = V[mask[owner]]
+            child_counts = counts[mask]
+            if parts[side]:
+                child_ids = np.concatenate([child_ids, [i for i, _ in parts[side]]])
+                child_V = np.concatenate([child_V] + [P for _, P in parts[side]])
+                child_counts = np.concatenate([child_counts, [len(P) for _, P in parts[side]]])
+            stack.append((child_ids, child_V, child_counts, node, side))
     # keep only the fragments the nodes hold (a split fragment is replaced by its parts)
     live = [i for here in node_frags for i in here]
     new_id = {old: new for new, old in enumerate(live)}
     node_frags = [[new_id[i] for i in here] for here in node_frags]
     return BSPTree(np.array(nodes_n), np.array(nodes_d), np.array(front), np.array(back),
-                   node_frags, [fragments[i] for i in live],
-                   np.array([source[i] for i in live]), splits, normals_src)
+                   node_frags, [fragments[i] for i in live], source[np.array(live, dtype=int)],
+                   splits, normals_src)
 
 
 def front_to_back(tree, point):

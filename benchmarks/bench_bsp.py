@@ -1,0 +1,70 @@
+"""BSP set-up: build time, depth, fragments and splits against the number of polygons.
+
+Usage: python benchmarks/bench_bsp.py [--max-level 6]
+
+Geodesic spheres of 1,280 to 81,920 triangles in a closed unit room of 16 x 16 quads per
+face (``exactff.scenes.room_with_sphere``), the procedural office and the cloister. For
+the spheres also the tree from the polygons' own planes only (the axis-plane candidates
+off: the chain a convex tessellation makes), and a hemicube-256 row of the same scene as
+the in-run yardstick (issue 20: set-up within the time of 10 such rows).
+"""
+
+import argparse
+import os
+import platform
+import time
+
+import numpy as np
+
+import exactff as ef
+from exactff import _tolerances as tol
+from exactff.visibility import build_bsp
+
+
+def depth(tree):
+    best, stack = 0, [(0, 1)]
+    while stack:
+        k, d = stack.pop()
+        best = max(best, d)
+        stack += [(c, d + 1) for c in (tree.front[k], tree.back[k]) if c >= 0]
+    return best
+
+
+def timed(f):
+    t = time.perf_counter()
+    out = f()
+    return out, time.perf_counter() - t
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--max-level", type=int, default=6)
+    ap.add_argument("--chain-max-level", type=int, default=4)
+    args = ap.parse_args()
+    print(f"machine: {platform.machine()}, {os.cpu_count()} cores, python "
+          f"{platform.python_version()}, numpy {np.__version__}")
+    print("| scene | polygons | candidates | build (s) | depth | fragments | splits | "
+          "hemicube-256 row (s) | build / row |")
+    print("|---|---|---|---|---|---|---|---|---|")
+    cases = [(f"room + sphere of {20 * 4**lv} triangles", lambda lv=lv: ef.scenes.room_with_sphere(lv))
+             for lv in range(3, args.max_level + 1)]
+    cases += [("office", ef.scenes.office), ("cloister", ef.scenes.cloister)]
+    default = tol.BSP_AXIS_CANDIDATE_MIN
+    for name, make in cases:
+        scene = make()
+        hemi = ef.Hemicube(resolution=256)
+        _, t_row = timed(lambda: hemi.point_form_factors(scene, scene.centroids[0], scene.normals[0]))
+        modes = [("planes + axis", default)]
+        if name.startswith("room") and len(scene) <= 1536 + 20 * 4**args.chain_max_level:
+            modes.append(("own planes only", 10**9))
+        for label, thr in modes:
+            tol.BSP_AXIS_CANDIDATE_MIN = thr
+            tree, t_build = timed(lambda: build_bsp(scene))
+            tol.BSP_AXIS_CANDIDATE_MIN = default
+            print(f"| {name} | {len(scene)} | {label} | {t_build:.2f} | {depth(tree)} | "
+                  f"{len(tree.fragments)} | {tree.splits} | {t_row:.3f} | {t_build / t_row:.1f} |",
+                  flush=True)
+
+
+if __name__ == "__main__":
+    main()
