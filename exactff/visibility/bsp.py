@@ -141,35 +141,41 @@ def build_bsp(scene, *, candidates=8, seed=0):
         owner = np.repeat(np.arange(m), counts)
         pool = ids.tolist() if m <= candidates else [int(ids[0])] + [
             int(x) for x in rng.choice(ids, size=candidates - 1, replace=False)]
-        cands = [(normals_src[source[c]], offsets_src[source[c]], c) for c in dict.fromkeys(pool)]
+        pool = list(dict.fromkeys(pool))
         starts = np.concatenate([[0], np.cumsum(counts)])
-        best = None
-        for cand in cands + [None]:
-            if cand is not None:
-                n, d, c = cand
-            else:
-                # the polygons' own planes leave this node badly unbalanced (a convex
-                # tessellation has every other facet on one side of each facet, and
-                # the tree becomes a chain as deep as the object has facets): also try
-                # a plane through the median of the fragments' vertex means along
-                # their widest axis
-                if m <= tol.BSP_AXIS_CANDIDATE_MIN or best[7] <= 0.75 * m:
-                    break
-                cen = np.add.reduceat(V, starts[:-1], axis=0) / counts[:, None]
-                axis = int(np.argmax(np.ptp(cen, axis=0)))
-                n, d, c = np.eye(3)[axis], float(np.median(cen[:, axis])), None
-            sign, _ = _classify(V, n, d)
-            has_pos = np.bincount(owner, weights=sign > 0, minlength=m) > 0
-            has_neg = np.bincount(owner, weights=sign < 0, minlength=m) > 0
-            nsplit = int(np.sum(has_pos & has_neg))
-            nfront = int(np.sum(has_pos & ~has_neg))
-            nback = int(np.sum(has_neg & ~has_pos))
-            ncop = m - nsplit - nfront - nback
-            score = 5 * nsplit + abs(nfront - nback) - 2 * ncop
-            if best is None or score < best[0]:
-                best = (score, n, d, c, sign, has_pos, has_neg, abs(nfront - nback))
-        _, n, d, c, sign, has_pos, has_neg, _ = best
-        _, s = _classify(V, n, d)
+        # every candidate plane at once: vertex signs (V, k), per fragment whether it
+        # has vertices in front / behind, and the score of each plane
+        Nc = normals_src[source[pool]]
+        Dc = offsets_src[source[pool]]
+        S = V @ Nc.T - Dc
+        band = tol.BSP_COPLANAR_ULPS * tol.EPS * (np.abs(V) @ np.abs(Nc).T + np.abs(Dc))
+        pos = np.add.reduceat(S > band, starts[:-1], axis=0) > 0      # (m, k)
+        neg = np.add.reduceat(S < -band, starts[:-1], axis=0) > 0
+        nsplit = (pos & neg).sum(axis=0)
+        nfront = (pos & ~neg).sum(axis=0)
+        nback = (neg & ~pos).sum(axis=0)
+        ncop = m - nsplit - nfront - nback
+        score = 5 * nsplit + np.abs(nfront - nback) - 2 * ncop
+        j = int(np.argmin(score))        # the first of equal scores, as one by one
+        c = pool[j]
+        n, d = Nc[j], Dc[j]
+        has_pos, has_neg = pos[:, j], neg[:, j]
+        if m > tol.BSP_AXIS_CANDIDATE_MIN and abs(int(nfront[j]) - int(nback[j])) > 0.75 * m:
+            # the polygons' own planes leave this node badly unbalanced (a convex
+            # tessellation has every other facet on one side of each facet, and the
+            # tree becomes a chain as deep as the object has facets): also try a plane
+            # through the median of the fragments' vertex means along their widest axis
+            cen = np.add.reduceat(V, starts[:-1], axis=0) / counts[:, None]
+            axis = int(np.argmax(np.ptp(cen, axis=0)))
+            na, da = np.eye(3)[axis], float(np.median(cen[:, axis]))
+            sg, _ = _classify(V, na, da)
+            ap = np.add.reduceat(sg > 0, starts[:-1]) > 0
+            an = np.add.reduceat(sg < 0, starts[:-1]) > 0
+            a_split, a_front, a_back = int(np.sum(ap & an)), int(np.sum(ap & ~an)), int(np.sum(an & ~ap))
+            a_score = 5 * a_split + abs(a_front - a_back) - 2 * (m - a_split - a_front - a_back)
+            if a_score < score[j]:
+                n, d, c, has_pos, has_neg = na, da, None, ap, an
+        sign, s = _classify(V, n, d)
         nodes_n.append(n)
         nodes_d.append(d)
         front.append(-1)
