@@ -109,3 +109,82 @@ def test_room_with_sphere_against_a_brute_force_ray_cast():
     assert np.all(np.abs(est - F) <= 5 * sigma)
     assert abs(F.sum() - 1) <= 1e-11
     assert F[np.array(scene.groups) == "sphere"].sum() > 0.01   # the sphere is seen
+
+
+def _clip(P, n, d):
+    """The part of polygon P with n . x >= d (Sutherland-Hodgman)."""
+    out = []
+    s = P @ n - d
+    for k in range(len(P)):
+        a, b, sa, sb = P[k], P[(k + 1) % len(P)], s[k], s[(k + 1) % len(P)]
+        if sa >= 0:
+            out.append(a)
+        if (sa >= 0) != (sb >= 0):
+            out.append(a + sa / (sa - sb) * (b - a))
+    return np.array(out)
+
+
+def shadow_reference(scene, p, n):
+    """Occluded form factors by shadow polygons, independent of the engine: for each
+    polygon j facing p, the part of every other polygon between p and j's plane is
+    projected centrally from p onto that plane; j minus the union of these shadows
+    (2-D booleans in j's plane) is what p sees of j, integrated with the unoccluded
+    kernel (exterior rings minus holes)."""
+    import shapely
+
+    F = np.zeros(len(scene))
+    for j, Pj in enumerate(scene.polygons):
+        nj, dj = scene.normals[j], scene.plane_offsets[j]
+        h = dj - nj @ p                    # < 0: p in front of j
+        if h >= 0:
+            continue
+        e1 = Pj[1] - Pj[0]
+        e1 /= np.linalg.norm(e1)
+        e2 = np.cross(nj, e1)
+        to2d = lambda X: np.column_stack([(X - Pj[0]) @ e1, (X - Pj[0]) @ e2])
+        # the pyramid from p over j: planes through p and each edge of j
+        cj = Pj.mean(axis=0)
+        pyramid = []
+        for a, b in zip(Pj, np.roll(Pj, -1, axis=0)):
+            m = np.cross(a - p, b - p)
+            m = m if m @ (cj - p) > 0 else -m
+            pyramid.append((m, m @ p))
+        shadows = []
+        for i, Pi in enumerate(scene.polygons):
+            if i == j:
+                continue
+            # keep the part of i between p and j's plane (on p's side of it, a little
+            # beyond p), inside the pyramid: its central projection lies in j
+            Q = _clip(Pi, nj, dj + 1e-12 * abs(h))          # n_j . x >= d_j: p's side
+            if len(Q) >= 3:
+                Q = _clip(Q, -nj, -(nj @ p) + 1e-9 * abs(h))  # and beyond p towards j
+            for m, dm in pyramid:
+                if len(Q) >= 3:
+                    Q = _clip(Q, m, dm)
+            if len(Q) < 3:
+                continue
+            t = h / ((Q - p) @ nj)
+            S = shapely.Polygon(to2d(p + t[:, None] * (Q - p)))
+            if S.is_valid and S.area > 0:
+                shadows.append(S)
+        vis = shapely.Polygon(to2d(Pj))
+        if shadows:
+            vis = vis.difference(shapely.union_all(shadows))
+        for part in shapely.get_parts(vis):
+            if part.geom_type != "Polygon" or part.area < 1e-14:
+                continue
+            rings = [np.asarray(part.exterior.coords)[:-1]] + [np.asarray(r.coords)[:-1]
+                                                                for r in part.interiors]
+            for r, ring in enumerate(rings):
+                X = Pj[0] + ring[:, :1] * e1 + ring[:, 1:] * e2
+                val = ef.point_polygon_form_factor(p, n, X, one_sided=False)
+                F[j] += val if r == 0 else -val
+    return F
+
+
+def test_small_room_with_sphere_against_shadow_polygons():
+    scene = ef.scenes.room_with_sphere(0, 2)     # an icosahedron in a room of 24 quads
+    for i in (0, 5, 13, 30):
+        p, n = scene.centroids[i], scene.normals[i]
+        F = ef.form_factors(scene, p, n)
+        assert_form_factors_close(F, shadow_reference(scene, p, n), rtol=0, atol=1e-11)
