@@ -8,7 +8,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 import exactff as ef
-from exactff.methods import METHODS
+from exactff.methods import METHODS, Exact
 from exactff.testing import assert_form_factors_close
 from exactff.testing.strategies import unit_vectors
 
@@ -141,3 +141,29 @@ def test_info_prints_the_overlaps(capsys):
     assert main(["info", "building:2x1"]) == 0
     out = capsys.readouterr().out
     assert "3 back-to-back pairs" in out and "0 same-facing pairs" in out
+
+
+@pytest.mark.parametrize("quad_first", [True, False])
+def test_convex_scene_shortcut_sees_coplanar_overlaps(quad_first):
+    # a unit box and a 0.2 x 0.2 quad lying on the ceiling, facing down: every vertex is
+    # in front of every plane, but the quad and the ceiling overlap; the shortcut used
+    # to count both (row sum 1.0126); the first in input order is in front on both paths
+    box = ef.scenes.box_polygons((0, 0, 0), (1, 1, 1), 1)
+    quad = np.array([[0.4, 0.4, 1], [0.4, 0.6, 1], [0.6, 0.6, 1], [0.6, 0.4, 1]], dtype=float)
+    polys = [quad] + box if quad_first else box + [quad]
+    scene = ef.Scene.from_polygons(polys)
+    q = 0 if quad_first else len(polys) - 1
+    ceiling = 2 if quad_first else 1        # box_polygons: z = lo, then z = hi
+    p, n = np.array([0.5, 0.5, 0.0]), np.array([0.0, 0.0, 1.0])
+    st = {}
+    on = Exact().point_form_factors(scene, p, n, stats=st)
+    off = Exact(shortcuts=False).point_form_factors(scene, p, n)
+    assert_form_factors_close(on, off, rtol=0, atol=1e-15)
+    assert abs(on.sum() - 1.0) <= 1e-12
+    U = ef.point_polygon_form_factors(p, n, scene)
+    if quad_first:   # the quad is in front: the ceiling receives only around it
+        assert_form_factors_close(on[q], U[q], rtol=0, atol=1e-14)
+        assert_form_factors_close(on[ceiling], U[ceiling] - U[q], rtol=0, atol=1e-13)
+    else:            # the ceiling is in front: the quad receives nothing
+        assert on[q] == 0.0
+        assert_form_factors_close(on[ceiling], U[ceiling], rtol=0, atol=1e-14)

@@ -32,8 +32,13 @@ def scene_bsp(scene):
 
 def is_convex_enclosure(scene):
     """True when every vertex of the scene lies on the front side (or in the plane) of
-    every polygon, so that from any point in front of all of them no polygon can hide
-    another (a convex room seen from inside). Computed once per scene."""
+    every polygon and no two coplanar polygons overlap, so that from any point in front
+    of all of them no polygon can hide another (a convex room seen from inside).
+    Computed once per scene.
+
+    Coplanar overlaps (a light on a ceiling, the two faces of a zero-thickness wall)
+    hide one another by the tie rule (``exactff.predicates.tie_priority``): such a
+    scene goes through the clipper."""
     cache = scene._cache
     if "convex" not in cache:
         V = np.unique(scene.vertices, axis=0)
@@ -44,7 +49,11 @@ def is_convex_enclosure(scene):
         d = scene.plane_offsets
         s = V @ scene.normals.T - d
         band = tol.BSP_COPLANAR_ULPS * tol.EPS * (np.abs(V) @ np.abs(scene.normals).T + np.abs(d))
-        cache["convex"] = bool(np.all(s >= -band))
+        convex = bool(np.all(s >= -band))
+        if convex:
+            back_to_back, same_facing = coplanar_overlaps(scene)
+            convex = len(back_to_back) == 0 and len(same_facing) == 0
+        cache["convex"] = convex
     return cache["convex"]
 
 
