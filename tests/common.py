@@ -58,3 +58,16 @@ def rotation(axis, angle):
     k = k / np.linalg.norm(k)
     K = np.array([[0, -k[2], k[1]], [k[2], 0, -k[0]], [-k[1], k[0], 0]])
     return np.eye(3) + math.sin(angle) * K + (1 - math.cos(angle)) * K @ K
+
+
+def examples(n):
+    """``max_examples`` for a slow property test: ``n`` in the dev and ci profiles, and
+    the thorough profile's own count (``HYPOTHESIS_PROFILE=thorough``), so that a
+    thorough run reaches every property test."""
+    import os
+
+    from hypothesis import settings
+
+    if os.environ.get("HYPOTHESIS_PROFILE") == "thorough":
+        return settings.get_profile("thorough").max_examples
+    return n

@@ -12,8 +12,8 @@ from exactff.integrate import eq3_edge_integral, eq3_form_factor, sector_form_fa
 from exactff.testing import assert_form_factors_close
 from exactff.testing.strategies import convex_polygons, planar_polygons, points, unit_vectors
 
-from common import (ORIGIN, UP, coaxial_disc, coaxial_regular_polygon, parallel_rect_corner,
-                    perpendicular_rect, rect_xy, regular_polygon, rotation)
+from common import (ORIGIN, UP, coaxial_disc, coaxial_regular_polygon, examples,
+                    parallel_rect_corner, perpendicular_rect, rect_xy, regular_polygon, rotation)
 from exactff.testing.mp_reference import area_form_factor, boundary_form_factor
 
 KERNELS = {
@@ -69,7 +69,7 @@ def test_fine_polygon_converges_to_disc():
 # ---------------------------------------------------------------------------------------
 # against mpmath (40 digits), random polygons including horizon crossings
 # ---------------------------------------------------------------------------------------
-@settings(max_examples=25)
+@settings(max_examples=examples(25))
 @given(P=planar_polygons(), n=unit_vectors(), one_sided=st.booleans())
 @example(P=rect_xy(-1, 1, -1, 1, 0.5) + [0, 0, -0.7], n=np.array([0.0, 0.6, 0.8]),
          one_sided=False).via("horizon crossing")

@@ -12,6 +12,8 @@ from exactff.catalog import stiff_cases
 from exactff.testing.mp_reference import boundary_form_factor
 from exactff.testing.strategies import polygons_2d, unit_vectors, embed
 
+from common import examples
+
 CASES = stiff_cases()
 IDS = [c.name for c in CASES]
 
@@ -82,7 +84,7 @@ def test_bad_tolerance():
         ef.point_polygon_form_factor([0, 0, 0], [0, 0, 1], CASES[0].polygon, tolerance=-1)
 
 
-@settings(max_examples=25, deadline=None)
+@settings(max_examples=examples(25), deadline=None)
 @given(P2=polygons_2d(max_vertices=6), n_poly=unit_vectors(), n_recv=unit_vectors(),
        size_exp=st.integers(-8, 8), dist_exp=st.integers(-8, 8), shift_exp=st.integers(-8, 8))
 def test_magnitudes_1e_minus_8_to_1e8_vs_mpmath(P2, n_poly, n_recv, size_exp, dist_exp,

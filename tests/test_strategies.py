@@ -7,15 +7,17 @@ from hypothesis import given, settings
 import exactff as ef
 from exactff.testing.strategies import convex_polygons, planar_polygons, points, unit_vectors
 
+from common import examples
 
-@settings(max_examples=200)
+
+@settings(max_examples=examples(200))
 @given(P=planar_polygons(max_vertices=12))
 def test_planar_polygons_are_valid_scenes(P):
     ef.scene.validate_polygon(P)
     assert P.shape[1] == 3 and 3 <= len(P) <= 12
 
 
-@settings(max_examples=200)
+@settings(max_examples=examples(200))
 @given(P=convex_polygons())
 def test_convex_polygons_are_convex_and_ccw(P):
     n = ef.unit_normal(P)

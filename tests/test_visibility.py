@@ -14,7 +14,7 @@ from exactff.methods import Exact
 from exactff.testing import assert_form_factors_close
 from exactff.testing.strategies import unit_vectors
 
-from common import rect_xy, rotation
+from common import examples, rect_xy, rotation
 
 # occluded accuracy target of the issue: 1e-11 absolute; row sums 1 +- 1e-11
 OCC_ATOL = 1e-11
@@ -72,7 +72,7 @@ def layered_scenes(draw):
     return polys
 
 
-@settings(max_examples=40)
+@settings(max_examples=examples(40))
 @given(polys=layered_scenes(), n=unit_vectors())
 def test_layered_scene_vs_2d_boolean_construction(polys, n):
     assume(n[2] > 0.05)  # the layers must be in the upper hemisphere at least partly
@@ -182,7 +182,7 @@ def test_coplanar_overlap_earlier_polygon_is_in_front():
 # ---------------------------------------------------------------------------------------
 # invariants
 # ---------------------------------------------------------------------------------------
-@settings(max_examples=15)
+@settings(max_examples=examples(15))
 @given(occluder=st.tuples(st.floats(0.05, 0.6), st.floats(0.05, 0.6), st.floats(0.05, 0.35),
                           st.floats(0.05, 0.35), st.floats(0.1, 0.85)), flip=st.booleans())
 def test_adding_an_occluder_never_raises_a_value(occluder, flip):
@@ -197,7 +197,7 @@ def test_adding_an_occluder_never_raises_a_value(occluder, flip):
         assert np.all(F1 <= F0 + OCC_ATOL)
 
 
-@settings(max_examples=10)
+@settings(max_examples=examples(10))
 @given(axis=unit_vectors(), angle=st.floats(0, 2 * math.pi),
        shift=st.tuples(*[st.floats(-50, 50)] * 3))
 def test_occluded_rows_invariant_under_rigid_motion(axis, angle, shift):
