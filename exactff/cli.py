@@ -95,10 +95,18 @@ def parse_rows(text, n):
     try:
         if ":" in text:
             a, b = text.split(":", 1)
-            return np.arange(n)[slice(int(a) if a else None, int(b) if b else None)]
-        return np.array([int(v) for v in text.split(",")])
+            a, b = int(a) if a else 0, int(b) if b else n
+            if not 0 <= a < b <= n:
+                raise IndexError
+            return np.arange(a, b)
+        rows = np.array([int(v) for v in text.split(",")])
+        if rows.min() < 0 or rows.max() >= n:
+            raise IndexError
+        return rows
     except ValueError:
         raise ValueError(f"--rows: expected 'all', 'A:B' or 'i,j,...', got {text!r}") from None
+    except IndexError:
+        raise ValueError(f"--rows {text}: the scene has {n} polygons (rows 0 to {n - 1})") from None
 
 
 def cmd_matrix(args):

@@ -8,7 +8,7 @@ import time
 
 import numpy as np
 
-from .integrate import as_normal, as_point
+from .integrate import as_normal, as_point, as_scene
 from .methods import resolve
 
 __all__ = ["form_factors", "form_factor_matrix"]
@@ -60,6 +60,7 @@ def form_factors(scene, point, normal, *, method="exact", two_sided=False, **opt
     (0.2394564705, 1.0)
     """
     m = resolve(method, **options)
+    as_scene(scene)
     p = as_point(point, "point")
     as_normal(normal, "normal")  # validates; the methods normalise the raw input
     n = np.asarray(normal, dtype=float)
@@ -75,6 +76,14 @@ def form_factors(scene, point, normal, *, method="exact", two_sided=False, **opt
     for i in range(len(P)):
         out[i] = m.point_form_factors(scene, P[i], Nn[i], two_sided=two_sided)
     return out.reshape(shape + (len(scene),))
+
+
+def _row_indices(rows):
+    """``rows`` as an integer array; floats, booleans and other non-integers raise."""
+    r = np.asarray(rows).reshape(-1)
+    if r.size and not (np.issubdtype(r.dtype, np.integer) and r.dtype != bool):
+        raise ValueError(f"rows must be polygon indices (integers), got {rows!r}")
+    return r.astype(int)
 
 
 def _rows(scene, method, rows, two_sided):
@@ -179,8 +188,8 @@ def form_factor_matrix(scene, *, method="exact", rows=None, two_sided=False, exe
     ((24, 24), True)
     """
     m = resolve(method, **options)
-    n = len(scene)
-    rows = np.arange(n) if rows is None else np.asarray(rows, dtype=int).reshape(-1)
+    n = len(as_scene(scene))
+    rows = np.arange(n) if rows is None else _row_indices(rows)
     if rows.size and (rows.min() < 0 or rows.max() >= n):
         raise ValueError(f"rows must lie in [0, {n}), got values from {rows.min()} to {rows.max()}")
     shape = (len(rows), n)

@@ -66,6 +66,38 @@ def as_normal(normal, name="normal"):
     return n / length
 
 
+def as_receiver(point, normal):
+    """One receiver, checked once for every entry point: ``point`` and ``normal`` as float
+    arrays of shape (3,), finite, the normal non-zero (returned as given, not scaled:
+    the methods normalise it). Raises ValueError naming the argument.
+
+    Examples
+    --------
+    >>> as_receiver([0, 0, 0], [0, 0, 2])[1].tolist()
+    [0.0, 0.0, 2.0]
+    >>> as_receiver([0, float("nan"), 0], [0, 0, 1])
+    Traceback (most recent call last):
+    ...
+    ValueError: point must be finite, got [0, nan, 0]
+    """
+    p = as_point(point, "point")
+    as_normal(normal, "normal")
+    n = np.asarray(normal, dtype=float)
+    if p.shape != (3,) or n.shape != (3,):
+        raise ValueError(f"point and normal must have shape (3,), got {p.shape} and {n.shape}")
+    return p, n
+
+
+def as_scene(scene):
+    """``scene`` if it is an :class:`exactff.Scene`, else a TypeError saying what to do."""
+    from .scene import Scene
+
+    if not isinstance(scene, Scene):
+        raise TypeError(f"scene must be an exactff.Scene (build one with "
+                        f"Scene.from_polygons or load_scene), got {type(scene).__name__}")
+    return scene
+
+
 # ---------------------------------------------------------------------------------------
 # sector (Lambert) form, vectorised over edges
 # ---------------------------------------------------------------------------------------

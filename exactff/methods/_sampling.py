@@ -22,7 +22,7 @@ import shapely
 
 from .. import _tolerances as tol
 from ..geometry import padded_buckets, receiver_frame, to_local
-from ..integrate import _Polygons, plane_sides
+from ..integrate import _Polygons, as_receiver, as_scene, plane_sides
 from ..predicates import tie_priority
 from ..visibility.clipper import CHARTS, chart_clip
 from ._base import FormFactorMethod
@@ -327,6 +327,8 @@ class SampledMethod(FormFactorMethod):
         return L.directions, L.weights
 
     def point_form_factors(self, scene, point, normal, *, two_sided=False, stats=None):
+        as_scene(scene)
+        point, normal = as_receiver(point, normal)
         D, w = self.directions_for(point)
         hit = nearest_polygons(scene, point, normal, D)
         flat = _Polygons.of(scene)

@@ -3,6 +3,7 @@
 import numpy as np
 
 from .._tolerances import DEFAULT_RTOL
+from ..integrate import as_receiver, as_scene
 from ..visibility import visible_form_factors
 from ._base import FormFactorMethod
 
@@ -54,6 +55,8 @@ class Exact(FormFactorMethod):
         self.integrator = integrator
 
     def point_form_factors(self, scene, point, normal, *, two_sided=False, stats=None):
+        as_scene(scene)
+        point, normal = as_receiver(point, normal)
         return visible_form_factors(scene, point, normal, two_sided=two_sided, stats=stats,
                                     shortcuts=self.shortcuts, tolerance=self.tolerance,
                                     integrator=self.integrator)

@@ -70,11 +70,7 @@ class MonteCarlo(SampledMethod):
 
     def form_factors_with_error(self, scene, point, normal, *, two_sided=False):
         """Estimates and their standard errors, each of shape ``(len(scene),)``."""
-        from ..integrate import as_normal, as_point
-
-        p = as_point(point)
-        n = as_normal(normal)
-        F = self.point_form_factors(scene, p, n, two_sided=two_sided)
+        F = self.point_form_factors(scene, point, normal, two_sided=two_sided)
         return F, np.sqrt(F * (1.0 - F) / self.n)
 
     def __repr__(self):

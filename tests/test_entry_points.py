@@ -1,0 +1,54 @@
+"""Every public entry point checks its receiver, scene and rows once and names the bad
+argument (issue 11, items 5 and 6): no silent row of zeros, no unrelated IndexError."""
+
+import numpy as np
+import pytest
+
+import exactff as ef
+from exactff.methods import METHODS
+
+BAD = [([np.nan, 0.5, 0.5], [0, 0, 1], "point"), ([np.inf, 0.5, 0.5], [0, 0, 1], "point"),
+       ([0.5, 0.5, 0.5], [0, 0, 0], "normal"), ([0.5, 0.5, 0.5], [0, np.nan, 1], "normal"),
+       ([0.5, 0.5], [0, 0, 1], "point")]
+
+
+@pytest.mark.parametrize("method", sorted(METHODS))
+@pytest.mark.parametrize("point, normal, name", BAD)
+def test_methods_reject_bad_receivers(method, point, normal, name):
+    scene = ef.scenes.subdivided_box(1)
+    m = METHODS[method]()
+    with pytest.raises(ValueError, match=name):
+        m.point_form_factors(scene, np.array(point, dtype=float), np.array(normal, dtype=float))
+    with pytest.raises(ValueError, match=name):
+        ef.form_factors(scene, point, normal, method=m)
+
+
+def test_monte_carlo_with_error_rejects_bad_receivers():
+    with pytest.raises(ValueError, match="normal"):
+        ef.MonteCarlo().form_factors_with_error(ef.scenes.subdivided_box(1), [0.5] * 3, [0, 0, 0])
+
+
+@pytest.mark.parametrize("method", sorted(METHODS))
+def test_a_list_is_not_a_scene(method):
+    polys = list(ef.scenes.subdivided_box(1).polygons)
+    with pytest.raises(TypeError, match="Scene.from_polygons"):
+        METHODS[method]().point_form_factors(polys, np.full(3, 0.5), np.array([0, 0, 1.0]))
+    with pytest.raises(TypeError, match="exactff.Scene"):
+        ef.form_factors(polys, [0.5] * 3, [0, 0, 1])
+    with pytest.raises(TypeError, match="exactff.Scene"):
+        ef.form_factor_matrix(polys)
+
+
+@pytest.mark.parametrize("rows", [[0.7, 1.9], [True, False], ["0"]])
+def test_matrix_rows_must_be_integers(rows):
+    with pytest.raises(ValueError, match="rows"):
+        ef.form_factor_matrix(ef.scenes.subdivided_box(1), rows=rows)
+
+
+def test_cli_rows_out_of_range_is_an_error(capsys):
+    from exactff.cli import parse_rows
+
+    assert parse_rows("2:4", 6).tolist() == [2, 3]
+    for text in ("0:100", "5,6", "-1:3", "4:2"):
+        with pytest.raises(ValueError, match="--rows"):
+            parse_rows(text, 6)
