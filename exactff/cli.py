@@ -38,7 +38,13 @@ def open_scene(spec):
         return _scenes().building(int(nx), int(ny or 1))
     if spec.startswith("cloister:"):
         return _scenes().cloister(int(spec[9:]))
-    return load_scene(spec)
+    try:
+        return load_scene(spec)
+    except UnicodeDecodeError:
+        raise ValueError(f"{spec}: not a text file (UTF-8)") from None
+    except ValueError as exc:
+        # name the file in every message (a polygon's SceneError names the polygon)
+        raise ValueError(str(exc) if str(exc).startswith(spec) else f"{spec}: {exc}") from None
 
 
 def cmd_info(args):

@@ -97,10 +97,26 @@ def read_obj(path, **options):
 
 
 def scene_from_json(data, **options):
-    """Build a scene from a parsed ``exactff-scene/1`` document (its ``surfaces``)."""
+    """Build a scene from a parsed ``exactff-scene/1`` document (its ``surfaces``).
+
+    Raises
+    ------
+    ValueError
+        The document is not an ``exactff-scene/1`` object with a non-empty list of
+        surfaces, each an object with ``vertices`` (the message says what is missing).
+    SceneError
+        A surface's polygon is ill-formed.
+    """
+    if not isinstance(data, dict):
+        raise ValueError(f"expected a JSON object (exactff-scene/1), got a {type(data).__name__}")
     if data.get("schema") != "exactff-scene/1":
         raise ValueError(f"schema: expected 'exactff-scene/1', got {data.get('schema')!r}")
-    surfaces = data["surfaces"]
+    surfaces = data.get("surfaces")
+    if not isinstance(surfaces, list) or not surfaces:
+        raise ValueError("surfaces: expected a non-empty list of surfaces")
+    for i, s in enumerate(surfaces):
+        if not isinstance(s, dict) or "vertices" not in s:
+            raise ValueError(f"surfaces[{i}]: expected an object with 'vertices'")
     return Scene.from_polygons(
         [s["vertices"] for s in surfaces],
         names=[s.get("name") for s in surfaces],
@@ -117,4 +133,9 @@ def read_scene_json(path, **options):
             data = json.load(fh)
         except json.JSONDecodeError as exc:
             raise ValueError(f"{path}:{exc.lineno}: invalid JSON: {exc.msg}") from None
-    return scene_from_json(data, **options)
+    try:
+        return scene_from_json(data, **options)
+    except ValueError as exc:
+        if type(exc) is ValueError:   # the document's structure (SceneError passes as is)
+            raise ValueError(f"{path}: {exc}") from None
+        raise

@@ -1,0 +1,7 @@
+"""``python -m exactff``: the ``exactff`` command."""
+
+import sys
+
+from .cli import main
+
+sys.exit(main())
