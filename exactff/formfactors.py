@@ -135,6 +135,21 @@ def _fingerprint(scene, rows):
     return h.hexdigest()
 
 
+def method_record(method):
+    """A complete, explicit record of a method and its options, for resumable output:
+    the class and every public attribute (``repr`` may leave options out).
+
+    Examples
+    --------
+    >>> from exactff.methods import SinglePlane
+    >>> method_record(SinglePlane(16, refine=2))["options"]["refine"]
+    '2'
+    """
+    options = {k: repr(v) for k, v in sorted(vars(method).items()) if not k.startswith("_")}
+    return {"class": f"{type(method).__module__}.{type(method).__qualname__}",
+            "options": options}
+
+
 def _read_meta(path):
     try:
         with open(path, encoding="utf-8") as fh:
@@ -198,7 +213,7 @@ def form_factor_matrix(scene, *, method="exact", rows=None, two_sided=False, exe
         stem = out[:-4] if out.endswith(".npy") else out
         done_path, meta_path = stem + ".done.npy", stem + ".meta.json"
         # what the file holds: a resumed run must be the same computation
-        meta = {"scene": _fingerprint(scene, rows), "method": repr(m), "two_sided": two_sided,
+        meta = {"scene": _fingerprint(scene, rows), "method": method_record(m), "two_sided": two_sided,
                 "shape": list(shape)}
         if os.path.exists(out):
             old = _read_meta(meta_path)

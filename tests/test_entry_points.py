@@ -52,3 +52,15 @@ def test_cli_rows_out_of_range_is_an_error(capsys):
     for text in ("0:100", "5,6", "-1:3", "4:2"):
         with pytest.raises(ValueError, match="--rows"):
             parse_rows(text, 6)
+
+
+def test_resume_refuses_a_method_with_other_options(tmp_path):
+    # the resume check compared repr(method), which leaves out SinglePlane's refine
+    scene = ef.scenes.subdivided_box(1)
+    out = tmp_path / "m.npy"
+    ef.form_factor_matrix(scene, method=ef.SinglePlane(8, refine=1), out=out)
+    with pytest.raises(ValueError, match="not written by this computation"):
+        ef.form_factor_matrix(scene, method=ef.SinglePlane(8, refine=3), out=out)
+    # the same method and options resume (here: everything is done already)
+    M = ef.form_factor_matrix(scene, method=ef.SinglePlane(8, refine=1), out=out)
+    assert M.shape == (6, 6)
