@@ -54,9 +54,10 @@ ROUNDING_OVERSHOOT = 1e3
 #: precisely, and splitting there would only cut rounding-thin slivers.
 BSP_COPLANAR_ULPS = 64.0
 
-#: A gnomonic chart whose uncovered area is below this fraction of the chart is full:
-#: whatever lies behind can change a form factor by less than that fraction of the
-#: chart's projected solid angle, far below the 1e-11 accuracy target.
+#: A tile of the clipper's covered region whose uncovered area falls below this fraction
+#: of the tile is tested for being full: it is full only when its region covers the
+#: whole tile (an exact predicate), so that a tiny polygon seen through a tiny gap keeps
+#: its value; the area test only decides when to ask.
 COVERED_RTOL = 1e-13
 
 #: Default relative accuracy requested of every unoccluded form factor: where the

@@ -116,3 +116,22 @@ def test_shortcuts_off_overlays_every_fragment():
                                               stats=stats)
     assert stats["tile_rejections"] == stats["covered_rejections"] == 0
     assert stats["differences"] >= 64
+
+
+def test_tiny_polygon_through_a_tiny_gap_keeps_its_value(monkeypatch):
+    # a wall at z = 1 with a square gap of side 2e-7 (4e-14 of the chart's area, below
+    # COVERED_RTOL): a tile full by area alone would hide the polygon behind it
+    # entirely; its value must be the gap's own form factor (central projection)
+    g, cx, cy = 2e-7, 0.3, 0.2
+    x0, x1, y0, y1 = cx - g / 2, cx + g / 2, cy - g / 2, cy + g / 2
+    wall = [rect_xy(-4, x0, -4, 4, 1.0), rect_xy(x1, 4, -4, 4, 1.0),
+            rect_xy(x0, x1, -4, y0, 1.0), rect_xy(x0, x1, y1, 4, 1.0)]
+    behind = rect_xy(0.4, 0.8, 0.2, 0.6, 2.0)
+    scene = ef.Scene.from_polygons(wall + [behind])
+    p, n = np.zeros(3), np.array([0.0, 0.0, 1.0])
+    gap = ef.point_polygon_form_factor(p, n, rect_xy(x0, x1, y0, y1, 1.0))
+    from exactff import _tolerances as tol
+    monkeypatch.setattr(tol, "CLIP_BATCH", 1)   # the polygon after the wall's merge
+    for shortcuts in (True, False):
+        F = Exact(shortcuts=shortcuts).point_form_factors(scene, p, n)
+        assert gap > 0 and abs(F[-1] - gap) <= 1e-6 * gap

@@ -319,7 +319,8 @@ class TiledRegion:
     whole batch, not one Python round per fragment):
 
     1. a fragment whose tiles are all full is hidden, without geometry (a tile is full
-       when its uncovered area is below ``COVERED_RTOL`` of the tile);
+       when its region covers it, an exact predicate asked once its uncovered area is
+       below ``COVERED_RTOL`` of the tile);
     2. the others are cut into one part per tile they overlap (checked by area
        conservation);
     3. a part whose interior meets an earlier part of the same batch (found with an
@@ -363,6 +364,11 @@ class TiledRegion:
 
     def is_full(self):
         return bool(self.full.all())
+
+    def box(self, t):
+        """Tile t as a polygon."""
+        n = self.n
+        return shapely.box(self.u[t // n], self.v[t % n], self.u[t // n + 1], self.v[t % n + 1])
 
     def tile_ranges(self, bounds):
         """Tile index ranges ``(ix0, ix1, iy0, iy1)`` of images with these bounds
@@ -525,7 +531,10 @@ class TiledRegion:
         # a tile is declared full only from a checked region
         for t in np.unique(ts[(self.area[ts] >= self.full_area) & ~self.full[ts]]):
             self._merge(int(t), stats)
-            self.full[t] = self.area[t] >= self.full_area
+            # full only when the region covers the whole tile (an exact predicate): a
+            # tile nearly full by area may still show a tiny polygon through a tiny gap
+            self.full[t] = self.region[t] is not None and bool(
+                shapely.covers(self.region[t], self.box(t)))
 
     def finish(self, stats):
         """Check the decisions still pending (every tile with pending parts is merged);
