@@ -26,6 +26,7 @@ import math
 import numpy as np
 
 from . import _tolerances as tol
+from .scene import NumericalError
 from .geometry import receiver_frame, rotate, to_local
 
 __all__ = [
@@ -205,7 +206,10 @@ def _finish(S, mags, errs, d0, one_sided, eps=tol.EPS, unchecked=None):
     ok = F >= -tol.ROUNDING_OVERSHOOT * (err + 1e-300)
     if unchecked is not None:
         ok |= unchecked
-    assert np.all(ok), "negative form factor beyond rounding"
+    if not np.all(ok):
+        i = int(np.flatnonzero(~ok)[0])
+        raise NumericalError(f"polygon {i}: form factor {F[i]!r} below 0 beyond its rounding "
+                             f"error estimate {err[i]:.3g}")
     return np.maximum(F, 0.0), err
 
 
@@ -507,13 +511,21 @@ def _mp_sector(point, normal, polygon, one_sided, dps, side_hint=None):
         return F
 
 
+#: mp_form_factor's precision limit (decimal digits), and the absolute size below which
+#: the difference of its two evaluations counts as agreement (a value that is 0 up to
+#: the working precision has no relative accuracy to reach)
+_MP_MAX_DPS = 400
+_MP_VALUE_FLOOR = 1e-300
+
+
 def mp_form_factor(point, normal, polygon, *, one_sided=True, tolerance=tol.DEFAULT_RTOL,
                    dps=None, error=False, side=None):
     """Unoccluded form factor with mpmath, from the float input taken as exact.
 
     The sector form evaluated at ``dps`` decimal digits and again 20 digits higher; the
-    precision grows until the two agree to ``tolerance`` (relative), up to 400 digits.
-    This is what automatic escalation calls.
+    precision grows until the two agree to ``tolerance`` (relative), up to 400 digits;
+    beyond, :class:`exactff.NumericalError` (with ``error=True``: the value and the
+    difference as its error estimate). This is what automatic escalation calls.
 
     Parameters
     ----------
@@ -546,7 +558,15 @@ def mp_form_factor(point, normal, polygon, *, one_sided=True, tolerance=tol.DEFA
         lo = _mp_sector(point, normal, P, one_sided, prec, side)
         hi = _mp_sector(point, normal, P, one_sided, prec + 20, side)
         diff = abs(hi - lo)
-        if diff <= (tolerance if tolerance else 1e-15) * abs(hi) * 1e-3 or hi == lo or prec >= 400:
+        if (diff <= (tolerance if tolerance else 1e-15) * abs(hi) * 1e-3 or hi == lo
+                or float(diff) < _MP_VALUE_FLOOR):
+            break
+        if prec >= _MP_MAX_DPS:
+            if not error:
+                raise NumericalError(
+                    f"mpmath did not converge at {_MP_MAX_DPS} digits: two evaluations "
+                    f"differ by {float(diff):.3g} (value {float(hi):.3g}); ask error=True "
+                    f"to get the value with this estimate")
             break
         prec += 40
     value = max(float(hi), 0.0)
@@ -792,7 +812,8 @@ def eq3_form_factor(point, normal, polygon, *, one_sided=True):
     area, _ = eq3_ring_area(np.array(C))
     # a polygon whose front faces p has a clockwise image (seen from above the disk)
     F = -sign * area / math.pi
-    assert F >= -tol.ROUNDING_OVERSHOOT * tol.EPS, "negative form factor beyond rounding"
+    if not F >= -tol.ROUNDING_OVERSHOOT * tol.EPS:
+        raise NumericalError(f"Eq. 3 gave the form factor {F!r}, below 0 beyond rounding")
     return max(F, 0.0)
 
 

@@ -6,7 +6,7 @@ import shapely
 from . import _tolerances as tol
 from .geometry import area_vector, polygon_diameter
 
-__all__ = ["SceneError", "Scene", "validate_polygon", "validate_polygons", "describe"]
+__all__ = ["SceneError", "NumericalError", "Scene", "validate_polygon", "validate_polygons", "describe"]
 
 
 class SceneError(ValueError):
@@ -25,6 +25,12 @@ class SceneError(ValueError):
         self.reason = reason
         label = f"polygon {index}" if name is None else f"polygon {index} ({name!r})"
         super().__init__(f"{label}: {reason}")
+
+
+class NumericalError(ArithmeticError):
+    """A computed value broke an invariant beyond its rounding-error estimate (a form
+    factor below 0), or higher precision did not converge: a bug or an input outside
+    what exactff can evaluate, never silently clamped. The message says which."""
 
 
 def _distinct_consecutive(P):

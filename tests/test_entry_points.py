@@ -64,3 +64,26 @@ def test_resume_refuses_a_method_with_other_options(tmp_path):
     # the same method and options resume (here: everything is done already)
     M = ef.form_factor_matrix(scene, method=ef.SinglePlane(8, refine=1), out=out)
     assert M.shape == (6, 6)
+
+
+def test_mpmath_that_does_not_converge_raises(monkeypatch):
+    # issue 11, item 7: mp_form_factor used to give up silently at its precision limit
+    import exactff.integrate as integ
+
+    sq = np.array([[0, 0, 1], [0, 1e-9, 1], [1e-9, 1e-9, 1], [1e-9, 0, 1.0]])
+    monkeypatch.setattr(integ, "_MP_MAX_DPS", 10)     # a limit this case cannot meet
+    with pytest.raises(ef.NumericalError, match="did not converge"):
+        integ.mp_form_factor([0, 0, 0], [0, 0, 1], sq, tolerance=1e-30, dps=10)
+    value, err = integ.mp_form_factor([0, 0, 0], [0, 0, 1], sq, tolerance=1e-30, dps=10,
+                                      error=True)
+    assert value > 0 and err > 0
+
+
+def test_negative_values_beyond_rounding_raise_a_named_error():
+    # invariants were checked with assert, which python -O removes
+    import exactff.integrate as integ
+
+    S = np.array([-1.0, 1e-3])          # the second would be a form factor of -1.6e-4
+    with pytest.raises(ef.NumericalError, match="polygon 1"):
+        integ._finish(S, np.ones(2), np.zeros(2), np.array([-1.0, -1.0]), True)
+

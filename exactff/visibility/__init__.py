@@ -11,6 +11,7 @@ import numpy as np
 from scipy.spatial import ConvexHull, QhullError
 
 from .. import _tolerances as tol
+from ..scene import NumericalError
 from ..geometry import padded_buckets, receiver_frame, to_local
 from ..integrate import _Polygons, eq3_form_factor, plane_sides, unoccluded_row
 from .bsp import build_bsp, coplanar_overlaps, front_to_back
@@ -145,8 +146,10 @@ def visible_form_factors(scene, point, normal, *, two_sided=False, stats=None,
     F = np.bincount(src, weights=Ff, minlength=len(scene))
     E = np.bincount(src, weights=ef_, minlength=len(scene))
     # holes subtract: a value may fall below 0 by rounding, never by more than its estimate
-    assert np.all(F >= -tol.ROUNDING_OVERSHOOT * (E + 1e-300)), \
-        "negative form factor beyond rounding"
+    bad = np.flatnonzero(~(F >= -tol.ROUNDING_OVERSHOOT * (E + 1e-300)))
+    if len(bad):
+        raise NumericalError(f"polygon {bad[0]}: occluded form factor {F[bad[0]]!r} below 0 "
+                             f"beyond its rounding error estimate {E[bad[0]]:.3g}")
     if stats is not None:
         stats["max_error_estimate"] = float(E.max(initial=0.0))
     return np.maximum(F, 0.0)

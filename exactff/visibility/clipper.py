@@ -163,9 +163,10 @@ def chart_polygons(buckets, chart):
 
     Returns
     -------
-    (ndarray of int, ndarray of shapely.Polygon, ndarray of shape (M', 4))
-        Positions of the polygons that reach the chart (increasing), their images, and
-        their bounds.
+    (ndarray of int, ndarray of shapely.Polygon, ndarray of shape (M', 4), int)
+        Positions of the polygons that reach the chart (increasing), their images,
+        their bounds, and how many images were invalid (rounding-thin or self-touching)
+        and repaired with ``make_valid`` (keeping their areal parts).
     """
     idx, polys = [], []
     for pos, V, counts in buckets:
@@ -177,19 +178,20 @@ def chart_polygons(buckets, chart):
         idx.append(pos[live])
         polys.append(shapely.polygons(rings))
     if not idx:
-        return np.zeros(0, dtype=int), np.empty(0, object), np.zeros((0, 4))
+        return np.zeros(0, dtype=int), np.empty(0, object), np.zeros((0, 4)), 0
     idx, polys = np.concatenate(idx), np.concatenate(polys)
     order = np.argsort(idx, kind="stable")
     idx, polys = idx[order], polys[order]
     bad = ~shapely.is_valid(polys)
     if bad.any():
-        # rounding-thin slivers or self-touching images: repair, keep only areas
+        # rounding-thin slivers or self-touching images: repair, keep only areas (the
+        # parts dropped are lines and points, of zero area; counted by the caller)
         fixed = []
         for g in shapely.make_valid(polys[bad]):
             parts = shapely.get_parts(g)
             fixed.append(shapely.union_all(parts[shapely.get_type_id(parts) >= 3]))
         polys[bad] = fixed
-    return idx, polys, shapely.bounds(polys)
+    return idx, polys, shapely.bounds(polys), int(bad.sum())
 
 
 def _repair(geom):
@@ -613,10 +615,13 @@ def visible_pieces(buckets, receives, stats=None, shortcuts=True):
         overlays every fragment with it (the baseline the shortcuts are tested against).
     stats : dict, optional
         Filled with counters: ``chart_fragments``, ``differences`` (overlays),
-        ``bbox_rejections``, ``tile_accepts`` (parts visible whole in empty tiles),
-        ``tile_rejections`` (fragments hidden by full tiles, no overlay), ``hidden``
-        (fragments with nothing visible), ``charts_full``, ``skipped_after_full``,
-        ``overlay_repairs``.
+        ``bbox_rejections`` (parts visible whole: bounds apart, or an empty tile),
+        ``disjoint_accepts`` (visible whole by a predicate), ``covered_rejections``
+        (hidden by a predicate), ``tile_rejections`` (fragments hidden by full tiles, no
+        geometry), ``hidden`` (fragments with nothing visible), ``charts_full``,
+        ``skipped_after_full``,
+        ``overlay_repairs``, ``repaired_images`` (invalid images repaired, keeping their
+        areal parts).
 
     Returns
     -------
@@ -628,11 +633,12 @@ def visible_pieces(buckets, receives, stats=None, shortcuts=True):
     st = stats if stats is not None else {}
     for key in ("chart_fragments", "differences", "bbox_rejections", "tile_rejections",
                 "covered_rejections", "disjoint_accepts", "hidden", "charts_full",
-                "skipped_after_full", "overlay_repairs"):
+                "skipped_after_full", "overlay_repairs", "repaired_images"):
         st.setdefault(key, 0)
     for ci, chart in enumerate(CHARTS):
-        idx, polys, bounds = chart_polygons(buckets, chart)
+        idx, polys, bounds, repaired = chart_polygons(buckets, chart)
         st["chart_fragments"] += len(idx)
+        st["repaired_images"] += repaired
         if shortcuts:
             _tiled_chart(ci, chart, idx, polys, bounds, receives, st, out)
         else:
