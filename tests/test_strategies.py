@@ -37,3 +37,21 @@ def test_unknown_method_option_is_a_value_error():
     with pytest.raises(ValueError, match="hemicube"):
         ef.form_factors(ef.scenes.cornell_box(), [1, 1, 1], [0, 1, 0], method="hemicube",
                         colour="red")
+
+
+def test_triangles_are_not_mostly_regular():
+    # the gap rule used to replace about 45 % of triangles by the regular one
+    from exactff.testing.strategies import polygons_2d
+
+    seen = []
+
+    @settings(max_examples=examples(300), database=None)
+    @given(P=polygons_2d(3, 3))
+    def collect(P):
+        ang = np.sort(np.mod(np.arctan2(P[:, 1], P[:, 0]), 2 * np.pi))
+        gaps = np.diff(np.r_[ang, ang[0] + 2 * np.pi])
+        seen.append(np.ptp(gaps) < 1e-6)
+        assert gaps.max() < np.pi
+
+    collect()
+    assert len(seen) > 50 and np.mean(seen) < 0.1

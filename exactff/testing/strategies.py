@@ -36,15 +36,20 @@ def points(bound=2.0):
 def polygons_2d(draw, min_vertices=3, max_vertices=8, convex=False):
     """Simple polygons in the plane, counter-clockwise, around the origin, radius <= 1.
 
-    Angles come from positive gaps normalised to 2 pi (each gap below pi, so the
-    polygon is star-shaped about the origin and therefore simple); ``convex=True`` puts
-    the vertices on the unit circle.
+    Angles come from positive gaps normalised to 2 pi, each kept below 0.9 pi (moved
+    towards equal gaps just enough where needed), so the polygon is star-shaped about
+    the origin and therefore simple; ``convex=True`` puts the vertices on the unit
+    circle.
     """
     k = draw(st.integers(min_vertices, max_vertices))
     gaps = np.array(draw(st.lists(st.floats(0.2, 1.0), min_size=k, max_size=k)))
     gaps = gaps / gaps.sum() * 2 * math.pi
     if gaps.max() >= 0.9 * math.pi:
-        gaps = np.full(k, 2 * math.pi / k)
+        # every gap must stay below pi (star-shaped): move the gaps towards equal ones
+        # just enough, rather than replacing the polygon by a regular one
+        target, even = 0.9 * math.pi * (1 - 1e-9), 2 * math.pi / k
+        lam = (gaps.max() - target) / (gaps.max() - even)
+        gaps = (1 - lam) * gaps + lam * even
     start = draw(st.floats(0, 2 * math.pi))
     ang = start + np.concatenate([[0.0], np.cumsum(gaps[:-1])])
     if convex:
