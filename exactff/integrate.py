@@ -317,7 +317,7 @@ def _extended_values(flat, ids, p, n_raw, d0, one_sided):
 
 
 def unoccluded_row(flat, p, n, *, one_sided=True, tolerance=None,
-                   return_error=False, in_band="exact"):
+                   return_error=False, in_band="exact", strict=None):
     """Unoccluded form factors from ``p`` (normal ``n``) to every polygon of ``flat``.
 
     The hot path: culls polygons seen edge-on, facing away (one-sided) or wholly below
@@ -331,7 +331,13 @@ def unoccluded_row(flat, p, n, *, one_sided=True, tolerance=None,
     ``p``: ``"exact"`` decides the side exactly and evaluates them with mpmath (their
     double value is unreliable); ``"edge_on"`` counts them as seen edge-on (0), as the
     visibility engine does.
+
+    ``strict`` (default: not ``return_error``): raise :class:`NumericalError` when a
+    value misses the tolerance even in the last tier, instead of returning it with its
+    estimate.
     """
+    if strict is None:
+        strict = not return_error
     N = len(flat.normals)
     p = np.asarray(p, dtype=float)
     n_raw = np.asarray(n, dtype=float)
@@ -392,6 +398,16 @@ def unoccluded_row(flat, p, n, *, one_sided=True, tolerance=None,
             F[i], err[i] = mp_form_factor(p, n_raw, P, one_sided=one_sided,
                                           tolerance=tolerance, error=True,
                                           side=int(side[i]))
+        # the last tier's values are checked too: one that still misses the tolerance
+        # (mpmath stopped at its precision limit) is returned with its estimate when the
+        # caller asks for estimates, and raises otherwise
+        missed = flagged[~(err[flagged] <= tolerance * F[flagged] + _MP_VALUE_FLOOR)]
+        if len(missed) and strict:
+            i = int(missed[0])
+            raise NumericalError(f"polygon {i}: the form factor {F[i]:.17g} misses the "
+                                 f"tolerance {tolerance:g} (error estimate {err[i]:.3g}) "
+                                 f"even in {_MP_MAX_DPS}-digit arithmetic; ask error=True "
+                                 f"for the value with its estimate")
     return (F, err) if return_error else F
 
 
@@ -444,7 +460,7 @@ def point_polygon_form_factors(point, normal, polygons, *, one_sided=True,
     _check_tolerance(tolerance)
     scene = polygons if isinstance(polygons, Scene) else Scene.from_polygons(polygons)
     F, err = unoccluded_row(_Polygons.of(scene), p, n, one_sided=one_sided,
-                            tolerance=tolerance, return_error=True)
+                            tolerance=tolerance, return_error=True, strict=not error)
     return (F, err) if error else F
 
 

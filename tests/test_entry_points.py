@@ -87,3 +87,17 @@ def test_negative_values_beyond_rounding_raise_a_named_error():
     with pytest.raises(ef.NumericalError, match="polygon 1"):
         integ._finish(S, np.ones(2), np.zeros(2), np.array([-1.0, -1.0]), True)
 
+
+
+def test_last_tier_values_are_checked_against_the_tolerance(monkeypatch):
+    # a 1e-9 square needs mpmath; with its precision capped below what the tolerance
+    # needs, the value is returned with its (large) estimate on request, else raises
+    import exactff.integrate as integ
+
+    sq = np.array([[0, 0, 1], [0, 1e-9, 1], [1e-9, 1e-9, 1], [1e-9, 0, 1.0]])
+    monkeypatch.setattr(integ, "_MP_MAX_DPS", 10)
+    F, E = ef.point_polygon_form_factors([0, 0, 0], [0, 0, 1], [sq], tolerance=1e-40,
+                                         error=True)
+    assert F[0] > 0 and E[0] > 1e-40 * F[0]
+    with pytest.raises(ef.NumericalError, match="misses the tolerance"):
+        ef.point_polygon_form_factors([0, 0, 0], [0, 0, 1], [sq], tolerance=1e-40)

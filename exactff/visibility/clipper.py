@@ -755,8 +755,9 @@ def pieces_form_factors(pieces, m, tolerance=None, owner=None, integrator="secto
         Form factors and error estimates per fragment.
     """
     from .. import _tolerances as tol
-    from ..integrate import (_C1, _LONGDOUBLE_EPS, _clipped_sector_sums, eq3_ring_area,
-                             mp_form_factor)
+    from ..integrate import (_C1, _LONGDOUBLE_EPS, _MP_MAX_DPS, _MP_VALUE_FLOOR,
+                             _clipped_sector_sums, eq3_ring_area, mp_form_factor)
+    from ..scene import NumericalError
 
     F = np.zeros(m)
     err = np.zeros(m)
@@ -842,6 +843,13 @@ def pieces_form_factors(pieces, m, tolerance=None, owner=None, integrator="secto
                     rv1, re1 = mp_form_factor(np.zeros(3), np.array([0.0, 0.0, 1.0]), ring,
                                               one_sided=False, tolerance=tolerance,
                                               error=True)
+                    # the last tier's value is checked too (mpmath may stop at its
+                    # limit): each ring to the tolerance, relative to itself
+                    if not re1 <= tolerance * abs(rv1) + _MP_VALUE_FLOOR:
+                        raise NumericalError(
+                            f"a visible piece's ring misses the tolerance {tolerance:g} "
+                            f"(value {rv1:.3g}, error estimate {re1:.3g}) even in "
+                            f"{_MP_MAX_DPS}-digit arithmetic")
                     total += -rv1 if is_hole[r] else rv1
                     e_total += re1
                 v[g], e[g] = total, e_total
