@@ -339,3 +339,24 @@ def test_compare_records_against_an_independent_loop():
     assert "| ppbh | " in ef.to_markdown(recs)
     with pytest.raises(ValueError, match="reference"):
         ef.compare(scene, ["ppbh"], rows=rows, reference=np.zeros((2, 2)))
+
+
+def test_cubic_tetrahedron_cells_carry_the_derived_delta_ff():
+    # the package's cells against the sympy-derived delta FF of the face x' = 1 of the
+    # cube (receiver normal (1, 1, 1)/sqrt 3), at each cell's centre times its area
+    from exactff.methods.cubic_tetrahedron import cubic_tetrahedron_frame
+
+    tool = load_delta_ff_tool()
+    sp = tool.sp
+    v, w = sp.symbols("v w", real=True)
+    dff = sp.lambdify((v, w), tool.delta_ff((1, v, w), [1 / sp.sqrt(3)] * 3, (1, 0, 0)), "numpy")
+    r = 24
+    L = ef.CubicTetrahedron(r).layout()
+    C = L.directions @ np.linalg.inv(cubic_tetrahedron_frame())   # cube coordinates
+    face = np.argmax(C, axis=1)
+    C = C / C[np.arange(len(C)), face][:, None]
+    # the faces are (1, v, w), (w, 1, v), (v, w, 1)
+    vv = C[np.arange(len(C)), (face + 1) % 3]
+    ww = C[np.arange(len(C)), (face + 2) % 3]
+    np.testing.assert_allclose(L.weights, dff(vv, ww) * (3.0 / r) ** 2, rtol=1e-12)
+    assert np.bincount(face, minlength=3).tolist() == [len(C) // 3] * 3

@@ -6,7 +6,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 import exactff as ef
-from exactff.testing.strategies import planar_polygons
+from exactff.testing.strategies import embed, planar_polygons, points, polygons_2d, unit_vectors
 
 SQUARE = [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]]
 
@@ -70,22 +70,23 @@ def test_scene_is_immutable():
             arr[0] = 1.0
 
 
-@given(P=planar_polygons())
-def test_scene_normal_area_centroid_vs_triangulation(P):
-    s = ef.Scene.from_polygons([P])
-    # independent: shapely area and centroid in the polygon's own 2-D frame
+@given(P2=polygons_2d(), n=unit_vectors(), c=points(2.0), scale=st.floats(0.2, 2.0))
+def test_scene_normal_area_centroid_vs_construction(P2, n, c, scale):
+    # a counter-clockwise 2-D polygon placed in 3-D with front normal n (by construction,
+    # independent of the Newell normal under test): the scene's normal is n, its area
+    # and centroid those of the 2-D polygon (shapely) carried into 3-D
     import shapely
-    n = s.normals[0]
+
+    P = embed(P2, n, c, scale)
+    s = ef.Scene.from_polygons([P])
+    assert np.allclose(s.normals[0], n, atol=1e-12)
+    poly = shapely.Polygon(P2)
+    assert shapely.is_ccw(poly.exterior)
+    assert s.areas[0] == pytest.approx(poly.area * scale**2, rel=1e-12)
     R = ef.receiver_frame(n)
-    Q = (P - P[0]) @ R.T
-    assert np.abs(Q[:, 2]).max() < 1e-12 * np.abs(P).max()
-    poly = shapely.Polygon(Q[:, :2])
-    assert s.areas[0] == pytest.approx(poly.area, rel=1e-12)
-    c = poly.centroid
-    expect = P[0] + c.x * R[0] + c.y * R[1]
+    cen = poly.centroid
+    expect = c + scale * (cen.x * R[0] + cen.y * R[1])
     assert np.allclose(s.centroids[0], expect, rtol=0, atol=1e-12 * (1 + np.abs(P).max()))
-    # counter-clockwise in the frame of the front normal: positive orientation
-    assert shapely.is_ccw(shapely.LinearRing(Q[:, :2]))
 
 
 def test_describe_cornell_box():
