@@ -1,6 +1,7 @@
 """Reading scenes: Wavefront OBJ (faces kept as polygons) and exactff-scene/1 JSON."""
 
 import json
+import math
 import os
 
 from .scene import Scene
@@ -67,9 +68,12 @@ def read_obj(path, **options):
                 if len(rest) not in (3, 4, 6, 7):
                     raise ValueError(f"{where}: a vertex needs 3 coordinates: {raw.strip()!r}")
                 try:
-                    verts.append(tuple(float(c) for c in rest[:3]))
+                    xyz = tuple(float(c) for c in rest[:3])
                 except ValueError:
                     raise ValueError(f"{where}: bad vertex coordinate: {raw.strip()!r}") from None
+                if not all(math.isfinite(c) for c in xyz):
+                    raise ValueError(f"{where}: NaN or infinite vertex coordinate: {raw.strip()!r}")
+                verts.append(xyz)
             elif key == "f":
                 if len(rest) < 3:
                     raise ValueError(f"{where}: a face needs at least 3 vertices: {raw.strip()!r}")

@@ -21,7 +21,7 @@ BAD_JSON = {
 BAD_OBJ = {
     "bad_index.obj": ("v 0 0 0\nv 1 0 0\nv 1 1 0\nf 1 2 9\n", ":4:"),
     "text.obj": ("v 0 0 0\nv 1 0 0\nhello world\nv one 1 0\n", ":4:"),
-    "nan.obj": ("v 0 0 0\nv 1 0 0\nv nan 1 0\nf 1 2 3\n", "polygon 0"),
+    "nan.obj": ("v 0 0 0\nv 1 0 0\nv nan 1 0\nf 1 2 3\n", ":3:"),
     "no_faces.obj": ("v 0 0 0\n", "no faces"),
 }
 
