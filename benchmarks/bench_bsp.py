@@ -11,7 +11,7 @@ the in-run yardstick (issue 20: set-up within the time of 10 such rows).
 
 import argparse
 import os
-import platform
+import sys
 import time
 
 import numpy as np
@@ -21,13 +21,8 @@ from exactff import _tolerances as tol
 from exactff.visibility import build_bsp
 
 
-def depth(tree):
-    best, stack = 0, [(0, 1)]
-    while stack:
-        k, d = stack.pop()
-        best = max(best, d)
-        stack += [(c, d + 1) for c in (tree.front[k], tree.back[k]) if c >= 0]
-    return best
+sys.path.insert(0, os.path.dirname(__file__))
+from scenes_bench import machine  # noqa: E402
 
 
 def timed(f):
@@ -41,8 +36,7 @@ def main():
     ap.add_argument("--max-level", type=int, default=6)
     ap.add_argument("--chain-max-level", type=int, default=4)
     args = ap.parse_args()
-    print(f"machine: {platform.machine()}, {os.cpu_count()} cores, python "
-          f"{platform.python_version()}, numpy {np.__version__}")
+    print(machine())
     print("| scene | polygons | candidates | build (s) | depth | fragments | splits | "
           "hemicube-256 row (s) | build / row |")
     print("|---|---|---|---|---|---|---|---|---|")
@@ -61,7 +55,7 @@ def main():
             tol.BSP_AXIS_CANDIDATE_MIN = thr
             tree, t_build = timed(lambda: build_bsp(scene))
             tol.BSP_AXIS_CANDIDATE_MIN = default
-            print(f"| {name} | {len(scene)} | {label} | {t_build:.2f} | {depth(tree)} | "
+            print(f"| {name} | {len(scene)} | {label} | {t_build:.2f} | {tree.depth()} | "
                   f"{len(tree.fragments)} | {tree.splits} | {t_row:.3f} | {t_build / t_row:.1f} |",
                   flush=True)
 

@@ -19,7 +19,6 @@ the process's peak resident set at the end (it includes the 6,144 x 6,144 matrix
 
 import argparse
 import os
-import platform
 import resource
 import sys
 import time
@@ -32,7 +31,7 @@ from exactff.methods import Exact
 from exactff.visibility import build_bsp
 
 sys.path.insert(0, os.path.dirname(__file__))
-from scenes_bench import furnished_room  # noqa: E402
+from scenes_bench import furnished_room, machine  # noqa: E402
 
 
 def timed(f):
@@ -139,8 +138,7 @@ def main():
     ap.add_argument("--visibility-only", action="store_true",
                     help="only the office / cloister output-sensitivity tables")
     args = ap.parse_args()
-    print(f"machine: {platform.machine()}, {os.cpu_count()} cores, python "
-          f"{platform.python_version()}, numpy {np.__version__}")
+    print(machine())
     visibility_report()
     if args.visibility_only:
         return

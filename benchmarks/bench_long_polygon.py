@@ -12,7 +12,6 @@ row (the discrete methods' z-buffer), which used to pad every polygon to the lon
 
 import argparse
 import os
-import platform
 import sys
 import time
 import tracemalloc
@@ -23,6 +22,7 @@ import exactff as ef
 from exactff.methods import Exact
 
 sys.path.insert(0, os.path.dirname(__file__))
+from scenes_bench import machine  # noqa: E402
 
 
 def table_top(k, centre=(4.0, 1.1, 3.0), radius=0.6):
@@ -53,8 +53,7 @@ def main():
     ap.add_argument("--rows", type=int, default=6)
     ap.add_argument("--max-vertices", type=int, default=50000)
     args = ap.parse_args()
-    print(f"machine: {platform.machine()}, {os.cpu_count()} cores, python "
-          f"{platform.python_version()}, numpy {np.__version__}")
+    print(machine())
     office = ef.scenes.office()
     rows = np.random.default_rng(0).choice(len(office), args.rows, replace=False).tolist()
     base = {}

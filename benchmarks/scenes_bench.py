@@ -1,8 +1,21 @@
 """Benchmark scenes and timing helpers shared by the benchmark scripts."""
 
+import os
+import platform
 import time
 
+import numpy as np
+
 import exactff as ef
+
+
+def machine():
+    """One line: the machine and the versions the figures were measured with."""
+    import shapely
+
+    return (f"machine: {platform.machine()}, {os.cpu_count()} cores, python "
+            f"{platform.python_version()}, numpy {np.__version__}, shapely "
+            f"{shapely.__version__} (GEOS {shapely.geos_version_string})")
 
 
 def best_of(f, k=3):

@@ -10,21 +10,12 @@ from exactff.testing import assert_form_factors_close
 from exactff.visibility import build_bsp
 
 
-def depth(tree):
-    best, stack = 0, [(0, 1)]
-    while stack:
-        k, d = stack.pop()
-        best = max(best, d)
-        stack += [(c, d + 1) for c in (tree.front[k], tree.back[k]) if c >= 0]
-    return best
-
-
 def test_convex_tessellation_gives_a_shallow_tree():
     scene = ef.scenes.room_with_sphere(3, 4)     # 1,280 triangles, 96 quads
     tree = build_bsp(scene)
     # the facets' own planes alone make a chain about as deep as the sphere has facets;
     # nodes of up to BSP_AXIS_CANDIDATE_MIN fragments may still chain
-    assert depth(tree) < tol.BSP_AXIS_CANDIDATE_MIN + 100 < 1280
+    assert tree.depth() < tol.BSP_AXIS_CANDIDATE_MIN + 100 < 1280
     assert sorted(set(tree.source.tolist())) == list(range(len(scene)))
 
 
@@ -33,11 +24,11 @@ def test_rows_do_not_depend_on_the_tree(monkeypatch):
     rows = [0, 7, 20, 33, 50]
     monkeypatch.setattr(tol, "BSP_AXIS_CANDIDATE_MIN", 32)
     shallow = ef.form_factor_matrix(scene, rows=rows)
-    d_shallow = depth(build_bsp(scene))
+    d_shallow = build_bsp(scene).depth()
     monkeypatch.setattr(tol, "BSP_AXIS_CANDIDATE_MIN", 10**9)
     chain_scene = ef.Scene.from_polygons(scene.polygons)
     chain = ef.form_factor_matrix(chain_scene, rows=rows)
-    assert depth(build_bsp(chain_scene)) > 300 > 100 > d_shallow
+    assert build_bsp(chain_scene).depth() > 300 > 100 > d_shallow
     assert_form_factors_close(shallow, chain, rtol=0, atol=1e-13)
 
 

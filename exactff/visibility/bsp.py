@@ -58,6 +58,22 @@ class BSPTree:
     def __len__(self):
         return len(self.offsets)
 
+    def depth(self):
+        """Number of nodes on the longest path from the root to a leaf.
+
+        Examples
+        --------
+        >>> from exactff.scenes import subdivided_box
+        >>> build_bsp(subdivided_box(2)).depth()
+        6
+        """
+        best, stack = 0, [(0, 1)]
+        while stack:
+            k, d = stack.pop()
+            best = max(best, d)
+            stack += [(int(c), d + 1) for c in (self.front[k], self.back[k]) if c >= 0]
+        return best
+
     def __repr__(self):
         return (f"<BSPTree: {len(self)} nodes, {len(self.fragments)} fragments from "
                 f"{len(set(self.source.tolist()))} polygons, {self.splits} splits>")
