@@ -38,10 +38,6 @@ def _chart_planes(chart, margin=0.0):
     return [g * ew - eu, g * ew + eu, g * ew - ev, ev + margin * ew if side else g * ew + ev]
 
 
-def chart_area(chart):
-    return 2.0 if chart[3] else 4.0
-
-
 def clip_halfspace(V, counts, h):
     """Clip a batch of polygons to the half-space ``h . x > 0`` (points on it kept).
 
@@ -204,7 +200,7 @@ def _repair(geom):
         return shapely.union_all(shapely.get_parts(geom))
 
 
-def _cut(g, covered, stats, disjoint=False):
+def _cut(g, covered, stats):
     """The visible part of image ``g`` behind ``covered``, and the grown covered region.
 
     Checked by area conservation, ``area(covered | g) = area(covered) + area(g - covered)``
@@ -215,9 +211,8 @@ def _cut(g, covered, stats, disjoint=False):
     ``stats["overlay_repairs"]``. The check runs when nothing is visible too: GEOS has
     been seen to return an empty difference for an image that shares one edge with the
     covered region and lies outside it (its union then had the area of both).
-    ``disjoint``: the bounds do not overlap, so the difference is ``g`` itself.
     """
-    vis = g if disjoint else _overlay(shapely.difference, g, covered, stats)
+    vis = _overlay(shapely.difference, g, covered, stats)
     grown = _overlay(shapely.union, covered, g, stats)
     a_cov, a_vis, a_new = covered.area, vis.area, grown.area
     if abs(a_new - a_cov - a_vis) > tol.AREA_CONSERVATION_RTOL * (a_cov + g.area) + 1e-300 or not (
