@@ -808,13 +808,15 @@ def eq3_edge_integral(a, b):
     return math.fsum(total)
 
 
-def eq3_form_factor(point, normal, polygon, *, one_sided=True):
+def eq3_form_factor(point, normal, polygon, *, one_sided=True, error=False):
     """Unoccluded form factor by the paper's Eq. 3 (corrected), with span splitting.
 
     The frame is first rotated about ``n`` (which changes no area) so that no edge
     plane is close to ``x = 0``, where ``eta -> 0`` makes Eq. 3 ill-conditioned.
 
-    Parameters and return value as :func:`point_polygon_form_factor`.
+    Parameters and return value as :func:`point_polygon_form_factor`; ``error=True``
+    also returns a rounding-error estimate (``C1 u`` times the sum of the absolute edge
+    integrals, over pi).
 
     Examples
     --------
@@ -824,13 +826,13 @@ def eq3_form_factor(point, normal, polygon, *, one_sided=True):
     """
     C, sign = _local_clipped(point, normal, polygon, one_sided)
     if not sign or len(C) < 2:
-        return 0.0
-    area, _ = eq3_ring_area(np.array(C))
+        return (0.0, 0.0) if error else 0.0
+    area, mag = eq3_ring_area(np.array(C))
     # a polygon whose front faces p has a clockwise image (seen from above the disk)
     F = -sign * area / math.pi
     if not F >= -tol.ROUNDING_OVERSHOOT * tol.EPS:
         raise NumericalError(f"Eq. 3 gave the form factor {F!r}, below 0 beyond rounding")
-    return max(F, 0.0)
+    return (max(F, 0.0), _C1 * tol.EPS * mag / math.pi) if error else max(F, 0.0)
 
 
 def eq3_ring_area(ring):

@@ -11,7 +11,7 @@ import numpy as np
 from hypothesis import strategies as st
 
 __all__ = ["unit_vectors", "points", "polygons_2d", "planar_polygons", "convex_polygons",
-           "embed"]
+           "embed", "points_above", "scenes", "enclosures", "occluded_scenes"]
 
 
 def _spherical(z, phi):
@@ -84,3 +84,204 @@ def planar_polygons(draw, min_vertices=3, max_vertices=8, convex=False,
 def convex_polygons(**kwargs):
     """Convex planar polygons of shape (K, 3) (vertices on a circle)."""
     return planar_polygons(convex=True, **kwargs)
+
+
+def _check_int(name, value, low):
+    if not (isinstance(value, (int, np.integer)) and value >= low):
+        raise ValueError(f"{name} must be an integer >= {low}, got {value!r}")
+
+
+def _magnitude(lo_exp, hi_exp):
+    """Positive magnitudes 10**e with the exponent e drawn in [lo_exp, hi_exp]."""
+    return st.floats(lo_exp, hi_exp).map(lambda e: float(10.0 ** e))
+
+
+def points_above(polygon, *, min_exponent=-6, max_exponent=2):
+    """Receivers ``(point, normal)`` in front of ``polygon``.
+
+    The point lies over a point of the polygon (or beside it), at a distance ``10**e``
+    from its plane with ``e`` drawn in ``[min_exponent, max_exponent]`` (near its plane
+    included); the normal is drawn on the sphere, often close to the point's horizon
+    through the polygon (grazing) or facing it. Eagerly checks its options.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from hypothesis import given
+    >>> sq = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], dtype=float)
+    >>> @given(points_above(sq))
+    ... def check(pn):
+    ...     p, n = pn
+    ...     assert p[2] > 0 and abs(np.linalg.norm(n) - 1) < 1e-12
+    >>> check()
+    """
+    P = np.asarray(polygon, dtype=float)
+    if P.ndim != 2 or P.shape[1] != 3 or len(P) < 3:
+        raise ValueError(f"polygon must have shape (K, 3) with K >= 3, got {P.shape}")
+    if not min_exponent <= max_exponent:
+        raise ValueError(f"min_exponent must not exceed max_exponent, got {min_exponent!r} "
+                         f"> {max_exponent!r}")
+    return _points_above(P, min_exponent, max_exponent)
+
+
+@st.composite
+def _points_above(draw, P, min_exponent, max_exponent):
+    from ..geometry import polygon_diameter, unit_normal
+
+    nP = unit_normal(P)
+    size = polygon_diameter(P)
+    # a point of the polygon (a convex combination of its vertices), or beside it
+    w = np.array(draw(st.lists(st.floats(0.0, 1.0), min_size=len(P), max_size=len(P))))
+    base = (w @ P) / w.sum() if w.sum() > 0 else P.mean(axis=0)
+    beside = draw(st.sampled_from([0.0, 0.0, 0.5, 2.0]))
+    t1 = P[1] - P[0]
+    t1 = t1 / np.linalg.norm(t1)
+    height = draw(_magnitude(min_exponent, max_exponent)) * max(size, 1e-300)
+    p = base + beside * size * t1 + height * nP
+    kind = draw(st.sampled_from(["random", "grazing", "facing"]))
+    if kind == "random":
+        n = draw(unit_vectors())
+    else:
+        # towards the polygon (facing) or nearly in the plane through p containing the
+        # direction to the polygon (grazing: the polygon on the horizon)
+        d = base - p
+        d = d / np.linalg.norm(d)
+        if kind == "facing":
+            n = d
+        else:
+            side = np.cross(d, t1)
+            side = side / np.linalg.norm(side) if np.linalg.norm(side) > 0 else nP
+            tilt = draw(st.floats(-1e-3, 1e-3))
+            n = side + tilt * d
+            n = n / np.linalg.norm(n)
+    return p, n
+
+
+def scenes(*, min_polygons=1, max_polygons=8, max_vertices=6):
+    """Scenes of planar polygons in general position (interpenetrating allowed), sizes
+    from a drawn exponent; each polygon valid by construction.
+
+    Examples
+    --------
+    >>> from hypothesis import given
+    >>> @given(scenes(max_polygons=3))
+    ... def check(scene):
+    ...     assert 1 <= len(scene) <= 3
+    >>> check()
+    """
+    _check_int("min_polygons", min_polygons, 1)
+    _check_int("max_polygons", max_polygons, min_polygons)
+    _check_int("max_vertices", max_vertices, 3)
+    return _scenes(min_polygons, max_polygons, max_vertices)
+
+
+@st.composite
+def _scenes(draw, min_polygons, max_polygons, max_vertices):
+    from ..scene import Scene
+
+    scale = draw(_magnitude(-3, 3))
+    k = draw(st.integers(min_polygons, max_polygons))
+    polys = [draw(planar_polygons(max_vertices=max_vertices,
+                                  scale=st.floats(0.2, 2.0).map(lambda s: s * scale),
+                                  centre=points(2.0).map(lambda c: c * scale)))
+             for _ in range(k)]
+    return Scene.from_polygons(polys)
+
+
+def enclosures(*, max_boxes=3, max_k=3):
+    """``(scene, point, normal)``: a closed box room (``k x k`` quads per face, size from
+    a drawn exponent, anywhere) with up to ``max_boxes`` solid box obstacles (floating,
+    touching the floor or the walls, or interpenetrating each other), and a receiver
+    inside the room and outside every obstacle, so that its row sums to 1.
+
+    Examples
+    --------
+    >>> from hypothesis import given, settings
+    >>> import exactff as ef
+    >>> @settings(max_examples=3, deadline=None)
+    ... @given(enclosures(max_boxes=1))
+    ... def check(case):
+    ...     scene, p, n = case
+    ...     assert abs(ef.form_factors(scene, p, n).sum() - 1) < 1e-11
+    >>> check()
+    """
+    _check_int("max_boxes", max_boxes, 0)
+    _check_int("max_k", max_k, 1)
+    return _enclosures(max_boxes, max_k)
+
+
+@st.composite
+def _enclosures(draw, max_boxes, max_k):
+    from ..scene import Scene
+    from ..scenes import box_polygons
+
+    L = draw(_magnitude(-2, 3))
+    origin = np.array(draw(points(10.0))) * L
+    k = draw(st.integers(1, max_k))
+    polys = box_polygons(origin, origin + L, k)
+    groups = ["room"] * len(polys)
+    unit = st.floats(0.15, 0.95)
+    for b in range(draw(st.integers(0, max_boxes))):
+        lo = np.array([draw(unit) for _ in range(3)])
+        hi = np.minimum(lo + np.array([draw(st.floats(0.05, 0.5)) for _ in range(3)]), 1.0)
+        if draw(st.booleans()):
+            lo[2] = 0.0          # standing on the floor (touching it)
+        if np.any(hi - lo < 0.02):
+            continue
+        box = box_polygons(origin + lo * L, origin + hi * L, 1, facing="out")
+        polys += box
+        groups += [f"box{b}"] * len(box)
+    # the receiver: in the corner region [0.02, 0.12]^3 of the room, which no obstacle
+    # reaches (their x and y start at 0.15 of the room)
+    p = origin + np.array([draw(st.floats(0.02, 0.12)) for _ in range(3)]) * L
+    return Scene.from_polygons(polys, groups=groups), p, draw(unit_vectors())
+
+
+def occluded_scenes(*, max_extra=3):
+    """``(scene, point, normal)`` where a polygon really hides part of another from the
+    point: a far polygon and a nearer one both crossing the line from the point along a
+    direction within 60 degrees of the normal, plus up to ``max_extra`` other polygons,
+    the whole moved by a random rigid motion and scaled by a drawn exponent.
+
+    Polygon 0 is the far one, polygon 1 the occluder: ``F[0]`` is smaller than the
+    unoccluded value.
+
+    Examples
+    --------
+    >>> from hypothesis import given, settings
+    >>> import exactff as ef
+    >>> @settings(max_examples=3, deadline=None)
+    ... @given(occluded_scenes())
+    ... def check(case):
+    ...     scene, p, n = case
+    ...     F = ef.form_factors(scene, p, n)
+    ...     U = ef.point_polygon_form_factors(p, n, scene)
+    ...     assert F[0] < U[0]
+    >>> check()
+    """
+    _check_int("max_extra", max_extra, 0)
+    return _occluded_scenes(max_extra)
+
+
+@st.composite
+def _occluded_scenes(draw, max_extra):
+    from ..geometry import receiver_frame
+    from ..scene import Scene
+
+    h_near = draw(st.floats(0.3, 1.0))
+    h_far = h_near * draw(st.floats(1.3, 4.0))
+    # both polygons contain the axis point (0, 0, h) and face the origin (down)
+    near = embed(draw(polygons_2d(convex=True)), np.array([0.0, 0.0, -1.0]),
+                 np.array([0.0, 0.0, h_near]), h_near * draw(st.floats(0.1, 0.8)))
+    far = embed(draw(polygons_2d(convex=True)), np.array([0.0, 0.0, -1.0]),
+                np.array([0.0, 0.0, h_far]), h_far * draw(st.floats(0.3, 1.5)))
+    polys = [far, near]
+    for _ in range(draw(st.integers(0, max_extra))):
+        polys.append(draw(planar_polygons(centre=points(2.0).map(lambda c: c + [0, 0, 2.5]))))
+    # the receiver normal within 60 degrees of the axis; then a rigid motion and a scale
+    n_local = draw(unit_vectors().filter(lambda v: v[2] > 0.5))
+    R = receiver_frame(draw(unit_vectors()))
+    scale = draw(_magnitude(-2, 2))
+    shift = np.array(draw(points(10.0))) * scale
+    moved = [scale * (P @ R) + shift for P in polys]
+    return Scene.from_polygons(moved), shift.copy(), n_local @ R

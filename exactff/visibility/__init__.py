@@ -59,7 +59,7 @@ def is_convex_enclosure(scene):
 
 
 def visible_form_factors(scene, point, normal, *, two_sided=False, stats=None,
-                         shortcuts=True, tolerance=None, integrator="sector"):
+                         shortcuts=True, tolerance=None, integrator="sector", error=False):
     """Exact form factors with occlusion from one point to every polygon of a scene.
 
     Parameters
@@ -90,9 +90,12 @@ def visible_form_factors(scene, point, normal, *, two_sided=False, stats=None,
         Eq. 3, corrected, with monotone-span splitting (one ring at a time, no
         escalation).
 
+    error : bool, default False
+        Also return the rounding-error estimate of each value's integration.
+
     Returns
     -------
-    ndarray of shape (len(scene),)
+    ndarray of shape (len(scene),), or a pair of them with ``error=True``
     """
     st = stats if stats is not None else {}
     flat = _Polygons.of(scene)
@@ -104,11 +107,12 @@ def visible_form_factors(scene, point, normal, *, two_sided=False, stats=None,
     if shortcuts and is_convex_enclosure(scene) and np.all(side >= 0):
         st["path"] = "unoccluded"
         if integrator == "eq3":
-            return np.array([0.0 if s == 0 else eq3_form_factor(p, normal, P,
-                                                                one_sided=not two_sided)
-                             for P, s in zip(scene.polygons, side)])
+            FE = np.array([(0.0, 0.0) if s == 0 else eq3_form_factor(
+                p, normal, P, one_sided=not two_sided, error=True)
+                for P, s in zip(scene.polygons, side)])
+            return (FE[:, 0], FE[:, 1]) if error else FE[:, 0]
         return unoccluded_row(flat, p, normal, one_sided=not two_sided, tolerance=tolerance,
-                              in_band="edge_on")
+                              in_band="edge_on", return_error=error, strict=True)
     st["path"] = "clipper"
     tree, buckets = scene_bsp(scene)
     order = np.array(front_to_back(tree, p), dtype=int)
@@ -152,4 +156,4 @@ def visible_form_factors(scene, point, normal, *, two_sided=False, stats=None,
                              f"beyond its rounding error estimate {E[bad[0]]:.3g}")
     if stats is not None:
         stats["max_error_estimate"] = float(E.max(initial=0.0))
-    return np.maximum(F, 0.0)
+    return (np.maximum(F, 0.0), E) if error else np.maximum(F, 0.0)
