@@ -5,12 +5,11 @@ overlaid), and its counters fire only when work is really left out."""
 import numpy as np
 import pytest
 from hypothesis import given
-from hypothesis import strategies as st
 
 import exactff as ef
 from exactff.methods import Exact
 from exactff.testing import assert_form_factors_close
-from exactff.testing.strategies import unit_vectors
+from exactff.testing.strategies import enclosures, unit_vectors
 
 from common import rect_xy
 from test_visibility import layered_scenes
@@ -59,20 +58,15 @@ def test_neutral_on_layered_scenes(polys, n):
     assert_form_factors_close(on, off, rtol=0, atol=NEUTRAL_ATOL)
 
 
-@given(seed=st.integers(0, 2**32 - 1))
-def test_neutral_on_random_furnished_rooms(seed):
-    rng = np.random.default_rng(seed)
-    boxes = []
-    for _ in range(rng.integers(1, 5)):
-        lo = rng.uniform(0.05, 0.7, 3)
-        boxes.append((lo, lo + rng.uniform(0.05, 0.3, 3)))
-    scene = ef.scenes.furnished_box(3, boxes, box_k=2)
-    i = int(rng.integers(len(scene)))
-    p = scene.centroids[i]
-    if any(np.all(p + 1e-9 * scene.normals[i] > lo) and np.all(p + 1e-9 * scene.normals[i] < hi)
-           for lo, hi in boxes):
-        return  # inside an obstacle: a row of zeros either way
-    neutral_rows(scene, [i])
+@given(case=enclosures())
+def test_neutral_on_random_enclosures(case):
+    # closed rooms with floating, touching and interpenetrating obstacles, receivers
+    # anywhere in free space, sizes and positions from drawn exponents
+    scene, p, n = case
+    on = Exact().point_form_factors(scene, p, n)
+    off = Exact(shortcuts=False).point_form_factors(scene, p, n)
+    assert_form_factors_close(on, off, rtol=0, atol=NEUTRAL_ATOL * max(1.0, on.max()))
+    assert abs(on.sum() - 1.0) <= 1e-11
 
 
 def grid_behind_wall(k=8):
