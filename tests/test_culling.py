@@ -62,10 +62,16 @@ def test_neutral_on_layered_scenes(polys, n):
 def test_neutral_on_random_enclosures(case):
     # closed rooms with floating, touching and interpenetrating obstacles, receivers
     # anywhere in free space, sizes and positions from drawn exponents
+    from exactff.visibility import visible_form_factors
+
     scene, p, n = case
-    on = Exact().point_form_factors(scene, p, n)
-    off = Exact(shortcuts=False).point_form_factors(scene, p, n)
-    assert_form_factors_close(on, off, rtol=0, atol=NEUTRAL_ATOL * max(1.0, on.max()))
+    on, e_on = visible_form_factors(scene, p, n, tolerance=1e-12, error=True)
+    off, e_off = visible_form_factors(scene, p, n, tolerance=1e-12, error=True,
+                                      shortcuts=False)
+    # a room without obstacles takes the convex-scene path (the unoccluded kernel over
+    # whole polygons) against the clipper's chart pieces: the same value, rounded
+    # differently; they agree within the sum of their rounding-error estimates
+    assert np.all(np.abs(on - off) <= e_on + e_off + NEUTRAL_ATOL)
     assert abs(on.sum() - 1.0) <= 1e-11
 
 
