@@ -523,8 +523,11 @@ def _mp_sector(point, normal, polygon, one_sided, dps, side_hint=None):
             sm = mp.sqrt(sum(c * c for c in m))
             if sm != 0:
                 total += mp.atan2(sm, sum(a[j] * b[j] for j in range(3))) * m[2] / sm
-        F = -total / (2 * mp.pi) if side < 0 else total / (2 * mp.pi)
-        return F
+        # the image of the boundary ring, whichever way it winds: for a point within
+        # rounding of a polygon that is planar only to rounding, the ring's winding can
+        # disagree with the side decided from the polygon's Newell plane (value 0 for
+        # 0.5 before); every other path integrates the ring as given too
+        return abs(total) / (2 * mp.pi)
 
 
 #: mp_form_factor's precision limit (decimal digits), and the absolute size below which

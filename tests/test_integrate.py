@@ -245,9 +245,9 @@ def test_nonunit_normal_is_normalised():
        p=points(0.5), one_sided=st.booleans())
 def test_vectorised_vs_eq3_scalar_loop(polys, n, p, one_sided):
     # the vectorised sector form against the scalar Eq. 3, an independent formula (the
-    # scalar sector form calls the vectorised path); points within rounding of a
-    # polygon's plane are the stiff catalogue's business (its side is a matter of
-    # rounding there, and the value jumps from 0 to up to 1/2)
+    # scalar sector form calls the vectorised path). Not within rounding of a polygon's
+    # plane: there the vectorised kernel escalates to mpmath, and the scalar Eq. 3 (no
+    # higher tier) is rounding noise (its horizon chord passes within 1e-17 of p)
     for P in polys:
         assume(abs(ef.unit_normal(P) @ (P.mean(axis=0) - p)) > 1e-9)
     F = ef.point_polygon_form_factors(p, n, polys, one_sided=one_sided)

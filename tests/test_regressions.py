@@ -141,3 +141,19 @@ def test_rounding_cracks_are_filled_in_covered_regions():
     assert len(filled.interiors) == 0
     assert abs(filled.area - region.area) < 1e-20
     assert shapely.difference(image, filled).area <= 1e-15 * image.area
+
+
+def test_mpmath_tier_integrates_the_ring_whichever_way_it_winds():
+    # p = 0 lies 1e-17 behind a square (planar to rounding) that crosses its horizon; the
+    # exact side says behind, but the horizon chord winds the ring the other way: the
+    # mpmath tier clamped its signed value to 0, where the ring's image is half the disk
+    from exactff.testing.mp_reference import boundary_form_factor
+
+    P = np.array([[0.7080734182735711, -0.4546487134128409, -0.5403023058681398],
+                  [-0.45464871341284085, 0.29192658172642877, -0.8414709848078965],
+                  [-0.7080734182735712, 0.45464871341284097, 0.5403023058681397],
+                  [0.4546487134128408, -0.2919265817264287, 0.8414709848078966]])
+    p, n = np.zeros(3), np.array([0.0, 0.0, 1.0])
+    ref = abs(float(boundary_form_factor(p, n, P, one_sided=False, dps=50)))
+    F = ef.point_polygon_form_factors(p, n, [P], one_sided=False)[0]
+    assert ref > 0.49 and abs(F - ref) <= 1e-12 * ref
