@@ -22,6 +22,7 @@ __all__ = [
     "LONG_POLYGON",
     "BATCH_VALIDATION_MAX_VERTICES",
     "BSP_AXIS_CANDIDATE_MIN",
+    "CHART_EDGE_ULPS",
 ]
 
 #: Unit roundoff of IEEE double precision, 2**-53.
@@ -108,3 +109,10 @@ BATCH_VALIDATION_MAX_VERTICES = 128
 #: BSP nodes with more fragments than this also try a plane through the median of the
 #: fragments' vertex means along their widest axis (not a tolerance: a cost threshold).
 BSP_AXIS_CANDIDATE_MIN = 512
+
+#: Chart coordinates within this many ulps of a chart's edge (u = +-1, v = +-1) are put on
+#: it: they are points clipped onto the edge, off it only by the rounding of the clip and
+#: the projection; left there, two images meeting on the edge had vertices 1e-15 apart,
+#: which GEOS's overlays and predicates got wrong.
+CHART_EDGE_ULPS = 8
+

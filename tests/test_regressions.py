@@ -157,3 +157,40 @@ def test_mpmath_tier_integrates_the_ring_whichever_way_it_winds():
     ref = abs(float(boundary_form_factor(p, n, P, one_sided=False, dps=50)))
     F = ef.point_polygon_form_factors(p, n, [P], one_sided=False)[0]
     assert ref > 0.49 and abs(F - ref) <= 1e-12 * ref
+
+
+def _room_with_boxes(lo, hi, boxes):
+    polys = ef.scenes.box_polygons(lo, hi, 1)
+    for blo, bhi in boxes:
+        polys += ef.scenes.box_polygons(blo, bhi, 1, facing="out")
+    return ef.Scene.from_polygons(polys)
+
+
+def test_images_meeting_on_a_chart_edge_are_not_mistaken_for_nested():
+    # found by strategies.enclosures (thorough profile): two images meeting on the edge
+    # u = 1 of the top chart had their shared points a few ulps apart (one at
+    # u = 1.0000000000000009, the other at 0.9999999999999998); GEOS's difference, union
+    # and relate all put one image inside the other, consistently, and the wall lost
+    # 0.0074 of its 0.408 (row sum 0.9926). Points on chart edges are now put on them and
+    # merged along them when a few ulps apart.
+    scene = _room_with_boxes((0, 0, 40), (10, 10, 50),
+                             [((5, 5, 47.5), (10, 10, 50)), ((2.5, 2.5, 42.5), (7.5, 7.5, 47.5)),
+                              ((2.5, 5, 40), (7.5, 10, 47.5))])
+    p = np.array([0.5, 0.2762069705061106, 40.2])
+    n = np.array([0.12845581839191236, 0.035486375509983986, 0.9910801278778767])
+    for shortcuts in (True, False):
+        F = ef.Exact(shortcuts=shortcuts).point_form_factors(scene, p, n)
+        assert abs(F.sum() - 1.0) <= 1e-12
+
+
+def test_shared_edge_end_points_an_ulp_apart_on_a_chart_edge():
+    # the same kind, with the end of the floor-wall edge clipped in each image landing
+    # an ulp apart along the chart's edge: the floor's image came back inside the wall's
+    # and the row summed to 0.8157
+    scene = _room_with_boxes((0, 0, 0), (1, 1, 1),
+                             [((0.5, 0.5, 0.5), (1, 1, 0.75)), ((0.5, 0.5, 0.5), (1, 1, 1))])
+    p = np.array([0.046875, 0.09375, 0.0234375])
+    n = np.array([0.48499812148654897, -0.8745151926379088, 0.0])
+    for shortcuts in (True, False):
+        F = ef.Exact(shortcuts=shortcuts).point_form_factors(scene, p, n)
+        assert abs(F.sum() - 1.0) <= 1e-12

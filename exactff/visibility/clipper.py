@@ -144,7 +144,34 @@ def chart_clip(V, counts, chart, margin=0.0):
     # was seen with a receiver normal of component 5e-324), and they move an image by
     # less than 2.2e-308
     UV[np.abs(UV) < np.finfo(float).tiny] = 0.0
+    if margin == 0.0:
+        # points clipped onto the chart's edges u = +-1 (and v = +-1, v = 1) land a few
+        # ulps off them; two images meeting there then had vertices 1e-15 apart, and
+        # GEOS got every overlay and predicate of the pair wrong (an image beside
+        # another came back inside it, consistently, so no area check could tell):
+        # snap them onto the edge, where they belong
+        for val in (-1.0, 1.0):
+            near = np.abs(UV - val) <= tol.CHART_EDGE_ULPS * np.spacing(1.0)
+            UV[near] = val
+        # and along the edge: the same point of two images (the end of an edge they
+        # share, clipped in each) came out an ulp apart on it, with the same failures;
+        # points of one edge within a few ulps of each other are merged (isolated
+        # points do not move)
+        for k in (0, 1):
+            for val in (-1.0, 1.0):
+                on_edge = UV[:, :, 1 - k] == val
+                if on_edge.sum() > 1:
+                    UV[:, :, k][on_edge] = _merge_close(UV[:, :, k][on_edge])
     return live, UV, cl
+
+
+def _merge_close(x):
+    """Values within ``CHART_EDGE_ULPS`` ulps of their neighbour (sorted) replaced by the
+    first of their run: near-coincident points collapse to one, others stay."""
+    u, inv = np.unique(x, return_inverse=True)
+    new_run = np.r_[True, np.diff(u) > tol.CHART_EDGE_ULPS * np.spacing(np.abs(u[1:]))]
+    first = np.flatnonzero(new_run)
+    return u[first[np.cumsum(new_run) - 1]][inv]
 
 
 def chart_polygons(buckets, chart):
