@@ -8,7 +8,7 @@ import time
 
 import numpy as np
 
-from .integrate import as_normal, as_point, as_scene
+from .integrate import as_receivers, as_scene
 from .methods import resolve
 
 __all__ = ["form_factors", "form_factor_matrix"]
@@ -61,17 +61,7 @@ def form_factors(scene, point, normal, *, method="exact", two_sided=False, **opt
     """
     m = resolve(method, **options)
     as_scene(scene)
-    p = as_point(point, "point")
-    as_normal(normal, "normal")  # validates; the methods normalise the raw input
-    n = np.asarray(normal, dtype=float)
-    try:
-        p, n = np.broadcast_arrays(p, n)
-    except ValueError:
-        raise ValueError(f"point of shape {p.shape} and normal of shape {n.shape} "
-                         f"do not broadcast") from None
-    shape = p.shape[:-1]
-    P = p.reshape(-1, 3)
-    Nn = n.reshape(-1, 3)
+    P, Nn, shape = as_receivers(point, normal)   # the methods normalise the normals
     out = np.empty((len(P), len(scene)))
     for i in range(len(P)):
         out[i] = m.point_form_factors(scene, P[i], Nn[i], two_sided=two_sided)

@@ -89,6 +89,28 @@ def as_receiver(point, normal):
     return p, n
 
 
+def as_receivers(point, normal, names=("point", "normal")):
+    """Receivers broadcast together: ``(P, N, shape)`` with ``P``, ``N`` of shape (M, 3)
+    (normals as given, not scaled) and ``shape`` the broadcast shape without the last
+    axis. Raises ValueError naming the argument.
+
+    Examples
+    --------
+    >>> P, N, shape = as_receivers([[0, 0, 0], [1, 0, 0]], [0, 0, 1])
+    >>> P.shape, N.shape, shape
+    ((2, 3), (2, 3), (2,))
+    """
+    p = as_point(point, names[0])
+    as_normal(normal, names[1])
+    n = np.asarray(normal, dtype=float)
+    try:
+        p, n = np.broadcast_arrays(p, n)
+    except ValueError:
+        raise ValueError(f"{names[0]} of shape {p.shape} and {names[1]} of shape {n.shape} "
+                         f"do not broadcast") from None
+    return p.reshape(-1, 3), n.reshape(-1, 3), p.shape[:-1]
+
+
 def as_scene(scene):
     """``scene`` if it is an :class:`exactff.Scene`, else a TypeError saying what to do."""
     from .scene import Scene

@@ -136,25 +136,17 @@ def ground_truth(scene, points, normals, *, two_sided=False, tolerance=1e-12):
     >>> round(float(F.sum()), 12), bool(E.max() < 1e-14)
     (1.0, True)
     """
-    from ..integrate import as_normal, as_point, as_scene
+    from ..integrate import as_receivers, as_scene
     from ..methods import Exact
     from ..visibility import visible_form_factors
 
     as_scene(scene)
     Exact(tolerance=tolerance)   # checks the tolerance
-    p = as_point(points, "points")
-    as_normal(normals, "normals")
-    n = np.asarray(normals, dtype=float)
-    try:
-        p, n = np.broadcast_arrays(p, n)
-    except ValueError:
-        raise ValueError(f"points of shape {p.shape} and normals of shape {n.shape} "
-                         f"do not broadcast") from None
-    P, Nn = p.reshape(-1, 3), n.reshape(-1, 3)
+    P, Nn, shape = as_receivers(points, normals, ("points", "normals"))
     F = np.empty((len(P), len(scene)))
     E = np.empty_like(F)
     for i in range(len(P)):
         F[i], E[i] = visible_form_factors(scene, P[i], Nn[i], two_sided=two_sided,
                                           tolerance=tolerance, error=True)
-    shape = p.shape[:-1] + (len(scene),)
+    shape = shape + (len(scene),)
     return F.reshape(shape), E.reshape(shape)
