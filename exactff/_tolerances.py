@@ -23,6 +23,9 @@ __all__ = [
     "BATCH_VALIDATION_MAX_VERTICES",
     "BSP_AXIS_CANDIDATE_MIN",
     "CHART_EDGE_ULPS",
+    "MP_MAX_DPS",
+    "MP_VALUE_FLOOR",
+    "BSP_AXIS_IMBALANCE",
 ]
 
 #: Unit roundoff of IEEE double precision, 2**-53.
@@ -116,3 +119,17 @@ BSP_AXIS_CANDIDATE_MIN = 512
 #: which GEOS's overlays and predicates got wrong.
 CHART_EDGE_ULPS = 8
 
+
+#: mpmath's precision limit (decimal digits) in the last escalation tier: a value that
+#: two evaluations 20 digits apart still disagree on here raises (or is returned with
+#: its error estimate on request).
+MP_MAX_DPS = 400
+
+#: Two mpmath evaluations closer than this (absolutely) agree: a value that is 0 up to
+#: the working precision has no relative accuracy to reach.
+MP_VALUE_FLOOR = 1e-300
+
+#: The axis-plane candidate is tried at a BSP node when the best of the polygons' own
+#: planes leaves more than this fraction of the node's fragments' count as the
+#: difference between its two sides (a chain in the making; a cost heuristic).
+BSP_AXIS_IMBALANCE = 0.75

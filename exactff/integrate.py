@@ -81,12 +81,11 @@ def as_receiver(point, normal):
     ...
     ValueError: point must be finite, got [0, nan, 0]
     """
-    p = as_point(point, "point")
-    as_normal(normal, "normal")
-    n = np.asarray(normal, dtype=float)
-    if p.shape != (3,) or n.shape != (3,):
-        raise ValueError(f"point and normal must have shape (3,), got {p.shape} and {n.shape}")
-    return p, n
+    P, N, shape = as_receivers(point, normal)
+    if shape != ():
+        raise ValueError(f"point and normal must have shape (3,), got {np.shape(point)} and "
+                         f"{np.shape(normal)}")
+    return P[0], N[0]
 
 
 def as_receivers(point, normal, names=("point", "normal")):
@@ -423,12 +422,12 @@ def unoccluded_row(flat, p, n, *, one_sided=True, tolerance=None,
         # the last tier's values are checked too: one that still misses the tolerance
         # (mpmath stopped at its precision limit) is returned with its estimate when the
         # caller asks for estimates, and raises otherwise
-        missed = flagged[~(err[flagged] <= tolerance * F[flagged] + _MP_VALUE_FLOOR)]
+        missed = flagged[~(err[flagged] <= tolerance * F[flagged] + tol.MP_VALUE_FLOOR)]
         if len(missed) and strict:
             i = int(missed[0])
             raise NumericalError(f"polygon {i}: the form factor {F[i]:.17g} misses the "
                                  f"tolerance {tolerance:g} (error estimate {err[i]:.3g}) "
-                                 f"even in {_MP_MAX_DPS}-digit arithmetic; ask error=True "
+                                 f"even in {tol.MP_MAX_DPS}-digit arithmetic; ask error=True "
                                  f"for the value with its estimate")
     return (F, err) if return_error else F
 
@@ -552,13 +551,6 @@ def _mp_sector(point, normal, polygon, one_sided, dps, side_hint=None):
         return abs(total) / (2 * mp.pi)
 
 
-#: mp_form_factor's precision limit (decimal digits), and the absolute size below which
-#: the difference of its two evaluations counts as agreement (a value that is 0 up to
-#: the working precision has no relative accuracy to reach)
-_MP_MAX_DPS = 400
-_MP_VALUE_FLOOR = 1e-300
-
-
 def mp_form_factor(point, normal, polygon, *, one_sided=True, tolerance=tol.DEFAULT_RTOL,
                    dps=None, error=False, side=None):
     """Unoccluded form factor with mpmath, from the float input taken as exact.
@@ -600,12 +592,12 @@ def mp_form_factor(point, normal, polygon, *, one_sided=True, tolerance=tol.DEFA
         hi = _mp_sector(point, normal, P, one_sided, prec + 20, side)
         diff = abs(hi - lo)
         if (diff <= (tolerance if tolerance else 1e-15) * abs(hi) * 1e-3 or hi == lo
-                or float(diff) < _MP_VALUE_FLOOR):
+                or float(diff) < tol.MP_VALUE_FLOOR):
             break
-        if prec >= _MP_MAX_DPS:
+        if prec >= tol.MP_MAX_DPS:
             if not error:
                 raise NumericalError(
-                    f"mpmath did not converge at {_MP_MAX_DPS} digits: two evaluations "
+                    f"mpmath did not converge at {tol.MP_MAX_DPS} digits: two evaluations "
                     f"differ by {float(diff):.3g} (value {float(hi):.3g}); ask error=True "
                     f"to get the value with this estimate")
             break

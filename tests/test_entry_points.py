@@ -69,9 +69,10 @@ def test_resume_refuses_a_method_with_other_options(tmp_path):
 def test_mpmath_that_does_not_converge_raises(monkeypatch):
     # issue 11, item 7: mp_form_factor used to give up silently at its precision limit
     import exactff.integrate as integ
+    from exactff import _tolerances as tol
 
     sq = np.array([[0, 0, 1], [0, 1e-9, 1], [1e-9, 1e-9, 1], [1e-9, 0, 1.0]])
-    monkeypatch.setattr(integ, "_MP_MAX_DPS", 10)     # a limit this case cannot meet
+    monkeypatch.setattr(tol, "MP_MAX_DPS", 10)        # a limit this case cannot meet
     with pytest.raises(ef.NumericalError, match="did not converge"):
         integ.mp_form_factor([0, 0, 0], [0, 0, 1], sq, tolerance=1e-30, dps=10)
     value, err = integ.mp_form_factor([0, 0, 0], [0, 0, 1], sq, tolerance=1e-30, dps=10,
@@ -92,10 +93,10 @@ def test_negative_values_beyond_rounding_raise_a_named_error():
 def test_last_tier_values_are_checked_against_the_tolerance(monkeypatch):
     # a 1e-9 square needs mpmath; with its precision capped below what the tolerance
     # needs, the value is returned with its (large) estimate on request, else raises
-    import exactff.integrate as integ
+    from exactff import _tolerances as tol
 
     sq = np.array([[0, 0, 1], [0, 1e-9, 1], [1e-9, 1e-9, 1], [1e-9, 0, 1.0]])
-    monkeypatch.setattr(integ, "_MP_MAX_DPS", 10)
+    monkeypatch.setattr(tol, "MP_MAX_DPS", 10)
     F, E = ef.point_polygon_form_factors([0, 0, 0], [0, 0, 1], [sq], tolerance=1e-40,
                                          error=True)
     assert F[0] > 0 and E[0] > 1e-40 * F[0]

@@ -79,13 +79,26 @@ class BSPTree:
                 f"{len(set(self.source.tolist()))} polygons, {self.splits} splits>")
 
 
-def _classify(V, n, d):
-    """-1 / 0 / +1 per vertex; 0 within the rounding band of the plane."""
-    s = V @ n - d
-    band = tol.BSP_COPLANAR_ULPS * tol.EPS * (np.abs(V) @ np.abs(n) + abs(d))
+def _classify(V, N, D):
+    """Side of every vertex for every plane ``N[k] . x = D[k]``: signs (-1 / 0 / +1, 0
+    within the plane's rounding band) and values, both of shape (len(V), len(N))."""
+    s = V @ N.T - D
+    band = tol.BSP_COPLANAR_ULPS * tol.EPS * (np.abs(V) @ np.abs(N).T + np.abs(D))
     out = np.sign(s).astype(np.int8)
     out[np.abs(s) <= band] = 0
     return out, s
+
+
+def _plane_scores(sign, starts):
+    """Per plane (column of ``sign``): which fragments (runs of ``starts``) have
+    vertices in front and behind, and the score ``5 splits + |front - back| - 2
+    coplanar`` (fewer cuts, balanced, many fragments settled at once)."""
+    pos = np.add.reduceat(sign > 0, starts[:-1], axis=0) > 0      # (fragments, planes)
+    neg = np.add.reduceat(sign < 0, starts[:-1], axis=0) > 0
+    nsplit = (pos & neg).sum(axis=0)
+    imbalance = np.abs((pos & ~neg).sum(axis=0) - (neg & ~pos).sum(axis=0))
+    ncop = len(starts) - 1 - (pos | neg).sum(axis=0)
+    return 5 * nsplit + imbalance - 2 * ncop, imbalance, pos, neg
 
 
 def _split(P, sign, s):
@@ -159,39 +172,26 @@ def build_bsp(scene, *, candidates=8, seed=0):
             int(x) for x in rng.choice(ids, size=candidates - 1, replace=False)]
         pool = list(dict.fromkeys(pool))
         starts = np.concatenate([[0], np.cumsum(counts)])
-        # every candidate plane at once: vertex signs (V, k), per fragment whether it
-        # has vertices in front / behind, and the score of each plane
-        Nc = normals_src[source[pool]]
-        Dc = offsets_src[source[pool]]
-        S = V @ Nc.T - Dc
-        band = tol.BSP_COPLANAR_ULPS * tol.EPS * (np.abs(V) @ np.abs(Nc).T + np.abs(Dc))
-        pos = np.add.reduceat(S > band, starts[:-1], axis=0) > 0      # (m, k)
-        neg = np.add.reduceat(S < -band, starts[:-1], axis=0) > 0
-        nsplit = (pos & neg).sum(axis=0)
-        nfront = (pos & ~neg).sum(axis=0)
-        nback = (neg & ~pos).sum(axis=0)
-        ncop = m - nsplit - nfront - nback
-        score = 5 * nsplit + np.abs(nfront - nback) - 2 * ncop
-        j = int(np.argmin(score))        # the first of equal scores, as one by one
-        c = pool[j]
-        n, d = Nc[j], Dc[j]
-        has_pos, has_neg = pos[:, j], neg[:, j]
-        if m > tol.BSP_AXIS_CANDIDATE_MIN and abs(int(nfront[j]) - int(nback[j])) > 0.75 * m:
+        # every candidate plane at once
+        Nc, Dc = normals_src[source[pool]], offsets_src[source[pool]]
+        sign_all, s_all = _classify(V, Nc, Dc)
+        score, imbalance, pos, neg = _plane_scores(sign_all, starts)
+        j = int(np.argmin(score))        # the first of equal scores
+        c, n, d = pool[j], Nc[j], Dc[j]
+        sign, s, has_pos, has_neg = sign_all[:, j], s_all[:, j], pos[:, j], neg[:, j]
+        if m > tol.BSP_AXIS_CANDIDATE_MIN and imbalance[j] > tol.BSP_AXIS_IMBALANCE * m:
             # the polygons' own planes leave this node badly unbalanced (a convex
             # tessellation has every other facet on one side of each facet, and the
             # tree becomes a chain as deep as the object has facets): also try a plane
             # through the median of the fragments' vertex means along their widest axis
             cen = np.add.reduceat(V, starts[:-1], axis=0) / counts[:, None]
             axis = int(np.argmax(np.ptp(cen, axis=0)))
-            na, da = np.eye(3)[axis], float(np.median(cen[:, axis]))
-            sg, _ = _classify(V, na, da)
-            ap = np.add.reduceat(sg > 0, starts[:-1]) > 0
-            an = np.add.reduceat(sg < 0, starts[:-1]) > 0
-            a_split, a_front, a_back = int(np.sum(ap & an)), int(np.sum(ap & ~an)), int(np.sum(an & ~ap))
-            a_score = 5 * a_split + abs(a_front - a_back) - 2 * (m - a_split - a_front - a_back)
-            if a_score < score[j]:
-                n, d, c, has_pos, has_neg = na, da, None, ap, an
-        sign, s = _classify(V, n, d)
+            na, da = np.eye(3)[axis:axis + 1], np.array([np.median(cen[:, axis])])
+            sg, sa = _classify(V, na, da)
+            a_score, _, ap, an = _plane_scores(sg, starts)
+            if a_score[0] < score[j]:
+                c, n, d = None, na[0], da[0]
+                sign, s, has_pos, has_neg = sg[:, 0], sa[:, 0], ap[:, 0], an[:, 0]
         nodes_n.append(n)
         nodes_d.append(d)
         front.append(-1)

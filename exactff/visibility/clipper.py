@@ -347,17 +347,17 @@ class TiledRegion:
        below ``COVERED_RTOL`` of the tile);
     2. the others are cut into one part per tile they overlap (checked by area
        conservation);
-    3. a part whose interior meets an earlier part of the same batch (found with an
-       STRtree over the batch) is decided after the others, against its tile's region
-       and those earlier parts;
-    4. every other part is decided against its tile's region as it was before the
-       batch: empty tile or disjoint bounds, visible whole; then one exact DE-9IM
-       predicate (``relate``): covered, hidden; interiors disjoint, visible whole; only
-       the rest is differenced (one vectorised GEOS call);
-    5. each tile's region is grown by one union with its new visible parts, checked by
-       area conservation (region + visible parts, whose interiors are disjoint); a tile
-       that fails is redone part by part with the checked, snap-rounding overlays of
-       :func:`_cut`.
+    3. each part is decided against its tile's region: empty tile or bounds apart,
+       visible whole; then one exact DE-9IM predicate (``relate``): covered, hidden
+       (confirmed by a prepared ``covers``); interiors disjoint, visible whole; only the
+       rest is differenced (one vectorised GEOS call);
+    4. a part whose interior meets an earlier part of the same batch (an STRtree over
+       the batch) then loses those earlier parts too;
+    5. decided parts wait in their tile's list and are unioned into the tile's region
+       when a later part needs it, when the tile may be full, or at the end; every
+       merge checks all the decisions since the last one by area conservation, and a
+       tile that fails is redone part by part with the checked, snap-rounding overlays
+       of :func:`_cut` (the caller's output is corrected).
 
     Tile seams are straight lines of the chart, hence great-circle arcs: the parts of a
     visible piece are closed regions that the integration adds up.
@@ -379,7 +379,8 @@ class TiledRegion:
         self.origin = np.array([u0, v0])
         self.full_area = (u1 - u0) * (v1 - v0) / n**2 * (1.0 - tol.COVERED_RTOL)
         self.region = np.full(n * n, None, dtype=object)    # each tile's checked region
-        self.pending = [[] for _ in range(n * n)]   # (part, visible part, output slot)
+        # (part, visible part or None, output slot, fragment, receives, merge checks it)
+        self.pending = [[] for _ in range(n * n)]
         self.area = np.zeros(n * n)                 # covered area, region + pending
         self.bounds = np.tile([np.inf, np.inf, -np.inf, -np.inf], (n * n, 1))
         self.full = np.zeros(n * n, dtype=bool)
@@ -479,13 +480,12 @@ class TiledRegion:
         waits[a] = True
         # every part against its tile's region as it was before the batch (parts that
         # meet earlier parts of the batch lose those afterwards)
-        ind = np.arange(m)
-        cb, pb = self.bounds[tile[ind]], pb[ind]
+        cb = self.bounds[tile]
         apart = ((pb[:, 0] >= cb[:, 2]) | (pb[:, 2] <= cb[:, 0]) | (pb[:, 1] >= cb[:, 3])
                  | (pb[:, 3] <= cb[:, 1]))     # includes empty tiles (inf bounds)
         stats["bbox_rejections"] += int((apart & ~waits).sum())
-        vis[ind[apart]] = parts[ind[apart]]
-        rel = ind[~apart]
+        vis[apart] = parts[apart]
+        rel = np.flatnonzero(~apart)
         for t in np.unique(tile[rel]):
             self._merge(int(t), stats)
         if len(rel):
@@ -777,8 +777,8 @@ def pieces_form_factors(pieces, m, tolerance=None, owner=None, integrator="secto
         Form factors and error estimates per fragment.
     """
     from .. import _tolerances as tol
-    from ..integrate import (_C1, _LONGDOUBLE_EPS, _MP_MAX_DPS, _MP_VALUE_FLOOR,
-                             _clipped_sector_sums, eq3_ring_area, mp_form_factor)
+    from ..integrate import (_C1, _LONGDOUBLE_EPS, _clipped_sector_sums, eq3_ring_area,
+                             mp_form_factor)
     from ..scene import NumericalError
 
     F = np.zeros(m)
@@ -867,11 +867,11 @@ def pieces_form_factors(pieces, m, tolerance=None, owner=None, integrator="secto
                                               error=True)
                     # the last tier's value is checked too (mpmath may stop at its
                     # limit): each ring to the tolerance, relative to itself
-                    if not re1 <= tolerance * abs(rv1) + _MP_VALUE_FLOOR:
+                    if not re1 <= tolerance * abs(rv1) + tol.MP_VALUE_FLOOR:
                         raise NumericalError(
                             f"a visible piece's ring misses the tolerance {tolerance:g} "
                             f"(value {rv1:.3g}, error estimate {re1:.3g}) even in "
-                            f"{_MP_MAX_DPS}-digit arithmetic")
+                            f"{tol.MP_MAX_DPS}-digit arithmetic")
                     total += -rv1 if is_hole[r] else rv1
                     e_total += re1
                 v[g], e[g] = total, e_total
