@@ -26,6 +26,11 @@ __all__ = [
     "MP_MAX_DPS",
     "MP_VALUE_FLOOR",
     "BSP_AXIS_IMBALANCE",
+    "CHART_VERTEX_ERROR",
+    "REFINE_MATCH",
+    "REFINE_SURE",
+    "REFINE_QUERY",
+    "REFINE_PARALLEL",
 ]
 
 #: Unit roundoff of IEEE double precision, 2**-53.
@@ -133,3 +138,25 @@ MP_VALUE_FLOOR = 1e-300
 #: planes leaves more than this fraction of the node's fragments' count as the
 #: difference between its two sides (a chain in the making; a cost heuristic).
 BSP_AXIS_IMBALANCE = 0.75
+
+#: Bound on how far the clipper moves a piece's vertex, in chart units: the local frame
+#: and the chart's division (a few ulps), GEOS's intersections and the snap-rounding grid
+#: OVERLAY_SNAP_GRID of its fallbacks (2**-50). A piece's value is off by at most its
+#: perimeter times this over pi (the image's area density is at most 1 per unit of chart
+#: area); measured against refined values in tests/test_refinement.py.
+CHART_VERTEX_ERROR = 2.0 ** -47
+
+#: A piece's edge is on a candidate plane when both its end points (unit directions) are
+#: within this of it; the least residual wins.
+REFINE_MATCH = 1e-10
+
+#: Below this residual an edge of a piece's own fragment (or a seam) is taken without
+#: searching the images in front.
+REFINE_SURE = 2.0 ** -44
+
+#: Chart distance of the search for images whose boundary passes through an edge.
+REFINE_QUERY = 1e-11
+
+#: Two planes closer to parallel than this (sine of their angle) do not give a vertex:
+#: the clipper's is kept, with its error counted.
+REFINE_PARALLEL = 1e-9

@@ -16,6 +16,7 @@ from ..geometry import padded_buckets, receiver_frame, to_local
 from ..integrate import _Polygons, eq3_form_factor, plane_sides, unoccluded_row
 from .bsp import build_bsp, coplanar_overlaps, front_to_back
 from .clipper import pieces_form_factors, visible_pieces
+from .refine import Refiner
 
 __all__ = ["visible_form_factors", "is_convex_enclosure", "scene_bsp", "build_bsp",
            "front_to_back", "coplanar_overlaps"]
@@ -135,18 +136,21 @@ def visible_form_factors(scene, point, normal, *, two_sided=False, stats=None,
     st["culled_below_horizon"] = int((below & ~edge_on).sum()) if shortcuts else 0
     new_position = np.full(len(order), -1)
     new_position[keep] = np.arange(int(keep.sum()))
-    kept = []
-    for pos, Vl, cb in local:
+    kept, world = [], []
+    for (pos, Vl, cb), (_, Vw, _) in zip(local, buckets):
         k = keep[pos]
         if k.any():
             kept.append((new_position[pos[k]], Vl[k], cb[k]))
+            world.append((new_position[pos[k]], Vw[k], cb[k]))
     order, src = order[keep], src[keep]
     receives = side[src] > 0
     if two_sided:
         receives |= side[src] < 0
-    pieces = visible_pieces(kept, receives, stats=st, shortcuts=shortcuts)
+    charts = []
+    pieces = visible_pieces(kept, receives, stats=st, shortcuts=shortcuts, charts=charts)
+    refiner = Refiner(scene, tree, order, p, normal, kept, world, charts)
     Ff, ef_ = pieces_form_factors(pieces, len(order), tolerance=tolerance, owner=src,
-                                  integrator=integrator)
+                                  integrator=integrator, refiner=refiner, stats=st)
     F = np.bincount(src, weights=Ff, minlength=len(scene))
     E = np.bincount(src, weights=ef_, minlength=len(scene))
     # holes subtract: a value may fall below 0 by rounding, never by more than its estimate

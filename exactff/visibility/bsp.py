@@ -29,11 +29,16 @@ class BSPTree:
         The scene polygon each fragment comes from.
     splits : int
         Number of fragment splits made while building.
+    whole : ndarray of shape (F,), bool
+        Whether each fragment is its source polygon, uncut (the same vertices in the
+        same order).
     """
 
     def __init__(self, normals, offsets, front, back, node_fragments, fragments, source, splits,
-                 source_normals):
+                 source_normals, whole=None):
         self.normals = normals
+        self.whole = (np.ones(len(fragments), dtype=bool) if whole is None
+                      else np.asarray(whole, dtype=bool))
         self.offsets = offsets
         self.front = front
         self.back = back
@@ -234,7 +239,7 @@ def build_bsp(scene, *, candidates=8, seed=0):
     node_frags = [[new_id[i] for i in here] for here in node_frags]
     return BSPTree(np.array(nodes_n), np.array(nodes_d), np.array(front), np.array(back),
                    node_frags, [fragments[i] for i in live], source[np.array(live, dtype=int)],
-                   splits, normals_src)
+                   splits, normals_src, whole=np.array(live, dtype=int) < len(scene))
 
 
 def front_to_back(tree, point):

@@ -619,7 +619,7 @@ class TiledRegion:
         self.pending[t] = []
 
 
-def visible_pieces(buckets, receives, stats=None, shortcuts=True):
+def visible_pieces(buckets, receives, stats=None, shortcuts=True, charts=None):
     """Visible pieces of polygons given front to back, per chart.
 
     Parameters
@@ -644,6 +644,10 @@ def visible_pieces(buckets, receives, stats=None, shortcuts=True):
         ``skipped_after_full``,
         ``overlay_repairs``, ``repaired_images`` (invalid images repaired, keeping their
         areal parts).
+    charts : list, optional
+        Filled with, per chart, the positions of the fragments that reach it, their
+        images and the tiles per side (what :class:`exactff.visibility.refine.Refiner`
+        needs).
 
     Returns
     -------
@@ -661,6 +665,8 @@ def visible_pieces(buckets, receives, stats=None, shortcuts=True):
         idx, polys, bounds, repaired = chart_polygons(buckets, chart)
         st["chart_fragments"] += len(idx)
         st["repaired_images"] += repaired
+        if charts is not None:
+            charts.append((idx, polys, tiles_per_side(len(idx)) if shortcuts else 1))
         if shortcuts:
             _tiled_chart(ci, chart, idx, polys, bounds, receives, st, out)
         else:
@@ -751,25 +757,35 @@ def _rings_long_double(D, start, count):
     return val, ((_C1 * u * mags + errs) / (2 * np.pi)).astype(float)
 
 
-def pieces_form_factors(pieces, m, tolerance=None, owner=None, integrator="sector"):
+def pieces_form_factors(pieces, m, tolerance=None, owner=None, integrator="sector",
+                        refiner=None, stats=None):
     """Form factors of visible pieces, summed per fragment, with error estimates.
 
     Every ring of a piece is a closed chain of great-circle arcs (its chart coordinates
-    lifted to directions ``u e_u + v e_v + e_w``, exactly). Its sector sum, evaluated in
-    offset form by the kernel's own ``_clipped_sector_sums`` (an edge on the horizon
-    becomes its horizon arc), is twice the signed area of its image on the base disk.
-    Exterior rings add and holes subtract the absolute values, so the result does not
-    depend on ring orientation.
+    lifted to directions ``u e_u + v e_v + e_w``). Its sector sum, evaluated in offset
+    form by the kernel's own ``_clipped_sector_sums`` (an edge on the horizon becomes its
+    horizon arc), is twice the signed area of its image on the base disk. Exterior rings
+    add and holes subtract the absolute values, so the result does not depend on ring
+    orientation.
 
     ``integrator="eq3"`` integrates every ring with the paper's Eq. 3 (corrected, with
     monotone-span splitting; :func:`exactff.integrate.eq3_ring_area`) instead, one ring
-    at a time; its estimate is ``C1 u`` times the sum of the absolute edge integrals,
-    and it is not escalated.
+    at a time; it is neither refined nor escalated.
 
-    With a ``tolerance``: where the summed estimate of a polygon (fragments grouped by
-    ``owner``, default one group per fragment) exceeds ``tolerance`` times its value,
-    its pieces that carry a share of that error are re-evaluated with mpmath from their
-    (float, exact) lifted coordinates.
+    Each estimate is the rounding of the ring's sum (``C1 u`` times its absolute terms,
+    as in the kernel) plus the clipper's geometry: the ring's perimeter in chart units
+    times ``CHART_VERTEX_ERROR`` over pi.
+
+    With a ``tolerance`` and a ``refiner``
+    (:class:`exactff.visibility.refine.Refiner`): where the summed estimate of a polygon
+    (fragments grouped by ``owner``, default one group per fragment) exceeds
+    ``tolerance`` times its value, its pieces that carry a share of that error are
+    refined (their vertices recomputed from the input) and integrated in long double,
+    then, where still needed, in mpmath. A refined ring must agree with the clipper's
+    value within the latter's estimate; where it does not, the clipper's value is kept
+    and the difference added to its estimate (``stats["refine_disagreements"]``).
+    Rings whose edges cannot all be traced to the input keep the clipper's value and
+    estimate (``stats["unrefined_rings"]``).
 
     Returns
     -------
@@ -777,15 +793,17 @@ def pieces_form_factors(pieces, m, tolerance=None, owner=None, integrator="secto
         Form factors and error estimates per fragment.
     """
     from .. import _tolerances as tol
-    from ..integrate import (_C1, _LONGDOUBLE_EPS, _clipped_sector_sums, eq3_ring_area,
-                             mp_form_factor)
-    from ..scene import NumericalError
+    from ..integrate import _C1, _clipped_sector_sums, eq3_ring_area
 
+    st = stats if stats is not None else {}
+    for key in ("refined_rings", "refined_rings_mp", "unrefined_rings",
+                "refine_disagreements"):
+        st.setdefault(key, 0)
     F = np.zeros(m)
     err = np.zeros(m)
     if not pieces:
         return F, err
-    vals, errs_, frags, ring_sets = [], [], [], []
+    charts = []
     for ci, chart in enumerate(CHARTS):
         sel = [(k, g) for k, c, g in pieces if c == ci]
         if not sel:
@@ -821,61 +839,89 @@ def pieces_form_factors(pieces, m, tolerance=None, owner=None, integrator="secto
             S, mags, errs = _clipped_sector_sums(A0, D - A0[ring_of], nxt, ring_of, len(rings))
             val = np.abs(S) / TWO_PI
             e_ring = (_C1 * tol.EPS * mags + errs) / TWO_PI
-        geom_of_ring = poly_of[ring_poly]
-        vals.append(np.bincount(geom_of_ring, weights=np.where(is_hole, -val, val),
-                                minlength=len(geoms)))
-        errs_.append(np.bincount(geom_of_ring, weights=e_ring, minlength=len(geoms)))
-        frags.append(frag)
-        ring_sets.append((D, start, count, is_hole, geom_of_ring))
-    if not vals:
-        return F, err
-    if tolerance is not None and integrator != "eq3":
+        # the clipper's geometry: every vertex within CHART_VERTEX_ERROR of its place
+        perimeter = np.bincount(ring_of, weights=np.hypot(*(coords[nxt] - coords).T),
+                                minlength=len(rings))
+        e_ring = e_ring + perimeter * tol.CHART_VERTEX_ERROR / np.pi + 4 * tol.EPS * val
+        charts.append(dict(ci=ci, chart=chart, frag=frag, n=len(geoms), coords=coords,
+                           nxt=nxt, ring_of=ring_of, start=start, count=count,
+                           is_hole=is_hole, geom=poly_of[ring_poly], val=val, err=e_ring))
+
+    def per_geom(c):
+        sign = np.where(c["is_hole"], -c["val"], c["val"])
+        return (np.bincount(c["geom"], weights=sign, minlength=c["n"]),
+                np.bincount(c["geom"], weights=c["err"], minlength=c["n"]))
+
+    if tolerance is not None and integrator != "eq3" and refiner is not None and charts:
         group = np.arange(m) if owner is None else np.asarray(owner)
-        Fg = np.zeros(group.max() + 1)
-        Eg = np.zeros(group.max() + 1)
-        for v, e, fr in zip(vals, errs_, frags):
-            np.add.at(Fg, group[fr], v)
-            np.add.at(Eg, group[fr], e)
-        for v, e, fr, (D, start, count, is_hole, geom_of_ring) in zip(vals, errs_, frags,
-                                                                      ring_sets):
-            g_of = group[fr]
-            # escalate the pieces of polygons that miss the tolerance, where the piece
-            # carries at least a tenth of the allowed error
-            bad = np.flatnonzero((Eg[g_of] > tolerance * Fg[g_of])
-                                 & (e > 0.1 * tolerance * Fg[g_of]))
-            if len(bad) == 0:
+        ng = group.max() + 1
+
+        def flagged():
+            Fg, Eg = np.zeros(ng), np.zeros(ng)
+            for c in charts:
+                v, e = per_geom(c)
+                np.add.at(Fg, group[c["frag"]], v)
+                np.add.at(Eg, group[c["frag"]], e)
+            out = []
+            for c in charts:
+                v, e = per_geom(c)
+                g_of = group[c["frag"]]
+                # the pieces of polygons that miss the tolerance, where the piece
+                # carries at least a tenth of the allowed error
+                out.append(np.flatnonzero((Eg[g_of] > tolerance * Fg[g_of])
+                                          & (e > 0.1 * tolerance * Fg[g_of])))
+            return out
+
+        # second tier: refined rings in long double, chart by chart, all at once
+        labels = []
+        for c, bad in zip(charts, flagged()):
+            rsel = np.flatnonzero(np.isin(c["geom"], bad))
+            labels.append((rsel, None))
+            if len(rsel) == 0:
                 continue
-            # second tier: the flagged pieces' rings in long double, all at once
-            rsel = np.flatnonzero(np.isin(geom_of_ring, bad))
-            if _LONGDOUBLE_EPS < tol.EPS / 100:
-                rv, re = _rings_long_double(D, start[rsel], count[rsel])
-                signed = np.where(is_hole[rsel], -rv, rv)
-                gv = np.zeros(len(v))
-                ge = np.zeros(len(v))
-                np.add.at(gv, geom_of_ring[rsel], signed)
-                np.add.at(ge, geom_of_ring[rsel], re)
-                good = bad[ge[bad] <= 0.1 * tolerance * Fg[g_of[bad]]]
-                v[good], e[good] = gv[good], ge[good]
-                bad = np.setdiff1d(bad, good)
-            # last tier: mpmath, ring by ring
-            for g in bad:
-                total = e_total = 0.0
-                for r in np.flatnonzero(geom_of_ring == g):
-                    ring = D[start[r]:start[r] + count[r]]
-                    rv1, re1 = mp_form_factor(np.zeros(3), np.array([0.0, 0.0, 1.0]), ring,
-                                              one_sided=False, tolerance=tolerance,
-                                              error=True)
-                    # the last tier's value is checked too (mpmath may stop at its
-                    # limit): each ring to the tolerance, relative to itself
-                    if not re1 <= tolerance * abs(rv1) + tol.MP_VALUE_FLOOR:
-                        raise NumericalError(
-                            f"a visible piece's ring misses the tolerance {tolerance:g} "
-                            f"(value {rv1:.3g}, error estimate {re1:.3g}) even in "
-                            f"{tol.MP_MAX_DPS}-digit arithmetic")
-                    total += -rv1 if is_hole[r] else rv1
-                    e_total += re1
-                v[g], e[g] = total, e_total
-    for v, e, fr in zip(vals, errs_, frags):
-        F += np.bincount(fr, weights=v, minlength=m)
-        err += np.bincount(fr, weights=e, minlength=m)
+            vsel = np.concatenate([np.arange(c["start"][r], c["start"][r] + c["count"][r])
+                                   for r in rsel])
+            ring_sub = np.repeat(np.arange(len(rsel)), c["count"][rsel])
+            st_sub = np.concatenate([[0], np.cumsum(c["count"][rsel])[:-1]])
+            nxt_sub = np.arange(len(vsel)) + 1
+            nxt_sub[st_sub + c["count"][rsel] - 1] = st_sub
+            frag_v = c["frag"][c["geom"][rsel]][ring_sub]
+            with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+                rv, re, ok, lab = refiner.refine_ld(c["ci"], c["chart"], c["coords"][vsel],
+                                                    nxt_sub, ring_sub, len(rsel), frag_v)
+            labels[-1] = (rsel, (vsel, st_sub, lab, ok))
+            _accept(c, rsel, rv, re, ok, st)
+            st["refined_rings"] += int(ok.sum())
+            st["unrefined_rings"] += int((~ok).sum())
+        # last tier: mpmath, ring by ring, for the pieces still missing the tolerance
+        for c, bad, (rsel, info) in zip(charts, flagged(), labels):
+            if info is None or len(bad) == 0:
+                continue
+            vsel, st_sub, (label, statics), ok = info
+            for k in np.flatnonzero(np.isin(c["geom"][rsel], bad) & ok):
+                r = rsel[k]
+                a, cnt = st_sub[k], c["count"][r]
+                rv, re = refiner.refine_mp(c["chart"], c["coords"][vsel[a:a + cnt]],
+                                           label[a:a + cnt], statics, tolerance)
+                _accept(c, np.array([r]), np.array([rv]), np.array([re]),
+                        np.array([True]), st)
+                st["refined_rings_mp"] += 1
+    for c in charts:
+        v, e = per_geom(c)
+        F += np.bincount(c["frag"], weights=v, minlength=m)
+        err += np.bincount(c["frag"], weights=e, minlength=m)
     return F, err
+
+
+def _accept(c, rsel, rv, re, ok, stats):
+    """Take refined ring values where refined and within the clipper's estimate of the
+    clipper's value; elsewhere keep the clipper's, its estimate widened by the
+    difference."""
+    fv, fe = c["val"][rsel], c["err"][rsel]
+    diff = np.abs(rv - fv)
+    agree = ok & (diff <= fe)
+    stats["refine_disagreements"] += int((ok & ~agree).sum())
+    c["val"][rsel[agree]] = rv[agree]
+    c["err"][rsel[agree]] = re[agree]
+    off = ok & ~agree
+    c["err"][rsel[off]] = fe[off] + diff[off]

@@ -1,0 +1,489 @@
+"""Refinement of visible pieces: the clipper's topology, the input's geometry.
+
+The clipper (:mod:`exactff.visibility.clipper`) finds the visible pieces with straight
+images in gnomonic charts, in double precision: every vertex of a piece is rounded there
+(to a few ulps of the chart's unit), which costs a small or thin piece its relative
+accuracy (a piece 1e-12 wide keeps about four digits). Here each piece keeps the
+clipper's topology and gets its geometry back from the input (DESIGN 3, "arcs
+approximated, then refined"):
+
+1. **Labels.** Every edge of a piece lies on a great circle through the point: the plane
+   of an edge of its own fragment or of a fragment in front of it, a chart's edge or a
+   tile seam (artificial edges, which cancel between the pieces on either side), or the
+   horizon. The plane is found as the candidate through both end points of the edge with
+   the least residual (candidates: the fragment's own edges, the seams and chart edges
+   nearest to the edge, and the edges of the images whose boundary passes through the
+   edge's midpoint).
+2. **Planes from the input.** A fragment's edge is traced back to the scene polygon's
+   edge it lies on (a BSP cut keeps the edge's line) and its plane is computed from
+   the two input vertices, ``(a - p) x (b - a)``; an edge made by a BSP cut keeps the
+   fragment's own end points (both sides of the cut use the same ones).
+3. **Vertices.** Where two labelled edges meet: the input vertex they share, if any;
+   else the intersection of their planes, ``m_in x m_out``. Where the two planes are
+   the same great circle the vertex is dropped; where they are too close to parallel for
+   their intersection to be trusted (``REFINE_PARALLEL``) the clipper's vertex is kept
+   and its error counted.
+4. **Integration.** The refined rings are integrated with the sector form in long
+   double (a second tier, vectorised) and, where that still misses the tolerance, in
+   mpmath with the same labels, planes computed from the input at the working precision.
+
+Error estimates: rounding of the sector sum (as in the kernel) plus, for each vertex, its
+position error (a few units of the working precision over the sine of the angle between
+its planes; the clipper's ``CHART_VERTEX_ERROR`` for a kept vertex) times the lengths of
+its edges. They rest on the topology being right: the labels the clipper's pieces give.
+"""
+
+import numpy as np
+import shapely
+
+from .. import _tolerances as tol
+from ..geometry import receiver_frame
+
+__all__ = ["Refiner"]
+
+_LD = np.longdouble
+_LD_EPS = float(np.finfo(_LD).eps) / 2
+#: vertex position errors in units of the working precision (cross products of cross
+#: products of differences: a few roundings each)
+_VERTEX_ULPS = 16.0
+
+
+def _unit(X):
+    n = np.sqrt((X * X).sum(axis=-1, keepdims=True))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.where(n > 0, X / n, np.nan)
+
+
+def _cross(a, b):
+    return np.stack([a[..., 1] * b[..., 2] - a[..., 2] * b[..., 1],
+                     a[..., 2] * b[..., 0] - a[..., 0] * b[..., 2],
+                     a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]], axis=-1)
+
+
+def _mp_receiver_frame(normal):
+    """:func:`exactff.geometry.receiver_frame` at mpmath's working precision: the same
+    construction, so that the charts, seams and tiles are where the clipper had them."""
+    import mpmath as mp
+
+    nv = [mp.mpf(float(c)) for c in normal]
+    ln = mp.sqrt(sum(c * c for c in nv))
+    x, y, z = (c / ln for c in nv)
+    sign = 1 if z >= 0 else -1
+    a = -1 / (sign + z)
+    b = x * y * a
+    return ([1 + sign * x * x * a, sign * b, -sign * x], [b, sign + y * y * a, -y], [x, y, z])
+
+
+class Refiner:
+    """What a row's refinement needs, built lazily: the fragments' edge planes, the
+    charts' images, and the receiver's frames.
+
+    Parameters
+    ----------
+    scene : Scene
+    tree : BSPTree
+    fragment : ndarray of int
+        The BSP fragment at each position of the clipper's order.
+    point, normal : ndarray of shape (3,)
+    buckets : list of (ndarray of int, ndarray of shape (M, K, 3), ndarray of shape (M,))
+        The clipper's input: positions, local (double) vertices and counts.
+    world : list of (ndarray of int, ndarray of shape (M, K, 3), ndarray of shape (M,))
+        The same fragments' world vertices (positions, vertices, counts).
+    charts : list
+        Filled by :func:`exactff.visibility.clipper.visible_pieces`: per chart, the
+        positions of the fragments that reach it, their images and the tiles per side.
+    """
+
+    def __init__(self, scene, tree, fragment, point, normal, buckets, world, charts):
+        self.scene, self.tree, self.fragment = scene, tree, np.asarray(fragment)
+        self.p = np.asarray(point, dtype=float)
+        self.n = np.asarray(normal, dtype=float)
+        self.buckets, self.world, self.charts = buckets, world, charts
+        self._edges = self._world = None
+        self._trees = {}
+        self.R_ld = receiver_frame(self.n, dtype=_LD)
+
+    # -- candidates -------------------------------------------------------------------
+    def _edge_table(self):
+        """Every fragment's edges as unit plane normals in the (double) local frame:
+        ``(offset, count, planes)``, fragment at position f owning rows
+        ``offset[f]:offset[f] + count[f]``."""
+        if self._edges is None:
+            m = sum(len(pos) for pos, _, _ in self.buckets)
+            count = np.zeros(m, dtype=int)
+            for pos, _, c in self.buckets:
+                count[pos] = c
+            offset = np.concatenate([[0], np.cumsum(count)[:-1]])
+            planes = np.full((int(count.sum()), 3), np.nan)
+            for pos, V, c in self.buckets:
+                K = V.shape[1]
+                slot = np.arange(K)
+                nxt = (slot[None, :] + 1) % np.maximum(c[:, None], 1)
+                W = np.take_along_axis(V, nxt[:, :, None], axis=1)
+                M = _unit(_cross(V, W))
+                valid = slot[None, :] < c[:, None]
+                rows = offset[pos][:, None] + slot[None, :]
+                planes[rows[valid]] = M[valid]
+            self._edges = offset, count, planes
+        return self._edges
+
+    def _boundary_tree(self, ci):
+        if ci not in self._trees:
+            idx, polys, _ = self.charts[ci]
+            self._trees[ci] = shapely.STRtree(shapely.boundary(polys))
+        return self._trees[ci]
+
+    def match(self, ci, chart, coords, nxt, frag):
+        """Label every edge of the pieces' rings in chart ``ci``.
+
+        Parameters
+        ----------
+        coords : ndarray of shape (V, 2)
+            Ring vertices in chart coordinates (closing points dropped).
+        nxt : ndarray of shape (V,)
+            Index of the next vertex of the same ring.
+        frag : ndarray of shape (V,)
+            Position of the fragment each vertex's piece belongs to.
+
+        Returns
+        -------
+        (ndarray of int, ndarray of shape (V, 3), ndarray)
+            Per edge (from vertex i to ``nxt[i]``): its label (>= 0: a row of the
+            fragment edge table; < 0: ``-1 - s`` for the static plane ``s``), the static
+            planes as local vectors, and the edge's residual (inf: no plane found).
+        """
+        eu, ev, ew, _ = chart
+        D = _unit(coords[:, :1] * eu + coords[:, 1:2] * ev + ew)
+        Dn = D[nxt]
+        nv = len(coords)
+        best = np.full(nv, np.inf)
+        label = np.full(nv, -1, dtype=np.int64)
+        statics = []
+        # seams and chart edges: the grid lines u = c and v = c nearest to the edge's
+        # first end point (plane e_u - c e_w or e_v - c e_w; v = 0 is the horizon)
+        _, _, n_tiles = self.charts[ci]
+        u0, v0, u1, v1 = (-1.0, 0.0, 1.0, 1.0) if chart[3] else (-1.0, -1.0, 1.0, 1.0)
+        for k, (e, lo, hi) in enumerate(((eu, u0, u1), (ev, v0, v1))):
+            grid = np.linspace(lo, hi, n_tiles + 1)
+            grid[-1] = hi
+            j = np.clip(np.searchsorted(grid, coords[:, k]), 1, n_tiles)
+            j = np.where(np.abs(grid[j - 1] - coords[:, k]) <= np.abs(grid[j] - coords[:, k]),
+                         j - 1, j)
+            Ms = e[None, :] - grid[:, None] * ew[None, :]
+            Mu = _unit(Ms)[j]
+            r = np.maximum(np.abs((Mu * D).sum(1)), np.abs((Mu * Dn).sum(1)))
+            better = r < best
+            best[better] = r[better]
+            label[better] = -1 - (len(statics) + j[better])
+            statics.extend(Ms)
+        statics = np.array(statics)
+        offset, count, planes = self._edge_table()
+
+        def consider(rows, fr):
+            # candidate pairs (ring edge, fragment): every edge of the fragment
+            for a in range(0, len(rows), 1 << 16):
+                r_, f_ = rows[a:a + (1 << 16)], fr[a:a + (1 << 16)]
+                c = count[f_]
+                e = np.repeat(r_, c)
+                g = np.repeat(offset[f_] - np.cumsum(c) + c, c) + np.arange(int(c.sum()))
+                P = planes[g]
+                res = np.maximum(np.abs((P * D[e]).sum(1)), np.abs((P * Dn[e]).sum(1)))
+                res = np.where(np.isnan(res), np.inf, res)
+                # the least residual per ring edge
+                o = np.lexsort((res, e))
+                first = np.r_[True, e[o][1:] != e[o][:-1]]
+                e1, g1, r1 = e[o][first], g[o][first], res[o][first]
+                better = r1 < best[e1]
+                best[e1[better]] = r1[better]
+                label[e1[better]] = g1[better]
+
+        consider(np.arange(nv), frag)
+        # the rest: edges of the images whose boundary passes through the edge
+        rest = np.flatnonzero(best > tol.REFINE_SURE)
+        if len(rest):
+            mid = shapely.points(0.5 * (coords[rest] + coords[nxt[rest]]))
+            q, t = self._boundary_tree(ci).query(mid, predicate="dwithin",
+                                                 distance=tol.REFINE_QUERY)
+            if len(q):
+                consider(rest[q], self.charts[ci][0][t])
+        best[best > tol.REFINE_MATCH] = np.inf
+        return label, statics, best
+
+    # -- planes from the input --------------------------------------------------------
+    def segments(self, rows):
+        """World end points ``(a, b)`` (float input) of the lines of fragment edge table
+        rows: the scene polygon's edge the fragment edge lies on, or the fragment's own
+        end points for an edge made by a BSP cut."""
+        offset, count, _ = self._edge_table()
+        W = self._world_table()
+        rows = np.asarray(rows)
+        # fragments without edges share the next one's offset: side="right" skips them
+        f = np.searchsorted(offset, rows, side="right") - 1
+        j = rows - offset[f]
+        A = W[rows]
+        B = W[offset[f] + (j + 1) % count[f]]
+        cut = np.flatnonzero(~self.tree.whole[self.fragment[f]])
+        if len(cut):
+            A[cut], B[cut] = self._polygon_edges(self.tree.source[self.fragment[f[cut]]],
+                                                 A[cut], B[cut])
+        return A, B
+
+    def _polygon_edges(self, src, a, b):
+        """For fragment edges ``a -> b`` of cut fragments: the end points of their scene
+        polygon's edge through both (a BSP cut keeps an edge's line), or ``a, b``
+        themselves for an edge the cut made."""
+        flat = self.scene._cache.get("refine_flat")
+        if flat is None:
+            P = self.scene.polygons
+            count = np.array([len(Q) for Q in P])
+            offset = np.concatenate([[0], np.cumsum(count)[:-1]])
+            V = np.concatenate(P)
+            nxt = np.arange(len(V)) + 1
+            nxt[offset + count - 1] = offset
+            flat = self.scene._cache["refine_flat"] = (offset, count, V, nxt)
+        offset, count, V, nxt = flat
+        c = count[src]
+        q = np.repeat(np.arange(len(src)), c)
+        k = np.repeat(offset[src] - np.cumsum(c) + c, c) + np.arange(int(c.sum()))
+        E = V[nxt[k]] - V[k]
+        L = np.linalg.norm(E, axis=1)
+        ra = np.linalg.norm(_cross(E, a[q] - V[k]), axis=1) / L
+        rb = np.linalg.norm(_cross(E, b[q] - V[k]), axis=1) / L
+        r = np.maximum(ra, rb)
+        scale = np.abs(V[k]).max(axis=1) + np.maximum(np.abs(a[q]), np.abs(b[q])).max(axis=1)
+        on = r <= tol.BSP_COPLANAR_ULPS * tol.EPS * scale
+        # the first polygon edge through both end points, per fragment edge
+        hit = np.flatnonzero(on)
+        first = np.unique(q[hit], return_index=True)
+        A, B = a.copy(), b.copy()
+        A[first[0]] = V[k[hit[first[1]]]]
+        B[first[0]] = V[nxt[k[hit[first[1]]]]]
+        return A, B
+
+    def _world_table(self):
+        """The fragments' world vertices, laid out as the edge table."""
+        if self._world is None:
+            offset, count, _ = self._edge_table()
+            W = np.full((int(count.sum()), 3), np.nan)
+            for pos, V, c in self.world:
+                slot = np.arange(V.shape[1])
+                valid = slot[None, :] < c[:, None]
+                W[(offset[pos][:, None] + slot[None, :])[valid]] = V[valid]
+            self._world = W
+        return self._world
+
+    def local_planes_ld(self, labels, statics):
+        """Plane normals of labels in the long-double local frame, and the condition of
+        each (``|a - p| |b - a| / |m|``, 1 for the exact static planes): the relative
+        error of a plane's direction is a few units of the working precision times it."""
+        out = np.empty((len(labels), 3), dtype=_LD)
+        cond = np.ones(len(labels))
+        st = labels < 0
+        out[st] = statics[-1 - labels[st]].astype(_LD)
+        fr = np.flatnonzero(~st)
+        if len(fr):
+            A, B = self.segments(labels[fr])
+            p = self.p.astype(_LD)
+            a = A.astype(_LD) - p
+            d = B.astype(_LD) - A.astype(_LD)
+            m = _cross(a, d)
+            with np.errstate(divide="ignore", invalid="ignore"):
+                cond[fr] = (np.sqrt((a * a).sum(1) * (d * d).sum(1))
+                            / np.sqrt((m * m).sum(1))).astype(float)
+            out[fr] = m @ self.R_ld.T
+        return out, cond
+
+    # -- refined rings ----------------------------------------------------------------
+    def _vertex_rules(self, label, nxt):
+        """Per vertex (incoming edge ``prev``, outgoing edge ``i``): whether it is dropped
+        (both edges on one great circle), the input point it is (shared end point of two
+        input edges; NaN for none), and the two labels."""
+        prev = np.empty_like(nxt)
+        prev[nxt] = np.arange(len(nxt))
+        li, lo = label[prev], label
+        fr = label >= 0
+        A = np.full((len(label), 3), np.nan)
+        B = np.full((len(label), 3), np.nan)
+        if fr.any():
+            A[fr], B[fr] = self.segments(label[fr])
+        Ai, Bi, Ao, Bo = A[prev], B[prev], A, B
+        eq = lambda X, Y: np.all(X == Y, axis=1)
+        same = (li == lo) | (eq(Ai, Ao) & eq(Bi, Bo)) | (eq(Ai, Bo) & eq(Bi, Ao))
+        point = np.full((len(label), 3), np.nan)
+        for X, Y in ((Bi, Ao), (Bi, Bo), (Ai, Ao), (Ai, Bo)):
+            hit = eq(X, Y) & np.isnan(point[:, 0])
+            point[hit] = X[hit]
+        return prev, same, point
+
+    def refine_ld(self, ci, chart, coords, nxt, ring_of, n_rings, frag):
+        """Refined rings of chart ``ci`` in long double.
+
+        Parameters
+        ----------
+        coords : ndarray of shape (V, 2)
+            The rings' vertices in chart coordinates, ring by ring (``ring_of`` sorted).
+        nxt : ndarray of shape (V,)
+        ring_of : ndarray of shape (V,)
+        n_rings : int
+        frag : ndarray of shape (V,)
+
+        Returns
+        -------
+        (ndarray, ndarray, ndarray of bool, labels)
+            Per ring the absolute form factor of its image, its error estimate, and
+            whether it was refined (every edge labelled); and the labels (reused by the
+            mpmath tier).
+        """
+        from ..integrate import _C1, _clipped_sector_sums
+
+        eu, ev, ew, _ = chart
+        label, statics, res = self.match(ci, chart, coords, nxt, frag)
+        ok_ring = np.ones(n_rings, dtype=bool)
+        ok_ring[ring_of[~np.isfinite(res)]] = False
+        val = np.zeros(n_rings)
+        est = np.full(n_rings, np.inf)
+        labels = (label, statics)
+        if not ok_ring.any():
+            return val, est, ok_ring, labels
+        use = ok_ring[ring_of]
+        lab = np.where(use, label, -1 - 0)  # unused edges: any static label
+        prev, same, point = self._vertex_rules(np.where(use, label, -1), nxt)
+        M, cond = self.local_planes_ld(lab, statics)
+        Mi, Mo = M[prev], M
+        d = _cross(Mi, Mo)
+        nd = np.sqrt((d * d).sum(1))
+        sin = (nd / np.sqrt((Mi * Mi).sum(1) * (Mo * Mo).sum(1))).astype(float)
+        Dflt = coords[:, :1] * eu + coords[:, 1:2] * ev + ew          # local, double
+        has_point = ~np.isnan(point[:, 0])
+        # two planes closer to parallel than REFINE_PARALLEL: collinear input edges (a
+        # T-junction, overlapping segments) or a turn too small to place; the vertex is
+        # dropped, at most the triangle it cuts off: half its edges' product times the
+        # sine of the turn (that of the planes, up to their rounding)
+        parallel = use & ~same & ~has_point & ~(sin >= tol.REFINE_PARALLEL)
+        X = d
+        if has_point.any():
+            X[has_point] = (point[has_point].astype(_LD) - self.p.astype(_LD)) @ self.R_ld.T
+        # the intersection of two planes is a pair of antipodes: the one near the clipper's
+        X = np.where(((X.astype(float) * Dflt).sum(1) < 0)[:, None], -X, X)
+        X = X / np.sqrt((X * X).sum(1))[:, None]
+        verr = np.where(has_point, _VERTEX_ULPS * _LD_EPS,
+                        _VERTEX_ULPS * _LD_EPS * (cond[prev] + cond) / np.maximum(sin, 1e-300))
+        Du = _unit(Dflt)
+        cut = np.zeros(n_rings)
+        if parallel.any():
+            v = np.flatnonzero(parallel)
+            tri = 0.5 * (np.linalg.norm(Du[v] - Du[prev[v]], axis=1)
+                         * np.linalg.norm(Du[nxt[v]] - Du[v], axis=1)
+                         * (np.nan_to_num(sin[v]) + _VERTEX_ULPS * _LD_EPS))
+            cut = np.bincount(ring_of[v], weights=tri, minlength=n_rings) / np.pi
+        same = same | parallel
+        keep = use & ~same
+        # compress: the kept vertices of each ring, in order
+        kv = np.flatnonzero(keep)
+        r = ring_of[kv]
+        cnt = np.bincount(r, minlength=n_rings)
+        good = ok_ring & (cnt >= 3)
+        kv = kv[good[r]]
+        r = ring_of[kv]
+        if len(kv) == 0:
+            val[ok_ring] = 0.0
+            est[ok_ring] = 0.0
+            return val, est, ok_ring, labels
+        rings = np.flatnonzero(good)
+        ridx = np.searchsorted(rings, r)
+        st = np.searchsorted(ridx, np.arange(len(rings)))
+        c = np.diff(np.append(st, len(ridx)))
+        nx2 = np.arange(len(kv)) + 1
+        nx2[st + c - 1] = st
+        Xk = X[kv]
+        A0 = Xk[st]
+        S, mags, errs = _clipped_sector_sums(A0, Xk - A0[ridx], nx2, ridx, len(rings),
+                                             eps=_LD_EPS)
+        v = (np.abs(S) / (2 * np.pi)).astype(float)
+        # vertex errors times their edges' lengths (chords of unit vectors)
+        Xf = Xk.astype(float)
+        seg = np.linalg.norm(Xf[nx2] - Xf, axis=1)
+        pv = np.empty_like(nx2)
+        pv[nx2] = np.arange(len(nx2))
+        g = verr[kv] * 0.5 * (seg + seg[pv])
+        geom = np.bincount(ridx, weights=g, minlength=len(rings)) / np.pi
+        e = ((_C1 * _LD_EPS * mags + errs) / (2 * np.pi)).astype(float) + geom \
+            + 4 * _LD_EPS * v + cut[rings]
+        val[rings], est[rings] = v, e
+        deg = ok_ring & ~good
+        val[deg], est[deg] = 0.0, 0.0
+        return val, est, ok_ring, labels
+
+    def refine_mp(self, chart, coords, label, statics, tolerance):
+        """One refined ring in mpmath (labels from :meth:`refine_ld`): planes and
+        vertices from the input at the working precision, evaluated at two precisions
+        20 digits apart, raised until they agree to ``tolerance``. Returns the absolute
+        form factor of its image and its error estimate."""
+        import mpmath as mp
+
+        eu, ev, ew, _ = chart
+        k = len(coords)
+        nxt = (np.arange(k) + 1) % k
+        prev, same, point = self._vertex_rules(label, nxt)
+        fr = label >= 0
+        A = np.full((k, 3), np.nan)
+        B = np.full((k, 3), np.nan)
+        if fr.any():
+            A[fr], B[fr] = self.segments(label[fr])
+        Dflt = coords[:, :1] * eu + coords[:, 1:2] * ev + ew
+
+        def evaluate(dps):
+            with mp.workdps(dps):
+                frame = _mp_receiver_frame(self.n)
+                pv = [mp.mpf(float(c)) for c in self.p]
+
+                def local(w):
+                    return [sum(ax[i] * w[i] for i in range(3)) for ax in frame]
+
+                def cross(a, b):
+                    return [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2],
+                            a[0] * b[1] - a[1] * b[0]]
+
+                M = []
+                for i in range(k):
+                    if label[i] < 0:
+                        M.append([mp.mpf(float(c)) for c in statics[-1 - label[i]]])
+                    else:
+                        a = [mp.mpf(float(A[i, j])) - pv[j] for j in range(3)]
+                        dd = [mp.mpf(float(B[i, j])) - mp.mpf(float(A[i, j])) for j in range(3)]
+                        M.append(local(cross(a, dd)))
+                X = []
+                for i in range(k):
+                    if same[i]:
+                        continue
+                    if not np.isnan(point[i, 0]):
+                        x = local([mp.mpf(float(point[i, j])) - pv[j] for j in range(3)])
+                    else:
+                        x = cross(M[prev[i]], M[i])
+                        nx = mp.sqrt(sum(c * c for c in x))
+                        na = mp.sqrt(sum(c * c for c in M[prev[i]]) * sum(c * c for c in M[i]))
+                        if nx <= mp.mpf(10) ** (10 - dps) * na:
+                            continue   # one great circle (collinear input edges)
+                    if sum(float(x[j]) * Dflt[i, j] for j in range(3)) < 0:
+                        x = [-c for c in x]
+                    X.append(x)
+                total = mp.mpf(0)
+                for i in range(len(X)):
+                    a, b = X[i], X[(i + 1) % len(X)]
+                    m = cross(a, b)
+                    sm = mp.sqrt(sum(c * c for c in m))
+                    if sm != 0:
+                        total += mp.atan2(sm, sum(a[j] * b[j] for j in range(3))) * m[2] / sm
+                return abs(total) / (2 * mp.pi) if len(X) >= 3 else mp.mpf(0)
+
+        dps = 30
+        while True:
+            lo = evaluate(dps)
+            hi = evaluate(dps + 20)
+            diff = abs(hi - lo)
+            if (diff <= tolerance * abs(hi) * 1e-3 or hi == lo
+                    or float(diff) < tol.MP_VALUE_FLOOR or dps >= tol.MP_MAX_DPS):
+                break
+            dps += 40
+        value = float(hi)
+        return value, float(diff) + 2 * abs(value) * tol.EPS
