@@ -14,7 +14,8 @@ from .methods import resolve
 __all__ = ["form_factors", "form_factor_matrix"]
 
 
-def form_factors(scene, point, normal, *, method="exact", two_sided=False, **options):
+def form_factors(scene, point, normal, *, method="exact", two_sided=False, error=False,
+                 **options):
     """Form factors from points to every polygon of a scene, with occlusion.
 
     Parameters
@@ -29,12 +30,18 @@ def form_factors(scene, point, normal, *, method="exact", two_sided=False, **opt
     two_sided : bool, default False
         Let polygons receive on their back side too. Every polygon occludes
         whichever way it faces.
+    error : bool, default False
+        Also return ``E``, a bound on ``|F - exact|`` per value (the exact method only):
+        the rounding of each value's integration plus the error of its visible pieces'
+        vertices (refined from the input where the tolerance asks for it). It rests on
+        the clipper's topology being right; what it covers is in
+        ``docs/explanation/robustness.md``.
     **options
         Passed to the method's constructor when ``method`` is a name.
 
     Returns
     -------
-    ndarray of shape (..., len(scene))
+    ndarray of shape (..., len(scene)), or a pair of them with ``error=True``
         ``F[..., j]`` = F(point -> polygon j).
 
     Raises
@@ -60,9 +67,18 @@ def form_factors(scene, point, normal, *, method="exact", two_sided=False, **opt
     (0.2394564705, 1.0)
     """
     m = resolve(method, **options)
+    if error and m.name != "exact":
+        raise ValueError(f"error=True needs method='exact' (an error bound per value); "
+                         f"got method={m.name!r}")
     as_scene(scene)
     P, Nn, shape = as_receivers(point, normal)   # the methods normalise the normals
     out = np.empty((len(P), len(scene)))
+    if error:
+        err = np.empty_like(out)
+        for i in range(len(P)):
+            out[i], err[i] = m.point_form_factors(scene, P[i], Nn[i], two_sided=two_sided,
+                                                  error=True)
+        return out.reshape(shape + (len(scene),)), err.reshape(shape + (len(scene),))
     for i in range(len(P)):
         out[i] = m.point_form_factors(scene, P[i], Nn[i], two_sided=two_sided)
     return out.reshape(shape + (len(scene),))

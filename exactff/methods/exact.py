@@ -19,10 +19,11 @@ class Exact(FormFactorMethod):
     Parameters
     ----------
     tolerance : float or None, default 1e-12
-        Requested relative accuracy: values (and visible pieces) whose rounding-error
-        estimate exceeds it are re-evaluated in long double or mpmath. Visible pieces
-        start from double-precision clip coordinates, which bounds thin slivers to about
-        1e-16 absolute (see ``docs/explanation/robustness.md``).
+        Requested relative accuracy: values whose error estimate exceeds it are
+        re-evaluated; unoccluded ones in long double or mpmath, visible pieces refined
+        (their vertices recomputed from the input, where the clipper's double-precision
+        coordinates fall short) and integrated in long double or mpmath (see
+        ``docs/explanation/robustness.md``). None: no refinement or escalation.
     shortcuts : bool, default True
         Leave out what a row does not need: the convex-scene shortcut, the tiled
         clipper (fragments hidden by full tiles or decided by exact predicates instead
@@ -54,12 +55,15 @@ class Exact(FormFactorMethod):
         self.shortcuts = bool(shortcuts)
         self.integrator = integrator
 
-    def point_form_factors(self, scene, point, normal, *, two_sided=False, stats=None):
+    def point_form_factors(self, scene, point, normal, *, two_sided=False, stats=None,
+                           error=False):
+        """One row; with ``error=True`` also the error bound of every value (see
+        :func:`exactff.visibility.visible_form_factors`)."""
         as_scene(scene)
         point, normal = as_receiver(point, normal)
         return visible_form_factors(scene, point, normal, two_sided=two_sided, stats=stats,
                                     shortcuts=self.shortcuts, tolerance=self.tolerance,
-                                    integrator=self.integrator)
+                                    integrator=self.integrator, error=error)
 
     def __repr__(self):
         extra = "" if self.integrator == "sector" else f", integrator={self.integrator!r}"

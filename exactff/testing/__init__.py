@@ -116,17 +116,17 @@ def ground_truth(scene, points, normals, *, two_sided=False, tolerance=1e-12):
     two_sided : bool, default False
         Let polygons receive on their back side too.
     tolerance : float, default 1e-12
-        Relative accuracy requested of every value (escalation to long double and
-        mpmath where the rounding-error estimate misses it).
+        Relative accuracy requested of every value (visible pieces refined from the
+        input and escalated to long double and mpmath where the error bound misses it).
 
     Returns
     -------
     F : ndarray of shape (..., len(scene))
     error : ndarray of shape (..., len(scene))
-        The engine's estimate of the rounding error of each value's integration (the
-        sum over its visible pieces). It does not yet cover the double-precision
-        coordinates of the visible pieces' vertices: a visible sliver of width w keeps
-        about 1e-16 / w relative accuracy (``docs/explanation/robustness.md``).
+        A bound on ``|F - exact|`` for each value: the rounding of its integration plus
+        the error of its visible pieces' vertices, as
+        ``form_factors(..., error=True)`` (what it rests on:
+        ``docs/explanation/robustness.md``).
 
     Examples
     --------
@@ -136,17 +136,10 @@ def ground_truth(scene, points, normals, *, two_sided=False, tolerance=1e-12):
     >>> round(float(F.sum()), 12), bool(E.max() < 1e-14)
     (1.0, True)
     """
-    from ..integrate import as_receivers, as_scene
+    from ..formfactors import form_factors
+    from ..integrate import as_receivers
     from ..methods import Exact
-    from ..visibility import visible_form_factors
 
-    as_scene(scene)
-    Exact(tolerance=tolerance)   # checks the tolerance
-    P, Nn, shape = as_receivers(points, normals, ("points", "normals"))
-    F = np.empty((len(P), len(scene)))
-    E = np.empty_like(F)
-    for i in range(len(P)):
-        F[i], E[i] = visible_form_factors(scene, P[i], Nn[i], two_sided=two_sided,
-                                          tolerance=tolerance, error=True)
-    shape = shape + (len(scene),)
-    return F.reshape(shape), E.reshape(shape)
+    as_receivers(points, normals, ("points", "normals"))   # names the arguments
+    return form_factors(scene, points, normals, method=Exact(tolerance=tolerance),
+                        two_sided=two_sided, error=True)

@@ -889,7 +889,7 @@ def pieces_form_factors(pieces, m, tolerance=None, owner=None, integrator="secto
             with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
                 rv, re, ok, lab = refiner.refine_ld(c["ci"], c["chart"], c["coords"][vsel],
                                                     nxt_sub, ring_sub, len(rsel), frag_v)
-            labels[-1] = (rsel, (vsel, st_sub, lab, ok))
+            labels[-1] = (rsel, None if lab is None else (vsel, st_sub, lab, ok))
             _accept(c, rsel, rv, re, ok, st)
             st["refined_rings"] += int(ok.sum())
             st["unrefined_rings"] += int((~ok).sum())
@@ -897,12 +897,13 @@ def pieces_form_factors(pieces, m, tolerance=None, owner=None, integrator="secto
         for c, bad, (rsel, info) in zip(charts, flagged(), labels):
             if info is None or len(bad) == 0:
                 continue
-            vsel, st_sub, (label, statics), ok = info
+            vsel, st_sub, (label, statics, point, drop, cut), ok = info
             for k in np.flatnonzero(np.isin(c["geom"][rsel], bad) & ok):
                 r = rsel[k]
                 a, cnt = st_sub[k], c["count"][r]
-                rv, re = refiner.refine_mp(c["chart"], c["coords"][vsel[a:a + cnt]],
-                                           label[a:a + cnt], statics, tolerance)
+                sl = slice(a, a + cnt)
+                rv, re = refiner.refine_mp(c["chart"], c["coords"][vsel[sl]], label[sl],
+                                           statics, point[sl], drop[sl], cut[k], tolerance)
                 _accept(c, np.array([r]), np.array([rv]), np.array([re]),
                         np.array([True]), st)
                 st["refined_rings_mp"] += 1

@@ -43,9 +43,9 @@ __all__ = ["Refiner"]
 
 _LD = np.longdouble
 _LD_EPS = float(np.finfo(_LD).eps) / 2
-#: vertex position errors in units of the working precision (cross products of cross
-#: products of differences: a few roundings each)
-_VERTEX_ULPS = 16.0
+#: rounding of a refined edge's plane and of its end points' residuals, in units of the
+#: working precision (per unit of the plane's condition)
+_VERTEX_ULPS = 32.0
 
 
 def _unit(X):
@@ -101,6 +101,7 @@ class Refiner:
         self.buckets, self.world, self.charts = buckets, world, charts
         self._edges = self._world = None
         self._trees = {}
+        self._mp_frames = {}
         self.R_ld = receiver_frame(self.n, dtype=_LD)
 
     # -- candidates -------------------------------------------------------------------
@@ -297,7 +298,7 @@ class Refiner:
     def _vertex_rules(self, label, nxt):
         """Per vertex (incoming edge ``prev``, outgoing edge ``i``): whether it is dropped
         (both edges on one great circle), the input point it is (shared end point of two
-        input edges; NaN for none), and the two labels."""
+        input edges; NaN for none), and the input end points of every edge's line."""
         prev = np.empty_like(nxt)
         prev[nxt] = np.arange(len(nxt))
         li, lo = label[prev], label
@@ -313,7 +314,7 @@ class Refiner:
         for X, Y in ((Bi, Ao), (Bi, Bo), (Ai, Ao), (Ai, Bo)):
             hit = eq(X, Y) & np.isnan(point[:, 0])
             point[hit] = X[hit]
-        return prev, same, point
+        return prev, same, point, A, B
 
     def refine_ld(self, ci, chart, coords, nxt, ring_of, n_rings, frag):
         """Refined rings of chart ``ci`` in long double.
@@ -342,12 +343,11 @@ class Refiner:
         ok_ring[ring_of[~np.isfinite(res)]] = False
         val = np.zeros(n_rings)
         est = np.full(n_rings, np.inf)
-        labels = (label, statics)
         if not ok_ring.any():
-            return val, est, ok_ring, labels
+            return val, est, ok_ring, None
         use = ok_ring[ring_of]
         lab = np.where(use, label, -1 - 0)  # unused edges: any static label
-        prev, same, point = self._vertex_rules(np.where(use, label, -1), nxt)
+        prev, same, point, SA, SB = self._vertex_rules(np.where(use, label, -1), nxt)
         M, cond = self.local_planes_ld(lab, statics)
         Mi, Mo = M[prev], M
         d = _cross(Mi, Mo)
@@ -355,20 +355,31 @@ class Refiner:
         sin = (nd / np.sqrt((Mi * Mi).sum(1) * (Mo * Mo).sum(1))).astype(float)
         Dflt = coords[:, :1] * eu + coords[:, 1:2] * ev + ew          # local, double
         has_point = ~np.isnan(point[:, 0])
+        Du = _unit(Dflt)
         # two planes closer to parallel than REFINE_PARALLEL: collinear input edges (a
-        # T-junction, overlapping segments) or a turn too small to place; the vertex is
-        # dropped, at most the triangle it cuts off: half its edges' product times the
-        # sine of the turn (that of the planes, up to their rounding)
+        # T-junction, overlapping segments) or a turn too small to place. Where an input
+        # end point of either edge is the clipper's vertex (within REFINE_MATCH), the
+        # vertex is that point; elsewhere it is dropped, at most the triangle it cuts
+        # off: half its edges' product times the sine of the turn (that of the planes,
+        # up to their rounding)
         parallel = use & ~same & ~has_point & ~(sin >= tol.REFINE_PARALLEL)
+        if parallel.any():
+            v = np.flatnonzero(parallel)
+            C = np.stack([SA[prev[v]], SB[prev[v]], SA[v], SB[v]], axis=1)   # (n, 4, 3)
+            Cd = _unit((C - self.p) @ self.R_ld.astype(float).T)
+            dist = np.nan_to_num(np.linalg.norm(Cd - Du[v][:, None, :], axis=2), nan=np.inf)
+            best = np.argmin(dist, axis=1)
+            near = dist[np.arange(len(v)), best] <= tol.REFINE_MATCH
+            w = v[near]
+            point[w] = C[near, best[near]]
+            has_point[w] = True
+            parallel[w] = False
         X = d
         if has_point.any():
             X[has_point] = (point[has_point].astype(_LD) - self.p.astype(_LD)) @ self.R_ld.T
         # the intersection of two planes is a pair of antipodes: the one near the clipper's
         X = np.where(((X.astype(float) * Dflt).sum(1) < 0)[:, None], -X, X)
         X = X / np.sqrt((X * X).sum(1))[:, None]
-        verr = np.where(has_point, _VERTEX_ULPS * _LD_EPS,
-                        _VERTEX_ULPS * _LD_EPS * (cond[prev] + cond) / np.maximum(sin, 1e-300))
-        Du = _unit(Dflt)
         cut = np.zeros(n_rings)
         if parallel.any():
             v = np.flatnonzero(parallel)
@@ -377,6 +388,7 @@ class Refiner:
                          * (np.nan_to_num(sin[v]) + _VERTEX_ULPS * _LD_EPS))
             cut = np.bincount(ring_of[v], weights=tri, minlength=n_rings) / np.pi
         same = same | parallel
+        labels = (label, statics, point, same, cut)
         keep = use & ~same
         # compress: the kept vertices of each ring, in order
         kv = np.flatnonzero(keep)
@@ -400,12 +412,16 @@ class Refiner:
         S, mags, errs = _clipped_sector_sums(A0, Xk - A0[ridx], nx2, ridx, len(rings),
                                              eps=_LD_EPS)
         v = (np.abs(S) / (2 * np.pi)).astype(float)
-        # vertex errors times their edges' lengths (chords of unit vectors)
+        # the vertices' geometry: each refined edge (the arc through its two computed
+        # end points) is off its input plane by its end points' residuals (measured),
+        # their evaluation and the plane's own rounding; the area between the two arcs
+        # is at most the edge's length times their mean
+        Mk = M[kv]
+        Mk = Mk / np.sqrt((Mk * Mk).sum(1))[:, None]
+        res = (np.abs((Mk * Xk).sum(1)) + np.abs((Mk * Xk[nx2]).sum(1))).astype(float)
         Xf = Xk.astype(float)
         seg = np.linalg.norm(Xf[nx2] - Xf, axis=1)
-        pv = np.empty_like(nx2)
-        pv[nx2] = np.arange(len(nx2))
-        g = verr[kv] * 0.5 * (seg + seg[pv])
+        g = 0.5 * seg * (res + _VERTEX_ULPS * _LD_EPS * (1.0 + cond[kv]))
         geom = np.bincount(ridx, weights=g, minlength=len(rings)) / np.pi
         e = ((_C1 * _LD_EPS * mags + errs) / (2 * np.pi)).astype(float) + geom \
             + 4 * _LD_EPS * v + cut[rings]
@@ -414,54 +430,67 @@ class Refiner:
         val[deg], est[deg] = 0.0, 0.0
         return val, est, ok_ring, labels
 
-    def refine_mp(self, chart, coords, label, statics, tolerance):
+    def refine_mp(self, chart, coords, label, statics, point, drop, cut, tolerance):
         """One refined ring in mpmath (labels from :meth:`refine_ld`): planes and
         vertices from the input at the working precision, evaluated at two precisions
         20 digits apart, raised until they agree to ``tolerance``. Returns the absolute
-        form factor of its image and its error estimate."""
+        form factor of its image and its error estimate. ``point``, ``drop`` and ``cut``
+        are the long-double tier's decisions (input points, dropped vertices, the
+        triangles they may cut off), kept here."""
         import mpmath as mp
 
         eu, ev, ew, _ = chart
         k = len(coords)
         nxt = (np.arange(k) + 1) % k
-        prev, same, point = self._vertex_rules(label, nxt)
-        fr = label >= 0
-        A = np.full((k, 3), np.nan)
-        B = np.full((k, 3), np.nan)
-        if fr.any():
-            A[fr], B[fr] = self.segments(label[fr])
+        prev, _, _, A, B = self._vertex_rules(label, nxt)
+        same = drop
         Dflt = coords[:, :1] * eu + coords[:, 1:2] * ev + ew
+
+        # the input as mpf values (exact, whatever the working precision)
+        mpf = mp.mpf
+        pv = [mpf(float(c)) for c in self.p]
+        plane_in = []
+        for i in range(k):
+            if label[i] < 0:
+                plane_in.append(None)
+            else:
+                a = [mpf(float(A[i, j])) for j in range(3)]
+                b = [mpf(float(B[i, j])) for j in range(3)]
+                plane_in.append((a, b))
+        pts = [None if np.isnan(point[i, 0]) else [mpf(float(c)) for c in point[i]]
+               for i in range(k)]
+
+        def cross(a, b):
+            return [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2],
+                    a[0] * b[1] - a[1] * b[0]]
 
         def evaluate(dps):
             with mp.workdps(dps):
-                frame = _mp_receiver_frame(self.n)
-                pv = [mp.mpf(float(c)) for c in self.p]
+                frame = self._mp_frames.get(dps)
+                if frame is None:
+                    frame = self._mp_frames[dps] = _mp_receiver_frame(self.n)
 
                 def local(w):
-                    return [sum(ax[i] * w[i] for i in range(3)) for ax in frame]
-
-                def cross(a, b):
-                    return [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2],
-                            a[0] * b[1] - a[1] * b[0]]
+                    return [mp.fdot(ax, w) for ax in frame]
 
                 M = []
                 for i in range(k):
-                    if label[i] < 0:
-                        M.append([mp.mpf(float(c)) for c in statics[-1 - label[i]]])
+                    if plane_in[i] is None:
+                        M.append([mpf(float(c)) for c in statics[-1 - label[i]]])
                     else:
-                        a = [mp.mpf(float(A[i, j])) - pv[j] for j in range(3)]
-                        dd = [mp.mpf(float(B[i, j])) - mp.mpf(float(A[i, j])) for j in range(3)]
-                        M.append(local(cross(a, dd)))
+                        a, b = plane_in[i]
+                        M.append(local(cross([a[j] - pv[j] for j in range(3)],
+                                             [b[j] - a[j] for j in range(3)])))
                 X = []
                 for i in range(k):
                     if same[i]:
                         continue
-                    if not np.isnan(point[i, 0]):
-                        x = local([mp.mpf(float(point[i, j])) - pv[j] for j in range(3)])
+                    if pts[i] is not None:
+                        x = local([pts[i][j] - pv[j] for j in range(3)])
                     else:
                         x = cross(M[prev[i]], M[i])
-                        nx = mp.sqrt(sum(c * c for c in x))
-                        na = mp.sqrt(sum(c * c for c in M[prev[i]]) * sum(c * c for c in M[i]))
+                        nx = mp.sqrt(mp.fdot(x, x))
+                        na = mp.sqrt(mp.fdot(M[prev[i]], M[prev[i]]) * mp.fdot(M[i], M[i]))
                         if nx <= mp.mpf(10) ** (10 - dps) * na:
                             continue   # one great circle (collinear input edges)
                     if sum(float(x[j]) * Dflt[i, j] for j in range(3)) < 0:
@@ -471,9 +500,9 @@ class Refiner:
                 for i in range(len(X)):
                     a, b = X[i], X[(i + 1) % len(X)]
                     m = cross(a, b)
-                    sm = mp.sqrt(sum(c * c for c in m))
+                    sm = mp.sqrt(mp.fdot(m, m))
                     if sm != 0:
-                        total += mp.atan2(sm, sum(a[j] * b[j] for j in range(3))) * m[2] / sm
+                        total += mp.atan2(sm, mp.fdot(a, b)) * m[2] / sm
                 return abs(total) / (2 * mp.pi) if len(X) >= 3 else mp.mpf(0)
 
         dps = 30
@@ -486,4 +515,4 @@ class Refiner:
                 break
             dps += 40
         value = float(hi)
-        return value, float(diff) + 2 * abs(value) * tol.EPS
+        return value, float(diff) + 2 * abs(value) * tol.EPS + cut
