@@ -75,11 +75,15 @@ def visible_form_factors(scene, point, normal, *, two_sided=False, stats=None,
     stats : dict, optional
         Filled with what the row did: ``path`` (``"unoccluded"`` when the convex-scene
         shortcut applied, else ``"clipper"``), ``fragments``, ``culled_edge_on``,
-        ``culled_below_horizon``, and the clipper's counters.
+        ``culled_below_horizon``, the clipper's counters, and the refinement's
+        (``refined_rings``, ``refined_rings_mp``, ``unrefined_rings``,
+        ``refine_disagreements``).
     tolerance : float or None
-        Relative accuracy requested of every unoccluded value (convex-scene path) and of
-        every visible piece: values whose error estimate exceeds it are re-evaluated in
-        higher precision (pieces from their clipped float coordinates).
+        Relative accuracy requested of every value: unoccluded values (convex-scene
+        path) whose estimate exceeds it are re-evaluated in higher precision; visible
+        pieces of polygons whose bound exceeds it are refined (vertices recomputed
+        from the input, :mod:`exactff.visibility.refine`) and integrated in long double
+        or mpmath. None: neither.
     shortcuts : bool, default True
         False disables every shortcut: the convex-scene path, the culling of fragments
         below the horizon, the tiled clipper (full tiles, predicates instead of
@@ -92,7 +96,9 @@ def visible_form_factors(scene, point, normal, *, two_sided=False, stats=None,
         escalation).
 
     error : bool, default False
-        Also return the rounding-error estimate of each value's integration.
+        Also return a bound on each value's error: the rounding of its integration
+        plus its visible pieces' geometry (the clipper's vertices, or the refined
+        ones), given the clipper's topology (``docs/explanation/robustness.md``).
 
     Returns
     -------
