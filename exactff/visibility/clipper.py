@@ -792,6 +792,8 @@ def pieces_form_factors(pieces, m, tolerance=None, owner=None, integrator="secto
     (ndarray of shape (m,), ndarray of shape (m,))
         Form factors and error estimates per fragment.
     """
+    import mpmath
+
     from .. import _tolerances as tol
     from ..integrate import _C1, _clipped_sector_sums, eq3_ring_area
 
@@ -845,12 +847,28 @@ def pieces_form_factors(pieces, m, tolerance=None, owner=None, integrator="secto
         e_ring = e_ring + perimeter * tol.CHART_VERTEX_ERROR / np.pi + 4 * tol.EPS * val
         charts.append(dict(ci=ci, chart=chart, frag=frag, n=len(geoms), coords=coords,
                            nxt=nxt, ring_of=ring_of, start=start, count=count,
-                           is_hole=is_hole, geom=poly_of[ring_poly], val=val, err=e_ring))
+                           is_hole=is_hole, geom=poly_of[ring_poly], val=val, err=e_ring,
+                           over=np.zeros(len(geoms), dtype=bool), over_val=np.zeros(len(geoms)),
+                           over_err=np.zeros(len(geoms))))
 
     def per_geom(c):
         sign = np.where(c["is_hole"], -c["val"], c["val"])
-        return (np.bincount(c["geom"], weights=sign, minlength=c["n"]),
-                np.bincount(c["geom"], weights=c["err"], minlength=c["n"]))
+        v = np.bincount(c["geom"], weights=sign, minlength=c["n"])
+        e = np.bincount(c["geom"], weights=c["err"], minlength=c["n"])
+        o = c["over"]
+        return np.where(o, c["over_val"], v), np.where(o, c["over_err"], e)
+
+    def accept(c, g, total, est, stats):
+        """Pieces' refined values (their rings summed in the working precision, then
+        rounded): taken where within the current values' estimates of them; elsewhere
+        the current values are kept, their estimates widened by the difference."""
+        v, e = per_geom(c)
+        diff = np.abs(total - v[g])
+        agree = diff <= e[g] + est
+        stats["refine_disagreements"] += int((~agree).sum())
+        c["over"][g] = True
+        c["over_val"][g] = np.where(agree, total, v[g])
+        c["over_err"][g] = np.where(agree, est, e[g] + diff)
 
     if tolerance is not None and integrator != "eq3" and refiner is not None and charts:
         group = np.arange(m) if owner is None else np.asarray(owner)
@@ -872,7 +890,9 @@ def pieces_form_factors(pieces, m, tolerance=None, owner=None, integrator="secto
                                           & (e > 0.1 * tolerance * Fg[g_of])))
             return out
 
-        # second tier: refined rings in long double, chart by chart, all at once
+        # second tier: refined rings in long double, chart by chart, all at once; a
+        # piece's rings (exterior and holes, which may nearly cancel) summed before
+        # rounding
         labels = []
         for c, bad in zip(charts, flagged()):
             rsel = np.flatnonzero(np.isin(c["geom"], bad))
@@ -890,39 +910,46 @@ def pieces_form_factors(pieces, m, tolerance=None, owner=None, integrator="secto
                 rv, re, ok, lab = refiner.refine_ld(c["ci"], c["chart"], c["coords"][vsel],
                                                     nxt_sub, ring_sub, len(rsel), frag_v)
             labels[-1] = (rsel, None if lab is None else (vsel, st_sub, lab, ok))
-            _accept(c, rsel, rv, re, ok, st)
             st["refined_rings"] += int(ok.sum())
             st["unrefined_rings"] += int((~ok).sum())
-        # last tier: mpmath, ring by ring, for the pieces still missing the tolerance
+            g_r = c["geom"][rsel]
+            geoms, inv = np.unique(g_r, return_inverse=True)
+            total = np.zeros(len(geoms), dtype=rv.dtype)
+            np.add.at(total, inv, np.where(c["is_hole"][rsel], -rv, rv))
+            est = np.bincount(inv, weights=np.where(ok, re, np.inf), minlength=len(geoms))
+            tf = total.astype(float)
+            est = est + tol.EPS * np.abs(tf)
+            done = np.isfinite(est)
+            accept(c, geoms[done], tf[done], est[done], st)
+        # last tier: mpmath, for the pieces still missing the tolerance, their rings
+        # summed at the working precision
         for c, bad, (rsel, info) in zip(charts, flagged(), labels):
             if info is None or len(bad) == 0:
                 continue
             vsel, st_sub, (label, statics, point, drop, cut), ok = info
-            for k in np.flatnonzero(np.isin(c["geom"][rsel], bad) & ok):
-                r = rsel[k]
-                a, cnt = st_sub[k], c["count"][r]
-                sl = slice(a, a + cnt)
-                rv, re = refiner.refine_mp(c["chart"], c["coords"][vsel[sl]], label[sl],
-                                           statics, point[sl], drop[sl], cut[k], tolerance)
-                _accept(c, np.array([r]), np.array([rv]), np.array([re]),
-                        np.array([True]), st)
-                st["refined_rings_mp"] += 1
+            g_r = c["geom"][rsel]
+            for g in np.intersect1d(bad, g_r):
+                ks = np.flatnonzero(g_r == g)
+                if not ok[ks].all():
+                    continue
+                terms, est = [], 0.0
+                for k in ks:
+                    r = rsel[k]
+                    a, cnt = st_sub[k], c["count"][r]
+                    sl = slice(a, a + cnt)
+                    rv, re = refiner.refine_mp(c["chart"], c["coords"][vsel[sl]], label[sl],
+                                               statics, point[sl], drop[sl], cut[k],
+                                               tolerance)
+                    terms.append((-1 if c["is_hole"][r] else 1, rv))
+                    est += re
+                    st["refined_rings_mp"] += 1
+                # summed exactly (not at mpmath's default 15 digits), then rounded once
+                with mpmath.workdps(tol.MP_MAX_DPS + 100):
+                    tf = float(mpmath.fsum(sg * rv for sg, rv in terms))
+                accept(c, np.array([g]), np.array([tf]), np.array([est + 2 * tol.EPS * abs(tf)]),
+                       st)
     for c in charts:
         v, e = per_geom(c)
         F += np.bincount(c["frag"], weights=v, minlength=m)
         err += np.bincount(c["frag"], weights=e, minlength=m)
     return F, err
-
-
-def _accept(c, rsel, rv, re, ok, stats):
-    """Take refined ring values where refined and within the clipper's estimate of the
-    clipper's value; elsewhere keep the clipper's, its estimate widened by the
-    difference."""
-    fv, fe = c["val"][rsel], c["err"][rsel]
-    diff = np.abs(rv - fv)
-    agree = ok & (diff <= fe)
-    stats["refine_disagreements"] += int((ok & ~agree).sum())
-    c["val"][rsel[agree]] = rv[agree]
-    c["err"][rsel[agree]] = re[agree]
-    off = ok & ~agree
-    c["err"][rsel[off]] = fe[off] + diff[off]

@@ -331,7 +331,8 @@ class Refiner:
         Returns
         -------
         (ndarray, ndarray, ndarray of bool, labels)
-            Per ring the absolute form factor of its image, its error estimate, and
+            Per ring the absolute form factor of its image (long double, to be summed
+            per piece before rounding), its error estimate, and
             whether it was refined (every edge labelled); and the labels (reused by the
             mpmath tier).
         """
@@ -341,7 +342,7 @@ class Refiner:
         label, statics, res = self.match(ci, chart, coords, nxt, frag)
         ok_ring = np.ones(n_rings, dtype=bool)
         ok_ring[ring_of[~np.isfinite(res)]] = False
-        val = np.zeros(n_rings)
+        val = np.zeros(n_rings, dtype=_LD)
         est = np.full(n_rings, np.inf)
         if not ok_ring.any():
             return val, est, ok_ring, None
@@ -411,7 +412,7 @@ class Refiner:
         A0 = Xk[st]
         S, mags, errs = _clipped_sector_sums(A0, Xk - A0[ridx], nx2, ridx, len(rings),
                                              eps=_LD_EPS)
-        v = (np.abs(S) / (2 * np.pi)).astype(float)
+        v = np.abs(S) / (2 * np.pi)                 # long double: summed per piece
         # the vertices' geometry: each refined edge (the arc through its two computed
         # end points) is off its input plane by its end points' residuals (measured),
         # their evaluation and the plane's own rounding; the area between the two arcs
@@ -424,7 +425,7 @@ class Refiner:
         g = 0.5 * seg * (res + _VERTEX_ULPS * _LD_EPS * (1.0 + cond[kv]))
         geom = np.bincount(ridx, weights=g, minlength=len(rings)) / np.pi
         e = ((_C1 * _LD_EPS * mags + errs) / (2 * np.pi)).astype(float) + geom \
-            + 4 * _LD_EPS * v + cut[rings]
+            + 4 * _LD_EPS * v.astype(float) + cut[rings]
         val[rings], est[rings] = v, e
         deg = ok_ring & ~good
         val[deg], est[deg] = 0.0, 0.0
@@ -434,7 +435,8 @@ class Refiner:
         """One refined ring in mpmath (labels from :meth:`refine_ld`): planes and
         vertices from the input at the working precision, evaluated at two precisions
         20 digits apart, raised until they agree to ``tolerance``. Returns the absolute
-        form factor of its image and its error estimate. ``point``, ``drop`` and ``cut``
+        form factor of its image (an mpf, to be summed per piece before rounding) and
+        its error estimate. ``point``, ``drop`` and ``cut``
         are the long-double tier's decisions (input points, dropped vertices, the
         triangles they may cut off), kept here."""
         import mpmath as mp
@@ -514,5 +516,4 @@ class Refiner:
                     or float(diff) < tol.MP_VALUE_FLOOR or dps >= tol.MP_MAX_DPS):
                 break
             dps += 40
-        value = float(hi)
-        return value, float(diff) + 2 * abs(value) * tol.EPS + cut
+        return hi, float(diff) + cut
