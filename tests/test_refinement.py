@@ -237,3 +237,17 @@ def test_refinement_is_neutral_where_nothing_is_needed():
     F1, E1 = visible_form_factors(scene, p, n, tolerance=1e-15, error=True, shortcuts=False)
     assert np.all(np.abs(F0 - F1) <= E1 + 1e-16)
     assert abs(F1.sum() - 1) <= 1e-13
+
+
+def test_ground_truth_bound_holds_on_slivers():
+    # exactff.testing.ground_truth, broadcast over receivers, against the references
+    from exactff.testing import ground_truth
+
+    for seed in range(3):
+        polys, p, n = sliver_scene(1e-9, seed, tilt=0.8)
+        scene = ef.Scene.from_polygons(polys)
+        F, E = ground_truth(scene, np.array([p, p]), n)
+        ref = sliver_reference(polys, p, n)
+        assert F.shape == E.shape == (2, 3)
+        assert np.all(np.abs(F[:, 0] - ref) <= E[:, 0] + tol.EPS * ref)
+        assert np.all(E[:, 0] <= 1e-12 * F[:, 0])
