@@ -27,7 +27,8 @@ from ..predicates import tie_priority
 from ..visibility.clipper import CHARTS, chart_clip
 from ._base import FormFactorMethod
 
-__all__ = ["CellLayout", "SampledMethod", "nearest_polygons", "samples_to_resolution"]
+__all__ = ["CellLayout", "SampledMethod", "ZBufferRow", "nearest_polygons", "resolve_depths",
+           "samples_to_resolution"]
 
 #: candidate (polygon, cell) pairs examined at once; bounds the memory of a row
 PAIR_CHUNK = 2_000_000
@@ -114,6 +115,59 @@ def _polygon_buckets(scene):
     return cache["padded_buckets"]
 
 
+class ZBufferRow:
+    """What every z-buffer needs for one row: the live polygons (front or back facing,
+    not edge-on, reaching above the horizon) in the local frame, bucket by bucket, and
+    their depth-test data.
+
+    Attributes
+    ----------
+    local : list of (ndarray of int, ndarray of shape (M, K, 3), ndarray of shape (M,))
+        Live polygons (indices 0, 1, ... across the buckets), local vertices, counts.
+    ids : ndarray of int
+        Scene index of each live polygon.
+    nl, dl : ndarray
+        Local unit normals and ``n . (c - p)``: the depth along a direction d is
+        ``dl / (nl . d)``.
+    band, prio : ndarray
+        Depth-tie band and priority (:func:`exactff.predicates.tie_priority`).
+    """
+
+    def __init__(self, scene, point, normal):
+        p = np.asarray(point, dtype=float)
+        flat = _Polygons.of(scene)
+        side, _ = plane_sides(flat, p, exact=False)  # in the band: edge-on, as the engine
+        R = receiver_frame(normal)
+        # bucket by bucket of vertex counts (one long polygon pads only its own bucket);
+        # the live polygons get indices 0, 1, ... across the buckets
+        local, ids = [], []
+        start = 0
+        for b_ids, Vb, cb in _polygon_buckets(scene):
+            V = to_local(Vb, p, R)
+            slot = np.arange(V.shape[1])[None, :] < cb[:, None]
+            live = (side[b_ids] != 0) & (np.where(slot, V[:, :, 2], -np.inf).max(axis=1) > 0)
+            if live.any():
+                n_live = int(live.sum())
+                local.append((start + np.arange(n_live), V[live], cb[live]))
+                ids.append(b_ids[live])
+                start += n_live
+        self.local = local
+        self.ids = ids = np.concatenate(ids) if ids else np.zeros(0, dtype=int)
+        self.nl = flat.normals[ids] @ R.T
+        rel = flat.centroids[ids] - p
+        self.dl = np.einsum("ij,ij->i", flat.normals[ids], rel)  # n . (c - p)
+        # depth ties: a polygon ties with the nearest hit X when X lies in its plane to
+        # the rounding of n . (X - c) (the BSP's coplanar band; unit normals)
+        self.band = tol.BSP_COPLANAR_ULPS * tol.EPS * (
+            np.linalg.norm(rel, axis=1) + np.linalg.norm(flat.centroids[ids], axis=1)
+            + np.linalg.norm(p))
+        self.prio = tie_priority(side)[ids]
+
+    def hits(self, best):
+        """Scene indices of the polygons shown (-1: none) from live indices."""
+        return np.where(best >= 0, self.ids[np.maximum(best, 0)], -1)
+
+
 def nearest_polygons(scene, point, normal, directions):
     """Index of the nearest polygon along each direction from ``point`` (-1 for none).
 
@@ -131,33 +185,8 @@ def nearest_polygons(scene, point, normal, directions):
     ndarray of shape (C,), int
         Polygons seen edge-on or wholly below the horizon are never returned.
     """
-    p = np.asarray(point, dtype=float)
-    flat = _Polygons.of(scene)
-    side, _ = plane_sides(flat, p, exact=False)  # in the band: edge-on, as the engine
-    R = receiver_frame(normal)
-    # bucket by bucket of vertex counts (one long polygon pads only its own bucket);
-    # the live polygons get indices 0, 1, ... across the buckets
-    local, ids = [], []
-    start = 0
-    for b_ids, Vb, cb in _polygon_buckets(scene):
-        V = to_local(Vb, p, R)
-        slot = np.arange(V.shape[1])[None, :] < cb[:, None]
-        live = (side[b_ids] != 0) & (np.where(slot, V[:, :, 2], -np.inf).max(axis=1) > 0)
-        if live.any():
-            n_live = int(live.sum())
-            local.append((start + np.arange(n_live), V[live], cb[live]))
-            ids.append(b_ids[live])
-            start += n_live
-    ids = np.concatenate(ids) if ids else np.zeros(0, dtype=int)
-    nl = flat.normals[ids] @ R.T
-    rel = flat.centroids[ids] - p
-    dl = np.einsum("ij,ij->i", flat.normals[ids], rel)  # n . (c - p)
-    # depth ties: a polygon ties with the nearest hit X when X lies in its plane to the
-    # rounding of n . (X - c) (the BSP's coplanar band; unit normals)
-    band = tol.BSP_COPLANAR_ULPS * tol.EPS * (np.linalg.norm(rel, axis=1)
-                                              + np.linalg.norm(flat.centroids[ids], axis=1)
-                                              + np.linalg.norm(p))
-    prio = tie_priority(side)[ids]
+    z = ZBufferRow(scene, point, normal)
+    local, nl, dl, band, prio = z.local, z.nl, z.dl, z.band, z.prio
     D = np.asarray(directions, dtype=float)
     chart, u, v = _chart_of(D)
     best_t = np.full(len(D), np.inf)
@@ -173,8 +202,7 @@ def nearest_polygons(scene, point, normal, directions):
                 continue
             _zbuffer_chart(cells, u[cells], v[cells], grid, g_ids[live_c], UV, cl, D, nl,
                            dl, band, prio, best_t, best)
-    out = np.where(best >= 0, ids[np.maximum(best, 0)], -1)
-    return out
+    return z.hits(best)
 
 
 def _ties(src, cell, t_near, D, nl, dl, band):
@@ -269,39 +297,57 @@ def _zbuffer_chart(cells, cu, cv, grid, live, UV, cl, D, nl, dl, band, prio, bes
                 ux = a[:, 0] + (vv - a[:, 1]) * (c[:, 0] - a[:, 0]) / (c[:, 1] - a[:, 1])
             inside ^= straddles & (uu < ux)
         poly, cell_local = poly[inside], cell_local[inside]
-        cell = cells[cell_local]
-        src = live[poly]
-        t = dl[src] / np.einsum("ij,ij->i", nl[src], D[cell])
-        # z-buffer: the nearest depth per cell, then of the polygons tied with it (the hit
-        # point in their planes) the one of lowest priority
-        srt = np.lexsort((prio[src], t, cell))
-        cell, t, src = cell[srt], t[srt], src[srt]
-        first = np.ones(len(cell), dtype=bool)
-        first[1:] = cell[1:] != cell[:-1]
-        group = np.cumsum(first) - 1
-        t_near = t[first][group]
-        tied = first | _ties(src, cell, t_near, D, nl, dl, band)
-        key = np.where(tied, prio[src], np.iinfo(np.int64).max)
-        # cells stay in the same order (and groups in the same places): the group's first
-        # entry is now the tied polygon of lowest priority
-        src = src[np.lexsort((key, cell))][first]
-        cell, t = cell[first], t_near[first]
-        # merge with the cells' best so far (other chunks): the nearer wins unless the
-        # other passes through its hit point with a lower priority
-        old = best[cell]
-        has_old = old >= 0
-        old_s = np.maximum(old, 0)
-        new_nearer = t < best_t[cell]
-        old_ties = np.zeros(len(cell), dtype=bool)
-        new_ties = np.zeros(len(cell), dtype=bool)
-        k = np.flatnonzero(has_old & new_nearer)
-        old_ties[k] = _ties(old_s[k], cell[k], t[k], D, nl, dl, band)
-        k = np.flatnonzero(has_old & ~new_nearer)
-        new_ties[k] = _ties(src[k], cell[k], best_t[cell[k]], D, nl, dl, band)
-        take = np.where(new_nearer, ~old_ties | (prio[src] < prio[old_s]),
-                        ~has_old | (new_ties & (prio[src] < prio[old_s])))
-        best_t[cell] = np.minimum(best_t[cell], t)
-        best[cell[take]] = src[take]
+        resolve_depths(cells[cell_local], live[poly], D, nl, dl, band, prio, best_t, best)
+
+
+def resolve_depths(cell, src, D, nl, dl, band, prio, best_t, best):
+    """The depth buffer: merge candidate (cell, polygon) pairs into ``best_t`` (depth of
+    the nearest hit per cell) and ``best`` (the polygon shown), in place.
+
+    The depth along a cell's direction ``D[cell]`` (any length) is
+    ``t = (n . (c - p)) / (n . D)``; of the polygons through the nearest hit point (depth
+    ties: the hit point in their planes to rounding), the one of lowest ``prio``."""
+    if len(cell) == 0:
+        return
+    den = np.einsum("ij,ij->i", nl[src], D[cell])
+    t = dl[src] / den
+    # the nearest depth per cell (a scatter-min over the whole buffer, linear in the
+    # pairs), then of the polygons tied with it (the hit point in their planes) the one
+    # of lowest priority (priorities are distinct per polygon)
+    n_cells = len(best_t)
+    t_min = np.full(n_cells, np.inf)
+    np.minimum.at(t_min, cell, t)
+    t_near = t_min[cell]
+    tied = t == t_near
+    # the tie test only where it can pass: n . (t_near d) - n . c = (t_near - t) (n . d)
+    # up to rounding, within four times the test's own band
+    slack = 4.0 * (band[src] + tol.BSP_COPLANAR_ULPS * tol.EPS * np.abs(t_near)
+                   + tol.EPS * (np.abs(t_near) * np.linalg.norm(D[cell], axis=1) + np.abs(dl[src])))
+    k = np.flatnonzero(~tied & (np.abs(t_near - t) * np.abs(den) <= slack))
+    tied[k] = _ties(src[k], cell[k], t_near[k], D, nl, dl, band)
+    p_min = np.full(n_cells, np.iinfo(np.int64).max)
+    np.minimum.at(p_min, cell[tied], prio[src[tied]])
+    chosen = np.flatnonzero(tied & (prio[src] == p_min[cell]))
+    pick = np.full(n_cells, -1)
+    pick[cell[chosen]] = src[chosen]
+    cell = np.flatnonzero(pick >= 0)
+    t, src = t_min[cell], pick[cell]
+    # merge with the cells' best so far (other chunks): the nearer wins unless the
+    # other passes through its hit point with a lower priority
+    old = best[cell]
+    has_old = old >= 0
+    old_s = np.maximum(old, 0)
+    new_nearer = t < best_t[cell]
+    old_ties = np.zeros(len(cell), dtype=bool)
+    new_ties = np.zeros(len(cell), dtype=bool)
+    k = np.flatnonzero(has_old & new_nearer)
+    old_ties[k] = _ties(old_s[k], cell[k], t[k], D, nl, dl, band)
+    k = np.flatnonzero(has_old & ~new_nearer)
+    new_ties[k] = _ties(src[k], cell[k], best_t[cell[k]], D, nl, dl, band)
+    take = np.where(new_nearer, ~old_ties | (prio[src] < prio[old_s]),
+                    ~has_old | (new_ties & (prio[src] < prio[old_s])))
+    best_t[cell] = np.minimum(best_t[cell], t)
+    best[cell[take]] = src[take]
 
 
 class SampledMethod(FormFactorMethod):
@@ -321,6 +367,11 @@ class SampledMethod(FormFactorMethod):
         """Number of cells (or rays)."""
         return len(self.layout())
 
+    def native_hits(self, scene, point, normal):
+        """The polygon shown in each cell by the method's own rasterisation (methods
+        with ``native=True``); the shared core is the oracle it is tested against."""
+        raise NotImplementedError
+
     def directions_for(self, point):
         """Cell directions and weights for a row (fixed per instance by default)."""
         L = self.layout()
@@ -330,7 +381,10 @@ class SampledMethod(FormFactorMethod):
         as_scene(scene)
         point, normal = as_receiver(point, normal)
         D, w = self.directions_for(point)
-        hit = nearest_polygons(scene, point, normal, D)
+        if getattr(self, "native", False):
+            hit = self.native_hits(scene, point, normal)
+        else:
+            hit = nearest_polygons(scene, point, normal, D)
         flat = _Polygons.of(scene)
         side, _ = plane_sides(flat, np.asarray(point, dtype=float), exact=False)
         receives = side > 0

@@ -2,7 +2,9 @@
 
 import numpy as np
 
-from ._sampling import CellLayout, SampledMethod, resolution_from
+from ..visibility.clipper import CHARTS
+from ._raster import rasterise_face
+from ._sampling import CellLayout, SampledMethod, ZBufferRow, resolution_from
 
 __all__ = ["Hemicube"]
 
@@ -32,6 +34,12 @@ class Hemicube(SampledMethod):
         Cells per edge of the top face (even).
     samples : int, optional
         About this many cells, if ``resolution`` is not given (default 65,536).
+    native : bool, default True
+        Rasterise as the hemicube does: each polygon clipped to each face's frustum
+        and scan-converted on the face's grid, a depth buffer per face
+        (:func:`exactff.methods._raster.rasterise_face`). False: the shared sampling
+        core (the test oracle; the same cells, the same rows up to cells exactly on
+        an edge).
 
     Examples
     --------
@@ -44,8 +52,9 @@ class Hemicube(SampledMethod):
 
     name = "hemicube"
 
-    def __init__(self, resolution=None, *, samples=None):
+    def __init__(self, resolution=None, *, samples=None, native=True):
         self.resolution = resolution_from(resolution, samples, 3.0, even=True)
+        self.native = bool(native)
         self._layout = None
 
     def build_layout(self):
@@ -65,5 +74,24 @@ class Hemicube(SampledMethod):
             wts.append(side_w)
         return CellLayout(np.vstack(dirs), np.concatenate(wts), 1.0)
 
+    def native_hits(self, scene, point, normal):
+        r = self.resolution
+        L = self.layout()
+        c, _ = _grid(r, -1.0, 1.0)
+        cz, _ = _grid(r // 2, 0.0, 1.0)
+        z = ZBufferRow(scene, point, normal)
+        best_t = np.full(len(L), np.inf)
+        best = np.full(len(L), -1)
+        # the top face (r x r cells), then the four half side faces (r x r/2 each), in
+        # the layout's order; the faces are the engine's charts
+        rasterise_face(z, CHARTS[0], c, c, lambda i, j: i * r + j, L.directions,
+                       best_t, best)
+        for k in range(4):
+            off = r * r + k * r * (r // 2)
+            rasterise_face(z, CHARTS[1 + k], c, cz, lambda i, j, off=off: off + i * (r // 2) + j,
+                           L.directions, best_t, best)
+        return z.hits(best)
+
     def __repr__(self):
-        return f"Hemicube(resolution={self.resolution})"
+        extra = "" if self.native else ", native=False"
+        return f"Hemicube(resolution={self.resolution}{extra})"

@@ -2,7 +2,8 @@
 
 import numpy as np
 
-from ._sampling import CellLayout, SampledMethod, resolution_from
+from ._raster import rasterise_disk
+from ._sampling import CellLayout, SampledMethod, ZBufferRow, resolution_from
 
 __all__ = ["DiscretePPBH"]
 
@@ -26,6 +27,12 @@ class DiscretePPBH(SampledMethod):
         Cells per side of the grid (``r``); about ``pi r^2 / 4`` cells are kept.
     samples : int, optional
         About this many cells, if ``resolution`` is not given (default 65,536).
+    native : bool, default True
+        Rasterise as the paper does: each polygon projected once onto the base of the
+        hemisphere (horizon-clipped; its edges are the ellipse arcs of Eq. 2) and
+        scan-converted on the disk's grid, one depth buffer
+        (:func:`exactff.methods._raster.rasterise_disk`). False: the shared sampling
+        core (the test oracle).
 
     Examples
     --------
@@ -41,8 +48,9 @@ class DiscretePPBH(SampledMethod):
 
     name = "ppbh"
 
-    def __init__(self, resolution=None, *, samples=None):
+    def __init__(self, resolution=None, *, samples=None, native=True):
         self.resolution = resolution_from(resolution, samples, np.pi / 4)
+        self.native = bool(native)
         self._layout = None
 
     def build_layout(self):
@@ -55,5 +63,19 @@ class DiscretePPBH(SampledMethod):
         D = np.column_stack([x, y, np.sqrt(1.0 - x * x - y * y)])
         return CellLayout(D, np.full(len(x), 1.0 / len(x)), 1.0)
 
+    def native_hits(self, scene, point, normal):
+        r = self.resolution
+        L = self.layout()
+        c = -1.0 + (np.arange(r) + 0.5) * (2.0 / r)
+        x, y = np.meshgrid(c, c, indexing="ij")
+        index_of = np.full(r * r, -1)
+        index_of[(x * x + y * y < 1.0).ravel()] = np.arange(len(L))
+        z = ZBufferRow(scene, point, normal)
+        best_t = np.full(len(L), np.inf)
+        best = np.full(len(L), -1)
+        rasterise_disk(z, c, c, lambda i, j: index_of[i * r + j], L.directions, best_t, best)
+        return z.hits(best)
+
     def __repr__(self):
-        return f"DiscretePPBH(resolution={self.resolution})"
+        extra = "" if self.native else ", native=False"
+        return f"DiscretePPBH(resolution={self.resolution}{extra})"
