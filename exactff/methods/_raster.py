@@ -25,7 +25,7 @@ from .. import _tolerances as tol
 from ..visibility.clipper import chart_clip, clip_halfspace
 from ._sampling import PAIR_CHUNK, resolve_depths
 
-__all__ = ["rasterise_face", "rasterise_disk"]
+__all__ = ["rasterise_face", "rasterise_disk", "rasterise_polar", "face_clipper"]
 
 
 def _first_at_or_above(centres, x):
@@ -81,26 +81,61 @@ def _chunks(n_pairs, width):
     return [(s, min(s + step, n_pairs)) for s in range(0, n_pairs, step)]
 
 
-def rasterise_face(z, chart, uc, vc, cell_of, D, best_t, best):
+def face_clipper(eu, ev, ew, planes):
+    """A clip function for :func:`rasterise_face`: polygons (local frame) clipped to the
+    half-spaces ``h . x > 0`` of ``planes`` (through the point) and projected onto the
+    plane ``w = 1`` with axes ``e_u``, ``e_v``; the same contract as
+    :func:`exactff.visibility.clipper.chart_clip`."""
+    eu, ev, ew = (np.asarray(e, dtype=float) for e in (eu, ev, ew))
+    planes = [np.asarray(h, dtype=float) for h in planes]
+
+    def clip(V, counts):
+        slot = np.arange(V.shape[1])[None, :] < counts[:, None]
+        S = V @ np.array(planes).T
+        reach = np.flatnonzero(~np.any(np.all((S <= 0) | ~slot[:, :, None], axis=1), axis=1)
+                               & (counts >= 3))
+        Vc, cc = V[reach], counts[reach]
+        for h in planes:
+            if not np.any(cc >= 3):
+                break
+            Vc, cc = clip_halfspace(Vc, np.where(cc >= 3, cc, 0), h)
+        ok = np.flatnonzero(cc >= 3)
+        Vc, cc = Vc[ok], cc[ok]
+        K = Vc.shape[1]
+        last = np.take_along_axis(Vc, np.maximum(cc - 1, 0)[:, None, None].repeat(3, axis=2),
+                                  axis=1)
+        Vc = np.where((np.arange(K)[None, :] < cc[:, None])[:, :, None], Vc, last)
+        w = Vc @ ew
+        UV = np.stack([(Vc @ eu) / w, (Vc @ ev) / w], axis=-1)
+        return reach[ok], UV, cc
+
+    return clip
+
+
+def rasterise_face(z, chart, uc, vc, cell_of, D, best_t, best, clip=None):
     """Scan-convert every live polygon on one planar face; depth-test into the buffer.
 
     Parameters
     ----------
     z : ZBufferRow
     chart : (e_u, e_v, e_w, side)
-        The face's plane ``w = 1`` and axes (one of the engine's charts).
+        The face's plane ``w = 1`` and axes (one of the engine's charts), when ``clip``
+        is not given.
     uc, vc : ndarray
         Cell centres along u and v, increasing.
     cell_of : callable
         ``cell_of(i, j)`` -> the index in the layout of the cell at ``(uc[i], vc[j])``
-        (consecutive along j).
+        (consecutive along j), -1 for a grid cell the layout does not have.
     D : ndarray of shape (C, 3)
         The layout's cell directions (for the depths).
     best_t, best : ndarray of shape (C,)
         The depth buffer (updated in place).
+    clip : callable, optional
+        ``clip(V, counts) -> (live, UV, counts)``: the face's frustum clipping and
+        projection (:func:`face_clipper`); default the chart's.
     """
     for g_ids, V, counts in z.local:
-        live, UV, cl = chart_clip(V, counts, chart)
+        live, UV, cl = chart_clip(V, counts, chart) if clip is None else clip(V, counts)
         if len(live) == 0:
             continue
         # scanlines u = const, spans along v: the layout's fast axis (cell index
@@ -124,7 +159,9 @@ def rasterise_face(z, chart, uc, vc, cell_of, D, best_t, best):
                     ux = a[:, 0] + (y - a[:, 1]) * (c[:, 0] - a[:, 0]) / (c[:, 1] - a[:, 1])
                 X[straddles, e] = ux[straddles]
             pair, col = _spans_to_cells(X, vc)
-            _depth_test(z, cell_of(r[pair], col), g_ids[live[P[pair]]], D, best_t, best)
+            cell = cell_of(r[pair], col)
+            keep = cell >= 0
+            _depth_test(z, cell[keep], g_ids[live[P[pair[keep]]]], D, best_t, best)
 
 
 def _arc_y(a, d, s):
@@ -231,3 +268,80 @@ def rasterise_disk(z, xc, yc, cell_of, D, best_t, best):
             cell = cell_of(r[pair], col)
             keep = cell >= 0
             _depth_test(z, cell[keep], g_ids[live[P[pair[keep]]]], D, best_t, best)
+
+
+def rasterise_polar(z, radii, angles, cell_of, D, best_t, best, clip):
+    """Scan-convert every live polygon on a plane's polar grid (the polar plane).
+
+    The polygon's image on the plane (straight edges, clipped by ``clip``) is scanned
+    along every sector's ray from the centre, ``(cos phi, sin phi) rho``, rho > 0: its
+    edges' crossings with the ray, sorted, give the spans of radii inside (even-odd,
+    counted outwards to infinity: with an odd number of crossings the centre is inside
+    and the first span starts at 0). Only the sectors within the image's angular extent
+    are scanned (all of them when its bounding box holds the centre).
+
+    Parameters
+    ----------
+    z : ZBufferRow
+    radii, angles : ndarray
+        Ring radii and sector angles of the cell centres, increasing (angles in
+        ``[0, 2 pi)``).
+    cell_of : callable
+        ``cell_of(ring, sector)`` -> the cell's index in the layout.
+    D, best_t, best : as :func:`rasterise_face`.
+    clip : callable
+        The plane's frustum clipping and projection (:func:`face_clipper`).
+    """
+    S = len(angles)
+    step = 2.0 * np.pi / S
+    cos, sin = np.cos(angles), np.sin(angles)
+    for g_ids, V, counts in z.local:
+        live, UV, cl = clip(V, counts)
+        if len(live) == 0:
+            continue
+        K = UV.shape[1]
+        # every edge from its lower end point (y, then x): computed identically in the
+        # polygons that share it
+        A = UV
+        B = np.roll(UV, -1, axis=1)
+        B = np.where((np.arange(K)[None, :] < cl[:, None] - 1)[:, :, None], B,
+                     np.take_along_axis(UV, np.zeros((len(UV), 1, 1), dtype=int).repeat(2, 2),
+                                        axis=1))
+        slot = np.arange(K)[None, :] < cl[:, None]
+        B = np.where(slot[:, :, None], B, A)
+        swap = (B[:, :, 1] < A[:, :, 1]) | ((B[:, :, 1] == A[:, :, 1]) & (B[:, :, 0] < A[:, :, 0]))
+        A, B = np.where(swap[:, :, None], B, A), np.where(swap[:, :, None], A, B)
+        # sectors within each image's angular extent
+        lo, hi = UV.min(axis=1), UV.max(axis=1)
+        holds = (lo[:, 0] <= 0) & (hi[:, 0] >= 0) & (lo[:, 1] <= 0) & (hi[:, 1] >= 0)
+        corners = np.stack([lo, np.column_stack([lo[:, 0], hi[:, 1]]), hi,
+                            np.column_stack([hi[:, 0], lo[:, 1]])], axis=1)
+        ang = np.arctan2(corners[:, :, 1], corners[:, :, 0])
+        mid = np.arctan2((lo[:, 1] + hi[:, 1]) / 2, (lo[:, 0] + hi[:, 0]) / 2)
+        off = (ang - mid[:, None] + np.pi) % (2 * np.pi) - np.pi
+        k0 = np.ceil((mid + off.min(axis=1)) / step - 0.5).astype(int) - 1
+        k1 = np.floor((mid + off.max(axis=1)) / step - 0.5).astype(int) + 1
+        k0 = np.where(holds, 0, k0)
+        k1 = np.where(holds, S - 1, np.minimum(k1, k0 + S - 1))
+        cnt = k1 - k0 + 1
+        poly = np.repeat(np.arange(len(live)), cnt)
+        sector = (np.repeat(k0, cnt) + np.arange(int(cnt.sum()))
+                  - np.repeat(np.cumsum(cnt) - cnt, cnt)) % S
+        for s0, s1 in _chunks(len(poly), K):
+            P, k = poly[s0:s1], sector[s0:s1]
+            cx, sy = cos[k][:, None], sin[k][:, None]
+            a, b = A[P], B[P]
+            sa = cx * a[:, :, 1] - sy * a[:, :, 0]
+            sb = cx * b[:, :, 1] - sy * b[:, :, 0]
+            with np.errstate(divide="ignore", invalid="ignore"):
+                t = sa / (sa - sb)
+                xx = a[:, :, 0] + t * (b[:, :, 0] - a[:, :, 0])
+                yy = a[:, :, 1] + t * (b[:, :, 1] - a[:, :, 1])
+            rho = cx * xx + sy * yy
+            cross = ((sa > 0) != (sb > 0)) & slot[P] & (rho > 0)
+            X = np.where(cross, rho, np.nan)
+            # an odd count: the centre is inside, the first span starts at 0
+            odd = (np.sum(cross, axis=1) % 2) == 1
+            X = np.column_stack([np.where(odd, -np.inf, np.nan), X])
+            pair, ring = _spans_to_cells(X, radii)
+            _depth_test(z, cell_of(ring, k[pair]), g_ids[live[P[pair]]], D, best_t, best)

@@ -2,7 +2,8 @@
 
 import numpy as np
 
-from ._sampling import CellLayout, SampledMethod, resolution_from
+from ._raster import face_clipper, rasterise_face
+from ._sampling import CellLayout, SampledMethod, ZBufferRow, resolution_from
 
 __all__ = ["CubicTetrahedron", "cubic_tetrahedron_frame"]
 
@@ -45,6 +46,11 @@ class CubicTetrahedron(SampledMethod):
         Cells per face edge; about ``3 r^2 / 2`` cells are kept.
     samples : int, optional
         About this many cells, if ``resolution`` is not given (default 65,536).
+    native : bool, default True
+        Rasterise on the three faces: each polygon clipped to each face's frustum
+        (its triangle above the base) and scan-converted on the face's grid
+        (:func:`exactff.methods._raster.rasterise_face`). False: the shared sampling
+        core (the test oracle).
 
     Examples
     --------
@@ -57,8 +63,9 @@ class CubicTetrahedron(SampledMethod):
 
     name = "cubic_tetrahedron"
 
-    def __init__(self, resolution=None, *, samples=None):
+    def __init__(self, resolution=None, *, samples=None, native=True):
         self.resolution = resolution_from(resolution, samples, 1.5)
+        self.native = bool(native)
         self._layout = None
 
     def build_layout(self):
@@ -77,5 +84,28 @@ class CubicTetrahedron(SampledMethod):
             dirs.append(cube @ A)
         return CellLayout(np.vstack(dirs), np.tile(wt, 3), 1.0)
 
+    def native_hits(self, scene, point, normal):
+        r = self.resolution
+        L = self.layout()
+        c = -2.0 + (np.arange(r) + 0.5) * (3.0 / r)
+        v, w = np.meshgrid(c, c, indexing="ij")
+        keep = (1.0 + v + w > 0).ravel()
+        n_face = int(keep.sum())
+        a1, a2, a3 = cubic_tetrahedron_frame()
+        up = np.array([0.0, 0.0, 1.0])
+        z = ZBufferRow(scene, point, normal)
+        best_t = np.full(len(L), np.inf)
+        best = np.full(len(L), -1)
+        # the faces x' = 1, y' = 1, z' = 1 in the layout's order, each with the plane
+        # axes of its grid (v, w); the frustum: u, v <= 1 and above the base
+        for k, (ew, eu, ev) in enumerate(((a1, a2, a3), (a2, a3, a1), (a3, a1, a2))):
+            index_of = np.full(r * r, -1)
+            index_of[keep] = k * n_face + np.arange(n_face)
+            clip = face_clipper(eu, ev, ew, [ew - eu, ew - ev, up])
+            rasterise_face(z, None, c, c, lambda i, j, m=index_of: m[i * r + j],
+                           L.directions, best_t, best, clip=clip)
+        return z.hits(best)
+
     def __repr__(self):
-        return f"CubicTetrahedron(resolution={self.resolution})"
+        extra = "" if self.native else ", native=False"
+        return f"CubicTetrahedron(resolution={self.resolution}{extra})"

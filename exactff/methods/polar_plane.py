@@ -2,7 +2,8 @@
 
 import numpy as np
 
-from ._sampling import CellLayout, SampledMethod, check_resolution
+from ._raster import face_clipper, rasterise_polar
+from ._sampling import CellLayout, SampledMethod, ZBufferRow, check_resolution
 
 __all__ = ["PolarPlane"]
 
@@ -31,6 +32,11 @@ class PolarPlane(SampledMethod):
         About this many cells (default 65,536).
     extent : float, default 10
         Radius ``E`` of the disc at height 1.
+    native : bool, default True
+        Rasterise on the plane's polar grid: each polygon clipped to the plane's
+        frustum and scanned along every sector's ray within its angular extent
+        (:func:`exactff.methods._raster.rasterise_polar`). False: the shared sampling
+        core (the test oracle).
 
     Examples
     --------
@@ -43,7 +49,7 @@ class PolarPlane(SampledMethod):
 
     name = "polar_plane"
 
-    def __init__(self, rings=None, sectors=None, *, samples=None, extent=10.0):
+    def __init__(self, rings=None, sectors=None, *, samples=None, extent=10.0, native=True):
         if not (np.isfinite(extent) and extent > 0):
             raise ValueError(f"extent must be a positive finite number, got {extent!r}")
         if rings is None or sectors is None:
@@ -55,17 +61,39 @@ class PolarPlane(SampledMethod):
         self.rings = check_resolution(rings, "rings")
         self.sectors = check_resolution(sectors, "sectors")
         self.extent = float(extent)
+        self.native = bool(native)
         self._layout = None
 
-    def build_layout(self):
+    def _polar_grid(self):
+        """Ring radii and sector angles of the cell centres, and the covered form
+        factor."""
         E = self.extent
         FE = E * E / (1.0 + E * E)
         Fm = (np.arange(self.rings) + 0.5) / self.rings * FE
         rm = np.sqrt(Fm / (1.0 - Fm))
         phi = (np.arange(self.sectors) + 0.5) * (2.0 * np.pi / self.sectors)
+        return rm, phi, FE
+
+    def native_hits(self, scene, point, normal):
+        E = self.extent
+        L = self.layout()
+        rm, phi, _ = self._polar_grid()
+        X, Y, Z = np.eye(3)
+        clip = face_clipper(X, Y, Z, [E * Z - X, E * Z + X, E * Z - Y, E * Z + Y])
+        z = ZBufferRow(scene, point, normal)
+        best_t = np.full(len(L), np.inf)
+        best = np.full(len(L), -1)
+        S = self.sectors
+        rasterise_polar(z, rm, phi, lambda i, k: i * S + k, L.directions, best_t, best, clip)
+        return z.hits(best)
+
+    def build_layout(self):
+        rm, phi, FE = self._polar_grid()
         r, a = (x.ravel() for x in np.meshgrid(rm, phi, indexing="ij"))
         D = np.column_stack([r * np.cos(a), r * np.sin(a), np.ones_like(r)])
         return CellLayout(D, np.full(len(r), FE / (self.rings * self.sectors)), FE)
 
     def __repr__(self):
-        return f"PolarPlane(rings={self.rings}, sectors={self.sectors}, extent={self.extent})"
+        extra = "" if self.native else ", native=False"
+        return (f"PolarPlane(rings={self.rings}, sectors={self.sectors}, extent={self.extent}"
+                f"{extra})")

@@ -2,7 +2,9 @@
 
 import numpy as np
 
-from ._sampling import CellLayout, SampledMethod, check_resolution, resolution_from
+from ._raster import face_clipper, rasterise_face
+from ._sampling import (CellLayout, SampledMethod, ZBufferRow, check_resolution,
+                        resolution_from)
 
 __all__ = ["SinglePlane", "parallel_rectangle_form_factor"]
 
@@ -63,6 +65,11 @@ class SinglePlane(SampledMethod):
     cells : {"equal_ff", "uniform", "uniform_refined"}, default "equal_ff"
     refine : int, default 2
         Subdivision of the centre cells for ``"uniform_refined"``.
+    native : bool, default True
+        Rasterise on the plane: each polygon clipped to the plane's frustum and
+        scan-converted on the plane's grid (two grids for ``"uniform_refined"``)
+        (:func:`exactff.methods._raster.rasterise_face`). False: the shared sampling
+        core (the test oracle).
 
     Examples
     --------
@@ -78,7 +85,7 @@ class SinglePlane(SampledMethod):
     name = "single_plane"
 
     def __init__(self, resolution=None, *, samples=None, extent=4.0, cells="equal_ff",
-                 refine=2):
+                 refine=2, native=True):
         if cells not in ("equal_ff", "uniform", "uniform_refined"):
             raise ValueError(f"cells must be 'equal_ff', 'uniform' or 'uniform_refined', "
                              f"got {cells!r}")
@@ -88,11 +95,15 @@ class SinglePlane(SampledMethod):
         self.refine = check_resolution(refine, "refine")
         self.extent = float(extent)
         self.cells = cells
+        self.native = bool(native)
         self._layout = None
 
-    def build_layout(self):
+    def _cells(self):
+        """Cell centres on the plane z = 1 and their delta form factors, and the grids
+        they lie on: a list of ``(x, y, index)`` with ``index`` the cells' positions
+        in the layout (one grid; two for ``"uniform_refined"``: the coarse cells
+        outside the centre and the fine ones inside)."""
         r, E = self.resolution, self.extent
-        covered = float(parallel_rectangle_form_factor(-E, E, -E, E))
         if self.cells == "equal_ff":
             S = E / np.sqrt(1.0 + E * E)
             s = np.linspace(-S, S, r + 1)
@@ -103,11 +114,12 @@ class SinglePlane(SampledMethod):
             w = parallel_rectangle_form_factor(x0, x1, y0, y1)
             # direction through the cell's centre
             xc, yc = 0.5 * (x0 + x1), 0.5 * (y0 + y1)
-            return CellLayout(np.column_stack([xc, yc, np.ones_like(xc)]), w, covered)
+            return xc, yc, w, [(xc, yc, np.arange(len(xc)))]
         h = 2.0 * E / r
         c = -E + (np.arange(r) + 0.5) * h
         x, y = (a.ravel() for a in np.meshgrid(c, c, indexing="ij"))
         dA = np.full(len(x), h * h)
+        grids = [(x, y, np.arange(len(x)))]
         if self.cells == "uniform_refined":
             # cells wholly inside [-1, 1]^2 (half a cell of slack against rounding)
             centre = (np.abs(x) + 0.5 * h <= 1.0 + 0.25 * h) & (np.abs(y) + 0.5 * h <= 1.0 + 0.25 * h)
@@ -116,12 +128,41 @@ class SinglePlane(SampledMethod):
             ox, oy = (a.ravel() for a in np.meshgrid(sub * h, sub * h, indexing="ij"))
             xf = (x[centre][:, None] + ox[None, :]).ravel()
             yf = (y[centre][:, None] + oy[None, :]).ravel()
+            n_out = int((~centre).sum())
+            outer = np.full(len(x), -1)
+            outer[~centre] = np.arange(n_out)
+            grids = [(x, y, outer), (xf, yf, n_out + np.arange(len(xf)))]
             x = np.concatenate([x[~centre], xf])
             y = np.concatenate([y[~centre], yf])
             dA = np.concatenate([dA[~centre], np.full(len(xf), (h / k) ** 2)])
         w = dA / (np.pi * (x * x + y * y + 1.0) ** 2)
+        return x, y, w, grids
+
+    def build_layout(self):
+        E = self.extent
+        covered = float(parallel_rectangle_form_factor(-E, E, -E, E))
+        x, y, w, _ = self._cells()
         return CellLayout(np.column_stack([x, y, np.ones_like(x)]), w, covered)
 
+    def native_hits(self, scene, point, normal):
+        E = self.extent
+        L = self.layout()
+        X, Y, Z = np.eye(3)
+        clip = face_clipper(X, Y, Z, [E * Z - X, E * Z + X, E * Z - Y, E * Z + Y])
+        z = ZBufferRow(scene, point, normal)
+        best_t = np.full(len(L), np.inf)
+        best = np.full(len(L), -1)
+        # each grid of cell centres (the plane's, or the coarse and the fine ones of
+        # the refined variant), scan-converted on its own rows and columns
+        for x, y, index in self._cells()[3]:
+            xs, ys = np.unique(x), np.unique(y)
+            m = np.full(len(xs) * len(ys), -1)
+            m[np.searchsorted(xs, x) * len(ys) + np.searchsorted(ys, y)] = index
+            rasterise_face(z, None, xs, ys, lambda i, j, m=m, n=len(ys): m[i * n + j],
+                           L.directions, best_t, best, clip=clip)
+        return z.hits(best)
+
     def __repr__(self):
+        extra = "" if self.native else ", native=False"
         return (f"SinglePlane(resolution={self.resolution}, extent={self.extent}, "
-                f"cells={self.cells!r})")
+                f"cells={self.cells!r}{extra})")
