@@ -241,8 +241,11 @@ def rasterise_disk(z, xc, yc, cell_of, D, best_t, best):
             P, r = poly[c0:c1], row[c0:c1]
             y = xc[r][:, None]
             cross = ((Y0[P] > y) != (Y1[P] > y)) & ok[P]
-            pay, pdy, pa2, pv2, pav = ay[P], dy[P], a2[P], v2[P], av[P]
-            yy = y * y
+            # the crossings only (most pieces miss a given scanline)
+            q, e = np.nonzero(cross)
+            Pe, yq = P[q], y[q, 0]
+            pay, pdy, pa2, pv2, pav = ay[Pe, e], dy[Pe, e], a2[Pe, e], v2[Pe, e], av[Pe, e]
+            yy = yq * yq
             q2 = pdy * pdy - yy * pv2
             q1 = 2.0 * (pay * pdy - yy * pav)
             q0 = pay * pay - yy * pa2
@@ -253,17 +256,17 @@ def rasterise_disk(z, xc, yc, cell_of, D, best_t, best):
                 r1 = big / q2
                 r2 = q0 / big
                 lin = -q0 / q1                              # q2 = 0: one root
-            s0, s1 = S0[P], S1[P]
+            s0, s1 = S0[Pe, e], S1[Pe, e]
             best_s = np.full(s0.shape, np.nan)
             for cand in (r1, r2, lin):
                 # on the monotone piece, on the row's side (y_j, not -y_j)
                 with np.errstate(invalid="ignore", over="ignore"):
                     good = (np.isfinite(cand) & (cand >= s0 - 1e-9) & (cand <= s1 + 1e-9)
-                            & ((np.sign(pay + cand * pdy) == np.sign(y)) | (y == 0)))
+                            & ((np.sign(pay + cand * pdy) == np.sign(yq)) | (yq == 0)))
                 best_s = np.where(np.isnan(best_s) & good, cand, best_s)
             s = np.clip(np.where(np.isnan(best_s), 0.5 * (s0 + s1), best_s), s0, s1)
-            x = (ax[P] + s * dx[P]) / np.sqrt(pa2 + s * (2.0 * pav + s * pv2))
-            X = np.where(cross, x, np.nan)
+            X = np.full(cross.shape, np.nan)
+            X[q, e] = (ax[Pe, e] + s * dx[Pe, e]) / np.sqrt(pa2 + s * (2.0 * pav + s * pv2))
             pair, col = _spans_to_cells(X, yc)
             cell = cell_of(r[pair], col)
             keep = cell >= 0
