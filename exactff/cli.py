@@ -21,12 +21,17 @@ def _scenes():
     return scenes
 
 
-def open_scene(spec):
+def open_scene(spec, *, split_nonplanar=False, planarity_rtol=None):
     """A scene from a file path or a built-in name (``cornell_box``, ``cornell_box_closed``,
     ``office``, ``office:N`` for about N quads, ``cloister``, ``cloister:N``, ``box:K`` for a closed unit box with K x K
     quads per face, ``building:NXxNY`` for rooms with zero-thickness walls)."""
     from .io import load_scene
 
+    options = {"nonplanar": "split" if split_nonplanar else "error"}
+    if planarity_rtol is not None:
+        if not (np.isfinite(planarity_rtol) and planarity_rtol > 0):
+            raise ValueError(f"--planarity-rtol: expected a positive number, got {planarity_rtol}")
+        options["planarity_rtol"] = planarity_rtol
     if spec in BUILTIN:
         return BUILTIN[spec]()
     if spec.startswith("box:"):
@@ -39,7 +44,7 @@ def open_scene(spec):
     if spec.startswith("cloister:"):
         return _scenes().cloister(int(spec[9:]))
     try:
-        return load_scene(spec)
+        return load_scene(spec, **options)
     except UnicodeDecodeError:
         raise ValueError(f"{spec}: not a text file (UTF-8)") from None
     except ValueError as exc:
@@ -47,10 +52,27 @@ def open_scene(spec):
         raise ValueError(str(exc) if str(exc).startswith(spec) else f"{spec}: {exc}") from None
 
 
+def _open(args):
+    return open_scene(args.scene, split_nonplanar=args.split_nonplanar,
+                      planarity_rtol=args.planarity_rtol)
+
+
+def _scene_arguments(p):
+    p.add_argument("scene", help="scene file (.obj, .json, .vs3, .stl, .ply, .off, .vtk, ...) "
+                                 "or built-in name (cornell_box, cornell_box_closed, "
+                                 "office[:N], cloister[:N], box:K, building:NXxNY)")
+    p.add_argument("--split-nonplanar", action="store_true",
+                   help="cut faces that are not planar into planar triangles instead of "
+                        "refusing the file")
+    p.add_argument("--planarity-rtol", type=float, default=None,
+                   help="allowed vertex distance from a face's plane, relative to its "
+                        "diameter (default 1e-6)")
+
+
 def cmd_info(args):
     from .scene import describe
 
-    scene = open_scene(args.scene)
+    scene = _open(args)
     d = describe(scene)
     lo, hi = d["bounds_min"], d["bounds_max"]
     print(f"scene            {args.scene}")
@@ -60,7 +82,9 @@ def cmd_info(args):
     print(f"bounding box     [{lo[0]:.6g}, {lo[1]:.6g}, {lo[2]:.6g}] .. "
           f"[{hi[0]:.6g}, {hi[1]:.6g}, {hi[2]:.6g}]")
     print(f"planarity        max vertex deviation {d['max_planarity_deviation']:.3g} "
-          f"of the polygon's diameter")
+          f"of the polygon's diameter"
+          + (f"; {d['split_faces']} non-planar faces split into triangles"
+             if d["split_faces"] else ""))
     closed = d["closure_residual"] <= 1e-12
     print(f"closure          |sum A n| / sum A = {d['closure_residual']:.3g} "
           f"({'closed' if closed else 'open: rows need not sum to 1'}); "
@@ -68,7 +92,8 @@ def cmd_info(args):
     b2b, same = d["back_to_back_pairs"], d["same_facing_overlaps"]
     print(f"coplanar overlaps {len(b2b)} back-to-back pairs (zero-thickness walls: each "
           f"side is seen from its own side)")
-    name = lambda i: scene.names[i] or f"polygon {i}"
+    name = lambda i: scene.names[i] or (f"polygon {i} ({scene.groups[i]})" if scene.groups[i]
+                                        else f"polygon {i}")
     print(f"                 {len(same)} same-facing pairs"
           + (" (usually a modelling mistake; the first in input order is in front)"
              if same else ""))
@@ -82,7 +107,7 @@ def cmd_info(args):
 def cmd_ff(args):
     from .integrate import point_polygon_form_factors
 
-    scene = open_scene(args.scene)
+    scene = _open(args)
     p = np.array(args.point, dtype=float)
     n = np.array(args.normal, dtype=float)
     F = point_polygon_form_factors(p, n, scene)
@@ -120,7 +145,7 @@ def cmd_matrix(args):
 
     from .formfactors import form_factor_matrix
 
-    scene = open_scene(args.scene)
+    scene = _open(args)
     rows = parse_rows(args.rows, len(scene))
     out = args.output
     if out is None:
@@ -167,18 +192,16 @@ def build_parser():
         description="Exact form factors (view factors) for scenes of planar polygons.")
     sub = parser.add_subparsers(dest="command", required=True)
     p = sub.add_parser("info", help="size, area, bounds, planarity and closure of a scene")
-    p.add_argument("scene", help="scene file (.obj, .json) or built-in name "
-                                 "(cornell_box, cornell_box_closed, office[:N], cloister[:N], box:K, "
-                                 "building:NXxNY)")
+    _scene_arguments(p)
     p.set_defaults(func=cmd_info)
     p = sub.add_parser("ff", help="unoccluded form factors from one point to every polygon")
-    p.add_argument("scene")
+    _scene_arguments(p)
     p.add_argument("--point", nargs=3, type=float, required=True, metavar=("X", "Y", "Z"))
     p.add_argument("--normal", nargs=3, type=float, required=True, metavar=("X", "Y", "Z"))
     p.set_defaults(func=cmd_ff)
     p = sub.add_parser("matrix", help="exact form-factor matrix (rows from the polygons' "
                                       "centroids), written to .npy")
-    p.add_argument("scene")
+    _scene_arguments(p)
     p.add_argument("-o", "--output", help="output .npy (default: SCENE_ff.npy); an "
                                           "interrupted run resumes from it")
     p.add_argument("--csv", help="also write the matrix as CSV")

@@ -299,6 +299,54 @@ class Scene:
     def __repr__(self):
         return f"<Scene: {len(self)} polygons, {len(self.vertices)} vertices>"
 
+    @classmethod
+    def from_pyvista(cls, mesh, **options):
+        """A scene from a pyvista ``PolyData`` (or anything with ``points`` and a flat
+        ``faces`` array ``[k, i_1, ..., i_k, k, ...]``): every face one polygon, in
+        order. pyvista itself is not needed here.
+
+        Parameters
+        ----------
+        mesh : pyvista.PolyData
+        **options
+            Passed to :func:`exactff.io.build_scene` (``nonplanar``, ``planarity_rtol``).
+
+        Examples
+        --------
+        >>> from types import SimpleNamespace
+        >>> quad = SimpleNamespace(points=[[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]],
+        ...                        faces=[4, 0, 1, 2, 3])
+        >>> len(Scene.from_pyvista(quad))
+        1
+        """
+        from .io import build_scene
+
+        points = np.asarray(mesh.points, dtype=float)
+        flat = np.asarray(mesh.faces, dtype=int).ravel()
+        faces, i = [], 0
+        while i < len(flat):
+            k = int(flat[i])
+            if k < 1 or i + 1 + k > len(flat):
+                raise ValueError(f"mesh.faces: bad face size {k} at position {i}")
+            faces.append(points[flat[i + 1:i + 1 + k]])
+            i += 1 + k
+        if not faces:
+            raise ValueError("mesh: no faces")
+        return build_scene(faces, sources=[f"mesh face {j}" for j in range(len(faces))],
+                           **options)
+
+    def to_pyvista(self):
+        """The scene as a pyvista ``PolyData`` (one face per polygon, in order), so that
+        a row or a matrix can be painted on it (``mesh.cell_data["F"] = row``). Needs
+        pyvista (``pip install pyvista``)."""
+        try:
+            import pyvista
+        except ImportError:
+            raise ImportError("Scene.to_pyvista needs pyvista (pip install pyvista)") from None
+        counts = np.diff(self.offsets)
+        faces = np.insert(np.arange(len(self.vertices)), self.offsets[:-1], counts)
+        return pyvista.PolyData(np.array(self.vertices), faces)
+
     @property
     def bounds(self):
         """``(min_xyz, max_xyz)`` of all vertices."""
@@ -335,7 +383,9 @@ def describe(scene):
         faces of a zero-thickness wall, legitimate) and ``same_facing_overlaps``
         (coplanar overlapping pairs facing the same way: usually a modelling mistake),
         both as lists of ``[i, j]`` (see
-        :func:`exactff.visibility.coplanar_overlaps`).
+        :func:`exactff.visibility.coplanar_overlaps`), and ``split_faces`` (faces of
+        the file that were not planar and were cut into triangles when it was read
+        with ``nonplanar="split"``; 0 otherwise).
 
     Examples
     --------
@@ -373,4 +423,5 @@ def describe(scene):
         "unpaired_edges": int(unpaired),
         "back_to_back_pairs": back_to_back.tolist(),
         "same_facing_overlaps": same_facing.tolist(),
+        "split_faces": int(scene._cache.get("split_faces", 0)),
     }

@@ -66,7 +66,7 @@ def test_obj_bad_face_raises_scene_error(tmp_path):
 
 def test_unknown_extension(tmp_path):
     with pytest.raises(ValueError, match="unknown scene format"):
-        ef.load_scene(write(tmp_path, "s.ply", ""))
+        ef.load_scene(write(tmp_path, "s.xyz", ""))
 
 
 def test_json_shared_cornell_box_matches_builtin():
