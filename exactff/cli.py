@@ -186,6 +186,89 @@ def cmd_matrix(args):
     return 0
 
 
+def _rows_for_study(text, seed, n):
+    """``--rows``: an integer K (K rows drawn without replacement with ``--seed``), or
+    'all', 'A:B', 'i,j,...'."""
+    if text not in (None, "all") and text.isdigit():
+        k = int(text)
+        if not 0 < k <= n:
+            raise ValueError(f"--rows {text}: expected 1 to {n} rows (the scene has {n})")
+        return np.sort(np.random.default_rng(seed).choice(n, k, replace=False))
+    return parse_rows(text, n)
+
+
+def _int_list(text, name):
+    try:
+        vals = [int(v) for v in text.split(",") if v.strip()]
+    except ValueError:
+        raise ValueError(f"{name}: expected comma-separated positive integers, got {text!r}") from None
+    if not vals or min(vals) <= 0:
+        raise ValueError(f"{name}: expected comma-separated positive integers, got {text!r}")
+    return vals
+
+
+def cmd_compare(args):
+    import csv
+    import json
+    import os
+    import platform
+
+    from . import __version__
+    from .methods import METHODS
+    from .reports import compare, to_markdown
+
+    methods = [m.strip() for m in args.methods.split(",") if m.strip()]
+    bad = [m for m in methods if m not in METHODS]
+    if not methods or bad:
+        raise ValueError(f"--methods: unknown {bad or methods!r}; choose from "
+                         f"{', '.join(sorted(METHODS))}")
+    samples = _int_list(args.samples, "--samples")
+    scene = _open(args)
+    rows = _rows_for_study(args.rows, args.seed, len(scene))
+    os.makedirs(args.out, exist_ok=True)
+    reference = args.reference or os.path.join(args.out, "reference.npz")
+    records = compare(scene, methods, samples=samples, rows=rows, reference=reference,
+                      two_sided=args.two_sided, progress=not args.no_progress)
+    print(f"scene {args.scene} ({len(scene)} polygons), {len(rows)} rows"
+          + (f" (seed {args.seed})" if args.rows not in (None, "all") and args.rows.isdigit()
+             else ""))
+    print(to_markdown(records))
+    doc = {"records": records, "scene": args.scene, "polygons": len(scene),
+           "rows": rows.tolist(), "seed": args.seed, "samples": samples, "methods": methods,
+           "two_sided": bool(args.two_sided), "reference": reference,
+           "exactff": __version__,
+           "machine": f"{platform.machine()}, {os.cpu_count()} cores, "
+                      f"python {platform.python_version()}, numpy {np.__version__}"}
+    with open(os.path.join(args.out, "results.json"), "w", encoding="utf-8") as fh:
+        json.dump(doc, fh, indent=1)
+    with open(os.path.join(args.out, "results.csv"), "w", newline="", encoding="utf-8") as fh:
+        w = csv.DictWriter(fh, fieldnames=list(records[0]))
+        w.writeheader()
+        w.writerows(records)
+    written = ["results.csv", "results.json"]
+    try:
+        import matplotlib
+    except ImportError:
+        print("figures: not drawn (pip install exactff[plots] for them)")
+    else:
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+
+        from . import plot
+
+        for name, draw in (("error_vs_samples", plot.error_vs_samples),
+                           ("time_vs_samples", plot.time_vs_samples),
+                           ("error_vs_time", plot.error_vs_time)):
+            ax = draw(records)
+            ax.set_title(f"{ax.get_title()}: {args.scene}, {len(rows)} rows")
+            ax.figure.tight_layout()
+            ax.figure.savefig(os.path.join(args.out, name + ".png"), dpi=120)
+            plt.close(ax.figure)
+            written.append(name + ".png")
+    print(f"written to {args.out}: {', '.join(written)}")
+    return 0
+
+
 def build_parser():
     parser = argparse.ArgumentParser(
         prog="exactff",
@@ -212,6 +295,24 @@ def build_parser():
     p.add_argument("--overwrite", action="store_true",
                    help="start over instead of resuming an existing output file")
     p.set_defaults(func=cmd_matrix)
+    p = sub.add_parser("compare", help="error against run time of discrete methods "
+                                       "(and the exact method) on a scene: tables, CSV, "
+                                       "JSON and figures")
+    _scene_arguments(p)
+    p.add_argument("--methods", required=True,
+                   help="comma-separated: exact, ppbh, hemicube, cubic_tetrahedron, "
+                        "single_plane, polar_plane, monte_carlo")
+    p.add_argument("--samples", default="4096,65536",
+                   help="comma-separated sample counts (methods with samples run at each)")
+    p.add_argument("--rows", default="all",
+                   help="K (K rows drawn with --seed), 'all', 'A:B' or 'i,j,...'")
+    p.add_argument("--seed", type=int, default=0, help="seed of the rows drawn (--rows K)")
+    p.add_argument("--out", required=True, help="output directory")
+    p.add_argument("--reference", help="cache of the exact rows (.npz; default "
+                                       "OUT/reference.npz, reused when it matches)")
+    p.add_argument("--two-sided", action="store_true", help="polygons receive on both sides")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.set_defaults(func=cmd_compare)
     return parser
 
 

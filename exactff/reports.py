@@ -1,5 +1,6 @@
 """Reports: the error of the discrete methods against the exact method, and run time."""
 
+import os
 import time
 
 import numpy as np
@@ -10,6 +11,51 @@ from .methods import resolve
 __all__ = ["compare", "to_markdown"]
 
 
+def _takes_samples(name):
+    """Whether the method class of this name has a sample count (``samples=``)."""
+    import inspect
+
+    from .methods import METHODS
+
+    return name in METHODS and "samples" in inspect.signature(METHODS[name]).parameters
+
+
+def scene_fingerprint(scene):
+    """A short hash of a scene's geometry (vertices and polygon sizes), to tell cached
+    results of one scene from another's."""
+    import hashlib
+
+    h = hashlib.sha256()
+    h.update(np.ascontiguousarray(scene.vertices).tobytes())
+    h.update(np.ascontiguousarray(scene.offsets).tobytes())
+    return h.hexdigest()[:16]
+
+
+def _reference_rows(scene, rows, reference, two_sided, progress):
+    """The exact rows (and the time per row, None when read back): computed, given, or
+    cached in an ``.npz`` file (computed once and written there, read back when the
+    scene, the rows and ``two_sided`` match; a mismatch is an error, never a silent
+    reuse)."""
+    if reference is not None and not isinstance(reference, (str, os.PathLike)):
+        return np.asarray(reference, dtype=float), None
+    path = None if reference is None else os.fspath(reference)
+    key = scene_fingerprint(scene)
+    if path is not None and os.path.exists(path):
+        with np.load(path) as z:
+            if not (str(z["scene"]) == key and np.array_equal(z["rows"], rows)
+                    and bool(z["two_sided"]) == bool(two_sided)):
+                raise ValueError(f"reference {path!r} holds rows of another scene, other rows "
+                                 f"or another two_sided: remove it or give another path")
+            return np.array(z["F"]), float(z["time_per_row"])
+    t0 = time.perf_counter()
+    ref = form_factor_matrix(scene, rows=rows, two_sided=two_sided, progress=progress)
+    t_ref = (time.perf_counter() - t0) / max(len(rows), 1)
+    if path is not None:
+        np.savez(path, F=ref, rows=rows, scene=key, two_sided=bool(two_sided),
+                 time_per_row=t_ref)
+    return ref, t_ref
+
+
 def compare(scene, methods, samples=(4096, 65536), rows=None, *, reference=None,
             two_sided=False, progress=False):
     """Error against run time of form-factor methods on a scene.
@@ -18,46 +64,56 @@ def compare(scene, methods, samples=(4096, 65536), rows=None, *, reference=None,
     ----------
     scene : Scene
     methods : sequence of str or FormFactorMethod
-        Method names (each is run at every sample count) or configured instances (run
-        once, as configured).
+        Method names (a method with a sample count runs at every one of ``samples``;
+        one without, such as ``"exact"``, runs once) or configured instances (run once,
+        as configured).
     samples : sequence of int, default (4096, 65536)
         Sample counts for the methods given by name (``samples=`` option).
     rows : sequence of int, optional
         The rows (receiving polygons) to compare; default all.
-    reference : ndarray of shape (len(rows), len(scene)), optional
-        Reference rows; default: the exact method, computed here.
+    reference : ndarray of shape (len(rows), len(scene)), or str or os.PathLike, optional
+        Reference rows; default: the exact method, computed here. A path caches them:
+        computed and written there (``.npz``) the first time, read back when the scene,
+        the rows and ``two_sided`` match.
     two_sided : bool, default False
     progress : bool, default False
 
     Returns
     -------
     list of dict
-        One per (method, samples): ``method``, ``samples`` (cells or rays actually
-        used), ``rows``, ``mean_abs_error`` (over all coefficients of the rows),
-        ``max_abs_error``, ``rms_error``, ``row_sum_error`` (mean absolute difference of
-        the row sums), ``time_per_row`` (seconds), ``reference_time_per_row``.
+        One per run: ``method``, ``samples`` (cells or rays actually used; 0 for a
+        method without samples), ``rows``, ``mean_abs_error`` (over all coefficients of
+        the rows), ``max_abs_error``, ``rms_error``, ``row_sum_error`` (mean absolute
+        difference of the row sums), ``time_per_row`` (seconds),
+        ``reference_time_per_row`` (None when the reference was given or read back).
 
     Examples
     --------
     >>> import exactff as ef
-    >>> rec = compare(ef.scenes.cornell_box(closed=True), ["hemicube"], samples=[4096])
-    >>> rec[0]["method"], rec[0]["samples"], rec[0]["max_abs_error"] < 0.05
-    ('hemicube', 4332, True)
+    >>> rec = compare(ef.scenes.cornell_box(closed=True), ["hemicube", "exact"], samples=[4096])
+    >>> [(r["method"], r["samples"]) for r in rec], rec[0]["max_abs_error"] < 0.05
+    ([('hemicube', 4332), ('exact', 0)], True)
+    >>> rec[1]["max_abs_error"]      # the exact method against itself
+    0.0
     """
     rows = np.arange(len(scene)) if rows is None else np.asarray(rows, dtype=int).reshape(-1)
-    t0 = time.perf_counter()
-    ref = (form_factor_matrix(scene, rows=rows, two_sided=two_sided, progress=progress)
-           if reference is None else np.asarray(reference, dtype=float))
-    t_ref = (time.perf_counter() - t0) / max(len(rows), 1) if reference is None else None
-    if ref.shape != (len(rows), len(scene)):
-        raise ValueError(f"reference must have shape {(len(rows), len(scene))}, "
-                         f"got {ref.shape}")
+    samples = list(samples)
+    for s in samples:
+        if not (isinstance(s, (int, np.integer)) and s > 0):
+            raise ValueError(f"samples must be positive integers, got {s!r}")
     runs = []
     for method in methods:
         if isinstance(method, str):
-            runs += [(method, resolve(method, samples=int(s))) for s in samples]
+            if _takes_samples(method):
+                runs += [(method, resolve(method, samples=int(s))) for s in samples]
+            else:
+                runs.append((method, resolve(method)))
         else:
             runs.append((getattr(method, "name", type(method).__name__), resolve(method)))
+    ref, t_ref = _reference_rows(scene, rows, reference, two_sided, progress)
+    if ref.shape != (len(rows), len(scene)):
+        raise ValueError(f"reference must have shape {(len(rows), len(scene))}, "
+                         f"got {ref.shape}")
     records = []
     for name, m in runs:
         if hasattr(m, "layout"):

@@ -210,10 +210,10 @@ def office(n=4428):
     Parameters
     ----------
     n : int, default 4428
-        Target number of quads. The count is a staircase in the global element size
-        and, because the room's dimensions share divisors, its steps near 4,428 are 1 to
-        2 % wide: the closest achievable count is taken (4,478 for 4,428; 2,957 for
-        3,000; 1,003 for 1,000). The holes and regions force at least about 400.
+        Target number of quads. The room's surfaces and the furniture get their own
+        element sizes (with one size the count is a staircase whose steps near 4,428
+        are 1 to 2 % wide); the closest achievable count is taken. The holes and
+        regions force at least about 400.
 
     Returns
     -------
@@ -246,8 +246,42 @@ def office(n=4428):
     for lo, hi, group in office_solids():
         faces += _box(lo, hi, group)
     faces = _resolve_contacts(faces)
-    quads, groups, _ = _mesh_to_target(faces, int(n))
+    quads, groups = _mesh_two_sizes(faces, int(n), lambda f: f.group in ROOM_GROUPS)
     return Scene.from_polygons(quads, groups=groups, materials=groups)
+
+
+#: the office's room surfaces (meshed with one element size; the furniture with another)
+ROOM_GROUPS = ("floor", "ceiling", "wall")
+
+
+def _mesh_two_sizes(faces, target, is_room):
+    """Mesh the room's faces with an element size h and the others with h f: a single
+    size makes the count a staircase whose steps near 4,428 are 1 to 2 % wide; the
+    second size fills the steps in (f within a factor 1.5 of 1, the closest count to
+    the target)."""
+    room = [f for f in faces if is_room(f)]
+    other = [f for f in faces if not is_room(f)]
+    count = lambda fs, h: sum(_count(f, h) for f in fs)
+    h0 = _fit_element_size(lambda h: count(faces, h), target)
+    best = (abs(count(faces, h0) - target), h0, 1.0)
+    good = max(1, 0.002 * target)        # close enough: stop searching
+    for h in (h0, *np.geomspace(h0 / 1.05, h0 * 1.05, 7)):
+        if best[0] <= good:
+            break
+        n_room = count(room, h)
+        for f in np.geomspace(1 / 1.5, 1.5, 41):
+            err = abs(n_room + count(other, h * f) - target)
+            if err < best[0]:
+                best = (err, h, f)
+            if best[0] <= good:
+                break
+    _, h, f = best
+    quads, groups = [], []
+    for face in faces:
+        q, g = _mesh(face, h if is_room(face) else h * f)
+        quads += q
+        groups += g
+    return quads, groups
 
 
 # ---------------------------------------------------------------------------------------
