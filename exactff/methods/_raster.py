@@ -336,11 +336,12 @@ def rasterise_polar(z, radii, angles, cell_of, D, best_t, best, clip):
             a, b = A[P], B[P]
             sa = cx * a[:, :, 1] - sy * a[:, :, 0]
             sb = cx * b[:, :, 1] - sy * b[:, :, 0]
-            with np.errstate(divide="ignore", invalid="ignore"):
+            # (edges parallel to the ray give 0 / 0: they do not straddle it)
+            with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
                 t = sa / (sa - sb)
                 xx = a[:, :, 0] + t * (b[:, :, 0] - a[:, :, 0])
                 yy = a[:, :, 1] + t * (b[:, :, 1] - a[:, :, 1])
-            rho = cx * xx + sy * yy
+                rho = cx * xx + sy * yy
             cross = ((sa > 0) != (sb > 0)) & slot[P] & (rho > 0)
             X = np.where(cross, rho, np.nan)
             # an odd count: the centre is inside, the first span starts at 0
