@@ -257,14 +257,20 @@ def rasterise_disk(z, xc, yc, cell_of, D, best_t, best):
                 r2 = q0 / big
                 lin = -q0 / q1                              # q2 = 0: one root
             s0, s1 = S0[Pe, e], S1[Pe, e]
-            best_s = np.full(s0.shape, np.nan)
+            # the root on the monotone piece and on the row's side (y_j, not -y_j); near
+            # the piece's ends (a double root at the arc's extreme) rounding may put it
+            # just outside: the candidate nearest the piece, clipped to it
+            best_s = np.full(s0.shape, 0.5 * (s0 + s1))
+            best_d = np.full(s0.shape, np.inf)
             for cand in (r1, r2, lin):
-                # on the monotone piece, on the row's side (y_j, not -y_j)
                 with np.errstate(invalid="ignore", over="ignore"):
-                    good = (np.isfinite(cand) & (cand >= s0 - 1e-9) & (cand <= s1 + 1e-9)
-                            & ((np.sign(pay + cand * pdy) == np.sign(yq)) | (yq == 0)))
-                best_s = np.where(np.isnan(best_s) & good, cand, best_s)
-            s = np.clip(np.where(np.isnan(best_s), 0.5 * (s0 + s1), best_s), s0, s1)
+                    side = (np.sign(pay + cand * pdy) == np.sign(yq)) | (yq == 0)
+                    dist = np.maximum(np.maximum(s0 - cand, cand - s1), 0.0)
+                    dist = np.where(np.isfinite(cand), dist, np.inf) + np.where(side, 0.0, 1.0)
+                take = dist < best_d
+                best_s = np.where(take, cand, best_s)
+                best_d = np.where(take, dist, best_d)
+            s = np.clip(best_s, s0, s1)
             X = np.full(cross.shape, np.nan)
             X[q, e] = (ax[Pe, e] + s * dx[Pe, e]) / np.sqrt(pa2 + s * (2.0 * pav + s * pv2))
             pair, col = _spans_to_cells(X, yc)
