@@ -4,6 +4,7 @@ The flat API re-exports each module's ``__all__``; see ``docs/reference``.
 """
 
 from . import catalog, scenes
+from .area import *  # noqa: F401,F403
 from .formfactors import *  # noqa: F401,F403
 from .geometry import *  # noqa: F401,F403
 from .integrate import *  # noqa: F401,F403
@@ -12,7 +13,7 @@ from .reports import *  # noqa: F401,F403
 from .methods import (METHODS, CubicTetrahedron, DiscretePPBH, Exact,  # noqa: F401
                       FormFactorMethod, Hemicube, MonteCarlo, PolarPlane, SinglePlane)
 from .scene import *  # noqa: F401,F403
-from . import (formfactors as _formfactors, geometry as _geometry, integrate as _integrate,
+from . import (area as _area, formfactors as _formfactors, geometry as _geometry, integrate as _integrate,
                io as _io, reports as _reports, scene as _scene)
 
 __version__ = "0.1.0"
@@ -20,4 +21,4 @@ __version__ = "0.1.0"
 __all__ = (["catalog", "scenes", "__version__", "METHODS", "FormFactorMethod", "Exact", "DiscretePPBH",
             "Hemicube", "CubicTetrahedron", "SinglePlane", "PolarPlane", "MonteCarlo"]
            + _scene.__all__ + _geometry.__all__ + _integrate.__all__ + _io.__all__
-           + _formfactors.__all__ + _reports.__all__)
+           + _formfactors.__all__ + _reports.__all__ + _area.__all__)

@@ -71,3 +71,12 @@ def examples(n):
     if os.environ.get("HYPOTHESIS_PROFILE") == "thorough":
         return settings.get_profile("thorough").max_examples
     return n
+
+
+def random_rotation(rng):
+    """A uniformly random rotation matrix (from a normalised Gaussian quaternion)."""
+    q = rng.normal(size=4)
+    a, b, c, d = q / np.linalg.norm(q)
+    return np.array([[a*a + b*b - c*c - d*d, 2*(b*c - a*d), 2*(b*d + a*c)],
+                     [2*(b*c + a*d), a*a - b*b + c*c - d*d, 2*(c*d - a*b)],
+                     [2*(b*d - a*c), 2*(c*d + a*b), a*a - b*b - c*c + d*d]])

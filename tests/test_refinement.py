@@ -17,17 +17,9 @@ from exactff import _tolerances as tol
 from exactff.catalog import stiff_cases
 from exactff.visibility import visible_form_factors
 
-from common import examples
+from common import examples, random_rotation
 
 DPS = 50
-
-
-def _rotation(rng):
-    q = rng.normal(size=4)
-    a, b, c, d = q / np.linalg.norm(q)
-    return np.array([[a*a + b*b - c*c - d*d, 2*(b*c - a*d), 2*(b*d + a*c)],
-                     [2*(b*c + a*d), a*a - b*b + c*c - d*d, 2*(c*d - a*b)],
-                     [2*(b*d - a*c), 2*(c*d + a*b), a*a - b*b - c*c + d*d]])
 
 
 def _mpv(v):
@@ -100,7 +92,7 @@ def sliver_scene(gap, seed, tilt, twist=0.5):
     T = np.array([[c, 0, s], [0, 1, 0], [-s, 0, c]])
     c, s = np.cos(twist), np.sin(twist)
     T = T @ np.array([[c, -s, 0], [s, c, 0], [0, 0, 1]])
-    Q = _rotation(rng)
+    Q = random_rotation(rng)
     t = rng.uniform(-10, 10, 3)
     polys = [P @ (Q @ T).T + t for P in (recv, left, right)]
     return polys, t, Q @ np.array([0.0, 0.0, 1.0])
@@ -170,7 +162,7 @@ def occluded_pair(seed, log_size, log_dist):
     R2 = np.array([[np.cos(ang), -np.sin(ang)], [np.sin(ang), np.cos(ang)]])
     occ = np.array([[-w, -w], [w, -w], [w, w], [-w, w]]) @ R2.T + c
     occ = np.column_stack([occ, np.full(4, d * f)])
-    Q = _rotation(rng)
+    Q = random_rotation(rng)
     t = rng.uniform(-5, 5, 3)
     return [recv @ Q.T + t, occ @ Q.T + t], t, Q @ np.array([0.0, 0.0, 1.0])
 

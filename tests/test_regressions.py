@@ -194,3 +194,21 @@ def test_shared_edge_end_points_an_ulp_apart_on_a_chart_edge():
     for shortcuts in (True, False):
         F = ef.Exact(shortcuts=shortcuts).point_form_factors(scene, p, n)
         assert abs(F.sum() - 1.0) <= 1e-12
+
+
+def test_images_meeting_on_the_horizon_edge_of_a_side_chart():
+    # found by strategies.enclosures: in a side chart, the floor's image and a wall's met
+    # on the chart's bottom edge v = 0 (the horizon) with a vertex at v = 4.9e-17 instead
+    # of 0; GEOS's intersection and difference put the floor's image wholly inside the
+    # wall's, and the floor lost 0.0344 of its 0.2031 (row sum 0.9656), with the
+    # shortcuts and without. Points within a few ulps of v = 0 are now put on it.
+    scene = _room_with_boxes((0, 0, 0), (1, 1, 1),
+                             [((0.5, 0.5, 0.5), (1, 1, 1)), ((0.5, 0.5, 0.5), (1, 1, 0.75))])
+    p = np.array([0.0625, 0.0625, 0.0625])
+    n = np.array([-0.20410215516147218, -0.9464894665332744, -0.25])
+    F0 = ef.point_polygon_form_factors(p, n, scene)
+    for shortcuts in (True, False):
+        F = ef.Exact(shortcuts=shortcuts).point_form_factors(scene, p, n)
+        assert abs(F.sum() - 1.0) <= 1e-12
+        # the boxes are behind the point's tangent plane: nothing hides anything
+        np.testing.assert_allclose(F, F0, rtol=0, atol=1e-14)

@@ -153,12 +153,21 @@ def chart_clip(V, counts, chart, margin=0.0):
         for val in (-1.0, 1.0):
             near = np.abs(UV - val) <= tol.CHART_EDGE_ULPS * np.spacing(1.0)
             UV[near] = val
+        # a side chart's bottom edge v = 0 is the horizon: points clipped onto it come
+        # out with v of about 1e-17 (the crossing's height, rounded), and GEOS got the
+        # overlay of two images meeting there wholly wrong (an image adjacent to
+        # another returned as inside it: a floor lost 17 % of its value)
+        edges = {0: (-1.0, 1.0), 1: (-1.0, 1.0)}
+        if chart[3]:
+            near = np.abs(UV[:, :, 1]) <= tol.CHART_EDGE_ULPS * np.spacing(1.0)
+            UV[:, :, 1][near] = 0.0
+            edges[1] = (-1.0, 0.0, 1.0)
         # and along the edge: the same point of two images (the end of an edge they
         # share, clipped in each) came out an ulp apart on it, with the same failures;
         # points of one edge within a few ulps of each other are merged (isolated
         # points do not move)
         for k in (0, 1):
-            for val in (-1.0, 1.0):
+            for val in edges[1 - k]:
                 on_edge = UV[:, :, 1 - k] == val
                 if on_edge.sum() > 1:
                     UV[:, :, k][on_edge] = _merge_close(UV[:, :, k][on_edge])
