@@ -679,7 +679,9 @@ def visible_pieces(buckets, receives, stats=None, shortcuts=True, charts=None):
         if shortcuts:
             _tiled_chart(ci, chart, idx, polys, bounds, receives, st, out)
         else:
-            _single_region_chart(ci, idx, polys, receives, st, out)
+            # GEOS raises the floating-point flags on its own (benign) divisions
+            with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+                _single_region_chart(ci, idx, polys, receives, st, out)
     return out
 
 
