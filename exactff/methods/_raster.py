@@ -164,6 +164,52 @@ def rasterise_face(z, chart, uc, vc, cell_of, D, best_t, best, clip=None):
             _depth_test(z, cell[keep], g_ids[live[P[pair[keep]]]], D, best_t, best)
 
 
+#: an edge passing closer to the point than this, relative to its end points' distance,
+#: is treated as passing through it (see :func:`rasterise_disk`)
+NEAR_ORIGIN = 1e-9
+
+
+def _passes_near_origin(V, counts):
+    """Whether an edge of each padded polygon passes within ``NEAR_ORIGIN`` (relative)
+    of the origin."""
+    K = V.shape[1]
+    nxt = (np.arange(K)[None, :] + 1) % counts[:, None]
+    B = np.take_along_axis(V, nxt[:, :, None].repeat(3, axis=2), axis=1)
+    d = B - V
+    dd = (d * d).sum(2)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        s = np.clip(-(V * d).sum(2) / dd, 0.0, 1.0)
+    s = np.nan_to_num(s)
+    closest = np.linalg.norm(V + s[:, :, None] * d, axis=2)
+    scale = np.maximum(np.linalg.norm(V, axis=2), np.linalg.norm(B, axis=2))
+    slot = np.arange(K)[None, :] < counts[:, None]
+    return np.any(slot & (closest <= NEAR_ORIGIN * scale), axis=1)
+
+
+def _cast_rays(z, live_index, P, D, best_t, best):
+    """Depth-test one polygon (local vertices ``P``) by casting every cell's ray: the
+    hit point ``t d`` with ``t = (n . a) / (n . d) > 0``, inside the polygon (in the
+    coordinate plane most parallel to it, boundary included)."""
+    import shapely
+
+    n = z.nl[live_index]
+    t_num = z.dl[live_index]
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        t = t_num / (D @ n)
+        X = t[:, None] * D
+    cand = np.flatnonzero(np.isfinite(t) & (t > 0))
+    if len(cand) == 0:
+        return
+    drop = int(np.argmax(np.abs(n)))
+    axes = [k for k in range(3) if k != drop]
+    g = shapely.Polygon(P[:, axes])
+    if not g.is_valid:
+        g = g.buffer(0)
+    inside = shapely.intersects_xy(g, X[cand, axes[0]], X[cand, axes[1]])
+    cells = cand[inside]
+    _depth_test(z, cells, np.full(len(cells), live_index), D, best_t, best)
+
+
 def _arc_y(a, d, s):
     """y of the unit direction along ``a + s d`` (its image on the base disk)."""
     q = a + s[..., None] * d
@@ -190,6 +236,7 @@ def rasterise_disk(z, xc, yc, cell_of, D, best_t, best):
     """
     ez = np.array([0.0, 0.0, 1.0])
     for g_ids, V, counts in z.local:
+        V0 = V
         # scanlines x = const, spans along y (the layout's fast axis): swap x and y
         V = V[:, :, [1, 0, 2]]
         Vc, cc = clip_halfspace(V, counts, ez)
@@ -199,6 +246,18 @@ def rasterise_disk(z, xc, yc, cell_of, D, best_t, best):
         Vc, cc = Vc[live], cc[live]
         K = Vc.shape[1]
         slot = np.arange(K)[None, :] < cc[:, None]
+        # a polygon whose edge passes within rounding of the point (its plane nearly
+        # through the point, the point nearly on it): its arcs' parametrisation breaks
+        # down there; such polygons are cast ray by ray instead
+        near = _passes_near_origin(Vc, cc)
+        if near.any():
+            for k in np.flatnonzero(near):
+                _cast_rays(z, int(g_ids[live[k]]), V0[live[k], :counts[live[k]]], D,
+                           best_t, best)
+            keep_k = np.flatnonzero(~near)
+            if len(keep_k) == 0:
+                continue
+            Vc, cc, live, slot = Vc[keep_k], cc[keep_k], live[keep_k], slot[keep_k]
         last = np.take_along_axis(Vc, (cc - 1)[:, None, None].repeat(3, axis=2), axis=1)
         Vc = np.where(slot[:, :, None], Vc, last)
         nxt = (np.arange(K)[None, :] + 1) % cc[:, None]

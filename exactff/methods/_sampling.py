@@ -310,7 +310,15 @@ def resolve_depths(cell, src, D, nl, dl, band, prio, best_t, best):
     if len(cell) == 0:
         return
     den = np.einsum("ij,ij->i", nl[src], D[cell])
-    t = dl[src] / den
+    # a ray along its polygon's plane (a polygon through the point to rounding, whose
+    # image a rasteriser may still reach) hits nothing
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = dl[src] / den
+    ok = np.isfinite(t)
+    if not ok.all():
+        cell, src, t, den = cell[ok], src[ok], t[ok], den[ok]
+        if len(cell) == 0:
+            return
     # the nearest depth per cell (a scatter-min over the whole buffer, linear in the
     # pairs), then of the polygons tied with it (the hit point in their planes) the one
     # of lowest priority (priorities are distinct per polygon)
