@@ -27,6 +27,7 @@ from scipy.special import roots_legendre, xlogy
 
 from .geometry import area_vector, polygon_diameter, receiver_frame
 from .scene import validate_polygon
+from .visibility.clipper import clip_halfspace
 
 __all__ = ["polygon_form_factor"]
 
@@ -66,18 +67,10 @@ def _segment_log_integral(W, E):
 
 
 def _clip_front(P, n, c):
-    """The part of polygon P with ``n . (x - c) > 0`` (None when nothing is left)."""
-    s = (P - c) @ n
-    out = []
-    k = len(P)
-    for i in range(k):
-        a, b = P[i], P[(i + 1) % k]
-        if s[i] > 0:
-            out.append(a)
-        if (s[i] > 0) != (s[(i + 1) % k] > 0):
-            t = s[i] / (s[i] - s[(i + 1) % k])
-            out.append(a + t * (b - a))
-    return np.array(out) if len(out) >= 3 else None
+    """The part of polygon P with ``n . (x - c) > 0`` (None when nothing is left): the
+    engine's half-space clipping, about the point c."""
+    V, k = clip_halfspace((P - c)[None], np.array([len(P)]), n)
+    return V[0, :k[0]] + c if k[0] >= 3 else None
 
 
 #: beyond this distance between centroids (in diameters of the larger polygon) the area

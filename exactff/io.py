@@ -63,7 +63,7 @@ def split_nonplanar(polygon):
     best, best_score = None, -np.inf
     for apex in range(len(P)):
         tris, score = _fan_score(P, apex)
-        if score > best_score + 1e-12:
+        if score > best_score + tol.SPLIT_FLATNESS_TIE:
             best, best_score = tris, score
     if best is None:
         raise ValueError("no fan of the polygon gives valid triangles")

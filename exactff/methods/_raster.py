@@ -164,14 +164,9 @@ def rasterise_face(z, chart, uc, vc, cell_of, D, best_t, best, clip=None):
             _depth_test(z, cell[keep], g_ids[live[P[pair[keep]]]], D, best_t, best)
 
 
-#: an edge passing closer to the point than this, relative to its end points' distance,
-#: is treated as passing through it (see :func:`rasterise_disk`)
-NEAR_ORIGIN = 1e-9
-
-
 def _passes_near_origin(V, counts):
-    """Whether an edge of each padded polygon passes within ``NEAR_ORIGIN`` (relative)
-    of the origin."""
+    """Whether an edge of each padded polygon passes within ``RASTER_NEAR_ORIGIN``
+    (relative) of the origin."""
     K = V.shape[1]
     nxt = (np.arange(K)[None, :] + 1) % counts[:, None]
     B = np.take_along_axis(V, nxt[:, :, None].repeat(3, axis=2), axis=1)
@@ -183,7 +178,7 @@ def _passes_near_origin(V, counts):
     closest = np.linalg.norm(V + s[:, :, None] * d, axis=2)
     scale = np.maximum(np.linalg.norm(V, axis=2), np.linalg.norm(B, axis=2))
     slot = np.arange(K)[None, :] < counts[:, None]
-    return np.any(slot & (closest <= NEAR_ORIGIN * scale), axis=1)
+    return np.any(slot & (closest <= tol.RASTER_NEAR_ORIGIN * scale), axis=1)
 
 
 def _cast_rays(z, live_index, P, D, best_t, best):

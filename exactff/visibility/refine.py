@@ -38,26 +38,17 @@ import shapely
 
 from .. import _tolerances as tol
 from ..geometry import receiver_frame
+from ..integrate import _LONGDOUBLE_EPS as _LD_EPS
 
 __all__ = ["Refiner"]
 
 _LD = np.longdouble
-_LD_EPS = float(np.finfo(_LD).eps) / 2
-#: rounding of a refined edge's plane and of its end points' residuals, in units of the
-#: working precision (per unit of the plane's condition)
-_VERTEX_ULPS = 32.0
 
 
 def _unit(X):
     n = np.sqrt((X * X).sum(axis=-1, keepdims=True))
     with np.errstate(divide="ignore", invalid="ignore"):
         return np.where(n > 0, X / n, np.nan)
-
-
-def _cross(a, b):
-    return np.stack([a[..., 1] * b[..., 2] - a[..., 2] * b[..., 1],
-                     a[..., 2] * b[..., 0] - a[..., 0] * b[..., 2],
-                     a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]], axis=-1)
 
 
 def _mp_receiver_frame(normal):
@@ -121,7 +112,7 @@ class Refiner:
                 slot = np.arange(K)
                 nxt = (slot[None, :] + 1) % np.maximum(c[:, None], 1)
                 W = np.take_along_axis(V, nxt[:, :, None], axis=1)
-                M = _unit(_cross(V, W))
+                M = _unit(np.cross(V, W))
                 valid = slot[None, :] < c[:, None]
                 rows = offset[pos][:, None] + slot[None, :]
                 planes[rows[valid]] = M[valid]
@@ -248,8 +239,8 @@ class Refiner:
         k = np.repeat(offset[src] - np.cumsum(c) + c, c) + np.arange(int(c.sum()))
         E = V[nxt[k]] - V[k]
         L = np.linalg.norm(E, axis=1)
-        ra = np.linalg.norm(_cross(E, a[q] - V[k]), axis=1) / L
-        rb = np.linalg.norm(_cross(E, b[q] - V[k]), axis=1) / L
+        ra = np.linalg.norm(np.cross(E, a[q] - V[k]), axis=1) / L
+        rb = np.linalg.norm(np.cross(E, b[q] - V[k]), axis=1) / L
         r = np.maximum(ra, rb)
         scale = np.abs(V[k]).max(axis=1) + np.maximum(np.abs(a[q]), np.abs(b[q])).max(axis=1)
         on = r <= tol.BSP_COPLANAR_ULPS * tol.EPS * scale
@@ -287,7 +278,7 @@ class Refiner:
             p = self.p.astype(_LD)
             a = A.astype(_LD) - p
             d = B.astype(_LD) - A.astype(_LD)
-            m = _cross(a, d)
+            m = np.cross(a, d)
             with np.errstate(divide="ignore", invalid="ignore"):
                 cond[fr] = (np.sqrt((a * a).sum(1) * (d * d).sum(1))
                             / np.sqrt((m * m).sum(1))).astype(float)
@@ -351,7 +342,7 @@ class Refiner:
         prev, same, point, SA, SB = self._vertex_rules(np.where(use, label, -1), nxt)
         M, cond = self.local_planes_ld(lab, statics)
         Mi, Mo = M[prev], M
-        d = _cross(Mi, Mo)
+        d = np.cross(Mi, Mo)
         nd = np.sqrt((d * d).sum(1))
         sin = (nd / np.sqrt((Mi * Mi).sum(1) * (Mo * Mo).sum(1))).astype(float)
         Dflt = coords[:, :1] * eu + coords[:, 1:2] * ev + ew          # local, double
@@ -386,7 +377,7 @@ class Refiner:
             v = np.flatnonzero(parallel)
             tri = 0.5 * (np.linalg.norm(Du[v] - Du[prev[v]], axis=1)
                          * np.linalg.norm(Du[nxt[v]] - Du[v], axis=1)
-                         * (np.nan_to_num(sin[v]) + _VERTEX_ULPS * _LD_EPS))
+                         * (np.nan_to_num(sin[v]) + tol.REFINE_VERTEX_ULPS * _LD_EPS))
             cut = np.bincount(ring_of[v], weights=tri, minlength=n_rings) / np.pi
         same = same | parallel
         labels = (label, statics, point, same, cut)
@@ -422,7 +413,7 @@ class Refiner:
         res = (np.abs((Mk * Xk).sum(1)) + np.abs((Mk * Xk[nx2]).sum(1))).astype(float)
         Xf = Xk.astype(float)
         seg = np.linalg.norm(Xf[nx2] - Xf, axis=1)
-        g = 0.5 * seg * (res + _VERTEX_ULPS * _LD_EPS * (1.0 + cond[kv]))
+        g = 0.5 * seg * (res + tol.REFINE_VERTEX_ULPS * _LD_EPS * (1.0 + cond[kv]))
         geom = np.bincount(ridx, weights=g, minlength=len(rings)) / np.pi
         e = ((_C1 * _LD_EPS * mags + errs) / (2 * np.pi)).astype(float) + geom \
             + 4 * _LD_EPS * v.astype(float) + cut[rings]
@@ -493,7 +484,7 @@ class Refiner:
                         x = cross(M[prev[i]], M[i])
                         nx = mp.sqrt(mp.fdot(x, x))
                         na = mp.sqrt(mp.fdot(M[prev[i]], M[prev[i]]) * mp.fdot(M[i], M[i]))
-                        if nx <= mp.mpf(10) ** (10 - dps) * na:
+                        if nx <= mp.mpf(10) ** (tol.REFINE_MP_ZERO_DIGITS - dps) * na:
                             continue   # one great circle (collinear input edges)
                     if sum(float(x[j]) * Dflt[i, j] for j in range(3)) < 0:
                         x = [-c for c in x]
