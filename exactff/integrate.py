@@ -37,6 +37,7 @@ __all__ = [
     "eq3_form_factor",
     "eq3_ring_area",
     "eq3_edge_integral",
+    "arc_x_extremes",
 ]
 
 TWO_PI = 2.0 * math.pi
@@ -791,21 +792,15 @@ def eq3_edge_integral(a, b):
         xa = a[0] / np.linalg.norm(a)
         xb = b[0] / np.linalg.norm(b)
         return float(-A / B * (xb * xb - xa * xa) / 2.0)
-    mhat = np.array([A, B, C])
-    # orthonormal basis of the arc's plane: w at the x-maximum (x = eta), w_perp = m x w
-    w = (np.array([1.0, 0.0, 0.0]) - A * mhat) / eta
-    w_perp = np.cross(mhat, w)
+    w, w_perp, ta, theta, extremes = arc_x_extremes(a, b)
     ua = a / np.linalg.norm(a)
     ub = b / np.linalg.norm(b)
-    ta = math.atan2(float(ua @ w_perp), float(ua @ w))
-    theta = math.atan2(kappa, float(a @ b))  # arc length, in (0, pi)
     # span ends as (t, x, cos t, |sin t|): the arc's end points, and its x-extremes
     # t = k pi (x = +- eta, cos t = +- 1, sin t = 0) where the arc passes them
     ends = [(ta, float(ua[0]), float(ua @ w), abs(float(ua @ w_perp)))]
-    for k in range(-1, 4):
-        if ta < k * math.pi < ta + theta:
-            c = 1.0 if k % 2 == 0 else -1.0
-            ends.append((k * math.pi, eta * c, c, 0.0))
+    for t in extremes:
+        c = 1.0 if round(t / math.pi) % 2 == 0 else -1.0
+        ends.append((t, eta * c, c, 0.0))
     ends.append((ta + theta, float(ub[0]), float(ub @ w), abs(float(ub @ w_perp))))
 
     def area(s, x, cos_t, abs_sin_t):
@@ -823,6 +818,55 @@ def eq3_edge_integral(a, b):
         s = 1.0 if C * (eta ** 2 * um[1] + A * B * um[0]) >= 0 else -1.0
         total.append(area(s, *P1) - area(s, *P0))
     return math.fsum(total)
+
+
+def arc_x_extremes(a, b):
+    """Where the image of the great-circle arc ``a -> b`` on the base disk turns in x:
+    the ends of its monotone spans (Eq. 3 is integrated span by span).
+
+    The arc is parametrised in its own plane as ``cos t w + sin t w_perp``, with ``w``
+    the direction of largest x on the great circle (x = eta) and ``w_perp = m x w``
+    (``m`` the unit normal of the arc's plane, ``a x b`` normalised); x is extreme at
+    ``t = k pi``.
+
+    Parameters
+    ----------
+    a, b : array_like of shape (3,)
+        End points in the local frame; only their directions matter. The arc's plane
+        must not hold the z axis's perpendicular x direction only (``eta > 0``) and
+        ``a``, ``b`` must not be parallel.
+
+    Returns
+    -------
+    (ndarray of shape (3,), ndarray of shape (3,), float, float, list of float)
+        ``w``, ``w_perp``, the parameter of ``a``, the arc's length (in (0, pi)) and the
+        parameters ``k pi`` strictly inside the arc, increasing.
+
+    Examples
+    --------
+    The horizon from +y past -x turns in x once, at -x (t = pi); from +y to x it is
+    monotone:
+
+    >>> w, w_perp, ta, theta, ts = arc_x_extremes([0, 1, 0], [-1, -0.1, 0])
+    >>> w.tolist(), [round(t / np.pi, 6) for t in ts]
+    ([1.0, 0.0, 0.0], [1.0])
+    >>> arc_x_extremes([0, 1, 0], [1, 0, 0])[4]
+    []
+    """
+    a = np.asarray(a, dtype=float)
+    b = np.asarray(b, dtype=float)
+    m = np.cross(a, b)
+    kappa = float(np.linalg.norm(m))
+    mhat = m / kappa
+    eta = math.hypot(mhat[1], mhat[2])
+    # orthonormal basis of the arc's plane: w at the x-maximum (x = eta), w_perp = m x w
+    w = (np.array([1.0, 0.0, 0.0]) - mhat[0] * mhat) / eta
+    w_perp = np.cross(mhat, w)
+    ua = a / np.linalg.norm(a)
+    ta = math.atan2(float(ua @ w_perp), float(ua @ w))
+    theta = math.atan2(kappa, float(a @ b))  # arc length, in (0, pi)
+    extremes = [k * math.pi for k in range(-1, 4) if ta < k * math.pi < ta + theta]
+    return w, w_perp, ta, theta, extremes
 
 
 def eq3_form_factor(point, normal, polygon, *, one_sided=True, error=False):

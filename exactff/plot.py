@@ -1,23 +1,27 @@
-"""Figures of the error-versus-run-time study (matplotlib, an optional extra:
-``pip install exactff[plots]``; importing exactff does not import matplotlib).
+"""Figures: the error-versus-run-time study and the method's geometry (matplotlib, an
+optional extra: ``pip install exactff[plots]``; importing exactff does not import
+matplotlib).
 
-Each function takes :func:`exactff.compare`'s records, draws one line per method on log
-axes, labels the axes, and returns the Axes.
+The study's functions take :func:`exactff.compare`'s records and draw one line per
+method on log axes; the geometry's draw a polygon's projection onto the hemisphere and
+its base (:func:`hemisphere_projection`) and a row's visible graph on the unit disk
+(:func:`visible_graph`). Each returns the Axes it drew on.
 """
 
 import numpy as np
 
-__all__ = ["error_vs_samples", "time_vs_samples", "error_vs_time"]
+__all__ = ["error_vs_samples", "time_vs_samples", "error_vs_time", "hemisphere_projection",
+           "visible_graph"]
 
 
-def _axes(ax):
+def _axes(ax, projection=None, figsize=(6.4, 4.4)):
     if ax is not None:
         return ax
     try:
         import matplotlib.pyplot as plt
     except ImportError:
         raise ImportError("exactff.plot needs matplotlib (pip install exactff[plots])") from None
-    return plt.figure(figsize=(6.4, 4.4)).add_subplot()
+    return plt.figure(figsize=figsize).add_subplot(projection=projection)
 
 
 def _by_method(records, sampled=True):
@@ -132,3 +136,180 @@ def error_vs_time(records, ax=None):
         ax.axvline(exact[0], color="k", lw=1.5, label=f"exact ({exact[0]:.3g} s / row)")
     return _finish(ax, "time per row (s)", "mean absolute error", "error against run time",
                    legend_size="small")
+
+
+# ---------------------------------------------------------------------------------------
+# the method's geometry: the Nusselt analog and the visible graph
+# ---------------------------------------------------------------------------------------
+def _arc_points(a, b, n=64):
+    """Unit directions along the great-circle arc from ``a`` to ``b`` (n points)."""
+    ua, ub = a / np.linalg.norm(a), b / np.linalg.norm(b)
+    omega = np.arctan2(np.linalg.norm(np.cross(ua, ub)), ua @ ub)
+    s = np.linspace(0.0, 1.0, n)[:, None]
+    if omega < 1e-12:
+        d = (1 - s) * ua + s * ub
+    else:
+        d = (np.sin((1 - s) * omega) * ua + np.sin(s * omega) * ub) / np.sin(omega)
+    return d / np.linalg.norm(d, axis=1, keepdims=True)
+
+
+def _unit_circle(ax, **kw):
+    t = np.linspace(0, 2 * np.pi, 361)
+    ax.plot(np.cos(t), np.sin(t), color="0.3", lw=1, **kw)
+    ax.set_aspect("equal")
+    ax.set_xlim(-1.05, 1.05)
+    ax.set_ylim(-1.05, 1.05)
+
+
+def hemisphere_projection(point, normal, polygon, ax=None, view="base"):
+    """The Nusselt analog of one polygon: its projection onto the unit hemisphere over
+    ``point`` and then onto the hemisphere's base, whose area over pi is the form factor.
+
+    Coordinates are those of the receiver's local frame (:func:`exactff.receiver_frame`,
+    z along the normal); the part of the polygon below the tangent plane is clipped
+    away first.
+
+    Parameters
+    ----------
+    point, normal : array_like of shape (3,)
+    polygon : array_like of shape (K, 3)
+    ax : matplotlib Axes, optional
+        A 2-D Axes for ``view="base"``, a 3-D one for ``view="3d"``; new if None.
+    view : {"base", "3d"}, default "base"
+        ``"base"``: the image on the base disk, filled, with its edges (the ellipse arcs
+        of Eq. 2), its vertices, and the ends of the monotone spans Eq. 3 is integrated
+        over (the vertices and the arcs' x-extremes, with a vertical line at each).
+        ``"3d"``: the polygon, the rays from the point to its vertices, its image on
+        the hemisphere (great-circle arcs) and that image dropped onto the base.
+
+    Returns
+    -------
+    matplotlib Axes
+
+    Examples
+    --------
+    >>> import matplotlib
+    >>> matplotlib.use("Agg")
+    >>> sq = [[-.5, -.5, 1], [-.5, .5, 1], [.5, .5, 1], [.5, -.5, 1]]
+    >>> ax = hemisphere_projection([0, 0, 0], [0, 0, 1], sq)
+    >>> ax.get_title()
+    'projection onto the base: F = 0.239456'
+    """
+    from .integrate import _local_clipped, arc_x_extremes, point_polygon_form_factor
+
+    if view not in ("base", "3d"):
+        raise ValueError(f"view must be 'base' or '3d', got {view!r}")
+    F = point_polygon_form_factor(point, normal, polygon, one_sided=False)
+    ring, _ = _local_clipped(point, normal, polygon, one_sided=False)
+    ring = np.array(ring, dtype=float).reshape(-1, 3)
+    arcs = [_arc_points(ring[i], ring[(i + 1) % len(ring)]) for i in range(len(ring))]
+    image = np.concatenate(arcs) if arcs else np.zeros((0, 3))
+    if view == "3d":
+        ax = _axes(ax, projection="3d", figsize=(6.4, 5.6))
+        u, v = np.meshgrid(np.linspace(0, 2 * np.pi, 37), np.linspace(0, np.pi / 2, 10))
+        ax.plot_wireframe(np.cos(u) * np.sin(v), np.sin(u) * np.sin(v), np.cos(v),
+                          color="0.8", lw=0.5)
+        P = np.vstack([ring, ring[:1]]) if len(ring) else ring
+        ax.plot(P[:, 0], P[:, 1], P[:, 2], color="C0", lw=2, label="polygon (clipped)")
+        for q in ring:
+            d = q / np.linalg.norm(q)
+            ax.plot([0, q[0]], [0, q[1]], [0, q[2]], color="0.5", lw=0.6, ls=":")
+            ax.plot([d[0], d[0]], [d[1], d[1]], [d[2], 0], color="C2", lw=0.6, ls=":")
+        ax.plot(image[:, 0], image[:, 1], image[:, 2], color="C1", lw=2,
+                label="image on the hemisphere")
+        ax.plot(image[:, 0], image[:, 1], 0 * image[:, 2], color="C2", lw=2,
+                label="image on the base")
+        ax.scatter([0], [0], [0], color="k", s=12)
+        ax.set_xlabel("x")
+        ax.set_ylabel("y")
+        ax.set_zlabel("z (normal)")
+        ax.set_title(f"Nusselt analog: F = {F:.6g}")
+        ax.legend(fontsize="small")
+        return ax
+    ax = _axes(ax, figsize=(5.6, 5.6))
+    _unit_circle(ax, label="base of the hemisphere")
+    if len(image):
+        ax.fill(image[:, 0], image[:, 1], color="C0", alpha=0.25)
+        ax.plot(image[:, 0], image[:, 1], color="C0", lw=1.5, label="edges (Eq. 2 arcs)")
+        D = ring / np.linalg.norm(ring, axis=1, keepdims=True)
+        ax.plot(D[:, 0], D[:, 1], "o", color="C0", ms=4, label="vertices")
+        turns = []
+        for i in range(len(ring)):
+            a, b = ring[i], ring[(i + 1) % len(ring)]
+            m = np.cross(a, b)
+            if np.linalg.norm(m) == 0 or np.hypot(m[1], m[2]) == 0:
+                continue
+            w, w_perp, _, _, ts = arc_x_extremes(a, b)
+            turns += [np.cos(t) * w + np.sin(t) * w_perp for t in ts]
+        if turns:
+            T = np.array(turns)
+            ax.plot(T[:, 0], T[:, 1], "s", color="C3", ms=6, label="x-extremes")
+        for x in np.concatenate([D[:, 0], [t[0] for t in turns]]):
+            ax.axvline(x, color="C3", lw=0.5, ls="--", alpha=0.6)
+    ax.set_xlabel("x")
+    ax.set_ylabel("y")
+    ax.set_title(f"projection onto the base: F = {F:.6g}")
+    ax.legend(fontsize="small", loc="lower left")
+    return ax
+
+
+def visible_graph(scene, point, normal, ax=None, *, two_sided=False, labels=False):
+    """The visible graph of one row on the unit disk: every visible piece of every
+    polygon (:func:`exactff.visibility.visible_graph`), coloured by its polygon.
+
+    Parameters
+    ----------
+    scene : Scene
+    point, normal : array_like of shape (3,)
+    ax : matplotlib Axes, optional
+    two_sided : bool, default False
+    labels : bool, default False
+        Write each polygon's index (or name, where the scene has names) at its largest
+        piece.
+
+    Returns
+    -------
+    matplotlib Axes
+
+    Examples
+    --------
+    >>> import matplotlib
+    >>> matplotlib.use("Agg")
+    >>> import exactff as ef
+    >>> ax = visible_graph(ef.scenes.cornell_box(closed=True), [278, 0.5, 279.6], [0, 1, 0])
+    >>> len(ax.patches) > 0
+    True
+    """
+    import shapely
+    from matplotlib.patches import PathPatch
+    from matplotlib.path import Path
+
+    from .visibility import visible_graph as graph
+
+    pieces = graph(scene, point, normal, two_sided=two_sided)
+    ax = _axes(ax, figsize=(5.6, 5.6))
+    cmap = __import__("matplotlib").colormaps["tab20"]
+    best = {}
+    for i, g in pieces:
+        for part in shapely.get_parts(g):
+            rings = [np.asarray(part.exterior.coords)] + [np.asarray(r.coords)
+                                                         for r in part.interiors]
+            verts = np.concatenate(rings)
+            codes = np.concatenate([[Path.MOVETO] + [Path.LINETO] * (len(r) - 2)
+                                    + [Path.CLOSEPOLY] for r in rings])
+            # tab20's strong colours first, then the light ones
+            colour = cmap((2 * i) % 20 + (i // 10) % 2)
+            ax.add_patch(PathPatch(Path(verts, codes), facecolor=colour,
+                                   edgecolor="k", lw=0.3))
+            if part.area > best.get(i, (0, None))[0]:
+                best[i] = (part.area, part.representative_point())
+    if labels:
+        names = scene.names
+        for i, (_, q) in best.items():
+            ax.annotate(names[i] or str(i), (q.x, q.y), fontsize=6,
+                        ha="center", va="center")
+    _unit_circle(ax)
+    ax.set_xlabel("x")
+    ax.set_ylabel("y")
+    ax.set_title(f"visible graph: {len(best)} polygons seen, {len(pieces)} pieces")
+    return ax

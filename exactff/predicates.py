@@ -18,7 +18,7 @@ def gamma(n):
 
 
 def side_of_plane(points, normal, offset):
-    """Exact sign of ``normal . x - offset`` for each point ``x``.
+    """Exact sign of ``normal @ x - offset`` for each point ``x``.
 
     The plane is the one the float numbers ``normal`` and ``offset`` describe exactly.
     The value is computed in float with the bound ``gamma(4) (|n| . |x| + |offset|)``;

@@ -354,7 +354,7 @@ class Scene:
 
     @property
     def plane_offsets(self):
-        """``normals[i] . centroids[i]``: the plane of polygon i is ``n . x = d``."""
+        """``normals[i] @ centroids[i]``: the plane of polygon i is ``n @ x = d``."""
         return np.einsum("ij,ij->i", self.normals, self.centroids)
 
 

@@ -18,7 +18,7 @@ from .bsp import build_bsp, coplanar_overlaps, front_to_back
 from .clipper import pieces_form_factors, visible_pieces
 from .refine import Refiner
 
-__all__ = ["visible_form_factors", "is_convex_enclosure", "scene_bsp", "build_bsp",
+__all__ = ["visible_form_factors", "visible_graph", "is_convex_enclosure", "scene_bsp", "build_bsp",
            "front_to_back", "coplanar_overlaps"]
 
 
@@ -121,6 +121,94 @@ def visible_form_factors(scene, point, normal, *, two_sided=False, stats=None,
         return unoccluded_row(flat, p, normal, one_sided=not two_sided, tolerance=tolerance,
                               in_band="edge_on", return_error=error, strict=True)
     st["path"] = "clipper"
+    tree, order, src, kept, world, receives = _row_fragments(scene, p, normal, side, two_sided,
+                                                             shortcuts, st)
+    charts = []
+    pieces = visible_pieces(kept, receives, stats=st, shortcuts=shortcuts, charts=charts)
+    refiner = Refiner(scene, tree, order, p, normal, kept, world, charts)
+    Ff, ef_ = pieces_form_factors(pieces, len(order), tolerance=tolerance, owner=src,
+                                  integrator=integrator, refiner=refiner, stats=st)
+    F = np.bincount(src, weights=Ff, minlength=len(scene))
+    E = np.bincount(src, weights=ef_, minlength=len(scene))
+    # holes subtract: a value may fall below 0 by rounding, never by more than its estimate
+    bad = np.flatnonzero(~(F >= -tol.ROUNDING_OVERSHOOT * (E + 1e-300)))
+    if len(bad):
+        raise NumericalError(f"polygon {bad[0]}: occluded form factor {F[bad[0]]!r} below 0 "
+                             f"beyond its rounding error estimate {E[bad[0]]:.3g}")
+    if stats is not None:
+        stats["max_error_estimate"] = float(E.max(initial=0.0))
+    return (np.maximum(F, 0.0), E) if error else np.maximum(F, 0.0)
+
+
+def visible_graph(scene, point, normal, *, two_sided=False, max_segment=0.02):
+    """The visible graph of one row, drawn on the base of the hemisphere: every visible
+    piece of every polygon, as the clipper keeps it, projected onto the unit disk.
+
+    A visible piece is a region of one gnomonic chart bounded by straight images of
+    great-circle arcs; on the disk those arcs are the ellipse arcs of the paper's Eq. 2.
+    Each chart edge is cut into pieces of at most ``max_segment`` chart units before it
+    is projected, so the rings follow the arcs closely; their areas approximate
+    (from inside, to about ``max_segment**2``) pi times the form factors.
+
+    Parameters
+    ----------
+    scene : Scene
+    point : array_like of shape (3,)
+    normal : array_like of shape (3,)
+        Receiver normal; the disk's x and y axes are those of
+        :func:`exactff.receiver_frame` (z along the normal).
+    two_sided : bool, default False
+        As for :func:`exactff.form_factors`.
+    max_segment : float, default 0.02
+        Longest chart-space segment before projection.
+
+    Returns
+    -------
+    list of (int, shapely.Polygon or shapely.MultiPolygon)
+        ``(polygon index, visible piece on the unit disk)``; a polygon may have several
+        pieces (one per chart and tile it crosses). Pieces of different polygons do not
+        overlap; in a closed room they tile the disk.
+
+    Examples
+    --------
+    >>> import exactff as ef
+    >>> scene = ef.scenes.cornell_box(closed=True)
+    >>> graph = visible_graph(scene, [278, 0.5, 279.6], [0, 1, 0])
+    >>> total = sum(g.area for _, g in graph)      # the whole disk: pi
+    >>> abs(total - np.pi) < 1e-3
+    True
+    """
+    import shapely
+
+    from ..integrate import as_receiver
+    from .clipper import CHARTS
+
+    p, n = as_receiver(point, normal)
+    if not (np.isfinite(max_segment) and max_segment > 0):
+        raise ValueError(f"max_segment must be a positive number, got {max_segment!r}")
+    flat = _Polygons.of(scene)
+    side, _ = plane_sides(flat, p, exact=False)
+    _, _, src, kept, _, receives = _row_fragments(scene, p, n, side, two_sided, True, {})
+    pieces = visible_pieces(kept, receives)
+
+    def on_disk(chart):
+        eu, ev, ew, _ = chart
+
+        def project(uv):
+            d = uv[:, :1] * eu + uv[:, 1:2] * ev + ew
+            return d[:, :2] / np.linalg.norm(d, axis=1, keepdims=True)
+        return project
+
+    return [(int(src[f]), shapely.transform(shapely.segmentize(g, max_segment),
+                                             on_disk(CHARTS[ci])))
+            for f, ci, g in pieces]
+
+
+def _row_fragments(scene, p, normal, side, two_sided, shortcuts, st):
+    """The fragments a row's clipper takes, front to back from ``p``: those seen edge-on
+    and (with shortcuts) those wholly below the horizon culled; their vertices in the
+    local frame of the point and in the world, bucket by bucket; whether each
+    receives. Returns ``(tree, order, src, kept, world, receives)``."""
     tree, buckets = scene_bsp(scene)
     order = np.array(front_to_back(tree, p), dtype=int)
     position = np.empty(len(order), dtype=int)
@@ -152,18 +240,4 @@ def visible_form_factors(scene, point, normal, *, two_sided=False, stats=None,
     receives = side[src] > 0
     if two_sided:
         receives |= side[src] < 0
-    charts = []
-    pieces = visible_pieces(kept, receives, stats=st, shortcuts=shortcuts, charts=charts)
-    refiner = Refiner(scene, tree, order, p, normal, kept, world, charts)
-    Ff, ef_ = pieces_form_factors(pieces, len(order), tolerance=tolerance, owner=src,
-                                  integrator=integrator, refiner=refiner, stats=st)
-    F = np.bincount(src, weights=Ff, minlength=len(scene))
-    E = np.bincount(src, weights=ef_, minlength=len(scene))
-    # holes subtract: a value may fall below 0 by rounding, never by more than its estimate
-    bad = np.flatnonzero(~(F >= -tol.ROUNDING_OVERSHOOT * (E + 1e-300)))
-    if len(bad):
-        raise NumericalError(f"polygon {bad[0]}: occluded form factor {F[bad[0]]!r} below 0 "
-                             f"beyond its rounding error estimate {E[bad[0]]:.3g}")
-    if stats is not None:
-        stats["max_error_estimate"] = float(E.max(initial=0.0))
-    return (np.maximum(F, 0.0), E) if error else np.maximum(F, 0.0)
+    return tree, order, src, kept, world, receives
