@@ -140,49 +140,91 @@ def parse_rows(text, n):
         raise ValueError(f"--rows {text}: the scene has {n} polygons (rows 0 to {n - 1})") from None
 
 
+def _matrix_summary(M):
+    """Row sums and the share of zero entries, block by block (a chunked store or a
+    sparse matrix is never made dense)."""
+    import scipy.sparse as sp
+
+    if sp.issparse(M):
+        return np.asarray(M.sum(axis=1)).ravel(), 1.0 - M.nnz / max(M.shape[0] * M.shape[1], 1)
+    sums, zeros, step = [], 0, max(1, 2 ** 22 // max(M.shape[1], 1))
+    for a in range(0, M.shape[0], step):
+        block = np.asarray(M[a:a + step])
+        sums.append(block.sum(axis=1))
+        zeros += int(np.count_nonzero(block == 0))
+    sums = np.concatenate(sums) if sums else np.zeros(0)
+    return sums, zeros / max(M.shape[0] * M.shape[1], 1)
+
+
+# a dense matrix larger than this goes to a chunked store by default
+DENSE_OUTPUT_BYTES = 2 ** 31
+
+
 def cmd_matrix(args):
+    import os
+    import shutil
     import time
 
     from .formfactors import form_factor_matrix
+    from .storage import _stem, _suffix
 
     scene = _open(args)
     rows = parse_rows(args.rows, len(scene))
+    if args.jobs < 1:
+        raise ValueError(f"--jobs must be at least 1, got {args.jobs}")
+    if args.scheduler and args.jobs > 1:
+        raise ValueError("--jobs and --scheduler: give one (the scheduler's workers run the rows)")
     out = args.output
     if out is None:
         stem = args.scene.split(":")[0].rsplit("/", 1)[-1].rsplit(".", 1)[0]
-        out = f"{stem}_ff.npy"
-    import os
-
-    stem = out[:-4] if out.endswith(".npy") else out
+        big = len(rows) * len(scene) * 8 > DENSE_OUTPUT_BYTES
+        out = f"{stem}_ff" + (".npz" if args.sparse else ".zarr" if big else ".npy")
+    suffix = _suffix(out, "--output")
+    if args.sparse != (suffix == ".npz"):
+        raise ValueError(f"--output {out}: " + ("--sparse writes a .npz file" if args.sparse
+                                                 else "a .npz output needs --sparse"))
+    stem = _stem(out)
     if args.overwrite:
-        for path in (out, stem + ".done.npy", stem + ".meta.json"):
-            if os.path.exists(path):
+        for path in (out, stem + ".done.npy", stem + ".meta.json", stem + ".parts"):
+            if os.path.isdir(path):
+                shutil.rmtree(path)
+            elif os.path.exists(path):
                 os.remove(path)
-    elif os.path.exists(out):
+    elif os.path.exists(out) or os.path.exists(stem + ".parts"):
         print(f"resuming {out} (rows already written are kept; --overwrite to start over)")
-    executor = None
-    if args.jobs > 1:
-        from concurrent.futures import ProcessPoolExecutor
-
-        executor = ProcessPoolExecutor(args.jobs)
+    executor = client = None
+    if args.scheduler:
+        try:
+            from dask.distributed import Client
+        except ImportError:
+            raise ValueError("--scheduler needs dask.distributed: pip install 'exactff[scale]'"
+                             ) from None
+        try:
+            client = executor = Client(args.scheduler, timeout=args.scheduler_timeout)
+        except (OSError, TimeoutError) as e:
+            raise ValueError(f"--scheduler {args.scheduler}: cannot connect ({e})") from None
     t0 = time.perf_counter()
     try:
         M = form_factor_matrix(scene, rows=rows, two_sided=args.two_sided, executor=executor,
+                               jobs=args.jobs if args.jobs > 1 else None, sparse=args.sparse,
                                progress=not args.no_progress, out=out)
     finally:
-        if executor is not None:
-            executor.shutdown()
+        if client is not None:
+            client.close()
     elapsed = time.perf_counter() - t0
-    M = np.asarray(M)
     if args.csv:
-        np.savetxt(args.csv, M, delimiter=",", fmt="%.17g")
-    sums = M.sum(axis=1)
+        import scipy.sparse as sp
+
+        np.savetxt(args.csv, M.toarray() if sp.issparse(M) else np.asarray(M), delimiter=",",
+                   fmt="%.17g")
+    sums, zero_share = _matrix_summary(M)
     print(f"scene            {args.scene} ({len(scene)} polygons)")
     print(f"matrix           {M.shape[0]} x {M.shape[1]} rows from the polygons' centroids "
           f"-> {out}" + (f" and {args.csv}" if args.csv else ""))
     print(f"time             {elapsed:.3f} s ({elapsed / max(len(rows), 1) * 1e3:.2f} ms per row)")
-    print(f"row sums         min {sums.min():.15f}  max {sums.max():.15f}")
-    print(f"zero entries     {np.mean(M == 0):.1%}")
+    if len(sums):
+        print(f"row sums         min {sums.min():.15f}  max {sums.max():.15f}")
+    print(f"zero entries     {zero_share:.1%}")
     return 0
 
 
@@ -283,14 +325,23 @@ def build_parser():
     p.add_argument("--normal", nargs=3, type=float, required=True, metavar=("X", "Y", "Z"))
     p.set_defaults(func=cmd_ff)
     p = sub.add_parser("matrix", help="exact form-factor matrix (rows from the polygons' "
-                                      "centroids), written to .npy")
+                                      "centroids), written to .npy, .zarr or .npz")
     _scene_arguments(p)
-    p.add_argument("-o", "--output", help="output .npy (default: SCENE_ff.npy); an "
-                                          "interrupted run resumes from it")
+    p.add_argument("-o", "--output", help="output: .npy (dense), .zarr (chunked, "
+                                          "compressed) or .npz (sparse, with --sparse); "
+                                          "default SCENE_ff.npy, .zarr above 2 GiB, .npz "
+                                          "with --sparse; an interrupted run resumes from it")
+    p.add_argument("--sparse", action="store_true",
+                   help="keep the non-zero values only (scipy.sparse CSR in a .npz)")
     p.add_argument("--csv", help="also write the matrix as CSV")
     p.add_argument("--rows", default="all", help="'all', 'A:B' or 'i,j,...'")
     p.add_argument("--two-sided", action="store_true", help="polygons receive on both sides")
-    p.add_argument("--jobs", type=int, default=1, help="worker processes")
+    p.add_argument("--jobs", type=int, default=1, help="worker processes on this machine")
+    p.add_argument("--scheduler", metavar="ADDRESS",
+                   help="send the rows to a running dask.distributed scheduler "
+                        "(tcp://host:8786); needs exactff[scale]")
+    p.add_argument("--scheduler-timeout", type=float, default=30.0, metavar="SECONDS",
+                   help=argparse.SUPPRESS)
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.add_argument("--overwrite", action="store_true",
                    help="start over instead of resuming an existing output file")

@@ -156,16 +156,51 @@ def method_record(method):
             "options": options}
 
 
-def _read_meta(path):
-    try:
-        with open(path, encoding="utf-8") as fh:
-            return json.load(fh)
-    except (OSError, ValueError):
+# a worker's computations (scene with its cached BSP tree, method, two_sided), by key:
+# installed once per process (a process pool's initializer), or kept from the first
+# task that brought them (any other executor), or resolved from a dask scatter
+_WORKER = {}
+_WORKER_KEEP = 4
+
+
+def _computation_key(scene, method, two_sided):
+    h = hashlib.sha256(_fingerprint(scene, []).encode())
+    h.update(json.dumps([method_record(method), bool(two_sided)], sort_keys=True).encode())
+    return h.hexdigest()
+
+
+def _install(job):
+    """Keep ``job = (key, scene, method, two_sided)`` in this process (the process pool's
+    initializer; also the first task of another executor)."""
+    while len(_WORKER) >= _WORKER_KEEP:
+        _WORKER.pop(next(iter(_WORKER)))
+    _WORKER[job[0]] = job[1:]
+
+
+def _task(job, rows):
+    """Rows computed in a worker. ``job`` is the key of a computation this process
+    holds, or the computation itself (kept for the tasks after it)."""
+    if isinstance(job, str):
+        scene, method, two_sided = _WORKER[job]
+    else:
+        if job[0] not in _WORKER:
+            _install(job)
+        scene, method, two_sided = _WORKER[job[0]]
+    return _rows(scene, method, rows, two_sided)
+
+
+def _dask_client(executor):
+    """The ``dask.distributed`` client behind ``executor`` (a Client or its executor), or
+    None."""
+    mod = type(executor).__module__ or ""
+    if not mod.startswith("distributed"):
         return None
+    return executor if hasattr(executor, "scatter") else getattr(executor, "_client", None)
 
 
 def form_factor_matrix(scene, *, method="exact", rows=None, two_sided=False, executor=None,
-                       progress=False, out=None, chunk_rows=None, **options):
+                       jobs=None, progress=False, out=None, sparse=False, chunk_rows=None,
+                       **options):
     """The form-factor matrix of a scene, row ``i`` from the centroid of polygon ``i``.
 
     As in the paper (and the hemicube), the coefficient ``F[i, j]`` is the form factor
@@ -179,27 +214,44 @@ def form_factor_matrix(scene, *, method="exact", rows=None, two_sided=False, exe
     rows : sequence of int, optional
         Compute only these rows (default: all, in order).
     two_sided : bool, default False
-    executor : concurrent.futures.Executor, optional
-        Rows are computed in chunks submitted to it (threads or processes; the scene
-        and method are pickled for processes).
+    executor : concurrent.futures.Executor or dask.distributed.Client, optional
+        Rows are computed in blocks submitted to it. A dask ``Client`` (or its
+        ``get_executor()``) receives the scene once per worker (scattered); any other
+        executor sends it with every block (a process keeps the scene, and its BSP tree,
+        from one block to the next).
+    jobs : int, optional
+        Run in this many worker processes of a pool that exactff starts and stops; the
+        scene reaches each process once (the pool's initializer). Not with ``executor``.
     progress : bool, default False
-        Show a progress bar (tqdm when installed).
+        Show a progress bar (tqdm when installed): rows per second and time left.
     out : str or os.PathLike, optional
-        Stream rows to this ``.npy`` file (a memory map). A ``.done.npy`` file beside it
-        records the finished rows (removed once every row is done) and a ``.meta.json``
-        file what is computed (a hash of the scene and rows, the method, the options).
-        Calling again with the same ``out`` and the same computation resumes an
-        interrupted run and recomputes nothing that was written; with a different
-        computation it raises ``ValueError`` instead of mixing results.
+        Stream rows to this file as they finish and resume from it: ``.npy`` (a dense
+        memory map), ``.zarr`` (a chunked, compressed store; ``exactff[scale]``) or
+        ``.npz`` (sparse, with ``sparse=True``); formats in :mod:`exactff.storage`.
+        ``STEM.meta.json`` beside it records what is computed (a hash of the scene and
+        rows, the method, the options). Calling again with the same ``out`` and the
+        same computation resumes an interrupted (even killed) run and recomputes no
+        finished row; a different computation raises ``ValueError`` instead of mixing
+        results. :func:`exactff.load_matrix` reads any of them back.
+    sparse : bool, default False
+        Return a ``scipy.sparse.csr_array`` holding the non-zero values (exactly the
+        dense matrix's, bit for bit).
     chunk_rows : int, optional
-        Rows per task (default: about 4 tasks per worker, at most 64 rows).
+        Rows per block (default: 16 serially; with workers about four blocks per
+        worker, at most 64 rows; a ``.zarr`` store's chunks: about 2**21 values, at most
+        64 rows).
     **options
         Passed to the method's constructor when ``method`` is a name.
 
     Returns
     -------
-    ndarray of shape (len(rows), len(scene))
-        A memory map when ``out`` is given.
+    ndarray, zarr.Array or scipy.sparse.csr_array of shape (len(rows), len(scene))
+        A memory map for ``.npy``, the store for ``.zarr``, CSR when ``sparse``.
+
+    Raises
+    ------
+    ValueError
+        Bad rows, jobs, chunk_rows, an ``out`` of another computation or format.
 
     Examples
     --------
@@ -207,70 +259,76 @@ def form_factor_matrix(scene, *, method="exact", rows=None, two_sided=False, exe
     >>> M = ef.form_factor_matrix(ef.scenes.subdivided_box(2))
     >>> M.shape, bool(np.allclose(M.sum(axis=1), 1.0, rtol=0, atol=1e-12))
     ((24, 24), True)
+    >>> S = ef.form_factor_matrix(ef.scenes.subdivided_box(2), sparse=True)
+    >>> bool(np.array_equal(S.toarray(), M)), S.nnz < M.size
+    (True, True)
     """
+    from .storage import ZARR_CHUNK_VALUES, MatrixOutput
+
     m = resolve(method, **options)
-    n = len(as_scene(scene))
+    scene = as_scene(scene)
+    n = len(scene)
     rows = np.arange(n) if rows is None else _row_indices(rows)
     if rows.size and (rows.min() < 0 or rows.max() >= n):
         raise ValueError(f"rows must lie in [0, {n}), got values from {rows.min()} to {rows.max()}")
-    shape = (len(rows), n)
-    if out is not None:
-        out = os.fspath(out)
-        stem = out[:-4] if out.endswith(".npy") else out
-        done_path, meta_path = stem + ".done.npy", stem + ".meta.json"
-        # what the file holds: a resumed run must be the same computation
-        meta = {"scene": _fingerprint(scene, rows), "method": method_record(m), "two_sided": two_sided,
-                "shape": list(shape)}
-        if os.path.exists(out):
-            old = _read_meta(meta_path)
-            if old != meta:
-                raise ValueError(
-                    f"out: {out!r} was not written by this computation (scene, rows, method "
-                    f"or options differ, or {os.path.basename(meta_path)!r} is missing); "
-                    f"remove it or choose another path")
-            M = np.lib.format.open_memmap(out, mode="r+")
-            done = np.load(done_path) if os.path.exists(done_path) else np.ones(len(rows), bool)
-        else:
-            M = np.lib.format.open_memmap(out, mode="w+", dtype=float, shape=shape)
-            done = np.zeros(len(rows), bool)
-            with open(meta_path, "w", encoding="utf-8") as fh:
-                json.dump(meta, fh)
-        np.save(done_path, done)
+    if jobs is not None:
+        if isinstance(jobs, bool) or not isinstance(jobs, (int, np.integer)) or jobs < 1:
+            raise ValueError(f"jobs must be a positive integer, got {jobs!r}")
+        if executor is not None:
+            raise ValueError("give executor or jobs, not both")
+    if chunk_rows is not None and (isinstance(chunk_rows, bool) or
+                                   not isinstance(chunk_rows, (int, np.integer)) or chunk_rows < 1):
+        raise ValueError(f"chunk_rows must be a positive integer, got {chunk_rows!r}")
+    client = None if executor is None else _dask_client(executor)
+    workers = (jobs if jobs and jobs > 1 else None) or (
+        len(client.scheduler_info().get("workers", {})) if client is not None
+        else getattr(executor, "_max_workers", None) or (os.cpu_count() if executor else 1)) or 1
+    zarr_out = out is not None and os.fspath(out).endswith(".zarr")
+    if chunk_rows:
+        step = int(chunk_rows)
+    elif zarr_out:   # fixed by the store (not by the workers): a resumed run has the same
+        step = max(1, min(64, ZARR_CHUNK_VALUES // max(n, 1)))
+    elif workers > 1:
+        step = max(1, min(64, -(-len(rows) // (4 * workers))))
     else:
-        M = np.empty(shape)
-        done = np.zeros(len(rows), bool)
-    todo = np.flatnonzero(~done)
+        step = 16
+    meta = {"scene": _fingerprint(scene, rows), "method": method_record(m),
+            "two_sided": two_sided}
+    result = MatrixOutput((len(rows), n), sparse=sparse, out=out, meta=meta, block=step)
+    # blocks of positions aligned to ``step`` (a chunked store's chunks), unfinished rows only
+    blocks = [b[~result.done[b]] for b in np.array_split(
+        np.arange(len(rows)), np.arange(step, len(rows), step))]
+    blocks = [b for b in blocks if len(b)]
     bar = _Progress(len(rows), progress, "form factors")
-    bar.update(len(rows) - len(todo))
+    bar.update(int(result.done.sum()))
 
     def store(pos, values):
-        for k, v in zip(pos, values):
-            M[k] = v
-        done[pos] = True
-        if out is not None:
-            M.flush()
-            np.save(done_path, done)
+        result.write(pos, values)
         bar.update(len(pos))
 
+    pool = None
     try:
-        if executor is None:
-            step = chunk_rows or 16
-            for s in range(0, len(todo), step):
-                pos = todo[s:s + step]
+        if executor is None and not (jobs and jobs > 1):
+            for pos in blocks:
                 store(pos, _rows(scene, m, rows[pos], two_sided))
         else:
-            workers = getattr(executor, "_max_workers", None) or os.cpu_count() or 1
-            step = chunk_rows or max(1, min(64, -(-len(todo) // (4 * workers))))
-            futures = {}
-            for s in range(0, len(todo), step):
-                pos = todo[s:s + step]
-                futures[executor.submit(_rows, scene, m, rows[pos], two_sided)] = pos
-            from concurrent.futures import as_completed
+            from concurrent.futures import ProcessPoolExecutor, as_completed
 
+            job = (_computation_key(scene, m, two_sided), scene, m, two_sided)
+            if client is not None:
+                # dask: the scene reaches each worker once; tasks refer to it
+                ex = client.get_executor(pure=False)
+                payload = client.scatter([job], broadcast=True, hash=False)[0]
+            elif executor is None:
+                pool = ex = ProcessPoolExecutor(jobs, initializer=_install, initargs=(job,))
+                payload = job[0]
+            else:
+                ex, payload = executor, job
+            futures = {ex.submit(_task, payload, rows[pos]): pos for pos in blocks}
             for fut in as_completed(futures):
                 store(futures[fut], fut.result())
     finally:
         bar.close()
-    if out is not None and done.all():
-        os.remove(done_path)
-    return M
+        if pool is not None:
+            pool.shutdown(cancel_futures=True)
+    return result.result()

@@ -1,0 +1,26 @@
+"""A method that records, per row, the process, the scene object it was given and
+whether that scene already held its BSP tree (importable by worker processes)."""
+
+import os
+
+from exactff.methods import Exact
+
+
+class RecordingExact(Exact):
+    """The exact method, logging ``pid id(scene) had_bsp row`` lines to ``log``."""
+
+    def __init__(self, log):
+        super().__init__()
+        self.log = log
+
+    def point_form_factors(self, scene, point, normal, two_sided=False, **kw):
+        had = "bsp" in scene._cache
+        F = super().point_form_factors(scene, point, normal, two_sided=two_sided, **kw)
+        with open(self.log, "a", encoding="utf-8") as fh:
+            fh.write(f"{os.getpid()} {id(scene)} {int(had)} {point.tolist()}\n")
+        return F
+
+
+def read_log(path):
+    with open(path, encoding="utf-8") as fh:
+        return [line.split(" ", 3) for line in fh]
