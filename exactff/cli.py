@@ -160,6 +160,34 @@ def _matrix_summary(M):
 DENSE_OUTPUT_BYTES = 2 ** 31
 
 
+def _area_matrix(scene, rows, args, out):
+    """``exactff matrix --area``: the area-to-area matrix, each value within
+    ``--tolerance``, written to a .npy (and its bounds beside it, STEM.error.npy)."""
+    from .area import area_form_factors
+
+    if args.sparse or args.scheduler or args.two_sided or not out.endswith(".npy"):
+        raise ValueError("--area writes a dense .npy (not with --sparse, --scheduler, "
+                         "--two-sided, .zarr or .npz)")
+    if not (args.tolerance > 0):
+        raise ValueError(f"--tolerance must be positive, got {args.tolerance}")
+    executor = None
+    if args.jobs > 1:
+        from concurrent.futures import ProcessPoolExecutor
+
+        executor = ProcessPoolExecutor(args.jobs)
+    try:
+        F, E = area_form_factors(scene, rows, tolerance=args.tolerance, error=True,
+                                 executor=executor, progress=not args.no_progress)
+    finally:
+        if executor is not None:
+            executor.shutdown()
+    np.save(out, F)
+    np.save(out[:-4] + ".error.npy", E)
+    print(f"error bounds     max {E.max():.3g} (tolerance {args.tolerance:g}) "
+          f"-> {out[:-4] + '.error.npy'}")
+    return F
+
+
 def cmd_matrix(args):
     import os
     import shutil
@@ -190,7 +218,7 @@ def cmd_matrix(args):
                 shutil.rmtree(path)
             elif os.path.exists(path):
                 os.remove(path)
-    elif os.path.exists(out) or os.path.exists(stem + ".parts"):
+    elif not args.area and (os.path.exists(out) or os.path.exists(stem + ".parts")):
         print(f"resuming {out} (rows already written are kept; --overwrite to start over)")
     executor = client = None
     if args.scheduler:
@@ -205,9 +233,12 @@ def cmd_matrix(args):
             raise ValueError(f"--scheduler {args.scheduler}: cannot connect ({e})") from None
     t0 = time.perf_counter()
     try:
-        M = form_factor_matrix(scene, rows=rows, two_sided=args.two_sided, executor=executor,
-                               jobs=args.jobs if args.jobs > 1 else None, sparse=args.sparse,
-                               progress=not args.no_progress, out=out)
+        if args.area:
+            M = _area_matrix(scene, rows, args, out)
+        else:
+            M = form_factor_matrix(scene, rows=rows, two_sided=args.two_sided,
+                                   executor=executor, jobs=args.jobs if args.jobs > 1 else None,
+                                   sparse=args.sparse, progress=not args.no_progress, out=out)
     finally:
         if client is not None:
             client.close()
@@ -333,6 +364,11 @@ def build_parser():
                                           "with --sparse; an interrupted run resumes from it")
     p.add_argument("--sparse", action="store_true",
                    help="keep the non-zero values only (scipy.sparse CSR in a .npz)")
+    p.add_argument("--area", action="store_true",
+                   help="area-to-area form factors (the paper's Eq. 1) with occlusion, "
+                        "each within --tolerance, instead of rows from the centroids")
+    p.add_argument("--tolerance", type=float, default=1e-9,
+                   help="absolute error allowed per value with --area (default 1e-9)")
     p.add_argument("--csv", help="also write the matrix as CSV")
     p.add_argument("--rows", default="all", help="'all', 'A:B' or 'i,j,...'")
     p.add_argument("--two-sided", action="store_true", help="polygons receive on both sides")

@@ -134,3 +134,102 @@ def test_bad_polygons_raise_scene_errors():
     P, Q = parallel_pair(1, 1, 1)
     with pytest.raises(ef.SceneError, match="polygon 1"):
         ef.polygon_form_factor(P, [[0, 0, 0], [1, 0, 0], [2, 0, 0]])
+
+
+# ---------------------------------------------------------------------------------------
+# with occlusion: area_form_factors
+# ---------------------------------------------------------------------------------------
+def _square(z, up):
+    P = [[0, 0, z], [1, 0, z], [1, 1, z], [0, 1, z]]
+    return P if up else P[::-1]
+
+
+# Issue 15's references: unit emitter [0,1]^2 at z = 0 facing up, unit receiver at z = 2
+# facing down, a 0.5 x 0.5 plate at z = 1. Computed independently of exactff (the emitter
+# split at its visibility kinks, inner rows from a 2-D boolean construction,
+# Gauss-Legendre 8 and 12 agreeing to 1e-16); quoted to 12 significant digits.
+OCCLUDED_REFERENCES = [
+    ([[.25, .25, 1], [.75, .25, 1], [.75, .75, 1], [.25, .75, 1]], 0.0314026942480),
+    ([[.6, .25, 1], [1.1, .25, 1], [1.1, .75, 1], [.6, .75, 1]], 0.0520276630454),
+]
+
+
+@pytest.mark.parametrize("plate, reference", OCCLUDED_REFERENCES)
+@pytest.mark.parametrize("tolerance", [1e-6, 1e-10])
+def test_occluded_references(plate, reference, tolerance):
+    scene = ef.Scene.from_polygons([_square(0, True), _square(2, False), plate])
+    F, E = ef.area_form_factors(scene, rows=[0], tolerance=tolerance, error=True)
+    err = abs(F[0, 1] - reference)
+    assert E[0, 1] <= tolerance
+    assert err <= E[0, 1] + 1e-13            # the bound holds (the reference has 12 digits)
+    assert err < max(tolerance, 1e-12)
+    # unoccluded: the plate moved away gives the contour integral's value, exactly
+    clear = ef.Scene.from_polygons([_square(0, True), _square(2, False),
+                                    np.array(plate) + [5, 0, 0]])
+    assert ef.area_form_factors(clear, rows=[0])[0, 1] == ef.polygon_form_factor(
+        _square(0, True), _square(2, False))
+
+
+def _room_with_plate():
+    room = list(ef.scenes.subdivided_box(1).polygons)
+    up = np.array([[.3, .35, .45], [.65, .35, .45], [.65, .7, .45], [.3, .7, .45]])
+    return ef.Scene.from_polygons(room + [up, up[::-1].copy()])    # a two-sided plate
+
+
+@pytest.mark.slow
+def test_closed_room_rows_sum_to_one_and_reciprocity_within_the_estimates():
+    scene = _room_with_plate()
+    tol = 1e-7
+    F, E = ef.area_form_factors(scene, rows=[0, 1], tolerance=tol, error=True)
+    assert np.all(E <= tol)
+    # every point of the floor (ceiling) sees the closed room: each row sums to 1
+    assert np.all(np.abs(F.sum(axis=1) - 1.0) <= E.sum(axis=1) + 1e-12)
+    A = scene.areas
+    # floor <-> ceiling, through the plate
+    assert abs(A[0] * F[0, 1] - A[1] * F[1, 0]) <= A[0] * E[0, 1] + A[1] * E[1, 0]
+    # the plate's underside against the floor (unoccluded: its own row, exact)
+    G = ef.area_form_factors(scene, rows=[7])
+    assert A[0] * F[0, 7] == pytest.approx(A[7] * G[0, 0], rel=1e-12)
+    assert F[1, 7] == 0.0 and F[0, 6] == 0.0           # the faces turned away
+
+
+def test_convex_room_is_all_contour_integrals():
+    scene = ef.scenes.subdivided_box(2)
+    F = ef.area_form_factors(scene, rows=[0, 9])
+    for k, i in enumerate([0, 9]):
+        for j in range(len(scene)):
+            want = 0.0 if j == i else ef.polygon_form_factor(scene.polygons[i],
+                                                             scene.polygons[j])
+            assert F[k, j] == want
+    assert np.allclose(F.sum(axis=1), 1.0, rtol=0, atol=1e-12)
+
+
+def test_area_form_factors_rejects_bad_arguments():
+    scene = ef.scenes.subdivided_box(1)
+    for bad in (0, -1e-9, float("nan"), "1e-9"):
+        with pytest.raises(ValueError, match="tolerance"):
+            ef.area_form_factors(scene, tolerance=bad)
+    with pytest.raises(ValueError, match="rows"):
+        ef.area_form_factors(scene, rows=[6])
+
+
+def test_cli_matrix_area(tmp_path):
+    import json
+    import subprocess
+    import sys
+
+    scene = ef.scenes.subdivided_box(1)
+    path = tmp_path / "box.json"
+    path.write_text(json.dumps({"schema": "exactff-scene/1", "surfaces": [
+        {"vertices": P.tolist()} for P in scene.polygons]}))
+    r = subprocess.run([sys.executable, "-m", "exactff", "matrix", str(path), "--area",
+                        "--tolerance", "1e-10", "--no-progress", "-o", "a.npy"],
+                       capture_output=True, text=True, cwd=tmp_path, timeout=300)
+    assert r.returncode == 0, r.stderr
+    F, E = np.load(tmp_path / "a.npy"), np.load(tmp_path / "a.error.npy")
+    assert np.array_equal(F, ef.area_form_factors(scene))
+    assert E.shape == F.shape and E.max() <= 1e-10
+    r = subprocess.run([sys.executable, "-m", "exactff", "matrix", str(path), "--area",
+                        "--sparse", "--no-progress"], capture_output=True, text=True,
+                       cwd=tmp_path, timeout=300)
+    assert r.returncode == 2 and "--area writes a dense .npy" in r.stderr
