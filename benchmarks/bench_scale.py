@@ -48,7 +48,8 @@ def write_formats(M, work, name):
     out = {}
     n_rows, n = M.shape
     for suffix, sparse in ((".npy", False), (".zarr", False), (".npz", True)):
-        path = os.path.join(work, name + suffix)
+        # one stem per format: the sidecar files (STEM.meta.json) are per stem
+        path = os.path.join(work, f"{name}_{suffix[1:]}{suffix}")
         for p in (path, path[: -len(suffix)] + ".meta.json"):
             if os.path.isdir(p):
                 shutil.rmtree(p)

@@ -223,10 +223,11 @@ class MatrixOutput:
         for name in sorted(os.listdir(self.parts)):
             if name.endswith(".npz") and not name.endswith(".tmp.npz"):
                 with np.load(os.path.join(self.parts, name)) as z:
-                    ends = np.cumsum(z["counts"])
-                    starts = ends - z["counts"]
-                    for p, a, b in zip(z["pos"], starts, ends):
-                        rows[int(p)] = (z["indices"][a:b], z["data"][a:b])
+                    # each array read once (an NpzFile reads it again on every access)
+                    pos, counts, idx, val = z["pos"], z["counts"], z["indices"], z["data"]
+                ends = np.cumsum(counts)
+                for p, a, b in zip(pos, ends - counts, ends):
+                    rows[int(p)] = (idx[a:b], val[a:b])
         M = _csr(self.shape[0], self.shape[1], rows)
         import scipy.sparse as sp
 
