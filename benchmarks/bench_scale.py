@@ -156,7 +156,7 @@ def main():
     print("|---|---|")
     for cores in (1, 64, 1024):
         s = len(cloister) * per_row / cores
-        print(f"| {cores} | {s / 3600:.1f} h ({s / 86400:.2f} days) |")
+        print(f"| {cores} | {s / 3600:.1f} h ({s / 60:.1f} min) |")
 
 
 if __name__ == "__main__":
