@@ -182,3 +182,27 @@ RASTER_NEAR_ORIGIN = 1e-9
 #: Fans of a non-planar face whose flatness scores differ by less than this are equal
 #: (the first apex is kept), so that the split does not depend on rounding.
 SPLIT_FLATNESS_TIE = 1e-12
+
+#: Area form factors: a polygon within this of a face of the convex hull of an emitter
+#: and a receiver (relative to the scene's size) lies on it and hides nothing.
+AREA_HULL_RTOL = 1e-12
+
+#: Area form factors: an event plane whose line with the emitter's plane has a direction
+#: below this (relative to the plane's normal) is parallel to it (no event line).
+AREA_EVENT_PARALLEL = 1e-12
+
+#: Area form factors: a ray from a vertex through an edge's end point rising less than
+#: this (relative to its length) towards the emitter's plane never meets it.
+AREA_RAY_PARALLEL = 1e-14
+
+#: Area form factors: event lines through infinity are kept as segments this many times
+#: the sub-scene's size long.
+AREA_EVENT_FAR = 1e6
+
+#: Area form factors: cells of the cut emitter below this share of its area are slivers
+#: of rounding and are dropped.
+AREA_SLIVER_CELL = 1e-14
+
+#: Area form factors: the rounding of a contour sum or an area rule, in units of
+#: rounding of its absolute terms.
+AREA_ROUNDING_ULPS = 64.0

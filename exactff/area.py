@@ -25,6 +25,7 @@ import numpy as np
 import shapely
 from scipy.special import roots_legendre, xlogy
 
+from . import _tolerances as tol
 from .geometry import area_vector, polygon_diameter, receiver_frame
 from .scene import validate_polygon
 from .visibility.clipper import clip_halfspace
@@ -201,7 +202,7 @@ def _unoccluded_pair(P, Q):
     if r0 > FAR * max(polygon_diameter(P), polygon_diameter(Q)):
         hi = _area_integral(Pc, nP, Qc) / area_P
         lo = _area_integral(Pc, nP, Qc, _GL_LOW) / area_P
-        return max(hi, 0.0), abs(hi - lo) + 64 * eps * abs(hi)
+        return max(hi, 0.0), abs(hi - lo) + tol.AREA_ROUNDING_ULPS * eps * abs(hi)
     eP = np.roll(Pc, -1, axis=0) - Pc          # (KP, 3)
     eQ = np.roll(Qc, -1, axis=0) - Qc          # (KQ, 3)
     d, upper, w = _NODES
@@ -216,7 +217,7 @@ def _unoccluded_pair(P, Q):
     total = float(terms.sum()) / (2.0 * np.pi) / area_P
     scale = (float(np.abs(terms).sum()) + float(np.abs(w[None, :, None] * G).sum())
              * float(np.abs(eP @ eQ.T).max())) / (2.0 * np.pi) / area_P
-    return max(total, 0.0), 64 * eps * scale
+    return max(total, 0.0), tol.AREA_ROUNDING_ULPS * eps * scale
 
 
 # ---------------------------------------------------------------------------------------
@@ -234,14 +235,14 @@ def _blockers(polys, i, j, Pc, Qc, scale):
         H = ConvexHull(pts).equations               # a . x + b <= 0 inside
     except QhullError:
         return []
-    tol = 1e-12 * scale
-    lo, hi = pts.min(axis=0) - tol, pts.max(axis=0) + tol
+    near = tol.AREA_HULL_RTOL * scale
+    lo, hi = pts.min(axis=0) - near, pts.max(axis=0) + near
     out = []
     for k, K in enumerate(polys):
         if k in (i, j) or np.any(K.max(axis=0) < lo) or np.any(K.min(axis=0) > hi):
             continue
         # on or outside one face of the hull: hides nothing
-        if np.any(np.all(K @ H[:, :3].T + H[:, 3] >= -tol, axis=0)):
+        if np.any(np.all(K @ H[:, :3].T + H[:, 3] >= -near, axis=0)):
             continue
         out.append(k)
     return out
@@ -255,13 +256,13 @@ def _event_lines(S, nP, dP, R, c):
     planes of the polygons of S meet P's plane. A segment is ``(point, point)``; an
     image through infinity is kept as its whole line."""
     out = []
-    far = 1e6 * (float(np.ptp(np.vstack(S), axis=0).max()) + 1.0)
+    far = tol.AREA_EVENT_FAR * (float(np.ptp(np.vstack(S), axis=0).max()) + 1.0)
 
     def line(m, off):
         # the plane m . x = off meets P's plane n . x = dP in a line: two far points
         d = np.cross(nP, m)
         dn = np.linalg.norm(d)
-        if dn < 1e-12 * np.linalg.norm(m):
+        if dn < tol.AREA_EVENT_PARALLEL * np.linalg.norm(m):
             return
         d /= dn
         x0 = np.linalg.solve(np.array([nP, m, d]), np.array([dP, off, d @ c]))
@@ -270,7 +271,7 @@ def _event_lines(S, nP, dP, R, c):
     def through(v, q):
         # where the line from v through q meets P's plane (None: parallel, or beyond)
         den = nP @ (q - v)
-        if abs(den) < 1e-14 * np.linalg.norm(q - v):
+        if abs(den) < tol.AREA_RAY_PARALLEL * np.linalg.norm(q - v):
             return None
         return v + (dP - nP @ v) / den * (q - v)
 
@@ -303,7 +304,7 @@ def _cells(Pc, nP, lines, R, c):
         shapely.get_parts(shapely.union_all([poly.boundary, *segs]).intersection(poly))))
     tris = []
     for cell in pieces:
-        if cell.area <= 1e-14 * poly.area or not cell.representative_point().within(poly):
+        if cell.area <= tol.AREA_SLIVER_CELL * poly.area or not cell.representative_point().within(poly):
             continue
         for t in shapely.get_parts(shapely.constrained_delaunay_triangles(cell)):
             uv = np.asarray(t.exterior.coords)[:3]

@@ -280,6 +280,7 @@ def visible_graph(scene, point, normal, ax=None, *, two_sided=False, labels=Fals
     >>> len(ax.patches) > 0
     True
     """
+    import matplotlib
     import shapely
     from matplotlib.patches import PathPatch
     from matplotlib.path import Path
@@ -288,7 +289,7 @@ def visible_graph(scene, point, normal, ax=None, *, two_sided=False, labels=Fals
 
     pieces = graph(scene, point, normal, two_sided=two_sided)
     ax = _axes(ax, figsize=(5.6, 5.6))
-    cmap = __import__("matplotlib").colormaps["tab20"]
+    cmap = matplotlib.colormaps["tab20"]
     best = {}
     for i, g in pieces:
         for part in shapely.get_parts(g):

@@ -3,6 +3,7 @@ sparse; outputs on disk (.npy, .zarr, .npz) resume after a SIGKILL without recom
 finished row; the scene reaches each worker once; the command line reaches a running
 dask scheduler."""
 
+import json
 import os
 import signal
 import subprocess
@@ -205,7 +206,7 @@ def test_sigkill_then_resume_gives_the_identical_matrix(tmp_path, serial, suffix
     M = ef.form_factor_matrix(SCENE, method=method, out=out, sparse=sparse, chunk_rows=2)
     resumed = read_log(log)[computed:]
     centroids = {tuple(np.round(c, 12)) for c in SCENE.centroids[sorted(done)]}
-    again = [tuple(np.round(eval(r[3]), 12)) for r in resumed]
+    again = [tuple(np.round(json.loads(r[3]), 12)) for r in resumed]
     assert not centroids & set(again), "a finished row was computed again"
     assert len(again) == len(SCENE) - len(done)
     dense = M.toarray() if sparse else np.asarray(M[:])
