@@ -206,3 +206,20 @@ AREA_SLIVER_CELL = 1e-14
 #: Area form factors: the rounding of a contour sum or an area rule, in units of
 #: rounding of its absolute terms.
 AREA_ROUNDING_ULPS = 64.0
+
+#: Area form factors: the rectangle over which a blocker's image is kept, around the
+#: receiver in its plane, is wider than the receiver's bounding box by this share of it
+#: (the rectangle's edges then never meet the receiver's).
+AREA_HIDDEN_PAD = 0.01
+
+#: Area form factors: the boundary of the hidden region built by the 2-D booleans moves
+#: by at most this many units of rounding of its largest coordinate per boolean.
+AREA_BOOLEAN_ULPS = 16.0
+
+#: Area form factors: a blocker whose plane passes within this of a point (relative to
+#: the sub-scene's size) is seen edge-on from it and hides nothing.
+AREA_EDGE_ON_RTOL = 8 * EPS
+
+#: Area form factors: cuts of an emitter's edge (for the contour integral's outer rule)
+#: closer than this (as a share of the edge) to each other or to its ends are dropped.
+AREA_EDGE_CUT = 1e-9

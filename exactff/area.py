@@ -34,16 +34,19 @@ __all__ = ["polygon_form_factor", "area_form_factors"]
 
 
 def _tanh_sinh(level=6, t_max=3.6):
-    """Tanh-sinh nodes on [0, 1] as (distance to the nearer end, which end, weight):
+    """Tanh-sinh nodes on [0, 1] as (distance to the nearer end, which end, weight, the
+    weight of the rule one level coarser: twice as wide a step, on every other node):
     the distance to the end is computed without cancellation."""
     h = 2.0 ** -level
-    t = np.arange(-int(t_max / h), int(t_max / h) + 1) * h
+    k = np.arange(-int(t_max / h), int(t_max / h) + 1)
+    t = k * h
     u = 0.5 * np.pi * np.sinh(np.abs(t))
     e = np.exp(-2.0 * u)
     d = e / (1.0 + e)                       # (1 - |tanh u|) / 2: distance to the end
     w = h * 0.5 * np.pi * np.cosh(t) * 4.0 * e / (1.0 + e) ** 2 / 2.0
+    coarse = np.where(k % 2 == 0, 2.0 * w, 0.0)
     keep = d > 0
-    return d[keep], (t >= 0)[keep], w[keep]
+    return d[keep], (t >= 0)[keep], w[keep], coarse[keep]
 
 
 _NODES = _tanh_sinh()
@@ -70,6 +73,11 @@ def _segment_log_integral(W, E):
 def _clip_front(P, n, c):
     """The part of polygon P with ``n . (x - c) > 0`` (None when nothing is left): the
     engine's half-space clipping, about the point c."""
+    d = (P - c) @ n
+    if np.all(d >= 0) and np.any(d > 0):
+        return P
+    if np.all(d <= 0) and np.any(d < 0):
+        return None
     V, k = clip_halfspace((P - c)[None], np.array([len(P)]), n)
     return V[0, :k[0]] + c if k[0] >= 3 else None
 
@@ -119,32 +127,61 @@ def triangle_rule(tri, rule=_GL):
     return X.reshape(-1, 3), (WW * J).ravel()
 
 
-def _point_values(X, nP, Qc):
-    """Unoccluded point form factors from the points X (normal nP) to the polygon Qc
-    (in front of them), in offset form, vectorised over the points; and their rounding
-    error estimates."""
+def _point_values(X, nP, Qs):
+    """Unoccluded point form factors from the points X (normal nP) to each polygon of
+    Qs (in front of them), in offset form, vectorised over points and polygons: arrays
+    of shape (len(Qs), len(X)) of the values and of their rounding error estimates."""
     from .integrate import _C1, _clipped_sector_sums
 
     R = receiver_frame(nP)
-    E = (Qc - Qc[0]) @ R.T                    # offsets, the same for every point
-    A0 = (Qc[0] - X) @ R.T                    # each point's reference vertex
-    k = len(Qc)
-    owner = np.repeat(np.arange(len(X)), k)
-    nxt = np.arange(len(owner)) + 1
-    nxt[k - 1::k] -= k
-    S, mags, errs = _clipped_sector_sums(A0, np.tile(E, (len(X), 1)), nxt, owner, len(X))
+    nX, m = len(X), len(Qs)
+    ks = np.array([len(Q) for Q in Qs])
+    # polygon (j, p): receiver j seen from point p, numbered j * nX + p; its vertices'
+    # offsets from its first vertex are the same for every point
+    A0 = ((np.array([Q[0] for Q in Qs])[:, None, :] - X[None]) @ R.T).reshape(-1, 3)
+    E = np.concatenate([np.tile((Q - Q[0]) @ R.T, (nX, 1)) for Q in Qs])
+    lens = np.repeat(ks, nX)
+    owner = np.repeat(np.arange(m * nX), lens)
+    first = np.repeat(np.cumsum(lens) - lens, lens)        # each vertex's polygon's first
+    idx = np.arange(len(owner))
+    nxt = np.where(idx + 1 == first + lens[owner], first, idx + 1)
+    S, mags, errs = _clipped_sector_sums(A0, E, nxt, owner, m * nX)
     eps = np.finfo(float).eps
-    return np.abs(S) / (2.0 * np.pi), (_C1 * eps * mags + errs) / (2.0 * np.pi)
+    return (np.abs(S).reshape(m, nX) / (2.0 * np.pi),
+            ((_C1 * eps * mags + errs) / (2.0 * np.pi)).reshape(m, nX))
 
 
-def _area_integral(Pc, nP, Qc, rule=_GL):
-    """``int_P F(x -> Q) dA`` by a collapsed Gauss-Legendre rule (12 x 12) on each
-    triangle of P, with the exact point form factors evaluated together in offset form
-    (one frame: P's normal)."""
-    nodes = [triangle_rule(t, rule) for t in _triangles(Pc, nP)]
-    X = np.concatenate([x for x, _ in nodes])
-    Wt = np.concatenate([w for _, w in nodes])
-    return float(_point_values(X, nP, Qc)[0] @ Wt)
+def _emitter_nodes(Pc, nP):
+    """The 12- and 8-point collapsed Gauss-Legendre rules on P's triangles, as one set
+    of nodes and the two weight vectors (each zero on the other rule's nodes)."""
+    tris = _triangles(Pc, nP)
+    hi = [triangle_rule(t, _GL) for t in tris]
+    lo = [triangle_rule(t, _GL_LOW) for t in tris]
+    X = np.concatenate([x for x, _ in hi] + [x for x, _ in lo])
+    n_hi = sum(len(w) for _, w in hi)
+    W_hi, W_lo = np.zeros(len(X)), np.zeros(len(X))
+    W_hi[:n_hi] = np.concatenate([w for _, w in hi])
+    W_lo[n_hi:] = np.concatenate([w for _, w in lo])
+    return X, W_hi, W_lo
+
+
+#: receivers per call of the vectorised point values (bounds the temporaries: about
+#: 2e5 edge terms per call)
+_EDGE_TERMS_PER_CALL = 200_000
+
+
+def _far_values(nodes, nP, area_P, Qs):
+    """F(P -> Q) for far receivers Qs (each in front of P's nodes) by the area integral
+    of exact point values, and its estimate: the difference between the 12- and 8-point
+    rules plus rounding."""
+    X, W_hi, W_lo = nodes
+    hi, lo = np.empty(len(Qs)), np.empty(len(Qs))
+    per = max(1, _EDGE_TERMS_PER_CALL // (len(X) * max(len(Q) for Q in Qs)))
+    for s in range(0, len(Qs), per):
+        V = _point_values(X, nP, Qs[s:s + per])[0]
+        hi[s:s + per], lo[s:s + per] = V @ W_hi / area_P, V @ W_lo / area_P
+    eps = np.finfo(float).eps
+    return np.maximum(hi, 0.0), np.abs(hi - lo) + tol.AREA_ROUNDING_ULPS * eps * np.abs(hi)
 
 
 def polygon_form_factor(P, Q):
@@ -184,6 +221,40 @@ def polygon_form_factor(P, Q):
     return _unoccluded_pair(P, Q)[0]
 
 
+def _edge_pieces(P, eP, Q, eQ):
+    """Each edge of P cut at the points nearest to the lines of Q's edges and to Q's
+    vertices, where those come within the edge's length of it: there the inner integral
+    of the contour form has its kinks (an edge of Q met in its interior, a vertex of Q
+    on the edge) or steep stretches, and the tanh-sinh rule wants them at the ends of
+    its intervals. Returns ``(owner, s0, s1)``: the pieces' edges (sorted) and their
+    ends as parameters along the edge."""
+    owner, s0, s1 = [], [], []
+    for k, (a, e) in enumerate(zip(P, eP)):
+        ee = e @ e
+        cuts = [((q - a) @ e) / ee for q in Q]
+        for b, f in zip(Q, eQ):
+            # the nearest points of the two lines (none when they are parallel)
+            c = np.cross(e, f)
+            cc = c @ c
+            if cc > tol.AREA_EVENT_PARALLEL * ee * (f @ f):
+                cuts.append(np.cross(b - a, f) @ c / cc)
+        cut = []
+        for s in sorted(cuts):
+            if not tol.AREA_EDGE_CUT < s < 1.0 - tol.AREA_EDGE_CUT:
+                continue
+            # only where Q comes near: within the edge's length of the point
+            x = a + s * e
+            t = np.clip(((x - Q) * eQ).sum(axis=1) / (eQ * eQ).sum(axis=1), 0.0, 1.0)
+            near = np.linalg.norm(Q + t[:, None] * eQ - x, axis=1).min()
+            if near < np.sqrt(ee) and (not cut or s - cut[-1] > tol.AREA_EDGE_CUT):
+                cut.append(s)
+        ends = [0.0] + cut + [1.0]
+        owner += [k] * (len(ends) - 1)
+        s0 += ends[:-1]
+        s1 += ends[1:]
+    return np.array(owner), np.array(s0), np.array(s1)
+
+
 def _unoccluded_pair(P, Q):
     """F(P -> Q) of two validated polygons, unoccluded, and a bound on its error: the
     rounding of the contour sum (64 units of its absolute terms), or, for far pairs,
@@ -200,52 +271,69 @@ def _unoccluded_pair(P, Q):
     r0 = float(np.linalg.norm(cQ - cP)) or 1.0
     eps = np.finfo(float).eps
     if r0 > FAR * max(polygon_diameter(P), polygon_diameter(Q)):
-        hi = _area_integral(Pc, nP, Qc) / area_P
-        lo = _area_integral(Pc, nP, Qc, _GL_LOW) / area_P
-        return max(hi, 0.0), abs(hi - lo) + tol.AREA_ROUNDING_ULPS * eps * abs(hi)
+        f, e = _far_values(_emitter_nodes(Pc, nP), nP, area_P, [Qc])
+        return float(f[0]), float(e[0])
     eP = np.roll(Pc, -1, axis=0) - Pc          # (KP, 3)
     eQ = np.roll(Qc, -1, axis=0) - Qc          # (KQ, 3)
-    d, upper, w = _NODES
-    # outer nodes along every edge of P, from the nearer end (no cancellation there)
-    start = np.where(upper[None, :, None], (Pc + eP)[:, None, :], Pc[:, None, :])
-    step = np.where(upper[None, :, None], -eP[:, None, :], eP[:, None, :])
-    X = start + d[None, :, None] * step                              # (KP, N, 3)
-    Wv = Qc[None, None, :, :] - X[:, :, None, :]                     # (KP, N, KQ, 3)
+    d, upper, w, w_coarse = _NODES
+    # each edge of P in pieces, cut where the inner integral loses smoothness (where
+    # the edge passes through or near an edge or a vertex of Q); outer nodes along each
+    # piece from its nearer end (no cancellation there)
+    owner, s0, s1 = _edge_pieces(Pc, eP, Qc, eQ)
+    A, B = Pc[owner] + s0[:, None] * eP[owner], Pc[owner] + s1[:, None] * eP[owner]
+    start = np.where(upper[None, :, None], B[:, None, :], A[:, None, :])
+    step = np.where(upper[None, :, None], (A - B)[:, None, :], (B - A)[:, None, :])
+    X = start + d[None, :, None] * step                              # (pieces, N, 3)
+    Wv = Qc[None, None, :, :] - X[:, :, None, :]                     # (pieces, N, KQ, 3)
     G = _segment_log_integral(Wv, np.broadcast_to(eQ, Wv.shape)) - np.log(r0)
-    inner = np.einsum("n,pnq->pq", w, G)                             # (KP, KQ)
+    G *= (s1 - s0)[:, None, None]
+    first = np.searchsorted(owner, np.arange(len(Pc)))
+    inner = np.add.reduceat(np.einsum("n,pnq->pq", w, G), first, axis=0)  # (KP, KQ)
+    coarse = np.add.reduceat(np.einsum("n,pnq->pq", w_coarse, G), first, axis=0)
     terms = (eP @ eQ.T) * inner
     total = float(terms.sum()) / (2.0 * np.pi) / area_P
     scale = (float(np.abs(terms).sum()) + float(np.abs(w[None, :, None] * G).sum())
              * float(np.abs(eP @ eQ.T).max())) / (2.0 * np.pi) / area_P
-    return max(total, 0.0), tol.AREA_ROUNDING_ULPS * eps * scale
+    # the outer rule's error: at most its difference from the rule one level coarser
+    # (tanh-sinh roughly squares its error from one level to the next)
+    step = abs(float(((eP @ eQ.T) * (inner - coarse)).sum())) / (2.0 * np.pi) / area_P
+    return max(total, 0.0), tol.AREA_ROUNDING_ULPS * eps * scale + step
 
 
 # ---------------------------------------------------------------------------------------
 # with occlusion: the outer integral of exact occluded point rows, split at visibility
 # events, adaptive, with an error estimate
 # ---------------------------------------------------------------------------------------
-def _blockers(polys, i, j, Pc, Qc, scale):
+def _padded(polys):
+    """The scene's polygons as one array (n, kmax, 3), short ones padded by repeating
+    their last vertex, with their bounding boxes (for :func:`_blockers`)."""
+    kmax = max(len(K) for K in polys)
+    V = np.array([np.vstack([K, np.repeat(K[-1:], kmax - len(K), axis=0)]) for K in polys])
+    return V, V.min(axis=1), V.max(axis=1)
+
+
+def _blockers(padded, i, j, Pc, Qc, scale):
     """Polygons (indices) that may hide part of Qc from part of Pc: those reaching into
     the interior of the convex hull of both (a polygon on or outside a face of the hull
-    hides nothing of positive measure)."""
+    hides nothing of positive measure). ``padded`` is :func:`_padded` of the scene."""
     from scipy.spatial import ConvexHull, QhullError
 
+    V, lo_k, hi_k = padded
     pts = np.vstack([Pc, Qc])
+    near = tol.AREA_HULL_RTOL * scale
+    lo, hi = pts.min(axis=0) - near, pts.max(axis=0) + near
+    cand = np.all((hi_k >= lo) & (lo_k <= hi), axis=1)
+    cand[[i, j]] = False
+    cand = np.flatnonzero(cand)
+    if cand.size == 0:
+        return []
     try:
         H = ConvexHull(pts).equations               # a . x + b <= 0 inside
     except QhullError:
         return []
-    near = tol.AREA_HULL_RTOL * scale
-    lo, hi = pts.min(axis=0) - near, pts.max(axis=0) + near
-    out = []
-    for k, K in enumerate(polys):
-        if k in (i, j) or np.any(K.max(axis=0) < lo) or np.any(K.min(axis=0) > hi):
-            continue
-        # on or outside one face of the hull: hides nothing
-        if np.any(np.all(K @ H[:, :3].T + H[:, 3] >= -near, axis=0)):
-            continue
-        out.append(k)
-    return out
+    # on or outside one face of the hull: hides nothing
+    outside = np.all(V[cand] @ H[:, :3].T + H[:, 3] >= -near, axis=1)      # (c, faces)
+    return [int(k) for k in cand[~outside.any(axis=1)]]
 
 
 def _event_lines(S, nP, dP, R, c):
@@ -312,6 +400,114 @@ def _cells(Pc, nP, lines, R, c):
     return tris
 
 
+def _hidden_values(X, nP, Qc, blockers):
+    """``F(x -> Qc) - F_occ(x -> Qc)`` for each point x of X (normal nP): the point form
+    factor of the part of Qc that the blockers hide from x, and its error estimate.
+
+    Built in Qc's plane: each blocker, clipped to the front of that plane and to the
+    pyramid from x over a rectangle around Qc, is projected from x onto the plane (a
+    projective map: its image stays a simple polygon within the rectangle); the images
+    are united and intersected with Qc (GEOS, vectorised over the points), and the
+    region's rings integrated by the sector sums (Eq. 3's kernel) from x: outer rings
+    count positive, holes negative. The estimate adds to the sector sums' rounding the
+    effect of moving the region's boundary by the booleans' rounding (a few units of the
+    largest coordinate), through the kernel's largest value over the region's bounding
+    box, ``h / (pi r^3)``.
+
+    Returns
+    -------
+    (ndarray of shape (len(X),), ndarray of shape (len(X),))
+    """
+    from .integrate import _C1, _clipped_sector_sums
+
+    nX = len(X)
+    AQ = area_vector(Qc)
+    nQ = AQ / np.linalg.norm(AQ)
+    q0 = Qc[0]
+    RQ = receiver_frame(nQ)
+    Q2 = (Qc - q0) @ RQ[:2].T
+    qpoly = shapely.Polygon(Q2)
+    lo, hi = Q2.min(axis=0), Q2.max(axis=0)
+    pad = tol.AREA_HIDDEN_PAD * float((hi - lo).max())
+    lo, hi = lo - pad, hi + pad
+    corners = q0 + np.array([[lo[0], lo[1]], [hi[0], lo[1]], [hi[0], hi[1]],
+                             [lo[0], hi[1]]]) @ RQ[:2]
+    Kc = [K for K in (_clip_front(np.asarray(K), nQ, q0) for K in blockers) if K is not None]
+    zero = np.zeros(nX)
+    if not Kc:
+        return zero, zero
+    nb, kmax = len(Kc), max(len(K) for K in Kc)
+    V = np.array([np.vstack([K, np.repeat(K[-1:], kmax - len(K), axis=0)]) for K in Kc])
+    # each blocker about each point, clipped to the pyramid from x over the rectangle
+    Vb = (V[None] - X[:, None, None, :]).reshape(nX * nb, kmax, 3)
+    cnt = np.tile([len(K) for K in Kc], nX)
+    # a blocker whose plane passes through x is seen edge-on: it hides nothing
+    NK = np.array([area_vector(K) for K in Kc])
+    NK /= np.linalg.norm(NK, axis=1)[:, None]
+    size = float(np.ptp(np.vstack(Kc + [Qc, X]), axis=0).max())
+    edge_on = np.abs(np.einsum("pbj,bj->pb", X[:, None, :] - V[None, :, 0, :], NK))
+    cnt[(edge_on <= tol.AREA_EDGE_ON_RTOL * size).ravel()] = 0
+    C = corners[None] - X[:, None, :]                                   # (nX, 4, 3)
+    for a in range(4):
+        m = np.cross(C[:, a], C[:, (a + 1) % 4])
+        m *= np.sign(np.einsum("ij,ij->i", m, C[:, (a + 2) % 4]))[:, None]
+        Vb, cnt = clip_halfspace(Vb, np.where(cnt >= 3, cnt, 0), np.repeat(m, nb, axis=0))
+    # central projection from x onto Qc's plane: q = x + y h / (-nQ . y), y = offset
+    h = (X - q0) @ nQ
+    live = np.flatnonzero(cnt >= 3)
+    if live.size == 0:
+        return zero, zero
+    slot = np.minimum(np.arange(Vb.shape[1])[None, :], cnt[live, None] - 1)
+    Y = np.take_along_axis(Vb[live], slot[:, :, None], axis=1)         # padded by repeats
+    pt = live // nb
+    Y = Y * (h[pt, None] / -(Y @ nQ))[:, :, None] + (X[pt] - q0)[:, None, :]
+    Y2 = Y @ RQ[:2].T
+    images = shapely.polygons(Y2)
+    bad = ~shapely.is_valid(images)
+    if bad.any():
+        images[bad] = shapely.make_valid(images[bad])
+    grid = np.full((nX, nb), shapely.Polygon(), dtype=object)
+    grid[pt, live % nb] = images
+    with np.errstate(all="ignore"):
+        union = grid[:, 0]
+        for k in range(1, nb):
+            union = shapely.union(union, grid[:, k])
+        hidden = shapely.intersection(union, qpoly)
+    # the region's rings from each point: outer rings and holes
+    parts, part_of = shapely.get_parts(hidden, return_index=True)
+    keep = shapely.area(parts) > 0
+    parts, part_of = parts[keep], part_of[keep]
+    if len(parts) == 0:
+        return zero, zero
+    rings, ring_of = shapely.get_rings(parts, return_index=True)
+    outer = np.r_[True, ring_of[1:] != ring_of[:-1]]
+    xy, owner = shapely.get_coordinates(rings, return_index=True)
+    last = np.r_[owner[1:] != owner[:-1], True]                          # closing vertex
+    xy, owner = xy[~last], owner[~last]
+    point = part_of[ring_of]                                             # ring -> point
+    first = np.searchsorted(owner, np.arange(len(rings)))
+    R = receiver_frame(nP)
+    E = ((xy - xy[first[owner]]) @ RQ[:2]) @ R.T
+    A0 = ((q0 - X[point]) + xy[first] @ RQ[:2]) @ R.T
+    idx = np.arange(len(owner))
+    nxt = np.where(np.r_[owner[1:] != owner[:-1], True], first[owner], idx + 1)
+    S, mags, errs = _clipped_sector_sums(A0, E, nxt, owner, len(rings))
+    sign = np.where(outer, 1.0, -1.0)
+    value = np.bincount(point, sign * np.abs(S), minlength=nX) / (2.0 * np.pi)
+    eps = np.finfo(float).eps
+    rnd = np.bincount(point, _C1 * eps * mags + errs, minlength=nX) / (2.0 * np.pi)
+    # the booleans' rounding: the boundary moved by delta, through the kernel's bound
+    # h / (pi r^3) over the region's bounding box (r >= the box's distance from x)
+    b = shapely.bounds(hidden)
+    foot = (X - q0) @ RQ[:2].T
+    dx = np.maximum(0.0, np.maximum(b[:, 0] - foot[:, 0], foot[:, 0] - b[:, 2]))
+    dy = np.maximum(0.0, np.maximum(b[:, 1] - foot[:, 1], foot[:, 1] - b[:, 3]))
+    r = np.sqrt(h * h + np.nan_to_num(dx * dx + dy * dy))
+    delta = tol.AREA_BOOLEAN_ULPS * (nb + 1) * eps * float(np.abs(Y2).max())
+    geo = np.where(value > 0, delta * shapely.length(hidden) * h / (np.pi * r ** 3), 0.0)
+    return np.maximum(value, 0.0), rnd + np.nan_to_num(geo)
+
+
 _RULES = (roots_legendre(6), roots_legendre(10))
 MAX_DEPTH = 7
 
@@ -319,18 +515,14 @@ MAX_DEPTH = 7
 def _occluded_pair(S, Pc, Qc, nP, tolerance, area_P):
     """``(1 / A_P) int_Pc F_occ(x -> S[0]) dA`` with S = [receiver, blockers...], as the
     unoccluded value (the contour integral, exact) less the integral of the hidden part
-    ``F(x -> Qc) - F_occ(x -> S[0])`` (exact point values: the kernel, and
-    :func:`exactff.form_factors` on S). The hidden part is smooth where the polygons
+    ``F(x -> Qc) - F_occ(x -> S[0])`` (exact point values of the hidden region, built
+    in Qc's plane: :func:`_hidden_values`). The hidden part is smooth where the polygons
     touch (the unoccluded part carries the edge singularities), so it is integrated over
     the cells of Pc between visibility events, each cell's triangles by two collapsed
     Gauss-Legendre rules (6 and 10 points a side), a triangle cut in four where the two
     differ by more than its share of the tolerance. Returns the value, its error
     estimate (the contour sum's, the rules' differences, the point values' bounds) and
     the number of point values used."""
-    from .formfactors import form_factors
-    from .scene import Scene
-
-    sub = Scene.from_polygons(S)
     R = receiver_frame(nP)
     c = Pc.mean(axis=0)
     dP = float(nP @ Pc[0])
@@ -343,9 +535,7 @@ def _occluded_pair(S, Pc, Qc, nP, tolerance, area_P):
         tri, depth = todo.pop()
         (Xl, Wl), (Xh, Wh) = (triangle_rule(tri, r) for r in _RULES)
         X = np.vstack([Xl, Xh])
-        F, E = form_factors(sub, X, nP, error=True)
-        U, EU = _point_values(X, nP, Qc)
-        H, EH = U - F[:, 0], EU + E[:, 0]
+        H, EH = _hidden_values(X, nP, Qc, S[1:])
         points += len(X)
         lo, hi = Wl @ H[:len(Xl)], Wh @ H[len(Xl):]
         share = 0.5 * np.linalg.norm(np.cross(tri[1] - tri[0], tri[2] - tri[0])) / total_area
@@ -453,12 +643,15 @@ def area_form_factors(scene, rows=None, *, tolerance=1e-9, error=False, executor
 def _area_row(scene, i, tolerance):
     """Row i of :func:`area_form_factors` and its estimates."""
     polys = [np.asarray(p, dtype=float) for p in scene.polygons]
+    padded = _padded(polys)
     P = polys[i]
     scale = float(np.ptp(scene.vertices, axis=0).max()) or 1.0
     AP = area_vector(P)
     area_P = float(np.linalg.norm(AP))
     nP = AP / area_P
+    diam_P, cP = polygon_diameter(P), P.mean(axis=0)
     f, e = np.zeros(len(polys)), np.zeros(len(polys))
+    far = []                      # far unoccluded pairs with P whole: integrated together
     for j, Q in enumerate(polys):
         if j == i:
             continue
@@ -468,11 +661,17 @@ def _area_row(scene, i, tolerance):
         Qc = _clip_front(Q, nP, P[0])
         if Pc is None or Qc is None:
             continue
-        B = _blockers(polys, i, j, Pc, Qc, scale)
-        if not B:
-            f[j], e[j] = _unoccluded_pair(P, Q)
-        else:
+        B = _blockers(padded, i, j, Pc, Qc, scale)
+        if B:
             f[j], e[j], _ = _occluded_pair([Q] + [polys[k] for k in B], Pc, Qc, nP,
                                            tolerance, area_P)
             f[j] = max(f[j], 0.0)
+        elif (Pc is P
+              and np.linalg.norm(Q.mean(axis=0) - cP) > FAR * max(diam_P, polygon_diameter(Q))):
+            far.append((j, Qc))
+        else:
+            f[j], e[j] = _unoccluded_pair(P, Q)
+    if far:
+        js = [j for j, _ in far]
+        f[js], e[js] = _far_values(_emitter_nodes(P, nP), nP, area_P, [Q for _, Q in far])
     return f, e

@@ -46,7 +46,8 @@ def clip_halfspace(V, counts, h):
     V : ndarray of shape (M, K, 3)
         Padded vertices; polygon m uses ``V[m, :counts[m]]``.
     counts : ndarray of shape (M,)
-    h : ndarray of shape (3,)
+    h : ndarray of shape (3,) or (M, 3)
+        One plane for all, or one per polygon.
 
     Returns
     -------
@@ -58,7 +59,7 @@ def clip_halfspace(V, counts, h):
     valid = slot[None, :] < counts[:, None]
     nxt = (slot[None, :] + 1) % np.maximum(counts[:, None], 1)
     W = np.take_along_axis(V, nxt[:, :, None], axis=1)
-    s = V @ h
+    s = V @ h if h.ndim == 1 else np.einsum("mkj,mj->mk", V, h)
     sn = np.take_along_axis(s, nxt, axis=1)
     inside = (s > 0) & valid
     inside_n = (sn > 0) & valid
