@@ -463,16 +463,20 @@ def _hidden_values(X, nP, Qc, blockers):
     Y = Y * (h[pt, None] / -(Y @ nQ))[:, :, None] + (X[pt] - q0)[:, None, :]
     Y2 = Y @ RQ[:2].T
     images = shapely.polygons(Y2)
-    bad = ~shapely.is_valid(images)
-    if bad.any():
-        images[bad] = shapely.make_valid(images[bad])
     grid = np.full((nX, nb), shapely.Polygon(), dtype=object)
-    grid[pt, live % nb] = images
-    with np.errstate(all="ignore"):
-        union = grid[:, 0]
-        for k in range(1, nb):
-            union = shapely.union(union, grid[:, k])
-        hidden = shapely.intersection(union, qpoly)
+    try:
+        bad = ~shapely.is_valid(images)
+        if bad.any():
+            images[bad] = shapely.make_valid(images[bad])
+        grid[pt, live % nb] = images
+        with np.errstate(all="ignore"):
+            union = grid[:, 0]
+            for k in range(1, nb):
+                union = shapely.union(union, grid[:, k])
+            hidden = shapely.intersection(union, qpoly)
+    except shapely.errors.GEOSException:
+        # GEOS gave up on a nearly degenerate configuration: the engine instead
+        return _hidden_values_by_engine(X, nP, Qc, Kc)
     # the region's rings from each point: outer rings and holes
     parts, part_of = shapely.get_parts(hidden, return_index=True)
     keep = shapely.area(parts) > 0
@@ -506,6 +510,18 @@ def _hidden_values(X, nP, Qc, blockers):
     delta = tol.AREA_BOOLEAN_ULPS * (nb + 1) * eps * float(np.abs(Y2).max())
     geo = np.where(value > 0, delta * shapely.length(hidden) * h / (np.pi * r ** 3), 0.0)
     return np.maximum(value, 0.0), rnd + np.nan_to_num(geo)
+
+
+def _hidden_values_by_engine(X, nP, Qc, blockers):
+    """:func:`_hidden_values` by the engine instead (exact occluded point values on the
+    sub-scene of Qc and the blockers, subtracted from the unoccluded ones): about a
+    hundred times slower, used where GEOS fails."""
+    from .formfactors import form_factors
+    from .scene import Scene
+
+    F, E = form_factors(Scene.from_polygons([Qc] + list(blockers)), X, nP, error=True)
+    U, EU = (v[0] for v in _point_values(X, nP, [Qc]))
+    return np.maximum(U - F[:, 0], 0.0), EU + E[:, 0]
 
 
 _RULES = (roots_legendre(6), roots_legendre(10))

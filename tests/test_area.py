@@ -268,6 +268,24 @@ def test_closed_room_rows_sum_to_one_and_reciprocity_within_the_estimates():
     assert F[0, 1] < ef.polygon_form_factor(scene.polygons[0], scene.polygons[1]) - 0.05
 
 
+def test_hidden_part_falls_back_to_the_engine_where_geos_fails(monkeypatch):
+    import shapely
+
+    from exactff import area
+
+    P, Q, B = list(_hidden_cases())[5]
+    nP = np.array([0.0, 0.0, 1.0])
+    X = P[0] + np.outer(np.linspace(0.05, 0.95, 7), P[1] - P[0]) + 0.3 * (P[3] - P[0])
+    H, EH = area._hidden_values(X, nP, Q, B)
+
+    def fail(*args, **kwargs):
+        raise shapely.errors.GEOSException("TopologyException: side location conflict")
+
+    monkeypatch.setattr(area.shapely, "intersection", fail)
+    G, EG = area._hidden_values(X, nP, Q, B)
+    assert H.max() > 0.01 and np.all(np.abs(G - H) <= EG + EH + 1e-16)
+
+
 @pytest.mark.slow
 def test_room_with_a_box_standing_on_the_floor():
     # a unit room of 24 quarters with an open-bottomed box on the floor: a point of the
