@@ -576,8 +576,9 @@ def area_form_factors(scene, rows=None, *, tolerance=1e-9, error=False, executor
     requested absolute tolerance.
 
     ``F[i, j] = (1 / A_i) int_{P_i} F_occ(x -> j) dA_x``, with ``F_occ`` the exact
-    occluded point form factor from ``x`` (normal of ``P_i``) to polygon ``j``
-    (:func:`exactff.form_factors`), one-sided. A pair with nothing that can come
+    occluded point form factor from ``x`` (normal of ``P_i``) to polygon ``j`` (as
+    :func:`exactff.form_factors`; here built in the receiver's plane from the blockers'
+    projections), one-sided. A pair with nothing that can come
     between (no other polygon reaches into the convex hull of the two, each clipped to
     the front of the other) is computed by :func:`polygon_form_factor` (exact to
     rounding). Otherwise the emitter is cut along the lines where the integrand may lose
@@ -607,8 +608,8 @@ def area_form_factors(scene, rows=None, *, tolerance=1e-9, error=False, executor
     Notes
     -----
     What the estimate rests on: for unoccluded pairs, the rounding of the contour sum
-    (its quadrature converges to rounding; tested against Howell's catalogue and
-    reciprocity); for occluded pairs, that on a triangle between visibility events the
+    and the difference between its tanh-sinh rule and the next coarser one (tested
+    against Howell's catalogue, reciprocity and splitting); for occluded pairs, that on a triangle between visibility events the
     integrand is smooth, so that the difference between the 6- and 10-point rules
     bounds the 10-point rule's error, plus the point values' own bounds. Curved events
     (three skew edges) are not cut along; the adaptive cutting resolves them, and a

@@ -4,6 +4,7 @@ import hashlib
 import json
 import os
 import sys
+import threading
 import time
 
 import numpy as np
@@ -161,6 +162,7 @@ def method_record(method):
 # task that brought them (any other executor), or resolved from a dask scatter
 _WORKER = {}
 _WORKER_KEEP = 4
+_WORKER_LOCK = threading.Lock()       # threads of one process share _WORKER
 
 
 def _computation_key(scene, method, two_sided):
@@ -171,21 +173,24 @@ def _computation_key(scene, method, two_sided):
 
 def _install(job):
     """Keep ``job = (key, scene, method, two_sided)`` in this process (the process pool's
-    initializer; also the first task of another executor)."""
-    while len(_WORKER) >= _WORKER_KEEP:
-        _WORKER.pop(next(iter(_WORKER)))
-    _WORKER[job[0]] = job[1:]
+    initializer; also the first task of another executor); returns it."""
+    with _WORKER_LOCK:
+        while len(_WORKER) >= _WORKER_KEEP:
+            _WORKER.pop(next(iter(_WORKER)))
+        _WORKER[job[0]] = job[1:]
+        return job[1:]
 
 
 def _task(job, rows):
     """Rows computed in a worker. ``job`` is the key of a computation this process
     holds, or the computation itself (kept for the tasks after it)."""
     if isinstance(job, str):
-        scene, method, two_sided = _WORKER[job]
+        with _WORKER_LOCK:
+            scene, method, two_sided = _WORKER[job]
     else:
-        if job[0] not in _WORKER:
-            _install(job)
-        scene, method, two_sided = _WORKER[job[0]]
+        with _WORKER_LOCK:
+            held = _WORKER.get(job[0])
+        scene, method, two_sided = held if held is not None else _install(job)
     return _rows(scene, method, rows, two_sided)
 
 

@@ -138,6 +138,13 @@ class MatrixOutput:
                     f"another path")
             self._reopen()
         else:
+            other = _read_meta(self.meta_path) or {}
+            twin = stem + str(other.get("format", ""))
+            if other.get("format") not in (None, self.kind) and os.path.exists(twin):
+                raise ValueError(
+                    f"out: {self.out!r} would share {os.path.basename(self.meta_path)!r} "
+                    f"(its record of what was computed) with {twin!r}, an output of the "
+                    f"same name in another format; choose another name")
             self._create()
 
     # -- creating and reopening files --------------------------------------------------

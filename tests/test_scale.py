@@ -139,6 +139,16 @@ def test_outputs_round_trip_and_refuse_other_computations(tmp_path, serial, suff
     del M
 
 
+def test_two_formats_of_one_name_are_refused_with_the_reason(tmp_path, serial):
+    dense = str(tmp_path / "m.npy")
+    ef.form_factor_matrix(SCENE, out=dense, chunk_rows=5)
+    with pytest.raises(ValueError, match="same name in another format"):
+        ef.form_factor_matrix(SCENE, out=str(tmp_path / "m.npz"), sparse=True, chunk_rows=5)
+    # the first output's record is untouched: it still reopens as finished
+    assert np.array_equal(np.asarray(ef.form_factor_matrix(SCENE, out=dense, chunk_rows=5)[:]),
+                          serial)
+
+
 def test_bad_outputs_and_options(tmp_path):
     with pytest.raises(ValueError, match="sparse=True"):
         ef.form_factor_matrix(SCENE, out=tmp_path / "a.npz")
