@@ -228,30 +228,30 @@ def _edge_pieces(P, eP, Q, eQ):
     on the edge) or steep stretches, and the tanh-sinh rule wants them at the ends of
     its intervals. Returns ``(owner, s0, s1)``: the pieces' edges (sorted) and their
     ends as parameters along the edge."""
+    ee = np.einsum("ij,ij->i", eP, eP)
+    # nearest points to Q's vertices, and to the lines of Q's edges (not when parallel)
+    at_vertex = np.einsum("pqj,pj->pq", Q[None] - P[:, None], eP) / ee[:, None]
+    c = np.cross(eP[:, None, :], eQ[None, :, :])                          # (KP, KQ, 3)
+    cc = np.einsum("pqj,pqj->pq", c, c)
+    crossing = np.einsum("pqj,pqj->pq", np.cross(Q[None] - P[:, None], eQ[None]), c)
+    ok = cc > tol.AREA_EVENT_PARALLEL * ee[:, None] * np.einsum("qj,qj->q", eQ, eQ)[None]
+    at_line = np.where(ok, crossing / np.where(ok, cc, 1.0), -1.0)
+    S = np.concatenate([at_vertex, at_line], axis=1)                      # (KP, 2 KQ)
+    # only where Q comes within the edge's length of the point
+    X = P[:, None, :] + S[..., None] * eP[:, None, :]
+    D = X[:, :, None, :] - Q[None, None]                                  # (KP, 2KQ, KQ, 3)
+    t = np.clip(np.einsum("pcqj,qj->pcq", D, eQ) / np.einsum("qj,qj->q", eQ, eQ), 0.0, 1.0)
+    near = np.linalg.norm(D - t[..., None] * eQ, axis=-1).min(axis=2)
+    keep = (S > tol.AREA_EDGE_CUT) & (S < 1.0 - tol.AREA_EDGE_CUT) & (near < np.sqrt(ee)[:, None])
     owner, s0, s1 = [], [], []
-    for k, (a, e) in enumerate(zip(P, eP)):
-        ee = e @ e
-        cuts = [((q - a) @ e) / ee for q in Q]
-        for b, f in zip(Q, eQ):
-            # the nearest points of the two lines (none when they are parallel)
-            c = np.cross(e, f)
-            cc = c @ c
-            if cc > tol.AREA_EVENT_PARALLEL * ee * (f @ f):
-                cuts.append(np.cross(b - a, f) @ c / cc)
-        cut = []
-        for s in sorted(cuts):
-            if not tol.AREA_EDGE_CUT < s < 1.0 - tol.AREA_EDGE_CUT:
-                continue
-            # only where Q comes near: within the edge's length of the point
-            x = a + s * e
-            t = np.clip(((x - Q) * eQ).sum(axis=1) / (eQ * eQ).sum(axis=1), 0.0, 1.0)
-            near = np.linalg.norm(Q + t[:, None] * eQ - x, axis=1).min()
-            if near < np.sqrt(ee) and (not cut or s - cut[-1] > tol.AREA_EDGE_CUT):
-                cut.append(s)
-        ends = [0.0] + cut + [1.0]
+    for k in range(len(P)):
+        cut = np.sort(S[k, keep[k]])
+        if cut.size:
+            cut = cut[np.r_[True, np.diff(cut) > tol.AREA_EDGE_CUT]]
+        ends = np.r_[0.0, cut, 1.0]
         owner += [k] * (len(ends) - 1)
-        s0 += ends[:-1]
-        s1 += ends[1:]
+        s0 += list(ends[:-1])
+        s1 += list(ends[1:])
     return np.array(owner), np.array(s0), np.array(s1)
 
 
@@ -508,7 +508,8 @@ def _hidden_values(X, nP, Qc, blockers):
     dy = np.maximum(0.0, np.maximum(b[:, 1] - foot[:, 1], foot[:, 1] - b[:, 3]))
     r = np.sqrt(h * h + np.nan_to_num(dx * dx + dy * dy))
     delta = tol.AREA_BOOLEAN_ULPS * (nb + 1) * eps * float(np.abs(Y2).max())
-    geo = np.where(value > 0, delta * shapely.length(hidden) * h / (np.pi * r ** 3), 0.0)
+    bound = np.divide(h, np.pi * r ** 3, out=np.zeros_like(r), where=r > 0)   # x on Qc's plane: Qc edge-on
+    geo = np.where(value > 0, delta * shapely.length(hidden) * bound, 0.0)
     return np.maximum(value, 0.0), rnd + np.nan_to_num(geo)
 
 
@@ -528,6 +529,22 @@ _RULES = (roots_legendre(6), roots_legendre(10))
 MAX_DEPTH = 7
 
 
+def _corner_first(tri, blockers, nP, dP):
+    """The triangle with first a vertex where a blocker's vertex touches the emitter's
+    plane, if it has one. Near such a point the hidden part depends on the direction
+    from it (to first order), and the collapsed rule, whose collapsed vertex is the first,
+    integrates functions of that direction alone without cutting towards the point."""
+    size = float(np.ptp(tri, axis=0).max())
+    for K in blockers:
+        on = np.abs(K @ nP - dP) <= tol.AREA_HULL_RTOL * size
+        for v in K[on]:
+            d = np.linalg.norm(tri - v, axis=1)
+            k = int(np.argmin(d))
+            if d[k] <= tol.AREA_HULL_RTOL * size:
+                return np.roll(tri, -k, axis=0)
+    return tri
+
+
 def _occluded_pair(S, Pc, Qc, nP, tolerance, area_P):
     """``(1 / A_P) int_Pc F_occ(x -> S[0]) dA`` with S = [receiver, blockers...], as the
     unoccluded value (the contour integral, exact) less the integral of the hidden part
@@ -543,27 +560,34 @@ def _occluded_pair(S, Pc, Qc, nP, tolerance, area_P):
     c = Pc.mean(axis=0)
     dP = float(nP @ Pc[0])
     whole, whole_err = _unoccluded_pair(np.asarray(Pc), np.asarray(S[0]))
-    todo = [(t, 0) for t in _cells(Pc, nP, _event_lines(S, nP, dP, R, c), R, c)]
+    todo = [(_corner_first(t, S[1:], nP, dP), 0)
+            for t in _cells(Pc, nP, _event_lines(S, nP, dP, R, c), R, c)]
     total_area = sum(0.5 * np.linalg.norm(np.cross(t[1] - t[0], t[2] - t[0])) for t, _ in todo)
     hidden = err = 0.0
     points = 0
     while todo:
-        tri, depth = todo.pop()
-        (Xl, Wl), (Xh, Wh) = (triangle_rule(tri, r) for r in _RULES)
-        X = np.vstack([Xl, Xh])
+        # every triangle of this level together: its two rules' nodes, one call
+        rules = [[triangle_rule(tri, r) for r in _RULES] for tri, _ in todo]
+        X = np.vstack([x for (xl, _), (xh, _) in rules for x in (xl, xh)])
         H, EH = _hidden_values(X, nP, Qc, S[1:])
         points += len(X)
-        lo, hi = Wl @ H[:len(Xl)], Wh @ H[len(Xl):]
-        share = 0.5 * np.linalg.norm(np.cross(tri[1] - tri[0], tri[2] - tri[0])) / total_area
-        diff = abs(hi - lo) / area_P
-        if diff > 0.5 * tolerance * share and depth < MAX_DEPTH:
-            a, b, cc = tri
-            ab, bc, ca = (a + b) / 2, (b + cc) / 2, (cc + a) / 2
-            todo += [(np.array(t), depth + 1) for t in
-                     ((a, ab, ca), (ab, b, bc), (ca, bc, cc), (ab, bc, ca))]
-            continue
-        hidden += hi / area_P
-        err += diff + (Wh @ EH[len(Xl):]) / area_P
+        nxt, at = [], 0
+        for (tri, depth), ((Xl, Wl), (Xh, Wh)) in zip(todo, rules):
+            Hl, Hh = H[at:at + len(Xl)], H[at + len(Xl):at + len(Xl) + len(Xh)]
+            EHh = EH[at + len(Xl):at + len(Xl) + len(Xh)]
+            at += len(Xl) + len(Xh)
+            lo, hi = Wl @ Hl, Wh @ Hh
+            share = 0.5 * np.linalg.norm(np.cross(tri[1] - tri[0], tri[2] - tri[0])) / total_area
+            diff = abs(hi - lo) / area_P
+            if diff > 0.5 * tolerance * share and depth < MAX_DEPTH:
+                a, b, cc = tri
+                ab, bc, ca = (a + b) / 2, (b + cc) / 2, (cc + a) / 2
+                nxt += [(np.array(t), depth + 1) for t in
+                        ((a, ab, ca), (ab, b, bc), (ca, bc, cc), (ab, bc, ca))]
+                continue
+            hidden += hi / area_P
+            err += diff + (Wh @ EHh) / area_P
+        todo = nxt
     # the contour integral over Pc is per unit area of Pc: back to P's area
     area_Pc = float(np.linalg.norm(area_vector(Pc)))
     value = whole * area_Pc / area_P - hidden
