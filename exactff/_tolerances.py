@@ -195,13 +195,13 @@ AREA_EVENT_PARALLEL = 1e-12
 #: this (relative to its length) towards the emitter's plane never meets it.
 AREA_RAY_PARALLEL = 1e-14
 
-#: Area form factors: event lines through infinity are kept as segments this many times
-#: the sub-scene's size long.
-AREA_EVENT_FAR = 1e6
-
 #: Area form factors: cells of the cut emitter below this share of its area are slivers
-#: of rounding and are dropped.
+#: of rounding and are dropped (their area counts in the estimate).
 AREA_SLIVER_CELL = 1e-14
+
+#: Area form factors: a triangle whose area (over the emitter's) is below this share of
+#: the tolerance is integrated once, not cut, and carries its area as its estimate.
+AREA_SLIVER_SHARE = 1e-3
 
 #: Area form factors: the rounding of a contour sum or an area rule, in units of
 #: rounding of its absolute terms.
