@@ -406,8 +406,10 @@ def _cells(Pc, nP, lines, R, c):
     poly = shapely.Polygon((Pc - c) @ R[:2].T)
     segs = [g for g in (shapely.LineString([p0, p1]).intersection(poly) for p0, p1 in lines)
             if not g.is_empty]
+    # the union nodes the segments (already cut to P) and P's boundary; cutting the
+    # union to P again would lose nodes on the boundary, and with them whole cells
     pieces = shapely.get_parts(shapely.polygonize(
-        shapely.get_parts(shapely.union_all([poly.boundary, *segs]).intersection(poly))))
+        shapely.get_parts(shapely.union_all([poly.boundary, *segs]))))
     tris = []
     for cell in pieces:
         if cell.area <= tol.AREA_SLIVER_CELL * poly.area:   # counted in the estimate

@@ -286,7 +286,6 @@ def test_hidden_part_falls_back_to_the_engine_where_geos_fails(monkeypatch):
     assert H.max() > 0.01 and np.all(np.abs(G - H) <= EG + EH + 1e-16)
 
 
-@pytest.mark.slow
 def test_room_with_a_box_standing_on_the_floor():
     # a unit room of 24 quarters with an open-bottomed box on the floor: a point of the
     # floor under the box sees nothing (the box's faces turn their backs to it), so a
