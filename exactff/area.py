@@ -336,12 +336,15 @@ def _blockers(padded, i, j, Pc, Qc, scale):
     return [int(k) for k in cand[~outside.any(axis=1)]]
 
 
-def _event_lines(S, nP, dP, R, c, radius):
+def _event_lines(S, nP, dP, R, c, radius, Qc):
     """The segments of P's plane (in its 2-D frame ``R`` about ``c``) across which the
     integrand may lose smoothness: for a vertex ``v`` of one polygon of S and an edge of
     another, the image of the edge through ``v`` on P's plane (the points from which
     ``v`` is seen on the edge: vertex-edge visibility events); and the lines where the
-    planes of the polygons of S meet P's plane. Each is kept within ``radius`` of ``c``
+    planes of the polygons of S meet P's plane. An event between two blockers (S[1:])
+    counts only where its lines of sight go on to meet Qc, the part of the receiver S[0]
+    in front of P (elsewhere it changes nothing that is seen of Qc). Each is kept
+    within ``radius`` of ``c``
     (a disk that holds P) as a segment ``(point, point)``, its ends placed on the exact
     line (the intersection of two planes), so that events through one point (a corner
     of a blocker on P) cross there to rounding; an image through infinity is kept as the
@@ -380,6 +383,22 @@ def _event_lines(S, nP, dP, R, c, radius):
             return None
         return v + (dP - nP @ v) / den * (q - v)
 
+    nQ = area_vector(Qc)
+    nQ /= np.linalg.norm(nQ)
+    q0, RQ = Qc[0], receiver_frame(nQ)
+    seen = shapely.Polygon((Qc - q0) @ RQ[:2].T)
+    shapely.prepare(seen)
+
+    def reaches_receiver(v, e0, e1):
+        # the lines through v and the points of the edge meet Qc's plane along the
+        # edge's central image from v: does it cross Qc? (unbounded images: kept)
+        d0, d1 = nQ @ (e0 - v), nQ @ (e1 - v)
+        if d0 * d1 <= 0:
+            return True
+        h = nQ @ (q0 - v)
+        a, b = v + h / d0 * (e0 - v) - q0, v + h / d1 * (e1 - v) - q0
+        return seen.intersects(shapely.LineString([a @ RQ[:2].T, b @ RQ[:2].T]))
+
     for a, A in enumerate(S):
         N = np.cross(A[1] - A[0], A[2] - A[0])
         line(N, A[0])
@@ -389,7 +408,7 @@ def _event_lines(S, nP, dP, R, c, radius):
             for v in A:
                 for e0, e1 in zip(B, np.roll(B, -1, axis=0)):
                     m = np.cross(e0 - v, e1 - v)
-                    if np.linalg.norm(m) == 0:
+                    if np.linalg.norm(m) == 0 or (a and b and not reaches_receiver(v, e0, e1)):
                         continue
                     x0, x1 = through(v, e0), through(v, e1)
                     s0, s1 = nP @ (e0 - v), nP @ (e1 - v)
@@ -458,20 +477,27 @@ def _hidden_values(X, nP, Qc, blockers):
         return zero, zero
     nb, kmax = len(Kc), max(len(K) for K in Kc)
     V = np.array([np.vstack([K, np.repeat(K[-1:], kmax - len(K), axis=0)]) for K in Kc])
-    # each blocker about each point, clipped to the pyramid from x over the rectangle
-    Vb = (V[None] - X[:, None, None, :]).reshape(nX * nb, kmax, 3)
-    cnt = np.tile([len(K) for K in Kc], nX)
-    # a blocker whose plane passes through x is seen edge-on: it hides nothing
+    # the pyramid from each x over the rectangle: its four inward planes (nX, 4, 3)
+    C = corners[None] - X[:, None, :]
+    M = np.cross(C, np.roll(C, -1, axis=1))
+    M *= np.sign(np.einsum("pai,pai->pa", M, np.roll(C, -2, axis=1)))[:, :, None]
+    # (point, blocker) pairs that can reach into the pyramid: not wholly outside one of
+    # its planes, and not seen edge-on (a blocker whose plane passes through x hides
+    # nothing); only those are clipped
+    D = V[None] - X[:, None, None, :]                                   # (nX, nb, kmax, 3)
+    side = np.einsum("pbkj,paj->pbak", D, M)                            # (nX, nb, 4, kmax)
     NK = np.array([area_vector(K) for K in Kc])
     NK /= np.linalg.norm(NK, axis=1)[:, None]
     size = float(np.ptp(np.vstack(Kc + [Qc, X]), axis=0).max())
-    edge_on = np.abs(np.einsum("pbj,bj->pb", X[:, None, :] - V[None, :, 0, :], NK))
-    cnt[(edge_on <= tol.AREA_EDGE_ON_RTOL * size).ravel()] = 0
-    C = corners[None] - X[:, None, :]                                   # (nX, 4, 3)
+    edge_on = np.abs(np.einsum("pbj,bj->pb", D[:, :, 0, :], NK)) <= tol.AREA_EDGE_ON_RTOL * size
+    pairs = np.flatnonzero(~(np.all(side <= 0, axis=3).any(axis=2) | edge_on))
+    if pairs.size == 0:
+        return zero, zero
+    pt, blk = pairs // nb, pairs % nb
+    Vb = D[pt, blk]
+    cnt = np.array([len(K) for K in Kc])[blk]
     for a in range(4):
-        m = np.cross(C[:, a], C[:, (a + 1) % 4])
-        m *= np.sign(np.einsum("ij,ij->i", m, C[:, (a + 2) % 4]))[:, None]
-        Vb, cnt = clip_halfspace(Vb, np.where(cnt >= 3, cnt, 0), np.repeat(m, nb, axis=0))
+        Vb, cnt = clip_halfspace(Vb, np.where(cnt >= 3, cnt, 0), M[pt, a])
     # central projection from x onto Qc's plane: q = x + y h / (-nQ . y), y = offset
     h = (X - q0) @ nQ
     live = np.flatnonzero(cnt >= 3)
@@ -479,20 +505,22 @@ def _hidden_values(X, nP, Qc, blockers):
         return zero, zero
     slot = np.minimum(np.arange(Vb.shape[1])[None, :], cnt[live, None] - 1)
     Y = np.take_along_axis(Vb[live], slot[:, :, None], axis=1)         # padded by repeats
-    pt = live // nb
+    pt = pt[live]                                                       # sorted
     Y = Y * (h[pt, None] / -(Y @ nQ))[:, :, None] + (X[pt] - q0)[:, None, :]
     Y2 = Y @ RQ[:2].T
     images = shapely.polygons(Y2)
-    grid = np.full((nX, nb), shapely.Polygon(), dtype=object)
+    # each image's rank among its point's images: the union grows rank by rank
+    rank = np.arange(len(pt)) - np.searchsorted(pt, pt)
+    union = np.full(nX, shapely.Polygon(), dtype=object)
     try:
         bad = ~shapely.is_valid(images)
         if bad.any():
             images[bad] = shapely.make_valid(images[bad])
-        grid[pt, live % nb] = images
+        union[pt[rank == 0]] = images[rank == 0]
         with np.errstate(all="ignore"):
-            union = grid[:, 0]
-            for k in range(1, nb):
-                union = shapely.union(union, grid[:, k])
+            for r in range(1, int(rank.max()) + 1):
+                at = rank == r
+                union[pt[at]] = shapely.union(union[pt[at]], images[at])
             hidden = shapely.intersection(union, qpoly)
     except shapely.errors.GEOSException:
         # GEOS gave up on a nearly degenerate configuration: the engine instead
@@ -582,7 +610,7 @@ def _occluded_pair(S, Pc, Qc, nP, tolerance, area_P):
     whole, whole_err = _unoccluded_pair(np.asarray(Pc), np.asarray(S[0]))
     radius = 1.01 * float(np.linalg.norm(Pc - c, axis=1).max())
     todo = [(_corner_first(t, S[1:], nP, dP), 0)
-            for t in _cells(Pc, nP, _event_lines(S, nP, dP, R, c, radius), R, c)]
+            for t in _cells(Pc, nP, _event_lines(S, nP, dP, R, c, radius, Qc), R, c)]
     total_area = sum(0.5 * np.linalg.norm(np.cross(t[1] - t[0], t[2] - t[0])) for t, _ in todo)
     hidden = err = 0.0
     points = 0
