@@ -79,7 +79,10 @@ def _clip_front(P, n, c):
     if np.all(d <= 0) and np.any(d < 0):
         return None
     V, k = clip_halfspace((P - c)[None], np.array([len(P)]), n)
-    return V[0, :k[0]] + c if k[0] >= 3 else None
+    C = V[0, :k[0]] + c
+    # a cut through a vertex repeats it: no edge of zero length
+    C = C[np.any(C != np.roll(C, 1, axis=0), axis=1)]
+    return C if len(C) >= 3 else None
 
 
 #: beyond this distance between centroids (in diameters of the larger polygon) the area

@@ -159,6 +159,27 @@ def test_one_sided():
     assert ef.polygon_form_factor(P2, Qh) == pytest.approx(ef.polygon_form_factor(P2, Qf), rel=1e-12)
 
 
+def test_clipping_twice_repeats_no_vertex():
+    # the closed Cornell box's ceiling against a wall: cutting the ceiling at the wall's
+    # plane a second time met a vertex on that plane and repeated it (an edge of length
+    # 0: 0/0 in the contour rule's cuts, NaN had it been the receiver's)
+    import warnings
+
+    from exactff.area import _clip_front
+
+    scene = ef.scenes.cornell_box(closed=True)
+    P, Q = (np.asarray(scene.polygons[k], float) for k in (3, 8))
+    nQ = ef.area_vector(Q) / np.linalg.norm(ef.area_vector(Q))
+    once = _clip_front(P, nQ, Q[0])
+    twice = _clip_front(once, nQ, Q[0])
+    assert np.all(np.linalg.norm(twice - np.roll(twice, 1, axis=0), axis=1) > 0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        whole = np.linalg.norm(ef.area_vector(P)) * ef.polygon_form_factor(P, Q)
+        part = np.linalg.norm(ef.area_vector(once)) * ef.polygon_form_factor(once, Q)
+    assert whole > 0 and part == pytest.approx(whole, rel=1e-12)
+
+
 def test_bad_polygons_raise_scene_errors():
     P, Q = parallel_pair(1, 1, 1)
     with pytest.raises(ef.SceneError, match="polygon 1"):
