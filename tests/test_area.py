@@ -328,6 +328,18 @@ def test_room_with_a_box_standing_on_the_floor():
     assert np.all(_within_estimates(scene, F, E))
 
 
+@pytest.mark.slow
+def test_closed_cube_of_384_quads():
+    # every pair unoccluded: the far pairs of a row integrated together, the near ones by
+    # the contour rule; every row of the closed cube sums to 1 and the matrix is
+    # symmetric (equal areas), each within the estimates
+    scene = ef.scenes.subdivided_box(8)
+    F, E = ef.area_form_factors(scene, error=True)
+    assert np.all(np.abs(F.sum(axis=1) - 1.0) <= E.sum(axis=1) + 4e-16)
+    assert np.all(np.abs(F - F.T) <= E + E.T + 1e-18)
+    assert E.max() < 1e-12
+
+
 def test_convex_room_is_all_contour_integrals():
     scene = ef.scenes.subdivided_box(2)
     F = ef.area_form_factors(scene, rows=[0, 9])
