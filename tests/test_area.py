@@ -340,6 +340,16 @@ def test_closed_cube_of_384_quads():
     assert E.max() < 1e-12
 
 
+@pytest.mark.slow
+def test_closed_cornell_box_rows_sum_to_one():
+    # the closed Cornell box: the light (ten block faces between it and the floor) and
+    # a face of the short block see the closed box, so their rows sum to 1
+    scene = ef.scenes.cornell_box(closed=True)
+    F, E = ef.area_form_factors(scene, rows=[0, 10], tolerance=1e-9, error=True)
+    assert np.all(E <= 1e-9)
+    assert np.all(np.abs(F.sum(axis=1) - 1.0) <= E.sum(axis=1) + 1e-14)
+
+
 def test_convex_room_is_all_contour_integrals():
     scene = ef.scenes.subdivided_box(2)
     F = ef.area_form_factors(scene, rows=[0, 9])
