@@ -11,6 +11,7 @@ import pytest
 from hypothesis import given, settings, strategies as st
 
 import exactff as ef
+from exactff.testing.strategies import occluded_scenes
 
 from common import examples, random_rotation
 
@@ -287,6 +288,26 @@ def test_closed_room_rows_sum_to_one_and_reciprocity_within_the_estimates():
     assert np.all(_within_estimates(scene, F, E))
     assert F[1, 7] == 0.0 and F[0, 6] == 0.0           # the faces turned away
     assert F[0, 1] < ef.polygon_form_factor(scene.polygons[0], scene.polygons[1]) - 0.05
+
+
+@settings(max_examples=examples(40), deadline=None)
+@given(case=occluded_scenes(max_extra=3))
+def test_hidden_part_against_the_engine_on_drawn_scenes(case):
+    # a far polygon partly hidden by a nearer one, and up to three others anywhere (not
+    # convex, crossing the point's plane or Q's): the hidden part built in Q's plane
+    # against the engine, within the two estimates
+    from exactff.area import _clip_front, _hidden_values, _point_values
+
+    scene, p, n = case
+    polys = [np.asarray(P, float) for P in scene.polygons]
+    Qc = _clip_front(polys[0], n, p)
+    assert Qc is not None                           # the strategy puts it in front
+    X = np.asarray(p, float)[None]
+    H, EH = _hidden_values(X, n, Qc, polys[1:])
+    F, E = ef.form_factors(ef.Scene.from_polygons([Qc] + polys[1:]), X, n, error=True)
+    U, EU = (v[0] for v in _point_values(X, n, [Qc]))
+    assert H[0] > 0                                 # the near polygon hides part of it
+    assert abs(H[0] - (U[0] - F[0, 0])) <= EH[0] + EU[0] + E[0, 0] + 1e-15 * U[0]
 
 
 def test_hidden_part_falls_back_to_the_engine_where_geos_fails(monkeypatch):
