@@ -209,7 +209,8 @@ AREA_ROUNDING_ULPS = 64.0
 
 #: Area form factors: the rectangle over which a blocker's image is kept, around the
 #: receiver in its plane, is wider than the receiver's bounding box by this share of it
-#: (the rectangle's edges then never meet the receiver's).
+#: (the rectangle's edges then never meet the receiver's); likewise the disk within
+#: which event lines are kept, around the emitter.
 AREA_HIDDEN_PAD = 0.01
 
 #: Area form factors: the boundary of the hidden region built by the 2-D booleans moves

@@ -28,7 +28,7 @@ from scipy.special import roots_legendre, xlogy
 from . import _tolerances as tol
 from .geometry import area_vector, polygon_diameter, receiver_frame
 from .scene import validate_polygon
-from .visibility.clipper import clip_halfspace
+from .visibility.clipper import _polygon_rings, clip_halfspace
 
 __all__ = ["polygon_form_factor", "area_form_factors"]
 
@@ -145,9 +145,9 @@ def _point_values(X, nP, Qs):
     E = np.concatenate([np.tile((Q - Q[0]) @ R.T, (nX, 1)) for Q in Qs])
     lens = np.repeat(ks, nX)
     owner = np.repeat(np.arange(m * nX), lens)
-    first = np.repeat(np.cumsum(lens) - lens, lens)        # each vertex's polygon's first
-    idx = np.arange(len(owner))
-    nxt = np.where(idx + 1 == first + lens[owner], first, idx + 1)
+    first = np.cumsum(lens) - lens                          # each polygon's first vertex
+    nxt = np.arange(len(owner)) + 1
+    nxt[first + lens - 1] = first
     S, mags, errs = _clipped_sector_sums(A0, E, nxt, owner, m * nX)
     eps = np.finfo(float).eps
     return (np.abs(S).reshape(m, nX) / (2.0 * np.pi),
@@ -259,9 +259,10 @@ def _edge_pieces(P, eP, Q, eQ):
 
 
 def _unoccluded_pair(P, Q):
-    """F(P -> Q) of two validated polygons, unoccluded, and a bound on its error: the
-    rounding of the contour sum (64 units of its absolute terms), or, for far pairs,
-    the difference between the 12- and 8-point area rules plus rounding."""
+    """F(P -> Q) of two validated polygons, unoccluded, and an estimate of its error:
+    the rounding of the contour sum (64 units of its absolute terms) plus the
+    difference from the tanh-sinh rule one level coarser, or, for far pairs, the
+    difference between the 12- and 8-point area rules plus rounding."""
     AP, AQ = area_vector(P), area_vector(Q)
     area_P = float(np.linalg.norm(AP))
     nP, nQ = AP / area_P, AQ / np.linalg.norm(AQ)
@@ -339,6 +340,15 @@ def _blockers(padded, i, j, Pc, Qc, scale):
     return [int(k) for k in cand[~outside.any(axis=1)]]
 
 
+def _plane_frame(Q):
+    """A planar polygon's unit normal, origin (its first vertex), frame (rows t1, t2, n:
+    :func:`receiver_frame`) and 2-D coordinates in that frame."""
+    nQ = area_vector(Q)
+    nQ = nQ / np.linalg.norm(nQ)
+    RQ = receiver_frame(nQ)
+    return nQ, Q[0], RQ, (Q - Q[0]) @ RQ[:2].T
+
+
 def _event_lines(S, nP, dP, R, c, radius, Qc):
     """The segments of P's plane (in its 2-D frame ``R`` about ``c``) across which the
     integrand may lose smoothness: for a vertex ``v`` of one polygon of S and an edge of
@@ -386,10 +396,8 @@ def _event_lines(S, nP, dP, R, c, radius, Qc):
             return None
         return v + (dP - nP @ v) / den * (q - v)
 
-    nQ = area_vector(Qc)
-    nQ /= np.linalg.norm(nQ)
-    q0, RQ = Qc[0], receiver_frame(nQ)
-    seen = shapely.Polygon((Qc - q0) @ RQ[:2].T)
+    nQ, q0, RQ, Q2 = _plane_frame(Qc)
+    seen = shapely.Polygon(Q2)
     shapely.prepare(seen)
 
     def reaches_receiver(v, e0, e1):
@@ -463,11 +471,7 @@ def _hidden_values(X, nP, Qc, blockers):
     from .integrate import _C1, _clipped_sector_sums
 
     nX = len(X)
-    AQ = area_vector(Qc)
-    nQ = AQ / np.linalg.norm(AQ)
-    q0 = Qc[0]
-    RQ = receiver_frame(nQ)
-    Q2 = (Qc - q0) @ RQ[:2].T
+    nQ, q0, RQ, Q2 = _plane_frame(Qc)
     qpoly = shapely.Polygon(Q2)
     lo, hi = Q2.min(axis=0), Q2.max(axis=0)
     pad = tol.AREA_HIDDEN_PAD * float((hi - lo).max())
@@ -534,20 +538,13 @@ def _hidden_values(X, nP, Qc, blockers):
     parts, part_of = parts[keep], part_of[keep]
     if len(parts) == 0:
         return zero, zero
-    rings, ring_of = shapely.get_rings(parts, return_index=True)
-    outer = np.r_[True, ring_of[1:] != ring_of[:-1]]
-    xy, owner = shapely.get_coordinates(rings, return_index=True)
-    last = np.r_[owner[1:] != owner[:-1], True]                          # closing vertex
-    xy, owner = xy[~last], owner[~last]
-    point = part_of[ring_of]                                             # ring -> point
-    first = np.searchsorted(owner, np.arange(len(rings)))
+    xy, owner, first, _, nxt, is_hole, ring_part = _polygon_rings(parts)
+    point = part_of[ring_part]                                           # ring -> point
     R = receiver_frame(nP)
     E = ((xy - xy[first[owner]]) @ RQ[:2]) @ R.T
     A0 = ((q0 - X[point]) + xy[first] @ RQ[:2]) @ R.T
-    idx = np.arange(len(owner))
-    nxt = np.where(np.r_[owner[1:] != owner[:-1], True], first[owner], idx + 1)
-    S, mags, errs = _clipped_sector_sums(A0, E, nxt, owner, len(rings))
-    sign = np.where(outer, 1.0, -1.0)
+    S, mags, errs = _clipped_sector_sums(A0, E, nxt, owner, len(first))
+    sign = np.where(is_hole, -1.0, 1.0)
     value = np.bincount(point, sign * np.abs(S), minlength=nX) / (2.0 * np.pi)
     eps = np.finfo(float).eps
     rnd = np.bincount(point, _C1 * eps * mags + errs, minlength=nX) / (2.0 * np.pi)
@@ -611,7 +608,7 @@ def _occluded_pair(S, Pc, Qc, nP, tolerance, area_P):
     c = Pc.mean(axis=0)
     dP = float(nP @ Pc[0])
     whole, whole_err = _unoccluded_pair(np.asarray(Pc), np.asarray(S[0]))
-    radius = 1.01 * float(np.linalg.norm(Pc - c, axis=1).max())
+    radius = (1.0 + tol.AREA_HIDDEN_PAD) * float(np.linalg.norm(Pc - c, axis=1).max())
     todo = [(_corner_first(t, S[1:], nP, dP), 0)
             for t in _cells(Pc, nP, _event_lines(S, nP, dP, R, c, radius, Qc), R, c)]
     total_area = sum(0.5 * np.linalg.norm(np.cross(t[1] - t[0], t[2] - t[0])) for t, _ in todo)
@@ -629,15 +626,15 @@ def _occluded_pair(S, Pc, Qc, nP, tolerance, area_P):
             EHh = EH[at + len(Xl):at + len(Xl) + len(Xh)]
             at += len(Xl) + len(Xh)
             lo, hi = Wl @ Hl, Wh @ Hh
-            share = 0.5 * np.linalg.norm(np.cross(tri[1] - tri[0], tri[2] - tri[0])) / total_area
+            area_t = 0.5 * np.linalg.norm(np.cross(tri[1] - tri[0], tri[2] - tri[0]))
             diff = abs(hi - lo) / area_P
-            if share * total_area / area_P <= tol.AREA_SLIVER_SHARE * tolerance:
+            if area_t / area_P <= tol.AREA_SLIVER_SHARE * tolerance:
                 # a sliver (between nearly coincident events): kept as it is, with the
                 # largest error it can carry (the hidden part is between 0 and 1)
                 hidden += hi / area_P
-                err += share * total_area / area_P
+                err += area_t / area_P
                 continue
-            if diff > 0.5 * tolerance * share and depth < MAX_DEPTH:
+            if diff > 0.5 * tolerance * area_t / total_area and depth < MAX_DEPTH:
                 a, b, cc = tri
                 ab, bc, ca = (a + b) / 2, (b + cc) / 2, (cc + a) / 2
                 nxt += [(np.array(t), depth + 1) for t in

@@ -752,6 +752,43 @@ def _lift(coords, chart):
     return coords[:, :1] * eu + coords[:, 1:2] * ev + ew
 
 
+def _polygon_rings(polys):
+    """The rings of shapely polygons as flat vertex arrays, for the sector sums.
+
+    Parameters
+    ----------
+    polys : ndarray of shapely Polygons
+
+    Returns
+    -------
+    coords : ndarray of shape (V, 2)
+        Every ring's vertices, its closing point dropped; rings contiguous, each
+        polygon's exterior first, then its holes.
+    ring_of : ndarray of shape (V,)
+        Each vertex's ring (sorted).
+    start, count : ndarray of shape (rings,)
+        Each ring's first vertex and number of vertices.
+    nxt : ndarray of shape (V,)
+        Each vertex's successor in its ring.
+    is_hole : ndarray of bool, shape (rings,)
+    ring_poly : ndarray of shape (rings,)
+        Each ring's polygon.
+    """
+    rings, ring_poly = shapely.get_rings(polys, return_index=True)
+    is_hole = np.ones(len(rings), dtype=bool)
+    n_rings = shapely.get_num_interior_rings(polys) + 1
+    is_hole[np.concatenate([[0], np.cumsum(n_rings)[:-1]])] = False
+    coords, ring_of = shapely.get_coordinates(rings, return_index=True)
+    last = np.ones(len(ring_of), dtype=bool)
+    last[:-1] = ring_of[1:] != ring_of[:-1]
+    coords, ring_of = coords[~last], ring_of[~last]
+    start = np.searchsorted(ring_of, np.arange(len(rings)))
+    count = np.diff(np.append(start, len(ring_of)))
+    nxt = np.arange(len(ring_of)) + 1
+    nxt[start + count - 1] = start
+    return coords, ring_of, start, count, nxt, is_hole, ring_poly
+
+
 def _rings_long_double(D, start, count):
     """Absolute image areas / pi (form factors) of closed rings of directions, and their
     error estimates, in long double arithmetic."""
@@ -829,33 +866,20 @@ def pieces_form_factors(pieces, m, tolerance=None, owner=None, integrator="secto
         polys, poly_of = parts[areal], part_of[areal]
         if len(polys) == 0:
             continue
-        # rings of each polygon: the exterior first, then its holes
-        rings, ring_poly = shapely.get_rings(polys, return_index=True)
-        is_hole = np.ones(len(rings), dtype=bool)
-        n_rings = shapely.get_num_interior_rings(polys) + 1
-        is_hole[np.concatenate([[0], np.cumsum(n_rings)[:-1]])] = False
-        coords, ring_of = shapely.get_coordinates(rings, return_index=True)
-        # drop each ring's closing point; offsets from its first point
-        last = np.ones(len(ring_of), dtype=bool)
-        last[:-1] = ring_of[1:] != ring_of[:-1]
-        coords, ring_of = coords[~last], ring_of[~last]
+        coords, ring_of, start, count, nxt, is_hole, ring_poly = _polygon_rings(polys)
         D = _lift(coords, chart)
-        start = np.searchsorted(ring_of, np.arange(len(rings)))
-        count = np.diff(np.append(start, len(ring_of)))
-        nxt = np.arange(len(ring_of)) + 1
-        nxt[start + count - 1] = start
         if integrator == "eq3":
             res = np.array([eq3_ring_area(D[a:a + c]) for a, c in zip(start, count)])
             val = np.abs(res[:, 0]) / np.pi
             e_ring = _C1 * tol.EPS * res[:, 1] / np.pi
         else:
             A0 = D[start]
-            S, mags, errs = _clipped_sector_sums(A0, D - A0[ring_of], nxt, ring_of, len(rings))
+            S, mags, errs = _clipped_sector_sums(A0, D - A0[ring_of], nxt, ring_of, len(start))
             val = np.abs(S) / TWO_PI
             e_ring = (_C1 * tol.EPS * mags + errs) / TWO_PI
         # the clipper's geometry: every vertex within CHART_VERTEX_ERROR of its place
         perimeter = np.bincount(ring_of, weights=np.hypot(*(coords[nxt] - coords).T),
-                                minlength=len(rings))
+                                minlength=len(start))
         e_ring = e_ring + perimeter * tol.CHART_VERTEX_ERROR / np.pi + 4 * tol.EPS * val
         charts.append(dict(ci=ci, chart=chart, frag=frag, n=len(geoms), coords=coords,
                            nxt=nxt, ring_of=ring_of, start=start, count=count,
