@@ -15,7 +15,7 @@ import math
 import numpy as np
 
 import exactff as ef
-from exactff.integrate import eq3_form_factor, sector_form_factor
+from exactff.kernel import eq3_form_factor, sector_form_factor
 from exactff.testing.mp_reference import boundary_form_factor
 
 

@@ -76,7 +76,7 @@ def cube_row_against_gauss(k=16, row=0):
     whole row by exactff (blockers' test, batched far pairs, contour integrals near)
     and by the vectorised 30-point Gauss rule; the row sums (1 exactly) and the time
     per pair of each."""
-    from exactff.area import _area_row
+    from exactff.area import area_row as _area_row
 
     cube = ef.scenes.subdivided_box(k)
     polys = np.array([np.asarray(p, float) for p in cube.polygons])

@@ -17,7 +17,7 @@ import time
 import numpy as np
 
 import exactff as ef
-from exactff.integrate import eq3_form_factor, sector_form_factor
+from exactff.kernel import eq3_form_factor, sector_form_factor
 
 sys.path.insert(0, os.path.dirname(__file__))
 from scenes_bench import best_of  # noqa: E402

@@ -69,7 +69,7 @@ def old_style(scene, rows, workers):
     step = max(1, min(64, -(-len(rows) // (4 * workers))))
     m = ef.methods.resolve("exact")
     with ProcessPoolExecutor(workers) as ex:
-        futs = [ex.submit(formfactors._rows, scene, m, rows[a:a + step], False)
+        futs = [ex.submit(formfactors.PointRows(m, False), scene, rows[a:a + step])
                 for a in range(0, len(rows), step)]
         return [f.result() for f in as_completed(futs)]
 

@@ -19,7 +19,7 @@ import numpy as np
 
 import exactff as ef
 from exactff.catalog import stiff_cases
-from exactff.integrate import _Polygons, unoccluded_row
+from exactff.kernel import flat_polygons, unoccluded_row
 
 sys.path.insert(0, os.path.dirname(__file__))
 from scenes_bench import best_of, furnished_room  # noqa: E402
@@ -49,7 +49,7 @@ def main():
     for label, gap in (("furnished room, unoccluded rows", 0.0),
                        ("same, shelves 1e-9 off the wall", 1e-9)):
         room = furnished_room(shelf_gap=gap)
-        flat = _Polygons.of(room)
+        flat = flat_polygons(room)
         ids = np.random.default_rng(3).choice(len(room), args.rows, replace=False)
         esc = vals = 0
         for i in ids:
@@ -68,7 +68,7 @@ def main():
     ef.form_factor_matrix(cube, rows=[0])
     t0, t1 = paired(lambda: ef.form_factor_matrix(cube, method=ef.Exact(tolerance=None)),
                     lambda: ef.form_factor_matrix(cube, method=ef.Exact()), 3)
-    flatc = _Polygons.of(cube)
+    flatc = flat_polygons(cube)
     esc = vals = 0
     for i in range(len(cube)):
         F, err = unoccluded_row(flatc, cube.centroids[i], cube.normals[i], return_error=True)

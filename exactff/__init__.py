@@ -1,25 +1,38 @@
 """exactff: exact form factors for scenes of planar polygons (continuous PPBH).
 
-The flat API re-exports each module's ``__all__``; see ``docs/reference``.
+The flat API gathers the public functions of the layers below
+(``docs/explanation/layout.md``); see ``docs/reference``.
 """
 
 from . import catalog, scenes
-from .area import *  # noqa: F401,F403
-from .formfactors import *  # noqa: F401,F403
-from .geometry import *  # noqa: F401,F403
-from .integrate import *  # noqa: F401,F403
-from .io import *  # noqa: F401,F403
-from .reports import *  # noqa: F401,F403
-from .methods import (METHODS, CubicTetrahedron, DiscretePPBH, Exact,  # noqa: F401
-                      FormFactorMethod, Hemicube, MonteCarlo, PolarPlane, SinglePlane)
-from .scene import *  # noqa: F401,F403
-from .storage import *  # noqa: F401,F403
-from . import (area as _area, formfactors as _formfactors, geometry as _geometry, integrate as _integrate,
-               io as _io, reports as _reports, scene as _scene, storage as _storage)
+from .errors import NumericalError, SceneError
+from .formfactors import area_form_factors, form_factor_matrix, form_factors
+from .geometry import (area_vector, polygon_area, polygon_centroid, polygon_diameter,
+                       receiver_frame, rotate, to_local, unit_normal)
+from .io import load_scene, read_mesh, read_obj, read_scene_json, read_vs3, scene_from_json
+from .kernel import (arc_x_extremes, eq3_edge_integral, eq3_form_factor, eq3_ring_area,
+                     mp_form_factor, point_polygon_form_factor, point_polygon_form_factors,
+                     sector_form_factor)
+from .area import polygon_form_factor
+from .methods import (METHODS, CubicTetrahedron, DiscretePPBH, Exact, FormFactorMethod,
+                      Hemicube, MonteCarlo, PolarPlane, SinglePlane)
+from .reports import compare, describe, to_markdown
+from .rings import padded, padded_buckets
+from .scene import NONPLANAR, Scene, split_nonplanar, validate_polygon, validate_polygons
+from .storage import load_matrix
+from .version import __version__
 
-__version__ = "0.1.0"
-
-__all__ = (["catalog", "scenes", "__version__", "METHODS", "FormFactorMethod", "Exact", "DiscretePPBH",
-            "Hemicube", "CubicTetrahedron", "SinglePlane", "PolarPlane", "MonteCarlo"]
-           + _scene.__all__ + _geometry.__all__ + _integrate.__all__ + _io.__all__
-           + _formfactors.__all__ + _storage.__all__ + _reports.__all__ + _area.__all__)
+__all__ = ["catalog", "scenes", "__version__",
+           "SceneError", "NumericalError",
+           "Scene", "validate_polygon", "validate_polygons", "split_nonplanar", "NONPLANAR",
+           "load_scene", "read_obj", "read_scene_json", "scene_from_json", "read_vs3",
+           "read_mesh", "describe",
+           "area_vector", "polygon_area", "polygon_centroid", "polygon_diameter", "unit_normal",
+           "receiver_frame", "rotate", "to_local", "padded", "padded_buckets",
+           "point_polygon_form_factor", "point_polygon_form_factors", "sector_form_factor",
+           "mp_form_factor", "eq3_form_factor", "eq3_ring_area", "eq3_edge_integral",
+           "arc_x_extremes", "polygon_form_factor",
+           "form_factors", "form_factor_matrix", "area_form_factors", "load_matrix",
+           "METHODS", "FormFactorMethod", "Exact", "DiscretePPBH", "Hemicube",
+           "CubicTetrahedron", "SinglePlane", "PolarPlane", "MonteCarlo",
+           "compare", "to_markdown"]

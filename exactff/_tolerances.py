@@ -35,6 +35,27 @@ __all__ = [
     "REFINE_MP_ZERO_DIGITS",
     "RASTER_NEAR_ORIGIN",
     "SPLIT_FLATNESS_TIE",
+    "AREA_HULL_RTOL",
+    "AREA_EVENT_PARALLEL",
+    "AREA_RAY_PARALLEL",
+    "AREA_SLIVER_CELL",
+    "AREA_SLIVER_SHARE",
+    "AREA_ROUNDING_ULPS",
+    "AREA_HIDDEN_PAD",
+    "AREA_BOOLEAN_ULPS",
+    "AREA_EDGE_ON_RTOL",
+    "AREA_EDGE_CUT",
+    "C1",
+    "C2",
+    "LONGDOUBLE_EPS",
+    "AREA_FAR",
+    "TANH_SINH_LEVEL",
+    "TANH_SINH_T_MAX",
+    "AREA_GAUSS_ORDER",
+    "AREA_GAUSS_LOW_ORDER",
+    "AREA_RULE_ORDERS",
+    "AREA_MAX_DEPTH",
+    "AREA_EDGE_TERMS_PER_CALL",
 ]
 
 #: Unit roundoff of IEEE double precision, 2**-53.
@@ -224,3 +245,38 @@ AREA_EDGE_ON_RTOL = 8 * EPS
 #: Area form factors: cuts of an emitter's edge (for the contour integral's outer rule)
 #: closer than this (as a share of the edge) to each other or to its ends are dropped.
 AREA_EDGE_CUT = 1e-9
+
+#: Constants of the sector sums' rounding-error estimate (DESIGN 2.2): per edge term,
+#: the relative error of its angle and sum (C1 ulps), and of its plane's direction (C2
+#: ulps per unit of the cross product's condition number).
+C1 = 10.0
+C2 = 10.0
+
+#: Unit roundoff of the platform's long double (2**-64 for x87 80-bit extended; equal to
+#: EPS where long double is double, and the second tier of the ladder is then skipped).
+LONGDOUBLE_EPS = float(np.finfo(np.longdouble).eps) / 2
+
+#: Area form factors: beyond this distance between centroids (in diameters of the larger
+#: polygon) the area integral of exact point values replaces the contour integral, whose
+#: terms cancel as (distance / size)^2 (measured: 4e-12 relative for squares 100
+#: diameters apart).
+AREA_FAR = 3.0
+
+#: Area form factors: the tanh-sinh rule of the contour integral's outer integral (step
+#: 2**-level, nodes up to |t| = t_max).
+TANH_SINH_LEVEL = 6
+TANH_SINH_T_MAX = 3.6
+
+#: Area form factors: Gauss-Legendre orders of the far-field rule on the emitter's
+#: triangles, and of the coarser rule its estimate compares with.
+AREA_GAUSS_ORDER = 12
+AREA_GAUSS_LOW_ORDER = 8
+
+#: Area form factors, occluded pairs: the two collapsed Gauss rules per triangle (points
+#: a side), and how many times a triangle may be cut in four.
+AREA_RULE_ORDERS = (6, 10)
+AREA_MAX_DEPTH = 7
+
+#: Area form factors: receivers per call of the vectorised point values (bounds the
+#: temporaries: about 2e5 edge terms per call).
+AREA_EDGE_TERMS_PER_CALL = 200_000

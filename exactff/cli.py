@@ -5,7 +5,8 @@ import sys
 
 import numpy as np
 
-__all__ = ["main"]
+__all__ = ["main", "build_parser", "open_scene", "parse_rows", "cmd_info", "cmd_ff",
+           "cmd_matrix", "cmd_compare", "BUILTIN", "DENSE_OUTPUT_BYTES"]
 
 BUILTIN = {
     "cornell_box": lambda: _scenes().cornell_box(),
@@ -70,7 +71,7 @@ def _scene_arguments(p):
 
 
 def cmd_info(args):
-    from .scene import describe
+    from .reports import describe
 
     scene = _open(args)
     d = describe(scene)
@@ -105,7 +106,7 @@ def cmd_info(args):
 
 
 def cmd_ff(args):
-    from .integrate import point_polygon_form_factors
+    from .kernel import point_polygon_form_factors
 
     scene = _open(args)
     p = np.array(args.point, dtype=float)
@@ -163,7 +164,7 @@ DENSE_OUTPUT_BYTES = 2 ** 31
 def _area_matrix(scene, rows, args, out):
     """``exactff matrix --area``: the area-to-area matrix, each value within
     ``--tolerance``, written to a .npy (and its bounds beside it, STEM.error.npy)."""
-    from .area import area_form_factors
+    from .formfactors import area_form_factors
 
     if args.sparse or args.scheduler or args.two_sided or not out.endswith(".npy"):
         raise ValueError("--area writes a dense .npy (not with --sparse, --scheduler, "
@@ -194,7 +195,7 @@ def cmd_matrix(args):
     import time
 
     from .formfactors import form_factor_matrix
-    from .storage import _stem, _suffix
+    from .storage import path_stem, path_suffix
 
     scene = _open(args)
     rows = parse_rows(args.rows, len(scene))
@@ -207,11 +208,11 @@ def cmd_matrix(args):
         stem = args.scene.split(":")[0].rsplit("/", 1)[-1].rsplit(".", 1)[0]
         big = len(rows) * len(scene) * 8 > DENSE_OUTPUT_BYTES
         out = f"{stem}_ff" + (".npz" if args.sparse else ".zarr" if big else ".npy")
-    suffix = _suffix(out, "--output")
+    suffix = path_suffix(out, "--output")
     if args.sparse != (suffix == ".npz"):
         raise ValueError(f"--output {out}: " + ("--sparse writes a .npz file" if args.sparse
                                                  else "a .npz output needs --sparse"))
-    stem = _stem(out)
+    stem = path_stem(out)
     if args.overwrite:
         for path in (out, stem + ".done.npy", stem + ".meta.json", stem + ".parts"):
             if os.path.isdir(path):
@@ -286,7 +287,7 @@ def cmd_compare(args):
     import os
     import platform
 
-    from . import __version__
+    from .version import __version__
     from .methods import METHODS
     from .reports import compare, to_markdown
 

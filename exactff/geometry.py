@@ -3,8 +3,6 @@
 import numpy as np
 
 __all__ = [
-    "padded",
-    "padded_buckets",
     "to_local",
     "rotate",
     "area_vector",
@@ -13,6 +11,7 @@ __all__ = [
     "polygon_centroid",
     "polygon_diameter",
     "receiver_frame",
+    "mp_receiver_frame",
 ]
 
 
@@ -166,6 +165,39 @@ def receiver_frame(normal, dtype=float):
                      [x, y, z]], dtype=dtype)
 
 
+def mp_receiver_frame(normal):
+    """:func:`receiver_frame` in mpmath numbers at the working precision: the same
+    construction, so that charts, seams and tiles are where the float frame has them.
+
+    Parameters
+    ----------
+    normal : array_like of shape (3,)
+        Floats, taken as exact.
+
+    Returns
+    -------
+    tuple of three lists of mpf
+        The rows t1, t2, n.
+
+    Examples
+    --------
+    >>> import mpmath as mp
+    >>> with mp.workdps(40):
+    ...     t1, t2, n = mp_receiver_frame([0.0, 0.0, 2.0])
+    >>> [float(c) for c in n]
+    [0.0, 0.0, 1.0]
+    """
+    import mpmath as mp
+
+    nv = [mp.mpf(float(c)) for c in normal]
+    ln = mp.sqrt(sum(c * c for c in nv))
+    x, y, z = (c / ln for c in nv)
+    sign = 1 if z >= 0 else -1
+    a = -1 / (sign + z)
+    b = x * y * a
+    return ([1 + sign * x * x * a, sign * b, -sign * x], [b, sign + y * y * a, -y], [x, y, z])
+
+
 def to_local(X, p, R):
     """``(X - p) @ R.T`` evaluated elementwise, the same rounding for every row.
 
@@ -200,64 +232,4 @@ def rotate(D, R):
     out = np.empty(D.shape, dtype=np.result_type(D, R))
     for k in range(3):
         out[..., k] = x * R[k, 0] + y * R[k, 1] + z * R[k, 2]
-    return out
-
-
-def padded(polygons):
-    """Polygons as one padded array, each padded by repeating its last vertex.
-
-    Parameters
-    ----------
-    polygons : sequence of ndarray of shape (K_i, 3)
-
-    Returns
-    -------
-    (ndarray of shape (M, max K_i, 3), ndarray of shape (M,))
-        The vertices and the counts ``K_i``.
-
-    Examples
-    --------
-    >>> V, k = padded([np.zeros((3, 3)), np.ones((4, 3))])
-    >>> V.shape, k.tolist()
-    ((2, 4, 3), [3, 4])
-    """
-    counts = np.array([len(P) for P in polygons])
-    V = np.empty((len(counts), counts.max(), 3))
-    for i, P in enumerate(polygons):
-        V[i, : len(P)] = P
-        V[i, len(P):] = P[-1]
-    return V, counts
-
-
-def padded_buckets(polygons):
-    """Polygons as padded arrays, one per bucket of similar vertex counts.
-
-    A single padded array costs every polygon as much as the longest one (a 5,000-gon
-    in a scene of quads multiplies the work and memory of every row by thousands);
-    buckets of vertex counts up to 4, 8, 16, ... (powers of two) keep the padding
-    within a factor 2 of each polygon's own count.
-
-    Parameters
-    ----------
-    polygons : sequence of ndarray of shape (K_i, 3)
-
-    Returns
-    -------
-    list of (ndarray of int, ndarray of shape (M_b, K_b, 3), ndarray of shape (M_b,))
-        For each bucket: the polygons' indices (increasing), their vertices padded
-        as by :func:`padded`, and their counts.
-
-    Examples
-    --------
-    >>> b = padded_buckets([np.zeros((3, 3)), np.ones((40, 3)), np.ones((4, 3))])
-    >>> [(ids.tolist(), V.shape) for ids, V, k in b]
-    [([0, 2], (2, 4, 3)), ([1], (1, 40, 3))]
-    """
-    counts = np.array([len(P) for P in polygons])
-    size = np.maximum(4, 2 ** np.ceil(np.log2(np.maximum(counts, 1)))).astype(int)
-    out = []
-    for s in np.unique(size):
-        ids = np.flatnonzero(size == s)
-        V, c = padded([polygons[i] for i in ids])
-        out.append((ids, V, c))
     return out

@@ -7,9 +7,10 @@ from fractions import Fraction
 
 import numpy as np
 
-from ._tolerances import EPS
+from ._tolerances import BSP_COPLANAR_ULPS, EPS, PLANE_SIDE_ULPS
 
-__all__ = ["side_of_plane", "gamma", "tie_priority"]
+__all__ = ["side_of_plane", "gamma", "tie_priority", "exact_side", "polygon_side",
+           "plane_distances", "plane_sides", "sides_of_point", "coplanar_band_sides"]
 
 
 def gamma(n):
@@ -92,3 +93,110 @@ def tie_priority(facing, index=None):
     i = np.arange(len(s)) if index is None else np.asarray(index).reshape(-1)
     big = int(i.max(initial=-1)) + 1
     return i + big * (s < 0)
+
+
+def plane_distances(flat, p):
+    """Signed distances of ``p`` from each polygon's plane (> 0: in front), and the
+    tolerance below which their float value cannot decide the side."""
+    rel = flat.centroids - p
+    d = -np.einsum("ij,ij->i", flat.normals, rel)
+    scale = np.abs(p).max() + flat.vmax
+    return d, PLANE_SIDE_ULPS * EPS * scale
+
+
+def exact_side(P, p):
+    """Exact sign of ``dot(A, p - c)`` with ``A`` the Newell area vector and ``c`` the
+    vertex mean of polygon ``P``, in rational arithmetic (the float input is exact):
+    +1 when ``p`` is in front of the polygon's plane, -1 behind, 0 in it."""
+    Q = [[Fraction(float(c)) for c in v] for v in P]
+    q0 = Q[0]
+    A = [Fraction(0)] * 3
+    for a, b in zip(Q[1:-1], Q[2:]):
+        u = [a[i] - q0[i] for i in range(3)]
+        w = [b[i] - q0[i] for i in range(3)]
+        A[0] += u[1] * w[2] - u[2] * w[1]
+        A[1] += u[2] * w[0] - u[0] * w[2]
+        A[2] += u[0] * w[1] - u[1] * w[0]
+    k = len(Q)
+    val = sum(A[i] * (Fraction(float(p[i])) - sum(v[i] for v in Q) / k) for i in range(3))
+    return (val > 0) - (val < 0)
+
+
+def plane_sides(flat, p, exact=True):
+    """Side of ``p`` for every polygon (+1 front, -1 back, 0 in the plane), and the mask
+    of polygons whose plane passes within rounding of ``p`` (the band).
+
+    Beyond the band the float value decides. Inside it, ``exact=True`` decides in
+    rational arithmetic (the double-precision form factor is then unreliable), and
+    ``exact=False`` gives 0: seen edge-on, as the visibility engine counts them."""
+    d, dtol = plane_distances(flat, p)
+    side = np.sign(d).astype(np.int8)
+    band = np.abs(d) <= dtol
+    side[band] = 0
+    if exact and band.any():
+        # exactly coplanar and axis-aligned (all vertices share p's coordinate on some
+        # axis): side 0 without rational arithmetic, the common case in rooms
+        same = np.zeros(len(band), dtype=bool)
+        for k in range(3):
+            same |= np.logical_and.reduceat(flat.V[:, k] == p[k], flat.offsets[:-1])
+        for i in np.flatnonzero(band & ~same):
+            side[i] = exact_side(flat.V[flat.offsets[i]:flat.offsets[i + 1]], p)
+    return side, band
+
+def polygon_side(P, p, normal):
+    """Side of ``p`` for one polygon ``P`` with unit normal ``normal``: +1 in front, -1
+    behind, 0 in its plane; decided from floats beyond the rounding band of the
+    coordinates, exactly (:func:`exact_side`) within it.
+
+    Examples
+    --------
+    >>> sq = np.array([[0, 0, 1], [0, 1, 1], [1, 1, 1], [1, 0, 1]], dtype=float)
+    >>> polygon_side(sq, np.zeros(3), np.array([0, 0, -1.0])), polygon_side(sq, np.array([0, 0, 1.0]), np.array([0, 0, -1.0]))
+    (1, 0)
+    """
+    d = float(normal @ (P.mean(axis=0) - p))  # < 0: p is in front of the polygon
+    dtol = PLANE_SIDE_ULPS * EPS * (np.abs(p).max() + np.abs(P).max())
+    if abs(d) <= dtol:
+        return exact_side(P, p)
+    return 1 if d < 0 else -1
+
+
+def sides_of_point(N, D, p):
+    """Exact side of one point ``p`` for many planes ``dot(N[k], x) = D[k]``: +1 in
+    front, -1 behind, 0 exactly on the plane.
+
+    Floats decide beyond the bound ``gamma(4) * (dot(abs(N[k]), abs(p)) + abs(D[k]))``;
+    :func:`side_of_plane` decides within it.
+
+    Examples
+    --------
+    >>> sides_of_point(np.array([[1.0, 0, 0], [0, 1.0, 0]]), np.array([0.3, 0.0]),
+    ...                np.array([0.1 + 0.2, 0, 0])).tolist()
+    [1, 0]
+    """
+    v = N @ p - D
+    bound = gamma(4) * (np.abs(N) @ np.abs(p) + np.abs(D))
+    side = np.sign(v).astype(np.int8)
+    for k in np.flatnonzero(np.abs(v) <= bound):
+        side[k] = side_of_plane(p[None, :], N[k], D[k])[0]
+    return side
+
+
+def coplanar_band_sides(V, N, D):
+    """Side of every vertex ``V[i]`` for every plane ``dot(N[k], x) = D[k]``, with the
+    coplanar band of the BSP tree: -1 / +1 beyond ``BSP_COPLANAR_ULPS`` ulps of the
+    magnitudes, 0 within (the vertex counts as in the plane). Returns the signs and the
+    signed values, both of shape (len(V), len(N)).
+
+    Examples
+    --------
+    >>> sign, s = coplanar_band_sides(np.array([[1 + 2.0 ** -52, 0, 0], [2.0, 0, 0]]),
+    ...                               np.array([[1.0, 0, 0]]), np.array([1.0]))
+    >>> sign.ravel().tolist()
+    [0, 1]
+    """
+    s = V @ N.T - D
+    band = BSP_COPLANAR_ULPS * EPS * (np.abs(V) @ np.abs(N).T + np.abs(D))
+    out = np.sign(s).astype(np.int8)
+    out[np.abs(s) <= band] = 0
+    return out, s

@@ -5,10 +5,13 @@ import time
 
 import numpy as np
 
-from .formfactors import _fingerprint, form_factor_matrix
+from .formfactors import fingerprint, form_factor_matrix
+from .geometry import area_vector, polygon_diameter
 from .methods import resolve
+from .scene import distinct_consecutive
+from .visibility import coplanar_overlaps
 
-__all__ = ["compare", "to_markdown"]
+__all__ = ["compare", "to_markdown", "describe"]
 
 
 def _takes_samples(name):
@@ -28,7 +31,7 @@ def _reference_rows(scene, rows, reference, two_sided, progress):
     if reference is not None and not isinstance(reference, (str, os.PathLike)):
         return np.asarray(reference, dtype=float), None
     path = None if reference is None else os.fspath(reference)
-    key = _fingerprint(scene, rows)          # the scene's geometry and the rows
+    key = fingerprint(scene, rows)          # the scene's geometry and the rows
     if path is not None and os.path.exists(path):
         with np.load(path) as z:
             if not np.array_equal(z["rows"], rows):
@@ -148,3 +151,60 @@ def to_markdown(records):
                      f"{r['max_abs_error']:.2e} | {r['rms_error']:.2e} | "
                      f"{r['row_sum_error']:.2e} | {r['time_per_row']:.4f} |")
     return "\n".join(lines)
+
+
+def describe(scene):
+    """Summary of a scene: size, area, bounds, planarity and closure.
+
+    Returns
+    -------
+    dict
+        ``polygons``, ``vertices``, ``total_area``, ``bounds_min``, ``bounds_max``,
+        ``max_planarity_deviation`` (largest vertex distance from its Newell plane over
+        the polygon's diameter), ``closure_residual`` (``|sum A_i n_i| / sum A_i``,
+        0 for a closed surface), ``unpaired_edges`` (directed edges whose reverse is
+        not an edge of another polygon; 0 for a watertight mesh without T-junctions),
+        ``back_to_back_pairs`` (coplanar overlapping pairs facing opposite ways: the two
+        faces of a zero-thickness wall, legitimate) and ``same_facing_overlaps``
+        (coplanar overlapping pairs facing the same way: usually a modelling mistake),
+        both as lists of ``[i, j]`` (see
+        :func:`exactff.visibility.coplanar_overlaps`), and ``split_faces`` (faces of
+        the file that were not planar and were cut into triangles when it was read
+        with ``nonplanar="split"``; 0 otherwise).
+
+    Examples
+    --------
+    >>> from exactff.scenes import subdivided_box
+    >>> d = describe(subdivided_box(2))
+    >>> d["polygons"], d["unpaired_edges"], d["closure_residual"] < 1e-15
+    (24, 0, True)
+    >>> d["back_to_back_pairs"], d["same_facing_overlaps"]
+    ([], [])
+    """
+    back_to_back, same_facing = coplanar_overlaps(scene)
+    devs = []
+    edges = {}
+    for P in scene.polygons:
+        D = distinct_consecutive(P)
+        diam = polygon_diameter(D)
+        N = area_vector(D)
+        N /= np.linalg.norm(N)
+        devs.append(float(np.abs((D - D.mean(axis=0)) @ N).max()) / diam)
+        for a, b in zip(map(tuple, D), map(tuple, np.roll(D, -1, axis=0))):
+            edges[(a, b)] = edges.get((a, b), 0) + 1
+    unpaired = sum(c for (a, b), c in edges.items() if edges.get((b, a), 0) != c)
+    vector_area = (scene.normals * scene.areas[:, None]).sum(axis=0)
+    lo, hi = scene.bounds
+    return {
+        "polygons": len(scene),
+        "vertices": int(len(scene.vertices)),
+        "total_area": float(scene.areas.sum()),
+        "bounds_min": lo.tolist(),
+        "bounds_max": hi.tolist(),
+        "max_planarity_deviation": max(devs),
+        "closure_residual": float(np.linalg.norm(vector_area) / scene.areas.sum()),
+        "unpaired_edges": int(unpaired),
+        "back_to_back_pairs": back_to_back.tolist(),
+        "same_facing_overlaps": same_facing.tolist(),
+        "split_faces": scene.split_faces,
+    }

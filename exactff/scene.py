@@ -4,37 +4,22 @@ import numpy as np
 import shapely
 
 from . import _tolerances as tol
+from .errors import SceneError
 from .geometry import area_vector, polygon_diameter
+from .rings import successors
 
-__all__ = ["SceneError", "NumericalError", "Scene", "validate_polygon", "validate_polygons", "describe"]
+__all__ = ["Scene", "distinct_consecutive", "validate_polygon", "validate_polygons", "as_scene", "build_scene",
+           "split_nonplanar", "NONPLANAR"]
 
 
-class SceneError(ValueError):
-    """A polygon of a scene is ill-formed; the message names the polygon and the reason.
+def distinct_consecutive(P):
+    """Vertices with consecutive repeats (cyclically) removed.
 
-    Attributes
-    ----------
-    index : int or None
-        Index of the offending polygon in input order.
-    reason : str
-        What is wrong with it.
+    Examples
+    --------
+    >>> distinct_consecutive(np.array([[0, 0, 0], [1, 0, 0], [1, 0, 0], [0, 1, 0]])).tolist()
+    [[0, 0, 0], [1, 0, 0], [0, 1, 0]]
     """
-
-    def __init__(self, index, reason, name=None):
-        self.index = index
-        self.reason = reason
-        label = f"polygon {index}" if name is None else f"polygon {index} ({name!r})"
-        super().__init__(f"{label}: {reason}")
-
-
-class NumericalError(ArithmeticError):
-    """A computed value broke an invariant beyond its rounding-error estimate (a form
-    factor below 0), or higher precision did not converge: a bug or an input outside
-    what exactff can evaluate, never silently clamped. The message says which."""
-
-
-def _distinct_consecutive(P):
-    """Vertices with consecutive repeats (cyclically) removed."""
     keep = np.any(P != np.roll(P, -1, axis=0), axis=1)
     return P[keep] if keep.any() else P[:1]
 
@@ -72,7 +57,7 @@ def validate_polygon(polygon, index=0, name=None, *, planarity_rtol=tol.PLANARIT
     >>> validate_polygon([[0, 0, 0], [1, 0, 0], [2, 0, 0]], index=7)
     Traceback (most recent call last):
     ...
-    exactff.scene.SceneError: polygon 7: zero area (the vertices are collinear)
+    exactff.SceneError: polygon 7: zero area (the vertices are collinear)
     """
     try:
         P = np.array(polygon, dtype=float)
@@ -84,7 +69,7 @@ def validate_polygon(polygon, index=0, name=None, *, planarity_rtol=tol.PLANARIT
         raise SceneError(index, f"fewer than 3 vertices ({P.shape[0]})", name)
     if not np.all(np.isfinite(P)):
         raise SceneError(index, "NaN or infinite coordinates", name)
-    D = _distinct_consecutive(P)
+    D = distinct_consecutive(P)
     if D.shape[0] < 3:
         raise SceneError(index, f"fewer than 3 distinct consecutive vertices ({D.shape[0]})", name)
     diam = polygon_diameter(D)
@@ -205,6 +190,9 @@ class Scene:
     vertices : ndarray of shape (V, 3)
         All vertices, concatenated.
     names, groups, materials : tuple of str or None
+    split_faces : int
+        Faces of the source file that were not planar and were cut into triangles
+        (``nonplanar="split"``); 0 otherwise. Kept when the scene is pickled.
 
     Notes
     -----
@@ -213,10 +201,10 @@ class Scene:
     """
 
     __slots__ = ("polygons", "normals", "areas", "centroids", "offsets", "vertices",
-                 "names", "groups", "materials", "_cache")
+                 "names", "groups", "materials", "split_faces", "__weakref__")
 
     def __init__(self, polygons, names=None, groups=None, materials=None,
-                 planarity_rtol=tol.PLANARITY_RTOL):
+                 planarity_rtol=tol.PLANARITY_RTOL, split_faces=0):
         n = len(polygons)
         labels = {}
         for key, val in (("names", names), ("groups", groups), ("materials", materials)):
@@ -234,8 +222,7 @@ class Scene:
         # Newell area vectors relative to each polygon's first vertex
         first = np.repeat(V[offsets[:-1]], counts, axis=0)
         Q = V - first
-        nxt = np.arange(len(V)) + 1
-        nxt[offsets[1:] - 1] = offsets[:-1]
+        nxt = successors(offsets)
         cross = np.cross(Q, Q[nxt])
         A = 0.5 * np.add.reduceat(cross, offsets[:-1], axis=0)
         areas = np.linalg.norm(A, axis=1)
@@ -254,14 +241,14 @@ class Scene:
         set_(self, "names", names)
         set_(self, "groups", labels["groups"])
         set_(self, "materials", labels["materials"])
-        set_(self, "_cache", {})
+        set_(self, "split_faces", int(split_faces))
 
     def __setattr__(self, key, value):
         raise AttributeError("Scene is immutable")
 
     def __reduce__(self):
         # rebuild from validated arrays without validating again (for process pools)
-        state = {k: getattr(self, k) for k in self.__slots__ if k != "_cache"}
+        state = {k: getattr(self, k) for k in self.__slots__ if k != "__weakref__"}
         return (_restore_scene, (state,))
 
     @classmethod
@@ -309,7 +296,7 @@ class Scene:
         ----------
         mesh : pyvista.PolyData
         **options
-            Passed to :func:`exactff.io.build_scene` (``nonplanar``, ``planarity_rtol``).
+            Passed to :func:`build_scene` (``nonplanar``, ``planarity_rtol``).
 
         Examples
         --------
@@ -319,8 +306,6 @@ class Scene:
         >>> len(Scene.from_pyvista(quad))
         1
         """
-        from .io import build_scene
-
         points = np.asarray(mesh.points, dtype=float)
         flat = np.asarray(mesh.faces, dtype=int).ravel()
         faces, i = [], 0
@@ -364,64 +349,141 @@ def _restore_scene(state):
         if isinstance(value, np.ndarray):
             value = _readonly(value)
         object.__setattr__(scene, key, value)
-    object.__setattr__(scene, "_cache", {})
     return scene
 
 
-def describe(scene):
-    """Summary of a scene: size, area, bounds, planarity and closure.
-
-    Returns
-    -------
-    dict
-        ``polygons``, ``vertices``, ``total_area``, ``bounds_min``, ``bounds_max``,
-        ``max_planarity_deviation`` (largest vertex distance from its Newell plane over
-        the polygon's diameter), ``closure_residual`` (``|sum A_i n_i| / sum A_i``,
-        0 for a closed surface), ``unpaired_edges`` (directed edges whose reverse is
-        not an edge of another polygon; 0 for a watertight mesh without T-junctions),
-        ``back_to_back_pairs`` (coplanar overlapping pairs facing opposite ways: the two
-        faces of a zero-thickness wall, legitimate) and ``same_facing_overlaps``
-        (coplanar overlapping pairs facing the same way: usually a modelling mistake),
-        both as lists of ``[i, j]`` (see
-        :func:`exactff.visibility.coplanar_overlaps`), and ``split_faces`` (faces of
-        the file that were not planar and were cut into triangles when it was read
-        with ``nonplanar="split"``; 0 otherwise).
+def as_scene(scene):
+    """``scene`` if it is an :class:`exactff.Scene`, else a TypeError saying what to do.
 
     Examples
     --------
-    >>> from exactff.scenes import subdivided_box
-    >>> d = describe(subdivided_box(2))
-    >>> d["polygons"], d["unpaired_edges"], d["closure_residual"] < 1e-15
-    (24, 0, True)
-    >>> d["back_to_back_pairs"], d["same_facing_overlaps"]
-    ([], [])
+    >>> as_scene([[0, 0, 0]])
+    Traceback (most recent call last):
+    ...
+    TypeError: scene must be an exactff.Scene (build one with Scene.from_polygons or load_scene), got list
     """
-    from .visibility import coplanar_overlaps
+    if not isinstance(scene, Scene):
+        raise TypeError(f"scene must be an exactff.Scene (build one with "
+                        f"Scene.from_polygons or load_scene), got {type(scene).__name__}")
+    return scene
 
-    back_to_back, same_facing = coplanar_overlaps(scene)
-    devs = []
-    edges = {}
-    for P in scene.polygons:
-        D = _distinct_consecutive(P)
-        diam = polygon_diameter(D)
-        N = area_vector(D)
-        N /= np.linalg.norm(N)
-        devs.append(float(np.abs((D - D.mean(axis=0)) @ N).max()) / diam)
-        for a, b in zip(map(tuple, D), map(tuple, np.roll(D, -1, axis=0))):
-            edges[(a, b)] = edges.get((a, b), 0) + 1
-    unpaired = sum(c for (a, b), c in edges.items() if edges.get((b, a), 0) != c)
-    vector_area = (scene.normals * scene.areas[:, None]).sum(axis=0)
-    lo, hi = scene.bounds
-    return {
-        "polygons": len(scene),
-        "vertices": int(len(scene.vertices)),
-        "total_area": float(scene.areas.sum()),
-        "bounds_min": lo.tolist(),
-        "bounds_max": hi.tolist(),
-        "max_planarity_deviation": max(devs),
-        "closure_residual": float(np.linalg.norm(vector_area) / scene.areas.sum()),
-        "unpaired_edges": int(unpaired),
-        "back_to_back_pairs": back_to_back.tolist(),
-        "same_facing_overlaps": same_facing.tolist(),
-        "split_faces": int(scene._cache.get("split_faces", 0)),
-    }
+
+# ---------------------------------------------------------------------------------------
+# scenes from the faces of a file: non-planar faces split, errors that name the face
+# ---------------------------------------------------------------------------------------
+#: what to do with a face that is not planar within the tolerance
+NONPLANAR = ("error", "split")
+
+def _fan_score(P, apex):
+    """Triangles of the fan of polygon P from vertex ``apex``, and how flat it is: the
+    least cosine between a triangle's normal and the polygon's mean normal (-inf when a
+    triangle is degenerate or turned over)."""
+    k = len(P)
+    order = [(apex + j) % k for j in range(k)]
+    tris = [P[[order[0], order[j], order[j + 1]]] for j in range(1, k - 1)]
+    N = np.array([np.cross(t[1] - t[0], t[2] - t[0]) for t in tris])
+    L = np.linalg.norm(N, axis=1)
+    mean = N.sum(axis=0)
+    if np.any(L <= tol.DEGENERATE_AREA_RTOL * np.max(L)) or not np.linalg.norm(mean) > 0:
+        return tris, -np.inf
+    cos = (N @ mean) / (L * np.linalg.norm(mean))
+    return tris, float(cos.min())
+
+
+def split_nonplanar(polygon):
+    """Planar triangles covering a polygon that is not planar: the fan from the vertex
+    that gives the flattest pieces (the triangles' normals closest to the polygon's
+    mean normal), orientation kept.
+
+    Parameters
+    ----------
+    polygon : array_like of shape (K, 3)
+
+    Returns
+    -------
+    list of ndarray of shape (3, 3)
+
+    Examples
+    --------
+    A quad with one corner lifted splits along the diagonal that leaves the flattest
+    halves:
+
+    >>> q = [[0, 0, 0], [1, 0, 0], [1, 1, 0.1], [0, 1, 0]]
+    >>> [t.tolist() for t in split_nonplanar(q)]
+    [[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.1]], [[0.0, 0.0, 0.0], [1.0, 1.0, 0.1], [0.0, 1.0, 0.0]]]
+    """
+    P = np.asarray(polygon, dtype=float)
+    best, best_score = None, -np.inf
+    for apex in range(len(P)):
+        tris, score = _fan_score(P, apex)
+        if score > best_score + tol.SPLIT_FLATNESS_TIE:
+            best, best_score = tris, score
+    if best is None:
+        raise ValueError("no fan of the polygon gives valid triangles")
+    return best
+
+
+def _hint(reason):
+    if reason.startswith("not planar"):
+        return ("; to load it anyway, split such faces into planar triangles "
+                "(--split-nonplanar, or nonplanar='split') or allow more "
+                "(--planarity-rtol, or planarity_rtol=)")
+    return "; fix the face in the file (or leave it out)"
+
+
+def build_scene(faces, *, names=None, groups=None, materials=None, sources=None,
+                nonplanar="error", planarity_rtol=tol.PLANARITY_RTOL):
+    """A scene from faces read from a file, with errors that name the face.
+
+    Parameters
+    ----------
+    faces : list of array_like of shape (K_i, 3)
+    names, groups, materials : list of str or None, optional
+    sources : list of str, optional
+        Where each face comes from (``"path:line"``), for the error messages.
+    nonplanar : {"error", "split"}, default "error"
+        ``"split"`` cuts every face that is not planar within ``planarity_rtol`` into
+        planar triangles (:func:`split_nonplanar`); the pieces keep the face's name,
+        group and material. The scene records how many faces were split
+        (``scene.split_faces``, ``describe(scene)["split_faces"]``).
+    planarity_rtol : float
+
+    Raises
+    ------
+    SceneError
+        A face is ill-formed: the message gives where it comes from, its index, its
+        name or group, the reason and how to proceed.
+    """
+    if nonplanar not in NONPLANAR:
+        raise ValueError(f"nonplanar must be one of {NONPLANAR}, got {nonplanar!r}")
+    n = len(faces)
+    names = list(names) if names is not None else [None] * n
+    groups = list(groups) if groups is not None else [None] * n
+    materials = list(materials) if materials is not None else [None] * n
+    sources = list(sources) if sources is not None else [None] * n
+    split = 0
+    if nonplanar == "split":
+        out = ([], [], [], [], [])
+        for i, F in enumerate(faces):
+            pieces = [F]
+            try:
+                validate_polygon(F, i, planarity_rtol=planarity_rtol)
+            except SceneError as exc:
+                if exc.reason.startswith("not planar"):
+                    pieces = split_nonplanar(F)
+                    split += 1
+            for Q in pieces:
+                for lst, val in zip(out, (Q, names[i], groups[i], materials[i], sources[i])):
+                    lst.append(val)
+        faces, names, groups, materials, sources = out
+    try:
+        scene = Scene(list(faces), names=names, groups=groups, materials=materials,
+                      planarity_rtol=planarity_rtol, split_faces=split)
+    except SceneError as exc:
+        i = exc.index
+        label = (f" ({names[i]!r})" if names[i] else
+                 f" (group {groups[i]!r})" if groups[i] else "")
+        where = f"{sources[i]}: " if sources[i] else ""
+        exc.args = (f"{where}polygon {i}{label}: {exc.reason}{_hint(exc.reason)}",)
+        raise
+    return scene

@@ -30,21 +30,21 @@ import shutil
 
 import numpy as np
 
-__all__ = ["load_matrix"]
+__all__ = ["load_matrix", "MatrixOutput", "path_stem", "path_suffix", "SUFFIXES", "ZARR_CHUNK_VALUES"]
 
 SUFFIXES = (".npy", ".zarr", ".npz")
 # blocks of a chunked store: about this many coefficients (16 MiB of doubles) per chunk
 ZARR_CHUNK_VALUES = 2 ** 21
 
 
-def _stem(path):
+def path_stem(path):
     for s in SUFFIXES:
         if path.endswith(s):
             return path[: -len(s)]
     return path
 
 
-def _suffix(path, name="out"):
+def path_suffix(path, name="out"):
     for s in SUFFIXES:
         if path.endswith(s):
             return s
@@ -110,7 +110,7 @@ class MatrixOutput:
         self.sparse = bool(sparse)
         self.out = None if out is None else os.fspath(out)
         self.block = int(block)
-        self.kind = "memory" if self.out is None else _suffix(self.out)
+        self.kind = "memory" if self.out is None else path_suffix(self.out)
         if self.kind == ".npz" and not self.sparse:
             raise ValueError(f"out: {self.out!r} is a sparse format (.npz): pass sparse=True, "
                              f"or write a dense .npy or a chunked .zarr")
@@ -123,7 +123,7 @@ class MatrixOutput:
                 self.M = np.empty(self.shape)
             self.done = np.zeros(self.shape[0], bool)
             return
-        stem = _stem(self.out)
+        stem = path_stem(self.out)
         self.meta_path, self.done_path = stem + ".meta.json", stem + ".done.npy"
         self.parts = stem + ".parts"
         self.meta = dict(meta or {}, shape=list(self.shape), format=self.kind)
@@ -287,8 +287,8 @@ def load_matrix(path):
     ((6, 6), 30, True)
     """
     path = os.fspath(path)
-    kind = _suffix(path, "path")
-    stem = _stem(path)
+    kind = path_suffix(path, "path")
+    stem = path_stem(path)
     if not os.path.exists(path):
         if kind == ".npz" and os.path.exists(stem + ".parts"):
             raise ValueError(f"path: {path!r} is not finished (its blocks are in "

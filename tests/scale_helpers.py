@@ -4,6 +4,7 @@ whether that scene already held its BSP tree (importable by worker processes).""
 import os
 
 from exactff.methods import Exact
+from exactff.prepared import prepared
 
 
 class RecordingExact(Exact):
@@ -14,7 +15,7 @@ class RecordingExact(Exact):
         self.log = log
 
     def point_form_factors(self, scene, point, normal, two_sided=False, **kw):
-        had = "bsp" in scene._cache
+        had = "bsp" in prepared(scene)
         F = super().point_form_factors(scene, point, normal, two_sided=two_sided, **kw)
         with open(self.log, "a", encoding="utf-8") as fh:
             fh.write(f"{os.getpid()} {id(scene)} {int(had)} {point.tolist()}\n")

@@ -166,7 +166,7 @@ def test_clipping_twice_repeats_no_vertex():
     # 0: 0/0 in the contour rule's cuts, NaN had it been the receiver's)
     import warnings
 
-    from exactff.area import _clip_front
+    from exactff.area.contour import clip_front as _clip_front
 
     scene = ef.scenes.cornell_box(closed=True)
     P, Q = (np.asarray(scene.polygons[k], float) for k in (3, 8))
@@ -256,7 +256,8 @@ def test_hidden_part_against_the_engine(case):
     # the hidden part F(x -> Q) - F_occ(x -> Q), built by 2-D booleans in Q's plane,
     # against the engine (BSP tree and clipper on the hemisphere) and the kernel, at
     # random points of the emitter (and on the box's footprint lines)
-    from exactff.area import _hidden_values, _point_values
+    from exactff.area.contour import point_values as _point_values
+    from exactff.area.occluded import _hidden_values
 
     P, Q, B = list(_hidden_cases())[case]
     nP = ef.area_vector(P) / np.linalg.norm(ef.area_vector(P))
@@ -296,7 +297,8 @@ def test_hidden_part_against_the_engine_on_drawn_scenes(case):
     # a far polygon partly hidden by a nearer one, and up to three others anywhere (not
     # convex, crossing the point's plane or Q's): the hidden part built in Q's plane
     # against the engine, within the two estimates
-    from exactff.area import _clip_front, _hidden_values, _point_values
+    from exactff.area.contour import clip_front as _clip_front, point_values as _point_values
+    from exactff.area.occluded import _hidden_values
 
     scene, p, n = case
     polys = [np.asarray(P, float) for P in scene.polygons]
@@ -313,7 +315,7 @@ def test_hidden_part_against_the_engine_on_drawn_scenes(case):
 def test_hidden_part_falls_back_to_the_engine_where_geos_fails(monkeypatch):
     import shapely
 
-    from exactff import area
+    from exactff.area import occluded as area
 
     P, Q, B = list(_hidden_cases())[5]
     nP = np.array([0.0, 0.0, 1.0])

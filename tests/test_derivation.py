@@ -6,7 +6,7 @@ import os
 
 import pytest
 
-from exactff.integrate import eq3_edge_integral
+from exactff.kernel import eq3_edge_integral
 
 TOOL = os.path.join(os.path.dirname(__file__), "..", "tools", "derive_eq3.py")
 

@@ -68,7 +68,7 @@ def test_resume_refuses_a_method_with_other_options(tmp_path):
 
 def test_mpmath_that_does_not_converge_raises(monkeypatch):
     # issue 11, item 7: mp_form_factor used to give up silently at its precision limit
-    import exactff.integrate as integ
+    import exactff.kernel as integ
     from exactff import _tolerances as tol
 
     sq = np.array([[0, 0, 1], [0, 1e-9, 1], [1e-9, 1e-9, 1], [1e-9, 0, 1.0]])
@@ -82,11 +82,11 @@ def test_mpmath_that_does_not_converge_raises(monkeypatch):
 
 def test_negative_values_beyond_rounding_raise_a_named_error():
     # invariants were checked with assert, which python -O removes
-    import exactff.integrate as integ
+    import exactff.kernel as integ
 
     S = np.array([-1.0, 1e-3])          # the second would be a form factor of -1.6e-4
     with pytest.raises(ef.NumericalError, match="polygon 1"):
-        integ._finish(S, np.ones(2), np.zeros(2), np.array([-1.0, -1.0]), True)
+        integ.sector_values(S, np.ones(2), np.zeros(2), np.array([-1.0, -1.0]), True)
 
 
 

@@ -7,7 +7,7 @@ import pytest
 from hypothesis import given
 
 import exactff as ef
-from exactff.integrate import eq3_ring_area
+from exactff.kernel import eq3_ring_area
 from exactff.testing import assert_form_factors_close
 from exactff.testing.strategies import unit_vectors
 

@@ -8,8 +8,9 @@ import pytest
 
 import exactff as ef
 from exactff.cli import main
-from exactff.io import load_scene, split_nonplanar
-from exactff.scene import describe
+from exactff.io import load_scene
+from exactff.scene import split_nonplanar
+from exactff.reports import describe
 
 # The original Cornell box in OBJ format, as published by Guedis Cardenas and Morgan
 # McGuire, Williams College, 2011 (public domain; http://graphics.cs.williams.edu/data,

@@ -8,7 +8,7 @@ from hypothesis import assume, example, given, settings
 from hypothesis import strategies as st
 
 import exactff as ef
-from exactff.integrate import eq3_edge_integral, eq3_form_factor, sector_form_factor
+from exactff.kernel import eq3_edge_integral, eq3_form_factor, sector_form_factor
 from exactff.testing import assert_form_factors_close
 from exactff.testing.strategies import convex_polygons, planar_polygons, points, unit_vectors
 

@@ -5,7 +5,8 @@ import numpy as np
 import pytest
 
 import exactff as ef
-from exactff.geometry import padded_buckets, polygon_diameter
+from exactff.geometry import polygon_diameter
+from exactff.rings import padded_buckets
 from exactff.testing import assert_form_factors_close
 
 

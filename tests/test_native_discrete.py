@@ -13,7 +13,7 @@ from hypothesis import given, settings
 
 import exactff as ef
 from exactff.geometry import receiver_frame
-from exactff.integrate import as_receiver
+from exactff.checks import as_receiver
 from exactff.methods._sampling import nearest_polygons
 from exactff.testing import strategies
 

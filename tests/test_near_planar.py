@@ -25,7 +25,7 @@ def box_with_a_bent_wall(shift=3e-7):
 
 
 def test_bent_wall_is_valid_and_reported():
-    d = ef.scene.describe(box_with_a_bent_wall())
+    d = ef.describe(box_with_a_bent_wall())
     assert 1e-8 < d["max_planarity_deviation"] < 1e-6
     assert d["unpaired_edges"] == 0 and d["closure_residual"] < 1e-15
 

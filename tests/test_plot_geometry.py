@@ -6,7 +6,7 @@ import pytest
 from hypothesis import given, settings, strategies as st
 
 import exactff as ef
-from exactff.integrate import arc_x_extremes
+from exactff.kernel import arc_x_extremes
 from exactff.visibility import visible_graph
 
 matplotlib = pytest.importorskip("matplotlib")

@@ -4,6 +4,8 @@ import numpy as np
 import pytest
 
 import exactff as ef
+from exactff.prepared import prepared
+from exactff.rings import padded_buckets
 from exactff.visibility import bsp
 
 from common import rect_xy
@@ -27,7 +29,7 @@ def test_cornell_front_wall_row_for_every_bsp_tree(candidates, seed):
     # edges are now bit-identical
     scene = ef.scenes.cornell_box(closed=True)
     tree = bsp.build_bsp(scene, candidates=candidates, seed=seed)
-    scene._cache["bsp"] = (tree, ef.geometry.padded_buckets(tree.fragments))
+    prepared(scene).put("bsp", (tree, padded_buckets(tree.fragments)))
     i = scene.names.index("front_wall")
     F = ef.form_factors(scene, scene.centroids[i], scene.normals[i])
     assert abs(F.sum() - 1.0) < 1e-13
@@ -78,7 +80,7 @@ def test_geos_empty_difference_of_an_uncovered_image_is_caught():
     # nothing was visible and lost 1.2e-6 of the row; now every step is checked.
     import shapely
 
-    from exactff.visibility.clipper import _cut
+    from exactff.visibility.overlay import cut_region as _cut
 
     covered = shapely.Polygon([
         (-0.368421052631579, 0.0), (-0.368421052631579, 3.3993918132779568e-15),
@@ -131,7 +133,7 @@ def test_rounding_cracks_are_filled_in_covered_regions():
     # thinner than the snap grid (snap-rounding would collapse them too).
     import shapely
 
-    from exactff.visibility.clipper import _fill_cracks
+    from exactff.visibility.overlay import fill_cracks as _fill_cracks
 
     region, image = shapely.from_wkt(_CRACKED), shapely.from_wkt(_INSIDE)
     X = shapely.get_coordinates(shapely.points(

@@ -111,7 +111,7 @@ def test_the_scene_reaches_each_worker_once(tmp_path, cluster):
     m = RecordingExact(str(log))
     with ProcessPoolExecutor(1) as ex:
         for rows in np.array_split(np.arange(len(SCENE)), 4):
-            ex.submit(formfactors._rows, SCENE, m, rows, False).result()
+            ex.submit(formfactors.PointRows(m, False), SCENE, rows).result()
     [(pid, calls)] = _per_process(log).items()
     assert [h for _, h in calls].count("0") == 4        # a BSP tree built per block
 

@@ -75,7 +75,7 @@ def test_occluded_scenes_really_occlude(case):
 @given(scene=scenes())
 def test_scenes_are_valid_and_vary_in_size(scene):
     assert 1 <= len(scene) <= 8
-    ef.scene.describe(scene)
+    ef.describe(scene)
 
 
 def test_strategy_options_are_checked_eagerly():

@@ -122,16 +122,16 @@ def test_building_of_rooms_with_doors_rows_sum_to_one():
 
 
 def test_describe_reports_back_to_back_and_same_facing_overlaps():
-    d = ef.scene.describe(ef.scenes.building(2, 2))
+    d = ef.describe(ef.scenes.building(2, 2))
     # 4 interior walls of 3 rectangles each, no same-facing overlap
     assert len(d["back_to_back_pairs"]) == 12 and d["same_facing_overlaps"] == []
     whole = ef.scenes.cornell_box(ceiling="whole")
-    d = ef.scene.describe(whole)
+    d = ef.describe(whole)
     assert d["back_to_back_pairs"] == []
     assert d["same_facing_overlaps"] == [sorted([whole.names.index("light"),
                                                  whole.names.index("ceiling")])]
     # touching (edge-sharing) coplanar polygons do not overlap
-    d = ef.scene.describe(ef.scenes.subdivided_box(3))
+    d = ef.describe(ef.scenes.subdivided_box(3))
     assert d["back_to_back_pairs"] == [] and d["same_facing_overlaps"] == []
 
 

@@ -5,7 +5,7 @@ normal, polygon vertices, as exact float reprs), ``one_sided``, and the referenc
 factor as a 60-digit string. The reference is the mpmath quadrature of the image's
 boundary integral (``exactff.testing.mp_reference.boundary_form_factor``, independent of
 the library's kernels) at 80 digits, cross-checked against the closed-form sector sum in
-mpmath (``exactff.integrate.mp_form_factor``) to 50 digits.
+mpmath (``exactff.kernel.mp_form_factor``) to 50 digits.
 
 Run: ``python tools/make_stiff_catalog.py`` (about a minute).
 """
@@ -19,7 +19,8 @@ import mpmath as mp
 import numpy as np
 
 from exactff.geometry import receiver_frame
-from exactff.integrate import _mp_sector, point_polygon_form_factor
+from exactff.kernel import point_polygon_form_factor
+from exactff.kernel.ladder import mp_sector_value
 from exactff.testing.mp_reference import boundary_form_factor
 
 OUT = os.path.join(os.path.dirname(__file__), "..", "exactff", "data", "stiff_cases.json")
@@ -126,7 +127,7 @@ def main():
     for name, p, n, P, one_sided in cases():
         with mp.workdps(80):
             ref = boundary_form_factor(p, n, P, one_sided=one_sided, dps=80)
-            check = _mp_sector(p, n, P, one_sided, 80)
+            check = mp_sector_value(p, n, P, one_sided, 80)
             if abs(ref - check) > mp.mpf(10) ** -50 * max(abs(ref), mp.mpf(10) ** -300):
                 raise SystemExit(f"{name}: quadrature {ref} and closed form {check} disagree")
             ref_s = mp.nstr(ref, 60, min_fixed=1, max_fixed=0)

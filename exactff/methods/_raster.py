@@ -22,10 +22,11 @@ in exactly one). The depth test is the shared depth buffer
 import numpy as np
 
 from .. import _tolerances as tol
-from ..visibility.clipper import chart_clip, clip_halfspace
+from ..halfspace import clip_halfspace
+from ..visibility.charts import chart_clip
 from ._sampling import PAIR_CHUNK, resolve_depths
 
-__all__ = ["rasterise_face", "rasterise_disk", "rasterise_polar", "face_clipper"]
+__all__ = ["rasterise_face", "rasterise_disk", "rasterise_polar", "face_clipper", "DEPTH_CHUNK"]
 
 
 def _first_at_or_above(centres, x):
@@ -85,7 +86,7 @@ def face_clipper(eu, ev, ew, planes):
     """A clip function for :func:`rasterise_face`: polygons (local frame) clipped to the
     half-spaces ``h . x > 0`` of ``planes`` (through the point) and projected onto the
     plane ``w = 1`` with axes ``e_u``, ``e_v``; the same contract as
-    :func:`exactff.visibility.clipper.chart_clip`."""
+    :func:`exactff.visibility.charts.chart_clip`."""
     eu, ev, ew = (np.asarray(e, dtype=float) for e in (eu, ev, ew))
     planes = [np.asarray(h, dtype=float) for h in planes]
 

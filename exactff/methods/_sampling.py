@@ -21,14 +21,18 @@ import numpy as np
 import shapely
 
 from .. import _tolerances as tol
-from ..geometry import padded_buckets, receiver_frame, to_local
-from ..integrate import _Polygons, as_receiver, as_scene, plane_sides
-from ..predicates import tie_priority
-from ..visibility.clipper import CHARTS, chart_clip
+from ..geometry import receiver_frame, to_local
+from ..checks import as_receiver
+from ..kernel import flat_polygons
+from ..predicates import plane_sides, tie_priority
+from ..prepared import prepared
+from ..rings import padded_buckets
+from ..scene import as_scene
+from ..visibility.charts import CHARTS, chart_clip
 from ._base import FormFactorMethod
 
 __all__ = ["CellLayout", "SampledMethod", "ZBufferRow", "nearest_polygons", "resolve_depths",
-           "samples_to_resolution"]
+           "samples_to_resolution", "PAIR_CHUNK", "check_resolution", "resolution_from"]
 
 #: candidate (polygon, cell) pairs examined at once; bounds the memory of a row
 PAIR_CHUNK = 2_000_000
@@ -109,10 +113,7 @@ def _chart_of(D):
 
 def _polygon_buckets(scene):
     """The scene's polygons padded bucket by bucket of vertex counts (cached)."""
-    cache = scene._cache
-    if "padded_buckets" not in cache:
-        cache["padded_buckets"] = padded_buckets(scene.polygons)
-    return cache["padded_buckets"]
+    return prepared(scene).get("padded_buckets", lambda s: padded_buckets(s.polygons))
 
 
 class ZBufferRow:
@@ -135,7 +136,7 @@ class ZBufferRow:
 
     def __init__(self, scene, point, normal):
         p = np.asarray(point, dtype=float)
-        flat = _Polygons.of(scene)
+        flat = flat_polygons(scene)
         side, _ = plane_sides(flat, p, exact=False)  # in the band: edge-on, as the engine
         R = receiver_frame(normal)
         # bucket by bucket of vertex counts (one long polygon pads only its own bucket);
@@ -393,7 +394,7 @@ class SampledMethod(FormFactorMethod):
             hit = self.native_hits(scene, point, normal)
         else:
             hit = nearest_polygons(scene, point, normal, D)
-        flat = _Polygons.of(scene)
+        flat = flat_polygons(scene)
         side, _ = plane_sides(flat, np.asarray(point, dtype=float), exact=False)
         receives = side > 0
         if two_sided:

@@ -3,7 +3,8 @@
 import numpy as np
 
 from .._tolerances import DEFAULT_RTOL
-from ..integrate import as_receiver, as_scene
+from ..checks import as_receiver
+from ..scene import as_scene
 from ..visibility import visible_form_factors
 from ._base import FormFactorMethod
 

@@ -2,7 +2,7 @@
 
 import numpy as np
 
-from ..visibility.clipper import CHARTS
+from ..visibility.charts import CHARTS
 from ._raster import rasterise_face
 from ._sampling import CellLayout, SampledMethod, ZBufferRow, resolution_from
 

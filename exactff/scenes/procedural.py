@@ -14,7 +14,7 @@ import numpy as np
 
 from ..scene import Scene
 
-__all__ = ["office", "office_solids", "OFFICE_REFLECTANCE", "cloister"]
+__all__ = ["office", "office_solids", "OFFICE_REFLECTANCE", "cloister", "ROOM_GROUPS"]
 
 #: reflectances of the office's groups: walls, floor and ceiling from the spec; the
 #: others are not specified there and are chosen here

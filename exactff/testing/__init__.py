@@ -137,7 +137,7 @@ def ground_truth(scene, points, normals, *, two_sided=False, tolerance=1e-12):
     (1.0, True)
     """
     from ..formfactors import form_factors
-    from ..integrate import as_receivers
+    from ..checks import as_receivers
     from ..methods import Exact
 
     as_receivers(points, normals, ("points", "normals"))   # names the arguments

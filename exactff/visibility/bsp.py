@@ -1,11 +1,15 @@
 """BSP tree (autopartition) of a scene, and its front-to-back traversal from a point."""
 
 import numpy as np
+import shapely
 
 from .. import _tolerances as tol
-from ..predicates import gamma, side_of_plane, tie_priority
+from ..halfspace import split_polygon
+from ..predicates import coplanar_band_sides, sides_of_point, tie_priority
+from ..prepared import prepared
+from ..rings import padded_buckets
 
-__all__ = ["BSPTree", "build_bsp", "front_to_back", "coplanar_overlaps"]
+__all__ = ["BSPTree", "build_bsp", "scene_bsp", "front_to_back", "coplanar_overlaps"]
 
 
 class BSPTree:
@@ -84,15 +88,6 @@ class BSPTree:
                 f"{len(set(self.source.tolist()))} polygons, {self.splits} splits>")
 
 
-def _classify(V, N, D):
-    """Side of every vertex for every plane ``N[k] . x = D[k]``: signs (-1 / 0 / +1, 0
-    within the plane's rounding band) and values, both of shape (len(V), len(N))."""
-    s = V @ N.T - D
-    band = tol.BSP_COPLANAR_ULPS * tol.EPS * (np.abs(V) @ np.abs(N).T + np.abs(D))
-    out = np.sign(s).astype(np.int8)
-    out[np.abs(s) <= band] = 0
-    return out, s
-
 
 def _plane_scores(sign, starts):
     """Per plane (column of ``sign``): which fragments (runs of ``starts``) have
@@ -104,27 +99,6 @@ def _plane_scores(sign, starts):
     imbalance = np.abs((pos & ~neg).sum(axis=0) - (neg & ~pos).sum(axis=0))
     ncop = len(starts) - 1 - (pos | neg).sum(axis=0)
     return 5 * nsplit + imbalance - 2 * ncop, imbalance, pos, neg
-
-
-def _split(P, sign, s):
-    """Split polygon P by a plane with per-vertex signs; returns (front, back) or None."""
-    front, back = [], []
-    k = len(P)
-    for i in range(k):
-        j = (i + 1) % k
-        if sign[i] >= 0:
-            front.append(P[i])
-        if sign[i] <= 0:
-            back.append(P[i])
-        if sign[i] * sign[j] < 0:
-            # from the front end point, so that a shared edge splits identically
-            a, b = (i, j) if sign[i] > 0 else (j, i)
-            X = P[a] + (s[a] / (s[a] - s[b])) * (P[b] - P[a])
-            front.append(X)
-            back.append(X)
-    f = np.array(front) if len(front) >= 3 else None
-    b = np.array(back) if len(back) >= 3 else None
-    return f, b
 
 
 def build_bsp(scene, *, candidates=8, seed=0):
@@ -179,7 +153,7 @@ def build_bsp(scene, *, candidates=8, seed=0):
         starts = np.concatenate([[0], np.cumsum(counts)])
         # every candidate plane at once
         Nc, Dc = normals_src[source[pool]], offsets_src[source[pool]]
-        sign_all, s_all = _classify(V, Nc, Dc)
+        sign_all, s_all = coplanar_band_sides(V, Nc, Dc)
         score, imbalance, pos, neg = _plane_scores(sign_all, starts)
         j = int(np.argmin(score))        # the first of equal scores
         c, n, d = pool[j], Nc[j], Dc[j]
@@ -192,7 +166,7 @@ def build_bsp(scene, *, candidates=8, seed=0):
             cen = np.add.reduceat(V, starts[:-1], axis=0) / counts[:, None]
             axis = int(np.argmax(np.ptp(cen, axis=0)))
             na, da = np.eye(3)[axis:axis + 1], np.array([np.median(cen[:, axis])])
-            sg, sa = _classify(V, na, da)
+            sg, sa = coplanar_band_sides(V, na, da)
             a_score, _, ap, an = _plane_scores(sg, starts)
             if a_score[0] < score[j]:
                 c, n, d = None, na[0], da[0]
@@ -212,7 +186,7 @@ def build_bsp(scene, *, candidates=8, seed=0):
         parts = {1: [], -1: []}
         for k in np.flatnonzero(cut).tolist():
             a, b = starts[k], starts[k + 1]
-            f, bk = _split(V[a:b], sign[a:b], s[a:b])
+            f, bk = split_polygon(V[a:b], sign[a:b], s[a:b])
             splits += 1
             for part, side in ((f, 1), (bk, -1)):
                 if part is not None:
@@ -242,6 +216,17 @@ def build_bsp(scene, *, candidates=8, seed=0):
                    splits, normals_src, whole=np.array(live, dtype=int) < len(scene))
 
 
+def scene_bsp(scene):
+    """The scene's BSP tree and its fragments as padded arrays bucketed by vertex count
+    (:func:`exactff.rings.padded_buckets`; built once, cached)."""
+    return prepared(scene).get("bsp", _build_bsp_buckets)
+
+
+def _build_bsp_buckets(scene):
+    tree = build_bsp(scene)
+    return tree, padded_buckets(tree.fragments)
+
+
 def front_to_back(tree, point):
     """Fragment indices in front-to-back order as seen from ``point``.
 
@@ -261,7 +246,7 @@ def front_to_back(tree, point):
     list of int
     """
     p = np.asarray(point, dtype=float)
-    side = _sides(tree, p)
+    side = sides_of_point(tree.normals, tree.offsets, p)
     order = []
     stack = [(0, False)]
     front, back = tree.front, tree.back
@@ -282,15 +267,6 @@ def front_to_back(tree, point):
             stack.append((near, False))
     return order
 
-
-def _sides(tree, p):
-    """Exact side of ``p`` for every node plane."""
-    v = tree.normals @ p - tree.offsets
-    bound = gamma(4) * (np.abs(tree.normals) @ np.abs(p) + np.abs(tree.offsets))
-    side = np.sign(v).astype(np.int8)
-    for k in np.flatnonzero(np.abs(v) <= bound):
-        side[k] = side_of_plane(p[None, :], tree.normals[k], tree.offsets[k])[0]
-    return side
 
 
 def coplanar_overlaps(scene, tree=None):
@@ -322,11 +298,7 @@ def coplanar_overlaps(scene, tree=None):
     >>> len(b2b), len(same)
     (3, 0)
     """
-    import shapely
-
     if tree is None:
-        from . import scene_bsp
-
         tree = scene_bsp(scene)[0]
     pairs = {+1: set(), -1: set()}
     for k, here in enumerate(tree.node_fragments):

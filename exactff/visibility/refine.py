@@ -37,8 +37,11 @@ import numpy as np
 import shapely
 
 from .. import _tolerances as tol
-from ..geometry import receiver_frame
-from ..integrate import _LONGDOUBLE_EPS as _LD_EPS
+from ..geometry import mp_receiver_frame, receiver_frame
+from ..kernel import clipped_sector_sums
+from ..kernel.flat import flat_polygons
+from ..kernel.ladder import mp_converge, mp_sector_sum
+from ..rings import successors
 
 __all__ = ["Refiner"]
 
@@ -49,20 +52,6 @@ def _unit(X):
     n = np.sqrt((X * X).sum(axis=-1, keepdims=True))
     with np.errstate(divide="ignore", invalid="ignore"):
         return np.where(n > 0, X / n, np.nan)
-
-
-def _mp_receiver_frame(normal):
-    """:func:`exactff.geometry.receiver_frame` at mpmath's working precision: the same
-    construction, so that the charts, seams and tiles are where the clipper had them."""
-    import mpmath as mp
-
-    nv = [mp.mpf(float(c)) for c in normal]
-    ln = mp.sqrt(sum(c * c for c in nv))
-    x, y, z = (c / ln for c in nv)
-    sign = 1 if z >= 0 else -1
-    a = -1 / (sign + z)
-    b = x * y * a
-    return ([1 + sign * x * x * a, sign * b, -sign * x], [b, sign + y * y * a, -y], [x, y, z])
 
 
 class Refiner:
@@ -224,16 +213,8 @@ class Refiner:
         """For fragment edges ``a -> b`` of cut fragments: the end points of their scene
         polygon's edge through both (a BSP cut keeps an edge's line), or ``a, b``
         themselves for an edge the cut made."""
-        flat = self.scene._cache.get("refine_flat")
-        if flat is None:
-            P = self.scene.polygons
-            count = np.array([len(Q) for Q in P])
-            offset = np.concatenate([[0], np.cumsum(count)[:-1]])
-            V = np.concatenate(P)
-            nxt = np.arange(len(V)) + 1
-            nxt[offset + count - 1] = offset
-            flat = self.scene._cache["refine_flat"] = (offset, count, V, nxt)
-        offset, count, V, nxt = flat
+        flat = flat_polygons(self.scene)
+        offset, count, V, nxt = flat.offsets[:-1], flat.counts, flat.V, flat.nxt
         c = count[src]
         q = np.repeat(np.arange(len(src)), c)
         k = np.repeat(offset[src] - np.cumsum(c) + c, c) + np.arange(int(c.sum()))
@@ -327,8 +308,6 @@ class Refiner:
             whether it was refined (every edge labelled); and the labels (reused by the
             mpmath tier).
         """
-        from ..integrate import _C1, _clipped_sector_sums
-
         eu, ev, ew, _ = chart
         label, statics, res = self.match(ci, chart, coords, nxt, frag)
         ok_ring = np.ones(n_rings, dtype=bool)
@@ -377,7 +356,7 @@ class Refiner:
             v = np.flatnonzero(parallel)
             tri = 0.5 * (np.linalg.norm(Du[v] - Du[prev[v]], axis=1)
                          * np.linalg.norm(Du[nxt[v]] - Du[v], axis=1)
-                         * (np.nan_to_num(sin[v]) + tol.REFINE_VERTEX_ULPS * _LD_EPS))
+                         * (np.nan_to_num(sin[v]) + tol.REFINE_VERTEX_ULPS * tol.LONGDOUBLE_EPS))
             cut = np.bincount(ring_of[v], weights=tri, minlength=n_rings) / np.pi
         same = same | parallel
         labels = (label, statics, point, same, cut)
@@ -396,13 +375,11 @@ class Refiner:
         rings = np.flatnonzero(good)
         ridx = np.searchsorted(rings, r)
         st = np.searchsorted(ridx, np.arange(len(rings)))
-        c = np.diff(np.append(st, len(ridx)))
-        nx2 = np.arange(len(kv)) + 1
-        nx2[st + c - 1] = st
+        nx2 = successors(np.append(st, len(kv)))
         Xk = X[kv]
         A0 = Xk[st]
-        S, mags, errs = _clipped_sector_sums(A0, Xk - A0[ridx], nx2, ridx, len(rings),
-                                             eps=_LD_EPS)
+        S, mags, errs = clipped_sector_sums(A0, Xk - A0[ridx], nx2, ridx, len(rings),
+                                             eps=tol.LONGDOUBLE_EPS)
         v = np.abs(S) / (2 * np.pi)                 # long double: summed per piece
         # the vertices' geometry: each refined edge (the arc through its two computed
         # end points) is off its input plane by its end points' residuals (measured),
@@ -413,10 +390,10 @@ class Refiner:
         res = (np.abs((Mk * Xk).sum(1)) + np.abs((Mk * Xk[nx2]).sum(1))).astype(float)
         Xf = Xk.astype(float)
         seg = np.linalg.norm(Xf[nx2] - Xf, axis=1)
-        g = 0.5 * seg * (res + tol.REFINE_VERTEX_ULPS * _LD_EPS * (1.0 + cond[kv]))
+        g = 0.5 * seg * (res + tol.REFINE_VERTEX_ULPS * tol.LONGDOUBLE_EPS * (1.0 + cond[kv]))
         geom = np.bincount(ridx, weights=g, minlength=len(rings)) / np.pi
-        e = ((_C1 * _LD_EPS * mags + errs) / (2 * np.pi)).astype(float) + geom \
-            + 4 * _LD_EPS * v.astype(float) + cut[rings]
+        e = ((tol.C1 * tol.LONGDOUBLE_EPS * mags + errs) / (2 * np.pi)).astype(float) + geom \
+            + 4 * tol.LONGDOUBLE_EPS * v.astype(float) + cut[rings]
         val[rings], est[rings] = v, e
         deg = ok_ring & ~good
         val[deg], est[deg] = 0.0, 0.0
@@ -461,7 +438,7 @@ class Refiner:
             with mp.workdps(dps):
                 frame = self._mp_frames.get(dps)
                 if frame is None:
-                    frame = self._mp_frames[dps] = _mp_receiver_frame(self.n)
+                    frame = self._mp_frames[dps] = mp_receiver_frame(self.n)
 
                 def local(w):
                     return [mp.fdot(ax, w) for ax in frame]
@@ -489,22 +466,7 @@ class Refiner:
                     if sum(float(x[j]) * Dflt[i, j] for j in range(3)) < 0:
                         x = [-c for c in x]
                     X.append(x)
-                total = mp.mpf(0)
-                for i in range(len(X)):
-                    a, b = X[i], X[(i + 1) % len(X)]
-                    m = cross(a, b)
-                    sm = mp.sqrt(mp.fdot(m, m))
-                    if sm != 0:
-                        total += mp.atan2(sm, mp.fdot(a, b)) * m[2] / sm
-                return abs(total) / (2 * mp.pi) if len(X) >= 3 else mp.mpf(0)
+                return abs(mp_sector_sum(X)) / (2 * mp.pi) if len(X) >= 3 else mp.mpf(0)
 
-        dps = 30
-        while True:
-            lo = evaluate(dps)
-            hi = evaluate(dps + 20)
-            diff = abs(hi - lo)
-            if (diff <= tolerance * abs(hi) * 1e-3 or hi == lo
-                    or float(diff) < tol.MP_VALUE_FLOOR or dps >= tol.MP_MAX_DPS):
-                break
-            dps += 40
+        hi, diff, _ = mp_converge(evaluate, tolerance)
         return hi, float(diff) + cut

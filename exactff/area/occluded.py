@@ -1,0 +1,400 @@
+"""Area-to-area form factors with occlusion: a pair with blockers between is the contour
+integral less the integral of the hidden part, cut along the vertex-edge visibility
+events and integrated adaptively by collapsed Gauss rules; a row of them.
+
+The hidden part at a point x of the emitter is built in the receiver's plane: each
+blocker projected from x onto that plane, the images united and cut by the receiver
+(shapely), and integrated by the sector sums (``docs/explanation/area-form-factors.md``).
+"""
+
+import numpy as np
+import shapely
+from scipy.spatial import ConvexHull, QhullError
+from scipy.special import roots_legendre
+
+from .. import _tolerances as tol
+from ..geometry import area_vector, polygon_diameter, receiver_frame
+from ..halfspace import clip_halfspace
+from ..kernel import clipped_sector_sums
+from ..methods import Exact
+from ..rings import padded, shapely_rings
+from ..scene import Scene
+from .contour import (clip_front, emitter_nodes, far_values, point_values, triangle_rule,
+                      unoccluded_pair)
+
+__all__ = ["area_row"]
+
+
+def _padded(polys):
+    """The scene's polygons as one array (n, kmax, 3), short ones padded by repeating
+    their last vertex, with their bounding boxes (for :func:`_blockers`)."""
+    V, _ = padded(polys)
+    return V, V.min(axis=1), V.max(axis=1)
+
+
+def _blockers(padded, i, j, Pc, Qc, scale):
+    """Polygons (indices) that may hide part of Qc from part of Pc: those reaching into
+    the interior of the convex hull of both (a polygon on or outside a face of the hull
+    hides nothing of positive measure). ``padded`` is :func:`_padded` of the scene."""
+
+    V, lo_k, hi_k = padded
+    pts = np.vstack([Pc, Qc])
+    near = tol.AREA_HULL_RTOL * scale
+    lo, hi = pts.min(axis=0) - near, pts.max(axis=0) + near
+    cand = np.all((hi_k >= lo) & (lo_k <= hi), axis=1)
+    cand[[i, j]] = False
+    cand = np.flatnonzero(cand)
+    if cand.size == 0:
+        return []
+    try:
+        H = ConvexHull(pts).equations               # a . x + b <= 0 inside
+    except QhullError:
+        return []
+    # on or outside one face of the hull: hides nothing
+    outside = np.all(V[cand] @ H[:, :3].T + H[:, 3] >= -near, axis=1)      # (c, faces)
+    return [int(k) for k in cand[~outside.any(axis=1)]]
+
+
+def _plane_frame(Q):
+    """A planar polygon's unit normal, origin (its first vertex), frame (rows t1, t2, n:
+    :func:`receiver_frame`) and 2-D coordinates in that frame."""
+    nQ = area_vector(Q)
+    nQ = nQ / np.linalg.norm(nQ)
+    RQ = receiver_frame(nQ)
+    return nQ, Q[0], RQ, (Q - Q[0]) @ RQ[:2].T
+
+
+def _event_lines(S, nP, dP, R, c, radius, Qc):
+    """The segments of P's plane (in its 2-D frame ``R`` about ``c``) across which the
+    integrand may lose smoothness: for a vertex ``v`` of one polygon of S and an edge of
+    another, the image of the edge through ``v`` on P's plane (the points from which
+    ``v`` is seen on the edge: vertex-edge visibility events); and the lines where the
+    planes of the polygons of S meet P's plane. An event between two blockers (S[1:])
+    counts only where its lines of sight go on to meet Qc, the part of the receiver S[0]
+    in front of P (elsewhere it changes nothing that is seen of Qc). Each is kept
+    within ``radius`` of ``c``
+    (a disk that holds P) as a segment ``(point, point)``, its ends placed on the exact
+    line (the intersection of two planes), so that events through one point (a corner
+    of a blocker on P) cross there to rounding; an image through infinity is kept as the
+    whole chord."""
+    out = []
+
+    def line(m, v, span=None):
+        # the plane m . (x - v) = 0 meets P's plane n . x = dP in a line; x0 is its point
+        # nearest to c, d its direction; the chord of the disk, or the span's part of it
+        m = m if m[np.flatnonzero(m)[0]] > 0 else -m    # one line for either orientation
+        d = np.cross(nP, m)
+        dn = np.linalg.norm(d)
+        if dn < tol.AREA_EVENT_PARALLEL * np.linalg.norm(m):
+            return
+        d /= dn
+        x0 = np.linalg.solve(np.array([nP, m, d]), np.array([dP, m @ v, d @ c]))
+        h2 = radius * radius - float((x0 - c) @ (x0 - c))
+        if h2 <= 0:
+            return
+        half = np.sqrt(h2)
+        ends = [x0 - half * d, x0 + half * d]
+        if span is not None:
+            # the span's ends where they lie on the chord (as computed: segments that
+            # meet there join exactly), else the chord's ends
+            (t0, p0), (t1, p1) = sorted(((float((q - x0) @ d), q) for q in span),
+                                        key=lambda tq: tq[0])
+            if t0 >= half or t1 <= -half:
+                return
+            ends = [p0 if t0 > -half else ends[0], p1 if t1 < half else ends[1]]
+        out.append(((ends[0] - c) @ R[:2].T, (ends[1] - c) @ R[:2].T))
+
+    def through(v, q):
+        # where the line from v through q meets P's plane (None: parallel, or beyond)
+        den = nP @ (q - v)
+        if abs(den) < tol.AREA_RAY_PARALLEL * np.linalg.norm(q - v):
+            return None
+        return v + (dP - nP @ v) / den * (q - v)
+
+    nQ, q0, RQ, Q2 = _plane_frame(Qc)
+    seen = shapely.Polygon(Q2)
+    shapely.prepare(seen)
+
+    def reaches_receiver(v, e0, e1):
+        # the lines through v and the points of the edge meet Qc's plane along the
+        # edge's central image from v: does it cross Qc? (unbounded images: kept)
+        d0, d1 = nQ @ (e0 - v), nQ @ (e1 - v)
+        if d0 * d1 <= 0:
+            return True
+        h = nQ @ (q0 - v)
+        a, b = v + h / d0 * (e0 - v) - q0, v + h / d1 * (e1 - v) - q0
+        return seen.intersects(shapely.LineString([a @ RQ[:2].T, b @ RQ[:2].T]))
+
+    for a, A in enumerate(S):
+        N = np.cross(A[1] - A[0], A[2] - A[0])
+        line(N, A[0])
+        for b, B in enumerate(S):
+            if a == b:
+                continue
+            for v in A:
+                for e0, e1 in zip(B, np.roll(B, -1, axis=0)):
+                    m = np.cross(e0 - v, e1 - v)
+                    if np.linalg.norm(m) == 0 or (a and b and not reaches_receiver(v, e0, e1)):
+                        continue
+                    x0, x1 = through(v, e0), through(v, e1)
+                    s0, s1 = nP @ (e0 - v), nP @ (e1 - v)
+                    if x0 is None or x1 is None or s0 * s1 <= 0:
+                        line(m, v)              # the image passes through infinity
+                    else:
+                        line(m, v, (x0, x1))
+    return out
+
+
+def _cells(Pc, nP, lines, R, c):
+    """P (clipped) cut along the event lines, as triangles in the world (the lines are
+    cut to P first, so every cell lies in P)."""
+    poly = shapely.Polygon((Pc - c) @ R[:2].T)
+    segs = [g for g in (shapely.LineString([p0, p1]).intersection(poly) for p0, p1 in lines)
+            if not g.is_empty]
+    # the union nodes the segments (already cut to P) and P's boundary; cutting the
+    # union to P again would lose nodes on the boundary, and with them whole cells
+    pieces = shapely.get_parts(shapely.polygonize(
+        shapely.get_parts(shapely.union_all([poly.boundary, *segs]))))
+    tris = []
+    for cell in pieces:
+        if cell.area <= tol.AREA_SLIVER_CELL * poly.area:   # counted in the estimate
+            continue
+        for t in shapely.get_parts(shapely.constrained_delaunay_triangles(cell)):
+            uv = np.asarray(t.exterior.coords)[:3]
+            tris.append(c + uv @ R[:2])
+    return tris
+
+
+def _hidden_values(X, nP, Qc, blockers):
+    """``F(x -> Qc) - F_occ(x -> Qc)`` for each point x of X (normal nP): the point form
+    factor of the part of Qc that the blockers hide from x, and its error estimate.
+
+    Built in Qc's plane: each blocker, clipped to the front of that plane and to the
+    pyramid from x over a rectangle around Qc, is projected from x onto the plane (a
+    projective map: its image stays a simple polygon within the rectangle); the images
+    are united and intersected with Qc (GEOS, vectorised over the points), and the
+    region's rings integrated by the sector sums (Eq. 3's kernel) from x: outer rings
+    count positive, holes negative. The estimate adds to the sector sums' rounding the
+    effect of moving the region's boundary by the booleans' rounding (a few units of the
+    largest coordinate), through the kernel's largest value over the region's bounding
+    box, ``h / (pi r^3)``.
+
+    Returns
+    -------
+    (ndarray of shape (len(X),), ndarray of shape (len(X),))
+    """
+    nX = len(X)
+    nQ, q0, RQ, Q2 = _plane_frame(Qc)
+    qpoly = shapely.Polygon(Q2)
+    lo, hi = Q2.min(axis=0), Q2.max(axis=0)
+    pad = tol.AREA_HIDDEN_PAD * float((hi - lo).max())
+    lo, hi = lo - pad, hi + pad
+    corners = q0 + np.array([[lo[0], lo[1]], [hi[0], lo[1]], [hi[0], hi[1]],
+                             [lo[0], hi[1]]]) @ RQ[:2]
+    Kc = [K for K in (clip_front(np.asarray(K), nQ, q0) for K in blockers) if K is not None]
+    zero = np.zeros(nX)
+    if not Kc:
+        return zero, zero
+    nb, kmax = len(Kc), max(len(K) for K in Kc)
+    V = np.array([np.vstack([K, np.repeat(K[-1:], kmax - len(K), axis=0)]) for K in Kc])
+    # the pyramid from each x over the rectangle: its four inward planes (nX, 4, 3)
+    C = corners[None] - X[:, None, :]
+    M = np.cross(C, np.roll(C, -1, axis=1))
+    M *= np.sign(np.einsum("pai,pai->pa", M, np.roll(C, -2, axis=1)))[:, :, None]
+    # (point, blocker) pairs that can reach into the pyramid: not wholly outside one of
+    # its planes, and not seen edge-on (a blocker whose plane passes through x hides
+    # nothing); only those are clipped
+    D = V[None] - X[:, None, None, :]                                   # (nX, nb, kmax, 3)
+    side = np.einsum("pbkj,paj->pbak", D, M)                            # (nX, nb, 4, kmax)
+    NK = np.array([area_vector(K) for K in Kc])
+    NK /= np.linalg.norm(NK, axis=1)[:, None]
+    size = float(np.ptp(np.vstack(Kc + [Qc, X]), axis=0).max())
+    edge_on = np.abs(np.einsum("pbj,bj->pb", D[:, :, 0, :], NK)) <= tol.AREA_EDGE_ON_RTOL * size
+    pairs = np.flatnonzero(~(np.all(side <= 0, axis=3).any(axis=2) | edge_on))
+    if pairs.size == 0:
+        return zero, zero
+    pt, blk = pairs // nb, pairs % nb
+    Vb = D[pt, blk]
+    cnt = np.array([len(K) for K in Kc])[blk]
+    for a in range(4):
+        Vb, cnt = clip_halfspace(Vb, np.where(cnt >= 3, cnt, 0), M[pt, a])
+    # central projection from x onto Qc's plane: q = x + y h / (-nQ . y), y = offset
+    h = (X - q0) @ nQ
+    live = np.flatnonzero(cnt >= 3)
+    if live.size == 0:
+        return zero, zero
+    slot = np.minimum(np.arange(Vb.shape[1])[None, :], cnt[live, None] - 1)
+    Y = np.take_along_axis(Vb[live], slot[:, :, None], axis=1)         # padded by repeats
+    pt = pt[live]                                                       # sorted
+    Y = Y * (h[pt, None] / -(Y @ nQ))[:, :, None] + (X[pt] - q0)[:, None, :]
+    Y2 = Y @ RQ[:2].T
+    images = shapely.polygons(Y2)
+    # each image's rank among its point's images: the union grows rank by rank
+    rank = np.arange(len(pt)) - np.searchsorted(pt, pt)
+    union = np.full(nX, shapely.Polygon(), dtype=object)
+    try:
+        bad = ~shapely.is_valid(images)
+        if bad.any():
+            images[bad] = shapely.make_valid(images[bad])
+        union[pt[rank == 0]] = images[rank == 0]
+        with np.errstate(all="ignore"):
+            for r in range(1, int(rank.max()) + 1):
+                at = rank == r
+                union[pt[at]] = shapely.union(union[pt[at]], images[at])
+            hidden = shapely.intersection(union, qpoly)
+    except shapely.errors.GEOSException:
+        # GEOS gave up on a nearly degenerate configuration: the engine instead
+        return _hidden_values_by_engine(X, nP, Qc, Kc)
+    # the region's rings from each point: outer rings and holes
+    parts, part_of = shapely.get_parts(hidden, return_index=True)
+    keep = shapely.area(parts) > 0
+    parts, part_of = parts[keep], part_of[keep]
+    if len(parts) == 0:
+        return zero, zero
+    xy, owner, first, _, nxt, is_hole, ring_part = shapely_rings(parts)
+    point = part_of[ring_part]                                           # ring -> point
+    R = receiver_frame(nP)
+    E = ((xy - xy[first[owner]]) @ RQ[:2]) @ R.T
+    A0 = ((q0 - X[point]) + xy[first] @ RQ[:2]) @ R.T
+    S, mags, errs = clipped_sector_sums(A0, E, nxt, owner, len(first))
+    sign = np.where(is_hole, -1.0, 1.0)
+    value = np.bincount(point, sign * np.abs(S), minlength=nX) / (2.0 * np.pi)
+    eps = np.finfo(float).eps
+    rnd = np.bincount(point, tol.C1 * eps * mags + errs, minlength=nX) / (2.0 * np.pi)
+    # the booleans' rounding: the boundary moved by delta, through the kernel's bound
+    # h / (pi r^3) over the region's bounding box (r >= the box's distance from x)
+    b = shapely.bounds(hidden)
+    foot = (X - q0) @ RQ[:2].T
+    dx = np.maximum(0.0, np.maximum(b[:, 0] - foot[:, 0], foot[:, 0] - b[:, 2]))
+    dy = np.maximum(0.0, np.maximum(b[:, 1] - foot[:, 1], foot[:, 1] - b[:, 3]))
+    r = np.sqrt(h * h + np.nan_to_num(dx * dx + dy * dy))
+    delta = tol.AREA_BOOLEAN_ULPS * (nb + 1) * eps * float(np.abs(Y2).max())
+    bound = np.divide(h, np.pi * r ** 3, out=np.zeros_like(r), where=r > 0)   # x on Qc's plane: Qc edge-on
+    geo = np.where(value > 0, delta * shapely.length(hidden) * bound, 0.0)
+    return np.maximum(value, 0.0), rnd + np.nan_to_num(geo)
+
+
+def _hidden_values_by_engine(X, nP, Qc, blockers):
+    """:func:`_hidden_values` by the engine instead (exact occluded point values on the
+    sub-scene of Qc and the blockers, subtracted from the unoccluded ones): about a
+    hundred times slower, used where GEOS fails."""
+    sub = Scene.from_polygons([Qc] + list(blockers))
+    exact = Exact()
+    FE = [exact.point_form_factors(sub, x, nP, error=True) for x in np.atleast_2d(X)]
+    F = np.array([f for f, _ in FE])
+    E = np.array([e for _, e in FE])
+    U, EU = (v[0] for v in point_values(X, nP, [Qc]))
+    return np.maximum(U - F[:, 0], 0.0), EU + E[:, 0]
+
+
+_RULES = tuple(roots_legendre(k) for k in tol.AREA_RULE_ORDERS)
+
+
+def _corner_first(tri, blockers, nP, dP):
+    """The triangle with first a vertex where a blocker's vertex touches the emitter's
+    plane, if it has one. Near such a point the hidden part depends on the direction
+    from it (to first order), and the collapsed rule, whose collapsed vertex is the first,
+    integrates functions of that direction alone without cutting towards the point."""
+    size = float(np.ptp(tri, axis=0).max())
+    for K in blockers:
+        on = np.abs(K @ nP - dP) <= tol.AREA_HULL_RTOL * size
+        for v in K[on]:
+            d = np.linalg.norm(tri - v, axis=1)
+            k = int(np.argmin(d))
+            if d[k] <= tol.AREA_HULL_RTOL * size:
+                return np.roll(tri, -k, axis=0)
+    return tri
+
+
+def _occluded_pair(S, Pc, Qc, nP, tolerance, area_P):
+    """``(1 / A_P) int_Pc F_occ(x -> S[0]) dA`` with S = [receiver, blockers...], as the
+    unoccluded value (the contour integral, exact) less the integral of the hidden part
+    ``F(x -> Qc) - F_occ(x -> S[0])`` (exact point values of the hidden region, built
+    in Qc's plane: :func:`_hidden_values`). The hidden part is smooth where the polygons
+    touch (the unoccluded part carries the edge singularities), so it is integrated over
+    the cells of Pc between visibility events, each cell's triangles by two collapsed
+    Gauss-Legendre rules (6 and 10 points a side), a triangle cut in four where the two
+    differ by more than its share of the tolerance. Returns the value, its error
+    estimate (the contour sum's, the rules' differences, the point values' bounds) and
+    the number of point values used."""
+    R = receiver_frame(nP)
+    c = Pc.mean(axis=0)
+    dP = float(nP @ Pc[0])
+    whole, whole_err = unoccluded_pair(np.asarray(Pc), np.asarray(S[0]))
+    radius = (1.0 + tol.AREA_HIDDEN_PAD) * float(np.linalg.norm(Pc - c, axis=1).max())
+    todo = [(_corner_first(t, S[1:], nP, dP), 0)
+            for t in _cells(Pc, nP, _event_lines(S, nP, dP, R, c, radius, Qc), R, c)]
+    total_area = sum(0.5 * np.linalg.norm(np.cross(t[1] - t[0], t[2] - t[0])) for t, _ in todo)
+    hidden = err = 0.0
+    points = 0
+    while todo:
+        # every triangle of this level together: its two rules' nodes, one call
+        rules = [[triangle_rule(tri, r) for r in _RULES] for tri, _ in todo]
+        X = np.vstack([x for (xl, _), (xh, _) in rules for x in (xl, xh)])
+        H, EH = _hidden_values(X, nP, Qc, S[1:])
+        points += len(X)
+        nxt, at = [], 0
+        for (tri, depth), ((Xl, Wl), (Xh, Wh)) in zip(todo, rules):
+            Hl, Hh = H[at:at + len(Xl)], H[at + len(Xl):at + len(Xl) + len(Xh)]
+            EHh = EH[at + len(Xl):at + len(Xl) + len(Xh)]
+            at += len(Xl) + len(Xh)
+            lo, hi = Wl @ Hl, Wh @ Hh
+            area_t = 0.5 * np.linalg.norm(np.cross(tri[1] - tri[0], tri[2] - tri[0]))
+            diff = abs(hi - lo) / area_P
+            if area_t / area_P <= tol.AREA_SLIVER_SHARE * tolerance:
+                # a sliver (between nearly coincident events): kept as it is, with the
+                # largest error it can carry (the hidden part is between 0 and 1)
+                hidden += hi / area_P
+                err += area_t / area_P
+                continue
+            if diff > 0.5 * tolerance * area_t / total_area and depth < tol.AREA_MAX_DEPTH:
+                a, b, cc = tri
+                ab, bc, ca = (a + b) / 2, (b + cc) / 2, (cc + a) / 2
+                nxt += [(np.array(t), depth + 1) for t in
+                        ((a, ab, ca), (ab, b, bc), (ca, bc, cc), (ab, bc, ca))]
+                continue
+            hidden += hi / area_P
+            err += diff + (Wh @ EHh) / area_P
+        todo = nxt
+    # the contour integral over Pc is per unit area of Pc: back to P's area
+    area_Pc = float(np.linalg.norm(area_vector(Pc)))
+    value = whole * area_Pc / area_P - hidden
+    err += max(area_Pc - total_area, 0.0) / area_P      # cells dropped as slivers
+    return value, err + whole_err * area_Pc / area_P, points
+
+
+def area_row(scene, i, tolerance):
+    """Row i of :func:`area_form_factors` and its estimates."""
+    polys = [np.asarray(p, dtype=float) for p in scene.polygons]
+    padded = _padded(polys)
+    P = polys[i]
+    scale = float(np.ptp(scene.vertices, axis=0).max()) or 1.0
+    AP = area_vector(P)
+    area_P = float(np.linalg.norm(AP))
+    nP = AP / area_P
+    diam_P, cP = polygon_diameter(P), P.mean(axis=0)
+    f, e = np.zeros(len(polys)), np.zeros(len(polys))
+    far = []                      # far unoccluded pairs with P whole: integrated together
+    for j, Q in enumerate(polys):
+        if j == i:
+            continue
+        nQ = area_vector(Q)
+        nQ = nQ / np.linalg.norm(nQ)
+        Pc = clip_front(P, nQ, Q[0])
+        Qc = clip_front(Q, nP, P[0])
+        if Pc is None or Qc is None:
+            continue
+        B = _blockers(padded, i, j, Pc, Qc, scale)
+        if B:
+            f[j], e[j], _ = _occluded_pair([Q] + [polys[k] for k in B], Pc, Qc, nP,
+                                           tolerance, area_P)
+            f[j] = max(f[j], 0.0)
+        elif (Pc is P
+              and np.linalg.norm(Q.mean(axis=0) - cP) > tol.AREA_FAR * max(diam_P, polygon_diameter(Q))):
+            far.append((j, Qc))
+        else:
+            f[j], e[j] = unoccluded_pair(P, Q)
+    if far:
+        js = [j for j, _ in far]
+        f[js], e[js] = far_values(emitter_nodes(P, nP), nP, area_P, [Q for _, Q in far])
+    return f, e

@@ -1,0 +1,65 @@
+"""Reading scenes: Wavefront OBJ (faces kept as polygons), exactff-scene/1 JSON, View3D
+``.vs3``, and the mesh formats of meshio (STL, PLY, OFF, VTK, ...), one module each;
+:func:`load_scene` chooses the reader by extension."""
+
+import os
+
+from .. import _tolerances as tol
+from .mesh import MESHIO_EXTENSIONS, read_mesh
+from .obj import read_obj
+from .scene_json import read_scene_json, scene_from_json
+from .vs3 import read_vs3
+
+__all__ = ["load_scene", "read_obj", "read_scene_json", "scene_from_json", "read_vs3",
+           "read_mesh", "MESHIO_EXTENSIONS"]
+
+
+def load_scene(path, *, nonplanar="error", planarity_rtol=tol.PLANARITY_RTOL):
+    """Read a scene file, choosing the reader by extension.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        ``.obj`` (Wavefront OBJ: faces kept as polygons, groups and materials kept),
+        ``.json`` (``exactff-scene/1``), ``.vs3`` (View3D input: the geometry), or a
+        mesh format of meshio (``.stl``, ``.ply``, ``.off``, ``.vtk``, ``.vtu``, ...;
+        ``pip install exactff[formats]``).
+    nonplanar : {"error", "split"}, default "error"
+        What to do with a face that is not planar within ``planarity_rtol``: raise
+        (naming the face and the line), or cut it into planar triangles.
+    planarity_rtol : float, optional
+        Allowed distance of a vertex from its face's plane, relative to the face's
+        diameter (default 1e-6).
+
+    Returns
+    -------
+    Scene
+
+    Raises
+    ------
+    ValueError
+        Unknown extension, or a malformed file (the message gives the line number).
+    SceneError
+        A polygon is ill-formed.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> d = pathlib.Path(tempfile.mkdtemp())
+    >>> _ = (d / "q.obj").write_text("v 0 0 0\\nv 1 0 0\\nv 1 1 0\\nv 0 1 0\\nf 1 2 3 4\\n")
+    >>> len(load_scene(d / "q.obj"))
+    1
+    """
+    path = os.fspath(path)
+    options = dict(nonplanar=nonplanar, planarity_rtol=planarity_rtol)
+    ext = os.path.splitext(path)[1].lower()
+    if ext == ".obj":
+        return read_obj(path, **options)
+    if ext == ".json":
+        return read_scene_json(path, **options)
+    if ext == ".vs3":
+        return read_vs3(path, **options)
+    if ext in MESHIO_EXTENSIONS:
+        return read_mesh(path, **options)
+    raise ValueError(f"path: unknown scene format {ext!r} in {path!r}; expected .obj, .json, "
+                     f".vs3 or a mesh format ({', '.join(MESHIO_EXTENSIONS)})")

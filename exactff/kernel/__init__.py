@@ -1,0 +1,22 @@
+"""The exact kernel: unoccluded form factors from points, by the sector (Lambert) form
+and by the paper's Eq. 3 (corrected), with rounding-error estimates and the escalation
+ladder (float, long double, mpmath).
+
+* :mod:`~exactff.kernel.sector`: the sector sums, vectorised, and their error model;
+* :mod:`~exactff.kernel.flat`: a scene's polygons as flat arrays;
+* :mod:`~exactff.kernel.ladder`: long double and mpmath re-evaluation;
+* :mod:`~exactff.kernel.point`: one point to one polygon, many polygons, a scene's row;
+* :mod:`~exactff.kernel.eq3`: Eq. 3 with monotone-span splitting.
+"""
+
+from .eq3 import arc_x_extremes, eq3_edge_integral, eq3_form_factor, eq3_ring_area
+from .flat import FlatPolygons, flat_polygons
+from .ladder import mp_form_factor
+from .point import (point_polygon_form_factor, point_polygon_form_factors,
+                    sector_form_factor, unoccluded_row)
+from .sector import TWO_PI, clipped_sector_sums, sector_values
+
+__all__ = ["mp_form_factor", "point_polygon_form_factor", "point_polygon_form_factors",
+           "sector_form_factor", "eq3_form_factor", "eq3_ring_area", "eq3_edge_integral",
+           "arc_x_extremes", "unoccluded_row", "clipped_sector_sums", "sector_values",
+           "FlatPolygons", "flat_polygons", "TWO_PI"]

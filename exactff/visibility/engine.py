@@ -1,0 +1,231 @@
+"""Exact visibility: occluded form factors from a point to every polygon of a scene.
+
+The engine (DESIGN 3): a BSP tree orders the fragments front to back from the point;
+the area-sorting clipper keeps the covered region in five gnomonic charts and cuts
+each new fragment's image against it; every visible piece is integrated exactly with
+the sector form. Shortcuts leave out what a row does not need; each is reported in
+``stats`` and tested to be neutral.
+"""
+
+import numpy as np
+import shapely
+from scipy.spatial import ConvexHull, QhullError
+
+from .. import _tolerances as tol
+from ..checks import as_receiver
+from ..errors import NumericalError
+from ..geometry import receiver_frame, to_local
+from ..kernel import eq3_form_factor, flat_polygons, unoccluded_row
+from ..predicates import coplanar_band_sides, plane_sides
+from ..prepared import prepared
+from .bsp import coplanar_overlaps, front_to_back, scene_bsp
+from .charts import CHARTS
+from .clipper import visible_pieces
+from .pieces import pieces_form_factors
+from .refine import Refiner
+
+__all__ = ["visible_form_factors", "visible_graph", "is_convex_enclosure"]
+
+
+def is_convex_enclosure(scene):
+    """True when every vertex of the scene lies on the front side (or in the plane) of
+    every polygon and no two coplanar polygons overlap, so that from any point in front
+    of all of them no polygon can hide another (a convex room seen from inside).
+    Computed once per scene.
+
+    Coplanar overlaps (a light on a ceiling, the two faces of a zero-thickness wall)
+    hide one another by the tie rule (``exactff.predicates.tie_priority``): such a
+    scene goes through the clipper."""
+    return prepared(scene).get("convex", _is_convex_enclosure)
+
+
+def _is_convex_enclosure(scene):
+    V = np.unique(scene.vertices, axis=0)
+    try:
+        V = V[ConvexHull(V).vertices]
+    except (QhullError, ValueError):
+        pass  # flat or tiny scenes: test every vertex
+    sign, _ = coplanar_band_sides(V, scene.normals, scene.plane_offsets)
+    if np.any(sign < 0):
+        return False
+    back_to_back, same_facing = coplanar_overlaps(scene)
+    return len(back_to_back) == 0 and len(same_facing) == 0
+
+
+def visible_form_factors(scene, point, normal, *, two_sided=False, stats=None,
+                         shortcuts=True, tolerance=None, integrator="sector", error=False):
+    """Exact form factors with occlusion from one point to every polygon of a scene.
+
+    Parameters
+    ----------
+    scene : Scene
+    point : ndarray of shape (3,)
+    normal : ndarray of shape (3,)
+        Unit receiver normal.
+    two_sided : bool, default False
+        Let polygons receive on their back side too. Every polygon occludes whichever
+        way it faces.
+    stats : dict, optional
+        Filled with what the row did: ``path`` (``"unoccluded"`` when the convex-scene
+        shortcut applied, else ``"clipper"``), ``fragments``, ``culled_edge_on``,
+        ``culled_below_horizon``, the clipper's counters, and the refinement's
+        (``refined_rings``, ``refined_rings_mp``, ``unrefined_rings``,
+        ``refine_disagreements``).
+    tolerance : float or None
+        Relative accuracy requested of every value: unoccluded values (convex-scene
+        path) whose estimate exceeds it are re-evaluated in higher precision; visible
+        pieces of polygons whose bound exceeds it are refined (vertices recomputed
+        from the input, :mod:`exactff.visibility.refine`) and integrated in long double
+        or mpmath. None: neither.
+    shortcuts : bool, default True
+        False disables every shortcut: the convex-scene path, the culling of fragments
+        below the horizon, the tiled clipper (full tiles, predicates instead of
+        overlays, bounding-box rejection) and the early stop on full charts (for
+        testing that they never change a result).
+    integrator : {"sector", "eq3"}, default "sector"
+        How visible pieces (and, on the convex-scene path, whole polygons) are
+        integrated: Lambert's sector form (vectorised, with escalation) or the paper's
+        Eq. 3, corrected, with monotone-span splitting (one ring at a time, no
+        escalation).
+
+    error : bool, default False
+        Also return a bound on each value's error: the rounding of its integration
+        plus its visible pieces' geometry (the clipper's vertices, or the refined
+        ones), given the clipper's topology (``docs/explanation/robustness.md``).
+
+    Returns
+    -------
+    ndarray of shape (len(scene),), or a pair of them with ``error=True``
+    """
+    st = stats if stats is not None else {}
+    flat = flat_polygons(scene)
+    p = np.asarray(point, dtype=float)
+    # polygons whose plane passes within rounding of p count as edge-on: their images
+    # are arcs up to rounding and cannot be clipped reliably in double precision
+    side, _ = plane_sides(flat, p, exact=False)
+    # shortcut: a convex enclosure seen from inside has no occlusion at all
+    if shortcuts and is_convex_enclosure(scene) and np.all(side >= 0):
+        st["path"] = "unoccluded"
+        if integrator == "eq3":
+            FE = np.array([(0.0, 0.0) if s == 0 else eq3_form_factor(
+                p, normal, P, one_sided=not two_sided, error=True)
+                for P, s in zip(scene.polygons, side)])
+            return (FE[:, 0], FE[:, 1]) if error else FE[:, 0]
+        return unoccluded_row(flat, p, normal, one_sided=not two_sided, tolerance=tolerance,
+                              in_band="edge_on", return_error=error, strict=True)
+    st["path"] = "clipper"
+    tree, order, src, kept, world, receives = _row_fragments(scene, p, normal, side, two_sided,
+                                                             shortcuts, st)
+    charts = []
+    pieces = visible_pieces(kept, receives, stats=st, shortcuts=shortcuts, charts=charts)
+    refiner = Refiner(scene, tree, order, p, normal, kept, world, charts)
+    Ff, ef_ = pieces_form_factors(pieces, len(order), tolerance=tolerance, owner=src,
+                                  integrator=integrator, refiner=refiner, stats=st)
+    F = np.bincount(src, weights=Ff, minlength=len(scene))
+    E = np.bincount(src, weights=ef_, minlength=len(scene))
+    # holes subtract: a value may fall below 0 by rounding, never by more than its estimate
+    bad = np.flatnonzero(~(F >= -tol.ROUNDING_OVERSHOOT * (E + 1e-300)))
+    if len(bad):
+        raise NumericalError(f"polygon {bad[0]}: occluded form factor {F[bad[0]]!r} below 0 "
+                             f"beyond its rounding error estimate {E[bad[0]]:.3g}")
+    if stats is not None:
+        stats["max_error_estimate"] = float(E.max(initial=0.0))
+    return (np.maximum(F, 0.0), E) if error else np.maximum(F, 0.0)
+
+
+def visible_graph(scene, point, normal, *, two_sided=False, max_segment=0.02):
+    """The visible graph of one row, drawn on the base of the hemisphere: every visible
+    piece of every polygon, as the clipper keeps it, projected onto the unit disk.
+
+    A visible piece is a region of one gnomonic chart bounded by straight images of
+    great-circle arcs; on the disk those arcs are the ellipse arcs of the paper's Eq. 2.
+    Each chart edge is cut into pieces of at most ``max_segment`` chart units before it
+    is projected, so the rings follow the arcs closely; their areas approximate
+    (from inside, to about ``max_segment**2``) pi times the form factors.
+
+    Parameters
+    ----------
+    scene : Scene
+    point : array_like of shape (3,)
+    normal : array_like of shape (3,)
+        Receiver normal; the disk's x and y axes are those of
+        :func:`exactff.receiver_frame` (z along the normal).
+    two_sided : bool, default False
+        As for :func:`exactff.form_factors`.
+    max_segment : float, default 0.02
+        Longest chart-space segment before projection.
+
+    Returns
+    -------
+    list of (int, shapely.Polygon or shapely.MultiPolygon)
+        ``(polygon index, visible piece on the unit disk)``; a polygon may have several
+        pieces (one per chart and tile it crosses). Pieces of different polygons do not
+        overlap; in a closed room they tile the disk.
+
+    Examples
+    --------
+    >>> import exactff as ef
+    >>> scene = ef.scenes.cornell_box(closed=True)
+    >>> graph = visible_graph(scene, [278, 0.5, 279.6], [0, 1, 0])
+    >>> total = sum(g.area for _, g in graph)      # the whole disk: pi
+    >>> abs(total - np.pi) < 1e-3
+    True
+    """
+    p, n = as_receiver(point, normal)
+    if not (np.isfinite(max_segment) and max_segment > 0):
+        raise ValueError(f"max_segment must be a positive number, got {max_segment!r}")
+    flat = flat_polygons(scene)
+    side, _ = plane_sides(flat, p, exact=False)
+    _, _, src, kept, _, receives = _row_fragments(scene, p, n, side, two_sided, True, {})
+    pieces = visible_pieces(kept, receives)
+
+    def on_disk(chart):
+        eu, ev, ew, _ = chart
+
+        def project(uv):
+            d = uv[:, :1] * eu + uv[:, 1:2] * ev + ew
+            return d[:, :2] / np.linalg.norm(d, axis=1, keepdims=True)
+        return project
+
+    return [(int(src[f]), shapely.transform(shapely.segmentize(g, max_segment),
+                                             on_disk(CHARTS[ci])))
+            for f, ci, g in pieces]
+
+
+def _row_fragments(scene, p, normal, side, two_sided, shortcuts, st):
+    """The fragments a row's clipper takes, front to back from ``p``: those seen edge-on
+    and (with shortcuts) those wholly below the horizon culled; their vertices in the
+    local frame of the point and in the world, bucket by bucket; whether each
+    receives. Returns ``(tree, order, src, kept, world, receives)``."""
+    tree, buckets = scene_bsp(scene)
+    order = np.array(front_to_back(tree, p), dtype=int)
+    position = np.empty(len(order), dtype=int)
+    position[order] = np.arange(len(order))
+    src = tree.source[order]
+    # cull: fragments seen edge-on have no image and hide nothing
+    edge_on = side[src] == 0
+    R = receiver_frame(normal)  # normalises
+    # local coordinates bucket by bucket (one long polygon pads only its own bucket)
+    local, below = [], np.zeros(len(order), dtype=bool)
+    for ids, Vb, cb in buckets:
+        Vl = to_local(Vb, p, R)
+        slot = np.arange(Vl.shape[1])[None, :] < cb[:, None]
+        below[position[ids]] = np.where(slot, Vl[:, :, 2], -np.inf).max(axis=1) <= 0
+        local.append((position[ids], Vl, cb))
+    keep = ~edge_on & ~below if shortcuts else ~edge_on
+    st["fragments"] = len(order)
+    st["culled_edge_on"] = int(edge_on.sum())
+    st["culled_below_horizon"] = int((below & ~edge_on).sum()) if shortcuts else 0
+    new_position = np.full(len(order), -1)
+    new_position[keep] = np.arange(int(keep.sum()))
+    kept, world = [], []
+    for (pos, Vl, cb), (_, Vw, _) in zip(local, buckets):
+        k = keep[pos]
+        if k.any():
+            kept.append((new_position[pos[k]], Vl[k], cb[k]))
+            world.append((new_position[pos[k]], Vw[k], cb[k]))
+    order, src = order[keep], src[keep]
+    receives = side[src] > 0
+    if two_sided:
+        receives |= side[src] < 0
+    return tree, order, src, kept, world, receives
