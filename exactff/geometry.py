@@ -1,6 +1,9 @@
 """Planar-polygon geometry: Newell area vectors, normals, centroids and receiver frames."""
 
+from __future__ import annotations
+
 import numpy as np
+from numpy.typing import ArrayLike
 
 __all__ = [
     "to_local",
@@ -15,7 +18,7 @@ __all__ = [
 ]
 
 
-def area_vector(polygon):
+def area_vector(polygon: ArrayLike) -> np.ndarray:
     """Newell area vector of a closed polygon, computed relative to its first vertex.
 
     Parameters
@@ -40,7 +43,7 @@ def area_vector(polygon):
     return 0.5 * np.cross(Q, np.roll(Q, -1, axis=0)).sum(axis=0)
 
 
-def polygon_area(polygon):
+def polygon_area(polygon: ArrayLike) -> float:
     """Area of a planar polygon, the length of its Newell area vector.
 
     Examples
@@ -51,7 +54,7 @@ def polygon_area(polygon):
     return float(np.linalg.norm(area_vector(polygon)))
 
 
-def unit_normal(polygon):
+def unit_normal(polygon: ArrayLike) -> np.ndarray:
     """Unit front normal (right-hand rule, Newell's normal for K > 3).
 
     Examples
@@ -63,7 +66,7 @@ def unit_normal(polygon):
     return A / np.linalg.norm(A)
 
 
-def polygon_centroid(polygon):
+def polygon_centroid(polygon: ArrayLike) -> np.ndarray:
     """Area centroid of a planar polygon (triangle fan from the first vertex).
 
     For a non-convex polygon the centroid may lie outside the polygon.
@@ -82,7 +85,7 @@ def polygon_centroid(polygon):
     return P[0] + c
 
 
-def polygon_diameter(polygon):
+def polygon_diameter(polygon: ArrayLike) -> float:
     """Largest distance between two vertices.
 
     Exact (all pairs) up to 128 vertices. Beyond, in O(K log K) time and O(K) memory:
@@ -129,7 +132,7 @@ def polygon_diameter(polygon):
     return best
 
 
-def receiver_frame(normal, dtype=float):
+def receiver_frame(normal: ArrayLike, dtype=float) -> np.ndarray:
     """Orthonormal frame ``(t1, t2, n)`` with ``n`` the unit receiver normal.
 
     The rows of the result map world vectors into the local frame of a receiver:
@@ -198,7 +201,7 @@ def mp_receiver_frame(normal):
     return ([1 + sign * x * x * a, sign * b, -sign * x], [b, sign + y * y * a, -y], [x, y, z])
 
 
-def to_local(X, p, R):
+def to_local(X: np.ndarray, p: np.ndarray, R: np.ndarray) -> np.ndarray:
     """``(X - p) @ R.T`` evaluated elementwise, the same rounding for every row.
 
     A matrix product may round a row differently depending on where it sits in the
@@ -220,7 +223,7 @@ def to_local(X, p, R):
     return rotate(X - p, R)
 
 
-def rotate(D, R):
+def rotate(D: np.ndarray, R: np.ndarray) -> np.ndarray:
     """``D @ R.T`` evaluated elementwise (see :func:`to_local`).
 
     Examples

@@ -1,5 +1,7 @@
 """Reports: the error of the discrete methods against the exact method, and run time."""
 
+from __future__ import annotations
+
 import os
 import time
 
@@ -8,7 +10,7 @@ import numpy as np
 from .formfactors import fingerprint, form_factor_matrix
 from .geometry import area_vector, polygon_diameter
 from .methods import resolve
-from .scene import distinct_consecutive
+from .scene import Scene, distinct_consecutive
 from .visibility import coplanar_overlaps
 
 __all__ = ["compare", "to_markdown", "describe"]
@@ -50,8 +52,8 @@ def _reference_rows(scene, rows, reference, two_sided, progress):
     return ref, t_ref
 
 
-def compare(scene, methods, samples=(4096, 65536), rows=None, *, reference=None,
-            two_sided=False, progress=False):
+def compare(scene: Scene, methods, samples=(4096, 65536), rows=None, *, reference=None,
+            two_sided: bool = False, progress: bool = False) -> list[dict]:
     """Error against run time of form-factor methods on a scene.
 
     Parameters
@@ -131,7 +133,7 @@ def compare(scene, methods, samples=(4096, 65536), rows=None, *, reference=None,
     return records
 
 
-def to_markdown(records):
+def to_markdown(records: list[dict]) -> str:
     """A Markdown table of :func:`compare`'s records.
 
     Examples
@@ -153,7 +155,7 @@ def to_markdown(records):
     return "\n".join(lines)
 
 
-def describe(scene):
+def describe(scene: Scene) -> dict:
     """Summary of a scene: size, area, bounds, planarity and closure.
 
     Returns

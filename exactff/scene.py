@@ -1,6 +1,9 @@
 """Planar polygons and scenes: validation, immutable storage, per-polygon planes."""
 
+from __future__ import annotations
+
 import numpy as np
+from numpy.typing import ArrayLike
 import shapely
 
 from . import _tolerances as tol
@@ -24,7 +27,8 @@ def distinct_consecutive(P):
     return P[keep] if keep.any() else P[:1]
 
 
-def validate_polygon(polygon, index=0, name=None, *, planarity_rtol=tol.PLANARITY_RTOL):
+def validate_polygon(polygon: ArrayLike, index: int = 0, name: str | None = None, *,
+                     planarity_rtol: float = tol.PLANARITY_RTOL) -> np.ndarray:
     """Check one polygon and return it as a read-only float array.
 
     Parameters
@@ -98,7 +102,8 @@ def validate_polygon(polygon, index=0, name=None, *, planarity_rtol=tol.PLANARIT
     return P
 
 
-def validate_polygons(polygons, names=None, planarity_rtol=tol.PLANARITY_RTOL):
+def validate_polygons(polygons, names=None,
+                      planarity_rtol: float = tol.PLANARITY_RTOL) -> tuple[np.ndarray, ...]:
     """Validate many polygons at once (as :func:`validate_polygon`, vectorised).
 
     Polygons with the same number of vertices are checked together; any polygon that a
@@ -253,7 +258,7 @@ class Scene:
 
     @classmethod
     def from_polygons(cls, polygons, *, names=None, groups=None, materials=None,
-                      planarity_rtol=tol.PLANARITY_RTOL):
+                      planarity_rtol: float = tol.PLANARITY_RTOL) -> "Scene":
         """Validate polygons and build a scene.
 
         Parameters

@@ -22,7 +22,10 @@ One-sided, as the point form factors: only the part of Q in front of P's plane a
 the part of P in front of Q's plane take part.
 """
 
+from __future__ import annotations
+
 import numpy as np
+from numpy.typing import ArrayLike
 import shapely
 from scipy.special import roots_legendre, xlogy
 
@@ -180,7 +183,7 @@ def far_values(nodes, nP, area_P, Qs):
     return np.maximum(hi, 0.0), np.abs(hi - lo) + tol.AREA_ROUNDING_ULPS * eps * np.abs(hi)
 
 
-def polygon_form_factor(P, Q):
+def polygon_form_factor(P: ArrayLike, Q: ArrayLike) -> float:
     """The area-to-area form factor F(P -> Q), unoccluded, exact to rounding.
 
     The paper's Eq. 1: ``(1 / A_P) int_P int_Q cos(theta_P) cos(theta_Q) / (pi r^2)

@@ -2,6 +2,8 @@
 ``.vs3``, and the mesh formats of meshio (STL, PLY, OFF, VTK, ...), one module each;
 :func:`load_scene` chooses the reader by extension."""
 
+from __future__ import annotations
+
 import os
 
 from .. import _tolerances as tol
@@ -9,12 +11,14 @@ from .mesh import MESHIO_EXTENSIONS, read_mesh
 from .obj import read_obj
 from .scene_json import read_scene_json, scene_from_json
 from .vs3 import read_vs3
+from ..scene import Scene
 
 __all__ = ["load_scene", "read_obj", "read_scene_json", "scene_from_json", "read_vs3",
            "read_mesh", "MESHIO_EXTENSIONS"]
 
 
-def load_scene(path, *, nonplanar="error", planarity_rtol=tol.PLANARITY_RTOL):
+def load_scene(path: str | os.PathLike, *, nonplanar: str = "error",
+               planarity_rtol: float = tol.PLANARITY_RTOL) -> Scene:
     """Read a scene file, choosing the reader by extension.
 
     Parameters

@@ -5,9 +5,12 @@ arc is split at its x-extremes into monotone spans, each integrated on its own b
 with the corrected antiderivative (DESIGN 2, ``tools/derive_eq3.py``).
 """
 
+from __future__ import annotations
+
 import math
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from .. import _tolerances as tol
 from ..errors import NumericalError
@@ -16,7 +19,7 @@ from .point import local_clipped
 __all__ = ["eq3_edge_integral", "arc_x_extremes", "eq3_form_factor", "eq3_ring_area"]
 
 
-def eq3_edge_integral(a, b):
+def eq3_edge_integral(a: ArrayLike, b: ArrayLike) -> float:
     """Integral of ``y dx`` along the image of the great-circle arc ``a -> b``.
 
     The image of the arc on the base disk lies on the ellipse of Eq. 2,
@@ -96,7 +99,7 @@ def eq3_edge_integral(a, b):
     return math.fsum(total)
 
 
-def arc_x_extremes(a, b):
+def arc_x_extremes(a: ArrayLike, b: ArrayLike) -> tuple:
     """Where the image of the great-circle arc ``a -> b`` on the base disk turns in x:
     the ends of its monotone spans (Eq. 3 is integrated span by span).
 
@@ -145,7 +148,9 @@ def arc_x_extremes(a, b):
     return w, w_perp, ta, theta, extremes
 
 
-def eq3_form_factor(point, normal, polygon, *, one_sided=True, error=False):
+def eq3_form_factor(point: ArrayLike, normal: ArrayLike, polygon: ArrayLike, *,
+                    one_sided: bool = True,
+                    error: bool = False) -> float | tuple[float, float]:
     """Unoccluded form factor by the paper's Eq. 3 (corrected), with span splitting.
 
     The frame is first rotated about ``n`` (which changes no area) so that no edge
@@ -172,7 +177,7 @@ def eq3_form_factor(point, normal, polygon, *, one_sided=True, error=False):
     return (max(F, 0.0), tol.C1 * tol.EPS * mag / math.pi) if error else max(F, 0.0)
 
 
-def eq3_ring_area(ring):
+def eq3_ring_area(ring: ArrayLike) -> tuple[float, float]:
     """Signed area (counter-clockwise positive) of the image on the base disk of a closed
     chain of great-circle arcs, by Eq. 3 (corrected) with monotone-span splitting.
 

@@ -4,7 +4,10 @@ misses the tolerance is evaluated again from the float input, first in long doub
 evaluations agree. Point rows and the refinement of visible pieces climb the same
 ladder (:func:`mp_converge`)."""
 
+from __future__ import annotations
+
 import numpy as np
+from numpy.typing import ArrayLike
 
 from .. import _tolerances as tol
 from ..errors import NumericalError
@@ -124,8 +127,10 @@ def mp_sector_value(point, normal, polygon, one_sided, dps, side_hint=None):
         return abs(total) / (2 * mp.pi)
 
 
-def mp_form_factor(point, normal, polygon, *, one_sided=True, tolerance=tol.DEFAULT_RTOL,
-                   dps=None, error=False, side=None):
+def mp_form_factor(point: ArrayLike, normal: ArrayLike, polygon: ArrayLike, *,
+                   one_sided: bool = True, tolerance: float = tol.DEFAULT_RTOL,
+                   dps: int | None = None, error: bool = False,
+                   side: int | None = None) -> float | tuple[float, float]:
     """Unoccluded form factor with mpmath, from the float input taken as exact.
 
     The sector form evaluated at ``dps`` decimal digits and again 20 digits higher; the

@@ -8,7 +8,10 @@ with a rounding-error estimate per polygon, climbing the escalation ladder
 ``docs/explanation/conventions.md`` for the orientation conventions.
 """
 
+from __future__ import annotations
+
 import numpy as np
+from numpy.typing import ArrayLike
 
 from .. import _tolerances as tol
 from ..checks import as_normal, as_point, check_tolerance
@@ -120,8 +123,10 @@ def unoccluded_row(flat, p, n, *, one_sided=True, tolerance=None,
     return (F, err) if return_error else F
 
 
-def point_polygon_form_factors(point, normal, polygons, *, one_sided=True,
-                               tolerance=tol.DEFAULT_RTOL, error=False):
+def point_polygon_form_factors(point: ArrayLike, normal: ArrayLike, polygons, *,
+                               one_sided: bool = True,
+                               tolerance: float | None = tol.DEFAULT_RTOL,
+                               error: bool = False) -> np.ndarray | tuple[np.ndarray, np.ndarray]:
     """Unoccluded form factors from one point to many polygons (vectorised).
 
     Parameters
@@ -196,8 +201,9 @@ def local_clipped(point, normal, polygon, one_sided):
     return clip_above_horizon(Q), (1.0 if side > 0 else -1.0)
 
 
-def sector_form_factor(point, normal, polygon, *, one_sided=True,
-                       tolerance=tol.DEFAULT_RTOL, error=False):
+def sector_form_factor(point: ArrayLike, normal: ArrayLike, polygon: ArrayLike, *,
+                       one_sided: bool = True, tolerance: float | None = tol.DEFAULT_RTOL,
+                       error: bool = False) -> float | tuple[float, float]:
     """Unoccluded form factor by the sector (Lambert) form, one polygon.
 
     ``F = (1 / 2 pi) sum_k atan2(|a_k x b_k|, a_k . b_k) (a_k x b_k)_z / |a_k x b_k|``
@@ -230,8 +236,10 @@ def sector_form_factor(point, normal, polygon, *, one_sided=True,
     return (float(F[0]), float(err[0])) if error else float(F[0])
 
 
-def point_polygon_form_factor(point, normal, polygon, *, one_sided=True,
-                              tolerance=tol.DEFAULT_RTOL, error=False):
+def point_polygon_form_factor(point: ArrayLike, normal: ArrayLike, polygon: ArrayLike, *,
+                              one_sided: bool = True,
+                              tolerance: float | None = tol.DEFAULT_RTOL,
+                              error: bool = False) -> float | tuple[float, float]:
     """Unoccluded form factor from a differential area to one planar polygon.
 
     ``F(p -> j) = (1 / pi) * integral over j of cos(theta_p) cos(theta_j) / r^2 dA``,
