@@ -194,7 +194,7 @@ def cmd_matrix(args):
     import time
 
     from .formfactors import form_factor_matrix
-    from .storage import _stem, _suffix
+    from .storage import _stem, _suffix, output_path
 
     scene = _open(args)
     rows = parse_rows(args.rows, len(scene))
@@ -207,6 +207,7 @@ def cmd_matrix(args):
         stem = args.scene.split(":")[0].rsplit("/", 1)[-1].rsplit(".", 1)[0]
         big = len(rows) * len(scene) * 8 > DENSE_OUTPUT_BYTES
         out = f"{stem}_ff" + (".npz" if args.sparse else ".zarr" if big else ".npy")
+    out = output_path(out, args.sparse)
     suffix = _suffix(out, "--output")
     if args.sparse != (suffix == ".npz"):
         raise ValueError(f"--output {out}: " + ("--sparse writes a .npz file" if args.sparse
@@ -360,8 +361,10 @@ def build_parser():
     _scene_arguments(p)
     p.add_argument("-o", "--output", help="output: .npy (dense), .zarr (chunked, "
                                           "compressed) or .npz (sparse, with --sparse); "
-                                          "default SCENE_ff.npy, .zarr above 2 GiB, .npz "
-                                          "with --sparse; an interrupted run resumes from it")
+                                          "without one of these suffixes .npy (.npz with "
+                                          "--sparse) is appended; default SCENE_ff.npy, "
+                                          ".zarr above 2 GiB, .npz with --sparse; an "
+                                          "interrupted run resumes from it")
     p.add_argument("--sparse", action="store_true",
                    help="keep the non-zero values only (scipy.sparse CSR in a .npz)")
     p.add_argument("--area", action="store_true",

@@ -233,6 +233,8 @@ def form_factor_matrix(scene, *, method="exact", rows=None, two_sided=False, exe
         Stream rows to this file as they finish and resume from it: ``.npy`` (a dense
         memory map), ``.zarr`` (a chunked, compressed store; ``exactff[scale]``) or
         ``.npz`` (sparse, with ``sparse=True``); formats in :mod:`exactff.storage`.
+        A path without one of these suffixes gets ``.npy`` appended, or ``.npz`` with
+        ``sparse=True``, as :func:`numpy.save` does: ``out="m"`` writes ``m.npy``.
         ``STEM.meta.json`` beside it records what is computed (a hash of the scene and
         rows, the method, the options). Calling again with the same ``out`` and the
         same computation resumes an interrupted (even killed) run and recomputes no
@@ -268,7 +270,7 @@ def form_factor_matrix(scene, *, method="exact", rows=None, two_sided=False, exe
     >>> bool(np.array_equal(S.toarray(), M)), S.nnz < M.size
     (True, True)
     """
-    from .storage import ZARR_CHUNK_VALUES, MatrixOutput
+    from .storage import ZARR_CHUNK_VALUES, MatrixOutput, output_path
 
     m = resolve(method, **options)
     scene = as_scene(scene)
@@ -288,7 +290,8 @@ def form_factor_matrix(scene, *, method="exact", rows=None, two_sided=False, exe
     workers = (jobs if jobs and jobs > 1 else None) or (
         len(client.scheduler_info().get("workers", {})) if client is not None
         else getattr(executor, "_max_workers", None) or (os.cpu_count() if executor else 1)) or 1
-    zarr_out = out is not None and os.fspath(out).endswith(".zarr")
+    out = None if out is None else output_path(out, sparse)
+    zarr_out = out is not None and out.endswith(".zarr")
     if chunk_rows:
         step = int(chunk_rows)
     elif zarr_out:   # fixed by the store (not by the workers): a resumed run has the same

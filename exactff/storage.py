@@ -1,7 +1,8 @@
 """Where a form-factor matrix goes while it is computed: memory, or a file on disk that
 an interrupted run resumes from.
 
-Three formats, chosen by the output's suffix:
+Three formats, chosen by the output's suffix (a path without one of these suffixes gets
+``.npy``, or ``.npz`` for a sparse matrix, appended, as :func:`numpy.save` does):
 
 ``.npy``
     A dense memory map (NumPy's own format): simple, any tool reads it, but it holds
@@ -50,6 +51,21 @@ def _suffix(path, name="out"):
             return s
     raise ValueError(f"{name}: {path!r} has no known suffix: .npy (dense), .zarr (chunked, "
                      f"compressed) or .npz (sparse)")
+
+
+def output_path(path, sparse=False):
+    """The file an output ``path`` names: ``path`` itself when it ends in ``.npy``,
+    ``.zarr`` or ``.npz``; otherwise ``path`` with ``.npz`` (``sparse``) or ``.npy``
+    appended, as :func:`numpy.save` does (``"m"`` -> ``"m.npy"``, ``"m.v2"`` ->
+    ``"m.v2.npy"``).
+
+    >>> output_path("m"), output_path("m", sparse=True), output_path("m.zarr")
+    ('m.npy', 'm.npz', 'm.zarr')
+    """
+    path = os.fspath(path)
+    if any(path.endswith(s) for s in SUFFIXES):
+        return path
+    return path + (".npz" if sparse else ".npy")
 
 
 def _save_atomic(path, array):

@@ -66,3 +66,29 @@ def test_cli_matrix_writes_resumes_and_overwrites(tmp_path, capsys):
     assert main(["matrix", "box:1", "-o", str(out), "--no-progress", "--overwrite",
                  "--rows", "0:3"]) == 0
     assert np.load(out).shape == (3, 6)
+
+
+def test_cli_output_without_a_suffix_gets_the_formats_suffix(tmp_path, capsys):
+    import numpy as np
+    import scipy.sparse as sp
+
+    scene = ef.scenes.subdivided_box(1)
+    ref = ef.form_factor_matrix(scene)
+    # the unit box seen from a face's centre: the opposite face by Howell's catalogue
+    # (parallel_rect_corner of the four quarters), each adjacent face (1 - that) / 4
+    from common import parallel_rect_corner
+
+    opposite = 4 * parallel_rect_corner(0.5, 0.5, 1.0)
+    for sparse, written in ((False, "m.npy"), (True, "m.npz")):
+        d = tmp_path / written[2:]
+        d.mkdir()
+        argv = ["matrix", "box:1", "-o", str(d / "m"), "--no-progress"]
+        assert main(argv + (["--sparse"] if sparse else [])) == 0
+        assert f"-> {d / written}" in capsys.readouterr().out
+        assert sorted(p.name for p in d.iterdir()) == ["m.meta.json", written]
+        M = ef.load_matrix(d / written)
+        M = M.toarray() if sp.issparse(M) else np.asarray(M)
+        assert np.array_equal(M, ref)
+        assert abs(M[0, 1] - opposite) <= 1e-13 + 1e-12 * opposite
+        side = (1 - opposite) / 4
+        assert np.all(np.abs(M[0, 2:] - side) <= 1e-13 + 1e-12 * side)
