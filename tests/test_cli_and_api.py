@@ -92,3 +92,23 @@ def test_cli_output_without_a_suffix_gets_the_formats_suffix(tmp_path, capsys):
         assert abs(M[0, 1] - opposite) <= 1e-13 + 1e-12 * opposite
         side = (1 - opposite) / 4
         assert np.all(np.abs(M[0, 2:] - side) <= 1e-13 + 1e-12 * side)
+
+
+def test_version_from_python_dash_m_and_the_console_script(capsys):
+    import pathlib
+    import tomllib
+
+    import pytest
+
+    root = pathlib.Path(__file__).resolve().parents[1]
+    project = tomllib.loads((root / "pyproject.toml").read_text())["project"]
+    want = f"exactff {project['version']}\n"
+    r = subprocess.run([sys.executable, "-m", "exactff", "--version"], capture_output=True,
+                       text=True, timeout=120, cwd=root)
+    assert r.returncode == 0 and r.stdout == want and r.stderr == ""
+    # the console script `exactff` is the entry point pyproject.toml names
+    module, _, func = project["scripts"]["exactff"].partition(":")
+    entry = getattr(__import__(module, fromlist=[func]), func)
+    with pytest.raises(SystemExit) as exit_:
+        entry(["--version"])
+    assert exit_.value.code == 0 and capsys.readouterr().out == want
