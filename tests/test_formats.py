@@ -262,7 +262,16 @@ def test_cli_matrix_from_the_cornell_obj(cornell_obj, tmp_path, capsys):
     assert main(["matrix", str(cornell_obj), "--split-nonplanar", "-o", str(out),
                  "--no-progress", "--rows", "0,1"]) == 0
     M = np.load(out)
-    assert M.shape == (18, 18) or M.shape == (2, 18)
+    # --rows 0,1 writes those two rows only (form_factor_matrix's rows=), each of the 18
+    # polygons a column; row k is the row from polygon k's centroid: polygon 0's
+    # row, not the others' (the bit-for-bit equality only says which rows were written)
+    assert M.shape == (2, 18)
+    scene = load_scene(cornell_obj, nonplanar="split")
+    rows = ef.form_factors(scene, scene.centroids, scene.normals)
+    for k in (0, 1):
+        assert [i for i in range(18) if np.array_equal(M[k], rows[i])] == [k]
+    assert M[0, 0] == M[1, 1] == 0 and np.all(M >= 0)
+    assert np.all(M.sum(axis=1) < 1)                   # the box is open
 
 
 def _box_triangles():
