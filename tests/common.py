@@ -60,6 +60,20 @@ def rotation(axis, angle):
     return np.eye(3) + math.sin(angle) * K + (1 - math.cos(angle)) * K @ K
 
 
+def upward_unit_vectors(min_z=0.05):
+    """Hypothesis strategy: unit vectors with z > ``min_z`` (z uniform in (min_z, 1],
+    azimuth uniform), shrinking towards +z: every example drawn is valid, none is thrown
+    away (an early return or ``assume(n[2] > min_z)`` on the whole sphere loses half)."""
+    from hypothesis import strategies as st
+
+    def build(z, phi):
+        s = math.sqrt(max(0.0, 1.0 - z * z))
+        return np.array([s * math.cos(phi), s * math.sin(phi), z])
+
+    return st.builds(build, st.floats(0.0, 1.0 - min_z, exclude_max=True).map(lambda d: 1.0 - d),
+                     st.floats(0, 2 * math.pi))
+
+
 def examples(n):
     """``max_examples`` for a slow property test: ``n`` in the dev and ci profiles, and
     the thorough profile's own count (``HYPOTHESIS_PROFILE=thorough``), so that a
