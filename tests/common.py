@@ -74,6 +74,16 @@ def upward_unit_vectors(min_z=0.05):
                      st.floats(0, 2 * math.pi))
 
 
+def rotations():
+    """Hypothesis strategy: rotation matrices (an axis from the sphere and an angle),
+    shrinking towards the identity about +z."""
+    from hypothesis import strategies as st
+
+    from exactff.testing.strategies import unit_vectors
+
+    return st.builds(rotation, unit_vectors(), st.floats(0, 2 * math.pi))
+
+
 def examples(n):
     """``max_examples`` for a property test that is slower (``n`` below 30) or cheaper
     (above) than most: ``n`` in the dev profile (30 examples a test), scaled by the

@@ -11,9 +11,9 @@ import pytest
 from hypothesis import given, settings, strategies as st
 
 import exactff as ef
-from exactff.testing.strategies import occluded_scenes
+from exactff.testing.strategies import occluded_scenes, polygons_2d
 
-from common import examples, random_rotation
+from common import examples, rotations
 
 
 def howell_parallel(a, b, c):
@@ -149,22 +149,25 @@ def test_perpendicular_rectangles_with_a_common_edge_howell(h, l, w):
     assert ef.polygon_form_factor(P, Q) == pytest.approx(ref, rel=1e-12)
 
 
-@given(st.integers(0, 2**32 - 1))
+@st.composite
+def facing_convex_pairs(draw):
+    """Two convex polygons (3 to 6 vertices, stretched in x and y) in parallel planes
+    0.05 to 8 apart, facing each other, offset sideways, under a drawn rotation."""
+    def polygon():
+        P2 = draw(polygons_2d(3, 6, convex=True)) * [draw(st.floats(0.3, 1.5)),
+                                                       draw(st.floats(0.3, 1.5))]
+        return np.column_stack([P2, np.zeros(len(P2))])
+    P = polygon()                                         # faces +z
+    Q = polygon()[::-1] + [draw(st.floats(-1, 1)), draw(st.floats(-1, 1)),
+                           draw(st.floats(0.05, 8.0))]    # faces -z
+    M = draw(rotations())
+    return P @ M.T, Q @ M.T
+
+
+@given(facing_convex_pairs())
 @settings(max_examples=examples(40), deadline=None)
-def test_reciprocity_on_random_pairs(seed):
-    rng = np.random.default_rng(seed)
-    # two random convex quads facing each other roughly, at a random distance
-    def quad(z, flip):
-        t = np.sort(rng.uniform(0, 2 * np.pi, 4))
-        r = rng.uniform(0.3, 1.5, 4)
-        Pq = np.column_stack([r * np.cos(t), r * np.sin(t), np.full(4, z)])
-        from scipy.spatial import ConvexHull
-        Pq = Pq[ConvexHull(Pq[:, :2]).vertices]
-        return Pq[::-1].copy() if flip else Pq
-    P = quad(0.0, False)
-    Q = quad(rng.uniform(0.05, 8.0), True) + [*rng.uniform(-1, 1, 2), 0]
-    M = random_rotation(rng)
-    P, Q = P @ M.T, Q @ M.T
+def test_reciprocity_on_random_pairs(pair):
+    P, Q = pair
     ap = np.linalg.norm(ef.area_vector(P))
     aq = np.linalg.norm(ef.area_vector(Q))
     fpq, fqp = ef.polygon_form_factor(P, Q), ef.polygon_form_factor(Q, P)
