@@ -353,6 +353,10 @@ def test_hidden_part_against_the_engine(case):
     U, EU = (v[0] for v in _point_values(X, nP, [Q]))
     assert np.all(H >= 0) and H.max() > 0.01
     assert np.all(np.abs(H - (U - F[:, 0])) <= EH + EU + E[:, 0] + 1e-16)
+    # the estimates themselves within DESIGN's targets (occluded 1e-11, unoccluded
+    # 1e-13 + 1e-12 F), not taken as they come
+    assert np.all(EH <= 1e-11) and np.all(E[:, 0] <= 1e-11), (EH.max(), E[:, 0].max())
+    assert np.all(EU <= 1e-13 + 1e-12 * U), (EU / U).max()
 
 
 def _within_estimates(scene, F, E):
@@ -393,6 +397,9 @@ def test_hidden_part_against_the_engine_on_drawn_scenes(case):
     U, EU = (v[0] for v in _point_values(X, n, [Qc]))
     assert H[0] > 0                                 # the near polygon hides part of it
     assert abs(H[0] - (U[0] - F[0, 0])) <= EH[0] + EU[0] + E[0, 0] + 1e-15 * U[0]
+    # the estimates within DESIGN's targets, not taken as they come
+    assert EH[0] <= 1e-11 and E[0, 0] <= 1e-11 and EU[0] <= 1e-13 + 1e-12 * U[0], (
+        EH[0], E[0, 0], EU[0], U[0])
 
 
 def test_hidden_part_falls_back_to_the_engine_where_geos_fails(monkeypatch):
