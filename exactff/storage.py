@@ -53,7 +53,7 @@ def _suffix(path, name="out"):
                      f"compressed) or .npz (sparse)")
 
 
-def output_path(path, sparse=False):
+def output_path(path, sparse=False, name="out"):
     """The file an output ``path`` names: ``path`` itself when it ends in ``.npy``,
     ``.zarr`` or ``.npz``; otherwise ``path`` with ``.npz`` (``sparse``) or ``.npy``
     appended, as :func:`numpy.save` does (``"m"`` -> ``"m.npy"``, ``"m.v2"`` ->
@@ -62,7 +62,12 @@ def output_path(path, sparse=False):
     >>> output_path("m"), output_path("m", sparse=True), output_path("m.zarr")
     ('m.npy', 'm.npz', 'm.zarr')
     """
-    path = os.fspath(path)
+    try:
+        path = os.fspath(path)
+    except TypeError:
+        raise TypeError(f"{name}: expected a path (str or os.PathLike), got {path!r}") from None
+    if not isinstance(path, str):
+        raise TypeError(f"{name}: expected a path as str, got {path!r}")
     if any(path.endswith(s) for s in SUFFIXES):
         return path
     return path + (".npz" if sparse else ".npy")

@@ -171,6 +171,9 @@ def test_bad_outputs_and_options(tmp_path):
         ef.form_factor_matrix(SCENE, out=tmp_path / "a.npz")
     with pytest.raises(ValueError, match=r"\.npz"):
         ef.form_factor_matrix(SCENE, out=tmp_path / "a.npy", sparse=True)
+    for bad in (3, b"m.npy"):
+        with pytest.raises(TypeError, match="out: expected a path"):
+            ef.form_factor_matrix(SCENE, out=bad)
     with pytest.raises(ValueError, match="jobs"):
         ef.form_factor_matrix(SCENE, jobs=0)
     with pytest.raises(ValueError, match="not both"):
@@ -271,11 +274,14 @@ def test_cli_scheduler_sparse_and_jobs(tmp_path, serial, cluster):
     for bad, msg in ((["--jobs", "2", "--scheduler", cluster.scheduler_address], "give one"),
                      (["--sparse", "-o", "x.npy"], "--sparse writes a .npz"),
                      (["-o", "x.npz"], "needs --sparse"),
-                     (["-o", "x.txt"], "suffix"),
                      (["--scheduler", "tcp://127.0.0.1:9", "--scheduler-timeout", "2"],
                       "cannot connect")):
         r = _cli("matrix", str(scene_file), "--no-progress", *bad, cwd=tmp_path)
         assert r.returncode == 2 and msg in r.stderr and "Traceback" not in r.stderr, (bad, r.stderr)
+    # another suffix is kept and the format's appended, as np.save does
+    r = _cli("matrix", str(scene_file), "--no-progress", "-o", "x.txt", cwd=tmp_path)
+    assert r.returncode == 0 and "-> x.txt.npy" in r.stdout, r.stderr
+    assert np.array_equal(np.asarray(ef.load_matrix(tmp_path / "x.txt.npy")), serial)
 
 
 def SCENE_JSON():
