@@ -74,6 +74,17 @@ def upward_unit_vectors(min_z=0.05):
                      st.floats(0, 2 * math.pi))
 
 
+def checkout_env():
+    """The environment for a subprocess that must import this checkout's exactff (not
+    another one installed in the interpreter) whatever its working directory: the
+    checkout's root first on PYTHONPATH."""
+    import os
+
+    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    path = os.environ.get("PYTHONPATH")
+    return dict(os.environ, PYTHONPATH=root + (os.pathsep + path if path else ""))
+
+
 def rotations():
     """Hypothesis strategy: rotation matrices (an axis from the sphere and an angle),
     shrinking towards the identity about +z."""

@@ -13,7 +13,7 @@ from hypothesis import given, settings, strategies as st
 import exactff as ef
 from exactff.testing.strategies import occluded_scenes, polygons_2d
 
-from common import examples, rotations
+from common import checkout_env, examples, rotations
 
 
 def howell_parallel(a, b, c):
@@ -498,12 +498,12 @@ def test_cli_matrix_area(tmp_path):
         {"vertices": P.tolist()} for P in scene.polygons]}))
     r = subprocess.run([sys.executable, "-m", "exactff", "matrix", str(path), "--area",
                         "--tolerance", "1e-10", "--no-progress", "-o", "a.npy"],
-                       capture_output=True, text=True, cwd=tmp_path, timeout=300)
+                       capture_output=True, text=True, cwd=tmp_path, timeout=300, env=checkout_env())
     assert r.returncode == 0, r.stderr
     F, E = np.load(tmp_path / "a.npy"), np.load(tmp_path / "a.error.npy")
     assert np.array_equal(F, ef.area_form_factors(scene))
     assert E.shape == F.shape and E.max() <= 1e-10
     r = subprocess.run([sys.executable, "-m", "exactff", "matrix", str(path), "--area",
                         "--sparse", "--no-progress"], capture_output=True, text=True,
-                       cwd=tmp_path, timeout=300)
+                       cwd=tmp_path, timeout=300, env=checkout_env())
     assert r.returncode == 2 and "--area writes a dense .npy" in r.stderr

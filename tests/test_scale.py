@@ -19,6 +19,7 @@ import scipy.sparse as sp
 import exactff as ef
 from exactff import formfactors
 
+from common import checkout_env
 from scale_helpers import RecordingExact, read_log
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -220,7 +221,7 @@ def test_sigkill_then_resume_gives_the_identical_matrix(tmp_path, serial, suffix
         pytest.importorskip("zarr")
     out, log = str(tmp_path / ("m" + suffix)), str(tmp_path / "killed.log")
     code = KILLED.format(tests=str(ROOT / "tests"), log=log, out=out, sparse=sparse)
-    proc = subprocess.Popen([sys.executable, "-c", code], cwd=tmp_path)
+    proc = subprocess.Popen([sys.executable, "-c", code], cwd=tmp_path, env=checkout_env())
     deadline = time.time() + 120
     while len(_done_rows(out, suffix)) < 8 and time.time() < deadline and proc.poll() is None:
         time.sleep(0.02)
@@ -256,7 +257,7 @@ def test_an_unfinished_output_is_not_read_as_a_matrix(tmp_path):
 # ---------------------------------------------------------------------------------------
 def _cli(*args, cwd):
     return subprocess.run([sys.executable, "-m", "exactff", *args], capture_output=True,
-                          text=True, cwd=cwd, timeout=300)
+                          text=True, cwd=cwd, timeout=300, env=checkout_env())
 
 
 def test_cli_scheduler_sparse_and_jobs(tmp_path, serial, cluster):
