@@ -5,7 +5,7 @@ import sys
 
 import numpy as np
 
-__all__ = ["main", "build_parser", "open_scene", "parse_rows", "cmd_info", "cmd_ff",
+__all__ = ["main", "PROCEDURAL", "build_parser", "open_scene", "parse_rows", "cmd_info", "cmd_ff",
            "cmd_matrix", "cmd_compare", "BUILTIN", "DENSE_OUTPUT_BYTES"]
 
 BUILTIN = {
@@ -13,6 +13,17 @@ BUILTIN = {
     "cornell_box_closed": lambda: _scenes().cornell_box(closed=True),
     "office": lambda: _scenes().office(),
     "cloister": lambda: _scenes().cloister(),
+}
+
+
+# built-in scenes with a size: NAME:COUNT (building:NXxNY); the form, the counts' names
+# and the builder
+PROCEDURAL = {
+    "box": ("box:K", ["K"], lambda k: _scenes().subdivided_box(k)),
+    "office": ("office:N", ["N"], lambda n: _scenes().office(n)),
+    "cloister": ("cloister:N", ["N"], lambda n: _scenes().cloister(n)),
+    "building": ("building:NX or building:NXxNY", ["NX", "NY"],
+                 lambda nx, ny=1: _scenes().building(nx, ny)),
 }
 
 
@@ -35,15 +46,23 @@ def open_scene(spec, *, split_nonplanar=False, planarity_rtol=None):
         options["planarity_rtol"] = planarity_rtol
     if spec in BUILTIN:
         return BUILTIN[spec]()
-    if spec.startswith("box:"):
-        return _scenes().subdivided_box(int(spec[4:]))
-    if spec.startswith("office:"):
-        return _scenes().office(int(spec[7:]))
-    if spec.startswith("building:"):
-        nx, _, ny = spec[9:].partition("x")
-        return _scenes().building(int(nx), int(ny or 1))
-    if spec.startswith("cloister:"):
-        return _scenes().cloister(int(spec[9:]))
+    kind, _, size = spec.partition(":")
+    if kind in PROCEDURAL:
+        form, names, build = PROCEDURAL[kind]
+        texts = size.split("x") if kind == "building" else [size]
+        if not 1 <= len(texts) <= len(names):
+            raise ValueError(f"scene {spec!r}: expected {form}")
+        counts = []
+        for name, text in zip(names, texts):
+            try:
+                counts.append(int(text))
+            except ValueError:
+                raise ValueError(f"scene {spec!r}: expected {form}, with {name} an integer, "
+                                 f"got {text!r}") from None
+        try:
+            return build(*counts)
+        except ValueError as exc:
+            raise ValueError(f"scene {spec!r} ({form}): {exc}") from None
     try:
         return load_scene(spec, **options)
     except UnicodeDecodeError:
@@ -195,7 +214,7 @@ def cmd_matrix(args):
     import time
 
     from .formfactors import form_factor_matrix
-    from .storage import path_stem, path_suffix
+    from .storage import output_path, path_stem, path_suffix
 
     scene = _open(args)
     rows = parse_rows(args.rows, len(scene))
@@ -208,6 +227,7 @@ def cmd_matrix(args):
         stem = args.scene.split(":")[0].rsplit("/", 1)[-1].rsplit(".", 1)[0]
         big = len(rows) * len(scene) * 8 > DENSE_OUTPUT_BYTES
         out = f"{stem}_ff" + (".npz" if args.sparse else ".zarr" if big else ".npy")
+    out = output_path(out, args.sparse)
     suffix = path_suffix(out, "--output")
     if args.sparse != (suffix == ".npz"):
         raise ValueError(f"--output {out}: " + ("--sparse writes a .npz file" if args.sparse
@@ -347,6 +367,9 @@ def build_parser():
     parser = argparse.ArgumentParser(
         prog="exactff",
         description="Exact form factors (view factors) for scenes of planar polygons.")
+    from .version import __version__
+
+    parser.add_argument("--version", action="version", version=f"exactff {__version__}")
     sub = parser.add_subparsers(dest="command", required=True)
     p = sub.add_parser("info", help="size, area, bounds, planarity and closure of a scene")
     _scene_arguments(p)
@@ -361,8 +384,10 @@ def build_parser():
     _scene_arguments(p)
     p.add_argument("-o", "--output", help="output: .npy (dense), .zarr (chunked, "
                                           "compressed) or .npz (sparse, with --sparse); "
-                                          "default SCENE_ff.npy, .zarr above 2 GiB, .npz "
-                                          "with --sparse; an interrupted run resumes from it")
+                                          "without one of these suffixes .npy (.npz with "
+                                          "--sparse) is appended; default SCENE_ff.npy, "
+                                          ".zarr above 2 GiB, .npz with --sparse; an "
+                                          "interrupted run resumes from it")
     p.add_argument("--sparse", action="store_true",
                    help="keep the non-zero values only (scipy.sparse CSR in a .npz)")
     p.add_argument("--area", action="store_true",
@@ -404,13 +429,32 @@ def build_parser():
     return parser
 
 
+def _one_line(exc):
+    return " ".join(str(exc).split()) or type(exc).__name__
+
+
 def main(argv=None):
-    """Entry point of the ``exactff`` command."""
+    """Entry point of the ``exactff`` command.
+
+    Returns the exit status: 0 on success, 2 for a usage error (bad arguments, a scene
+    that cannot be opened or is invalid, an output of another computation; argparse's
+    own errors exit with 2 too), 1 when the computation fails (an
+    :class:`exactff.NumericalError`: a value that cannot be computed to its tolerance;
+    running out of memory). Each error is one line on stderr, without a traceback.
+    """
+    from .errors import NumericalError
+
     args = build_parser().parse_args(argv)
     try:
         return args.func(args)
+    except NumericalError as exc:
+        print(f"exactff: numerical error: {_one_line(exc)}", file=sys.stderr)
+        return 1
+    except MemoryError as exc:
+        print(f"exactff: error: out of memory ({_one_line(exc)})", file=sys.stderr)
+        return 1
     except (ValueError, OSError) as exc:
-        print(f"exactff: error: {exc}", file=sys.stderr)
+        print(f"exactff: error: {_one_line(exc)}", file=sys.stderr)
         return 2
 
 

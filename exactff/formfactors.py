@@ -14,7 +14,7 @@ from .area import area_row
 from .checks import as_receivers, check_tolerance, row_indices
 from .methods import resolve
 from .scene import as_scene
-from .storage import ZARR_CHUNK_VALUES, MatrixOutput, path_stem, path_suffix
+from .storage import ZARR_CHUNK_VALUES, MatrixOutput, output_path, path_stem, path_suffix
 
 __all__ = ["form_factors", "form_factor_matrix", "area_form_factors", "run_rows",
            "PointRows", "AreaRows", "Progress", "fingerprint", "method_record"]
@@ -291,6 +291,8 @@ def form_factor_matrix(scene, *, method="exact", rows=None, two_sided=False, exe
         Stream rows to this file as they finish and resume from it: ``.npy`` (a dense
         memory map), ``.zarr`` (a chunked, compressed store; ``exactff[scale]``) or
         ``.npz`` (sparse, with ``sparse=True``); formats in :mod:`exactff.storage`.
+        A path without one of these suffixes gets ``.npy`` appended, or ``.npz`` with
+        ``sparse=True``, as :func:`numpy.save` does: ``out="m"`` writes ``m.npy``.
         ``STEM.meta.json`` beside it records what is computed (a hash of the scene and
         rows, the method, the options). Calling again with the same ``out`` and the
         same computation resumes an interrupted (even killed) run and recomputes no
@@ -373,7 +375,8 @@ def run_rows(scene, rows, computation, *, executor=None, jobs=None, progress=Fal
     workers = (jobs if jobs and jobs > 1 else None) or (
         len(client.scheduler_info().get("workers", {})) if client is not None
         else getattr(executor, "_max_workers", None) or (os.cpu_count() if executor else 1)) or 1
-    zarr_out = out is not None and os.fspath(out).endswith(".zarr")
+    out = None if out is None else output_path(out, sparse)
+    zarr_out = out is not None and out.endswith(".zarr")
     if chunk_rows:
         step = int(chunk_rows)
     elif zarr_out:   # fixed by the store (not by the workers): a resumed run has the same

@@ -1,7 +1,8 @@
 """Where a form-factor matrix goes while it is computed: memory, or a file on disk that
 an interrupted run resumes from.
 
-Three formats, chosen by the output's suffix:
+Three formats, chosen by the output's suffix (a path without one of these suffixes gets
+``.npy``, or ``.npz`` for a sparse matrix, appended, as :func:`numpy.save` does):
 
 ``.npy``
     A dense memory map (NumPy's own format): simple, any tool reads it, but it holds
@@ -30,7 +31,8 @@ import shutil
 
 import numpy as np
 
-__all__ = ["load_matrix", "MatrixOutput", "path_stem", "path_suffix", "SUFFIXES", "ZARR_CHUNK_VALUES"]
+__all__ = ["load_matrix", "MatrixOutput", "output_path", "path_stem", "path_suffix", "SUFFIXES",
+           "ZARR_CHUNK_VALUES"]
 
 SUFFIXES = (".npy", ".zarr", ".npz")
 # blocks of a chunked store: about this many coefficients (16 MiB of doubles) per chunk
@@ -50,6 +52,26 @@ def path_suffix(path, name="out"):
             return s
     raise ValueError(f"{name}: {path!r} has no known suffix: .npy (dense), .zarr (chunked, "
                      f"compressed) or .npz (sparse)")
+
+
+def output_path(path, sparse=False, name="out"):
+    """The file an output ``path`` names: ``path`` itself when it ends in ``.npy``,
+    ``.zarr`` or ``.npz``; otherwise ``path`` with ``.npz`` (``sparse``) or ``.npy``
+    appended, as :func:`numpy.save` does (``"m"`` -> ``"m.npy"``, ``"m.v2"`` ->
+    ``"m.v2.npy"``).
+
+    >>> output_path("m"), output_path("m", sparse=True), output_path("m.zarr")
+    ('m.npy', 'm.npz', 'm.zarr')
+    """
+    try:
+        path = os.fspath(path)
+    except TypeError:
+        raise TypeError(f"{name}: expected a path (str or os.PathLike), got {path!r}") from None
+    if not isinstance(path, str):
+        raise TypeError(f"{name}: expected a path as str, got {path!r}")
+    if any(path.endswith(s) for s in SUFFIXES):
+        return path
+    return path + (".npz" if sparse else ".npy")
 
 
 def _save_atomic(path, array):

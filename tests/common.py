@@ -60,17 +60,52 @@ def rotation(axis, angle):
     return np.eye(3) + math.sin(angle) * K + (1 - math.cos(angle)) * K @ K
 
 
-def examples(n):
-    """``max_examples`` for a slow property test: ``n`` in the dev and ci profiles, and
-    the thorough profile's own count (``HYPOTHESIS_PROFILE=thorough``), so that a
-    thorough run reaches every property test."""
+def upward_unit_vectors(min_z=0.05):
+    """Hypothesis strategy: unit vectors with z > ``min_z`` (z uniform in (min_z, 1],
+    azimuth uniform), shrinking towards +z: every example drawn is valid, none is thrown
+    away (an early return or ``assume(n[2] > min_z)`` on the whole sphere loses half)."""
+    from hypothesis import strategies as st
+
+    def build(z, phi):
+        s = math.sqrt(max(0.0, 1.0 - z * z))
+        return np.array([s * math.cos(phi), s * math.sin(phi), z])
+
+    return st.builds(build, st.floats(0.0, 1.0 - min_z, exclude_max=True).map(lambda d: 1.0 - d),
+                     st.floats(0, 2 * math.pi))
+
+
+def checkout_env():
+    """The environment for a subprocess that must import this checkout's exactff (not
+    another one installed in the interpreter) whatever its working directory: the
+    checkout's root first on PYTHONPATH."""
     import os
 
+    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    path = os.environ.get("PYTHONPATH")
+    return dict(os.environ, PYTHONPATH=root + (os.pathsep + path if path else ""))
+
+
+def rotations():
+    """Hypothesis strategy: rotation matrices (an axis from the sphere and an angle),
+    shrinking towards the identity about +z."""
+    from hypothesis import strategies as st
+
+    from exactff.testing.strategies import unit_vectors
+
+    return st.builds(rotation, unit_vectors(), st.floats(0, 2 * math.pi))
+
+
+def examples(n):
+    """``max_examples`` for a property test that is slower (``n`` below 30) or cheaper
+    (above) than most: ``n`` in the dev profile (30 examples a test), scaled by the
+    loaded profile's count over the dev profile's, so every profile runs it in the same
+    proportion: twice ``n`` in ci (60), 1000 / 30 times ``n`` in thorough
+    (``HYPOTHESIS_PROFILE=thorough``). At least 1."""
     from hypothesis import settings
 
-    if os.environ.get("HYPOTHESIS_PROFILE") == "thorough":
-        return settings.get_profile("thorough").max_examples
-    return n
+    loaded = settings().max_examples
+    dev = settings.get_profile("dev").max_examples
+    return max(1, round(n * loaded / dev))
 
 
 def random_rotation(rng):

@@ -127,7 +127,12 @@ def shadow_reference(scene, p, n):
     for j, Pj in enumerate(scene.polygons):
         nj, dj = scene.normals[j], scene.plane_offsets[j]
         h = dj - nj @ p                    # < 0: p in front of j
-        if h >= 0:
+        # p within rounding of j's plane (its own polygon's centroid, a coplanar one) is
+        # edge-on, 0; the sign of h there depends on how the CPU's BLAS rounds (on one
+        # machine h = -5.6e-17 for row 30's own polygon, and the clip below kept points
+        # on p's plane: 0 / 0)
+        ulps = 16 * np.finfo(float).eps * (abs(dj) + np.abs(nj) @ np.abs(p))
+        if h >= -ulps:
             continue
         e1 = Pj[1] - Pj[0]
         e1 /= np.linalg.norm(e1)
@@ -148,7 +153,7 @@ def shadow_reference(scene, p, n):
             # beyond p), inside the pyramid: its central projection lies in j
             Q = _clip(Pi, nj, dj + 1e-12 * abs(h))          # n_j . x >= d_j: p's side
             if len(Q) >= 3:
-                Q = _clip(Q, -nj, -(nj @ p) + 1e-9 * abs(h))  # and beyond p towards j
+                Q = _clip(Q, -nj, -(nj @ p) + max(1e-9 * abs(h), ulps))  # beyond p
             for m, dm in pyramid:
                 if len(Q) >= 3:
                     Q = _clip(Q, m, dm)

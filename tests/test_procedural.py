@@ -17,7 +17,7 @@ def test_office_size_and_groups(office):
                                   "desk", "partition", "shelf"}
     light = np.array(office.groups) == "light"
     assert office.areas[light].sum() == pytest.approx(1.2 * 0.6, rel=1e-12)
-    assert np.allclose(office.normals[light], [0, -1, 0])
+    assert np.allclose(office.normals[light], [0, -1, 0], rtol=0, atol=1e-15)
     door = np.array(office.groups) == "door"
     assert office.areas[door].sum() == pytest.approx(0.9 * 2.1, rel=1e-12)
 
@@ -60,7 +60,7 @@ def test_cloister_size_groups_and_light(cloister):
     assert cloister.groups.count("light") == 1
     light = cloister.groups.index("light")
     assert cloister.areas[light] == pytest.approx(400.0, rel=1e-15)
-    assert np.allclose(cloister.normals[light], [0, -1, 0])
+    assert np.allclose(cloister.normals[light], [0, -1, 0], rtol=0, atol=1e-15)
     assert {"garth", "walk_floor", "walk_ceiling", "outer_wall", "arcade", "pier"} <= \
         set(cloister.groups)
 

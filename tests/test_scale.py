@@ -19,6 +19,7 @@ import scipy.sparse as sp
 import exactff as ef
 from exactff import formfactors
 
+from common import checkout_env
 from scale_helpers import RecordingExact, read_log
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -139,6 +140,23 @@ def test_outputs_round_trip_and_refuse_other_computations(tmp_path, serial, suff
     del M
 
 
+@pytest.mark.parametrize("name, sparse, written", [("m", False, "m.npy"), ("m", True, "m.npz"),
+                                                   ("m.v2", False, "m.v2.npy")])
+def test_out_without_a_known_suffix_gets_the_formats_suffix(tmp_path, serial, name, sparse,
+                                                            written):
+    # DESIGN 5: out="m" writes m.npy (dense) or m.npz (sparse=True), as np.save does
+    M = ef.form_factor_matrix(SCENE, out=tmp_path / name, sparse=sparse, chunk_rows=5)
+    assert sorted(os.listdir(tmp_path)) == sorted([written, written[:-4] + ".meta.json"])
+    back = ef.load_matrix(tmp_path / written)
+    assert sp.issparse(back) == sparse
+    assert np.array_equal(back.toarray() if sparse else np.asarray(back), serial)
+    assert np.array_equal(M.toarray() if sparse else np.asarray(M), serial)
+    # the same path again resumes the finished file instead of starting another
+    again = ef.form_factor_matrix(SCENE, out=str(tmp_path / name), sparse=sparse, chunk_rows=5)
+    assert np.array_equal(again.toarray() if sparse else np.asarray(again), serial)
+    assert len(os.listdir(tmp_path)) == 2
+
+
 def test_two_formats_of_one_name_are_refused_with_the_reason(tmp_path, serial):
     dense = str(tmp_path / "m.npy")
     ef.form_factor_matrix(SCENE, out=dense, chunk_rows=5)
@@ -154,8 +172,9 @@ def test_bad_outputs_and_options(tmp_path):
         ef.form_factor_matrix(SCENE, out=tmp_path / "a.npz")
     with pytest.raises(ValueError, match=r"\.npz"):
         ef.form_factor_matrix(SCENE, out=tmp_path / "a.npy", sparse=True)
-    with pytest.raises(ValueError, match="suffix"):
-        ef.form_factor_matrix(SCENE, out=tmp_path / "a.dat")
+    for bad in (3, b"m.npy"):
+        with pytest.raises(TypeError, match="out: expected a path"):
+            ef.form_factor_matrix(SCENE, out=bad)
     with pytest.raises(ValueError, match="jobs"):
         ef.form_factor_matrix(SCENE, jobs=0)
     with pytest.raises(ValueError, match="not both"):
@@ -202,7 +221,7 @@ def test_sigkill_then_resume_gives_the_identical_matrix(tmp_path, serial, suffix
         pytest.importorskip("zarr")
     out, log = str(tmp_path / ("m" + suffix)), str(tmp_path / "killed.log")
     code = KILLED.format(tests=str(ROOT / "tests"), log=log, out=out, sparse=sparse)
-    proc = subprocess.Popen([sys.executable, "-c", code], cwd=tmp_path)
+    proc = subprocess.Popen([sys.executable, "-c", code], cwd=tmp_path, env=checkout_env())
     deadline = time.time() + 120
     while len(_done_rows(out, suffix)) < 8 and time.time() < deadline and proc.poll() is None:
         time.sleep(0.02)
@@ -238,7 +257,7 @@ def test_an_unfinished_output_is_not_read_as_a_matrix(tmp_path):
 # ---------------------------------------------------------------------------------------
 def _cli(*args, cwd):
     return subprocess.run([sys.executable, "-m", "exactff", *args], capture_output=True,
-                          text=True, cwd=cwd, timeout=300)
+                          text=True, cwd=cwd, timeout=300, env=checkout_env())
 
 
 def test_cli_scheduler_sparse_and_jobs(tmp_path, serial, cluster):
@@ -256,11 +275,14 @@ def test_cli_scheduler_sparse_and_jobs(tmp_path, serial, cluster):
     for bad, msg in ((["--jobs", "2", "--scheduler", cluster.scheduler_address], "give one"),
                      (["--sparse", "-o", "x.npy"], "--sparse writes a .npz"),
                      (["-o", "x.npz"], "needs --sparse"),
-                     (["-o", "x.txt"], "suffix"),
                      (["--scheduler", "tcp://127.0.0.1:9", "--scheduler-timeout", "2"],
                       "cannot connect")):
         r = _cli("matrix", str(scene_file), "--no-progress", *bad, cwd=tmp_path)
         assert r.returncode == 2 and msg in r.stderr and "Traceback" not in r.stderr, (bad, r.stderr)
+    # another suffix is kept and the format's appended, as np.save does
+    r = _cli("matrix", str(scene_file), "--no-progress", "-o", "x.txt", cwd=tmp_path)
+    assert r.returncode == 0 and "-> x.txt.npy" in r.stdout, r.stderr
+    assert np.array_equal(np.asarray(ef.load_matrix(tmp_path / "x.txt.npy")), serial)
 
 
 def SCENE_JSON():

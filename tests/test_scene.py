@@ -79,7 +79,7 @@ def test_scene_normal_area_centroid_vs_construction(P2, n, c, scale):
 
     P = embed(P2, n, c, scale)
     s = ef.Scene.from_polygons([P])
-    assert np.allclose(s.normals[0], n, atol=1e-12)
+    assert np.allclose(s.normals[0], n, rtol=0, atol=1e-12)
     poly = shapely.Polygon(P2)
     assert shapely.is_ccw(poly.exterior)
     assert s.areas[0] == pytest.approx(poly.area * scale**2, rel=1e-12)

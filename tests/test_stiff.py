@@ -33,10 +33,12 @@ def test_catalogue_size_and_kinds():
 
 
 @pytest.mark.parametrize("case", CASES, ids=IDS)
-def test_catalogue_with_escalation_within_1e_10(case):
+def test_catalogue_with_escalation_within_the_default_tolerance(case):
+    # the default tolerance is 1e-12 relative (DESIGN's stiff target, 1e-10, is what
+    # the cases must meet at least); the value returned is rounded to double once more
     F = ef.point_polygon_form_factor(case.point, case.normal, case.polygon,
                                      one_sided=case.one_sided)
-    assert rel_error(F, case.reference) <= 1e-10
+    assert rel_error(F, case.reference) <= 1e-12 + 2.0**-53
 
 
 @pytest.mark.parametrize("case", CASES, ids=IDS)
