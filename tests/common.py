@@ -95,6 +95,18 @@ def rotations():
     return st.builds(rotation, unit_vectors(), st.floats(0, 2 * math.pi))
 
 
+def register_profiles():
+    """The hypothesis profiles: dev (30 examples), ci (60), thorough (1000). Registered
+    here, not only in conftest, so that benchmarks importing the tests' helpers see them."""
+    from hypothesis import HealthCheck, settings
+
+    settings.register_profile("dev", max_examples=30, deadline=None)
+    settings.register_profile("ci", max_examples=60, deadline=None,
+                              suppress_health_check=[HealthCheck.too_slow])
+    settings.register_profile("thorough", max_examples=1000, deadline=None,
+                              suppress_health_check=[HealthCheck.too_slow])
+
+
 def examples(n):
     """``max_examples`` for a property test that is slower (``n`` below 30) or cheaper
     (above) than most: ``n`` in the dev profile (30 examples a test), scaled by the
@@ -103,6 +115,7 @@ def examples(n):
     (``HYPOTHESIS_PROFILE=thorough``). At least 1."""
     from hypothesis import settings
 
+    register_profiles()
     loaded = settings().max_examples
     dev = settings.get_profile("dev").max_examples
     return max(1, round(n * loaded / dev))
