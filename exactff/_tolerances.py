@@ -8,7 +8,7 @@ __all__ = [
     "PLANARITY_ULPS",
     "DEGENERATE_AREA_RTOL",
     "PLANE_SIDE_ULPS",
-    "ROUNDING_OVERSHOOT",
+    "ON_PLANE_ULPS",
     "BSP_COPLANAR_ULPS",
     "COVERED_RTOL",
     "DEFAULT_RTOL",
@@ -74,14 +74,19 @@ PLANARITY_ULPS = 64.0
 #: (collinear up to rounding): its area vector is then pure rounding noise.
 DEGENERATE_AREA_RTOL = 256 * EPS
 
-#: The receiving point lies in a polygon's plane when its signed distance is below this
-#: many ulps of the coordinates' magnitude: the side cannot be decided from float input,
-#: and the polygon is seen edge-on (form factor 0).
+#: Below this many ulps of the coordinates' magnitude, the float signed distance of the
+#: receiving point from a polygon's plane cannot decide its side (the rounding band):
+#: the side is decided exactly (rational arithmetic on the float input) and the
+#: unoccluded value evaluated in high precision. In the visibility engine, also the
+#: rounding of local coordinates (ulps of ``|c - p|``) in ON_PLANE_ULPS's test.
 PLANE_SIDE_ULPS = 16.0
 
-#: A value that rounding pushed below 0 (or a sine or cosine above 1) by at most this
-#: many ulps of its terms is clamped; beyond it, an AssertionError flags a bug.
-ROUNDING_OVERSHOOT = 1e3
+#: The visibility engine takes a point within this many units of rounding of its own
+#: coordinates and of a polygon's centroid (``u (|n| . |p| + |n| . |c|)``) of the
+#: polygon's plane to lie in it (seen edge-on): a centroid rounded to float lies off its
+#: polygon's plane by up to one such unit, a coplanar neighbour's plane by about as
+#: much again. Beyond it (still inside PLANE_SIDE_ULPS) the side is decided exactly.
+ON_PLANE_ULPS = 2.0
 
 #: In the BSP tree, a vertex within this many ulps of the magnitudes in ``n . x - d``
 #: lies on the splitting plane: coordinates rounded to float cannot place it more

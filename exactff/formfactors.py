@@ -11,6 +11,7 @@ import time
 import numpy as np
 
 from .area import area_row
+from .errors import check_finite
 from .checks import as_receivers, check_tolerance, row_indices
 from .methods import resolve
 from .scene import as_scene
@@ -54,6 +55,10 @@ def form_factors(scene, point, normal, *, method="exact", two_sided=False, error
     ------
     ValueError
         Bad point, normal, or method (the message names the argument).
+    NumericalError
+        The exact method: a value fell below 0 beyond its bound or came out NaN or
+        infinite (never returned); on its unoccluded path, also a value that missed the
+        tolerance in every precision tier.
 
     Notes
     -----
@@ -138,7 +143,8 @@ class AreaRows:
         return {"area": True, "tolerance": repr(self.tolerance)}
 
     def __call__(self, scene, rows):
-        return [area_row(scene, i, self.tolerance) for i in rows]
+        # every row checked before it is stored: a NaN is never returned
+        return [check_finite(*area_row(scene, i, self.tolerance)) for i in rows]
 
 
 class Progress:
@@ -467,6 +473,11 @@ def area_form_factors(scene, rows=None, *, tolerance=1e-9, error=False, executor
     -------
     ndarray of shape (len(rows), len(scene)), or a pair of them with ``error=True``
         (CSR arrays with ``sparse=True``, memory maps or stores with ``out``)
+
+    Raises
+    ------
+    NumericalError
+        A value came out NaN or infinite, or an estimate NaN (never returned).
 
     Notes
     -----

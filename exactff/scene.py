@@ -16,7 +16,8 @@ __all__ = ["Scene", "distinct_consecutive", "validate_polygon", "validate_polygo
 
 
 def distinct_consecutive(P):
-    """Vertices with consecutive repeats (cyclically) removed.
+    """Vertices with exact consecutive repeats removed, cyclically (a closing vertex
+    equal to the first included): the ring without its zero-length edges.
 
     Examples
     --------
@@ -45,8 +46,11 @@ def validate_polygon(polygon: ArrayLike, index: int = 0, name: str | None = None
 
     Returns
     -------
-    ndarray of shape (K, 3)
-        The vertices as given (consecutive repeats kept), float64, read-only.
+    ndarray of shape (K', 3)
+        The vertices, float64, read-only, with exactly repeated consecutive vertices (and
+        a closing vertex equal to the first) dropped: the same ring without its
+        zero-length edges, so that every kernel sees it alike (a zero-length edge gave
+        0/0 in the area form factors' contour integral).
 
     Raises
     ------
@@ -98,8 +102,8 @@ def validate_polygon(polygon: ArrayLike, index: int = 0, name: str | None = None
     area = float(np.linalg.norm(area_vector(D)))
     if not area > tol.DEGENERATE_AREA_RTOL * diam * diam:
         raise SceneError(index, "zero area", name)
-    P.setflags(write=False)
-    return P
+    D.setflags(write=False)
+    return D
 
 
 def validate_polygons(polygons, names=None,
@@ -114,7 +118,8 @@ def validate_polygons(polygons, names=None,
     Returns
     -------
     tuple of ndarray of shape (K_i, 3)
-        Read-only float arrays.
+        Read-only float arrays, in input order; a polygon with repeated consecutive
+        vertices comes back without them (as from :func:`validate_polygon`).
     """
     n = len(polygons)
     names = names if names is not None else (None,) * n
@@ -184,7 +189,9 @@ class Scene:
     Attributes
     ----------
     polygons : tuple of ndarray of shape (K_i, 3)
-        Read-only vertex arrays in input order.
+        Read-only vertex arrays in input order (one per input polygon, same index),
+        each with exactly repeated consecutive vertices, and a closing vertex equal to
+        the first, dropped (:func:`validate_polygon`).
     normals : ndarray of shape (N, 3)
         Unit front normals (right-hand rule, Newell).
     areas : ndarray of shape (N,)
@@ -276,11 +283,19 @@ class Scene:
         SceneError
             A polygon is ill-formed; the message names its index and the reason.
 
+        Notes
+        -----
+        Exactly repeated consecutive vertices (and a closing vertex equal to the first)
+        are dropped: ``scene.polygons[i]`` is polygon ``i`` without its zero-length
+        edges, the ring every kernel integrates.
+
         Examples
         --------
         >>> s = Scene.from_polygons([[[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]]])
         >>> len(s), float(s.areas[0])
         (1, 1.0)
+        >>> len(Scene.from_polygons([[[0, 0, 0], [1, 0, 0], [1, 0, 0], [0, 1, 0]]]).polygons[0])
+        3
         """
         return cls(list(polygons), names=names, groups=groups, materials=materials,
                    planarity_rtol=planarity_rtol)

@@ -58,17 +58,24 @@ def brute_force_nearest(P, p, D):
     """Nearest convex polygon along each direction (rows of D) from p, by testing every
     polygon (independent of the engine): plane hit, then inside all edges."""
     V = np.array([np.pad(Q, ((0, 4 - len(Q)), (0, 0)), mode="edge") for Q in P])  # (N, 4, 3)
+    from exactff import _tolerances as tol
+
     n = np.cross(V[:, 1] - V[:, 0], V[:, 2] - V[:, 0])
     n /= np.linalg.norm(n, axis=1, keepdims=True)
     num = np.einsum("ij,ij->i", n, V[:, 0] - p)
+    # decided explicitly, not by the sign of a rounded dot product: p in a polygon's
+    # plane to rounding (its own, a coplanar neighbour's) sees it edge-on, and a ray
+    # parallel to a plane to rounding misses it, in any CPU's rounding
+    ulps = tol.PLANE_SIDE_ULPS * tol.EPS
+    edge_on = np.abs(num) <= ulps * (np.abs(p).max() + np.abs(V).max(axis=(1, 2)))
     out = np.full(len(D), -1)
     for s in range(0, len(D), 500):
         d = D[s:s + 500]
         den = d @ n.T                                     # (k, N)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            t = num[None, :] / den
-        X = p + t[:, :, None] * d[:, None, :]             # (k, N, 3)
-        inside = np.isfinite(t) & (t > 1e-12)
+        ok = (np.abs(den) > ulps) & ~edge_on[None, :]
+        t = np.divide(num[None, :], den, out=np.full(den.shape, np.inf), where=ok)
+        X = p + np.where(ok, t, 0.0)[:, :, None] * d[:, None, :]   # (k, N, 3)
+        inside = ok & (t > 1e-12)
         for e in range(4):
             a, b = V[:, e], V[:, (e + 1) % 4]
             c = np.cross(b - a, X - a)
@@ -123,16 +130,18 @@ def shadow_reference(scene, p, n):
     kernel (exterior rings minus holes)."""
     import shapely
 
+    from exactff import _tolerances as tol
+
     F = np.zeros(len(scene))
     for j, Pj in enumerate(scene.polygons):
         nj, dj = scene.normals[j], scene.plane_offsets[j]
         h = dj - nj @ p                    # < 0: p in front of j
-        # p within rounding of j's plane (its own polygon's centroid, a coplanar one) is
-        # edge-on, 0; the sign of h there depends on how the CPU's BLAS rounds (on one
-        # machine h = -5.6e-17 for row 30's own polygon, and the clip below kept points
-        # on p's plane: 0 / 0)
-        ulps = 16 * np.finfo(float).eps * (abs(dj) + np.abs(nj) @ np.abs(p))
-        if h >= -ulps:
+        # decided explicitly, not by the sign of a rounded dot product: p behind j, or in
+        # its plane to the rounding of the coordinates (seen edge-on, 0; a row from a
+        # coplanar neighbour's centroid), where h is 0 or 1e-17 depending on the CPU's
+        # rounding and the projection below would divide by a rounded 0
+        band = tol.PLANE_SIDE_ULPS * tol.EPS * (np.abs(p).max() + np.abs(Pj).max())
+        if h >= -band:
             continue
         e1 = Pj[1] - Pj[0]
         e1 /= np.linalg.norm(e1)
@@ -153,13 +162,19 @@ def shadow_reference(scene, p, n):
             # beyond p), inside the pyramid: its central projection lies in j
             Q = _clip(Pi, nj, dj + 1e-12 * abs(h))          # n_j . x >= d_j: p's side
             if len(Q) >= 3:
-                Q = _clip(Q, -nj, -(nj @ p) + max(1e-9 * abs(h), ulps))  # beyond p
+                # and beyond p towards j, by more than the rounding of the projection's
+                # denominator (Q - p) . n_j, so that it is negative in any rounding
+                margin = max(1e-9 * abs(h), tol.PLANE_SIDE_ULPS * tol.EPS
+                             * (np.abs(p).max() + np.abs(Q).max()))
+                Q = _clip(Q, -nj, -(nj @ p) + margin)
             for m, dm in pyramid:
                 if len(Q) >= 3:
                     Q = _clip(Q, m, dm)
             if len(Q) < 3:
                 continue
-            t = h / ((Q - p) @ nj)
+            den = (Q - p) @ nj
+            assert np.all(den < 0), den     # the clips above guarantee it
+            t = h / den
             S = shapely.Polygon(to2d(p + t[:, None] * (Q - p)))
             if S.is_valid and S.area > 0:
                 shadows.append(S)

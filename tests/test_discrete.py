@@ -174,12 +174,17 @@ def brute_force_nearest(scene, p, n, D):
     W = D @ R  # world directions
     best = np.full(len(D), np.inf)
     hit = np.full(len(D), -1)
+    ulps = ef._tolerances.PLANE_SIDE_ULPS * ef._tolerances.EPS
     for j, P in enumerate(scene.polygons):
         nj, c = scene.normals[j], scene.centroids[j]
-        den = W @ nj
-        with np.errstate(divide="ignore", invalid="ignore"):
-            t = ((c - p) @ nj) / den
-        X = p + t[:, None] * W
+        num, den = (c - p) @ nj, W @ nj
+        # decided explicitly, not by a rounded 0: p in the plane to rounding sees the
+        # polygon edge-on, a ray parallel to it to rounding misses it
+        if abs(num) <= ulps * (np.abs(p).max() + np.abs(P).max()):
+            continue
+        ok = np.abs(den) > ulps
+        t = np.divide(num, den, out=np.full(len(W), np.inf), where=ok)
+        X = p + np.where(ok, t, 0.0)[:, None] * W
         # inside test in the polygon's plane (crossing number in 2-D)
         e1 = P[1] - P[0]
         e1 = e1 / np.linalg.norm(e1)
@@ -189,11 +194,11 @@ def brute_force_nearest(scene, p, n, D):
         inside = np.zeros(len(D), bool)
         for k in range(len(Q)):
             a, b = Q[k], Q[(k + 1) % len(Q)]
-            st = (a[1] > q[:, 1]) != (b[1] > q[:, 1])
-            with np.errstate(divide="ignore", invalid="ignore"):
-                ux = a[0] + (q[:, 1] - a[1]) * (b[0] - a[0]) / (b[1] - a[1])
+            st = (a[1] > q[:, 1]) != (b[1] > q[:, 1])     # then b[1] != a[1]
+            ux = a[0] + np.divide((q[:, 1] - a[1]) * (b[0] - a[0]), b[1] - a[1],
+                                  out=np.zeros(len(q)), where=st)
             inside ^= st & (q[:, 0] < ux)
-        ok = inside & (t > 0) & np.isfinite(t) & (t < best)
+        ok &= inside & (t > 0) & (t < best)
         best[ok], hit[ok] = t[ok], j
     return hit
 

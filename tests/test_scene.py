@@ -40,7 +40,8 @@ def test_repeated_vertices_and_nonconvex_polygons_are_valid():
     L = [[0, 0, 0], [2, 0, 0], [2, 1, 0], [1, 1, 0], [1, 2, 0], [0, 2, 0], [0, 2, 0]]
     s = ef.Scene.from_polygons([L])
     assert s.areas[0] == pytest.approx(3.0, rel=1e-15)
-    assert len(s.polygons[0]) == 7  # kept as given
+    # the repeated closing vertex is dropped (the same ring without its zero-length edge)
+    np.testing.assert_array_equal(s.polygons[0], np.array(L[:-1], dtype=float))
 
 
 def test_tiny_polygon_far_away_is_planar():

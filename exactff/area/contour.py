@@ -30,6 +30,7 @@ import shapely
 from scipy.special import roots_legendre, xlogy
 
 from .. import _tolerances as tol
+from ..errors import check_finite
 from ..geometry import area_vector, polygon_diameter, receiver_frame
 from ..halfspace import clip_halfspace
 from ..kernel import clipped_sector_sums
@@ -204,6 +205,8 @@ def polygon_form_factor(P: ArrayLike, Q: ArrayLike) -> float:
     ------
     SceneError
         A polygon is ill-formed (as for scenes; P is polygon 0, Q polygon 1).
+    NumericalError
+        The value or its estimate came out NaN or infinite (never returned).
 
     Examples
     --------
@@ -217,7 +220,7 @@ def polygon_form_factor(P: ArrayLike, Q: ArrayLike) -> float:
     """
     P = np.array(validate_polygon(P, 0), dtype=float)
     Q = np.array(validate_polygon(Q, 1), dtype=float)
-    return unoccluded_pair(P, Q)[0]
+    return check_finite(*unoccluded_pair(P, Q))[0]
 
 
 def _edge_pieces(P, eP, Q, eQ):

@@ -13,7 +13,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from .. import _tolerances as tol
-from ..errors import NumericalError
+from ..errors import NumericalError, check_finite
 from .point import local_clipped
 
 __all__ = ["eq3_edge_integral", "arc_x_extremes", "eq3_form_factor", "eq3_ring_area"]
@@ -172,9 +172,14 @@ def eq3_form_factor(point: ArrayLike, normal: ArrayLike, polygon: ArrayLike, *,
     area, mag = eq3_ring_area(np.array(C))
     # a polygon whose front faces p has a clockwise image (seen from above the disk)
     F = -sign * area / math.pi
-    if not F >= -tol.ROUNDING_OVERSHOOT * tol.EPS:
-        raise NumericalError(f"Eq. 3 gave the form factor {F!r}, below 0 beyond rounding")
-    return (max(F, 0.0), tol.C1 * tol.EPS * mag / math.pi) if error else max(F, 0.0)
+    est = tol.C1 * tol.EPS * mag / math.pi
+    check_finite(F, est, "Eq. 3 form factor")
+    # below 0 by at most its own estimate: clamped to 0, which the estimate covers;
+    # beyond it, a defect
+    if not F >= -est:
+        raise NumericalError(f"Eq. 3 gave the form factor {F!r}, below 0 beyond its "
+                             f"rounding error estimate {est:.3g}")
+    return (max(F, 0.0), est) if error else max(F, 0.0)
 
 
 def eq3_ring_area(ring: ArrayLike) -> tuple[float, float]:

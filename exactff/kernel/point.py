@@ -15,7 +15,7 @@ from numpy.typing import ArrayLike
 
 from .. import _tolerances as tol
 from ..checks import as_normal, as_point, check_tolerance
-from ..errors import NumericalError
+from ..errors import NumericalError, check_finite
 from ..geometry import area_vector, receiver_frame, rotate, to_local
 from ..halfspace import clip_above_horizon
 from ..predicates import plane_sides, polygon_side
@@ -29,7 +29,7 @@ __all__ = ["unoccluded_row", "point_polygon_form_factors", "sector_form_factor",
 
 
 def unoccluded_row(flat, p, n, *, one_sided=True, tolerance=None,
-                   return_error=False, in_band="exact", strict=None):
+                   return_error=False, in_band="exact", strict=None, sides=None):
     """Unoccluded form factors from ``p`` (normal ``n``) to every polygon of ``flat``.
 
     The hot path: culls polygons seen edge-on, facing away (one-sided) or wholly below
@@ -41,8 +41,11 @@ def unoccluded_row(flat, p, n, *, one_sided=True, tolerance=None,
 
     ``in_band`` says what happens to polygons whose plane passes within rounding of
     ``p``: ``"exact"`` decides the side exactly and evaluates them with mpmath (their
-    double value is unreliable); ``"edge_on"`` counts them as seen edge-on (0), as the
-    visibility engine does.
+    double value is unreliable); ``"edge_on"`` counts them as seen edge-on (0).
+    ``sides``: the pair ``(side, band)`` already decided by the caller (as
+    :func:`exactff.predicates.plane_sides` returns it; the visibility engine's
+    :func:`exactff.predicates.engine_sides`), instead of ``in_band``; band polygons
+    with a non-zero side are evaluated with mpmath.
 
     ``strict`` (default: not ``return_error``): raise :class:`NumericalError` when a
     value misses the tolerance even in the last tier, instead of returning it with its
@@ -53,9 +56,12 @@ def unoccluded_row(flat, p, n, *, one_sided=True, tolerance=None,
     N = len(flat.normals)
     p = np.asarray(p, dtype=float)
     n_raw = np.asarray(n, dtype=float)
-    side, band = plane_sides(flat, p, exact=(in_band == "exact"))
-    if in_band == "edge_on":
-        band[:] = False
+    if sides is not None:
+        side, band = (np.array(a) for a in sides)
+    else:
+        side, band = plane_sides(flat, p, exact=(in_band == "exact"))
+        if in_band == "edge_on":
+            band[:] = False
     live = (side > 0) if one_sided else (side != 0)
     F = np.zeros(N)
     err = np.zeros(N)
@@ -113,13 +119,15 @@ def unoccluded_row(flat, p, n, *, one_sided=True, tolerance=None,
         # the last tier's values are checked too: one that still misses the tolerance
         # (mpmath stopped at its precision limit) is returned with its estimate when the
         # caller asks for estimates, and raises otherwise
-        missed = flagged[~(err[flagged] <= tolerance * F[flagged] + tol.MP_VALUE_FLOOR)]
+        missed = flagged[err[flagged] > tolerance * F[flagged] + tol.MP_VALUE_FLOOR]
         if len(missed) and strict:
             i = int(missed[0])
             raise NumericalError(f"polygon {i}: the form factor {F[i]:.17g} misses the "
                                  f"tolerance {tolerance:g} (error estimate {err[i]:.3g}) "
                                  f"even in {tol.MP_MAX_DPS}-digit arithmetic; ask error=True "
                                  f"for the value with its estimate")
+    # (a NaN is not "missed" above: it is refused here, on every tier's way out)
+    check_finite(F, err)
     return (F, err) if return_error else F
 
 
@@ -151,6 +159,12 @@ def point_polygon_form_factors(point: ArrayLike, normal: ArrayLike, polygons, *,
     ndarray of shape (M,)
         ``F(p -> polygon_j)`` with horizon clipping and no occlusion; with
         ``error=True``, a pair ``(F, err)``.
+
+    Raises
+    ------
+    NumericalError
+        As :func:`point_polygon_form_factor`: a value missed the tolerance (unless
+        ``error=True``), fell below 0 beyond its estimate, or came out NaN or infinite.
 
     See Also
     --------
@@ -275,6 +289,9 @@ def point_polygon_form_factor(point: ArrayLike, normal: ArrayLike, polygon: Arra
         The polygon is ill-formed (the error names polygon 0).
     ValueError
         ``point`` or ``normal`` is not finite, or the normal is zero.
+    NumericalError
+        The value missed ``tolerance`` even in the last precision tier (unless
+        ``error=True``), fell below 0 beyond its estimate, or came out NaN or infinite.
 
     Notes
     -----

@@ -109,8 +109,10 @@ def sector_values(S, mags, errs, d0, one_sided, eps=tol.EPS, unchecked=None):
     if one_sided:
         F[d0 >= 0] = 0.0
         err[d0 >= 0] = 0.0
-    # rounding can leave a value below 0 by at most its error estimate
-    ok = F >= -tol.ROUNDING_OVERSHOOT * (err + 1e-300)
+    # rounding can leave a value below 0 by at most its error estimate: there it is
+    # clamped to 0, which the estimate still covers (0 <= exact <= F + err <= err);
+    # beyond it, the value is a defect and raises
+    ok = F >= -err
     if unchecked is not None:
         ok |= unchecked
     if not np.all(ok):

@@ -13,10 +13,10 @@ from scipy.spatial import ConvexHull, QhullError
 
 from .. import _tolerances as tol
 from ..checks import as_receiver
-from ..errors import NumericalError
+from ..errors import NumericalError, check_finite
 from ..geometry import receiver_frame, to_local
 from ..kernel import eq3_form_factor, flat_polygons, unoccluded_row
-from ..predicates import coplanar_band_sides, plane_sides
+from ..predicates import coplanar_band_sides, engine_sides
 from ..prepared import prepared
 from .bsp import coplanar_overlaps, front_to_back, scene_bsp
 from .charts import CHARTS
@@ -100,9 +100,9 @@ def visible_form_factors(scene, point, normal, *, two_sided=False, stats=None,
     st = stats if stats is not None else {}
     flat = flat_polygons(scene)
     p = np.asarray(point, dtype=float)
-    # polygons whose plane passes within rounding of p count as edge-on: their images
-    # are arcs up to rounding and cannot be clipped reliably in double precision
-    side, _ = plane_sides(flat, p, exact=False)
+    # the side of p decided exactly in the rounding band, as on the unoccluded path;
+    # seen edge-on only where p lies in the plane to the rounding of its coordinates
+    side, band = engine_sides(flat, p)
     # shortcut: a convex enclosure seen from inside has no occlusion at all
     if shortcuts and is_convex_enclosure(scene) and np.all(side >= 0):
         st["path"] = "unoccluded"
@@ -112,7 +112,7 @@ def visible_form_factors(scene, point, normal, *, two_sided=False, stats=None,
                 for P, s in zip(scene.polygons, side)])
             return (FE[:, 0], FE[:, 1]) if error else FE[:, 0]
         return unoccluded_row(flat, p, normal, one_sided=not two_sided, tolerance=tolerance,
-                              in_band="edge_on", return_error=error, strict=True)
+                              sides=(side, band), return_error=error, strict=True)
     st["path"] = "clipper"
     tree, order, src, kept, world, receives = _row_fragments(scene, p, normal, side, two_sided,
                                                              shortcuts, st)
@@ -123,8 +123,10 @@ def visible_form_factors(scene, point, normal, *, two_sided=False, stats=None,
                                   integrator=integrator, refiner=refiner, stats=st)
     F = np.bincount(src, weights=Ff, minlength=len(scene))
     E = np.bincount(src, weights=ef_, minlength=len(scene))
-    # holes subtract: a value may fall below 0 by rounding, never by more than its estimate
-    bad = np.flatnonzero(~(F >= -tol.ROUNDING_OVERSHOOT * (E + 1e-300)))
+    check_finite(F, E)
+    # holes subtract: a value may fall below 0 by rounding, never by more than its
+    # bound; within it, it is clamped to 0 (still covered: 0 <= exact <= F + E <= E)
+    bad = np.flatnonzero(~(F >= -E))
     if len(bad):
         raise NumericalError(f"polygon {bad[0]}: occluded form factor {F[bad[0]]!r} below 0 "
                              f"beyond its rounding error estimate {E[bad[0]]:.3g}")
@@ -175,7 +177,7 @@ def visible_graph(scene, point, normal, *, two_sided=False, max_segment=0.02):
     if not (np.isfinite(max_segment) and max_segment > 0):
         raise ValueError(f"max_segment must be a positive number, got {max_segment!r}")
     flat = flat_polygons(scene)
-    side, _ = plane_sides(flat, p, exact=False)
+    side, _ = engine_sides(flat, p)
     _, _, src, kept, _, receives = _row_fragments(scene, p, n, side, two_sided, True, {})
     pieces = visible_pieces(kept, receives)
 
