@@ -51,9 +51,9 @@ def main():
         ref = float(boundary_form_factor(np.zeros(3), n, P, one_sided=one_sided, dps=args.dps))
         received += ref > 0
         vals = {
-            "sector": sector_form_factor(np.zeros(3), n, P, one_sided=one_sided),
-            "eq3": eq3_form_factor(np.zeros(3), n, P, one_sided=one_sided),
-            "vectorised": float(ef.point_polygon_form_factors(np.zeros(3), n, [P], one_sided=one_sided)[0]),
+            "sector": sector_form_factor(np.zeros(3), n, P, two_sided=not one_sided),
+            "eq3": eq3_form_factor(np.zeros(3), n, P, two_sided=not one_sided),
+            "vectorised": float(ef.point_polygon_form_factors(np.zeros(3), n, [P], two_sided=not one_sided)[0]),
         }
         for k, v in vals.items():
             err = abs(v - ref)

@@ -56,10 +56,10 @@ def main():
     t_sector = best_of(lambda: [sector_form_factor(p, n, q) for q in quads[:ns]], max(1, args.repeat // 2))
     t_eq3 = best_of(lambda: [eq3_form_factor(p, n, q) for q in quads[:ns]], 1)
     t_vec = best_of(lambda: ef.point_polygon_form_factors(p, n, scene, tolerance=None), args.repeat)
-    t_vec2 = best_of(lambda: ef.point_polygon_form_factors(p, n, scene, one_sided=False,
+    t_vec2 = best_of(lambda: ef.point_polygon_form_factors(p, n, scene, two_sided=True,
                                                         tolerance=None), args.repeat)
-    t_esc = best_of(lambda: ef.point_polygon_form_factors(p, n, scene, one_sided=False), args.repeat)
-    F2, err2 = ef.point_polygon_form_factors(p, n, scene, one_sided=False, tolerance=None,
+    t_esc = best_of(lambda: ef.point_polygon_form_factors(p, n, scene, two_sided=True), args.repeat)
+    F2, err2 = ef.point_polygon_form_factors(p, n, scene, two_sided=True, tolerance=None,
                                              error=True)
     flagged = int(np.sum(err2 > 1e-12 * F2))
     us_sector = t_sector / ns * 1e6
@@ -69,7 +69,7 @@ def main():
     rows.append(("vectorised, two-sided", args.quads, t_vec2, t_vec2 / args.quads * 1e6))
     rows.append(("two-sided, escalation on", args.quads, t_esc, t_esc / args.quads * 1e6))
 
-    F = ef.point_polygon_form_factors(p, n, scene, one_sided=False)
+    F = ef.point_polygon_form_factors(p, n, scene, two_sided=True)
     print(f"machine: {platform.machine()}, {platform.processor() or '?'}, "
           f"python {platform.python_version()}, numpy {np.__version__}")
     print(f"escalation (tolerance 1e-12, two-sided): {flagged} of {np.count_nonzero(F2)} "

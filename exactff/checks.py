@@ -1,10 +1,12 @@
 """Argument checks shared by every entry point: each returns the checked value or raises
 ValueError naming the argument (in the manner of scikit-image's ``_shared/utils``)."""
 
+import warnings
+
 import numpy as np
 
 __all__ = ["as_point", "as_normal", "as_receiver", "as_receivers", "check_tolerance",
-           "row_indices"]
+           "row_indices", "check_sides"]
 
 
 def as_point(point, name="point"):
@@ -116,3 +118,25 @@ def row_indices(rows, n):
     if r.size and (r.min() < 0 or r.max() >= n):
         raise ValueError(f"rows must lie in [0, {n}), got values from {r.min()} to {r.max()}")
     return r
+
+
+def check_sides(two_sided, one_sided=None):
+    """Whether only the front of a polygon receives, from ``two_sided`` (the option's
+    name everywhere) and the deprecated ``one_sided`` (its old name in the point
+    functions: a DeprecationWarning; ValueError when the two disagree).
+
+    Examples
+    --------
+    >>> check_sides(False), check_sides(True)
+    (True, False)
+    """
+    if not isinstance(two_sided, (bool, np.bool_)):
+        raise ValueError(f"two_sided must be True or False, got {two_sided!r}")
+    if one_sided is None:
+        return not two_sided
+    warnings.warn("one_sided= is deprecated: use two_sided= (two_sided=not one_sided)",
+                  DeprecationWarning, stacklevel=3)
+    if two_sided and one_sided:
+        raise ValueError("one_sided=True contradicts two_sided=True (one_sided is "
+                         "deprecated: give two_sided only)")
+    return bool(one_sided)

@@ -200,7 +200,7 @@ def hemisphere_projection(point, normal, polygon, ax=None, view="base"):
 
     if view not in ("base", "3d"):
         raise ValueError(f"view must be 'base' or '3d', got {view!r}")
-    F = point_polygon_form_factor(point, normal, polygon, one_sided=False)
+    F = point_polygon_form_factor(point, normal, polygon, two_sided=True)
     ring, _ = local_clipped(point, normal, polygon, one_sided=False)
     ring = np.array(ring, dtype=float).reshape(-1, 3)
     arcs = [_arc_points(ring[i], ring[(i + 1) % len(ring)]) for i in range(len(ring))]

@@ -263,3 +263,26 @@ def test_eq3_value_below_zero_is_judged_against_its_own_estimate(monkeypatch, ar
     else:
         with pytest.raises(ef.NumericalError, match="below 0"):
             ef.eq3_form_factor([0, 0, 0], [0, 0, 1], sq, error=True)
+
+
+# ---------------------------------------------------------------------------------------
+# interface: one name for the sidedness option
+# ---------------------------------------------------------------------------------------
+def test_two_sided_is_the_option_and_one_sided_is_deprecated():
+    # a unit square facing away from p (front towards +z, p below): 0 one-sided; seen
+    # from behind, Howell's point below the centre of a parallel square at distance 1
+    sq = np.array([[-.5, -.5, 1], [.5, -.5, 1], [.5, .5, 1], [-.5, .5, 1]], dtype=float)
+    p, n = np.zeros(3), np.array([0, 0, 1.0])
+    ref = 0.2394564705
+    for f in (ef.point_polygon_form_factor, ef.sector_form_factor, ef.eq3_form_factor,
+              ef.mp_form_factor,
+              lambda p, n, P, **k: float(ef.point_polygon_form_factors(p, n, [P], **k)[0])):
+        assert f(p, n, sq) == 0.0
+        assert abs(f(p, n, sq, two_sided=True) - ref) < 1e-10
+        with pytest.warns(DeprecationWarning, match="two_sided"):
+            assert abs(f(p, n, sq, one_sided=False) - ref) < 1e-10
+        with pytest.raises(ValueError, match="contradicts"), \
+                pytest.warns(DeprecationWarning):
+            f(p, n, sq, two_sided=True, one_sided=True)
+    with pytest.raises(ValueError, match="two_sided"):
+        ef.point_polygon_form_factor(p, n, sq, two_sided="yes")

@@ -188,7 +188,7 @@ def shadow_reference(scene, p, n):
                                                                 for r in part.interiors]
             for r, ring in enumerate(rings):
                 X = Pj[0] + ring[:, :1] * e1 + ring[:, 1:] * e2
-                val = ef.point_polygon_form_factor(p, n, X, one_sided=False)
+                val = ef.point_polygon_form_factor(p, n, X, two_sided=True)
                 F[j] += val if r == 0 else -val
     return F
 

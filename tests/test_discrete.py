@@ -22,7 +22,7 @@ DISCRETE = [m for m in METHODS if m != "exact"]
 def exact_region(P):
     """Exact form factor of a region given by a polygon, from the origin with normal z,
     either side receiving (the kernel under test elsewhere, against mpmath)."""
-    return ef.point_polygon_form_factor(ORIGIN, UP, np.asarray(P, float), one_sided=False)
+    return ef.point_polygon_form_factor(ORIGIN, UP, np.asarray(P, float), two_sided=True)
 
 
 def cells_in(layout, mask_fn):

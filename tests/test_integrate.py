@@ -79,7 +79,7 @@ def test_random_polygons_vs_mpmath(P, n, one_sided):
     assume(abs(ef.unit_normal(P) @ P.mean(axis=0)) > 1e-9)
     ref = float(boundary_form_factor(ORIGIN, n, P, one_sided=one_sided, dps=40))
     for kernel in KERNELS.values():
-        assert_form_factors_close(kernel(ORIGIN, n, P, one_sided=one_sided), ref,
+        assert_form_factors_close(kernel(ORIGIN, n, P, two_sided=not one_sided), ref,
                                   rtol=RTOL, atol=ATOL)
 
 
@@ -105,8 +105,8 @@ def test_eq3_vs_sector_form(P, n, p):
     # sector form's high-precision tier is reliable)
     assume(abs(ef.unit_normal(P) @ (P.mean(axis=0) - p)) > 1e-9)
     for one_sided in (True, False):
-        assert_form_factors_close(eq3_form_factor(p, n, P, one_sided=one_sided),
-                                  sector_form_factor(p, n, P, one_sided=one_sided),
+        assert_form_factors_close(eq3_form_factor(p, n, P, two_sided=not one_sided),
+                                  sector_form_factor(p, n, P, two_sided=not one_sided),
                                   rtol=RTOL, atol=ATOL)
 
 
@@ -194,8 +194,8 @@ def test_form_factor_invariant_under_rotation_about_normal(P, n, angle):
 def test_form_factor_invariant_under_rigid_motion(P, n, p, axis, angle, shift):
     assume(abs(ef.unit_normal(P) @ (P.mean(axis=0) - p)) > 1e-9)
     Rm = rotation(axis, angle)
-    F0 = sector_form_factor(p, n, P, one_sided=False)
-    F1 = sector_form_factor(Rm @ p + shift, Rm @ n, P @ Rm.T + shift, one_sided=False)
+    F0 = sector_form_factor(p, n, P, two_sided=True)
+    F1 = sector_form_factor(Rm @ p + shift, Rm @ n, P @ Rm.T + shift, two_sided=True)
     # moving the inputs rounds them at the scale of |shift| ~ 10: a few 1e-15 per vertex
     assert_form_factors_close(F1, F0, rtol=1e-11, atol=1e-12)
 
@@ -209,8 +209,8 @@ def test_splitting_a_polygon_keeps_the_total(P, n, p, cut):
     j = 2 + cut % (k - 3)  # split along the chord 0 - j, 2 <= j <= k - 2 (convex)
     part1, part2 = P[: j + 1], np.vstack([P[j:], P[:1]])
     for kernel in KERNELS.values():
-        total = kernel(p, n, part1, one_sided=False) + kernel(p, n, part2, one_sided=False)
-        assert_form_factors_close(total, kernel(p, n, P, one_sided=False),
+        total = kernel(p, n, part1, two_sided=True) + kernel(p, n, part2, two_sided=True)
+        assert_form_factors_close(total, kernel(p, n, P, two_sided=True),
                                   rtol=1e-12, atol=2e-13)
 
 
@@ -221,18 +221,18 @@ def test_reversed_winding(P, n, p):
     for kernel in KERNELS.values():
         front, back = kernel(p, n, P), kernel(p, n, Rv)
         assert front == 0.0 or back == 0.0  # one-sided: only one side receives
-        assert_form_factors_close(kernel(p, n, Rv, one_sided=False),
-                                  kernel(p, n, P, one_sided=False), rtol=RTOL, atol=ATOL)
-        assert_form_factors_close(front + back, kernel(p, n, P, one_sided=False),
+        assert_form_factors_close(kernel(p, n, Rv, two_sided=True),
+                                  kernel(p, n, P, two_sided=True), rtol=RTOL, atol=ATOL)
+        assert_form_factors_close(front + back, kernel(p, n, P, two_sided=True),
                                   rtol=RTOL, atol=ATOL)
 
 
 def test_polygon_behind_in_plane_or_edge_on_gives_zero():
     for kernel in KERNELS.values():
         assert kernel(ORIGIN, UP, rect_xy(-1, 1, -1, 1, -0.5)) == 0.0            # behind
-        assert kernel(ORIGIN, UP, rect_xy(1, 2, -1, 1, 0.0), one_sided=False) == 0.0
+        assert kernel(ORIGIN, UP, rect_xy(1, 2, -1, 1, 0.0), two_sided=True) == 0.0
         edge_on = np.array([[0.0, 1, 0], [0.0, 1, 1], [0.0, 2, 1], [0.0, 2, 0]])
-        assert kernel(ORIGIN, UP, edge_on, one_sided=False) == 0.0            # p in plane
+        assert kernel(ORIGIN, UP, edge_on, two_sided=True) == 0.0            # p in plane
         assert kernel(ORIGIN, UP, rect_xy(-1, 1, -1, 1, 1.0, facing_down=False)) == 0.0
 
 
@@ -250,9 +250,9 @@ def test_vectorised_vs_eq3_scalar_loop(polys, n, p, one_sided):
     # higher tier) is rounding noise (its horizon chord passes within 1e-17 of p)
     for P in polys:
         assume(abs(ef.unit_normal(P) @ (P.mean(axis=0) - p)) > 1e-9)
-    F = ef.point_polygon_form_factors(p, n, polys, one_sided=one_sided)
+    F = ef.point_polygon_form_factors(p, n, polys, two_sided=not one_sided)
     assert F.shape == (len(polys),)
-    loop = [eq3_form_factor(p, n, P, one_sided=one_sided) for P in polys]
+    loop = [eq3_form_factor(p, n, P, two_sided=not one_sided) for P in polys]
     assert_form_factors_close(F, loop, rtol=RTOL, atol=ATOL)
     assert np.all(F >= 0) and np.all(np.isfinite(F))
 

@@ -38,7 +38,7 @@ def test_points_above_reach_the_plane_and_the_horizon():
     def grazing(pn):
         p, n = pn
         F = ef.point_polygon_form_factor(p, n, SQUARE)
-        U = ef.point_polygon_form_factor(p, n, SQUARE, one_sided=False)
+        U = ef.point_polygon_form_factor(p, n, SQUARE, two_sided=True)
         # the horizon cuts the polygon: part of it is below
         below = np.any((SQUARE - p) @ n < 0) and np.any((SQUARE - p) @ n > 0)
         return below and F > 0 and U >= F

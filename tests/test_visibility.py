@@ -252,7 +252,7 @@ def test_two_sided_receiving():
     assert one[1] == 0.0
     # nothing is in front of the strip: its back receives its unoccluded value
     assert_form_factors_close(two[1], ef.point_polygon_form_factor(
-        p, [0, 0, 1], scene.polygons[1], one_sided=False), rtol=0, atol=OCC_ATOL)
+        p, [0, 0, 1], scene.polygons[1], two_sided=True), rtol=0, atol=OCC_ATOL)
     assert_form_factors_close(two[[0, 2]], one[[0, 2]], rtol=0, atol=OCC_ATOL)
 
 

@@ -131,7 +131,7 @@ def main():
             if abs(ref - check) > mp.mpf(10) ** -50 * max(abs(ref), mp.mpf(10) ** -300):
                 raise SystemExit(f"{name}: quadrature {ref} and closed form {check} disagree")
             ref_s = mp.nstr(ref, 60, min_fixed=1, max_fixed=0)
-        dbl = point_polygon_form_factor(p, n, P, one_sided=one_sided, tolerance=None)
+        dbl = point_polygon_form_factor(p, n, P, two_sided=not one_sided, tolerance=None)
         rel = abs(dbl - float(ref)) / abs(float(ref))
         data.append({
             "name": name,

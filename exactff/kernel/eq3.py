@@ -13,6 +13,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from .. import _tolerances as tol
+from ..checks import check_sides
 from ..errors import NumericalError, check_finite
 from .point import local_clipped
 
@@ -149,7 +150,7 @@ def arc_x_extremes(a: ArrayLike, b: ArrayLike) -> tuple:
 
 
 def eq3_form_factor(point: ArrayLike, normal: ArrayLike, polygon: ArrayLike, *,
-                    one_sided: bool = True,
+                    two_sided: bool = False, one_sided: bool | None = None,
                     error: bool = False) -> float | tuple[float, float]:
     """Unoccluded form factor by the paper's Eq. 3 (corrected), with span splitting.
 
@@ -166,6 +167,7 @@ def eq3_form_factor(point: ArrayLike, normal: ArrayLike, polygon: ArrayLike, *,
     >>> round(eq3_form_factor([0, 0, 0], [0, 0, 1], sq), 12)
     0.239456470461
     """
+    one_sided = check_sides(two_sided, one_sided)
     C, sign = local_clipped(point, normal, polygon, one_sided)
     if not sign or len(C) < 2:
         return (0.0, 0.0) if error else 0.0

@@ -10,6 +10,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from .. import _tolerances as tol
+from ..checks import check_sides
 from ..errors import NumericalError
 from ..geometry import mp_receiver_frame, receiver_frame, rotate
 from ..halfspace import clip_above_horizon
@@ -128,7 +129,7 @@ def mp_sector_value(point, normal, polygon, one_sided, dps, side_hint=None):
 
 
 def mp_form_factor(point: ArrayLike, normal: ArrayLike, polygon: ArrayLike, *,
-                   one_sided: bool = True, tolerance: float = tol.DEFAULT_RTOL,
+                   two_sided: bool = False, one_sided: bool | None = None, tolerance: float = tol.DEFAULT_RTOL,
                    dps: int | None = None, error: bool = False,
                    side: int | None = None) -> float | tuple[float, float]:
     """Unoccluded form factor with mpmath, from the float input taken as exact.
@@ -142,7 +143,8 @@ def mp_form_factor(point: ArrayLike, normal: ArrayLike, polygon: ArrayLike, *,
     ----------
     point, normal : array_like of shape (3,)
     polygon : array_like of shape (K, 3)
-    one_sided : bool, default True
+    two_sided : bool, default False
+        As for :func:`exactff.point_polygon_form_factor` (``one_sided=``: deprecated).
     tolerance : float, default 1e-12
     dps : int, optional
         Starting precision (default 30 digits).
@@ -163,6 +165,7 @@ def mp_form_factor(point: ArrayLike, normal: ArrayLike, polygon: ArrayLike, *,
     >>> mp_form_factor([0, 0, 0], [0, 0, 1], sq)  # F = A / pi to first order
     3.183098861837907e-19
     """
+    one_sided = check_sides(two_sided, one_sided)
     P = np.asarray(polygon, dtype=float)
     hi, diff, converged = mp_converge(
         lambda prec: mp_sector_value(point, normal, P, one_sided, prec, side),

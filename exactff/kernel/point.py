@@ -14,7 +14,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from .. import _tolerances as tol
-from ..checks import as_normal, as_point, check_tolerance
+from ..checks import as_normal, as_point, check_sides, check_tolerance
 from ..errors import NumericalError, check_finite
 from ..geometry import area_vector, receiver_frame, rotate, to_local
 from ..halfspace import clip_above_horizon
@@ -113,7 +113,7 @@ def unoccluded_row(flat, p, n, *, one_sided=True, tolerance=None,
         # last tier (DESIGN 2.2): mpmath at the digits the value needs
         for i in flagged:
             P = flat.V[flat.offsets[i]:flat.offsets[i + 1]]
-            F[i], err[i] = mp_form_factor(p, n_raw, P, one_sided=one_sided,
+            F[i], err[i] = mp_form_factor(p, n_raw, P, two_sided=not one_sided,
                                           tolerance=tolerance, error=True,
                                           side=int(side[i]))
         # the last tier's values are checked too: one that still misses the tolerance
@@ -132,7 +132,7 @@ def unoccluded_row(flat, p, n, *, one_sided=True, tolerance=None,
 
 
 def point_polygon_form_factors(point: ArrayLike, normal: ArrayLike, polygons, *,
-                               one_sided: bool = True,
+                               two_sided: bool = False, one_sided: bool | None = None,
                                tolerance: float | None = tol.DEFAULT_RTOL,
                                error: bool = False) -> np.ndarray | tuple[np.ndarray, np.ndarray]:
     """Unoccluded form factors from one point to many polygons (vectorised).
@@ -145,8 +145,9 @@ def point_polygon_form_factors(point: ArrayLike, normal: ArrayLike, polygons, *,
         Receiver normal ``n`` (normalised if not unit).
     polygons : Scene or sequence of array_like of shape (K_i, 3)
         The polygons; a sequence is validated as by :meth:`exactff.Scene.from_polygons`.
-    one_sided : bool, default True
-        If True, a polygon receives only when its front faces ``p``.
+    two_sided : bool, default False
+        If True, a polygon receives on either side; else only when its front faces
+        ``p``. (``one_sided=`` is its deprecated old name.)
     tolerance : float or None, default 1e-12
         Requested relative accuracy. Values whose rounding-error estimate exceeds
         ``tolerance * F`` are re-evaluated with mpmath from the float input (see
@@ -178,6 +179,7 @@ def point_polygon_form_factors(point: ArrayLike, normal: ArrayLike, polygons, *,
     >>> point_polygon_form_factors([0, 0, 0], [0, 0, 1], [sq, sq + [1, 0, 0]]).round(6)
     array([0.239456, 0.084354])
     """
+    one_sided = check_sides(two_sided, one_sided)
     p = as_point(point)
     as_normal(normal)
     n = np.asarray(normal, dtype=float)
@@ -216,7 +218,7 @@ def local_clipped(point, normal, polygon, one_sided):
 
 
 def sector_form_factor(point: ArrayLike, normal: ArrayLike, polygon: ArrayLike, *,
-                       one_sided: bool = True, tolerance: float | None = tol.DEFAULT_RTOL,
+                       two_sided: bool = False, one_sided: bool | None = None, tolerance: float | None = tol.DEFAULT_RTOL,
                        error: bool = False) -> float | tuple[float, float]:
     """Unoccluded form factor by the sector (Lambert) form, one polygon.
 
@@ -229,7 +231,8 @@ def sector_form_factor(point: ArrayLike, normal: ArrayLike, polygon: ArrayLike, 
     point : array_like of shape (3,)
     normal : array_like of shape (3,)
     polygon : array_like of shape (K, 3)
-    one_sided : bool, default True
+    two_sided : bool, default False
+        As for :func:`exactff.point_polygon_form_factor` (``one_sided=``: deprecated).
     tolerance : float or None, default 1e-12
         Requested relative accuracy (None: plain double precision, no escalation).
     error : bool, default False
@@ -245,13 +248,14 @@ def sector_form_factor(point: ArrayLike, normal: ArrayLike, polygon: ArrayLike, 
     >>> round(sector_form_factor([0, 0, 0], [0, 0, 1], sq), 12)
     0.239456470461
     """
-    F, err = point_polygon_form_factors(point, normal, [polygon], one_sided=one_sided,
+    one_sided = check_sides(two_sided, one_sided)
+    F, err = point_polygon_form_factors(point, normal, [polygon], two_sided=not one_sided,
                                         tolerance=tolerance, error=True)
     return (float(F[0]), float(err[0])) if error else float(F[0])
 
 
 def point_polygon_form_factor(point: ArrayLike, normal: ArrayLike, polygon: ArrayLike, *,
-                              one_sided: bool = True,
+                              two_sided: bool = False, one_sided: bool | None = None,
                               tolerance: float | None = tol.DEFAULT_RTOL,
                               error: bool = False) -> float | tuple[float, float]:
     """Unoccluded form factor from a differential area to one planar polygon.
@@ -267,9 +271,9 @@ def point_polygon_form_factor(point: ArrayLike, normal: ArrayLike, polygon: Arra
         Receiver normal ``n``; normalised if not unit.
     polygon : array_like of shape (K, 3)
         Planar simple polygon, counter-clockwise seen from its front.
-    one_sided : bool, default True
-        If True (the default), the polygon receives only when its front faces ``p``;
-        if False, either side does.
+    two_sided : bool, default False
+        If False (the default), the polygon receives only when its front faces ``p``;
+        if True, either side does. (``one_sided=`` is its deprecated old name.)
     tolerance : float or None, default 1e-12
         Requested relative accuracy. When the rounding-error estimate of the double
         precision value exceeds ``tolerance * F``, the value is re-evaluated with
@@ -308,5 +312,6 @@ def point_polygon_form_factor(point: ArrayLike, normal: ArrayLike, polygon: Arra
     >>> round(point_polygon_form_factor([0, 0, 0], [0, 0, 1], rect), 10)
     0.1673750099
     """
-    return sector_form_factor(point, normal, polygon, one_sided=one_sided,
+    one_sided = check_sides(two_sided, one_sided)
+    return sector_form_factor(point, normal, polygon, two_sided=not one_sided,
                               tolerance=tolerance, error=error)

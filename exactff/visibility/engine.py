@@ -108,7 +108,7 @@ def visible_form_factors(scene, point, normal, *, two_sided=False, stats=None,
         st["path"] = "unoccluded"
         if integrator == "eq3":
             FE = np.array([(0.0, 0.0) if s == 0 else eq3_form_factor(
-                p, normal, P, one_sided=not two_sided, error=True)
+                p, normal, P, two_sided=two_sided, error=True)
                 for P, s in zip(scene.polygons, side)])
             return (FE[:, 0], FE[:, 1]) if error else FE[:, 0]
         return unoccluded_row(flat, p, normal, one_sided=not two_sided, tolerance=tolerance,
