@@ -1,6 +1,8 @@
 """Form factors of a scene: rows from points (broadcasting), and the one matrix driver
 for point rows and area rows (jobs, executors, streamed and resumable outputs, sparse)."""
 
+from __future__ import annotations
+
 import hashlib
 import json
 import os
@@ -9,20 +11,22 @@ import threading
 import time
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from .area import area_row
 from .errors import check_finite
 from .checks import as_receivers, check_tolerance, row_indices
-from .methods import resolve
-from .scene import as_scene
+from .methods import FormFactorMethod, resolve
+from .scene import Scene, as_scene
 from .storage import ZARR_CHUNK_VALUES, MatrixOutput, output_path, path_stem, path_suffix
 
 __all__ = ["form_factors", "form_factor_matrix", "area_form_factors", "run_rows",
            "PointRows", "AreaRows", "Progress", "fingerprint", "method_record"]
 
 
-def form_factors(scene, point, normal, *, method="exact", two_sided=False, error=False,
-                 **options):
+def form_factors(scene: Scene, point: ArrayLike, normal: ArrayLike, *,
+                 method: str | FormFactorMethod = "exact", two_sided: bool = False,
+                 error: bool = False, **options) -> np.ndarray | tuple[np.ndarray, np.ndarray]:
     """Form factors from points to every polygon of a scene, with occlusion.
 
     Parameters
@@ -267,9 +271,11 @@ def _dask_client(executor):
     return executor if hasattr(executor, "scatter") else getattr(executor, "_client", None)
 
 
-def form_factor_matrix(scene, *, method="exact", rows=None, two_sided=False, executor=None,
-                       jobs=None, progress=False, out=None, sparse=False, chunk_rows=None,
-                       **options):
+def form_factor_matrix(scene: Scene, *, method: str | FormFactorMethod = "exact",
+                       rows: ArrayLike | None = None, two_sided: bool = False, executor=None,
+                       jobs: int | None = None, progress: bool = False,
+                       out: str | os.PathLike | None = None, sparse: bool = False,
+                       chunk_rows: int | None = None, **options):
     """The form-factor matrix of a scene, row ``i`` from the centroid of polygon ``i``.
 
     As in the paper (and the hemicube), the coefficient ``F[i, j]`` is the form factor
