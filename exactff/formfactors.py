@@ -123,28 +123,51 @@ class PointRows:
 
 class AreaRows:
     """A matrix's rows as area-to-area form factors with occlusion, each value within
-    an absolute ``tolerance`` (:func:`exactff.area.area_row`); each row is the pair
-    ``(values, error estimates)``. What :func:`area_form_factors` computes.
+    an absolute ``tolerance`` (:func:`exactff.area.area_row`) and ``shortcuts`` on or
+    off; each row is the pair ``(values, error estimates)``. What
+    :func:`area_form_factors` computes. The options travel with it to worker processes
+    (it is pickled) and are in :meth:`record` (resumable outputs key on it). ``stats``,
+    a dict, receives the sums of the rows' counters as the driver stores them
+    (:meth:`collect`, in the calling process), whichever executor computed them.
 
     Examples
     --------
     >>> import exactff as ef
-    >>> (f, e), = AreaRows(1e-9)(ef.scenes.subdivided_box(1), [0])
-    >>> abs(float(f.sum()) - 1) < 1e-12
-    True
+    >>> (f, e, counts), = AreaRows(1e-9)(ef.scenes.subdivided_box(1), [0])
+    >>> abs(float(f.sum()) - 1) < 1e-12, counts["hull_unoccluded_pairs"]
+    (True, 5)
     """
 
     outputs = 2
 
-    def __init__(self, tolerance):
-        self.tolerance = tolerance
+    def __init__(self, tolerance, shortcuts=True, stats=None):
+        self.tolerance, self.shortcuts = tolerance, bool(shortcuts)
+        self.stats = stats
 
     def record(self):
-        return {"area": True, "tolerance": repr(self.tolerance)}
+        return {"area": True, "tolerance": repr(self.tolerance), "shortcuts": self.shortcuts}
+
+    def __getstate__(self):
+        # the caller's dict stays in the caller's process: workers return their counts
+        return dict(vars(self), stats=None)
 
     def __call__(self, scene, rows):
-        # every row checked before it is stored: a NaN is never returned
-        return [check_finite(*area_row(scene, i, self.tolerance)) for i in rows]
+        out = []
+        for i in rows:
+            st = {}
+            f, e = area_row(scene, i, self.tolerance, shortcuts=self.shortcuts, stats=st)
+            # every row checked before it is stored: a NaN is never returned
+            out.append(check_finite(f, e) + (st,))
+        return out
+
+    def collect(self, values):
+        """Add the counters of stored rows (``(values, estimates, counters)``) to
+        ``stats``."""
+        if self.stats is None:
+            return
+        for *_, st in values:
+            for k, v in st.items():
+                self.stats[k] = self.stats.get(k, 0) + v
 
 
 class Progress:
@@ -408,6 +431,9 @@ def run_rows(scene, rows, computation, *, executor=None, jobs=None, progress=Fal
             values = [(v,) for v in values]
         for k, result in enumerate(results):
             result.write(pos, [v[k] for v in values])
+        collect = getattr(computation, "collect", None)
+        if collect is not None:          # what the rows report beyond their outputs
+            collect(values)
         bar.update(len(pos))
 
     pool = None
@@ -439,7 +465,8 @@ def run_rows(scene, rows, computation, *, executor=None, jobs=None, progress=Fal
 
 
 def area_form_factors(scene, rows=None, *, tolerance=1e-9, error=False, executor=None,
-                      jobs=None, progress=False, out=None, sparse=False, chunk_rows=None):
+                      jobs=None, progress=False, out=None, sparse=False, chunk_rows=None,
+                      shortcuts=True, stats=None):
     """Area-to-area form factors with occlusion (the paper's Eq. 1), each within a
     requested absolute tolerance.
 
@@ -468,6 +495,21 @@ def area_form_factors(scene, rows=None, *, tolerance=1e-9, error=False, executor
         As for :func:`form_factor_matrix`: rows in parallel, a progress bar, streamed to
         ``out`` and resumed from it (the estimates to ``STEM.error.SUFFIX`` beside it),
         sparse results.
+    shortcuts : bool, default True
+        False disables every shortcut, for testing that they never change a result
+        beyond the estimates: the hull test (every other polygon is then taken as a
+        possible blocker of every pair, and the pair goes through the occluded path),
+        the far-field rule (the contour integral for every unoccluded pair) and the cull
+        of blocker-blocker events whose lines of sight miss the receiver. Much slower.
+        Part of what a resumable ``out`` records.
+    stats : dict, optional
+        Filled with the sums over the rows computed in this call (with any executor) of
+        :data:`exactff.area.occluded.STATS`: ``hull_unoccluded_pairs`` (pairs taken by
+        the exact contour integral because the hull test left no blocker),
+        ``hull_culled_blockers``, ``far_pairs`` (by the far-field rule),
+        ``culled_events``, ``engine_fallbacks`` and ``engine_fallback_points`` (hidden
+        parts the engine computed where GEOS failed), ``occluded_pairs`` and
+        ``point_values``. Every shortcut's counter is 0 with ``shortcuts=False``.
 
     Returns
     -------
@@ -507,7 +549,9 @@ def area_form_factors(scene, rows=None, *, tolerance=1e-9, error=False, executor
     scene = as_scene(scene)
     rows = row_indices(rows, len(scene))
     check_tolerance(tolerance, allow_none=False)
-    F, E = run_rows(scene, rows, AreaRows(tolerance), executor=executor, jobs=jobs,
+    if stats is not None and not isinstance(stats, dict):
+        raise ValueError(f"stats must be a dict or None, got {type(stats).__name__}")
+    F, E = run_rows(scene, rows, AreaRows(tolerance, shortcuts, stats), executor=executor, jobs=jobs,
                     progress=progress, out=out, sparse=sparse, chunk_rows=chunk_rows,
                     desc="area form factors")
     return (F, E) if error else F

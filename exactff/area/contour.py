@@ -38,7 +38,14 @@ from ..rings import owners, successors
 from ..scene import validate_polygon
 
 __all__ = ["polygon_form_factor", "clip_front", "triangle_rule", "point_values",
-           "emitter_nodes", "far_values", "unoccluded_pair"]
+           "emitter_nodes", "far_values", "unoccluded_pair", "is_far"]
+
+
+def is_far(P, Q):
+    """True when P and Q are far enough apart for the far-field rule: their centroids
+    more than ``AREA_FAR`` diameters of the larger one apart."""
+    r0 = float(np.linalg.norm(Q.mean(axis=0) - P.mean(axis=0)))
+    return r0 > tol.AREA_FAR * max(polygon_diameter(P), polygon_diameter(Q))
 
 
 def clip_front(P, n, c):
@@ -257,11 +264,12 @@ def _edge_pieces(P, eP, Q, eQ):
     return np.array(owner), np.array(s0), np.array(s1)
 
 
-def unoccluded_pair(P, Q):
+def unoccluded_pair(P, Q, far=True):
     """F(P -> Q) of two validated polygons, unoccluded, and an estimate of its error:
     the rounding of the contour sum (64 units of its absolute terms) plus the
-    difference from the tanh-sinh rule one level coarser, or, for far pairs, the
-    difference between the 12- and 8-point area rules plus rounding."""
+    difference from the tanh-sinh rule one level coarser, or, for far pairs (:func:`is_far`;
+    only with ``far=True``), the difference between the 12- and 8-point area rules plus
+    rounding."""
     AP, AQ = area_vector(P), area_vector(Q)
     area_P = float(np.linalg.norm(AP))
     nP, nQ = AP / area_P, AQ / np.linalg.norm(AQ)
@@ -272,8 +280,7 @@ def unoccluded_pair(P, Q):
     if Pc is None or Qc is None:
         return 0.0, 0.0
     r0 = float(np.linalg.norm(cQ - cP)) or 1.0
-    eps = np.finfo(float).eps
-    if r0 > tol.AREA_FAR * max(polygon_diameter(P), polygon_diameter(Q)):
+    if far and is_far(P, Q):
         f, e = far_values(emitter_nodes(Pc, nP), nP, area_P, [Qc])
         return float(f[0]), float(e[0])
     eP = np.roll(Pc, -1, axis=0) - Pc          # (KP, 3)
@@ -300,7 +307,7 @@ def unoccluded_pair(P, Q):
     # the outer rule's error: at most its difference from the rule one level coarser
     # (tanh-sinh roughly squares its error from one level to the next)
     step = abs(float(((eP @ eQ.T) * (inner - coarse)).sum())) / (2.0 * np.pi) / area_P
-    return max(total, 0.0), tol.AREA_ROUNDING_ULPS * eps * scale + step
+    return max(total, 0.0), tol.AREA_ROUNDING_ULPS * np.finfo(float).eps * scale + step
 
 
 # ---------------------------------------------------------------------------------------
