@@ -613,3 +613,80 @@ def test_area_engine_fallbacks_are_counted(monkeypatch):
     g, eg = area_row(scene, 0, 1e-6, stats=fst)
     assert fst["engine_fallbacks"] > 0 and fst["engine_fallback_points"] == fst["point_values"]
     assert abs(g[1] - f[1]) <= e[1] + eg[1] and abs(g[1] - OCCLUDED_REFERENCES[0][1]) <= eg[1] + 1e-13
+
+
+# ---------------------------------------------------------------------------------------
+# no silent clamp (issue 33): below 0 within a value's own estimate is 0, beyond it raises
+# ---------------------------------------------------------------------------------------
+def test_nonnegative_clamps_only_within_the_estimate():
+    from exactff.area.contour import nonnegative
+
+    assert nonnegative(-1e-17, 1e-16) == 0.0 and nonnegative(0.25, 0.0) == 0.25
+    assert np.array_equal(nonnegative(np.array([-1e-17, 0.5]), np.array([1e-16, 0.0])), [0.0, 0.5])
+    for value, estimate in ((-1e-15, 1e-16), (-1e-300, 0.0), (np.nan, 1.0), (0.1, np.nan)):
+        with pytest.raises(ef.NumericalError):
+            nonnegative(value, estimate)
+    with pytest.raises(ef.NumericalError, match=r"\[1\]|-0.5"):
+        nonnegative(np.array([0.0, -0.5]), np.array([0.0, 1e-9]))
+
+
+def test_area_row_raises_on_a_negative_beyond_its_estimate(monkeypatch):
+    # an occluded pair coming out -1e-6 with an estimate of 1e-9 was set to 0 (max(f, 0));
+    # within its estimate it is 0 and keeps the estimate
+    from exactff.area import area_row
+    from exactff.area import occluded as area
+
+    scene = ef.Scene.from_polygons([_square(0, True), _square(2, False), OCCLUDED_REFERENCES[0][0]])
+    monkeypatch.setattr(area, "_occluded_pair", lambda *a, **k: (-1e-6, 1e-9, 0))
+    with pytest.raises(ef.NumericalError, match="below 0 beyond"):
+        area_row(scene, 0, 1e-9)
+    monkeypatch.setattr(area, "_occluded_pair", lambda *a, **k: (-1e-10, 1e-9, 0))
+    f, e = area_row(scene, 0, 1e-9)
+    assert f[1] == 0.0 and e[1] == 1e-9
+
+
+def test_contour_and_far_rule_raise_on_a_negative_beyond_the_estimate(monkeypatch):
+    from exactff.area import contour
+
+    P, Q = parallel_pair(1, 1, 1)
+    log_integral = contour._segment_log_integral
+    monkeypatch.setattr(contour, "_segment_log_integral", lambda W, E: -log_integral(W, E))
+    with pytest.raises(ef.NumericalError, match="below 0 beyond"):
+        contour.unoccluded_pair(P, Q)
+    monkeypatch.undo()
+    far = Q + [0, 0, 10]
+    nodes = contour.emitter_nodes(P, np.array([0.0, 0.0, 1.0]))
+    monkeypatch.setattr(contour, "point_values", lambda X, n, Qs: (-np.ones((len(Qs), len(X))),) * 2)
+    with pytest.raises(ef.NumericalError, match="below 0 beyond"):
+        contour.far_values(nodes, np.array([0.0, 0.0, 1.0]), 1.0, [far])
+
+
+def test_hidden_part_raises_on_a_nan_estimate_and_a_negative_beyond_it(monkeypatch):
+    # the booleans' part of the estimate came out NaN: it was made 0 (nan_to_num), an
+    # understated bound; and the engine's hidden part U - F was clamped with no check
+    import shapely
+
+    from exactff.area import occluded as area
+
+    P, Q, B = list(_hidden_cases())[5]
+    nP = np.array([0.0, 0.0, 1.0])
+    X = P[0] + np.outer(np.linspace(0.05, 0.95, 7), P[1] - P[0]) + 0.3 * (P[3] - P[0])
+    length = shapely.length
+    monkeypatch.setattr(area.shapely, "length", lambda g: np.full(np.shape(g), np.nan))
+    with pytest.raises(ef.NumericalError, match="NaN error estimate"):
+        area._hidden_values(X, nP, Q, B)
+    monkeypatch.setattr(area.shapely, "length", length)
+    monkeypatch.setattr(area, "point_values", lambda X, n, Qs: (np.zeros((1, len(X))),) * 2)
+    with pytest.raises(ef.NumericalError, match="below 0 beyond"):
+        area._hidden_values_by_engine(X, nP, Q, B)
+
+
+def test_area_estimates_use_the_unit_roundoff_of_the_tolerances_module():
+    # C1 and the ulps constants are calibrated for u = 2**-53 (tol.EPS); np.finfo's eps
+    # is 2**-52: no module of the area code takes its own
+    import pathlib
+
+    import exactff.area
+
+    for path in pathlib.Path(exactff.area.__file__).parent.glob("*.py"):
+        assert "finfo" not in path.read_text(), path.name

@@ -19,7 +19,7 @@ from ..kernel import clipped_sector_sums
 from ..methods import Exact
 from ..rings import padded, shapely_rings
 from ..scene import Scene
-from .contour import (clip_front, emitter_nodes, far_values, is_far, point_values,
+from .contour import (clip_front, emitter_nodes, far_values, is_far, nonnegative, point_values,
                       triangle_rule, unoccluded_pair)
 
 __all__ = ["area_row", "STATS"]
@@ -283,19 +283,25 @@ def _hidden_values(X, nP, Qc, blockers, st=None):
     S, mags, errs = clipped_sector_sums(A0, E, nxt, owner, len(first))
     sign = np.where(is_hole, -1.0, 1.0)
     value = np.bincount(point, sign * np.abs(S), minlength=nX) / (2.0 * np.pi)
-    eps = np.finfo(float).eps
-    rnd = np.bincount(point, tol.C1 * eps * mags + errs, minlength=nX) / (2.0 * np.pi)
+    # the sector sums' own error model (C1 is calibrated for the unit roundoff 2**-53)
+    rnd = np.bincount(point, tol.C1 * tol.EPS * mags + errs, minlength=nX) / (2.0 * np.pi)
     # the booleans' rounding: the boundary moved by delta, through the kernel's bound
-    # h / (pi r^3) over the region's bounding box (r >= the box's distance from x)
-    b = shapely.bounds(hidden)
-    foot = (X - q0) @ RQ[:2].T
+    # h / (pi r^3) over the region's bounding box (r >= the box's distance from x);
+    # points with nothing hidden (an empty region, no bounds) have nothing to move
+    some = np.zeros(nX, dtype=bool)
+    some[point] = True
+    b = shapely.bounds(hidden[some])
+    foot = ((X - q0) @ RQ[:2].T)[some]
     dx = np.maximum(0.0, np.maximum(b[:, 0] - foot[:, 0], foot[:, 0] - b[:, 2]))
     dy = np.maximum(0.0, np.maximum(b[:, 1] - foot[:, 1], foot[:, 1] - b[:, 3]))
-    r = np.sqrt(h * h + np.nan_to_num(dx * dx + dy * dy))
-    delta = tol.AREA_BOOLEAN_ULPS * (nb + 1) * eps * float(np.abs(Y2).max())
-    bound = np.divide(h, np.pi * r ** 3, out=np.zeros_like(r), where=r > 0)   # x on Qc's plane: Qc edge-on
-    geo = np.where(value > 0, delta * shapely.length(hidden) * bound, 0.0)
-    return np.maximum(value, 0.0), rnd + np.nan_to_num(geo)
+    r = np.sqrt(h[some] ** 2 + dx * dx + dy * dy)
+    delta = tol.AREA_BOOLEAN_ULPS * (nb + 1) * tol.EPS * float(np.abs(Y2).max())
+    bound = np.divide(h[some], np.pi * r ** 3, out=np.zeros_like(r), where=r > 0)   # x on Qc's plane: Qc edge-on
+    geo = np.zeros(nX)
+    geo[some] = delta * shapely.length(hidden[some]) * bound
+    est = rnd + geo
+    # holes subtract: below 0 only by rounding, within the estimate
+    return nonnegative(value, est, "hidden part"), est
 
 
 def _hidden_values_by_engine(X, nP, Qc, blockers):
@@ -308,7 +314,8 @@ def _hidden_values_by_engine(X, nP, Qc, blockers):
     F = np.array([f for f, _ in FE])
     E = np.array([e for _, e in FE])
     U, EU = (v[0] for v in point_values(X, nP, [Qc]))
-    return np.maximum(U - F[:, 0], 0.0), EU + E[:, 0]
+    est = EU + E[:, 0]
+    return nonnegative(U - F[:, 0], est, "hidden part"), est
 
 
 _RULES = tuple(roots_legendre(k) for k in tol.AREA_RULE_ORDERS)
@@ -440,7 +447,7 @@ def area_row(scene, i, tolerance, *, shortcuts=True, stats=None):
             f[j], e[j], points = _occluded_pair([Q] + [polys[k] for k in B], Pc, Qc, nP,
                                                 tolerance, area_P, shortcuts, st)
             st["point_values"] += points
-            f[j] = max(f[j], 0.0)
+            f[j] = nonnegative(f[j], e[j])
             continue
         if len(polys) > 2 and shortcuts:
             st["hull_unoccluded_pairs"] += 1
