@@ -123,8 +123,8 @@ class PointRows:
 
 class AreaRows:
     """A matrix's rows as area-to-area form factors with occlusion, each value within
-    an absolute ``tolerance`` (:func:`exactff.area.area_row`) and ``shortcuts`` on or
-    off; each row is the pair ``(values, error estimates)``. What
+    an absolute ``tolerance`` (or ``max(tolerance, rtol * |F|)`` with ``rtol``;
+    :func:`exactff.area.area_row`) and ``shortcuts`` on or off; each row is the pair ``(values, error estimates)``. What
     :func:`area_form_factors` computes. The options travel with it to worker processes
     (it is pickled) and are in :meth:`record` (resumable outputs key on it). ``stats``,
     a dict, receives the sums of the rows' counters as the driver stores them
@@ -140,12 +140,13 @@ class AreaRows:
 
     outputs = 2
 
-    def __init__(self, tolerance, shortcuts=True, stats=None):
-        self.tolerance, self.shortcuts = tolerance, bool(shortcuts)
+    def __init__(self, tolerance, shortcuts=True, stats=None, rtol=None):
+        self.tolerance, self.rtol, self.shortcuts = tolerance, rtol, bool(shortcuts)
         self.stats = stats
 
     def record(self):
-        return {"area": True, "tolerance": repr(self.tolerance), "shortcuts": self.shortcuts}
+        return {"area": True, "tolerance": repr(self.tolerance), "rtol": repr(self.rtol),
+                "shortcuts": self.shortcuts}
 
     def __getstate__(self):
         # the caller's dict stays in the caller's process: workers return their counts
@@ -155,7 +156,8 @@ class AreaRows:
         out = []
         for i in rows:
             st = {}
-            f, e = area_row(scene, i, self.tolerance, shortcuts=self.shortcuts, stats=st)
+            f, e = area_row(scene, i, self.tolerance, rtol=self.rtol, shortcuts=self.shortcuts,
+                            stats=st)
             # every row checked before it is stored: a NaN is never returned
             out.append(check_finite(f, e) + (st,))
         return out
@@ -466,9 +468,9 @@ def run_rows(scene, rows, computation, *, executor=None, jobs=None, progress=Fal
 
 def area_form_factors(scene, rows=None, *, tolerance=1e-9, error=False, executor=None,
                       jobs=None, progress=False, out=None, sparse=False, chunk_rows=None,
-                      shortcuts=True, stats=None):
+                      rtol=None, shortcuts=True, stats=None):
     """Area-to-area form factors with occlusion (the paper's Eq. 1), each within a
-    requested absolute tolerance.
+    requested **absolute** tolerance (or, with ``rtol``, a share of the value).
 
     ``F[i, j] = (1 / A_i) int_{P_i} F_occ(x -> j) dA_x``, with ``F_occ`` the exact
     occluded point form factor from ``x`` (normal of ``P_i``) to polygon ``j`` (as
@@ -488,7 +490,14 @@ def area_form_factors(scene, rows=None, *, tolerance=1e-9, error=False, executor
     rows : sequence of int, optional
         Emitters (default: every polygon).
     tolerance : float, default 1e-9
-        Absolute error allowed per value.
+        Absolute error allowed per value: the target of the adaptive rules on occluded
+        pairs, ``|F[i, j] - exact| <= tolerance`` (unlike the point functions'
+        ``tolerance``, which is relative to each value). Unoccluded pairs are exact to
+        rounding whatever it is.
+    rtol : float, optional
+        Also allowed: this share of each value; the bound per value is then
+        ``max(tolerance, rtol * |F[i, j]|)`` (say ``tolerance=1e-15, rtol=1e-9`` for a
+        relative target). Default: the absolute ``tolerance`` alone.
     error : bool, default False
         Also return the per-value error estimates.
     executor, jobs, progress, out, sparse, chunk_rows
@@ -549,9 +558,10 @@ def area_form_factors(scene, rows=None, *, tolerance=1e-9, error=False, executor
     scene = as_scene(scene)
     rows = row_indices(rows, len(scene))
     check_tolerance(tolerance, allow_none=False)
+    check_tolerance(rtol, "rtol")
     if stats is not None and not isinstance(stats, dict):
         raise ValueError(f"stats must be a dict or None, got {type(stats).__name__}")
-    F, E = run_rows(scene, rows, AreaRows(tolerance, shortcuts, stats), executor=executor, jobs=jobs,
+    F, E = run_rows(scene, rows, AreaRows(tolerance, shortcuts, stats, rtol), executor=executor, jobs=jobs,
                     progress=progress, out=out, sparse=sparse, chunk_rows=chunk_rows,
                     desc="area form factors")
     return (F, E) if error else F

@@ -690,3 +690,30 @@ def test_area_estimates_use_the_unit_roundoff_of_the_tolerances_module():
 
     for path in pathlib.Path(exactff.area.__file__).parent.glob("*.py"):
         assert "finfo" not in path.read_text(), path.name
+
+
+@pytest.mark.parametrize("plate, reference", OCCLUDED_REFERENCES)
+@pytest.mark.parametrize("tolerance, rtol", [(1e-6, None), (1e-12, None), (1e-15, 1e-6),
+                                             (1e-15, 1e-9), (1e-7, 1e-12)])
+def test_each_estimate_within_its_requested_bound(plate, reference, tolerance, rtol):
+    # tolerance is absolute per value; with rtol the bound is max(tolerance, rtol |F|):
+    # every value's estimate within it, and the value within its estimate of the
+    # reference (12 digits)
+    scene = ef.Scene.from_polygons([_square(0, True), _square(2, False), plate])
+    F, E = ef.area_form_factors(scene, rows=[0], tolerance=tolerance, rtol=rtol, error=True)
+    allowed = np.maximum(tolerance, (rtol or 0.0) * np.abs(F))
+    assert np.all(E <= allowed), (E, allowed)
+    assert abs(F[0, 1] - reference) <= E[0, 1] + 1e-13
+    if rtol == 1e-6:            # the relative bound, not the absolute one, was the target
+        assert tolerance < E[0, 1]
+
+
+def test_rtol_is_checked_and_recorded():
+    from exactff.formfactors import AreaRows
+
+    scene = ef.scenes.subdivided_box(1)
+    for bad in (0, -1e-9, float("nan"), "1e-9"):
+        with pytest.raises(ValueError, match="rtol"):
+            ef.area_form_factors(scene, rtol=bad)
+    assert AreaRows(1e-9).record() != AreaRows(1e-9, rtol=1e-6).record()
+    assert np.array_equal(ef.area_form_factors(scene, rtol=1e-6), ef.area_form_factors(scene))

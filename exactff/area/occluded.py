@@ -337,7 +337,7 @@ def _corner_first(tri, blockers, nP, dP):
     return tri
 
 
-def _occluded_pair(S, Pc, Qc, nP, tolerance, area_P, shortcuts=True, st=None):
+def _occluded_pair(S, Pc, Qc, nP, tolerance, area_P, shortcuts=True, st=None, rtol=None):
     """``(1 / A_P) int_Pc F_occ(x -> S[0]) dA`` with S = [receiver, blockers...], as the
     unoccluded value (the contour integral, exact) less the integral of the hidden part
     ``F(x -> Qc) - F_occ(x -> S[0])`` (exact point values of the hidden region, built
@@ -347,13 +347,33 @@ def _occluded_pair(S, Pc, Qc, nP, tolerance, area_P, shortcuts=True, st=None):
     Gauss-Legendre rules (6 and 10 points a side), a triangle cut in four where the two
     differ by more than its share of the tolerance. Returns the value, its error
     estimate (the contour sum's, the rules' differences, the point values' bounds) and
-    the number of point values used."""
-    R = receiver_frame(nP)
-    c = Pc.mean(axis=0)
-    dP = float(nP @ Pc[0])
+    the number of point values used.
+
+    The rules' target is the absolute ``tolerance``, or with ``rtol`` the bound
+    ``max(tolerance, rtol * F)``: first with the unoccluded value for F (the value is
+    at most that), and where the estimate then misses ``max(tolerance, rtol * |value|)``
+    once more with ``value - estimate`` for F (a lower bound where the estimate holds)."""
     whole, whole_err = unoccluded_pair(np.asarray(Pc), np.asarray(S[0]), far=shortcuts)
     if shortcuts and st is not None and is_far(np.asarray(Pc), np.asarray(S[0])):
         st["far_pairs"] = st.get("far_pairs", 0) + 1
+    area_Pc = float(np.linalg.norm(area_vector(Pc)))
+    whole = (whole * area_Pc / area_P, whole_err * area_Pc / area_P)
+    target = tolerance if rtol is None else max(tolerance, rtol * whole[0])
+    value, err, points = _hidden_integral(S, Pc, Qc, nP, target, area_P, whole, shortcuts, st)
+    if rtol is not None and target > tolerance and err > max(tolerance, rtol * abs(value)):
+        target = max(tolerance, rtol * max(value - err, 0.0))
+        value, err, more = _hidden_integral(S, Pc, Qc, nP, target, area_P, whole, shortcuts, st)
+        points += more
+    return value, err, points
+
+
+def _hidden_integral(S, Pc, Qc, nP, tolerance, area_P, whole, shortcuts, st):
+    """The adaptive integral of :func:`_occluded_pair` to the absolute target
+    ``tolerance``, with ``whole`` the pair's unoccluded value and estimate (per unit area
+    of P)."""
+    R = receiver_frame(nP)
+    c = Pc.mean(axis=0)
+    dP = float(nP @ Pc[0])
     radius = (1.0 + tol.AREA_HIDDEN_PAD) * float(np.linalg.norm(Pc - c, axis=1).max())
     todo = [(_corner_first(t, S[1:], nP, dP), 0)
             for t in _cells(Pc, nP, _event_lines(S, nP, dP, R, c, radius, Qc, shortcuts, st),
@@ -390,14 +410,13 @@ def _occluded_pair(S, Pc, Qc, nP, tolerance, area_P, shortcuts=True, st=None):
             hidden += hi / area_P
             err += diff + (Wh @ EHh) / area_P
         todo = nxt
-    # the contour integral over Pc is per unit area of Pc: back to P's area
     area_Pc = float(np.linalg.norm(area_vector(Pc)))
-    value = whole * area_Pc / area_P - hidden
+    value = whole[0] - hidden
     err += max(area_Pc - total_area, 0.0) / area_P      # cells dropped as slivers
-    return value, err + whole_err * area_Pc / area_P, points
+    return value, err + whole[1], points
 
 
-def area_row(scene, i, tolerance, *, shortcuts=True, stats=None):
+def area_row(scene, i, tolerance, *, rtol=None, shortcuts=True, stats=None):
     """Row i of :func:`exactff.area_form_factors` and its estimates.
 
     Parameters
@@ -407,6 +426,8 @@ def area_row(scene, i, tolerance, *, shortcuts=True, stats=None):
         The emitter.
     tolerance : float
         Absolute error allowed per value (the adaptive rules' target).
+    rtol : float, optional
+        Also allowed: this share of the value; the bound is ``max(tolerance, rtol * F)``.
     shortcuts : bool, default True
         False disables every shortcut (for testing that they never change a result
         beyond the estimates): the hull test (every other polygon is then a blocker of
@@ -445,7 +466,7 @@ def area_row(scene, i, tolerance, *, shortcuts=True, stats=None):
         if B:
             st["occluded_pairs"] += 1
             f[j], e[j], points = _occluded_pair([Q] + [polys[k] for k in B], Pc, Qc, nP,
-                                                tolerance, area_P, shortcuts, st)
+                                                tolerance, area_P, shortcuts, st, rtol)
             st["point_values"] += points
             f[j] = nonnegative(f[j], e[j])
             continue
