@@ -127,28 +127,53 @@ class PointRows:
 
 class AreaRows:
     """A matrix's rows as area-to-area form factors with occlusion, each value within
-    an absolute ``tolerance`` (:func:`exactff.area.area_row`); each row is the pair
-    ``(values, error estimates)``. What :func:`area_form_factors` computes.
+    an absolute ``tolerance`` (or ``max(tolerance, rtol * |F|)`` with ``rtol``;
+    :func:`exactff.area.area_row`) and ``shortcuts`` on or off; each row is the pair ``(values, error estimates)``. What
+    :func:`area_form_factors` computes. The options travel with it to worker processes
+    (it is pickled) and are in :meth:`record` (resumable outputs key on it). ``stats``,
+    a dict, receives the sums of the rows' counters as the driver stores them
+    (:meth:`collect`, in the calling process), whichever executor computed them.
 
     Examples
     --------
     >>> import exactff as ef
-    >>> (f, e), = AreaRows(1e-9)(ef.scenes.subdivided_box(1), [0])
-    >>> abs(float(f.sum()) - 1) < 1e-12
-    True
+    >>> (f, e, counts), = AreaRows(1e-9)(ef.scenes.subdivided_box(1), [0])
+    >>> abs(float(f.sum()) - 1) < 1e-12, counts["hull_unoccluded_pairs"]
+    (True, 5)
     """
 
     outputs = 2
 
-    def __init__(self, tolerance):
-        self.tolerance = tolerance
+    def __init__(self, tolerance, shortcuts=True, stats=None, rtol=None):
+        self.tolerance, self.rtol, self.shortcuts = tolerance, rtol, bool(shortcuts)
+        self.stats = stats
 
     def record(self):
-        return {"area": True, "tolerance": repr(self.tolerance)}
+        return {"area": True, "tolerance": repr(self.tolerance), "rtol": repr(self.rtol),
+                "shortcuts": self.shortcuts}
+
+    def __getstate__(self):
+        # the caller's dict stays in the caller's process: workers return their counts
+        return dict(vars(self), stats=None)
 
     def __call__(self, scene, rows):
-        # every row checked before it is stored: a NaN is never returned
-        return [check_finite(*area_row(scene, i, self.tolerance)) for i in rows]
+        out = []
+        for i in rows:
+            st = {}
+            f, e = area_row(scene, i, self.tolerance, rtol=self.rtol, shortcuts=self.shortcuts,
+                            stats=st)
+            # every row checked before it is stored: a NaN is never returned
+            out.append(check_finite(f, e) + (st,))
+        return out
+
+    def collect(self, values):
+        """Add the counters of stored rows (``(values, estimates, counters)``) to
+        ``stats``."""
+        if self.stats is None:
+            return
+        for *_, st in values:
+            for k, v in st.items():
+                self.stats[k] = self.stats.get(k, 0) + v
 
 
 class Progress:
@@ -414,6 +439,9 @@ def run_rows(scene, rows, computation, *, executor=None, jobs=None, progress=Fal
             values = [(v,) for v in values]
         for k, result in enumerate(results):
             result.write(pos, [v[k] for v in values])
+        collect = getattr(computation, "collect", None)
+        if collect is not None:          # what the rows report beyond their outputs
+            collect(values)
         bar.update(len(pos))
 
     pool = None
@@ -445,9 +473,10 @@ def run_rows(scene, rows, computation, *, executor=None, jobs=None, progress=Fal
 
 
 def area_form_factors(scene, rows=None, *, tolerance=1e-9, error=False, executor=None,
-                      jobs=None, progress=False, out=None, sparse=False, chunk_rows=None):
+                      jobs=None, progress=False, out=None, sparse=False, chunk_rows=None,
+                      rtol=None, shortcuts=True, stats=None):
     """Area-to-area form factors with occlusion (the paper's Eq. 1), each within a
-    requested absolute tolerance.
+    requested **absolute** tolerance (or, with ``rtol``, a share of the value).
 
     ``F[i, j] = (1 / A_i) int_{P_i} F_occ(x -> j) dA_x``, with ``F_occ`` the exact
     occluded point form factor from ``x`` (normal of ``P_i``) to polygon ``j`` (as
@@ -467,13 +496,35 @@ def area_form_factors(scene, rows=None, *, tolerance=1e-9, error=False, executor
     rows : sequence of int, optional
         Emitters (default: every polygon).
     tolerance : float, default 1e-9
-        Absolute error allowed per value.
+        Absolute error allowed per value: the target of the adaptive rules on occluded
+        pairs, ``|F[i, j] - exact| <= tolerance`` (unlike the point functions'
+        ``tolerance``, which is relative to each value). Unoccluded pairs are exact to
+        rounding whatever it is.
+    rtol : float, optional
+        Also allowed: this share of each value; the bound per value is then
+        ``max(tolerance, rtol * |F[i, j]|)`` (say ``tolerance=1e-15, rtol=1e-9`` for a
+        relative target). Default: the absolute ``tolerance`` alone.
     error : bool, default False
         Also return the per-value error estimates.
     executor, jobs, progress, out, sparse, chunk_rows
         As for :func:`form_factor_matrix`: rows in parallel, a progress bar, streamed to
         ``out`` and resumed from it (the estimates to ``STEM.error.SUFFIX`` beside it),
         sparse results.
+    shortcuts : bool, default True
+        False disables every shortcut, for testing that they never change a result
+        beyond the estimates: the hull test (every other polygon is then taken as a
+        possible blocker of every pair, and the pair goes through the occluded path),
+        the far-field rule (the contour integral for every unoccluded pair) and the cull
+        of blocker-blocker events whose lines of sight miss the receiver. Much slower.
+        Part of what a resumable ``out`` records.
+    stats : dict, optional
+        Filled with the sums over the rows computed in this call (with any executor) of
+        :data:`exactff.area.occluded.STATS`: ``hull_unoccluded_pairs`` (pairs taken by
+        the exact contour integral because the hull test left no blocker),
+        ``hull_culled_blockers``, ``far_pairs`` (by the far-field rule),
+        ``culled_events``, ``engine_fallbacks`` and ``engine_fallback_points`` (hidden
+        parts the engine computed where GEOS failed), ``occluded_pairs`` and
+        ``point_values``. Every shortcut's counter is 0 with ``shortcuts=False``.
 
     Returns
     -------
@@ -513,7 +564,10 @@ def area_form_factors(scene, rows=None, *, tolerance=1e-9, error=False, executor
     scene = as_scene(scene)
     rows = row_indices(rows, len(scene))
     check_tolerance(tolerance, allow_none=False)
-    F, E = run_rows(scene, rows, AreaRows(tolerance), executor=executor, jobs=jobs,
+    check_tolerance(rtol, "rtol")
+    if stats is not None and not isinstance(stats, dict):
+        raise ValueError(f"stats must be a dict or None, got {type(stats).__name__}")
+    F, E = run_rows(scene, rows, AreaRows(tolerance, shortcuts, stats, rtol), executor=executor, jobs=jobs,
                     progress=progress, out=out, sparse=sparse, chunk_rows=chunk_rows,
                     desc="area form factors")
     return (F, E) if error else F

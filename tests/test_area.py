@@ -509,3 +509,211 @@ def test_cli_matrix_area(tmp_path):
                         "--sparse", "--no-progress"], capture_output=True, text=True,
                        cwd=tmp_path, timeout=300, env=checkout_env())
     assert r.returncode == 2 and "--area writes a dense .npy" in r.stderr
+
+
+# ---------------------------------------------------------------------------------------
+# shortcuts (issue 33): each off under shortcuts=False, counted in stats, and neutral
+# ---------------------------------------------------------------------------------------
+SHORTCUT_COUNTERS = ("hull_unoccluded_pairs", "hull_culled_blockers", "far_pairs",
+                     "culled_events")
+
+
+def _far_squares():
+    """A unit square facing up and three small squares about five above it, facing
+    down: every pair far (beyond AREA_FAR diameters), nothing between."""
+    def sq(x, y, z, a, up):
+        return np.array([[x, y, z], [x + a, y, z], [x + a, y + a, z], [x, y + a, z]][::1 if up else -1], float)
+    return ef.Scene.from_polygons([sq(0, 0, 0, 1, True), sq(0, 0, 5, .2, False),
+                                   sq(.6, .3, 5, .2, False), sq(-.5, .8, 4.8, .3, False)])
+
+
+def _box_on_a_floor():
+    """A quarter of a room's floor, a quarter of its back wall and the open-bottomed
+    box of test_room_with_a_box_standing_on_the_floor (its faces hide one another)."""
+    return ef.Scene.from_polygons(
+        [_rect_xy(0, 0.5, 0, 0.5), np.array([[0, 1, 0], [.5, 1, 0], [.5, 1, .5], [0, 1, .5]], float)]
+        + _box_faces([.2, .3, 0], [.6, .7, .35])[1:])
+
+
+def _shortcut_scene(name):
+    """(scene, rows, tolerance, the counters that must fire with shortcuts on)."""
+    if name.startswith("reference"):
+        plate = OCCLUDED_REFERENCES[int(name[-1])][0]
+        return (ef.Scene.from_polygons([_square(0, True), _square(2, False), plate]), [0], 1e-10, ())
+    if name == "room":
+        return _room_with_plate(), [0], 1e-7, ("hull_unoccluded_pairs", "hull_culled_blockers")
+    if name == "box":
+        return _box_on_a_floor(), [0], 1e-7, ("hull_unoccluded_pairs", "hull_culled_blockers", "culled_events")
+    return _far_squares(), [0, 1], 1e-9, ("far_pairs", "hull_unoccluded_pairs", "hull_culled_blockers")
+
+
+@pytest.mark.parametrize("name", ["reference0", "reference1", "room", "box", "far"])
+def test_area_shortcuts_are_neutral_and_counted(name):
+    # with shortcuts=False (every other polygon a blocker of every pair, the contour
+    # integral for far pairs, every blocker-blocker event cut along) the values agree
+    # with the shortcuts' within the two estimates; a shortcut's counter is > 0 only
+    # where it skipped work, and 0 with shortcuts off
+    scene, rows, tol, fire = _shortcut_scene(name)
+    on, off = {}, {}
+    F, E = ef.area_form_factors(scene, rows=rows, tolerance=tol, error=True, stats=on)
+    G, EG = ef.area_form_factors(scene, rows=rows, tolerance=tol, error=True, stats=off,
+                                 shortcuts=False)
+    assert np.all(E <= tol) and np.all(EG <= tol)
+    assert np.all(np.abs(F - G) <= E + EG), np.abs(F - G).max()
+    for k in SHORTCUT_COUNTERS:
+        assert off[k] == 0, (k, off)
+        assert (on[k] > 0) == (k in fire), (k, on)
+    assert on["engine_fallbacks"] == off["engine_fallbacks"] == 0
+    # shortcuts off did the work they skip: more pairs through the occluded path
+    assert off["occluded_pairs"] >= on["occluded_pairs"] > 0 or name == "far"
+    if fire:
+        assert off["occluded_pairs"] > on["occluded_pairs"]
+
+
+def test_area_stats_from_worker_processes_and_the_options_in_the_record(tmp_path):
+    # the counters come back from worker processes (AreaRows is pickled: its options
+    # travel, the caller's dict does not), summed over the rows; shortcuts is part of
+    # what a resumable output records
+    import pickle
+
+    from exactff.formfactors import AreaRows
+
+    scene = _far_squares()
+    serial, pooled = {}, {}
+    F = ef.area_form_factors(scene, tolerance=1e-9, stats=serial)
+    G = ef.area_form_factors(scene, tolerance=1e-9, stats=pooled, jobs=2, chunk_rows=1)
+    assert np.array_equal(F, G) and serial == pooled and serial["far_pairs"] == 6
+    rows = pickle.loads(pickle.dumps(AreaRows(1e-9, shortcuts=False, stats={"far_pairs": 1})))
+    assert rows.shortcuts is False and rows.stats is None
+    assert AreaRows(1e-9).record() != AreaRows(1e-9, shortcuts=False).record()
+    out = tmp_path / "a.npy"
+    ef.area_form_factors(scene, rows=[1], out=out)
+    with pytest.raises(ValueError):
+        ef.area_form_factors(scene, rows=[1], out=out, shortcuts=False)
+
+
+def test_area_engine_fallbacks_are_counted(monkeypatch):
+    # where GEOS fails the engine computes the hidden part: counted (0 otherwise), and
+    # the value agrees within the estimates
+    import shapely
+
+    from exactff.area import area_row
+    from exactff.area import occluded as area
+
+    scene = ef.Scene.from_polygons([_square(0, True), _square(2, False), OCCLUDED_REFERENCES[0][0]])
+    st = {}
+    f, e = area_row(scene, 0, 1e-6, stats=st)
+    assert st["engine_fallbacks"] == st["engine_fallback_points"] == 0
+
+    def fail(*args, **kwargs):
+        raise shapely.errors.GEOSException("TopologyException: side location conflict")
+
+    monkeypatch.setattr(area.shapely, "intersection", fail)
+    fst = {}
+    g, eg = area_row(scene, 0, 1e-6, stats=fst)
+    assert fst["engine_fallbacks"] > 0 and fst["engine_fallback_points"] == fst["point_values"]
+    assert abs(g[1] - f[1]) <= e[1] + eg[1] and abs(g[1] - OCCLUDED_REFERENCES[0][1]) <= eg[1] + 1e-13
+
+
+# ---------------------------------------------------------------------------------------
+# no silent clamp (issue 33): below 0 within a value's own estimate is 0, beyond it raises
+# ---------------------------------------------------------------------------------------
+def test_nonnegative_clamps_only_within_the_estimate():
+    from exactff.area.contour import nonnegative
+
+    assert nonnegative(-1e-17, 1e-16) == 0.0 and nonnegative(0.25, 0.0) == 0.25
+    assert np.array_equal(nonnegative(np.array([-1e-17, 0.5]), np.array([1e-16, 0.0])), [0.0, 0.5])
+    for value, estimate in ((-1e-15, 1e-16), (-1e-300, 0.0), (np.nan, 1.0), (0.1, np.nan)):
+        with pytest.raises(ef.NumericalError):
+            nonnegative(value, estimate)
+    with pytest.raises(ef.NumericalError, match=r"\[1\]|-0.5"):
+        nonnegative(np.array([0.0, -0.5]), np.array([0.0, 1e-9]))
+
+
+def test_area_row_raises_on_a_negative_beyond_its_estimate(monkeypatch):
+    # an occluded pair coming out -1e-6 with an estimate of 1e-9 was set to 0 (max(f, 0));
+    # within its estimate it is 0 and keeps the estimate
+    from exactff.area import area_row
+    from exactff.area import occluded as area
+
+    scene = ef.Scene.from_polygons([_square(0, True), _square(2, False), OCCLUDED_REFERENCES[0][0]])
+    monkeypatch.setattr(area, "_occluded_pair", lambda *a, **k: (-1e-6, 1e-9, 0))
+    with pytest.raises(ef.NumericalError, match="below 0 beyond"):
+        area_row(scene, 0, 1e-9)
+    monkeypatch.setattr(area, "_occluded_pair", lambda *a, **k: (-1e-10, 1e-9, 0))
+    f, e = area_row(scene, 0, 1e-9)
+    assert f[1] == 0.0 and e[1] == 1e-9
+
+
+def test_contour_and_far_rule_raise_on_a_negative_beyond_the_estimate(monkeypatch):
+    from exactff.area import contour
+
+    P, Q = parallel_pair(1, 1, 1)
+    log_integral = contour._segment_log_integral
+    monkeypatch.setattr(contour, "_segment_log_integral", lambda W, E: -log_integral(W, E))
+    with pytest.raises(ef.NumericalError, match="below 0 beyond"):
+        contour.unoccluded_pair(P, Q)
+    monkeypatch.undo()
+    far = Q + [0, 0, 10]
+    nodes = contour.emitter_nodes(P, np.array([0.0, 0.0, 1.0]))
+    monkeypatch.setattr(contour, "point_values", lambda X, n, Qs: (-np.ones((len(Qs), len(X))),) * 2)
+    with pytest.raises(ef.NumericalError, match="below 0 beyond"):
+        contour.far_values(nodes, np.array([0.0, 0.0, 1.0]), 1.0, [far])
+
+
+def test_hidden_part_raises_on_a_nan_estimate_and_a_negative_beyond_it(monkeypatch):
+    # the booleans' part of the estimate came out NaN: it was made 0 (nan_to_num), an
+    # understated bound; and the engine's hidden part U - F was clamped with no check
+    import shapely
+
+    from exactff.area import occluded as area
+
+    P, Q, B = list(_hidden_cases())[5]
+    nP = np.array([0.0, 0.0, 1.0])
+    X = P[0] + np.outer(np.linspace(0.05, 0.95, 7), P[1] - P[0]) + 0.3 * (P[3] - P[0])
+    length = shapely.length
+    monkeypatch.setattr(area.shapely, "length", lambda g: np.full(np.shape(g), np.nan))
+    with pytest.raises(ef.NumericalError, match="NaN error estimate"):
+        area._hidden_values(X, nP, Q, B)
+    monkeypatch.setattr(area.shapely, "length", length)
+    monkeypatch.setattr(area, "point_values", lambda X, n, Qs: (np.zeros((1, len(X))),) * 2)
+    with pytest.raises(ef.NumericalError, match="below 0 beyond"):
+        area._hidden_values_by_engine(X, nP, Q, B)
+
+
+def test_area_estimates_use_the_unit_roundoff_of_the_tolerances_module():
+    # C1 and the ulps constants are calibrated for u = 2**-53 (tol.EPS); np.finfo's eps
+    # is 2**-52: no module of the area code takes its own
+    import pathlib
+
+    import exactff.area
+
+    for path in pathlib.Path(exactff.area.__file__).parent.glob("*.py"):
+        assert "finfo" not in path.read_text(), path.name
+
+
+@pytest.mark.parametrize("plate, reference", OCCLUDED_REFERENCES)
+@pytest.mark.parametrize("tolerance, rtol", [(1e-6, None), (1e-12, None), (1e-15, 1e-6),
+                                             (1e-15, 1e-9), (1e-7, 1e-12)])
+def test_each_estimate_within_its_requested_bound(plate, reference, tolerance, rtol):
+    # tolerance is absolute per value; with rtol the bound is max(tolerance, rtol |F|):
+    # every value's estimate within it, and the value within its estimate of the
+    # reference (12 digits)
+    scene = ef.Scene.from_polygons([_square(0, True), _square(2, False), plate])
+    F, E = ef.area_form_factors(scene, rows=[0], tolerance=tolerance, rtol=rtol, error=True)
+    allowed = np.maximum(tolerance, (rtol or 0.0) * np.abs(F))
+    assert np.all(E <= allowed), (E, allowed)
+    assert abs(F[0, 1] - reference) <= E[0, 1] + 1e-13
+    if rtol == 1e-6:            # the relative bound, not the absolute one, was the target
+        assert tolerance < E[0, 1]
+
+
+def test_rtol_is_checked_and_recorded():
+    from exactff.formfactors import AreaRows
+
+    scene = ef.scenes.subdivided_box(1)
+    for bad in (0, -1e-9, float("nan"), "1e-9"):
+        with pytest.raises(ValueError, match="rtol"):
+            ef.area_form_factors(scene, rtol=bad)
+    assert AreaRows(1e-9).record() != AreaRows(1e-9, rtol=1e-6).record()
+    assert np.array_equal(ef.area_form_factors(scene, rtol=1e-6), ef.area_form_factors(scene))

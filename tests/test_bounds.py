@@ -141,7 +141,7 @@ def test_repeated_vertices_give_the_values_of_the_clean_ring(name):
         assert abs(f - HOWELL_C11) <= 1e-12
 
 
-def _nan_pair(P, Q):
+def _nan_pair(P, Q, far=True):
     return float("nan"), 0.0
 
 

@@ -30,7 +30,7 @@ import shapely
 from scipy.special import roots_legendre, xlogy
 
 from .. import _tolerances as tol
-from ..errors import check_finite
+from ..errors import NumericalError, check_finite
 from ..geometry import area_vector, polygon_diameter, receiver_frame
 from ..halfspace import clip_halfspace
 from ..kernel import clipped_sector_sums
@@ -38,7 +38,43 @@ from ..rings import owners, successors
 from ..scene import validate_polygon
 
 __all__ = ["polygon_form_factor", "clip_front", "triangle_rule", "point_values",
-           "emitter_nodes", "far_values", "unoccluded_pair"]
+           "emitter_nodes", "far_values", "unoccluded_pair", "nonnegative", "is_far"]
+
+
+def nonnegative(value, estimate, what="area form factor"):
+    """``value`` (a float or an array) with what rounding left below 0 set to 0, where
+    it lies within its own error ``estimate`` (the estimate still covers it:
+    ``0 <= exact <= value + estimate <= estimate``); a value below 0 beyond it, or NaN,
+    raises :class:`~exactff.NumericalError` instead of being hidden.
+
+    Examples
+    --------
+    >>> float(nonnegative(-1e-17, 1e-16))
+    0.0
+    >>> nonnegative(-1e-15, 1e-16)
+    Traceback (most recent call last):
+    ...
+    exactff.NumericalError: area form factor -1e-15 below 0 beyond its error estimate 1e-16
+    """
+    v, e = np.asarray(value, dtype=float), np.asarray(estimate, dtype=float)
+    bad = ~(v >= -e)
+    if np.any(bad):
+        bad = np.broadcast_to(bad, np.broadcast(v, e).shape)
+        k = int(np.flatnonzero(bad.ravel())[0])
+        vk = float(np.broadcast_to(v, bad.shape).ravel()[k])
+        ek = float(np.broadcast_to(e, bad.shape).ravel()[k])
+        why = "is NaN" if np.isnan(vk) else (
+            "has a NaN error estimate" if np.isnan(ek) else "below 0 beyond its error estimate")
+        raise NumericalError(f"{what} {vk!r} {why} {ek!r}")
+    out = np.maximum(v, 0.0)
+    return float(out) if out.ndim == 0 else out
+
+
+def is_far(P, Q):
+    """True when P and Q are far enough apart for the far-field rule: their centroids
+    more than ``AREA_FAR`` diameters of the larger one apart."""
+    r0 = float(np.linalg.norm(Q.mean(axis=0) - P.mean(axis=0)))
+    return r0 > tol.AREA_FAR * max(polygon_diameter(P), polygon_diameter(Q))
 
 
 def clip_front(P, n, c):
@@ -149,9 +185,9 @@ def point_values(X, nP, Qs):
     offsets = np.concatenate([[0], np.cumsum(lens)])
     owner, nxt = owners(offsets), successors(offsets)
     S, mags, errs = clipped_sector_sums(A0, E, nxt, owner, m * nX)
-    eps = np.finfo(float).eps
+    # the sector sums' own error model (C1 is calibrated for the unit roundoff 2**-53)
     return (np.abs(S).reshape(m, nX) / (2.0 * np.pi),
-            ((tol.C1 * eps * mags + errs) / (2.0 * np.pi)).reshape(m, nX))
+            ((tol.C1 * tol.EPS * mags + errs) / (2.0 * np.pi)).reshape(m, nX))
 
 
 def emitter_nodes(Pc, nP):
@@ -180,8 +216,9 @@ def far_values(nodes, nP, area_P, Qs):
     for s in range(0, len(Qs), per):
         V = point_values(X, nP, Qs[s:s + per])[0]
         hi[s:s + per], lo[s:s + per] = V @ W_hi / area_P, V @ W_lo / area_P
-    eps = np.finfo(float).eps
-    return np.maximum(hi, 0.0), np.abs(hi - lo) + tol.AREA_ROUNDING_ULPS * eps * np.abs(hi)
+    est = np.abs(hi - lo) + tol.AREA_ROUNDING_ULPS * tol.EPS * np.abs(hi)
+    # a sum of non-negative point values with positive weights: below 0 only by rounding
+    return nonnegative(hi, est), est
 
 
 def polygon_form_factor(P: ArrayLike, Q: ArrayLike) -> float:
@@ -257,11 +294,12 @@ def _edge_pieces(P, eP, Q, eQ):
     return np.array(owner), np.array(s0), np.array(s1)
 
 
-def unoccluded_pair(P, Q):
+def unoccluded_pair(P, Q, far=True):
     """F(P -> Q) of two validated polygons, unoccluded, and an estimate of its error:
     the rounding of the contour sum (64 units of its absolute terms) plus the
-    difference from the tanh-sinh rule one level coarser, or, for far pairs, the
-    difference between the 12- and 8-point area rules plus rounding."""
+    difference from the tanh-sinh rule one level coarser, or, for far pairs (:func:`is_far`;
+    only with ``far=True``), the difference between the 12- and 8-point area rules plus
+    rounding. A value below 0 within its estimate is 0; beyond it, NumericalError."""
     AP, AQ = area_vector(P), area_vector(Q)
     area_P = float(np.linalg.norm(AP))
     nP, nQ = AP / area_P, AQ / np.linalg.norm(AQ)
@@ -272,8 +310,7 @@ def unoccluded_pair(P, Q):
     if Pc is None or Qc is None:
         return 0.0, 0.0
     r0 = float(np.linalg.norm(cQ - cP)) or 1.0
-    eps = np.finfo(float).eps
-    if r0 > tol.AREA_FAR * max(polygon_diameter(P), polygon_diameter(Q)):
+    if far and is_far(P, Q):
         f, e = far_values(emitter_nodes(Pc, nP), nP, area_P, [Qc])
         return float(f[0]), float(e[0])
     eP = np.roll(Pc, -1, axis=0) - Pc          # (KP, 3)
@@ -300,7 +337,8 @@ def unoccluded_pair(P, Q):
     # the outer rule's error: at most its difference from the rule one level coarser
     # (tanh-sinh roughly squares its error from one level to the next)
     step = abs(float(((eP @ eQ.T) * (inner - coarse)).sum())) / (2.0 * np.pi) / area_P
-    return max(total, 0.0), tol.AREA_ROUNDING_ULPS * eps * scale + step
+    est = tol.AREA_ROUNDING_ULPS * tol.EPS * scale + step
+    return nonnegative(total, est), est
 
 
 # ---------------------------------------------------------------------------------------

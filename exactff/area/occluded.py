@@ -13,16 +13,27 @@ from scipy.spatial import ConvexHull, QhullError
 from scipy.special import roots_legendre
 
 from .. import _tolerances as tol
-from ..geometry import area_vector, polygon_diameter, receiver_frame
+from ..geometry import area_vector, receiver_frame
 from ..halfspace import clip_halfspace
 from ..kernel import clipped_sector_sums
 from ..methods import Exact
 from ..rings import padded, shapely_rings
 from ..scene import Scene
-from .contour import (clip_front, emitter_nodes, far_values, point_values, triangle_rule,
-                      unoccluded_pair)
+from .contour import (clip_front, emitter_nodes, far_values, is_far, nonnegative, point_values,
+                      triangle_rule, unoccluded_pair)
 
-__all__ = ["area_row"]
+__all__ = ["area_row", "STATS"]
+
+#: The counters :func:`area_row` fills in ``stats`` (each 0 where its shortcut is off or
+#: did not apply): pairs taken by the exact contour integral because the hull test left
+#: no blocker (``hull_unoccluded_pairs``; the polygons it left out:
+#: ``hull_culled_blockers``), far pairs by the far-field rule (``far_pairs``),
+#: blocker-blocker events not cut along because their lines of sight miss the receiver
+#: (``culled_events``), batches of hidden parts the engine computed where GEOS failed
+#: (``engine_fallbacks``, their points ``engine_fallback_points``); and what was done:
+#: ``occluded_pairs``, ``point_values`` (hidden parts evaluated).
+STATS = ("hull_unoccluded_pairs", "hull_culled_blockers", "far_pairs", "culled_events",
+         "engine_fallbacks", "engine_fallback_points", "occluded_pairs", "point_values")
 
 
 def _padded(polys):
@@ -32,12 +43,15 @@ def _padded(polys):
     return V, V.min(axis=1), V.max(axis=1)
 
 
-def _blockers(padded, i, j, Pc, Qc, scale):
+def _blockers(padded, i, j, Pc, Qc, scale, shortcuts=True):
     """Polygons (indices) that may hide part of Qc from part of Pc: those reaching into
     the interior of the convex hull of both (a polygon on or outside a face of the hull
-    hides nothing of positive measure). ``padded`` is :func:`_padded` of the scene."""
+    hides nothing of positive measure). ``padded`` is :func:`_padded` of the scene.
+    Without ``shortcuts``, every polygon but i and j."""
 
     V, lo_k, hi_k = padded
+    if not shortcuts:
+        return [k for k in range(len(V)) if k not in (i, j)]
     pts = np.vstack([Pc, Qc])
     near = tol.AREA_HULL_RTOL * scale
     lo, hi = pts.min(axis=0) - near, pts.max(axis=0) + near
@@ -64,7 +78,7 @@ def _plane_frame(Q):
     return nQ, Q[0], RQ, (Q - Q[0]) @ RQ[:2].T
 
 
-def _event_lines(S, nP, dP, R, c, radius, Qc):
+def _event_lines(S, nP, dP, R, c, radius, Qc, shortcuts=True, st=None):
     """The segments of P's plane (in its 2-D frame ``R`` about ``c``) across which the
     integrand may lose smoothness: for a vertex ``v`` of one polygon of S and an edge of
     another, the image of the edge through ``v`` on P's plane (the points from which
@@ -76,8 +90,10 @@ def _event_lines(S, nP, dP, R, c, radius, Qc):
     (a disk that holds P) as a segment ``(point, point)``, its ends placed on the exact
     line (the intersection of two planes), so that events through one point (a corner
     of a blocker on P) cross there to rounding; an image through infinity is kept as the
-    whole chord."""
+    whole chord. Without ``shortcuts`` every blocker-blocker event is kept; the ones
+    culled are counted in ``st["culled_events"]``."""
     out = []
+    st = {} if st is None else st
 
     def line(m, v, span=None):
         # the plane m . (x - v) = 0 meets P's plane n . x = dP in a line; x0 is its point
@@ -134,7 +150,10 @@ def _event_lines(S, nP, dP, R, c, radius, Qc):
             for v in A:
                 for e0, e1 in zip(B, np.roll(B, -1, axis=0)):
                     m = np.cross(e0 - v, e1 - v)
-                    if np.linalg.norm(m) == 0 or (a and b and not reaches_receiver(v, e0, e1)):
+                    if np.linalg.norm(m) == 0:
+                        continue
+                    if shortcuts and a and b and not reaches_receiver(v, e0, e1):
+                        st["culled_events"] = st.get("culled_events", 0) + 1
                         continue
                     x0, x1 = through(v, e0), through(v, e1)
                     s0, s1 = nP @ (e0 - v), nP @ (e1 - v)
@@ -165,7 +184,7 @@ def _cells(Pc, nP, lines, R, c):
     return tris
 
 
-def _hidden_values(X, nP, Qc, blockers):
+def _hidden_values(X, nP, Qc, blockers, st=None):
     """``F(x -> Qc) - F_occ(x -> Qc)`` for each point x of X (normal nP): the point form
     factor of the part of Qc that the blockers hide from x, and its error estimate.
 
@@ -177,7 +196,9 @@ def _hidden_values(X, nP, Qc, blockers):
     count positive, holes negative. The estimate adds to the sector sums' rounding the
     effect of moving the region's boundary by the booleans' rounding (a few units of the
     largest coordinate), through the kernel's largest value over the region's bounding
-    box, ``h / (pi r^3)``.
+    box, ``h / (pi r^3)``. Where GEOS fails, the engine computes them instead
+    (:func:`_hidden_values_by_engine`), counted in ``st["engine_fallbacks"]`` (and the
+    points in ``st["engine_fallback_points"]``).
 
     Returns
     -------
@@ -244,6 +265,9 @@ def _hidden_values(X, nP, Qc, blockers):
             hidden = shapely.intersection(union, qpoly)
     except shapely.errors.GEOSException:
         # GEOS gave up on a nearly degenerate configuration: the engine instead
+        if st is not None:
+            st["engine_fallbacks"] = st.get("engine_fallbacks", 0) + 1
+            st["engine_fallback_points"] = st.get("engine_fallback_points", 0) + nX
         return _hidden_values_by_engine(X, nP, Qc, Kc)
     # the region's rings from each point: outer rings and holes
     parts, part_of = shapely.get_parts(hidden, return_index=True)
@@ -259,19 +283,25 @@ def _hidden_values(X, nP, Qc, blockers):
     S, mags, errs = clipped_sector_sums(A0, E, nxt, owner, len(first))
     sign = np.where(is_hole, -1.0, 1.0)
     value = np.bincount(point, sign * np.abs(S), minlength=nX) / (2.0 * np.pi)
-    eps = np.finfo(float).eps
-    rnd = np.bincount(point, tol.C1 * eps * mags + errs, minlength=nX) / (2.0 * np.pi)
+    # the sector sums' own error model (C1 is calibrated for the unit roundoff 2**-53)
+    rnd = np.bincount(point, tol.C1 * tol.EPS * mags + errs, minlength=nX) / (2.0 * np.pi)
     # the booleans' rounding: the boundary moved by delta, through the kernel's bound
-    # h / (pi r^3) over the region's bounding box (r >= the box's distance from x)
-    b = shapely.bounds(hidden)
-    foot = (X - q0) @ RQ[:2].T
+    # h / (pi r^3) over the region's bounding box (r >= the box's distance from x);
+    # points with nothing hidden (an empty region, no bounds) have nothing to move
+    some = np.zeros(nX, dtype=bool)
+    some[point] = True
+    b = shapely.bounds(hidden[some])
+    foot = ((X - q0) @ RQ[:2].T)[some]
     dx = np.maximum(0.0, np.maximum(b[:, 0] - foot[:, 0], foot[:, 0] - b[:, 2]))
     dy = np.maximum(0.0, np.maximum(b[:, 1] - foot[:, 1], foot[:, 1] - b[:, 3]))
-    r = np.sqrt(h * h + np.nan_to_num(dx * dx + dy * dy))
-    delta = tol.AREA_BOOLEAN_ULPS * (nb + 1) * eps * float(np.abs(Y2).max())
-    bound = np.divide(h, np.pi * r ** 3, out=np.zeros_like(r), where=r > 0)   # x on Qc's plane: Qc edge-on
-    geo = np.where(value > 0, delta * shapely.length(hidden) * bound, 0.0)
-    return np.maximum(value, 0.0), rnd + np.nan_to_num(geo)
+    r = np.sqrt(h[some] ** 2 + dx * dx + dy * dy)
+    delta = tol.AREA_BOOLEAN_ULPS * (nb + 1) * tol.EPS * float(np.abs(Y2).max())
+    bound = np.divide(h[some], np.pi * r ** 3, out=np.zeros_like(r), where=r > 0)   # x on Qc's plane: Qc edge-on
+    geo = np.zeros(nX)
+    geo[some] = delta * shapely.length(hidden[some]) * bound
+    est = rnd + geo
+    # holes subtract: below 0 only by rounding, within the estimate
+    return nonnegative(value, est, "hidden part"), est
 
 
 def _hidden_values_by_engine(X, nP, Qc, blockers):
@@ -284,7 +314,8 @@ def _hidden_values_by_engine(X, nP, Qc, blockers):
     F = np.array([f for f, _ in FE])
     E = np.array([e for _, e in FE])
     U, EU = (v[0] for v in point_values(X, nP, [Qc]))
-    return np.maximum(U - F[:, 0], 0.0), EU + E[:, 0]
+    est = EU + E[:, 0]
+    return nonnegative(U - F[:, 0], est, "hidden part"), est
 
 
 _RULES = tuple(roots_legendre(k) for k in tol.AREA_RULE_ORDERS)
@@ -306,7 +337,7 @@ def _corner_first(tri, blockers, nP, dP):
     return tri
 
 
-def _occluded_pair(S, Pc, Qc, nP, tolerance, area_P):
+def _occluded_pair(S, Pc, Qc, nP, tolerance, area_P, shortcuts=True, st=None, rtol=None):
     """``(1 / A_P) int_Pc F_occ(x -> S[0]) dA`` with S = [receiver, blockers...], as the
     unoccluded value (the contour integral, exact) less the integral of the hidden part
     ``F(x -> Qc) - F_occ(x -> S[0])`` (exact point values of the hidden region, built
@@ -316,14 +347,37 @@ def _occluded_pair(S, Pc, Qc, nP, tolerance, area_P):
     Gauss-Legendre rules (6 and 10 points a side), a triangle cut in four where the two
     differ by more than its share of the tolerance. Returns the value, its error
     estimate (the contour sum's, the rules' differences, the point values' bounds) and
-    the number of point values used."""
+    the number of point values used.
+
+    The rules' target is the absolute ``tolerance``, or with ``rtol`` the bound
+    ``max(tolerance, rtol * F)``: first with the unoccluded value for F (the value is
+    at most that), and where the estimate then misses ``max(tolerance, rtol * |value|)``
+    once more with ``value - estimate`` for F (a lower bound where the estimate holds)."""
+    whole, whole_err = unoccluded_pair(np.asarray(Pc), np.asarray(S[0]), far=shortcuts)
+    if shortcuts and st is not None and is_far(np.asarray(Pc), np.asarray(S[0])):
+        st["far_pairs"] = st.get("far_pairs", 0) + 1
+    area_Pc = float(np.linalg.norm(area_vector(Pc)))
+    whole = (whole * area_Pc / area_P, whole_err * area_Pc / area_P)
+    target = tolerance if rtol is None else max(tolerance, rtol * whole[0])
+    value, err, points = _hidden_integral(S, Pc, Qc, nP, target, area_P, whole, shortcuts, st)
+    if rtol is not None and target > tolerance and err > max(tolerance, rtol * abs(value)):
+        target = max(tolerance, rtol * max(value - err, 0.0))
+        value, err, more = _hidden_integral(S, Pc, Qc, nP, target, area_P, whole, shortcuts, st)
+        points += more
+    return value, err, points
+
+
+def _hidden_integral(S, Pc, Qc, nP, tolerance, area_P, whole, shortcuts, st):
+    """The adaptive integral of :func:`_occluded_pair` to the absolute target
+    ``tolerance``, with ``whole`` the pair's unoccluded value and estimate (per unit area
+    of P)."""
     R = receiver_frame(nP)
     c = Pc.mean(axis=0)
     dP = float(nP @ Pc[0])
-    whole, whole_err = unoccluded_pair(np.asarray(Pc), np.asarray(S[0]))
     radius = (1.0 + tol.AREA_HIDDEN_PAD) * float(np.linalg.norm(Pc - c, axis=1).max())
     todo = [(_corner_first(t, S[1:], nP, dP), 0)
-            for t in _cells(Pc, nP, _event_lines(S, nP, dP, R, c, radius, Qc), R, c)]
+            for t in _cells(Pc, nP, _event_lines(S, nP, dP, R, c, radius, Qc, shortcuts, st),
+                            R, c)]
     total_area = sum(0.5 * np.linalg.norm(np.cross(t[1] - t[0], t[2] - t[0])) for t, _ in todo)
     hidden = err = 0.0
     points = 0
@@ -331,7 +385,7 @@ def _occluded_pair(S, Pc, Qc, nP, tolerance, area_P):
         # every triangle of this level together: its two rules' nodes, one call
         rules = [[triangle_rule(tri, r) for r in _RULES] for tri, _ in todo]
         X = np.vstack([x for (xl, _), (xh, _) in rules for x in (xl, xh)])
-        H, EH = _hidden_values(X, nP, Qc, S[1:])
+        H, EH = _hidden_values(X, nP, Qc, S[1:], st)
         points += len(X)
         nxt, at = [], 0
         for (tri, depth), ((Xl, Wl), (Xh, Wh)) in zip(todo, rules):
@@ -356,15 +410,38 @@ def _occluded_pair(S, Pc, Qc, nP, tolerance, area_P):
             hidden += hi / area_P
             err += diff + (Wh @ EHh) / area_P
         todo = nxt
-    # the contour integral over Pc is per unit area of Pc: back to P's area
     area_Pc = float(np.linalg.norm(area_vector(Pc)))
-    value = whole * area_Pc / area_P - hidden
+    value = whole[0] - hidden
     err += max(area_Pc - total_area, 0.0) / area_P      # cells dropped as slivers
-    return value, err + whole_err * area_Pc / area_P, points
+    return value, err + whole[1], points
 
 
-def area_row(scene, i, tolerance):
-    """Row i of :func:`area_form_factors` and its estimates."""
+def area_row(scene, i, tolerance, *, rtol=None, shortcuts=True, stats=None):
+    """Row i of :func:`exactff.area_form_factors` and its estimates.
+
+    Parameters
+    ----------
+    scene : Scene
+    i : int
+        The emitter.
+    tolerance : float
+        Absolute error allowed per value (the adaptive rules' target).
+    rtol : float, optional
+        Also allowed: this share of the value; the bound is ``max(tolerance, rtol * F)``.
+    shortcuts : bool, default True
+        False disables every shortcut (for testing that they never change a result
+        beyond the estimates): the hull test (every other polygon is then a blocker of
+        every pair), the far-field rule (the contour integral for every pair) and the
+        cull of blocker-blocker events whose lines of sight miss the receiver.
+    stats : dict, optional
+        Filled with this row's counters (:data:`STATS`).
+
+    Returns
+    -------
+    (ndarray of shape (len(scene),), ndarray of shape (len(scene),))
+        The values and their error estimates.
+    """
+    st = {k: 0 for k in STATS}
     polys = [np.asarray(p, dtype=float) for p in scene.polygons]
     padded = _padded(polys)
     P = polys[i]
@@ -372,7 +449,6 @@ def area_row(scene, i, tolerance):
     AP = area_vector(P)
     area_P = float(np.linalg.norm(AP))
     nP = AP / area_P
-    diam_P, cP = polygon_diameter(P), P.mean(axis=0)
     f, e = np.zeros(len(polys)), np.zeros(len(polys))
     far = []                      # far unoccluded pairs with P whole: integrated together
     for j, Q in enumerate(polys):
@@ -384,17 +460,28 @@ def area_row(scene, i, tolerance):
         Qc = clip_front(Q, nP, P[0])
         if Pc is None or Qc is None:
             continue
-        B = _blockers(padded, i, j, Pc, Qc, scale)
+        B = _blockers(padded, i, j, Pc, Qc, scale, shortcuts)
+        if shortcuts:
+            st["hull_culled_blockers"] += len(polys) - 2 - len(B)
         if B:
-            f[j], e[j], _ = _occluded_pair([Q] + [polys[k] for k in B], Pc, Qc, nP,
-                                           tolerance, area_P)
-            f[j] = max(f[j], 0.0)
-        elif (Pc is P
-              and np.linalg.norm(Q.mean(axis=0) - cP) > tol.AREA_FAR * max(diam_P, polygon_diameter(Q))):
+            st["occluded_pairs"] += 1
+            f[j], e[j], points = _occluded_pair([Q] + [polys[k] for k in B], Pc, Qc, nP,
+                                                tolerance, area_P, shortcuts, st, rtol)
+            st["point_values"] += points
+            f[j] = nonnegative(f[j], e[j])
+            continue
+        if len(polys) > 2 and shortcuts:
+            st["hull_unoccluded_pairs"] += 1
+        if shortcuts and Pc is P and is_far(P, Q):
             far.append((j, Qc))
         else:
-            f[j], e[j] = unoccluded_pair(P, Q)
+            if shortcuts and is_far(P, Q):
+                st["far_pairs"] += 1
+            f[j], e[j] = unoccluded_pair(P, Q, far=shortcuts)
     if far:
+        st["far_pairs"] += len(far)
         js = [j for j, _ in far]
         f[js], e[js] = far_values(emitter_nodes(P, nP), nP, area_P, [Q for _, Q in far])
+    if stats is not None:
+        stats.update(st)
     return f, e
