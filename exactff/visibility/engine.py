@@ -11,7 +11,6 @@ import numpy as np
 import shapely
 from scipy.spatial import ConvexHull, QhullError
 
-from .. import _tolerances as tol
 from ..checks import as_receiver
 from ..errors import NumericalError, check_finite
 from ..geometry import receiver_frame, to_local
