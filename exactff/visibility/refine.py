@@ -79,8 +79,10 @@ class Refiner:
         self.p = np.asarray(point, dtype=float)
         self.n = np.asarray(normal, dtype=float)
         self.buckets, self.world, self.charts = buckets, world, charts
-        self._edges = self._world = None
+        self._edges = self._world = self._local = None
         self._trees = {}
+        self._edge_trees = {}
+        self._poly_trees = {}
         self._mp_frames = {}
         self.R_ld = receiver_frame(self.n, dtype=_LD)
 
@@ -107,6 +109,49 @@ class Refiner:
                 planes[rows[valid]] = M[valid]
             self._edges = offset, count, planes
         return self._edges
+
+    def _local_table(self):
+        """The fragments' local (double) vertices, laid out as the edge table."""
+        if self._local is None:
+            offset, count, _ = self._edge_table()
+            L = np.full((int(count.sum()), 3), np.nan)
+            for pos, V, c in self.buckets:
+                slot = np.arange(V.shape[1])
+                valid = slot[None, :] < c[:, None]
+                L[(offset[pos][:, None] + slot[None, :])[valid]] = V[valid]
+            self._local = L
+        return self._local
+
+    def _fragment_edge_tree(self, ci, chart, f):
+        """A long fragment's edges as segments in chart ``ci``: an STRtree and the edge
+        table row of each of its geometries. Each edge is clipped to the part whose
+        image lies within ``REFINE_CHART_REACH`` of the chart's centre (finite: in
+        front of the chart's plane) and projected; edges outside are left out."""
+        key = (ci, int(f))
+        if key not in self._edge_trees:
+            eu, ev, ew, _ = chart
+            offset, count, _ = self._edge_table()
+            o, c = int(offset[f]), int(count[f])
+            L = self._local_table()[o:o + c]
+            a, b = L, np.roll(L, -1, axis=0)
+            t0, t1 = np.zeros(c), np.ones(c)
+            for e in (eu, -eu, ev, -ev):
+                h = tol.REFINE_CHART_REACH * ew - e
+                fa, fb = a @ h, b @ h
+                with np.errstate(divide="ignore", invalid="ignore"):
+                    t = fa / (fa - fb)
+                t0 = np.where((fa < 0) & (fb >= 0), np.maximum(t0, t), t0)
+                t1 = np.where((fb < 0) & (fa >= 0), np.minimum(t1, t), t1)
+                t1 = np.where((fa < 0) & (fb < 0), -1.0, t1)
+            d = b - a
+            A, B = a + t0[:, None] * d, a + t1[:, None] * d
+            with np.errstate(divide="ignore", invalid="ignore"):
+                xy = np.stack([np.stack([X @ eu / (X @ ew), X @ ev / (X @ ew)], axis=1)
+                               for X in (A, B)], axis=1)              # (c, 2, 2)
+            keep = np.flatnonzero((t0 <= t1) & np.isfinite(xy).all(axis=(1, 2)))
+            self._edge_trees[key] = (shapely.STRtree(shapely.linestrings(xy[keep])),
+                                     o + keep)
+        return self._edge_trees[key]
 
     def _boundary_tree(self, ci):
         if ci not in self._trees:
@@ -161,12 +206,32 @@ class Refiner:
         offset, count, planes = self._edge_table()
 
         def consider(rows, fr):
-            # candidate pairs (ring edge, fragment): every edge of the fragment
+            # candidate pairs (ring edge, fragment edge table row), in the order of the
+            # pairs (ring edge, fragment) and of the fragment's edges: every edge of a
+            # short fragment; of a long one, the edges whose image passes within
+            # REFINE_QUERY of the ring edge's (a few, not all of them)
+            short = count[fr] <= tol.LONG_POLYGON
+            lp, lg = [np.zeros(0, dtype=np.int64)], [np.zeros(0, dtype=np.int64)]
+            for f in np.unique(fr[~short]):
+                j = np.flatnonzero(~short & (fr == f))
+                tree, grow = self._fragment_edge_tree(ci, chart, f)
+                segs = shapely.linestrings(np.stack([coords[rows[j]], coords[nxt[rows[j]]]],
+                                                    axis=1))
+                q, t = tree.query(segs, predicate="dwithin", distance=tol.REFINE_QUERY)
+                lp.append(j[q])
+                lg.append(grow[t])
+            lp, lg = np.concatenate(lp), np.concatenate(lg)
             for a in range(0, len(rows), 1 << 16):
-                r_, f_ = rows[a:a + (1 << 16)], fr[a:a + (1 << 16)]
-                c = count[f_]
-                e = np.repeat(r_, c)
-                g = np.repeat(offset[f_] - np.cumsum(c) + c, c) + np.arange(int(c.sum()))
+                sp = a + np.flatnonzero(short[a:a + (1 << 16)])
+                c = count[fr[sp]]
+                pr = np.repeat(sp, c)
+                g = np.repeat(offset[fr[sp]] - np.cumsum(c) + c, c) + np.arange(int(c.sum()))
+                inl = (lp >= a) & (lp < a + (1 << 16))
+                pr, g = np.concatenate([pr, lp[inl]]), np.concatenate([g, lg[inl]])
+                if len(pr) == 0:
+                    continue
+                o = np.lexsort((g, pr))
+                e, g = rows[pr[o]], g[o]
                 P = planes[g]
                 res = np.maximum(np.abs((P * D[e]).sum(1)), np.abs((P * Dn[e]).sum(1)))
                 res = np.where(np.isnan(res), np.inf, res)
@@ -215,9 +280,28 @@ class Refiner:
         themselves for an edge the cut made."""
         flat = flat_polygons(self.scene)
         offset, count, V, nxt = flat.offsets[:-1], flat.counts, flat.V, flat.nxt
-        c = count[src]
-        q = np.repeat(np.arange(len(src)), c)
-        k = np.repeat(offset[src] - np.cumsum(c) + c, c) + np.arange(int(c.sum()))
+        src = np.asarray(src)
+        # candidate pairs (fragment edge q, polygon edge k): every edge of a short
+        # polygon; of a long one, those within the test's distance of the fragment edge
+        # (in the polygon's plane projected along its normal's largest axis, which
+        # shortens no distance more than it keeps: a superset)
+        short = np.flatnonzero(count[src] <= tol.LONG_POLYGON)
+        c = count[src[short]]
+        qs = [np.repeat(short, c)]
+        ks = [np.repeat(offset[src[short]] - np.cumsum(c) + c, c) + np.arange(int(c.sum()))]
+        long_ = np.flatnonzero(count[src] > tol.LONG_POLYGON)
+        for s in np.unique(src[long_]):
+            qq = long_[src[long_] == s]
+            tree, axes, vmax = self._polygon_edge_tree(s)
+            reach = tol.BSP_COPLANAR_ULPS * tol.EPS * (
+                vmax + np.maximum(np.abs(a[qq]), np.abs(b[qq])).max(axis=1))
+            segs = shapely.linestrings(np.stack([a[qq][:, axes], b[qq][:, axes]], axis=1))
+            i, t = tree.query(segs, predicate="dwithin", distance=reach)
+            qs.append(qq[i])
+            ks.append(offset[s] + t)
+        q, k = np.concatenate(qs), np.concatenate(ks)
+        o = np.lexsort((k, q))
+        q, k = q[o], k[o]
         E = V[nxt[k]] - V[k]
         L = np.linalg.norm(E, axis=1)
         ra = np.linalg.norm(np.cross(E, a[q] - V[k]), axis=1) / L
@@ -232,6 +316,21 @@ class Refiner:
         A[first[0]] = V[k[hit[first[1]]]]
         B[first[0]] = V[nxt[k[hit[first[1]]]]]
         return A, B
+
+    def _polygon_edge_tree(self, s):
+        """A long scene polygon's edges as 2-d segments (its plane projected along the
+        largest axis of its normal): an STRtree, the two axes kept, and the largest
+        coordinate magnitude of its vertices."""
+        s = int(s)
+        if s not in self._poly_trees:
+            flat = flat_polygons(self.scene)
+            o, c = int(flat.offsets[s]), int(flat.counts[s])
+            k = np.arange(o, o + c)
+            axes = np.delete(np.arange(3), np.argmax(np.abs(self.scene.normals[s])))
+            seg = np.stack([flat.V[k][:, axes], flat.V[flat.nxt[k]][:, axes]], axis=1)
+            self._poly_trees[s] = (shapely.STRtree(shapely.linestrings(seg)), axes,
+                                   float(np.abs(flat.V[k]).max()))
+        return self._poly_trees[s]
 
     def _world_table(self):
         """The fragments' world vertices, laid out as the edge table."""
