@@ -83,6 +83,7 @@ class Refiner:
         self._trees = {}
         self._edge_trees = {}
         self._poly_trees = {}
+        self._segment_trees = {}
         self._mp_frames = {}
         self.R_ld = receiver_frame(self.n, dtype=_LD)
 
@@ -154,10 +155,43 @@ class Refiner:
         return self._edge_trees[key]
 
     def _boundary_tree(self, ci):
+        """The images' boundaries in chart ``ci``: an STRtree, the boundaries and their
+        vertex counts."""
         if ci not in self._trees:
             idx, polys, _ = self.charts[ci]
-            self._trees[ci] = shapely.STRtree(shapely.boundary(polys))
+            b = shapely.boundary(polys)
+            self._trees[ci] = (shapely.STRtree(b), b, shapely.get_num_coordinates(b))
         return self._trees[ci]
+
+    def _boundary_segment_tree(self, ci, t):
+        """A long image boundary of chart ``ci`` as an STRtree of its segments."""
+        key = (ci, int(t))
+        if key not in self._segment_trees:
+            parts = shapely.get_parts(self._boundary_tree(ci)[1][t])
+            xy, part = shapely.get_coordinates(parts, return_index=True)
+            j = np.flatnonzero(part[1:] == part[:-1])
+            self._segment_trees[key] = shapely.STRtree(
+                shapely.linestrings(np.stack([xy[j], xy[j + 1]], axis=1)))
+        return self._segment_trees[key]
+
+    def _boundaries_near(self, ci, xy):
+        """Pairs (point, image) with the image's boundary within ``REFINE_QUERY`` of the
+        point, as ``STRtree.query(predicate="dwithin")`` gives them and in its order
+        (the candidates of the distance's envelope, in the tree's order), but a long
+        boundary is searched by its segments rather than measured whole."""
+        tree, bounds, ncoord = self._boundary_tree(ci)
+        d = tol.REFINE_QUERY
+        q, t = tree.query(shapely.box(xy[:, 0] - d, xy[:, 1] - d, xy[:, 0] + d, xy[:, 1] + d))
+        keep = np.zeros(len(q), dtype=bool)
+        pts = shapely.points(xy)
+        short = ncoord[t] <= tol.LONG_POLYGON
+        keep[short] = shapely.dwithin(pts[q[short]], bounds[t[short]], d)
+        for b in np.unique(t[~short]):
+            j = np.flatnonzero(~short & (t == b))
+            hit, _ = self._boundary_segment_tree(ci, b).query(pts[q[j]], predicate="dwithin",
+                                                             distance=d)
+            keep[j[np.unique(hit)]] = True
+        return q[keep], t[keep]
 
     def match(self, ci, chart, coords, nxt, frag):
         """Label every edge of the pieces' rings in chart ``ci``.
@@ -247,9 +281,7 @@ class Refiner:
         # the rest: edges of the images whose boundary passes through the edge
         rest = np.flatnonzero(best > tol.REFINE_SURE)
         if len(rest):
-            mid = shapely.points(0.5 * (coords[rest] + coords[nxt[rest]]))
-            q, t = self._boundary_tree(ci).query(mid, predicate="dwithin",
-                                                 distance=tol.REFINE_QUERY)
+            q, t = self._boundaries_near(ci, 0.5 * (coords[rest] + coords[nxt[rest]]))
             if len(q):
                 consider(rest[q], self.charts[ci][0][t])
         best[best > tol.REFINE_MATCH] = np.inf
