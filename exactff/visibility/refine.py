@@ -13,7 +13,8 @@ approximated, then refined"):
    horizon. The plane is found as the candidate through both end points of the edge with
    the least residual (candidates: the fragment's own edges, the seams and chart edges
    nearest to the edge, and the edges of the images whose boundary passes through the
-   edge's midpoint).
+   edge's midpoint; of a fragment longer than ``LONG_POLYGON``, only its edges whose
+   image passes within ``REFINE_QUERY`` of the edge's, found with an STRtree).
 2. **Planes from the input.** A fragment's edge is traced back to the scene polygon's
    edge it lies on (a BSP cut keeps the edge's line) and its plane is computed from
    the two input vertices, ``(a - p) x (b - a)``; an edge made by a BSP cut keeps the
