@@ -1,13 +1,19 @@
-"""One long polygon in a scene: time and memory per row with and without it (issue 21).
+"""One long polygon in a scene: time and memory per row with and without it (issues 21, 33).
 
 Usage: python benchmarks/bench_long_polygon.py [--rows 6] [--max-vertices 50000]
+       [--methods exact,refined,hemicube]
 
-The procedural office (4,478 quads) plus one round table top given as a single polygon
+The procedural office (4,424 quads) plus one round table top given as a single polygon
 of 500, 5,000 or 50,000 vertices (radius 0.6 m at desk height, facing up). The same
-sampled rows are timed for every scene in one run; the ratio is against the office
-without the table. Memory: the tracemalloc peak of one row after the scene's caches are
-built (numpy and Python allocations; GEOS's own are not traced). Also the hemicube-256
-row (the discrete methods' z-buffer), which used to pad every polygon to the longest.
+sampled rows are timed for every scene in one run, interleaved (row by row, scene by
+scene); the ratio is against the office without the table, same method. Memory: the
+tracemalloc peak of one row after the scene's caches are built (numpy and Python
+allocations; GEOS's own are not traced).
+Methods: the exact method without refinement (tolerance None: the clipper alone), with
+it (tolerance 1e-12, the default: pieces whose estimate misses it are refined, the
+disc's among them; "refined rings" is the mean per row), and the hemicube-256 row (the
+discrete methods' z-buffer), which used to pad every polygon to the longest. Issue 33:
+the refinement tried every edge of a long fragment for every edge of a piece (204 x).
 """
 
 import argparse
@@ -34,48 +40,65 @@ def table_top(k, centre=(4.0, 1.1, 3.0), radius=0.6):
     return P[::-1].copy()
 
 
-def row_time_and_peak(scene, method, rows):
-    method.point_form_factors(scene, scene.centroids[rows[0]], scene.normals[rows[0]])
-    ts = []
-    for i in rows:
-        t = time.perf_counter()
-        method.point_form_factors(scene, scene.centroids[i], scene.normals[i])
-        ts.append(time.perf_counter() - t)
+def row_peak(scene, method, i):
     tracemalloc.start()
-    method.point_form_factors(scene, scene.centroids[rows[0]], scene.normals[rows[0]])
+    method.point_form_factors(scene, scene.centroids[i], scene.normals[i])
     peak = tracemalloc.get_traced_memory()[1]
     tracemalloc.stop()
-    return float(np.median(ts)), peak
+    return peak
+
+
+METHODS = {"exact": ("exact, tolerance None", lambda: Exact(tolerance=None)),
+           "refined": ("exact, refined (tolerance 1e-12)", lambda: Exact(tolerance=1e-12)),
+           "hemicube": ("hemicube-256", lambda: ef.Hemicube(resolution=256))}
 
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--rows", type=int, default=6)
     ap.add_argument("--max-vertices", type=int, default=50000)
+    ap.add_argument("--methods", default=",".join(METHODS),
+                    help="comma-separated, of " + ", ".join(METHODS))
     args = ap.parse_args()
     print(machine())
     office = ef.scenes.office()
     rows = np.random.default_rng(0).choice(len(office), args.rows, replace=False).tolist()
-    base = {}
-    print("| long polygon (vertices) | method | median s/row | ratio | row peak (MiB) | "
-          "extra peak (MiB) | set-up (s) |")
-    print("|---|---|---|---|---|---|---|")
+    scenes, setup = {}, {}
     for k in [0, 500, 5000, 50000]:
         if k > args.max_vertices:
             continue
         t = time.perf_counter()
-        scene = office if k == 0 else ef.Scene.from_polygons(
+        scenes[k] = office if k == 0 else ef.Scene.from_polygons(
             list(office.polygons) + [table_top(k)], groups=list(office.groups) + ["table"])
-        setup = time.perf_counter() - t
-        for name, method in (("exact", Exact()), ("hemicube-256", ef.Hemicube(resolution=256))):
+        setup[k] = time.perf_counter() - t
+    print("| long polygon (vertices) | method | median s/row | ratio | row peak (MiB) | "
+          "extra peak (MiB) | set-up (s) | refined rings |")
+    print("|---|---|---|---|---|---|---|---|")
+    for key in args.methods.split(","):
+        name, make = METHODS[key]
+        method = make()
+        first = {}
+        for k, scene in scenes.items():
             t = time.perf_counter()
             method.point_form_factors(scene, scene.centroids[rows[0]], scene.normals[rows[0]])
-            first = time.perf_counter() - t
-            med, peak = row_time_and_peak(scene, method, rows)
-            if k == 0:
-                base[name] = (med, peak)
-            print(f"| {k} | {name} | {med:.3f} | {med / base[name][0]:.2f} | {peak / 2**20:.1f} | "
-                  f"{(peak - base[name][1]) / 2**20:.1f} | {setup + first:.2f} |", flush=True)
+            first[k] = time.perf_counter() - t
+        # the scenes' rows interleaved, so that the machine's load (shared) drifts
+        # alike for all of them
+        ts = {k: [] for k in scenes}
+        refined = {k: [] for k in scenes}
+        for i in rows:
+            for k, scene in scenes.items():
+                st = {}
+                t = time.perf_counter()
+                method.point_form_factors(scene, scene.centroids[i], scene.normals[i], stats=st)
+                ts[k].append(time.perf_counter() - t)
+                refined[k].append(st.get("refined_rings", 0))
+        peak = {k: row_peak(scene, method, rows[0]) for k, scene in scenes.items()}
+        med = {k: float(np.median(v)) for k, v in ts.items()}
+        for k in scenes:
+            print(f"| {k} | {name} | {med[k]:.3f} | {med[k] / med[0]:.2f} | "
+                  f"{peak[k] / 2**20:.1f} | {(peak[k] - peak[0]) / 2**20:.1f} | "
+                  f"{setup[k] + first[k]:.2f} | {np.mean(refined[k]):.0f} |", flush=True)
 
 
 if __name__ == "__main__":

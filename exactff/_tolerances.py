@@ -30,6 +30,7 @@ __all__ = [
     "REFINE_MATCH",
     "REFINE_SURE",
     "REFINE_QUERY",
+    "REFINE_CHART_REACH",
     "REFINE_PARALLEL",
     "REFINE_VERTEX_ULPS",
     "REFINE_MP_ZERO_DIGITS",
@@ -136,7 +137,9 @@ CLIP_BATCH = 256
 
 #: The discrete methods' z-buffer tests cells against polygon images with a vectorised
 #: crossing-number loop over the edges; images with more vertices than this use a
-#: prepared point-in-polygon test instead (not a tolerance: a cost threshold).
+#: prepared point-in-polygon test instead (not a tolerance: a cost threshold). The
+#: refinement likewise finds the candidate edges of fragments and scene polygons longer
+#: than this by proximity (STRtree) instead of trying all of them.
 LONG_POLYGON = 64
 
 #: Scene validation checks polygons with the same vertex count together, with O(k^2)
@@ -186,6 +189,11 @@ REFINE_SURE = 2.0 ** -44
 
 #: Chart distance of the search for images whose boundary passes through an edge.
 REFINE_QUERY = 1e-11
+
+#: The refinement projects a long fragment's edges into a chart as far as this many
+#: chart units from its centre (the chart spans [-1, 1]; not a tolerance: a margin, so
+#: that an edge's image stays finite and every edge reaching the chart is kept).
+REFINE_CHART_REACH = 2.0
 
 #: Two planes closer to parallel than this (sine of their angle) do not give a vertex:
 #: the clipper's is kept, with its error counted.

@@ -77,3 +77,25 @@ def test_diameter_of_long_polygons_against_all_pairs():
         P = P @ R.T + rng.normal(size=3)
         D = P[:, None, :] - P[None, :, :]
         assert abs(polygon_diameter(P) - np.sqrt((D * D).sum(-1)).max()) <= 1e-12
+
+
+def test_refinement_of_a_long_polygon_does_not_depend_on_its_candidate_search(monkeypatch):
+    """The refinement finds a long fragment's (and a long scene polygon's) candidate
+    edges by proximity, not among all of them (issue 33): the same labels, so the same
+    values and estimates as trying every edge."""
+    from exactff import _tolerances as tol
+
+    room = ef.scenes.furnished_box(2, [((0.1, 0.1, 0.0), (0.3, 0.35, 0.6))])
+    long_ = ef.Scene.from_polygons(list(room.polygons) + [disc(200)])
+    # a tolerance below what the clipper's vertices give: every visible piece is refined,
+    # the disc's too
+    method = ef.Exact(tolerance=1e-15)
+    for i in (4, 9, 14, 21):   # walls and ceiling rows that see the disc
+        p, nrm = long_.centroids[i], long_.normals[i]
+        F, E = method.point_form_factors(long_, p, nrm, error=True)
+        assert F[-1] > 0 and E[-1] <= 1e-15 * F[-1]    # the disc's pieces were refined
+        with monkeypatch.context() as m:
+            m.setattr(tol, "LONG_POLYGON", len(long_.polygons[-1]) + 1)
+            F0, E0 = method.point_form_factors(long_, p, nrm, error=True)
+        np.testing.assert_array_equal(F, F0)
+        np.testing.assert_array_equal(E, E0)

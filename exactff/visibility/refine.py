@@ -13,7 +13,8 @@ approximated, then refined"):
    horizon. The plane is found as the candidate through both end points of the edge with
    the least residual (candidates: the fragment's own edges, the seams and chart edges
    nearest to the edge, and the edges of the images whose boundary passes through the
-   edge's midpoint).
+   edge's midpoint; of a fragment longer than ``LONG_POLYGON``, only its edges whose
+   image passes within ``REFINE_QUERY`` of the edge's, found with an STRtree).
 2. **Planes from the input.** A fragment's edge is traced back to the scene polygon's
    edge it lies on (a BSP cut keeps the edge's line) and its plane is computed from
    the two input vertices, ``(a - p) x (b - a)``; an edge made by a BSP cut keeps the
@@ -79,8 +80,11 @@ class Refiner:
         self.p = np.asarray(point, dtype=float)
         self.n = np.asarray(normal, dtype=float)
         self.buckets, self.world, self.charts = buckets, world, charts
-        self._edges = self._world = None
+        self._edges = self._world = self._local = None
         self._trees = {}
+        self._edge_trees = {}
+        self._poly_trees = {}
+        self._segment_trees = {}
         self._mp_frames = {}
         self.R_ld = receiver_frame(self.n, dtype=_LD)
 
@@ -108,11 +112,87 @@ class Refiner:
             self._edges = offset, count, planes
         return self._edges
 
+    def _local_table(self):
+        """The fragments' local (double) vertices, laid out as the edge table."""
+        if self._local is None:
+            offset, count, _ = self._edge_table()
+            L = np.full((int(count.sum()), 3), np.nan)
+            for pos, V, c in self.buckets:
+                slot = np.arange(V.shape[1])
+                valid = slot[None, :] < c[:, None]
+                L[(offset[pos][:, None] + slot[None, :])[valid]] = V[valid]
+            self._local = L
+        return self._local
+
+    def _fragment_edge_tree(self, ci, chart, f):
+        """A long fragment's edges as segments in chart ``ci``: an STRtree and the edge
+        table row of each of its geometries. Each edge is clipped to the part whose
+        image lies within ``REFINE_CHART_REACH`` of the chart's centre (finite: in
+        front of the chart's plane) and projected; edges outside are left out."""
+        key = (ci, int(f))
+        if key not in self._edge_trees:
+            eu, ev, ew, _ = chart
+            offset, count, _ = self._edge_table()
+            o, c = int(offset[f]), int(count[f])
+            L = self._local_table()[o:o + c]
+            a, b = L, np.roll(L, -1, axis=0)
+            t0, t1 = np.zeros(c), np.ones(c)
+            for e in (eu, -eu, ev, -ev):
+                h = tol.REFINE_CHART_REACH * ew - e
+                fa, fb = a @ h, b @ h
+                with np.errstate(divide="ignore", invalid="ignore"):
+                    t = fa / (fa - fb)
+                t0 = np.where((fa < 0) & (fb >= 0), np.maximum(t0, t), t0)
+                t1 = np.where((fb < 0) & (fa >= 0), np.minimum(t1, t), t1)
+                t1 = np.where((fa < 0) & (fb < 0), -1.0, t1)
+            d = b - a
+            A, B = a + t0[:, None] * d, a + t1[:, None] * d
+            with np.errstate(divide="ignore", invalid="ignore"):
+                xy = np.stack([np.stack([X @ eu / (X @ ew), X @ ev / (X @ ew)], axis=1)
+                               for X in (A, B)], axis=1)              # (c, 2, 2)
+            keep = np.flatnonzero((t0 <= t1) & np.isfinite(xy).all(axis=(1, 2)))
+            self._edge_trees[key] = (shapely.STRtree(shapely.linestrings(xy[keep])),
+                                     o + keep)
+        return self._edge_trees[key]
+
     def _boundary_tree(self, ci):
+        """The images' boundaries in chart ``ci``: an STRtree, the boundaries and their
+        vertex counts."""
         if ci not in self._trees:
             idx, polys, _ = self.charts[ci]
-            self._trees[ci] = shapely.STRtree(shapely.boundary(polys))
+            b = shapely.boundary(polys)
+            self._trees[ci] = (shapely.STRtree(b), b, shapely.get_num_coordinates(b))
         return self._trees[ci]
+
+    def _boundary_segment_tree(self, ci, t):
+        """A long image boundary of chart ``ci`` as an STRtree of its segments."""
+        key = (ci, int(t))
+        if key not in self._segment_trees:
+            parts = shapely.get_parts(self._boundary_tree(ci)[1][t])
+            xy, part = shapely.get_coordinates(parts, return_index=True)
+            j = np.flatnonzero(part[1:] == part[:-1])
+            self._segment_trees[key] = shapely.STRtree(
+                shapely.linestrings(np.stack([xy[j], xy[j + 1]], axis=1)))
+        return self._segment_trees[key]
+
+    def _boundaries_near(self, ci, xy):
+        """Pairs (point, image) with the image's boundary within ``REFINE_QUERY`` of the
+        point, as ``STRtree.query(predicate="dwithin")`` gives them and in its order
+        (the candidates of the distance's envelope, in the tree's order), but a long
+        boundary is searched by its segments rather than measured whole."""
+        tree, bounds, ncoord = self._boundary_tree(ci)
+        d = tol.REFINE_QUERY
+        q, t = tree.query(shapely.box(xy[:, 0] - d, xy[:, 1] - d, xy[:, 0] + d, xy[:, 1] + d))
+        keep = np.zeros(len(q), dtype=bool)
+        pts = shapely.points(xy)
+        short = ncoord[t] <= tol.LONG_POLYGON
+        keep[short] = shapely.dwithin(pts[q[short]], bounds[t[short]], d)
+        for b in np.unique(t[~short]):
+            j = np.flatnonzero(~short & (t == b))
+            hit, _ = self._boundary_segment_tree(ci, b).query(pts[q[j]], predicate="dwithin",
+                                                             distance=d)
+            keep[j[np.unique(hit)]] = True
+        return q[keep], t[keep]
 
     def match(self, ci, chart, coords, nxt, frag):
         """Label every edge of the pieces' rings in chart ``ci``.
@@ -161,12 +241,32 @@ class Refiner:
         offset, count, planes = self._edge_table()
 
         def consider(rows, fr):
-            # candidate pairs (ring edge, fragment): every edge of the fragment
+            # candidate pairs (ring edge, fragment edge table row), in the order of the
+            # pairs (ring edge, fragment) and of the fragment's edges: every edge of a
+            # short fragment; of a long one, the edges whose image passes within
+            # REFINE_QUERY of the ring edge's (a few, not all of them)
+            short = count[fr] <= tol.LONG_POLYGON
+            lp, lg = [np.zeros(0, dtype=np.int64)], [np.zeros(0, dtype=np.int64)]
+            for f in np.unique(fr[~short]):
+                j = np.flatnonzero(~short & (fr == f))
+                tree, grow = self._fragment_edge_tree(ci, chart, f)
+                segs = shapely.linestrings(np.stack([coords[rows[j]], coords[nxt[rows[j]]]],
+                                                    axis=1))
+                q, t = tree.query(segs, predicate="dwithin", distance=tol.REFINE_QUERY)
+                lp.append(j[q])
+                lg.append(grow[t])
+            lp, lg = np.concatenate(lp), np.concatenate(lg)
             for a in range(0, len(rows), 1 << 16):
-                r_, f_ = rows[a:a + (1 << 16)], fr[a:a + (1 << 16)]
-                c = count[f_]
-                e = np.repeat(r_, c)
-                g = np.repeat(offset[f_] - np.cumsum(c) + c, c) + np.arange(int(c.sum()))
+                sp = a + np.flatnonzero(short[a:a + (1 << 16)])
+                c = count[fr[sp]]
+                pr = np.repeat(sp, c)
+                g = np.repeat(offset[fr[sp]] - np.cumsum(c) + c, c) + np.arange(int(c.sum()))
+                inl = (lp >= a) & (lp < a + (1 << 16))
+                pr, g = np.concatenate([pr, lp[inl]]), np.concatenate([g, lg[inl]])
+                if len(pr) == 0:
+                    continue
+                o = np.lexsort((g, pr))
+                e, g = rows[pr[o]], g[o]
                 P = planes[g]
                 res = np.maximum(np.abs((P * D[e]).sum(1)), np.abs((P * Dn[e]).sum(1)))
                 res = np.where(np.isnan(res), np.inf, res)
@@ -182,9 +282,7 @@ class Refiner:
         # the rest: edges of the images whose boundary passes through the edge
         rest = np.flatnonzero(best > tol.REFINE_SURE)
         if len(rest):
-            mid = shapely.points(0.5 * (coords[rest] + coords[nxt[rest]]))
-            q, t = self._boundary_tree(ci).query(mid, predicate="dwithin",
-                                                 distance=tol.REFINE_QUERY)
+            q, t = self._boundaries_near(ci, 0.5 * (coords[rest] + coords[nxt[rest]]))
             if len(q):
                 consider(rest[q], self.charts[ci][0][t])
         best[best > tol.REFINE_MATCH] = np.inf
@@ -215,9 +313,28 @@ class Refiner:
         themselves for an edge the cut made."""
         flat = flat_polygons(self.scene)
         offset, count, V, nxt = flat.offsets[:-1], flat.counts, flat.V, flat.nxt
-        c = count[src]
-        q = np.repeat(np.arange(len(src)), c)
-        k = np.repeat(offset[src] - np.cumsum(c) + c, c) + np.arange(int(c.sum()))
+        src = np.asarray(src)
+        # candidate pairs (fragment edge q, polygon edge k): every edge of a short
+        # polygon; of a long one, those within the test's distance of the fragment edge
+        # (in the polygon's plane projected along its normal's largest axis, which
+        # shortens no distance more than it keeps: a superset)
+        short = np.flatnonzero(count[src] <= tol.LONG_POLYGON)
+        c = count[src[short]]
+        qs = [np.repeat(short, c)]
+        ks = [np.repeat(offset[src[short]] - np.cumsum(c) + c, c) + np.arange(int(c.sum()))]
+        long_ = np.flatnonzero(count[src] > tol.LONG_POLYGON)
+        for s in np.unique(src[long_]):
+            qq = long_[src[long_] == s]
+            tree, axes, vmax = self._polygon_edge_tree(s)
+            reach = tol.BSP_COPLANAR_ULPS * tol.EPS * (
+                vmax + np.maximum(np.abs(a[qq]), np.abs(b[qq])).max(axis=1))
+            segs = shapely.linestrings(np.stack([a[qq][:, axes], b[qq][:, axes]], axis=1))
+            i, t = tree.query(segs, predicate="dwithin", distance=reach)
+            qs.append(qq[i])
+            ks.append(offset[s] + t)
+        q, k = np.concatenate(qs), np.concatenate(ks)
+        o = np.lexsort((k, q))
+        q, k = q[o], k[o]
         E = V[nxt[k]] - V[k]
         L = np.linalg.norm(E, axis=1)
         ra = np.linalg.norm(np.cross(E, a[q] - V[k]), axis=1) / L
@@ -232,6 +349,21 @@ class Refiner:
         A[first[0]] = V[k[hit[first[1]]]]
         B[first[0]] = V[nxt[k[hit[first[1]]]]]
         return A, B
+
+    def _polygon_edge_tree(self, s):
+        """A long scene polygon's edges as 2-d segments (its plane projected along the
+        largest axis of its normal): an STRtree, the two axes kept, and the largest
+        coordinate magnitude of its vertices."""
+        s = int(s)
+        if s not in self._poly_trees:
+            flat = flat_polygons(self.scene)
+            o, c = int(flat.offsets[s]), int(flat.counts[s])
+            k = np.arange(o, o + c)
+            axes = np.delete(np.arange(3), np.argmax(np.abs(self.scene.normals[s])))
+            seg = np.stack([flat.V[k][:, axes], flat.V[flat.nxt[k]][:, axes]], axis=1)
+            self._poly_trees[s] = (shapely.STRtree(shapely.linestrings(seg)), axes,
+                                   float(np.abs(flat.V[k]).max()))
+        return self._poly_trees[s]
 
     def _world_table(self):
         """The fragments' world vertices, laid out as the edge table."""
