@@ -10,7 +10,8 @@ import numpy as np
 from ._tolerances import BSP_COPLANAR_ULPS, EPS, PLANE_SIDE_ULPS
 
 __all__ = ["side_of_plane", "gamma", "tie_priority", "exact_side", "polygon_side",
-           "plane_distances", "plane_sides", "sides_of_point", "coplanar_band_sides"]
+           "plane_distances", "plane_sides", "sides_of_point", "coplanar_band_sides",
+           "collinear"]
 
 
 def gamma(n):
@@ -200,3 +201,58 @@ def coplanar_band_sides(V, N, D):
     out = np.sign(s).astype(np.int8)
     out[np.abs(s) <= band] = 0
     return out, s
+
+
+def collinear(P):
+    """Whether all vertices of ``P`` lie on one line, decided exactly (the float input
+    is exact): the orientation test of every vertex against the line through the first
+    vertex and the one farthest from it.
+
+    The cross products ``(v_i - v_0) x (v_f - v_0)`` are computed in float with the
+    bound ``gamma(6)`` times the sum of their terms' magnitudes (the differences'
+    rounding included), so that a polygon of any size, however far from the origin, is
+    told from a line without a tolerance: only cross products within the bound are
+    recomputed with :class:`fractions.Fraction`. A polygon whose vertices are all equal
+    is collinear.
+
+    Parameters
+    ----------
+    P : array_like of shape (K, 3)
+
+    Returns
+    -------
+    bool
+
+    Examples
+    --------
+    A triangle whose vertices differ in y only, far from the origin, and one lifted by
+    one ulp of its z coordinate:
+
+    >>> t = [[1620.33, -0.045731, -1013.51], [1620.33, -0.045334, -1013.51],
+    ...      [1620.33, 0.016953, -1013.51]]
+    >>> collinear(t)
+    True
+    >>> t[1][2] = float(np.nextafter(-1013.51, 0))
+    >>> collinear(t)
+    False
+    """
+    X = np.asarray(P, dtype=float)
+    Q = X - X[0]
+    f = int(np.argmax(np.einsum("ij,ij->i", Q, Q)))
+    q = Q[f]
+    C = np.cross(Q, q)
+    A, a = np.abs(Q), np.abs(q)
+    bound = gamma(6) * np.column_stack([A[:, 1] * a[2] + A[:, 2] * a[1],
+                                        A[:, 2] * a[0] + A[:, 0] * a[2],
+                                        A[:, 0] * a[1] + A[:, 1] * a[0]])
+    if np.any(np.abs(C) > bound):
+        return False
+    x0 = [Fraction(float(c)) for c in X[0]]
+    e = [Fraction(float(c)) - x0[k] for k, c in enumerate(X[f])]
+    for i in np.flatnonzero(np.any(C != 0, axis=1) | np.any(bound > 0, axis=1)):
+        d = [Fraction(float(c)) - x0[k] for k, c in enumerate(X[i])]
+        if (d[1] * e[2] != d[2] * e[1] or d[2] * e[0] != d[0] * e[2]
+                or d[0] * e[1] != d[1] * e[0]):
+            return False
+    return True
+

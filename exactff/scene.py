@@ -9,6 +9,7 @@ import shapely
 from . import _tolerances as tol
 from .errors import SceneError
 from .geometry import area_vector, polygon_diameter
+from .predicates import collinear
 from .rings import successors
 
 __all__ = ["Scene", "distinct_consecutive", "validate_polygon", "validate_polygons", "as_scene", "build_scene",
@@ -52,7 +53,8 @@ def validate_polygon(polygon: ArrayLike, index: int = 0, name: str | None = None
     ------
     SceneError
         Fewer than 3 vertices; NaN or infinite coordinates; fewer than 3 distinct
-        consecutive vertices; zero area (collinear); non-planar (best-fit plane) beyond
+        consecutive vertices; zero area (collinear: exactly,
+        :func:`exactff.predicates.collinear`, or up to rounding); non-planar (best-fit plane) beyond
         ``PLANARITY_RTOL`` of the diameter plus ``PLANARITY_ULPS`` of the coordinates'
         magnitude; self-intersecting.
 
@@ -76,6 +78,8 @@ def validate_polygon(polygon: ArrayLike, index: int = 0, name: str | None = None
     D = distinct_consecutive(P)
     if D.shape[0] < 3:
         raise SceneError(index, f"fewer than 3 distinct consecutive vertices ({D.shape[0]})", name)
+    if collinear(D):    # exactly, however far from the origin (before the tests in floats)
+        raise SceneError(index, "zero area (the vertices are collinear)", name)
     diam = polygon_diameter(D)
     # best-fit plane (SVD): robust for any vertex set, including bow ties of zero area
     c = D.mean(axis=0)
