@@ -172,7 +172,9 @@ def describe(scene: Scene) -> dict:
         both as lists of ``[i, j]`` (see
         :func:`exactff.visibility.coplanar_overlaps`), and ``split_faces`` (faces of
         the file that were not planar and were cut into triangles when it was read
-        with ``nonplanar="split"``; 0 otherwise).
+        with ``nonplanar="split"``; 0 otherwise), ``dropped_faces`` (degenerate faces
+        of the file left out when it was read with ``degenerate="drop"``; 0 otherwise)
+        and ``dropped_reasons`` (how many for each reason, a dict).
 
     Examples
     --------
@@ -180,8 +182,8 @@ def describe(scene: Scene) -> dict:
     >>> d = describe(subdivided_box(2))
     >>> d["polygons"], d["unpaired_edges"], d["closure_residual"] < 1e-15
     (24, 0, True)
-    >>> d["back_to_back_pairs"], d["same_facing_overlaps"]
-    ([], [])
+    >>> d["back_to_back_pairs"], d["same_facing_overlaps"], d["dropped_faces"]
+    ([], [], 0)
     """
     back_to_back, same_facing = coplanar_overlaps(scene)
     devs = []
@@ -209,4 +211,6 @@ def describe(scene: Scene) -> dict:
         "back_to_back_pairs": back_to_back.tolist(),
         "same_facing_overlaps": same_facing.tolist(),
         "split_faces": scene.split_faces,
+        "dropped_faces": scene.dropped_faces,
+        "dropped_reasons": dict(scene.dropped_reasons),
     }

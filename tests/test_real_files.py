@@ -82,3 +82,198 @@ def test_collinear_predicate_against_rationals_on_random_near_lines():
         assert collinear(P) == truth
         seen[truth] += 1
     assert seen[True] > 50 and seen[False] > 50
+
+
+# ---------------------------------------------------------------------------------------
+# finding 1: degenerate faces are dropped on request, counted and named otherwise
+# ---------------------------------------------------------------------------------------
+#: a room-like OBJ: valid faces (a fan of triangles, quads) with degenerate faces between
+#: them; kind per face in file order
+KINDS = ["ok", "ok", "same index", "ok", "same point", "far collinear", "ok", "one point",
+         "ok", "collinear quad", "repeat ok", "ok", "same index"]
+DEGENERATE_KIND = {"same index": "fewer than 3 distinct vertices",
+                   "same point": "fewer than 3 distinct vertices",
+                   "one point": "fewer than 3 distinct vertices",
+                   "far collinear": "zero area", "collinear quad": "zero area"}
+
+
+def _face(kind, j):
+    """The vertices of face ``j`` of the given kind."""
+    x = float(j)
+    if kind == "ok":      # on the floor facing up, or on the ceiling facing down
+        return [[x, 0, 0], [x + 1, 0, 0], [x, 1, 0]] if j % 2 else \
+            [[x, 0, 1], [x, 1, 1], [x + 1, 0, 1]]
+    if kind == "repeat ok":                 # a repeated vertex, three distinct: valid
+        return [[x, 0, 0], [x + 1, 0, 0], [x + 1, 0, 0], [x, 1, 0]]
+    if kind in ("same index", "same point"):
+        return [[x, 0, 0], [x + 1, 0, 0], [x + 1, 0, 0]]
+    if kind == "one point":
+        return [[x, 2, 0]] * 3
+    if kind == "far collinear":
+        return FAR_COLLINEAR
+    if kind == "collinear quad":
+        return [[x, 0, 1], [x + 1, 0, 1], [x + 2, 0, 1], [x + 3, 0, 1]]
+    raise ValueError(kind)
+
+
+def _write_obj(path, kinds):
+    """The faces as an OBJ, one group per face; returns the line of each face. Faces
+    of kind "same index" repeat a vertex reference, the others repeat coordinates."""
+    lines, where, nv = ["# issue 29 test"], [], 0
+    for j, kind in enumerate(kinds):
+        F = _face(kind, j)
+        lines.append(f"g part{j}")
+        refs = []
+        for v in F:
+            if kind == "same index" and refs and v == F[refs[-1] - nv - 1]:
+                refs.append(refs[-1])
+                continue
+            lines.append("v %r %r %r" % tuple(float(c) for c in v))
+            refs.append(nv + len(refs) + 1 if not refs else max(refs) + 1)
+        nv = max(refs)
+        lines.append("f " + " ".join(map(str, refs)))
+        where.append(len(lines))
+    path.write_text("\n".join(lines) + "\n")
+    return where
+
+
+def test_degenerate_faces_are_counted_and_the_first_five_named(tmp_path):
+    path = tmp_path / "room.obj"
+    where = _write_obj(path, KINDS)
+    bad = [j for j, k in enumerate(KINDS) if k in DEGENERATE_KIND]
+    with pytest.raises(ef.SceneError) as info:
+        ef.load_scene(path)
+    msg = str(info.value)
+    assert msg.startswith(f"{len(bad)} faces are degenerate (4 fewer than 3 distinct "
+                          f"vertices, 2 zero area); the first 5: ")
+    for j in bad[:5]:
+        assert f"{path}:{where[j]}: polygon {j} (group 'part{j}'): " in msg
+    assert f"polygon {bad[5]} " not in msg
+    assert "--drop-degenerate" in msg and "degenerate='drop'" in msg
+    assert info.value.index == bad[0]
+
+
+def test_drop_keeps_the_other_faces_in_order_with_their_groups(tmp_path):
+    import pickle
+
+    path = tmp_path / "room.obj"
+    _write_obj(path, KINDS)
+    scene = ef.load_scene(path, degenerate="drop")
+    kept = [j for j, k in enumerate(KINDS) if k not in DEGENERATE_KIND]
+    # the independent value: the kept faces, in order, built directly
+    expect = ef.Scene.from_polygons([_face(KINDS[j], j) for j in kept])
+    assert len(scene) == len(kept) == len(expect)
+    for P, Q in zip(scene.polygons, expect.polygons):
+        assert np.array_equal(P, Q)
+    assert scene.groups == tuple(f"part{j}" for j in kept)
+    assert scene.dropped_faces == 6
+    assert dict(scene.dropped_reasons) == {"fewer than 3 distinct vertices": 4, "zero area": 2}
+    d = ef.describe(scene)
+    assert d["dropped_faces"] == 6 and d["dropped_reasons"] == dict(scene.dropped_reasons)
+    again = pickle.loads(pickle.dumps(scene))
+    assert again.dropped_faces == 6 and again.dropped_reasons == scene.dropped_reasons
+    assert ef.describe(expect)["dropped_faces"] == 0
+    # a file without degenerate faces loads the same either way
+    clean = tmp_path / "clean.obj"
+    _write_obj(clean, [KINDS[j] for j in kept])
+    a, b = ef.load_scene(clean), ef.load_scene(clean, degenerate="drop")
+    assert b.dropped_faces == 0 and all(np.array_equal(P, Q) for P, Q in zip(a.polygons, b.polygons))
+
+
+def test_nan_and_self_intersecting_faces_raise_even_with_drop(tmp_path):
+    import json
+
+    ok = [[0, 0, 0], [1, 0, 0], [0, 1, 0]]
+    line = [[0, 0, 0], [1, 0, 0], [2, 0, 0]]
+    bow = [[0, 0, 0], [1, 1, 0], [1, 0, 0], [0, 1, 0]]
+    for bad, reason in (([[0, 0, 0], [1, 0, 0], [float("nan"), 1, 0]], "NaN or infinite"),
+                        (bow, "self-intersecting")):
+        path = tmp_path / "s.json"
+        path.write_text(json.dumps({"schema": "exactff-scene/1", "surfaces": [
+            {"vertices": ok}, {"vertices": line}, {"vertices": bad, "name": "bad"}]}))
+        with pytest.raises(ef.SceneError, match=rf"^surfaces\[2\]: polygon 2 \('bad'\): "
+                                                rf"{reason}.*fix the face in the file$"):
+            ef.load_scene(path, degenerate="drop")
+        with pytest.raises(ef.SceneError, match=rf"^2 faces are ill-formed \(1 degenerate, "
+                                                rf"1 {reason}"):
+            ef.load_scene(path)
+    # every face degenerate: nothing left to load, said so
+    with pytest.raises(ValueError, match="all 2 faces are degenerate"):
+        ef.scene.build_scene([line, line], degenerate="drop")
+    with pytest.raises(ValueError, match="degenerate must be one of"):
+        ef.scene.build_scene([ok], degenerate="skip")
+
+
+def test_drop_and_split_together(tmp_path):
+    warped = [[0, 0, 0], [1, 0, 0], [1, 1, 0.1], [0, 1, 0]]
+    ok = [[0, 0, 0], [1, 0, 0], [0, 1, 0]]
+    line = [[0, 0, 0], [1, 0, 0], [2, 0, 0]]
+    faces = [ok, line, warped, ok]
+    with pytest.raises(ef.SceneError, match=r"2 faces are ill-formed \(1 degenerate, 1 not "
+                                            r"planar\).*--drop-degenerate.*--split-nonplanar"):
+        ef.scene.build_scene(faces)
+    with pytest.raises(ef.SceneError, match=r"^polygon 2: not planar.*--split-nonplanar"):
+        ef.scene.build_scene(faces, degenerate="drop")
+    s = ef.scene.build_scene(faces, degenerate="drop", nonplanar="split",
+                             groups=["a", "b", "c", "d"])
+    tris = ef.split_nonplanar(warped)
+    assert len(s) == 4 and s.groups == ("a", "c", "c", "d")
+    assert all(np.array_equal(P, Q) for P, Q in zip(s.polygons, [ok] + tris + [ok]))
+    assert (s.split_faces, s.dropped_faces) == (1, 1)
+
+
+def test_cli_drop_degenerate_on_info_matrix_and_compare(tmp_path, capsys):
+    from exactff.cli import main
+
+    path = tmp_path / "room.obj"
+    _write_obj(path, KINDS)
+    assert main(["info", str(path)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "6 faces are degenerate" in err and "--drop-degenerate" in err
+    assert main(["info", str(path), "--drop-degenerate"]) == 0
+    out = capsys.readouterr().out
+    assert "polygons         7\n" in out
+    assert ("dropped faces    6 degenerate faces left out (4 fewer than 3 distinct "
+            "vertices, 2 zero area)") in out
+    m = tmp_path / "m.npy"
+    assert main(["matrix", str(path), "--drop-degenerate", "--rows", "0", "-o", str(m),
+                 "--no-progress"]) == 0
+    F = np.load(m)
+    kept = ef.load_scene(path, degenerate="drop")
+    np.testing.assert_array_equal(F, ef.form_factor_matrix(kept, rows=[0]))
+    assert F.shape == (1, 7) and F.sum() > 0.01
+    capsys.readouterr()
+    assert main(["compare", str(path), "--drop-degenerate", "--methods", "hemicube",
+                 "--samples", "64", "--rows", "0:1", "--out", str(tmp_path / "c"),
+                 "--no-progress"]) == 0
+    assert "(7 polygons)" in capsys.readouterr().out
+
+
+# ---------------------------------------------------------------------------------------
+# finding 4: nonplanar="split" validates every face once, and only the faces that fail
+# again (it cost 10 x the load where nothing was split)
+# ---------------------------------------------------------------------------------------
+def test_split_looks_again_only_at_the_faces_that_fail(monkeypatch):
+    import exactff.scene as scene_module
+
+    calls = []
+    one_by_one = scene_module.validate_polygon
+
+    def counted(P, index=0, *args, **kwargs):
+        calls.append(index)
+        return one_by_one(P, index, *args, **kwargs)
+
+    monkeypatch.setattr(scene_module, "validate_polygon", counted)
+    rng = np.random.default_rng(4)
+    faces = [rng.normal(size=(3, 3)) for _ in range(300)]
+    warped = [[0, 0, 0], [1, 0, 0], [1, 1, 0.1], [0, 1, 0]]
+    line = [[0, 0, 0], [1, 0, 0], [2, 0, 0]]
+    plain = ef.scene.build_scene(faces, nonplanar="split")
+    assert calls == [] and plain.split_faces == 0
+    assert all(np.array_equal(P, Q) for P, Q in zip(plain.polygons, faces))
+    s = ef.scene.build_scene(faces[:100] + [warped] + faces[100:] + [line],
+                             nonplanar="split", degenerate="drop")
+    # the bulk check sends the two faces that fail one by one; the split's 2 triangles
+    # are validated as they are made
+    assert calls == [100, 301, 100, 100]
+    assert len(s) == 302 and (s.split_faces, s.dropped_faces) == (1, 1)

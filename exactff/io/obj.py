@@ -13,7 +13,9 @@ def read_obj(path, **options):
     Vertex references may be positive (1-based) or negative (relative to the vertices
     read so far), with or without ``/texture/normal`` parts. ``o`` and ``g`` set the
     group of the faces that follow, ``usemtl`` their material. Other statements
-    (``vt``, ``vn``, ``s``, ``mtllib``, lines and points) are ignored.
+    (``vt``, ``vn``, ``s``, ``mtllib``, lines and points) are ignored. ``options``
+    go to :func:`exactff.scene.build_scene` (``nonplanar``, ``degenerate``,
+    ``planarity_rtol``).
     """
     verts, faces, groups, materials, sources = [], [], [], [], []
     group = material = None
