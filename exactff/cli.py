@@ -112,6 +112,15 @@ def cmd_info(args):
         print(f"                   {name(i)} and {name(j)}")
     if len(same) > 5:
         print(f"                   ... and {len(same) - 5} more")
+    near = d["near_coplanar_overlaps"]
+    print(f"near-coplanar    {len(near)} overlapping pairs flush to within 1e-9 of the "
+          f"magnitudes but not coplanar"
+          + (" (the exact method orders them by their geometry, the discrete methods "
+             "may call them ties: docs/explanation/conventions.md)" if near else ""))
+    for i, j in near[:5]:
+        print(f"                   {name(i)} and {name(j)}")
+    if len(near) > 5:
+        print(f"                   ... and {len(near) - 5} more")
     return 0
 
 

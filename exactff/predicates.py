@@ -11,7 +11,7 @@ from ._tolerances import BSP_COPLANAR_ULPS, EPS, PLANE_SIDE_ULPS
 
 __all__ = ["side_of_plane", "gamma", "tie_priority", "exact_side", "polygon_side",
            "plane_distances", "plane_sides", "sides_of_point", "coplanar_band_sides",
-           "collinear"]
+           "collinear", "in_plane_band", "orient2d", "polygons_apart"]
 
 
 def gamma(n):
@@ -256,3 +256,102 @@ def collinear(P):
             return False
     return True
 
+
+def in_plane_band(V, N, D, rtol=BSP_COPLANAR_ULPS * EPS):
+    """Row by row: whether the point ``V[k]`` lies in the band of the plane
+    ``dot(N[k], x) = D[k]``, ``|n . x - d| <= rtol (|n| . |x| + |d|)``: by default the
+    BSP tree's coplanar band (:func:`coplanar_band_sides`, ``BSP_COPLANAR_ULPS`` ulps of
+    the magnitudes).
+
+    Examples
+    --------
+    >>> in_plane_band(np.array([[1 + 2.0 ** -52, 0, 0], [2.0, 0, 0]]),
+    ...               np.array([[1.0, 0, 0], [1.0, 0, 0]]), np.array([1.0, 1.0])).tolist()
+    [True, False]
+    """
+    s = np.einsum("ij,ij->i", V, N) - D
+    return np.abs(s) <= rtol * (np.einsum("ij,ij->i", np.abs(V), np.abs(N)) + np.abs(D))
+
+
+def orient2d(p, q, w):
+    """Sign of the 2-D orientation ``(q - p) x (w - p)`` (+1: ``w`` to the left of the
+    line from ``p`` to ``q``, -1: to the right), row by row, where floats can decide it:
+    0 where the value is within Shewchuk's bound ``(3 + 16 u) u (|l| + |r|)`` of 0 (the
+    sign is then not decided here; exact zeros included).
+
+    Examples
+    --------
+    >>> p, q = np.array([[0.0, 0.0]] * 3), np.array([[1.0, 0.0]] * 3)
+    >>> orient2d(p, q, np.array([[0.5, 1.0], [0.5, -1.0], [0.5, 0.0]])).tolist()
+    [1, -1, 0]
+    """
+    d1, d2 = q - p, w - p
+    left, right = d1[..., 0] * d2[..., 1], d1[..., 1] * d2[..., 0]
+    det = left - right
+    bound = (3 + 16 * EPS) * EPS * (np.abs(left) + np.abs(right))
+    return np.where(np.abs(det) > bound, np.sign(det), 0).astype(np.int8)
+
+
+def _side_of_line(p, q, w):
+    """Side of ``w`` of the line from ``p`` to ``q``: +1 left, -1 right, where floats
+    decide it (:func:`orient2d`); 0 where ``w`` is certainly on the line (it is ``p`` or
+    ``q``, or a zero difference makes both products exactly 0: an axis-aligned line);
+    2 where floats cannot tell."""
+    d1, d2 = q - p, w - p
+    left, right = d1[..., 0] * d2[..., 1], d1[..., 1] * d2[..., 0]
+    det = left - right
+    bound = (3 + 16 * EPS) * EPS * (np.abs(left) + np.abs(right))
+    out = np.where(np.abs(det) > bound, np.sign(det), 2).astype(np.int8)
+    on = (((d1[..., 0] == 0) | (d2[..., 1] == 0)) & ((d1[..., 1] == 0) | (d2[..., 0] == 0))
+          | np.all(w == p, axis=-1) | np.all(w == q, axis=-1))
+    out[on] = 0
+    return out
+
+
+def polygons_apart(T, U):
+    """Whether the 2-D polygons ``T[m]`` and ``U[m]`` certainly have disjoint interiors:
+    the line of an edge of one has that polygon on one side and the other polygon on
+    the other (vertices on the line itself allowed where that is certain: the edge's
+    ends, axis-aligned lines; polygons touching along it are apart). Decided with the
+    float filter of :func:`orient2d`; False where floats cannot tell, or no edge
+    separates them (the caller then overlays the two).
+
+    Parameters
+    ----------
+    T : ndarray of shape (M, K, 2)
+    U : ndarray of shape (M, L, 2)
+
+    Returns
+    -------
+    ndarray of shape (M,), bool
+
+    Examples
+    --------
+    Two halves of a square, and a triangle that overlaps the first:
+
+    >>> a = np.array([[[0, 0], [1, 0], [1, 1]]], dtype=float)
+    >>> b = np.array([[[0, 0], [1, 1], [0, 1]]], dtype=float)
+    >>> c = np.array([[[0.5, 0], [1, 0], [1, 2]]], dtype=float)
+    >>> polygons_apart(a, b).tolist(), polygons_apart(a, c).tolist()
+    ([True], [False])
+    """
+    out = np.zeros(len(T), dtype=bool)
+    todo = np.arange(len(T))
+    for X, Y in ((T, U), (U, T)):
+        k = X.shape[1]
+        for i in range(k):
+            if len(todo) == 0:
+                return out
+            Xs, Ys = X[todo], Y[todo]
+            p, q = Xs[:, i], Xs[:, (i + 1) % k]
+            s = _side_of_line(p, q, Xs[:, (i + 2) % k])
+            apart = (s == 1) | (s == -1)
+            for j in range(3, k):           # the polygon's own vertices: on one side
+                t = _side_of_line(p, q, Xs[:, (i + j) % k])
+                apart &= (t == s) | (t == 0)
+            for j in range(Ys.shape[1]):    # the other's: on the other side (or on it)
+                t = _side_of_line(p, q, Ys[:, j])
+                apart &= (t == -s) | (t == 0)
+            out[todo[apart]] = True
+            todo = todo[~apart]
+    return out

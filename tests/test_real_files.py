@@ -2,6 +2,7 @@
 otherwise, collinear triangles far from the origin, nonplanar="split" at the cost of
 what it splits, the scene summary without the BSP tree."""
 
+import os
 from fractions import Fraction
 
 import numpy as np
@@ -9,6 +10,9 @@ import pytest
 
 import exactff as ef
 from exactff.predicates import collinear
+
+#: small real files (sources and licences: shared/scenes/real/README.md)
+REAL = os.path.join(os.path.dirname(__file__), "..", "..", "shared", "scenes", "real")
 
 #: the issue's triangle: exactly collinear (its vertices differ in y only), 1e3 from the
 #: origin
@@ -277,3 +281,99 @@ def test_split_looks_again_only_at_the_faces_that_fail(monkeypatch):
     # are validated as they are made
     assert calls == [100, 301, 100, 100]
     assert len(s) == 302 and (s.split_faces, s.dropped_faces) == (1, 1)
+
+
+# ---------------------------------------------------------------------------------------
+# finding 5: the scene summary finds coplanar overlaps without the BSP tree
+# ---------------------------------------------------------------------------------------
+def _desk_room(origin=(1620.33, -1013.51, 0.0), gap=1e-13):
+    """A room far from the origin with desks: legs under table tops and mats on them
+    (back-to-back pairs), a mat flush to ``gap`` above its table (near-coplanar), a
+    duplicated face (same-facing), shelves against a wall (back-to-back with it)."""
+    o = np.array(origin)
+    polys = ef.scenes.box_polygons(o, o + [6.0, 4.0, 3.0], 4)
+    for c in range(3):
+        x = o + [1.0 + 1.6 * c, 1.0, 0.0]
+        for dx, dy in ((0, 0), (1.1, 0), (0, 0.7), (1.1, 0.7)):
+            polys += ef.scenes.box_polygons(x + [dx, dy, 0], x + [dx + 0.1, dy + 0.1, 0.72],
+                                            facing="out")
+        polys += ef.scenes.box_polygons(x + [0, 0, 0.72], x + [1.2, 0.8, 0.75], 2, facing="out")
+        lift = gap if c == 1 else 0.0
+        polys += ef.scenes.box_polygons(x + [0.1, 0.1, 0.75 + lift], x + [0.7, 0.5, 0.755],
+                                        facing="out")
+    polys += ef.scenes.box_polygons(o + [0.5, 3.6, 0], o + [2.5, 4.0, 2.0], facing="out")
+    polys.append(polys[-1].copy())
+    return ef.Scene.from_polygons(polys)
+
+
+def _quad_on_ceiling():
+    box = ef.scenes.box_polygons((0, 0, 0), (1, 1, 1), 1)
+    quad = np.array([[0.4, 0.4, 1], [0.4, 0.6, 1], [0.6, 0.6, 1], [0.6, 0.4, 1]], dtype=float)
+    return ef.Scene.from_polygons([quad] + box)
+
+
+SCENES_WITH_OVERLAPS = {
+    "building 2x1": lambda: ef.scenes.building(2, 1),
+    "building 3x2": lambda: ef.scenes.building(3, 2),
+    "cornell, whole ceiling": lambda: ef.scenes.cornell_box(ceiling="whole"),
+    "quad on a ceiling": _quad_on_ceiling,
+    "office": ef.scenes.office,
+    "desk room": _desk_room,
+    "desk room at the origin": lambda: _desk_room(origin=(0.0, 0.0, 0.0)),
+}
+
+
+@pytest.mark.parametrize("name", sorted(SCENES_WITH_OVERLAPS))
+def test_plane_hash_gives_the_pairs_of_the_bsp_tree(name):
+    from exactff.prepared import prepared
+    from exactff.visibility import coplanar_overlaps, plane_overlaps, scene_bsp
+
+    scene = SCENES_WITH_OVERLAPS[name]()
+    b2b, same = plane_overlaps(scene)
+    assert "bsp" not in prepared(scene)            # found without the tree
+    tree_b2b, tree_same = coplanar_overlaps(scene, scene_bsp(scene)[0])
+    assert np.array_equal(b2b, tree_b2b) and np.array_equal(same, tree_same)
+    if name != "office":
+        assert len(b2b) + len(same) > 0
+
+
+def test_describe_does_not_build_the_bsp_tree_and_lists_the_desk_room_pairs():
+    from exactff.prepared import prepared
+
+    scene = _desk_room()
+    d = ef.describe(scene)
+    assert "bsp" not in prepared(scene)
+    n = len(scene)
+    # by construction: the duplicated shelf face (the last two polygons) is the one
+    # same-facing pair; the lifted mat's bottom and its table's top are near-coplanar
+    assert d["same_facing_overlaps"] == [[n - 2, n - 1]]
+    near = d["near_coplanar_overlaps"]
+    assert near and all(abs(scene.centroids[i][2] - scene.centroids[j][2]) < 2e-13
+                        and {scene.normals[i][2], scene.normals[j][2]} == {1.0, -1.0}
+                        for i, j in near)
+    assert not set(map(tuple, near)) & set(map(tuple, d["back_to_back_pairs"]))
+    flush = ef.describe(_desk_room(gap=0.0))
+    assert flush["near_coplanar_overlaps"] == []
+    assert len(flush["back_to_back_pairs"]) == len(d["back_to_back_pairs"]) + len(near)
+
+
+def test_describe_planarity_and_edges_match_the_per_polygon_definitions():
+    from exactff.geometry import area_vector, polygon_diameter
+    from exactff.scene import distinct_consecutive
+
+    # the knot's quads are bent (up to 0.014 of their diameter): planarity counts
+    knot = ef.load_scene(os.path.join(REAL, "quadknot.obj"), planarity_rtol=0.1)
+    for scene in [ef.scenes.cornell_box(), ef.scenes.office(400), _desk_room(), knot]:
+        devs, edges = [], {}
+        for P in scene.polygons:
+            D = distinct_consecutive(P)
+            N = area_vector(D)
+            N = N / np.linalg.norm(N)
+            devs.append(float(np.abs((D - D.mean(axis=0)) @ N).max()) / polygon_diameter(D))
+            for a, b in zip(map(tuple, D), map(tuple, np.roll(D, -1, axis=0))):
+                edges[(a, b)] = edges.get((a, b), 0) + 1
+        d = ef.describe(scene)
+        assert d["unpaired_edges"] == sum(c for (a, b), c in edges.items()
+                                          if edges.get((b, a), 0) != c)
+        assert abs(d["max_planarity_deviation"] - max(devs)) <= 4 * np.finfo(float).eps * (
+            1 + max(devs))
