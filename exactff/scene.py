@@ -142,6 +142,7 @@ def validate_polygons(polygons, names=None,
     names = names if names is not None else (None,) * n
     arrays = [None] * n
     slow = []
+    decided = {}        # polygons the batch check can name the error of
     by_k = {}
     for i, p in enumerate(polygons):
         try:
@@ -160,7 +161,12 @@ def validate_polygons(polygons, names=None,
             continue
         P = np.stack([arrays[i] for i in idx])
         ok = np.all(np.isfinite(P), axis=(1, 2))
-        ok &= np.all(np.any(P != np.roll(P, -1, axis=1), axis=2), axis=1)
+        distinct = np.any(P != np.roll(P, -1, axis=1), axis=2).sum(axis=1)
+        for j in np.flatnonzero(ok & (distinct < 3)):     # as validate_polygon says it
+            i = idx[j]
+            decided[i] = SceneError(i, f"fewer than 3 distinct consecutive vertices "
+                                       f"({max(int(distinct[j]), 1)})", names[i])
+        ok &= distinct == k
         Pc = np.where(ok[:, None, None], P, 0.0)
         diff = Pc[:, :, None, :] - Pc[:, None, :, :]
         diam = np.sqrt((diff * diff).sum(-1)).max(axis=(1, 2))
@@ -182,16 +188,21 @@ def validate_polygons(polygons, names=None,
             rings = shapely.linearrings(flat.reshape(-1, 2), indices=np.repeat(np.arange(len(idx)), k))
             ok &= shapely.is_simple(rings)
         for j, i in enumerate(idx):
-            if not ok[j]:
+            if not ok[j] and i not in decided:
                 slow.append(i)
-    for i in sorted(slow):
-        try:
-            arrays[i] = validate_polygon(polygons[i], i, names[i], planarity_rtol=planarity_rtol)
-        except SceneError as exc:
-            if failures is None:
-                raise
-            failures.append(exc)
-            arrays[i] = None
+    for i in sorted(slow + list(decided)):
+        exc = decided.get(i)
+        if exc is None:
+            try:
+                arrays[i] = validate_polygon(polygons[i], i, names[i],
+                                             planarity_rtol=planarity_rtol)
+                continue
+            except SceneError as e:
+                exc = e
+        if failures is None:
+            raise exc
+        failures.append(exc)
+        arrays[i] = None
     for a in arrays:
         if a is not None:
             a.setflags(write=False)

@@ -3,6 +3,7 @@ otherwise, collinear triangles far from the origin, nonplanar="split" at the cos
 what it splits, the scene summary without the BSP tree."""
 
 import os
+import re
 from fractions import Fraction
 
 import numpy as np
@@ -377,3 +378,22 @@ def test_describe_planarity_and_edges_match_the_per_polygon_definitions():
                                           if edges.get((b, a), 0) != c)
         assert abs(d["max_planarity_deviation"] - max(devs)) <= 4 * np.finfo(float).eps * (
             1 + max(devs))
+
+
+def test_bulk_errors_are_the_per_polygon_errors():
+    # the bulk check names some errors itself (fewer than 3 distinct vertices): the same
+    # messages as validate_polygon, in input order
+    faces = [_face(kind, j) for j, kind in enumerate(KINDS)]
+    faces += [[[0, 0, 0]] * 4, [[0, 0, 0], [0, 0, 0], [1, 0, 0], [1, 0, 0]],
+              [[0, 0, 0], [1, 0, 0], [1, 0, 0], [0, 0, 0], [0, 1, 0]], [[0, 0, 0], [1, 0, 0]]]
+    expect = []
+    for i, F in enumerate(faces):
+        try:
+            ef.validate_polygon(F, i)
+        except ef.SceneError as exc:
+            expect.append(str(exc))
+    failures = []
+    ef.validate_polygons(faces, failures=failures)
+    assert [str(e) for e in failures] == expect and len(expect) == 10
+    with pytest.raises(ef.SceneError, match="^" + re.escape(expect[0]) + "$"):
+        ef.validate_polygons(faces)
