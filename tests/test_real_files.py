@@ -397,3 +397,14 @@ def test_bulk_errors_are_the_per_polygon_errors():
     assert [str(e) for e in failures] == expect and len(expect) == 10
     with pytest.raises(ef.SceneError, match="^" + re.escape(expect[0]) + "$"):
         ef.validate_polygons(faces)
+
+
+# ---------------------------------------------------------------------------------------
+# noticed on the way: a row that sees no polygon (every other face in its plane, as in a
+# flat file or a scene left with one plane after dropping) crashed the discrete methods
+# ---------------------------------------------------------------------------------------
+@pytest.mark.parametrize("method", sorted(ef.METHODS))
+def test_a_row_that_sees_nothing_is_zero_for_every_method(method):
+    s = ef.Scene.from_polygons([[[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[2, 0, 0], [3, 0, 0], [2, 1, 0]]])
+    F = ef.form_factors(s, s.centroids[0], s.normals[0], method=method)
+    assert F.tolist() == [0.0, 0.0]         # both polygons seen edge-on
