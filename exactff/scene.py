@@ -570,8 +570,9 @@ def build_scene(faces, *, names=None, groups=None, materials=None, sources=None,
     ----------
     faces : list of array_like of shape (K_i, 3)
     names, groups, materials : list of str or None, optional
-    sources : list of str, optional
-        Where each face comes from (``"path:line"``), for the error messages.
+    sources : sequence of str, optional
+        Where each face comes from (``"path:line"``), for the error messages (read by
+        index, only for the faces an error names).
     nonplanar : {"error", "split"}, default "error"
         ``"split"`` cuts every face that is not planar within ``planarity_rtol`` into
         planar triangles (:func:`split_nonplanar`); the pieces keep the face's name,
@@ -618,7 +619,7 @@ def build_scene(faces, *, names=None, groups=None, materials=None, sources=None,
     names = list(names) if names is not None else [None] * n
     groups = list(groups) if groups is not None else [None] * n
     materials = list(materials) if materials is not None else [None] * n
-    sources = list(sources) if sources is not None else [None] * n
+    sources = sources if sources is not None else [None] * n     # read by index only
     failures = []
     arrays = list(validate_polygons(faces, planarity_rtol=planarity_rtol, failures=failures))
     pieces, dropped, errors = {}, {}, []
