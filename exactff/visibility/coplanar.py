@@ -67,8 +67,11 @@ def _plane_groups(scene, rtol):
     lo, hi = scene.bounds
     size = float(np.linalg.norm(hi - lo))
     magnitude = float(np.abs(scene.vertices).max()) + float(np.abs(D).max())
-    # a polygon in the band of another's plane has its centroid within the band of it:
-    # the offsets along the mean normal differ by at most the band plus the spread
+    # a polygon in the band of another's plane has its centroid within the band of it
+    # (the band is at most rtol sqrt(3) times the magnitudes): their offsets along the
+    # group's mean normal differ by at most the band plus the spread of the normals
+    # times the scene's size; twice that, and the rounding of the centroids and offsets
+    # (a few ulps of the magnitudes), so that no such pair is ever put apart
     gap = 2 * (rtol * np.sqrt(3) * magnitude + spread * size) + 8 * tol.EPS * magnitude
     offsets = np.einsum("ij,ij->i", mean[labels], scene.centroids)
     return _refine(labels, offsets, gap), mean[labels]
