@@ -313,7 +313,17 @@ def _quad_on_ceiling():
     return ef.Scene.from_polygons([quad] + box)
 
 
+def _rotated_desk_room(offset):
+    """The desk room at the origin turned by a random rotation (no plane along an axis)
+    and moved by ``offset``: coplanar within rounding only."""
+    R = np.linalg.qr(np.random.default_rng(1).normal(size=(3, 3)))[0]
+    R[:, 0] *= np.sign(np.linalg.det(R))
+    return ef.Scene.from_polygons([P @ R.T + offset for P in _desk_room((0, 0, 0)).polygons])
+
+
 SCENES_WITH_OVERLAPS = {
+    "desk room turned": lambda: _rotated_desk_room(np.zeros(3)),
+    "desk room turned, 1e3 away": lambda: _rotated_desk_room(np.array([812.5, -344.1, 967.3])),
     "building 2x1": lambda: ef.scenes.building(2, 1),
     "building 3x2": lambda: ef.scenes.building(3, 2),
     "cornell, whole ceiling": lambda: ef.scenes.cornell_box(ceiling="whole"),
