@@ -622,23 +622,33 @@ def build_scene(faces, *, names=None, groups=None, materials=None, sources=None,
     sources = sources if sources is not None else [None] * n     # read by index only
     failures = []
     arrays = list(validate_polygons(faces, planarity_rtol=planarity_rtol, failures=failures))
-    pieces, dropped, errors = {}, {}, []
+    pieces, dropped, errors = {}, {}, {}
     for exc in failures:
         i, kind = exc.index, _degenerate_kind(exc.reason)
         if kind is not None and degenerate == "drop":
             dropped[kind] = dropped.get(kind, 0) + 1
         elif nonplanar == "split" and exc.reason.startswith("not planar"):
             try:
-                F = distinct_consecutive(np.asarray(faces[i], dtype=float))
-                pieces[i] = [validate_polygon(T, i, planarity_rtol=planarity_rtol)
-                             for T in split_nonplanar(F)]
-            except ValueError as why:    # SceneError too
-                errors.append(SceneError(i, f"{exc.reason}; and it cannot be split into "
-                                            f"planar triangles ({getattr(why, 'reason', why)})"))
+                pieces[i] = split_nonplanar(distinct_consecutive(np.asarray(faces[i], dtype=float)))
+            except ValueError as why:
+                errors[i] = SceneError(i, f"{exc.reason}; and it cannot be split into planar "
+                                          f"triangles ({why})")
         else:
-            errors.append(exc)
+            errors[i] = exc
+    if pieces:      # the triangles of the split faces, validated together
+        owner = [i for i, tris in pieces.items() for _ in tris]
+        bad = []
+        flat = validate_polygons([T for tris in pieces.values() for T in tris],
+                                 planarity_rtol=planarity_rtol, failures=bad)
+        for exc in bad:
+            i = owner[exc.index]
+            errors.setdefault(i, SceneError(i, f"not planar; and a triangle of its split is "
+                                               f"ill-formed ({exc.reason})"))
+        at = 0
+        for i, tris in pieces.items():
+            pieces[i], at = flat[at:at + len(tris)], at + len(tris)
     if errors:
-        raise _file_error(errors, names, groups, sources)
+        raise _file_error([errors[i] for i in sorted(errors)], names, groups, sources)
     if len(pieces) == 0 and len(dropped) == 0:
         kept = (arrays, names, groups, materials)
     else:
