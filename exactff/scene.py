@@ -53,10 +53,10 @@ def validate_polygon(polygon: ArrayLike, index: int = 0, name: str | None = None
     ------
     SceneError
         Fewer than 3 vertices; NaN or infinite coordinates; fewer than 3 distinct
-        consecutive vertices; zero area (collinear: exactly,
-        :func:`exactff.predicates.collinear`, or up to rounding); non-planar (best-fit plane) beyond
-        ``PLANARITY_RTOL`` of the diameter plus ``PLANARITY_ULPS`` of the coordinates'
-        magnitude; self-intersecting.
+        consecutive vertices; zero area (collinear: exactly, decided first by
+        :func:`exactff.predicates.collinear`, or up to rounding); non-planar (best-fit
+        plane) beyond ``PLANARITY_RTOL`` of the diameter plus ``PLANARITY_ULPS`` of the
+        coordinates' magnitude; self-intersecting.
 
     Examples
     --------
@@ -113,8 +113,9 @@ def validate_polygons(polygons, names=None,
 
     Polygons with the same number of vertices are checked together; any polygon that a
     batch check flags, or that has repeated consecutive vertices, goes through
-    :func:`validate_polygon`, so errors and their messages are the same. The first
-    ill-formed polygon in input order raises, unless ``failures`` is given.
+    :func:`validate_polygon`, so errors and their messages are the same (the batch
+    check names fewer than 3 distinct consecutive vertices itself, in the same words).
+    The first ill-formed polygon in input order raises, unless ``failures`` is given.
 
     Parameters
     ----------
