@@ -199,8 +199,12 @@ def validate_polygons(polygons, names=None,
                                              planarity_rtol=planarity_rtol)
                 continue
             except SceneError as e:
-                exc = e
-        if failures is None:
+                if failures is None:
+                    raise
+                # kept without its traceback: that would keep this frame, and every
+                # batch array in it, alive in a reference cycle until a full collection
+                exc = e.with_traceback(None)
+        elif failures is None:
             raise exc
         failures.append(exc)
         arrays[i] = None
