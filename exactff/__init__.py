@@ -18,13 +18,14 @@ from .methods import (METHODS, CubicTetrahedron, DiscretePPBH, Exact, FormFactor
                       Hemicube, MonteCarlo, PolarPlane, SinglePlane)
 from .reports import compare, describe, to_markdown
 from .rings import padded, padded_buckets
-from .scene import NONPLANAR, Scene, split_nonplanar, validate_polygon, validate_polygons
+from .scene import (DEGENERATE, NONPLANAR, Scene, split_nonplanar, validate_polygon,
+                    validate_polygons)
 from .storage import load_matrix
 from .version import __version__
 
 __all__ = ["catalog", "scenes", "__version__",
            "SceneError", "NumericalError",
-           "Scene", "validate_polygon", "validate_polygons", "split_nonplanar", "NONPLANAR",
+           "Scene", "validate_polygon", "validate_polygons", "split_nonplanar", "NONPLANAR", "DEGENERATE",
            "load_scene", "read_obj", "read_scene_json", "scene_from_json", "read_vs3",
            "read_mesh", "describe",
            "area_vector", "polygon_area", "polygon_centroid", "polygon_diameter", "unit_normal",

@@ -16,6 +16,9 @@ __all__ = [
     "AREA_CONSERVATION_RTOL",
     "OVERLAY_SNAP_GRID",
     "OVERLAP_RTOL",
+    "PLANE_HASH_NORMAL",
+    "PLANE_HASH_PAD",
+    "NEAR_COPLANAR_RTOL",
     "TILE_FRAGMENTS",
     "MAX_TILES",
     "CLIP_BATCH",
@@ -122,6 +125,27 @@ OVERLAY_SNAP_GRID = 2.0 ** -50
 #: they share more than this fraction of the smaller one's area: polygons that only
 #: touch along an edge share zero area up to the rounding of their coordinates.
 OVERLAP_RTOL = 1e-9
+
+#: The scene summary groups polygons by plane without the BSP tree
+#: (``exactff.visibility.coplanar``): unit normals closer than this (in each
+#: coordinate) are never put in different groups. Not a tolerance on the result: pairs
+#: are then kept by the BSP tree's band; it bounds what is missed, a coplanar polygon
+#: whose float normal is off by more than this (a sliver whose height is below its band
+#: over 1e-3: 1e-8 of the coordinates' magnitude), and larger values only cost time.
+PLANE_HASH_NORMAL = 1e-3
+
+#: Two overlapping polygons are near-coplanar (reported apart by the scene summary)
+#: when one lies within this of the other's plane, relative to the magnitudes in
+#: ``n . x - d``, but not within the BSP tree's band (BSP_COPLANAR_ULPS ulps): a face
+#: flush with another to 1e-13, which the exact method orders by its geometry and the
+#: discrete methods' z-buffers may call a tie.
+NEAR_COPLANAR_RTOL = 1e-9
+
+#: The plane hash finds candidate pairs with one STRtree over every group's 2-D
+#: bounding boxes, each group moved to its own place: boxes are widened by this share
+#: of the widest group, far more than the rounding of the move (a few ulps of the
+#: moved coordinates), so that no pair of meeting boxes is lost.
+PLANE_HASH_PAD = 1e-6
 
 #: The clipper's covered region is kept per tile of a grid over each chart, with about
 #: this many fragment images per tile (not a tolerance: a cost trade-off, measured in

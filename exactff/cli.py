@@ -33,13 +33,15 @@ def _scenes():
     return scenes
 
 
-def open_scene(spec, *, split_nonplanar=False, planarity_rtol=None):
+def open_scene(spec, *, split_nonplanar=False, planarity_rtol=None, drop_degenerate=False):
     """A scene from a file path or a built-in name (``cornell_box``, ``cornell_box_closed``,
     ``office``, ``office:N`` for about N quads, ``cloister``, ``cloister:N``, ``box:K`` for a closed unit box with K x K
-    quads per face, ``building:NXxNY`` for rooms with zero-thickness walls)."""
+    quads per face, ``building:NXxNY`` for rooms with zero-thickness walls).
+    ``drop_degenerate`` leaves a file's degenerate faces out (``degenerate="drop"``)."""
     from .io import load_scene
 
-    options = {"nonplanar": "split" if split_nonplanar else "error"}
+    options = {"nonplanar": "split" if split_nonplanar else "error",
+               "degenerate": "drop" if drop_degenerate else "raise"}
     if planarity_rtol is not None:
         if not (np.isfinite(planarity_rtol) and planarity_rtol > 0):
             raise ValueError(f"--planarity-rtol: expected a positive number, got {planarity_rtol}")
@@ -74,7 +76,7 @@ def open_scene(spec, *, split_nonplanar=False, planarity_rtol=None):
 
 def _open(args):
     return open_scene(args.scene, split_nonplanar=args.split_nonplanar,
-                      planarity_rtol=args.planarity_rtol)
+                      planarity_rtol=args.planarity_rtol, drop_degenerate=args.drop_degenerate)
 
 
 def _scene_arguments(p):
@@ -87,6 +89,10 @@ def _scene_arguments(p):
     p.add_argument("--planarity-rtol", type=float, default=None,
                    help="allowed vertex distance from a face's plane, relative to its "
                         "diameter (default 1e-6)")
+    p.add_argument("--drop-degenerate", action="store_true",
+                   help="leave out degenerate faces (fewer than 3 distinct vertices, zero "
+                        "area) instead of refusing the file; polygons keep the file's "
+                        "order without them, and info says how many were left out")
 
 
 def cmd_info(args):
@@ -105,6 +111,10 @@ def cmd_info(args):
           f"of the polygon's diameter"
           + (f"; {d['split_faces']} non-planar faces split into triangles"
              if d["split_faces"] else ""))
+    if d["dropped_faces"] or args.drop_degenerate:
+        why = ", ".join(f"{c:,} {r}" for r, c in d["dropped_reasons"].items())
+        print(f"dropped faces    {d['dropped_faces']:,} degenerate faces left out"
+              + (f" ({why})" if why else ""))
     closed = d["closure_residual"] <= 1e-12
     print(f"closure          |sum A n| / sum A = {d['closure_residual']:.3g} "
           f"({'closed' if closed else 'open: rows need not sum to 1'}); "
@@ -121,6 +131,15 @@ def cmd_info(args):
         print(f"                   {name(i)} and {name(j)}")
     if len(same) > 5:
         print(f"                   ... and {len(same) - 5} more")
+    near = d["near_coplanar_overlaps"]
+    print(f"near-coplanar    {len(near)} overlapping pairs flush to within 1e-9 of the "
+          f"magnitudes but not coplanar"
+          + (" (the exact method orders them by their geometry, the discrete methods "
+             "may call them ties: docs/explanation/conventions.md)" if near else ""))
+    for i, j in near[:5]:
+        print(f"                   {name(i)} and {name(j)}")
+    if len(near) > 5:
+        print(f"                   ... and {len(near) - 5} more")
     return 0
 
 

@@ -10,7 +10,8 @@ import numpy as np
 from ._tolerances import BSP_COPLANAR_ULPS, EPS, ON_PLANE_ULPS, PLANE_SIDE_ULPS
 
 __all__ = ["side_of_plane", "gamma", "tie_priority", "exact_side", "polygon_side",
-           "plane_distances", "plane_sides", "sides_of_point", "coplanar_band_sides", "engine_sides"]
+           "plane_distances", "plane_sides", "sides_of_point", "coplanar_band_sides",
+           "engine_sides", "collinear", "in_plane_band", "orient2d", "polygons_apart"]
 
 
 def gamma(n):
@@ -232,3 +233,159 @@ def engine_sides(flat, p):
         for i in ids[~on_plane]:
             side[i] = exact_side(flat.V[flat.offsets[i]:flat.offsets[i + 1]], p)
     return side, band
+
+
+def collinear(P):
+    """Whether all vertices of ``P`` lie on one line, decided exactly (the float input
+    is exact): the orientation test of every vertex against the line through the first
+    vertex and the one farthest from it.
+
+    The cross products ``(v_i - v_0) x (v_f - v_0)`` are computed in float with the
+    bound ``gamma(6)`` times the sum of their terms' magnitudes (the differences'
+    rounding included), so that a polygon of any size, however far from the origin, is
+    told from a line without a tolerance: only cross products within the bound are
+    recomputed with :class:`fractions.Fraction`. A polygon whose vertices are all equal
+    is collinear.
+
+    Parameters
+    ----------
+    P : array_like of shape (K, 3)
+
+    Returns
+    -------
+    bool
+
+    Examples
+    --------
+    A triangle whose vertices differ in y only, far from the origin, and one lifted by
+    one ulp of its z coordinate:
+
+    >>> t = [[1620.33, -0.045731, -1013.51], [1620.33, -0.045334, -1013.51],
+    ...      [1620.33, 0.016953, -1013.51]]
+    >>> collinear(t)
+    True
+    >>> t[1][2] = float(np.nextafter(-1013.51, 0))
+    >>> collinear(t)
+    False
+    """
+    X = np.asarray(P, dtype=float)
+    Q = X - X[0]
+    f = int(np.argmax(np.einsum("ij,ij->i", Q, Q)))
+    q = Q[f]
+    C = np.cross(Q, q)
+    A, a = np.abs(Q), np.abs(q)
+    bound = gamma(6) * np.column_stack([A[:, 1] * a[2] + A[:, 2] * a[1],
+                                        A[:, 2] * a[0] + A[:, 0] * a[2],
+                                        A[:, 0] * a[1] + A[:, 1] * a[0]])
+    if np.any(np.abs(C) > bound):
+        return False
+    x0 = [Fraction(float(c)) for c in X[0]]
+    e = [Fraction(float(c)) - x0[k] for k, c in enumerate(X[f])]
+    for i in np.flatnonzero(np.any(C != 0, axis=1) | np.any(bound > 0, axis=1)):
+        d = [Fraction(float(c)) - x0[k] for k, c in enumerate(X[i])]
+        if (d[1] * e[2] != d[2] * e[1] or d[2] * e[0] != d[0] * e[2]
+                or d[0] * e[1] != d[1] * e[0]):
+            return False
+    return True
+
+
+def in_plane_band(V, N, D, rtol=BSP_COPLANAR_ULPS * EPS):
+    """Row by row: whether the point ``V[k]`` lies in the band of the plane
+    ``dot(N[k], x) = D[k]``; by default the BSP tree's coplanar band.
+
+    The band is ``abs(dot(n, x) - d) <= rtol * (dot(abs(n), abs(x)) + abs(d))``, by
+    default ``BSP_COPLANAR_ULPS`` ulps of the magnitudes (as
+    :func:`coplanar_band_sides`).
+
+    Examples
+    --------
+    >>> in_plane_band(np.array([[1 + 2.0 ** -52, 0, 0], [2.0, 0, 0]]),
+    ...               np.array([[1.0, 0, 0], [1.0, 0, 0]]), np.array([1.0, 1.0])).tolist()
+    [True, False]
+    """
+    s = np.einsum("ij,ij->i", V, N) - D
+    return np.abs(s) <= rtol * (np.einsum("ij,ij->i", np.abs(V), np.abs(N)) + np.abs(D))
+
+
+def orient2d(p, q, w):
+    """Sign of the 2-D orientation ``(q - p) x (w - p)`` (+1: ``w`` to the left of the
+    line from ``p`` to ``q``, -1: to the right), row by row, where floats can decide it:
+    0 where the value is within Shewchuk's bound ``(3 + 16 u) u (|l| + |r|)`` of 0 (the
+    sign is then not decided here; exact zeros included).
+
+    Examples
+    --------
+    >>> p, q = np.array([[0.0, 0.0]] * 3), np.array([[1.0, 0.0]] * 3)
+    >>> orient2d(p, q, np.array([[0.5, 1.0], [0.5, -1.0], [0.5, 0.0]])).tolist()
+    [1, -1, 0]
+    """
+    d1, d2 = q - p, w - p
+    left, right = d1[..., 0] * d2[..., 1], d1[..., 1] * d2[..., 0]
+    det = left - right
+    bound = (3 + 16 * EPS) * EPS * (np.abs(left) + np.abs(right))
+    return np.where(np.abs(det) > bound, np.sign(det), 0).astype(np.int8)
+
+
+def _side_of_line(p, q, w):
+    """Side of ``w`` of the line from ``p`` to ``q``: +1 left, -1 right, where floats
+    decide it (:func:`orient2d`); 0 where ``w`` is certainly on the line (it is ``p`` or
+    ``q``, or a zero difference makes both products exactly 0: an axis-aligned line);
+    2 where floats cannot tell."""
+    d1, d2 = q - p, w - p
+    left, right = d1[..., 0] * d2[..., 1], d1[..., 1] * d2[..., 0]
+    det = left - right
+    bound = (3 + 16 * EPS) * EPS * (np.abs(left) + np.abs(right))
+    out = np.where(np.abs(det) > bound, np.sign(det), 2).astype(np.int8)
+    on = (((d1[..., 0] == 0) | (d2[..., 1] == 0)) & ((d1[..., 1] == 0) | (d2[..., 0] == 0))
+          | np.all(w == p, axis=-1) | np.all(w == q, axis=-1))
+    out[on] = 0
+    return out
+
+
+def polygons_apart(T, U):
+    """Whether the 2-D polygons ``T[m]`` and ``U[m]`` certainly have disjoint interiors:
+    the line of an edge of one has that polygon on one side and the other polygon on
+    the other (vertices on the line itself allowed where that is certain: the edge's
+    ends, axis-aligned lines; polygons touching along it are apart). Decided with the
+    float filter of :func:`orient2d`; False where floats cannot tell, or no edge
+    separates them (the caller then overlays the two).
+
+    Parameters
+    ----------
+    T : ndarray of shape (M, K, 2)
+    U : ndarray of shape (M, L, 2)
+
+    Returns
+    -------
+    ndarray of shape (M,), bool
+
+    Examples
+    --------
+    Two halves of a square, and a triangle that overlaps the first:
+
+    >>> a = np.array([[[0, 0], [1, 0], [1, 1]]], dtype=float)
+    >>> b = np.array([[[0, 0], [1, 1], [0, 1]]], dtype=float)
+    >>> c = np.array([[[0.5, 0], [1, 0], [1, 2]]], dtype=float)
+    >>> polygons_apart(a, b).tolist(), polygons_apart(a, c).tolist()
+    ([True], [False])
+    """
+    out = np.zeros(len(T), dtype=bool)
+    todo = np.arange(len(T))
+    for X, Y in ((T, U), (U, T)):
+        k = X.shape[1]
+        for i in range(k):
+            if len(todo) == 0:
+                return out
+            Xs, Ys = X[todo], Y[todo]
+            p, q = Xs[:, i], Xs[:, (i + 1) % k]
+            s = _side_of_line(p, q, Xs[:, (i + 2) % k])
+            apart = (s == 1) | (s == -1)
+            for j in range(3, k):           # the polygon's own vertices: on one side
+                t = _side_of_line(p, q, Xs[:, (i + j) % k])
+                apart &= (t == s) | (t == 0)
+            for j in range(Ys.shape[1]):    # the other's: on the other side (or on it)
+                t = _side_of_line(p, q, Ys[:, j])
+                apart &= (t == -s) | (t == 0)
+            out[todo[apart]] = True
+            todo = todo[~apart]
+    return out

@@ -7,11 +7,13 @@ import time
 
 import numpy as np
 
+from . import _tolerances as tol
 from .formfactors import fingerprint, form_factor_matrix
-from .geometry import area_vector, polygon_diameter
+from .geometry import polygon_diameter
 from .methods import resolve
-from .scene import Scene, distinct_consecutive
-from .visibility import coplanar_overlaps
+from .rings import successors
+from .scene import Scene
+from .visibility import plane_overlaps
 
 __all__ = ["compare", "to_markdown", "describe"]
 
@@ -155,6 +157,57 @@ def to_markdown(records: list[dict]) -> str:
     return "\n".join(lines)
 
 
+#: vertex pairs whose distances one block of the vectorised diameters holds
+_PAIRS_PER_BLOCK = 2 ** 20
+
+
+def _distinct_rings(scene):
+    """The scene's rings with consecutive repeats removed (as
+    :func:`exactff.scene.distinct_consecutive`): vertices and offsets."""
+    V, off = scene.vertices, scene.offsets
+    keep = np.any(V != V[successors(off)], axis=1)
+    counts = np.add.reduceat(keep.astype(np.int64), off[:-1])
+    return V[keep], np.concatenate([[0], np.cumsum(counts)])
+
+
+def _planarity_deviations(scene):
+    """Per polygon: the largest distance of a vertex from the plane through the vertex
+    mean with the Newell normal, over the polygon's diameter (consecutive repeats
+    removed), by vertex count."""
+    V, off = _distinct_rings(scene)
+    counts = np.diff(off)
+    devs = np.zeros(len(counts))
+    for k in np.unique(counts):
+        idx = np.flatnonzero(counts == k)
+        P = V[off[idx][:, None] + np.arange(k)]                    # (m, k, 3)
+        Q = P - P[:, :1]
+        N = 0.5 * np.cross(Q, np.roll(Q, -1, axis=1)).sum(axis=1)
+        N /= np.linalg.norm(N, axis=1)[:, None]
+        dev = np.abs(np.einsum("mkj,mj->mk", P - P.mean(axis=1, keepdims=True), N)).max(axis=1)
+        if k <= tol.BATCH_VALIDATION_MAX_VERTICES:
+            step = max(1, _PAIRS_PER_BLOCK // (k * k))       # bounds the temporaries
+            diam = np.concatenate([
+                np.sqrt(((B[:, :, None, :] - B[:, None, :, :]) ** 2).sum(axis=-1)).max(axis=(1, 2))
+                for B in (P[a:a + step] for a in range(0, len(P), step))])
+        else:
+            diam = np.array([polygon_diameter(R) for R in P])
+        devs[idx] = dev / diam
+    return devs
+
+
+def _unpaired_edges(scene):
+    """Directed edges (consecutive repeats removed) whose reverse is not an edge as
+    many times: their number."""
+    V, off = _distinct_rings(scene)
+    E = np.hstack([V, V[successors(off)]]) + 0.0     # -0.0 and 0.0 are one coordinate
+    rows = lambda A: np.ascontiguousarray(A).view(np.dtype((np.void, A.dtype.itemsize * 6)))
+    keys, count = np.unique(rows(E).ravel(), return_counts=True)
+    flipped = rows(np.ascontiguousarray(keys.view(np.float64).reshape(-1, 6)[:, [3, 4, 5, 0, 1, 2]])).ravel()
+    at = np.minimum(np.searchsorted(keys, flipped), len(keys) - 1)
+    reverse = np.where(keys[at] == flipped, count[at], 0)
+    return int(count[reverse != count].sum())
+
+
 def describe(scene: Scene) -> dict:
     """Summary of a scene: size, area, bounds, planarity and closure.
 
@@ -169,10 +222,17 @@ def describe(scene: Scene) -> dict:
         ``back_to_back_pairs`` (coplanar overlapping pairs facing opposite ways: the two
         faces of a zero-thickness wall, legitimate) and ``same_facing_overlaps``
         (coplanar overlapping pairs facing the same way: usually a modelling mistake),
-        both as lists of ``[i, j]`` (see
-        :func:`exactff.visibility.coplanar_overlaps`), and ``split_faces`` (faces of
+        both as lists of ``[i, j]`` (the pairs of
+        :func:`exactff.visibility.coplanar_overlaps`, found without the BSP tree:
+        :func:`exactff.visibility.plane_overlaps`), ``near_coplanar_overlaps``
+        (overlapping pairs that are coplanar within ``NEAR_COPLANAR_RTOL`` of the
+        magnitudes but not within the BSP tree's band: faces flush to 1e-13, which the
+        exact method orders by their geometry and the discrete methods may call a
+        tie; ``docs/explanation/conventions.md``), ``split_faces`` (faces of
         the file that were not planar and were cut into triangles when it was read
-        with ``nonplanar="split"``; 0 otherwise).
+        with ``nonplanar="split"``; 0 otherwise), ``dropped_faces`` (degenerate faces
+        of the file left out when it was read with ``degenerate="drop"``; 0 otherwise)
+        and ``dropped_reasons`` (how many for each reason, a dict).
 
     Examples
     --------
@@ -180,21 +240,12 @@ def describe(scene: Scene) -> dict:
     >>> d = describe(subdivided_box(2))
     >>> d["polygons"], d["unpaired_edges"], d["closure_residual"] < 1e-15
     (24, 0, True)
-    >>> d["back_to_back_pairs"], d["same_facing_overlaps"]
-    ([], [])
+    >>> d["back_to_back_pairs"], d["same_facing_overlaps"], d["dropped_faces"]
+    ([], [], 0)
     """
-    back_to_back, same_facing = coplanar_overlaps(scene)
-    devs = []
-    edges = {}
-    for P in scene.polygons:
-        D = distinct_consecutive(P)
-        diam = polygon_diameter(D)
-        N = area_vector(D)
-        N /= np.linalg.norm(N)
-        devs.append(float(np.abs((D - D.mean(axis=0)) @ N).max()) / diam)
-        for a, b in zip(map(tuple, D), map(tuple, np.roll(D, -1, axis=0))):
-            edges[(a, b)] = edges.get((a, b), 0) + 1
-    unpaired = sum(c for (a, b), c in edges.items() if edges.get((b, a), 0) != c)
+    back_to_back, same_facing, near = plane_overlaps(scene, near_rtol=tol.NEAR_COPLANAR_RTOL)
+    devs = _planarity_deviations(scene)
+    unpaired = _unpaired_edges(scene)
     vector_area = (scene.normals * scene.areas[:, None]).sum(axis=0)
     lo, hi = scene.bounds
     return {
@@ -203,10 +254,13 @@ def describe(scene: Scene) -> dict:
         "total_area": float(scene.areas.sum()),
         "bounds_min": lo.tolist(),
         "bounds_max": hi.tolist(),
-        "max_planarity_deviation": max(devs),
+        "max_planarity_deviation": float(devs.max()),
         "closure_residual": float(np.linalg.norm(vector_area) / scene.areas.sum()),
         "unpaired_edges": int(unpaired),
         "back_to_back_pairs": back_to_back.tolist(),
         "same_facing_overlaps": same_facing.tolist(),
+        "near_coplanar_overlaps": near.tolist(),
         "split_faces": scene.split_faces,
+        "dropped_faces": scene.dropped_faces,
+        "dropped_reasons": dict(scene.dropped_reasons),
     }

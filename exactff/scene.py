@@ -9,10 +9,11 @@ import shapely
 from . import _tolerances as tol
 from .errors import SceneError
 from .geometry import area_vector, polygon_diameter
+from .predicates import collinear
 from .rings import successors
 
 __all__ = ["Scene", "distinct_consecutive", "validate_polygon", "validate_polygons", "as_scene", "build_scene",
-           "split_nonplanar", "NONPLANAR"]
+           "split_nonplanar", "NONPLANAR", "DEGENERATE"]
 
 
 def distinct_consecutive(P):
@@ -56,9 +57,10 @@ def validate_polygon(polygon: ArrayLike, index: int = 0, name: str | None = None
     ------
     SceneError
         Fewer than 3 vertices; NaN or infinite coordinates; fewer than 3 distinct
-        consecutive vertices; zero area (collinear); non-planar (best-fit plane) beyond
-        ``PLANARITY_RTOL`` of the diameter plus ``PLANARITY_ULPS`` of the coordinates'
-        magnitude; self-intersecting.
+        consecutive vertices; zero area (collinear: exactly, decided first by
+        :func:`exactff.predicates.collinear`, or up to rounding); non-planar (best-fit
+        plane) beyond ``PLANARITY_RTOL`` of the diameter plus ``PLANARITY_ULPS`` of the
+        coordinates' magnitude; self-intersecting.
 
     Examples
     --------
@@ -80,6 +82,8 @@ def validate_polygon(polygon: ArrayLike, index: int = 0, name: str | None = None
     D = distinct_consecutive(P)
     if D.shape[0] < 3:
         raise SceneError(index, f"fewer than 3 distinct consecutive vertices ({D.shape[0]})", name)
+    if collinear(D):    # exactly, however far from the origin (before the tests in floats)
+        raise SceneError(index, "zero area (the vertices are collinear)", name)
     diam = polygon_diameter(D)
     # best-fit plane (SVD): robust for any vertex set, including bow ties of zero area
     c = D.mean(axis=0)
@@ -107,24 +111,44 @@ def validate_polygon(polygon: ArrayLike, index: int = 0, name: str | None = None
 
 
 def validate_polygons(polygons, names=None,
-                      planarity_rtol: float = tol.PLANARITY_RTOL) -> tuple[np.ndarray, ...]:
+                      planarity_rtol: float = tol.PLANARITY_RTOL, *,
+                      failures: list | None = None) -> tuple[np.ndarray, ...]:
     """Validate many polygons at once (as :func:`validate_polygon`, vectorised).
 
     Polygons with the same number of vertices are checked together; any polygon that a
     batch check flags, or that has repeated consecutive vertices, goes through
-    :func:`validate_polygon`, so errors and their messages are the same. The first
-    ill-formed polygon in input order raises.
+    :func:`validate_polygon`, so errors and their messages are the same (the batch
+    check names fewer than 3 distinct consecutive vertices itself, in the same words).
+    The first ill-formed polygon in input order raises, unless ``failures`` is given.
+
+    Parameters
+    ----------
+    polygons : sequence of array_like of shape (K_i, 3)
+    names : sequence of str or None, optional
+    planarity_rtol : float, optional
+    failures : list, optional
+        Where to collect the :class:`SceneError` of every ill-formed polygon, in input
+        order, instead of raising the first; their entries of the result are None.
 
     Returns
     -------
     tuple of ndarray of shape (K_i, 3)
         Read-only float arrays, in input order; a polygon with repeated consecutive
         vertices comes back without them (as from :func:`validate_polygon`).
+
+    Examples
+    --------
+    >>> bad = []
+    >>> out = validate_polygons([[[0, 0, 0], [1, 0, 0], [0, 1, 0]],
+    ...                          [[0, 0, 0], [1, 0, 0], [2, 0, 0]]], failures=bad)
+    >>> out[1] is None, [str(e) for e in bad]
+    (True, ['polygon 1: zero area (the vertices are collinear)'])
     """
     n = len(polygons)
     names = names if names is not None else (None,) * n
     arrays = [None] * n
     slow = []
+    decided = {}        # polygons the batch check can name the error of
     by_k = {}
     for i, p in enumerate(polygons):
         try:
@@ -143,7 +167,12 @@ def validate_polygons(polygons, names=None,
             continue
         P = np.stack([arrays[i] for i in idx])
         ok = np.all(np.isfinite(P), axis=(1, 2))
-        ok &= np.all(np.any(P != np.roll(P, -1, axis=1), axis=2), axis=1)
+        distinct = np.any(P != np.roll(P, -1, axis=1), axis=2).sum(axis=1)
+        for j in np.flatnonzero(ok & (distinct < 3)):     # as validate_polygon says it
+            i = idx[j]
+            decided[i] = SceneError(i, f"fewer than 3 distinct consecutive vertices "
+                                       f"({max(int(distinct[j]), 1)})", names[i])
+        ok &= distinct == k
         Pc = np.where(ok[:, None, None], P, 0.0)
         diff = Pc[:, :, None, :] - Pc[:, None, :, :]
         diam = np.sqrt((diff * diff).sum(-1)).max(axis=(1, 2))
@@ -165,12 +194,28 @@ def validate_polygons(polygons, names=None,
             rings = shapely.linearrings(flat.reshape(-1, 2), indices=np.repeat(np.arange(len(idx)), k))
             ok &= shapely.is_simple(rings)
         for j, i in enumerate(idx):
-            if not ok[j]:
+            if not ok[j] and i not in decided:
                 slow.append(i)
-    for i in sorted(slow):
-        arrays[i] = validate_polygon(polygons[i], i, names[i], planarity_rtol=planarity_rtol)
+    for i in sorted(slow + list(decided)):
+        exc = decided.get(i)
+        if exc is None:
+            try:
+                arrays[i] = validate_polygon(polygons[i], i, names[i],
+                                             planarity_rtol=planarity_rtol)
+                continue
+            except SceneError as e:
+                if failures is None:
+                    raise
+                # kept without its traceback: that would keep this frame, and every
+                # batch array in it, alive in a reference cycle until a full collection
+                exc = e.with_traceback(None)
+        elif failures is None:
+            raise exc
+        failures.append(exc)
+        arrays[i] = None
     for a in arrays:
-        a.setflags(write=False)
+        if a is not None:
+            a.setflags(write=False)
     return tuple(arrays)
 
 
@@ -205,6 +250,12 @@ class Scene:
     split_faces : int
         Faces of the source file that were not planar and were cut into triangles
         (``nonplanar="split"``); 0 otherwise. Kept when the scene is pickled.
+    dropped_faces : int
+        Degenerate faces of the source file left out (``degenerate="drop"``); 0
+        otherwise. Kept when the scene is pickled.
+    dropped_reasons : tuple of (str, int)
+        How many of them were left out for each reason (``"fewer than 3 vertices"``,
+        ``"fewer than 3 distinct vertices"``, ``"zero area"``); empty if none.
 
     Notes
     -----
@@ -213,10 +264,11 @@ class Scene:
     """
 
     __slots__ = ("polygons", "normals", "areas", "centroids", "offsets", "vertices",
-                 "names", "groups", "materials", "split_faces", "__weakref__")
+                 "names", "groups", "materials", "split_faces", "dropped_faces",
+                 "dropped_reasons", "__weakref__")
 
     def __init__(self, polygons, names=None, groups=None, materials=None,
-                 planarity_rtol=tol.PLANARITY_RTOL, split_faces=0):
+                 planarity_rtol=tol.PLANARITY_RTOL, split_faces=0, dropped=(), _validated=False):
         n = len(polygons)
         labels = {}
         for key, val in (("names", names), ("groups", groups), ("materials", materials)):
@@ -227,7 +279,8 @@ class Scene:
         if n == 0:
             raise ValueError("polygons: a scene needs at least one polygon")
         names = labels["names"]
-        P = validate_polygons(polygons, names, planarity_rtol)
+        # build_scene gives the arrays validate_polygons returned
+        P = tuple(polygons) if _validated else validate_polygons(polygons, names, planarity_rtol)
         counts = np.array([len(p) for p in P])
         offsets = np.concatenate([[0], np.cumsum(counts)])
         V = np.concatenate(P, axis=0)
@@ -254,6 +307,8 @@ class Scene:
         set_(self, "groups", labels["groups"])
         set_(self, "materials", labels["materials"])
         set_(self, "split_faces", int(split_faces))
+        set_(self, "dropped_reasons", tuple((str(r), int(c)) for r, c in dropped))
+        set_(self, "dropped_faces", sum(c for _, c in self.dropped_reasons))
 
     def __setattr__(self, key, value):
         raise AttributeError("Scene is immutable")
@@ -443,67 +498,187 @@ def split_nonplanar(polygon):
     return best
 
 
+#: what to do with a degenerate face (fewer than 3 distinct vertices, or zero area: its
+#: vertices collinear): raise, naming and counting them, or leave it out
+DEGENERATE = ("raise", "drop")
+
+#: the reasons of validate_polygon that make a face degenerate, by their start
+_DEGENERATE_REASONS = (("fewer than 3 vertices", "fewer than 3 vertices"),
+                       ("fewer than 3 distinct", "fewer than 3 distinct vertices"),
+                       ("zero area", "zero area"))
+_DROP_HINT = ("to load the file without such faces, leave them out (--drop-degenerate, "
+              "or degenerate='drop')")
+_SPLIT_HINT = ("to load it anyway, split such faces into planar triangles "
+               "(--split-nonplanar, or nonplanar='split') or allow more "
+               "(--planarity-rtol, or planarity_rtol=)")
+#: how many ill-formed faces an error lists
+_LISTED = 5
+
+
+def _degenerate_kind(reason):
+    """The degenerate reason a face's error falls under, or None (not degenerate: NaN or
+    infinite coordinates, not planar, self-intersecting, not an array)."""
+    for start, kind in _DEGENERATE_REASONS:
+        if reason.startswith(start):
+            return kind
+    return None
+
+
 def _hint(reason):
     if reason.startswith("not planar"):
-        return ("; to load it anyway, split such faces into planar triangles "
-                "(--split-nonplanar, or nonplanar='split') or allow more "
-                "(--planarity-rtol, or planarity_rtol=)")
-    return "; fix the face in the file (or leave it out)"
+        return "; " + _SPLIT_HINT
+    if _degenerate_kind(reason):
+        return "; " + _DROP_HINT
+    return "; fix the face in the file"
+
+
+def _kind(reason):
+    """What an error's summary calls a face with this reason."""
+    if _degenerate_kind(reason):
+        return "degenerate"
+    for start in ("not planar", "self-intersecting", "NaN or infinite coordinates"):
+        if reason.startswith(start):
+            return start
+    return "ill-formed"
+
+
+def _file_error(errors, names, groups, sources):
+    """One SceneError for the ill-formed faces of a file: the face, where it is, its
+    reason and how to proceed; for several, how many of each kind and the first few."""
+    def describe(exc):
+        i = exc.index
+        label = (f" ({names[i]!r})" if names[i] else
+                 f" (group {groups[i]!r})" if groups[i] else "")
+        where = f"{sources[i]}: " if sources[i] else ""
+        return f"{where}polygon {i}{label}: {exc.reason}"
+
+    first = errors[0]
+    out = SceneError(first.index, first.reason)
+    if len(errors) == 1:
+        out.args = (describe(first) + _hint(first.reason),)
+        return out
+    kinds = {}
+    for exc in errors:
+        kinds[_kind(exc.reason)] = kinds.get(_kind(exc.reason), 0) + 1
+    if list(kinds) == ["degenerate"]:
+        reasons = {}
+        for exc in errors:
+            kind = _degenerate_kind(exc.reason)
+            reasons[kind] = reasons.get(kind, 0) + 1
+        head = (f"{len(errors):,} faces are degenerate ("
+                + ", ".join(f"{c:,} {r}" for r, c in reasons.items()) + ")")
+    else:
+        head = (f"{len(errors):,} faces are ill-formed ("
+                + ", ".join(f"{c:,} {k}" for k, c in kinds.items()) + ")")
+    hints = ([_DROP_HINT] if "degenerate" in kinds else []) + (
+        [_SPLIT_HINT.replace("load it", "load them")] if "not planar" in kinds else []) + (
+        ["fix the others in the file"] if set(kinds) - {"degenerate", "not planar"} else [])
+    listed = "; ".join(describe(exc) for exc in errors[:_LISTED])
+    out.args = (f"{head}; the first {min(len(errors), _LISTED)}: {listed}; "
+                + "; ".join(hints),)
+    return out
 
 
 def build_scene(faces, *, names=None, groups=None, materials=None, sources=None,
-                nonplanar="error", planarity_rtol=tol.PLANARITY_RTOL):
+                nonplanar="error", degenerate="raise", planarity_rtol=tol.PLANARITY_RTOL):
     """A scene from faces read from a file, with errors that name the face.
+
+    Every face is validated once, in bulk (:func:`validate_polygons`); only the faces
+    that fail are looked at again, to split or drop them as asked.
 
     Parameters
     ----------
     faces : list of array_like of shape (K_i, 3)
     names, groups, materials : list of str or None, optional
-    sources : list of str, optional
-        Where each face comes from (``"path:line"``), for the error messages.
+    sources : sequence of str, optional
+        Where each face comes from (``"path:line"``), for the error messages (read by
+        index, only for the faces an error names).
     nonplanar : {"error", "split"}, default "error"
         ``"split"`` cuts every face that is not planar within ``planarity_rtol`` into
         planar triangles (:func:`split_nonplanar`); the pieces keep the face's name,
         group and material. The scene records how many faces were split
         (``scene.split_faces``, ``describe(scene)["split_faces"]``).
+    degenerate : {"raise", "drop"}, default "raise"
+        ``"drop"`` leaves out every degenerate face: fewer than 3 vertices, fewer than
+        3 distinct (consecutive) vertices, or zero area (the vertices collinear,
+        exactly or up to rounding; :func:`validate_polygon`). The polygons that remain
+        keep the file's order (polygon ``i`` of the scene is the ``i``-th face that was
+        kept), with their names, groups and materials; the scene records how many were
+        left out and why (``scene.dropped_faces``, ``scene.dropped_reasons``,
+        ``describe(scene)["dropped_faces"]``). Faces with NaN or infinite coordinates,
+        non-planar (unless split) or self-intersecting faces are broken input, not
+        degenerate: they raise either way.
     planarity_rtol : float
 
     Raises
     ------
     SceneError
-        A face is ill-formed: the message gives where it comes from, its index, its
-        name or group, the reason and how to proceed.
+        Faces are ill-formed: the message gives how many (of each kind), and for the
+        first few where they come from, their index, name or group and reason, then how
+        to proceed (``--drop-degenerate`` / ``degenerate="drop"`` for degenerate faces).
+    ValueError
+        ``nonplanar`` or ``degenerate`` is not one of its values, or every face was
+        dropped.
+
+    Examples
+    --------
+    >>> tri, line = [[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 0, 0], [1, 0, 0], [2, 0, 0]]
+    >>> build_scene([tri, line, line], sources=["a.obj:5", "a.obj:6", "a.obj:7"])
+    Traceback (most recent call last):
+    ...
+    exactff.SceneError: 2 faces are degenerate (2 zero area); the first 2: a.obj:6: polygon 1: zero area (the vertices are collinear); a.obj:7: polygon 2: zero area (the vertices are collinear); to load the file without such faces, leave them out (--drop-degenerate, or degenerate='drop')
+    >>> s = build_scene([tri, line, tri], degenerate="drop")
+    >>> len(s), s.dropped_faces, s.dropped_reasons
+    (2, 1, (('zero area', 1),))
     """
     if nonplanar not in NONPLANAR:
         raise ValueError(f"nonplanar must be one of {NONPLANAR}, got {nonplanar!r}")
+    if degenerate not in DEGENERATE:
+        raise ValueError(f"degenerate must be one of {DEGENERATE}, got {degenerate!r}")
     n = len(faces)
     names = list(names) if names is not None else [None] * n
     groups = list(groups) if groups is not None else [None] * n
     materials = list(materials) if materials is not None else [None] * n
-    sources = list(sources) if sources is not None else [None] * n
-    split = 0
-    if nonplanar == "split":
-        out = ([], [], [], [], [])
-        for i, F in enumerate(faces):
-            pieces = [F]
+    sources = sources if sources is not None else [None] * n     # read by index only
+    failures = []
+    arrays = list(validate_polygons(faces, planarity_rtol=planarity_rtol, failures=failures))
+    pieces, dropped, errors = {}, {}, {}
+    for exc in failures:
+        i, kind = exc.index, _degenerate_kind(exc.reason)
+        if kind is not None and degenerate == "drop":
+            dropped[kind] = dropped.get(kind, 0) + 1
+        elif nonplanar == "split" and exc.reason.startswith("not planar"):
             try:
-                validate_polygon(F, i, planarity_rtol=planarity_rtol)
-            except SceneError as exc:
-                if exc.reason.startswith("not planar"):
-                    pieces = split_nonplanar(F)
-                    split += 1
-            for Q in pieces:
-                for lst, val in zip(out, (Q, names[i], groups[i], materials[i], sources[i])):
+                pieces[i] = split_nonplanar(distinct_consecutive(np.asarray(faces[i], dtype=float)))
+            except ValueError as why:
+                errors[i] = SceneError(i, f"{exc.reason}; and it cannot be split into planar "
+                                          f"triangles ({why})")
+        else:
+            errors[i] = exc
+    if pieces:      # the triangles of the split faces, validated together
+        owner = [i for i, tris in pieces.items() for _ in tris]
+        bad = []
+        flat = validate_polygons([T for tris in pieces.values() for T in tris],
+                                 planarity_rtol=planarity_rtol, failures=bad)
+        for exc in bad:
+            i = owner[exc.index]
+            errors.setdefault(i, SceneError(i, f"not planar; and a triangle of its split is "
+                                               f"ill-formed ({exc.reason})"))
+        at = 0
+        for i, tris in pieces.items():
+            pieces[i], at = flat[at:at + len(tris)], at + len(tris)
+    if errors:
+        raise _file_error([errors[i] for i in sorted(errors)], names, groups, sources)
+    if len(pieces) == 0 and len(dropped) == 0:
+        kept = (arrays, names, groups, materials)
+    else:
+        kept = ([], [], [], [])
+        for i, P in enumerate(arrays):
+            for Q in ([P] if P is not None else pieces.get(i, [])):
+                for lst, val in zip(kept, (Q, names[i], groups[i], materials[i])):
                     lst.append(val)
-        faces, names, groups, materials, sources = out
-    try:
-        scene = Scene(list(faces), names=names, groups=groups, materials=materials,
-                      planarity_rtol=planarity_rtol, split_faces=split)
-    except SceneError as exc:
-        i = exc.index
-        label = (f" ({names[i]!r})" if names[i] else
-                 f" (group {groups[i]!r})" if groups[i] else "")
-        where = f"{sources[i]}: " if sources[i] else ""
-        exc.args = (f"{where}polygon {i}{label}: {exc.reason}{_hint(exc.reason)}",)
-        raise
-    return scene
+    if not kept[0]:
+        raise ValueError(f"faces: all {n:,} faces are degenerate and were left out "
+                         f"(degenerate='drop'): no polygon remains")
+    return Scene(kept[0], names=kept[1], groups=kept[2], materials=kept[3],
+                 split_faces=len(pieces), dropped=tuple(dropped.items()), _validated=True)

@@ -47,6 +47,7 @@ LAYERS = {
     "exactff.visibility.pieces": 4,
     "exactff.visibility.refine": 4,
     "exactff.visibility.bsp": 4,
+    "exactff.visibility.coplanar": 4,
     "exactff.visibility.engine": 4,
     # L5 area form factors and the methods
     "exactff.area": 5,

@@ -18,6 +18,7 @@ __all__ = ["load_scene", "read_obj", "read_scene_json", "scene_from_json", "read
 
 
 def load_scene(path: str | os.PathLike, *, nonplanar: str = "error",
+               degenerate: str = "raise",
                planarity_rtol: float = tol.PLANARITY_RTOL) -> Scene:
     """Read a scene file, choosing the reader by extension.
 
@@ -31,6 +32,12 @@ def load_scene(path: str | os.PathLike, *, nonplanar: str = "error",
     nonplanar : {"error", "split"}, default "error"
         What to do with a face that is not planar within ``planarity_rtol``: raise
         (naming the face and the line), or cut it into planar triangles.
+    degenerate : {"raise", "drop"}, default "raise"
+        What to do with a degenerate face (fewer than 3 distinct vertices, or zero
+        area: collinear vertices): raise, counting every such face and naming the first
+        few, or leave it out (the remaining polygons keep the file's order; how many
+        were left out: ``describe(scene)["dropped_faces"]``). NaN or infinite
+        coordinates are broken input, not degenerate, and raise either way.
     planarity_rtol : float, optional
         Allowed distance of a vertex from its face's plane, relative to the face's
         diameter (default 1e-6).
@@ -44,7 +51,7 @@ def load_scene(path: str | os.PathLike, *, nonplanar: str = "error",
     ValueError
         Unknown extension, or a malformed file (the message gives the line number).
     SceneError
-        A polygon is ill-formed.
+        Polygons are ill-formed (the message counts them and names the first few).
 
     Examples
     --------
@@ -53,9 +60,14 @@ def load_scene(path: str | os.PathLike, *, nonplanar: str = "error",
     >>> _ = (d / "q.obj").write_text("v 0 0 0\\nv 1 0 0\\nv 1 1 0\\nv 0 1 0\\nf 1 2 3 4\\n")
     >>> len(load_scene(d / "q.obj"))
     1
+    >>> _ = (d / "t.obj").write_text("v 0 0 0\\nv 1 0 0\\nv 2 0 0\\nv 0 1 0\\n"
+    ...                              "f 1 2 4\\nf 1 2 3\\nf 1 1 4\\nf 2 3 4\\n")
+    >>> s = load_scene(d / "t.obj", degenerate="drop")
+    >>> len(s), s.dropped_faces
+    (2, 2)
     """
     path = os.fspath(path)
-    options = dict(nonplanar=nonplanar, planarity_rtol=planarity_rtol)
+    options = dict(nonplanar=nonplanar, degenerate=degenerate, planarity_rtol=planarity_rtol)
     ext = os.path.splitext(path)[1].lower()
     if ext == ".obj":
         return read_obj(path, **options)

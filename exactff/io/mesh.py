@@ -20,7 +20,9 @@ def read_mesh(path, **options):
     triangles only) and their vertex order (counter-clockwise seen from the front:
     STL's facet order; a closed solid written with outward normals is seen from
     outside). Not kept: names, groups and materials (meshio does not expose them
-    uniformly). Volume cells are refused; lines and points are ignored.
+    uniformly). Volume cells are refused; lines and points are ignored. ``options`` go
+    to :func:`exactff.scene.build_scene` (``nonplanar``, ``degenerate``,
+    ``planarity_rtol``).
     """
     try:
         import meshio

@@ -8,7 +8,9 @@ __all__ = ["scene_from_json", "read_scene_json"]
 
 
 def scene_from_json(data, **options):
-    """Build a scene from a parsed ``exactff-scene/1`` document (its ``surfaces``).
+    """Build a scene from a parsed ``exactff-scene/1`` document (its ``surfaces``);
+    ``options`` go to :func:`exactff.scene.build_scene` (``nonplanar``, ``degenerate``,
+    ``planarity_rtol``).
 
     Raises
     ------

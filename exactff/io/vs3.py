@@ -22,6 +22,8 @@ def read_vs3(path, **options):
     polygon; View3D reports no form factors to or from them, exactff computes them:
     ignore those rows and columns). Refused with a clear error: subsurfaces
     (``base > 0``), mask and null surfaces (``M``, ``N``), the 2-D and ``3a`` formats.
+    ``options`` go to :func:`exactff.scene.build_scene` (``nonplanar``, ``degenerate``,
+    ``planarity_rtol``).
     """
     verts, faces, names, groups, sources = {}, [], [], [], []
     with open(path, encoding="utf-8") as fh:

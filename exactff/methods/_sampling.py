@@ -166,6 +166,8 @@ class ZBufferRow:
 
     def hits(self, best):
         """Scene indices of the polygons shown (-1: none) from live indices."""
+        if len(self.ids) == 0:          # the point sees no polygon at all
+            return np.full(np.shape(best), -1)
         return np.where(best >= 0, self.ids[np.maximum(best, 0)], -1)
 
 

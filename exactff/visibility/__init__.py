@@ -8,7 +8,8 @@ the sector form. Shortcuts leave out what a row does not need; each is reported 
 """
 
 from .bsp import BSPTree, build_bsp, coplanar_overlaps, front_to_back, scene_bsp
+from .coplanar import plane_overlaps
 from .engine import is_convex_enclosure, visible_form_factors, visible_graph
 
 __all__ = ["visible_form_factors", "visible_graph", "is_convex_enclosure", "scene_bsp", "build_bsp",
-           "front_to_back", "coplanar_overlaps", "BSPTree"]
+           "front_to_back", "coplanar_overlaps", "plane_overlaps", "BSPTree"]

@@ -1,0 +1,431 @@
+"""Real scene files (issue 29): degenerate faces dropped on request and counted
+otherwise, collinear triangles far from the origin, nonplanar="split" at the cost of
+what it splits, the scene summary without the BSP tree."""
+
+import os
+import re
+from fractions import Fraction
+
+import numpy as np
+import pytest
+
+import exactff as ef
+from exactff.predicates import collinear
+
+#: small real files (sources and licences: shared/scenes/real/README.md)
+REAL = os.path.join(os.path.dirname(__file__), "..", "..", "shared", "scenes", "real")
+
+#: the issue's triangle: exactly collinear (its vertices differ in y only), 1e3 from the
+#: origin
+FAR_COLLINEAR = [[1620.33, -0.045731, -1013.51], [1620.33, -0.045334, -1013.51],
+                 [1620.33, 0.016953, -1013.51]]
+
+
+def _exactly_collinear(P):
+    """The reference: every vertex's cross product with the first edge, in rationals."""
+    X = [[Fraction(float(c)) for c in v] for v in P]
+    d = [[v[k] - X[0][k] for k in range(3)] for v in X]
+    e = max(d, key=lambda w: sum(c * c for c in w))
+    return all(w[1] * e[2] == w[2] * e[1] and w[2] * e[0] == w[0] * e[2]
+               and w[0] * e[1] == w[1] * e[0] for w in d)
+
+
+# ---------------------------------------------------------------------------------------
+# finding 2: collinear triangles far from the origin are zero area, not self-intersecting
+# ---------------------------------------------------------------------------------------
+def test_collinear_triangle_far_from_the_origin_is_zero_area():
+    with pytest.raises(ef.SceneError, match="polygon 4: zero area"):
+        ef.validate_polygon(FAR_COLLINEAR, index=4)
+    moved = np.array(FAR_COLLINEAR) - np.array(FAR_COLLINEAR[0])
+    with pytest.raises(ef.SceneError, match="zero area"):
+        ef.validate_polygon(moved)
+
+
+@pytest.mark.parametrize("origin", [[0.0, 0.0, 0.0], [1620.33, -1013.51, 7.1],
+                                    [-3.3e6, 2.5e5, 1e7]])
+@pytest.mark.parametrize("steps", [[0, 1, 3], [0, 5, 2, 7], [0, 1, 1, 2]])
+def test_exactly_collinear_polygons_in_any_direction_are_zero_area(origin, steps):
+    # vertices o + t d with dyadic d and small integers t: exactly collinear in floats
+    # (checked in rationals), in a direction no coordinate plane contains
+    d = np.array([0.125, 0.25, -0.375])
+    P = np.array(origin) + np.outer(steps, d)
+    assert _exactly_collinear(P)
+    assert collinear(P)
+    with pytest.raises(ef.SceneError, match="zero area|fewer than 3 distinct"):
+        ef.validate_polygon(P)
+
+
+@pytest.mark.parametrize("ulps", [1, 2, 7])
+def test_a_triangle_one_ulp_off_its_line_is_valid_far_from_the_origin(ulps):
+    # lifted by a few ulps of its z coordinate: not collinear (rationals), and valid
+    # with the area of its exact coordinates
+    P = np.array(FAR_COLLINEAR)
+    z = P[1, 2]
+    for _ in range(ulps):
+        z = np.nextafter(z, 0)
+    P[1, 2] = z
+    assert not _exactly_collinear(P) and not collinear(P)
+    s = ef.Scene.from_polygons([P])
+    # the area: half the base (y extent) times the height (dz), both exact differences
+    expect = 0.5 * (P[2, 1] - P[0, 1]) * (P[1, 2] - P[0, 2])
+    assert s.areas[0] == pytest.approx(abs(expect), rel=1e-9)
+
+
+def test_collinear_predicate_against_rationals_on_random_near_lines():
+    rng = np.random.default_rng(29)
+    seen = {True: 0, False: 0}
+    for _ in range(400):
+        o = rng.uniform(-2e3, 2e3, 3)
+        scale = 2.0 ** -int(rng.integers(0, 20))
+        d = (rng.integers(-8, 9, 3) if rng.random() < 0.5 else rng.normal(size=3)) * scale
+        t = np.sort(rng.integers(-4, 5, size=int(rng.integers(3, 6))))
+        P = o + np.outer(t, d)
+        if rng.random() < 0.5:          # push one vertex off by an ulp
+            k, axis = int(rng.integers(0, len(P))), int(rng.integers(0, 3))
+            P[k, axis] = np.nextafter(P[k, axis], np.inf)
+        truth = _exactly_collinear(P)
+        assert collinear(P) == truth
+        seen[truth] += 1
+    assert seen[True] > 50 and seen[False] > 50
+
+
+# ---------------------------------------------------------------------------------------
+# finding 1: degenerate faces are dropped on request, counted and named otherwise
+# ---------------------------------------------------------------------------------------
+#: a room-like OBJ: valid faces (a fan of triangles, quads) with degenerate faces between
+#: them; kind per face in file order
+KINDS = ["ok", "ok", "same index", "ok", "same point", "far collinear", "ok", "one point",
+         "ok", "collinear quad", "repeat ok", "ok", "same index"]
+DEGENERATE_KIND = {"same index": "fewer than 3 distinct vertices",
+                   "same point": "fewer than 3 distinct vertices",
+                   "one point": "fewer than 3 distinct vertices",
+                   "far collinear": "zero area", "collinear quad": "zero area"}
+
+
+def _face(kind, j):
+    """The vertices of face ``j`` of the given kind."""
+    x = float(j)
+    if kind == "ok":      # on the floor facing up, or on the ceiling facing down
+        return [[x, 0, 0], [x + 1, 0, 0], [x, 1, 0]] if j % 2 else \
+            [[x, 0, 1], [x, 1, 1], [x + 1, 0, 1]]
+    if kind == "repeat ok":                 # a repeated vertex, three distinct: valid
+        return [[x, 0, 0], [x + 1, 0, 0], [x + 1, 0, 0], [x, 1, 0]]
+    if kind in ("same index", "same point"):
+        return [[x, 0, 0], [x + 1, 0, 0], [x + 1, 0, 0]]
+    if kind == "one point":
+        return [[x, 2, 0]] * 3
+    if kind == "far collinear":
+        return FAR_COLLINEAR
+    if kind == "collinear quad":
+        return [[x, 0, 1], [x + 1, 0, 1], [x + 2, 0, 1], [x + 3, 0, 1]]
+    raise ValueError(kind)
+
+
+def _write_obj(path, kinds):
+    """The faces as an OBJ, one group per face; returns the line of each face. Faces
+    of kind "same index" repeat a vertex reference, the others repeat coordinates."""
+    lines, where, nv = ["# issue 29 test"], [], 0
+    for j, kind in enumerate(kinds):
+        F = _face(kind, j)
+        lines.append(f"g part{j}")
+        refs = []
+        for v in F:
+            if kind == "same index" and refs and v == F[refs[-1] - nv - 1]:
+                refs.append(refs[-1])
+                continue
+            lines.append("v %r %r %r" % tuple(float(c) for c in v))
+            refs.append(nv + len(refs) + 1 if not refs else max(refs) + 1)
+        nv = max(refs)
+        lines.append("f " + " ".join(map(str, refs)))
+        where.append(len(lines))
+    path.write_text("\n".join(lines) + "\n")
+    return where
+
+
+def test_degenerate_faces_are_counted_and_the_first_five_named(tmp_path):
+    path = tmp_path / "room.obj"
+    where = _write_obj(path, KINDS)
+    bad = [j for j, k in enumerate(KINDS) if k in DEGENERATE_KIND]
+    with pytest.raises(ef.SceneError) as info:
+        ef.load_scene(path)
+    msg = str(info.value)
+    assert msg.startswith(f"{len(bad)} faces are degenerate (4 fewer than 3 distinct "
+                          f"vertices, 2 zero area); the first 5: ")
+    for j in bad[:5]:
+        assert f"{path}:{where[j]}: polygon {j} (group 'part{j}'): " in msg
+    assert f"polygon {bad[5]} " not in msg
+    assert "--drop-degenerate" in msg and "degenerate='drop'" in msg
+    assert info.value.index == bad[0]
+
+
+def test_drop_keeps_the_other_faces_in_order_with_their_groups(tmp_path):
+    import pickle
+
+    path = tmp_path / "room.obj"
+    _write_obj(path, KINDS)
+    scene = ef.load_scene(path, degenerate="drop")
+    kept = [j for j, k in enumerate(KINDS) if k not in DEGENERATE_KIND]
+    # the independent value: the kept faces, in order, built directly
+    expect = ef.Scene.from_polygons([_face(KINDS[j], j) for j in kept])
+    assert len(scene) == len(kept) == len(expect)
+    for P, Q in zip(scene.polygons, expect.polygons):
+        assert np.array_equal(P, Q)
+    assert scene.groups == tuple(f"part{j}" for j in kept)
+    assert scene.dropped_faces == 6
+    assert dict(scene.dropped_reasons) == {"fewer than 3 distinct vertices": 4, "zero area": 2}
+    d = ef.describe(scene)
+    assert d["dropped_faces"] == 6 and d["dropped_reasons"] == dict(scene.dropped_reasons)
+    again = pickle.loads(pickle.dumps(scene))
+    assert again.dropped_faces == 6 and again.dropped_reasons == scene.dropped_reasons
+    assert ef.describe(expect)["dropped_faces"] == 0
+    # a file without degenerate faces loads the same either way
+    clean = tmp_path / "clean.obj"
+    _write_obj(clean, [KINDS[j] for j in kept])
+    a, b = ef.load_scene(clean), ef.load_scene(clean, degenerate="drop")
+    assert b.dropped_faces == 0 and all(np.array_equal(P, Q) for P, Q in zip(a.polygons, b.polygons))
+
+
+def test_nan_and_self_intersecting_faces_raise_even_with_drop(tmp_path):
+    import json
+
+    ok = [[0, 0, 0], [1, 0, 0], [0, 1, 0]]
+    line = [[0, 0, 0], [1, 0, 0], [2, 0, 0]]
+    bow = [[0, 0, 0], [1, 1, 0], [1, 0, 0], [0, 1, 0]]
+    for bad, reason in (([[0, 0, 0], [1, 0, 0], [float("nan"), 1, 0]], "NaN or infinite"),
+                        (bow, "self-intersecting")):
+        path = tmp_path / "s.json"
+        path.write_text(json.dumps({"schema": "exactff-scene/1", "surfaces": [
+            {"vertices": ok}, {"vertices": line}, {"vertices": bad, "name": "bad"}]}))
+        with pytest.raises(ef.SceneError, match=rf"^surfaces\[2\]: polygon 2 \('bad'\): "
+                                                rf"{reason}.*fix the face in the file$"):
+            ef.load_scene(path, degenerate="drop")
+        with pytest.raises(ef.SceneError, match=rf"^2 faces are ill-formed \(1 degenerate, "
+                                                rf"1 {reason}"):
+            ef.load_scene(path)
+    # every face degenerate: nothing left to load, said so
+    with pytest.raises(ValueError, match="all 2 faces are degenerate"):
+        ef.scene.build_scene([line, line], degenerate="drop")
+    with pytest.raises(ValueError, match="degenerate must be one of"):
+        ef.scene.build_scene([ok], degenerate="skip")
+
+
+def test_drop_and_split_together(tmp_path):
+    warped = [[0, 0, 0], [1, 0, 0], [1, 1, 0.1], [0, 1, 0]]
+    ok = [[0, 0, 0], [1, 0, 0], [0, 1, 0]]
+    line = [[0, 0, 0], [1, 0, 0], [2, 0, 0]]
+    faces = [ok, line, warped, ok]
+    with pytest.raises(ef.SceneError, match=r"2 faces are ill-formed \(1 degenerate, 1 not "
+                                            r"planar\).*--drop-degenerate.*--split-nonplanar"):
+        ef.scene.build_scene(faces)
+    with pytest.raises(ef.SceneError, match=r"^polygon 2: not planar.*--split-nonplanar"):
+        ef.scene.build_scene(faces, degenerate="drop")
+    s = ef.scene.build_scene(faces, degenerate="drop", nonplanar="split",
+                             groups=["a", "b", "c", "d"])
+    tris = ef.split_nonplanar(warped)
+    assert len(s) == 4 and s.groups == ("a", "c", "c", "d")
+    assert all(np.array_equal(P, Q) for P, Q in zip(s.polygons, [ok] + tris + [ok]))
+    assert (s.split_faces, s.dropped_faces) == (1, 1)
+
+
+def test_cli_drop_degenerate_on_info_matrix_and_compare(tmp_path, capsys):
+    from exactff.cli import main
+
+    path = tmp_path / "room.obj"
+    _write_obj(path, KINDS)
+    assert main(["info", str(path)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "6 faces are degenerate" in err and "--drop-degenerate" in err
+    assert main(["info", str(path), "--drop-degenerate"]) == 0
+    out = capsys.readouterr().out
+    assert "polygons         7\n" in out
+    assert ("dropped faces    6 degenerate faces left out (4 fewer than 3 distinct "
+            "vertices, 2 zero area)") in out
+    m = tmp_path / "m.npy"
+    assert main(["matrix", str(path), "--drop-degenerate", "--rows", "0", "-o", str(m),
+                 "--no-progress"]) == 0
+    F = np.load(m)
+    kept = ef.load_scene(path, degenerate="drop")
+    np.testing.assert_array_equal(F, ef.form_factor_matrix(kept, rows=[0]))
+    assert F.shape == (1, 7) and F.sum() > 0.01
+    capsys.readouterr()
+    assert main(["compare", str(path), "--drop-degenerate", "--methods", "hemicube",
+                 "--samples", "64", "--rows", "0:1", "--out", str(tmp_path / "c"),
+                 "--no-progress"]) == 0
+    assert "(7 polygons)" in capsys.readouterr().out
+
+
+# ---------------------------------------------------------------------------------------
+# finding 4: nonplanar="split" validates every face once, and only the faces that fail
+# again (it cost 10 x the load where nothing was split)
+# ---------------------------------------------------------------------------------------
+def test_split_looks_again_only_at_the_faces_that_fail(monkeypatch):
+    import exactff.scene as scene_module
+
+    calls = []
+    one_by_one = scene_module.validate_polygon
+
+    def counted(P, index=0, *args, **kwargs):
+        calls.append(index)
+        return one_by_one(P, index, *args, **kwargs)
+
+    monkeypatch.setattr(scene_module, "validate_polygon", counted)
+    rng = np.random.default_rng(4)
+    faces = [rng.normal(size=(3, 3)) for _ in range(300)]
+    warped = [[0, 0, 0], [1, 0, 0], [1, 1, 0.1], [0, 1, 0]]
+    line = [[0, 0, 0], [1, 0, 0], [2, 0, 0]]
+    plain = ef.scene.build_scene(faces, nonplanar="split")
+    assert calls == [] and plain.split_faces == 0
+    assert all(np.array_equal(P, Q) for P, Q in zip(plain.polygons, faces))
+    s = ef.scene.build_scene(faces[:100] + [warped] + faces[100:] + [line],
+                             nonplanar="split", degenerate="drop")
+    # the bulk check sends the two faces that fail one by one (the split's triangles are
+    # validated in bulk too)
+    assert calls == [100, 301]
+    assert len(s) == 302 and (s.split_faces, s.dropped_faces) == (1, 1)
+
+
+# ---------------------------------------------------------------------------------------
+# finding 5: the scene summary finds coplanar overlaps without the BSP tree
+# ---------------------------------------------------------------------------------------
+def _desk_room(origin=(1620.33, -1013.51, 0.0), gap=1e-13):
+    """A room far from the origin with desks: legs under table tops and mats on them
+    (back-to-back pairs), a mat flush to ``gap`` above its table (near-coplanar), a
+    duplicated face (same-facing), shelves against a wall (back-to-back with it)."""
+    o = np.array(origin)
+    polys = ef.scenes.box_polygons(o, o + [6.0, 4.0, 3.0], 4)
+    for c in range(3):
+        x = o + [1.0 + 1.6 * c, 1.0, 0.0]
+        for dx, dy in ((0, 0), (1.1, 0), (0, 0.7), (1.1, 0.7)):
+            polys += ef.scenes.box_polygons(x + [dx, dy, 0], x + [dx + 0.1, dy + 0.1, 0.72],
+                                            facing="out")
+        polys += ef.scenes.box_polygons(x + [0, 0, 0.72], x + [1.2, 0.8, 0.75], 2, facing="out")
+        lift = gap if c == 1 else 0.0
+        polys += ef.scenes.box_polygons(x + [0.1, 0.1, 0.75 + lift], x + [0.7, 0.5, 0.755],
+                                        facing="out")
+    polys += ef.scenes.box_polygons(o + [0.5, 3.6, 0], o + [2.5, 4.0, 2.0], facing="out")
+    polys.append(polys[-1].copy())
+    return ef.Scene.from_polygons(polys)
+
+
+def _quad_on_ceiling():
+    box = ef.scenes.box_polygons((0, 0, 0), (1, 1, 1), 1)
+    quad = np.array([[0.4, 0.4, 1], [0.4, 0.6, 1], [0.6, 0.6, 1], [0.6, 0.4, 1]], dtype=float)
+    return ef.Scene.from_polygons([quad] + box)
+
+
+def _rotated_desk_room(offset):
+    """The desk room at the origin turned by a random rotation (no plane along an axis)
+    and moved by ``offset``: coplanar within rounding only."""
+    R = np.linalg.qr(np.random.default_rng(1).normal(size=(3, 3)))[0]
+    R[:, 0] *= np.sign(np.linalg.det(R))
+    return ef.Scene.from_polygons([P @ R.T + offset for P in _desk_room((0, 0, 0)).polygons])
+
+
+SCENES_WITH_OVERLAPS = {
+    "desk room turned": lambda: _rotated_desk_room(np.zeros(3)),
+    "desk room turned, 1e3 away": lambda: _rotated_desk_room(np.array([812.5, -344.1, 967.3])),
+    "building 2x1": lambda: ef.scenes.building(2, 1),
+    "building 3x2": lambda: ef.scenes.building(3, 2),
+    "cornell, whole ceiling": lambda: ef.scenes.cornell_box(ceiling="whole"),
+    "quad on a ceiling": _quad_on_ceiling,
+    "office": ef.scenes.office,
+    "desk room": _desk_room,
+    "desk room at the origin": lambda: _desk_room(origin=(0.0, 0.0, 0.0)),
+}
+
+
+@pytest.mark.parametrize("name", sorted(SCENES_WITH_OVERLAPS))
+def test_plane_hash_gives_the_pairs_of_the_bsp_tree(name):
+    from exactff.prepared import prepared
+    from exactff.visibility import coplanar_overlaps, plane_overlaps, scene_bsp
+
+    scene = SCENES_WITH_OVERLAPS[name]()
+    b2b, same = plane_overlaps(scene)
+    assert "bsp" not in prepared(scene)            # found without the tree
+    tree_b2b, tree_same = coplanar_overlaps(scene, scene_bsp(scene)[0])
+    assert np.array_equal(b2b, tree_b2b) and np.array_equal(same, tree_same)
+    if name != "office":
+        assert len(b2b) + len(same) > 0
+
+
+def test_describe_does_not_build_the_bsp_tree_and_lists_the_desk_room_pairs():
+    from exactff.prepared import prepared
+
+    scene = _desk_room()
+    d = ef.describe(scene)
+    assert "bsp" not in prepared(scene)
+    n = len(scene)
+    # by construction: the duplicated shelf face (the last two polygons) is the one
+    # same-facing pair; the lifted mat's bottom and its table's top are near-coplanar
+    assert d["same_facing_overlaps"] == [[n - 2, n - 1]]
+    near = d["near_coplanar_overlaps"]
+    assert near and all(abs(scene.centroids[i][2] - scene.centroids[j][2]) < 2e-13
+                        and {scene.normals[i][2], scene.normals[j][2]} == {1.0, -1.0}
+                        for i, j in near)
+    assert not set(map(tuple, near)) & set(map(tuple, d["back_to_back_pairs"]))
+    flush = ef.describe(_desk_room(gap=0.0))
+    assert flush["near_coplanar_overlaps"] == []
+    assert len(flush["back_to_back_pairs"]) == len(d["back_to_back_pairs"]) + len(near)
+
+
+def test_describe_planarity_and_edges_match_the_per_polygon_definitions():
+    from exactff.geometry import area_vector, polygon_diameter
+    from exactff.scene import distinct_consecutive
+
+    # the knot's quads are bent (up to 0.014 of their diameter): planarity counts
+    knot = ef.load_scene(os.path.join(REAL, "quadknot.obj"), planarity_rtol=0.1)
+    for scene in [ef.scenes.cornell_box(), ef.scenes.office(400), _desk_room(), knot]:
+        devs, edges = [], {}
+        for P in scene.polygons:
+            D = distinct_consecutive(P)
+            N = area_vector(D)
+            N = N / np.linalg.norm(N)
+            devs.append(float(np.abs((D - D.mean(axis=0)) @ N).max()) / polygon_diameter(D))
+            for a, b in zip(map(tuple, D), map(tuple, np.roll(D, -1, axis=0))):
+                edges[(a, b)] = edges.get((a, b), 0) + 1
+        d = ef.describe(scene)
+        assert d["unpaired_edges"] == sum(c for (a, b), c in edges.items()
+                                          if edges.get((b, a), 0) != c)
+        assert abs(d["max_planarity_deviation"] - max(devs)) <= 4 * np.finfo(float).eps * (
+            1 + max(devs))
+
+
+def test_bulk_errors_are_the_per_polygon_errors():
+    # the bulk check names some errors itself (fewer than 3 distinct vertices): the same
+    # messages as validate_polygon, in input order
+    faces = [_face(kind, j) for j, kind in enumerate(KINDS)]
+    faces += [[[0, 0, 0]] * 4, [[0, 0, 0], [0, 0, 0], [1, 0, 0], [1, 0, 0]],
+              [[0, 0, 0], [1, 0, 0], [1, 0, 0], [0, 0, 0], [0, 1, 0]], [[0, 0, 0], [1, 0, 0]]]
+    expect = []
+    for i, F in enumerate(faces):
+        try:
+            ef.validate_polygon(F, i)
+        except ef.SceneError as exc:
+            expect.append(str(exc))
+    failures = []
+    ef.validate_polygons(faces, failures=failures)
+    assert [str(e) for e in failures] == expect and len(expect) == 10
+    with pytest.raises(ef.SceneError, match="^" + re.escape(expect[0]) + "$"):
+        ef.validate_polygons(faces)
+
+
+# ---------------------------------------------------------------------------------------
+# noticed on the way: a row that sees no polygon (every other face in its plane, as in a
+# flat file or a scene left with one plane after dropping) crashed the discrete methods
+# ---------------------------------------------------------------------------------------
+@pytest.mark.parametrize("method", sorted(ef.METHODS))
+def test_a_row_that_sees_nothing_is_zero_for_every_method(method):
+    s = ef.Scene.from_polygons([[[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[2, 0, 0], [3, 0, 0], [2, 1, 0]]])
+    F = ef.form_factors(s, s.centroids[0], s.normals[0], method=method)
+    assert F.tolist() == [0.0, 0.0]         # both polygons seen edge-on
+
+
+def test_collected_errors_keep_no_frame_alive():
+    # an error kept with its traceback holds validate_polygons' frame, and its batch
+    # arrays (428 MB on the 313k-face room), until a full garbage collection
+    failures = []
+    ef.validate_polygons([FAR_COLLINEAR, [[0, 0, 0], [1, 0, 0], [0, 1, 0]]], failures=failures)
+    assert len(failures) == 1 and failures[0].__traceback__ is None
+    with pytest.raises(ef.SceneError) as info:     # raised: the traceback is kept
+        ef.validate_polygons([FAR_COLLINEAR])
+    assert info.value.__traceback__ is not None
