@@ -24,6 +24,7 @@ __all__ = [
     "CLIP_BATCH",
     "LONG_POLYGON",
     "BATCH_VALIDATION_MAX_VERTICES",
+    "BATCH_VALIDATION_PAIRS",
     "BSP_AXIS_CANDIDATE_MIN",
     "CHART_EDGE_ULPS",
     "MP_MAX_DPS",
@@ -170,6 +171,11 @@ LONG_POLYGON = 64
 #: pairwise distances; longer polygons are checked one by one (not a tolerance: a cost
 #: threshold).
 BATCH_VALIDATION_MAX_VERTICES = 128
+
+#: Scene validation checks at most this many vertex pairs (polygons times k^2) in one
+#: batch: bounds its temporaries (about 1 KiB per triangle) without costing time (not a
+#: tolerance: a memory threshold, measured in benchmarks/bench_real_files.py).
+BATCH_VALIDATION_PAIRS = 2 ** 19
 
 #: BSP nodes with more fragments than this also try a plane through the median of the
 #: fragments' vertex means along their widest axis (not a tolerance: a cost threshold).

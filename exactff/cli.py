@@ -131,9 +131,11 @@ def cmd_info(args):
         print(f"                   {name(i)} and {name(j)}")
     if len(same) > 5:
         print(f"                   ... and {len(same) - 5} more")
+    from ._tolerances import NEAR_COPLANAR_RTOL
+
     near = d["near_coplanar_overlaps"]
-    print(f"near-coplanar    {len(near)} overlapping pairs flush to within 1e-9 of the "
-          f"magnitudes but not coplanar"
+    print(f"near-coplanar    {len(near)} overlapping pairs flush to within "
+          f"{NEAR_COPLANAR_RTOL:g} of the magnitudes but not coplanar"
           + (" (the exact method orders them by their geometry, the discrete methods "
              "may call them ties: docs/explanation/conventions.md)" if near else ""))
     for i, j in near[:5]:

@@ -149,7 +149,7 @@ def validate_polygons(polygons, names=None,
     arrays = [None] * n
     slow = []
     decided = {}        # polygons the batch check can name the error of
-    by_k = {}
+    by_k, seen = {}, {}
     for i, p in enumerate(polygons):
         try:
             a = np.array(p, dtype=float)
@@ -160,8 +160,13 @@ def validate_polygons(polygons, names=None,
             slow.append(i)
             continue
         arrays[i] = a
-        by_k.setdefault(a.shape[0], []).append(i)
-    for k, idx in by_k.items():
+        # polygons of k vertices in batches of at most BATCH_VALIDATION_PAIRS vertex
+        # pairs (the batch check's temporaries are O(k^2) per polygon)
+        k = a.shape[0]
+        seen[k] = seen.get(k, 0) + 1
+        by_k.setdefault((k, seen[k] // max(1, tol.BATCH_VALIDATION_PAIRS // (k * k))),
+                        []).append(i)
+    for (k, _), idx in by_k.items():
         if k > tol.BATCH_VALIDATION_MAX_VERTICES:
             slow.extend(idx)   # long polygons one by one (the batch check is O(k^2))
             continue
