@@ -2,6 +2,7 @@
 with the defects real exports have, loaded, summarised and prepared for the engine.
 
 Usage: python benchmarks/bench_real_files.py [--cells 720] [--work DIR] [--skip-bsp]
+       [--no-trace]
 
 The room (``furnished_room_obj``): a 45 x 36 x 3 m shell placed far from the origin
 (x about 1620, y about -1013, as the issue's conference room), 40 x 40 quads per face
@@ -41,6 +42,7 @@ import os
 import resource
 import subprocess
 import sys
+import tempfile
 import time
 import tracemalloc
 
@@ -260,7 +262,8 @@ def run_child(name, work, traced):
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--cells", type=int, default=720)
-    ap.add_argument("--work", default=os.path.join("benchmarks", "_work_real_files"))
+    ap.add_argument("--work", default=os.path.join(tempfile.gettempdir(), "exactff_real_files"),
+                    help="where the OBJ files are written (kept: a rerun reuses them)")
     ap.add_argument("--skip-bsp", action="store_true", help="leave out the BSP phases")
     ap.add_argument("--no-trace", action="store_true", help="leave out the tracemalloc runs")
     ap.add_argument("--child", help=argparse.SUPPRESS)
