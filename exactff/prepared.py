@@ -29,22 +29,26 @@ class Prepared:
     True
     """
 
-    __slots__ = ("_scene", "_values")
+    __slots__ = ("_scene", "_values", "_lock")
 
     def __init__(self, scene):
         self._scene = weakref.ref(scene)
         self._values = {}
+        self._lock = threading.RLock()   # this scene's builds only (re-entrant: one may need another)
 
     def get(self, name, build):
         """The accelerator ``name``, built as ``build(scene)`` on first use."""
-        with _LOCK:
+        value = self._values.get(name)
+        if value is not None:
+            return value      # built: no lock on the hot path
+        with self._lock:
             if name not in self._values:
                 self._values[name] = build(self._scene())
             return self._values[name]
 
     def put(self, name, value):
         """Set the accelerator ``name`` (a test's own BSP tree, say)."""
-        with _LOCK:
+        with self._lock:
             self._values[name] = value
 
     def __contains__(self, name):
