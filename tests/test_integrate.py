@@ -200,6 +200,12 @@ def test_form_factor_invariant_under_rigid_motion(P, n, p, axis, angle, shift):
     assert_form_factors_close(F1, F0, rtol=1e-11, atol=1e-12)
 
 
+# found by CI: a quadrilateral within 3e-8 of the horizon plane, whose pieces' Eq. 3
+# terms (C asin ~ pi / 2 each) cancel to 1e-19; the estimate once summed the edge
+# integrals (1e-3) instead of the terms, and the rounding of -3.5e-17 exceeded it
+@example(P=np.array([[1.0, -1.0, -2.88758404e-08], [-0.939692621, -0.657979857, 2.46126269e-08],
+                     [-0.5, -1.8660254, 2.08233096e-08], [0.173648178, -1.98480775, 2.24695983e-09]]),
+         n=np.array([0.0, 0.0, 1.0]), p=np.zeros(3), cut=2)
 @given(P=convex_polygons(min_vertices=4), n=unit_vectors(), p=points(0.5),
        cut=st.integers(2, 100))
 def test_splitting_a_polygon_keeps_the_total(P, n, p, cut):
@@ -212,6 +218,23 @@ def test_splitting_a_polygon_keeps_the_total(P, n, p, cut):
         total = kernel(p, n, part1, two_sided=True) + kernel(p, n, part2, two_sided=True)
         assert_form_factors_close(total, kernel(p, n, P, two_sided=True),
                                   rtol=1e-12, atol=2e-13)
+
+
+@given(P=convex_polygons(), tilt=st.floats(1e-12, 1e-5), azimuth=st.floats(0, 2 * math.pi),
+       lift=st.floats(-1e-7, 1e-7))
+def test_eq3_estimate_covers_its_error_near_the_horizon(P, tilt, azimuth, lift):
+    # a polygon within 1e-5 of the horizon plane: its image is a sliver along the rim,
+    # whose Eq. 3 terms cancel to many orders below their size; the estimate must still
+    # cover the error against a 40-digit boundary quadrature
+    Q = np.column_stack([P[:, 0], P[:, 1], np.zeros(len(P))]) * 2 + [0.5, 0.5, 0]
+    x, y = Q[:, 0], Q[:, 1]
+    assume(abs(x @ np.roll(y, -1) - y @ np.roll(x, -1)) > 1e-2)  # not edge-on from above
+    axis = np.array([math.cos(azimuth), math.sin(azimuth), 0.0])
+    Q = Q @ rotation(axis, tilt).T + [0, 0, lift]
+    assume(abs(ef.unit_normal(Q) @ Q.mean(axis=0)) > 1e-14)  # p not on the plane
+    F, est = eq3_form_factor(ORIGIN, UP, Q, two_sided=True, error=True)
+    ref = float(boundary_form_factor(ORIGIN, UP, Q, one_sided=False, dps=40))
+    assert abs(F - ref) <= est + 4 * np.finfo(float).eps * ref
 
 
 @given(P=planar_polygons(), n=unit_vectors(), p=points(0.5))

@@ -20,7 +20,8 @@ from .point import local_clipped
 __all__ = ["eq3_edge_integral", "arc_x_extremes", "eq3_form_factor", "eq3_ring_area"]
 
 
-def eq3_edge_integral(a: ArrayLike, b: ArrayLike) -> float:
+def eq3_edge_integral(a: ArrayLike, b: ArrayLike, *,
+                      scale: bool = False) -> float | tuple[float, float]:
     """Integral of ``y dx`` along the image of the great-circle arc ``a -> b``.
 
     The image of the arc on the base disk lies on the ellipse of Eq. 2,
@@ -40,10 +41,15 @@ def eq3_edge_integral(a: ArrayLike, b: ArrayLike) -> float:
     ----------
     a, b : array_like of shape (3,)
         End points in the local frame, ``z >= 0``; only their directions matter.
+    scale : bool, optional
+        Also return the sum of the absolute values of the terms of Eq. 3 that make up
+        the integral, the scale of its rounding error. The terms (``C asin`` is up to
+        ``pi / 2``) can be much larger than the integral they add up to: an arc near
+        the horizon whose image runs almost parallel to the y axis.
 
     Returns
     -------
-    float
+    float, or (float, float) with ``scale=True``
         The signed integral; minus the sum over a closed contour is the signed
         (counter-clockwise positive) area of its image.
 
@@ -61,17 +67,18 @@ def eq3_edge_integral(a: ArrayLike, b: ArrayLike) -> float:
     kappa = float(np.linalg.norm(m))
     if kappa == 0.0:
         # a and b parallel: a point (or an edge through p, excluded upstream)
-        return 0.0
+        return (0.0, 0.0) if scale else 0.0
     A, B, C = m / kappa  # normalised so that kappa = 1 below
     eta = math.hypot(B, C)
     if eta == 0.0:
         # B = C = 0: the plane x = 0, a vertical segment on the disk, dx = 0
-        return 0.0
+        return (0.0, 0.0) if scale else 0.0
     if C == 0.0:
         # C = 0: the plane holds the zenith; the image is the segment y = -A x / B
         xa = a[0] / np.linalg.norm(a)
         xb = b[0] / np.linalg.norm(b)
-        return float(-A / B * (xb * xb - xa * xa) / 2.0)
+        value = float(-A / B * (xb * xb - xa * xa) / 2.0)
+        return (value, abs(A / B) * (xb * xb + xa * xa) / 2.0) if scale else value
     w, w_perp, ta, theta, extremes = arc_x_extremes(a, b)
     ua = a / np.linalg.norm(a)
     ub = b / np.linalg.norm(b)
@@ -83,21 +90,24 @@ def eq3_edge_integral(a: ArrayLike, b: ArrayLike) -> float:
         ends.append((t, eta * c, c, 0.0))
     ends.append((ta + theta, float(ub[0]), float(ub @ w), abs(float(ub @ w_perp))))
 
-    def area(s, x, cos_t, abs_sin_t):
-        # corrected Eq. 3 with kappa = 1: asin(x / eta) = atan2(cos t, |sin t|),
-        # sqrt(eta^2 - x^2) = eta |sin t|
-        return 0.5 * (s * C * math.atan2(cos_t, abs_sin_t)
-                      + s * (C * x / eta) * abs_sin_t
-                      - (A * B / eta ** 2) * x * x)
+    def area_terms(s, x, cos_t, abs_sin_t):
+        # the three terms of the corrected Eq. 3 with kappa = 1 (halved):
+        # asin(x / eta) = atan2(cos t, |sin t|), sqrt(eta^2 - x^2) = eta |sin t|
+        return (0.5 * s * C * math.atan2(cos_t, abs_sin_t),
+                0.5 * s * (C * x / eta) * abs_sin_t,
+                -0.5 * (A * B / eta ** 2) * x * x)
 
-    total = []
+    total, magnitude = [], 0.0
     for (t0, *P0), (t1, *P1) in zip(ends[:-1], ends[1:]):
         # branch of this span, from its midpoint: s C sqrt(...) = eta^2 y + A B x
         tm = 0.5 * (t0 + t1)
         um = math.cos(tm) * w + math.sin(tm) * w_perp
         s = 1.0 if C * (eta ** 2 * um[1] + A * B * um[0]) >= 0 else -1.0
-        total.append(area(s, *P1) - area(s, *P0))
-    return math.fsum(total)
+        end, start = area_terms(s, *P1), area_terms(s, *P0)
+        total.append(math.fsum(end) - math.fsum(start))
+        magnitude += math.fsum(abs(v) for v in end + start)
+    value = math.fsum(total)
+    return (value, magnitude) if scale else value
 
 
 def arc_x_extremes(a: ArrayLike, b: ArrayLike) -> tuple:
@@ -158,8 +168,8 @@ def eq3_form_factor(point: ArrayLike, normal: ArrayLike, polygon: ArrayLike, *,
     plane is close to ``x = 0``, where ``eta -> 0`` makes Eq. 3 ill-conditioned.
 
     Parameters and return value as :func:`point_polygon_form_factor`; ``error=True``
-    also returns a rounding-error estimate (``C1 u`` times the sum of the absolute edge
-    integrals, over pi).
+    also returns a rounding-error estimate (``C1 u`` times the sum of the absolute
+    terms of Eq. 3 over the edges, over pi).
 
     Examples
     --------
@@ -202,8 +212,8 @@ def eq3_ring_area(ring: ArrayLike) -> tuple[float, float]:
     Returns
     -------
     (float, float)
-        The signed area and the sum of the absolute edge integrals (the scale of its
-        rounding error).
+        The signed area and the sum of the absolute values of the terms of Eq. 3 that
+        make it up (the scale of its rounding error; see :func:`eq3_edge_integral`).
 
     Examples
     --------
@@ -230,6 +240,7 @@ def eq3_ring_area(ring: ArrayLike) -> tuple[float, float]:
     z = Q[:, 2].copy()
     Q = Q @ Rz.T
     Q[:, 2] = z
-    parts = [eq3_edge_integral(Q[i], Q[(i + 1) % len(Q)]) for i in range(len(Q))]
+    parts = [eq3_edge_integral(Q[i], Q[(i + 1) % len(Q)], scale=True)
+             for i in range(len(Q))]
     # image area (counter-clockwise positive) = - sum of y dx
-    return -math.fsum(parts), math.fsum(abs(x) for x in parts)
+    return -math.fsum(v for v, _ in parts), math.fsum(m for _, m in parts)
