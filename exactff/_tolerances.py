@@ -51,6 +51,9 @@ __all__ = [
     "AREA_EDGE_ON_RTOL",
     "AREA_EDGE_CUT",
     "C1",
+    "SVBSP_BAND",
+    "SVBSP_SPLIT_ULPS",
+    "SVBSP_BOX_BUDGET",
     "C2",
     "LONGDOUBLE_EPS",
     "AREA_FAR",
@@ -323,3 +326,16 @@ AREA_MAX_DEPTH = 7
 #: Area form factors: receivers per call of the vectorised point values (bounds the
 #: temporaries: about 2e5 edge terms per call).
 AREA_EDGE_TERMS_PER_CALL = 200_000
+
+#: Compiled core (exactff.visibility.compiled): a vertex lies on a plane through the
+#: point when its distance is within this band (radians, with the plane's and vertex's
+#: own error bounds added); 16 units of long double's roundoff (the sign's rounding is
+#: 3 to 5 of them).
+SVBSP_BAND = 16 * LONGDOUBLE_EPS
+#: Compiled core: the rounding of a vertex split off an edge, in long double roundoffs
+#: per unit of the edge's ends' distance from the point over the new vertex's (the
+#: parameter's quotient and the three-term interpolation, with a margin).
+SVBSP_SPLIT_ULPS = 8.0
+#: Compiled core: most shadow-tree nodes one bounding-box test may visit before it
+#: gives up (the subtree is then entered, which is always correct).
+SVBSP_BOX_BUDGET = 256

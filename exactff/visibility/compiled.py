@@ -1,0 +1,186 @@
+"""The compiled visibility core: exact rows whose cost follows what they see.
+
+The BSP tree of :mod:`exactff.visibility.bsp` orders the fragments front to back; the
+compiled core (``_svbsp.cpp``, C++ through pybind11) keeps the covered region as a
+shadow-volume BSP tree (planes through the point, Chin & Feiner 1989), filters each
+convex fragment down it, integrates the visible pieces with the sector form, and
+skips every BSP subtree whose bounding box is already covered. The row runs without
+the GIL. Values whose bound misses the requested tolerance are recomputed by the
+Python engine (:func:`exactff.visibility.visible_form_factors`), which refines and
+escalates; the row's ``stats`` say when.
+"""
+
+import numpy as np
+import shapely
+
+from .. import _tolerances as tol
+from ..errors import NumericalError, check_finite
+from ..kernel import flat_polygons
+from ..predicates import engine_sides, sides_of_point
+from ..prepared import prepared
+from ._svbsp import Core
+from .bsp import scene_bsp
+from .engine import is_convex_enclosure, visible_form_factors
+
+__all__ = ["compiled_core", "compiled_form_factors", "convex_pieces"]
+
+
+def convex_pieces(polygon, normal):
+    """A planar polygon as convex pieces with the polygon's own vertices.
+
+    Convex polygons (collinear vertices allowed) are returned whole; others are cut into
+    triangles by a constrained Delaunay triangulation of their projection on the
+    coordinate plane the normal is most nearly perpendicular to.
+
+    Parameters
+    ----------
+    polygon : ndarray of shape (K, 3)
+    normal : ndarray of shape (3,)
+        Its unit normal (counter-clockwise winding).
+
+    Returns
+    -------
+    list of ndarray of shape (k, 3)
+
+    Examples
+    --------
+    >>> L = np.array([[0, 0, 0], [2, 0, 0], [2, 1, 0], [1, 1, 0], [1, 2, 0], [0, 2, 0.]])
+    >>> [len(q) for q in convex_pieces(L, np.array([0, 0, 1.0]))]
+    [3, 3, 3, 3]
+    >>> len(convex_pieces(L[:4], np.array([0, 0, 1.0])))
+    1
+    """
+    P = np.asarray(polygon, dtype=float)
+    e = np.roll(P, -1, axis=0) - P
+    turn = np.cross(e, np.roll(e, -1, axis=0)) @ normal
+    scale = np.linalg.norm(e, axis=1) * np.linalg.norm(np.roll(e, -1, axis=0), axis=1)
+    if np.all(turn >= -8 * tol.EPS * scale):   # collinear within the cross product's rounding
+        return [P]
+    keep = [a for a in range(3) if a != int(np.argmax(np.abs(normal)))]
+    lookup = {tuple(q): P[i] for i, q in enumerate(P[:, keep].tolist())}
+    tri = shapely.constrained_delaunay_triangles(shapely.make_valid(shapely.Polygon(P[:, keep])))
+    pieces = []
+    for t in shapely.get_parts(tri):
+        ring = np.asarray(t.exterior.coords)[:-1]
+        if any(tuple(q) not in lookup for q in ring.tolist()):
+            raise NumericalError("the triangulation of a non-convex fragment added vertices")
+        Q = np.array([lookup[tuple(q)] for q in ring.tolist()])
+        # the polygon's own winding
+        if np.cross(Q[1] - Q[0], Q[2] - Q[0]) @ normal < 0:
+            Q = Q[::-1]
+        pieces.append(Q)
+    return pieces
+
+
+def compiled_core(scene):
+    """The scene's compiled core: its BSP tree with every fragment convex, and the
+    subtrees' bounding boxes (built once, cached with the scene).
+
+    Returns
+    -------
+    (BSPTree, Core)
+    """
+    return prepared(scene).get("compiled_core", _build_core)
+
+
+def _build_core(scene):
+    tree, _ = scene_bsp(scene)
+    normals = scene.normals
+    pieces, first = [], np.zeros(len(tree.fragments) + 1, dtype=np.int64)
+    for f, P in enumerate(tree.fragments):
+        parts = convex_pieces(P, normals[tree.source[f]])
+        pieces.extend(parts)
+        first[f + 1] = first[f] + len(parts)
+    count = np.array([len(q) for q in pieces], dtype=np.int64)
+    start = np.concatenate([[0], np.cumsum(count)[:-1]]).astype(np.int64)
+    vertices = np.concatenate(pieces) if pieces else np.zeros((0, 3))
+    source = np.repeat(tree.source, np.diff(first)).astype(np.int64)
+
+    def expand(lists):
+        out = [np.arange(first[f], first[f + 1]) for here in lists for f in here]
+        return np.concatenate(out).astype(np.int64) if out else np.zeros(0, np.int64)
+
+    sizes = [sum(int(first[f + 1] - first[f]) for f in here) for here in tree.node_fragments]
+    here_start = np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64)
+    core = Core(vertices, start, count, source, tree.front.astype(np.int64),
+                tree.back.astype(np.int64), here_start, expand(tree.node_fragments),
+                expand(tree.node_fragments_behind), len(scene), tol.SVBSP_BAND,
+                tol.C1, tol.SVBSP_SPLIT_ULPS)
+    return tree, core
+
+
+def compiled_form_factors(scene, point, normal, *, two_sided=False, stats=None,
+                          shortcuts=True, tolerance=None, error=False):
+    """Exact form factors with occlusion from one point to every polygon of a scene, by
+    the compiled core.
+
+    The same values as :func:`exactff.visibility.visible_form_factors` (the Python
+    engine, which stays as the oracle) within the two bounds. The compiled row's bound
+    of each value is the rounding of its pieces' sector sums plus the error of their
+    vertices' directions times their edges' arc lengths (``docs/explanation/visibility.md``).
+    Where a receiving polygon's bound exceeds ``tolerance`` times its value, the row is
+    recomputed by the Python engine, which refines and escalates (``stats["path"]``
+    then says ``"compiled, then python"``).
+
+    Parameters
+    ----------
+    scene : Scene
+    point, normal : ndarray of shape (3,)
+        The receiving point and its unit normal.
+    two_sided : bool, default False
+        Let polygons receive on their back side too; every polygon occludes whichever
+        way it faces.
+    stats : dict, optional
+        Filled with what the row did: ``path``, ``fragments`` (filtered down the
+        shadow tree), ``visible_pieces``, ``hidden_pieces``, ``splits``,
+        ``subtrees_culled`` and ``fragments_culled`` (skipped by their bounding box),
+        ``box_tests``, ``shadow_planes``, ``max_error_estimate``.
+    shortcuts : bool, default True
+        False disables the convex-scene path and the culling of subtrees (results do
+        not depend on it).
+    tolerance : float or None
+        Relative accuracy requested of every value; None: no check, no fallback.
+    error : bool, default False
+        Also return each value's bound.
+
+    Returns
+    -------
+    ndarray of shape (len(scene),), or a pair of them with ``error=True``
+
+    Examples
+    --------
+    >>> import exactff as ef
+    >>> box = ef.scenes.cornell_box(closed=True)
+    >>> F = compiled_form_factors(box, [278, 0.5, 279.6], [0, 1, 0], tolerance=1e-12)
+    >>> abs(F.sum() - 1) < 1e-12
+    True
+    """
+    st = stats if stats is not None else {}
+    p = np.asarray(point, dtype=float)
+    flat = flat_polygons(scene)
+    side, _ = engine_sides(flat, p)
+
+    def python_row():
+        return visible_form_factors(scene, p, normal, two_sided=two_sided, stats=st,
+                                    shortcuts=shortcuts, tolerance=tolerance, error=error)
+
+    if shortcuts and is_convex_enclosure(scene) and np.all(side >= 0):
+        return python_row()   # no occlusion: the unoccluded kernel with its ladder
+    tree, core = compiled_core(scene)
+    node_side = sides_of_point(tree.normals, tree.offsets, p).astype(np.int8)
+    F, E, counters = core.row(p, np.asarray(normal, dtype=float), node_side,
+                              side.astype(np.int8), bool(two_sided), bool(shortcuts),
+                              tol.SVBSP_BOX_BUDGET)
+    check_finite(F, E)
+    if tolerance is not None:
+        missed = np.flatnonzero(E > tolerance * F + tol.MP_VALUE_FLOOR)
+        if len(missed):
+            st.update(counters)
+            st["compiled_missed"] = int(len(missed))
+            out = python_row()
+            st["path"] = "compiled, then python"
+            return out
+    st.update(counters)
+    st["path"] = "compiled"
+    st["max_error_estimate"] = float(E.max(initial=0.0))
+    return (F, E) if error else F
