@@ -18,14 +18,17 @@ from test_visibility import layered_scenes
 NEUTRAL_ATOL = 1e-15
 # DESIGN 6: an occluded value within 1e-11 of the exact one
 OCCLUDED_ATOL = 1e-11
+# the compiled core's culling of subtrees and the Python engine's tiled clipper alike
+ENGINES = ("compiled", "python")
 
 
 def neutral_rows(scene, rows):
     for i in rows:
         p, n = scene.centroids[i], scene.normals[i]
-        on = Exact().point_form_factors(scene, p, n)
-        off = Exact(shortcuts=False).point_form_factors(scene, p, n)
-        assert_form_factors_close(on, off, rtol=0, atol=NEUTRAL_ATOL)
+        for engine in ENGINES:
+            on = Exact(engine=engine).point_form_factors(scene, p, n)
+            off = Exact(shortcuts=False, engine=engine).point_form_factors(scene, p, n)
+            assert_form_factors_close(on, off, rtol=0, atol=NEUTRAL_ATOL)
 
 
 @pytest.fixture(scope="module")
@@ -55,9 +58,10 @@ def test_neutral_with_coplanar_overlaps():
 def test_neutral_on_layered_scenes(polys, n):
     scene = ef.Scene.from_polygons(polys)
     p = np.zeros(3)
-    on = Exact().point_form_factors(scene, p, n)
-    off = Exact(shortcuts=False).point_form_factors(scene, p, n)
-    assert_form_factors_close(on, off, rtol=0, atol=NEUTRAL_ATOL)
+    for engine in ENGINES:
+        on = Exact(engine=engine).point_form_factors(scene, p, n)
+        off = Exact(shortcuts=False, engine=engine).point_form_factors(scene, p, n)
+        assert_form_factors_close(on, off, rtol=0, atol=NEUTRAL_ATOL)
 
 
 @given(case=enclosures())
@@ -94,7 +98,8 @@ def grid_behind_wall(k=8):
 def test_hidden_fragments_are_left_out_without_overlays():
     scene = grid_behind_wall()
     stats = {}
-    F = Exact().point_form_factors(scene, np.zeros(3), np.array([0, 0, 1.0]), stats=stats)
+    F = Exact(engine="python").point_form_factors(scene, np.zeros(3), np.array([0, 0, 1.0]),
+                                                  stats=stats)
     assert np.all(F[1:] == 0) and F[0] > 0
     # every grid square was hidden by a full tile or an exact predicate: no overlay
     left_out = stats["tile_rejections"] + stats["covered_rejections"]
@@ -107,7 +112,8 @@ def test_counters_do_not_fire_when_nothing_is_left_out():
     scene = grid_behind_wall()
     moved = ef.Scene.from_polygons([rect_xy(5, 6, 5, 6, 1.0)] + list(scene.polygons[1:]))
     stats = {}
-    F = Exact().point_form_factors(moved, np.zeros(3), np.array([0, 0, 1.0]), stats=stats)
+    F = Exact(engine="python").point_form_factors(moved, np.zeros(3), np.array([0, 0, 1.0]),
+                                                  stats=stats)
     U = ef.point_polygon_form_factors(np.zeros(3), [0, 0, 1], moved)
     assert_form_factors_close(F, U, rtol=0, atol=1e-15)
     assert stats["tile_rejections"] == 0 and stats["covered_rejections"] == 0
@@ -117,8 +123,8 @@ def test_counters_do_not_fire_when_nothing_is_left_out():
 def test_shortcuts_off_overlays_every_fragment():
     scene = grid_behind_wall()
     stats = {}
-    Exact(shortcuts=False).point_form_factors(scene, np.zeros(3), np.array([0, 0, 1.0]),
-                                              stats=stats)
+    Exact(shortcuts=False, engine="python").point_form_factors(
+        scene, np.zeros(3), np.array([0, 0, 1.0]), stats=stats)
     assert stats["tile_rejections"] == stats["covered_rejections"] == 0
     assert stats["differences"] >= 64
 
@@ -137,8 +143,8 @@ def test_tiny_polygon_through_a_tiny_gap_keeps_its_value(monkeypatch):
     gap = ef.point_polygon_form_factor(p, n, rect_xy(x0, x1, y0, y1, 1.0))
     from exactff import _tolerances as tol
     monkeypatch.setattr(tol, "CLIP_BATCH", 1)   # the polygon after the wall's merge
-    for shortcuts in (True, False):
-        F = Exact(shortcuts=shortcuts).point_form_factors(scene, p, n)
+    for shortcuts, engine in ((True, "python"), (False, "python"), (True, "compiled")):
+        F = Exact(shortcuts=shortcuts, engine=engine).point_form_factors(scene, p, n)
         # the visible part is the gap's central projection: the same form factor, to the
         # default tolerance (1e-12 relative)
         assert gap > 0 and abs(F[-1] - gap) <= 1e-12 * gap, (shortcuts, F[-1], gap)

@@ -49,6 +49,7 @@ LAYERS = {
     "exactff.visibility.bsp": 4,
     "exactff.visibility.coplanar": 4,
     "exactff.visibility.engine": 4,
+    "exactff.visibility.compiled": 4,
     # L5 area form factors and the methods
     "exactff.area": 5,
     "exactff.area.contour": 5,

@@ -259,8 +259,9 @@ def test_two_sided_receiving():
 # ---------------------------------------------------------------------------------------
 # shortcuts never change a result
 # ---------------------------------------------------------------------------------------
+@pytest.mark.parametrize("engine", ["compiled", "python"])
 @pytest.mark.parametrize("scene_name", ["box", "cornell", "furnished"])
-def test_shortcuts_are_neutral(scene_name):
+def test_shortcuts_are_neutral(scene_name, engine):
     scene = {"box": lambda: ef.scenes.subdivided_box(3),
              "cornell": lambda: ef.scenes.cornell_box(closed=True),
              "furnished": lambda: ef.scenes.furnished_box(2, FURNITURE[2])}[scene_name]()
@@ -269,17 +270,26 @@ def test_shortcuts_are_neutral(scene_name):
     for i in rng.choice(len(scene), size=min(8, len(scene)), replace=False):
         p, n = scene.centroids[i], scene.normals[i]
         st_on, st_off = {}, {}
-        on = Exact().point_form_factors(scene, p, n, stats=st_on)
-        off = Exact(shortcuts=False).point_form_factors(scene, p, n, stats=st_off)
+        on = Exact(engine=engine).point_form_factors(scene, p, n, stats=st_on)
+        off = Exact(shortcuts=False, engine=engine).point_form_factors(scene, p, n,
+                                                                       stats=st_off)
         assert_form_factors_close(on, off, rtol=0, atol=1e-13)
-        assert st_off["path"] == "clipper" and st_off["charts_full"] == 0
+        if engine == "python":
+            assert st_off["path"] == "clipper" and st_off["charts_full"] == 0
+        else:
+            assert st_off["path"] == "compiled" and st_off["subtrees_culled"] == 0
+            if st_on.get("subtrees_culled"):
+                # culled subtrees' fragments were never filtered
+                assert st_on["fragments"] < st_off["fragments"]
         used |= {k for k, v in st_on.items() if k != "path" and v} | {st_on["path"]}
     if scene_name == "box":
         assert "unoccluded" in used              # convex room: the clipper is skipped
-    else:
+    elif engine == "python":
         # work really left out (not flags): fragments hidden or kept whole without an
         # overlay, and edge-on fragments culled
         assert {"covered_rejections", "bbox_rejections", "culled_edge_on"} <= used
+    else:
+        assert "subtrees_culled" in used
 
 
 def test_convex_scene_detection():
@@ -292,9 +302,13 @@ def test_convex_scene_detection():
 def test_point_outside_convex_room_uses_clipper():
     box = ef.scenes.subdivided_box(2)
     st = {}
+    F = Exact(engine="python").point_form_factors(box, np.array([0.5, 0.5, -1.0]),
+                                                  np.array([0, 0, 1.0]), stats=st)
+    assert st["path"] == "clipper"
+    assert np.all(F == 0)   # from outside only back faces are seen
     F = Exact().point_form_factors(box, np.array([0.5, 0.5, -1.0]), np.array([0, 0, 1.0]),
                                    stats=st)
-    assert st["path"] == "clipper"
+    assert st["path"] == "compiled"
     assert np.all(F == 0)   # from outside only back faces are seen
 
 
@@ -304,8 +318,9 @@ def test_horizon_culling_is_neutral():
     below = [rect_xy(-1, 1, -1, 1, -1.0, facing_down=False), rect_xy(-3, 3, -3, 3, -0.2)]
     F1 = ef.form_factors(ef.Scene.from_polygons(above), [0, 0, 0], [0, 0, 1])
     st = {}
-    F2 = Exact().point_form_factors(ef.Scene.from_polygons(above + below), np.zeros(3),
-                                    np.array([0, 0, 1.0]), stats=st)
+    F2 = Exact(engine="python").point_form_factors(ef.Scene.from_polygons(above + below),
+                                                   np.zeros(3), np.array([0, 0, 1.0]),
+                                                   stats=st)
     assert st["culled_below_horizon"] == 2
     assert_form_factors_close(F2[:2], F1, rtol=0, atol=1e-14)
     assert np.all(F2[2:] == 0)

@@ -5,13 +5,17 @@ import numpy as np
 from .._tolerances import DEFAULT_RTOL
 from ..checks import as_receiver
 from ..scene import as_scene
-from ..visibility import visible_form_factors
+from ..visibility import compiled_form_factors, visible_form_factors
 from ._base import FormFactorMethod
 
-__all__ = ["Exact", "INTEGRATORS"]
+__all__ = ["Exact", "INTEGRATORS", "ENGINES"]
 
 #: How visible pieces can be integrated (both exact; DESIGN 2).
 INTEGRATORS = ("sector", "eq3")
+
+#: Which visibility engine computes a row: the compiled core (shadow-volume BSP tree,
+#: output-sensitive) or the Python engine (gnomonic charts and GEOS), kept as the oracle.
+ENGINES = ("compiled", "python")
 
 
 class Exact(FormFactorMethod):
@@ -36,6 +40,14 @@ class Exact(FormFactorMethod):
         with monotone-span splitting (one ring at a time in Python, no escalation).
         Both are exact; the sector form is the default because it is faster (see
         ``docs/benchmarks.md``) and escalates where double precision falls short.
+        Eq. 3 is integrated by the Python engine only.
+    engine : {"compiled", "python"} or None, default None
+        ``"compiled"``: the compiled core (:mod:`exactff.visibility.compiled`), whose
+        cost follows what a row sees; a row any of whose values misses the tolerance is
+        recomputed by the Python engine. ``"python"``: the Python engine
+        (:func:`exactff.visibility.visible_form_factors`), unchanged, the oracle the
+        compiled core is tested against. None: compiled, or Python with
+        ``integrator="eq3"``.
 
     Examples
     --------
@@ -47,14 +59,23 @@ class Exact(FormFactorMethod):
 
     name = "exact"
 
-    def __init__(self, *, tolerance=DEFAULT_RTOL, shortcuts=True, integrator="sector"):
+    def __init__(self, *, tolerance=DEFAULT_RTOL, shortcuts=True, integrator="sector",
+                 engine=None):
         if tolerance is not None and not (np.isfinite(tolerance) and tolerance > 0):
             raise ValueError(f"tolerance must be a positive number or None, got {tolerance!r}")
         if integrator not in INTEGRATORS:
             raise ValueError(f"integrator must be one of {INTEGRATORS}, got {integrator!r}")
+        if engine is None:
+            engine = "python" if integrator == "eq3" else "compiled"
+        if engine not in ENGINES:
+            raise ValueError(f"engine must be one of {ENGINES}, got {engine!r}")
+        if engine == "compiled" and integrator != "sector":
+            raise ValueError(f"engine='compiled' integrates with the sector form; "
+                             f"integrator={integrator!r} needs engine='python'")
         self.tolerance = tolerance
         self.shortcuts = bool(shortcuts)
         self.integrator = integrator
+        self.engine = engine
 
     def point_form_factors(self, scene, point, normal, *, two_sided=False, stats=None,
                            error=False):
@@ -62,10 +83,16 @@ class Exact(FormFactorMethod):
         :func:`exactff.visibility.visible_form_factors`)."""
         as_scene(scene)
         point, normal = as_receiver(point, normal)
+        if self.engine == "compiled":
+            return compiled_form_factors(scene, point, normal, two_sided=two_sided,
+                                         stats=stats, shortcuts=self.shortcuts,
+                                         tolerance=self.tolerance, error=error)
         return visible_form_factors(scene, point, normal, two_sided=two_sided, stats=stats,
                                     shortcuts=self.shortcuts, tolerance=self.tolerance,
                                     integrator=self.integrator, error=error)
 
     def __repr__(self):
         extra = "" if self.integrator == "sector" else f", integrator={self.integrator!r}"
+        if self.engine != "compiled" and self.integrator == "sector":
+            extra += f", engine={self.engine!r}"
         return f"Exact(tolerance={self.tolerance}, shortcuts={self.shortcuts}{extra})"

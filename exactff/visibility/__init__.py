@@ -3,13 +3,16 @@
 The engine (DESIGN 3): a BSP tree orders the fragments front to back from the point;
 the area-sorting clipper keeps the covered region in five gnomonic charts and cuts
 each new fragment's image against it; every visible piece is integrated exactly with
-the sector form. Shortcuts leave out what a row does not need; each is reported in
+the sector form. The compiled core (:mod:`exactff.visibility.compiled`) keeps the
+covered region as a shadow-volume BSP tree instead, and is the default. Shortcuts leave out what a row does not need; each is reported in
 ``stats`` and tested to be neutral.
 """
 
+from .compiled import compiled_core, compiled_form_factors, convex_pieces
 from .bsp import BSPTree, build_bsp, coplanar_overlaps, front_to_back, scene_bsp
 from .coplanar import plane_overlaps
 from .engine import is_convex_enclosure, visible_form_factors, visible_graph
 
 __all__ = ["visible_form_factors", "visible_graph", "is_convex_enclosure", "scene_bsp", "build_bsp",
-           "front_to_back", "coplanar_overlaps", "plane_overlaps", "BSPTree"]
+           "front_to_back", "coplanar_overlaps", "plane_overlaps", "BSPTree",
+           "compiled_form_factors", "compiled_core", "convex_pieces"]
