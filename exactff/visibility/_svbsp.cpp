@@ -51,11 +51,111 @@ inline V3 cross(const V3& a, const V3& b) {
 }
 inline R norm(const V3& a) { return std::sqrt(dot(a, a)); }
 
+// ---- exact signs of float input (Shewchuk's expansion arithmetic), for the cases the
+// band leaves open: a vertex of the input and a plane through p and two input points
+// (or the horizon), whose float sign is not sure
+using Expansion = std::vector<double>;
+
+inline void two_sum(double a, double b, double& x, double& y) {
+    x = a + b;
+    double bv = x - a;
+    y = (a - (x - bv)) + (b - bv);
+}
+
+// e + b, e nonoverlapping increasing (Shewchuk's grow-expansion, zeros dropped)
+Expansion grow(const Expansion& e, double b) {
+    Expansion h;
+    h.reserve(e.size() + 1);
+    double q = b;
+    for (double ei : e) {
+        double x, y;
+        two_sum(q, ei, x, y);
+        if (y != 0) h.push_back(y);
+        q = x;
+    }
+    if (q != 0 || h.empty()) h.push_back(q);
+    return h;
+}
+
+Expansion add(const Expansion& e, const Expansion& f) {
+    Expansion h = e;
+    for (double fi : f) h = grow(h, fi);
+    return h;
+}
+
+Expansion scale(const Expansion& e, double b) {
+    Expansion h{0.0};
+    for (double ei : e) {
+        double x = ei * b;
+        double y = std::fma(ei, b, -x);
+        h = grow(grow(h, y), x);
+    }
+    return h;
+}
+
+Expansion mul(const Expansion& e, const Expansion& f) {
+    Expansion h{0.0};
+    for (double fi : f) h = add(h, scale(e, fi));
+    return h;
+}
+
+Expansion neg(Expansion e) {
+    for (double& x : e) x = -x;
+    return e;
+}
+
+int sign(const Expansion& e) {
+    for (auto it = e.rbegin(); it != e.rend(); ++it)
+        if (*it != 0) return *it > 0 ? 1 : -1;
+    return 0;
+}
+
+Expansion diff(double a, double b) {  // a - b exactly
+    double x, y;
+    two_sum(a, -b, x, y);
+    return y != 0 ? Expansion{y, x} : Expansion{x};
+}
+
+// det(a - p, b - a, x - p): the side of x of the plane through p, a, b
+Expansion orient_exact(const double* p, const double* a, const double* b, const double* x) {
+    Expansion A[3], B[3], C[3];
+    for (int i = 0; i < 3; ++i) {
+        A[i] = diff(a[i], p[i]);
+        B[i] = diff(b[i], a[i]);
+        C[i] = diff(x[i], p[i]);
+    }
+    Expansion m0 = add(mul(B[1], C[2]), neg(mul(B[2], C[1])));
+    Expansion m1 = add(mul(B[2], C[0]), neg(mul(B[0], C[2])));
+    Expansion m2 = add(mul(B[0], C[1]), neg(mul(B[1], C[0])));
+    return add(add(mul(A[0], m0), mul(A[1], m1)), mul(A[2], m2));
+}
+
+// n . (x - p)
+Expansion dot_exact(const double* n, const double* p, const double* x) {
+    Expansion s{0.0};
+    for (int i = 0; i < 3; ++i) s = add(s, scale(diff(x[i], p[i]), n[i]));
+    return s;
+}
+
+// a plane through p as the input defines it: through two input points (kind 0, with
+// (a - p) x (b - a) its orientation) or with normal n (kind 1, the horizon)
+struct ExactPlane {
+    int kind;
+    double a[3], b[3];
+    V3 m;       // its computed normal, in its own orientation
+};
+
 struct Vertex {
     V3 w;       // position in the world
     V3 v;       // w - p: its direction from p (not normalised)
     R length;   // |v|
     R err;      // bound on the error of its direction, radians
+    int64_t id; // index of an input vertex (its coordinates exact), or -1: computed
+    int64_t on_edge, on_plane;  // a computed vertex where input edge on_edge (the
+                                // input vertex it starts from) crosses exact plane
+                                // on_plane, or -1
+    int64_t edge;  // the edge to the next vertex: on input edge id (>= 0: the input
+                   // vertex it starts from) or on exact plane -1 - k
 };
 using Piece = std::vector<Vertex>;
 
@@ -64,6 +164,8 @@ struct Plane {  // m . x = 0 through p; positive side first
     R mnorm;
     R err;      // bound on its tilt, radians
     int pos, neg;
+    int exact;  // the exact plane it is (ExactPlane index)
+    int orient; // +1 or -1: m's orientation against the exact plane's
 };
 
 struct Constants {
@@ -129,24 +231,26 @@ class Core {
             throw std::invalid_argument("node_side must have one entry per BSP node");
         if (source_side.size() != n_sources_)
             throw std::invalid_argument("source_side must have one entry per polygon");
-        py::array_t<double> F(n_sources_), E(n_sources_);
+        py::array_t<double> F(n_sources_), E(n_sources_), B(n_sources_);
         const double* pp = point.data();
         const double* pn = normal.data();
         const int8_t* ns = node_side.data();
         const int8_t* ss = source_side.data();
         double* pF = F.mutable_data();
         double* pE = E.mutable_data();
+        double* pB = B.mutable_data();
         RowStats st;
         {
             py::gil_scoped_release release;
-            std::vector<R> f(n_sources_, 0), e(n_sources_, 0);
-            run(pp, pn, ns, ss, two_sided, cull, box_budget, f, e, st);
+            std::vector<R> f(n_sources_, 0), e(n_sources_, 0), b(n_sources_, 0);
+            run(pp, pn, ns, ss, two_sided, cull, box_budget, f, e, b, st);
             const R half_ulp = std::numeric_limits<double>::epsilon() / 2;
             for (int64_t i = 0; i < n_sources_; ++i) {
                 pF[i] = static_cast<double>(f[i]);
                 // the bound, and the rounding of the value to double
                 pE[i] = static_cast<double>(e[i] + half_ulp * std::fabs(f[i])) *
                         (1 + 4 * std::numeric_limits<double>::epsilon());
+                pB[i] = static_cast<double>(b[i]) * (1 + 4 * std::numeric_limits<double>::epsilon());
             }
         }
         py::dict d;
@@ -158,7 +262,7 @@ class Core {
         d["fragments_culled"] = st.fragments_culled;
         d["box_tests"] = st.box_tests;
         d["shadow_planes"] = st.shadow_planes;
-        return py::make_tuple(F, E, d);
+        return py::make_tuple(F, E, B, d);
     }
 
   private:
@@ -206,7 +310,8 @@ class Core {
         }
     }
 
-    // side of a direction against a plane: +1, -1, or 0 within the band
+    // side of a direction against a plane, conservatively: +1, -1, or 0 where the
+    // sign is not sure (within the rounding of d and the plane's and vertex's errors)
     static int side(const Plane& P, const Vertex& x, const Constants& K, R* d_out) {
         R d = dot(P.m, x.v);
         *d_out = d;
@@ -214,6 +319,34 @@ class Core {
         if (d > band) return 1;
         if (d < -band) return -1;
         return 0;
+    }
+
+    // an exact plane's value at a point of the input
+    static Expansion exact_value(const ExactPlane& X, const double* p, const double* x) {
+        return X.kind == 0 ? orient_exact(p, X.a, X.b, x) : dot_exact(X.a, p, x);
+    }
+
+    // whether a vertex lies exactly on an exact plane: an input vertex, or the crossing
+    // of an input edge a -> b with an exact plane P, x = a + t (b - a) with
+    // t = P(a) / (P(a) - P(b)): Q(x) = (Q(a) P(b) - P(a) Q(b)) / (P(b) - P(a)).
+    // False where it cannot be told (the vertex is then charged its sliver).
+    bool exactly_on(const std::vector<ExactPlane>& xp, int k, const double* p, int64_t f,
+                    const Vertex& u) const {
+        const ExactPlane& Q = xp[k];
+        if (u.id >= 0) return sign(exact_value(Q, p, &V_[3 * u.id])) == 0;
+        if (u.on_edge < 0) return false;
+        if (u.on_plane == k) return true;
+        const int64_t ia = u.on_edge;
+        const int64_t ib = start_[f] + (ia - start_[f] + 1) % count_[f];
+        const ExactPlane& P = xp[u.on_plane];
+        Expansion Pa = exact_value(P, p, &V_[3 * ia]), Pb = exact_value(P, p, &V_[3 * ib]);
+        Expansion Qa = exact_value(Q, p, &V_[3 * ia]), Qb = exact_value(Q, p, &V_[3 * ib]);
+        return sign(add(mul(Qa, Pb), neg(mul(Pa, Qb)))) == 0;
+    }
+
+    // arc length between two directions
+    static R arc(const Vertex& a, const Vertex& b) {
+        return std::atan2(norm(cross(a.v, b.v)), dot(a.v, b.v));
     }
 
     // is the conic hull (from p) of the box's corners wholly in covered leaves?
@@ -224,7 +357,7 @@ class Core {
             V3 v{(i & 1 ? hi_[3 * k] : lo_[3 * k]) - p.x,
                  (i & 2 ? hi_[3 * k + 1] : lo_[3 * k + 1]) - p.y,
                  (i & 4 ? hi_[3 * k + 2] : lo_[3 * k + 2]) - p.z};
-            c[i] = {v, v, norm(v), 4 * K_.eps};
+            c[i] = {v, v, norm(v), 4 * K_.eps, -1, -1, -1, -1};
         }
         // p must be outside the box (with a margin): the hull is then a pointed cone
         bool inside = true;
@@ -280,15 +413,18 @@ class Core {
 
     void run(const double* pp, const double* pn, const int8_t* node_side,
              const int8_t* source_side, bool two_sided, bool cull, int64_t budget,
-             std::vector<R>& F, std::vector<R>& E, RowStats& st) const {
+             std::vector<R>& F, std::vector<R>& E, std::vector<R>& B, RowStats& st) const {
         const V3 p{pp[0], pp[1], pp[2]};
         V3 n{pn[0], pn[1], pn[2]};
         R nl = norm(n);
         n = {n.x / nl, n.y / nl, n.z / nl};
         std::vector<Plane> sv;
         sv.reserve(1024);
+        std::vector<ExactPlane> xp;
+        xp.reserve(1024);
         // the root: the horizon, covered below
-        sv.push_back({n, 1, 2 * K_.eps, OUT, IN});
+        sv.push_back({n, 1, 2 * K_.eps, OUT, IN, 0, 1});
+        xp.push_back({1, {pn[0], pn[1], pn[2]}, {0, 0, 0}, n});
         if (nodes() == 0) return;
         struct Item {
             int64_t node;
@@ -311,7 +447,8 @@ class Core {
             if (it.emit) {
                 const auto& list = near_front ? here_front_ : here_behind_;
                 for (int64_t j = here_start_[k]; j < here_start_[k + 1]; ++j)
-                    process(list[j], p, n, source_side, two_sided, sv, work, F, E, st);
+                    process(list[j], pp, p, n, source_side, two_sided, sv, xp, work, F, E,
+                            B, st);
                 continue;
             }
             if (cull && size_[k] >= 4) {
@@ -331,9 +468,10 @@ class Core {
     }
 
     template <class W>
-    void process(int64_t f, const V3& p, const V3& n, const int8_t* source_side,
-                 bool two_sided, std::vector<Plane>& sv, std::vector<W>& work,
-                 std::vector<R>& F, std::vector<R>& E, RowStats& st) const {
+    void process(int64_t f, const double* pp, const V3& p, const V3& n,
+                 const int8_t* source_side, bool two_sided, std::vector<Plane>& sv,
+                 std::vector<ExactPlane>& xp, std::vector<W>& work, std::vector<R>& F,
+                 std::vector<R>& E, std::vector<R>& B, RowStats& st) const {
         const int64_t src = source_[f];
         const int s = source_side[src];
         if (s == 0) return;  // seen edge-on: no image, hides nothing
@@ -344,7 +482,7 @@ class Core {
         for (int64_t i = start_[f]; i < start_[f] + count_[f]; ++i) {
             V3 w{V_[3 * i], V_[3 * i + 1], V_[3 * i + 2]};
             V3 v{w.x - p.x, w.y - p.y, w.z - p.z};
-            q.push_back({w, v, norm(v), 2 * K_.eps});
+            q.push_back({w, v, norm(v), 2 * K_.eps, i, -1, -1, i});
         }
         work.clear();
         work.push_back({std::move(q), 0, true});
@@ -372,39 +510,41 @@ class Core {
                     F[src] += val;
                     E[src] += bnd;
                 }
-                insert_shadow(w.q, w.plane, w.positive, sv, st);
+                insert_shadow(w.q, f, w.plane, w.positive, sv, xp, st);
                 continue;
             }
             const Plane P = sv[node];
-            std::vector<int> sg(w.q.size());
-            std::vector<R> d(w.q.size());
+            const size_t m = w.q.size();
+            std::vector<int> sg(m);
+            std::vector<R> d(m);
             bool pos = false, neg = false;
-            for (size_t i = 0; i < w.q.size(); ++i) {
+            for (size_t i = 0; i < m; ++i) {
+                // a vertex within the band is taken as on the plane (it goes with the
+                // others); it may lie on the other side by up to the band: the sliver
+                // along its two edges is charged to the piece
                 sg[i] = side(P, w.q[i], K_, &d[i]);
                 pos |= sg[i] > 0;
                 neg |= sg[i] < 0;
+                if (sg[i] == 0 && receives &&
+                    !exactly_on(xp, P.exact, pp, f, w.q[i])) {
+                    const Vertex& u = w.q[i];
+                    R width = K_.band + P.err + u.err;
+                    R adjacent = arc(w.q[(i + m - 1) % m], u) + arc(u, w.q[(i + 1) % m]);
+                    B[src] += adjacent * width / 3.14159265358979323846264338327950288L;
+                }
             }
-            if (!neg) {  // in front (or wholly in the band: either side)
-                for (size_t i = 0; i < w.q.size(); ++i)
-                    if (sg[i] == 0) on_plane(w.q[i], P);
+            if (!neg) {  // in front (or in the plane: either side)
                 work.push_back({std::move(w.q), node, true});
                 continue;
             }
             if (!pos) {
-                for (size_t i = 0; i < w.q.size(); ++i)
-                    if (sg[i] == 0) on_plane(w.q[i], P);
                 work.push_back({std::move(w.q), node, false});
                 continue;
             }
             ++st.splits;
-            Piece a, b;
-            const size_t m = w.q.size();
+            std::vector<Vertex> cut(m);
             for (size_t i = 0; i < m; ++i) {
                 const size_t j = (i + 1) % m;
-                Vertex u = w.q[i];
-                if (sg[i] == 0) on_plane(u, P);
-                if (sg[i] >= 0) a.push_back(u);
-                if (sg[i] <= 0) b.push_back(u);
                 if ((sg[i] > 0 && sg[j] < 0) || (sg[i] < 0 && sg[j] > 0)) {
                     const Vertex& x = w.q[i];
                     const Vertex& y = w.q[j];
@@ -418,24 +558,40 @@ class Core {
                     // plus its ends' and the plane's errors carried over
                     R err = P.err + K_.split * K_.eps * (x.length + y.length) / l +
                             std::max(x.err * x.length, y.err * y.length) / l;
-                    Vertex c{wv, v, l, err};
-                    a.push_back(c);
-                    b.push_back(c);
+                    cut[i] = {wv, v, l, err, -1, -1, -1, -1};
+                    if (x.edge >= 0) {  // on an input edge: exactly known
+                        cut[i].on_edge = x.edge;
+                        cut[i].on_plane = P.exact;
+                    }
                 }
             }
-            work.push_back({std::move(b), node, false});
-            work.push_back({std::move(a), node, true});
+            // the two parts, each vertex with the edge to its successor: the input edge
+            // it was on, or the cut along this plane
+            const int64_t cut_edge = -1 - static_cast<int64_t>(P.exact);
+            auto part = [&](int sigma) {
+                Piece out;
+                for (size_t i = 0; i < m; ++i) {
+                    const size_t j = (i + 1) % m;
+                    const int si = sigma * sg[i], sj = sigma * sg[j];
+                    if (si >= 0) {
+                        out.push_back(w.q[i]);
+                        if (si == 0 && sj < 0) out.back().edge = cut_edge;
+                    }
+                    if ((si > 0 && sj < 0) || (si < 0 && sj > 0)) {
+                        out.push_back(cut[i]);
+                        out.back().edge = si > 0 ? cut_edge : w.q[i].edge;
+                    }
+                }
+                return out;
+            };
+            work.push_back({part(-1), node, false});
+            work.push_back({part(1), node, true});
         }
     }
 
-    // a vertex classified as on a plane within the band: its position is kept, which
-    // can misplace the boundary by the band (and the plane's own error)
-    void on_plane(Vertex& u, const Plane& P) const {
-        u.err += K_.band + P.err;
-    }
-
     // replace the free leaf reached by (plane, branch) with the piece's shadow volume
-    void insert_shadow(const Piece& q, int plane, bool positive, std::vector<Plane>& sv,
+    void insert_shadow(const Piece& q, int64_t f, int plane, bool positive,
+                       std::vector<Plane>& sv, std::vector<ExactPlane>& xp,
                        RowStats& st) const {
         const size_t m = q.size();
         if (m < 3) return;
@@ -455,12 +611,30 @@ class Core {
             V3 mm = cross(a.v, e);
             R ml = norm(mm);
             if (!(ml > 0)) continue;  // an edge through p, or a repeated vertex
+            // the exact plane it is: its input edge's, or the plane it was cut along
+            int exact;
+            int orient;
+            if (a.edge >= 0) {
+                const int64_t ia = a.edge;
+                const int64_t ib = start_[f] + (ia - start_[f] + 1) % count_[f];
+                exact = static_cast<int>(xp.size());
+                ExactPlane X{0, {V_[3 * ia], V_[3 * ia + 1], V_[3 * ia + 2]},
+                             {V_[3 * ib], V_[3 * ib + 1], V_[3 * ib + 2]}, mm};
+                xp.push_back(X);
+                orient = 1;
+            } else {
+                exact = static_cast<int>(-1 - a.edge);
+                orient = dot(mm, xp[exact].m) >= 0 ? 1 : -1;
+            }
             R dc = dot(mm, c);
-            if (dc < 0) mm = {-mm.x, -mm.y, -mm.z};
+            if (dc < 0) {
+                mm = {-mm.x, -mm.y, -mm.z};
+                orient = -orient;
+            }
             // its tilt: its end points' errors, and the rounding of the cross product
             // of two rounded vectors relative to its length
             R err = std::max(a.err, b.err) + 8 * K_.eps * a.length * norm(e) / ml;
-            chain.push_back({mm, ml, err, OUT, OUT});
+            chain.push_back({mm, ml, err, OUT, OUT, exact, orient});
         }
         if (chain.size() < 3) return;  // a sliver: hides nothing to speak of
         const int base = static_cast<int>(sv.size());

@@ -116,11 +116,17 @@ def compiled_form_factors(scene, point, normal, *, two_sided=False, stats=None,
 
     The same values as :func:`exactff.visibility.visible_form_factors` (the Python
     engine, which stays as the oracle) within the two bounds. The compiled row's bound
-    of each value is the rounding of its pieces' sector sums plus the error of their
-    vertices' directions times their edges' arc lengths (``docs/explanation/visibility.md``).
-    Where a receiving polygon's bound exceeds ``tolerance`` times its value, the row is
-    recomputed by the Python engine, which refines and escalates (``stats["path"]``
-    then says ``"compiled, then python"``).
+    of each value is the rounding of its pieces' sector sums, the error of their
+    vertices' directions times their edges' arc lengths, and the slivers that the
+    band's decisions may misplace: a vertex within rounding of a shadow plane whose
+    side exact arithmetic cannot settle (a vertex computed from computed ones) is taken
+    as on it, and its two edges' arc lengths times the band are added
+    (``docs/explanation/visibility.md``). Where the first two exceed ``tolerance``
+    times the value, the row is recomputed by the Python engine, which refines and
+    escalates (``stats["path"]`` then says ``"compiled, then python"``). The band's
+    slivers (``stats["max_band_bound"]``, about 1e-18 where they occur) are not
+    checked against the tolerance: the Python engine's topology has the same
+    decisions, and its bound leaves them out.
 
     Parameters
     ----------
@@ -168,11 +174,14 @@ def compiled_form_factors(scene, point, normal, *, two_sided=False, stats=None,
         return python_row()   # no occlusion: the unoccluded kernel with its ladder
     tree, core = compiled_core(scene)
     node_side = sides_of_point(tree.normals, tree.offsets, p).astype(np.int8)
-    F, E, counters = core.row(p, np.asarray(normal, dtype=float), node_side,
-                              side.astype(np.int8), bool(two_sided), bool(shortcuts),
-                              tol.SVBSP_BOX_BUDGET)
+    F, E, band, counters = core.row(p, np.asarray(normal, dtype=float), node_side,
+                                    side.astype(np.int8), bool(two_sided), bool(shortcuts),
+                                    tol.SVBSP_BOX_BUDGET)
     check_finite(F, E)
+    check_finite(band)
     if tolerance is not None:
+        # the rounding and geometry of the pieces, which the Python engine's refinement
+        # and escalation narrow; the band's slivers (below) no engine here narrows
         missed = np.flatnonzero(E > tolerance * F + tol.MP_VALUE_FLOOR)
         if len(missed):
             st.update(counters)
@@ -182,5 +191,7 @@ def compiled_form_factors(scene, point, normal, *, two_sided=False, stats=None,
             return out
     st.update(counters)
     st["path"] = "compiled"
+    E = E + band
     st["max_error_estimate"] = float(E.max(initial=0.0))
+    st["max_band_bound"] = float(band.max(initial=0.0))
     return (F, E) if error else F
