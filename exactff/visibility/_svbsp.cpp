@@ -525,12 +525,16 @@ class Core {
                 sg[i] = side(P, w.q[i], K_, &d[i]);
                 pos |= sg[i] > 0;
                 neg |= sg[i] < 0;
-                if (sg[i] == 0 && receives &&
-                    !exactly_on(xp, P.exact, pp, f, w.q[i])) {
+                if (sg[i] == 0 && !exactly_on(xp, P.exact, pp, f, w.q[i])) {
                     const Vertex& u = w.q[i];
                     R width = K_.band + P.err + u.err;
                     R adjacent = arc(w.q[(i + m - 1) % m], u) + arc(u, w.q[(i + 1) % m]);
-                    B[src] += adjacent * width / 3.14159265358979323846264338327950288L;
+                    if (receives)
+                        B[src] += adjacent * width / 3.14159265358979323846264338327950288L;
+                    // the sliver, on whichever side it truly is, also hides or uncovers
+                    // what lies behind it near this plane: the plane's own bound widens
+                    // by it for every later piece classified or cut here
+                    sv[node].err = std::max(sv[node].err, width);
                 }
             }
             if (!neg) {  // in front (or in the plane: either side)
