@@ -24,7 +24,7 @@ from .. import _tolerances as tol
 from ..geometry import receiver_frame, to_local
 from ..checks import as_receiver
 from ..kernel import flat_polygons
-from ..predicates import plane_sides, tie_priority
+from ..predicates import plane_sides, polygon_coplanar_bands, tie_priority
 from ..prepared import prepared
 from ..rings import padded_buckets
 from ..scene import as_scene
@@ -111,6 +111,12 @@ def _chart_of(D):
     return chart, u, v
 
 
+def _scene_bands(scene):
+    """The near-coplanar band of each polygon's plane over the polygon (cached)."""
+    return prepared(scene).get("coplanar_bands", lambda s: polygon_coplanar_bands(
+        s.vertices, s.offsets, s.normals, s.plane_offsets))
+
+
 def _polygon_buckets(scene):
     """The scene's polygons padded bucket by bucket of vertex counts (cached)."""
     return prepared(scene).get("padded_buckets", lambda s: padded_buckets(s.polygons))
@@ -131,7 +137,10 @@ class ZBufferRow:
         Local unit normals and ``n . (c - p)``: the depth along a direction d is
         ``dl / (nl . d)``.
     band, prio : ndarray
-        Depth-tie band and priority (:func:`exactff.predicates.tie_priority`).
+        Depth-tie band (the near-coplanar band of each polygon's plane,
+        :func:`exactff.predicates.polygon_coplanar_bands`, the BSP tree's, plus the
+        rounding of ``n . c`` in the local frame) and priority
+        (:func:`exactff.predicates.tie_priority`).
     """
 
     def __init__(self, scene, point, normal):
@@ -157,11 +166,13 @@ class ZBufferRow:
         self.nl = flat.normals[ids] @ R.T
         rel = flat.centroids[ids] - p
         self.dl = np.einsum("ij,ij->i", flat.normals[ids], rel)  # n . (c - p)
-        # depth ties: a polygon ties with the nearest hit X when X lies in its plane to
-        # the rounding of n . (X - c) (the BSP's coplanar band; unit normals)
-        self.band = tol.BSP_COPLANAR_ULPS * tol.EPS * (
-            np.linalg.norm(rel, axis=1) + np.linalg.norm(flat.centroids[ids], axis=1)
-            + np.linalg.norm(p))
+        # depth ties: a polygon ties with the nearest hit X when X lies in its plane
+        # within the near-coplanar band of the input magnitudes (the BSP tree's, one
+        # definition: exactff.predicates.coplanar_band), up to the rounding of
+        # n . (X - c) in the local frame (ZBUFFER_ROUNDING_ULPS; the hit point's part
+        # is added per cell, _ties)
+        self.band = (_scene_bands(scene)[ids]
+                     + tol.ZBUFFER_ROUNDING_ULPS * tol.EPS * np.linalg.norm(rel, axis=1))
         self.prio = tie_priority(side)[ids]
 
     def hits(self, best):
@@ -208,11 +219,18 @@ def nearest_polygons(scene, point, normal, directions):
     return z.hits(best)
 
 
+def _hit_rounding(t, D):
+    """The rounding of a hit point ``t D`` in the depth-tie test (local frame)."""
+    return tol.ZBUFFER_ROUNDING_ULPS * tol.EPS * np.abs(t) * np.linalg.norm(D, axis=1)
+
+
 def _ties(src, cell, t_near, D, nl, dl, band):
-    """Whether polygon ``src`` passes through the hit point ``t_near D[cell]``."""
+    """Whether polygon ``src`` passes through the hit point ``t_near D[cell]``: the
+    point lies in its plane within the near-coplanar band (``band``, the BSP tree's)
+    and the rounding of the hit point."""
     X = t_near[:, None] * D[cell]
     r = np.einsum("ij,ij->i", nl[src], X) - dl[src]
-    return np.abs(r) <= band[src] + tol.BSP_COPLANAR_ULPS * tol.EPS * np.abs(t_near)
+    return np.abs(r) <= band[src] + _hit_rounding(t_near, D[cell])
 
 
 def _cell_grid(cu, cv, side):
@@ -332,7 +350,7 @@ def resolve_depths(cell, src, D, nl, dl, band, prio, best_t, best):
     tied = t == t_near
     # the tie test only where it can pass: n . (t_near d) - n . c = (t_near - t) (n . d)
     # up to rounding, within four times the test's own band
-    slack = 4.0 * (band[src] + tol.BSP_COPLANAR_ULPS * tol.EPS * np.abs(t_near)
+    slack = 4.0 * (band[src] + _hit_rounding(t_near, D[cell])
                    + tol.EPS * (np.abs(t_near) * np.linalg.norm(D[cell], axis=1) + np.abs(dl[src])))
     k = np.flatnonzero(~tied & (np.abs(t_near - t) * np.abs(den) <= slack))
     tied[k] = _ties(src[k], cell[k], t_near[k], D, nl, dl, band)
