@@ -11,7 +11,7 @@ from ._tolerances import BSP_COPLANAR_ULPS, EPS, ON_PLANE_ULPS, PLANE_SIDE_ULPS
 
 __all__ = ["side_of_plane", "gamma", "tie_priority", "exact_side", "polygon_side",
            "plane_distances", "plane_sides", "sides_of_point", "coplanar_band",
-           "polygon_coplanar_bands", "coplanar_band_sides",
+           "polygon_coplanar_bands", "coplanar_pairs", "coplanar_band_sides",
            "engine_sides", "collinear", "in_plane_band", "orient2d", "polygons_apart"]
 
 
@@ -245,6 +245,50 @@ def polygon_coplanar_bands(V, offsets, N, D):
     owner = np.repeat(np.arange(len(N)), np.diff(offsets))
     return np.maximum.reduceat(coplanar_band(V, N[owner], D[owner], rows=True),
                                offsets[:-1])
+
+
+def coplanar_pairs(V, offsets, N, D, a, b):
+    """Pair by pair: whether polygons ``a[k]`` and ``b[k]`` are coplanar by the BSP
+    tree's rule: every vertex of one lies within the near-coplanar band
+    (:func:`coplanar_band`) of the other's plane. Such a pair is one depth tie over
+    its whole overlap (:func:`tie_priority` decides); any other pair is ordered by its
+    geometry, as the BSP tree puts a polygon with a vertex beyond the band wholly on
+    that vertex's side.
+
+    Parameters
+    ----------
+    V : ndarray of shape (M, 3)
+        Vertices of all polygons, concatenated.
+    offsets : ndarray of shape (P + 1,)
+        Polygon ``i`` is ``V[offsets[i]:offsets[i + 1]]``.
+    N, D : ndarray of shape (P, 3) and (P,)
+        The polygons' planes ``dot(N[i], x) = D[i]``.
+    a, b : ndarray of shape (K,), int
+        The pairs.
+
+    Examples
+    --------
+    >>> sq = lambda z: [[0, 0, z], [0, 1, z], [1, 1, z], [1, 0, z]]
+    >>> V = np.array(sq(15.0) + sq(15.0 - 1e-13) + sq(15.0 - 3.5e-13))
+    >>> N = np.array([[0, 0, -1.0]] * 3); D = -V[[0, 4, 8], 2]
+    >>> coplanar_pairs(V, np.array([0, 4, 8, 12]), N, D, np.array([0, 0]), np.array([1, 2])).tolist()
+    [True, False]
+    """
+    a = np.asarray(a, dtype=int).reshape(-1)
+    b = np.asarray(b, dtype=int).reshape(-1)
+    if len(a) == 0:
+        return np.zeros(0, dtype=bool)
+
+    def within(p, q):           # every vertex of q in the band of p's plane
+        cnt = np.diff(offsets)[q]
+        first = np.cumsum(cnt) - cnt
+        owner = np.repeat(np.arange(len(q)), cnt)
+        X = V[np.repeat(offsets[q], cnt) + np.arange(int(cnt.sum())) - np.repeat(first, cnt)]
+        n, d = N[p][owner], D[p][owner]
+        ok = np.abs(np.einsum("ij,ij->i", X, n) - d) <= coplanar_band(X, n, d, rows=True)
+        return np.logical_and.reduceat(ok, first)
+
+    return within(a, b) | within(b, a)
 
 
 def coplanar_band_sides(V, N, D):

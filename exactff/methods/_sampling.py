@@ -24,7 +24,7 @@ from .. import _tolerances as tol
 from ..geometry import receiver_frame, to_local
 from ..checks import as_receiver
 from ..kernel import flat_polygons
-from ..predicates import plane_sides, polygon_coplanar_bands, tie_priority
+from ..predicates import coplanar_pairs, plane_sides, polygon_coplanar_bands, tie_priority
 from ..prepared import prepared
 from ..rings import padded_buckets
 from ..scene import as_scene
@@ -141,6 +141,14 @@ class ZBufferRow:
         :func:`exactff.predicates.polygon_coplanar_bands`, the BSP tree's, plus the
         rounding of ``n . c`` in the local frame) and priority
         (:func:`exactff.predicates.tie_priority`).
+
+    Methods
+    -------
+    coplanar(i, j)
+        Pair by pair (live indices): whether the polygons are coplanar by the BSP
+        tree's rule (:func:`exactff.predicates.coplanar_pairs`): the depth buffer's
+        ties, so that a face flush with another is a tie over the whole overlap or
+        nowhere, as in the exact engine.
     """
 
     def __init__(self, scene, point, normal):
@@ -174,6 +182,13 @@ class ZBufferRow:
         self.band = (_scene_bands(scene)[ids]
                      + tol.ZBUFFER_ROUNDING_ULPS * tol.EPS * np.linalg.norm(rel, axis=1))
         self.prio = tie_priority(side)[ids]
+        self._scene = scene
+
+    def coplanar(self, i, j):
+        """Whether live polygons ``i[k]`` and ``j[k]`` are coplanar (the BSP's rule)."""
+        s = self._scene
+        return coplanar_pairs(s.vertices, s.offsets, s.normals, s.plane_offsets,
+                              self.ids[i], self.ids[j])
 
     def hits(self, best):
         """Scene indices of the polygons shown (-1: none) from live indices."""
@@ -215,7 +230,7 @@ def nearest_polygons(scene, point, normal, directions):
             if len(live_c) == 0:
                 continue
             _zbuffer_chart(cells, u[cells], v[cells], grid, g_ids[live_c], UV, cl, D, nl,
-                           dl, band, prio, best_t, best)
+                           dl, band, prio, best_t, best, coplanar=z.coplanar)
     return z.hits(best)
 
 
@@ -246,7 +261,8 @@ def _cell_grid(cu, cv, side):
     return nb, v_lo, order, starts
 
 
-def _zbuffer_chart(cells, cu, cv, grid, live, UV, cl, D, nl, dl, band, prio, best_t, best):
+def _zbuffer_chart(cells, cu, cv, grid, live, UV, cl, D, nl, dl, band, prio, best_t, best,
+                   coplanar=None):
     """Nearest polygon per cell within one chart (updates best_t / best in place).
 
     ``grid`` is the chart's :func:`_cell_grid`. ``best_t`` is the depth of the nearest
@@ -318,16 +334,20 @@ def _zbuffer_chart(cells, cu, cv, grid, live, UV, cl, D, nl, dl, band, prio, bes
                 ux = a[:, 0] + (vv - a[:, 1]) * (c[:, 0] - a[:, 0]) / (c[:, 1] - a[:, 1])
             inside ^= straddles & (uu < ux)
         poly, cell_local = poly[inside], cell_local[inside]
-        resolve_depths(cells[cell_local], live[poly], D, nl, dl, band, prio, best_t, best)
+        resolve_depths(cells[cell_local], live[poly], D, nl, dl, band, prio, best_t, best,
+                       coplanar=coplanar)
 
 
-def resolve_depths(cell, src, D, nl, dl, band, prio, best_t, best):
+def resolve_depths(cell, src, D, nl, dl, band, prio, best_t, best, coplanar=None):
     """The depth buffer: merge candidate (cell, polygon) pairs into ``best_t`` (depth of
     the nearest hit per cell) and ``best`` (the polygon shown), in place.
 
     The depth along a cell's direction ``D[cell]`` (any length) is
-    ``t = (n . (c - p)) / (n . D)``; of the polygons through the nearest hit point (depth
-    ties: the hit point in their planes to rounding), the one of lowest ``prio``."""
+    ``t = (n . (c - p)) / (n . D)``; of the polygons tied with the nearest hit, the one
+    of lowest ``prio``. A polygon ties with the nearest one when ``coplanar(nearest,
+    polygon)`` (:meth:`ZBufferRow.coplanar`: the BSP tree's rule, pair by pair) and
+    it is within four times ``band`` of its depth; without ``coplanar``, when the
+    nearest hit point lies in its plane within ``band`` (point by point)."""
     if len(cell) == 0:
         return
     den = np.einsum("ij,ij->i", nl[src], D[cell])
@@ -353,7 +373,13 @@ def resolve_depths(cell, src, D, nl, dl, band, prio, best_t, best):
     slack = 4.0 * (band[src] + _hit_rounding(t_near, D[cell])
                    + tol.EPS * (np.abs(t_near) * np.linalg.norm(D[cell], axis=1) + np.abs(dl[src])))
     k = np.flatnonzero(~tied & (np.abs(t_near - t) * np.abs(den) <= slack))
-    tied[k] = _ties(src[k], cell[k], t_near[k], D, nl, dl, band)
+    if coplanar is None:
+        tied[k] = _ties(src[k], cell[k], t_near[k], D, nl, dl, band)
+    elif len(k):
+        near = np.full(n_cells, -1)
+        f = np.flatnonzero(tied)
+        near[cell[f]] = src[f]          # one of the polygons at the nearest depth
+        tied[k] = coplanar(near[cell[k]], src[k])
     p_min = np.full(n_cells, np.iinfo(np.int64).max)
     np.minimum.at(p_min, cell[tied], prio[src[tied]])
     chosen = np.flatnonzero(tied & (prio[src] == p_min[cell]))
@@ -370,9 +396,15 @@ def resolve_depths(cell, src, D, nl, dl, band, prio, best_t, best):
     old_ties = np.zeros(len(cell), dtype=bool)
     new_ties = np.zeros(len(cell), dtype=bool)
     k = np.flatnonzero(has_old & new_nearer)
-    old_ties[k] = _ties(old_s[k], cell[k], t[k], D, nl, dl, band)
+    if coplanar is None:
+        old_ties[k] = _ties(old_s[k], cell[k], t[k], D, nl, dl, band)
+    else:
+        old_ties[k] = coplanar(old_s[k], src[k])
     k = np.flatnonzero(has_old & ~new_nearer)
-    new_ties[k] = _ties(src[k], cell[k], best_t[cell[k]], D, nl, dl, band)
+    if coplanar is None:
+        new_ties[k] = _ties(src[k], cell[k], best_t[cell[k]], D, nl, dl, band)
+    else:
+        new_ties[k] = coplanar(src[k], old_s[k])
     take = np.where(new_nearer, ~old_ties | (prio[src] < prio[old_s]),
                     ~has_old | (new_ties & (prio[src] < prio[old_s])))
     best_t[cell] = np.minimum(best_t[cell], t)
