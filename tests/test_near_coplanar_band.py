@@ -134,3 +134,22 @@ def test_monte_carlo_value_within_its_sampling_error(offset):
         Fm, sigma = mc.form_factors_with_error(scene, p, UP)
         exact_sigma = np.sqrt(F * (1 - F) / mc.n)
         assert np.all(np.abs(Fm - F) <= 5 * exact_sigma + 1e-12), (F, Fm, sigma)
+
+
+def test_tilted_rafter_of_the_ifc_house_monte_carlo_within_its_sampling_error():
+    """The issue's own rafter: its vertices +3.6e-14, -3.5e-13 and -3.5e-13 off the
+    slab's plane (the first within the band, the others beyond). The BSP tree puts it
+    wholly below the slab (in front for the points below); the z-buffers, deciding the
+    tie pair by pair by the same rule, see it too. The Monte Carlo estimate lies within
+    5 standard errors sqrt(F (1 - F) / N) of the exact value (point by point, half of
+    the rafter was a tie: 0.064 against 0.136; before, all of it: 0)."""
+    slab = _rect(20.0, 30.0, 20.0, 30.0, Z)
+    rafter = np.array([[23.0, 21.0, Z + 3.6e-14], [23.0, 29.0, Z - 3.5e-13],
+                       [27.0, 29.0, Z - 3.5e-13]])
+    scene = ef.Scene.from_polygons([slab, rafter])
+    mc = MonteCarlo(samples=100_000, seed=5)
+    for p in POINTS:
+        F = ef.form_factors(scene, p, UP)
+        assert abs(F[1] - ef.point_polygon_form_factor(p, UP, rafter)) <= 1e-12
+        Fm = mc.point_form_factors(scene, p, UP)
+        assert np.all(np.abs(Fm - F) <= 5 * np.sqrt(F * (1 - F) / mc.n) + 1e-12), (F, Fm)
