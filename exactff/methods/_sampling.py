@@ -370,8 +370,10 @@ def resolve_depths(cell, src, D, nl, dl, band, prio, best_t, best, coplanar=None
     tied = t == t_near
     # the tie test only where it can pass: n . (t_near d) - n . c = (t_near - t) (n . d)
     # up to rounding, within four times the test's own band
-    slack = 4.0 * (band[src] + _hit_rounding(t_near, D[cell])
-                   + tol.EPS * (np.abs(t_near) * np.linalg.norm(D[cell], axis=1) + np.abs(dl[src])))
+    # (_hit_rounding and one more ulp of the hit point, with one norm of the directions)
+    slack = 4.0 * (band[src] + tol.EPS * (
+        (tol.ZBUFFER_ROUNDING_ULPS + 1.0) * np.abs(t_near) * np.linalg.norm(D[cell], axis=1)
+        + np.abs(dl[src])))
     k = np.flatnonzero(~tied & (np.abs(t_near - t) * np.abs(den) <= slack))
     if coplanar is None:
         tied[k] = _ties(src[k], cell[k], t_near[k], D, nl, dl, band)
