@@ -10,6 +10,7 @@ __all__ = [
     "PLANE_SIDE_ULPS",
     "ON_PLANE_ULPS",
     "BSP_COPLANAR_ULPS",
+    "ZBUFFER_ROUNDING_ULPS",
     "COVERED_RTOL",
     "DEFAULT_RTOL",
     "CHART_MARGIN",
@@ -96,10 +97,23 @@ PLANE_SIDE_ULPS = 16.0
 #: much again. Beyond it (still inside PLANE_SIDE_ULPS) the side is decided exactly.
 ON_PLANE_ULPS = 2.0
 
-#: In the BSP tree, a vertex within this many ulps of the magnitudes in ``n . x - d``
-#: lies on the splitting plane: coordinates rounded to float cannot place it more
-#: precisely, and splitting there would only cut rounding-thin slivers.
+#: The near-coplanar band of every method (``exactff.predicates.coplanar_band``): a
+#: point within this many ulps of the magnitudes in ``n . x - d`` lies in the plane.
+#: In the BSP tree a vertex in it lies on the splitting plane (coordinates rounded to
+#: float cannot place it more precisely, and splitting there would only cut
+#: rounding-thin slivers); in the discrete methods' z-buffers a polygon whose plane
+#: passes within it of the nearest hit point ties with it in depth. Beyond it both
+#: order faces by their geometry (issue 29: a rafter 3.5e-13 below a slab's plane at
+#: 15 m, where the band is 2.1e-13, is in front of it for every method).
 BSP_COPLANAR_ULPS = 64.0
+
+#: The z-buffers' depth-tie test evaluates ``n . (X - c)`` for a hit point ``X = t d``
+#: in the receiver's local frame, not the input coordinates: on top of the band, it
+#: allows this many ulps of ``|c - p|`` (the centroid relative to the point) and of
+#: ``|t d|`` (the hit point), the rounding of the frame, the depth and the dot
+#: products (a few ulps each; far below the band's 64 ulps of the input magnitudes
+#: where the point is near what it sees).
+ZBUFFER_ROUNDING_ULPS = 8.0
 
 #: A tile of the clipper's covered region whose uncovered area falls below this fraction
 #: of the tile is tested for being full: it is full only when its region covers the

@@ -10,7 +10,8 @@ import numpy as np
 from ._tolerances import BSP_COPLANAR_ULPS, EPS, ON_PLANE_ULPS, PLANE_SIDE_ULPS
 
 __all__ = ["side_of_plane", "gamma", "tie_priority", "exact_side", "polygon_side",
-           "plane_distances", "plane_sides", "sides_of_point", "coplanar_band_sides",
+           "plane_distances", "plane_sides", "sides_of_point", "coplanar_band",
+           "polygon_coplanar_bands", "coplanar_pairs", "coplanar_band_sides",
            "engine_sides", "collinear", "in_plane_band", "orient2d", "polygons_apart"]
 
 
@@ -183,11 +184,118 @@ def sides_of_point(N, D, p):
     return side
 
 
+def coplanar_band(V, N, D, rows=False):
+    """The near-coplanar band: a point ``x`` lies in the plane ``dot(n, x) = d`` when
+    ``abs(dot(n, x) - d) <= coplanar_band(x, n, d)``.
+
+    The one definition of "coplanar / flush" for every method: the BSP tree's side
+    tests (:func:`coplanar_band_sides`) and the discrete methods' depth ties
+    (:func:`polygon_coplanar_bands`) both use it. It is ``BSP_COPLANAR_ULPS`` units of
+    rounding of the input magnitudes in ``n . x - d``: ``u (|n| . |x| + |d|)``. A face
+    flush with another within it is coplanar with it (a depth tie, resolved by
+    :func:`tie_priority`); beyond it the geometry orders them, in the exact engine and
+    the z-buffers alike (a rafter 3.5e-13 below a slab at 15 m, with a band of 2.1e-13
+    there, is in front of it).
+
+    Parameters
+    ----------
+    V : ndarray of shape (M, 3)
+        Points.
+    N, D : ndarray of shape (K, 3) and (K,)
+        Planes ``dot(N[k], x) = D[k]``.
+    rows : bool, default False
+        False: every point against every plane, shape (M, K). True: row by row
+        (``K == M``), shape (M,).
+
+    Examples
+    --------
+    >>> coplanar_band(np.array([[0.0, 0, 15.0]]), np.array([[0, 0, -1.0]]),
+    ...               np.array([-15.0])).round(16).tolist()
+    [[2.132e-13]]
+    """
+    if rows:
+        mag = np.einsum("ij,ij->i", np.abs(V), np.abs(N)) + np.abs(D)
+    else:
+        mag = np.abs(V) @ np.abs(N).T + np.abs(D)
+    return BSP_COPLANAR_ULPS * EPS * mag
+
+
+def polygon_coplanar_bands(V, offsets, N, D):
+    """Per polygon, the largest :func:`coplanar_band` of its own plane over its
+    vertices: the band of its plane at every point of the polygon (``|n| . |x|`` is
+    convex in ``x``, so its maximum over the polygon is at a vertex; for an
+    axis-aligned polygon it is the same everywhere).
+
+    Parameters
+    ----------
+    V : ndarray of shape (M, 3)
+        Vertices of all polygons, concatenated.
+    offsets : ndarray of shape (P + 1,)
+        Polygon ``i`` is ``V[offsets[i]:offsets[i + 1]]``.
+    N, D : ndarray of shape (P, 3) and (P,)
+        The polygons' planes.
+
+    Examples
+    --------
+    >>> sq = np.array([[0, 0, 15.0], [0, 1, 15], [1, 1, 15], [1, 0, 15]])
+    >>> polygon_coplanar_bands(sq, np.array([0, 4]), np.array([[0, 0, -1.0]]),
+    ...                        np.array([-15.0])).round(16).tolist()
+    [2.132e-13]
+    """
+    owner = np.repeat(np.arange(len(N)), np.diff(offsets))
+    return np.maximum.reduceat(coplanar_band(V, N[owner], D[owner], rows=True),
+                               offsets[:-1])
+
+
+def coplanar_pairs(V, offsets, N, D, a, b):
+    """Pair by pair: whether polygons ``a[k]`` and ``b[k]`` are coplanar by the BSP
+    tree's rule: every vertex of one lies within the near-coplanar band
+    (:func:`coplanar_band`) of the other's plane. Such a pair is one depth tie over
+    its whole overlap (:func:`tie_priority` decides); any other pair is ordered by its
+    geometry, as the BSP tree puts a polygon with a vertex beyond the band wholly on
+    that vertex's side.
+
+    Parameters
+    ----------
+    V : ndarray of shape (M, 3)
+        Vertices of all polygons, concatenated.
+    offsets : ndarray of shape (P + 1,)
+        Polygon ``i`` is ``V[offsets[i]:offsets[i + 1]]``.
+    N, D : ndarray of shape (P, 3) and (P,)
+        The polygons' planes ``dot(N[i], x) = D[i]``.
+    a, b : ndarray of shape (K,), int
+        The pairs.
+
+    Examples
+    --------
+    >>> sq = lambda z: [[0, 0, z], [0, 1, z], [1, 1, z], [1, 0, z]]
+    >>> V = np.array(sq(15.0) + sq(15.0 - 1e-13) + sq(15.0 - 3.5e-13))
+    >>> N = np.array([[0, 0, -1.0]] * 3); D = -V[[0, 4, 8], 2]
+    >>> coplanar_pairs(V, np.array([0, 4, 8, 12]), N, D, np.array([0, 0]), np.array([1, 2])).tolist()
+    [True, False]
+    """
+    a = np.asarray(a, dtype=int).reshape(-1)
+    b = np.asarray(b, dtype=int).reshape(-1)
+    if len(a) == 0:
+        return np.zeros(0, dtype=bool)
+
+    def within(p, q):           # every vertex of q in the band of p's plane
+        cnt = np.diff(offsets)[q]
+        first = np.cumsum(cnt) - cnt
+        owner = np.repeat(np.arange(len(q)), cnt)
+        X = V[np.repeat(offsets[q], cnt) + np.arange(int(cnt.sum())) - np.repeat(first, cnt)]
+        n, d = N[p][owner], D[p][owner]
+        ok = np.abs(np.einsum("ij,ij->i", X, n) - d) <= coplanar_band(X, n, d, rows=True)
+        return np.logical_and.reduceat(ok, first)
+
+    return within(a, b) | within(b, a)
+
+
 def coplanar_band_sides(V, N, D):
     """Side of every vertex ``V[i]`` for every plane ``dot(N[k], x) = D[k]``, with the
-    coplanar band of the BSP tree: -1 / +1 beyond ``BSP_COPLANAR_ULPS`` ulps of the
-    magnitudes, 0 within (the vertex counts as in the plane). Returns the signs and the
-    signed values, both of shape (len(V), len(N)).
+    near-coplanar band (:func:`coplanar_band`; the BSP tree's): -1 / +1 beyond
+    ``BSP_COPLANAR_ULPS`` ulps of the magnitudes, 0 within (the vertex counts as in the
+    plane). Returns the signs and the signed values, both of shape (len(V), len(N)).
 
     Examples
     --------
@@ -197,9 +305,8 @@ def coplanar_band_sides(V, N, D):
     [0, 1]
     """
     s = V @ N.T - D
-    band = BSP_COPLANAR_ULPS * EPS * (np.abs(V) @ np.abs(N).T + np.abs(D))
     out = np.sign(s).astype(np.int8)
-    out[np.abs(s) <= band] = 0
+    out[np.abs(s) <= coplanar_band(V, N, D)] = 0
     return out, s
 
 
@@ -294,8 +401,8 @@ def in_plane_band(V, N, D, rtol=BSP_COPLANAR_ULPS * EPS):
     ``dot(N[k], x) = D[k]``; by default the BSP tree's coplanar band.
 
     The band is ``abs(dot(n, x) - d) <= rtol * (dot(abs(n), abs(x)) + abs(d))``, by
-    default ``BSP_COPLANAR_ULPS`` ulps of the magnitudes (as
-    :func:`coplanar_band_sides`).
+    default ``BSP_COPLANAR_ULPS`` ulps of the magnitudes (:func:`coplanar_band`, as
+    :func:`coplanar_band_sides` and the z-buffers' depth ties).
 
     Examples
     --------
@@ -304,7 +411,10 @@ def in_plane_band(V, N, D, rtol=BSP_COPLANAR_ULPS * EPS):
     [True, False]
     """
     s = np.einsum("ij,ij->i", V, N) - D
-    return np.abs(s) <= rtol * (np.einsum("ij,ij->i", np.abs(V), np.abs(N)) + np.abs(D))
+    band = coplanar_band(V, N, D, rows=True)
+    if rtol != BSP_COPLANAR_ULPS * EPS:
+        band = band * (rtol / (BSP_COPLANAR_ULPS * EPS))
+    return np.abs(s) <= band
 
 
 def orient2d(p, q, w):

@@ -74,7 +74,7 @@ DEPTH_CHUNK = 1 << 19
 def _depth_test(z, cell, src, D, best_t, best):
     for a in range(0, len(cell), DEPTH_CHUNK):
         resolve_depths(cell[a:a + DEPTH_CHUNK], src[a:a + DEPTH_CHUNK], D, z.nl, z.dl,
-                       z.band, z.prio, best_t, best)
+                       z.band, z.prio, best_t, best, coplanar=z.coplanar)
 
 
 def _chunks(n_pairs, width):

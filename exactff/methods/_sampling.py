@@ -24,7 +24,7 @@ from .. import _tolerances as tol
 from ..geometry import receiver_frame, to_local
 from ..checks import as_receiver
 from ..kernel import flat_polygons
-from ..predicates import plane_sides, tie_priority
+from ..predicates import coplanar_pairs, plane_sides, polygon_coplanar_bands, tie_priority
 from ..prepared import prepared
 from ..rings import padded_buckets
 from ..scene import as_scene
@@ -111,6 +111,12 @@ def _chart_of(D):
     return chart, u, v
 
 
+def _scene_bands(scene):
+    """The near-coplanar band of each polygon's plane over the polygon (cached)."""
+    return prepared(scene).get("coplanar_bands", lambda s: polygon_coplanar_bands(
+        s.vertices, s.offsets, s.normals, s.plane_offsets))
+
+
 def _polygon_buckets(scene):
     """The scene's polygons padded bucket by bucket of vertex counts (cached)."""
     return prepared(scene).get("padded_buckets", lambda s: padded_buckets(s.polygons))
@@ -131,7 +137,18 @@ class ZBufferRow:
         Local unit normals and ``n . (c - p)``: the depth along a direction d is
         ``dl / (nl . d)``.
     band, prio : ndarray
-        Depth-tie band and priority (:func:`exactff.predicates.tie_priority`).
+        Depth-tie band (the near-coplanar band of each polygon's plane,
+        :func:`exactff.predicates.polygon_coplanar_bands`, the BSP tree's, plus the
+        rounding of ``n . c`` in the local frame) and priority
+        (:func:`exactff.predicates.tie_priority`).
+
+    Methods
+    -------
+    coplanar(i, j)
+        Pair by pair (live indices): whether the polygons are coplanar by the BSP
+        tree's rule (:func:`exactff.predicates.coplanar_pairs`): the depth buffer's
+        ties, so that a face flush with another is a tie over the whole overlap or
+        nowhere, as in the exact engine.
     """
 
     def __init__(self, scene, point, normal):
@@ -157,12 +174,21 @@ class ZBufferRow:
         self.nl = flat.normals[ids] @ R.T
         rel = flat.centroids[ids] - p
         self.dl = np.einsum("ij,ij->i", flat.normals[ids], rel)  # n . (c - p)
-        # depth ties: a polygon ties with the nearest hit X when X lies in its plane to
-        # the rounding of n . (X - c) (the BSP's coplanar band; unit normals)
-        self.band = tol.BSP_COPLANAR_ULPS * tol.EPS * (
-            np.linalg.norm(rel, axis=1) + np.linalg.norm(flat.centroids[ids], axis=1)
-            + np.linalg.norm(p))
+        # depth ties: a polygon ties with the nearest hit X when X lies in its plane
+        # within the near-coplanar band of the input magnitudes (the BSP tree's, one
+        # definition: exactff.predicates.coplanar_band), up to the rounding of
+        # n . (X - c) in the local frame (ZBUFFER_ROUNDING_ULPS; the hit point's part
+        # is added per cell, _ties)
+        self.band = (_scene_bands(scene)[ids]
+                     + tol.ZBUFFER_ROUNDING_ULPS * tol.EPS * np.linalg.norm(rel, axis=1))
         self.prio = tie_priority(side)[ids]
+        self._scene = scene
+
+    def coplanar(self, i, j):
+        """Whether live polygons ``i[k]`` and ``j[k]`` are coplanar (the BSP's rule)."""
+        s = self._scene
+        return coplanar_pairs(s.vertices, s.offsets, s.normals, s.plane_offsets,
+                              self.ids[i], self.ids[j])
 
     def hits(self, best):
         """Scene indices of the polygons shown (-1: none) from live indices."""
@@ -204,15 +230,22 @@ def nearest_polygons(scene, point, normal, directions):
             if len(live_c) == 0:
                 continue
             _zbuffer_chart(cells, u[cells], v[cells], grid, g_ids[live_c], UV, cl, D, nl,
-                           dl, band, prio, best_t, best)
+                           dl, band, prio, best_t, best, coplanar=z.coplanar)
     return z.hits(best)
 
 
+def _hit_rounding(t, D):
+    """The rounding of a hit point ``t D`` in the depth-tie test (local frame)."""
+    return tol.ZBUFFER_ROUNDING_ULPS * tol.EPS * np.abs(t) * np.linalg.norm(D, axis=1)
+
+
 def _ties(src, cell, t_near, D, nl, dl, band):
-    """Whether polygon ``src`` passes through the hit point ``t_near D[cell]``."""
+    """Whether polygon ``src`` passes through the hit point ``t_near D[cell]``: the
+    point lies in its plane within the near-coplanar band (``band``, the BSP tree's)
+    and the rounding of the hit point."""
     X = t_near[:, None] * D[cell]
     r = np.einsum("ij,ij->i", nl[src], X) - dl[src]
-    return np.abs(r) <= band[src] + tol.BSP_COPLANAR_ULPS * tol.EPS * np.abs(t_near)
+    return np.abs(r) <= band[src] + _hit_rounding(t_near, D[cell])
 
 
 def _cell_grid(cu, cv, side):
@@ -228,7 +261,8 @@ def _cell_grid(cu, cv, side):
     return nb, v_lo, order, starts
 
 
-def _zbuffer_chart(cells, cu, cv, grid, live, UV, cl, D, nl, dl, band, prio, best_t, best):
+def _zbuffer_chart(cells, cu, cv, grid, live, UV, cl, D, nl, dl, band, prio, best_t, best,
+                   coplanar=None):
     """Nearest polygon per cell within one chart (updates best_t / best in place).
 
     ``grid`` is the chart's :func:`_cell_grid`. ``best_t`` is the depth of the nearest
@@ -300,16 +334,20 @@ def _zbuffer_chart(cells, cu, cv, grid, live, UV, cl, D, nl, dl, band, prio, bes
                 ux = a[:, 0] + (vv - a[:, 1]) * (c[:, 0] - a[:, 0]) / (c[:, 1] - a[:, 1])
             inside ^= straddles & (uu < ux)
         poly, cell_local = poly[inside], cell_local[inside]
-        resolve_depths(cells[cell_local], live[poly], D, nl, dl, band, prio, best_t, best)
+        resolve_depths(cells[cell_local], live[poly], D, nl, dl, band, prio, best_t, best,
+                       coplanar=coplanar)
 
 
-def resolve_depths(cell, src, D, nl, dl, band, prio, best_t, best):
+def resolve_depths(cell, src, D, nl, dl, band, prio, best_t, best, coplanar=None):
     """The depth buffer: merge candidate (cell, polygon) pairs into ``best_t`` (depth of
     the nearest hit per cell) and ``best`` (the polygon shown), in place.
 
     The depth along a cell's direction ``D[cell]`` (any length) is
-    ``t = (n . (c - p)) / (n . D)``; of the polygons through the nearest hit point (depth
-    ties: the hit point in their planes to rounding), the one of lowest ``prio``."""
+    ``t = (n . (c - p)) / (n . D)``; of the polygons tied with the nearest hit, the one
+    of lowest ``prio``. A polygon ties with the nearest one when ``coplanar(nearest,
+    polygon)`` (:meth:`ZBufferRow.coplanar`: the BSP tree's rule, pair by pair) and
+    it is within four times ``band`` of its depth; without ``coplanar``, when the
+    nearest hit point lies in its plane within ``band`` (point by point)."""
     if len(cell) == 0:
         return
     den = np.einsum("ij,ij->i", nl[src], D[cell])
@@ -332,10 +370,18 @@ def resolve_depths(cell, src, D, nl, dl, band, prio, best_t, best):
     tied = t == t_near
     # the tie test only where it can pass: n . (t_near d) - n . c = (t_near - t) (n . d)
     # up to rounding, within four times the test's own band
-    slack = 4.0 * (band[src] + tol.BSP_COPLANAR_ULPS * tol.EPS * np.abs(t_near)
-                   + tol.EPS * (np.abs(t_near) * np.linalg.norm(D[cell], axis=1) + np.abs(dl[src])))
+    # (_hit_rounding and one more ulp of the hit point, with one norm of the directions)
+    slack = 4.0 * (band[src] + tol.EPS * (
+        (tol.ZBUFFER_ROUNDING_ULPS + 1.0) * np.abs(t_near) * np.linalg.norm(D[cell], axis=1)
+        + np.abs(dl[src])))
     k = np.flatnonzero(~tied & (np.abs(t_near - t) * np.abs(den) <= slack))
-    tied[k] = _ties(src[k], cell[k], t_near[k], D, nl, dl, band)
+    if coplanar is None:
+        tied[k] = _ties(src[k], cell[k], t_near[k], D, nl, dl, band)
+    elif len(k):
+        near = np.full(n_cells, -1)
+        f = np.flatnonzero(tied)
+        near[cell[f]] = src[f]          # one of the polygons at the nearest depth
+        tied[k] = coplanar(near[cell[k]], src[k])
     p_min = np.full(n_cells, np.iinfo(np.int64).max)
     np.minimum.at(p_min, cell[tied], prio[src[tied]])
     chosen = np.flatnonzero(tied & (prio[src] == p_min[cell]))
@@ -352,9 +398,15 @@ def resolve_depths(cell, src, D, nl, dl, band, prio, best_t, best):
     old_ties = np.zeros(len(cell), dtype=bool)
     new_ties = np.zeros(len(cell), dtype=bool)
     k = np.flatnonzero(has_old & new_nearer)
-    old_ties[k] = _ties(old_s[k], cell[k], t[k], D, nl, dl, band)
+    if coplanar is None:
+        old_ties[k] = _ties(old_s[k], cell[k], t[k], D, nl, dl, band)
+    else:
+        old_ties[k] = coplanar(old_s[k], src[k])
     k = np.flatnonzero(has_old & ~new_nearer)
-    new_ties[k] = _ties(src[k], cell[k], best_t[cell[k]], D, nl, dl, band)
+    if coplanar is None:
+        new_ties[k] = _ties(src[k], cell[k], best_t[cell[k]], D, nl, dl, band)
+    else:
+        new_ties[k] = coplanar(src[k], old_s[k])
     take = np.where(new_nearer, ~old_ties | (prio[src] < prio[old_s]),
                     ~has_old | (new_ties & (prio[src] < prio[old_s])))
     best_t[cell] = np.minimum(best_t[cell], t)
