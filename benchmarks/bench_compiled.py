@@ -22,13 +22,8 @@ import exactff as ef
 from exactff.visibility import compiled_core, scene_bsp
 
 sys.path.insert(0, os.path.dirname(__file__))
-from scenes_bench import machine  # noqa: E402
+from scenes_bench import machine, timed  # noqa: E402
 
-
-def timed(f):
-    t = time.perf_counter()
-    out = f()
-    return out, time.perf_counter() - t
 
 
 def main():

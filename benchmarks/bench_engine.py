@@ -31,13 +31,8 @@ from exactff.methods import Exact
 from exactff.visibility import build_bsp
 
 sys.path.insert(0, os.path.dirname(__file__))
-from scenes_bench import furnished_room, machine  # noqa: E402
+from scenes_bench import furnished_room, machine, timed  # noqa: E402
 
-
-def timed(f):
-    t = time.perf_counter()
-    out = f()
-    return out, time.perf_counter() - t
 
 
 def row_peak_memory(scene, method, i):

@@ -27,7 +27,7 @@ HERE = os.path.dirname(__file__)
 sys.path.insert(0, HERE)
 sys.path.insert(0, os.path.join(HERE, "..", "tests"))
 from bench_engine import cloister_rows  # noqa: E402
-from scenes_bench import machine  # noqa: E402
+from scenes_bench import machine, timed  # noqa: E402
 from test_refinement import sliver_reference, sliver_scene  # noqa: E402
 
 
@@ -49,11 +49,6 @@ def sliver_table(seeds=8):
             print(f"| {gap:.0e} | {tilt} | {min(e1):.1e} .. {max(e1):.1e} | "
                   f"{min(e0):.1e} .. {max(e0):.1e} | {ok} |")
 
-
-def timed(f):
-    t = time.perf_counter()
-    out = f()
-    return out, time.perf_counter() - t
 
 
 def cost_table(name, scene, rows):

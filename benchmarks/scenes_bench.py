@@ -18,6 +18,13 @@ def machine():
             f"{shapely.__version__} (GEOS {shapely.geos_version_string})")
 
 
+def timed(f):
+    """``(f(), wall time in seconds)``."""
+    t = time.perf_counter()
+    out = f()
+    return out, time.perf_counter() - t
+
+
 def best_of(f, k=3):
     """Best wall time of ``k`` calls of ``f`` (the machines are shared and noisy)."""
     ts = []
