@@ -14,7 +14,7 @@ import numpy as np
 import shapely
 
 from .. import _tolerances as tol
-from ..errors import NumericalError, check_finite
+from ..errors import check_finite
 from ..kernel import flat_polygons
 from ..predicates import engine_sides, sides_of_point
 from ..prepared import prepared
@@ -30,7 +30,9 @@ def convex_pieces(polygon, normal):
 
     Convex polygons (collinear vertices allowed) are returned whole; others are cut into
     triangles by a constrained Delaunay triangulation of their projection on the
-    coordinate plane the normal is most nearly perpendicular to.
+    coordinate plane the normal is most nearly perpendicular to (a ring that touches
+    itself, as a BSP split can leave, is repaired first; the points where it touches are
+    lifted onto the polygon's plane).
 
     Parameters
     ----------
@@ -59,12 +61,23 @@ def convex_pieces(polygon, normal):
     keep = [a for a in range(3) if a != int(np.argmax(np.abs(normal)))]
     lookup = {tuple(q): P[i] for i, q in enumerate(P[:, keep].tolist())}
     tri = shapely.constrained_delaunay_triangles(shapely.make_valid(shapely.Polygon(P[:, keep])))
+    axis = int(np.argmax(np.abs(normal)))
+    offset = float(normal @ P[0])
+
+    def lifted(q):
+        # a vertex of the polygon, or one that repairing a self-touching ring added
+        # (where a ring touches itself): on the polygon's plane, from its projection
+        if tuple(q) in lookup:
+            return lookup[tuple(q)]
+        x = np.zeros(3)
+        x[keep] = q
+        x[axis] = (offset - normal[keep] @ np.asarray(q)) / normal[axis]
+        return x
+
     pieces = []
     for t in shapely.get_parts(tri):
         ring = np.asarray(t.exterior.coords)[:-1]
-        if any(tuple(q) not in lookup for q in ring.tolist()):
-            raise NumericalError("the triangulation of a non-convex fragment added vertices")
-        Q = np.array([lookup[tuple(q)] for q in ring.tolist()])
+        Q = np.array([lifted(q) for q in ring.tolist()])
         # the polygon's own winding
         if np.cross(Q[1] - Q[0], Q[2] - Q[0]) @ normal < 0:
             Q = Q[::-1]
