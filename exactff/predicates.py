@@ -185,7 +185,9 @@ def sides_of_point(N, D, p):
 
 
 def coplanar_band(V, N, D, rows=False):
-    """The near-coplanar band: a point ``x`` lies in the plane ``dot(n, x) = d`` when
+    """The near-coplanar band: how far from a plane a point may lie and still be in it.
+
+    A point ``x`` lies in the plane ``dot(n, x) = d`` when
     ``abs(dot(n, x) - d) <= coplanar_band(x, n, d)``.
 
     The one definition of "coplanar / flush" for every method: the BSP tree's side
@@ -222,9 +224,10 @@ def coplanar_band(V, N, D, rows=False):
 
 def polygon_coplanar_bands(V, offsets, N, D):
     """Per polygon, the largest :func:`coplanar_band` of its own plane over its
-    vertices: the band of its plane at every point of the polygon (``|n| . |x|`` is
-    convex in ``x``, so its maximum over the polygon is at a vertex; for an
-    axis-aligned polygon it is the same everywhere).
+    vertices: the band of its plane at every point of the polygon.
+
+    The band grows with ``sum(abs(n) * abs(x))``, convex in ``x``, so its maximum over
+    the polygon is at a vertex; for an axis-aligned polygon it is the same everywhere.
 
     Parameters
     ----------
