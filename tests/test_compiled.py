@@ -8,6 +8,7 @@ import shapely
 from hypothesis import given
 
 import exactff as ef
+from exactff.kernel import mp_form_factor
 from exactff.visibility import compiled_core, compiled_form_factors, convex_pieces
 from exactff.testing.strategies import enclosures, occluded_scenes
 
@@ -16,11 +17,12 @@ from test_visibility import FURNITURE
 
 # DESIGN 6: an occluded value within 1e-11 of the exact one (absolute)
 OCC_ATOL = 1e-11
-# known defect (issue 28, open): on these families the compiled core's bound is a few
-# times too small for some values (office(600): 3.0e-17 apart against bounds 1.1e-18;
-# the room with a sphere: 1.0e-21 against 7.4e-22); its values agree with the Python
-# engine's to the accuracy target, and the default engine stays the Python one
-BOUND_DEFECT = pytest.mark.xfail(strict=True, reason="compiled bound too small (issue 28)")
+# open (issue 28): on office rows the engines disagree on some occluded
+# values beyond both bounds (office(600) row 183, polygon 345: 4.2e-18 apart, bounds
+# 3.6e-19 and 2.2e-19); where such a polygon is wholly visible, mpmath shows the Python
+# engine wrong (polygon 530: its value 3.0e-17 off, bound 8.9e-19; the compiled one
+# exact to its bound); which one is short on occluded values is not decided yet
+UNDECIDED = pytest.mark.xfail(strict=True, reason="engines apart beyond both bounds")
 
 COMPILED = ef.Exact(tolerance=None, engine="compiled")
 PYTHON = ef.Exact(engine="python")
@@ -28,19 +30,30 @@ PYTHON = ef.Exact(engine="python")
 
 def assert_engines_agree(scene, p, n, two_sided=False, closed=False, within_bounds=True,
                          compiled=COMPILED):
-    """Both engines' values within the sum of their bounds (or, with
-    ``within_bounds=False``, within the accuracy target); a closed row sums to 1."""
+    """Both engines' values within the accuracy target and (``within_bounds``) within the
+    sum of their bounds; a closed row sums to 1.
+
+    Where the bounds do not cover the gap, mpmath decides for a polygon both engines
+    see whole (the unoccluded value at 40 digits): the compiled value must hold there,
+    and the Python engine's then misses it by more than its own bound (a defect of the
+    oracle, counted in the returned stats as ``oracle_misses``)."""
     st = {}
     F, E = compiled.point_form_factors(scene, p, n, two_sided=two_sided, error=True, stats=st)
     G, H = PYTHON.point_form_factors(scene, p, n, two_sided=two_sided, error=True)
     assert np.all(F >= 0) and np.all(np.isfinite(E)) and np.all(E >= 0)
     gap = np.abs(F - G)
     assert np.all(gap <= OCC_ATOL)
-    worst = int(np.argmax(gap - E - H))
+    st["oracle_misses"], undecided = 0, []
+    for j in np.flatnonzero(gap > E + H):
+        U = float(mp_form_factor(p, n, scene.polygons[j], two_sided=two_sided,
+                                 tolerance=1e-30))
+        if abs(F[j] - U) <= E[j] and abs(G[j] - U) > H[j]:
+            st["oracle_misses"] += 1
+        else:
+            undecided.append((int(j), F[j], G[j], E[j], H[j]))
     if within_bounds:
-        assert np.all(gap <= E + H), (worst, F[worst], G[worst], E[worst], H[worst], st)
+        assert undecided == [], undecided
     if closed:
-        assert abs(F.sum() - 1.0) <= 1e-12 + E.sum()
         assert abs(F.sum() - 1.0) <= 1e-12
     return st
 
@@ -62,8 +75,9 @@ def test_enclosures(case):
 @given(case=occluded_scenes())
 def test_occluded_scenes(case):
     scene, p, n = case
-    # the accuracy target only: the bound defect shows here too (hypothesis finds
-    # values 2e-18 apart against bounds 5e-19); pinned by the strict xfails below
+    # the accuracy target, and mpmath where the engines disagree on a wholly visible
+    # polygon; hypothesis also finds undecided occluded values (2e-18 apart against
+    # bounds 3e-19: the office's open question, pinned there)
     assert_engines_agree(scene, p, n, within_bounds=False)
     assert_engines_agree(scene, p, n, two_sided=True, within_bounds=False)
 
@@ -78,19 +92,8 @@ NAMED = {
 }
 
 
-@pytest.mark.parametrize("within_bounds", [
-    False, pytest.param(True, marks=BOUND_DEFECT)])
-@pytest.mark.parametrize("name", ["room with sphere"])
-def test_named_scenes_with_the_bound_defect(name, within_bounds):
-    make, closed = NAMED[name]
-    scene = make()
-    for i in rows_of(scene, 8):
-        assert_engines_agree(scene, scene.centroids[i], scene.normals[i], closed=closed,
-                             within_bounds=within_bounds)
-
-
 @pytest.mark.parametrize("name", ["cornell closed", "cornell open", "cornell whole ceiling",
-                                  "building", "furnished box"])
+                                  "building", "furnished box", "room with sphere"])
 def test_named_scenes(name):
     make, closed = NAMED[name]
     scene = make()
@@ -98,7 +101,7 @@ def test_named_scenes(name):
         assert_engines_agree(scene, scene.centroids[i], scene.normals[i], closed=closed)
 
 
-@pytest.mark.parametrize("within_bounds", [False, pytest.param(True, marks=BOUND_DEFECT)])
+@pytest.mark.parametrize("within_bounds", [False, pytest.param(True, marks=UNDECIDED)])
 def test_office_rows(within_bounds):
     scene = ef.scenes.office(600)
     culled = 0
@@ -109,15 +112,13 @@ def test_office_rows(within_bounds):
     assert culled > 0   # the hierarchy left work out somewhere
 
 
-@pytest.mark.parametrize("within_bounds", [False, pytest.param(True, marks=BOUND_DEFECT)])
-def test_cloister_rows_of_every_group(within_bounds):
+def test_cloister_rows_of_every_group():
     scene = ef.scenes.cloister(3000)
     groups = np.array(scene.groups)
     rng = np.random.default_rng(0)
     for g in sorted(set(scene.groups)):
         i = rng.choice(np.flatnonzero(groups == g))
-        assert_engines_agree(scene, scene.centroids[i], scene.normals[i],
-                             within_bounds=within_bounds)
+        assert_engines_agree(scene, scene.centroids[i], scene.normals[i])
 
 
 def test_long_polygon_occludes_and_receives():
@@ -191,8 +192,8 @@ def test_core_refuses_inconsistent_arrays():
 
 
 def test_engine_argument():
-    assert ef.Exact().engine == "python"      # until the known case below is fixed
-    assert ef.Exact(engine="compiled").engine == "compiled"
+    assert ef.Exact().engine == "compiled"
+    assert ef.Exact(engine="python").engine == "python"
     assert ef.Exact(integrator="eq3").engine == "python"
     with pytest.raises(ValueError, match="engine"):
         ef.Exact(engine="gpu")

@@ -46,9 +46,8 @@ class Exact(FormFactorMethod):
         cost follows what a row sees; a row any of whose values misses the tolerance is
         recomputed by the Python engine. ``"python"``: the Python engine
         (:func:`exactff.visibility.visible_form_factors`), unchanged, the oracle the
-        compiled core is tested against. None: the Python engine for now: the compiled
-        core's bound is not yet sound on every scene (one known case, pinned by
-        ``tests/test_compiled.py``), and the default must be.
+        compiled core is tested against. None: compiled, or Python with
+        ``integrator="eq3"`` (the compiled core integrates with the sector form).
 
     Examples
     --------
@@ -67,7 +66,7 @@ class Exact(FormFactorMethod):
         if integrator not in INTEGRATORS:
             raise ValueError(f"integrator must be one of {INTEGRATORS}, got {integrator!r}")
         if engine is None:
-            engine = "python"
+            engine = "python" if integrator == "eq3" else "compiled"
         if engine not in ENGINES:
             raise ValueError(f"engine must be one of {ENGINES}, got {engine!r}")
         if engine == "compiled" and integrator != "sector":
@@ -94,6 +93,6 @@ class Exact(FormFactorMethod):
 
     def __repr__(self):
         extra = "" if self.integrator == "sector" else f", integrator={self.integrator!r}"
-        if self.engine != "python":
+        if self.engine != ("python" if self.integrator == "eq3" else "compiled"):
             extra += f", engine={self.engine!r}"
         return f"Exact(tolerance={self.tolerance}, shortcuts={self.shortcuts}{extra})"

@@ -171,7 +171,8 @@ struct Plane {  // m . x = 0 through p; positive side first
 struct Constants {
     R eps;      // unit roundoff of R
     R band;     // relative band of "on the plane" (radians)
-    R c1;       // rounding constant of a sector sum (as the Python kernel's C1)
+    R c1;       // rounding constants of a sector sum (the Python kernel's C1, C2)
+    R c2;
     R split;    // rounding of a split vertex, in units of eps
 };
 
@@ -191,7 +192,7 @@ class Core {
          py::array_t<int64_t, py::array::c_style | py::array::forcecast> here_start,
          py::array_t<int64_t, py::array::c_style | py::array::forcecast> here_front,
          py::array_t<int64_t, py::array::c_style | py::array::forcecast> here_behind,
-         int64_t n_sources, double band, double c1, double split)
+         int64_t n_sources, double band, double c1, double c2, double split)
         : n_sources_(n_sources) {
         copy(vertices, V_);
         copy(start, start_);
@@ -212,6 +213,7 @@ class Core {
         K_.eps = std::numeric_limits<R>::epsilon() / 2;
         K_.band = band;
         K_.c1 = c1;
+        K_.c2 = c2;
         K_.split = split;
         build_boxes();
     }
@@ -390,25 +392,52 @@ class Core {
     }
 
     // the sector form of one convex piece above the horizon: its value and bound
+    // the sector form of one convex piece above the horizon, in offset form (as
+    // exactff.kernel.clipped_sector_sums): each edge's plane as
+    // m = a0 x (e_b - e_a) + e_a x e_b with a0 the first vertex's direction and e the
+    // world offsets from it, accurate for pieces small next to their distance; each
+    // term's rounding bounded by the magnitudes of the products in n . m (C2 ulps per
+    // unit of the cross product's condition), the sum's by C1 ulps of its terms
     void integrate(const Piece& q, const V3& n, R* value, R* bound) const {
-        R S = 0, mag = 0, geo = 0;
+        R S = 0, mag = 0, errs = 0, geo = 0;
         const size_t m = q.size();
+        const V3 a0 = q[0].v;
+        const V3 w0 = q[0].w;
+        auto offset = [&](const Vertex& u) {
+            return V3{u.w.x - w0.x, u.w.y - w0.y, u.w.z - w0.z};
+        };
         for (size_t i = 0; i < m; ++i) {
             const Vertex& a = q[i];
             const Vertex& b = q[(i + 1) % m];
-            V3 c = cross(a.v, b.v);
-            R cl = norm(c);
-            if (cl == 0) continue;
-            R gamma = std::atan2(cl, dot(a.v, b.v));
-            R t = gamma * dot(n, c) / cl;
+            const V3 ea = offset(a), eb = offset(b);
+            const V3 d{eb.x - ea.x, eb.y - ea.y, eb.z - ea.z};
+            const V3 c1 = cross(a0, d), c2 = cross(ea, eb);
+            const V3 c{c1.x + c2.x, c1.y + c2.y, c1.z + c2.z};
+            // the magnitudes of the products that make up n . m
+            const R Z = std::fabs(n.x) * (std::fabs(a0.y * d.z) + std::fabs(a0.z * d.y) +
+                                          std::fabs(ea.y * eb.z) + std::fabs(ea.z * eb.y)) +
+                        std::fabs(n.y) * (std::fabs(a0.z * d.x) + std::fabs(a0.x * d.z) +
+                                          std::fabs(ea.z * eb.x) + std::fabs(ea.x * eb.z)) +
+                        std::fabs(n.z) * (std::fabs(a0.x * d.y) + std::fabs(a0.y * d.x) +
+                                          std::fabs(ea.x * eb.y) + std::fabs(ea.y * eb.x));
+            const R cl = norm(c);
+            const R Nm = a.length * b.length;
+            const R theta = std::atan2(cl, dot(a.v, b.v));
+            geo += theta * std::max(a.err, b.err);
+            if (!(cl > 0)) {
+                if (Nm > 0) errs += 2 * K_.eps;  // a degenerate edge: its term unknown
+                continue;
+            }
+            const R t = theta * dot(n, c) / cl;
             S += t;
             mag += std::fabs(t);
-            geo += gamma * std::max(a.err, b.err);
+            const R rel = K_.c2 * K_.eps * (Z + theta * theta * Nm) / cl;
+            errs += theta * std::min(static_cast<R>(2), rel);
         }
         const R two_pi = 6.283185307179586476925286766559L;
         const R pi = two_pi / 2;
         *value = std::fabs(S) / two_pi;
-        *bound = K_.c1 * K_.eps * mag / two_pi + geo / pi;
+        *bound = (K_.c1 * K_.eps * mag + errs) / two_pi + geo / pi;
     }
 
     void run(const double* pp, const double* pn, const int8_t* node_side,
@@ -674,7 +703,7 @@ PYBIND11_MODULE(_svbsp, m) {
                       py::array_t<int64_t, py::array::c_style | py::array::forcecast>,
                       py::array_t<int64_t, py::array::c_style | py::array::forcecast>,
                       py::array_t<int64_t, py::array::c_style | py::array::forcecast>,
-                      int64_t, double, double, double>())
+                      int64_t, double, double, double, double>())
         .def("row", &Core::row)
         .def_property_readonly("nodes", &Core::nodes)
         .def_property_readonly("pieces", &Core::pieces)

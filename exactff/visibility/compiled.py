@@ -118,7 +118,7 @@ def _build_core(scene):
     core = Core(vertices, start, count, source, tree.front.astype(np.int64),
                 tree.back.astype(np.int64), here_start, expand(tree.node_fragments),
                 expand(tree.node_fragments_behind), len(scene), tol.SVBSP_BAND,
-                tol.C1, tol.SVBSP_SPLIT_ULPS)
+                tol.C1, tol.C2, tol.SVBSP_SPLIT_ULPS)
     return tree, core
 
 
