@@ -55,6 +55,7 @@ __all__ = [
     "SVBSP_BAND",
     "SVBSP_SPLIT_ULPS",
     "SVBSP_BOX_BUDGET",
+    "SVBSP_TILES",
     "C2",
     "LONGDOUBLE_EPS",
     "AREA_FAR",
@@ -353,3 +354,6 @@ SVBSP_SPLIT_ULPS = 8.0
 #: Compiled core: most shadow-tree nodes one bounding-box test may visit before it
 #: gives up (the subtree is then entered, which is always correct).
 SVBSP_BOX_BUDGET = 256
+#: Compiled core: planes per axis of the fixed grid the upper hemisphere is cut into
+#: before any shadow (``(tiles + 1)^2`` cells, each growing its own shadows).
+SVBSP_TILES = 7

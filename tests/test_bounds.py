@@ -159,11 +159,24 @@ def _band_square():
     return sq, np.array([c + 0.5, c + 0.5, c - 1e-7]), np.array([0.0, 0.0, 1.0])
 
 
+def _nan_core(scene):
+    # the compiled core with a row that makes a NaN
+    import exactff.visibility.bsp as bsp
+
+    class NaNCore:
+        def row(self, p, n, node_side, source_side, *args):
+            F = np.full(len(source_side), np.nan)
+            return F, np.zeros_like(F), np.zeros_like(F), {}
+
+    return bsp.scene_bsp(scene)[0], NaNCore()
+
+
 def _nan_calls():
     import exactff.area.contour as contour
     import exactff.area.occluded as occluded
     import exactff.kernel.eq3 as eq3
     import exactff.kernel.point as point
+    import exactff.visibility.compiled as compiled
     import exactff.visibility.engine as engine
 
     sq, p, n = _band_square()
@@ -183,7 +196,10 @@ def _nan_calls():
         "form_factors_unoccluded_path": (point, "mp_form_factor", _nan_mp,
                                          lambda: ef.form_factors(alone, p, n, error=True)),
         "form_factors_clipper": (engine, "pieces_form_factors", _nan_pieces,
-                                 lambda: ef.form_factors(alone, p, n, shortcuts=False)),
+                                 lambda: ef.form_factors(alone, p, n, shortcuts=False,
+                                                         engine="python")),
+        "form_factors_compiled": (compiled, "compiled_core", _nan_core,
+                                  lambda: ef.form_factors(alone, p, n, shortcuts=False)),
         "eq3_form_factor": (eq3, "eq3_ring_area", lambda ring: (float("nan"), 1.0),
                             lambda: ef.eq3_form_factor([0, 0, 0], [0, 0, 1],
                                                        UNIT_DOWN_AT_1)),
@@ -193,7 +209,7 @@ def _nan_calls():
 @pytest.mark.parametrize("name", ["polygon_form_factor", "area_form_factors",
                                   "point_polygon_form_factor", "point_polygon_form_factors",
                                   "form_factors_unoccluded_path", "form_factors_clipper",
-                                  "eq3_form_factor"])
+                                  "form_factors_compiled", "eq3_form_factor"])
 def test_nan_from_a_kernel_is_refused_by_every_public_result(monkeypatch, name):
     # the finiteness check on the way out of each path: a NaN made inside a kernel (here
     # injected) raises NumericalError saying so, never comes back as a value
@@ -241,11 +257,11 @@ def test_occluded_value_below_zero_is_clamped_only_within_its_bound(monkeypatch,
     scene = ef.Scene.from_polygons([sq])
     monkeypatch.setattr(engine, "pieces_form_factors", pieces)
     if k <= 1.0:
-        F, E = ef.form_factors(scene, p, n, error=True, shortcuts=False)
+        F, E = ef.form_factors(scene, p, n, error=True, shortcuts=False, engine="python")
         assert F[0] == 0.0 and E[0] >= k * E0
     else:
         with pytest.raises(ef.NumericalError, match="below 0 beyond"):
-            ef.form_factors(scene, p, n, error=True, shortcuts=False)
+            ef.form_factors(scene, p, n, error=True, shortcuts=False, engine="python")
 
 
 @pytest.mark.parametrize("area,mag,ok", [

@@ -28,6 +28,8 @@
 #include <pybind11/pybind11.h>
 
 #include <algorithm>
+#include <array>
+#include <functional>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -53,8 +55,12 @@ inline R norm(const V3& a) { return std::sqrt(dot(a, a)); }
 
 // ---- exact signs of float input (Shewchuk's expansion arithmetic), for the cases the
 // band leaves open: a vertex of the input and a plane through p and two input points
-// (or the horizon), whose float sign is not sure
-using Expansion = std::vector<double>;
+// (or with a normal of the input), whose float sign is not sure. Expansions live on the
+// stack (the longest here, a 3 x 3 determinant of differences, has at most 192 terms).
+struct Expansion {
+    std::array<double, 200> c;
+    int n = 0;
+};
 
 inline void two_sum(double a, double b, double& x, double& y) {
     x = a + b;
@@ -62,58 +68,61 @@ inline void two_sum(double a, double b, double& x, double& y) {
     y = (a - (x - bv)) + (b - bv);
 }
 
-// e + b, e nonoverlapping increasing (Shewchuk's grow-expansion, zeros dropped)
-Expansion grow(const Expansion& e, double b) {
-    Expansion h;
-    h.reserve(e.size() + 1);
+// e + b, nonoverlapping increasing (Shewchuk's grow-expansion, zeros dropped)
+inline void grow(Expansion& e, double b) {
     double q = b;
-    for (double ei : e) {
+    int k = 0;
+    for (int i = 0; i < e.n; ++i) {
         double x, y;
-        two_sum(q, ei, x, y);
-        if (y != 0) h.push_back(y);
+        two_sum(q, e.c[i], x, y);
+        if (y != 0) e.c[k++] = y;
         q = x;
     }
-    if (q != 0 || h.empty()) h.push_back(q);
-    return h;
+    if (q != 0 || k == 0) e.c[k++] = q;
+    e.n = k;
 }
 
-Expansion add(const Expansion& e, const Expansion& f) {
+inline Expansion add(const Expansion& e, const Expansion& f) {
     Expansion h = e;
-    for (double fi : f) h = grow(h, fi);
+    for (int i = 0; i < f.n; ++i) grow(h, f.c[i]);
     return h;
 }
 
-Expansion scale(const Expansion& e, double b) {
-    Expansion h{0.0};
-    for (double ei : e) {
-        double x = ei * b;
-        double y = std::fma(ei, b, -x);
-        h = grow(grow(h, y), x);
+inline Expansion scale(const Expansion& e, double b) {
+    Expansion h;
+    for (int i = 0; i < e.n; ++i) {
+        double x = e.c[i] * b;
+        double y = std::fma(e.c[i], b, -x);
+        grow(h, y);
+        grow(h, x);
     }
     return h;
 }
 
-Expansion mul(const Expansion& e, const Expansion& f) {
-    Expansion h{0.0};
-    for (double fi : f) h = add(h, scale(e, fi));
+inline Expansion mul(const Expansion& e, const Expansion& f) {
+    Expansion h;
+    for (int i = 0; i < f.n; ++i) h = add(h, scale(e, f.c[i]));
     return h;
 }
 
-Expansion neg(Expansion e) {
-    for (double& x : e) x = -x;
+inline Expansion neg(Expansion e) {
+    for (int i = 0; i < e.n; ++i) e.c[i] = -e.c[i];
     return e;
 }
 
-int sign(const Expansion& e) {
-    for (auto it = e.rbegin(); it != e.rend(); ++it)
-        if (*it != 0) return *it > 0 ? 1 : -1;
+inline int sign(const Expansion& e) {
+    for (int i = e.n - 1; i >= 0; --i)
+        if (e.c[i] != 0) return e.c[i] > 0 ? 1 : -1;
     return 0;
 }
 
-Expansion diff(double a, double b) {  // a - b exactly
+inline Expansion diff(double a, double b) {  // a - b exactly
+    Expansion e;
     double x, y;
     two_sum(a, -b, x, y);
-    return y != 0 ? Expansion{y, x} : Expansion{x};
+    if (y != 0) e.c[e.n++] = y;
+    e.c[e.n++] = x;
+    return e;
 }
 
 // det(a - p, b - a, x - p): the side of x of the plane through p, a, b
@@ -132,9 +141,41 @@ Expansion orient_exact(const double* p, const double* a, const double* b, const 
 
 // n . (x - p)
 Expansion dot_exact(const double* n, const double* p, const double* x) {
-    Expansion s{0.0};
+    Expansion s;
     for (int i = 0; i < 3; ++i) s = add(s, scale(diff(x[i], p[i]), n[i]));
     return s;
+}
+
+// the filter: whether the same determinant in long double is surely not 0 (beyond
+// 32 roundoffs of its permanent, which bounds the subtractions' and products' rounding)
+bool surely_off(int kind, const double* p, const double* a, const double* b,
+                const double* x) {
+    const R eps = std::numeric_limits<R>::epsilon();
+    R value, permanent;
+    if (kind == 0) {
+        R A[3], B[3], C[3];
+        for (int i = 0; i < 3; ++i) {
+            A[i] = static_cast<R>(a[i]) - p[i];
+            B[i] = static_cast<R>(b[i]) - a[i];
+            C[i] = static_cast<R>(x[i]) - p[i];
+        }
+        R m[3] = {B[1] * C[2] - B[2] * C[1], B[2] * C[0] - B[0] * C[2],
+                  B[0] * C[1] - B[1] * C[0]};
+        R M[3] = {std::fabs(B[1] * C[2]) + std::fabs(B[2] * C[1]),
+                  std::fabs(B[2] * C[0]) + std::fabs(B[0] * C[2]),
+                  std::fabs(B[0] * C[1]) + std::fabs(B[1] * C[0])};
+        value = A[0] * m[0] + A[1] * m[1] + A[2] * m[2];
+        permanent = std::fabs(A[0]) * M[0] + std::fabs(A[1]) * M[1] + std::fabs(A[2]) * M[2];
+    } else {
+        value = 0;
+        permanent = 0;
+        for (int i = 0; i < 3; ++i) {
+            R d = static_cast<R>(x[i]) - p[i];
+            value += a[i] * d;
+            permanent += std::fabs(a[i] * d);
+        }
+    }
+    return std::fabs(value) > 32 * eps * permanent;
 }
 
 // a plane through p as the input defines it: through two input points (kind 0, with
@@ -143,6 +184,7 @@ struct ExactPlane {
     int kind;
     double a[3], b[3];
     V3 m;       // its computed normal, in its own orientation
+    std::vector<std::pair<int64_t, bool>> seen{};  // input vertices tested: on it?
 };
 
 struct Vertex {
@@ -226,7 +268,7 @@ class Core {
                   py::array_t<double, py::array::c_style | py::array::forcecast> normal,
                   py::array_t<int8_t, py::array::c_style | py::array::forcecast> node_side,
                   py::array_t<int8_t, py::array::c_style | py::array::forcecast> source_side,
-                  bool two_sided, bool cull, int64_t box_budget) const {
+                  bool two_sided, bool cull, int64_t box_budget, int64_t tiles) const {
         if (point.size() != 3 || normal.size() != 3)
             throw std::invalid_argument("point and normal must have 3 coordinates");
         if (node_side.size() != nodes())
@@ -245,7 +287,7 @@ class Core {
         {
             py::gil_scoped_release release;
             std::vector<R> f(n_sources_, 0), e(n_sources_, 0), b(n_sources_, 0);
-            run(pp, pn, ns, ss, two_sided, cull, box_budget, f, e, b, st);
+            run(pp, pn, ns, ss, two_sided, cull, box_budget, tiles, f, e, b, st);
             const R half_ulp = std::numeric_limits<double>::epsilon() / 2;
             for (int64_t i = 0; i < n_sources_; ++i) {
                 pF[i] = static_cast<double>(f[i]);
@@ -323,6 +365,61 @@ class Core {
         return 0;
     }
 
+    // the upper hemisphere cut into (tiles + 1)^2 cells by planes through p with double
+    // normals cos t u - sin t n and cos t v - sin t n (t evenly spaced in angle; u, v, n
+    // a frame), as balanced trees: each cell's shadows grow on their own, so a piece
+    // is filtered down the shadows of its own part of the sky only
+    int tile_tree(const double* pn, int64_t tiles, std::vector<Plane>& sv,
+                  std::vector<ExactPlane>& xp) const {
+        double n[3] = {pn[0], pn[1], pn[2]};
+        const double nl = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+        for (double& c : n) c /= nl;
+        int a = 0;
+        for (int i = 1; i < 3; ++i)
+            if (std::fabs(n[i]) < std::fabs(n[a])) a = i;
+        double e[3] = {0, 0, 0};
+        e[a] = 1;
+        double u[3] = {e[1] * n[2] - e[2] * n[1], e[2] * n[0] - e[0] * n[2],
+                       e[0] * n[1] - e[1] * n[0]};
+        const double ul = std::sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
+        for (double& c : u) c /= ul;
+        double v[3] = {n[1] * u[2] - n[2] * u[1], n[2] * u[0] - n[0] * u[2],
+                       n[0] * u[1] - n[1] * u[0]};
+        const double pi = 3.14159265358979323846;
+        auto planes = [&](const double* w) {
+            std::vector<std::array<double, 3>> out;
+            for (int64_t k = 0; k < tiles; ++k) {
+                double t = -pi / 2 + pi * static_cast<double>(k + 1) / (tiles + 1);
+                out.push_back({std::cos(t) * w[0] - std::sin(t) * n[0],
+                               std::cos(t) * w[1] - std::sin(t) * n[1],
+                               std::cos(t) * w[2] - std::sin(t) * n[2]});
+            }
+            return out;
+        };
+        const auto xs = planes(u), ys = planes(v);
+        using Normals = std::vector<std::array<double, 3>>;
+        std::function<int(const Normals&, int64_t, int64_t, const std::function<int()>&)>
+            build = [&](const Normals& ms, int64_t lo, int64_t hi,
+                        const std::function<int()>& inner) -> int {
+            if (lo >= hi) return inner();
+            const int64_t mid = (lo + hi) / 2;
+            const auto& m = ms[mid];
+            V3 mm{m[0], m[1], m[2]};
+            const int node = static_cast<int>(sv.size());
+            const int exact = static_cast<int>(xp.size());
+            xp.push_back({1, {m[0], m[1], m[2]}, {0, 0, 0}, mm});
+            sv.push_back({mm, norm(mm), 2 * K_.eps, OUT, OUT, exact, 1});
+            const int neg = build(ms, lo, mid, inner);
+            const int pos = build(ms, mid + 1, hi, inner);
+            sv[node].neg = neg;
+            sv[node].pos = pos;
+            return node;
+        };
+        std::function<int()> out_leaf = []() { return OUT; };
+        std::function<int()> cells = [&]() { return build(ys, 0, tiles, out_leaf); };
+        return build(xs, 0, tiles, cells);
+    }
+
     // an exact plane's value at a point of the input
     static Expansion exact_value(const ExactPlane& X, const double* p, const double* x) {
         return X.kind == 0 ? orient_exact(p, X.a, X.b, x) : dot_exact(X.a, p, x);
@@ -332,10 +429,16 @@ class Core {
     // of an input edge a -> b with an exact plane P, x = a + t (b - a) with
     // t = P(a) / (P(a) - P(b)): Q(x) = (Q(a) P(b) - P(a) Q(b)) / (P(b) - P(a)).
     // False where it cannot be told (the vertex is then charged its sliver).
-    bool exactly_on(const std::vector<ExactPlane>& xp, int k, const double* p, int64_t f,
+    bool exactly_on(std::vector<ExactPlane>& xp, int k, const double* p, int64_t f,
                     const Vertex& u) const {
-        const ExactPlane& Q = xp[k];
-        if (u.id >= 0) return sign(exact_value(Q, p, &V_[3 * u.id])) == 0;
+        ExactPlane& Q = xp[k];
+        if (u.id >= 0) {
+            for (const auto& [id, on] : Q.seen)
+                if (id == u.id) return on;
+            const bool on = exactly_on_input(Q, p, u.id);
+            if (Q.seen.size() < 64) Q.seen.emplace_back(u.id, on);
+            return on;
+        }
         if (u.on_edge < 0) return false;
         if (u.on_plane == k) return true;
         const int64_t ia = u.on_edge;
@@ -344,6 +447,28 @@ class Core {
         Expansion Pa = exact_value(P, p, &V_[3 * ia]), Pb = exact_value(P, p, &V_[3 * ib]);
         Expansion Qa = exact_value(Q, p, &V_[3 * ia]), Qb = exact_value(Q, p, &V_[3 * ib]);
         return sign(add(mul(Qa, Pb), neg(mul(Pa, Qb)))) == 0;
+    }
+
+    bool exactly_on_input(const ExactPlane& Q, const double* p, int64_t id) const {
+        {  // an input vertex against an exact plane
+            const double* x = &V_[3 * id];
+            // one of the two points that define the plane (a shared edge's end): on it
+            if (Q.kind == 0 && ((x[0] == Q.a[0] && x[1] == Q.a[1] && x[2] == Q.a[2]) ||
+                                (x[0] == Q.b[0] && x[1] == Q.b[1] && x[2] == Q.b[2])))
+                return true;
+            if (surely_off(Q.kind, p, Q.a, Q.b, x)) return false;
+            return sign(exact_value(Q, p, x)) == 0;
+        }
+    }
+
+    // b - a: from the world coordinates where both are input vertices (exact doubles:
+    // their difference loses nothing to the distance from p), else from the
+    // directions (a computed vertex's world position would be rounded at the scale of
+    // its coordinates, far coarser than its direction from p far from the origin; the
+    // directions' rounding is in the vertices' own error bounds)
+    static V3 between(const Vertex& a, const Vertex& b) {
+        if (a.id >= 0 && b.id >= 0) return {b.w.x - a.w.x, b.w.y - a.w.y, b.w.z - a.w.z};
+        return {b.v.x - a.v.x, b.v.y - a.v.y, b.v.z - a.v.z};
     }
 
     // arc length between two directions
@@ -402,10 +527,7 @@ class Core {
         R S = 0, mag = 0, errs = 0, geo = 0;
         const size_t m = q.size();
         const V3 a0 = q[0].v;
-        const V3 w0 = q[0].w;
-        auto offset = [&](const Vertex& u) {
-            return V3{u.w.x - w0.x, u.w.y - w0.y, u.w.z - w0.z};
-        };
+        auto offset = [&](const Vertex& u) { return between(q[0], u); };
         for (size_t i = 0; i < m; ++i) {
             const Vertex& a = q[i];
             const Vertex& b = q[(i + 1) % m];
@@ -442,7 +564,7 @@ class Core {
 
     void run(const double* pp, const double* pn, const int8_t* node_side,
              const int8_t* source_side, bool two_sided, bool cull, int64_t budget,
-             std::vector<R>& F, std::vector<R>& E, std::vector<R>& B, RowStats& st) const {
+             int64_t tiles, std::vector<R>& F, std::vector<R>& E, std::vector<R>& B, RowStats& st) const {
         const V3 p{pp[0], pp[1], pp[2]};
         V3 n{pn[0], pn[1], pn[2]};
         R nl = norm(n);
@@ -454,6 +576,7 @@ class Core {
         // the root: the horizon, covered below
         sv.push_back({n, 1, 2 * K_.eps, OUT, IN, 0, 1});
         xp.push_back({1, {pn[0], pn[1], pn[2]}, {0, 0, 0}, n});
+        if (tiles > 0) sv[0].pos = tile_tree(pn, tiles, sv, xp);
         if (nodes() == 0) return;
         struct Item {
             int64_t node;
@@ -548,15 +671,18 @@ class Core {
             std::vector<R> d(m);
             bool pos = false, neg = false;
             for (size_t i = 0; i < m; ++i) {
-                // a vertex within the band is taken as on the plane (it goes with the
-                // others); it may lie on the other side by up to the band: the sliver
-                // along its two edges is charged to the piece
-                sg[i] = side(P, w.q[i], K_, &d[i]);
+                // a vertex within the rounding band of d is taken as on the plane (it
+                // goes with the others); one within that band plus the plane's and its
+                // own errors may lie on the other side of the true plane by up to them:
+                // the sliver along its two edges is charged to the piece
+                const Vertex& u = w.q[i];
+                d[i] = dot(P.m, u.v);
+                const R scale = P.mnorm * u.length;
+                sg[i] = d[i] > K_.band * scale ? 1 : (d[i] < -K_.band * scale ? -1 : 0);
                 pos |= sg[i] > 0;
                 neg |= sg[i] < 0;
-                if (sg[i] == 0 && !exactly_on(xp, P.exact, pp, f, w.q[i])) {
-                    const Vertex& u = w.q[i];
-                    R width = K_.band + P.err + u.err;
+                const R width = K_.band + P.err + u.err;
+                if (std::fabs(d[i]) <= width * scale && !exactly_on(xp, P.exact, pp, f, u)) {
                     R adjacent = arc(w.q[(i + m - 1) % m], u) + arc(u, w.q[(i + 1) % m]);
                     if (receives)
                         B[src] += adjacent * width / 3.14159265358979323846264338327950288L;
@@ -638,9 +764,10 @@ class Core {
         for (size_t i = 0; i < m; ++i) {
             const Vertex& a = q[i];
             const Vertex& b = q[(i + 1) % m];
-            // the plane through p, a and b: (a - p) x (b - a), with b - a taken from
-            // the world positions (accurate for short edges far from p)
-            V3 e{b.w.x - a.w.x, b.w.y - a.w.y, b.w.z - a.w.z};
+            // the plane through p, a and b: (a - p) x (b - a), with b - a from the
+            // input's coordinates where both are input vertices (accurate for short
+            // edges far from p)
+            const V3 e = between(a, b);
             V3 mm = cross(a.v, e);
             R ml = norm(mm);
             if (!(ml > 0)) continue;  // an edge through p, or a repeated vertex
@@ -666,7 +793,9 @@ class Core {
             }
             // its tilt: its end points' errors, and the rounding of the cross product
             // of two rounded vectors relative to its length
-            R err = std::max(a.err, b.err) + 8 * K_.eps * a.length * norm(e) / ml;
+            R scale = norm(e);
+            if (a.id < 0 || b.id < 0) scale += a.length + b.length;  // e from directions
+            R err = std::max(a.err, b.err) + 8 * K_.eps * a.length * scale / ml;
             chain.push_back({mm, ml, err, OUT, OUT, exact, orient});
         }
         if (chain.size() < 3) return;  // a sliver: hides nothing to speak of
