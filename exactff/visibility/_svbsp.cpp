@@ -148,8 +148,19 @@ Expansion dot_exact(const double* n, const double* p, const double* x) {
 
 // the filter: whether the same determinant in long double is surely not 0 (beyond
 // 32 roundoffs of its permanent, which bounds the subtractions' and products' rounding)
+// the same determinant in long double, and a bound on its rounding error
+void filtered(int kind, const double* p, const double* a, const double* b, const double* x,
+              R* value_out, R* error_out);
+
 bool surely_off(int kind, const double* p, const double* a, const double* b,
                 const double* x) {
+    R value, error;
+    filtered(kind, p, a, b, x, &value, &error);
+    return std::fabs(value) > error;
+}
+
+void filtered(int kind, const double* p, const double* a, const double* b, const double* x,
+              R* value_out, R* error_out) {
     const R eps = std::numeric_limits<R>::epsilon();
     R value, permanent;
     if (kind == 0) {
@@ -175,7 +186,8 @@ bool surely_off(int kind, const double* p, const double* a, const double* b,
             permanent += std::fabs(a[i] * d);
         }
     }
-    return std::fabs(value) > 32 * eps * permanent;
+    *value_out = value;
+    *error_out = 32 * eps * permanent;
 }
 
 // a plane through p as the input defines it: through two input points (kind 0, with
@@ -444,6 +456,19 @@ class Core {
         const int64_t ia = u.on_edge;
         const int64_t ib = start_[f] + (ia - start_[f] + 1) % count_[f];
         const ExactPlane& P = xp[u.on_plane];
+        {   // the filter: Q(a) P(b) - P(a) Q(b) in long double, with its error bound
+            R qa, eqa, qb, eqb, pa, epa, pb, epb;
+            filtered(Q.kind, p, Q.a, Q.b, &V_[3 * ia], &qa, &eqa);
+            filtered(Q.kind, p, Q.a, Q.b, &V_[3 * ib], &qb, &eqb);
+            filtered(P.kind, p, P.a, P.b, &V_[3 * ia], &pa, &epa);
+            filtered(P.kind, p, P.a, P.b, &V_[3 * ib], &pb, &epb);
+            const R c = qa * pb - pa * qb;
+            const R err = (std::fabs(qa) + eqa) * epb + eqa * std::fabs(pb) +
+                          (std::fabs(pa) + epa) * eqb + epa * std::fabs(qb) +
+                          4 * std::numeric_limits<R>::epsilon() *
+                              (std::fabs(qa * pb) + std::fabs(pa * qb));
+            if (std::fabs(c) > err) return false;
+        }
         Expansion Pa = exact_value(P, p, &V_[3 * ia]), Pb = exact_value(P, p, &V_[3 * ib]);
         Expansion Qa = exact_value(Q, p, &V_[3 * ia]), Qb = exact_value(Q, p, &V_[3 * ib]);
         return sign(add(mul(Qa, Pb), neg(mul(Pa, Qb)))) == 0;
