@@ -456,6 +456,16 @@ class Core {
         const int64_t ia = u.on_edge;
         const int64_t ib = start_[f] + (ia - start_[f] + 1) % count_[f];
         const ExactPlane& P = xp[u.on_plane];
+        {   // the edge is one that defines Q (a shared edge): its whole line lies on Q
+            const double* A = &V_[3 * ia];
+            const double* Bv = &V_[3 * ib];
+            auto same = [](const double* x, const double* y) {
+                return x[0] == y[0] && x[1] == y[1] && x[2] == y[2];
+            };
+            if (Q.kind == 0 &&
+                ((same(A, Q.a) && same(Bv, Q.b)) || (same(A, Q.b) && same(Bv, Q.a))))
+                return true;
+        }
         {   // the filter: Q(a) P(b) - P(a) Q(b) in long double, with its error bound
             R qa, eqa, qb, eqb, pa, epa, pb, epb;
             filtered(Q.kind, p, Q.a, Q.b, &V_[3 * ia], &qa, &eqa);
