@@ -210,6 +210,7 @@ struct Vertex {
                                 // on_plane, or -1
     int64_t edge;  // the edge to the next vertex: on input edge id (>= 0: the input
                    // vertex it starts from) or on exact plane -1 - k
+    R t = 0;       // with on_edge: its parameter along that input edge
 };
 using Piece = std::vector<Vertex>;
 
@@ -501,8 +502,43 @@ class Core {
     // directions (a computed vertex's world position would be rounded at the scale of
     // its coordinates, far coarser than its direction from p far from the origin; the
     // directions' rounding is in the vertices' own error bounds)
-    static V3 between(const Vertex& a, const Vertex& b) {
-        if (a.id >= 0 && b.id >= 0) return {b.w.x - a.w.x, b.w.y - a.w.y, b.w.z - a.w.z};
+    //
+    // A vertex on an input edge is anchored there (its start plus its parameter times
+    // the edge), so differences of anchored vertices come from the input's own
+    // differences too. ``scale`` receives the magnitude the difference's rounding is
+    // relative to.
+    V3 between(const Vertex& a, const Vertex& b, int64_t f, R* scale) const {
+        if (a.id >= 0 && b.id >= 0) {
+            V3 e{b.w.x - a.w.x, b.w.y - a.w.y, b.w.z - a.w.z};
+            *scale = norm(e);
+            return e;
+        }
+        const bool anchored_a = a.id >= 0 || a.on_edge >= 0;
+        const bool anchored_b = b.id >= 0 || b.on_edge >= 0;
+        if (anchored_a && anchored_b) {
+            auto anchor = [&](const Vertex& u, V3* base, V3* edge, R* t) {
+                const int64_t i0 = u.id >= 0 ? u.id : u.on_edge;
+                *base = {V_[3 * i0], V_[3 * i0 + 1], V_[3 * i0 + 2]};
+                *edge = {0, 0, 0};
+                *t = 0;
+                if (u.id < 0) {
+                    const int64_t i1 = start_[f] + (i0 - start_[f] + 1) % count_[f];
+                    *edge = {V_[3 * i1] - base->x, V_[3 * i1 + 1] - base->y,
+                             V_[3 * i1 + 2] - base->z};
+                    *t = u.t;
+                }
+            };
+            V3 ba, ea, bb, eb;
+            R ta, tb;
+            anchor(a, &ba, &ea, &ta);
+            anchor(b, &bb, &eb, &tb);
+            V3 d0{bb.x - ba.x, bb.y - ba.y, bb.z - ba.z};
+            V3 e{d0.x + tb * eb.x - ta * ea.x, d0.y + tb * eb.y - ta * ea.y,
+                 d0.z + tb * eb.z - ta * ea.z};
+            *scale = norm(d0) + std::fabs(tb) * norm(eb) + std::fabs(ta) * norm(ea);
+            return e;
+        }
+        *scale = a.length + b.length;
         return {b.v.x - a.v.x, b.v.y - a.v.y, b.v.z - a.v.z};
     }
 
@@ -558,11 +594,12 @@ class Core {
     // world offsets from it, accurate for pieces small next to their distance; each
     // term's rounding bounded by the magnitudes of the products in n . m (C2 ulps per
     // unit of the cross product's condition), the sum's by C1 ulps of its terms
-    void integrate(const Piece& q, const V3& n, R* value, R* bound) const {
+    void integrate(const Piece& q, int64_t f, const V3& n, R* value, R* bound) const {
         R S = 0, mag = 0, errs = 0, geo = 0;
         const size_t m = q.size();
         const V3 a0 = q[0].v;
-        auto offset = [&](const Vertex& u) { return between(q[0], u); };
+        R unused;
+        auto offset = [&](const Vertex& u) { return between(q[0], u, f, &unused); };
         for (size_t i = 0; i < m; ++i) {
             const Vertex& a = q[i];
             const Vertex& b = q[(i + 1) % m];
@@ -693,7 +730,7 @@ class Core {
                 ++st.visible;
                 if (receives) {
                     R val, bnd;
-                    integrate(w.q, n, &val, &bnd);
+                    integrate(w.q, f, n, &val, &bnd);
                     F[src] += val;
                     E[src] += bnd;
                 }
@@ -754,8 +791,18 @@ class Core {
                             std::max(x.err * x.length, y.err * y.length) / l;
                     cut[i] = {wv, v, l, err, -1, -1, -1, -1};
                     if (x.edge >= 0) {  // on an input edge: exactly known
-                        cut[i].on_edge = x.edge;
-                        cut[i].on_plane = P.exact;
+                        const int64_t ia = x.edge;
+                        const int64_t ib = start_[f] + (ia - start_[f] + 1) % count_[f];
+                        R tx = -1, ty = -1;  // the ends' parameters along it
+                        if (x.id == ia) tx = 0;
+                        else if (x.on_edge == ia) tx = x.t;
+                        if (y.id == ib) ty = 1;
+                        else if (y.on_edge == ia) ty = y.t;
+                        if (tx >= 0 && ty >= 0) {
+                            cut[i].on_edge = ia;
+                            cut[i].on_plane = P.exact;
+                            cut[i].t = tx + t * (ty - tx);
+                        }
                     }
                 }
             }
@@ -802,7 +849,8 @@ class Core {
             // the plane through p, a and b: (a - p) x (b - a), with b - a from the
             // input's coordinates where both are input vertices (accurate for short
             // edges far from p)
-            const V3 e = between(a, b);
+            R scale;
+            const V3 e = between(a, b, f, &scale);
             V3 mm = cross(a.v, e);
             R ml = norm(mm);
             if (!(ml > 0)) continue;  // an edge through p, or a repeated vertex
@@ -828,8 +876,6 @@ class Core {
             }
             // its tilt: its end points' errors, and the rounding of the cross product
             // of two rounded vectors relative to its length
-            R scale = norm(e);
-            if (a.id < 0 || b.id < 0) scale += a.length + b.length;  // e from directions
             R err = std::max(a.err, b.err) + 8 * K_.eps * a.length * scale / ml;
             chain.push_back({mm, ml, err, OUT, OUT, exact, orient});
         }
