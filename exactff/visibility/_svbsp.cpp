@@ -196,6 +196,7 @@ struct ExactPlane {
     int kind;
     double a[3], b[3];
     V3 m;       // its computed normal, in its own orientation
+    R err;      // the bound on that normal's tilt, radians
     std::vector<std::pair<int64_t, bool>> seen{};  // input vertices tested: on it?
 };
 
@@ -221,6 +222,8 @@ struct Plane {  // m . x = 0 through p; positive side first
     int pos, neg;
     int exact;  // the exact plane it is (ExactPlane index)
     int orient; // +1 or -1: m's orientation against the exact plane's
+    R slack = 0;  // the widest sliver decided against it so far: the covered region
+                  // next to it is uncertain by that much for every later piece
 };
 
 struct Constants {
@@ -232,6 +235,7 @@ struct Constants {
 };
 
 struct RowStats {
+    R unattributed = 0;  // value of visible slivers whose shadows were left out
     int64_t fragments = 0, visible = 0, hidden = 0, splits = 0, subtrees_culled = 0,
             fragments_culled = 0, box_tests = 0, shadow_planes = 0;
 };
@@ -319,6 +323,7 @@ class Core {
         d["fragments_culled"] = st.fragments_culled;
         d["box_tests"] = st.box_tests;
         d["shadow_planes"] = st.shadow_planes;
+        d["unattributed_bound"] = static_cast<double>(st.unattributed);
         return py::make_tuple(F, E, B, d);
     }
 
@@ -420,7 +425,7 @@ class Core {
             V3 mm{m[0], m[1], m[2]};
             const int node = static_cast<int>(sv.size());
             const int exact = static_cast<int>(xp.size());
-            xp.push_back({1, {m[0], m[1], m[2]}, {0, 0, 0}, mm});
+            xp.push_back({1, {m[0], m[1], m[2]}, {0, 0, 0}, mm, 2 * K_.eps});
             sv.push_back({mm, norm(mm), 2 * K_.eps, OUT, OUT, exact, 1});
             const int neg = build(ms, lo, mid, inner);
             const int pos = build(ms, mid + 1, hi, inner);
@@ -647,7 +652,7 @@ class Core {
         xp.reserve(1024);
         // the root: the horizon, covered below
         sv.push_back({n, 1, 2 * K_.eps, OUT, IN, 0, 1});
-        xp.push_back({1, {pn[0], pn[1], pn[2]}, {0, 0, 0}, n});
+        xp.push_back({1, {pn[0], pn[1], pn[2]}, {0, 0, 0}, n, 2 * K_.eps});
         if (tiles > 0) sv[0].pos = tile_tree(pn, tiles, sv, xp);
         if (nodes() == 0) return;
         struct Item {
@@ -689,6 +694,12 @@ class Core {
             stack.push_back({k, true});
             if (nearc >= 0) stack.push_back({nearc, false});
         }
+        // a visible sliver whose shadow was left out may wrongly show any later piece
+        // behind it: its area goes to every receiving polygon's band bound
+        if (st.unattributed > 0)
+            for (int64_t i = 0; i < n_sources_; ++i)
+                if (source_side[i] > 0 || (two_sided && source_side[i] < 0))
+                    B[i] += st.unattributed;
     }
 
     template <class W>
@@ -728,13 +739,14 @@ class Core {
             }
             if (node == OUT) {
                 ++st.visible;
+                R val, bnd;
+                integrate(w.q, f, n, &val, &bnd);
                 if (receives) {
-                    R val, bnd;
-                    integrate(w.q, f, n, &val, &bnd);
                     F[src] += val;
                     E[src] += bnd;
                 }
-                insert_shadow(w.q, f, w.plane, w.positive, sv, xp, st);
+                insert_shadow(w.q, f, pp, w.plane, w.positive, sv, xp, st, &st.unattributed,
+                              val + bnd);
                 continue;
             }
             const Plane P = sv[node];
@@ -753,15 +765,16 @@ class Core {
                 sg[i] = d[i] > K_.band * scale ? 1 : (d[i] < -K_.band * scale ? -1 : 0);
                 pos |= sg[i] > 0;
                 neg |= sg[i] < 0;
-                const R width = K_.band + P.err + u.err;
+                const R width = K_.band + P.err + P.slack + u.err;
                 if (std::fabs(d[i]) <= width * scale && !exactly_on(xp, P.exact, pp, f, u)) {
                     R adjacent = arc(w.q[(i + m - 1) % m], u) + arc(u, w.q[(i + 1) % m]);
                     if (receives)
                         B[src] += adjacent * width / 3.14159265358979323846264338327950288L;
                     // the sliver, on whichever side it truly is, also hides or uncovers
-                    // what lies behind it near this plane: the plane's own bound widens
-                    // by it for every later piece classified or cut here
-                    sv[node].err = std::max(sv[node].err, width);
+                    // what lies behind it near this plane: every later piece classified
+                    // or cut here is charged it too (the plane's slack; not fed back into
+                    // the slack itself, so that it does not grow hit by hit)
+                    sv[node].slack = std::max(sv[node].slack, K_.band + P.err + u.err);
                 }
             }
             if (!neg) {  // in front (or in the plane: either side)
@@ -785,9 +798,10 @@ class Core {
                     V3 wv{x.w.x + t * (y.w.x - x.w.x), x.w.y + t * (y.w.y - x.w.y),
                           x.w.z + t * (y.w.z - x.w.z)};
                     R l = norm(v);
-                    // the new vertex: within K.split ulps of the edge's length scale,
-                    // plus its ends' and the plane's errors carried over
-                    R err = P.err + K_.split * K_.eps * (x.length + y.length) / l +
+                    // the new vertex: within K.split ulps of its ends' interpolated distance
+                    // (and its own), plus its ends' and the plane's errors carried over
+                    R err = P.err + P.slack +
+                            K_.split * K_.eps * ((1 - t) * x.length + t * y.length + l) / l +
                             std::max(x.err * x.length, y.err * y.length) / l;
                     cut[i] = {wv, v, l, err, -1, -1, -1, -1};
                     if (x.edge >= 0) {  // on an input edge: exactly known
@@ -831,55 +845,79 @@ class Core {
     }
 
     // replace the free leaf reached by (plane, branch) with the piece's shadow volume
-    void insert_shadow(const Piece& q, int64_t f, int plane, bool positive,
-                       std::vector<Plane>& sv, std::vector<ExactPlane>& xp,
-                       RowStats& st) const {
+    // the plane through p and input points a, b: (a - p) x (b - a), from the doubles'
+    // error-free differences and products (two-sum, two-product), so that its direction
+    // is good to a few long double roundoffs even for an edge seen nearly end-on
+    static V3 input_plane(const double* p, const double* a, const double* b) {
+        double Ah[3], Al[3], Eh[3], El[3];
+        for (int i = 0; i < 3; ++i) {
+            two_sum(a[i], -p[i], Ah[i], Al[i]);
+            two_sum(b[i], -a[i], Eh[i], El[i]);
+        }
+        auto term = [&](int i, int j) {  // A_i E_j - A_j E_i
+            const double p1 = Ah[i] * Eh[j], p2 = Ah[j] * Eh[i];
+            const double e1 = std::fma(Ah[i], Eh[j], -p1), e2 = std::fma(Ah[j], Eh[i], -p2);
+            return (static_cast<R>(p1) - p2) + (static_cast<R>(e1) - e2) +
+                   (static_cast<R>(Ah[i]) * El[j] + static_cast<R>(Al[i]) * Eh[j]) -
+                   (static_cast<R>(Ah[j]) * El[i] + static_cast<R>(Al[j]) * Eh[i]);
+        };
+        return {term(1, 2), term(2, 0), term(0, 1)};
+    }
+
+    // replace the free leaf reached by (plane, branch) with the piece's shadow volume:
+    // for each edge, the plane it lies on (its input edge's plane through p, or the
+    // plane it was cut along), oriented to hold the piece
+    void insert_shadow(const Piece& q, int64_t f, const double* pp, int plane, bool positive,
+                       std::vector<Plane>& sv, std::vector<ExactPlane>& xp, RowStats& st,
+                       R* unattributed, R piece_bound) const {
         const size_t m = q.size();
-        if (m < 3) return;
         V3 c{0, 0, 0};
         for (const Vertex& u : q) {
             c.x += u.v.x / u.length;
             c.y += u.v.y / u.length;
             c.z += u.v.z / u.length;
         }
+        const R cl = norm(c);
         std::vector<Plane> chain;
-        for (size_t i = 0; i < m; ++i) {
+        bool degenerate = m < 3;
+        for (size_t i = 0; i < m && !degenerate; ++i) {
             const Vertex& a = q[i];
-            const Vertex& b = q[(i + 1) % m];
-            // the plane through p, a and b: (a - p) x (b - a), with b - a from the
-            // input's coordinates where both are input vertices (accurate for short
-            // edges far from p)
-            R scale;
-            const V3 e = between(a, b, f, &scale);
-            V3 mm = cross(a.v, e);
-            R ml = norm(mm);
-            if (!(ml > 0)) continue;  // an edge through p, or a repeated vertex
-            // the exact plane it is: its input edge's, or the plane it was cut along
+            V3 mm;
+            R err;
             int exact;
-            int orient;
             if (a.edge >= 0) {
                 const int64_t ia = a.edge;
                 const int64_t ib = start_[f] + (ia - start_[f] + 1) % count_[f];
+                mm = input_plane(pp, &V_[3 * ia], &V_[3 * ib]);
+                err = 8 * K_.eps;
                 exact = static_cast<int>(xp.size());
-                ExactPlane X{0, {V_[3 * ia], V_[3 * ia + 1], V_[3 * ia + 2]},
-                             {V_[3 * ib], V_[3 * ib + 1], V_[3 * ib + 2]}, mm};
-                xp.push_back(X);
-                orient = 1;
+                xp.push_back({0, {V_[3 * ia], V_[3 * ia + 1], V_[3 * ia + 2]},
+                              {V_[3 * ib], V_[3 * ib + 1], V_[3 * ib + 2]}, mm, err});
             } else {
                 exact = static_cast<int>(-1 - a.edge);
-                orient = dot(mm, xp[exact].m) >= 0 ? 1 : -1;
+                mm = xp[exact].m;
+                err = xp[exact].err;
             }
-            R dc = dot(mm, c);
+            const R ml = norm(mm);
+            if (!(ml > 0)) continue;  // an input edge through p (seen end-on exactly)
+            int orient = 1;
+            const R dc = dot(mm, c);
+            // the piece must lie clearly on one side: else it is a sliver along this
+            // plane, whose shadow is left out (its area goes to every value's bound)
+            if (!(std::fabs(dc) > (16 * K_.eps + err) * ml * cl)) {
+                degenerate = true;
+                break;
+            }
             if (dc < 0) {
                 mm = {-mm.x, -mm.y, -mm.z};
-                orient = -orient;
+                orient = -1;
             }
-            // its tilt: its end points' errors, and the rounding of the cross product
-            // of two rounded vectors relative to its length
-            R err = std::max(a.err, b.err) + 8 * K_.eps * a.length * scale / ml;
             chain.push_back({mm, ml, err, OUT, OUT, exact, orient});
         }
-        if (chain.size() < 3) return;  // a sliver: hides nothing to speak of
+        if (degenerate || chain.size() < 3) {
+            *unattributed += piece_bound;
+            return;
+        }
         const int base = static_cast<int>(sv.size());
         for (size_t i = 0; i < chain.size(); ++i) {
             chain[i].pos = i + 1 < chain.size() ? base + static_cast<int>(i) + 1 : IN;
