@@ -1,12 +1,19 @@
 """Build of the compiled visibility core (exactff.visibility._svbsp); the rest of the
 project's metadata is in pyproject.toml."""
 
+import platform
+
 from pybind11.setup_helpers import Pybind11Extension, build_ext
 from setuptools import setup
+
+# the quadruple-precision tier uses GCC's libquadmath on x86 (long double is already
+# quadruple on aarch64)
+QUADMATH = ["-lquadmath"] if platform.machine().lower() in ("x86_64", "amd64", "i686") else []
 
 setup(
     ext_modules=[Pybind11Extension("exactff.visibility._svbsp",
                                    ["exactff/visibility/_svbsp.cpp"],
-                                   cxx_std=17, extra_compile_args=["-O2"])],
+                                   cxx_std=17, extra_compile_args=["-O2"],
+                                   extra_link_args=QUADMATH)],
     cmdclass={"build_ext": build_ext},
 )

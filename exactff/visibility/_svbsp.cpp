@@ -31,9 +31,28 @@
 #include <array>
 #include <functional>
 #include <cmath>
+#include <cfloat>
 #include <cstdint>
 #include <limits>
+#include <cstring>
+#include <unordered_map>
 #include <vector>
+#if defined(__SIZEOF_FLOAT128__) && !defined(__aarch64__)
+#include <quadmath.h>
+using Quad = __float128;
+inline Quad q_atan2(Quad y, Quad x) { return atan2q(y, x); }
+inline Quad q_sqrt(Quad x) { return sqrtq(x); }
+inline Quad q_abs(Quad x) { return fabsq(x); }
+const Quad QUAD_EPS = static_cast<Quad>(std::ldexp(1.0L, -113));  // unit roundoff
+#else
+// long double is already quadruple (aarch64) or the platform has no quad type: the
+// second tier is long double again
+using Quad = long double;
+inline Quad q_atan2(Quad y, Quad x) { return std::atan2(y, x); }
+inline Quad q_sqrt(Quad x) { return std::sqrt(x); }
+inline Quad q_abs(Quad x) { return std::fabs(x); }
+constexpr Quad QUAD_EPS = LDBL_EPSILON / 2;
+#endif
 
 namespace py = pybind11;
 
@@ -212,6 +231,8 @@ struct Vertex {
     int64_t edge;  // the edge to the next vertex: on input edge id (>= 0: the input
                    // vertex it starts from) or on exact plane -1 - k
     R t = 0;       // with on_edge: its parameter along that input edge
+    R err_line = 0;  // with on_edge: bound on its direction's error off that edge's
+                     // plane through p (its error along the edge moves no boundary)
 };
 using Piece = std::vector<Vertex>;
 
@@ -234,8 +255,42 @@ struct Constants {
     R split;    // rounding of a split vertex, in units of eps
 };
 
+struct EdgeKey {
+    R c[6];
+    bool operator==(const EdgeKey& o) const {
+        for (int i = 0; i < 6; ++i)
+            if (c[i] != o.c[i]) return false;
+        return true;
+    }
+};
+struct EdgeKeyHash {
+    size_t operator()(const EdgeKey& k) const {
+        size_t h = 1469598103934665603ull;
+        for (int i = 0; i < 6; ++i) {
+            double d = static_cast<double>(k.c[i]);
+            uint64_t bits;
+            std::memcpy(&bits, &d, sizeof bits);
+            h = (h ^ bits) * 1099511628211ull;
+        }
+        return h;
+    }
+};
+struct EdgeCharge {
+    int64_t src;
+    R charge;
+    int count;
+};
+
 struct RowStats {
+    // the vertex-error charges of visible pieces' edges with a computed end, by edge:
+    // an edge two visible pieces of one polygon share cancels (the two pieces' sums
+    // carry it with opposite signs); the rest is charged at the end of the row
+    std::unordered_map<EdgeKey, EdgeCharge, EdgeKeyHash> edges;
     R unattributed = 0;  // value of visible slivers whose shadows were left out
+    R rtol = 0;          // pieces whose bound exceeds this times their value are
+                         // integrated again in quadruple precision (0: never)
+    const double* normal = nullptr;  // the receiver normal as given
+    int64_t quad_pieces = 0;
     int64_t fragments = 0, visible = 0, hidden = 0, splits = 0, subtrees_culled = 0,
             fragments_culled = 0, box_tests = 0, shadow_planes = 0;
 };
@@ -285,7 +340,8 @@ class Core {
                   py::array_t<double, py::array::c_style | py::array::forcecast> normal,
                   py::array_t<int8_t, py::array::c_style | py::array::forcecast> node_side,
                   py::array_t<int8_t, py::array::c_style | py::array::forcecast> source_side,
-                  bool two_sided, bool cull, int64_t box_budget, int64_t tiles) const {
+                  bool two_sided, bool cull, int64_t box_budget, int64_t tiles,
+                  double rtol) const {
         if (point.size() != 3 || normal.size() != 3)
             throw std::invalid_argument("point and normal must have 3 coordinates");
         if (node_side.size() != nodes())
@@ -301,6 +357,8 @@ class Core {
         double* pE = E.mutable_data();
         double* pB = B.mutable_data();
         RowStats st;
+        st.rtol = rtol;
+        st.normal = pn;
         {
             py::gil_scoped_release release;
             std::vector<R> f(n_sources_, 0), e(n_sources_, 0), b(n_sources_, 0);
@@ -323,6 +381,7 @@ class Core {
         d["fragments_culled"] = st.fragments_culled;
         d["box_tests"] = st.box_tests;
         d["shadow_planes"] = st.shadow_planes;
+        d["quad_pieces"] = st.quad_pieces;
         d["unattributed_bound"] = static_cast<double>(st.unattributed);
         return py::make_tuple(F, E, B, d);
     }
@@ -547,6 +606,12 @@ class Core {
         return {b.v.x - a.v.x, b.v.y - a.v.y, b.v.z - a.v.z};
     }
 
+    static bool lex_less(const V3& x, const V3& y) {
+        if (x.x != y.x) return x.x < y.x;
+        if (x.y != y.y) return x.y < y.y;
+        return x.z < y.z;
+    }
+
     // arc length between two directions
     static R arc(const Vertex& a, const Vertex& b) {
         return std::atan2(norm(cross(a.v, b.v)), dot(a.v, b.v));
@@ -622,7 +687,7 @@ class Core {
             const R cl = norm(c);
             const R Nm = a.length * b.length;
             const R theta = std::atan2(cl, dot(a.v, b.v));
-            geo += theta * std::max(a.err, b.err);
+            (void)geo;
             if (!(cl > 0)) {
                 if (Nm > 0) errs += 2 * K_.eps;  // a degenerate edge: its term unknown
                 continue;
@@ -636,7 +701,119 @@ class Core {
         const R two_pi = 6.283185307179586476925286766559L;
         const R pi = two_pi / 2;
         *value = std::fabs(S) / two_pi;
-        *bound = (K_.c1 * K_.eps * mag + errs) / two_pi + geo / pi;
+        (void)pi;
+        *bound = (K_.c1 * K_.eps * mag + errs) / two_pi;
+    }
+
+    // each edge's share of the error of its ends' directions: its arc length times the
+    // larger of their bounds, over pi (the area swept by moving the edge that far)
+    void charge_edges(const Piece& q, int64_t src, std::vector<R>& E, RowStats& st) const {
+        const R pi = 3.14159265358979323846264338327950288L;
+        const size_t m = q.size();
+        for (size_t i = 0; i < m; ++i) {
+            const Vertex& a = q[i];
+            const Vertex& b = q[(i + 1) % m];
+            // off the plane the edge lies on: for an input edge, its ends' distances
+            // from that edge's plane (a crossing slides along it, which moves nothing)
+            auto off = [&](const Vertex& u) {
+                if (a.edge >= 0 && u.id < 0 && u.on_edge == a.edge) return u.err_line;
+                return u.err;
+            };
+            const R charge = arc(a, b) * std::max(off(a), off(b)) / pi;
+            if (a.id >= 0 && b.id >= 0) {  // an input edge: on the fragment's boundary
+                E[src] += charge;
+                continue;
+            }
+            // a cut edge: keyed by its ends, in a fixed order
+            const Vertex* lo = &a;
+            const Vertex* hi = &b;
+            auto less = [](const V3& x, const V3& y) {
+                if (x.x != y.x) return x.x < y.x;
+                if (x.y != y.y) return x.y < y.y;
+                return x.z < y.z;
+            };
+            if (less(hi->v, lo->v)) std::swap(lo, hi);
+            EdgeKey k{{lo->v.x, lo->v.y, lo->v.z, hi->v.x, hi->v.y, hi->v.z}};
+            auto it = st.edges.find(k);
+            if (it == st.edges.end())
+                st.edges.emplace(k, EdgeCharge{src, charge, 1});
+            else if (it->second.src == src && it->second.count == 1)
+                it->second.count = 2;  // shared by two visible pieces of src: cancels
+            else
+                E[src] += charge;
+        }
+    }
+
+    // the same sector form in quadruple precision, from the input's coordinates where
+    // the vertices are input vertices (exact there) and from the long double directions
+    // of computed ones (their errors stay in the bound), with the normal as given
+    // (unnormalised: the value is divided by its length at the end, a relative error);
+    // the second tier for pieces whose terms cancel (grazing, far, small)
+    void integrate_quad(const Piece& q, int64_t f, const double* pp, const double* pn,
+                        R* value, R* bound) const {
+        (void)f;
+        const size_t m = q.size();
+        std::vector<std::array<Quad, 3>> v(m);
+        for (size_t i = 0; i < m; ++i) {
+            const Vertex& u = q[i];
+            if (u.id >= 0)
+                for (int k = 0; k < 3; ++k) v[i][k] = static_cast<Quad>(V_[3 * u.id + k]) - pp[k];
+            else
+                v[i] = {static_cast<Quad>(u.v.x), static_cast<Quad>(u.v.y),
+                        static_cast<Quad>(u.v.z)};
+        }
+        const Quad n[3] = {pn[0], pn[1], pn[2]};
+        const Quad nl = q_sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+        Quad S = 0, mag = 0, errs = 0;
+        R geo = 0;
+        const auto& a0 = v[0];
+        for (size_t i = 0; i < m; ++i) {
+            const size_t j = (i + 1) % m;
+            Quad ea[3], eb[3], d[3], c[3];
+            for (int k = 0; k < 3; ++k) {
+                ea[k] = v[i][k] - a0[k];
+                eb[k] = v[j][k] - a0[k];
+                d[k] = eb[k] - ea[k];
+            }
+            c[0] = (a0[1] * d[2] - a0[2] * d[1]) + (ea[1] * eb[2] - ea[2] * eb[1]);
+            c[1] = (a0[2] * d[0] - a0[0] * d[2]) + (ea[2] * eb[0] - ea[0] * eb[2]);
+            c[2] = (a0[0] * d[1] - a0[1] * d[0]) + (ea[0] * eb[1] - ea[1] * eb[0]);
+            Quad Z = 0;
+            {
+                const Quad P[3] = {q_abs(a0[1] * d[2]) + q_abs(a0[2] * d[1]) +
+                                       q_abs(ea[1] * eb[2]) + q_abs(ea[2] * eb[1]),
+                                   q_abs(a0[2] * d[0]) + q_abs(a0[0] * d[2]) +
+                                       q_abs(ea[2] * eb[0]) + q_abs(ea[0] * eb[2]),
+                                   q_abs(a0[0] * d[1]) + q_abs(a0[1] * d[0]) +
+                                       q_abs(ea[0] * eb[1]) + q_abs(ea[1] * eb[0])};
+                for (int k = 0; k < 3; ++k) Z += q_abs(n[k]) * P[k];
+            }
+            const Quad cl = q_sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
+            const Quad la = q_sqrt(v[i][0] * v[i][0] + v[i][1] * v[i][1] + v[i][2] * v[i][2]);
+            const Quad lb = q_sqrt(v[j][0] * v[j][0] + v[j][1] * v[j][1] + v[j][2] * v[j][2]);
+            const Quad ab = v[i][0] * v[j][0] + v[i][1] * v[j][1] + v[i][2] * v[j][2];
+            const Quad theta = q_atan2(cl, ab);
+            // input vertices are exact here; computed ones keep their error bounds
+            const R ua = q[i].id >= 0 ? 0 : q[i].err, ub = q[j].id >= 0 ? 0 : q[j].err;
+            (void)ua;
+            (void)ub;
+            if (!(cl > 0)) {
+                if (la * lb > 0) errs += 2 * QUAD_EPS;
+                continue;
+            }
+            const Quad t = theta * (n[0] * c[0] + n[1] * c[1] + n[2] * c[2]) / (cl * nl);
+            S += t;
+            mag += q_abs(t);
+            const Quad rel = static_cast<Quad>(K_.c2) * QUAD_EPS *
+                             (Z / nl + theta * theta * la * lb) / cl;
+            errs += theta * (rel < 2 ? rel : static_cast<Quad>(2));
+        }
+        const Quad two_pi = static_cast<Quad>(6.283185307179586476925286766559L);
+        const R pi = 3.14159265358979323846264338327950288L;
+        *value = static_cast<R>(q_abs(S) / two_pi);
+        // the value's rounding to long double, and the quad sums' own
+        *bound = static_cast<R>((static_cast<Quad>(K_.c1) * QUAD_EPS * mag + errs) / two_pi) +
+                 geo / pi + K_.eps * *value;  // geo: the vertices' errors, charged apart
     }
 
     void run(const double* pp, const double* pn, const int8_t* node_side,
@@ -694,6 +871,8 @@ class Core {
             stack.push_back({k, true});
             if (nearc >= 0) stack.push_back({nearc, false});
         }
+        for (const auto& [key, e] : st.edges)
+            if (e.count == 1) E[e.src] += e.charge;
         // a visible sliver whose shadow was left out may wrongly show any later piece
         // behind it: its area goes to every receiving polygon's band bound
         if (st.unattributed > 0)
@@ -717,7 +896,16 @@ class Core {
         for (int64_t i = start_[f]; i < start_[f] + count_[f]; ++i) {
             V3 w{V_[3 * i], V_[3 * i + 1], V_[3 * i + 2]};
             V3 v{w.x - p.x, w.y - p.y, w.z - p.z};
-            q.push_back({w, v, norm(v), 2 * K_.eps, i, -1, -1, i});
+            // the difference is exact where it fits long double (the usual case): the
+            // direction has no error then, else half an ulp per coordinate
+            bool exact = true;
+            for (int k = 0; k < 3; ++k) {
+                double hi, lo;
+                two_sum(V_[3 * i + k], -pp[k], hi, lo);
+                const R vk = k == 0 ? v.x : (k == 1 ? v.y : v.z);
+                exact = exact && (vk - hi == lo);
+            }
+            q.push_back({w, v, norm(v), exact ? static_cast<R>(0) : 2 * K_.eps, i, -1, -1, i});
         }
         work.clear();
         work.push_back({std::move(q), 0, true});
@@ -741,9 +929,19 @@ class Core {
                 ++st.visible;
                 R val, bnd;
                 integrate(w.q, f, n, &val, &bnd);
+                if (receives && st.rtol > 0 && bnd > st.rtol * val) {
+                    R qv, qb;
+                    integrate_quad(w.q, f, pp, st.normal, &qv, &qb);
+                    ++st.quad_pieces;
+                    if (qb < bnd) {
+                        val = qv;
+                        bnd = qb;
+                    }
+                }
                 if (receives) {
                     F[src] += val;
                     E[src] += bnd;
+                    charge_edges(w.q, src, E, st);
                 }
                 insert_shadow(w.q, f, pp, w.plane, w.positive, sv, xp, st, &st.unattributed,
                               val + bnd);
@@ -790,9 +988,13 @@ class Core {
             for (size_t i = 0; i < m; ++i) {
                 const size_t j = (i + 1) % m;
                 if ((sg[i] > 0 && sg[j] < 0) || (sg[i] < 0 && sg[j] > 0)) {
-                    const Vertex& x = w.q[i];
-                    const Vertex& y = w.q[j];
-                    R t = d[i] / (d[i] - d[j]);
+                    // the crossing computed from the edge's ends in a fixed order, so
+                    // that the piece across the edge gets the same point bit for bit
+                    const bool swap = lex_less(w.q[j].v, w.q[i].v);
+                    const Vertex& x = swap ? w.q[j] : w.q[i];
+                    const Vertex& y = swap ? w.q[i] : w.q[j];
+                    const R dx = swap ? d[j] : d[i], dy = swap ? d[i] : d[j];
+                    R t = dx / (dx - dy);
                     V3 v{x.v.x + t * (y.v.x - x.v.x), x.v.y + t * (y.v.y - x.v.y),
                          x.v.z + t * (y.v.z - x.v.z)};
                     V3 wv{x.w.x + t * (y.w.x - x.w.x), x.w.y + t * (y.w.y - x.w.y),
@@ -804,18 +1006,29 @@ class Core {
                             K_.split * K_.eps * ((1 - t) * x.length + t * y.length + l) / l +
                             std::max(x.err * x.length, y.err * y.length) / l;
                     cut[i] = {wv, v, l, err, -1, -1, -1, -1};
-                    if (x.edge >= 0) {  // on an input edge: exactly known
-                        const int64_t ia = x.edge;
+                    // the parameter along the input edge the piece's edge i -> j lies on
+                    const Vertex& xi = w.q[i];
+                    const Vertex& yj = w.q[j];
+                    const R ti = swap ? 1 - t : t;
+                    if (xi.edge >= 0) {  // on an input edge: exactly known
+                        const int64_t ia = xi.edge;
                         const int64_t ib = start_[f] + (ia - start_[f] + 1) % count_[f];
                         R tx = -1, ty = -1;  // the ends' parameters along it
-                        if (x.id == ia) tx = 0;
-                        else if (x.on_edge == ia) tx = x.t;
-                        if (y.id == ib) ty = 1;
-                        else if (y.on_edge == ia) ty = y.t;
+                        if (xi.id == ia) tx = 0;
+                        else if (xi.on_edge == ia) tx = xi.t;
+                        if (yj.id == ib) ty = 1;
+                        else if (yj.on_edge == ia) ty = yj.t;
                         if (tx >= 0 && ty >= 0) {
                             cut[i].on_edge = ia;
                             cut[i].on_plane = P.exact;
-                            cut[i].t = tx + t * (ty - tx);
+                            cut[i].t = tx + ti * (ty - tx);
+                            // off the edge's line: the interpolation's rounding, and its
+                            // ends' own distances from it
+                            auto off = [&](const Vertex& u) {
+                                return u.id >= 0 ? u.err : u.err_line;
+                            };
+                            cut[i].err_line =
+                                4 * K_.eps + std::max(off(xi) * xi.length, off(yj) * yj.length) / l;
                         }
                     }
                 }

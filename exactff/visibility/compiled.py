@@ -189,7 +189,8 @@ def compiled_form_factors(scene, point, normal, *, two_sided=False, stats=None,
     node_side = sides_of_point(tree.normals, tree.offsets, p).astype(np.int8)
     F, E, band, counters = core.row(p, np.asarray(normal, dtype=float), node_side,
                                     side.astype(np.int8), bool(two_sided), bool(shortcuts),
-                                    tol.SVBSP_BOX_BUDGET, tol.SVBSP_TILES)
+                                    tol.SVBSP_BOX_BUDGET, tol.SVBSP_TILES,
+                                    0.0 if tolerance is None else float(tolerance))
     check_finite(F, E)
     check_finite(band)
     if tolerance is not None:
