@@ -35,6 +35,7 @@
 #include <cstdint>
 #include <limits>
 #include <cstring>
+#include <stdexcept>
 #include <unordered_map>
 #include <vector>
 #if defined(__SIZEOF_FLOAT128__) && !defined(__aarch64__)
@@ -99,6 +100,9 @@ inline void grow(Expansion& e, double b) {
     }
     if (q != 0 || k == 0) e.c[k++] = q;
     e.n = k;
+    // a nonoverlapping expansion of these determinants holds a few hundred bits: a
+    // length near the capacity would mean a defect, never silently overrun
+    if (k >= static_cast<int>(e.c.size()) - 1) throw std::overflow_error("expansion too long");
 }
 
 inline Expansion add(const Expansion& e, const Expansion& f) {
@@ -144,6 +148,18 @@ inline Expansion diff(double a, double b) {  // a - b exactly
     return e;
 }
 
+// h += sign * e * f, in place (every product two-product split, grown into h)
+inline void mul_into(Expansion& h, const Expansion& e, const Expansion& f, double sign) {
+    for (int j = 0; j < f.n; ++j) {
+        const double fj = sign * f.c[j];
+        for (int i = 0; i < e.n; ++i) {
+            const double x = e.c[i] * fj;
+            grow(h, std::fma(e.c[i], fj, -x));
+            grow(h, x);
+        }
+    }
+}
+
 // det(a - p, b - a, x - p): the side of x of the plane through p, a, b
 Expansion orient_exact(const double* p, const double* a, const double* b, const double* x) {
     Expansion A[3], B[3], C[3];
@@ -152,10 +168,15 @@ Expansion orient_exact(const double* p, const double* a, const double* b, const 
         B[i] = diff(b[i], a[i]);
         C[i] = diff(x[i], p[i]);
     }
-    Expansion m0 = add(mul(B[1], C[2]), neg(mul(B[2], C[1])));
-    Expansion m1 = add(mul(B[2], C[0]), neg(mul(B[0], C[2])));
-    Expansion m2 = add(mul(B[0], C[1]), neg(mul(B[1], C[0])));
-    return add(add(mul(A[0], m0), mul(A[1], m1)), mul(A[2], m2));
+    Expansion m[3];
+    for (int i = 0; i < 3; ++i) {
+        const int j = (i + 1) % 3, k = (i + 2) % 3;
+        mul_into(m[i], B[j], C[k], 1.0);
+        mul_into(m[i], B[k], C[j], -1.0);
+    }
+    Expansion r;
+    for (int i = 0; i < 3; ++i) mul_into(r, A[i], m[i], 1.0);
+    return r;
 }
 
 // n . (x - p)
@@ -216,7 +237,6 @@ struct ExactPlane {
     double a[3], b[3];
     V3 m;       // its computed normal, in its own orientation
     R err;      // the bound on that normal's tilt, radians
-    std::vector<std::pair<int64_t, bool>> seen{};  // input vertices tested: on it?
 };
 
 struct Vertex {
@@ -281,7 +301,26 @@ struct EdgeCharge {
     int count;
 };
 
+struct PointKey {  // a plane (two points, or a normal and a tag) and a point, bit for bit
+    double c[10];
+    bool operator==(const PointKey& o) const { return std::memcmp(c, o.c, sizeof c) == 0; }
+};
+struct PointKeyHash {
+    size_t operator()(const PointKey& k) const {
+        uint64_t h = 1469598103934665603ull;
+        for (double d : k.c) {
+            uint64_t bits;
+            std::memcpy(&bits, &d, sizeof bits);
+            h = (h ^ bits) * 1099511628211ull;
+        }
+        return static_cast<size_t>(h);
+    }
+};
+
 struct RowStats {
+    // exact tests of input points against planes through p already decided this row
+    // (the same mesh vertex and edge recur in every fragment that shares them)
+    std::unordered_map<PointKey, bool, PointKeyHash> on_plane;
     // the vertex-error charges of visible pieces' edges with a computed end, by edge:
     // an edge two visible pieces of one polygon share cancels (the two pieces' sums
     // carry it with opposite signs); the rest is charged at the end of the row
@@ -507,17 +546,41 @@ class Core {
     // t = P(a) / (P(a) - P(b)): Q(x) = (Q(a) P(b) - P(a) Q(b)) / (P(b) - P(a)).
     // False where it cannot be told (the vertex is then charged its sliver).
     bool exactly_on(std::vector<ExactPlane>& xp, int k, const double* p, int64_t f,
-                    const Vertex& u) const {
+                    const Vertex& u, RowStats& st) const {
         ExactPlane& Q = xp[k];
         if (u.id >= 0) {
-            for (const auto& [id, on] : Q.seen)
-                if (id == u.id) return on;
+            PointKey key;
+            const double* x = &V_[3 * u.id];
+            if (Q.kind == 0) {  // the plane through p and two points: either order
+                const bool swap = std::memcmp(Q.a, Q.b, sizeof Q.a) > 0;
+                std::memcpy(key.c, swap ? Q.b : Q.a, sizeof Q.a);
+                std::memcpy(key.c + 3, swap ? Q.a : Q.b, sizeof Q.a);
+                key.c[9] = 0;
+            } else {
+                std::memcpy(key.c, Q.a, sizeof Q.a);
+                std::memset(key.c + 3, 0, sizeof Q.a);
+                key.c[9] = 1;
+            }
+            std::memcpy(key.c + 6, x, 3 * sizeof(double));
+            auto it = st.on_plane.find(key);
+            if (it != st.on_plane.end()) return it->second;
             const bool on = exactly_on_input(Q, p, u.id);
-            if (Q.seen.size() < 64) Q.seen.emplace_back(u.id, on);
+            st.on_plane.emplace(key, on);
             return on;
         }
         if (u.on_edge < 0) return false;
         if (u.on_plane == k) return true;
+        {   // the plane it was cut by, instantiated again (the same input edge's plane
+            // from another piece's shadow, or the same normal): on it
+            const ExactPlane& P0 = xp[u.on_plane];
+            auto same3 = [](const double* x, const double* y) {
+                return std::memcmp(x, y, 3 * sizeof(double)) == 0;
+            };
+            if (P0.kind == Q.kind &&
+                ((same3(P0.a, Q.a) && (Q.kind == 1 || same3(P0.b, Q.b))) ||
+                 (Q.kind == 0 && same3(P0.a, Q.b) && same3(P0.b, Q.a))))
+                return true;
+        }
         const int64_t ia = u.on_edge;
         const int64_t ib = start_[f] + (ia - start_[f] + 1) % count_[f];
         const ExactPlane& P = xp[u.on_plane];
@@ -546,7 +609,10 @@ class Core {
         }
         Expansion Pa = exact_value(P, p, &V_[3 * ia]), Pb = exact_value(P, p, &V_[3 * ib]);
         Expansion Qa = exact_value(Q, p, &V_[3 * ia]), Qb = exact_value(Q, p, &V_[3 * ib]);
-        return sign(add(mul(Qa, Pb), neg(mul(Pa, Qb)))) == 0;
+        Expansion r;
+        mul_into(r, Qa, Pb, 1.0);
+        mul_into(r, Pa, Qb, -1.0);
+        return sign(r) == 0;
     }
 
     bool exactly_on_input(const ExactPlane& Q, const double* p, int64_t id) const {
@@ -964,7 +1030,7 @@ class Core {
                 pos |= sg[i] > 0;
                 neg |= sg[i] < 0;
                 const R width = K_.band + P.err + P.slack + u.err;
-                if (std::fabs(d[i]) <= width * scale && !exactly_on(xp, P.exact, pp, f, u)) {
+                if (std::fabs(d[i]) <= width * scale && !exactly_on(xp, P.exact, pp, f, u, st)) {
                     R adjacent = arc(w.q[(i + m - 1) % m], u) + arc(u, w.q[(i + 1) % m]);
                     if (receives)
                         B[src] += adjacent * width / 3.14159265358979323846264338327950288L;
