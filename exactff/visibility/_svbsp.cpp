@@ -230,6 +230,11 @@ void filtered(int kind, const double* p, const double* a, const double* b, const
     *error_out = 32 * eps * permanent;
 }
 
+// two input points, bit for bit
+inline bool same_point(const double* x, const double* y) {
+    return std::memcmp(x, y, 3 * sizeof(double)) == 0;
+}
+
 // a plane through p as the input defines it: through two input points (kind 0, with
 // (a - p) x (b - a) its orientation) or with normal n (kind 1, the horizon)
 struct ExactPlane {
@@ -240,7 +245,8 @@ struct ExactPlane {
 };
 
 struct Vertex {
-    V3 w;       // position in the world
+    V3 w;       // position in the world: input vertices only (a computed vertex's
+                // differences come from its anchor or its direction, see between())
     V3 v;       // w - p: its direction from p (not normalised)
     R length;   // |v|
     R err;      // bound on the error of its direction, radians
@@ -573,12 +579,9 @@ class Core {
         {   // the plane it was cut by, instantiated again (the same input edge's plane
             // from another piece's shadow, or the same normal): on it
             const ExactPlane& P0 = xp[u.on_plane];
-            auto same3 = [](const double* x, const double* y) {
-                return std::memcmp(x, y, 3 * sizeof(double)) == 0;
-            };
             if (P0.kind == Q.kind &&
-                ((same3(P0.a, Q.a) && (Q.kind == 1 || same3(P0.b, Q.b))) ||
-                 (Q.kind == 0 && same3(P0.a, Q.b) && same3(P0.b, Q.a))))
+                ((same_point(P0.a, Q.a) && (Q.kind == 1 || same_point(P0.b, Q.b))) ||
+                 (Q.kind == 0 && same_point(P0.a, Q.b) && same_point(P0.b, Q.a))))
                 return true;
         }
         const int64_t ia = u.on_edge;
@@ -587,11 +590,8 @@ class Core {
         {   // the edge is one that defines Q (a shared edge): its whole line lies on Q
             const double* A = &V_[3 * ia];
             const double* Bv = &V_[3 * ib];
-            auto same = [](const double* x, const double* y) {
-                return x[0] == y[0] && x[1] == y[1] && x[2] == y[2];
-            };
-            if (Q.kind == 0 &&
-                ((same(A, Q.a) && same(Bv, Q.b)) || (same(A, Q.b) && same(Bv, Q.a))))
+            if (Q.kind == 0 && ((same_point(A, Q.a) && same_point(Bv, Q.b)) ||
+                                (same_point(A, Q.b) && same_point(Bv, Q.a))))
                 return true;
         }
         {   // the filter: Q(a) P(b) - P(a) Q(b) in long double, with its error bound
@@ -731,7 +731,7 @@ class Core {
     // term's rounding bounded by the magnitudes of the products in n . m (C2 ulps per
     // unit of the cross product's condition), the sum's by C1 ulps of its terms
     void integrate(const Piece& q, int64_t f, const V3& n, R* value, R* bound) const {
-        R S = 0, mag = 0, errs = 0, geo = 0;
+        R S = 0, mag = 0, errs = 0;
         const size_t m = q.size();
         const V3 a0 = q[0].v;
         R unused;
@@ -753,7 +753,6 @@ class Core {
             const R cl = norm(c);
             const R Nm = a.length * b.length;
             const R theta = std::atan2(cl, dot(a.v, b.v));
-            (void)geo;
             if (!(cl > 0)) {
                 if (Nm > 0) errs += 2 * K_.eps;  // a degenerate edge: its term unknown
                 continue;
@@ -765,9 +764,7 @@ class Core {
             errs += theta * std::min(static_cast<R>(2), rel);
         }
         const R two_pi = 6.283185307179586476925286766559L;
-        const R pi = two_pi / 2;
         *value = std::fabs(S) / two_pi;
-        (void)pi;
         *bound = (K_.c1 * K_.eps * mag + errs) / two_pi;
     }
 
@@ -793,12 +790,7 @@ class Core {
             // a cut edge: keyed by its ends, in a fixed order
             const Vertex* lo = &a;
             const Vertex* hi = &b;
-            auto less = [](const V3& x, const V3& y) {
-                if (x.x != y.x) return x.x < y.x;
-                if (x.y != y.y) return x.y < y.y;
-                return x.z < y.z;
-            };
-            if (less(hi->v, lo->v)) std::swap(lo, hi);
+            if (lex_less(hi->v, lo->v)) std::swap(lo, hi);
             EdgeKey k{{lo->v.x, lo->v.y, lo->v.z, hi->v.x, hi->v.y, hi->v.z}};
             auto it = st.edges.find(k);
             if (it == st.edges.end())
@@ -815,9 +807,8 @@ class Core {
     // of computed ones (their errors stay in the bound), with the normal as given
     // (unnormalised: the value is divided by its length at the end, a relative error);
     // the second tier for pieces whose terms cancel (grazing, far, small)
-    void integrate_quad(const Piece& q, int64_t f, const double* pp, const double* pn,
-                        R* value, R* bound) const {
-        (void)f;
+    void integrate_quad(const Piece& q, const double* pp, const double* pn, R* value,
+                        R* bound) const {
         const size_t m = q.size();
         std::vector<std::array<Quad, 3>> v(m);
         for (size_t i = 0; i < m; ++i) {
@@ -831,7 +822,6 @@ class Core {
         const Quad n[3] = {pn[0], pn[1], pn[2]};
         const Quad nl = q_sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
         Quad S = 0, mag = 0, errs = 0;
-        R geo = 0;
         const auto& a0 = v[0];
         for (size_t i = 0; i < m; ++i) {
             const size_t j = (i + 1) % m;
@@ -859,10 +849,6 @@ class Core {
             const Quad lb = q_sqrt(v[j][0] * v[j][0] + v[j][1] * v[j][1] + v[j][2] * v[j][2]);
             const Quad ab = v[i][0] * v[j][0] + v[i][1] * v[j][1] + v[i][2] * v[j][2];
             const Quad theta = q_atan2(cl, ab);
-            // input vertices are exact here; computed ones keep their error bounds
-            const R ua = q[i].id >= 0 ? 0 : q[i].err, ub = q[j].id >= 0 ? 0 : q[j].err;
-            (void)ua;
-            (void)ub;
             if (!(cl > 0)) {
                 if (la * lb > 0) errs += 2 * QUAD_EPS;
                 continue;
@@ -875,11 +861,11 @@ class Core {
             errs += theta * (rel < 2 ? rel : static_cast<Quad>(2));
         }
         const Quad two_pi = static_cast<Quad>(6.283185307179586476925286766559L);
-        const R pi = 3.14159265358979323846264338327950288L;
         *value = static_cast<R>(q_abs(S) / two_pi);
-        // the value's rounding to long double, and the quad sums' own
+        // the quad sums' own rounding, and the value's to long double (the vertices'
+        // errors are charged edge by edge, apart)
         *bound = static_cast<R>((static_cast<Quad>(K_.c1) * QUAD_EPS * mag + errs) / two_pi) +
-                 geo / pi + K_.eps * *value;  // geo: the vertices' errors, charged apart
+                 K_.eps * *value;
     }
 
     void run(const double* pp, const double* pn, const int8_t* node_side,
@@ -997,7 +983,7 @@ class Core {
                 integrate(w.q, f, n, &val, &bnd);
                 if (receives && st.rtol > 0 && bnd > st.rtol * val) {
                     R qv, qb;
-                    integrate_quad(w.q, f, pp, st.normal, &qv, &qb);
+                    integrate_quad(w.q, pp, st.normal, &qv, &qb);
                     ++st.quad_pieces;
                     if (qb < bnd) {
                         val = qv;
@@ -1063,15 +1049,13 @@ class Core {
                     R t = dx / (dx - dy);
                     V3 v{x.v.x + t * (y.v.x - x.v.x), x.v.y + t * (y.v.y - x.v.y),
                          x.v.z + t * (y.v.z - x.v.z)};
-                    V3 wv{x.w.x + t * (y.w.x - x.w.x), x.w.y + t * (y.w.y - x.w.y),
-                          x.w.z + t * (y.w.z - x.w.z)};
                     R l = norm(v);
                     // the new vertex: within K.split ulps of its ends' interpolated distance
                     // (and its own), plus its ends' and the plane's errors carried over
                     R err = P.err + P.slack +
                             K_.split * K_.eps * ((1 - t) * x.length + t * y.length + l) / l +
                             std::max(x.err * x.length, y.err * y.length) / l;
-                    cut[i] = {wv, v, l, err, -1, -1, -1, -1};
+                    cut[i] = {V3{0, 0, 0}, v, l, err, -1, -1, -1, -1};
                     // the parameter along the input edge the piece's edge i -> j lies on
                     const Vertex& xi = w.q[i];
                     const Vertex& yj = w.q[j];

@@ -58,10 +58,10 @@ def convex_pieces(polygon, normal):
     scale = np.linalg.norm(e, axis=1) * np.linalg.norm(np.roll(e, -1, axis=0), axis=1)
     if np.all(turn >= -8 * tol.EPS * scale):   # collinear within the cross product's rounding
         return [P]
-    keep = [a for a in range(3) if a != int(np.argmax(np.abs(normal)))]
+    axis = int(np.argmax(np.abs(normal)))
+    keep = [a for a in range(3) if a != axis]
     lookup = {tuple(q): P[i] for i, q in enumerate(P[:, keep].tolist())}
     tri = shapely.constrained_delaunay_triangles(shapely.make_valid(shapely.Polygon(P[:, keep])))
-    axis = int(np.argmax(np.abs(normal)))
     offset = float(normal @ P[0])
 
     def lifted(q):
@@ -153,7 +153,10 @@ def compiled_form_factors(scene, point, normal, *, two_sided=False, stats=None,
         Filled with what the row did: ``path``, ``fragments`` (filtered down the
         shadow tree), ``visible_pieces``, ``hidden_pieces``, ``splits``,
         ``subtrees_culled`` and ``fragments_culled`` (skipped by their bounding box),
-        ``box_tests``, ``shadow_planes``, ``max_error_estimate``.
+        ``box_tests``, ``shadow_planes``, ``quad_pieces`` (integrated again in
+        quadruple precision), ``unattributed_bound`` (visible slivers whose shadows were
+        left out), ``max_error_estimate`` and ``max_band_bound``; after a fallback,
+        ``compiled_missed`` and the Python engine's counters.
     shortcuts : bool, default True
         False disables the convex-scene path and the culling of subtrees (results do
         not depend on it).
