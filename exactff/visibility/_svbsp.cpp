@@ -61,6 +61,10 @@ namespace {
 
 using R = long double;
 
+// the classification's double filter: a distance computed in double from the long
+// double vectors rounded to double is within this many double roundoffs (DBL_EPSILON
+// / 2 each) of |m| |v| of its long double value (6 needed, 8 kept)
+constexpr double FILTER_ROUNDOFFS = 4;  // in units of DBL_EPSILON = 2 roundoffs
 constexpr int OUT = -1;  // a free leaf of the shadow tree
 constexpr int IN = -2;   // a covered leaf
 
@@ -262,7 +266,18 @@ struct Vertex {
     R t = 0;       // with on_edge: its parameter along that input edge
     R err_line = 0;  // with on_edge: bound on its direction's error off that edge's
                      // plane through p (its error along the edge moves no boundary)
+    double vd[3] = {0, 0, 0};  // v, length and err rounded to double: the
+    double lengthd = 0;        // classification's filter (see Core::process)
+    double errd = 0;
 };
+
+inline void set_double(Vertex& u) {
+    u.vd[0] = static_cast<double>(u.v.x);
+    u.vd[1] = static_cast<double>(u.v.y);
+    u.vd[2] = static_cast<double>(u.v.z);
+    u.lengthd = static_cast<double>(u.length);
+    u.errd = static_cast<double>(u.err);
+}
 using Piece = std::vector<Vertex>;
 
 struct Plane {  // m . x = 0 through p; positive side first
@@ -274,7 +289,16 @@ struct Plane {  // m . x = 0 through p; positive side first
     int orient; // +1 or -1: m's orientation against the exact plane's
     R slack = 0;  // the widest sliver decided against it so far: the covered region
                   // next to it is uncertain by that much for every later piece
+    double md[3] = {0, 0, 0};  // m and mnorm rounded to double, for the filter
+    double mnormd = 0;
 };
+
+inline void set_double(Plane& P) {
+    P.md[0] = static_cast<double>(P.m.x);
+    P.md[1] = static_cast<double>(P.m.y);
+    P.md[2] = static_cast<double>(P.m.z);
+    P.mnormd = static_cast<double>(P.mnorm);
+}
 
 struct Constants {
     R eps;      // unit roundoff of R
@@ -596,6 +620,7 @@ class Core {
             xp.push_back({1, {m[0], m[1], m[2]}, {0, 0, 0}, mm, 2 * K_.eps,
                           -1 - exact, -1 - exact});
             sv.push_back({mm, norm(mm), 2 * K_.eps, OUT, OUT, exact, 1});
+            set_double(sv.back());
             const int neg = build(ms, lo, mid, inner);
             const int pos = build(ms, mid + 1, hi, inner);
             sv[node].neg = neg;
@@ -973,6 +998,7 @@ class Core {
         xp.reserve(1024);
         // the root: the horizon, covered below
         sv.push_back({n, 1, 2 * K_.eps, OUT, IN, 0, 1});
+        set_double(sv.back());
         xp.push_back({1, {pn[0], pn[1], pn[2]}, {0, 0, 0}, n, 2 * K_.eps, -1, -1});
         if (tiles > 0) sv[0].pos = tile_tree(pn, tiles, sv, xp);
         if (nodes() == 0) return;
@@ -1050,6 +1076,7 @@ class Core {
                 exact = exact && (vk - hi == lo);
             }
             q.push_back({w, v, norm(v), exact ? static_cast<R>(0) : 2 * K_.eps, i, -1, -1, i});
+            set_double(q.back());
         }
         work.clear();
         work.push_back({std::move(q), 0, true});
@@ -1101,12 +1128,29 @@ class Core {
             sg.resize(m);
             d.resize(m);
             bool pos = false, neg = false;
+            const double plane_width = static_cast<double>(K_.band + P.err + P.slack);
             for (size_t i = 0; i < m; ++i) {
                 // a vertex within the rounding band of d is taken as on the plane (it
                 // goes with the others); one within that band plus the plane's and its
                 // own errors may lie on the other side of the true plane by up to them:
                 // the sliver along its two edges is charged to the piece
                 const Vertex& u = w.q[i];
+                // the filter: P.m . u.v in double, off its long double value by at most
+                // 6 double roundoffs of |m| |v| (the roundings to double, the products
+                // and sums); a vertex clearly beyond the widest band is decided by it
+                // (its long double distance is then computed only if the piece is cut)
+                {
+                    const double dd = P.md[0] * u.vd[0] + P.md[1] * u.vd[1] + P.md[2] * u.vd[2];
+                    const double widthd = plane_width + u.errd;
+                    if (std::fabs(dd) > (widthd + FILTER_ROUNDOFFS * DBL_EPSILON) *
+                                            (P.mnormd * u.lengthd) * (1 + 8 * DBL_EPSILON)) {
+                        sg[i] = dd > 0 ? 1 : -1;
+                        pos |= dd > 0;
+                        neg |= dd < 0;
+                        d[i] = NAN;
+                        continue;
+                    }
+                }
                 d[i] = dot(P.m, u.v);
                 const R scale = P.mnorm * u.length;
                 sg[i] = d[i] > K_.band * scale ? 1 : (d[i] < -K_.band * scale ? -1 : 0);
@@ -1133,6 +1177,8 @@ class Core {
                 continue;
             }
             ++st.splits;
+            for (size_t i = 0; i < m; ++i)
+                if (std::isnan(d[i])) d[i] = dot(P.m, w.q[i].v);
             cut.resize(m);
             for (size_t i = 0; i < m; ++i) {
                 const size_t j = (i + 1) % m;
@@ -1153,6 +1199,7 @@ class Core {
                             K_.split * K_.eps * ((1 - t) * x.length + t * y.length + l) / l +
                             std::max(x.err * x.length, y.err * y.length) / l;
                     cut[i] = {V3{0, 0, 0}, v, l, err, -1, -1, -1, -1};
+                    set_double(cut[i]);
                     // the parameter along the input edge the piece's edge i -> j lies on
                     const Vertex& xi = w.q[i];
                     const Vertex& yj = w.q[j];
@@ -1279,7 +1326,10 @@ class Core {
             // an edge along a plane the piece was cut by: that plane is on the path to
             // the leaf, whose whole cell already lies on the piece's side of it, so the
             // shadow needs no plane there
-            if (!on_cut) chain.push_back({mm, ml, err, OUT, OUT, exact, orient});
+            if (!on_cut) {
+                chain.push_back({mm, ml, err, OUT, OUT, exact, orient});
+                set_double(chain.back());
+            }
         }
         if (degenerate || sides < 3) {
             *unattributed += piece_bound;
