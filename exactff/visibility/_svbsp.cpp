@@ -61,6 +61,10 @@ namespace {
 
 using R = long double;
 
+// the classification's double filter: a distance computed in double from the long
+// double vectors rounded to double is within this many double roundoffs (DBL_EPSILON
+// / 2 each) of |m| |v| of its long double value (6 needed, 8 kept)
+constexpr double FILTER_ROUNDOFFS = 4;  // in units of DBL_EPSILON = 2 roundoffs
 constexpr int OUT = -1;  // a free leaf of the shadow tree
 constexpr int IN = -2;   // a covered leaf
 
@@ -242,6 +246,9 @@ struct ExactPlane {
     double a[3], b[3];
     V3 m;       // its computed normal, in its own orientation
     R err;      // the bound on that normal's tilt, radians
+    // the plane's identity for the row's cache of exact tests: kind 0, the distinct
+    // input points a and b are (their ids, see Core::uid_); kind 1, -1 - its index
+    int64_t ua = -1, ub = -1;
 };
 
 struct Vertex {
@@ -259,7 +266,18 @@ struct Vertex {
     R t = 0;       // with on_edge: its parameter along that input edge
     R err_line = 0;  // with on_edge: bound on its direction's error off that edge's
                      // plane through p (its error along the edge moves no boundary)
+    double vd[3] = {0, 0, 0};  // v, length and err rounded to double: the
+    double lengthd = 0;        // classification's filter (see Core::process)
+    double errd = 0;
 };
+
+inline void set_double(Vertex& u) {
+    u.vd[0] = static_cast<double>(u.v.x);
+    u.vd[1] = static_cast<double>(u.v.y);
+    u.vd[2] = static_cast<double>(u.v.z);
+    u.lengthd = static_cast<double>(u.length);
+    u.errd = static_cast<double>(u.err);
+}
 using Piece = std::vector<Vertex>;
 
 struct Plane {  // m . x = 0 through p; positive side first
@@ -271,7 +289,16 @@ struct Plane {  // m . x = 0 through p; positive side first
     int orient; // +1 or -1: m's orientation against the exact plane's
     R slack = 0;  // the widest sliver decided against it so far: the covered region
                   // next to it is uncertain by that much for every later piece
+    double md[3] = {0, 0, 0};  // m and mnorm rounded to double, for the filter
+    double mnormd = 0;
 };
+
+inline void set_double(Plane& P) {
+    P.md[0] = static_cast<double>(P.m.x);
+    P.md[1] = static_cast<double>(P.m.y);
+    P.md[2] = static_cast<double>(P.m.z);
+    P.mnormd = static_cast<double>(P.mnorm);
+}
 
 struct Constants {
     R eps;      // unit roundoff of R
@@ -307,26 +334,58 @@ struct EdgeCharge {
     int count;
 };
 
-struct PointKey {  // a plane (two points, or a normal and a tag) and a point, bit for bit
-    double c[10];
-    bool operator==(const PointKey& o) const { return std::memcmp(c, o.c, sizeof c) == 0; }
-};
-struct PointKeyHash {
-    size_t operator()(const PointKey& k) const {
-        uint64_t h = 1469598103934665603ull;
-        for (double d : k.c) {
-            uint64_t bits;
-            std::memcpy(&bits, &d, sizeof bits);
-            h = (h ^ bits) * 1099511628211ull;
+// the row's cache of exact tests of an input point against an exact plane, by ids:
+// open addressing (linear probing, power-of-two capacity, at most half full), one probe
+// run and no allocation per test in the usual case
+class PointCache {
+  public:
+    // -1: not decided yet; else whether the point is on the plane
+    int find(int64_t a, int64_t b, int64_t x) const {
+        if (keys_.empty()) return -1;
+        for (size_t i = slot(a, b, x);; i = (i + 1) & (keys_.size() - 1)) {
+            const Key& k = keys_[i];
+            if (k.x == EMPTY) return -1;
+            if (k.a == a && k.b == b && k.x == x) return k.on;
         }
-        return static_cast<size_t>(h);
     }
+    void insert(int64_t a, int64_t b, int64_t x, bool on) {
+        if (2 * (used_ + 1) > keys_.size()) grow();
+        size_t i = slot(a, b, x);
+        while (keys_[i].x != EMPTY) i = (i + 1) & (keys_.size() - 1);
+        keys_[i] = {a, b, x, on ? 1 : 0};
+        ++used_;
+    }
+
+  private:
+    static constexpr int64_t EMPTY = INT64_MIN;
+    struct Key {
+        int64_t a, b, x;
+        int on;
+    };
+    size_t slot(int64_t a, int64_t b, int64_t x) const {
+        uint64_t h = static_cast<uint64_t>(a) * 0x9E3779B97F4A7C15ull;
+        h ^= static_cast<uint64_t>(b) + 0x632BE59BD9B4E019ull + (h << 6) + (h >> 2);
+        h ^= static_cast<uint64_t>(x) * 0xC2B2AE3D27D4EB4Full;
+        h ^= h >> 29;
+        h *= 0xBF58476D1CE4E5B9ull;
+        h ^= h >> 32;
+        return static_cast<size_t>(h) & (keys_.size() - 1);
+    }
+    void grow() {
+        std::vector<Key> old = std::move(keys_);
+        keys_.assign(old.empty() ? 1 << 12 : 2 * old.size(), Key{0, 0, EMPTY, 0});
+        used_ = 0;
+        for (const Key& k : old)
+            if (k.x != EMPTY) insert(k.a, k.b, k.x, k.on != 0);
+    }
+    std::vector<Key> keys_;
+    size_t used_ = 0;
 };
 
 struct RowStats {
     // exact tests of input points against planes through p already decided this row
     // (the same mesh vertex and edge recur in every fragment that shares them)
-    std::unordered_map<PointKey, bool, PointKeyHash> on_plane;
+    PointCache on_plane;
     // the vertex-error charges of visible pieces' edges with a computed end, by edge:
     // an edge two visible pieces of one polygon share cancels (the two pieces' sums
     // carry it with opposite signs); the rest is charged at the end of the row
@@ -337,7 +396,10 @@ struct RowStats {
     const double* normal = nullptr;  // the receiver normal as given
     int64_t quad_pieces = 0;
     int64_t fragments = 0, visible = 0, hidden = 0, splits = 0, subtrees_culled = 0,
-            fragments_culled = 0, box_tests = 0, shadow_planes = 0;
+            fragments_culled = 0, box_tests = 0, shadow_planes = 0,
+            node_visits = 0,   // shadow-tree nodes a piece was classified at
+            near_tests = 0,    // vertices within the band of such a plane
+            exact_tests = 0;   // exact tests of an input point decided (not cached)
 };
 
 class Core {
@@ -375,6 +437,29 @@ class Core {
         K_.c2 = c2;
         K_.split = split;
         build_boxes();
+        // one id per distinct input point, bit for bit (a mesh vertex recurs in every
+        // polygon and fragment that has it): the row's exact tests are cached by ids
+        const int64_t nv = static_cast<int64_t>(V_.size() / 3);
+        std::vector<int64_t> order(nv);
+        for (int64_t i = 0; i < nv; ++i) order[i] = i;
+        auto bits = [&](int64_t i, int k) {
+            uint64_t b;
+            std::memcpy(&b, &V_[3 * i + k], sizeof b);
+            return b;
+        };
+        std::sort(order.begin(), order.end(), [&](int64_t i, int64_t j) {
+            for (int k = 0; k < 3; ++k)
+                if (bits(i, k) != bits(j, k)) return bits(i, k) < bits(j, k);
+            return false;
+        });
+        uid_.assign(nv, 0);
+        int64_t next = -1;
+        for (int64_t r = 0; r < nv; ++r) {
+            const int64_t i = order[r];
+            if (r == 0 || std::memcmp(&V_[3 * i], &V_[3 * order[r - 1]], 3 * sizeof(double)) != 0)
+                ++next;
+            uid_[i] = next;
+        }
     }
 
     int64_t nodes() const { return static_cast<int64_t>(front_.size()); }
@@ -426,6 +511,9 @@ class Core {
         d["fragments_culled"] = st.fragments_culled;
         d["box_tests"] = st.box_tests;
         d["shadow_planes"] = st.shadow_planes;
+        d["node_visits"] = st.node_visits;
+        d["near_tests"] = st.near_tests;
+        d["exact_tests"] = st.exact_tests;
         d["quad_pieces"] = st.quad_pieces;
         d["unattributed_bound"] = static_cast<double>(st.unattributed);
         return py::make_tuple(F, E, B, d);
@@ -529,8 +617,10 @@ class Core {
             V3 mm{m[0], m[1], m[2]};
             const int node = static_cast<int>(sv.size());
             const int exact = static_cast<int>(xp.size());
-            xp.push_back({1, {m[0], m[1], m[2]}, {0, 0, 0}, mm, 2 * K_.eps});
+            xp.push_back({1, {m[0], m[1], m[2]}, {0, 0, 0}, mm, 2 * K_.eps,
+                          -1 - exact, -1 - exact});
             sv.push_back({mm, norm(mm), 2 * K_.eps, OUT, OUT, exact, 1});
+            set_double(sv.back());
             const int neg = build(ms, lo, mid, inner);
             const int pos = build(ms, mid + 1, hi, inner);
             sv[node].neg = neg;
@@ -547,6 +637,19 @@ class Core {
         return X.kind == 0 ? orient_exact(p, X.a, X.b, x) : dot_exact(X.a, p, x);
     }
 
+    // whether input point x lies exactly on exact plane Q, decided once a row (the same
+    // mesh vertex and edge recur in every fragment that shares them)
+    bool point_on_plane(const ExactPlane& Q, const double* p, const double* x, int64_t ux,
+                        RowStats& st) const {
+        const int64_t a = std::min(Q.ua, Q.ub), b = std::max(Q.ua, Q.ub);
+        const int known = st.on_plane.find(a, b, ux);
+        if (known >= 0) return known != 0;
+        ++st.exact_tests;
+        const bool on = exactly_on_input(Q, p, x, st);
+        st.on_plane.insert(a, b, ux, on);
+        return on;
+    }
+
     // whether a vertex lies exactly on an exact plane: an input vertex, or the crossing
     // of an input edge a -> b with an exact plane P, x = a + t (b - a) with
     // t = P(a) / (P(a) - P(b)): Q(x) = (Q(a) P(b) - P(a) Q(b)) / (P(b) - P(a)).
@@ -554,26 +657,7 @@ class Core {
     bool exactly_on(std::vector<ExactPlane>& xp, int k, const double* p, int64_t f,
                     const Vertex& u, RowStats& st) const {
         ExactPlane& Q = xp[k];
-        if (u.id >= 0) {
-            PointKey key;
-            const double* x = &V_[3 * u.id];
-            if (Q.kind == 0) {  // the plane through p and two points: either order
-                const bool swap = std::memcmp(Q.a, Q.b, sizeof Q.a) > 0;
-                std::memcpy(key.c, swap ? Q.b : Q.a, sizeof Q.a);
-                std::memcpy(key.c + 3, swap ? Q.a : Q.b, sizeof Q.a);
-                key.c[9] = 0;
-            } else {
-                std::memcpy(key.c, Q.a, sizeof Q.a);
-                std::memset(key.c + 3, 0, sizeof Q.a);
-                key.c[9] = 1;
-            }
-            std::memcpy(key.c + 6, x, 3 * sizeof(double));
-            auto it = st.on_plane.find(key);
-            if (it != st.on_plane.end()) return it->second;
-            const bool on = exactly_on_input(Q, p, u.id);
-            st.on_plane.emplace(key, on);
-            return on;
-        }
+        if (u.id >= 0) return point_on_plane(Q, p, &V_[3 * u.id], uid_[u.id], st);
         if (u.on_edge < 0) return false;
         if (u.on_plane == k) return true;
         {   // the plane it was cut by, instantiated again (the same input edge's plane
@@ -593,6 +677,39 @@ class Core {
             if (Q.kind == 0 && ((same_point(A, Q.a) && same_point(Bv, Q.b)) ||
                                 (same_point(A, Q.b) && same_point(Bv, Q.a))))
                 return true;
+        }
+        // P and Q through p and a common input point v (two silhouette edges that meet
+        // at v): two distinct such planes meet in the line through p and v, so the
+        // crossing of the edge with P lies on Q exactly where that line meets the
+        // edge's line, i.e. where v lies on the plane through p and the edge (one
+        // orientation test of degree 3, against Q(a) P(b) - P(a) Q(b) of degree 6).
+        // Where P and Q are one plane this says false, which only charges a sliver.
+        if (P.kind == 0 && Q.kind == 0) {
+            const double* v = nullptr;
+            int64_t uv = -1;
+            if (P.ua == Q.ua || P.ua == Q.ub) {
+                v = P.a;
+                uv = P.ua;
+            } else if (P.ub == Q.ua || P.ub == Q.ub) {
+                v = P.b;
+                uv = P.ub;
+            }
+            if (v != nullptr && !same_point(v, p)) {
+                ExactPlane R{0, {}, {}, V3{0, 0, 0}, 0, uid_[ia], uid_[ib]};
+                std::memcpy(R.a, &V_[3 * ia], sizeof R.a);
+                std::memcpy(R.b, &V_[3 * ib], sizeof R.b);
+                return point_on_plane(R, p, v, uv, st);
+            }
+        }
+        // P and Q one plane, given by other points (the bottom edges of walls standing
+        // on the receiver's plane, collinear edges of separate polygons): every point
+        // of P lies on Q. Told by the points that define one lying on the other
+        // (degree 3 each, and the same pair of planes recurs all row long)
+        if ((Q.kind == 0 && point_on_plane(P, p, Q.a, Q.ua, st) &&
+             point_on_plane(P, p, Q.b, Q.ub, st)) ||
+            (P.kind == 0 && point_on_plane(Q, p, P.a, P.ua, st) &&
+             point_on_plane(Q, p, P.b, P.ub, st))) {
+            return true;
         }
         {   // the filter: Q(a) P(b) - P(a) Q(b) in long double, with its error bound
             R qa, eqa, qb, eqb, pa, epa, pb, epb;
@@ -615,9 +732,9 @@ class Core {
         return sign(r) == 0;
     }
 
-    bool exactly_on_input(const ExactPlane& Q, const double* p, int64_t id) const {
-        {  // an input vertex against an exact plane
-            const double* x = &V_[3 * id];
+    bool exactly_on_input(const ExactPlane& Q, const double* p, const double* x,
+                          RowStats& st) const {
+        {  // an input point against an exact plane
             // one of the two points that define the plane (a shared edge's end): on it
             if (Q.kind == 0 && ((x[0] == Q.a[0] && x[1] == Q.a[1] && x[2] == Q.a[2]) ||
                                 (x[0] == Q.b[0] && x[1] == Q.b[1] && x[2] == Q.b[2])))
@@ -881,7 +998,8 @@ class Core {
         xp.reserve(1024);
         // the root: the horizon, covered below
         sv.push_back({n, 1, 2 * K_.eps, OUT, IN, 0, 1});
-        xp.push_back({1, {pn[0], pn[1], pn[2]}, {0, 0, 0}, n, 2 * K_.eps});
+        set_double(sv.back());
+        xp.push_back({1, {pn[0], pn[1], pn[2]}, {0, 0, 0}, n, 2 * K_.eps, -1, -1});
         if (tiles > 0) sv[0].pos = tile_tree(pn, tiles, sv, xp);
         if (nodes() == 0) return;
         struct Item {
@@ -958,11 +1076,16 @@ class Core {
                 exact = exact && (vk - hi == lo);
             }
             q.push_back({w, v, norm(v), exact ? static_cast<R>(0) : 2 * K_.eps, i, -1, -1, i});
+            set_double(q.back());
         }
         work.clear();
         work.push_back({std::move(q), 0, true});
         // the first step enters the root from a virtual link
         bool first = true;
+        // each step's signs, distances and crossings (reused: no allocation per step)
+        std::vector<int> sg;
+        std::vector<R> d;
+        std::vector<Vertex> cut;
         while (!work.empty()) {
             W w = std::move(work.back());
             work.pop_back();
@@ -1001,22 +1124,40 @@ class Core {
             }
             const Plane P = sv[node];
             const size_t m = w.q.size();
-            std::vector<int> sg(m);
-            std::vector<R> d(m);
+            ++st.node_visits;
+            sg.resize(m);
+            d.resize(m);
             bool pos = false, neg = false;
+            const double plane_width = static_cast<double>(K_.band + P.err + P.slack);
             for (size_t i = 0; i < m; ++i) {
                 // a vertex within the rounding band of d is taken as on the plane (it
                 // goes with the others); one within that band plus the plane's and its
                 // own errors may lie on the other side of the true plane by up to them:
                 // the sliver along its two edges is charged to the piece
                 const Vertex& u = w.q[i];
+                // the filter: P.m . u.v in double, off its long double value by at most
+                // 6 double roundoffs of |m| |v| (the roundings to double, the products
+                // and sums); a vertex clearly beyond the widest band is decided by it
+                // (its long double distance is then computed only if the piece is cut)
+                {
+                    const double dd = P.md[0] * u.vd[0] + P.md[1] * u.vd[1] + P.md[2] * u.vd[2];
+                    const double widthd = plane_width + u.errd;
+                    if (std::fabs(dd) > (widthd + FILTER_ROUNDOFFS * DBL_EPSILON) *
+                                            (P.mnormd * u.lengthd) * (1 + 8 * DBL_EPSILON)) {
+                        sg[i] = dd > 0 ? 1 : -1;
+                        pos |= dd > 0;
+                        neg |= dd < 0;
+                        d[i] = NAN;
+                        continue;
+                    }
+                }
                 d[i] = dot(P.m, u.v);
                 const R scale = P.mnorm * u.length;
                 sg[i] = d[i] > K_.band * scale ? 1 : (d[i] < -K_.band * scale ? -1 : 0);
                 pos |= sg[i] > 0;
                 neg |= sg[i] < 0;
                 const R width = K_.band + P.err + P.slack + u.err;
-                if (std::fabs(d[i]) <= width * scale && !exactly_on(xp, P.exact, pp, f, u, st)) {
+                if (std::fabs(d[i]) <= width * scale && (++st.near_tests, !exactly_on(xp, P.exact, pp, f, u, st))) {
                     R adjacent = arc(w.q[(i + m - 1) % m], u) + arc(u, w.q[(i + 1) % m]);
                     if (receives)
                         B[src] += adjacent * width / 3.14159265358979323846264338327950288L;
@@ -1036,7 +1177,9 @@ class Core {
                 continue;
             }
             ++st.splits;
-            std::vector<Vertex> cut(m);
+            for (size_t i = 0; i < m; ++i)
+                if (std::isnan(d[i])) d[i] = dot(P.m, w.q[i].v);
+            cut.resize(m);
             for (size_t i = 0; i < m; ++i) {
                 const size_t j = (i + 1) % m;
                 if ((sg[i] > 0 && sg[j] < 0) || (sg[i] < 0 && sg[j] > 0)) {
@@ -1056,6 +1199,7 @@ class Core {
                             K_.split * K_.eps * ((1 - t) * x.length + t * y.length + l) / l +
                             std::max(x.err * x.length, y.err * y.length) / l;
                     cut[i] = {V3{0, 0, 0}, v, l, err, -1, -1, -1, -1};
+                    set_double(cut[i]);
                     // the parameter along the input edge the piece's edge i -> j lies on
                     const Vertex& xi = w.q[i];
                     const Vertex& yj = w.q[j];
@@ -1142,6 +1286,7 @@ class Core {
         }
         const R cl = norm(c);
         std::vector<Plane> chain;
+        size_t sides = 0;  // the piece's edges that bound its shadow, cut ones included
         bool degenerate = m < 3;
         for (size_t i = 0; i < m && !degenerate; ++i) {
             const Vertex& a = q[i];
@@ -1155,12 +1300,14 @@ class Core {
                 err = 8 * K_.eps;
                 exact = static_cast<int>(xp.size());
                 xp.push_back({0, {V_[3 * ia], V_[3 * ia + 1], V_[3 * ia + 2]},
-                              {V_[3 * ib], V_[3 * ib + 1], V_[3 * ib + 2]}, mm, err});
+                              {V_[3 * ib], V_[3 * ib + 1], V_[3 * ib + 2]}, mm, err,
+                              uid_[ia], uid_[ib]});
             } else {
                 exact = static_cast<int>(-1 - a.edge);
                 mm = xp[exact].m;
                 err = xp[exact].err;
             }
+            const bool on_cut = a.edge < 0;
             const R ml = norm(mm);
             if (!(ml > 0)) continue;  // an input edge through p (seen end-on exactly)
             int orient = 1;
@@ -1175,10 +1322,21 @@ class Core {
                 mm = {-mm.x, -mm.y, -mm.z};
                 orient = -1;
             }
-            chain.push_back({mm, ml, err, OUT, OUT, exact, orient});
+            ++sides;
+            // an edge along a plane the piece was cut by: that plane is on the path to
+            // the leaf, whose whole cell already lies on the piece's side of it, so the
+            // shadow needs no plane there
+            if (!on_cut) {
+                chain.push_back({mm, ml, err, OUT, OUT, exact, orient});
+                set_double(chain.back());
+            }
         }
-        if (degenerate || chain.size() < 3) {
+        if (degenerate || sides < 3) {
             *unattributed += piece_bound;
+            return;
+        }
+        if (chain.empty()) {  // the piece fills its leaf's cell: the cell is covered
+            (positive ? sv[plane].pos : sv[plane].neg) = IN;
             return;
         }
         const int base = static_cast<int>(sv.size());
@@ -1193,6 +1351,7 @@ class Core {
 
     int64_t n_sources_;
     std::vector<double> V_;
+    std::vector<int64_t> uid_;  // distinct input point of each vertex
     std::vector<int64_t> start_, count_, source_, front_, back_, here_start_, here_front_,
         here_behind_;
     std::vector<double> lo_, hi_;

@@ -153,7 +153,10 @@ def compiled_form_factors(scene, point, normal, *, two_sided=False, stats=None,
         Filled with what the row did: ``path``, ``fragments`` (filtered down the
         shadow tree), ``visible_pieces``, ``hidden_pieces``, ``splits``,
         ``subtrees_culled`` and ``fragments_culled`` (skipped by their bounding box),
-        ``box_tests``, ``shadow_planes``, ``quad_pieces`` (integrated again in
+        ``box_tests``, ``shadow_planes``, ``node_visits`` (shadow-tree nodes a piece
+        was classified at), ``near_tests`` (vertices within a plane's rounding band),
+        ``exact_tests`` (exact tests of an input point decided, not found in the row's
+        cache), ``quad_pieces`` (integrated again in
         quadruple precision), ``unattributed_bound`` (visible slivers whose shadows were
         left out), ``max_error_estimate`` and ``max_band_bound``; after a fallback,
         ``compiled_missed`` and the Python engine's counters.
