@@ -3,7 +3,10 @@ the check every public result passes on its way out)."""
 
 import numpy as np
 
-__all__ = ["SceneError", "NumericalError", "check_finite"]
+from . import _tolerances as tol
+
+__all__ = ["SceneError", "NumericalError", "check_finite", "misses_tolerance",
+           "tolerance_missed"]
 
 
 class SceneError(ValueError):
@@ -65,6 +68,44 @@ def check_finite(F, E=None, what="form factor"):
         raise NumericalError(f"{what}{where} is {float(F_.ravel()[k])!r} (error estimate "
                              f"{est!r}): not finite, never returned")
     return F if E is None else (F, E)
+
+
+def misses_tolerance(F, E, rtol, atol=None):
+    """Where a value misses what it was asked to meet: its error estimate ``E`` exceeds
+    ``max(atol, rtol * |F|)`` (``rtol`` None: 0; ``atol`` None: ``MP_VALUE_FLOOR``, so
+    that a value 0 with an estimate 0 meets any relative tolerance). The one acceptance
+    criterion of every path: unoccluded rows (after their last precision tier), the
+    clipper's refined values, the Eq. 3 integrator, area form factors (absolute
+    ``atol``). An infinite estimate misses; a NaN one is refused by :func:`check_finite`.
+
+    Examples
+    --------
+    >>> misses_tolerance(np.array([0.5, 0.5, 0.0]), np.array([1e-13, 1e-11, 0.0]), 1e-12)
+    array([False,  True, False])
+    >>> bool(misses_tolerance(1e-3, 2e-9, 1e-9, atol=1e-9))    # max(1e-9, 1e-12)
+    True
+    """
+    F, E = np.asarray(F, dtype=float), np.asarray(E, dtype=float)
+    allowed = np.zeros_like(F) if rtol is None else rtol * np.abs(F)
+    return E > np.maximum(tol.MP_VALUE_FLOOR if atol is None else atol, allowed)
+
+
+def tolerance_missed(where, value, estimate, allowed, why="", hint=""):
+    """The :class:`NumericalError` for a value that misses its tolerance (see
+    :func:`misses_tolerance`): names ``where`` (``"polygon 3"``, ``"row 0, polygon
+    2"``), the value, its bound and what was allowed, ``why`` it could not do better,
+    and that ``error=True`` returns the value with its bound instead.
+
+    Examples
+    --------
+    >>> str(tolerance_missed("polygon 3", 0.25, 2e-9, "1e-12 relative"))[:72]
+    'polygon 3: the form factor 0.25 misses the tolerance 1e-12 relative (err'
+    """
+    why = f" {why}" if why else ""
+    hint = f"; {hint}" if hint else ""
+    return NumericalError(f"{where}: the form factor {float(value):.17g} misses the tolerance "
+                          f"{allowed} (error estimate {float(estimate):.3g}){why}{hint}; "
+                          f"ask error=True for the value with its estimate")
 
 
 # shown (and pickled) by their public name, as numpy does for its exceptions
