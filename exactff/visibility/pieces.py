@@ -6,6 +6,7 @@ import numpy as np
 import shapely
 
 from .. import _tolerances as tol
+from ..errors import tolerance_missed
 from ..kernel import TWO_PI, clipped_sector_sums, eq3_ring_area
 from ..rings import repack, shapely_rings
 from .charts import CHARTS, lift
@@ -26,7 +27,7 @@ def rings_long_double(D, start, count):
 
 
 def pieces_form_factors(pieces, m, tolerance=None, owner=None, integrator="sector",
-                        refiner=None, stats=None):
+                        refiner=None, stats=None, strict=True):
     """Form factors of visible pieces, summed per fragment, with error estimates.
 
     Every ring of a piece is a closed chain of great-circle arcs (its chart coordinates
@@ -53,7 +54,12 @@ def pieces_form_factors(pieces, m, tolerance=None, owner=None, integrator="secto
     value within the latter's estimate; where it does not, the clipper's value is kept
     and the difference added to its estimate (``stats["refine_disagreements"]``).
     Rings whose edges cannot all be traced to the input keep the clipper's value and
-    estimate (``stats["unrefined_rings"]``).
+    estimate (``stats["unrefined_rings"]``). Where mpmath stops at ``MP_MAX_DPS``
+    digits before two evaluations agree, ``strict`` (the default) raises
+    :class:`exactff.NumericalError` naming the polygon; else the ring keeps the
+    difference of the two as its estimate (``stats["refine_mp_unconverged"]``). Whether
+    the summed values meet the tolerance is the caller's check
+    (:func:`exactff.visibility.visible_form_factors`).
 
     Returns
     -------
@@ -64,7 +70,7 @@ def pieces_form_factors(pieces, m, tolerance=None, owner=None, integrator="secto
 
     st = stats if stats is not None else {}
     for key in ("refined_rings", "refined_rings_mp", "unrefined_rings",
-                "refine_disagreements"):
+                "refine_disagreements", "refine_mp_unconverged"):
         st.setdefault(key, 0)
     F = np.zeros(m)
     err = np.zeros(m)
@@ -184,9 +190,17 @@ def pieces_form_factors(pieces, m, tolerance=None, owner=None, integrator="secto
                     r = rsel[k]
                     a, cnt = st_sub[k], c["count"][r]
                     sl = slice(a, a + cnt)
-                    rv, re = refiner.refine_mp(c["chart"], c["coords"][vsel[sl]], label[sl],
-                                               statics, point[sl], drop[sl], cut[k],
-                                               tolerance)
+                    rv, re, converged = refiner.refine_mp(
+                        c["chart"], c["coords"][vsel[sl]], label[sl], statics, point[sl],
+                        drop[sl], cut[k], tolerance)
+                    if not converged:
+                        st["refine_mp_unconverged"] += 1
+                        if strict:
+                            j = int(group[c["frag"][g]])
+                            raise tolerance_missed(
+                                f"polygon {j} (a ring of one of its visible pieces)", rv, re,
+                                f"{tolerance:g}",
+                                f"mpmath did not converge at {tol.MP_MAX_DPS} digits")
                     terms.append((-1 if c["is_hole"][r] else 1, rv))
                     est += re
                     st["refined_rings_mp"] += 1
