@@ -62,7 +62,9 @@ def form_factors(scene: Scene, point: ArrayLike, normal: ArrayLike, *,
     NumericalError
         The exact method: a value fell below 0 beyond its bound or came out NaN or
         infinite (never returned); unless ``error=True``, also a value whose bound
-        missed the method's tolerance after refinement and every precision tier (on
+        missed the method's tolerance (relative, with an absolute floor of
+        ``tolerance * 1e-4``: :func:`exactff.errors.misses_tolerance`) after
+        refinement and every precision tier (on
         every path; with ``integrator="eq3"``, which neither refines nor escalates, as
         soon as its bound misses it). With ``error=True`` such a value is returned
         with its bound.

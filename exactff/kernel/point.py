@@ -122,7 +122,7 @@ def unoccluded_row(flat, p, n, *, one_sided=True, tolerance=None,
         missed = flagged[misses_tolerance(F[flagged], err[flagged], tolerance)]
         if len(missed) and strict:
             i = int(missed[0])
-            raise tolerance_missed(f"polygon {i}", F[i], err[i], f"{tolerance:g}",
+            raise tolerance_missed(f"polygon {i}", F[i], err[i], tolerance,
                                    f"even in {tol.MP_MAX_DPS}-digit arithmetic")
     # (a NaN is not "missed" above: it is refused here, on every tier's way out)
     check_finite(F, err)

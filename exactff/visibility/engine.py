@@ -11,6 +11,7 @@ import numpy as np
 import shapely
 from scipy.spatial import ConvexHull, QhullError
 
+from .. import _tolerances as tol
 from ..checks import as_receiver
 from ..errors import NumericalError, check_finite, misses_tolerance, tolerance_missed
 from ..geometry import receiver_frame, to_local
@@ -75,12 +76,13 @@ def visible_form_factors(scene, point, normal, *, two_sided=False, stats=None,
         path) whose estimate exceeds it are re-evaluated in higher precision; visible
         pieces of polygons whose bound exceeds it are refined (vertices recomputed
         from the input, :mod:`exactff.visibility.refine`) and integrated in long double
-        or mpmath. A value whose bound still exceeds ``tolerance`` times it afterwards
-        (:func:`exactff.errors.misses_tolerance`), or whose mpmath evaluation stopped
-        at its precision limit, raises :class:`exactff.NumericalError` naming the
-        polygon, its bound and the tolerance, on every path and with either
-        integrator; with ``error=True`` it is returned with that bound instead. None:
-        no refinement, no escalation, no check.
+        or mpmath. A value whose bound still exceeds ``tolerance`` times the larger of
+        the value and ``VALUE_FLOOR`` (1e-4; :func:`exactff.errors.misses_tolerance`)
+        afterwards, mpmath's evaluations at their precision limit included, raises
+        :class:`exactff.NumericalError` naming the polygon, its bound and the
+        tolerance, on every path and with either integrator; with ``error=True`` it is
+        returned with that bound instead. None: no refinement, no escalation, no
+        check.
     shortcuts : bool, default True
         False disables every shortcut: the convex-scene path, the culling of fragments
         below the horizon, the tiled clipper (full tiles, predicates instead of
@@ -138,8 +140,7 @@ def visible_form_factors(scene, point, normal, *, two_sided=False, stats=None,
     pieces = visible_pieces(kept, receives, stats=st, shortcuts=shortcuts, charts=charts)
     refiner = Refiner(scene, tree, order, p, normal, kept, world, charts)
     Ff, ef_ = pieces_form_factors(pieces, len(order), tolerance=tolerance, owner=src,
-                                  integrator=integrator, refiner=refiner, stats=st,
-                                  strict=not error)
+                                  integrator=integrator, refiner=refiner, stats=st)
     F = np.bincount(src, weights=Ff, minlength=len(scene))
     E = np.bincount(src, weights=ef_, minlength=len(scene))
     check_finite(F, E)
@@ -176,10 +177,13 @@ def _require_tolerance(F, E, tolerance, integrator, st):
         why = "after refining its visible pieces"
         if st.get("unrefined_rings"):
             why += f" ({st['unrefined_rings']} ring(s) of the row could not be refined)"
+        if st.get("refine_mp_unconverged"):
+            why += (f" ({st['refine_mp_unconverged']} ring(s) of the row: mpmath did not "
+                    f"converge at {tol.MP_MAX_DPS} digits)")
         hint = ""
     else:
         why, hint = "", ""
-    raise tolerance_missed(f"polygon {i}", F[i], E[i], f"{tolerance:g}", why, hint)
+    raise tolerance_missed(f"polygon {i}", F[i], E[i], tolerance, why, hint)
 
 
 def visible_graph(scene, point, normal, *, two_sided=False, max_segment=0.02):

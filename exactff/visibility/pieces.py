@@ -6,7 +6,6 @@ import numpy as np
 import shapely
 
 from .. import _tolerances as tol
-from ..errors import tolerance_missed
 from ..kernel import TWO_PI, clipped_sector_sums, eq3_ring_area
 from ..rings import repack, shapely_rings
 from .charts import CHARTS, lift
@@ -27,7 +26,7 @@ def rings_long_double(D, start, count):
 
 
 def pieces_form_factors(pieces, m, tolerance=None, owner=None, integrator="sector",
-                        refiner=None, stats=None, strict=True):
+                        refiner=None, stats=None):
     """Form factors of visible pieces, summed per fragment, with error estimates.
 
     Every ring of a piece is a closed chain of great-circle arcs (its chart coordinates
@@ -55,11 +54,10 @@ def pieces_form_factors(pieces, m, tolerance=None, owner=None, integrator="secto
     and the difference added to its estimate (``stats["refine_disagreements"]``).
     Rings whose edges cannot all be traced to the input keep the clipper's value and
     estimate (``stats["unrefined_rings"]``). Where mpmath stops at ``MP_MAX_DPS``
-    digits before two evaluations agree, ``strict`` (the default) raises
-    :class:`exactff.NumericalError` naming the polygon; else the ring keeps the
-    difference of the two as its estimate (``stats["refine_mp_unconverged"]``). Whether
-    the summed values meet the tolerance is the caller's check
-    (:func:`exactff.visibility.visible_form_factors`).
+    digits before two evaluations agree, the ring keeps the difference of the two as
+    its estimate (``stats["refine_mp_unconverged"]``). Whether the summed values meet
+    the tolerance is the caller's check (:func:`exactff.visibility.visible_form_factors`,
+    by :func:`exactff.errors.misses_tolerance`).
 
     Returns
     -------
@@ -193,14 +191,9 @@ def pieces_form_factors(pieces, m, tolerance=None, owner=None, integrator="secto
                     rv, re, converged = refiner.refine_mp(
                         c["chart"], c["coords"][vsel[sl]], label[sl], statics, point[sl],
                         drop[sl], cut[k], tolerance)
-                    if not converged:
-                        st["refine_mp_unconverged"] += 1
-                        if strict:
-                            j = int(group[c["frag"][g]])
-                            raise tolerance_missed(
-                                f"polygon {j} (a ring of one of its visible pieces)", rv, re,
-                                f"{tolerance:g}",
-                                f"mpmath did not converge at {tol.MP_MAX_DPS} digits")
+                    # stopped at MP_MAX_DPS: the difference of its last two evaluations
+                    # is its estimate, which the caller checks with the others
+                    st["refine_mp_unconverged"] += int(not converged)
                     terms.append((-1 if c["is_hole"][r] else 1, rv))
                     est += re
                     st["refined_rings_mp"] += 1
