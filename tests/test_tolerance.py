@@ -3,7 +3,9 @@ misses ``tolerance`` after everything its path can do raises NumericalError nami
 polygon (and the row), its bound and the tolerance; with ``error=True`` it comes back
 with that bound instead. One criterion decides it (``errors.misses_tolerance``): the
 bound against ``tolerance`` times the larger of the value and ``VALUE_FLOOR``. Each
-test here failed before its fix.
+test here failed before its fix (on 0596bee; the floor's with ``VALUE_FLOOR = 0``, the
+criterion of the first version), but the compiled core's, which pin what stayed: its
+fallback is its escalation, and its band's slivers are in its bound, not in the check.
 """
 
 import numpy as np
