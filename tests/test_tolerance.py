@@ -108,6 +108,23 @@ def test_unrefinable_sliver_raises_instead_of_returning_the_clippers_bound(monke
         visible_form_factors(scene, p, n, tolerance=1e-12)
 
 
+def test_unoccluded_path_returns_the_bound_when_asked(monkeypatch):
+    # the engine's convex-scene path raised at its last tier even with error=True
+    import exactff.kernel.point as point
+
+    def stopped(p, n, P, two_sided=False, tolerance=None, error=False, side=None):
+        return 0.125, 1e-20                # as mpmath at its limit: a bound of 1e-20
+
+    box = ef.scenes.subdivided_box(2)
+    p, n = np.array([0.5, 0.5, 0.0]), np.array([0, 0, 1.0])
+    monkeypatch.setattr(point, "mp_form_factor", stopped)
+    st = {}
+    F, E = visible_form_factors(box, p, n, tolerance=1e-40, error=True, stats=st)
+    assert st["path"] == "unoccluded" and np.all(E[F > 0] == 1e-20)
+    with pytest.raises(ef.NumericalError, match=r"polygon \d+: .*misses the tolerance 1e-40"):
+        visible_form_factors(box, p, n, tolerance=1e-40)
+
+
 # ---------------------------------------------------------------------------------------
 # (a') the compiled core: the same criterion decides its fallback, and its band's slivers
 # ---------------------------------------------------------------------------------------
