@@ -140,11 +140,12 @@ def compiled_form_factors(scene, point, normal, *, two_sided=False, stats=None,
     (:func:`exactff.errors.misses_tolerance`, raising where one misses it);
     ``stats["path"]`` then says ``"compiled, then python"`` and
     ``stats["compiled_missed"]`` counts the values that caused it. A row the compiled
-    core returns meets the tolerance everywhere, even without the floor. The band's slivers (``stats["max_band_bound"]``, 1e-18 to 1e-16 where
-    they occur) are a bound on the topology, not on rounding or geometry: they are in
-    the returned bound but not checked against the tolerance, as the Python engine's
-    topology has the same decisions and its bound leaves them out (a value 0 of
-    ``office(600)``'s row 183 carries 1.8e-16 of them, above the tolerance's floor).
+    core returns has the rounding and geometry of every value within the tolerance,
+    even without its floor. The band's slivers (``stats["max_band_bound"]``) are a
+    bound on the topology: they are in the returned bound but not checked against the
+    tolerance, as the Python engine's topology has the same decisions and its bound
+    leaves them out (a value 0 of ``office(600)``'s row 183 carries 1.8e-16 of them,
+    above the tolerance's floor).
 
     Parameters
     ----------

@@ -537,8 +537,8 @@ class Refiner:
         20 digits apart, raised until they agree to ``tolerance``. Returns the absolute
         form factor of its image (an mpf, to be summed per piece before rounding), its
         error estimate, and whether the two evaluations agreed (False: mpmath stopped
-        at ``MP_MAX_DPS`` digits; the estimate is then their difference, and the caller
-        raises unless asked for bounds). ``point``, ``drop`` and ``cut``
+        at ``MP_MAX_DPS`` digits; the estimate is then their difference, which the
+        caller counts and checks with the others). ``point``, ``drop`` and ``cut``
         are the long-double tier's decisions (input points, dropped vertices, the
         triangles they may cut off), kept here."""
         import mpmath as mp
