@@ -30,6 +30,7 @@ __all__ = [
     "CHART_EDGE_ULPS",
     "MP_MAX_DPS",
     "MP_VALUE_FLOOR",
+    "VALUE_FLOOR",
     "BSP_AXIS_IMBALANCE",
     "CHART_VERTEX_ERROR",
     "REFINE_MATCH",
@@ -214,6 +215,15 @@ MP_MAX_DPS = 400
 #: Two mpmath evaluations closer than this (absolutely) agree: a value that is 0 up to
 #: the working precision has no relative accuracy to reach.
 MP_VALUE_FLOOR = 1e-300
+
+#: A form factor meets a relative ``tolerance`` when its bound is at most ``tolerance``
+#: times the larger of its magnitude and this share of the hemisphere
+#: (:func:`exactff.errors.misses_tolerance`): a value of 1e-30 cannot carry 12 digits
+#: relative to the 1e-17 rounding of its neighbours (a sliver left between touching
+#: polygons by moved coordinates, a polygon all but edge-on), while 1e5 such values keep
+#: a row's sum within about 10 times ``tolerance``; DESIGN 6's targets are absolute plus
+#: relative too (1e-13 + 1e-12 F, of which this floor gives 1e-16 at the default).
+VALUE_FLOOR = 1e-4
 
 #: The axis-plane candidate is tried at a BSP node when the best of the polygons' own
 #: planes leaves more than this fraction of the node's fragments' count as the

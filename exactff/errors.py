@@ -3,7 +3,10 @@ the check every public result passes on its way out)."""
 
 import numpy as np
 
-__all__ = ["SceneError", "NumericalError", "check_finite"]
+from . import _tolerances as tol
+
+__all__ = ["SceneError", "NumericalError", "check_finite", "misses_tolerance",
+           "tolerance_missed"]
 
 
 class SceneError(ValueError):
@@ -65,6 +68,56 @@ def check_finite(F, E=None, what="form factor"):
         raise NumericalError(f"{what}{where} is {float(F_.ravel()[k])!r} (error estimate "
                              f"{est!r}): not finite, never returned")
     return F if E is None else (F, E)
+
+
+def misses_tolerance(F, E, tolerance, atol=None):
+    """Where a value's bound misses the accuracy asked of it.
+
+    A bound ``E`` misses ``tolerance`` where it exceeds
+    ``tolerance * max(|F|, VALUE_FLOOR)``, the relative tolerance with an absolute floor
+    proportional to it (``VALUE_FLOOR``, a share of the hemisphere: a value near 0
+    cannot carry relative digits its neighbours' rounding does not have). With an
+    explicit ``atol`` (area form factors, whose ``tolerance`` is absolute) the floor is
+    ``atol`` instead: ``E > max(atol, tolerance * |F|)``, ``tolerance`` None meaning no
+    relative part. The one acceptance criterion of every path: unoccluded values after
+    their last precision tier, the Python engine's refined pieces (either integrator),
+    the compiled core's check before it falls back, area form factors. An infinite
+    bound misses; a NaN is refused by :func:`check_finite`.
+
+    Examples
+    --------
+    >>> misses_tolerance(np.array([0.5, 0.5, 0.0, 0.0]),
+    ...                  np.array([1e-13, 1e-11, 5e-17, 2e-16]), 1e-12)
+    array([False,  True, False,  True])
+    >>> bool(misses_tolerance(1e-3, 2e-9, 1e-9, atol=1e-9))    # max(1e-9, 1e-12)
+    True
+    """
+    F, E = np.asarray(F, dtype=float), np.asarray(E, dtype=float)
+    if atol is None:
+        return E > tolerance * np.maximum(np.abs(F), tol.VALUE_FLOOR)
+    allowed = np.zeros_like(F) if tolerance is None else tolerance * np.abs(F)
+    return E > np.maximum(atol, allowed)
+
+
+def tolerance_missed(where, value, estimate, allowed, why="", hint=""):
+    """The :class:`NumericalError` for a value that misses its tolerance (see
+    :func:`misses_tolerance`): names ``where`` (``"polygon 3"``, ``"row 0, polygon
+    2"``), the value, its bound and what was allowed (a number: a relative tolerance
+    with its floor; a string: as given), ``why`` it could not do better, and that
+    ``error=True`` returns the value with its bound instead.
+
+    Examples
+    --------
+    >>> print(tolerance_missed("polygon 3", 0.25, 2e-9, 1e-12))
+    polygon 3: the form factor 0.25 misses the tolerance 1e-12 relative (times the larger of |F| and 0.0001) (error estimate 2e-09); ask error=True for the value with its estimate
+    """
+    why = f" {why}" if why else ""
+    hint = f"; {hint}" if hint else ""
+    if not isinstance(allowed, str):       # a relative tolerance, with its floor
+        allowed = f"{allowed:g} relative (times the larger of |F| and {tol.VALUE_FLOOR:g})"
+    return NumericalError(f"{where}: the form factor {float(value):.17g} misses the tolerance "
+                          f"{allowed} (error estimate {float(estimate):.3g}){why}{hint}; "
+                          f"ask error=True for the value with its estimate")
 
 
 # shown (and pickled) by their public name, as numpy does for its exceptions

@@ -14,7 +14,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from .area import area_row
-from .errors import check_finite
+from .errors import check_finite, misses_tolerance, tolerance_missed
 from .checks import as_receivers, check_tolerance, row_indices
 from .methods import FormFactorMethod, resolve
 from .scene import Scene, as_scene
@@ -61,8 +61,13 @@ def form_factors(scene: Scene, point: ArrayLike, normal: ArrayLike, *,
         Bad point, normal, or method (the message names the argument).
     NumericalError
         The exact method: a value fell below 0 beyond its bound or came out NaN or
-        infinite (never returned); on its unoccluded path, also a value that missed the
-        tolerance in every precision tier.
+        infinite (never returned); unless ``error=True``, also a value whose bound
+        missed the method's tolerance (relative, with an absolute floor of
+        ``tolerance * 1e-4``: :func:`exactff.errors.misses_tolerance`) after
+        refinement and every precision tier (on
+        every path; with ``integrator="eq3"``, which neither refines nor escalates, as
+        soon as its bound misses it). With ``error=True`` such a value is returned
+        with its bound.
 
     Notes
     -----
@@ -133,6 +138,9 @@ class AreaRows:
     (it is pickled) and are in :meth:`record` (resumable outputs key on it). ``stats``,
     a dict, receives the sums of the rows' counters as the driver stores them
     (:meth:`collect`, in the calling process), whichever executor computed them.
+    ``strict`` (what :func:`area_form_factors` sets unless ``error=True``): a row with a
+    value whose estimate misses the tolerance raises :class:`exactff.NumericalError`
+    instead of being stored (not part of :meth:`record`: it changes no stored value).
 
     Examples
     --------
@@ -144,9 +152,9 @@ class AreaRows:
 
     outputs = 2
 
-    def __init__(self, tolerance, shortcuts=True, stats=None, rtol=None):
+    def __init__(self, tolerance, shortcuts=True, stats=None, rtol=None, strict=False):
         self.tolerance, self.rtol, self.shortcuts = tolerance, rtol, bool(shortcuts)
-        self.stats = stats
+        self.stats, self.strict = stats, bool(strict)
 
     def record(self):
         return {"area": True, "tolerance": repr(self.tolerance), "rtol": repr(self.rtol),
@@ -162,8 +170,18 @@ class AreaRows:
             st = {}
             f, e = area_row(scene, i, self.tolerance, rtol=self.rtol, shortcuts=self.shortcuts,
                             stats=st)
-            # every row checked before it is stored: a NaN is never returned
-            out.append(check_finite(f, e) + (st,))
+            # every row checked before it is stored: a NaN is never returned, nor (strict)
+            # a value whose estimate misses the tolerance
+            check_finite(f, e)
+            if self.strict:
+                bad = np.flatnonzero(misses_tolerance(f, e, self.rtol, atol=self.tolerance))
+                if len(bad):
+                    j = int(bad[0])
+                    allowed = (f"{self.tolerance:g} absolute" if self.rtol is None else
+                               f"max({self.tolerance:g}, {self.rtol:g} * F)")
+                    raise tolerance_missed(f"row {i}, polygon {j}", f[j], e[j], allowed,
+                                           "(area form factor, after adaptive refinement)")
+            out.append((f, e, st))
         return out
 
     def collect(self, values):
@@ -534,7 +552,12 @@ def area_form_factors(scene, rows=None, *, tolerance=1e-9, error=False, executor
     Raises
     ------
     NumericalError
-        A value came out NaN or infinite, or an estimate NaN (never returned).
+        A value came out NaN or infinite, or an estimate NaN (never returned); unless
+        ``error=True``, also a value whose estimate exceeds ``tolerance`` (or
+        ``max(tolerance, rtol * |F|)``) after the adaptive rules' cutting (the message
+        names the row and the polygon). With ``error=True`` such a value is returned
+        with its estimate, which says so. Rows read back from a resumed ``out`` were
+        checked when they were computed, under that run's ``error``.
 
     Notes
     -----
@@ -545,7 +568,8 @@ def area_form_factors(scene, rows=None, *, tolerance=1e-9, error=False, executor
     bounds the 10-point rule's error, plus the point values' own bounds. Curved events
     (three skew edges) are not cut along; the adaptive cutting resolves them, and a
     triangle still unresolved after ``MAX_DEPTH`` cuts keeps its (large) estimate, so
-    that a value whose estimate exceeds ``tolerance`` says so. Cost grows with the
+    that a value whose estimate exceeds ``tolerance`` says so: it raises, or with
+    ``error=True`` comes back with that estimate. Cost grows with the
     events of each occluded pair: meant for scenes of up to a few hundred polygons.
 
     Examples
@@ -567,7 +591,8 @@ def area_form_factors(scene, rows=None, *, tolerance=1e-9, error=False, executor
     check_tolerance(rtol, "rtol")
     if stats is not None and not isinstance(stats, dict):
         raise ValueError(f"stats must be a dict or None, got {type(stats).__name__}")
-    F, E = run_rows(scene, rows, AreaRows(tolerance, shortcuts, stats, rtol), executor=executor, jobs=jobs,
+    F, E = run_rows(scene, rows, AreaRows(tolerance, shortcuts, stats, rtol, strict=not error),
+                    executor=executor, jobs=jobs,
                     progress=progress, out=out, sparse=sparse, chunk_rows=chunk_rows,
                     desc="area form factors")
     return (F, E) if error else F

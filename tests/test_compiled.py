@@ -152,10 +152,16 @@ def test_a_missed_tolerance_falls_back_to_the_python_engine():
     scene = ef.scenes.cornell_box(closed=True)
     p, n = scene.centroids[1], scene.normals[1]
     st = {}
-    F = compiled_form_factors(scene, p, n, tolerance=1e-30, stats=st)
+    # 1e-30 is out of reach: the Python engine returns its bounds (error=True) rather
+    # than raise (tests/test_tolerance.py)
+    F, E = compiled_form_factors(scene, p, n, tolerance=1e-30, stats=st, error=True)
     assert st["path"] == "compiled, then python" and st["compiled_missed"] > 0
-    np.testing.assert_array_equal(F, ef.Exact(engine="python", tolerance=1e-30)
-                                  .point_form_factors(scene, p, n))
+    Fp, Ep = ef.Exact(engine="python", tolerance=1e-30).point_form_factors(scene, p, n,
+                                                                          error=True)
+    np.testing.assert_array_equal(F, Fp)
+    np.testing.assert_array_equal(E, Ep)
+    with pytest.raises(ef.NumericalError, match="misses the tolerance 1e-30"):
+        compiled_form_factors(scene, p, n, tolerance=1e-30)
     st = {}
     compiled_form_factors(scene, p, n, tolerance=1e-12, stats=st)
     assert st["path"] == "compiled"

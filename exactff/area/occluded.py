@@ -13,6 +13,7 @@ from scipy.spatial import ConvexHull, QhullError
 from scipy.special import roots_legendre
 
 from .. import _tolerances as tol
+from ..errors import misses_tolerance
 from ..geometry import area_vector, receiver_frame
 from ..halfspace import clip_halfspace
 from ..kernel import clipped_sector_sums
@@ -360,7 +361,8 @@ def _occluded_pair(S, Pc, Qc, nP, tolerance, area_P, shortcuts=True, st=None, rt
     whole = (whole * area_Pc / area_P, whole_err * area_Pc / area_P)
     target = tolerance if rtol is None else max(tolerance, rtol * whole[0])
     value, err, points = _hidden_integral(S, Pc, Qc, nP, target, area_P, whole, shortcuts, st)
-    if rtol is not None and target > tolerance and err > max(tolerance, rtol * abs(value)):
+    if rtol is not None and target > tolerance and misses_tolerance(value, err, rtol,
+                                                                     atol=tolerance):
         target = max(tolerance, rtol * max(value - err, 0.0))
         value, err, more = _hidden_integral(S, Pc, Qc, nP, target, area_P, whole, shortcuts, st)
         points += more

@@ -15,7 +15,7 @@ from numpy.typing import ArrayLike
 
 from .. import _tolerances as tol
 from ..checks import as_normal, as_point, check_sides, check_tolerance
-from ..errors import NumericalError, check_finite
+from ..errors import check_finite, misses_tolerance, tolerance_missed
 from ..geometry import area_vector, receiver_frame, rotate, to_local
 from ..halfspace import clip_above_horizon
 from ..predicates import plane_sides, polygon_side
@@ -119,13 +119,11 @@ def unoccluded_row(flat, p, n, *, one_sided=True, tolerance=None,
         # the last tier's values are checked too: one that still misses the tolerance
         # (mpmath stopped at its precision limit) is returned with its estimate when the
         # caller asks for estimates, and raises otherwise
-        missed = flagged[err[flagged] > tolerance * F[flagged] + tol.MP_VALUE_FLOOR]
+        missed = flagged[misses_tolerance(F[flagged], err[flagged], tolerance)]
         if len(missed) and strict:
             i = int(missed[0])
-            raise NumericalError(f"polygon {i}: the form factor {F[i]:.17g} misses the "
-                                 f"tolerance {tolerance:g} (error estimate {err[i]:.3g}) "
-                                 f"even in {tol.MP_MAX_DPS}-digit arithmetic; ask error=True "
-                                 f"for the value with its estimate")
+            raise tolerance_missed(f"polygon {i}", F[i], err[i], tolerance,
+                                   f"even in {tol.MP_MAX_DPS}-digit arithmetic")
     # (a NaN is not "missed" above: it is refused here, on every tier's way out)
     check_finite(F, err)
     return (F, err) if return_error else F

@@ -28,7 +28,14 @@ class Exact(FormFactorMethod):
         re-evaluated; unoccluded ones in long double or mpmath, visible pieces refined
         (their vertices recomputed from the input, where the clipper's double-precision
         coordinates fall short) and integrated in long double or mpmath (see
-        ``docs/explanation/robustness.md``). None: no refinement or escalation.
+        ``docs/explanation/robustness.md``). A value whose bound still exceeds
+        ``tolerance`` times the larger of the value and ``VALUE_FLOOR`` (1e-4 of the
+        hemisphere: a value near 0 cannot carry relative digits;
+        :func:`exactff.errors.misses_tolerance`) after all that raises
+        :class:`exactff.NumericalError` naming the polygon (on every path, either
+        engine and either integrator), unless the row is asked for with
+        ``error=True``, which returns it with its bound. None: no refinement,
+        escalation or check.
     shortcuts : bool, default True
         Leave out what a row does not need: the convex-scene shortcut, the tiled
         clipper (fragments hidden by full tiles or decided by exact predicates instead
@@ -40,7 +47,13 @@ class Exact(FormFactorMethod):
         with monotone-span splitting (one ring at a time in Python, no escalation).
         Both are exact; the sector form is the default because it is faster (see
         ``docs/benchmarks.md``) and escalates where double precision falls short.
-        Eq. 3 is integrated by the Python engine only.
+        Eq. 3 is integrated by the Python engine only. With ``"eq3"`` nothing is
+        refined or escalated, but the values are still checked against
+        ``tolerance``: one whose bound misses it raises
+        :class:`exactff.NumericalError` (suggesting ``integrator="sector"``) unless
+        ``error=True`` was asked, as it does on most occluded rows at the default
+        tolerance; ``tolerance=None`` turns the check off (to compare the
+        integrators).
     engine : {"compiled", "python"} or None, default None
         ``"compiled"``: the compiled core (:mod:`exactff.visibility.compiled`), whose
         cost follows what a row sees; a row any of whose values misses the tolerance is

@@ -11,8 +11,9 @@ import numpy as np
 import shapely
 from scipy.spatial import ConvexHull, QhullError
 
+from .. import _tolerances as tol
 from ..checks import as_receiver
-from ..errors import NumericalError, check_finite
+from ..errors import NumericalError, check_finite, misses_tolerance, tolerance_missed
 from ..geometry import receiver_frame, to_local
 from ..kernel import eq3_form_factor, flat_polygons, unoccluded_row
 from ..predicates import coplanar_band_sides, engine_sides
@@ -69,13 +70,19 @@ def visible_form_factors(scene, point, normal, *, two_sided=False, stats=None,
         shortcut applied, else ``"clipper"``), ``fragments``, ``culled_edge_on``,
         ``culled_below_horizon``, the clipper's counters, and the refinement's
         (``refined_rings``, ``refined_rings_mp``, ``unrefined_rings``,
-        ``refine_disagreements``).
+        ``refine_disagreements``, ``refine_mp_unconverged``).
     tolerance : float or None
         Relative accuracy requested of every value: unoccluded values (convex-scene
         path) whose estimate exceeds it are re-evaluated in higher precision; visible
         pieces of polygons whose bound exceeds it are refined (vertices recomputed
         from the input, :mod:`exactff.visibility.refine`) and integrated in long double
-        or mpmath. None: neither.
+        or mpmath. A value whose bound still exceeds ``tolerance`` times the larger of
+        the value and ``VALUE_FLOOR`` (1e-4; :func:`exactff.errors.misses_tolerance`)
+        afterwards, mpmath's evaluations at their precision limit included, raises
+        :class:`exactff.NumericalError` naming the polygon, its bound and the
+        tolerance, on every path and with either integrator; with ``error=True`` it is
+        returned with that bound instead. None: no refinement, no escalation, no
+        check.
     shortcuts : bool, default True
         False disables every shortcut: the convex-scene path, the culling of fragments
         below the horizon, the tiled clipper (full tiles, predicates instead of
@@ -85,16 +92,28 @@ def visible_form_factors(scene, point, normal, *, two_sided=False, stats=None,
         How visible pieces (and, on the convex-scene path, whole polygons) are
         integrated: Lambert's sector form (vectorised, with escalation) or the paper's
         Eq. 3, corrected, with monotone-span splitting (one ring at a time, no
-        escalation).
+        escalation). Eq. 3's values are neither refined nor escalated, but they are
+        checked against ``tolerance`` as the sector form's are: one that misses it
+        raises :class:`exactff.NumericalError` suggesting ``integrator="sector"``
+        (unless ``error=True``).
 
     error : bool, default False
         Also return a bound on each value's error: the rounding of its integration
         plus its visible pieces' geometry (the clipper's vertices, or the refined
         ones), given the clipper's topology (``docs/explanation/robustness.md``).
+        Values that miss ``tolerance`` are then returned with their bounds instead of
+        raising.
 
     Returns
     -------
     ndarray of shape (len(scene),), or a pair of them with ``error=True``
+
+    Raises
+    ------
+    NumericalError
+        A value missed ``tolerance`` after refinement and escalation (or with
+        ``integrator="eq3"``, which has neither), and ``error`` is False; a value fell
+        below 0 beyond its bound; a value or bound came out NaN.
     """
     st = stats if stats is not None else {}
     flat = flat_polygons(scene)
@@ -109,9 +128,11 @@ def visible_form_factors(scene, point, normal, *, two_sided=False, stats=None,
             FE = np.array([(0.0, 0.0) if s == 0 else eq3_form_factor(
                 p, normal, P, two_sided=two_sided, error=True)
                 for P, s in zip(scene.polygons, side)])
+            if not error:
+                _require_tolerance(FE[:, 0], FE[:, 1], tolerance, integrator, st)
             return (FE[:, 0], FE[:, 1]) if error else FE[:, 0]
         return unoccluded_row(flat, p, normal, one_sided=not two_sided, tolerance=tolerance,
-                              sides=(side, band), return_error=error, strict=True)
+                              sides=(side, band), return_error=error, strict=not error)
     st["path"] = "clipper"
     tree, order, src, kept, world, receives = _row_fragments(scene, p, normal, side, two_sided,
                                                              shortcuts, st)
@@ -129,9 +150,40 @@ def visible_form_factors(scene, point, normal, *, two_sided=False, stats=None,
     if len(bad):
         raise NumericalError(f"polygon {bad[0]}: occluded form factor {F[bad[0]]!r} below 0 "
                              f"beyond its rounding error estimate {E[bad[0]]:.3g}")
+    F = np.maximum(F, 0.0)
     if stats is not None:
         stats["max_error_estimate"] = float(E.max(initial=0.0))
-    return (np.maximum(F, 0.0), E) if error else np.maximum(F, 0.0)
+    if not error:
+        _require_tolerance(F, E, tolerance, integrator, st)
+    return (F, E) if error else F
+
+
+def _require_tolerance(F, E, tolerance, integrator, st):
+    """Raise :class:`NumericalError` for the first polygon of a row whose bound misses
+    ``tolerance`` (:func:`exactff.errors.misses_tolerance`, the criterion of the
+    unoccluded path's last tier), after everything the row could do: refinement and
+    escalation with the sector form, nothing more with Eq. 3."""
+    if tolerance is None:
+        return
+    bad = np.flatnonzero(misses_tolerance(F, E, tolerance))
+    if not len(bad):
+        return
+    i = int(bad[0])
+    if integrator == "eq3":
+        why = ("with integrator='eq3', which neither refines nor escalates "
+               f"({st.get('path', 'clipper')} path)")
+        hint = "integrator='sector' (the default) refines and escalates"
+    elif st.get("path") == "clipper":
+        why = "after refining its visible pieces"
+        if st.get("unrefined_rings"):
+            why += f" ({st['unrefined_rings']} ring(s) of the row could not be refined)"
+        if st.get("refine_mp_unconverged"):
+            why += (f" ({st['refine_mp_unconverged']} ring(s) of the row: mpmath did not "
+                    f"converge at {tol.MP_MAX_DPS} digits)")
+        hint = ""
+    else:
+        why, hint = "", ""
+    raise tolerance_missed(f"polygon {i}", F[i], E[i], tolerance, why, hint)
 
 
 def visible_graph(scene, point, normal, *, two_sided=False, max_segment=0.02):

@@ -53,7 +53,11 @@ def pieces_form_factors(pieces, m, tolerance=None, owner=None, integrator="secto
     value within the latter's estimate; where it does not, the clipper's value is kept
     and the difference added to its estimate (``stats["refine_disagreements"]``).
     Rings whose edges cannot all be traced to the input keep the clipper's value and
-    estimate (``stats["unrefined_rings"]``).
+    estimate (``stats["unrefined_rings"]``). Where mpmath stops at ``MP_MAX_DPS``
+    digits before two evaluations agree, the ring keeps the difference of the two as
+    its estimate (``stats["refine_mp_unconverged"]``). Whether the summed values meet
+    the tolerance is the caller's check (:func:`exactff.visibility.visible_form_factors`,
+    by :func:`exactff.errors.misses_tolerance`).
 
     Returns
     -------
@@ -64,7 +68,7 @@ def pieces_form_factors(pieces, m, tolerance=None, owner=None, integrator="secto
 
     st = stats if stats is not None else {}
     for key in ("refined_rings", "refined_rings_mp", "unrefined_rings",
-                "refine_disagreements"):
+                "refine_disagreements", "refine_mp_unconverged"):
         st.setdefault(key, 0)
     F = np.zeros(m)
     err = np.zeros(m)
@@ -184,9 +188,12 @@ def pieces_form_factors(pieces, m, tolerance=None, owner=None, integrator="secto
                     r = rsel[k]
                     a, cnt = st_sub[k], c["count"][r]
                     sl = slice(a, a + cnt)
-                    rv, re = refiner.refine_mp(c["chart"], c["coords"][vsel[sl]], label[sl],
-                                               statics, point[sl], drop[sl], cut[k],
-                                               tolerance)
+                    rv, re, converged = refiner.refine_mp(
+                        c["chart"], c["coords"][vsel[sl]], label[sl], statics, point[sl],
+                        drop[sl], cut[k], tolerance)
+                    # stopped at MP_MAX_DPS: the difference of its last two evaluations
+                    # is its estimate, which the caller checks with the others
+                    st["refine_mp_unconverged"] += int(not converged)
                     terms.append((-1 if c["is_hole"][r] else 1, rv))
                     est += re
                     st["refined_rings_mp"] += 1

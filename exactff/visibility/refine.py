@@ -535,8 +535,10 @@ class Refiner:
         """One refined ring in mpmath (labels from :meth:`refine_ld`): planes and
         vertices from the input at the working precision, evaluated at two precisions
         20 digits apart, raised until they agree to ``tolerance``. Returns the absolute
-        form factor of its image (an mpf, to be summed per piece before rounding) and
-        its error estimate. ``point``, ``drop`` and ``cut``
+        form factor of its image (an mpf, to be summed per piece before rounding), its
+        error estimate, and whether the two evaluations agreed (False: mpmath stopped
+        at ``MP_MAX_DPS`` digits; the estimate is then their difference, which the
+        caller counts and checks with the others). ``point``, ``drop`` and ``cut``
         are the long-double tier's decisions (input points, dropped vertices, the
         triangles they may cut off), kept here."""
         import mpmath as mp
@@ -600,5 +602,5 @@ class Refiner:
                     X.append(x)
                 return abs(mp_sector_sum(X)) / (2 * mp.pi) if len(X) >= 3 else mp.mpf(0)
 
-        hi, diff, _ = mp_converge(evaluate, tolerance)
-        return hi, float(diff) + cut
+        hi, diff, converged = mp_converge(evaluate, tolerance)
+        return hi, float(diff) + cut, converged

@@ -1,0 +1,268 @@
+"""Issue 33, item 3: the tolerance is enforced on every path. A value whose bound still
+misses ``tolerance`` after everything its path can do raises NumericalError naming the
+polygon (and the row), its bound and the tolerance; with ``error=True`` it comes back
+with that bound instead. One criterion decides it (``errors.misses_tolerance``): the
+bound against ``tolerance`` times the larger of the value and ``VALUE_FLOOR``. Each
+test here failed before its fix (on 0596bee; the floor's with ``VALUE_FLOOR = 0``, the
+criterion of the first version), but the compiled core's, which pin what stayed: its
+fallback is its escalation, and its band's slivers are in its bound, not in the check.
+"""
+
+import numpy as np
+import pytest
+
+import exactff as ef
+from exactff.errors import misses_tolerance
+from exactff.visibility import visible_form_factors
+
+from test_refinement import sliver_scene
+
+UNIT_UP = [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]]
+UNIT_DOWN_AT_1 = [[0, 0, 1], [0, 1, 1], [1, 1, 1], [1, 0, 1]]
+
+
+def test_one_acceptance_criterion():
+    # relative with an absolute floor proportional to it: E > tol * max(|F|, 1e-4)
+    F = np.array([0.5, 0.5, 0.0, 0.0, 5.3e-33])
+    E = np.array([5e-13, 6e-13, 0.0, 1e-16, 1.8e-17])
+    assert misses_tolerance(F, E, 1e-12).tolist() == [False, True, False, False, False]
+    assert misses_tolerance(0.0, 1.1e-16, 1e-12) and misses_tolerance(1e-3, 1.1e-15, 1e-12)
+    assert not misses_tolerance(1e-3, 0.9e-15, 1e-12)
+    # area form factors: their tolerance is absolute (atol), rtol optional
+    assert misses_tolerance(F, E, None, atol=1e-15).tolist() == [True, True, False, False,
+                                                                 False]
+    assert not misses_tolerance(0.1, 1e-9, 1e-12, atol=1e-9)
+    assert misses_tolerance(1e-3, 2e-9, 1e-9, atol=1e-9)
+
+
+# ---------------------------------------------------------------------------------------
+# (a) the clipper path checks its values against the tolerance after refinement
+# ---------------------------------------------------------------------------------------
+def _occluded_pair():
+    # a unit square at height 1 facing down, hiding a second one above it: a convex
+    # enclosure it is not, so the row goes through the clipper
+    sq = np.array(UNIT_DOWN_AT_1, dtype=float) - [0.5, 0.5, 0.0]
+    return ef.Scene.from_polygons([sq, sq + [0.0, 0.0, 1.0]]), np.zeros(3), np.array([0, 0, 1.0])
+
+
+def test_clipper_value_whose_bound_misses_the_tolerance_raises(monkeypatch):
+    import exactff.visibility.engine as engine
+
+    def pieces(pieces, m, **kwargs):          # polygon 0 with a bound 1e-9: misses 1e-12
+        F, E = np.zeros(m), np.zeros(m)
+        F[0], E[0] = 0.2394564705, 1e-9
+        return F, E
+
+    scene, p, n = _occluded_pair()
+    monkeypatch.setattr(engine, "pieces_form_factors", pieces)
+    python = ef.Exact(engine="python")
+    with pytest.raises(ef.NumericalError, match=r"polygon 0: .* misses the tolerance 1e-12 "
+                                                r"relative .*\(error estimate 1e-09\) after "
+                                                r"refining"):
+        ef.form_factors(scene, p, n, method=python)
+    # asked for bounds: the value and its honest bound
+    F, E = ef.form_factors(scene, p, n, error=True, method=python)
+    assert F[0] == 0.2394564705 and E[0] == 1e-9
+    # no tolerance asked: no check
+    assert ef.form_factors(scene, p, n, method=ef.Exact(tolerance=None,
+                                                        engine="python"))[0] == 0.2394564705
+
+
+@pytest.mark.parametrize("F0,E0", [(5.3e-33, 1.8e-17), (0.0, 2.6e-17)])
+def test_clipper_value_near_zero_meets_the_tolerance_by_its_floor(monkeypatch, F0, E0):
+    # what two property tests met once every path was checked (test_visibility's rigid
+    # motion: 5.3e-33 with a bound of 1.8e-17; test_ties' with shift (32, 0, 9): 0 with
+    # 2.6e-17): a value near 0 cannot carry 12 relative digits, its floor is 1e-16
+    import exactff.visibility.engine as engine
+
+    def pieces(pieces, m, **kwargs):
+        F, E = np.zeros(m), np.zeros(m)
+        F[0], E[0] = F0, E0
+        return F, E
+
+    scene, p, n = _occluded_pair()
+    monkeypatch.setattr(engine, "pieces_form_factors", pieces)
+    assert visible_form_factors(scene, p, n, tolerance=1e-12)[0] == F0
+    with pytest.raises(ef.NumericalError, match="polygon 0"):    # the floor scales with it
+        visible_form_factors(scene, p, n, tolerance=1e-14)
+
+
+def test_unrefinable_sliver_raises_instead_of_returning_the_clippers_bound(monkeypatch):
+    # the sliver family (test_refinement) with the refinement made to fail (no ring can
+    # be traced to the input): the clipper's value keeps its bound, far above 1e-12 F
+    from exactff.visibility.refine import Refiner
+
+    polys, p, n = sliver_scene(1e-9, 0, 0.0)
+    scene = ef.Scene.from_polygons(polys)
+    real = Refiner.refine_ld
+
+    def unrefinable(self, ci, chart, coords, nxt, ring_of, n_rings, frag):
+        val, est, ok, lab = real(self, ci, chart, coords, nxt, ring_of, n_rings, frag)
+        return val, np.full(n_rings, np.inf), np.zeros(n_rings, dtype=bool), None
+
+    monkeypatch.setattr(Refiner, "refine_ld", unrefinable)
+    st = {}
+    F, E = visible_form_factors(scene, p, n, tolerance=1e-12, error=True, stats=st)
+    assert st["unrefined_rings"] > 0 and misses_tolerance(F[0], E[0], 1e-12)   # honest
+    with pytest.raises(ef.NumericalError, match=r"polygon 0: .*could not be refined"):
+        visible_form_factors(scene, p, n, tolerance=1e-12)
+
+
+def test_unoccluded_path_returns_the_bound_when_asked(monkeypatch):
+    # the engine's convex-scene path raised at its last tier even with error=True
+    import exactff.kernel.point as point
+
+    def stopped(p, n, P, two_sided=False, tolerance=None, error=False, side=None):
+        return 0.125, 1e-20                # as mpmath at its limit: a bound of 1e-20
+
+    box = ef.scenes.subdivided_box(2)
+    p, n = np.array([0.5, 0.5, 0.0]), np.array([0, 0, 1.0])
+    monkeypatch.setattr(point, "mp_form_factor", stopped)
+    st = {}
+    F, E = visible_form_factors(box, p, n, tolerance=1e-40, error=True, stats=st)
+    assert st["path"] == "unoccluded" and np.all(E[F > 0] == 1e-20)
+    with pytest.raises(ef.NumericalError, match=r"polygon \d+: .*misses the tolerance 1e-40"):
+        visible_form_factors(box, p, n, tolerance=1e-40)
+
+
+# ---------------------------------------------------------------------------------------
+# (a') the compiled core: the same criterion decides its fallback, and its band's slivers
+# ---------------------------------------------------------------------------------------
+def _fake_core(monkeypatch, F0, E0, band0):
+    # the compiled core's row with given values for polygon 0 (the C++ is not changed)
+    import exactff.visibility.compiled as compiled
+
+    real = compiled.compiled_core
+
+    class Core:
+        def row(self, *args):
+            m = 2
+            F, E, band = np.zeros(m), np.zeros(m), np.zeros(m)
+            F[0], E[0], band[0] = F0, E0, band0
+            return F, E, band, {}
+
+    monkeypatch.setattr(compiled, "compiled_core", lambda scene: (real(scene)[0], Core()))
+    return compiled.compiled_form_factors
+
+
+@pytest.mark.parametrize("F0,E0", [(5.3e-33, 1.8e-17), (0.0, 2.6e-17), (0.2, 1e-9)])
+def test_compiled_value_that_misses_falls_back_and_the_python_row_is_checked(monkeypatch,
+                                                                             F0, E0):
+    # the fallback is the compiled row's escalation: a small value is refined too (a
+    # sliver of 1.1e-10 kept a bound of 1.0e-17 without it, 2.4e-26 with it:
+    # test_refinement's ground truth)
+    scene, p, n = _occluded_pair()
+    row = _fake_core(monkeypatch, F0, E0, 0.0)
+    st = {}
+    F = row(scene, p, n, tolerance=1e-12, stats=st)
+    assert st["path"] == "compiled, then python" and st["compiled_missed"] == 1
+    Fp, Ep = ef.Exact(engine="python").point_form_factors(scene, p, n, error=True)
+    np.testing.assert_array_equal(F, Fp)
+    assert not misses_tolerance(Fp, Ep, 1e-12).any()
+
+
+def test_compiled_band_slivers_are_in_the_bound_not_in_the_check(monkeypatch):
+    # the band's slivers bound the topology (which the Python engine shares and leaves
+    # out of its bound): returned with the value, neither a fallback nor an error
+    scene, p, n = _occluded_pair()
+    row = _fake_core(monkeypatch, 0.2, 1e-15, 1e-9)
+    st = {}
+    assert row(scene, p, n, tolerance=1e-12, stats=st)[0] == 0.2
+    assert st["path"] == "compiled" and st["max_band_bound"] == 1e-9
+    F, E = row(scene, p, n, tolerance=1e-12, error=True)
+    assert F[0] == 0.2 and E[0] == 1e-9 + 1e-15
+
+
+# ---------------------------------------------------------------------------------------
+# (b) integrator="eq3": not refined, but checked
+# ---------------------------------------------------------------------------------------
+#: a strip 1e-3 above the horizon of the origin, 1 away (F ~ 4e-7): Eq. 3's rounding
+#: (its terms' absolute values, ~1) gives a bound of 2.5e-15, 25 times what 1e-12 allows
+STRIP = np.array([[1, 0.5, 1e-3], [1, -0.5, 1e-3], [1, -0.5, 2e-3], [1, 0.5, 2e-3]])
+
+
+@pytest.mark.parametrize("shortcuts", [True, False], ids=["unoccluded_path", "clipper"])
+def test_eq3_value_that_misses_the_tolerance_raises_and_suggests_sector(shortcuts):
+    scene = ef.Scene.from_polygons([STRIP])
+    p, n = np.zeros(3), np.array([0, 0, 1.0])
+    eq3 = ef.Exact(integrator="eq3", shortcuts=shortcuts)
+    F, E = eq3.point_form_factors(scene, p, n, error=True)
+    assert F[0] > 0 and misses_tolerance(F[0], E[0], 1e-12)
+    with pytest.raises(ef.NumericalError, match=r"polygon 0: .*integrator='eq3'.*"
+                                                r"integrator='sector'"):
+        eq3.point_form_factors(scene, p, n)
+    # no tolerance asked: the same value, unchecked
+    assert ef.Exact(integrator="eq3", shortcuts=shortcuts, tolerance=None
+                    ).point_form_factors(scene, p, n)[0] == F[0]
+    # the sector integrator escalates and meets it
+    ref = ef.mp_form_factor(p, n, STRIP)
+    Fs, Es = ef.Exact(shortcuts=shortcuts).point_form_factors(scene, p, n, error=True)
+    assert abs(Fs[0] - ref) <= 1e-12 * ref and not misses_tolerance(Fs[0], Es[0], 1e-12)
+
+
+# ---------------------------------------------------------------------------------------
+# (c) the mpmath tier of the refinement stops at its limit: counted, and its value
+#     checked with the others
+# ---------------------------------------------------------------------------------------
+def test_refinement_mpmath_that_does_not_converge_raises(monkeypatch):
+    import exactff.visibility.refine as refine
+
+    real = refine.mp_converge
+    calls = []
+
+    def stopped(evaluate, tolerance, dps=30):
+        # as at MP_MAX_DPS: two evaluations that do not agree (by 1e-9 here)
+        hi, diff, _ = real(evaluate, tolerance, dps)
+        calls.append(1)
+        return hi, diff + 1e-9, False
+
+    polys, p, n = sliver_scene(1e-12, 0, 0.0)
+    scene = ef.Scene.from_polygons(polys)
+    st = {}
+    visible_form_factors(scene, p, n, tolerance=1e-12, stats=st)
+    assert st["refined_rings_mp"] > 0 and st["refine_mp_unconverged"] == 0
+    monkeypatch.setattr(refine, "mp_converge", stopped)
+    with pytest.raises(ef.NumericalError, match=r"polygon 0: .*mpmath did not converge at "
+                                                r"400 digits"):
+        visible_form_factors(scene, p, n, tolerance=1e-12)
+    assert calls
+    st = {}
+    F, E = visible_form_factors(scene, p, n, tolerance=1e-12, error=True, stats=st)
+    assert st["refine_mp_unconverged"] > 0 and F[0] > 0 and E[0] >= 1e-9
+
+
+# ---------------------------------------------------------------------------------------
+# (d) area form factors
+# ---------------------------------------------------------------------------------------
+def test_area_value_whose_estimate_misses_the_tolerance_raises(monkeypatch):
+    import exactff.area.occluded as occluded
+
+    pair = ef.Scene.from_polygons([UNIT_UP, UNIT_DOWN_AT_1])
+    F0 = ef.area_form_factors(pair, tolerance=1e-9)          # meets it: no error
+    monkeypatch.setattr(occluded, "unoccluded_pair",
+                        lambda P, Q, far=True: (0.19982489569838746, 1e-6))
+    with pytest.raises(ef.NumericalError, match=r"row 0, polygon 1: .*misses the tolerance "
+                                                r"1e-09 absolute \(error estimate 1e-06\)"):
+        ef.area_form_factors(pair, tolerance=1e-9)
+    with pytest.raises(ef.NumericalError, match=r"max\(1e-15, 1e-09 \* F\)"):
+        ef.area_form_factors(pair, tolerance=1e-15, rtol=1e-9)
+    F, E = ef.area_form_factors(pair, tolerance=1e-9, error=True)
+    assert np.all(E[[0, 1], [1, 0]] == 1e-6)
+    assert abs(F[0, 1] - F0[0, 1]) <= 1e-12
+    # within a looser absolute tolerance it passes
+    ef.area_form_factors(pair, tolerance=1e-5)
+
+
+def test_occluded_area_value_that_the_rules_cannot_resolve_raises(monkeypatch):
+    # an occluded pair with the adaptive cutting switched off (AREA_MAX_DEPTH = 0) and
+    # a tolerance the uncut rules cannot meet: a genuine miss, said so
+    from exactff import _tolerances as tol
+
+    plate = [[.25, .25, 1], [.75, .25, 1], [.75, .75, 1], [.25, .75, 1]]
+    down_at_2 = (np.array(UNIT_DOWN_AT_1) + [0, 0, 1]).tolist()
+    scene = ef.Scene.from_polygons([UNIT_UP, down_at_2, plate])
+    monkeypatch.setattr(tol, "AREA_MAX_DEPTH", 0)
+    F, E = ef.area_form_factors(scene, rows=[0], tolerance=1e-14, error=True)
+    assert E[0, 1] > 1e-14
+    with pytest.raises(ef.NumericalError, match=r"row 0, polygon 1: "):
+        ef.area_form_factors(scene, rows=[0], tolerance=1e-14)
