@@ -66,6 +66,9 @@ __all__ = [
     "AREA_RULE_ORDERS",
     "AREA_MAX_DEPTH",
     "AREA_EDGE_TERMS_PER_CALL",
+    "REMAINDER_SPLITS",
+    "REMAINDER_SLACK",
+    "MATRIX_ROUNDING_ULPS",
 ]
 
 #: Unit roundoff of IEEE double precision, 2**-53.
@@ -357,3 +360,15 @@ SVBSP_BOX_BUDGET = 256
 #: Compiled core: planes per axis of the fixed grid the upper hemisphere is cut into
 #: before any shadow (``(tiles + 1)^2`` cells, each growing its own shadows).
 SVBSP_TILES = 7
+#: Open scenes (exactff.remainder): horizontal splits of one scene kept in its cache,
+#: the latest used (rows at one height, a floor grid, share one; a matrix's rows come at
+#: a few heights at a time).
+REMAINDER_SPLITS = 8
+#: Open scenes, the exact method without error=True: how far below 0 a sky or ground
+#: may come out and still be rounding (then set to 0): ten times DESIGN 6's row-sum
+#: target (1e-11), since a remainder is a share minus a row's sum.
+REMAINDER_SLACK = 1e-10
+#: check_matrix: the rounding allowed on top of the error estimates, in units of the
+#: roundoff per value summed (a row's sum of N values is within N roundoffs of exact;
+#: this many times that, for the values' own last roundings).
+MATRIX_ROUNDING_ULPS = 4.0
