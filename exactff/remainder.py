@@ -285,25 +285,27 @@ def _split_bounds(sp, point, F, E):
         err = cuts["err"] + 2 * e_off
         room = cuts["gap"] - err
         with np.errstate(divide="ignore", invalid="ignore"):
-            t = np.where(room > 0, err / room, 1.0)
+            # heights exact (err 0: an edge in the plane, say): the cut is exact
+            t = np.where(err == 0, 0.0, np.where(room > 0, err / room, 1.0))
         delta = np.minimum(t, 1.0) * cuts["length"] + cuts["round"]
         dmax = np.zeros(n0)
         np.maximum.at(dmax, cuts["point_owner"], delta)
         j = cuts["owner"]
-        A, B = cuts["a"], cuts["b"]
-        L = np.linalg.norm(B - A, axis=1)
-        AB = B - A
+        A, AB = cuts["a"], cuts["b"] - cuts["a"]
+        L = np.linalg.norm(AB, axis=1)
         with np.errstate(divide="ignore", invalid="ignore"):
-            t = np.clip(np.einsum("ij,ij->i", point - A, AB) / np.einsum("ij,ij->i", AB, AB),
-                        0, 1)
-        t = np.where(np.isfinite(t), t, 0.0)
-        d = np.linalg.norm(A + t[:, None] * AB - point, axis=1)
-        dd = 2 * dmax[j]
-        reach = d - dd
+            u = np.where(L[:, None] > 0, AB / L[:, None], 0.0)
+        w = point - A
+        foot = np.einsum("ij,ij->i", w, u)            # p's foot on the cut line, from A
+        d_perp = np.linalg.norm(w - foot[:, None] * u, axis=1)
+        dd = 2 * dmax[j]                               # the cut points' spread, doubled
+        D = d_perp - dd
+        l1, l2 = -foot - dd, L - foot + dd
         with np.errstate(divide="ignore", invalid="ignore"):
-            # a region within dd of a segment of length L, no nearer than ``reach``:
-            # form factor <= area / (pi reach^2)
-            b = np.where(reach > 0, 2 * dd * (L + 2 * dd) / (math.pi * reach ** 2), np.inf)
+            # a strip of width 2 dd along the cut, no nearer to p than D from its line:
+            # F <= (1/pi) int 2 dd / (D^2 + l^2) dl over the strip's length
+            b = np.where(D > 0, 2 * dd * (np.arctan(l2 / D) - np.arctan(l1 / D))
+                         / (math.pi * D), np.inf)
         out[j] = np.minimum(b, total[j])
     for j, area, Vd in cuts["dropped"]:
         diam = float(np.linalg.norm(Vd.max(axis=0) - Vd.min(axis=0)))
