@@ -202,7 +202,8 @@ def horizontal_split(scene: Scene, point, up=None) -> HorizontalSplit:
     and counts on neither side (its value from a point in its plane is 0 for the exact
     method: it is seen edge-on). A part too thin to be a valid polygon stays with the
     rest of its polygon, and its value is in the bound of :func:`remainder_row`.
-    The cache keeps ``REMAINDER_SPLITS`` heights per scene, the latest used.
+    The cache keeps the latest used heights of each scene, up to
+    ``REMAINDER_SPLIT_POLYGONS`` polygons in all.
 
     Examples
     --------
@@ -230,7 +231,8 @@ def horizontal_split(scene: Scene, point, up=None) -> HorizontalSplit:
     built = _split(scene, up, offset)
     with _LOCK:
         cache[key] = built
-        while len(cache) > tol.REMAINDER_SPLITS:
+        while len(cache) > 1 and sum(len(v.scene) for v in cache.values()) > \
+                tol.REMAINDER_SPLIT_POLYGONS:
             cache.popitem(last=False)
     return built
 
