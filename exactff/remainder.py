@@ -359,7 +359,10 @@ def remainder_row(scene: Scene, point, row, *, sky_share, share_bound=0.0, up=No
     Notes
     -----
     ``sky = sky_share - sum(parts above)``, ``ground = (1 - sky_share) - sum(parts
-    below)``; a polygon lying in the plane counts on neither side. Bounds: the parts'
+    below)``; a polygon lying in the plane counts on neither side. The remainder is
+    what no polygon *receives*: with one-sided polygons, directions that meet a
+    polygon's back (which occludes but does not receive) count in it too, as in a row
+    from inside a solid (``two_sided=True`` makes backs receive). Bounds: the parts'
     own bounds, the rounding of the sums and of the share, and for each polygon the
     plane cuts, the value of the region between its computed cut and the exact plane
     (:func:`horizontal_split`).

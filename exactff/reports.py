@@ -423,10 +423,11 @@ def _dense(M, a, b):
 
 
 def _is_closed(scene):
-    """A closed surface: zero vector area and every directed edge paired."""
+    """Closed as ``exactff info`` says it: the vector area ``|sum A n|`` within
+    ``CLOSED_RESIDUAL`` of the total area (T-junctions allowed: a block standing on a
+    floor leaves edges unpaired in a closed room)."""
     vector_area = (scene.normals * scene.areas[:, None]).sum(axis=0)
-    residual = np.linalg.norm(vector_area) / scene.areas.sum()
-    return residual <= tol.CLOSED_RESIDUAL and _unpaired_edges(scene) == 0
+    return np.linalg.norm(vector_area) / scene.areas.sum() <= tol.CLOSED_RESIDUAL
 
 
 def _unobstructed_rows(scene, rows):
@@ -463,8 +464,8 @@ def check_matrix(F, scene: Scene | None = None, E=None, *, remainder=None,
         The scene's polygon of each row (default ``0 .. R-1``).
     closed : bool, optional
         Whether the rows should sum to 1 without a remainder. Default: when a scene is
-        given, whether it is closed (no vector area, every edge paired); without one,
-        not judged.
+        given, whether it is closed as ``exactff info`` says (no vector area; an open
+        tube has none either: say ``closed=False``); without one, not judged.
     area : bool, default False
         ``F`` is an area-to-area matrix (:func:`exactff.area_form_factors`, View3D, a
         radiosity code's): reciprocity ``A_i F_ij = A_j F_ji`` is then judged. Point

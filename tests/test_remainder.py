@@ -177,6 +177,17 @@ def test_courtyard_floor_grid_vs_howell():
     assert horizontal_split(scene, P[0]) is horizontal_split(scene, P[-1])
 
 
+def test_builtin_courtyard_vs_howell():
+    """ef.scenes.courtyard: from a floor point, 1 minus its four walls (Howell)."""
+    W, D, H = 20.0, 14.0, (9.0, 6.0, 9.0, 3.0)
+    scene = ef.scenes.courtyard(W, D, H, k=3)
+    for x0, y0 in ((10.0, 7.0), (3.0, 11.5), (17.2, 1.1)):
+        _, sky, ground = ef.form_factors(scene, [x0, y0, 0.0], [0, 0, 1], remainder=True)
+        walls = (floor_to_wall(x0, y0, 0, W, 0.0, H[0]) + floor_to_wall(y0, x0, 0, D, W, H[1])
+                 + floor_to_wall(x0, y0, 0, W, D, H[2]) + floor_to_wall(y0, x0, 0, D, 0.0, H[3]))
+        assert abs(sky - (1 - walls)) <= 1e-12 and ground == 0.0
+
+
 def test_closed_room_has_no_sky_or_ground():
     """Closed scenes: sky = ground = 0 within their bounds, from receivers at many
     heights and tilts (the office is y-up)."""
