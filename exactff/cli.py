@@ -13,6 +13,7 @@ BUILTIN = {
     "cornell_box_closed": lambda: _scenes().cornell_box(closed=True),
     "office": lambda: _scenes().office(),
     "cloister": lambda: _scenes().cloister(),
+    "courtyard": lambda: _scenes().courtyard(),
 }
 
 
@@ -35,7 +36,7 @@ def _scenes():
 
 def open_scene(spec, *, split_nonplanar=False, planarity_rtol=None, drop_degenerate=False):
     """A scene from a file path or a built-in name (``cornell_box``, ``cornell_box_closed``,
-    ``office``, ``office:N`` for about N quads, ``cloister``, ``cloister:N``, ``box:K`` for a closed unit box with K x K
+    ``office``, ``office:N`` for about N quads, ``cloister``, ``cloister:N``, ``courtyard`` (open, z up), ``box:K`` for a closed unit box with K x K
     quads per face, ``building:NXxNY`` for rooms with zero-thickness walls).
     ``drop_degenerate`` leaves a file's degenerate faces out (``degenerate="drop"``)."""
     from .io import load_scene
@@ -82,7 +83,8 @@ def _open(args):
 def _scene_arguments(p):
     p.add_argument("scene", help="scene file (.obj, .json, .vs3, .stl, .ply, .off, .vtk, ...) "
                                  "or built-in name (cornell_box, cornell_box_closed, "
-                                 "office[:N], cloister[:N], box:K, building:NXxNY)")
+                                 "office[:N], cloister[:N], courtyard, box:K, "
+                                 "building:NXxNY)")
     p.add_argument("--split-nonplanar", action="store_true",
                    help="cut faces that are not planar into planar triangles instead of "
                         "refusing the file")

@@ -303,8 +303,9 @@ class MatrixReport:
         What each row's sum may miss 1 by: the sum of its error estimates (and the
         remainder's) plus rounding, or ``MATRIX_ROW_SUM_ATOL`` without estimates.
     rows_missing : list of int
-        Rows that miss 1 beyond their bound, or hold a NaN, a value below 0 or above 1
-        beyond its estimate.
+        Rows (named by their polygon, from ``rows``) that miss 1 beyond their bound, or
+        hold a NaN, a value below 0 or above 1 beyond its estimate. Every ``(row,
+        column)`` of the report names the row the same way.
     negatives, nans, above_one : int
         How many values are below 0, NaN, above 1 (beyond their estimates, when given).
     min_value, max_value : float
@@ -506,7 +507,7 @@ def check_matrix(F, scene: Scene | None = None, E=None, *, remainder=None,
     True
     >>> print(check_matrix([[0.5, 0.6], [0.2, 0.8]], closed=True))  # doctest: +NORMALIZE_WHITESPACE
     matrix           2 x 2 (dense)
-    row sums         min 1  max 1.1
+    row sums         min 1.000000000000000  max 1.100000000000000
                      largest deficit -0.1 (row 0); should be 1 (closed=True)
     values           0 below 0, 0 NaN, 0 above 1 (min 0.2, max 0.8)
     MISSED           1 rows: 0
@@ -611,7 +612,12 @@ def check_matrix(F, scene: Scene | None = None, E=None, *, remainder=None,
         row_bounds = e_sums + extra_bound + rounding
     if judged is not None:
         bad_rows.update(int(r) for r in np.flatnonzero(~(np.abs(deficits) <= row_bounds)))
-    rows_missing = sorted(bad_rows)
+    # rows named by their polygon (``rows``), as everywhere in the report
+    label = lambda k: int(rows[k])
+    rows_missing = sorted(label(k) for k in bad_rows)
+    excess_missing = [(label(k), c) for k, c in excess_missing]
+    emax_at = None if emax_at is None else (label(emax_at[0]), emax_at[1])
+    excess_at = None if excess_at is None else (label(excess_at[0]), excess_at[1])
 
     report = MatrixReport(
         shape=(R, N), sparse=sparse, rows=rows, sums=sums, deficits=deficits, judged=judged,

@@ -78,6 +78,13 @@ def test_area_matrix_with_bounds():
     assert r.pairs_missing == [(1, 2)] and r.rows_missing == [1]
 
 
+def test_rows_are_named_by_their_polygon(box, exact):
+    F = np.array(exact[[3, 8, 20]])
+    F[1, 0] += 0.1                      # the row of polygon 8
+    r = ef.check_matrix(F, box, rows=[3, 8, 20])
+    assert r.rows_missing == [8] and "(row 8)" in str(r) and r.reciprocity is None
+
+
 def test_sparse_and_memmap_give_the_same_report(box, exact, tmp_path):
     F = np.array(exact)
     F[4, 4] = 0.3
