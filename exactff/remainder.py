@@ -41,8 +41,8 @@ _LOCK = threading.Lock()
 
 @dataclass(frozen=True, eq=False)
 class HorizontalSplit:
-    """A scene cut along a horizontal plane ``up . x = offset``: what
-    :func:`horizontal_split` returns (and caches).
+    """A scene cut along a horizontal plane: what :func:`horizontal_split` returns
+    (and caches). The plane is ``up . x = offset``.
 
     Attributes
     ----------
@@ -239,7 +239,8 @@ def horizontal_split(scene: Scene, point, up=None) -> HorizontalSplit:
 
 def hemisphere_sky_share(normal, up=None):
     """The cosine-weighted share of the hemisphere around ``normal`` that lies above
-    the horizontal plane, ``(1 + n . up) / 2``, and a bound on its rounding.
+    the horizontal plane, and a bound on its rounding. The share is
+    ``(1 + n . up) / 2``.
 
     Parameters
     ----------

@@ -391,9 +391,9 @@ class MatrixReport:
                      f"{self.max_value:.3g})")
         if self.reciprocity is not None:
             i, j = self.reciprocity_pair
+            judged = "" if self.area else "; not judged (point rows; area=True if areas)"
             lines.append(f"reciprocity      max |A_i F_ij - A_j F_ji| = {self.reciprocity:.3g} "
-                         f"(pair {i}, {j})" + ("" if self.area else
-                                              "; not judged (not an area matrix: area=True)"))
+                         f"(pair {i}, {j}){judged}")
         if self.max_error is not None:
             lines.append(f"error estimates  largest {self.max_error:.3g} (row "
                          f"{self.max_error_at[0]}, column {self.max_error_at[1]})")
