@@ -16,7 +16,7 @@ from .kernel import (arc_x_extremes, eq3_edge_integral, eq3_form_factor, eq3_rin
 from .area import polygon_form_factor
 from .methods import (METHODS, CubicTetrahedron, DiscretePPBH, Exact, FormFactorMethod,
                       Hemicube, MonteCarlo, PolarPlane, SinglePlane)
-from .reports import compare, describe, to_markdown
+from .reports import MatrixReport, check_matrix, compare, describe, to_markdown
 from .rings import padded, padded_buckets
 from .scene import (DEGENERATE, NONPLANAR, Scene, split_nonplanar, validate_polygon,
                     validate_polygons)
@@ -36,4 +36,4 @@ __all__ = ["catalog", "scenes", "__version__",
            "form_factors", "form_factor_matrix", "area_form_factors", "load_matrix",
            "METHODS", "FormFactorMethod", "Exact", "DiscretePPBH", "Hemicube",
            "CubicTetrahedron", "SinglePlane", "PolarPlane", "MonteCarlo",
-           "compare", "to_markdown"]
+           "compare", "to_markdown", "check_matrix", "MatrixReport"]

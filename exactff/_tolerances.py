@@ -67,6 +67,12 @@ __all__ = [
     "AREA_RULE_ORDERS",
     "AREA_MAX_DEPTH",
     "AREA_EDGE_TERMS_PER_CALL",
+    "REMAINDER_SPLIT_POLYGONS",
+    "REMAINDER_SLACK",
+    "MATRIX_ROUNDING_ULPS",
+    "MATRIX_ROW_SUM_ATOL",
+    "MATRIX_RECIPROCITY_RTOL",
+    "CLOSED_RESIDUAL",
 ]
 
 #: Unit roundoff of IEEE double precision, 2**-53.
@@ -367,3 +373,27 @@ SVBSP_BOX_BUDGET = 256
 #: Compiled core: planes per axis of the fixed grid the upper hemisphere is cut into
 #: before any shadow (``(tiles + 1)^2`` cells, each growing its own shadows).
 SVBSP_TILES = 7
+#: Open scenes (exactff.remainder): the horizontal splits of one scene kept in its
+#: cache, the latest used, up to this many polygons in all (rows at one height, a floor
+#: grid, share one; the office's 42 heights all fit, the cloister's 80,000-polygon
+#: splits six at a time: a split and its BSP tree cost about what the scene does).
+REMAINDER_SPLIT_POLYGONS = 500_000
+#: Open scenes, the exact method without error=True: how far below 0 a sky or ground
+#: may come out and still be rounding (then set to 0): ten times DESIGN 6's row-sum
+#: target (1e-11), since a remainder is a share minus a row's sum.
+REMAINDER_SLACK = 1e-10
+#: check_matrix: the rounding allowed on top of the error estimates, in units of the
+#: roundoff per value summed (a row's sum of N values is within N roundoffs of exact;
+#: this many times that, for the values' own last roundings).
+MATRIX_ROUNDING_ULPS = 4.0
+#: check_matrix without error estimates: how far a row may sum from 1, and a value
+#: exceed its unobstructed one (DESIGN 6's targets for the exact method: row sums and
+#: occluded values within 1e-11).
+MATRIX_ROW_SUM_ATOL = 1e-11
+#: check_matrix without error estimates: the reciprocity defect allowed, relative to the
+#: larger of A_i F_ij and A_j F_ji (testing.assert_reciprocity's default; the area
+#: form factors' default tolerance).
+MATRIX_RECIPROCITY_RTOL = 1e-9
+#: check_matrix: a scene is closed when its vector area |sum A n| is within this share
+#: of its total area (and every edge is paired): the figure `exactff info` uses.
+CLOSED_RESIDUAL = 1e-12

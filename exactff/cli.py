@@ -13,6 +13,7 @@ BUILTIN = {
     "cornell_box_closed": lambda: _scenes().cornell_box(closed=True),
     "office": lambda: _scenes().office(),
     "cloister": lambda: _scenes().cloister(),
+    "courtyard": lambda: _scenes().courtyard(),
 }
 
 
@@ -35,7 +36,7 @@ def _scenes():
 
 def open_scene(spec, *, split_nonplanar=False, planarity_rtol=None, drop_degenerate=False):
     """A scene from a file path or a built-in name (``cornell_box``, ``cornell_box_closed``,
-    ``office``, ``office:N`` for about N quads, ``cloister``, ``cloister:N``, ``box:K`` for a closed unit box with K x K
+    ``office``, ``office:N`` for about N quads, ``cloister``, ``cloister:N``, ``courtyard`` (open, z up), ``box:K`` for a closed unit box with K x K
     quads per face, ``building:NXxNY`` for rooms with zero-thickness walls).
     ``drop_degenerate`` leaves a file's degenerate faces out (``degenerate="drop"``)."""
     from .io import load_scene
@@ -82,7 +83,8 @@ def _open(args):
 def _scene_arguments(p):
     p.add_argument("scene", help="scene file (.obj, .json, .vs3, .stl, .ply, .off, .vtk, ...) "
                                  "or built-in name (cornell_box, cornell_box_closed, "
-                                 "office[:N], cloister[:N], box:K, building:NXxNY)")
+                                 "office[:N], cloister[:N], courtyard, box:K, "
+                                 "building:NXxNY)")
     p.add_argument("--split-nonplanar", action="store_true",
                    help="cut faces that are not planar into planar triangles instead of "
                         "refusing the file")
@@ -93,6 +95,13 @@ def _scene_arguments(p):
                    help="leave out degenerate faces (fewer than 3 distinct vertices, zero "
                         "area) instead of refusing the file; polygons keep the file's "
                         "order without them, and info says how many were left out")
+
+
+def _remainder_arguments(p, what):
+    p.add_argument("--remainder", action="store_true", help=what)
+    p.add_argument("--up", nargs=3, type=float, default=None, metavar=("X", "Y", "Z"),
+                   help="up direction for --remainder (default 0 0 1; the built-in office "
+                        "and cloister are y-up: 0 1 0)")
 
 
 def cmd_info(args):
@@ -151,12 +160,26 @@ def cmd_ff(args):
     scene = _open(args)
     p = np.array(args.point, dtype=float)
     n = np.array(args.normal, dtype=float)
-    F = point_polygon_form_factors(p, n, scene)
-    print(f"unoccluded form factors from {p.tolist()} with normal {n.tolist()}:")
+    if args.up is not None and not args.remainder:
+        raise ValueError("--up is the up direction of --remainder: give --remainder too")
+    if args.remainder:
+        # the remainder of a row needs occlusion (unoccluded values may overlap)
+        from .formfactors import form_factors
+
+        F, sky, ground = form_factors(scene, p, n, remainder=True, up=args.up)
+        print(f"form factors with occlusion from {p.tolist()} with normal {n.tolist()}:")
+    else:
+        F = point_polygon_form_factors(p, n, scene)
+        print(f"unoccluded form factors from {p.tolist()} with normal {n.tolist()}:")
     for i in np.flatnonzero(F):
         name = scene.names[i] or f"polygon {i}"
         print(f"  {name:24s} {F[i]:.15f}")
     print(f"  {'sum':24s} {F.sum():.15f}")
+    if args.remainder:
+        up = [0.0, 0.0, 1.0] if args.up is None else list(args.up)
+        print(f"  {'sky':24s} {sky:.15f}   (uncovered, above the horizontal plane; up {up})")
+        print(f"  {'ground':24s} {ground:.15f}   (uncovered, below it)")
+        print(f"  {'sum with sky and ground':24s} {F.sum() + sky + ground:.15f}")
     return 0
 
 
@@ -226,7 +249,7 @@ def _area_matrix(scene, rows, args, out):
     np.save(out[:-4] + ".error.npy", E)
     print(f"error bounds     max {E.max():.3g} (tolerance {args.tolerance:g}) "
           f"-> {out[:-4] + '.error.npy'}")
-    return F
+    return F, E
 
 
 def cmd_matrix(args):
@@ -250,12 +273,17 @@ def cmd_matrix(args):
         out = f"{stem}_ff" + (".npz" if args.sparse else ".zarr" if big else ".npy")
     out = output_path(out, args.sparse)
     suffix = path_suffix(out, "--output")
+    if args.area and args.remainder:
+        raise ValueError("--remainder is for point rows (not with --area)")
+    if args.up is not None and not args.remainder:
+        raise ValueError("--up is the up direction of --remainder: give --remainder too")
     if args.sparse != (suffix == ".npz"):
         raise ValueError(f"--output {out}: " + ("--sparse writes a .npz file" if args.sparse
                                                  else "a .npz output needs --sparse"))
     stem = path_stem(out)
     if args.overwrite:
-        for path in (out, stem + ".done.npy", stem + ".meta.json", stem + ".parts"):
+        beside = [stem + ".remainder" + e for e in (".npy", ".done.npy", ".meta.json", ".parts")]
+        for path in (out, stem + ".done.npy", stem + ".meta.json", stem + ".parts", *beside):
             if os.path.isdir(path):
                 shutil.rmtree(path)
             elif os.path.exists(path):
@@ -274,13 +302,17 @@ def cmd_matrix(args):
         except (OSError, TimeoutError) as e:
             raise ValueError(f"--scheduler {args.scheduler}: cannot connect ({e})") from None
     t0 = time.perf_counter()
+    E = R = None
     try:
         if args.area:
-            M = _area_matrix(scene, rows, args, out)
+            M, E = _area_matrix(scene, rows, args, out)
         else:
             M = form_factor_matrix(scene, rows=rows, two_sided=args.two_sided,
                                    executor=executor, jobs=args.jobs if args.jobs > 1 else None,
-                                   sparse=args.sparse, progress=not args.no_progress, out=out)
+                                   sparse=args.sparse, progress=not args.no_progress, out=out,
+                                   remainder=args.remainder, up=args.up)
+            if args.remainder:
+                M, R = M
     finally:
         if client is not None:
             client.close()
@@ -290,15 +322,39 @@ def cmd_matrix(args):
 
         np.savetxt(args.csv, M.toarray() if sp.issparse(M) else np.asarray(M), delimiter=",",
                    fmt="%.17g")
-    sums, zero_share = _matrix_summary(M)
+    _, zero_share = _matrix_summary(M)
     print(f"scene            {args.scene} ({len(scene)} polygons)")
-    print(f"matrix           {M.shape[0]} x {M.shape[1]} rows from the polygons' centroids "
-          f"-> {out}" + (f" and {args.csv}" if args.csv else ""))
+    print(f"matrix           {M.shape[0]} x {M.shape[1]} "
+          + ("area-to-area" if args.area else "rows from the polygons' centroids")
+          + f" -> {out}" + (f" and {args.csv}" if args.csv else ""))
+    if R is not None:
+        print(f"remainder        sky and ground per row -> {stem}.remainder.npy "
+              f"(sky max {R[:, 0].max():.6g}, ground max {R[:, 1].max():.6g})")
     print(f"time             {elapsed:.3f} s ({elapsed / max(len(rows), 1) * 1e3:.2f} ms per row)")
-    if len(sums):
-        print(f"row sums         min {sums.min():.15f}  max {sums.max():.15f}")
     print(f"zero entries     {zero_share:.1%}")
+    _write_report(M, scene, E, R, rows, args.area, stem + ".report.json")
     return 0
+
+
+def _write_report(M, scene, E, R, rows, area, path):
+    """The invariants' report (:func:`exactff.check_matrix`): its summary printed, the
+    whole written to ``path`` (JSON)."""
+    import json
+
+    from .reports import check_matrix
+
+    report = check_matrix(M, scene, E, remainder=R, rows=rows, area=area)
+    print("-- report (exactff.check_matrix) " + "-" * 40)
+    print(str(report))
+    doc = report.to_dict()
+    per_row = ("rows", "sums", "deficits", "row_bounds")
+    # the summary first, the per-row arrays after it
+    doc = {**{k: v for k, v in doc.items() if k not in per_row},
+           **{k: doc[k] for k in per_row}}
+    with open(path, "w", encoding="utf-8") as fh:
+        json.dump(doc, fh, indent=1, allow_nan=True)
+    print(f"report           -> {path}")
+    return report
 
 
 def _rows_for_study(text, seed, n):
@@ -399,9 +455,12 @@ def build_parser():
     _scene_arguments(p)
     p.add_argument("--point", nargs=3, type=float, required=True, metavar=("X", "Y", "Z"))
     p.add_argument("--normal", nargs=3, type=float, required=True, metavar=("X", "Y", "Z"))
+    _remainder_arguments(p, "with occlusion (the exact method), and the uncovered rest of "
+                            "the hemisphere: sky above the horizontal plane, ground below")
     p.set_defaults(func=cmd_ff)
     p = sub.add_parser("matrix", help="exact form-factor matrix (rows from the polygons' "
-                                      "centroids), written to .npy, .zarr or .npz")
+                                      "centroids), written to .npy, .zarr or .npz, with "
+                                      "the report of its invariants (STEM.report.json)")
     _scene_arguments(p)
     p.add_argument("-o", "--output", help="output: .npy (dense), .zarr (chunked, "
                                           "compressed) or .npz (sparse, with --sparse); "
@@ -428,6 +487,9 @@ def build_parser():
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.add_argument("--overwrite", action="store_true",
                    help="start over instead of resuming an existing output file")
+    _remainder_arguments(p, "also each row's sky and ground (the uncovered hemisphere above "
+                            "and below the horizontal plane), written to "
+                            "STEM.remainder.npy (columns sky, ground)")
     p.set_defaults(func=cmd_matrix)
     p = sub.add_parser("compare", help="error against run time of discrete methods "
                                        "(and the exact method) on a scene: tables, CSV, "

@@ -65,6 +65,7 @@ LAYERS = {
     "exactff.methods.polar_plane": 5,
     "exactff.methods.ppbh": 5,
     "exactff.methods.single_plane": 5,
+    "exactff.remainder": 5,
     # L6 drivers, outputs, reports, files, plots, the command line
     "exactff.storage": 6,
     "exactff.formfactors": 6,
