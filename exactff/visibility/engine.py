@@ -20,10 +20,11 @@ from ..prepared import prepared
 from .bsp import coplanar_overlaps, front_to_back, scene_bsp
 from .charts import CHARTS
 from .clipper import visible_pieces
-from .pieces import pieces_form_factors
+from .pieces import pieces_form_factors, pieces_solid_angles
 from .refine import Refiner
 
-__all__ = ["visible_form_factors", "visible_graph", "is_convex_enclosure"]
+__all__ = ["visible_form_factors", "visible_solid_angles", "visible_graph",
+           "is_convex_enclosure"]
 
 
 def is_convex_enclosure(scene):
@@ -132,6 +133,68 @@ def visible_form_factors(scene, point, normal, *, two_sided=False, stats=None,
     if stats is not None:
         stats["max_error_estimate"] = float(E.max(initial=0.0))
     return (np.maximum(F, 0.0), E) if error else np.maximum(F, 0.0)
+
+
+def visible_solid_angles(scene, point, normal, *, two_sided=False, stats=None,
+                         shortcuts=True):
+    """Visible solid angles with occlusion from one point to every polygon of a scene,
+    within the hemisphere around ``normal``: one half of a spherical factor.
+
+    The same fragments, BSP order and clipper as :func:`visible_form_factors`; every
+    visible piece is measured by its solid angle instead of its cosine-weighted one
+    (:func:`exactff.visibility.pieces.pieces_solid_angles`). There is no convex-scene
+    path here (it integrates the cosine-weighted measure): a caller with an unoccluded
+    scene measures whole polygons (:func:`exactff.kernel.polygon_solid_angles`).
+
+    Parameters
+    ----------
+    scene : Scene
+    point : ndarray of shape (3,)
+    normal : ndarray of shape (3,)
+        The hemisphere's axis (unit).
+    two_sided : bool, default False
+        Let polygons receive on their back side too (every polygon occludes).
+    stats : dict, optional
+        Filled as by :func:`visible_form_factors` (``path`` is ``"clipper"``).
+    shortcuts : bool, default True
+        As for :func:`visible_form_factors` (the culling and the tiled clipper).
+
+    Returns
+    -------
+    (ndarray of shape (len(scene),), ndarray of shape (len(scene),))
+        Solid angles in steradians (at most 2 pi in all) and a bound on each one's
+        error: the rounding of its pieces' fans plus their vertices' (the clipper's,
+        not refined), given the clipper's topology.
+
+    Examples
+    --------
+    From the centre of a closed box, the upper hemisphere's pieces add up to 2 pi:
+
+    >>> import exactff as ef
+    >>> box = ef.scenes.subdivided_box(2)
+    >>> W, E = visible_solid_angles(box, [0.5, 0.5, 0.5], [0, 0, 1])
+    >>> bool(abs(W.sum() - 2 * np.pi) < 1e-12), bool(E.max() < 1e-12)
+    (True, True)
+    """
+    st = stats if stats is not None else {}
+    flat = flat_polygons(scene)
+    p = np.asarray(point, dtype=float)
+    side, _ = engine_sides(flat, p)
+    st["path"] = "clipper"
+    tree, order, src, kept, world, receives = _row_fragments(scene, p, normal, side, two_sided,
+                                                             shortcuts, st)
+    pieces = visible_pieces(kept, receives, stats=st, shortcuts=shortcuts)
+    Wf, Ef = pieces_solid_angles(pieces, len(order))
+    W = np.bincount(src, weights=Wf, minlength=len(scene))
+    E = np.bincount(src, weights=Ef, minlength=len(scene))
+    check_finite(W, E)
+    bad = np.flatnonzero(~(W >= -E))
+    if len(bad):
+        raise NumericalError(f"polygon {bad[0]}: occluded solid angle {W[bad[0]]!r} below 0 "
+                             f"beyond its rounding error estimate {E[bad[0]]:.3g}")
+    if stats is not None:
+        stats["max_error_estimate"] = float(E.max(initial=0.0))
+    return np.maximum(W, 0.0), E
 
 
 def visible_graph(scene, point, normal, *, two_sided=False, max_segment=0.02):
