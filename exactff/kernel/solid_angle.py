@@ -153,11 +153,28 @@ def polygon_solid_angles(point, polygons, *, error=False):
 
 
 def offset_error(A0, E, nxt, owner, m, eps=tol.EPS):
-    """A bound on the solid-angle error of polygons whose offsets ``A0`` (from the
-    viewpoint) and ``E`` (from the reference vertex) were rounded once each: every
-    vertex moves by at most ``eps (|A0| + |E_k|)`` (each coordinate ``eps`` of its
-    magnitude), which sweeps at most that width times the perimeter, seen at no less
-    than the distance from the viewpoint to the polygon's boundary."""
+    """A bound on the solid-angle error that the rounding of the offsets brings.
+
+    The offsets ``A0`` (from the viewpoint) and ``E`` (from the reference vertex) were
+    rounded once each, so every vertex is off by at most ``eps`` of each coordinate of
+    both (the 1-norms, twice); moving every vertex by at most a width ``w`` sweeps a
+    strip of at most ``w`` times the perimeter along the boundary, whose solid angle is
+    at most its area over the squared distance from the viewpoint to the boundary
+    (``dOmega = h dA / r^3 <= dA / r^2``). Arguments as :func:`solid_angle_sums`.
+
+    Returns
+    -------
+    ndarray of shape (m,)
+        Infinite for a viewpoint on a polygon's boundary.
+
+    Examples
+    --------
+    >>> A0 = np.array([[-0.5, -0.5, 0.5]])
+    >>> E = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], dtype=float)
+    >>> e = offset_error(A0, E, np.array([1, 2, 3, 0]), np.zeros(4, int), 1)
+    >>> bool(0 < e[0] < 1e-14)
+    True
+    """
     A = A0[owner]
     a, b = A + E, A + E[nxt]
     e = b - a
@@ -176,9 +193,11 @@ def offset_error(A0, E, nxt, owner, m, eps=tol.EPS):
 
 
 def mp_solid_angle(point, polygon, *, tolerance=tol.DEFAULT_RTOL):
-    """The solid angle of a polygon seen from a point, whichever way it faces, by the
-    same fan in mpmath from the float input, at growing precision until two evaluations
-    agree (:func:`exactff.kernel.ladder.mp_converge`): the last tier of the spherical
+    """The solid angle of a polygon seen from a point, in mpmath.
+
+    Whichever way the polygon faces; the same fan as :func:`solid_angle_sums`, from the
+    float input, at growing precision until two evaluations agree
+    (:func:`exactff.kernel.ladder.mp_converge`): the last tier of the spherical
     factors' unoccluded values.
 
     Returns
