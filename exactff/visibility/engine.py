@@ -121,18 +121,8 @@ def visible_form_factors(scene, point, normal, *, two_sided=False, stats=None,
     refiner = Refiner(scene, tree, order, p, normal, kept, world, charts)
     Ff, ef_ = pieces_form_factors(pieces, len(order), tolerance=tolerance, owner=src,
                                   integrator=integrator, refiner=refiner, stats=st)
-    F = np.bincount(src, weights=Ff, minlength=len(scene))
-    E = np.bincount(src, weights=ef_, minlength=len(scene))
-    check_finite(F, E)
-    # holes subtract: a value may fall below 0 by rounding, never by more than its
-    # bound; within it, it is clamped to 0 (still covered: 0 <= exact <= F + E <= E)
-    bad = np.flatnonzero(~(F >= -E))
-    if len(bad):
-        raise NumericalError(f"polygon {bad[0]}: occluded form factor {F[bad[0]]!r} below 0 "
-                             f"beyond its rounding error estimate {E[bad[0]]:.3g}")
-    if stats is not None:
-        stats["max_error_estimate"] = float(E.max(initial=0.0))
-    return (np.maximum(F, 0.0), E) if error else np.maximum(F, 0.0)
+    F, E = _per_polygon(src, Ff, ef_, len(scene), "form factor", stats)
+    return (F, E) if error else F
 
 
 def visible_solid_angles(scene, point, normal, *, two_sided=False, stats=None,
@@ -185,16 +175,23 @@ def visible_solid_angles(scene, point, normal, *, two_sided=False, stats=None,
                                                              shortcuts, st)
     pieces = visible_pieces(kept, receives, stats=st, shortcuts=shortcuts)
     Wf, Ef = pieces_solid_angles(pieces, len(order))
-    W = np.bincount(src, weights=Wf, minlength=len(scene))
-    E = np.bincount(src, weights=Ef, minlength=len(scene))
-    check_finite(W, E)
-    bad = np.flatnonzero(~(W >= -E))
+    return _per_polygon(src, Wf, Ef, len(scene), "solid angle", stats)
+
+
+def _per_polygon(src, Vf, Ef, n, what, stats):
+    """Fragments' values and bounds summed per polygon, checked: never NaN, and below 0
+    by no more than the bound (holes subtract: rounding may take a value below 0; within
+    its bound it is clamped to 0, still covered: 0 <= exact <= V + E <= E)."""
+    V = np.bincount(src, weights=Vf, minlength=n)
+    E = np.bincount(src, weights=Ef, minlength=n)
+    check_finite(V, E)
+    bad = np.flatnonzero(~(V >= -E))
     if len(bad):
-        raise NumericalError(f"polygon {bad[0]}: occluded solid angle {W[bad[0]]!r} below 0 "
+        raise NumericalError(f"polygon {bad[0]}: occluded {what} {V[bad[0]]!r} below 0 "
                              f"beyond its rounding error estimate {E[bad[0]]:.3g}")
     if stats is not None:
         stats["max_error_estimate"] = float(E.max(initial=0.0))
-    return np.maximum(W, 0.0), E
+    return np.maximum(V, 0.0), E
 
 
 def visible_graph(scene, point, normal, *, two_sided=False, max_segment=0.02):
