@@ -16,7 +16,7 @@ def solid_angle_sums(A0, E, nxt, owner, m, eps=tol.EPS):
 
     Each polygon is a fan of triangles ``(a, b, c) = (A0, A0 + E_k, A0 + E_k+1)`` over
     its edges ``k -> nxt[k]``; each triangle's signed solid angle is Van Oosterom and
-    Strackee's
+    Strackee's::
 
         tan(Omega / 2) = a . (b x c) / (|a||b||c| + (a.b)|c| + (a.c)|b| + (b.c)|a|),
 
