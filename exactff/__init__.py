@@ -20,6 +20,7 @@ from .reports import MatrixReport, check_matrix, compare, describe, to_markdown
 from .rings import padded, padded_buckets
 from .scene import (DEGENERATE, NONPLANAR, Scene, split_nonplanar, validate_polygon,
                     validate_polygons)
+from .sphere import sphere_form_factors
 from .storage import load_matrix
 from .version import __version__
 
@@ -34,6 +35,7 @@ __all__ = ["catalog", "scenes", "__version__",
            "mp_form_factor", "eq3_form_factor", "eq3_ring_area", "eq3_edge_integral",
            "arc_x_extremes", "polygon_form_factor",
            "form_factors", "form_factor_matrix", "area_form_factors", "load_matrix",
+           "sphere_form_factors",
            "METHODS", "FormFactorMethod", "Exact", "DiscretePPBH", "Hemicube",
            "CubicTetrahedron", "SinglePlane", "PolarPlane", "MonteCarlo",
            "compare", "to_markdown", "check_matrix", "MatrixReport"]

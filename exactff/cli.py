@@ -5,7 +5,8 @@ import sys
 
 import numpy as np
 
-__all__ = ["main", "PROCEDURAL", "build_parser", "open_scene", "parse_rows", "cmd_info", "cmd_ff",
+__all__ = ["main", "PROCEDURAL", "build_parser", "open_scene", "parse_rows", "read_points",
+           "cmd_info", "cmd_ff",
            "cmd_matrix", "cmd_compare", "BUILTIN", "DENSE_OUTPUT_BYTES"]
 
 BUILTIN = {
@@ -252,6 +253,49 @@ def _area_matrix(scene, rows, args, out):
     return F, E
 
 
+def read_points(path):
+    """Viewpoints from a file: ``.npy`` (an array of shape (P, 3)) or text with three
+    numbers a line (separated by commas or white space; ``#`` starts a comment)."""
+    try:
+        if path.endswith(".npy"):
+            P = np.load(path)
+        else:
+            with open(path, encoding="utf-8") as fh:
+                text = fh.read().replace(",", " ")
+            P = np.loadtxt(text.splitlines(), ndmin=2)
+    except OSError as exc:
+        raise ValueError(f"--points {path}: {exc.strerror or exc}") from None
+    except ValueError as exc:
+        raise ValueError(f"--points {path}: not three numbers a line ({exc})") from None
+    P = np.asarray(P, dtype=float)
+    if P.ndim != 2 or P.shape[1] != 3 or len(P) == 0:
+        raise ValueError(f"--points {path}: expected an array of shape (P, 3), got {P.shape}")
+    if not np.all(np.isfinite(P)):
+        raise ValueError(f"--points {path}: every coordinate must be finite")
+    return P
+
+
+def _sphere_matrix(scene, rows, args, out):
+    """``exactff matrix --sphere``: spherical factors (visible solid angle / 4 pi) from
+    the points of ``--points`` (or, without it, from the centroids of ``rows``), written
+    to a .npy with their bounds beside it (STEM.error.npy)."""
+    from .sphere import sphere_form_factors
+
+    if args.sparse or args.scheduler or args.area or args.jobs > 1 or not out.endswith(".npy"):
+        raise ValueError("--sphere writes a dense .npy (not with --sparse, --scheduler, "
+                         "--area, --jobs or .zarr)")
+    points = read_points(args.points) if args.points else scene.centroids[rows]
+    S, E = sphere_form_factors(scene, points, two_sided=not args.front_only, error=True)
+    np.save(out, S)
+    np.save(out[:-4] + ".error.npy", E)
+    what = f"{len(points)} points of {args.points}" if args.points else "the centroids"
+    print(f"sphere           visible solid angle / 4 pi from {what}"
+          + ("" if args.points else " (each polygon edge-on from its own centroid: a "
+             "closed room's rows sum to 1/2)"))
+    print(f"error bounds     max {E.max(initial=0.0):.3g} -> {out[:-4] + '.error.npy'}")
+    return S
+
+
 def cmd_matrix(args):
     import os
     import shutil
@@ -264,13 +308,18 @@ def cmd_matrix(args):
     rows = parse_rows(args.rows, len(scene))
     if args.jobs < 1:
         raise ValueError(f"--jobs must be at least 1, got {args.jobs}")
+    if (args.points or args.front_only) and not args.sphere:
+        raise ValueError("--points and --front-only go with --sphere")
+    if args.points and args.rows not in (None, "all"):
+        raise ValueError("--rows selects centroids: not with --points")
     if args.scheduler and args.jobs > 1:
         raise ValueError("--jobs and --scheduler: give one (the scheduler's workers run the rows)")
     out = args.output
     if out is None:
         stem = args.scene.split(":")[0].rsplit("/", 1)[-1].rsplit(".", 1)[0]
         big = len(rows) * len(scene) * 8 > DENSE_OUTPUT_BYTES
-        out = f"{stem}_ff" + (".npz" if args.sparse else ".zarr" if big else ".npy")
+        out = (f"{stem}_sphere.npy" if args.sphere else
+               f"{stem}_ff" + (".npz" if args.sparse else ".zarr" if big else ".npy"))
     out = output_path(out, args.sparse)
     suffix = path_suffix(out, "--output")
     if args.area and args.remainder:
@@ -288,7 +337,7 @@ def cmd_matrix(args):
                 shutil.rmtree(path)
             elif os.path.exists(path):
                 os.remove(path)
-    elif not args.area and (os.path.exists(out) or os.path.exists(stem + ".parts")):
+    elif not (args.area or args.sphere) and (os.path.exists(out) or os.path.exists(stem + ".parts")):
         print(f"resuming {out} (rows already written are kept; --overwrite to start over)")
     executor = client = None
     if args.scheduler:
@@ -304,7 +353,9 @@ def cmd_matrix(args):
     t0 = time.perf_counter()
     E = R = None
     try:
-        if args.area:
+        if args.sphere:
+            M = _sphere_matrix(scene, rows, args, out)
+        elif args.area:
             M, E = _area_matrix(scene, rows, args, out)
         else:
             M = form_factor_matrix(scene, rows=rows, two_sided=args.two_sided,
@@ -325,14 +376,16 @@ def cmd_matrix(args):
     _, zero_share = _matrix_summary(M)
     print(f"scene            {args.scene} ({len(scene)} polygons)")
     print(f"matrix           {M.shape[0]} x {M.shape[1]} "
-          + ("area-to-area" if args.area else "rows from the polygons' centroids")
+          + ("area-to-area" if args.area else "rows from the "
+             + ("points" if args.sphere and args.points else "polygons' centroids"))
           + f" -> {out}" + (f" and {args.csv}" if args.csv else ""))
     if R is not None:
         print(f"remainder        sky and ground per row -> {stem}.remainder.npy "
               f"(sky max {R[:, 0].max():.6g}, ground max {R[:, 1].max():.6g})")
-    print(f"time             {elapsed:.3f} s ({elapsed / max(len(rows), 1) * 1e3:.2f} ms per row)")
+    print(f"time             {elapsed:.3f} s ({elapsed / max(M.shape[0], 1) * 1e3:.2f} ms per row)")
     print(f"zero entries     {zero_share:.1%}")
-    _write_report(M, scene, E, R, rows, args.area, stem + ".report.json")
+    if not args.sphere:  # spherical rows have no invariant of 1 to report
+        _write_report(M, scene, E, R, rows, args.area, stem + ".report.json")
     return 0
 
 
@@ -475,8 +528,18 @@ def build_parser():
                         "each within --tolerance, instead of rows from the centroids")
     p.add_argument("--tolerance", type=float, default=1e-9,
                    help="absolute error allowed per value with --area (default 1e-9)")
+    p.add_argument("--sphere", action="store_true",
+                   help="spherical factors (visible solid angle / 4 pi, both faces "
+                        "receiving) from --points or the centroids, instead of plane "
+                        "form factors; writes a dense .npy and STEM.error.npy")
+    p.add_argument("--points", metavar="FILE",
+                   help="with --sphere: the viewpoints, .npy of shape (P, 3) or text with "
+                        "three numbers a line")
+    p.add_argument("--front-only", action="store_true",
+                   help="with --sphere: only the front of a polygon receives")
     p.add_argument("--csv", help="also write the matrix as CSV")
-    p.add_argument("--rows", default="all", help="'all', 'A:B' or 'i,j,...'")
+    p.add_argument("--rows", default="all", help="'all', 'A:B' or 'i,j,...' (the centroids "
+                                                 "with --sphere: not with --points)")
     p.add_argument("--two-sided", action="store_true", help="polygons receive on both sides")
     p.add_argument("--jobs", type=int, default=1, help="worker processes on this machine")
     p.add_argument("--scheduler", metavar="ADDRESS",

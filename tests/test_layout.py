@@ -39,6 +39,7 @@ LAYERS = {
     "exactff.kernel.ladder": 3,
     "exactff.kernel.point": 3,
     "exactff.kernel.eq3": 3,
+    "exactff.kernel.solid_angle": 3,
     # L4 visibility: charts, overlays, the clipper, pieces, refinement, BSP
     "exactff.visibility": 4,
     "exactff.visibility.charts": 4,
@@ -69,6 +70,7 @@ LAYERS = {
     # L6 drivers, outputs, reports, files, plots, the command line
     "exactff.storage": 6,
     "exactff.formfactors": 6,
+    "exactff.sphere": 6,
     "exactff.reports": 6,
     "exactff.io": 6,
     "exactff.io.obj": 6,
