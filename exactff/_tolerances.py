@@ -57,6 +57,12 @@ __all__ = [
     "SVBSP_SPLIT_ULPS",
     "SVBSP_BOX_BUDGET",
     "SVBSP_TILES",
+    "VIEW3D_REGION_RTOL",
+    "VIEW3D_IN_PLANE_RTOL",
+    "VIEW3D_FACING_COS",
+    "VIEW3D_WITHIN_RTOL",
+    "VIEW3D_EMISSIVITY_RANGE",
+    "VIEW3D_ZERO_COORDINATE",
     "C2",
     "LONGDOUBLE_EPS",
     "AREA_FAR",
@@ -397,3 +403,24 @@ MATRIX_RECIPROCITY_RTOL = 1e-9
 #: check_matrix: a scene is closed when its vector area |sum A n| is within this share
 #: of its total area (and every edge is paired): the figure `exactff info` uses.
 CLOSED_RESIDUAL = 1e-12
+
+#: View3D surfaces (exactff.combine): cuts of a polygon around its subsurfaces closer
+#: than this share of its size are one cut, and pieces smaller than this share of its
+#: area are left out: slivers of the booleans' rounding (a few ulps of the coordinates),
+#: far below any surface a View3D file describes.
+VIEW3D_REGION_RTOL = 1e-10
+#: View3D's own tests of a subsurface, mask or null surface on its base (getdat.c,
+#: TestSubSrf): its vertices within this share of its radius of the base's plane...
+VIEW3D_IN_PLANE_RTOL = 1e-5
+#: ... facing as the base (or against it, for masks and null surfaces) to this cosine...
+VIEW3D_FACING_COS = 0.999
+#: ... and within the base: at most this share of its area outside (View3D's overlap
+#: test takes 1e-6 of the square root of the area as its tolerance).
+VIEW3D_WITHIN_RTOL = 1e-6
+#: View3D clamps emissivities to this range (getdat.c, with a warning): its script-F
+#: factors divide by 1 - emissivity.
+VIEW3D_EMISSIVITY_RANGE = (0.001, 0.999)
+#: View3D sets F 3a vertex coordinates below this magnitude to 0 (getdat.c, SetPlane):
+#: the rounding of cos(90 degrees) and its kin; exactff does the same, to read the same
+#: vertices.
+VIEW3D_ZERO_COORDINATE = 1e-14

@@ -152,6 +152,19 @@ def cmd_info(args):
         print(f"                   {name(i)} and {name(j)}")
     if len(near) > 5:
         print(f"                   ... and {len(near) - 5} more")
+    v3 = scene.metadata.get("view3d")
+    if v3 is not None:
+        from .combine import combined_surfaces
+
+        kinds = [s["kind"] for s in v3["surfaces"]]
+        subs = sum(1 for s in v3["surfaces"] if s["kind"] == "S" and s["base"])
+        cmb = sum(1 for s in v3["surfaces"] if s["cmb"])
+        print(f"View3D           format F {v3['format']}; {len(kinds)} surfaces "
+              f"({kinds.count('S')} S of which {subs} subsurfaces, {kinds.count('M')} masks, "
+              f"{kinds.count('N')} null, {kinds.count('O')} obstructions; {cmb} combined): "
+              f"{len(combined_surfaces(scene))} rows with --area --combine")
+        for note in v3["notes"]:
+            print(f"                 {note}")
     return 0
 
 
@@ -242,7 +255,8 @@ def _area_matrix(scene, rows, args, out):
         executor = ProcessPoolExecutor(args.jobs)
     try:
         F, E = area_form_factors(scene, rows, tolerance=args.tolerance, error=True,
-                                 executor=executor, progress=not args.no_progress)
+                                 executor=executor, progress=not args.no_progress,
+                                 combine=args.combine)
     finally:
         if executor is not None:
             executor.shutdown()
@@ -305,7 +319,15 @@ def cmd_matrix(args):
     from .storage import output_path, path_stem, path_suffix
 
     scene = _open(args)
-    rows = parse_rows(args.rows, len(scene))
+    if args.combine and not args.area:
+        raise ValueError("--combine: the surfaces View3D reports, with --area")
+    if args.combine:
+        from .combine import combined_surfaces
+
+        n_rows = len(combined_surfaces(scene))
+        rows = None if args.rows in (None, "all") else parse_rows(args.rows, n_rows)
+    else:
+        rows = parse_rows(args.rows, len(scene))
     if args.jobs < 1:
         raise ValueError(f"--jobs must be at least 1, got {args.jobs}")
     if (args.points or args.front_only) and not args.sphere:
@@ -317,7 +339,7 @@ def cmd_matrix(args):
     out = args.output
     if out is None:
         stem = args.scene.split(":")[0].rsplit("/", 1)[-1].rsplit(".", 1)[0]
-        big = len(rows) * len(scene) * 8 > DENSE_OUTPUT_BYTES
+        big = (len(scene) if rows is None else len(rows)) * len(scene) * 8 > DENSE_OUTPUT_BYTES
         out = (f"{stem}_sphere.npy" if args.sphere else
                f"{stem}_ff" + (".npz" if args.sparse else ".zarr" if big else ".npy"))
     out = output_path(out, args.sparse)
@@ -375,10 +397,11 @@ def cmd_matrix(args):
                    fmt="%.17g")
     _, zero_share = _matrix_summary(M)
     print(f"scene            {args.scene} ({len(scene)} polygons)")
-    print(f"matrix           {M.shape[0]} x {M.shape[1]} "
-          + ("area-to-area" if args.area else "rows from the "
-             + ("points" if args.sphere and args.points else "polygons' centroids"))
-          + f" -> {out}" + (f" and {args.csv}" if args.csv else ""))
+    what = ("area-to-area, the surfaces View3D reports" if args.combine else "area-to-area"
+            if args.area else "rows from the "
+            + ("points" if args.sphere and args.points else "polygons' centroids"))
+    print(f"matrix           {M.shape[0]} x {M.shape[1]} {what} "
+          f"-> {out}" + (f" and {args.csv}" if args.csv else ""))
     if R is not None:
         print(f"remainder        sky and ground per row -> {stem}.remainder.npy "
               f"(sky max {R[:, 0].max():.6g}, ground max {R[:, 1].max():.6g})")
@@ -526,6 +549,10 @@ def build_parser():
     p.add_argument("--area", action="store_true",
                    help="area-to-area form factors (the paper's Eq. 1) with occlusion, "
                         "each within --tolerance, instead of rows from the centroids")
+    p.add_argument("--combine", action="store_true",
+                   help="with --area: one row and column per surface View3D reports (a "
+                        ".vs3 file's combined surfaces merged, subsurfaces separated, "
+                        "obstructions left out), as View3D prints them")
     p.add_argument("--tolerance", type=float, default=1e-9,
                    help="absolute error allowed per value with --area (default 1e-9)")
     p.add_argument("--sphere", action="store_true",

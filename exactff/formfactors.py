@@ -14,6 +14,7 @@ import time
 import numpy as np
 from numpy.typing import ArrayLike
 
+from . import _tolerances as tol
 from .area import area_row
 from .errors import check_finite, misses_tolerance, tolerance_missed
 from .checks import as_normal, as_receivers, check_tolerance, row_indices
@@ -603,7 +604,7 @@ def run_rows(scene, rows, computation, *, executor=None, jobs=None, progress=Fal
 
 def area_form_factors(scene, rows=None, *, tolerance=1e-9, error=False, executor=None,
                       jobs=None, progress=False, out=None, sparse=False, chunk_rows=None,
-                      rtol=None, shortcuts=True, stats=None):
+                      rtol=None, shortcuts=True, stats=None, combine=False):
     """Area-to-area form factors with occlusion (the paper's Eq. 1), each within a
     requested **absolute** tolerance (or, with ``rtol``, a share of the value).
 
@@ -654,11 +655,26 @@ def area_form_factors(scene, rows=None, *, tolerance=1e-9, error=False, executor
         ``culled_events``, ``engine_fallbacks`` and ``engine_fallback_points`` (hidden
         parts the engine computed where GEOS failed), ``occluded_pairs`` and
         ``point_values``. Every shortcut's counter is 0 with ``shortcuts=False``.
+    combine : bool, default False
+        The matrix View3D prints for a scene read from a ``.vs3`` file
+        (:func:`exactff.read_vs3`; :mod:`exactff.combine`): one row and column per
+        surface View3D reports (:func:`exactff.combined_surfaces`: combined surfaces
+        merged by area weighting, subsurfaces separated from their bases, null
+        surfaces taken from their bases, masks seen only by their bases, obstructions
+        left out), from the exact factors of the polygons (those with subsurfaces, masks
+        or null surfaces on them cut into convex pieces around them). ``rows`` are then
+        those surfaces; without ``rows``, the file's ``row`` control value (when set)
+        selects that surface's row, as View3D computes only it. With the file's
+        ``encl=1`` a row that does not sum to 1 within its estimates warns (the values
+        are not normalised: they need not be). The estimates add up the polygons'. A
+        scene without View3D data gives the same matrix as ``combine=False``. Not with
+        ``out`` or ``sparse``.
 
     Returns
     -------
     ndarray of shape (len(rows), len(scene)), or a pair of them with ``error=True``
-        (CSR arrays with ``sparse=True``, memory maps or stores with ``out``)
+        (CSR arrays with ``sparse=True``, memory maps or stores with ``out``); with
+        ``combine``, of shape (len(rows), len(combined_surfaces(scene)))
 
     Raises
     ------
@@ -697,13 +713,62 @@ def area_form_factors(scene, rows=None, *, tolerance=1e-9, error=False, executor
     (0.03140269, True)
     """
     scene = as_scene(scene)
-    rows = row_indices(rows, len(scene))
     check_tolerance(tolerance, allow_none=False)
     check_tolerance(rtol, "rtol")
     if stats is not None and not isinstance(stats, dict):
         raise ValueError(f"stats must be a dict or None, got {type(stats).__name__}")
+    if combine:
+        return _combined_area_form_factors(
+            scene, rows, error=error, tolerance=tolerance, executor=executor, jobs=jobs,
+            progress=progress, out=out, sparse=sparse, chunk_rows=chunk_rows, rtol=rtol,
+            shortcuts=shortcuts, stats=stats)
+    rows = row_indices(rows, len(scene))
     F, E = run_rows(scene, rows, AreaRows(tolerance, shortcuts, stats, rtol, strict=not error),
                     executor=executor, jobs=jobs,
                     progress=progress, out=out, sparse=sparse, chunk_rows=chunk_rows,
                     desc="area form factors")
+    return (F, E) if error else F
+
+
+def _combined_area_form_factors(scene, rows, *, error, tolerance, out, sparse, **options):
+    """``area_form_factors(..., combine=True)``: the area rows of the polygons of
+    :func:`exactff.combined_surfaces`, reduced to the surfaces."""
+    import warnings
+
+    from .combine import combined_surfaces
+
+    if out is not None or sparse:
+        raise ValueError("combine=True: not with out= or sparse= (the matrix of the "
+                         "surfaces is computed in memory)")
+    surfaces = combined_surfaces(scene)
+    control = scene.metadata.get("view3d", {}).get("control", {})
+    if rows is None and control.get("row"):
+        numbers = {num: k for k, num in enumerate(surfaces.numbers)}
+        v3 = scene.metadata["view3d"]
+        s = v3["surfaces"][control["row"] - 1]
+        num = s["cmb"] or s["number"]
+        if num not in numbers:
+            raise ValueError(f"control row={control['row']}: surface {control['row']} is a "
+                             f"null surface (no row)")
+        rows = [numbers[num]]
+    rows = row_indices(rows, len(surfaces))
+    raw = surfaces.rows_needed(rows)
+    comp = surfaces.scene
+    if len(raw):
+        F, E = run_rows(comp, raw, AreaRows(tolerance, options.pop("shortcuts"),
+                                            options.pop("stats"), options.pop("rtol")),
+                        desc="area form factors", **options)
+    else:
+        F = E = np.zeros((0, len(comp)))
+    F, E = surfaces.reduce(rows, raw, F, E)
+    if control.get("encl") and len(rows) == len(surfaces):
+        sums = F.sum(axis=1)
+        slack = E.sum(axis=1) + 64 * tol.EPS * len(surfaces)
+        bad = np.flatnonzero(np.abs(sums - 1.0) > slack)
+        if len(bad):
+            i = int(bad[np.argmax(np.abs(sums[bad] - 1.0))])
+            warnings.warn(f"{scene.metadata['view3d'].get('source', 'the scene')}: encl=1 (the "
+                          f"surfaces form an enclosure) but {len(bad)} rows do not sum to 1 "
+                          f"within their estimates; surface {surfaces.numbers[i]} "
+                          f"({surfaces.names[i]}): {sums[i]:.12g}", stacklevel=3)
     return (F, E) if error else F

@@ -32,6 +32,7 @@ LAYERS = {
     "exactff.prepared": 2,
     "exactff.scenes": 2,
     "exactff.scenes.procedural": 2,
+    "exactff.combine": 2,
     # L3 kernel: sector sums, Eq. 3, the escalation ladder, point functions
     "exactff.kernel": 3,
     "exactff.kernel.sector": 3,

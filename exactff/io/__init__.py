@@ -1,6 +1,7 @@
 """Reading scenes: Wavefront OBJ (faces kept as polygons), exactff-scene/1 JSON, View3D
 ``.vs3``, and the mesh formats of meshio (STL, PLY, OFF, VTK, ...), one module each;
-:func:`load_scene` chooses the reader by extension."""
+:func:`load_scene` chooses the reader by extension. Writing View3D's input and output
+files (:mod:`exactff.io.vs3`)."""
 
 from __future__ import annotations
 
@@ -10,11 +11,13 @@ from .. import _tolerances as tol
 from .mesh import MESHIO_EXTENSIONS, read_mesh
 from .obj import read_obj
 from .scene_json import read_scene_json, scene_from_json
-from .vs3 import read_vs3
+from .vs3 import (read_view3d_factors, read_vs3, script_f, write_view3d_factors,
+                  write_vs3)
 from ..scene import Scene
 
 __all__ = ["load_scene", "read_obj", "read_scene_json", "scene_from_json", "read_vs3",
-           "read_mesh", "MESHIO_EXTENSIONS"]
+           "read_mesh", "MESHIO_EXTENSIONS", "write_vs3", "write_view3d_factors",
+           "read_view3d_factors", "script_f"]
 
 
 def load_scene(path: str | os.PathLike, *, nonplanar: str = "error",
