@@ -261,6 +261,10 @@ class Scene:
     dropped_reasons : tuple of (str, int)
         How many of them were left out for each reason (``"fewer than 3 vertices"``,
         ``"fewer than 3 distinct vertices"``, ``"zero area"``); empty if none.
+    skipped_primitives : tuple of (str, int)
+        Objects of the source file that are not polygons and were not read, counted by
+        kind (a Radiance ``sphere``, an EnergyPlus ``FenestrationSurface:Detailed``),
+        in the order first met; empty if none. Kept when the scene is pickled.
 
     Notes
     -----
@@ -270,10 +274,11 @@ class Scene:
 
     __slots__ = ("polygons", "normals", "areas", "centroids", "offsets", "vertices",
                  "names", "groups", "materials", "split_faces", "dropped_faces",
-                 "dropped_reasons", "__weakref__")
+                 "dropped_reasons", "skipped_primitives", "__weakref__")
 
     def __init__(self, polygons, names=None, groups=None, materials=None,
-                 planarity_rtol=tol.PLANARITY_RTOL, split_faces=0, dropped=(), _validated=False):
+                 planarity_rtol=tol.PLANARITY_RTOL, split_faces=0, dropped=(), skipped=(),
+                 _validated=False):
         n = len(polygons)
         labels = {}
         for key, val in (("names", names), ("groups", groups), ("materials", materials)):
@@ -314,6 +319,7 @@ class Scene:
         set_(self, "split_faces", int(split_faces))
         set_(self, "dropped_reasons", tuple((str(r), int(c)) for r, c in dropped))
         set_(self, "dropped_faces", sum(c for _, c in self.dropped_reasons))
+        set_(self, "skipped_primitives", tuple((str(k), int(c)) for k, c in skipped))
 
     def __setattr__(self, key, value):
         raise AttributeError("Scene is immutable")
@@ -585,7 +591,8 @@ def _file_error(errors, names, groups, sources):
 
 
 def build_scene(faces, *, names=None, groups=None, materials=None, sources=None,
-                nonplanar="error", degenerate="raise", planarity_rtol=tol.PLANARITY_RTOL):
+                nonplanar="error", degenerate="raise", planarity_rtol=tol.PLANARITY_RTOL,
+                skipped=()):
     """A scene from faces read from a file, with errors that name the face.
 
     Every face is validated once, in bulk (:func:`validate_polygons`); only the faces
@@ -614,6 +621,9 @@ def build_scene(faces, *, names=None, groups=None, materials=None, sources=None,
         non-planar (unless split) or self-intersecting faces are broken input, not
         degenerate: they raise either way.
     planarity_rtol : float
+    skipped : sequence of (str, int), optional
+        The file's objects that are not polygons and were not read, counted by kind
+        (``scene.skipped_primitives``, ``describe(scene)["skipped_primitives"]``).
 
     Raises
     ------
@@ -686,4 +696,5 @@ def build_scene(faces, *, names=None, groups=None, materials=None, sources=None,
         raise ValueError(f"faces: all {n:,} faces are degenerate and were left out "
                          f"(degenerate='drop'): no polygon remains")
     return Scene(kept[0], names=kept[1], groups=kept[2], materials=kept[3],
-                 split_faces=len(pieces), dropped=tuple(dropped.items()), _validated=True)
+                 split_faces=len(pieces), dropped=tuple(dropped.items()), skipped=skipped,
+                 _validated=True)
