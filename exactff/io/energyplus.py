@@ -208,7 +208,7 @@ def _relative_to_building(P, north, origin):
 
 
 def read_idf(path, *, facing="inside", **options):
-    """Read the building surfaces of an EnergyPlus input file (``.idf``) into a Scene.
+    """Read the building surfaces of an EnergyPlus input file into a Scene.
 
     Every ``BuildingSurface:Detailed`` (and ``Wall:Detailed``, ``RoofCeiling:Detailed``,
     ``Floor:Detailed``) becomes one polygon, in file order, with its name

@@ -30,7 +30,7 @@ def _words(path):
 
 
 def read_rad(path, **options):
-    """Read the polygons of a Radiance scene description (``.rad``) into a Scene.
+    """Read the polygons of a Radiance scene description into a Scene.
 
     A Radiance primitive is ``modifier type identifier`` followed by three argument
     lists, each its count and then its values: strings, integers, reals (an ``alias``

@@ -10,8 +10,8 @@ __all__ = ["write_elmer_view_factors", "write_openfoam_view_factors", "patch_ran
 
 
 def write_elmer_view_factors(path, F, *, min_factor=0.0, fmt=FULL_PRECISION):
-    """Write a form-factor matrix as Elmer's ``ViewFactors.dat``: sparse rows, the
-    factors above ``min_factor``.
+    """Write a form-factor matrix as Elmer's view-factor file: sparse rows, the factors
+    above a minimum.
 
     Parameters
     ----------
