@@ -303,7 +303,7 @@ def test_rad_without_other_surfaces_warns_nothing(tmp_path):
     ("void polygon floor\n0\nzero\n9 0 0 0 1 0 0 0 1 0\n",
      r"x\.rad:3: polygon 'floor': expected the number of integer arguments, got 'zero'"),
     ("void polygon floor 0 0 9 0 0 0\n1 0 0\n0 1.o 0\n",
-     r"x\.rad:3: polygon 'floor': expected a finite coordinate, got '1\.o'"),
+     r"x\.rad:3: polygon 'floor': a coordinate: expected a finite number, got '1\.o'"),
     ("void polygon floor 0 0 9 0 0 0 1 0 0\n",
      r"x\.rad:1: polygon 'floor': the file ends inside its 9 real arguments \(read 6\)"),
     ("void polygon floor 1 s 0 9 0 0 0 1 0 0 0 1 0\n",

@@ -7,6 +7,7 @@ import warnings
 
 import numpy as np
 
+from ..checks import finite_float
 from ..scene import Scene, build_scene
 from .matrices import FULL_PRECISION, as_square_matrix, check_number_format
 
@@ -135,14 +136,7 @@ def _number(obj, i, path, what, default=None):
     text = obj.get(i)
     if text == "" and default is not None:
         return default
-    try:
-        value = float(text)
-    except ValueError:
-        value = math.nan
-    if not math.isfinite(value):
-        raise ValueError(f"{obj.where(path, i)}: {what}: expected a finite number, "
-                         f"got {text!r}")
-    return value
+    return finite_float(text, f"{obj.where(path, i)}: {what}")
 
 
 def _version(objects, path):

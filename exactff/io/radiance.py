@@ -1,11 +1,11 @@
 """Radiance scene descriptions (``.rad``): the polygons, with their names and
 modifiers."""
 
-import math
 import os
 import re
 import warnings
 
+from ..checks import finite_float
 from ..scene import build_scene
 
 __all__ = ["read_rad", "RADIANCE_SURFACES"]
@@ -143,16 +143,8 @@ def read_rad(path, **options):
         if len(reals) % 3 or len(reals) < 9:
             raise ValueError(f"{what}: a polygon needs 3 reals (x y z) for each of at least "
                              f"3 vertices, got {len(reals)}")
-        xyz = []
-        for w, line in reals:
-            try:
-                v = float(w)
-            except ValueError:
-                v = math.nan
-            if not math.isfinite(v):
-                raise ValueError(f"{path}:{line}: {kind} {name!r}: expected a finite "
-                                 f"coordinate, got {w!r}")
-            xyz.append(v)
+        xyz = [finite_float(w, f"{path}:{line}: {kind} {name!r}: a coordinate")
+               for w, line in reals]
         faces.append([xyz[i:i + 3] for i in range(0, len(xyz), 3)])
         names.append(name)
         materials.append(modifier)
