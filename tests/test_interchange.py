@@ -137,6 +137,25 @@ def test_idf_relative_clockwise_space_field(tmp_path):
     assert scene.normals[1].tolist() == [0.0, 0.0, 1.0]    # clockwise from below: up
 
 
+def test_idf_relative_outside_reverses_clockwise(tmp_path):
+    scene = ef.read_idf(_write(tmp_path, "rel.idf", RELATIVE_IDF), facing="outside")
+    assert scene.polygons[1].tolist() == [[0.1, 0, 0], [0, 0.3, 0], [0.7, 0, 0]]
+    assert scene.normals[1].tolist() == [0.0, 0.0, -1.0]
+
+
+@pytest.mark.parametrize("system", ["World", "absolute", ""])
+def test_idf_world_absolute_and_default_relative(tmp_path, system):
+    """World and Absolute read the vertices as they are; a blank Coordinate System is
+    EnergyPlus's default, Relative (here with a zone at the origin: the same)."""
+    text = (f"GlobalGeometryRules,UpperLeftCorner,Counterclockwise,{system};\n"
+            "Zone, Z, 0, 0, 0, 0;  Version, 9.4;   ! two objects on a line\n"
+            "BuildingSurface:Detailed,A,Wall,C,Z,Outdoors,,,,,\n"
+            "  3   ! the count, its comma on the next line\n"
+            "  , 0.5,0,0, 1,0,0, 0,1,0;\n")
+    scene = ef.read_idf(_write(tmp_path, "w.idf", text), facing="outside")
+    assert scene.polygons[0].tolist() == [[0.5, 0, 0], [1, 0, 0], [0, 1, 0]]
+
+
 def test_idf_layout_without_version(tmp_path):
     """No Version object: the layout is the one that leaves whole x, y, z triples."""
     old = ("GlobalGeometryRules,UpperLeftCorner,Counterclockwise,World;\n"
@@ -168,6 +187,10 @@ def test_idf_layout_without_version(tmp_path):
      r"x\.idf:3: BuildingSurface:Detailed 'A': zone 'Nowhere' is not defined"),
     ("GlobalGeometryRules,UpperLeftCorner,Clockwise,World;\nZone,\n  Room\n",
      r"x\.idf:2: Zone: not ended by ';'"),
+    ("GlobalGeometryRules,UpperLeftCorner,Clockwise,World;\nZone,\n  Room\n  Two;\n",
+     r"x\.idf:4: two values in one field: 'Room' and 'Two'"),
+    ("Version, nine;\nGlobalGeometryRules,UpperLeftCorner,Clockwise,World;\n",
+     r"x\.idf:1: Version: expected a version such as '9\.6'"),
 ])
 def test_idf_errors_name_file_line_object(tmp_path, text, match):
     with pytest.raises(ValueError, match=match):
@@ -286,6 +309,15 @@ def test_rad_polygons_names_modifiers_and_skipped(tmp_path):
     # the right-hand normals: the floor faces up, the wall faces -y (into the room)
     assert scene.normals.tolist() == [[0, 0, 1], [0, -1, 0]]
     assert ef.describe(scene)["skipped_primitives"] == {"sphere": 1, "ring": 1, "cone": 1}
+
+
+def test_info_says_what_was_not_read(tmp_path, capsys):
+    from exactff.cli import main
+
+    p = _write(tmp_path, "room.rad", ROOM_RAD)
+    with pytest.warns(UserWarning):
+        assert main(["info", str(p)]) == 0
+    assert "not read         1 sphere, 1 ring, 1 cone (not polygons)" in capsys.readouterr().out
 
 
 def test_rad_without_other_surfaces_warns_nothing(tmp_path):
