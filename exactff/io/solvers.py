@@ -127,10 +127,10 @@ def write_openfoam_view_factors(case, F, *, patches=None, region=None, min_facto
     F : array_like or scipy.sparse matrix of shape (N, N)
         ``F[i, j]``: the area form factor from face i to face j
         (:func:`exactff.area_form_factors`). The faces are viewFactorsGen's coarse
-        faces, in its order: the view-factor patches (those whose ``qr`` is
-        ``fixedValue``) in the boundary's order, each patch's faces in the order of
-        its agglomeration (``finalAgglom``; one face each when nothing is
-        agglomerated).
+        faces, in its order: the view-factor patches in the boundary's order (in
+        OpenFOAM-dev's viewFactorsGen, the patches whose ``qr`` is ``fixedValue``),
+        each patch's faces in the order of its agglomeration (``finalAgglom``; one face
+        each when nothing is agglomerated).
     patches : sequence of N str, or Scene, optional
         The patch of each face (a Scene gives its ``groups``): checked to be
         consecutive, and written as a comment that says which faces belong to which
