@@ -7,6 +7,7 @@ are read back by parsers written here, independently of the code under test, and
 give back the matrix to the digits written."""
 
 import math
+import pathlib
 import re
 import warnings
 
@@ -15,6 +16,8 @@ import pytest
 import scipy.sparse
 
 import exactff as ef
+
+DATA = pathlib.Path(__file__).resolve().parent / "data"
 
 # View3D's manual (NISTIR 6925), its cube.vs3 example: unit cube, opposite faces and
 # adjacent faces, printed to 9 digits (the issue quotes them)
@@ -104,130 +107,12 @@ def test_idf_cube_view_factors_vs_view3d(tmp_path):
     assert abs(F.sum(axis=1) - 1).max() < 1e-10   # a closed zone
 
 
-# EnergyPlus's own test file testfiles/1ZoneUncontrolled.idf (EnergyPlus 9.3,
-# github.com/NREL/EnergyPlus): its Version, Zone, GlobalGeometryRules and six surfaces,
-# their fields and vertex lines as shipped (the comments' column alignment aside)
-ONE_ZONE_UNCONTROLLED = """\
-  Version,9.3;
-  Zone,
-    ZONE ONE,                !- Name
-    0,                       !- Direction of Relative North {deg}
-    0,                       !- X Origin {m}
-    0,                       !- Y Origin {m}
-    0,                       !- Z Origin {m}
-    1,                       !- Type
-    1,                       !- Multiplier
-    autocalculate,           !- Ceiling Height {m}
-    autocalculate;           !- Volume {m3}
-  GlobalGeometryRules,
-    UpperLeftCorner,         !- Starting Vertex Position
-    CounterClockWise,        !- Vertex Entry Direction
-    World;                   !- Coordinate System
-
-  BuildingSurface:Detailed,
-    Zn001:Wall001,           !- Name
-    Wall,                !- Surface Type
-    R13WALL,             !- Construction Name
-    ZONE ONE,                !- Zone Name
-    Outdoors,            !- Outside Boundary Condition
-    ,                        !- Outside Boundary Condition Object
-    SunExposed,          !- Sun Exposure
-    WindExposed,         !- Wind Exposure
-    0.5000000,           !- View Factor to Ground
-    4,                       !- Number of Vertices
-    0,0,4.572000,  !- X,Y,Z ==> Vertex 1 {m}
-    0,0,0,  !- X,Y,Z ==> Vertex 2 {m}
-    15.24000,0,0,  !- X,Y,Z ==> Vertex 3 {m}
-    15.24000,0,4.572000;  !- X,Y,Z ==> Vertex 4 {m}
-
-  BuildingSurface:Detailed,
-    Zn001:Wall002,           !- Name
-    Wall,                !- Surface Type
-    R13WALL,             !- Construction Name
-    ZONE ONE,                !- Zone Name
-    Outdoors,            !- Outside Boundary Condition
-    ,                        !- Outside Boundary Condition Object
-    SunExposed,          !- Sun Exposure
-    WindExposed,         !- Wind Exposure
-    0.5000000,           !- View Factor to Ground
-    4,                       !- Number of Vertices
-    15.24000,0,4.572000,  !- X,Y,Z ==> Vertex 1 {m}
-    15.24000,0,0,  !- X,Y,Z ==> Vertex 2 {m}
-    15.24000,15.24000,0,  !- X,Y,Z ==> Vertex 3 {m}
-    15.24000,15.24000,4.572000;  !- X,Y,Z ==> Vertex 4 {m}
-
-  BuildingSurface:Detailed,
-    Zn001:Wall003,           !- Name
-    Wall,                !- Surface Type
-    R13WALL,             !- Construction Name
-    ZONE ONE,                !- Zone Name
-    Outdoors,            !- Outside Boundary Condition
-    ,                        !- Outside Boundary Condition Object
-    SunExposed,          !- Sun Exposure
-    WindExposed,         !- Wind Exposure
-    0.5000000,           !- View Factor to Ground
-    4,                       !- Number of Vertices
-    15.24000,15.24000,4.572000,  !- X,Y,Z ==> Vertex 1 {m}
-    15.24000,15.24000,0,  !- X,Y,Z ==> Vertex 2 {m}
-    0,15.24000,0,  !- X,Y,Z ==> Vertex 3 {m}
-    0,15.24000,4.572000;  !- X,Y,Z ==> Vertex 4 {m}
-
-  BuildingSurface:Detailed,
-    Zn001:Wall004,           !- Name
-    Wall,                !- Surface Type
-    R13WALL,             !- Construction Name
-    ZONE ONE,                !- Zone Name
-    Outdoors,            !- Outside Boundary Condition
-    ,                        !- Outside Boundary Condition Object
-    SunExposed,          !- Sun Exposure
-    WindExposed,         !- Wind Exposure
-    0.5000000,           !- View Factor to Ground
-    4,                       !- Number of Vertices
-    0,15.24000,4.572000,  !- X,Y,Z ==> Vertex 1 {m}
-    0,15.24000,0,  !- X,Y,Z ==> Vertex 2 {m}
-    0,0,0,  !- X,Y,Z ==> Vertex 3 {m}
-    0,0,4.572000;  !- X,Y,Z ==> Vertex 4 {m}
-
-  BuildingSurface:Detailed,
-    Zn001:Flr001,            !- Name
-    Floor,               !- Surface Type
-    FLOOR,               !- Construction Name
-    ZONE ONE,                !- Zone Name
-    Adiabatic,           !- Outside Boundary Condition
-    ,                        !- Outside Boundary Condition Object
-    NoSun,               !- Sun Exposure
-    NoWind,              !- Wind Exposure
-    1.000000,            !- View Factor to Ground
-    4,                       !- Number of Vertices
-    15.24000,0.000000,0.0,  !- X,Y,Z ==> Vertex 1 {m}
-    0.000000,0.000000,0.0,  !- X,Y,Z ==> Vertex 2 {m}
-    0.000000,15.24000,0.0,  !- X,Y,Z ==> Vertex 3 {m}
-    15.24000,15.24000,0.0;  !- X,Y,Z ==> Vertex 4 {m}
-
-  BuildingSurface:Detailed,
-    Zn001:Roof001,           !- Name
-    Roof,                !- Surface Type
-    ROOF31,              !- Construction Name
-    ZONE ONE,                !- Zone Name
-    Outdoors,            !- Outside Boundary Condition
-    ,                        !- Outside Boundary Condition Object
-    SunExposed,          !- Sun Exposure
-    WindExposed,         !- Wind Exposure
-    0,                   !- View Factor to Ground
-    4,                       !- Number of Vertices
-    0.000000,15.24000,4.572,  !- X,Y,Z ==> Vertex 1 {m}
-    0.000000,0.000000,4.572,  !- X,Y,Z ==> Vertex 2 {m}
-    15.24000,0.000000,4.572,  !- X,Y,Z ==> Vertex 3 {m}
-    15.24000,15.24000,4.572;  !- X,Y,Z ==> Vertex 4 {m}
-"""
-
-
-def test_idf_energyplus_example_file(tmp_path):
+def test_idf_energyplus_example_file():
     """EnergyPlus's 1ZoneUncontrolled: every surface faces into the zone, the zone is
     closed, and floor to roof is Howell's C-11 for 15.24 m squares 4.572 m apart."""
     from test_area import howell_parallel
 
-    scene = ef.read_idf(_write(tmp_path, "1ZoneUncontrolled.idf", ONE_ZONE_UNCONTROLLED))
+    scene = ef.read_idf(DATA / "1ZoneUncontrolled.idf")
     assert scene.names[4:] == ("Zn001:Flr001", "Zn001:Roof001")
     centre = np.array([7.62, 7.62, 2.286])
     inward = np.einsum("ij,ij->i", scene.normals, centre - scene.centroids)
