@@ -125,6 +125,9 @@ def cmd_info(args):
         why = ", ".join(f"{c:,} {r}" for r, c in d["dropped_reasons"].items())
         print(f"dropped faces    {d['dropped_faces']:,} degenerate faces left out"
               + (f" ({why})" if why else ""))
+    if d["skipped_primitives"]:
+        kinds = ", ".join(f"{c:,} {k}" for k, c in d["skipped_primitives"].items())
+        print(f"not read         {kinds} (not polygons)")
     closed = d["closure_residual"] <= 1e-12
     print(f"closure          |sum A n| / sum A = {d['closure_residual']:.3g} "
           f"({'closed' if closed else 'open: rows need not sum to 1'}); "

@@ -233,8 +233,11 @@ def describe(scene: Scene) -> dict:
         tie; ``docs/explanation/conventions.md``), ``split_faces`` (faces of
         the file that were not planar and were cut into triangles when it was read
         with ``nonplanar="split"``; 0 otherwise), ``dropped_faces`` (degenerate faces
-        of the file left out when it was read with ``degenerate="drop"``; 0 otherwise)
-        and ``dropped_reasons`` (how many for each reason, a dict).
+        of the file left out when it was read with ``degenerate="drop"``; 0 otherwise),
+        ``dropped_reasons`` (how many for each reason, a dict) and
+        ``skipped_primitives`` (the file's objects that are not polygons and were not
+        read, counted by kind, a dict: ``{"sphere": 1}`` for a Radiance scene with one
+        sphere; empty otherwise).
 
     Examples
     --------
@@ -265,6 +268,7 @@ def describe(scene: Scene) -> dict:
         "split_faces": scene.split_faces,
         "dropped_faces": scene.dropped_faces,
         "dropped_reasons": dict(scene.dropped_reasons),
+        "skipped_primitives": dict(scene.skipped_primitives),
     }
 
 

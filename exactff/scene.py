@@ -269,6 +269,10 @@ class Scene:
         file (:func:`exactff.read_vs3`: title, control values, surface kinds,
         subsurfaces and combined surfaces); empty otherwise. Kept when the scene is
         pickled; :meth:`with_metadata` gives a scene with other metadata.
+    skipped_primitives : tuple of (str, int)
+        Objects of the source file that are not polygons and were not read, counted by
+        kind (a Radiance ``sphere``, an EnergyPlus ``FenestrationSurface:Detailed``),
+        in the order first met; empty if none. Kept when the scene is pickled.
 
     Notes
     -----
@@ -278,10 +282,11 @@ class Scene:
 
     __slots__ = ("polygons", "normals", "areas", "centroids", "offsets", "vertices",
                  "names", "groups", "materials", "split_faces", "dropped_faces",
-                 "dropped_reasons", "_metadata", "__weakref__")
+                 "dropped_reasons", "_metadata", "skipped_primitives", "__weakref__")
 
     def __init__(self, polygons, names=None, groups=None, materials=None,
                  planarity_rtol=tol.PLANARITY_RTOL, split_faces=0, dropped=(), metadata=None,
+                 skipped=(),
                  _validated=False):
         n = len(polygons)
         labels = {}
@@ -324,6 +329,7 @@ class Scene:
         set_(self, "dropped_reasons", tuple((str(r), int(c)) for r, c in dropped))
         set_(self, "dropped_faces", sum(c for _, c in self.dropped_reasons))
         set_(self, "_metadata", _metadata_text(metadata))
+        set_(self, "skipped_primitives", tuple((str(k), int(c)) for k, c in skipped))
 
     def __setattr__(self, key, value):
         raise AttributeError("Scene is immutable")
@@ -632,7 +638,7 @@ def _file_error(errors, names, groups, sources):
 
 def build_scene(faces, *, names=None, groups=None, materials=None, sources=None,
                 nonplanar="error", degenerate="raise", planarity_rtol=tol.PLANARITY_RTOL,
-                face_index=None):
+                face_index=None, skipped=()):
     """A scene from faces read from a file, with errors that name the face.
 
     Every face is validated once, in bulk (:func:`validate_polygons`); only the faces
@@ -665,6 +671,9 @@ def build_scene(faces, *, names=None, groups=None, materials=None, sources=None,
         Receives, for each polygon of the scene in order, the index of the face it comes
         from (a split face gives several polygons, a dropped face none): what a reader
         needs to carry its own per-face data over to the polygons.
+    skipped : sequence of (str, int), optional
+        The file's objects that are not polygons and were not read, counted by kind
+        (``scene.skipped_primitives``, ``describe(scene)["skipped_primitives"]``).
 
     Raises
     ------
@@ -741,4 +750,5 @@ def build_scene(faces, *, names=None, groups=None, materials=None, sources=None,
         raise ValueError(f"faces: all {n:,} faces are degenerate and were left out "
                          f"(degenerate='drop'): no polygon remains")
     return Scene(kept[0], names=kept[1], groups=kept[2], materials=kept[3],
-                 split_faces=len(pieces), dropped=tuple(dropped.items()), _validated=True)
+                 split_faces=len(pieces), dropped=tuple(dropped.items()), skipped=skipped,
+                 _validated=True)
