@@ -13,7 +13,7 @@ QUADMATH = ["-lquadmath"] if platform.machine().lower() in ("x86_64", "amd64", "
 setup(
     ext_modules=[Pybind11Extension("exactff.visibility._svbsp",
                                    ["exactff/visibility/_svbsp.cpp"],
-                                   cxx_std=17, extra_compile_args=["-O2", "-g"],
+                                   cxx_std=17, extra_compile_args=["-O2"],
                                    extra_link_args=QUADMATH)],
     cmdclass={"build_ext": build_ext},
 )

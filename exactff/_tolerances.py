@@ -232,10 +232,11 @@ MP_VALUE_FLOOR = 1e-300
 #: times the larger of its magnitude and this share of the hemisphere
 #: (:func:`exactff.errors.misses_tolerance`): a value of 1e-30 cannot carry 12 digits
 #: relative to the 1e-17 rounding of its neighbours (a sliver left between touching
-#: polygons by moved coordinates, a polygon all but edge-on), while 1e5 such values keep
-#: a row's sum within about 10 times ``tolerance``; DESIGN 6's targets are absolute plus
-#: relative too (1e-13 + 1e-12 F, of which this floor gives 1e-16 at the default).
-VALUE_FLOOR = 1e-4
+#: polygons by moved coordinates, a polygon all but edge-on; hypothesis found a 0 with
+#: a bound of 1.6e-16 from a rigid motion of an occluded row), while 100 such values
+#: keep a row's sum within ``tolerance``; DESIGN 6's targets are absolute plus relative
+#: too (1e-13 + 1e-12 F, ten times looser than this floor's 1e-14 at the default).
+VALUE_FLOOR = 1e-2
 
 #: The axis-plane candidate is tried at a BSP node when the best of the polygons' own
 #: planes leaves more than this fraction of the node's fragments' count as the

@@ -87,7 +87,7 @@ def misses_tolerance(F, E, tolerance, atol=None):
     Examples
     --------
     >>> misses_tolerance(np.array([0.5, 0.5, 0.0, 0.0]),
-    ...                  np.array([1e-13, 1e-11, 5e-17, 2e-16]), 1e-12)
+    ...                  np.array([1e-13, 1e-11, 5e-15, 2e-14]), 1e-12)
     array([False,  True, False,  True])
     >>> bool(misses_tolerance(1e-3, 2e-9, 1e-9, atol=1e-9))    # max(1e-9, 1e-12)
     True
@@ -109,7 +109,7 @@ def tolerance_missed(where, value, estimate, allowed, why="", hint=""):
     Examples
     --------
     >>> print(tolerance_missed("polygon 3", 0.25, 2e-9, 1e-12))
-    polygon 3: the form factor 0.25 misses the tolerance 1e-12 relative (times the larger of |F| and 0.0001) (error estimate 2e-09); ask error=True for the value with its estimate
+    polygon 3: the form factor 0.25 misses the tolerance 1e-12 relative (times the larger of |F| and 0.01) (error estimate 2e-09); ask error=True for the value with its estimate
     """
     why = f" {why}" if why else ""
     hint = f"; {hint}" if hint else ""

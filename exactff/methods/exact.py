@@ -41,7 +41,7 @@ class Exact(FormFactorMethod):
         (their vertices recomputed from the input, where the clipper's double-precision
         coordinates fall short) and integrated in long double or mpmath (see
         ``docs/explanation/robustness.md``). A value whose bound still exceeds
-        ``tolerance`` times the larger of the value and ``VALUE_FLOOR`` (1e-4 of the
+        ``tolerance`` times the larger of the value and ``VALUE_FLOOR`` (1e-2 of the
         hemisphere: a value near 0 cannot carry relative digits;
         :func:`exactff.errors.misses_tolerance`) after all that raises
         :class:`exactff.NumericalError` naming the polygon (on every path, either
