@@ -57,6 +57,12 @@ __all__ = [
     "SVBSP_SPLIT_ULPS",
     "SVBSP_BOX_BUDGET",
     "SVBSP_TILES",
+    "VIEW3D_REGION_RTOL",
+    "VIEW3D_IN_PLANE_RTOL",
+    "VIEW3D_FACING_COS",
+    "VIEW3D_WITHIN_RTOL",
+    "VIEW3D_EMISSIVITY_RANGE",
+    "VIEW3D_ZERO_COORDINATE",
     "C2",
     "LONGDOUBLE_EPS",
     "AREA_FAR",
@@ -67,6 +73,12 @@ __all__ = [
     "AREA_RULE_ORDERS",
     "AREA_MAX_DEPTH",
     "AREA_EDGE_TERMS_PER_CALL",
+    "REMAINDER_SPLIT_POLYGONS",
+    "REMAINDER_SLACK",
+    "MATRIX_ROUNDING_ULPS",
+    "MATRIX_ROW_SUM_ATOL",
+    "MATRIX_RECIPROCITY_RTOL",
+    "CLOSED_RESIDUAL",
 ]
 
 #: Unit roundoff of IEEE double precision, 2**-53.
@@ -368,3 +380,48 @@ SVBSP_BOX_BUDGET = 256
 #: Compiled core: planes per axis of the fixed grid the upper hemisphere is cut into
 #: before any shadow (``(tiles + 1)^2`` cells, each growing its own shadows).
 SVBSP_TILES = 7
+#: Open scenes (exactff.remainder): the horizontal splits of one scene kept in its
+#: cache, the latest used, up to this many polygons in all (rows at one height, a floor
+#: grid, share one; the office's 42 heights all fit, the cloister's 80,000-polygon
+#: splits six at a time: a split and its BSP tree cost about what the scene does).
+REMAINDER_SPLIT_POLYGONS = 500_000
+#: Open scenes, the exact method without error=True: how far below 0 a sky or ground
+#: may come out and still be rounding (then set to 0): ten times DESIGN 6's row-sum
+#: target (1e-11), since a remainder is a share minus a row's sum.
+REMAINDER_SLACK = 1e-10
+#: check_matrix: the rounding allowed on top of the error estimates, in units of the
+#: roundoff per value summed (a row's sum of N values is within N roundoffs of exact;
+#: this many times that, for the values' own last roundings).
+MATRIX_ROUNDING_ULPS = 4.0
+#: check_matrix without error estimates: how far a row may sum from 1, and a value
+#: exceed its unobstructed one (DESIGN 6's targets for the exact method: row sums and
+#: occluded values within 1e-11).
+MATRIX_ROW_SUM_ATOL = 1e-11
+#: check_matrix without error estimates: the reciprocity defect allowed, relative to the
+#: larger of A_i F_ij and A_j F_ji (testing.assert_reciprocity's default; the area
+#: form factors' default tolerance).
+MATRIX_RECIPROCITY_RTOL = 1e-9
+#: check_matrix: a scene is closed when its vector area |sum A n| is within this share
+#: of its total area (and every edge is paired): the figure `exactff info` uses.
+CLOSED_RESIDUAL = 1e-12
+
+#: View3D surfaces (exactff.combine): cuts of a polygon around its subsurfaces closer
+#: than this share of its size are one cut, and pieces smaller than this share of its
+#: area are left out: slivers of the booleans' rounding (a few ulps of the coordinates),
+#: far below any surface a View3D file describes.
+VIEW3D_REGION_RTOL = 1e-10
+#: View3D's own tests of a subsurface, mask or null surface on its base (getdat.c,
+#: TestSubSrf): its vertices within this share of its radius of the base's plane...
+VIEW3D_IN_PLANE_RTOL = 1e-5
+#: ... facing as the base (or against it, for masks and null surfaces) to this cosine...
+VIEW3D_FACING_COS = 0.999
+#: ... and within the base: at most this share of its area outside (View3D's overlap
+#: test takes 1e-6 of the square root of the area as its tolerance).
+VIEW3D_WITHIN_RTOL = 1e-6
+#: View3D clamps emissivities to this range (getdat.c, with a warning): its script-F
+#: factors divide by 1 - emissivity.
+VIEW3D_EMISSIVITY_RANGE = (0.001, 0.999)
+#: View3D sets F 3a vertex coordinates below this magnitude to 0 (getdat.c, SetPlane):
+#: the rounding of cos(90 degrees) and its kin; exactff does the same, to read the same
+#: vertices.
+VIEW3D_ZERO_COORDINATE = 1e-14

@@ -6,7 +6,29 @@ import warnings
 import numpy as np
 
 __all__ = ["as_point", "as_normal", "as_receiver", "as_receivers", "check_tolerance",
-           "row_indices", "check_sides"]
+           "row_indices", "check_sides", "finite_float"]
+
+
+def finite_float(text, where):
+    """The finite float a file's field ``text`` holds, or a ValueError that starts with
+    ``where`` (the file, the line, the object and the field).
+
+    Examples
+    --------
+    >>> finite_float("2.5e-1", "a.rad:3: polygon 'p'")
+    0.25
+    >>> finite_float("nan", "a.rad:3: polygon 'p'")
+    Traceback (most recent call last):
+    ...
+    ValueError: a.rad:3: polygon 'p': expected a finite number, got 'nan'
+    """
+    try:
+        value = float(text)
+    except ValueError:
+        value = float("nan")
+    if not np.isfinite(value):
+        raise ValueError(f"{where}: expected a finite number, got {text!r}")
+    return value
 
 
 def as_point(point, name="point"):

@@ -5,7 +5,8 @@ import sys
 
 import numpy as np
 
-__all__ = ["main", "PROCEDURAL", "build_parser", "open_scene", "parse_rows", "cmd_info", "cmd_ff",
+__all__ = ["main", "PROCEDURAL", "build_parser", "open_scene", "parse_rows", "read_points",
+           "cmd_info", "cmd_ff",
            "cmd_matrix", "cmd_compare", "BUILTIN", "DENSE_OUTPUT_BYTES"]
 
 BUILTIN = {
@@ -13,6 +14,7 @@ BUILTIN = {
     "cornell_box_closed": lambda: _scenes().cornell_box(closed=True),
     "office": lambda: _scenes().office(),
     "cloister": lambda: _scenes().cloister(),
+    "courtyard": lambda: _scenes().courtyard(),
 }
 
 
@@ -35,7 +37,7 @@ def _scenes():
 
 def open_scene(spec, *, split_nonplanar=False, planarity_rtol=None, drop_degenerate=False):
     """A scene from a file path or a built-in name (``cornell_box``, ``cornell_box_closed``,
-    ``office``, ``office:N`` for about N quads, ``cloister``, ``cloister:N``, ``box:K`` for a closed unit box with K x K
+    ``office``, ``office:N`` for about N quads, ``cloister``, ``cloister:N``, ``courtyard`` (open, z up), ``box:K`` for a closed unit box with K x K
     quads per face, ``building:NXxNY`` for rooms with zero-thickness walls).
     ``drop_degenerate`` leaves a file's degenerate faces out (``degenerate="drop"``)."""
     from .io import load_scene
@@ -82,7 +84,8 @@ def _open(args):
 def _scene_arguments(p):
     p.add_argument("scene", help="scene file (.obj, .json, .vs3, .stl, .ply, .off, .vtk, ...) "
                                  "or built-in name (cornell_box, cornell_box_closed, "
-                                 "office[:N], cloister[:N], box:K, building:NXxNY)")
+                                 "office[:N], cloister[:N], courtyard, box:K, "
+                                 "building:NXxNY)")
     p.add_argument("--split-nonplanar", action="store_true",
                    help="cut faces that are not planar into planar triangles instead of "
                         "refusing the file")
@@ -93,6 +96,13 @@ def _scene_arguments(p):
                    help="leave out degenerate faces (fewer than 3 distinct vertices, zero "
                         "area) instead of refusing the file; polygons keep the file's "
                         "order without them, and info says how many were left out")
+
+
+def _remainder_arguments(p, what):
+    p.add_argument("--remainder", action="store_true", help=what)
+    p.add_argument("--up", nargs=3, type=float, default=None, metavar=("X", "Y", "Z"),
+                   help="up direction for --remainder (default 0 0 1; the built-in office "
+                        "and cloister are y-up: 0 1 0)")
 
 
 def cmd_info(args):
@@ -115,6 +125,9 @@ def cmd_info(args):
         why = ", ".join(f"{c:,} {r}" for r, c in d["dropped_reasons"].items())
         print(f"dropped faces    {d['dropped_faces']:,} degenerate faces left out"
               + (f" ({why})" if why else ""))
+    if d["skipped_primitives"]:
+        kinds = ", ".join(f"{c:,} {k}" for k, c in d["skipped_primitives"].items())
+        print(f"not read         {kinds} (not polygons)")
     closed = d["closure_residual"] <= 1e-12
     print(f"closure          |sum A n| / sum A = {d['closure_residual']:.3g} "
           f"({'closed' if closed else 'open: rows need not sum to 1'}); "
@@ -142,6 +155,19 @@ def cmd_info(args):
         print(f"                   {name(i)} and {name(j)}")
     if len(near) > 5:
         print(f"                   ... and {len(near) - 5} more")
+    v3 = scene.metadata.get("view3d")
+    if v3 is not None:
+        from .combine import combined_surfaces
+
+        kinds = [s["kind"] for s in v3["surfaces"]]
+        subs = sum(1 for s in v3["surfaces"] if s["kind"] == "S" and s["base"])
+        cmb = sum(1 for s in v3["surfaces"] if s["cmb"])
+        print(f"View3D           format F {v3['format']}; {len(kinds)} surfaces "
+              f"({kinds.count('S')} S of which {subs} subsurfaces, {kinds.count('M')} masks, "
+              f"{kinds.count('N')} null, {kinds.count('O')} obstructions; {cmb} combined): "
+              f"{len(combined_surfaces(scene))} rows with --area --combine")
+        for note in v3["notes"]:
+            print(f"                 {note}")
     return 0
 
 
@@ -151,12 +177,26 @@ def cmd_ff(args):
     scene = _open(args)
     p = np.array(args.point, dtype=float)
     n = np.array(args.normal, dtype=float)
-    F = point_polygon_form_factors(p, n, scene)
-    print(f"unoccluded form factors from {p.tolist()} with normal {n.tolist()}:")
+    if args.up is not None and not args.remainder:
+        raise ValueError("--up is the up direction of --remainder: give --remainder too")
+    if args.remainder:
+        # the remainder of a row needs occlusion (unoccluded values may overlap)
+        from .formfactors import form_factors
+
+        F, sky, ground = form_factors(scene, p, n, remainder=True, up=args.up)
+        print(f"form factors with occlusion from {p.tolist()} with normal {n.tolist()}:")
+    else:
+        F = point_polygon_form_factors(p, n, scene)
+        print(f"unoccluded form factors from {p.tolist()} with normal {n.tolist()}:")
     for i in np.flatnonzero(F):
         name = scene.names[i] or f"polygon {i}"
         print(f"  {name:24s} {F[i]:.15f}")
     print(f"  {'sum':24s} {F.sum():.15f}")
+    if args.remainder:
+        up = [0.0, 0.0, 1.0] if args.up is None else list(args.up)
+        print(f"  {'sky':24s} {sky:.15f}   (uncovered, above the horizontal plane; up {up})")
+        print(f"  {'ground':24s} {ground:.15f}   (uncovered, below it)")
+        print(f"  {'sum with sky and ground':24s} {F.sum() + sky + ground:.15f}")
     return 0
 
 
@@ -218,7 +258,8 @@ def _area_matrix(scene, rows, args, out):
         executor = ProcessPoolExecutor(args.jobs)
     try:
         F, E = area_form_factors(scene, rows, tolerance=args.tolerance, error=True,
-                                 executor=executor, progress=not args.no_progress)
+                                 executor=executor, progress=not args.no_progress,
+                                 combine=args.combine)
     finally:
         if executor is not None:
             executor.shutdown()
@@ -226,7 +267,50 @@ def _area_matrix(scene, rows, args, out):
     np.save(out[:-4] + ".error.npy", E)
     print(f"error bounds     max {E.max():.3g} (tolerance {args.tolerance:g}) "
           f"-> {out[:-4] + '.error.npy'}")
-    return F
+    return F, E
+
+
+def read_points(path):
+    """Viewpoints from a file: ``.npy`` (an array of shape (P, 3)) or text with three
+    numbers a line (separated by commas or white space; ``#`` starts a comment)."""
+    try:
+        if path.endswith(".npy"):
+            P = np.load(path)
+        else:
+            with open(path, encoding="utf-8") as fh:
+                text = fh.read().replace(",", " ")
+            P = np.loadtxt(text.splitlines(), ndmin=2)
+    except OSError as exc:
+        raise ValueError(f"--points {path}: {exc.strerror or exc}") from None
+    except ValueError as exc:
+        raise ValueError(f"--points {path}: not three numbers a line ({exc})") from None
+    P = np.asarray(P, dtype=float)
+    if P.ndim != 2 or P.shape[1] != 3 or len(P) == 0:
+        raise ValueError(f"--points {path}: expected an array of shape (P, 3), got {P.shape}")
+    if not np.all(np.isfinite(P)):
+        raise ValueError(f"--points {path}: every coordinate must be finite")
+    return P
+
+
+def _sphere_matrix(scene, rows, args, out):
+    """``exactff matrix --sphere``: spherical factors (visible solid angle / 4 pi) from
+    the points of ``--points`` (or, without it, from the centroids of ``rows``), written
+    to a .npy with their bounds beside it (STEM.error.npy)."""
+    from .sphere import sphere_form_factors
+
+    if args.sparse or args.scheduler or args.area or args.jobs > 1 or not out.endswith(".npy"):
+        raise ValueError("--sphere writes a dense .npy (not with --sparse, --scheduler, "
+                         "--area, --jobs or .zarr)")
+    points = read_points(args.points) if args.points else scene.centroids[rows]
+    S, E = sphere_form_factors(scene, points, two_sided=not args.front_only, error=True)
+    np.save(out, S)
+    np.save(out[:-4] + ".error.npy", E)
+    what = f"{len(points)} points of {args.points}" if args.points else "the centroids"
+    print(f"sphere           visible solid angle / 4 pi from {what}"
+          + ("" if args.points else " (each polygon edge-on from its own centroid: a "
+             "closed room's rows sum to 1/2)"))
+    print(f"error bounds     max {E.max(initial=0.0):.3g} -> {out[:-4] + '.error.npy'}")
+    return S
 
 
 def cmd_matrix(args):
@@ -238,29 +322,47 @@ def cmd_matrix(args):
     from .storage import output_path, path_stem, path_suffix
 
     scene = _open(args)
-    rows = parse_rows(args.rows, len(scene))
+    if args.combine and not args.area:
+        raise ValueError("--combine: the surfaces View3D reports, with --area")
+    if args.combine:
+        from .combine import combined_surfaces
+
+        n_rows = len(combined_surfaces(scene))
+        rows = None if args.rows in (None, "all") else parse_rows(args.rows, n_rows)
+    else:
+        rows = parse_rows(args.rows, len(scene))
     if args.jobs < 1:
         raise ValueError(f"--jobs must be at least 1, got {args.jobs}")
+    if (args.points or args.front_only) and not args.sphere:
+        raise ValueError("--points and --front-only go with --sphere")
+    if args.points and args.rows not in (None, "all"):
+        raise ValueError("--rows selects centroids: not with --points")
     if args.scheduler and args.jobs > 1:
         raise ValueError("--jobs and --scheduler: give one (the scheduler's workers run the rows)")
     out = args.output
     if out is None:
         stem = args.scene.split(":")[0].rsplit("/", 1)[-1].rsplit(".", 1)[0]
-        big = len(rows) * len(scene) * 8 > DENSE_OUTPUT_BYTES
-        out = f"{stem}_ff" + (".npz" if args.sparse else ".zarr" if big else ".npy")
+        big = (len(scene) if rows is None else len(rows)) * len(scene) * 8 > DENSE_OUTPUT_BYTES
+        out = (f"{stem}_sphere.npy" if args.sphere else
+               f"{stem}_ff" + (".npz" if args.sparse else ".zarr" if big else ".npy"))
     out = output_path(out, args.sparse)
     suffix = path_suffix(out, "--output")
+    if args.area and args.remainder:
+        raise ValueError("--remainder is for point rows (not with --area)")
+    if args.up is not None and not args.remainder:
+        raise ValueError("--up is the up direction of --remainder: give --remainder too")
     if args.sparse != (suffix == ".npz"):
         raise ValueError(f"--output {out}: " + ("--sparse writes a .npz file" if args.sparse
                                                  else "a .npz output needs --sparse"))
     stem = path_stem(out)
     if args.overwrite:
-        for path in (out, stem + ".done.npy", stem + ".meta.json", stem + ".parts"):
+        beside = [stem + ".remainder" + e for e in (".npy", ".done.npy", ".meta.json", ".parts")]
+        for path in (out, stem + ".done.npy", stem + ".meta.json", stem + ".parts", *beside):
             if os.path.isdir(path):
                 shutil.rmtree(path)
             elif os.path.exists(path):
                 os.remove(path)
-    elif not args.area and (os.path.exists(out) or os.path.exists(stem + ".parts")):
+    elif not (args.area or args.sphere) and (os.path.exists(out) or os.path.exists(stem + ".parts")):
         print(f"resuming {out} (rows already written are kept; --overwrite to start over)")
     executor = client = None
     if args.scheduler:
@@ -274,13 +376,19 @@ def cmd_matrix(args):
         except (OSError, TimeoutError) as e:
             raise ValueError(f"--scheduler {args.scheduler}: cannot connect ({e})") from None
     t0 = time.perf_counter()
+    E = R = None
     try:
-        if args.area:
-            M = _area_matrix(scene, rows, args, out)
+        if args.sphere:
+            M = _sphere_matrix(scene, rows, args, out)
+        elif args.area:
+            M, E = _area_matrix(scene, rows, args, out)
         else:
             M = form_factor_matrix(scene, rows=rows, two_sided=args.two_sided,
                                    executor=executor, jobs=args.jobs if args.jobs > 1 else None,
-                                   sparse=args.sparse, progress=not args.no_progress, out=out)
+                                   sparse=args.sparse, progress=not args.no_progress, out=out,
+                                   remainder=args.remainder, up=args.up)
+            if args.remainder:
+                M, R = M
     finally:
         if client is not None:
             client.close()
@@ -290,15 +398,42 @@ def cmd_matrix(args):
 
         np.savetxt(args.csv, M.toarray() if sp.issparse(M) else np.asarray(M), delimiter=",",
                    fmt="%.17g")
-    sums, zero_share = _matrix_summary(M)
+    _, zero_share = _matrix_summary(M)
     print(f"scene            {args.scene} ({len(scene)} polygons)")
-    print(f"matrix           {M.shape[0]} x {M.shape[1]} rows from the polygons' centroids "
+    what = ("area-to-area, the surfaces View3D reports" if args.combine else "area-to-area"
+            if args.area else "rows from the "
+            + ("points" if args.sphere and args.points else "polygons' centroids"))
+    print(f"matrix           {M.shape[0]} x {M.shape[1]} {what} "
           f"-> {out}" + (f" and {args.csv}" if args.csv else ""))
-    print(f"time             {elapsed:.3f} s ({elapsed / max(len(rows), 1) * 1e3:.2f} ms per row)")
-    if len(sums):
-        print(f"row sums         min {sums.min():.15f}  max {sums.max():.15f}")
+    if R is not None:
+        print(f"remainder        sky and ground per row -> {stem}.remainder.npy "
+              f"(sky max {R[:, 0].max():.6g}, ground max {R[:, 1].max():.6g})")
+    print(f"time             {elapsed:.3f} s ({elapsed / max(M.shape[0], 1) * 1e3:.2f} ms per row)")
     print(f"zero entries     {zero_share:.1%}")
+    if not args.sphere:  # spherical rows have no invariant of 1 to report
+        _write_report(M, scene, E, R, rows, args.area, stem + ".report.json")
     return 0
+
+
+def _write_report(M, scene, E, R, rows, area, path):
+    """The invariants' report (:func:`exactff.check_matrix`): its summary printed, the
+    whole written to ``path`` (JSON)."""
+    import json
+
+    from .reports import check_matrix
+
+    report = check_matrix(M, scene, E, remainder=R, rows=rows, area=area)
+    print("-- report (exactff.check_matrix) " + "-" * 40)
+    print(str(report))
+    doc = report.to_dict()
+    per_row = ("rows", "sums", "deficits", "row_bounds")
+    # the summary first, the per-row arrays after it
+    doc = {**{k: v for k, v in doc.items() if k not in per_row},
+           **{k: doc[k] for k in per_row}}
+    with open(path, "w", encoding="utf-8") as fh:
+        json.dump(doc, fh, indent=1, allow_nan=True)
+    print(f"report           -> {path}")
+    return report
 
 
 def _rows_for_study(text, seed, n):
@@ -399,9 +534,12 @@ def build_parser():
     _scene_arguments(p)
     p.add_argument("--point", nargs=3, type=float, required=True, metavar=("X", "Y", "Z"))
     p.add_argument("--normal", nargs=3, type=float, required=True, metavar=("X", "Y", "Z"))
+    _remainder_arguments(p, "with occlusion (the exact method), and the uncovered rest of "
+                            "the hemisphere: sky above the horizontal plane, ground below")
     p.set_defaults(func=cmd_ff)
     p = sub.add_parser("matrix", help="exact form-factor matrix (rows from the polygons' "
-                                      "centroids), written to .npy, .zarr or .npz")
+                                      "centroids), written to .npy, .zarr or .npz, with "
+                                      "the report of its invariants (STEM.report.json)")
     _scene_arguments(p)
     p.add_argument("-o", "--output", help="output: .npy (dense), .zarr (chunked, "
                                           "compressed) or .npz (sparse, with --sparse); "
@@ -414,10 +552,24 @@ def build_parser():
     p.add_argument("--area", action="store_true",
                    help="area-to-area form factors (the paper's Eq. 1) with occlusion, "
                         "each within --tolerance, instead of rows from the centroids")
+    p.add_argument("--combine", action="store_true",
+                   help="with --area: one row and column per surface View3D reports (a "
+                        ".vs3 file's combined surfaces merged, subsurfaces separated, "
+                        "obstructions left out), as View3D prints them")
     p.add_argument("--tolerance", type=float, default=1e-9,
                    help="absolute error allowed per value with --area (default 1e-9)")
+    p.add_argument("--sphere", action="store_true",
+                   help="spherical factors (visible solid angle / 4 pi, both faces "
+                        "receiving) from --points or the centroids, instead of plane "
+                        "form factors; writes a dense .npy and STEM.error.npy")
+    p.add_argument("--points", metavar="FILE",
+                   help="with --sphere: the viewpoints, .npy of shape (P, 3) or text with "
+                        "three numbers a line")
+    p.add_argument("--front-only", action="store_true",
+                   help="with --sphere: only the front of a polygon receives")
     p.add_argument("--csv", help="also write the matrix as CSV")
-    p.add_argument("--rows", default="all", help="'all', 'A:B' or 'i,j,...'")
+    p.add_argument("--rows", default="all", help="'all', 'A:B' or 'i,j,...' (the centroids "
+                                                 "with --sphere: not with --points)")
     p.add_argument("--two-sided", action="store_true", help="polygons receive on both sides")
     p.add_argument("--jobs", type=int, default=1, help="worker processes on this machine")
     p.add_argument("--scheduler", metavar="ADDRESS",
@@ -428,6 +580,9 @@ def build_parser():
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.add_argument("--overwrite", action="store_true",
                    help="start over instead of resuming an existing output file")
+    _remainder_arguments(p, "also each row's sky and ground (the uncovered hemisphere above "
+                            "and below the horizontal plane), written to "
+                            "STEM.remainder.npy (columns sky, ground)")
     p.set_defaults(func=cmd_matrix)
     p = sub.add_parser("compare", help="error against run time of discrete methods "
                                        "(and the exact method) on a scene: tables, CSV, "

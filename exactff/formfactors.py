@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import math
 import os
 import sys
 import threading
@@ -13,10 +14,12 @@ import time
 import numpy as np
 from numpy.typing import ArrayLike
 
+from . import _tolerances as tol
 from .area import area_row
 from .errors import check_finite, misses_tolerance, tolerance_missed
-from .checks import as_receivers, check_tolerance, row_indices
+from .checks import as_normal, as_receivers, check_tolerance, row_indices
 from .methods import FormFactorMethod, resolve
+from .remainder import hemisphere_sky_share, remainder_row
 from .scene import Scene, as_scene
 from .storage import ZARR_CHUNK_VALUES, MatrixOutput, output_path, path_stem, path_suffix
 
@@ -26,7 +29,8 @@ __all__ = ["form_factors", "form_factor_matrix", "area_form_factors", "run_rows"
 
 def form_factors(scene: Scene, point: ArrayLike, normal: ArrayLike, *,
                  method: str | FormFactorMethod = "exact", two_sided: bool = False,
-                 error: bool = False, **options) -> np.ndarray | tuple[np.ndarray, np.ndarray]:
+                 error: bool = False, remainder: bool = False, up: ArrayLike | None = None,
+                 **options) -> np.ndarray | tuple[np.ndarray, ...]:
     """Form factors from points to every polygon of a scene, with occlusion.
 
     Parameters
@@ -47,13 +51,30 @@ def form_factors(scene: Scene, point: ArrayLike, normal: ArrayLike, *,
         vertices (refined from the input where the tolerance asks for it). It rests on
         the clipper's topology being right; what it covers is in
         ``docs/explanation/robustness.md``.
+    remainder : bool, default False
+        Also return the uncovered part of each row, split at the horizontal plane
+        through the point: ``sky`` (directions above it) and ``ground`` (below), so
+        that ``F.sum(-1) + sky + ground`` is 1 in every scene, open or closed. Every
+        method and engine: the scene is cut along that plane (once per height, cached),
+        the row computed on the cut scene, its parts summed back per polygon; ``sky`` is
+        the closed-form share ``(1 + n . up) / 2`` minus the parts above
+        (:func:`exactff.remainder.remainder_row`). A polygon lying in that plane counts
+        on neither side.
+    up : array_like of shape (3,), optional
+        The up direction for ``remainder`` (default +z; the built-in office and
+        cloister are y-up: ``up=(0, 1, 0)``).
     **options
         Passed to the method's constructor when ``method`` is a name.
 
     Returns
     -------
-    ndarray of shape (..., len(scene)), or a pair of them with ``error=True``
-        ``F[..., j]`` = F(point -> polygon j).
+    ndarray of shape (..., len(scene)), or a tuple
+        ``F[..., j]`` = F(point -> polygon j); ``(F, E)`` with ``error=True``;
+        ``(F, sky, ground)`` with ``remainder=True`` (``sky``, ``ground`` of shape
+        ``(...)``, floats for one point); ``(F, sky, ground, E, E_sky, E_ground)`` with
+        both (values, then their bounds: the parts' bounds, the rounding of the sums
+        and of the share, and what the split's rounding may move between sky and
+        ground).
 
     Raises
     ------
@@ -85,6 +106,14 @@ def form_factors(scene: Scene, point: ArrayLike, normal: ArrayLike, *,
     >>> F = ef.form_factors(box, [0.5, 0.5, 0.0], [0, 0, 1])
     >>> round(float(F[4:8].sum()), 10), round(float(F.sum()), 12)
     (0.2394564705, 1.0)
+
+    Without the ceiling the sky is what the ceiling took; the walls' parts below the
+    floor's plane (none) leave no ground:
+
+    >>> open_box = ef.Scene.from_polygons(box.polygons[:4] + box.polygons[8:])
+    >>> F, sky, ground = ef.form_factors(open_box, [0.5, 0.5, 0.0], [0, 0, 1], remainder=True)
+    >>> round(sky, 10), ground, round(float(F.sum()) + sky + ground, 12)
+    (0.2394564705, 0.0, 1.0)
     """
     m = resolve(method, **options)
     if error and m.name != "exact":
@@ -92,6 +121,11 @@ def form_factors(scene: Scene, point: ArrayLike, normal: ArrayLike, *,
                          f"got method={m.name!r}")
     as_scene(scene)
     P, Nn, shape = as_receivers(point, normal)   # the methods normalise the normals
+    if up is not None and not remainder:
+        raise ValueError("up= is the up direction of remainder=True: give remainder=True "
+                         "too, or leave up out")
+    if remainder:
+        return _with_remainder(scene, P, Nn, shape, m, two_sided, error, up)
     out = np.empty((len(P), len(scene)))
     if error:
         err = np.empty_like(out)
@@ -104,9 +138,43 @@ def form_factors(scene: Scene, point: ArrayLike, normal: ArrayLike, *,
     return out.reshape(shape + (len(scene),))
 
 
+def _remainder_row(scene, p, n, method, two_sided, error, up):
+    """One receiver's row with its sky and ground (:func:`exactff.remainder.remainder_row`
+    with the method's row on the split scene)."""
+    share, share_bound = hemisphere_sky_share(n, up)
+    if error:
+        row = lambda s: method.point_form_factors(s, p, n, two_sided=two_sided, error=True)
+    else:
+        row = lambda s: method.point_form_factors(s, p, n, two_sided=two_sided)
+    # a sampled method's row is only within sampling of the shares: clamp, never raise
+    slack = None if method.name == "exact" else math.inf
+    return remainder_row(scene, p, row, sky_share=share, share_bound=share_bound, up=up,
+                         error=error, slack=slack)
+
+
+def _with_remainder(scene, P, Nn, shape, method, two_sided, error, up):
+    n = len(scene)
+    F = np.empty((len(P), n))
+    R = np.empty((len(P), 2))
+    E = np.empty_like(F) if error else None
+    ER = np.empty_like(R) if error else None
+    for i in range(len(P)):
+        got = _remainder_row(scene, P[i], Nn[i], method, two_sided, error, up)
+        F[i], R[i] = got[0], got[1:3]
+        if error:
+            E[i], ER[i] = got[3], got[4:6]
+    scalar = lambda a: float(a[0]) if shape == () else a.reshape(shape)
+    values = (F.reshape(shape + (n,)), scalar(R[:, 0]), scalar(R[:, 1]))
+    if not error:
+        return values
+    return values + (E.reshape(shape + (n,)), scalar(ER[:, 0]), scalar(ER[:, 1]))
+
+
 class PointRows:
     """A matrix's rows as point samples: row ``i`` from the centroid of polygon ``i``
-    (with its normal) by ``method``. What :func:`form_factor_matrix` computes.
+    (with its normal) by ``method``. What :func:`form_factor_matrix` computes; with
+    ``remainder``, each row is the pair ``(values, [sky, ground])`` (``up`` the up
+    direction, default +z).
 
     Examples
     --------
@@ -117,15 +185,29 @@ class PointRows:
     [1.0]
     """
 
-    outputs = 1
-
-    def __init__(self, method, two_sided):
+    def __init__(self, method, two_sided, remainder=False, up=None):
         self.method, self.two_sided = method, bool(two_sided)
+        self.remainder = bool(remainder)
+        self.up = None if up is None else tuple(float(v) for v in np.asarray(up).ravel())
+        # with the remainder: a second output, (sky, ground) per row, in STEM.remainder.npy
+        self.outputs = 2 if self.remainder else 1
+        self.suffixes = ("remainder",) if self.remainder else ()
+        self.widths = (2,) if self.remainder else ()
 
     def record(self):
-        return {"method": method_record(self.method), "two_sided": self.two_sided}
+        rec = {"method": method_record(self.method), "two_sided": self.two_sided}
+        if self.remainder:
+            rec.update(remainder=True, up=repr(self.up))
+        return rec
 
     def __call__(self, scene, rows):
+        if self.remainder:
+            out = []
+            for i in rows:
+                F, sky, ground = _remainder_row(scene, scene.centroids[i], scene.normals[i],
+                                                self.method, self.two_sided, False, self.up)
+                out.append((F, np.array([sky, ground])))
+            return out
         return [self.method.point_form_factors(scene, scene.centroids[i], scene.normals[i],
                                                two_sided=self.two_sided) for i in rows]
 
@@ -151,6 +233,8 @@ class AreaRows:
     """
 
     outputs = 2
+    suffixes = ("error",)
+    widths = (None,)
 
     def __init__(self, tolerance, shortcuts=True, stats=None, rtol=None, strict=False):
         self.tolerance, self.rtol, self.shortcuts = tolerance, rtol, bool(shortcuts)
@@ -318,7 +402,8 @@ def form_factor_matrix(scene: Scene, *, method: str | FormFactorMethod = "exact"
                        rows: ArrayLike | None = None, two_sided: bool = False, executor=None,
                        jobs: int | None = None, progress: bool = False,
                        out: str | os.PathLike | None = None, sparse: bool = False,
-                       chunk_rows: int | None = None, **options):
+                       chunk_rows: int | None = None, remainder: bool = False,
+                       up: ArrayLike | None = None, **options):
     """The form-factor matrix of a scene, row ``i`` from the centroid of polygon ``i``.
 
     As in the paper (and the hemicube), the coefficient ``F[i, j]`` is the form factor
@@ -360,13 +445,21 @@ def form_factor_matrix(scene: Scene, *, method: str | FormFactorMethod = "exact"
         Rows per block (default: 16 serially; with workers about four blocks per
         worker, at most 64 rows; a ``.zarr`` store's chunks: about 2**21 values, at most
         64 rows).
+    remainder : bool, default False
+        Also return each row's uncovered remainder, ``R`` of shape (len(rows), 2): the
+        sky (column 0) and the ground (column 1), as :func:`form_factors` with
+        ``remainder=True`` (the matrix's values are then the sums of the polygons'
+        parts). With ``out``, ``R`` is written beside it to ``STEM.remainder.npy``.
+    up : array_like of shape (3,), optional
+        The up direction of ``remainder`` (default +z).
     **options
         Passed to the method's constructor when ``method`` is a name.
 
     Returns
     -------
     ndarray, zarr.Array or scipy.sparse.csr_array of shape (len(rows), len(scene))
-        A memory map for ``.npy``, the store for ``.zarr``, CSR when ``sparse``.
+        A memory map for ``.npy``, the store for ``.zarr``, CSR when ``sparse``;
+        with ``remainder=True`` the pair ``(M, R)``.
 
     Raises
     ------
@@ -382,19 +475,29 @@ def form_factor_matrix(scene: Scene, *, method: str | FormFactorMethod = "exact"
     >>> S = ef.form_factor_matrix(ef.scenes.subdivided_box(2), sparse=True)
     >>> bool(np.array_equal(S.toarray(), M)), S.nnz < M.size
     (True, True)
+    >>> M, R = ef.form_factor_matrix(ef.scenes.subdivided_box(2), remainder=True)
+    >>> R.shape, float(np.abs(R).max())      # a closed box: no sky, no ground
+    ((24, 2), 0.0)
     """
     m = resolve(method, **options)
     scene = as_scene(scene)
     rows = row_indices(rows, len(scene))
-    return run_rows(scene, rows, PointRows(m, two_sided), executor=executor, jobs=jobs,
-                    progress=progress, out=out, sparse=sparse, chunk_rows=chunk_rows,
-                    desc="form factors")[0]
+    if up is not None and not remainder:
+        raise ValueError("up= is the up direction of remainder=True: give remainder=True "
+                         "too, or leave up out")
+    if up is not None:
+        as_normal(up, "up")
+    got = run_rows(scene, rows, PointRows(m, two_sided, remainder, up), executor=executor,
+                   jobs=jobs, progress=progress, out=out, sparse=sparse,
+                   chunk_rows=chunk_rows, desc="form factors")
+    return (got[0], got[1]) if remainder else got[0]
 
 
-def _error_path(out):
-    """Where the error estimates of an output go: ``STEM.error.SUFFIX`` beside it."""
+def _beside_path(out, what, suffix=None):
+    """Where a second output goes: ``STEM.WHAT.SUFFIX`` beside ``out`` (the error
+    estimates: ``STEM.error.SUFFIX``; the remainder: ``STEM.remainder.npy``)."""
     out = os.fspath(out)
-    return path_stem(out) + ".error" + path_suffix(out)
+    return path_stem(out) + "." + what + (path_suffix(out) if suffix is None else suffix)
 
 
 def run_rows(scene, rows, computation, *, executor=None, jobs=None, progress=False, out=None,
@@ -405,7 +508,9 @@ def run_rows(scene, rows, computation, *, executor=None, jobs=None, progress=Fal
     resumed from it, dense or sparse, with a progress bar.
 
     Returns a list with one matrix per output of the computation (values, and error
-    estimates for :class:`AreaRows`; those go to ``STEM.error.SUFFIX`` beside ``out``).
+    estimates for :class:`AreaRows`, which go to ``STEM.error.SUFFIX`` beside ``out``;
+    sky and ground for :class:`PointRows` with ``remainder``, to
+    ``STEM.remainder.npy``).
     The arguments are described in :func:`form_factor_matrix`.
 
     Examples
@@ -441,9 +546,16 @@ def run_rows(scene, rows, computation, *, executor=None, jobs=None, progress=Fal
     else:
         step = 16
     meta = dict(computation.record(), scene=fingerprint(scene, rows))
-    paths = [out] + [None if out is None else _error_path(out)] * (computation.outputs - 1)
-    results = [MatrixOutput((len(rows), n), sparse=sparse, out=path, meta=meta, block=step)
-               for path in paths]
+    # second outputs beside the first: as wide as the scene (the error estimates, in the
+    # same format) or narrower (the remainder's sky and ground: dense, STEM.WHAT.npy)
+    results = [MatrixOutput((len(rows), n), sparse=sparse, out=out, meta=meta, block=step)]
+    for what, width in zip(getattr(computation, "suffixes", ()),
+                           getattr(computation, "widths", ())):
+        narrow = width is not None
+        path = None if out is None else _beside_path(out, what, ".npy" if narrow else None)
+        results.append(MatrixOutput((len(rows), width if narrow else n),
+                                    sparse=sparse and not narrow, out=path, meta=meta,
+                                    block=step))
     done = np.logical_and.reduce([r.done for r in results])
     # blocks of positions aligned to ``step`` (a chunked store's chunks), unfinished rows only
     blocks = [b[~done[b]] for b in np.array_split(
@@ -492,7 +604,7 @@ def run_rows(scene, rows, computation, *, executor=None, jobs=None, progress=Fal
 
 def area_form_factors(scene, rows=None, *, tolerance=1e-9, error=False, executor=None,
                       jobs=None, progress=False, out=None, sparse=False, chunk_rows=None,
-                      rtol=None, shortcuts=True, stats=None):
+                      rtol=None, shortcuts=True, stats=None, combine=False):
     """Area-to-area form factors with occlusion (the paper's Eq. 1), each within a
     requested **absolute** tolerance (or, with ``rtol``, a share of the value).
 
@@ -543,11 +655,26 @@ def area_form_factors(scene, rows=None, *, tolerance=1e-9, error=False, executor
         ``culled_events``, ``engine_fallbacks`` and ``engine_fallback_points`` (hidden
         parts the engine computed where GEOS failed), ``occluded_pairs`` and
         ``point_values``. Every shortcut's counter is 0 with ``shortcuts=False``.
+    combine : bool, default False
+        The matrix View3D prints for a scene read from a ``.vs3`` file
+        (:func:`exactff.read_vs3`; :mod:`exactff.combine`): one row and column per
+        surface View3D reports (:func:`exactff.combined_surfaces`: combined surfaces
+        merged by area weighting, subsurfaces separated from their bases, null
+        surfaces taken from their bases, masks seen only by their bases, obstructions
+        left out), from the exact factors of the polygons (those with subsurfaces, masks
+        or null surfaces on them cut into convex pieces around them). ``rows`` are then
+        those surfaces; without ``rows``, the file's ``row`` control value (when set)
+        selects that surface's row, as View3D computes only it. With the file's
+        ``encl=1`` a row that does not sum to 1 within its estimates warns (the values
+        are not normalised: they need not be). The estimates add up the polygons'. A
+        scene without View3D data gives the same matrix as ``combine=False``. Not with
+        ``out`` or ``sparse``.
 
     Returns
     -------
     ndarray of shape (len(rows), len(scene)), or a pair of them with ``error=True``
-        (CSR arrays with ``sparse=True``, memory maps or stores with ``out``)
+        (CSR arrays with ``sparse=True``, memory maps or stores with ``out``); with
+        ``combine``, of shape (len(rows), len(combined_surfaces(scene)))
 
     Raises
     ------
@@ -586,13 +713,62 @@ def area_form_factors(scene, rows=None, *, tolerance=1e-9, error=False, executor
     (0.03140269, True)
     """
     scene = as_scene(scene)
-    rows = row_indices(rows, len(scene))
     check_tolerance(tolerance, allow_none=False)
     check_tolerance(rtol, "rtol")
     if stats is not None and not isinstance(stats, dict):
         raise ValueError(f"stats must be a dict or None, got {type(stats).__name__}")
+    if combine:
+        return _combined_area_form_factors(
+            scene, rows, error=error, tolerance=tolerance, executor=executor, jobs=jobs,
+            progress=progress, out=out, sparse=sparse, chunk_rows=chunk_rows, rtol=rtol,
+            shortcuts=shortcuts, stats=stats)
+    rows = row_indices(rows, len(scene))
     F, E = run_rows(scene, rows, AreaRows(tolerance, shortcuts, stats, rtol, strict=not error),
                     executor=executor, jobs=jobs,
                     progress=progress, out=out, sparse=sparse, chunk_rows=chunk_rows,
                     desc="area form factors")
+    return (F, E) if error else F
+
+
+def _combined_area_form_factors(scene, rows, *, error, tolerance, out, sparse, **options):
+    """``area_form_factors(..., combine=True)``: the area rows of the polygons of
+    :func:`exactff.combined_surfaces`, reduced to the surfaces."""
+    import warnings
+
+    from .combine import combined_surfaces
+
+    if out is not None or sparse:
+        raise ValueError("combine=True: not with out= or sparse= (the matrix of the "
+                         "surfaces is computed in memory)")
+    surfaces = combined_surfaces(scene)
+    control = scene.metadata.get("view3d", {}).get("control", {})
+    if rows is None and control.get("row"):
+        numbers = {num: k for k, num in enumerate(surfaces.numbers)}
+        v3 = scene.metadata["view3d"]
+        s = v3["surfaces"][control["row"] - 1]
+        num = s["cmb"] or s["number"]
+        if num not in numbers:
+            raise ValueError(f"control row={control['row']}: surface {control['row']} is a "
+                             f"null surface (no row)")
+        rows = [numbers[num]]
+    rows = row_indices(rows, len(surfaces))
+    raw = surfaces.rows_needed(rows)
+    comp = surfaces.scene
+    if len(raw):
+        F, E = run_rows(comp, raw, AreaRows(tolerance, options.pop("shortcuts"),
+                                            options.pop("stats"), options.pop("rtol")),
+                        desc="area form factors", **options)
+    else:
+        F = E = np.zeros((0, len(comp)))
+    F, E = surfaces.reduce(rows, raw, F, E)
+    if control.get("encl") and len(rows) == len(surfaces):
+        sums = F.sum(axis=1)
+        slack = E.sum(axis=1) + 64 * tol.EPS * len(surfaces)
+        bad = np.flatnonzero(np.abs(sums - 1.0) > slack)
+        if len(bad):
+            i = int(bad[np.argmax(np.abs(sums[bad] - 1.0))])
+            warnings.warn(f"{scene.metadata['view3d'].get('source', 'the scene')}: encl=1 (the "
+                          f"surfaces form an enclosure) but {len(bad)} rows do not sum to 1 "
+                          f"within their estimates; surface {surfaces.numbers[i]} "
+                          f"({surfaces.names[i]}): {sums[i]:.12g}", stacklevel=3)
     return (F, E) if error else F

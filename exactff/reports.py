@@ -2,8 +2,10 @@
 
 from __future__ import annotations
 
+import math
 import os
 import time
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -15,7 +17,7 @@ from .rings import successors
 from .scene import Scene
 from .visibility import plane_overlaps
 
-__all__ = ["compare", "to_markdown", "describe"]
+__all__ = ["compare", "to_markdown", "describe", "check_matrix", "MatrixReport"]
 
 
 def _takes_samples(name):
@@ -231,8 +233,11 @@ def describe(scene: Scene) -> dict:
         tie; ``docs/explanation/conventions.md``), ``split_faces`` (faces of
         the file that were not planar and were cut into triangles when it was read
         with ``nonplanar="split"``; 0 otherwise), ``dropped_faces`` (degenerate faces
-        of the file left out when it was read with ``degenerate="drop"``; 0 otherwise)
-        and ``dropped_reasons`` (how many for each reason, a dict).
+        of the file left out when it was read with ``degenerate="drop"``; 0 otherwise),
+        ``dropped_reasons`` (how many for each reason, a dict) and
+        ``skipped_primitives`` (the file's objects that are not polygons and were not
+        read, counted by kind, a dict: ``{"sphere": 1}`` for a Radiance scene with one
+        sphere; empty otherwise).
 
     Examples
     --------
@@ -263,4 +268,416 @@ def describe(scene: Scene) -> dict:
         "split_faces": scene.split_faces,
         "dropped_faces": scene.dropped_faces,
         "dropped_reasons": dict(scene.dropped_reasons),
+        "skipped_primitives": dict(scene.skipped_primitives),
     }
+
+
+# ---------------------------------------------------------------------------------------
+# the invariants of a matrix: check_matrix and its report
+# ---------------------------------------------------------------------------------------
+#: rows of a dense matrix (or memory map, or chunked store) read at a time
+_BLOCK_VALUES = 2 ** 22
+#: rows and pairs a report's text names before it says how many more
+_NAMED = 10
+
+
+@dataclass
+class MatrixReport:
+    """The invariants of a form-factor matrix: what :func:`check_matrix` returns.
+
+    ``str(report)`` is a summary that names the rows and pairs that miss an invariant;
+    :meth:`to_dict` gives the same as plain values (JSON).
+
+    Attributes
+    ----------
+    shape : (int, int)
+        The matrix's shape (R, N).
+    sparse : bool
+    rows : ndarray of shape (R,)
+        The scene's polygon of each row (for reciprocity and the unobstructed rows).
+    sums : ndarray of shape (R,)
+        Row sums, with the remainder (sky and ground) when it was given.
+    deficits : ndarray of shape (R,)
+        ``1 - sums``.
+    judged : str or None
+        Why the rows should sum to 1 (``"remainder"``, ``"closed scene"``,
+        ``"closed=True"``), or None when they need not (an open scene without its
+        remainder): then no row misses.
+    row_bounds : ndarray of shape (R,)
+        What each row's sum may miss 1 by: the sum of its error estimates (and the
+        remainder's) plus rounding, or ``MATRIX_ROW_SUM_ATOL`` without estimates.
+    rows_missing : list of int
+        Rows (named by their polygon, from ``rows``) that miss 1 beyond their bound, or
+        hold a NaN, a value below 0 or above 1 beyond its estimate. Every ``(row,
+        column)`` of the report names the row the same way.
+    negatives, nans, above_one : int
+        How many values are below 0, NaN, above 1 (beyond their estimates, when given).
+    min_value, max_value : float
+        Over the non-NaN values (0 for a sparse matrix's implicit zeros included).
+    reciprocity : float or None
+        ``max |A_i F_ij - A_j F_ji|`` (a scene given and the matrix square over it),
+        with ``reciprocity_pair`` its ``(i, j)``.
+    area : bool
+        Whether the matrix is area-to-area (then reciprocity is judged: pairs beyond
+        ``A_i E_ij + A_j E_ji`` plus rounding, or ``MATRIX_RECIPROCITY_RTOL`` of the
+        larger product without estimates, are in ``pairs_missing``).
+    pairs_missing : list of (int, int)
+    max_error : float or None
+        The largest error estimate, with ``max_error_at`` its ``(row, column)``.
+    obstructed_excess : float or None
+        ``max (F_ij - U_ij)`` over the unobstructed matrix ``U`` (0 or less when no
+        obstructed value exceeds its unobstructed one), with ``excess_at``;
+        ``excess_missing`` the ``(row, column)`` beyond the estimates (without them,
+        ``MATRIX_ROW_SUM_ATOL``) plus rounding.
+    """
+
+    shape: tuple
+    sparse: bool
+    rows: np.ndarray
+    sums: np.ndarray
+    deficits: np.ndarray
+    judged: str | None
+    row_bounds: np.ndarray
+    rows_missing: list
+    negatives: int
+    nans: int
+    above_one: int
+    min_value: float
+    max_value: float
+    reciprocity: float | None = None
+    reciprocity_pair: tuple | None = None
+    area: bool = False
+    pairs_missing: list = field(default_factory=list)
+    max_error: float | None = None
+    max_error_at: tuple | None = None
+    obstructed_excess: float | None = None
+    excess_at: tuple | None = None
+    excess_missing: list = field(default_factory=list)
+
+    @property
+    def ok(self):
+        """True when no row, pair or value misses an invariant."""
+        return not (self.rows_missing or self.pairs_missing or self.excess_missing)
+
+    def to_dict(self):
+        """The report as plain values (lists, floats, None), for JSON."""
+        out = {}
+        for k in self.__dataclass_fields__:
+            v = getattr(self, k)
+            if isinstance(v, np.ndarray):
+                v = v.tolist()
+            elif isinstance(v, tuple):
+                v = [int(x) for x in v]
+            elif isinstance(v, list):
+                v = [[int(x) for x in e] if isinstance(e, tuple) else int(e) for e in v]
+            elif isinstance(v, (np.floating, np.integer, np.bool_)):
+                v = v.item()
+            out[k] = v
+        out["ok"] = self.ok
+        return out
+
+    def __str__(self):
+        R, N = self.shape
+        named = lambda xs: ", ".join(map(str, xs[:_NAMED])) + (
+            f" and {len(xs) - _NAMED} more" if len(xs) > _NAMED else "")
+        lines = [f"matrix           {R} x {N} ({'sparse' if self.sparse else 'dense'})"]
+        if R:
+            w = int(np.nanargmax(np.abs(self.deficits))) if np.any(np.isfinite(self.deficits)) else 0
+            lines.append(f"row sums         min {np.nanmin(self.sums):.15f}  max "
+                         f"{np.nanmax(self.sums):.15f}" if np.any(np.isfinite(self.sums))
+                         else "row sums         all NaN")
+            why = (f"should be 1 ({self.judged})" if self.judged else
+                   "need not be 1 (an open scene: give its remainder, or closed=True)")
+            lines.append(f"                 largest deficit {self.deficits[w]:.3g} (row "
+                         f"{self.rows[w]}); {why}")
+        lines.append(f"values           {self.negatives} below 0, {self.nans} NaN, "
+                     f"{self.above_one} above 1 (min {self.min_value:.3g}, max "
+                     f"{self.max_value:.3g})")
+        if self.reciprocity is not None:
+            i, j = self.reciprocity_pair
+            judged = "" if self.area else "; not judged (point rows; area=True if areas)"
+            lines.append(f"reciprocity      max |A_i F_ij - A_j F_ji| = {self.reciprocity:.3g} "
+                         f"(pair {i}, {j}){judged}")
+        if self.max_error is not None:
+            lines.append(f"error estimates  largest {self.max_error:.3g} (row "
+                         f"{self.max_error_at[0]}, column {self.max_error_at[1]})")
+        if self.obstructed_excess is not None:
+            lines.append(f"obstructed       max excess over unobstructed "
+                         f"{max(self.obstructed_excess, 0.0):.3g}"
+                         + (f" (row {self.excess_at[0]}, column {self.excess_at[1]})"
+                            if self.obstructed_excess > 0 else ""))
+        if self.ok:
+            lines.append("invariants       every row, pair and value within its bound")
+        else:
+            if self.rows_missing:
+                lines.append(f"MISSED           {len(self.rows_missing)} rows: "
+                             f"{named(self.rows_missing)}")
+            if self.pairs_missing:
+                lines.append(f"MISSED           {len(self.pairs_missing)} pairs "
+                             f"(reciprocity): {named(self.pairs_missing)}")
+            if self.excess_missing:
+                lines.append(f"MISSED           {len(self.excess_missing)} values above "
+                             f"their unobstructed value: {named(self.excess_missing)}")
+        return "\n".join(lines)
+
+
+def _dense(M, a, b):
+    import scipy.sparse as sp
+
+    return M[a:b].toarray() if sp.issparse(M) else np.asarray(M[a:b], dtype=float)
+
+
+def _is_closed(scene):
+    """Closed as ``exactff info`` says it: the vector area ``|sum A n|`` within
+    ``CLOSED_RESIDUAL`` of the total area (T-junctions allowed: a block standing on a
+    floor leaves edges unpaired in a closed room)."""
+    vector_area = (scene.normals * scene.areas[:, None]).sum(axis=0)
+    return np.linalg.norm(vector_area) / scene.areas.sum() <= tol.CLOSED_RESIDUAL
+
+
+def _unobstructed_rows(scene, rows):
+    from .kernel import point_polygon_form_factors
+
+    return np.array([point_polygon_form_factors(scene.centroids[i], scene.normals[i], scene)
+                     for i in rows])
+
+
+def check_matrix(F, scene: Scene | None = None, E=None, *, remainder=None,
+                 remainder_error=None, rows=None, closed: bool | None = None,
+                 area: bool = False, unobstructed=None) -> MatrixReport:
+    """Check a form-factor matrix's invariants: row sums, reciprocity, signs, bounds.
+
+    Works on any matrix, however computed (a user's hemicube matrix, View3D's), dense
+    (ndarray, memory map, zarr array: read in blocks) or ``scipy.sparse``.
+
+    Parameters
+    ----------
+    F : array_like or scipy.sparse matrix of shape (R, N)
+        ``F[i, j]`` = F(row i -> polygon j).
+    scene : Scene, optional
+        The scene (N polygons): its areas for reciprocity, whether it is closed.
+    E : array_like or scipy.sparse matrix of shape (R, N), optional
+        Error estimates of ``F`` (``|F - exact| <= E``): rows and pairs are then judged
+        against them, and the largest is reported.
+    remainder : array_like of shape (R, 2) or (R,), optional
+        Each row's uncovered remainder (sky and ground, from
+        :func:`exactff.form_factors` or :func:`exactff.form_factor_matrix` with
+        ``remainder=True``): the rows then sum to 1 with it, in any scene.
+    remainder_error : array_like of the same shape, optional
+        Bounds on the remainder.
+    rows : sequence of int, optional
+        The scene's polygon of each row (default ``0 .. R-1``).
+    closed : bool, optional
+        Whether the rows should sum to 1 without a remainder. Default: when a scene is
+        given, whether it is closed as ``exactff info`` says (no vector area; an open
+        tube has none either: say ``closed=False``); without one, not judged.
+    area : bool, default False
+        ``F`` is an area-to-area matrix (:func:`exactff.area_form_factors`, View3D, a
+        radiosity code's): reciprocity ``A_i F_ij = A_j F_ji`` is then judged. Point
+        rows from centroids (:func:`exactff.form_factor_matrix`) are not reciprocal:
+        their defect is reported, not judged.
+    unobstructed : array_like, scipy.sparse matrix or "points", optional
+        The same matrix without occlusion, or ``"points"`` to compute it here
+        (unoccluded point rows from the rows' centroids, cheap): the largest excess of
+        ``F`` over it is reported, and values beyond it (with ``E`` and rounding) miss.
+
+    Returns
+    -------
+    MatrixReport
+
+    Raises
+    ------
+    ValueError
+        A shape that does not match (the message names the argument).
+
+    Notes
+    -----
+    Bounds: a row's sum ``1 +- (sum_j E_ij + remainder_error + rounding)``, the
+    rounding being ``MATRIX_ROUNDING_ULPS`` units of roundoff per value summed; without
+    ``E`` the row-sum target ``MATRIX_ROW_SUM_ATOL``. A pair: ``|A_i F_ij - A_j F_ji|
+    <= A_i E_ij + A_j E_ji`` plus rounding; without ``E``, ``MATRIX_RECIPROCITY_RTOL`` of
+    the larger product. A value: ``-E <= F <= 1 + E``, NaN never.
+
+    Examples
+    --------
+    A coarse hemicube's rows miss 1 in a closed box; the exact rows do not:
+
+    >>> import exactff as ef
+    >>> box = ef.scenes.subdivided_box(2)
+    >>> report = check_matrix(ef.form_factor_matrix(box, method="hemicube", resolution=8), box)
+    >>> report.ok, len(report.rows_missing), report.judged
+    (False, 24, 'closed scene')
+    >>> check_matrix(ef.form_factor_matrix(box), box).ok
+    True
+    >>> print(check_matrix([[0.5, 0.6], [0.2, 0.8]], closed=True))  # doctest: +NORMALIZE_WHITESPACE
+    matrix           2 x 2 (dense)
+    row sums         min 1.000000000000000  max 1.100000000000000
+                     largest deficit -0.1 (row 0); should be 1 (closed=True)
+    values           0 below 0, 0 NaN, 0 above 1 (min 0.2, max 0.8)
+    MISSED           1 rows: 0
+    """
+    import scipy.sparse as sp
+
+    sparse = sp.issparse(F)
+    if not sparse and not hasattr(F, "shape"):
+        F = np.asarray(F, dtype=float)
+    if len(F.shape) != 2:
+        raise ValueError(f"F must be a matrix (R, N), got shape {F.shape}")
+    R, N = (int(s) for s in F.shape)
+    if scene is not None and N != len(scene):
+        raise ValueError(f"F has {N} columns but the scene has {len(scene)} polygons")
+    rows = np.arange(R) if rows is None else np.asarray(rows, dtype=int).reshape(-1)
+    if rows.shape != (R,):
+        raise ValueError(f"rows must have one entry per row of F ({R}), got {rows.shape}")
+    if E is not None:
+        if not sp.issparse(E) and not hasattr(E, "shape"):
+            E = np.asarray(E, dtype=float)
+        if tuple(E.shape) != (R, N):
+            raise ValueError(f"E must have the shape of F {(R, N)}, got {tuple(E.shape)}")
+    extra = np.zeros(R)
+    extra_bound = np.zeros(R)
+    if remainder is not None:
+        rem = np.asarray(remainder, dtype=float)
+        if rem.shape not in ((R,), (R, 2)):
+            raise ValueError(f"remainder must have shape ({R}, 2) or ({R},), got {rem.shape}")
+        extra = rem.reshape(R, -1).sum(axis=1)
+        if remainder_error is not None:
+            re = np.asarray(remainder_error, dtype=float)
+            if re.shape != rem.shape:
+                raise ValueError(f"remainder_error must have the shape of remainder "
+                                 f"{rem.shape}, got {re.shape}")
+            extra_bound = re.reshape(R, -1).sum(axis=1)
+    if isinstance(unobstructed, str):
+        if unobstructed != "points":
+            raise ValueError(f"unobstructed must be a matrix or 'points', got {unobstructed!r}")
+        if scene is None:
+            raise ValueError("unobstructed='points' needs the scene")
+        unobstructed = _unobstructed_rows(scene, rows)
+    if unobstructed is not None:
+        if not sp.issparse(unobstructed) and not hasattr(unobstructed, "shape"):
+            unobstructed = np.asarray(unobstructed, dtype=float)
+        if tuple(unobstructed.shape) != (R, N):
+            raise ValueError(f"unobstructed must have the shape of F {(R, N)}, got "
+                             f"{tuple(unobstructed.shape)}")
+    if closed is not None:
+        judged = "closed=True" if closed else None
+    elif remainder is not None:
+        judged = None
+    else:
+        judged = "closed scene" if scene is not None and _is_closed(scene) else None
+    if remainder is not None:
+        judged = "remainder"
+
+    # one pass over the rows: sums, values, estimates, the unobstructed excess
+    sums = np.zeros(R)
+    abs_sums = np.zeros(R)
+    e_sums = np.zeros(R)
+    bad_rows = set()
+    negatives = nans = above = 0
+    vmin, vmax = math.inf, -math.inf
+    emax, emax_at = -math.inf, None
+    excess, excess_at, excess_missing = -math.inf, None, []
+    for a, b, Fb in ((a, b, _dense(F, a, b)) for a, b in _row_ranges(R, N)):
+        Eb = np.zeros_like(Fb) if E is None else _dense(E, a, b)
+        isnan = np.isnan(Fb)
+        nans += int(isnan.sum())
+        neg = Fb < -Eb
+        big = Fb > 1 + Eb
+        negatives += int(neg.sum())
+        above += int(big.sum())
+        for r in np.flatnonzero(isnan.any(axis=1) | neg.any(axis=1) | big.any(axis=1)):
+            bad_rows.add(a + int(r))
+        if (~isnan).any():
+            vmin = min(vmin, float(np.nanmin(Fb)))
+            vmax = max(vmax, float(np.nanmax(Fb)))
+        sums[a:b] = Fb.sum(axis=1)
+        abs_sums[a:b] = np.abs(np.nan_to_num(Fb)).sum(axis=1)
+        e_sums[a:b] = Eb.sum(axis=1)
+        if E is not None and Eb.size:
+            k = int(np.argmax(Eb))
+            if Eb.flat[k] > emax:
+                emax, emax_at = float(Eb.flat[k]), (a + k // N, k % N)
+        if unobstructed is not None and Fb.size:
+            Ub = _dense(unobstructed, a, b)
+            D = Fb - Ub
+            k = int(np.nanargmax(D)) if np.any(np.isfinite(D)) else 0
+            if D.flat[k] > excess:
+                excess, excess_at = float(D.flat[k]), (a + k // N, k % N)
+            room = ((Eb if E is not None else tol.MATRIX_ROW_SUM_ATOL)
+                    + tol.MATRIX_ROUNDING_ULPS * tol.EPS * np.abs(Ub))
+            for r, c in zip(*np.nonzero(D > room)):
+                excess_missing.append((a + int(r), int(c)))
+    sums = sums + extra
+    deficits = 1.0 - sums
+    rounding = tol.MATRIX_ROUNDING_ULPS * tol.EPS * (N + 2) * (abs_sums + np.abs(extra))
+    if E is None and remainder_error is None:
+        row_bounds = np.full(R, tol.MATRIX_ROW_SUM_ATOL) + rounding
+    else:
+        row_bounds = e_sums + extra_bound + rounding
+    if judged is not None:
+        bad_rows.update(int(r) for r in np.flatnonzero(~(np.abs(deficits) <= row_bounds)))
+    # rows named by their polygon (``rows``), as everywhere in the report
+    label = lambda k: int(rows[k])
+    rows_missing = sorted(label(k) for k in bad_rows)
+    excess_missing = [(label(k), c) for k, c in excess_missing]
+    emax_at = None if emax_at is None else (label(emax_at[0]), emax_at[1])
+    excess_at = None if excess_at is None else (label(excess_at[0]), excess_at[1])
+
+    report = MatrixReport(
+        shape=(R, N), sparse=sparse, rows=rows, sums=sums, deficits=deficits, judged=judged,
+        row_bounds=row_bounds, rows_missing=rows_missing, negatives=negatives, nans=nans,
+        above_one=above, min_value=float(vmin) if math.isfinite(vmin) else math.nan,
+        max_value=float(vmax) if math.isfinite(vmax) else math.nan,
+        max_error=None if E is None else float(max(emax, 0.0)),
+        max_error_at=None if E is None else (emax_at or (0, 0)), area=bool(area),
+        obstructed_excess=None if unobstructed is None else float(excess),
+        excess_at=None if unobstructed is None else (excess_at or (0, 0)),
+        excess_missing=excess_missing)
+    if scene is not None and R == N and np.array_equal(rows, np.arange(N)):
+        _reciprocity(report, F, E, scene.areas, area)
+    return report
+
+
+def _row_ranges(R, N):
+    step = max(1, _BLOCK_VALUES // max(N, 1))
+    return [(a, min(a + step, R)) for a in range(0, R, step)]
+
+
+def _reciprocity(report, F, E, A, area):
+    """Fill in the reciprocity defect of a square matrix, block against block, and the
+    pairs that miss it (judged when ``area``)."""
+    N = len(A)
+    worst, at, missing = -1.0, (0, 0), []
+    for a, b in _row_ranges(N, N):
+        G = A[a:b, None] * _dense(F, a, b)                     # A_i F_ij, rows a:b
+        cols = _columns(F, a, b)                                # F[:, a:b]
+        H = (A[:, None] * cols).T                               # A_j F_ji, as [i - a, j]
+        D = np.abs(G - H)
+        if E is not None:
+            room = A[a:b, None] * _dense(E, a, b) + (A[:, None] * _columns(E, a, b)).T
+        else:
+            room = tol.MATRIX_RECIPROCITY_RTOL * np.maximum(np.abs(G), np.abs(H))
+        room = room + tol.MATRIX_ROUNDING_ULPS * tol.EPS * (np.abs(G) + np.abs(H))
+        if D.size and np.any(np.isfinite(D)):
+            k = int(np.nanargmax(D))
+            if D.flat[k] > worst:
+                worst, at = float(D.flat[k]), (a + k // N, k % N)
+        if area:
+            for r, c in zip(*np.nonzero(~(D <= room))):
+                i, j = a + int(r), int(c)
+                if i < j or not (a <= j < b):        # each pair once
+                    missing.append((min(i, j), max(i, j)))
+    report.reciprocity = max(worst, 0.0)
+    report.reciprocity_pair = at
+    report.pairs_missing = sorted(set(missing))
+
+
+def _columns(M, a, b):
+    """``M[:, a:b]`` as a dense array (read in row blocks for a dense store)."""
+    import scipy.sparse as sp
+
+    if sp.issparse(M):
+        return sp.csc_array(M)[:, a:b].toarray()
+    R, N = M.shape
+    return np.concatenate([np.asarray(M[c:d, a:b], dtype=float) for c, d in _row_ranges(R, N)]
+                          or [np.zeros((0, b - a))])

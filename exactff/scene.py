@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import json
+
 import numpy as np
 from numpy.typing import ArrayLike
 import shapely
@@ -261,6 +263,16 @@ class Scene:
     dropped_reasons : tuple of (str, int)
         How many of them were left out for each reason (``"fewer than 3 vertices"``,
         ``"fewer than 3 distinct vertices"``, ``"zero area"``); empty if none.
+    metadata : dict
+        What the source file says beyond the polygons (JSON data; a fresh copy at each
+        access, so the scene stays immutable): ``metadata["view3d"]`` for a View3D
+        file (:func:`exactff.read_vs3`: title, control values, surface kinds,
+        subsurfaces and combined surfaces); empty otherwise. Kept when the scene is
+        pickled; :meth:`with_metadata` gives a scene with other metadata.
+    skipped_primitives : tuple of (str, int)
+        Objects of the source file that are not polygons and were not read, counted by
+        kind (a Radiance ``sphere``, an EnergyPlus ``FenestrationSurface:Detailed``),
+        in the order first met; empty if none. Kept when the scene is pickled.
 
     Notes
     -----
@@ -270,10 +282,12 @@ class Scene:
 
     __slots__ = ("polygons", "normals", "areas", "centroids", "offsets", "vertices",
                  "names", "groups", "materials", "split_faces", "dropped_faces",
-                 "dropped_reasons", "__weakref__")
+                 "dropped_reasons", "_metadata", "skipped_primitives", "__weakref__")
 
     def __init__(self, polygons, names=None, groups=None, materials=None,
-                 planarity_rtol=tol.PLANARITY_RTOL, split_faces=0, dropped=(), _validated=False):
+                 planarity_rtol=tol.PLANARITY_RTOL, split_faces=0, dropped=(), metadata=None,
+                 skipped=(),
+                 _validated=False):
         n = len(polygons)
         labels = {}
         for key, val in (("names", names), ("groups", groups), ("materials", materials)):
@@ -314,6 +328,8 @@ class Scene:
         set_(self, "split_faces", int(split_faces))
         set_(self, "dropped_reasons", tuple((str(r), int(c)) for r, c in dropped))
         set_(self, "dropped_faces", sum(c for _, c in self.dropped_reasons))
+        set_(self, "_metadata", _metadata_text(metadata))
+        set_(self, "skipped_primitives", tuple((str(k), int(c)) for k, c in skipped))
 
     def __setattr__(self, key, value):
         raise AttributeError("Scene is immutable")
@@ -359,6 +375,30 @@ class Scene:
         """
         return cls(list(polygons), names=names, groups=groups, materials=materials,
                    planarity_rtol=planarity_rtol)
+
+    @property
+    def metadata(self):
+        """What the source file says beyond the polygons (a copy: see the class)."""
+        return json.loads(self._metadata) if self._metadata else {}
+
+    def with_metadata(self, metadata) -> "Scene":
+        """The same polygons (shared, not validated again) with other ``metadata``.
+
+        Parameters
+        ----------
+        metadata : dict or None
+            JSON data (str keys; lists, numbers, str, bool, None); None for none.
+
+        Examples
+        --------
+        >>> s = Scene.from_polygons([[[0, 0, 0], [1, 0, 0], [0, 1, 0]]])
+        >>> t = s.with_metadata({"note": [1, 2]})
+        >>> t.metadata, s.metadata, t.polygons[0] is s.polygons[0]
+        ({'note': [1, 2]}, {}, True)
+        """
+        state = {k: getattr(self, k) for k in self.__slots__ if k != "__weakref__"}
+        state["_metadata"] = _metadata_text(metadata)
+        return _restore_scene(state)
 
     def __len__(self):
         return len(self.polygons)
@@ -421,6 +461,18 @@ class Scene:
     def plane_offsets(self):
         """``normals[i] @ centroids[i]``: the plane of polygon i is ``n @ x = d``."""
         return np.einsum("ij,ij->i", self.normals, self.centroids)
+
+
+def _metadata_text(metadata):
+    """``metadata`` as canonical JSON text (None for none): checked to be JSON data."""
+    if metadata is None or metadata == {}:
+        return None
+    if not isinstance(metadata, dict):
+        raise TypeError(f"metadata must be a dict or None, got {type(metadata).__name__}")
+    try:
+        return json.dumps(metadata, sort_keys=True, allow_nan=False)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"metadata must be JSON data: {exc}") from None
 
 
 def _restore_scene(state):
@@ -585,7 +637,8 @@ def _file_error(errors, names, groups, sources):
 
 
 def build_scene(faces, *, names=None, groups=None, materials=None, sources=None,
-                nonplanar="error", degenerate="raise", planarity_rtol=tol.PLANARITY_RTOL):
+                nonplanar="error", degenerate="raise", planarity_rtol=tol.PLANARITY_RTOL,
+                face_index=None, skipped=()):
     """A scene from faces read from a file, with errors that name the face.
 
     Every face is validated once, in bulk (:func:`validate_polygons`); only the faces
@@ -614,6 +667,13 @@ def build_scene(faces, *, names=None, groups=None, materials=None, sources=None,
         non-planar (unless split) or self-intersecting faces are broken input, not
         degenerate: they raise either way.
     planarity_rtol : float
+    face_index : list, optional
+        Receives, for each polygon of the scene in order, the index of the face it comes
+        from (a split face gives several polygons, a dropped face none): what a reader
+        needs to carry its own per-face data over to the polygons.
+    skipped : sequence of (str, int), optional
+        The file's objects that are not polygons and were not read, counted by kind
+        (``scene.skipped_primitives``, ``describe(scene)["skipped_primitives"]``).
 
     Raises
     ------
@@ -676,14 +736,19 @@ def build_scene(faces, *, names=None, groups=None, materials=None, sources=None,
         raise _file_error([errors[i] for i in sorted(errors)], names, groups, sources)
     if len(pieces) == 0 and len(dropped) == 0:
         kept = (arrays, names, groups, materials)
+        if face_index is not None:
+            face_index.extend(range(n))
     else:
         kept = ([], [], [], [])
         for i, P in enumerate(arrays):
             for Q in ([P] if P is not None else pieces.get(i, [])):
                 for lst, val in zip(kept, (Q, names[i], groups[i], materials[i])):
                     lst.append(val)
+                if face_index is not None:
+                    face_index.append(i)
     if not kept[0]:
         raise ValueError(f"faces: all {n:,} faces are degenerate and were left out "
                          f"(degenerate='drop'): no polygon remains")
     return Scene(kept[0], names=kept[1], groups=kept[2], materials=kept[3],
-                 split_faces=len(pieces), dropped=tuple(dropped.items()), _validated=True)
+                 split_faces=len(pieces), dropped=tuple(dropped.items()), skipped=skipped,
+                 _validated=True)

@@ -121,7 +121,7 @@ def test_cli_output_without_a_suffix_gets_the_formats_suffix(tmp_path, capsys):
         argv = ["matrix", "box:1", "-o", str(d / "m"), "--no-progress"]
         assert main(argv + (["--sparse"] if sparse else [])) == 0
         assert f"-> {d / written}" in capsys.readouterr().out
-        assert sorted(p.name for p in d.iterdir()) == ["m.meta.json", written]
+        assert sorted(p.name for p in d.iterdir()) == sorted(["m.meta.json", "m.report.json", written])
         M = ef.load_matrix(d / written)
         M = M.toarray() if sp.issparse(M) else np.asarray(M)
         assert np.array_equal(M, ref)

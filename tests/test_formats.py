@@ -412,11 +412,11 @@ def test_vs3_reads_surfaces_and_obstructions(tmp_path):
 
 
 @pytest.mark.parametrize("line,needle", [
-    ("S  3    9  10  11  12   1   0   0.50  sub", "subsurfaces"),
-    ("M  3    9  10  11  12   1   0   0.50  m", "mask"),
-    ("S  3    9  10  11  99   0   0   0.50  x", "vertex 99"),
+    ("S  3    9  10  11  12   5   0   0.50  sub", "base surface 5 does not exist"),
+    ("M  3    9  10  11  12   0   0   0.50  m", "needs a base"),
+    ("S  3    9  10  11  99   0   0   0.50  x", "vertex 99 is not defined"),
     ("S  4    9  10  11  12   0   0   0.50  x", "out of sequence"),
-    ("V 13   0. 0.", "3 finite coordinates"),
+    ("V 13   0. 0.", "vertex 13: coordinate: 'End' (line 21) is not a number"),
     ("Q what", "unknown keyword"),
 ])
 def test_vs3_errors_name_the_line(tmp_path, line, needle):

@@ -24,13 +24,17 @@ OCC_ATOL = 1e-11
 # ---------------------------------------------------------------------------------------
 # independent construction: horizontal layers facing down over a point
 # ---------------------------------------------------------------------------------------
-def layered_reference(p, n, polygons):
+def layered_reference(p, n, polygons, measure=None):
     """Occluded form factors of horizontal polygons facing down, above p, by other means:
     project every polygon centrally onto the plane z = p_z + 1 (a similarity for
     horizontal polygons), resolve visibility nearest first with 2-D boolean operations,
     and integrate each visible region in that plane by mpmath quadrature of its
     boundary (``exactff.testing.mp_reference``, 30 digits; exterior minus holes), not
-    by the kernel the engine uses."""
+    by the kernel the engine uses. ``measure(ring)``, given, replaces the integration
+    of a lifted ring (``n`` is then unused)."""
+    if measure is None:
+        def measure(ring):
+            return float(boundary_form_factor(p, n, ring, one_sided=False, dps=30))
     h = [P[0, 2] - p[2] for P in polygons]
     images = [shapely.Polygon((P[:, :2] - p[:2]) / hk) for P, hk in zip(polygons, h)]
     F = np.zeros(len(polygons))
@@ -45,7 +49,7 @@ def layered_reference(p, n, polygons):
                                                                 for r in part.interiors]
             for r, ring in enumerate(rings):
                 lifted = np.column_stack([ring + p[:2], np.full(len(ring), p[2] + 1.0)])
-                val = float(boundary_form_factor(p, n, lifted, one_sided=False, dps=30))
+                val = measure(lifted)
                 F[k] += val if r == 0 else -val
     return F
 

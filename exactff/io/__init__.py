@@ -1,20 +1,30 @@
 """Reading scenes: Wavefront OBJ (faces kept as polygons), exactff-scene/1 JSON, View3D
-``.vs3``, and the mesh formats of meshio (STL, PLY, OFF, VTK, ...), one module each;
-:func:`load_scene` chooses the reader by extension."""
+``.vs3``, EnergyPlus ``.idf``, Radiance ``.rad``, and the mesh formats of meshio (STL,
+PLY, OFF, VTK, ...), one module each; :func:`load_scene` chooses the reader by
+extension. Writing View3D's input and output files (:mod:`exactff.io.vs3`), and
+matrices for other tools: EnergyPlus, Elmer, OpenFOAM, pandas."""
 
 from __future__ import annotations
 
 import os
 
 from .. import _tolerances as tol
+from .dataframe import to_dataframe
+from .energyplus import read_idf, write_energyplus_view_factors
 from .mesh import MESHIO_EXTENSIONS, read_mesh
 from .obj import read_obj
+from .radiance import read_rad
 from .scene_json import read_scene_json, scene_from_json
-from .vs3 import read_vs3
+from .solvers import write_elmer_view_factors, write_openfoam_view_factors
+from .vs3 import (read_view3d_factors, read_vs3, script_f, write_view3d_factors,
+                  write_vs3)
 from ..scene import Scene
 
 __all__ = ["load_scene", "read_obj", "read_scene_json", "scene_from_json", "read_vs3",
-           "read_mesh", "MESHIO_EXTENSIONS"]
+           "read_idf", "read_rad", "read_mesh", "MESHIO_EXTENSIONS", "write_vs3",
+           "write_view3d_factors", "read_view3d_factors", "script_f",
+           "write_energyplus_view_factors", "write_elmer_view_factors",
+           "write_openfoam_view_factors", "to_dataframe"]
 
 
 def load_scene(path: str | os.PathLike, *, nonplanar: str = "error",
@@ -26,7 +36,9 @@ def load_scene(path: str | os.PathLike, *, nonplanar: str = "error",
     ----------
     path : str or os.PathLike
         ``.obj`` (Wavefront OBJ: faces kept as polygons, groups and materials kept),
-        ``.json`` (``exactff-scene/1``), ``.vs3`` (View3D input: the geometry), or a
+        ``.json`` (``exactff-scene/1``), ``.vs3`` (View3D input: the geometry),
+        ``.idf`` (EnergyPlus: the building surfaces, facing into their zones;
+        :func:`read_idf`), ``.rad`` (Radiance: the polygons; :func:`read_rad`), or a
         mesh format of meshio (``.stl``, ``.ply``, ``.off``, ``.vtk``, ``.vtu``, ...;
         ``pip install exactff[formats]``).
     nonplanar : {"error", "split"}, default "error"
@@ -75,7 +87,11 @@ def load_scene(path: str | os.PathLike, *, nonplanar: str = "error",
         return read_scene_json(path, **options)
     if ext == ".vs3":
         return read_vs3(path, **options)
+    if ext == ".idf":
+        return read_idf(path, **options)
+    if ext == ".rad":
+        return read_rad(path, **options)
     if ext in MESHIO_EXTENSIONS:
         return read_mesh(path, **options)
     raise ValueError(f"path: unknown scene format {ext!r} in {path!r}; expected .obj, .json, "
-                     f".vs3 or a mesh format ({', '.join(MESHIO_EXTENSIONS)})")
+                     f".vs3, .idf, .rad or a mesh format ({', '.join(MESHIO_EXTENSIONS)})")

@@ -6,7 +6,9 @@ ladder (float, long double, mpmath).
 * :mod:`~exactff.kernel.flat`: a scene's polygons as flat arrays;
 * :mod:`~exactff.kernel.ladder`: long double and mpmath re-evaluation;
 * :mod:`~exactff.kernel.point`: one point to one polygon, many polygons, a scene's row;
-* :mod:`~exactff.kernel.eq3`: Eq. 3 with monotone-span splitting.
+* :mod:`~exactff.kernel.eq3`: Eq. 3 with monotone-span splitting;
+* :mod:`~exactff.kernel.solid_angle`: solid angles (Van Oosterom and Strackee), the
+  measure of the spherical factors.
 """
 
 from .eq3 import arc_x_extremes, eq3_edge_integral, eq3_form_factor, eq3_ring_area
@@ -15,8 +17,10 @@ from .ladder import mp_form_factor
 from .point import (point_polygon_form_factor, point_polygon_form_factors,
                     sector_form_factor, unoccluded_row)
 from .sector import TWO_PI, clipped_sector_sums, sector_values
+from .solid_angle import mp_solid_angle, offset_error, polygon_solid_angles, solid_angle_sums
 
 __all__ = ["mp_form_factor", "point_polygon_form_factor", "point_polygon_form_factors",
            "sector_form_factor", "eq3_form_factor", "eq3_ring_area", "eq3_edge_integral",
            "arc_x_extremes", "unoccluded_row", "clipped_sector_sums", "sector_values",
-           "FlatPolygons", "flat_polygons", "TWO_PI"]
+           "FlatPolygons", "flat_polygons", "TWO_PI", "solid_angle_sums",
+           "polygon_solid_angles", "offset_error", "mp_solid_angle"]

@@ -1,14 +1,26 @@
 """The exact method: continuous PPBH with BSP ordering and the area-sorting clipper."""
 
+import math
+
 import numpy as np
 
 from .._tolerances import DEFAULT_RTOL
-from ..checks import as_receiver
+from ..checks import as_point, as_receiver
+from ..errors import NumericalError, check_finite
+from ..kernel import flat_polygons, mp_solid_angle, offset_error, solid_angle_sums
+from ..predicates import engine_sides
 from ..scene import as_scene
-from ..visibility import compiled_form_factors, visible_form_factors
+from ..visibility import (compiled_form_factors, is_convex_enclosure, visible_form_factors,
+                          visible_solid_angles)
 from ._base import FormFactorMethod
 
-__all__ = ["Exact", "INTEGRATORS", "ENGINES"]
+__all__ = ["Exact", "INTEGRATORS", "ENGINES", "hemisphere_solid_angles",
+           "unoccluded_solid_angles", "SPHERE_AXES"]
+
+#: The two hemispheres the sphere is measured in: any frame does; normal +z and -z.
+SPHERE_AXES = (np.array([0.0, 0.0, 1.0]), np.array([0.0, 0.0, -1.0]))
+
+_FOUR_PI = 4.0 * math.pi
 
 #: How visible pieces can be integrated (both exact; DESIGN 2).
 INTEGRATORS = ("sector", "eq3")
@@ -104,8 +116,119 @@ class Exact(FormFactorMethod):
                                     shortcuts=self.shortcuts, tolerance=self.tolerance,
                                     integrator=self.integrator, error=error)
 
+    def point_sphere_factors(self, scene, point, *, two_sided=True, stats=None,
+                             error=False):
+        """One row of spherical factors: the visible solid angle of every polygon from
+        ``point``, over 4 pi (see :func:`exactff.sphere_form_factors`).
+
+        Unoccluded (a convex enclosure seen from inside, with shortcuts): whole
+        polygons (:func:`unoccluded_solid_angles`). Otherwise the sphere is measured as
+        two hemispheres about ``SPHERE_AXES`` by :func:`hemisphere_solid_angles`."""
+        as_scene(scene)
+        p = as_point(point)
+        if p.shape != (3,):
+            raise ValueError(f"point must have shape (3,), got {p.shape}")
+        st = stats if stats is not None else {}
+        flat = flat_polygons(scene)
+        side, band = engine_sides(flat, p)
+        if self.shortcuts and is_convex_enclosure(scene) and np.all(side >= 0):
+            st["path"] = "unoccluded"
+            W, E = unoccluded_solid_angles(scene, p, side, two_sided=two_sided,
+                                           tolerance=self.tolerance)
+        else:
+            st["path"] = "hemispheres"
+            W, E = np.zeros(len(scene)), np.zeros(len(scene))
+            for axis in SPHERE_AXES:
+                w, e = hemisphere_solid_angles(scene, p, axis, two_sided=two_sided,
+                                               engine=self.engine, shortcuts=self.shortcuts)
+                W += w
+                E += e
+        S, E = W / _FOUR_PI, E / _FOUR_PI
+        check_finite(S, E)
+        return (S, E) if error else S
+
     def __repr__(self):
         extra = "" if self.integrator == "sector" else f", integrator={self.integrator!r}"
         if self.engine != ("python" if self.integrator == "eq3" else "compiled"):
             extra += f", engine={self.engine!r}"
         return f"Exact(tolerance={self.tolerance}, shortcuts={self.shortcuts}{extra})"
+
+
+def hemisphere_solid_angles(scene, point, normal, *, two_sided=True, engine="compiled",
+                            shortcuts=True, stats=None):
+    """Visible solid angles from ``point`` within the hemisphere around ``normal``, with
+    occlusion, and their error bounds: half of a spherical row, the place where an
+    engine supplies the measure.
+
+    Parameters
+    ----------
+    scene : Scene
+    point : ndarray of shape (3,)
+    normal : ndarray of shape (3,)
+        The hemisphere's axis (unit).
+    two_sided : bool, default True
+        Both faces of a polygon receive (every polygon occludes either way).
+    engine : {"compiled", "python"}, default "compiled"
+        The engine that computes the row. The compiled core has no solid-angle
+        measure: both names are served by the Python engine
+        (:func:`exactff.visibility.visible_solid_angles`).
+    shortcuts : bool, default True
+    stats : dict, optional
+
+    Returns
+    -------
+    (ndarray of shape (len(scene),), ndarray of shape (len(scene),))
+        Solid angles in steradians (their sum at most 2 pi) and error bounds.
+
+    Examples
+    --------
+    >>> import exactff as ef
+    >>> box = ef.scenes.subdivided_box(1)
+    >>> W, E = hemisphere_solid_angles(box, np.array([0.5, 0.5, 0.5]), SPHERE_AXES[1])
+    >>> round(float(W[0] / (2 * np.pi)), 12)       # the floor: a third of the lower half
+    0.333333333333
+    """
+    if engine not in ENGINES:
+        raise ValueError(f"engine must be one of {ENGINES}, got {engine!r}")
+    return visible_solid_angles(scene, point, normal, two_sided=two_sided, stats=stats,
+                                shortcuts=shortcuts)
+
+
+def unoccluded_solid_angles(scene, point, side, *, two_sided=True, tolerance=DEFAULT_RTOL):
+    """Solid angles of every polygon of a scene from ``point`` with nothing in between,
+    and their error bounds: the fan over all edges at once
+    (:func:`exactff.kernel.solid_angle_sums`, offset form), the offsets' rounding
+    (:func:`exactff.kernel.offset_error`), and mpmath
+    (:func:`exactff.kernel.mp_solid_angle`) for the values whose bound exceeds
+    ``tolerance`` times the value (None: none).
+
+    ``side`` is the point's side of every polygon (:func:`exactff.predicates.engine_sides`):
+    0 (seen edge-on) gives 0; a back side (-1) receives only with ``two_sided``.
+
+    Examples
+    --------
+    >>> import exactff as ef
+    >>> box = ef.scenes.subdivided_box(1)
+    >>> W, E = unoccluded_solid_angles(box, np.full(3, 0.5), np.ones(6))
+    >>> np.round(W / (4 * np.pi), 12).tolist()
+    [0.166666666667, 0.166666666667, 0.166666666667, 0.166666666667, 0.166666666667, 0.166666666667]
+    """
+    flat = flat_polygons(scene)
+    p = np.asarray(point, dtype=float)
+    m = len(scene)
+    A0 = flat.first - p
+    W, E = solid_angle_sums(A0, flat.E, flat.nxt, flat.owner, m)
+    W = np.abs(W)
+    E = E + offset_error(A0, flat.E, flat.nxt, flat.owner, m)
+    live = (side > 0) | (two_sided & (side < 0))
+    W[~live] = 0.0
+    E[~live] = 0.0
+    if tolerance is not None:
+        for i in np.flatnonzero(live & ~(E <= tolerance * W)):
+            P = flat.V[flat.offsets[i]:flat.offsets[i + 1]]
+            W[i], E[i] = mp_solid_angle(p, P, tolerance=tolerance)
+    if not np.all(W <= 2 * np.pi + E):
+        i = int(np.flatnonzero(~(W <= 2 * np.pi + E))[0])
+        raise NumericalError(f"polygon {i}: solid angle {W[i]!r} above 2 pi beyond its "
+                             f"bound {E[i]:.3g}")
+    return W, E

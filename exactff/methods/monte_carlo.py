@@ -1,10 +1,15 @@
-"""Monte Carlo ray casting with cosine-weighted directions."""
+"""Monte Carlo ray casting with cosine-weighted directions, and over the whole sphere
+(uniform directions) for the spherical factors."""
 
 import hashlib
 
 import numpy as np
 
-from ._sampling import CellLayout, SampledMethod
+from ..checks import as_point
+from ..kernel import flat_polygons
+from ..predicates import plane_sides
+from ..scene import as_scene
+from ._sampling import CellLayout, SampledMethod, nearest_polygons
 
 __all__ = ["MonteCarlo"]
 
@@ -19,6 +24,11 @@ class MonteCarlo(SampledMethod):
 
     The rays of a row come from a generator seeded with ``seed`` and the point's
     coordinates, so a row is reproducible whatever the order or the executor.
+
+    Sphere mode (:meth:`point_sphere_factors`, what
+    ``exactff.sphere_form_factors(..., method="monte_carlo")`` calls): ``samples``
+    directions uniform over the whole sphere, each carrying ``1 / samples`` of the
+    spherical factor, with the same standard error.
 
     Parameters
     ----------
@@ -63,10 +73,60 @@ class MonteCarlo(SampledMethod):
         return CellLayout(D, np.full(self.n, 1.0 / self.n), 1.0)
 
     def directions_for(self, point):
-        key = np.asarray(point, dtype=float).tobytes() + self.seed.to_bytes(8, "little", signed=True)
-        digest = int.from_bytes(hashlib.blake2b(key, digest_size=8).digest(), "little")
-        L = self._rays(np.random.default_rng(digest))
+        L = self._rays(self._generator(point, b""))
         return L.directions, L.weights
+
+    def _generator(self, point, salt):
+        key = (np.asarray(point, dtype=float).tobytes()
+               + self.seed.to_bytes(8, "little", signed=True) + salt)
+        digest = int.from_bytes(hashlib.blake2b(key, digest_size=8).digest(), "little")
+        return np.random.default_rng(digest)
+
+    def sphere_directions(self, point):
+        """The row's ``samples`` directions, uniform over the sphere (Archimedes: z
+        uniform in [-1, 1], azimuth uniform), seeded by ``seed`` and the point."""
+        rng = self._generator(point, b"sphere")
+        z = 2.0 * rng.random(self.n) - 1.0
+        a = 2.0 * np.pi * rng.random(self.n)
+        r = np.sqrt(np.maximum(1.0 - z * z, 0.0))
+        return np.column_stack([r * np.cos(a), r * np.sin(a), z])
+
+    def point_sphere_factors(self, scene, point, *, two_sided=True, stats=None,
+                             error=False):
+        """Spherical factors from one point: the share of uniform directions over the
+        sphere whose nearest polygon is ``j`` (receiving on the face it shows, both
+        with ``two_sided``); with ``error=True`` also their standard errors
+        ``sqrt(S (1 - S) / samples)``.
+
+        Examples
+        --------
+        >>> import exactff as ef
+        >>> S, se = MonteCarlo(20000, seed=3).point_sphere_factors(
+        ...     ef.scenes.subdivided_box(1), [0.5, 0.5, 0.5], error=True)
+        >>> bool(np.all(np.abs(S - 1 / 6) < 5 * se)), float(S.sum())
+        (True, 1.0)
+        """
+        as_scene(scene)
+        p = as_point(point)
+        D = self.sphere_directions(p)
+        hit = np.full(self.n, -1)
+        # two hemispheres, each in its own local frame (z along +z, then -z): a
+        # direction's local coordinates are (x, y, |z|) up to a rotation about the
+        # axis, which a uniform distribution does not see
+        for sign in (1.0, -1.0):
+            k = np.flatnonzero(D[:, 2] * sign > 0)
+            if len(k):
+                L = np.column_stack([D[k, 0], D[k, 1], np.abs(D[k, 2])])
+                hit[k] = nearest_polygons(scene, p, np.array([0.0, 0.0, sign]), L)
+        side, _ = plane_sides(flat_polygons(scene), p, exact=False)
+        receives = (side > 0) | (bool(two_sided) & (side < 0))
+        ok = hit >= 0
+        ok[ok] = receives[hit[ok]]
+        if stats is not None:
+            stats["rays"] = self.n
+            stats["rays_hit"] = int((hit >= 0).sum())
+        S = np.bincount(hit[ok], minlength=len(scene)) / self.n
+        return (S, np.sqrt(S * (1.0 - S) / self.n)) if error else S
 
     def form_factors_with_error(self, scene, point, normal, *, two_sided=False):
         """Estimates and their standard errors, each of shape ``(len(scene),)``."""

@@ -10,7 +10,7 @@ from .procedural import OFFICE_REFLECTANCE, cloister, office, office_solids
 
 __all__ = ["cornell_box", "cornell_box_data", "subdivided_box", "box_polygons",
            "furnished_box", "office", "office_solids", "OFFICE_REFLECTANCE", "cloister",
-           "building", "geodesic_sphere", "room_with_sphere"]
+           "building", "geodesic_sphere", "room_with_sphere", "courtyard"]
 
 
 def cornell_box_data():
@@ -374,3 +374,60 @@ def room_with_sphere(level=4, k=16):
     polys = box_polygons((0, 0, 0), (1, 1, 1), k)
     ball = geodesic_sphere(level, (0.5, 0.5, 0.5), 0.25)
     return Scene.from_polygons(polys + ball, groups=["room"] * len(polys) + ["sphere"] * len(ball))
+
+
+def courtyard(width=20.0, depth=14.0, heights=(9.0, 6.0, 9.0, 3.0), *, k=1):
+    """An open courtyard (z up): a floor ``[0, width] x [0, depth]`` facing up and four
+    walls facing in, of their own heights, open to the sky above.
+
+    Parameters
+    ----------
+    width, depth : float
+        Along x and y.
+    heights : 4 floats
+        Heights of the walls y = 0 ("south"), x = width ("east"), y = depth ("north")
+        and x = 0 ("west").
+    k : int, default 1
+        The floor as ``k x k`` quads (a floor plan to paint rows on).
+
+    Returns
+    -------
+    Scene
+        Floor quads first (group ``floor``), then the walls (group ``wall``, names
+        ``wall_south`` ... ``wall_west``). Rows from the floor do not sum to 1: the rest
+        is sky (``form_factors(..., remainder=True)``).
+
+    Examples
+    --------
+    >>> import exactff as ef
+    >>> c = courtyard(k=2)
+    >>> len(c), c.names[-4:]
+    (8, ('wall_south', 'wall_east', 'wall_north', 'wall_west'))
+    >>> F, sky, ground = ef.form_factors(c, [10, 7, 0], [0, 0, 1], remainder=True)
+    >>> round(sky, 6), round(float(F.sum()) + sky, 12), ground
+    (0.60904, 1.0, 0.0)
+    """
+    W, D = float(width), float(depth)
+    H = [float(h) for h in heights]
+    if not (W > 0 and D > 0 and len(H) == 4 and all(h > 0 for h in H)):
+        raise ValueError(f"width, depth and the 4 heights must be positive, got "
+                         f"{width!r}, {depth!r}, {heights!r}")
+    if not (isinstance(k, (int, np.integer)) and k >= 1):
+        raise ValueError(f"k must be a positive integer, got {k!r}")
+    xs, ys = np.linspace(0.0, W, k + 1), np.linspace(0.0, D, k + 1)
+    polys = [np.array([[xs[i], ys[j], 0], [xs[i + 1], ys[j], 0], [xs[i + 1], ys[j + 1], 0],
+                       [xs[i], ys[j + 1], 0]], dtype=float)
+             for j in range(k) for i in range(k)]
+    names = [None] * len(polys)
+    s, e, n, w = H
+    walls = {   # counter-clockwise seen from inside
+        "wall_south": [[0, 0, 0], [0, 0, s], [W, 0, s], [W, 0, 0]],
+        "wall_east": [[W, 0, 0], [W, 0, e], [W, D, e], [W, D, 0]],
+        "wall_north": [[W, D, 0], [W, D, n], [0, D, n], [0, D, 0]],
+        "wall_west": [[0, D, 0], [0, D, w], [0, 0, w], [0, 0, 0]],
+    }
+    for name, P in walls.items():
+        polys.append(np.array(P, dtype=float))
+        names.append(name)
+    groups = ["floor"] * (k * k) + ["wall"] * 4
+    return Scene.from_polygons(polys, names=names, groups=groups)

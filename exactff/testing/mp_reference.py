@@ -6,11 +6,15 @@ integral 1/2 (x dy - y dx) along each edge's image evaluated by mpmath quadratur
 
 ``area_form_factor``: the defining double integral (1 / pi) cos(theta_p) cos(theta_j) / r^2
 over the (horizon-clipped) polygon, by mpmath 2-D quadrature on a triangle fan.
+
+``solid_angle``: the solid angle of a polygon, Van Oosterom and Strackee's triangle
+formula (IEEE Trans. Biomed. Eng. 30, 1983, doi:10.1109/TBME.1983.325207) summed with
+signs over a fan from the mean of the vertices (not from a vertex, as the kernel's).
 """
 
 import mpmath as mp
 
-__all__ = ["boundary_form_factor", "area_form_factor"]
+__all__ = ["boundary_form_factor", "area_form_factor", "solid_angle"]
 
 
 def _frame(n):
@@ -131,3 +135,29 @@ def area_form_factor(point, normal, polygon, dps=20):
 
             total += mp.quad(f, [0, 1], [0, 1])
         return total
+
+
+def solid_angle(point, polygon, dps=40):
+    """The solid angle of a planar polygon seen from ``point``, whichever way it faces,
+    at ``dps`` digits: ``tan(Omega / 2) = a . (b x c) / (|a||b||c| + (a.b)|c| + (a.c)|b|
+    + (b.c)|a|)`` for each triangle (apex: the mean of the vertices, in the polygon's
+    plane), signed, summed, the absolute value taken. Any simple polygon whose plane
+    misses the point."""
+    with mp.workdps(dps):
+        p = [mp.mpf(float(c)) for c in point]
+        Q = [[mp.mpf(float(v[i])) - p[i] for i in range(3)] for v in polygon]
+        k = len(Q)
+        a = [sum(v[i] for v in Q) / k for i in range(3)]
+
+        def dot(x, y):
+            return x[0] * y[0] + x[1] * y[1] + x[2] * y[2]
+
+        la = mp.sqrt(dot(a, a))
+        total = mp.mpf(0)
+        for j in range(k):
+            b, c = Q[j], Q[(j + 1) % k]
+            bxc = [b[1] * c[2] - b[2] * c[1], b[2] * c[0] - b[0] * c[2], b[0] * c[1] - b[1] * c[0]]
+            lb, lc = mp.sqrt(dot(b, b)), mp.sqrt(dot(c, c))
+            den = la * lb * lc + dot(a, b) * lc + dot(a, c) * lb + dot(b, c) * la
+            total += 2 * mp.atan2(dot(a, bxc), den)
+        return abs(total)

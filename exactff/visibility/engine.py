@@ -21,10 +21,11 @@ from ..prepared import prepared
 from .bsp import coplanar_overlaps, front_to_back, scene_bsp
 from .charts import CHARTS
 from .clipper import visible_pieces
-from .pieces import pieces_form_factors
+from .pieces import pieces_form_factors, pieces_solid_angles
 from .refine import Refiner
 
-__all__ = ["visible_form_factors", "visible_graph", "is_convex_enclosure"]
+__all__ = ["visible_form_factors", "visible_solid_angles", "visible_graph",
+           "is_convex_enclosure"]
 
 
 def is_convex_enclosure(scene):
@@ -141,21 +142,79 @@ def visible_form_factors(scene, point, normal, *, two_sided=False, stats=None,
     refiner = Refiner(scene, tree, order, p, normal, kept, world, charts)
     Ff, ef_ = pieces_form_factors(pieces, len(order), tolerance=tolerance, owner=src,
                                   integrator=integrator, refiner=refiner, stats=st)
-    F = np.bincount(src, weights=Ff, minlength=len(scene))
-    E = np.bincount(src, weights=ef_, minlength=len(scene))
-    check_finite(F, E)
-    # holes subtract: a value may fall below 0 by rounding, never by more than its
-    # bound; within it, it is clamped to 0 (still covered: 0 <= exact <= F + E <= E)
-    bad = np.flatnonzero(~(F >= -E))
-    if len(bad):
-        raise NumericalError(f"polygon {bad[0]}: occluded form factor {F[bad[0]]!r} below 0 "
-                             f"beyond its rounding error estimate {E[bad[0]]:.3g}")
-    F = np.maximum(F, 0.0)
-    if stats is not None:
-        stats["max_error_estimate"] = float(E.max(initial=0.0))
+    F, E = _per_polygon(src, Ff, ef_, len(scene), "form factor", stats)
     if not error:
         _require_tolerance(F, E, tolerance, integrator, st)
     return (F, E) if error else F
+
+
+def visible_solid_angles(scene, point, normal, *, two_sided=False, stats=None,
+                         shortcuts=True):
+    """Visible solid angles with occlusion from one point to every polygon of a scene,
+    within the hemisphere around ``normal``: one half of a spherical factor.
+
+    The same fragments, BSP order and clipper as :func:`visible_form_factors`; every
+    visible piece is measured by its solid angle instead of its cosine-weighted one
+    (:func:`exactff.visibility.pieces.pieces_solid_angles`). There is no convex-scene
+    path here (it integrates the cosine-weighted measure): a caller with an unoccluded
+    scene measures whole polygons (:func:`exactff.kernel.polygon_solid_angles`).
+
+    Parameters
+    ----------
+    scene : Scene
+    point : ndarray of shape (3,)
+    normal : ndarray of shape (3,)
+        The hemisphere's axis (unit).
+    two_sided : bool, default False
+        Let polygons receive on their back side too (every polygon occludes).
+    stats : dict, optional
+        Filled as by :func:`visible_form_factors` (``path`` is ``"clipper"``).
+    shortcuts : bool, default True
+        As for :func:`visible_form_factors` (the culling and the tiled clipper).
+
+    Returns
+    -------
+    (ndarray of shape (len(scene),), ndarray of shape (len(scene),))
+        Solid angles in steradians (at most 2 pi in all) and a bound on each one's
+        error: the rounding of its pieces' fans plus their vertices' (the clipper's,
+        not refined), given the clipper's topology.
+
+    Examples
+    --------
+    From the centre of a closed box, the upper hemisphere's pieces add up to 2 pi:
+
+    >>> import exactff as ef
+    >>> box = ef.scenes.subdivided_box(2)
+    >>> W, E = visible_solid_angles(box, [0.5, 0.5, 0.5], [0, 0, 1])
+    >>> bool(abs(W.sum() - 2 * np.pi) < 1e-12), bool(E.max() < 1e-12)
+    (True, True)
+    """
+    st = stats if stats is not None else {}
+    flat = flat_polygons(scene)
+    p = np.asarray(point, dtype=float)
+    side, _ = engine_sides(flat, p)
+    st["path"] = "clipper"
+    tree, order, src, kept, world, receives = _row_fragments(scene, p, normal, side, two_sided,
+                                                             shortcuts, st)
+    pieces = visible_pieces(kept, receives, stats=st, shortcuts=shortcuts)
+    Wf, Ef = pieces_solid_angles(pieces, len(order))
+    return _per_polygon(src, Wf, Ef, len(scene), "solid angle", stats)
+
+
+def _per_polygon(src, Vf, Ef, n, what, stats):
+    """Fragments' values and bounds summed per polygon, checked: never NaN, and below 0
+    by no more than the bound (holes subtract: rounding may take a value below 0; within
+    its bound it is clamped to 0, still covered: 0 <= exact <= V + E <= E)."""
+    V = np.bincount(src, weights=Vf, minlength=n)
+    E = np.bincount(src, weights=Ef, minlength=n)
+    check_finite(V, E)
+    bad = np.flatnonzero(~(V >= -E))
+    if len(bad):
+        raise NumericalError(f"polygon {bad[0]}: occluded {what} {V[bad[0]]!r} below 0 "
+                             f"beyond its rounding error estimate {E[bad[0]]:.3g}")
+    if stats is not None:
+        stats["max_error_estimate"] = float(E.max(initial=0.0))
+    return np.maximum(V, 0.0), E
 
 
 def _require_tolerance(F, E, tolerance, integrator, st):

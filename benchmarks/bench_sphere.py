@@ -1,0 +1,64 @@
+"""Spherical rows against plane rows on the office (issue 31): time per row.
+
+Usage: python benchmarks/bench_sphere.py [--points 10] [--n 4428] [--seed 0]
+
+Viewpoints drawn uniformly in the office's free space (outside the furniture's boxes);
+each is timed as a spherical row (``sphere_form_factors``, exact: two hemispheres
+through the Python engine's clipper, or Monte Carlo over the sphere with 65,536 rays)
+and as a plane row facing up (``form_factors``, the compiled core and the Python
+engine). Caches (BSP tree, flat arrays) are built before timing. Also printed: the
+largest deviation of a spherical row's sum from 1 and the largest bound.
+"""
+
+import argparse
+import time
+
+import numpy as np
+
+import exactff as ef
+
+
+def free_points(scene_solids, k, rng):
+    out = []
+    while len(out) < k:
+        x = rng.uniform([0.2, 0.2, 0.2], [7.8, 2.6, 5.8])
+        if not any(np.all((x > lo) & (x < hi)) for lo, hi, _ in scene_solids):
+            out.append(x)
+    return np.array(out)
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--points", type=int, default=10)
+    ap.add_argument("--n", type=int, default=4428)
+    ap.add_argument("--seed", type=int, default=0)
+    a = ap.parse_args()
+    office = ef.scenes.office(a.n)
+    P = free_points(ef.scenes.office_solids(), a.points, np.random.default_rng(a.seed))
+    up = [0.0, 1.0, 0.0]
+    python = ef.Exact(engine="python")
+    ef.sphere_form_factors(office, P[0])
+    ef.form_factors(office, P[0], up)
+    ef.form_factors(office, P[0], up, method=python)
+
+    def per_row(f):
+        t0 = time.perf_counter()
+        r = f()
+        return (time.perf_counter() - t0) / len(P), r
+
+    ts, (S, E) = per_row(lambda: ef.sphere_form_factors(office, P, error=True))
+    tc, _ = per_row(lambda: ef.form_factors(office, P, up))
+    tp, _ = per_row(lambda: ef.form_factors(office, P, up, method=python))
+    tm, _ = per_row(lambda: ef.sphere_form_factors(office, P, method="monte_carlo",
+                                                   samples=65536))
+    print(f"office ({len(office)} polygons), {len(P)} points")
+    print(f"sphere_form_factors exact        {ts:.3f} s/row")
+    print(f"sphere_form_factors monte_carlo  {tm:.3f} s/row (65,536 rays)")
+    print(f"form_factors exact (compiled)    {tc:.3f} s/row")
+    print(f"form_factors exact (python)      {tp:.3f} s/row")
+    print(f"sphere rows: |sum - 1| <= {np.abs(S.sum(axis=1) - 1).max():.1e}, "
+          f"largest bound {E.max():.1e}, largest row bound sum {E.sum(axis=1).max():.1e}")
+
+
+if __name__ == "__main__":
+    main()
