@@ -645,7 +645,7 @@ class Core {
         const int known = st.on_plane.find(a, b, ux);
         if (known >= 0) return known != 0;
         ++st.exact_tests;
-        const bool on = exactly_on_input(Q, p, x, st);
+        const bool on = exactly_on_input(Q, p, x);
         st.on_plane.insert(a, b, ux, on);
         return on;
     }
@@ -732,16 +732,14 @@ class Core {
         return sign(r) == 0;
     }
 
-    bool exactly_on_input(const ExactPlane& Q, const double* p, const double* x,
-                          RowStats& st) const {
-        {  // an input point against an exact plane
-            // one of the two points that define the plane (a shared edge's end): on it
-            if (Q.kind == 0 && ((x[0] == Q.a[0] && x[1] == Q.a[1] && x[2] == Q.a[2]) ||
-                                (x[0] == Q.b[0] && x[1] == Q.b[1] && x[2] == Q.b[2])))
-                return true;
-            if (surely_off(Q.kind, p, Q.a, Q.b, x)) return false;
-            return sign(exact_value(Q, p, x)) == 0;
-        }
+    // an input point against an exact plane
+    bool exactly_on_input(const ExactPlane& Q, const double* p, const double* x) const {
+        // one of the two points that define the plane (a shared edge's end): on it
+        if (Q.kind == 0 && ((x[0] == Q.a[0] && x[1] == Q.a[1] && x[2] == Q.a[2]) ||
+                            (x[0] == Q.b[0] && x[1] == Q.b[1] && x[2] == Q.b[2])))
+            return true;
+        if (surely_off(Q.kind, p, Q.a, Q.b, x)) return false;
+        return sign(exact_value(Q, p, x)) == 0;
     }
 
     // b - a: from the world coordinates where both are input vertices (exact doubles:
@@ -1157,7 +1155,9 @@ class Core {
                 pos |= sg[i] > 0;
                 neg |= sg[i] < 0;
                 const R width = K_.band + P.err + P.slack + u.err;
-                if (std::fabs(d[i]) <= width * scale && (++st.near_tests, !exactly_on(xp, P.exact, pp, f, u, st))) {
+                if (!(std::fabs(d[i]) <= width * scale)) continue;
+                ++st.near_tests;
+                if (!exactly_on(xp, P.exact, pp, f, u, st)) {
                     R adjacent = arc(w.q[(i + m - 1) % m], u) + arc(u, w.q[(i + 1) % m]);
                     if (receives)
                         B[src] += adjacent * width / 3.14159265358979323846264338327950288L;
