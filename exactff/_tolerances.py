@@ -52,6 +52,7 @@ __all__ = [
     "AREA_BOOLEAN_ULPS",
     "AREA_EDGE_ON_RTOL",
     "AREA_EDGE_CUT",
+    "CLIP_MEET_ULPS",
     "C1",
     "SVBSP_BAND",
     "SVBSP_SPLIT_ULPS",
@@ -329,6 +330,14 @@ AREA_EDGE_ON_RTOL = 8 * EPS
 #: Area form factors: cuts of an emitter's edge (for the contour integral's outer rule)
 #: closer than this (as a share of the edge) to each other or to its ends are dropped.
 AREA_EDGE_CUT = 1e-9
+
+#: The half-space clipper computes a crossing as the meet of the edge's plane through
+#: the origin with the clipping plane (``exactff.halfspace``) where that plane's normal
+#: ``A x e`` is above this many ulps of ``|A|_1 |e|_1`` (below it the edge's line runs
+#: through the origin to rounding and the interpolated crossing is kept), and where it
+#: agrees with the interpolated crossing within this many ulps of ``(|A|_1 + |e|_1)``
+#: times the crossing's condition ``1 + |h|_1 |e|_1 / |h . e|``.
+CLIP_MEET_ULPS = 8.0
 
 #: Constants of the sector sums' rounding-error estimate (DESIGN 2.2): per edge term,
 #: the relative error of its angle and sum (C1 ulps), and of its plane's direction (C2
