@@ -68,23 +68,27 @@ def clip_halfspace(V, counts, h):
     # Either form's error is at most a few eps |A| |e| |h| / |h . e|. The interpolated
     # form stays where the edge's line runs through the origin (m = 0 to its rounding: the
     # crossing is then the origin itself, and only rounding says which way it points).
-    hh = np.broadcast_to(h if h.ndim == 2 else h[None], (M, 3))[:, None, :]
-    m = np.cross(A, B - A)
     with np.errstate(divide="ignore", invalid="ignore"):
         t = np.where(cross, sa / (sa - sb), 0.0)
-        meet = np.cross(m, np.broadcast_to(hh, m.shape)) / (sa - sb)[:, :, None]
     X = A + t[:, :, None] * (B - A)
-    # the meet where it is the same point as the interpolated one within the latter's
-    # error (not so where the planes' rounding dominates: subnormal heights, say)
-    la, le = np.abs(A).sum(axis=2), np.abs(B - A).sum(axis=2)
-    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-        cond = 1.0 + np.abs(hh).sum(axis=2) * le / np.abs(sa - sb)
-        agree = np.abs(meet - X).sum(axis=2) <= tol.CLIP_MEET_ULPS * tol.EPS * (la + le) * cond
-    # and only where no product underflows and the crossing is well conditioned
-    use_meet = (cross & agree & (cond * tol.CLIP_MEET_ULPS * tol.EPS < 1.0)
-                & (np.abs(m).sum(axis=2) > tol.CLIP_MEET_ULPS * tol.EPS * la * le)
-                & (np.abs(sa - sb) > _NORMAL_FLOOR) & (la * le > _NORMAL_FLOOR))
-    X = np.where(use_meet[:, :, None], meet + 0.0, X)        # + 0: no signed zeros
+    pm, pk = np.nonzero(cross)
+    if len(pm):
+        a, e, d = A[pm, pk], B[pm, pk] - A[pm, pk], (sa - sb)[pm, pk]
+        hc = h[pm] if h.ndim == 2 else np.broadcast_to(h, a.shape)
+        m = np.cross(a, e)
+        x = X[pm, pk]
+        la, le = np.abs(a).sum(axis=1), np.abs(e).sum(axis=1)
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+            meet = np.cross(m, hc) / d[:, None]
+            cond = 1.0 + np.abs(hc).sum(axis=1) * le / np.abs(d)
+            # the meet where it is the same point as the interpolated one within the
+            # latter's error, the crossing is well conditioned and no product underflows
+            # (not so where the planes' rounding dominates: subnormal heights, say)
+            use = ((np.abs(meet - x).sum(axis=1) <= tol.CLIP_MEET_ULPS * tol.EPS * (la + le) * cond)
+                   & (cond * tol.CLIP_MEET_ULPS * tol.EPS < 1.0)
+                   & (np.abs(m).sum(axis=1) > tol.CLIP_MEET_ULPS * tol.EPS * la * le)
+                   & (np.abs(d) > _NORMAL_FLOOR) & (la * le > _NORMAL_FLOOR))
+        X[pm[use], pk[use]] = meet[use] + 0.0                 # + 0: no signed zeros
     out = np.empty((M, 2 * K, 3))
     out[:, 0::2] = V
     out[:, 1::2] = X
