@@ -10,6 +10,8 @@ Python engine (:func:`exactff.visibility.visible_form_factors`), which refines a
 escalates; the row's ``stats`` say when.
 """
 
+import math
+
 import numpy as np
 import shapely
 
@@ -122,6 +124,22 @@ def _build_core(scene):
     return tree, core
 
 
+def _shadow_tiles(n):
+    """Planes per axis of the grid the compiled core cuts the upper hemisphere into
+    before any shadow, for a scene of ``n`` polygons: about ``SVBSP_POLYGONS_PER_CELL``
+    polygons per cell, within ``SVBSP_TILES`` and ``SVBSP_TILES_MAX`` (each cell's
+    shadows grow on their own chain; more cells, shorter chains, but a bigger tree to
+    build each row).
+
+    Examples
+    --------
+    >>> _shadow_tiles(4424), _shadow_tiles(80461)
+    (8, 35)
+    """
+    cells_per_axis = math.ceil(math.sqrt(n / tol.SVBSP_POLYGONS_PER_CELL))
+    return int(min(max(cells_per_axis - 1, tol.SVBSP_TILES), tol.SVBSP_TILES_MAX))
+
+
 def compiled_form_factors(scene, point, normal, *, two_sided=False, stats=None,
                           shortcuts=True, tolerance=None, error=False):
     """Exact form factors with occlusion from one point to every polygon of a scene, by
@@ -201,7 +219,7 @@ def compiled_form_factors(scene, point, normal, *, two_sided=False, stats=None,
     node_side = sides_of_point(tree.normals, tree.offsets, p).astype(np.int8)
     F, E, band, counters = core.row(p, np.asarray(normal, dtype=float), node_side,
                                     side.astype(np.int8), bool(two_sided), bool(shortcuts),
-                                    tol.SVBSP_BOX_BUDGET, tol.SVBSP_TILES,
+                                    tol.SVBSP_BOX_BUDGET, _shadow_tiles(len(scene)),
                                     0.0 if tolerance is None else float(tolerance))
     check_finite(F, E)
     check_finite(band)
