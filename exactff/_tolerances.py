@@ -57,6 +57,7 @@ __all__ = [
     "SVBSP_BAND",
     "SVBSP_SPLIT_ULPS",
     "SVBSP_BOX_BUDGET",
+    "CONVEX_TURN_ULPS",
     "SVBSP_TILES",
     "SVBSP_TILES_MAX",
     "SVBSP_POLYGONS_PER_CELL",
@@ -388,6 +389,9 @@ SVBSP_SPLIT_ULPS = 8.0
 #: Compiled core: most shadow-tree nodes one bounding-box test may visit before it
 #: gives up (the subtree is then entered, which is always correct).
 SVBSP_BOX_BUDGET = 256
+#: A ring is convex where every corner turns the normal's way or is collinear within
+#: this many ulps of its edges' cross product (``exactff.visibility.compiled._convex_rings``).
+CONVEX_TURN_ULPS = 8.0
 #: Compiled core: planes per axis of the grid the upper hemisphere is cut into before
 #: any shadow (``(tiles + 1)^2`` cells, each growing its own shadows), at least this
 #: many and at most SVBSP_TILES_MAX, about SVBSP_POLYGONS_PER_CELL polygons of the
