@@ -26,6 +26,7 @@ __all__ = [
     "LONG_POLYGON",
     "BATCH_VALIDATION_MAX_VERTICES",
     "BATCH_VALIDATION_PAIRS",
+    "BSP_SCORE_SAMPLE",
     "BSP_AXIS_CANDIDATE_MIN",
     "CHART_EDGE_ULPS",
     "MP_MAX_DPS",
@@ -211,6 +212,14 @@ BATCH_VALIDATION_MAX_VERTICES = 128
 #: batch: bounds its temporaries (about 1 KiB per triangle) without costing time (not a
 #: tolerance: a memory threshold, measured in benchmarks/bench_real_files.py).
 BATCH_VALIDATION_PAIRS = 2 ** 19
+
+#: BSP nodes with more fragments than this score their candidate planes on a random
+#: sample of this many fragments (its own random stream: the same candidates; not a
+#: tolerance but a cost threshold; the chosen plane then classifies every fragment).
+#: Cloister (80,461 polygons): BSP build 1.6 -> 0.67 s (process time) with the same
+#: tree (1,115 nodes, 1,700 splits); a sample of 1,024 gave 0.56 s and a tree of 1,153
+#: nodes and 1,749 splits.
+BSP_SCORE_SAMPLE = 4096
 
 #: BSP nodes with more fragments than this also try a plane through the median of the
 #: fragments' vertex means along their widest axis (not a tolerance: a cost threshold).
