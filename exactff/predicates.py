@@ -309,7 +309,13 @@ def coplanar_band_sides(V, N, D):
     """
     s = V @ N.T - D
     out = np.sign(s).astype(np.int8)
-    out[np.abs(s) <= coplanar_band(V, N, D)] = 0
+    # the band only where a point may be in it: within the band of the points' largest
+    # coordinates (|n| . |x| <= |n| . max |x|), the plane's widest band
+    widest = coplanar_band(np.abs(V).max(axis=0, initial=0.0)[None], N, D)[0]
+    i, k = np.nonzero(np.abs(s) <= widest)
+    if len(i):
+        inside = np.abs(s[i, k]) <= coplanar_band(V[i], N[k], D[k], rows=True)
+        out[i[inside], k[inside]] = 0
     return out, s
 
 

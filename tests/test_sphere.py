@@ -63,6 +63,33 @@ def test_sphere_single_polygon_through_the_clipper_vs_mpmath(P, p):
     assert abs(S[0] - ref) <= E[0] + 1e-16 * ref, (S[0], ref, E[0])
 
 
+@pytest.mark.parametrize("height", [1e-5, 1.41706337e-06, 1e-7, 1e-9])
+def test_sphere_point_just_behind_a_large_polygon_bound_holds(height):
+    # found by hypothesis: a point 1.4e-6 behind a triangle of circumradius 1 came out
+    # 4.3e-12 off with a bound of 2.1e-14 (the chart clip's crossings, interpolated
+    # between vertices 1 away, had directions off by 1e-10 in the top chart's corners)
+    P = np.array([[1.0, 0.0, height], [-0.5, 0.866025404, height], [-0.5, -0.866025404, height]])
+    p = np.zeros(3)
+    ref = mp_sphere(p, P)
+    S, E = ef.sphere_form_factors(ef.Scene.from_polygons([P]), p, error=True)
+    assert abs(S[0] - ref) <= E[0], (S[0], ref, E[0])
+    assert abs(S[0] - ref) <= UNOCC_ATOL + UNOCC_RTOL * ref
+
+
+def test_clip_crossing_keeps_its_direction_far_from_the_vertices():
+    # an edge at height 1e-6 over the origin, 1 away, met by the plane z = x: the crossing
+    # is (1e-6, y, 1e-6) exactly in direction (u = x / z = 1 in the top chart)
+    from exactff.halfspace import clip_halfspace
+
+    h = 1e-6
+    V = np.array([[[1.0, -0.3, h], [-0.5, 0.8, h], [-0.5, -0.8, h]]])
+    W, k = clip_halfspace(V, np.array([3]), np.array([-1.0, 0.0, 1.0]))
+    X = W[0, :k[0]]
+    on_plane = X[np.abs(X[:, 0] - X[:, 2]) < 1e-3 * h]
+    assert len(on_plane) == 2
+    assert np.all(np.abs(on_plane[:, 0] / on_plane[:, 2] - 1.0) <= 4 * np.finfo(float).eps)
+
+
 def test_solid_angle_kernel_vs_mpmath_small_and_far():
     # stiff: a 1e-6 square 1e3 away (the offset form keeps its digits)
     sq = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], float) * 1e-6 + [3.0, -2.0, 1e3]

@@ -128,6 +128,7 @@ def build_bsp(scene, *, candidates=8, seed=0):
     (6, 24, 0)
     """
     rng = np.random.default_rng(seed)
+    sampler = np.random.default_rng([seed, 1])    # its own stream: the same candidates
     normals_src = scene.normals
     offsets_src = scene.plane_offsets
     fragments = [np.array(P, dtype=float) for P in scene.polygons]
@@ -151,14 +152,23 @@ def build_bsp(scene, *, candidates=8, seed=0):
             int(x) for x in rng.choice(ids, size=candidates - 1, replace=False)]
         pool = list(dict.fromkeys(pool))
         starts = np.concatenate([[0], np.cumsum(counts)])
+        # the candidates are scored on every fragment of the node, or on a sample of
+        # BSP_SCORE_SAMPLE of them at a larger node (the score estimates proportions)
+        if m > tol.BSP_SCORE_SAMPLE:
+            scored = np.zeros(m, dtype=bool)
+            scored[sampler.choice(m, size=tol.BSP_SCORE_SAMPLE, replace=False)] = True
+            Vs, cs = V[scored[owner]], counts[scored]
+            starts_s = np.concatenate([[0], np.cumsum(cs)])
+        else:
+            Vs, cs, starts_s = V, counts, starts
+        ms = len(cs)
         # every candidate plane at once
         Nc, Dc = normals_src[source[pool]], offsets_src[source[pool]]
-        sign_all, s_all = coplanar_band_sides(V, Nc, Dc)
-        score, imbalance, pos, neg = _plane_scores(sign_all, starts)
+        sign_c, _ = coplanar_band_sides(Vs, Nc, Dc)
+        score, imbalance, _, _ = _plane_scores(sign_c, starts_s)
         j = int(np.argmin(score))        # the first of equal scores
         c, n, d = pool[j], Nc[j], Dc[j]
-        sign, s, has_pos, has_neg = sign_all[:, j], s_all[:, j], pos[:, j], neg[:, j]
-        if m > tol.BSP_AXIS_CANDIDATE_MIN and imbalance[j] > tol.BSP_AXIS_IMBALANCE * m:
+        if m > tol.BSP_AXIS_CANDIDATE_MIN and imbalance[j] > tol.BSP_AXIS_IMBALANCE * ms:
             # the polygons' own planes leave this node badly unbalanced (a convex
             # tessellation has every other facet on one side of each facet, and the
             # tree becomes a chain as deep as the object has facets): also try a plane
@@ -166,11 +176,13 @@ def build_bsp(scene, *, candidates=8, seed=0):
             cen = np.add.reduceat(V, starts[:-1], axis=0) / counts[:, None]
             axis = int(np.argmax(np.ptp(cen, axis=0)))
             na, da = np.eye(3)[axis:axis + 1], np.array([np.median(cen[:, axis])])
-            sg, sa = coplanar_band_sides(V, na, da)
-            a_score, _, ap, an = _plane_scores(sg, starts)
+            a_score, _, _, _ = _plane_scores(coplanar_band_sides(Vs, na, da)[0], starts_s)
             if a_score[0] < score[j]:
                 c, n, d = None, na[0], da[0]
-                sign, s, has_pos, has_neg = sg[:, 0], sa[:, 0], ap[:, 0], an[:, 0]
+        # the chosen plane against every fragment
+        sign, s = coplanar_band_sides(V, n[None], np.array([d]))
+        _, _, has_pos, has_neg = _plane_scores(sign, starts)
+        sign, s, has_pos, has_neg = sign[:, 0], s[:, 0], has_pos[:, 0], has_neg[:, 0]
         nodes_n.append(n)
         nodes_d.append(d)
         front.append(-1)

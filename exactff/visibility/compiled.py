@@ -10,6 +10,8 @@ Python engine (:func:`exactff.visibility.visible_form_factors`), which refines a
 escalates; the row's ``stats`` say when.
 """
 
+import math
+
 import numpy as np
 import shapely
 
@@ -17,6 +19,7 @@ from .. import _tolerances as tol
 from ..errors import check_finite
 from ..kernel import flat_polygons
 from ..predicates import engine_sides, sides_of_point
+from ..rings import owners, successors
 from ..prepared import prepared
 from ._svbsp import Core
 from .bsp import scene_bsp
@@ -53,10 +56,7 @@ def convex_pieces(polygon, normal):
     1
     """
     P = np.asarray(polygon, dtype=float)
-    e = np.roll(P, -1, axis=0) - P
-    turn = np.cross(e, np.roll(e, -1, axis=0)) @ normal
-    scale = np.linalg.norm(e, axis=1) * np.linalg.norm(np.roll(e, -1, axis=0), axis=1)
-    if np.all(turn >= -8 * tol.EPS * scale):   # collinear within the cross product's rounding
+    if _convex_rings(P, np.array([0, len(P)]), np.asarray(normal, dtype=float)[None])[0]:
         return [P]
     axis = int(np.argmax(np.abs(normal)))
     keep = [a for a in range(3) if a != axis]
@@ -96,30 +96,98 @@ def compiled_core(scene):
     return prepared(scene).get("compiled_core", _build_core)
 
 
+def _convex_rings(V, offsets, normals):
+    """Which rings are convex (collinear vertices allowed), all at once: the test of
+    :func:`convex_pieces` over concatenated rings.
+
+    Parameters
+    ----------
+    V : ndarray of shape (N, 3)
+        The rings' vertices, concatenated.
+    offsets : ndarray of shape (M + 1,)
+        Ring m is ``V[offsets[m]:offsets[m + 1]]``.
+    normals : ndarray of shape (M, 3)
+        Each ring's unit normal (counter-clockwise winding).
+
+    Returns
+    -------
+    ndarray of shape (M,), bool
+
+    Examples
+    --------
+    >>> L = np.array([[0, 0, 0], [2, 0, 0], [2, 1, 0], [1, 1, 0], [1, 2, 0], [0, 2, 0.]])
+    >>> _convex_rings(np.vstack([L, L[:4]]), np.array([0, 6, 10]), np.array([[0, 0, 1.0]] * 2)).tolist()
+    [False, True]
+    """
+    nxt = successors(offsets)
+    e = V[nxt] - V
+    e_next = e[nxt]
+    # each corner's turn about the normal, and its cross product's rounding scale
+    turn = np.einsum("ij,ij->i", np.cross(e, e_next), normals[owners(offsets)])
+    scale = np.sqrt(np.einsum("ij,ij->i", e, e) * np.einsum("ij,ij->i", e_next, e_next))
+    ok = turn >= -tol.CONVEX_TURN_ULPS * tol.EPS * scale
+    return np.logical_and.reduceat(ok, offsets[:-1])
+
+
+def _ragged_ranges(starts, lengths):
+    """The concatenation of ``arange(s, s + k)`` for each start s and length k."""
+    lengths = np.asarray(lengths, dtype=np.int64)
+    total = int(lengths.sum())
+    if total == 0:
+        return np.zeros(0, np.int64)
+    shift = np.repeat(np.asarray(starts, np.int64) - np.cumsum(lengths) + lengths, lengths)
+    return shift + np.arange(total, dtype=np.int64)
+
+
 def _build_core(scene):
     tree, _ = scene_bsp(scene)
-    normals = scene.normals
-    pieces, first = [], np.zeros(len(tree.fragments) + 1, dtype=np.int64)
+    frag_normals = scene.normals[tree.source]
+    counts = np.array([len(P) for P in tree.fragments], dtype=np.int64)
+    offsets = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
+    convex = (_convex_rings(np.concatenate(tree.fragments), offsets, frag_normals)
+              if len(counts) else np.zeros(0, bool))
+    pieces, n_pieces = [], np.ones(len(counts), dtype=np.int64)
     for f, P in enumerate(tree.fragments):
-        parts = convex_pieces(P, normals[tree.source[f]])
+        if convex[f]:
+            pieces.append(P)
+            continue
+        parts = convex_pieces(P, frag_normals[f])
         pieces.extend(parts)
-        first[f + 1] = first[f] + len(parts)
+        n_pieces[f] = len(parts)
+    first = np.concatenate([[0], np.cumsum(n_pieces)]).astype(np.int64)
     count = np.array([len(q) for q in pieces], dtype=np.int64)
     start = np.concatenate([[0], np.cumsum(count)[:-1]]).astype(np.int64)
     vertices = np.concatenate(pieces) if pieces else np.zeros((0, 3))
-    source = np.repeat(tree.source, np.diff(first)).astype(np.int64)
+    source = np.repeat(tree.source, n_pieces).astype(np.int64)
 
     def expand(lists):
-        out = [np.arange(first[f], first[f + 1]) for here in lists for f in here]
-        return np.concatenate(out).astype(np.int64) if out else np.zeros(0, np.int64)
+        # each node's fragments, in order, as the indices of their pieces
+        flat = np.fromiter((f for here in lists for f in here), dtype=np.int64)
+        return _ragged_ranges(first[flat], n_pieces[flat])
 
-    sizes = [sum(int(first[f + 1] - first[f]) for f in here) for here in tree.node_fragments]
+    sizes = [int(n_pieces[here].sum()) if len(here) else 0 for here in tree.node_fragments]
     here_start = np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64)
     core = Core(vertices, start, count, source, tree.front.astype(np.int64),
                 tree.back.astype(np.int64), here_start, expand(tree.node_fragments),
                 expand(tree.node_fragments_behind), len(scene), tol.SVBSP_BAND,
                 tol.C1, tol.C2, tol.SVBSP_SPLIT_ULPS)
     return tree, core
+
+
+def _shadow_tiles(n):
+    """Planes per axis of the grid the compiled core cuts the upper hemisphere into
+    before any shadow, for a scene of ``n`` polygons: about ``SVBSP_POLYGONS_PER_CELL``
+    polygons per cell, within ``SVBSP_TILES`` and ``SVBSP_TILES_MAX`` (each cell's
+    shadows grow on their own chain; more cells, shorter chains, but a bigger tree to
+    build each row).
+
+    Examples
+    --------
+    >>> _shadow_tiles(4424), _shadow_tiles(80461)
+    (8, 35)
+    """
+    cells_per_axis = math.ceil(math.sqrt(n / tol.SVBSP_POLYGONS_PER_CELL))
+    return int(min(max(cells_per_axis - 1, tol.SVBSP_TILES), tol.SVBSP_TILES_MAX))
 
 
 def compiled_form_factors(scene, point, normal, *, two_sided=False, stats=None,
@@ -201,7 +269,7 @@ def compiled_form_factors(scene, point, normal, *, two_sided=False, stats=None,
     node_side = sides_of_point(tree.normals, tree.offsets, p).astype(np.int8)
     F, E, band, counters = core.row(p, np.asarray(normal, dtype=float), node_side,
                                     side.astype(np.int8), bool(two_sided), bool(shortcuts),
-                                    tol.SVBSP_BOX_BUDGET, tol.SVBSP_TILES,
+                                    tol.SVBSP_BOX_BUDGET, _shadow_tiles(len(scene)),
                                     0.0 if tolerance is None else float(tolerance))
     check_finite(F, E)
     check_finite(band)

@@ -41,11 +41,11 @@ def is_convex_enclosure(scene):
 
 
 def _is_convex_enclosure(scene):
-    V = np.unique(scene.vertices, axis=0)
+    V = scene.vertices
     try:
-        V = V[ConvexHull(V).vertices]
+        V = V[ConvexHull(V).vertices]      # Qhull merges repeated points itself
     except (QhullError, ValueError):
-        pass  # flat or tiny scenes: test every vertex
+        V = np.unique(V, axis=0)           # flat or tiny scenes: test every vertex
     sign, _ = coplanar_band_sides(V, scene.normals, scene.plane_offsets)
     if np.any(sign < 0):
         return False
