@@ -185,7 +185,7 @@ def _cells(Pc, nP, lines, R, c):
     return tris
 
 
-def _hidden_values(X, nP, Qc, blockers, st=None):
+def _hidden_values(X, nP, Qc, blockers, st=None, split=True):
     """``F(x -> Qc) - F_occ(x -> Qc)`` for each point x of X (normal nP): the point form
     factor of the part of Qc that the blockers hide from x, and its error estimate.
 
@@ -197,9 +197,12 @@ def _hidden_values(X, nP, Qc, blockers, st=None):
     count positive, holes negative. The estimate adds to the sector sums' rounding the
     effect of moving the region's boundary by the booleans' rounding (a few units of the
     largest coordinate), through the kernel's largest value over the region's bounding
-    box, ``h / (pi r^3)``. Where GEOS fails, the engine computes them instead
-    (:func:`_hidden_values_by_engine`), counted in ``st["engine_fallbacks"]`` (and the
-    points in ``st["engine_fallback_points"]``).
+    box, ``h / (pi r^3)``. A point on Qc's plane sees nothing of it (0). Where GEOS
+    fails, the engine computes them instead (:func:`_hidden_values_by_engine`), counted
+    in ``st["engine_fallbacks"]`` (and the points in ``st["engine_fallback_points"]``);
+    where a point's images do not stay finite (a blocker's vertex at the point, to
+    rounding), the engine computes that point's value and the others are computed as
+    above (with ``split``; :func:`_hidden_values_split`).
 
     Returns
     -------
@@ -232,7 +235,11 @@ def _hidden_values(X, nP, Qc, blockers, st=None):
     NK /= np.linalg.norm(NK, axis=1)[:, None]
     size = float(np.ptp(np.vstack(Kc + [Qc, X]), axis=0).max())
     edge_on = np.abs(np.einsum("pbj,bj->pb", D[:, :, 0, :], NK)) <= tol.AREA_EDGE_ON_RTOL * size
-    pairs = np.flatnonzero(~(np.all(side <= 0, axis=3).any(axis=2) | edge_on))
+    # a point on Q's plane (a node at Q's edge, to rounding) sees Q edge-on: nothing of
+    # it is seen, so nothing is hidden (and its images would divide 0 by 0)
+    h = (X - q0) @ nQ
+    on_plane = (h <= 0)[:, None]
+    pairs = np.flatnonzero(~(np.all(side <= 0, axis=3).any(axis=2) | edge_on | on_plane))
     if pairs.size == 0:
         return zero, zero
     pt, blk = pairs // nb, pairs % nb
@@ -241,7 +248,6 @@ def _hidden_values(X, nP, Qc, blockers, st=None):
     for a in range(4):
         Vb, cnt = clip_halfspace(Vb, np.where(cnt >= 3, cnt, 0), M[pt, a])
     # central projection from x onto Qc's plane: q = x + y h / (-nQ . y), y = offset
-    h = (X - q0) @ nQ
     live = np.flatnonzero(cnt >= 3)
     if live.size == 0:
         return zero, zero
@@ -250,11 +256,18 @@ def _hidden_values(X, nP, Qc, blockers, st=None):
     pt = pt[live]                                                       # sorted
     Y = Y * (h[pt, None] / -(Y @ nQ))[:, :, None] + (X[pt] - q0)[:, None, :]
     Y2 = Y @ RQ[:2].T
-    images = shapely.polygons(Y2)
+    lost = np.unique(pt[~np.isfinite(Y2).all(axis=(1, 2))])
+    if lost.size and split:
+        # an image through infinity (a blocker's vertex at x to rounding): those points
+        # by the engine, the others as below
+        return _hidden_values_split(X, nP, Qc, blockers, lost, st)
     # each image's rank among its point's images: the union grows rank by rank
     rank = np.arange(len(pt)) - np.searchsorted(pt, pt)
     union = np.full(nX, shapely.Polygon(), dtype=object)
     try:
+        if lost.size:
+            raise shapely.errors.GEOSException("image through infinity")
+        images = shapely.polygons(Y2)
         bad = ~shapely.is_valid(images)
         if bad.any():
             images[bad] = shapely.make_valid(images[bad])
@@ -303,6 +316,23 @@ def _hidden_values(X, nP, Qc, blockers, st=None):
     est = rnd + geo
     # holes subtract: below 0 only by rounding, within the estimate
     return nonnegative(value, est, "hidden part"), est
+
+
+def _hidden_values_split(X, nP, Qc, blockers, lost, st):
+    """:func:`_hidden_values` with the points ``lost`` (indices into X) by the engine
+    (counted as a fallback) and the others by GEOS (without a second split: if their
+    images still do not stay finite, the engine takes them all)."""
+    H, EH = np.zeros(len(X)), np.zeros(len(X))
+    keep = np.setdiff1d(np.arange(len(X)), lost)
+    if keep.size:
+        H[keep], EH[keep] = _hidden_values(X[keep], nP, Qc, blockers, st, split=False)
+    if st is not None:
+        st["engine_fallbacks"] = st.get("engine_fallbacks", 0) + 1
+        st["engine_fallback_points"] = st.get("engine_fallback_points", 0) + len(lost)
+    Kc = [K for K in (clip_front(np.asarray(K), *_plane_frame(Qc)[:2]) for K in blockers)
+          if K is not None]
+    H[lost], EH[lost] = _hidden_values_by_engine(X[lost], nP, Qc, Kc)
+    return H, EH
 
 
 def _hidden_values_by_engine(X, nP, Qc, blockers):
