@@ -514,7 +514,8 @@ def test_cli_matrix_area(tmp_path):
 # ---------------------------------------------------------------------------------------
 # shortcuts (issue 33): each off under shortcuts=False, counted in stats, and neutral
 # ---------------------------------------------------------------------------------------
-SHORTCUT_COUNTERS = ("hull_unoccluded_pairs", "hull_culled_blockers", "far_pairs",
+SHORTCUT_COUNTERS = ("hull_unoccluded_pairs", "hull_culled_blockers", "shaft_culled_blockers",
+                     "shaft_unoccluded_pairs", "far_pairs",
                      "culled_events")
 
 
@@ -544,10 +545,18 @@ def _shortcut_scene(name):
         return _room_with_plate(), [0], 1e-7, ("hull_unoccluded_pairs", "hull_culled_blockers")
     if name == "box":
         return _box_on_a_floor(), [0], 1e-7, ("hull_unoccluded_pairs", "hull_culled_blockers", "culled_events")
+    if name == "facet":
+        # View3D's facet box (a plate inside a unit box): row 5, the wall behind the
+        # plate, whose pairs with the side walls have the plate in their boxes but
+        # outside their shafts
+        import os
+        scene = ef.read_vs3(os.path.join(os.path.dirname(__file__), "data", "view3d", "facet.vs3"))
+        return scene, [5], 1e-7, ("hull_unoccluded_pairs", "hull_culled_blockers",
+                                  "shaft_culled_blockers", "shaft_unoccluded_pairs")
     return _far_squares(), [0, 1], 1e-9, ("far_pairs", "hull_unoccluded_pairs", "hull_culled_blockers")
 
 
-@pytest.mark.parametrize("name", ["reference0", "reference1", "room", "box", "far"])
+@pytest.mark.parametrize("name", ["reference0", "reference1", "room", "box", "far", "facet"])
 def test_area_shortcuts_are_neutral_and_counted(name):
     # with shortcuts=False (every other polygon a blocker of every pair, the contour
     # integral for far pairs, every blocker-blocker event cut along) the values agree

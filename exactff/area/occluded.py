@@ -14,7 +14,7 @@ from scipy.special import roots_legendre
 
 from .. import _tolerances as tol
 from ..errors import misses_tolerance
-from ..geometry import area_vector, receiver_frame
+from ..geometry import area_vector, receiver_frame, unit_normal
 from ..halfspace import clip_halfspace
 from ..kernel import clipped_sector_sums
 from ..methods import Exact
@@ -26,31 +26,52 @@ from .contour import (clip_front, emitter_nodes, far_values, is_far, nonnegative
 __all__ = ["area_row", "STATS"]
 
 #: The counters :func:`area_row` fills in ``stats`` (each 0 where its shortcut is off or
-#: did not apply): pairs taken by the exact contour integral because the hull test left
-#: no blocker (``hull_unoccluded_pairs``; the polygons it left out:
-#: ``hull_culled_blockers``), far pairs by the far-field rule (``far_pairs``),
+#: did not apply): pairs taken by the exact contour integral because shaft culling and
+#: the hull test left no blocker (``hull_unoccluded_pairs``; the polygons they left out:
+#: ``hull_culled_blockers``), polygons in a pair's bounding box that the shaft's planes
+#: rejected before the hull test (``shaft_culled_blockers``) and pairs whose box held
+#: polygons but the shaft none, so that no hull was built (``shaft_unoccluded_pairs``),
+#: far pairs by the far-field rule (``far_pairs``),
 #: blocker-blocker events not cut along because their lines of sight miss the receiver
 #: (``culled_events``), batches of hidden parts the engine computed where GEOS failed
-#: (``engine_fallbacks``, their points ``engine_fallback_points``); and what was done:
-#: ``occluded_pairs``, ``point_values`` (hidden parts evaluated).
-STATS = ("hull_unoccluded_pairs", "hull_culled_blockers", "far_pairs", "culled_events",
+#: or a point's images did not stay finite (``engine_fallbacks``, their points
+#: ``engine_fallback_points``); and what was done: ``occluded_pairs``, ``point_values``
+#: (hidden parts evaluated).
+STATS = ("hull_unoccluded_pairs", "hull_culled_blockers", "shaft_culled_blockers",
+         "shaft_unoccluded_pairs", "far_pairs", "culled_events",
          "engine_fallbacks", "engine_fallback_points", "occluded_pairs", "point_values")
 
 
 def _padded(polys):
     """The scene's polygons as one array (n, kmax, 3), short ones padded by repeating
-    their last vertex, with their bounding boxes (for :func:`_blockers`)."""
+    their last vertex, with their bounding boxes and unit normals (Newell, relative to
+    the first vertex as :func:`area_vector`; the repeats add nothing)."""
     V, _ = padded(polys)
-    return V, V.min(axis=1), V.max(axis=1)
+    W = V - V[:, :1]
+    A = 0.5 * np.cross(W, np.roll(W, -1, axis=1)).sum(axis=1)
+    return V, V.min(axis=1), V.max(axis=1), A / np.linalg.norm(A, axis=1)[:, None]
+
+
+def _hull_blockers(V, cand, Pc, Qc, near):
+    """The candidates (indices into V) reaching into the interior of the convex hull of
+    Pc and Qc: a polygon on or outside one face of the hull hides nothing of positive
+    measure (the exact test; no hull, as for a flat pair: none)."""
+    if len(cand) == 0:
+        return []
+    try:
+        H = ConvexHull(np.vstack([Pc, Qc])).equations      # a . x + b <= 0 inside
+    except QhullError:
+        return []
+    outside = np.all(V[cand] @ H[:, :3].T + H[:, 3] >= -near, axis=1)      # (c, faces)
+    return [int(k) for k in np.asarray(cand)[~outside.any(axis=1)]]
 
 
 def _blockers(padded, i, j, Pc, Qc, scale, shortcuts=True):
     """Polygons (indices) that may hide part of Qc from part of Pc: those reaching into
-    the interior of the convex hull of both (a polygon on or outside a face of the hull
-    hides nothing of positive measure). ``padded`` is :func:`_padded` of the scene.
-    Without ``shortcuts``, every polygon but i and j."""
-
-    V, lo_k, hi_k = padded
+    the interior of the convex hull of both (the hull test alone, for one pair: what
+    :func:`_shaft` decides for a whole row before the hull test). ``padded`` is
+    :func:`_padded` of the scene. Without ``shortcuts``, every polygon but i and j."""
+    V, lo_k, hi_k = padded[:3]
     if not shortcuts:
         return [k for k in range(len(V)) if k not in (i, j)]
     pts = np.vstack([Pc, Qc])
@@ -58,16 +79,97 @@ def _blockers(padded, i, j, Pc, Qc, scale, shortcuts=True):
     lo, hi = pts.min(axis=0) - near, pts.max(axis=0) + near
     cand = np.all((hi_k >= lo) & (lo_k <= hi), axis=1)
     cand[[i, j]] = False
-    cand = np.flatnonzero(cand)
-    if cand.size == 0:
-        return []
-    try:
-        H = ConvexHull(pts).equations               # a . x + b <= 0 inside
-    except QhullError:
-        return []
-    # on or outside one face of the hull: hides nothing
-    outside = np.all(V[cand] @ H[:, :3].T + H[:, 3] >= -near, axis=1)      # (c, faces)
-    return [int(k) for k in cand[~outside.any(axis=1)]]
+    return _hull_blockers(V, np.flatnonzero(cand), Pc, Qc, near)
+
+
+#: The box edges the shaft's side planes join: two axes and a direction along each.
+_SHAFT_EDGES = tuple((a, b, sa, sb) for a, b in ((0, 1), (0, 2), (1, 2))
+                     for sa in (1.0, -1.0) for sb in (1.0, -1.0))
+
+
+def _shaft(padded, i, J, boxes, nP, p0, near, st):
+    """The blockers of each pair (i, J[a]) of a row that survive shaft culling (Haines &
+    Wallace 1991), decided for all pairs and all polygons at once: a polygon stays a
+    candidate only if it reaches into the open interior of the pair's bounding box, is
+    not on or behind P's plane nor on or behind the receiver's (rays leave P's front and
+    reach Q's front), and is not on or outside one of the shaft's side planes, the
+    planes through an edge of each of the two polygons' boxes where one box extends
+    beyond the other along one axis and the other along a second (each is a supporting
+    plane of both boxes, so the shaft holds the convex hull of the pair: a polygon it
+    rejects lies outside that hull, to ``near / 2``, and hides nothing). What survives
+    goes to the hull test (:func:`_hull_blockers`).
+
+    Parameters
+    ----------
+    padded : tuple
+        :func:`_padded` of the scene.
+    i : int
+        The emitter.
+    J : ndarray of shape (m,)
+        The receivers.
+    boxes : ndarray of shape (m, 4, 3)
+        Per pair, the clipped emitter's box (lo, hi) and the clipped receiver's (lo, hi).
+    nP, p0 : ndarray of shape (3,)
+        P's unit normal and a point of its plane.
+    near : float
+        The hull test's distance (``AREA_HULL_RTOL`` of the scene's size).
+    st : dict
+        Counts ``shaft_culled_blockers`` (polygons in a pair's box the planes rejected:
+        the hull test never sees them) and ``shaft_unoccluded_pairs`` (pairs whose box
+        held polygons, none left: no hull built).
+
+    Returns
+    -------
+    list of ndarray
+        Per pair, the candidates for the hull test.
+    """
+    V, lo_k, hi_k, N = padded
+    m = len(J)
+    loP, hiP, loQ, hiQ = boxes[:, 0], boxes[:, 1], boxes[:, 2], boxes[:, 3]
+    lo, hi = np.minimum(loP, loQ), np.maximum(hiP, hiQ)
+    # polygons reaching into the open interior of each pair's box (m, n)
+    inbox = np.all((hi_k[None] > lo[:, None]) & (lo_k[None] < hi[:, None]), axis=2)
+    inbox[:, i] = False
+    inbox[np.arange(m), J] = False
+    a, k = np.nonzero(inbox)                        # sorted by pair
+    boxed = np.bincount(a, minlength=m)
+    # on or behind P's plane: for every pair of the row at once
+    keep = ((V - p0) @ nP).max(axis=1)[k] > 0.5 * near
+    a, k = a[keep], k[keep]
+    # on or behind the receiver's plane
+    q0 = V[J, 0]
+    keep = np.einsum("ckx,cx->ck", V[k] - q0[a][:, None], N[J][a]).max(axis=1) > 0.5 * near
+    a, k = a[keep], k[keep]
+    # the side planes: through the edge of box A extreme in direction sa along axis ax
+    # and the edge of box B extreme in direction sb along axis bx (A != B), parallel to
+    # the third axis; the outward normal (sa |d_b|, sb |d_a|) is in the quadrant (sa, sb)
+    for ax, bx, sa, sb in _SHAFT_EDGES:
+        if a.size == 0:
+            break
+        eP = np.stack([np.where(sa > 0, hiP[:, ax], loP[:, ax]),
+                       np.where(sb > 0, hiP[:, bx], loP[:, bx])], axis=1)
+        eQ = np.stack([np.where(sa > 0, hiQ[:, ax], loQ[:, ax]),
+                       np.where(sb > 0, hiQ[:, bx], loQ[:, bx])], axis=1)
+        sign = np.array([sa, sb])
+        p_ahead = (sign * eP > sign * eQ)           # P's box beyond Q's along ax, bx
+        q_ahead = (sign * eQ > sign * eP)
+        active = (p_ahead[:, 0] & q_ahead[:, 1]) | (q_ahead[:, 0] & p_ahead[:, 1])
+        d = eQ - eP
+        n2 = sign * np.abs(d[:, ::-1])
+        size = np.linalg.norm(n2, axis=1)[:, None]
+        n2 = np.divide(n2, size, out=np.zeros_like(n2), where=size > 0)    # 0: inactive
+        off = np.einsum("mx,mx->m", n2, eP)
+        on = active[a]
+        if not on.any():
+            continue
+        dist = np.einsum("ckx,cx->ck", V[k[on]][:, :, [ax, bx]], n2[a[on]]).min(axis=1) - off[a[on]]
+        drop = np.zeros(a.size, dtype=bool)
+        drop[np.flatnonzero(on)[dist >= -0.5 * near]] = True
+        a, k = a[~drop], k[~drop]
+    left = np.bincount(a, minlength=m)
+    st["shaft_culled_blockers"] += int(boxed.sum() - left.sum())
+    st["shaft_unoccluded_pairs"] += int(np.count_nonzero((boxed > 0) & (left == 0)))
+    return np.split(k, np.cumsum(left)[:-1])
 
 
 def _plane_frame(Q):
@@ -448,8 +550,67 @@ def _hidden_integral(S, Pc, Qc, nP, tolerance, area_P, whole, shortcuts, st):
     return value, err + whole[1], points
 
 
+def _front_pairs(polys, i, nP, padded, near):
+    """The receivers j of row i with each polygon's part in front of the other's plane
+    (one-sided: rays leave P's front and reach Q's front), and those parts, as a list of
+    ``(j, Pc, Qc)``: decided for all receivers at once where every vertex is clear of
+    the other's plane by more than ``near`` (wholly behind: dropped; wholly in front:
+    kept whole, the polygon itself), by :func:`clip_front` for the others."""
+    V, _, _, N = padded
+    P = polys[i]
+    dQ = (V - P[0]) @ nP                                    # (n, kmax)
+    dP = np.einsum("njx,nx->nj", P[None] - V[:, :1], N)     # (n, kP)
+    behind = (dQ.max(axis=1) < -near) | (dP.max(axis=1) < -near)
+    behind[i] = True
+    whole_Q, whole_P = dQ.min(axis=1) > near, dP.min(axis=1) > near
+    out = []
+    for j in np.flatnonzero(~behind):
+        Q = polys[j]
+        Pc = P if whole_P[j] else clip_front(P, unit_normal(Q), Q[0])
+        Qc = Q if whole_Q[j] else clip_front(Q, nP, P[0])
+        if Pc is not None and Qc is not None:
+            out.append((int(j), Pc, Qc))
+    return out
+
+
+def _unoccluded_values(polys, i, nP, area_P, pairs, shortcuts, st):
+    """The values and estimates of a row's unoccluded pairs ``(j, Pc, Qc)``: far pairs
+    with P whole by the far-field rule, all together (one set of nodes on P, one kernel
+    call), the others by the contour integral pair by pair. The one place where a
+    row's unoccluded pairs are computed (a batch of contour integrals goes here).
+
+    Returns
+    -------
+    (list of int, ndarray, ndarray)
+        The receivers, their values and their estimates.
+    """
+    P = polys[i]
+    js = [j for j, _, _ in pairs]
+    f, e = np.zeros(len(pairs)), np.zeros(len(pairs))
+    far = [a for a, (j, Pc, _) in enumerate(pairs)
+           if shortcuts and Pc is P and is_far(P, polys[j])]
+    near = np.setdiff1d(np.arange(len(pairs)), far)
+    for a in near:
+        Q = polys[pairs[a][0]]
+        if shortcuts and is_far(P, Q):
+            st["far_pairs"] += 1
+        f[a], e[a] = unoccluded_pair(P, Q, far=shortcuts)
+    if far:
+        st["far_pairs"] += len(far)
+        f[far], e[far] = far_values(emitter_nodes(P, nP), nP, area_P,
+                                    [pairs[a][2] for a in far])
+    return js, f, e
+
+
 def area_row(scene, i, tolerance, *, rtol=None, shortcuts=True, stats=None):
     """Row i of :func:`exactff.area_form_factors` and its estimates.
+
+    The pairs of the row are decided together: the receivers in front of P (and P in
+    front of them, :func:`_front_pairs`), then each pair's blockers by shaft culling
+    (:func:`_shaft`, all pairs and polygons at once) and the hull test on what survives
+    (:func:`_hull_blockers`); occluded pairs are integrated one by one
+    (:func:`_occluded_pair`), the unoccluded ones together at the end
+    (:func:`_unoccluded_values`).
 
     Parameters
     ----------
@@ -462,9 +623,10 @@ def area_row(scene, i, tolerance, *, rtol=None, shortcuts=True, stats=None):
         Also allowed: this share of the value; the bound is ``max(tolerance, rtol * F)``.
     shortcuts : bool, default True
         False disables every shortcut (for testing that they never change a result
-        beyond the estimates): the hull test (every other polygon is then a blocker of
-        every pair), the far-field rule (the contour integral for every pair) and the
-        cull of blocker-blocker events whose lines of sight miss the receiver.
+        beyond the estimates): shaft culling and the hull test (every other polygon is
+        then a blocker of every pair), the far-field rule (the contour integral for
+        every pair) and the cull of blocker-blocker events whose lines of sight miss
+        the receiver.
     stats : dict, optional
         Filled with this row's counters (:data:`STATS`).
 
@@ -476,44 +638,43 @@ def area_row(scene, i, tolerance, *, rtol=None, shortcuts=True, stats=None):
     st = {k: 0 for k in STATS}
     polys = [np.asarray(p, dtype=float) for p in scene.polygons]
     padded = _padded(polys)
+    V = padded[0]
     P = polys[i]
     scale = float(np.ptp(scene.vertices, axis=0).max()) or 1.0
+    near = tol.AREA_HULL_RTOL * scale
     AP = area_vector(P)
     area_P = float(np.linalg.norm(AP))
     nP = AP / area_P
     f, e = np.zeros(len(polys)), np.zeros(len(polys))
-    far = []                      # far unoccluded pairs with P whole: integrated together
-    for j, Q in enumerate(polys):
-        if j == i:
-            continue
-        nQ = area_vector(Q)
-        nQ = nQ / np.linalg.norm(nQ)
-        Pc = clip_front(P, nQ, Q[0])
-        Qc = clip_front(Q, nP, P[0])
-        if Pc is None or Qc is None:
-            continue
-        B = _blockers(padded, i, j, Pc, Qc, scale, shortcuts)
+    pairs = _front_pairs(polys, i, nP, padded, near)
+    if not pairs:
+        if stats is not None:
+            stats.update(st)
+        return f, e
+    if shortcuts:
+        J = np.array([j for j, _, _ in pairs])
+        boxes = np.array([(Pc.min(axis=0), Pc.max(axis=0), Qc.min(axis=0), Qc.max(axis=0))
+                          for _, Pc, Qc in pairs])
+        cands = _shaft(padded, i, J, boxes, nP, P[0], near, st)
+    unoccluded = []               # (j, Pc, Qc): computed together at the end
+    for a, (j, Pc, Qc) in enumerate(pairs):
         if shortcuts:
+            B = _hull_blockers(V, cands[a], Pc, Qc, near)
             st["hull_culled_blockers"] += len(polys) - 2 - len(B)
+        else:
+            B = [k for k in range(len(polys)) if k not in (i, j)]
         if B:
             st["occluded_pairs"] += 1
-            f[j], e[j], points = _occluded_pair([Q] + [polys[k] for k in B], Pc, Qc, nP,
-                                                tolerance, area_P, shortcuts, st, rtol)
+            f[j], e[j], points = _occluded_pair([polys[j]] + [polys[k] for k in B], Pc, Qc,
+                                                nP, tolerance, area_P, shortcuts, st, rtol)
             st["point_values"] += points
             f[j] = nonnegative(f[j], e[j])
             continue
         if len(polys) > 2 and shortcuts:
             st["hull_unoccluded_pairs"] += 1
-        if shortcuts and Pc is P and is_far(P, Q):
-            far.append((j, Qc))
-        else:
-            if shortcuts and is_far(P, Q):
-                st["far_pairs"] += 1
-            f[j], e[j] = unoccluded_pair(P, Q, far=shortcuts)
-    if far:
-        st["far_pairs"] += len(far)
-        js = [j for j, _ in far]
-        f[js], e[js] = far_values(emitter_nodes(P, nP), nP, area_P, [Q for _, Q in far])
+        unoccluded.append((j, Pc, Qc))
+    if unoccluded:
+        js, f[js], e[js] = _unoccluded_values(polys, i, nP, area_P, unoccluded, shortcuts, st)
     if stats is not None:
         stats.update(st)
     return f, e
