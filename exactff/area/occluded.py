@@ -21,7 +21,7 @@ from ..methods import Exact
 from ..rings import padded, shapely_rings
 from ..scene import Scene
 from .contour import (clip_front, emitter_nodes, far_values, is_far, nonnegative, point_values,
-                      triangle_rule, unoccluded_pair)
+                      unoccluded_pair)
 
 __all__ = ["area_row", "STATS"]
 
@@ -195,76 +195,80 @@ def _event_lines(S, nP, dP, R, c, radius, Qc, shortcuts=True, st=None):
     of a blocker on P) cross there to rounding; an image through infinity is kept as the
     whole chord. Without ``shortcuts`` every blocker-blocker event is kept; the ones
     culled are counted in ``st["culled_events"]``."""
-    out = []
     st = {} if st is None else st
-
-    def line(m, v, span=None):
-        # the plane m . (x - v) = 0 meets P's plane n . x = dP in a line; x0 is its point
-        # nearest to c, d its direction; the chord of the disk, or the span's part of it
-        m = m if m[np.flatnonzero(m)[0]] > 0 else -m    # one line for either orientation
-        d = np.cross(nP, m)
-        dn = np.linalg.norm(d)
-        if dn < tol.AREA_EVENT_PARALLEL * np.linalg.norm(m):
-            return
-        d /= dn
-        x0 = np.linalg.solve(np.array([nP, m, d]), np.array([dP, m @ v, d @ c]))
-        h2 = radius * radius - float((x0 - c) @ (x0 - c))
-        if h2 <= 0:
-            return
-        half = np.sqrt(h2)
-        ends = [x0 - half * d, x0 + half * d]
-        if span is not None:
-            # the span's ends where they lie on the chord (as computed: segments that
-            # meet there join exactly), else the chord's ends
-            (t0, p0), (t1, p1) = sorted(((float((q - x0) @ d), q) for q in span),
-                                        key=lambda tq: tq[0])
-            if t0 >= half or t1 <= -half:
-                return
-            ends = [p0 if t0 > -half else ends[0], p1 if t1 < half else ends[1]]
-        out.append(((ends[0] - c) @ R[:2].T, (ends[1] - c) @ R[:2].T))
-
-    def through(v, q):
-        # where the line from v through q meets P's plane (None: parallel, or beyond)
-        den = nP @ (q - v)
-        if abs(den) < tol.AREA_RAY_PARALLEL * np.linalg.norm(q - v):
-            return None
-        return v + (dP - nP @ v) / den * (q - v)
-
     nQ, q0, RQ, Q2 = _plane_frame(Qc)
     seen = shapely.Polygon(Q2)
     shapely.prepare(seen)
-
-    def reaches_receiver(v, e0, e1):
-        # the lines through v and the points of the edge meet Qc's plane along the
-        # edge's central image from v: does it cross Qc? (unbounded images: kept)
-        d0, d1 = nQ @ (e0 - v), nQ @ (e1 - v)
-        if d0 * d1 <= 0:
-            return True
-        h = nQ @ (q0 - v)
-        a, b = v + h / d0 * (e0 - v) - q0, v + h / d1 * (e1 - v) - q0
-        return seen.intersects(shapely.LineString([a @ RQ[:2].T, b @ RQ[:2].T]))
-
+    # the events in order (per polygon A: its plane, then per other polygon B, vertex v
+    # of A and edge of B): the plane m . (x - v) = 0 through v, and the span's ends
+    ms, vs, spans, spanned = [], [], [], []
     for a, A in enumerate(S):
-        N = np.cross(A[1] - A[0], A[2] - A[0])
-        line(N, A[0])
+        ms.append(np.cross(A[1] - A[0], A[2] - A[0])[None])
+        vs.append(A[:1])
+        spans.append(np.zeros((1, 2, 3)))
+        spanned.append(np.zeros(1, dtype=bool))
         for b, B in enumerate(S):
             if a == b:
                 continue
-            for v in A:
-                for e0, e1 in zip(B, np.roll(B, -1, axis=0)):
-                    m = np.cross(e0 - v, e1 - v)
-                    if np.linalg.norm(m) == 0:
-                        continue
-                    if shortcuts and a and b and not reaches_receiver(v, e0, e1):
-                        st["culled_events"] = st.get("culled_events", 0) + 1
-                        continue
-                    x0, x1 = through(v, e0), through(v, e1)
-                    s0, s1 = nP @ (e0 - v), nP @ (e1 - v)
-                    if x0 is None or x1 is None or s0 * s1 <= 0:
-                        line(m, v)              # the image passes through infinity
-                    else:
-                        line(m, v, (x0, x1))
-    return out
+            # every vertex of A against every edge of B, (kA * kB) rows in loop order
+            v = np.repeat(A, len(B), axis=0)
+            e0, e1 = np.tile(B, (len(A), 1)), np.tile(np.roll(B, -1, axis=0), (len(A), 1))
+            m = np.cross(e0 - v, e1 - v)
+            keep = np.any(m != 0, axis=1)
+            if shortcuts and a and b:
+                # the lines through v and the points of the edge meet Qc's plane along
+                # the edge's central image from v: does it cross Qc? (unbounded: kept)
+                d0, d1 = (e0 - v) @ nQ, (e1 - v) @ nQ
+                bounded = keep & (d0 * d1 > 0)
+                if bounded.any():
+                    vb, h = v[bounded], (q0 - v[bounded]) @ nQ
+                    ia = vb + (h / d0[bounded])[:, None] * (e0[bounded] - vb) - q0
+                    ib = vb + (h / d1[bounded])[:, None] * (e1[bounded] - vb) - q0
+                    segs = shapely.linestrings(np.stack([ia @ RQ[:2].T, ib @ RQ[:2].T], axis=1))
+                    miss = ~shapely.intersects(seen, segs)
+                    st["culled_events"] = st.get("culled_events", 0) + int(miss.sum())
+                    keep[np.flatnonzero(bounded)[miss]] = False
+            v, e0, e1, m = v[keep], e0[keep], e1[keep], m[keep]
+            # where the lines from v through the edge's ends meet P's plane (None:
+            # parallel, or the image passes through infinity: the whole chord)
+            den0, den1 = (e0 - v) @ nP, (e1 - v) @ nP
+            ok = ((np.abs(den0) >= tol.AREA_RAY_PARALLEL * np.linalg.norm(e0 - v, axis=1))
+                  & (np.abs(den1) >= tol.AREA_RAY_PARALLEL * np.linalg.norm(e1 - v, axis=1))
+                  & (den0 * den1 > 0))
+            with np.errstate(divide="ignore", invalid="ignore"):
+                x0 = v + ((dP - v @ nP) / den0)[:, None] * (e0 - v)
+                x1 = v + ((dP - v @ nP) / den1)[:, None] * (e1 - v)
+            ms.append(m)
+            vs.append(v)
+            spans.append(np.stack([x0, x1], axis=1))
+            spanned.append(ok)
+    m, v, span, spanned = (np.concatenate(x) for x in (ms, vs, spans, spanned))
+    # the plane meets P's plane n . x = dP in a line; x0 is its point nearest to c, d
+    # its direction; the chord of the disk, or the span's part of it
+    first = m[np.arange(len(m)), np.argmax(m != 0, axis=1)]
+    m = np.where((first > 0)[:, None], m, -m)          # one line for either orientation
+    d = np.cross(nP, m)
+    dn = np.linalg.norm(d, axis=1)
+    live = dn >= tol.AREA_EVENT_PARALLEL * np.linalg.norm(m, axis=1)
+    m, v, span, spanned, d = m[live], v[live], span[live], spanned[live], d[live] / dn[live, None]
+    A = np.stack([np.broadcast_to(nP, m.shape), m, d], axis=1)
+    rhs = np.stack([np.full(len(m), dP), np.einsum("lx,lx->l", m, v), d @ c], axis=1)
+    x0 = np.linalg.solve(A, rhs[:, :, None])[:, :, 0]
+    h2 = radius * radius - np.einsum("lx,lx->l", x0 - c, x0 - c)
+    live = h2 > 0
+    x0, d, span, spanned, half = x0[live], d[live], span[live], spanned[live], np.sqrt(h2[live])
+    ends = np.stack([x0 - half[:, None] * d, x0 + half[:, None] * d], axis=1)
+    # the span's ends where they lie on the chord (as computed: segments that meet there
+    # join exactly), else the chord's ends
+    t = np.einsum("lex,lx->le", span - x0[:, None], d)
+    swap = t[:, 1] < t[:, 0]
+    t = np.where(swap[:, None], t[:, ::-1], t)
+    span = np.where(swap[:, None, None], span[:, ::-1], span)
+    inside = ~spanned | ((t[:, 0] < half) & (t[:, 1] > -half))
+    use = spanned[:, None] & (np.stack([t[:, 0] > -half, t[:, 1] < half], axis=1))
+    ends = np.where(use[:, :, None], span, ends)[inside]
+    E2 = (ends - c) @ R[:2].T
+    return [(p0, p1) for p0, p1 in E2]
 
 
 def _cells(Pc, nP, lines, R, c):
@@ -348,7 +352,16 @@ def _hidden_values(X, nP, Qc, blockers, st=None, split=True):
     Vb = D[pt, blk]
     cnt = np.array([len(K) for K in Kc])[blk]
     for a in range(4):
-        Vb, cnt = clip_halfspace(Vb, np.where(cnt >= 3, cnt, 0), M[pt, a])
+        # only the polygons with a vertex on or outside this plane are clipped (for the
+        # others the clip returns them as they are)
+        cnt = np.where(cnt >= 3, cnt, 0)
+        valid = np.arange(Vb.shape[1])[None, :] < cnt[:, None]
+        cut = np.any(valid & ~(np.einsum("pkj,pj->pk", Vb, M[pt, a]) > 0), axis=1)
+        if cut.any():
+            W, cnt[cut] = clip_halfspace(Vb[cut], cnt[cut], M[pt[cut], a])
+            if W.shape[1] > Vb.shape[1]:
+                Vb = np.concatenate([Vb, np.repeat(Vb[:, -1:], W.shape[1] - Vb.shape[1], axis=1)], axis=1)
+            Vb[cut, :W.shape[1]] = W
     # central projection from x onto Qc's plane: q = x + y h / (-nQ . y), y = offset
     live = np.flatnonzero(cnt >= 3)
     if live.size == 0:
@@ -454,6 +467,24 @@ def _hidden_values_by_engine(X, nP, Qc, blockers):
 _RULES = tuple(roots_legendre(k) for k in tol.AREA_RULE_ORDERS)
 
 
+def _triangle_areas(T):
+    """The areas of triangles T (t, 3, 3)."""
+    return 0.5 * np.linalg.norm(np.cross(T[:, 1] - T[:, 0], T[:, 2] - T[:, 0]), axis=1)
+
+
+def _triangle_rules(T, rule):
+    """:func:`~exactff.area.contour.triangle_rule` for a batch of triangles T (t, 3, 3):
+    nodes (t, n^2, 3) and weights (t, n^2)."""
+    x, w = rule
+    x, w = 0.5 * (x + 1.0), 0.5 * w
+    U, V = np.meshgrid(x, x, indexing="ij")
+    WW = (np.outer(w, w) * U).ravel()          # the collapse's Jacobian u
+    U, UV = U.ravel()[None, :, None], (U * V).ravel()[None, :, None]
+    a, b, c = T[:, None, 0], T[:, None, 1], T[:, None, 2]
+    X = a + U * (b - a) + UV * (c - b)
+    return X, WW[None] * (2.0 * _triangle_areas(T))[:, None]
+
+
 def _corner_first(tri, blockers, nP, dP):
     """The triangle with first a vertex where a blocker's vertex touches the emitter's
     plane, if it has one. Near such a point the hidden part depends on the direction
@@ -509,41 +540,39 @@ def _hidden_integral(S, Pc, Qc, nP, tolerance, area_P, whole, shortcuts, st):
     c = Pc.mean(axis=0)
     dP = float(nP @ Pc[0])
     radius = (1.0 + tol.AREA_HIDDEN_PAD) * float(np.linalg.norm(Pc - c, axis=1).max())
-    todo = [(_corner_first(t, S[1:], nP, dP), 0)
-            for t in _cells(Pc, nP, _event_lines(S, nP, dP, R, c, radius, Qc, shortcuts, st),
-                            R, c)]
-    total_area = sum(0.5 * np.linalg.norm(np.cross(t[1] - t[0], t[2] - t[0])) for t, _ in todo)
+    T = np.array([_corner_first(t, S[1:], nP, dP)
+                  for t in _cells(Pc, nP, _event_lines(S, nP, dP, R, c, radius, Qc, shortcuts, st),
+                                  R, c)]).reshape(-1, 3, 3)
+    depth = np.zeros(len(T), dtype=int)
+    total_area = float(_triangle_areas(T).sum())
     hidden = err = 0.0
     points = 0
-    while todo:
+    while len(T):
         # every triangle of this level together: its two rules' nodes, one call
-        rules = [[triangle_rule(tri, r) for r in _RULES] for tri, _ in todo]
-        X = np.vstack([x for (xl, _), (xh, _) in rules for x in (xl, xh)])
-        H, EH = _hidden_values(X, nP, Qc, S[1:], st)
-        points += len(X)
-        nxt, at = [], 0
-        for (tri, depth), ((Xl, Wl), (Xh, Wh)) in zip(todo, rules):
-            Hl, Hh = H[at:at + len(Xl)], H[at + len(Xl):at + len(Xl) + len(Xh)]
-            EHh = EH[at + len(Xl):at + len(Xl) + len(Xh)]
-            at += len(Xl) + len(Xh)
-            lo, hi = Wl @ Hl, Wh @ Hh
-            area_t = 0.5 * np.linalg.norm(np.cross(tri[1] - tri[0], tri[2] - tri[0]))
-            diff = abs(hi - lo) / area_P
-            if area_t / area_P <= tol.AREA_SLIVER_SHARE * tolerance:
-                # a sliver (between nearly coincident events): kept as it is, with the
-                # largest error it can carry (the hidden part is between 0 and 1)
-                hidden += hi / area_P
-                err += area_t / area_P
-                continue
-            if diff > 0.5 * tolerance * area_t / total_area and depth < tol.AREA_MAX_DEPTH:
-                a, b, cc = tri
-                ab, bc, ca = (a + b) / 2, (b + cc) / 2, (cc + a) / 2
-                nxt += [(np.array(t), depth + 1) for t in
-                        ((a, ab, ca), (ab, b, bc), (ca, bc, cc), (ab, bc, ca))]
-                continue
-            hidden += hi / area_P
-            err += diff + (Wh @ EHh) / area_P
-        todo = nxt
+        (Xl, Wl), (Xh, Wh) = (_triangle_rules(T, r) for r in _RULES)
+        nl = Xl.shape[1]
+        H, EH = _hidden_values(np.concatenate([Xl, Xh], axis=1).reshape(-1, 3), nP, Qc, S[1:], st)
+        points += H.size
+        H, EH = H.reshape(len(T), -1), EH.reshape(len(T), -1)
+        lo, hi = (Wl * H[:, :nl]).sum(axis=1), (Wh * H[:, nl:]).sum(axis=1)
+        area_t = _triangle_areas(T)
+        diff = np.abs(hi - lo) / area_P
+        # a sliver (between nearly coincident events): kept as it is, with the largest
+        # error it can carry (the hidden part is between 0 and 1)
+        sliver = area_t / area_P <= tol.AREA_SLIVER_SHARE * tolerance
+        hidden += float(hi[sliver].sum()) / area_P
+        err += float(area_t[sliver].sum()) / area_P
+        split = ~sliver & (diff > 0.5 * tolerance * area_t / total_area) & (depth < tol.AREA_MAX_DEPTH)
+        done = ~sliver & ~split
+        hidden += float(hi[done].sum()) / area_P
+        err += float(diff[done].sum() + (Wh[done] * EH[done, nl:]).sum() / area_P)
+        # the others cut in four at their edges' midpoints
+        a_, b_, c_ = T[split, 0], T[split, 1], T[split, 2]
+        ab, bc, ca = (a_ + b_) / 2, (b_ + c_) / 2, (c_ + a_) / 2
+        T = np.stack([np.stack(t, axis=1) for t in
+                      ((a_, ab, ca), (ab, b_, bc), (ca, bc, c_), (ab, bc, ca))],
+                     axis=1).reshape(-1, 3, 3)
+        depth = np.repeat(depth[split] + 1, 4)
     area_Pc = float(np.linalg.norm(area_vector(Pc)))
     value = whole[0] - hidden
     err += max(area_Pc - total_area, 0.0) / area_P      # cells dropped as slivers
