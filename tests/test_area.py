@@ -414,10 +414,16 @@ def test_hidden_part_falls_back_to_the_engine_where_geos_fails(monkeypatch):
     X = P[0] + np.outer(np.linspace(0.05, 0.95, 7), P[1] - P[0]) + 0.3 * (P[3] - P[0])
     H, EH = area._hidden_values(X, nP, Q, B)
 
-    def fail(*args, **kwargs):
-        raise shapely.errors.GEOSException("TopologyException: side location conflict")
+    build = shapely.polygons
 
-    monkeypatch.setattr(area.shapely, "intersection", fail)
+    def fail(coords, *args, **kwargs):
+        # the images of a batch of points (not a single polygon's construction)
+        if np.ndim(coords) == 3:
+            raise shapely.errors.GEOSException("IllegalArgumentException: Points of LinearRing "
+                                               "do not form a closed linestring")
+        return build(coords, *args, **kwargs)
+
+    monkeypatch.setattr(area.shapely, "polygons", fail)
     G, EG = area._hidden_values(X, nP, Q, B)
     assert H.max() > 0.01 and np.all(np.abs(G - H) <= EG + EH + 1e-16)
 
@@ -614,10 +620,16 @@ def test_area_engine_fallbacks_are_counted(monkeypatch):
     f, e = area_row(scene, 0, 1e-6, stats=st)
     assert st["engine_fallbacks"] == st["engine_fallback_points"] == 0
 
-    def fail(*args, **kwargs):
-        raise shapely.errors.GEOSException("TopologyException: side location conflict")
+    build = shapely.polygons
 
-    monkeypatch.setattr(area.shapely, "intersection", fail)
+    def fail(coords, *args, **kwargs):
+        # the images of a batch of points (not a single polygon's construction)
+        if np.ndim(coords) == 3:
+            raise shapely.errors.GEOSException("IllegalArgumentException: Points of LinearRing "
+                                               "do not form a closed linestring")
+        return build(coords, *args, **kwargs)
+
+    monkeypatch.setattr(area.shapely, "polygons", fail)
     fst = {}
     g, eg = area_row(scene, 0, 1e-6, stats=fst)
     assert fst["engine_fallbacks"] > 0 and fst["engine_fallback_points"] == fst["point_values"]

@@ -296,9 +296,10 @@ def _hidden_values(X, nP, Qc, blockers, st=None, split=True):
     factor of the part of Qc that the blockers hide from x, and its error estimate.
 
     Built in Qc's plane: each blocker, clipped to the front of that plane and to the
-    pyramid from x over a rectangle around Qc, is projected from x onto the plane (a
-    projective map: its image stays a simple polygon within the rectangle); the images
-    are united and intersected with Qc (GEOS, vectorised over the points), and the
+    pyramid from x over Qc where Qc is strictly convex (else over a rectangle around
+    it), is projected from x onto the plane (a projective map: its image stays a simple
+    polygon within the pyramid's base); the images are united (and, over a rectangle,
+    intersected with Qc; GEOS, vectorised over the points), and the
     region's rings integrated by the sector sums (Eq. 3's kernel) from x: outer rings
     count positive, holes negative. The estimate adds to the sector sums' rounding the
     effect of moving the region's boundary by the booleans' rounding (a few units of the
@@ -317,11 +318,18 @@ def _hidden_values(X, nP, Qc, blockers, st=None, split=True):
     nX = len(X)
     nQ, q0, RQ, Q2 = _plane_frame(Qc)
     qpoly = shapely.Polygon(Q2)
-    lo, hi = Q2.min(axis=0), Q2.max(axis=0)
-    pad = tol.AREA_HIDDEN_PAD * float((hi - lo).max())
-    lo, hi = lo - pad, hi + pad
-    corners = q0 + np.array([[lo[0], lo[1]], [hi[0], lo[1]], [hi[0], hi[1]],
-                             [lo[0], hi[1]]]) @ RQ[:2]
+    # the pyramid's base: Qc itself where it is strictly convex (the images then lie in
+    # it: their union is the hidden region, and a blocker outside the pyramid is not
+    # clipped at all), else a rectangle around it (the union then cut by Qc)
+    convex = _strictly_convex(Q2)
+    if convex:
+        corners = np.asarray(Qc, dtype=float)
+    else:
+        lo, hi = Q2.min(axis=0), Q2.max(axis=0)
+        pad = tol.AREA_HIDDEN_PAD * float((hi - lo).max())
+        lo, hi = lo - pad, hi + pad
+        corners = q0 + np.array([[lo[0], lo[1]], [hi[0], lo[1]], [hi[0], hi[1]],
+                                 [lo[0], hi[1]]]) @ RQ[:2]
     Kc = [K for K in (clip_front(np.asarray(K), nQ, q0) for K in blockers) if K is not None]
     zero = np.zeros(nX)
     if not Kc:
@@ -351,7 +359,7 @@ def _hidden_values(X, nP, Qc, blockers, st=None, split=True):
     pt, blk = pairs // nb, pairs % nb
     Vb = D[pt, blk]
     cnt = np.array([len(K) for K in Kc])[blk]
-    for a in range(4):
+    for a in range(len(corners)):
         # only the polygons with a vertex on or outside this plane are clipped (for the
         # others the clip returns them as they are)
         cnt = np.where(cnt >= 3, cnt, 0)
@@ -391,7 +399,7 @@ def _hidden_values(X, nP, Qc, blockers, st=None, split=True):
             for r in range(1, int(rank.max()) + 1):
                 at = rank == r
                 union[pt[at]] = shapely.union(union[pt[at]], images[at])
-            hidden = shapely.intersection(union, qpoly)
+            hidden = union if convex else shapely.intersection(union, qpoly)
     except shapely.errors.GEOSException:
         # GEOS gave up on a nearly degenerate configuration: the engine instead
         if st is not None:
@@ -431,6 +439,15 @@ def _hidden_values(X, nP, Qc, blockers, st=None, split=True):
     est = rnd + geo
     # holes subtract: below 0 only by rounding, within the estimate
     return nonnegative(value, est, "hidden part"), est
+
+
+def _strictly_convex(Q2):
+    """True where the 2-D polygon Q2 (counter-clockwise) turns left at every vertex by
+    more than 1e-6 radians (no three vertices nearly on a line)."""
+    e = np.roll(Q2, -1, axis=0) - Q2
+    f = np.roll(e, -1, axis=0)
+    turn = e[:, 0] * f[:, 1] - e[:, 1] * f[:, 0]
+    return bool(np.all(turn > 1e-6 * np.linalg.norm(e, axis=1) * np.linalg.norm(f, axis=1)))
 
 
 def _hidden_values_split(X, nP, Qc, blockers, lost, st):
