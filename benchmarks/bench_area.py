@@ -198,11 +198,11 @@ def view3d_table(args):
             t0 = time.process_time()
             F, E = ef.area_form_factors(scene, tolerance=tol, error=True, stats=st)
             dt = time.process_time() - t0
-            ratio = f"{dt / v3d:.0f}" if v3d else "-"
+            ratio = f"{dt / v3d:.3g}" if v3d else "-"
             rows = (f"{np.abs(F.sum(axis=1) - 1).max():.1e} | {E.sum(axis=1).max():.1e}"
                     if encl else "- | -")
             brief = ", ".join(f"{k} {v}" for k, v in st.items() if v)
-            print(f"| {what} | {len(scene)} | {tol:g} | {dt:.2f} | {before if tol == 1e-9 else '-'} "
+            print(f"| {what} | {len(scene)} | {tol:g} | {dt:.3f} | {before if tol == 1e-9 else '-'} "
                   f"| {v3d if v3d else 'not measured'} | {ratio} | {E.max():.1e} | {rows} | {brief} |",
                   flush=True)
     print()

@@ -404,9 +404,23 @@ def test_hidden_part_against_the_engine_on_drawn_scenes(case):
         EH[0], E[0, 0], EU[0], U[0])
 
 
-def test_hidden_part_falls_back_to_the_engine_where_geos_fails(monkeypatch):
+def _fail_images(monkeypatch, area):
+    """Make GEOS fail on the images of a batch of points (not on a single polygon's
+    construction) in the area code."""
     import shapely
 
+    build = shapely.polygons
+
+    def fail(coords, *args, **kwargs):
+        if np.ndim(coords) == 3:
+            raise shapely.errors.GEOSException("IllegalArgumentException: Points of LinearRing "
+                                               "do not form a closed linestring")
+        return build(coords, *args, **kwargs)
+
+    monkeypatch.setattr(area.shapely, "polygons", fail)
+
+
+def test_hidden_part_falls_back_to_the_engine_where_geos_fails(monkeypatch):
     from exactff.area import occluded as area
 
     P, Q, B = list(_hidden_cases())[5]
@@ -414,16 +428,7 @@ def test_hidden_part_falls_back_to_the_engine_where_geos_fails(monkeypatch):
     X = P[0] + np.outer(np.linspace(0.05, 0.95, 7), P[1] - P[0]) + 0.3 * (P[3] - P[0])
     H, EH = area._hidden_values(X, nP, Q, B)
 
-    build = shapely.polygons
-
-    def fail(coords, *args, **kwargs):
-        # the images of a batch of points (not a single polygon's construction)
-        if np.ndim(coords) == 3:
-            raise shapely.errors.GEOSException("IllegalArgumentException: Points of LinearRing "
-                                               "do not form a closed linestring")
-        return build(coords, *args, **kwargs)
-
-    monkeypatch.setattr(area.shapely, "polygons", fail)
+    _fail_images(monkeypatch, area)
     G, EG = area._hidden_values(X, nP, Q, B)
     assert H.max() > 0.01 and np.all(np.abs(G - H) <= EG + EH + 1e-16)
 
@@ -610,8 +615,6 @@ def test_area_stats_from_worker_processes_and_the_options_in_the_record(tmp_path
 def test_area_engine_fallbacks_are_counted(monkeypatch):
     # where GEOS fails the engine computes the hidden part: counted (0 otherwise), and
     # the value agrees within the estimates
-    import shapely
-
     from exactff.area import area_row
     from exactff.area import occluded as area
 
@@ -620,16 +623,7 @@ def test_area_engine_fallbacks_are_counted(monkeypatch):
     f, e = area_row(scene, 0, 1e-6, stats=st)
     assert st["engine_fallbacks"] == st["engine_fallback_points"] == 0
 
-    build = shapely.polygons
-
-    def fail(coords, *args, **kwargs):
-        # the images of a batch of points (not a single polygon's construction)
-        if np.ndim(coords) == 3:
-            raise shapely.errors.GEOSException("IllegalArgumentException: Points of LinearRing "
-                                               "do not form a closed linestring")
-        return build(coords, *args, **kwargs)
-
-    monkeypatch.setattr(area.shapely, "polygons", fail)
+    _fail_images(monkeypatch, area)
     fst = {}
     g, eg = area_row(scene, 0, 1e-6, stats=fst)
     assert fst["engine_fallbacks"] > 0 and fst["engine_fallback_points"] == fst["point_values"]
