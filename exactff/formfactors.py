@@ -659,7 +659,8 @@ def area_form_factors(scene, rows=None, *, tolerance=1e-9, error=False, executor
         ``far_pairs`` (by the far-field rule), ``culled_events``,
         ``engine_fallbacks`` and ``engine_fallback_points`` (hidden parts the engine
         computed where GEOS failed or a point's images did not stay finite),
-        ``occluded_pairs`` and
+        ``cell_fallbacks`` (emitters GEOS failed to cut along their visibility events,
+        cut again on a grid of 1e-12 of their size), ``occluded_pairs`` and
         ``point_values``. Every shortcut's counter is 0 with ``shortcuts=False``.
     combine : bool, default False
         The matrix View3D prints for a scene read from a ``.vs3`` file

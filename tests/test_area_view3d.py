@@ -77,3 +77,39 @@ def test_view3d_enclosures_rows_sum_to_one(name):
     F, E = ef.area_form_factors(scene, tolerance=tol, error=True)
     for f, e in zip(F, E):
         _row_is_complete(f, e, tol)
+
+
+@pytest.mark.parametrize("failures", [1, 2])
+def test_emitter_cut_on_a_grid_where_geos_fails_to_cut_it(monkeypatch, failures):
+    # where GEOS fails to node the events, they are noded again on a fine grid: counted
+    # (0 otherwise), and the value agrees with the reference within its estimate; where
+    # that fails too, NumericalError (not a GEOSException)
+    import shapely
+
+    from exactff.area import area_row
+    from exactff.area import occluded as area
+
+    from test_area import OCCLUDED_REFERENCES, _square
+
+    plate, ref = OCCLUDED_REFERENCES[1]
+    scene = ef.Scene.from_polygons([_square(0, True), _square(2, False), plate])
+    st = {}
+    area_row(scene, 0, 1e-6, stats=st)
+    assert st["cell_fallbacks"] == 0
+    polygonize, calls = shapely.polygonize, []
+
+    def fail(*args, **kwargs):
+        calls.append(1)
+        if len(calls) <= failures:
+            raise shapely.errors.GEOSException("TopologyException: found non-noded intersection")
+        return polygonize(*args, **kwargs)
+
+    monkeypatch.setattr(area.shapely, "polygonize", fail)
+    fst = {}
+    if failures == 2:
+        with pytest.raises(ef.NumericalError):
+            area_row(scene, 0, 1e-6, stats=fst)
+        return
+    g, eg = area_row(scene, 0, 1e-6, stats=fst)
+    assert fst["cell_fallbacks"] == 1 and fst["occluded_pairs"] == 1
+    assert abs(g[1] - ref) <= eg[1] + 1e-13, (g[1] - ref, eg[1])

@@ -13,7 +13,7 @@ from scipy.spatial import ConvexHull, QhullError
 from scipy.special import roots_legendre
 
 from .. import _tolerances as tol
-from ..errors import misses_tolerance
+from ..errors import NumericalError, misses_tolerance
 from ..geometry import area_vector, receiver_frame, unit_normal
 from ..halfspace import clip_halfspace
 from ..kernel import clipped_sector_sums
@@ -35,11 +35,15 @@ __all__ = ["area_row", "STATS"]
 #: blocker-blocker events not cut along because their lines of sight miss the receiver
 #: (``culled_events``), batches of hidden parts the engine computed where GEOS failed
 #: or a point's images did not stay finite (``engine_fallbacks``, their points
-#: ``engine_fallback_points``); and what was done: ``occluded_pairs``, ``point_values``
+#: ``engine_fallback_points``), pairs whose emitter GEOS failed to cut along the
+#: events in floating point, cut again on a fine grid (``cell_fallbacks``); and what was
+#: done:
+#: ``occluded_pairs``, ``point_values``
 #: (hidden parts evaluated).
 STATS = ("hull_unoccluded_pairs", "hull_culled_blockers", "shaft_culled_blockers",
          "shaft_unoccluded_pairs", "far_pairs", "culled_events",
-         "engine_fallbacks", "engine_fallback_points", "occluded_pairs", "point_values")
+         "engine_fallbacks", "engine_fallback_points", "cell_fallbacks", "occluded_pairs",
+         "point_values")
 
 
 def _padded(polys):
@@ -271,16 +275,17 @@ def _event_lines(S, nP, dP, R, c, radius, Qc, shortcuts=True, st=None):
     return [(p0, p1) for p0, p1 in E2]
 
 
-def _cells(Pc, nP, lines, R, c):
+def _cells(Pc, nP, lines, R, c, grid=None):
     """P (clipped) cut along the event lines, as triangles in the world (the lines are
-    cut to P first, so every cell lies in P)."""
+    cut to P first, so every cell lies in P; with ``grid``, the noding snaps the
+    vertices to a grid of that size, and the cells lie in P to that size)."""
     poly = shapely.Polygon((Pc - c) @ R[:2].T)
     segs = [g for g in (shapely.LineString([p0, p1]).intersection(poly) for p0, p1 in lines)
             if not g.is_empty]
     # the union nodes the segments (already cut to P) and P's boundary; cutting the
     # union to P again would lose nodes on the boundary, and with them whole cells
     pieces = shapely.get_parts(shapely.polygonize(
-        shapely.get_parts(shapely.union_all([poly.boundary, *segs]))))
+        shapely.get_parts(shapely.union_all([poly.boundary, *segs], grid_size=grid))))
     tris = []
     for cell in pieces:
         if cell.area <= tol.AREA_SLIVER_CELL * poly.area:   # counted in the estimate
@@ -557,9 +562,21 @@ def _hidden_integral(S, Pc, Qc, nP, tolerance, area_P, whole, shortcuts, st):
     c = Pc.mean(axis=0)
     dP = float(nP @ Pc[0])
     radius = (1.0 + tol.AREA_HIDDEN_PAD) * float(np.linalg.norm(Pc - c, axis=1).max())
-    T = np.array([_corner_first(t, S[1:], nP, dP)
-                  for t in _cells(Pc, nP, _event_lines(S, nP, dP, R, c, radius, Qc, shortcuts, st),
-                                  R, c)]).reshape(-1, 3, 3)
+    lines = _event_lines(S, nP, dP, R, c, radius, Qc, shortcuts, st)
+    try:
+        cells = _cells(Pc, nP, lines, R, c)
+    except shapely.errors.GEOSException:
+        # GEOS gave up noding the events in floating point: noded again on a grid of
+        # AREA_HULL_RTOL of P's size (the cuts move by that much, the cells' area
+        # missing from P is in the estimate), counted
+        if st is not None:
+            st["cell_fallbacks"] = st.get("cell_fallbacks", 0) + 1
+        try:
+            cells = _cells(Pc, nP, lines, R, c, grid=tol.AREA_HULL_RTOL * radius)
+        except shapely.errors.GEOSException as exc:
+            raise NumericalError(f"could not cut the emitter along its {len(lines)} "
+                                 f"visibility events: {exc}") from exc
+    T = np.array([_corner_first(t, S[1:], nP, dP) for t in cells]).reshape(-1, 3, 3)
     depth = np.zeros(len(T), dtype=int)
     total_area = float(_triangle_areas(T).sum())
     hidden = err = 0.0
