@@ -13,6 +13,15 @@ Usage: python benchmarks/bench_area.py [--cube-k 8]
    ``area_form_factors`` at tolerances 1e-6, 1e-9, 1e-12.
 3. A closed cube, ``subdivided_box(k)`` (6 k^2 quads; every pair unoccluded): the full
    area matrix, its time per pair and its worst row-sum error.
+4. View3D's example files (``tests/data/view3d``; issue 30), at tolerances 1e-6 and 1e-9:
+   surfaces, exactff's process time for the full matrix, View3D's time (constants,
+   measured 2026-12-01 on this machine, one run each), their ratio, the largest
+   estimate and, for the enclosures, the worst ``|row sum - 1|`` against the largest
+   row's sum of estimates; then the cube of ``subdivided_box(k)`` (``--cube-k``)
+   against pyviewfactor's unoccluded matrix (``compute_viewfactor_matrix``, SA-30
+   kernel, Numba threads, obstruction skipped) when it is importable, process time
+   (all threads) and wall time of each. ``--skip-slow`` leaves out gunter1 at 1e-9
+   (minutes); ``--only-view3d`` runs this part alone.
 """
 
 import argparse
@@ -109,11 +118,16 @@ def main():
     ap.add_argument("--cube-k", type=int, default=8)
     ap.add_argument("--jobs", type=int, default=1, help="processes for the cube's matrix")
     ap.add_argument("--only-cube", action="store_true")
+    ap.add_argument("--only-view3d", action="store_true",
+                    help="only the View3D examples and the cube against pyviewfactor")
+    ap.add_argument("--skip-slow", action="store_true", help="leave out gunter1 at 1e-9")
     args = ap.parse_args()
     print(machine())
     print()
     if args.only_cube:
         return cube_matrix(args)
+    if args.only_view3d:
+        return view3d_table(args)
     cases = [("C-11 squares 1 apart", parallel_pair(1, 1, 1), howell_parallel(1, 1, 1)),
              ("C-11 10 x 10 at 0.1", parallel_pair(10, 10, 0.1), howell_parallel(10, 10, 0.1)),
              ("C-14 unit, common edge", perpendicular_pair(1, 1, 1), howell_perpendicular(1, 1, 1)),
@@ -142,6 +156,93 @@ def main():
                   f"| {E[0, 1]:.1e} | {dt * 1e3:.0f} |")
     print()
     cube_matrix(args)
+    print()
+    view3d_table(args)
+
+
+DATA = os.path.join(os.path.dirname(__file__), "..", "tests", "data", "view3d")
+
+#: View3D's example files: (file, what, View3D's time in s, exactff's before issue 30 at
+#: tolerance 1e-9 in s, an enclosure). The times were measured 2026-12-01 on the
+#: project's 2-core machine, one run each (View3D 3.3 on the file; exactff
+#: ``area_form_factors(tolerance=1e-9)``); gunter1's View3D time was not measured and
+#: exactff's run then crashed at row 8.
+VIEW3D_EXAMPLES = (
+    ("cube.vs3", "cube", 0.002, 0.06, True),
+    ("ParallelPlanesMasked.vs3", "square obstruction (mask)", 0.003, 0.13, False),
+    ("test4.vs3", "Pinney & Bean BRE test 4 (L-room)", 0.004, 5.8, True),
+    ("facet.vs3", "facet (box and plate)", 0.004, 11.0, True),
+    ("gunter1.vs3", "gunter1 (irregular enclosure)", None, 297.0, True),
+)
+
+#: pyviewfactor 1.1's unoccluded matrix of ``subdivided_box(16)`` with 2 threads,
+#: measured 2026-12-01 (s), shown where pyviewfactor is not importable.
+PYVIEWFACTOR_K16 = "13.7-16.7 s"
+
+
+def view3d_table(args):
+    """Part 4: View3D's examples, then the cube against pyviewfactor."""
+    print("View3D examples, full area matrix (exactff: process time, one run; View3D and "
+          "'before': measured 2026-12-01, one run each, tolerance 1e-9 for 'before'):")
+    print()
+    print("| example | surfaces | tolerance | exactff s | before s | View3D s | exactff / View3D "
+          "| max estimate | worst abs(row sum - 1) | largest row's sum of estimates | stats |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|")
+    for tol in (1e-6, 1e-9):
+        for name, what, v3d, before, encl in VIEW3D_EXAMPLES:
+            if args.skip_slow and name == "gunter1.vs3" and tol == 1e-9:
+                print(f"| {what} | 25 | {tol:g} | skipped (--skip-slow) | {before} | - | - | - | - | - | - |")
+                continue
+            scene = ef.read_vs3(os.path.join(DATA, name))
+            st = {}
+            t0 = time.process_time()
+            F, E = ef.area_form_factors(scene, tolerance=tol, error=True, stats=st)
+            dt = time.process_time() - t0
+            ratio = f"{dt / v3d:.3g}" if v3d else "-"
+            rows = (f"{np.abs(F.sum(axis=1) - 1).max():.1e} | {E.sum(axis=1).max():.1e}"
+                    if encl else "- | -")
+            brief = ", ".join(f"{k} {v}" for k, v in st.items() if v)
+            print(f"| {what} | {len(scene)} | {tol:g} | {dt:.3f} | {before if tol == 1e-9 else '-'} "
+                  f"| {v3d if v3d else 'not measured'} | {ratio} | {E.max():.1e} | {rows} | {brief} |",
+                  flush=True)
+    print()
+    cube_against_pyviewfactor(args.cube_k)
+
+
+def cube_against_pyviewfactor(k):
+    """The closed cube of 6 k^2 quads: exactff's full area matrix (one process) and
+    pyviewfactor's unoccluded one on the same quads, side by side."""
+    cube = ef.scenes.subdivided_box(k)
+    n = len(cube)
+    t0, w0 = time.process_time(), time.perf_counter()
+    F, E = ef.area_form_factors(cube, tolerance=1e-9, error=True)
+    dt, dw = time.process_time() - t0, time.perf_counter() - w0
+    print(f"| cube subdivided_box({k}), {n} quads | process s | wall s | us of CPU per pair "
+          f"| worst abs(row sum - 1) |")
+    print("|---|---|---|---|---|")
+    print(f"| exactff (1 process, tolerance 1e-9) | {dt:.1f} | {dw:.1f} | {dt / (n * n) * 1e6:.0f} "
+          f"| {np.abs(F.sum(axis=1) - 1).max():.1e} |")
+    try:
+        import pyvista as pv
+        import pyviewfactor as pvf
+    except ImportError:
+        print(f"| pyviewfactor (not importable; its k = 16 time measured 2026-12-01, 2 threads) "
+              f"| - | {PYVIEWFACTOR_K16} | - | - |")
+        return
+
+    def mesh(scene):
+        faces = np.concatenate([[len(P), *range(o, o + len(P))]
+                                for P, o in zip(scene.polygons, scene.offsets[:-1])])
+        return pv.PolyData(np.asarray(scene.vertices, float), faces)
+
+    pvf.compute_viewfactor_matrix(mesh(ef.scenes.subdivided_box(1)), skip_obstruction=True)  # JIT
+    t0, w0 = time.process_time(), time.perf_counter()
+    G = pvf.compute_viewfactor_matrix(mesh(cube), skip_obstruction=True).T   # F[i, j] = F(i -> j)
+    dt, dw = time.process_time() - t0, time.perf_counter() - w0
+    print(f"| pyviewfactor {pvf.__version__} (compute_viewfactor_matrix, obstruction skipped, "
+          f"Numba threads) | {dt:.1f} | {dw:.1f} | {dt / (n * n) * 1e6:.0f} "
+          f"| {np.abs(G.sum(axis=1) - 1).max():.1e} |")
+    print(f"worst abs(exactff - pyviewfactor) {np.abs(F - G).max():.1e}")
 
 
 def cube_matrix(args):

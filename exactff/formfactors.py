@@ -642,18 +642,25 @@ def area_form_factors(scene, rows=None, *, tolerance=1e-9, error=False, executor
         sparse results.
     shortcuts : bool, default True
         False disables every shortcut, for testing that they never change a result
-        beyond the estimates: the hull test (every other polygon is then taken as a
-        possible blocker of every pair, and the pair goes through the occluded path),
+        beyond the estimates: shaft culling and the hull test (every other polygon is
+        then taken as a possible blocker of every pair, and the pair goes through the
+        occluded path),
         the far-field rule (the contour integral for every unoccluded pair) and the cull
         of blocker-blocker events whose lines of sight miss the receiver. Much slower.
         Part of what a resumable ``out`` records.
     stats : dict, optional
         Filled with the sums over the rows computed in this call (with any executor) of
         :data:`exactff.area.occluded.STATS`: ``hull_unoccluded_pairs`` (pairs taken by
-        the exact contour integral because the hull test left no blocker),
-        ``hull_culled_blockers``, ``far_pairs`` (by the far-field rule),
-        ``culled_events``, ``engine_fallbacks`` and ``engine_fallback_points`` (hidden
-        parts the engine computed where GEOS failed), ``occluded_pairs`` and
+        the exact contour integral because shaft culling and the hull test left no
+        blocker), ``hull_culled_blockers`` (the polygons they left out),
+        ``shaft_culled_blockers`` (polygons in a pair's bounding box that the shaft's
+        planes rejected, so the hull test never saw them), ``shaft_unoccluded_pairs``
+        (pairs whose box held polygons but the shaft none: no hull built),
+        ``far_pairs`` (by the far-field rule), ``culled_events``,
+        ``engine_fallbacks`` and ``engine_fallback_points`` (hidden parts the engine
+        computed where GEOS failed or a point's images did not stay finite),
+        ``cell_fallbacks`` (emitters GEOS failed to cut along their visibility events,
+        cut again on a grid of 1e-12 of their size), ``occluded_pairs`` and
         ``point_values``. Every shortcut's counter is 0 with ``shortcuts=False``.
     combine : bool, default False
         The matrix View3D prints for a scene read from a ``.vs3`` file

@@ -404,9 +404,23 @@ def test_hidden_part_against_the_engine_on_drawn_scenes(case):
         EH[0], E[0, 0], EU[0], U[0])
 
 
-def test_hidden_part_falls_back_to_the_engine_where_geos_fails(monkeypatch):
+def _fail_images(monkeypatch, area):
+    """Make GEOS fail on the images of a batch of points (not on a single polygon's
+    construction) in the area code."""
     import shapely
 
+    build = shapely.polygons
+
+    def fail(coords, *args, **kwargs):
+        if np.ndim(coords) == 3:
+            raise shapely.errors.GEOSException("IllegalArgumentException: Points of LinearRing "
+                                               "do not form a closed linestring")
+        return build(coords, *args, **kwargs)
+
+    monkeypatch.setattr(area.shapely, "polygons", fail)
+
+
+def test_hidden_part_falls_back_to_the_engine_where_geos_fails(monkeypatch):
     from exactff.area import occluded as area
 
     P, Q, B = list(_hidden_cases())[5]
@@ -414,10 +428,7 @@ def test_hidden_part_falls_back_to_the_engine_where_geos_fails(monkeypatch):
     X = P[0] + np.outer(np.linspace(0.05, 0.95, 7), P[1] - P[0]) + 0.3 * (P[3] - P[0])
     H, EH = area._hidden_values(X, nP, Q, B)
 
-    def fail(*args, **kwargs):
-        raise shapely.errors.GEOSException("TopologyException: side location conflict")
-
-    monkeypatch.setattr(area.shapely, "intersection", fail)
+    _fail_images(monkeypatch, area)
     G, EG = area._hidden_values(X, nP, Q, B)
     assert H.max() > 0.01 and np.all(np.abs(G - H) <= EG + EH + 1e-16)
 
@@ -514,7 +525,8 @@ def test_cli_matrix_area(tmp_path):
 # ---------------------------------------------------------------------------------------
 # shortcuts (issue 33): each off under shortcuts=False, counted in stats, and neutral
 # ---------------------------------------------------------------------------------------
-SHORTCUT_COUNTERS = ("hull_unoccluded_pairs", "hull_culled_blockers", "far_pairs",
+SHORTCUT_COUNTERS = ("hull_unoccluded_pairs", "hull_culled_blockers", "shaft_culled_blockers",
+                     "shaft_unoccluded_pairs", "far_pairs",
                      "culled_events")
 
 
@@ -544,10 +556,18 @@ def _shortcut_scene(name):
         return _room_with_plate(), [0], 1e-7, ("hull_unoccluded_pairs", "hull_culled_blockers")
     if name == "box":
         return _box_on_a_floor(), [0], 1e-7, ("hull_unoccluded_pairs", "hull_culled_blockers", "culled_events")
+    if name == "facet":
+        # View3D's facet box (a plate inside a unit box): row 5, the wall behind the
+        # plate, whose pairs with the side walls have the plate in their boxes but
+        # outside their shafts
+        import os
+        scene = ef.read_vs3(os.path.join(os.path.dirname(__file__), "data", "view3d", "facet.vs3"))
+        return scene, [5], 1e-7, ("hull_unoccluded_pairs", "hull_culled_blockers",
+                                  "shaft_culled_blockers", "shaft_unoccluded_pairs")
     return _far_squares(), [0, 1], 1e-9, ("far_pairs", "hull_unoccluded_pairs", "hull_culled_blockers")
 
 
-@pytest.mark.parametrize("name", ["reference0", "reference1", "room", "box", "far"])
+@pytest.mark.parametrize("name", ["reference0", "reference1", "room", "box", "far", "facet"])
 def test_area_shortcuts_are_neutral_and_counted(name):
     # with shortcuts=False (every other polygon a blocker of every pair, the contour
     # integral for far pairs, every blocker-blocker event cut along) the values agree
@@ -595,8 +615,6 @@ def test_area_stats_from_worker_processes_and_the_options_in_the_record(tmp_path
 def test_area_engine_fallbacks_are_counted(monkeypatch):
     # where GEOS fails the engine computes the hidden part: counted (0 otherwise), and
     # the value agrees within the estimates
-    import shapely
-
     from exactff.area import area_row
     from exactff.area import occluded as area
 
@@ -605,10 +623,7 @@ def test_area_engine_fallbacks_are_counted(monkeypatch):
     f, e = area_row(scene, 0, 1e-6, stats=st)
     assert st["engine_fallbacks"] == st["engine_fallback_points"] == 0
 
-    def fail(*args, **kwargs):
-        raise shapely.errors.GEOSException("TopologyException: side location conflict")
-
-    monkeypatch.setattr(area.shapely, "intersection", fail)
+    _fail_images(monkeypatch, area)
     fst = {}
     g, eg = area_row(scene, 0, 1e-6, stats=fst)
     assert fst["engine_fallbacks"] > 0 and fst["engine_fallback_points"] == fst["point_values"]

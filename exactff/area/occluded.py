@@ -13,44 +13,69 @@ from scipy.spatial import ConvexHull, QhullError
 from scipy.special import roots_legendre
 
 from .. import _tolerances as tol
-from ..errors import misses_tolerance
-from ..geometry import area_vector, receiver_frame
+from ..errors import NumericalError, misses_tolerance
+from ..geometry import area_vector, receiver_frame, unit_normal
 from ..halfspace import clip_halfspace
 from ..kernel import clipped_sector_sums
 from ..methods import Exact
 from ..rings import padded, shapely_rings
 from ..scene import Scene
 from .contour import (clip_front, emitter_nodes, far_values, is_far, nonnegative, point_values,
-                      triangle_rule, unoccluded_pair)
+                      unoccluded_pair)
 
 __all__ = ["area_row", "STATS"]
 
 #: The counters :func:`area_row` fills in ``stats`` (each 0 where its shortcut is off or
-#: did not apply): pairs taken by the exact contour integral because the hull test left
-#: no blocker (``hull_unoccluded_pairs``; the polygons it left out:
-#: ``hull_culled_blockers``), far pairs by the far-field rule (``far_pairs``),
+#: did not apply): pairs taken by the exact contour integral because shaft culling and
+#: the hull test left no blocker (``hull_unoccluded_pairs``; the polygons they left out:
+#: ``hull_culled_blockers``), polygons in a pair's bounding box that the shaft's planes
+#: rejected before the hull test (``shaft_culled_blockers``) and pairs whose box held
+#: polygons but the shaft none, so that no hull was built (``shaft_unoccluded_pairs``),
+#: far pairs by the far-field rule (``far_pairs``),
 #: blocker-blocker events not cut along because their lines of sight miss the receiver
 #: (``culled_events``), batches of hidden parts the engine computed where GEOS failed
-#: (``engine_fallbacks``, their points ``engine_fallback_points``); and what was done:
-#: ``occluded_pairs``, ``point_values`` (hidden parts evaluated).
-STATS = ("hull_unoccluded_pairs", "hull_culled_blockers", "far_pairs", "culled_events",
-         "engine_fallbacks", "engine_fallback_points", "occluded_pairs", "point_values")
+#: or a point's images did not stay finite (``engine_fallbacks``, their points
+#: ``engine_fallback_points``), pairs whose emitter GEOS failed to cut along the
+#: events in floating point, cut again on a fine grid (``cell_fallbacks``); and what was
+#: done:
+#: ``occluded_pairs``, ``point_values``
+#: (hidden parts evaluated).
+STATS = ("hull_unoccluded_pairs", "hull_culled_blockers", "shaft_culled_blockers",
+         "shaft_unoccluded_pairs", "far_pairs", "culled_events",
+         "engine_fallbacks", "engine_fallback_points", "cell_fallbacks", "occluded_pairs",
+         "point_values")
 
 
 def _padded(polys):
     """The scene's polygons as one array (n, kmax, 3), short ones padded by repeating
-    their last vertex, with their bounding boxes (for :func:`_blockers`)."""
+    their last vertex, with their bounding boxes and unit normals (Newell, relative to
+    the first vertex as :func:`area_vector`; the repeats add nothing)."""
     V, _ = padded(polys)
-    return V, V.min(axis=1), V.max(axis=1)
+    W = V - V[:, :1]
+    A = 0.5 * np.cross(W, np.roll(W, -1, axis=1)).sum(axis=1)
+    return V, V.min(axis=1), V.max(axis=1), A / np.linalg.norm(A, axis=1)[:, None]
+
+
+def _hull_blockers(V, cand, Pc, Qc, near):
+    """The candidates (indices into V) reaching into the interior of the convex hull of
+    Pc and Qc: a polygon on or outside one face of the hull hides nothing of positive
+    measure (the exact test; no hull, as for a flat pair: none)."""
+    if len(cand) == 0:
+        return []
+    try:
+        H = ConvexHull(np.vstack([Pc, Qc])).equations      # a . x + b <= 0 inside
+    except QhullError:
+        return []
+    outside = np.all(V[cand] @ H[:, :3].T + H[:, 3] >= -near, axis=1)      # (c, faces)
+    return [int(k) for k in np.asarray(cand)[~outside.any(axis=1)]]
 
 
 def _blockers(padded, i, j, Pc, Qc, scale, shortcuts=True):
     """Polygons (indices) that may hide part of Qc from part of Pc: those reaching into
-    the interior of the convex hull of both (a polygon on or outside a face of the hull
-    hides nothing of positive measure). ``padded`` is :func:`_padded` of the scene.
-    Without ``shortcuts``, every polygon but i and j."""
-
-    V, lo_k, hi_k = padded
+    the interior of the convex hull of both (the hull test alone, for one pair: what
+    :func:`_shaft` decides for a whole row before the hull test). ``padded`` is
+    :func:`_padded` of the scene. Without ``shortcuts``, every polygon but i and j."""
+    V, lo_k, hi_k = padded[:3]
     if not shortcuts:
         return [k for k in range(len(V)) if k not in (i, j)]
     pts = np.vstack([Pc, Qc])
@@ -58,16 +83,97 @@ def _blockers(padded, i, j, Pc, Qc, scale, shortcuts=True):
     lo, hi = pts.min(axis=0) - near, pts.max(axis=0) + near
     cand = np.all((hi_k >= lo) & (lo_k <= hi), axis=1)
     cand[[i, j]] = False
-    cand = np.flatnonzero(cand)
-    if cand.size == 0:
-        return []
-    try:
-        H = ConvexHull(pts).equations               # a . x + b <= 0 inside
-    except QhullError:
-        return []
-    # on or outside one face of the hull: hides nothing
-    outside = np.all(V[cand] @ H[:, :3].T + H[:, 3] >= -near, axis=1)      # (c, faces)
-    return [int(k) for k in cand[~outside.any(axis=1)]]
+    return _hull_blockers(V, np.flatnonzero(cand), Pc, Qc, near)
+
+
+#: The box edges the shaft's side planes join: two axes and a direction along each.
+_SHAFT_EDGES = tuple((a, b, sa, sb) for a, b in ((0, 1), (0, 2), (1, 2))
+                     for sa in (1.0, -1.0) for sb in (1.0, -1.0))
+
+
+def _shaft(padded, i, J, boxes, nP, p0, near, st):
+    """The blockers of each pair (i, J[a]) of a row that survive shaft culling (Haines &
+    Wallace 1991), decided for all pairs and all polygons at once: a polygon stays a
+    candidate only if it reaches into the open interior of the pair's bounding box, is
+    not on or behind P's plane nor on or behind the receiver's (rays leave P's front and
+    reach Q's front), and is not on or outside one of the shaft's side planes, the
+    planes through an edge of each of the two polygons' boxes where one box extends
+    beyond the other along one axis and the other along a second (each is a supporting
+    plane of both boxes, so the shaft holds the convex hull of the pair: a polygon it
+    rejects lies outside that hull, to ``near / 2``, and hides nothing). What survives
+    goes to the hull test (:func:`_hull_blockers`).
+
+    Parameters
+    ----------
+    padded : tuple
+        :func:`_padded` of the scene.
+    i : int
+        The emitter.
+    J : ndarray of shape (m,)
+        The receivers.
+    boxes : ndarray of shape (m, 4, 3)
+        Per pair, the clipped emitter's box (lo, hi) and the clipped receiver's (lo, hi).
+    nP, p0 : ndarray of shape (3,)
+        P's unit normal and a point of its plane.
+    near : float
+        The hull test's distance (``AREA_HULL_RTOL`` of the scene's size).
+    st : dict
+        Counts ``shaft_culled_blockers`` (polygons in a pair's box the planes rejected:
+        the hull test never sees them) and ``shaft_unoccluded_pairs`` (pairs whose box
+        held polygons, none left: no hull built).
+
+    Returns
+    -------
+    list of ndarray
+        Per pair, the candidates for the hull test.
+    """
+    V, lo_k, hi_k, N = padded
+    m = len(J)
+    loP, hiP, loQ, hiQ = boxes[:, 0], boxes[:, 1], boxes[:, 2], boxes[:, 3]
+    lo, hi = np.minimum(loP, loQ), np.maximum(hiP, hiQ)
+    # polygons reaching into the open interior of each pair's box (m, n)
+    inbox = np.all((hi_k[None] > lo[:, None]) & (lo_k[None] < hi[:, None]), axis=2)
+    inbox[:, i] = False
+    inbox[np.arange(m), J] = False
+    a, k = np.nonzero(inbox)                        # sorted by pair
+    boxed = np.bincount(a, minlength=m)
+    # on or behind P's plane: for every pair of the row at once
+    keep = ((V - p0) @ nP).max(axis=1)[k] > 0.5 * near
+    a, k = a[keep], k[keep]
+    # on or behind the receiver's plane
+    q0 = V[J, 0]
+    keep = np.einsum("ckx,cx->ck", V[k] - q0[a][:, None], N[J][a]).max(axis=1) > 0.5 * near
+    a, k = a[keep], k[keep]
+    # the side planes: through the edge of box A extreme in direction sa along axis ax
+    # and the edge of box B extreme in direction sb along axis bx (A != B), parallel to
+    # the third axis; the outward normal (sa |d_b|, sb |d_a|) is in the quadrant (sa, sb)
+    for ax, bx, sa, sb in _SHAFT_EDGES:
+        if a.size == 0:
+            break
+        eP = np.stack([np.where(sa > 0, hiP[:, ax], loP[:, ax]),
+                       np.where(sb > 0, hiP[:, bx], loP[:, bx])], axis=1)
+        eQ = np.stack([np.where(sa > 0, hiQ[:, ax], loQ[:, ax]),
+                       np.where(sb > 0, hiQ[:, bx], loQ[:, bx])], axis=1)
+        sign = np.array([sa, sb])
+        p_ahead = (sign * eP > sign * eQ)           # P's box beyond Q's along ax, bx
+        q_ahead = (sign * eQ > sign * eP)
+        active = (p_ahead[:, 0] & q_ahead[:, 1]) | (q_ahead[:, 0] & p_ahead[:, 1])
+        d = eQ - eP
+        n2 = sign * np.abs(d[:, ::-1])
+        size = np.linalg.norm(n2, axis=1)[:, None]
+        n2 = np.divide(n2, size, out=np.zeros_like(n2), where=size > 0)    # 0: inactive
+        off = np.einsum("mx,mx->m", n2, eP)
+        on = active[a]
+        if not on.any():
+            continue
+        dist = np.einsum("ckx,cx->ck", V[k[on]][:, :, [ax, bx]], n2[a[on]]).min(axis=1) - off[a[on]]
+        drop = np.zeros(a.size, dtype=bool)
+        drop[np.flatnonzero(on)[dist >= -0.5 * near]] = True
+        a, k = a[~drop], k[~drop]
+    left = np.bincount(a, minlength=m)
+    st["shaft_culled_blockers"] += int(boxed.sum() - left.sum())
+    st["shaft_unoccluded_pairs"] += int(np.count_nonzero((boxed > 0) & (left == 0)))
+    return np.split(k, np.cumsum(left)[:-1])
 
 
 def _plane_frame(Q):
@@ -93,88 +199,93 @@ def _event_lines(S, nP, dP, R, c, radius, Qc, shortcuts=True, st=None):
     of a blocker on P) cross there to rounding; an image through infinity is kept as the
     whole chord. Without ``shortcuts`` every blocker-blocker event is kept; the ones
     culled are counted in ``st["culled_events"]``."""
-    out = []
     st = {} if st is None else st
-
-    def line(m, v, span=None):
-        # the plane m . (x - v) = 0 meets P's plane n . x = dP in a line; x0 is its point
-        # nearest to c, d its direction; the chord of the disk, or the span's part of it
-        m = m if m[np.flatnonzero(m)[0]] > 0 else -m    # one line for either orientation
-        d = np.cross(nP, m)
-        dn = np.linalg.norm(d)
-        if dn < tol.AREA_EVENT_PARALLEL * np.linalg.norm(m):
-            return
-        d /= dn
-        x0 = np.linalg.solve(np.array([nP, m, d]), np.array([dP, m @ v, d @ c]))
-        h2 = radius * radius - float((x0 - c) @ (x0 - c))
-        if h2 <= 0:
-            return
-        half = np.sqrt(h2)
-        ends = [x0 - half * d, x0 + half * d]
-        if span is not None:
-            # the span's ends where they lie on the chord (as computed: segments that
-            # meet there join exactly), else the chord's ends
-            (t0, p0), (t1, p1) = sorted(((float((q - x0) @ d), q) for q in span),
-                                        key=lambda tq: tq[0])
-            if t0 >= half or t1 <= -half:
-                return
-            ends = [p0 if t0 > -half else ends[0], p1 if t1 < half else ends[1]]
-        out.append(((ends[0] - c) @ R[:2].T, (ends[1] - c) @ R[:2].T))
-
-    def through(v, q):
-        # where the line from v through q meets P's plane (None: parallel, or beyond)
-        den = nP @ (q - v)
-        if abs(den) < tol.AREA_RAY_PARALLEL * np.linalg.norm(q - v):
-            return None
-        return v + (dP - nP @ v) / den * (q - v)
-
     nQ, q0, RQ, Q2 = _plane_frame(Qc)
     seen = shapely.Polygon(Q2)
     shapely.prepare(seen)
-
-    def reaches_receiver(v, e0, e1):
-        # the lines through v and the points of the edge meet Qc's plane along the
-        # edge's central image from v: does it cross Qc? (unbounded images: kept)
-        d0, d1 = nQ @ (e0 - v), nQ @ (e1 - v)
-        if d0 * d1 <= 0:
-            return True
-        h = nQ @ (q0 - v)
-        a, b = v + h / d0 * (e0 - v) - q0, v + h / d1 * (e1 - v) - q0
-        return seen.intersects(shapely.LineString([a @ RQ[:2].T, b @ RQ[:2].T]))
-
+    # the events in order (per polygon A: its plane, then per other polygon B, vertex v
+    # of A and edge of B): the plane m . (x - v) = 0 through v, and the span's ends
+    ms, vs, spans, spanned = [], [], [], []
     for a, A in enumerate(S):
-        N = np.cross(A[1] - A[0], A[2] - A[0])
-        line(N, A[0])
+        ms.append(np.cross(A[1] - A[0], A[2] - A[0])[None])
+        vs.append(A[:1])
+        spans.append(np.zeros((1, 2, 3)))
+        spanned.append(np.zeros(1, dtype=bool))
         for b, B in enumerate(S):
             if a == b:
                 continue
-            for v in A:
-                for e0, e1 in zip(B, np.roll(B, -1, axis=0)):
-                    m = np.cross(e0 - v, e1 - v)
-                    if np.linalg.norm(m) == 0:
-                        continue
-                    if shortcuts and a and b and not reaches_receiver(v, e0, e1):
-                        st["culled_events"] = st.get("culled_events", 0) + 1
-                        continue
-                    x0, x1 = through(v, e0), through(v, e1)
-                    s0, s1 = nP @ (e0 - v), nP @ (e1 - v)
-                    if x0 is None or x1 is None or s0 * s1 <= 0:
-                        line(m, v)              # the image passes through infinity
-                    else:
-                        line(m, v, (x0, x1))
-    return out
+            # every vertex of A against every edge of B, (kA * kB) rows in loop order
+            v = np.repeat(A, len(B), axis=0)
+            e0, e1 = np.tile(B, (len(A), 1)), np.tile(np.roll(B, -1, axis=0), (len(A), 1))
+            m = np.cross(e0 - v, e1 - v)
+            keep = np.any(m != 0, axis=1)
+            if shortcuts and a and b:
+                # the lines through v and the points of the edge meet Qc's plane along
+                # the edge's central image from v: does it cross Qc? (unbounded: kept)
+                d0, d1 = (e0 - v) @ nQ, (e1 - v) @ nQ
+                bounded = keep & (d0 * d1 > 0)
+                if bounded.any():
+                    vb, h = v[bounded], (q0 - v[bounded]) @ nQ
+                    ia = vb + (h / d0[bounded])[:, None] * (e0[bounded] - vb) - q0
+                    ib = vb + (h / d1[bounded])[:, None] * (e1[bounded] - vb) - q0
+                    segs = shapely.linestrings(np.stack([ia @ RQ[:2].T, ib @ RQ[:2].T], axis=1))
+                    miss = ~shapely.intersects(seen, segs)
+                    st["culled_events"] = st.get("culled_events", 0) + int(miss.sum())
+                    keep[np.flatnonzero(bounded)[miss]] = False
+            v, e0, e1, m = v[keep], e0[keep], e1[keep], m[keep]
+            # where the lines from v through the edge's ends meet P's plane (None:
+            # parallel, or the image passes through infinity: the whole chord)
+            den0, den1 = (e0 - v) @ nP, (e1 - v) @ nP
+            ok = ((np.abs(den0) >= tol.AREA_RAY_PARALLEL * np.linalg.norm(e0 - v, axis=1))
+                  & (np.abs(den1) >= tol.AREA_RAY_PARALLEL * np.linalg.norm(e1 - v, axis=1))
+                  & (den0 * den1 > 0))
+            with np.errstate(divide="ignore", invalid="ignore"):
+                x0 = v + ((dP - v @ nP) / den0)[:, None] * (e0 - v)
+                x1 = v + ((dP - v @ nP) / den1)[:, None] * (e1 - v)
+            ms.append(m)
+            vs.append(v)
+            spans.append(np.stack([x0, x1], axis=1))
+            spanned.append(ok)
+    m, v, span, spanned = (np.concatenate(x) for x in (ms, vs, spans, spanned))
+    # the plane meets P's plane n . x = dP in a line; x0 is its point nearest to c, d
+    # its direction; the chord of the disk, or the span's part of it
+    first = m[np.arange(len(m)), np.argmax(m != 0, axis=1)]
+    m = np.where((first > 0)[:, None], m, -m)          # one line for either orientation
+    d = np.cross(nP, m)
+    dn = np.linalg.norm(d, axis=1)
+    live = dn >= tol.AREA_EVENT_PARALLEL * np.linalg.norm(m, axis=1)
+    m, v, span, spanned, d = m[live], v[live], span[live], spanned[live], d[live] / dn[live, None]
+    A = np.stack([np.broadcast_to(nP, m.shape), m, d], axis=1)
+    rhs = np.stack([np.full(len(m), dP), np.einsum("lx,lx->l", m, v), d @ c], axis=1)
+    x0 = np.linalg.solve(A, rhs[:, :, None])[:, :, 0]
+    h2 = radius * radius - np.einsum("lx,lx->l", x0 - c, x0 - c)
+    live = h2 > 0
+    x0, d, span, spanned, half = x0[live], d[live], span[live], spanned[live], np.sqrt(h2[live])
+    ends = np.stack([x0 - half[:, None] * d, x0 + half[:, None] * d], axis=1)
+    # the span's ends where they lie on the chord (as computed: segments that meet there
+    # join exactly), else the chord's ends
+    t = np.einsum("lex,lx->le", span - x0[:, None], d)
+    swap = t[:, 1] < t[:, 0]
+    t = np.where(swap[:, None], t[:, ::-1], t)
+    span = np.where(swap[:, None, None], span[:, ::-1], span)
+    inside = ~spanned | ((t[:, 0] < half) & (t[:, 1] > -half))
+    use = spanned[:, None] & (np.stack([t[:, 0] > -half, t[:, 1] < half], axis=1))
+    ends = np.where(use[:, :, None], span, ends)[inside]
+    E2 = (ends - c) @ R[:2].T
+    return [(p0, p1) for p0, p1 in E2]
 
 
-def _cells(Pc, nP, lines, R, c):
+def _cells(Pc, nP, lines, R, c, grid=None):
     """P (clipped) cut along the event lines, as triangles in the world (the lines are
-    cut to P first, so every cell lies in P)."""
+    cut to P first, so every cell lies in P; with ``grid``, the noding snaps the
+    vertices to a grid of that size, and the cells lie in P to that size)."""
     poly = shapely.Polygon((Pc - c) @ R[:2].T)
     segs = [g for g in (shapely.LineString([p0, p1]).intersection(poly) for p0, p1 in lines)
             if not g.is_empty]
     # the union nodes the segments (already cut to P) and P's boundary; cutting the
     # union to P again would lose nodes on the boundary, and with them whole cells
     pieces = shapely.get_parts(shapely.polygonize(
-        shapely.get_parts(shapely.union_all([poly.boundary, *segs]))))
+        shapely.get_parts(shapely.union_all([poly.boundary, *segs], grid_size=grid))))
     tris = []
     for cell in pieces:
         if cell.area <= tol.AREA_SLIVER_CELL * poly.area:   # counted in the estimate
@@ -185,21 +296,25 @@ def _cells(Pc, nP, lines, R, c):
     return tris
 
 
-def _hidden_values(X, nP, Qc, blockers, st=None):
+def _hidden_values(X, nP, Qc, blockers, st=None, split=True):
     """``F(x -> Qc) - F_occ(x -> Qc)`` for each point x of X (normal nP): the point form
     factor of the part of Qc that the blockers hide from x, and its error estimate.
 
     Built in Qc's plane: each blocker, clipped to the front of that plane and to the
-    pyramid from x over a rectangle around Qc, is projected from x onto the plane (a
-    projective map: its image stays a simple polygon within the rectangle); the images
-    are united and intersected with Qc (GEOS, vectorised over the points), and the
+    pyramid from x over Qc where Qc is strictly convex (else over a rectangle around
+    it), is projected from x onto the plane (a projective map: its image stays a simple
+    polygon within the pyramid's base); the images are united (and, over a rectangle,
+    intersected with Qc; GEOS, vectorised over the points), and the
     region's rings integrated by the sector sums (Eq. 3's kernel) from x: outer rings
     count positive, holes negative. The estimate adds to the sector sums' rounding the
     effect of moving the region's boundary by the booleans' rounding (a few units of the
     largest coordinate), through the kernel's largest value over the region's bounding
-    box, ``h / (pi r^3)``. Where GEOS fails, the engine computes them instead
-    (:func:`_hidden_values_by_engine`), counted in ``st["engine_fallbacks"]`` (and the
-    points in ``st["engine_fallback_points"]``).
+    box, ``h / (pi r^3)``. A point on Qc's plane sees nothing of it (0). Where GEOS
+    fails, the engine computes them instead (:func:`_hidden_values_by_engine`), counted
+    in ``st["engine_fallbacks"]`` (and the points in ``st["engine_fallback_points"]``);
+    where a point's images do not stay finite (a blocker's vertex at the point, to
+    rounding), the engine computes that point's value and the others are computed as
+    above (with ``split``; :func:`_hidden_values_split`).
 
     Returns
     -------
@@ -208,11 +323,18 @@ def _hidden_values(X, nP, Qc, blockers, st=None):
     nX = len(X)
     nQ, q0, RQ, Q2 = _plane_frame(Qc)
     qpoly = shapely.Polygon(Q2)
-    lo, hi = Q2.min(axis=0), Q2.max(axis=0)
-    pad = tol.AREA_HIDDEN_PAD * float((hi - lo).max())
-    lo, hi = lo - pad, hi + pad
-    corners = q0 + np.array([[lo[0], lo[1]], [hi[0], lo[1]], [hi[0], hi[1]],
-                             [lo[0], hi[1]]]) @ RQ[:2]
+    # the pyramid's base: Qc itself where it is strictly convex (the images then lie in
+    # it: their union is the hidden region, and a blocker outside the pyramid is not
+    # clipped at all), else a rectangle around it (the union then cut by Qc)
+    convex = _strictly_convex(Q2)
+    if convex:
+        corners = np.asarray(Qc, dtype=float)
+    else:
+        lo, hi = Q2.min(axis=0), Q2.max(axis=0)
+        pad = tol.AREA_HIDDEN_PAD * float((hi - lo).max())
+        lo, hi = lo - pad, hi + pad
+        corners = q0 + np.array([[lo[0], lo[1]], [hi[0], lo[1]], [hi[0], hi[1]],
+                                 [lo[0], hi[1]]]) @ RQ[:2]
     Kc = [K for K in (clip_front(np.asarray(K), nQ, q0) for K in blockers) if K is not None]
     zero = np.zeros(nX)
     if not Kc:
@@ -232,16 +354,28 @@ def _hidden_values(X, nP, Qc, blockers, st=None):
     NK /= np.linalg.norm(NK, axis=1)[:, None]
     size = float(np.ptp(np.vstack(Kc + [Qc, X]), axis=0).max())
     edge_on = np.abs(np.einsum("pbj,bj->pb", D[:, :, 0, :], NK)) <= tol.AREA_EDGE_ON_RTOL * size
-    pairs = np.flatnonzero(~(np.all(side <= 0, axis=3).any(axis=2) | edge_on))
+    # a point on Q's plane (a node at Q's edge, to rounding) sees Q edge-on: nothing of
+    # it is seen, so nothing is hidden (and its images would divide 0 by 0)
+    h = (X - q0) @ nQ
+    on_plane = (h <= 0)[:, None]
+    pairs = np.flatnonzero(~(np.all(side <= 0, axis=3).any(axis=2) | edge_on | on_plane))
     if pairs.size == 0:
         return zero, zero
     pt, blk = pairs // nb, pairs % nb
     Vb = D[pt, blk]
     cnt = np.array([len(K) for K in Kc])[blk]
-    for a in range(4):
-        Vb, cnt = clip_halfspace(Vb, np.where(cnt >= 3, cnt, 0), M[pt, a])
+    for a in range(len(corners)):
+        # only the polygons with a vertex on or outside this plane are clipped (for the
+        # others the clip returns them as they are)
+        cnt = np.where(cnt >= 3, cnt, 0)
+        valid = np.arange(Vb.shape[1])[None, :] < cnt[:, None]
+        cut = np.any(valid & ~(np.einsum("pkj,pj->pk", Vb, M[pt, a]) > 0), axis=1)
+        if cut.any():
+            W, cnt[cut] = clip_halfspace(Vb[cut], cnt[cut], M[pt[cut], a])
+            if W.shape[1] > Vb.shape[1]:
+                Vb = np.concatenate([Vb, np.repeat(Vb[:, -1:], W.shape[1] - Vb.shape[1], axis=1)], axis=1)
+            Vb[cut, :W.shape[1]] = W
     # central projection from x onto Qc's plane: q = x + y h / (-nQ . y), y = offset
-    h = (X - q0) @ nQ
     live = np.flatnonzero(cnt >= 3)
     if live.size == 0:
         return zero, zero
@@ -250,11 +384,18 @@ def _hidden_values(X, nP, Qc, blockers, st=None):
     pt = pt[live]                                                       # sorted
     Y = Y * (h[pt, None] / -(Y @ nQ))[:, :, None] + (X[pt] - q0)[:, None, :]
     Y2 = Y @ RQ[:2].T
-    images = shapely.polygons(Y2)
+    lost = np.unique(pt[~np.isfinite(Y2).all(axis=(1, 2))])
+    if lost.size and split:
+        # an image through infinity (a blocker's vertex at x to rounding): those points
+        # by the engine, the others as below
+        return _hidden_values_split(X, nP, Qc, blockers, lost, st)
     # each image's rank among its point's images: the union grows rank by rank
     rank = np.arange(len(pt)) - np.searchsorted(pt, pt)
     union = np.full(nX, shapely.Polygon(), dtype=object)
     try:
+        if lost.size:
+            raise shapely.errors.GEOSException("image through infinity")
+        images = shapely.polygons(Y2)
         bad = ~shapely.is_valid(images)
         if bad.any():
             images[bad] = shapely.make_valid(images[bad])
@@ -263,7 +404,7 @@ def _hidden_values(X, nP, Qc, blockers, st=None):
             for r in range(1, int(rank.max()) + 1):
                 at = rank == r
                 union[pt[at]] = shapely.union(union[pt[at]], images[at])
-            hidden = shapely.intersection(union, qpoly)
+            hidden = union if convex else shapely.intersection(union, qpoly)
     except shapely.errors.GEOSException:
         # GEOS gave up on a nearly degenerate configuration: the engine instead
         if st is not None:
@@ -305,6 +446,32 @@ def _hidden_values(X, nP, Qc, blockers, st=None):
     return nonnegative(value, est, "hidden part"), est
 
 
+def _strictly_convex(Q2):
+    """True where the 2-D polygon Q2 (counter-clockwise) turns left at every vertex by
+    more than 1e-6 radians (no three vertices nearly on a line)."""
+    e = np.roll(Q2, -1, axis=0) - Q2
+    f = np.roll(e, -1, axis=0)
+    turn = e[:, 0] * f[:, 1] - e[:, 1] * f[:, 0]
+    return bool(np.all(turn > 1e-6 * np.linalg.norm(e, axis=1) * np.linalg.norm(f, axis=1)))
+
+
+def _hidden_values_split(X, nP, Qc, blockers, lost, st):
+    """:func:`_hidden_values` with the points ``lost`` (indices into X) by the engine
+    (counted as a fallback) and the others by GEOS (without a second split: if their
+    images still do not stay finite, the engine takes them all)."""
+    H, EH = np.zeros(len(X)), np.zeros(len(X))
+    keep = np.setdiff1d(np.arange(len(X)), lost)
+    if keep.size:
+        H[keep], EH[keep] = _hidden_values(X[keep], nP, Qc, blockers, st, split=False)
+    if st is not None:
+        st["engine_fallbacks"] = st.get("engine_fallbacks", 0) + 1
+        st["engine_fallback_points"] = st.get("engine_fallback_points", 0) + len(lost)
+    Kc = [K for K in (clip_front(np.asarray(K), *_plane_frame(Qc)[:2]) for K in blockers)
+          if K is not None]
+    H[lost], EH[lost] = _hidden_values_by_engine(X[lost], nP, Qc, Kc)
+    return H, EH
+
+
 def _hidden_values_by_engine(X, nP, Qc, blockers):
     """:func:`_hidden_values` by the engine instead (exact occluded point values on the
     sub-scene of Qc and the blockers, subtracted from the unoccluded ones): about a
@@ -320,6 +487,24 @@ def _hidden_values_by_engine(X, nP, Qc, blockers):
 
 
 _RULES = tuple(roots_legendre(k) for k in tol.AREA_RULE_ORDERS)
+
+
+def _triangle_areas(T):
+    """The areas of triangles T (t, 3, 3)."""
+    return 0.5 * np.linalg.norm(np.cross(T[:, 1] - T[:, 0], T[:, 2] - T[:, 0]), axis=1)
+
+
+def _triangle_rules(T, rule):
+    """:func:`~exactff.area.contour.triangle_rule` for a batch of triangles T (t, 3, 3):
+    nodes (t, n^2, 3) and weights (t, n^2)."""
+    x, w = rule
+    x, w = 0.5 * (x + 1.0), 0.5 * w
+    U, V = np.meshgrid(x, x, indexing="ij")
+    WW = (np.outer(w, w) * U).ravel()          # the collapse's Jacobian u
+    U, UV = U.ravel()[None, :, None], (U * V).ravel()[None, :, None]
+    a, b, c = T[:, None, 0], T[:, None, 1], T[:, None, 2]
+    X = a + U * (b - a) + UV * (c - b)
+    return X, WW[None] * (2.0 * _triangle_areas(T))[:, None]
 
 
 def _corner_first(tri, blockers, nP, dP):
@@ -377,49 +562,118 @@ def _hidden_integral(S, Pc, Qc, nP, tolerance, area_P, whole, shortcuts, st):
     c = Pc.mean(axis=0)
     dP = float(nP @ Pc[0])
     radius = (1.0 + tol.AREA_HIDDEN_PAD) * float(np.linalg.norm(Pc - c, axis=1).max())
-    todo = [(_corner_first(t, S[1:], nP, dP), 0)
-            for t in _cells(Pc, nP, _event_lines(S, nP, dP, R, c, radius, Qc, shortcuts, st),
-                            R, c)]
-    total_area = sum(0.5 * np.linalg.norm(np.cross(t[1] - t[0], t[2] - t[0])) for t, _ in todo)
+    lines = _event_lines(S, nP, dP, R, c, radius, Qc, shortcuts, st)
+    try:
+        cells = _cells(Pc, nP, lines, R, c)
+    except shapely.errors.GEOSException:
+        # GEOS gave up noding the events in floating point: noded again on a grid of
+        # AREA_HULL_RTOL of P's size (the cuts move by that much, the cells' area
+        # missing from P is in the estimate), counted
+        if st is not None:
+            st["cell_fallbacks"] = st.get("cell_fallbacks", 0) + 1
+        try:
+            cells = _cells(Pc, nP, lines, R, c, grid=tol.AREA_HULL_RTOL * radius)
+        except shapely.errors.GEOSException as exc:
+            raise NumericalError(f"could not cut the emitter along its {len(lines)} "
+                                 f"visibility events: {exc}") from exc
+    T = np.array([_corner_first(t, S[1:], nP, dP) for t in cells]).reshape(-1, 3, 3)
+    depth = np.zeros(len(T), dtype=int)
+    total_area = float(_triangle_areas(T).sum())
     hidden = err = 0.0
     points = 0
-    while todo:
+    while len(T):
         # every triangle of this level together: its two rules' nodes, one call
-        rules = [[triangle_rule(tri, r) for r in _RULES] for tri, _ in todo]
-        X = np.vstack([x for (xl, _), (xh, _) in rules for x in (xl, xh)])
-        H, EH = _hidden_values(X, nP, Qc, S[1:], st)
-        points += len(X)
-        nxt, at = [], 0
-        for (tri, depth), ((Xl, Wl), (Xh, Wh)) in zip(todo, rules):
-            Hl, Hh = H[at:at + len(Xl)], H[at + len(Xl):at + len(Xl) + len(Xh)]
-            EHh = EH[at + len(Xl):at + len(Xl) + len(Xh)]
-            at += len(Xl) + len(Xh)
-            lo, hi = Wl @ Hl, Wh @ Hh
-            area_t = 0.5 * np.linalg.norm(np.cross(tri[1] - tri[0], tri[2] - tri[0]))
-            diff = abs(hi - lo) / area_P
-            if area_t / area_P <= tol.AREA_SLIVER_SHARE * tolerance:
-                # a sliver (between nearly coincident events): kept as it is, with the
-                # largest error it can carry (the hidden part is between 0 and 1)
-                hidden += hi / area_P
-                err += area_t / area_P
-                continue
-            if diff > 0.5 * tolerance * area_t / total_area and depth < tol.AREA_MAX_DEPTH:
-                a, b, cc = tri
-                ab, bc, ca = (a + b) / 2, (b + cc) / 2, (cc + a) / 2
-                nxt += [(np.array(t), depth + 1) for t in
-                        ((a, ab, ca), (ab, b, bc), (ca, bc, cc), (ab, bc, ca))]
-                continue
-            hidden += hi / area_P
-            err += diff + (Wh @ EHh) / area_P
-        todo = nxt
+        (Xl, Wl), (Xh, Wh) = (_triangle_rules(T, r) for r in _RULES)
+        nl = Xl.shape[1]
+        H, EH = _hidden_values(np.concatenate([Xl, Xh], axis=1).reshape(-1, 3), nP, Qc, S[1:], st)
+        points += H.size
+        H, EH = H.reshape(len(T), -1), EH.reshape(len(T), -1)
+        lo, hi = (Wl * H[:, :nl]).sum(axis=1), (Wh * H[:, nl:]).sum(axis=1)
+        area_t = _triangle_areas(T)
+        diff = np.abs(hi - lo) / area_P
+        # a sliver (between nearly coincident events): kept as it is, with the largest
+        # error it can carry (the hidden part is between 0 and 1)
+        sliver = area_t / area_P <= tol.AREA_SLIVER_SHARE * tolerance
+        hidden += float(hi[sliver].sum()) / area_P
+        err += float(area_t[sliver].sum()) / area_P
+        split = ~sliver & (diff > 0.5 * tolerance * area_t / total_area) & (depth < tol.AREA_MAX_DEPTH)
+        done = ~sliver & ~split
+        hidden += float(hi[done].sum()) / area_P
+        err += float(diff[done].sum() + (Wh[done] * EH[done, nl:]).sum() / area_P)
+        # the others cut in four at their edges' midpoints
+        a_, b_, c_ = T[split, 0], T[split, 1], T[split, 2]
+        ab, bc, ca = (a_ + b_) / 2, (b_ + c_) / 2, (c_ + a_) / 2
+        T = np.stack([np.stack(t, axis=1) for t in
+                      ((a_, ab, ca), (ab, b_, bc), (ca, bc, c_), (ab, bc, ca))],
+                     axis=1).reshape(-1, 3, 3)
+        depth = np.repeat(depth[split] + 1, 4)
     area_Pc = float(np.linalg.norm(area_vector(Pc)))
     value = whole[0] - hidden
     err += max(area_Pc - total_area, 0.0) / area_P      # cells dropped as slivers
     return value, err + whole[1], points
 
 
+def _front_pairs(polys, i, nP, padded, near):
+    """The receivers j of row i with each polygon's part in front of the other's plane
+    (one-sided: rays leave P's front and reach Q's front), and those parts, as a list of
+    ``(j, Pc, Qc)``: decided for all receivers at once where every vertex is clear of
+    the other's plane by more than ``near`` (wholly behind: dropped; wholly in front:
+    kept whole, the polygon itself), by :func:`clip_front` for the others."""
+    V, _, _, N = padded
+    P = polys[i]
+    dQ = (V - P[0]) @ nP                                    # (n, kmax)
+    dP = np.einsum("njx,nx->nj", P[None] - V[:, :1], N)     # (n, kP)
+    behind = (dQ.max(axis=1) < -near) | (dP.max(axis=1) < -near)
+    behind[i] = True
+    whole_Q, whole_P = dQ.min(axis=1) > near, dP.min(axis=1) > near
+    out = []
+    for j in np.flatnonzero(~behind):
+        Q = polys[j]
+        Pc = P if whole_P[j] else clip_front(P, unit_normal(Q), Q[0])
+        Qc = Q if whole_Q[j] else clip_front(Q, nP, P[0])
+        if Pc is not None and Qc is not None:
+            out.append((int(j), Pc, Qc))
+    return out
+
+
+def _unoccluded_values(polys, i, nP, area_P, pairs, shortcuts, st):
+    """The values and estimates of a row's unoccluded pairs ``(j, Pc, Qc)``: far pairs
+    with P whole by the far-field rule, all together (one set of nodes on P, one kernel
+    call), the others by the contour integral pair by pair. The one place where a
+    row's unoccluded pairs are computed (a batch of contour integrals goes here).
+
+    Returns
+    -------
+    (list of int, ndarray, ndarray)
+        The receivers, their values and their estimates.
+    """
+    P = polys[i]
+    js = [j for j, _, _ in pairs]
+    f, e = np.zeros(len(pairs)), np.zeros(len(pairs))
+    far = [a for a, (j, Pc, _) in enumerate(pairs)
+           if shortcuts and Pc is P and is_far(P, polys[j])]
+    near = np.setdiff1d(np.arange(len(pairs)), far)
+    for a in near:
+        Q = polys[pairs[a][0]]
+        if shortcuts and is_far(P, Q):
+            st["far_pairs"] += 1
+        f[a], e[a] = unoccluded_pair(P, Q, far=shortcuts)
+    if far:
+        st["far_pairs"] += len(far)
+        f[far], e[far] = far_values(emitter_nodes(P, nP), nP, area_P,
+                                    [pairs[a][2] for a in far])
+    return js, f, e
+
+
 def area_row(scene, i, tolerance, *, rtol=None, shortcuts=True, stats=None):
     """Row i of :func:`exactff.area_form_factors` and its estimates.
+
+    The pairs of the row are decided together: the receivers in front of P (and P in
+    front of them, :func:`_front_pairs`), then each pair's blockers by shaft culling
+    (:func:`_shaft`, all pairs and polygons at once) and the hull test on what survives
+    (:func:`_hull_blockers`); occluded pairs are integrated one by one
+    (:func:`_occluded_pair`), the unoccluded ones together at the end
+    (:func:`_unoccluded_values`).
 
     Parameters
     ----------
@@ -432,9 +686,10 @@ def area_row(scene, i, tolerance, *, rtol=None, shortcuts=True, stats=None):
         Also allowed: this share of the value; the bound is ``max(tolerance, rtol * F)``.
     shortcuts : bool, default True
         False disables every shortcut (for testing that they never change a result
-        beyond the estimates): the hull test (every other polygon is then a blocker of
-        every pair), the far-field rule (the contour integral for every pair) and the
-        cull of blocker-blocker events whose lines of sight miss the receiver.
+        beyond the estimates): shaft culling and the hull test (every other polygon is
+        then a blocker of every pair), the far-field rule (the contour integral for
+        every pair) and the cull of blocker-blocker events whose lines of sight miss
+        the receiver.
     stats : dict, optional
         Filled with this row's counters (:data:`STATS`).
 
@@ -446,44 +701,43 @@ def area_row(scene, i, tolerance, *, rtol=None, shortcuts=True, stats=None):
     st = {k: 0 for k in STATS}
     polys = [np.asarray(p, dtype=float) for p in scene.polygons]
     padded = _padded(polys)
+    V = padded[0]
     P = polys[i]
     scale = float(np.ptp(scene.vertices, axis=0).max()) or 1.0
+    near = tol.AREA_HULL_RTOL * scale
     AP = area_vector(P)
     area_P = float(np.linalg.norm(AP))
     nP = AP / area_P
     f, e = np.zeros(len(polys)), np.zeros(len(polys))
-    far = []                      # far unoccluded pairs with P whole: integrated together
-    for j, Q in enumerate(polys):
-        if j == i:
-            continue
-        nQ = area_vector(Q)
-        nQ = nQ / np.linalg.norm(nQ)
-        Pc = clip_front(P, nQ, Q[0])
-        Qc = clip_front(Q, nP, P[0])
-        if Pc is None or Qc is None:
-            continue
-        B = _blockers(padded, i, j, Pc, Qc, scale, shortcuts)
+    pairs = _front_pairs(polys, i, nP, padded, near)
+    if not pairs:
+        if stats is not None:
+            stats.update(st)
+        return f, e
+    if shortcuts:
+        J = np.array([j for j, _, _ in pairs])
+        boxes = np.array([(Pc.min(axis=0), Pc.max(axis=0), Qc.min(axis=0), Qc.max(axis=0))
+                          for _, Pc, Qc in pairs])
+        cands = _shaft(padded, i, J, boxes, nP, P[0], near, st)
+    unoccluded = []               # (j, Pc, Qc): computed together at the end
+    for a, (j, Pc, Qc) in enumerate(pairs):
         if shortcuts:
+            B = _hull_blockers(V, cands[a], Pc, Qc, near)
             st["hull_culled_blockers"] += len(polys) - 2 - len(B)
+        else:
+            B = [k for k in range(len(polys)) if k not in (i, j)]
         if B:
             st["occluded_pairs"] += 1
-            f[j], e[j], points = _occluded_pair([Q] + [polys[k] for k in B], Pc, Qc, nP,
-                                                tolerance, area_P, shortcuts, st, rtol)
+            f[j], e[j], points = _occluded_pair([polys[j]] + [polys[k] for k in B], Pc, Qc,
+                                                nP, tolerance, area_P, shortcuts, st, rtol)
             st["point_values"] += points
             f[j] = nonnegative(f[j], e[j])
             continue
         if len(polys) > 2 and shortcuts:
             st["hull_unoccluded_pairs"] += 1
-        if shortcuts and Pc is P and is_far(P, Q):
-            far.append((j, Qc))
-        else:
-            if shortcuts and is_far(P, Q):
-                st["far_pairs"] += 1
-            f[j], e[j] = unoccluded_pair(P, Q, far=shortcuts)
-    if far:
-        st["far_pairs"] += len(far)
-        js = [j for j, _ in far]
-        f[js], e[js] = far_values(emitter_nodes(P, nP), nP, area_P, [Q for _, Q in far])
+        unoccluded.append((j, Pc, Qc))
+    if unoccluded:
+        js, f[js], e[js] = _unoccluded_values(polys, i, nP, area_P, unoccluded, shortcuts, st)
     if stats is not None:
         stats.update(st)
     return f, e

@@ -1,0 +1,94 @@
+"""Shaft culling of the area rows (issue 30): the receivers in front of each emitter,
+decided for a whole row at once, are those of :func:`clip_front` pair by pair; the
+blockers that survive the shaft and the hull test are those of the hull test alone,
+less only polygons that hide nothing."""
+
+import numpy as np
+from hypothesis import given, settings, strategies as st
+
+import exactff as ef
+from exactff.area import occluded as area
+from exactff.area.contour import clip_front
+from exactff.geometry import area_vector, unit_normal
+
+from common import examples
+
+# grid coordinates make polygons touch, share planes and lie on one another's faces
+_coord = st.one_of(st.sampled_from([0.0, 0.25, 0.5, 0.75, 1.0]),
+                   st.floats(0.0, 1.0, allow_nan=False, allow_infinity=False))
+
+
+@st.composite
+def _scenes(draw):
+    """Three to eight triangles and axis-aligned rectangles in the unit cube."""
+    polys = []
+    for _ in range(draw(st.integers(3, 8))):
+        if draw(st.booleans()):
+            T = np.array([[draw(_coord) for _ in range(3)] for _ in range(3)])
+        else:
+            ax = draw(st.integers(0, 2))
+            c = draw(_coord)
+            u0, u1 = sorted([draw(_coord), draw(_coord)])
+            v0, v1 = sorted([draw(_coord), draw(_coord)])
+            R = np.array([[u0, v0], [u1, v0], [u1, v1], [u0, v1]])
+            T = np.insert(R, ax, c, axis=1)
+            if draw(st.booleans()):
+                T = T[::-1]
+        n = area_vector(T)
+        if np.linalg.norm(n) < 1e-3 or np.ptp(T, axis=0).max() < 1e-3:
+            continue
+        polys.append(T)
+    return polys
+
+
+def _plain_pairs(polys, i):
+    # the row's pairs as area_row built them before: clip_front for every pair
+    P = polys[i]
+    nP = unit_normal(P)
+    out = []
+    for j, Q in enumerate(polys):
+        if j == i:
+            continue
+        Pc, Qc = clip_front(P, unit_normal(Q), Q[0]), clip_front(Q, nP, P[0])
+        if Pc is not None and Qc is not None:
+            out.append((j, Pc, Qc))
+    return out
+
+
+@settings(deadline=None, max_examples=examples(100))
+@given(polys=_scenes())
+def test_shaft_keeps_every_blocker_the_hull_test_keeps_that_hides_something(polys):
+    if len(polys) < 3:
+        return
+    try:
+        scene = ef.Scene.from_polygons(polys)
+    except ef.SceneError:
+        return
+    polys = [np.asarray(p, float) for p in scene.polygons]
+    padded = area._padded(polys)
+    scale = float(np.ptp(scene.vertices, axis=0).max())
+    near = ef._tolerances.AREA_HULL_RTOL * scale
+    for i, P in enumerate(polys):
+        nP = unit_normal(P)
+        pairs = area._front_pairs(polys, i, nP, padded, near)
+        plain = _plain_pairs(polys, i)
+        assert [j for j, _, _ in pairs] == [j for j, _, _ in plain]
+        for (_, Pc, Qc), (_, Pp, Qp) in zip(pairs, plain):
+            assert np.array_equal(Pc, Pp) and np.array_equal(Qc, Qp)
+        if not pairs:
+            continue
+        J = np.array([j for j, _, _ in pairs])
+        boxes = np.array([(Pc.min(0), Pc.max(0), Qc.min(0), Qc.max(0)) for _, Pc, Qc in pairs])
+        st_ = {"shaft_culled_blockers": 0, "shaft_unoccluded_pairs": 0}
+        cands = area._shaft(padded, i, J, boxes, nP, P[0], near, st_)
+        for (j, Pc, Qc), c in zip(pairs, cands):
+            shaft = set(area._hull_blockers(padded[0], c, Pc, Qc, near))
+            hull = set(area._blockers(padded, i, j, Pc, Qc, scale))
+            assert shaft <= hull, (i, j, shaft, hull)
+            # what the shaft left out and the hull test kept hides nothing: the hidden
+            # part of Qc by it alone is 0 (within its estimate) at points of Pc
+            c0 = Pc.mean(axis=0)
+            X = np.vstack([c0, c0 + 0.5 * (Pc - c0), c0 + 0.9 * (Pc - c0)])
+            for k in hull - shaft:
+                H, EH = area._hidden_values(X, nP, Qc, [polys[k]])
+                assert np.all(H <= EH + 1e-15), (i, j, k, H.max())
