@@ -147,6 +147,15 @@ def build_bsp(scene, *, candidates=8, seed=0):
         if parent >= 0:
             (front if child > 0 else back)[parent] = node
         m = len(ids)
+        if m == 1:
+            # a leaf: the one fragment's own plane holds it (as the scoring below would)
+            c = int(ids[0])
+            nodes_n.append(normals_src[source[c]])
+            nodes_d.append(offsets_src[source[c]])
+            front.append(-1)
+            back.append(-1)
+            node_frags.append([c])
+            continue
         owner = np.repeat(np.arange(m), counts)
         pool = ids.tolist() if m <= candidates else [int(ids[0])] + [
             int(x) for x in rng.choice(ids, size=candidates - 1, replace=False)]
@@ -164,10 +173,11 @@ def build_bsp(scene, *, candidates=8, seed=0):
         ms = len(cs)
         # every candidate plane at once
         Nc, Dc = normals_src[source[pool]], offsets_src[source[pool]]
-        sign_c, _ = coplanar_band_sides(Vs, Nc, Dc)
-        score, imbalance, _, _ = _plane_scores(sign_c, starts_s)
+        sign_c, s_c = coplanar_band_sides(Vs, Nc, Dc)
+        score, imbalance, pos_c, neg_c = _plane_scores(sign_c, starts_s)
         j = int(np.argmin(score))        # the first of equal scores
         c, n, d = pool[j], Nc[j], Dc[j]
+        chosen = None if ms < m else (sign_c[:, j], s_c[:, j], pos_c[:, j], neg_c[:, j])
         if m > tol.BSP_AXIS_CANDIDATE_MIN and imbalance[j] > tol.BSP_AXIS_IMBALANCE * ms:
             # the polygons' own planes leave this node badly unbalanced (a convex
             # tessellation has every other facet on one side of each facet, and the
@@ -179,10 +189,13 @@ def build_bsp(scene, *, candidates=8, seed=0):
             a_score, _, _, _ = _plane_scores(coplanar_band_sides(Vs, na, da)[0], starts_s)
             if a_score[0] < score[j]:
                 c, n, d = None, na[0], da[0]
-        # the chosen plane against every fragment
-        sign, s = coplanar_band_sides(V, n[None], np.array([d]))
-        _, _, has_pos, has_neg = _plane_scores(sign, starts)
-        sign, s, has_pos, has_neg = sign[:, 0], s[:, 0], has_pos[:, 0], has_neg[:, 0]
+                chosen = None
+        if chosen is None:
+            # the chosen plane against every fragment (scored on a sample, or the axis)
+            sign, s = coplanar_band_sides(V, n[None], np.array([d]))
+            _, _, has_pos, has_neg = _plane_scores(sign, starts)
+            chosen = sign[:, 0], s[:, 0], has_pos[:, 0], has_neg[:, 0]
+        sign, s, has_pos, has_neg = chosen
         nodes_n.append(n)
         nodes_d.append(d)
         front.append(-1)
