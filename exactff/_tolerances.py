@@ -52,6 +52,7 @@ __all__ = [
     "AREA_HIDDEN_PAD",
     "AREA_BOOLEAN_ULPS",
     "AREA_EDGE_ON_RTOL",
+    "AREA_SHAFT_ENTRIES_PER_CALL",
     "AREA_EDGE_CUT",
     "CLIP_MEET_ULPS",
     "C1",
@@ -338,6 +339,10 @@ AREA_BOOLEAN_ULPS = 16.0
 #: Area form factors: a blocker whose plane passes within this of a point (relative to
 #: the sub-scene's size) is seen edge-on from it and hides nothing.
 AREA_EDGE_ON_RTOL = 8 * EPS
+
+#: Area form factors: shaft culling tests a batch of a row's pairs against every polygon
+#: at once, about this many pair-polygon entries a batch (memory, not accuracy).
+AREA_SHAFT_ENTRIES_PER_CALL = 2_000_000
 
 #: Area form factors: cuts of an emitter's edge (for the contour integral's outer rule)
 #: closer than this (as a share of the edge) to each other or to its ends are dropped.

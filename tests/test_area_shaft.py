@@ -3,6 +3,8 @@ decided for a whole row at once, are those of :func:`clip_front` pair by pair; t
 blockers that survive the shaft and the hull test are those of the hull test alone,
 less only polygons that hide nothing."""
 
+import os
+
 import numpy as np
 from hypothesis import given, settings, strategies as st
 
@@ -92,3 +94,16 @@ def test_shaft_keeps_every_blocker_the_hull_test_keeps_that_hides_something(poly
             for k in hull - shaft:
                 H, EH = area._hidden_values(X, nP, Qc, [polys[k]])
                 assert np.all(H <= EH + 1e-15), (i, j, k, H.max())
+
+
+def test_shaft_in_batches_gives_the_same_row(monkeypatch):
+    # the pairs tested against the polygons in batches of one pair (memory cap) or all at
+    # once: the same blockers, so the same values and estimates bit for bit
+    scene = ef.read_vs3(os.path.join(os.path.dirname(__file__), "data", "view3d", "facet.vs3"))
+    whole = ef.area_form_factors(scene, rows=[4, 6], tolerance=1e-6, error=True)
+    monkeypatch.setattr(ef._tolerances, "AREA_SHAFT_ENTRIES_PER_CALL", 1)
+    st_ = {}
+    batched = ef.area_form_factors(scene, rows=[4, 6], tolerance=1e-6, error=True, stats=st_)
+    assert st_["shaft_culled_blockers"] > 0
+    for a, b in zip(whole, batched):
+        assert np.array_equal(a, b)

@@ -718,7 +718,10 @@ def area_row(scene, i, tolerance, *, rtol=None, shortcuts=True, stats=None):
         J = np.array([j for j, _, _ in pairs])
         boxes = np.array([(Pc.min(axis=0), Pc.max(axis=0), Qc.min(axis=0), Qc.max(axis=0))
                           for _, Pc, Qc in pairs])
-        cands = _shaft(padded, i, J, boxes, nP, P[0], near, st)
+        # the pairs in batches: each batch tests its pairs against every polygon
+        per = max(1, tol.AREA_SHAFT_ENTRIES_PER_CALL // len(polys))
+        cands = [c for s in range(0, len(J), per)
+                 for c in _shaft(padded, i, J[s:s + per], boxes[s:s + per], nP, P[0], near, st)]
     unoccluded = []               # (j, Pc, Qc): computed together at the end
     for a, (j, Pc, Qc) in enumerate(pairs):
         if shortcuts:
