@@ -68,6 +68,12 @@ __all__ = [
     "AREA_FAR",
     "TANH_SINH_LEVEL",
     "TANH_SINH_T_MAX",
+    "AREA_CLOSED_ULPS",
+    "AREA_CLOSED_RTOL",
+    "AREA_CLOSED_FLOOR",
+    "AREA_CLOSED_MP_DPS",
+    "AREA_CLOSED_MP_MARGIN",
+    "AREA_CLOSED_SIDE_ULPS",
     "AREA_GAUSS_ORDER",
     "AREA_GAUSS_LOW_ORDER",
     "AREA_RULE_ORDERS",
@@ -425,3 +431,25 @@ VIEW3D_EMISSIVITY_RANGE = (0.001, 0.999)
 #: the rounding of cos(90 degrees) and its kin; exactff does the same, to read the same
 #: vertices.
 VIEW3D_ZERO_COORDINATE = 1e-14
+
+#: Area form factors, the closed form of the contour integral: its rounding, in units of
+#: EPS of the magnitudes of its terms (each edge pair's triangle terms over |e x f|, or
+#: the parallel form's four corner terms, times |e . f|, summed; the measurement is in
+#: benchmarks/bench_closed_form.py and tests/test_closed_form.py).
+AREA_CLOSED_ULPS = 4.0
+
+#: Area form factors, the closed form: the relative target of its estimate, and the
+#: floor of the values it is relative to (a share of the emitter's hemisphere); where the
+#: estimate misses it, the far-field rule (far pairs) or mpmath takes over.
+AREA_CLOSED_RTOL = 1e-13
+AREA_CLOSED_FLOOR = 1e-3
+
+#: Area form factors, the closed form's mpmath escalation: its working precision
+#: (decimal digits) and the digits its estimate leaves for the closed form's own
+#: cancellation (the rounding is taken as 10**(margin - dps) of the terms' magnitudes).
+AREA_CLOSED_MP_DPS = 40
+AREA_CLOSED_MP_MARGIN = 20
+
+#: Area form factors: a vertex farther than this many units of rounding of the
+#: coordinates in front of the other polygon's plane needs no clipping.
+AREA_CLOSED_SIDE_ULPS = 64.0
