@@ -375,14 +375,20 @@ def _skew_edge_integrals(a, e, b, f):
             h = np.abs(hs)
             m2 = h * h + d2
             m = np.sqrt(m2)
-            q = np.abs(d) / (m + h)                            # sqrt(rho)
+            mh = m + h
+            q = np.where(mh > 0, np.abs(d) / np.where(mh > 0, mh, 1.0), 0.0)   # sqrt(rho)
             lq = np.where(q > 0, np.log(np.where(q > 0, q, 1.0)), 0.0)
-            tri, mag = -h * L, h * L
+            # h and t carry the rounding of the corner A (of its size, not of h's): the
+            # elementary part's magnitude is taken with h + |A| + L for h
+            H = h + np.sqrt(np.einsum("ij,ij->i", A, A)) + L
+            tri, mag = -h * L, H * L
             for t, sgn in ((tB, 1.0), (tA, -1.0)):
                 # Phi(t): the elementary part
-                p1, p2 = xlogy(t, t * t + m2), 2.0 * m * np.arctan2(t, m)
+                # (a logarithm's rounding is absolute: t ln(...) is off by |t| ulps)
+                lg = np.log(np.where(t * t + m2 > 0, t * t + m2, 1.0))
+                p1, p2 = t * lg, 2.0 * m * np.arctan2(t, m)
                 tri = tri + sgn * h * (p1 - 2.0 * t + p2)
-                mag = mag + h * (np.abs(p1) + 2.0 * np.abs(t) + np.abs(p2))
+                mag = mag + H * (np.abs(t) * (np.abs(lg) + 4.0) + np.abs(p2) + 2.0 * m)
                 # K(phi): the dilogarithms, e^{2 i phi} = ((h^2 - t^2) + 2 i h t) / (h^2 + t^2)
                 R2 = h * h + t * t
                 z = ((h * h - t * t) + 2j * h * t) / R2
@@ -392,10 +398,14 @@ def _skew_edge_integrals(a, e, b, f):
                 k3 = spence(1.0 + z).imag                       # Im Li2(-e^{2 i phi})
                 kk = np.where(R2 > 0, k1 + k2 + k3, 0.0)
                 tri = tri + sgn * d2 * kk
-                mag = mag + d2 * np.where(R2 > 0, np.abs(k1) + np.abs(k2) + np.abs(k3), 0.0)
+                # the dilogarithms' rounding: of their values, and of their arguments
+                # times the derivative, ln |1 - w| / |w|, near w = 1 logarithmic
+                dl = (np.abs(np.log(np.abs(1.0 + (q * q) * z) + 1e-300))
+                      + np.abs(np.log(np.abs(1.0 + z) + 1e-300)))
+                km = 2.0 * np.abs(phi) * (np.abs(lq) + 2.0) + np.abs(k2) + np.abs(k3) + dl + 4.0
+                mag = mag + d2 * np.where(R2 > 0, km, 0.0)
             # an edge through the origin (h = 0) bounds a triangle of no area
             tri = np.where(h > 0, tri, 0.0)
-            mag = np.where(h > 0, mag, 0.0)
             S += np.sign(hs) * tri
             M += mag
     # the parallelogram w + s e - t f is traversed clockwise about n
@@ -422,7 +432,10 @@ def _parallel_edge_integrals(a, e, b, f):
             g1 = 0.25 * xlogy(zz - dd, zz + dd)
             g3 = np.where(delta > 0, delta * z * np.arctan2(z, delta), 0.0)
             J += sgn * (g1 - 0.75 * zz + g3)
-            M += np.abs(g1) + 0.75 * zz + np.abs(g3)
+            # a logarithm's rounding is absolute: (z^2 - delta^2) ln(...) is off by
+            # |z^2 - delta^2| ulps
+            lg = np.log(np.where(zz + dd > 0, zz + dd, 1.0))
+            M += 0.25 * np.abs(zz - dd) * (np.abs(lg) + 4.0) + zz + np.abs(g3) + dd
     XY = np.abs(X * Y)
     return J / (X * Y), M / XY
 
@@ -443,7 +456,7 @@ def _edge_log_integrals(a, e, b, f):
         ``AREA_CLOSED_ULPS`` units of EPS of them; at least ``|J|``).
     """
     c = np.cross(e, f)
-    par = ~np.any(c != 0, axis=1)
+    par = np.einsum("ij,ij->i", c, c) == 0     # (a cross product below 1e-154 is 0)
     J, M = np.empty(len(a)), np.empty(len(a))
     if np.any(par):
         J[par], M[par] = _parallel_edge_integrals(a[par], e[par], b[par], f[par])
@@ -454,9 +467,10 @@ def _edge_log_integrals(a, e, b, f):
 
 
 def _mp_edge_log_integral(a, e, b, f):
-    """J of one edge pair (mpmath vectors of 3), in mpmath at its working precision: the
-    same closed form as :func:`_edge_log_integrals` (``mp.polylog`` for the dilogarithm
-    inside the unit disk, ``mp.clsin`` for Clausen's function on the circle)."""
+    """J of one edge pair (mpmath vectors of 3), in mpmath at its working precision, and
+    the magnitude of its terms (what its rounding is relative to): the same closed form as
+    :func:`_edge_log_integrals` (``mp.polylog`` for the dilogarithm inside the unit disk,
+    ``mp.clsin`` for Clausen's function on the circle)."""
     dot = lambda x, y: x[0] * y[0] + x[1] * y[1] + x[2] * y[2]        # noqa: E731
     cross = lambda x, y: [x[1] * y[2] - x[2] * y[1], x[2] * y[0] - x[0] * y[2],  # noqa: E731
                           x[0] * y[1] - x[1] * y[0]]
@@ -469,19 +483,20 @@ def _mp_edge_log_integral(a, e, b, f):
         Y, z0 = dot(f, u), dot(w, u)
         perp = [w[k] - z0 * u[k] for k in range(3)]
         delta = mp.sqrt(dot(perp, perp))
-        total = mp.mpf(0)
+        total, mag = mp.mpf(0), mp.mpf(0)
         for z, sgn in ((z0 + X, 1), (z0, -1), (z0 + X - Y, -1), (z0 - Y, 1)):
             s2 = z * z + delta * delta
             g = (z * z - delta * delta) * mp.log(s2) / 4 if s2 > 0 else mp.mpf(0)
             g += -3 * z * z / 4 + (delta * z * mp.atan2(z, delta) if delta > 0 else 0)
             total += sgn * g
-        return total / (X * Y)
+            mag += abs(g) + z * z
+        return total / (X * Y), mag / abs(X * Y)
     n = [v / cn for v in c]
     d = dot(w, n)
     wp = [w[k] - d * n[k] for k in range(3)]
     V = [wp, [wp[k] + e[k] for k in range(3)], [wp[k] + e[k] - f[k] for k in range(3)],
          [wp[k] - f[k] for k in range(3)]]
-    S = mp.mpf(0)
+    S, mag = mp.mpf(0), mp.mpf(0)
     for k in range(4):
         A, B = V[k], V[(k + 1) % 4]
         D = [B[i] - A[i] for i in range(3)]
@@ -496,16 +511,20 @@ def _mp_edge_log_integral(a, e, b, f):
         m = mp.sqrt(m2)
         rho = (d / (m + h)) ** 2
         tri = -h * L
+        H = h + mp.sqrt(dot(A, A)) + L
+        mag += H * L
         for t, sgn in ((tA + L, 1), (tA, -1)):
-            tri += sgn * h * ((t * mp.log(t * t + m2) if t != 0 else 0) - 2 * t
-                              + 2 * m * mp.atan2(t, m))
+            p = (t * mp.log(t * t + m2) if t != 0 else 0) - 2 * t + 2 * m * mp.atan2(t, m)
+            tri += sgn * h * p
+            mag += H * (abs(p) + 4 * abs(t) + 4 * m)
             if d != 0:
                 phi = mp.atan2(t, h)
                 K = (-phi * mp.log(rho) - mp.im(mp.polylog(2, -rho * mp.expj(2 * phi)))
                      + mp.clsin(2, mp.pi + 2 * phi))
                 tri += sgn * d * d * K
+                mag += d * d * (abs(phi * mp.log(rho)) + 4)
         S += mp.sign(hs) * tri
-    return -S / (4 * cn)
+    return -S / (4 * cn), mag / (4 * cn)
 
 
 #: Counters of the closed form's fallbacks, since import (a caller may reset them):
@@ -554,29 +573,36 @@ def _mp_escalate(c, ef, J, edges, L, area_s, target):
     mpmath: the fewest (by decreasing rounding estimate ``c``) that bring the rest within
     half the ``target``. The rest are summed in floats; the re-evaluated ones in mpmath,
     from the float vertices (``edges``: for each pair, the vertices a, a', b, b' of its
-    edges ``a -> a'`` and ``b -> b'``, unscaled), with ln L taken out as in the floats."""
+    edges ``a -> a'`` and ``b -> b'``, unscaled), with ln L taken out as in the floats,
+    at ``AREA_CLOSED_MP_DPS`` digits, doubled (up to ``MP_MAX_DPS``) while their rounding
+    (``AREA_CLOSED_MP_ULPS`` units of the precision of the closed form's terms) misses
+    the other half."""
     order = np.argsort(-c)
     rest = np.concatenate([np.cumsum(c[order][::-1])[::-1][1:], [0.0]])
     n_esc = int(np.argmax(rest <= 0.5 * target)) + 1
     esc, kept = order[:n_esc], order[n_esc:]
-    with mp.workdps(tol.AREA_CLOSED_MP_DPS):
-        lnL, L2 = mp.log(mp.mpf(L)), mp.mpf(L) ** 2
-        acc, mag = mp.mpf(0), mp.mpf(0)
-        for k in esc:
-            a, a1, b, b1 = (_mp_vector(x) for x in edges[k])
-            e = [a1[i] - a[i] for i in range(3)]
-            f = [b1[i] - b[i] for i in range(3)]
-            t = (e[0] * f[0] + e[1] * f[1] + e[2] * f[2]) / L2 * (
-                _mp_edge_log_integral(a, e, b, f) - lnL)
-            acc += t
-            mag += abs(t)
-        total = (acc + mp.mpf(float(np.dot(ef[kept], J[kept])))) / (2 * mp.pi * mp.mpf(area_s))
-        value = float(total)
-        # the float part's rounding, the conversion, and the mpmath rounding (a few
-        # units of its precision per term)
-        est = (float(c[kept].sum()) + tol.AREA_ROUNDING_ULPS * tol.EPS * abs(value)
-               + float(mag * mp.mpf(10) ** (tol.AREA_CLOSED_MP_MARGIN - tol.AREA_CLOSED_MP_DPS)
-                       / (2 * mp.pi * mp.mpf(area_s))))
+    float_part = float(np.dot(ef[kept], J[kept]))
+    dps = tol.AREA_CLOSED_MP_DPS
+    while True:
+        with mp.workdps(dps):
+            lnL, L2 = mp.log(mp.mpf(L)), mp.mpf(L) ** 2
+            acc, mag = mp.mpf(0), mp.mpf(0)
+            for k in esc:
+                a, a1, b, b1 = (_mp_vector(x) for x in edges[k])
+                e = [a1[i] - a[i] for i in range(3)]
+                f = [b1[i] - b[i] for i in range(3)]
+                efk = (e[0] * f[0] + e[1] * f[1] + e[2] * f[2]) / L2
+                Jk, Mk = _mp_edge_log_integral(a, e, b, f)
+                acc += efk * (Jk - lnL)
+                mag += abs(efk) * (Mk + abs(lnL))
+            denom = 2 * mp.pi * mp.mpf(area_s)
+            value = float((acc + mp.mpf(float_part)) / denom)
+            mp_err = float(tol.AREA_CLOSED_MP_ULPS * mag * mp.mpf(2) ** -mp.mp.prec / denom)
+        if mp_err <= 0.5 * target or 2 * dps > tol.MP_MAX_DPS:
+            break
+        dps *= 2
+    # the float part's rounding, the conversion to a float and the mpmath rounding
+    est = float(c[kept].sum()) + tol.EPS * abs(value) + mp_err
     return value, est, n_esc
 
 
