@@ -372,7 +372,10 @@ def _skew_edge_integrals(a, e, b, f):
             tA = np.einsum("ij,ij->i", A, u)
             tB = tA + L
             hs = np.einsum("ij,ij->i", np.cross(A, u), n)     # signed: the triangle's side
-            h = np.abs(hs)
+            absA = np.sqrt(np.einsum("ij,ij->i", A, A))
+            # a triangle thinner than 1e-100 of its size is of no area (its terms, below
+            # 1e-100 of the magnitudes counted, would only underflow)
+            h = np.where(np.abs(hs) > 1e-100 * (absA + L), np.abs(hs), 0.0)
             m2 = h * h + d2
             m = np.sqrt(m2)
             mh = m + h
@@ -380,7 +383,7 @@ def _skew_edge_integrals(a, e, b, f):
             lq = np.where(q > 0, np.log(np.where(q > 0, q, 1.0)), 0.0)
             # h and t carry the rounding of the corner A (of its size, not of h's): the
             # elementary part's magnitude is taken with h + |A| + L for h
-            H = h + np.sqrt(np.einsum("ij,ij->i", A, A)) + L
+            H = h + absA + L
             tri, mag = -h * L, H * L
             for t, sgn in ((tB, 1.0), (tA, -1.0)):
                 # Phi(t): the elementary part
