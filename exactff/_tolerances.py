@@ -450,7 +450,7 @@ AREA_CLOSED_FLOOR = 1e-3
 #: (decimal digits; doubled while the estimate misses), and its rounding in units of
 #: that precision of the terms' magnitudes (as AREA_CLOSED_ULPS for the floats, with
 #: the margin of mpmath's functions' last digits).
-AREA_CLOSED_MP_DPS = 40
+AREA_CLOSED_MP_DPS = 30
 AREA_CLOSED_MP_ULPS = 64.0
 
 #: Area form factors: a vertex farther than this many units of rounding of the

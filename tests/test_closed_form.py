@@ -12,12 +12,14 @@ closed cube's row sums.
 import mpmath as mp
 import numpy as np
 import pytest
-from hypothesis import assume, given, strategies as st
+from hypothesis import assume, given, settings, strategies as st
 
 import exactff as ef
 from exactff import _tolerances as tol
 from exactff.area import contour
 from exactff.area.contour import CLOSED_FORM_COUNTS, unoccluded_pairs
+
+from common import examples
 
 from test_area import (gross_parallel, gross_perpendicular, howell_parallel, howell_perpendicular,
                        parallel_pair, perpendicular_pair)
@@ -304,6 +306,7 @@ def facing_pairs(draw):
     return P @ R.T + shift, Q @ R.T + shift
 
 
+@settings(max_examples=examples(8))      # most escalate to mpmath (0.5 s a pair)
 @given(facing_pairs())
 def test_random_pairs_against_the_tanh_sinh_oracle(pair):
     P, Q = pair
@@ -319,6 +322,7 @@ def test_random_pairs_against_the_tanh_sinh_oracle(pair):
     assert e <= tol.AREA_CLOSED_RTOL * max(f, tol.AREA_CLOSED_FLOOR)
 
 
+@settings(max_examples=examples(4))
 @given(facing_pairs())
 def test_reciprocity_on_random_pairs(pair):
     P, Q = pair
