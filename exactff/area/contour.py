@@ -660,7 +660,10 @@ def unoccluded_pairs(P, Qs, far=True, rtol=None):
     AP = area_vector(P)
     area_P = float(np.linalg.norm(AP))
     nP = AP / area_P
-    nQs = np.array([area_vector(Q) for Q in Qs])
+    # the receivers' area vectors, (1/2) sum v_k x v_{k+1} about each first vertex
+    V, offsets, nxt = _rings(Qs)
+    V0 = np.repeat(V[offsets[:-1]], np.diff(offsets), axis=0)
+    nQs = 0.5 * np.add.reduceat(np.cross(V - V0, V[nxt] - V0), offsets[:-1], axis=0)
     nQs /= np.linalg.norm(nQs, axis=1)[:, None]
     Pcs, Qcs = _front_parts(P, nP, Qs, nQs)
     live = [j for j in range(m) if Pcs[j] is not None and Qcs[j] is not None]
@@ -698,13 +701,17 @@ def unoccluded_pairs(P, Qs, far=True, rtol=None):
     target = rtol * np.maximum(np.abs(values), tol.AREA_CLOSED_FLOOR)
     miss = [k for k in range(len(live)) if est[live[k]] > target[live[k]]]
     if far and miss:
-        far_k = [k for k in miss if is_far(P, Qs[live[k]])]
-        for k in far_k:
-            j = live[k]
-            fv, fe = far_values(emitter_nodes(Pcs[j], nP), nP, area_P, [Qcs[j]])
-            if fe[0] < est[j]:
-                values[j], est[j] = fv[0], fe[0]
-                CLOSED_FORM_COUNTS["far_rule"] += 1
+        far_j = [live[k] for k in miss if is_far(P, Qs[live[k]])]
+        # P whole: one set of emitter nodes for all; P clipped: its own
+        groups = [[j for j in far_j if Pcs[j] is P]] + [[j] for j in far_j if Pcs[j] is not P]
+        for js in groups:
+            if not js:
+                continue
+            fv, fe = far_values(emitter_nodes(Pcs[js[0]], nP), nP, area_P, [Qcs[j] for j in js])
+            better = fe < est[js]
+            values[np.array(js)[better]] = fv[better]
+            est[np.array(js)[better]] = fe[better]
+            CLOSED_FORM_COUNTS["far_rule"] += int(better.sum())
         miss = [k for k in miss if est[live[k]] > target[live[k]]]
     for k in miss:
         j = live[k]
