@@ -722,6 +722,9 @@ def unoccluded_pairs(P, Qs, far=True, rtol=None):
                                                 area_s[k], target[j])
         CLOSED_FORM_COUNTS["escalated_pairs"] += 1
         CLOSED_FORM_COUNTS["escalated_edge_pairs"] += n_esc
+    # the emitter's area (a Newell sum) and the last division round the value by a few
+    # units more, on every path
+    est += tol.AREA_CLOSED_ULPS * tol.EPS * np.abs(values)
     check_finite(values, est, "area form factor")
     return nonnegative(values, est), est
 
