@@ -3,7 +3,7 @@ contour rule it replaced: accuracy against mpmath and speed per pair.
 
 Accuracy: Howell's catalogue (parallel and perpendicular rectangles, with the 10 x 0.01
 strips and the 1e-3 / 1e3 rectangles), and random facing pairs (tests/test_closed_form.py's
-strategy) against the double contour integral in mpmath (30 digits). Speed: one row of
+strategy) against the double contour integral in mpmath (40 digits). Speed: one row of
 ``scenes.subdivided_box(16)`` (1,536 quads, closed), ``unoccluded_pairs`` over all
 receivers against ``_contour_tanh_sinh`` per pair (process time, one run each).
 
@@ -45,7 +45,7 @@ def accuracy(n_random):
         pairs.append(p)
     draw()
     pairs = pairs[:n_random]
-    randoms = [("random", p, mp_contour_form_factor(*p)) for p in pairs]
+    randoms = [("random", p, mp_contour_form_factor(*p, dps=40)) for p in pairs]
     print(f"{'cases':32s} {'n':>4s} {'old (tanh-sinh)':>16s} {'new (closed)':>13s} {'covered':>8s}")
     for name, cases in [("Howell's catalogue", howell), ("extreme aspect ratios", extreme),
                         ("random facing pairs", randoms)]:
