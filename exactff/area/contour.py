@@ -7,16 +7,21 @@ Eq. 1 into a double contour integral (Mitalas & Stephenson 1966; Sparrow 1963):
     A_P F(P -> Q) = (1 / 2 pi) sum_i sum_j (e_i . e_j) int_0^1 int_0^1 ln |p_i(s) - q_j(t)| dt ds
 
 over the edges ``p_i(s) = a_i + s e_i`` of P and ``q_j(t) = b_j + t e_j`` of Q, each
-counter-clockwise seen from its front. The inner integral is in closed form (``_segment_log_integral``); the outer one is a tanh-sinh
-(double-exponential) quadrature, which keeps full accuracy when the integrand has
-logarithmic singularities at the ends of an edge (polygons sharing an edge or a
-vertex). ``ln r`` is measured against the distance between the centroids (the shift
-contributes ``(sum e_i) . (sum e_j) = 0``), which keeps the terms small when the
-polygons are far apart.
+counter-clockwise seen from its front. Both integrals are in closed form
+(``_edge_log_integrals``: elementary for parallel edges, dilogarithms for skew ones; see
+the notes before it), evaluated for all edge pairs of one emitter and many receivers at
+once (:func:`unoccluded_pairs`), each pair scaled by a power of 2 near its centroids'
+distance (the scale's ``ln L`` drops out: ``(sum e_i) . (sum e_j) = 0``). The error
+estimate is the rounding of the terms' magnitudes (``AREA_CLOSED_ULPS``).
 
-The contour terms cancel as (distance / size)^2 when the polygons are far apart: beyond
-``FAR`` diameters the double integral is taken instead as the area integral over P of
-the exact point form factors (smooth there), by a Gauss-Legendre rule on P's triangles.
+The contour terms cancel as (distance / size)^2 when the polygons are far apart, and for
+thin polygons: where the estimate misses ``AREA_CLOSED_RTOL`` the double integral is
+taken, for pairs beyond ``AREA_FAR`` diameters, as the area integral over P of the exact
+point form factors (smooth there) by a Gauss-Legendre rule on P's triangles, and where it
+still misses, the costliest edge pairs are evaluated again in mpmath.
+
+The tanh-sinh outer quadrature of the inner closed form (``_segment_log_integral``), the
+production path before, is kept as a test oracle (``_contour_tanh_sinh``).
 
 One-sided, as the point form factors: only the part of Q in front of P's plane and
 the part of P in front of Q's plane take part.
