@@ -664,10 +664,18 @@ def test_contour_and_far_rule_raise_on_a_negative_beyond_the_estimate(monkeypatc
     from exactff.area import contour
 
     P, Q = parallel_pair(1, 1, 1)
+    # the closed form's edge integrals negated (the sum then comes out -F)
+    closed = contour._edge_log_integrals
+    monkeypatch.setattr(contour, "_edge_log_integrals",
+                        lambda a, e, b, f: (-closed(a, e, b, f)[0], closed(a, e, b, f)[1]))
+    with pytest.raises(ef.NumericalError, match="below 0 beyond"):
+        contour.unoccluded_pair(P, Q)
+    monkeypatch.undo()
+    # and the tanh-sinh oracle's
     log_integral = contour._segment_log_integral
     monkeypatch.setattr(contour, "_segment_log_integral", lambda W, E: -log_integral(W, E))
     with pytest.raises(ef.NumericalError, match="below 0 beyond"):
-        contour.unoccluded_pair(P, Q)
+        contour._contour_tanh_sinh(P, Q)
     monkeypatch.undo()
     far = Q + [0, 0, 10]
     nodes = contour.emitter_nodes(P, np.array([0.0, 0.0, 1.0]))

@@ -7,16 +7,21 @@ Eq. 1 into a double contour integral (Mitalas & Stephenson 1966; Sparrow 1963):
     A_P F(P -> Q) = (1 / 2 pi) sum_i sum_j (e_i . e_j) int_0^1 int_0^1 ln |p_i(s) - q_j(t)| dt ds
 
 over the edges ``p_i(s) = a_i + s e_i`` of P and ``q_j(t) = b_j + t e_j`` of Q, each
-counter-clockwise seen from its front. The inner integral is in closed form (``_segment_log_integral``); the outer one is a tanh-sinh
-(double-exponential) quadrature, which keeps full accuracy when the integrand has
-logarithmic singularities at the ends of an edge (polygons sharing an edge or a
-vertex). ``ln r`` is measured against the distance between the centroids (the shift
-contributes ``(sum e_i) . (sum e_j) = 0``), which keeps the terms small when the
-polygons are far apart.
+counter-clockwise seen from its front. Both integrals are in closed form
+(``_edge_log_integrals``: elementary for parallel edges, dilogarithms for skew ones; see
+the notes before it), evaluated for all edge pairs of one emitter and many receivers at
+once (:func:`unoccluded_pairs`), each pair scaled by a power of 2 near its centroids'
+distance (the scale's ``ln L`` drops out: ``(sum e_i) . (sum e_j) = 0``). The error
+estimate is the rounding of the terms' magnitudes (``AREA_CLOSED_ULPS``).
 
-The contour terms cancel as (distance / size)^2 when the polygons are far apart: beyond
-``FAR`` diameters the double integral is taken instead as the area integral over P of
-the exact point form factors (smooth there), by a Gauss-Legendre rule on P's triangles.
+The contour terms cancel as (distance / size)^2 when the polygons are far apart, and for
+thin polygons: where the estimate misses ``AREA_CLOSED_RTOL`` the double integral is
+taken, for pairs beyond ``AREA_FAR`` diameters, as the area integral over P of the exact
+point form factors (smooth there) by a Gauss-Legendre rule on P's triangles, and where it
+still misses, the costliest edge pairs are evaluated again in mpmath.
+
+The tanh-sinh outer quadrature of the inner closed form (``_segment_log_integral``), the
+production path before, is kept as a test oracle (``_contour_tanh_sinh``).
 
 One-sided, as the point form factors: only the part of Q in front of P's plane and
 the part of P in front of Q's plane take part.
@@ -24,10 +29,11 @@ the part of P in front of Q's plane take part.
 
 from __future__ import annotations
 
+import mpmath as mp
 import numpy as np
 from numpy.typing import ArrayLike
 import shapely
-from scipy.special import roots_legendre, xlogy
+from scipy.special import roots_legendre, spence, xlogy
 
 from .. import _tolerances as tol
 from ..errors import NumericalError, check_finite
@@ -38,7 +44,8 @@ from ..rings import owners, successors
 from ..scene import validate_polygon
 
 __all__ = ["polygon_form_factor", "clip_front", "triangle_rule", "point_values",
-           "emitter_nodes", "far_values", "unoccluded_pair", "nonnegative", "is_far"]
+           "emitter_nodes", "far_values", "unoccluded_pair", "unoccluded_pairs", "nonnegative",
+           "is_far", "CLOSED_FORM_COUNTS"]
 
 
 def nonnegative(value, estimate, what="area form factor"):
@@ -221,29 +228,35 @@ def far_values(nodes, nP, area_P, Qs):
     return nonnegative(hi, est), est
 
 
-def polygon_form_factor(P: ArrayLike, Q: ArrayLike) -> float:
+def polygon_form_factor(P: ArrayLike, Q: ArrayLike, error: bool = False):
     """The area-to-area form factor F(P -> Q), unoccluded, exact to rounding.
 
     The paper's Eq. 1: ``(1 / A_P) int_P int_Q cos(theta_P) cos(theta_Q) / (pi r^2)
     dA_Q dA_P``, one-sided (only the parts of each polygon in front of the other's
-    plane), by the contour integral of Mitalas and Stephenson with the inner integral
-    in closed form and a tanh-sinh outer quadrature (see the module's notes).
+    plane), by the contour integral of Mitalas and Stephenson with both integrals in
+    closed form (:func:`unoccluded_pairs`; see the module's notes), the far-field rule
+    or mpmath where the closed form's rounding estimate misses ``AREA_CLOSED_RTOL``.
 
     Parameters
     ----------
     P, Q : array_like of shape (K, 3)
         Planar polygons, counter-clockwise seen from their fronts.
+    error : bool, default False
+        Also return the error estimate: a bound on ``|F - exact|``, from the rounding of
+        the closed form's terms (or the far-field rule's, or the mpmath evaluation's).
 
     Returns
     -------
-    float
+    float, or (float, float) with ``error=True``
+        F(P -> Q), and its error estimate.
 
     Raises
     ------
     SceneError
         A polygon is ill-formed (as for scenes; P is polygon 0, Q polygon 1).
     NumericalError
-        The value or its estimate came out NaN or infinite (never returned).
+        The value or its estimate came out NaN or infinite, or the value below 0 beyond
+        its estimate (never returned).
 
     Examples
     --------
@@ -254,10 +267,16 @@ def polygon_form_factor(P: ArrayLike, Q: ArrayLike) -> float:
     >>> Q = [[0, 0, 1], [0, 1, 1], [1, 1, 1], [1, 0, 1]]
     >>> round(polygon_form_factor(P, Q), 12)
     0.199824895698
+    >>> f, e = polygon_form_factor(P, Q, error=True)
+    >>> abs(f - 0.19982489569838739) <= e < 1e-14
+    True
     """
+    if not isinstance(error, (bool, np.bool_)):
+        raise ValueError(f"error must be True or False, not {error!r}")
     P = np.array(validate_polygon(P, 0), dtype=float)
     Q = np.array(validate_polygon(Q, 1), dtype=float)
-    return check_finite(*unoccluded_pair(P, Q))[0]
+    f, e = check_finite(*unoccluded_pair(P, Q))
+    return (f, e) if error else f
 
 
 def _edge_pieces(P, eP, Q, eQ):
@@ -294,12 +313,443 @@ def _edge_pieces(P, eP, Q, eQ):
     return np.array(owner), np.array(s0), np.array(s1)
 
 
+# ---------------------------------------------------------------------------------------
+# the edge-pair integral J = int_0^1 int_0^1 ln |a + s e - b - t f| ds dt in closed form
+# ---------------------------------------------------------------------------------------
+#
+# Skew (non-parallel) edges. With n = (e x f) / |e x f|, the difference of the two points
+# splits into a constant part d n across (d = (a - b) . n, the lines' distance) and the
+# point X(s, t) = w + s e - t f of their common plane (w: the part of a - b in that
+# plane), which sweeps a parallelogram of area |e x f|. So
+#     J = (1 / |e x f|) int_parallelogram (1/2) ln(d^2 + |X|^2) dX,
+# a radial function over a polygon: the signed sum of its integrals over the triangles
+# (0, A, B) on the parallelogram's edges A -> B. For an edge at distance h from the origin,
+# with t the position along it from the foot of the perpendicular, phi = atan(t / h),
+# m^2 = h^2 + d^2 and rho = (m - h) / (m + h) = d^2 / (m + h)^2, the triangle's integral is
+#     T = (1/4) [h Phi(t) - h t + d^2 K(phi)]  between the edge's ends,
+#     Phi(t) = t ln(t^2 + m^2) - 2 t + 2 m atan(t / m),
+#     K(phi) = -phi ln rho - Im Li2(-rho e^{2 i phi}) + Im Li2(-e^{2 i phi}),
+# from int_0^R (1/2) ln(d^2 + r^2) r dr = (1/4) [(d^2 + R^2) ln(d^2 + R^2) - R^2 - d^2 ln d^2]
+# with R = h / cos(phi), and ln(d^2 cos^2 phi + h^2) = ln((m + h)^2 / 4)
+# + ln(1 + 2 rho cos 2phi + rho^2), whose Fourier series integrates to the dilogarithm
+# (-Im Li2(-rho e^{i psi}) / 2 per unit of psi = 2 phi), and -2 ln |2 cos phi| to
+# Im Li2(-e^{2 i phi}) (Clausen's function Cl2(pi + 2 phi)). This is the dilogarithm
+# form of Schroeder & Hanrahan ("On the form factor between two polygons", SIGGRAPH 1993)
+# and Narayanaswamy (IJHMT 2015), derived here through the parallelogram: d = 0 (edges on
+# intersecting lines) leaves only elementary terms, and an edge through the origin
+# (h = 0: the lines' common point on the parallelogram's boundary, touching edges)
+# contributes 0, so shared vertices and edges need no limits but xlogy's 0 ln 0 = 0.
+#
+# Parallel edges (e x f = 0, f = sigma |f| e / |e|): with z the position along the common
+# direction and delta the lines' distance, ln r = (1/2) ln(z^2 + delta^2) has the double
+# antiderivative G2(z) = (1/4) (z^2 - delta^2) ln(z^2 + delta^2) - (3/4) z^2
+# + delta z atan(z / delta), and
+#     J = [G2(w + X) - G2(w) - G2(w + X - Y) + G2(w - Y)] / (X Y),  X = |e|, Y = sigma |f|,
+# w the offset of a from b along the direction.
+
+
+def _skew_edge_integrals(a, e, b, f):
+    """J and the sum of its terms' magnitudes (its rounding scale) for skew edges.
+
+    Parameters
+    ----------
+    a, e, b, f : ndarray of shape (N, 3)
+        The edges ``a + s e`` and ``b + t f``, ``e x f`` nonzero.
+
+    Returns
+    -------
+    (ndarray of shape (N,), ndarray of shape (N,))
+    """
+    c = np.cross(e, f)
+    cn = np.sqrt(np.einsum("ij,ij->i", c, c))
+    n = c / cn[:, None]
+    w = a - b
+    d = np.einsum("ij,ij->i", w, n)
+    wp = w - d[:, None] * n                         # the parallelogram's corner, in plane
+    d2 = d * d
+    V = (wp, wp + e, wp + e - f, wp - f)
+    S, M = np.zeros(len(a)), np.zeros(len(a))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        for k in range(4):
+            A, D = V[k], V[(k + 1) % 4] - V[k]
+            L = np.sqrt(np.einsum("ij,ij->i", D, D))
+            u = D / L[:, None]
+            tA = np.einsum("ij,ij->i", A, u)
+            tB = tA + L
+            hs = np.einsum("ij,ij->i", np.cross(A, u), n)     # signed: the triangle's side
+            absA = np.sqrt(np.einsum("ij,ij->i", A, A))
+            # a triangle thinner than 1e-100 of its size is of no area (its terms, below
+            # 1e-100 of the magnitudes counted, would only underflow)
+            h = np.where(np.abs(hs) > 1e-100 * (absA + L), np.abs(hs), 0.0)
+            m2 = h * h + d2
+            m = np.sqrt(m2)
+            mh = m + h
+            q = np.where(mh > 0, np.abs(d) / np.where(mh > 0, mh, 1.0), 0.0)   # sqrt(rho)
+            lq = np.where(q > 0, np.log(np.where(q > 0, q, 1.0)), 0.0)
+            # h and t carry the rounding of the corner A (of its size, not of h's): the
+            # elementary part's magnitude is taken with h + |A| + L for h
+            H = h + absA + L
+            tri, mag = -h * L, H * L
+            for t, sgn in ((tB, 1.0), (tA, -1.0)):
+                # Phi(t): the elementary part
+                # (a logarithm's rounding is absolute: t ln(...) is off by |t| ulps)
+                lg = np.log(np.where(t * t + m2 > 0, t * t + m2, 1.0))
+                p1, p2 = t * lg, 2.0 * m * np.arctan2(t, m)
+                tri = tri + sgn * h * (p1 - 2.0 * t + p2)
+                mag = mag + H * (np.abs(t) * (np.abs(lg) + 4.0) + np.abs(p2) + 2.0 * m)
+                # K(phi): the dilogarithms, e^{2 i phi} = ((h^2 - t^2) + 2 i h t) / (h^2 + t^2)
+                R2 = h * h + t * t
+                z = ((h * h - t * t) + 2j * h * t) / R2
+                phi = np.arctan2(t, h)
+                k1 = -2.0 * phi * lq
+                k2 = -spence(1.0 + (q * q) * z).imag            # -Im Li2(-rho e^{2 i phi})
+                k3 = spence(1.0 + z).imag                       # Im Li2(-e^{2 i phi})
+                kk = np.where(R2 > 0, k1 + k2 + k3, 0.0)
+                tri = tri + sgn * d2 * kk
+                # the dilogarithms' rounding: of their values, and of their arguments
+                # times the derivative, ln |1 - w| / |w|, near w = 1 logarithmic
+                dl = (np.abs(np.log(np.abs(1.0 + (q * q) * z) + 1e-300))
+                      + np.abs(np.log(np.abs(1.0 + z) + 1e-300)))
+                km = 2.0 * np.abs(phi) * (np.abs(lq) + 2.0) + np.abs(k2) + np.abs(k3) + dl + 4.0
+                mag = mag + d2 * np.where(R2 > 0, km, 0.0)
+            # an edge through the origin (h = 0) bounds a triangle of no area
+            tri = np.where(h > 0, tri, 0.0)
+            S += np.sign(hs) * tri
+            M += mag
+    # the parallelogram w + s e - t f is traversed clockwise about n
+    return -0.25 * S / cn, 0.25 * M / cn
+
+
+def _parallel_edge_integrals(a, e, b, f):
+    """J and the sum of its terms' magnitudes for parallel edges (``e x f = 0``).
+
+    Parameters and returns as :func:`_skew_edge_integrals`.
+    """
+    X = np.sqrt(np.einsum("ij,ij->i", e, e))
+    u = e / X[:, None]
+    Y = np.einsum("ij,ij->i", f, u)                 # sigma |f|
+    w = a - b
+    z0 = np.einsum("ij,ij->i", w, u)
+    perp = w - z0[:, None] * u
+    delta = np.sqrt(np.einsum("ij,ij->i", perp, perp))
+    dd = delta * delta
+    J, M = np.zeros(len(a)), np.zeros(len(a))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        for z, sgn in ((z0 + X, 1.0), (z0, -1.0), (z0 + X - Y, -1.0), (z0 - Y, 1.0)):
+            zz = z * z
+            g1 = 0.25 * xlogy(zz - dd, zz + dd)
+            g3 = np.where(delta > 0, delta * z * np.arctan2(z, delta), 0.0)
+            J += sgn * (g1 - 0.75 * zz + g3)
+            # a logarithm's rounding is absolute: (z^2 - delta^2) ln(...) is off by
+            # |z^2 - delta^2| ulps
+            lg = np.log(np.where(zz + dd > 0, zz + dd, 1.0))
+            M += 0.25 * np.abs(zz - dd) * (np.abs(lg) + 4.0) + zz + np.abs(g3) + dd
+    XY = np.abs(X * Y)
+    return J / (X * Y), M / XY
+
+
+def _edge_log_integrals(a, e, b, f):
+    """``J = int_0^1 int_0^1 ln |a + s e - b - t f| ds dt`` for many edge pairs at once, in
+    closed form (see the notes above), and the sum of its terms' magnitudes.
+
+    Parameters
+    ----------
+    a, e, b, f : ndarray of shape (N, 3)
+        The edges ``a + s e`` (``s`` in [0, 1]) and ``b + t f``, of nonzero length.
+
+    Returns
+    -------
+    (ndarray of shape (N,), ndarray of shape (N,))
+        J, and the magnitudes whose rounding bounds its error (the caller's
+        ``AREA_CLOSED_ULPS`` units of EPS of them; at least ``|J|``).
+    """
+    c = np.cross(e, f)
+    par = np.einsum("ij,ij->i", c, c) == 0     # (a cross product below 1e-154 is 0)
+    J, M = np.empty(len(a)), np.empty(len(a))
+    if np.any(par):
+        J[par], M[par] = _parallel_edge_integrals(a[par], e[par], b[par], f[par])
+    if not np.all(par):
+        s = ~par
+        J[s], M[s] = _skew_edge_integrals(a[s], e[s], b[s], f[s])
+    return J, np.maximum(M, np.abs(J))
+
+
+def _mp_edge_log_integral(a, e, b, f):
+    """J of one edge pair (mpmath vectors of 3), in mpmath at its working precision, and
+    the magnitude of its terms (what its rounding is relative to): the same closed form as
+    :func:`_edge_log_integrals` (``mp.polylog`` for the dilogarithm inside the unit disk,
+    ``mp.clsin`` for Clausen's function on the circle)."""
+    dot = lambda x, y: x[0] * y[0] + x[1] * y[1] + x[2] * y[2]        # noqa: E731
+    cross = lambda x, y: [x[1] * y[2] - x[2] * y[1], x[2] * y[0] - x[0] * y[2],  # noqa: E731
+                          x[0] * y[1] - x[1] * y[0]]
+    w = [a[k] - b[k] for k in range(3)]
+    c = cross(e, f)
+    cn = mp.sqrt(dot(c, c))
+    if cn == 0:
+        X = mp.sqrt(dot(e, e))
+        u = [v / X for v in e]
+        Y, z0 = dot(f, u), dot(w, u)
+        perp = [w[k] - z0 * u[k] for k in range(3)]
+        delta = mp.sqrt(dot(perp, perp))
+        total, mag = mp.mpf(0), mp.mpf(0)
+        for z, sgn in ((z0 + X, 1), (z0, -1), (z0 + X - Y, -1), (z0 - Y, 1)):
+            s2 = z * z + delta * delta
+            g = (z * z - delta * delta) * mp.log(s2) / 4 if s2 > 0 else mp.mpf(0)
+            g += -3 * z * z / 4 + (delta * z * mp.atan2(z, delta) if delta > 0 else 0)
+            total += sgn * g
+            mag += abs(g) + z * z
+        return total / (X * Y), mag / abs(X * Y)
+    n = [v / cn for v in c]
+    d = dot(w, n)
+    wp = [w[k] - d * n[k] for k in range(3)]
+    V = [wp, [wp[k] + e[k] for k in range(3)], [wp[k] + e[k] - f[k] for k in range(3)],
+         [wp[k] - f[k] for k in range(3)]]
+    S, mag = mp.mpf(0), mp.mpf(0)
+    for k in range(4):
+        A, B = V[k], V[(k + 1) % 4]
+        D = [B[i] - A[i] for i in range(3)]
+        L = mp.sqrt(dot(D, D))
+        u = [v / L for v in D]
+        tA = dot(A, u)
+        hs = dot(cross(A, u), n)
+        h = abs(hs)
+        if h == 0:
+            continue
+        m2 = h * h + d * d
+        m = mp.sqrt(m2)
+        rho = (d / (m + h)) ** 2
+        tri = -h * L
+        H = h + mp.sqrt(dot(A, A)) + L
+        mag += H * L
+        for t, sgn in ((tA + L, 1), (tA, -1)):
+            p = (t * mp.log(t * t + m2) if t != 0 else 0) - 2 * t + 2 * m * mp.atan2(t, m)
+            tri += sgn * h * p
+            mag += H * (abs(p) + 4 * abs(t) + 4 * m)
+            if d != 0:
+                phi = mp.atan2(t, h)
+                K = (-phi * mp.log(rho) - mp.im(mp.polylog(2, -rho * mp.expj(2 * phi)))
+                     + mp.clsin(2, mp.pi + 2 * phi))
+                tri += sgn * d * d * K
+                mag += d * d * (abs(phi * mp.log(rho)) + 4)
+        S += mp.sign(hs) * tri
+    return -S / (4 * cn), mag / (4 * cn)
+
+
+#: Counters of the closed form's fallbacks, since import (a caller may reset them):
+#: ``pairs`` (receivers evaluated by :func:`unoccluded_pairs`), ``far_rule`` (taken by the
+#: far-field rule instead, its estimate the smaller), ``escalated_pairs`` and
+#: ``escalated_edge_pairs`` (re-evaluated in mpmath, and how many of their edge pairs).
+CLOSED_FORM_COUNTS = {"pairs": 0, "far_rule": 0, "escalated_pairs": 0,
+                      "escalated_edge_pairs": 0}
+
+
+def _rings(polys):
+    """Concatenated vertices (V, 3), offsets, and each vertex's successor's index."""
+    V = np.concatenate(polys)
+    offsets = np.concatenate([[0], np.cumsum([len(p) for p in polys])])
+    return V, offsets, successors(offsets)
+
+
+def _front_parts(P, nP, Qs, nQs):
+    """Each pair's parts in front of the other's plane (:func:`clip_front`): lists of the
+    clipped P and Q (None where nothing is left). clip_front is called only where some
+    vertex is within rounding of the other plane, or behind it."""
+    V, offsets, _ = _rings(Qs)
+    start = offsets[:-1]
+    margin = tol.AREA_CLOSED_SIDE_ULPS * tol.EPS * (float(np.abs(V).max())
+                                                   + float(np.abs(P).max()))
+    sQ = np.minimum.reduceat((V - P[0]) @ nP, start)
+    sP = np.einsum("mkj,mj->mk", P[None] - V[start][:, None], nQs).min(axis=1)
+    whole = (sQ > margin) & (sP > margin)
+    Pcs, Qcs = [], []
+    for j, Q in enumerate(Qs):
+        if whole[j]:
+            Pcs.append(P)
+            Qcs.append(Q)
+        else:
+            Pcs.append(clip_front(P, nQs[j], Q[0]))
+            Qcs.append(clip_front(Q, nP, P[0]))
+    return Pcs, Qcs
+
+
+def _mp_vector(x):
+    return [mp.mpf(float(v)) for v in x]
+
+
+def _mp_escalate(c, ef, J, edges, L, area_s, target):
+    """One receiver's value and estimate with its costliest edge pairs re-evaluated in
+    mpmath: the fewest (by decreasing rounding estimate ``c``) that bring the rest within
+    half the ``target``. The rest are summed in floats; the re-evaluated ones in mpmath,
+    from the float vertices (``edges``: for each pair, the vertices a, a', b, b' of its
+    edges ``a -> a'`` and ``b -> b'``, unscaled), with ln L taken out as in the floats,
+    at ``AREA_CLOSED_MP_DPS`` digits, doubled (up to ``MP_MAX_DPS``) while their rounding
+    (``AREA_CLOSED_MP_ULPS`` units of the precision of the closed form's terms) misses
+    the other half."""
+    order = np.argsort(-c)
+    rest = np.concatenate([np.cumsum(c[order][::-1])[::-1][1:], [0.0]])
+    n_esc = int(np.argmax(rest <= 0.5 * target)) + 1
+    esc, kept = order[:n_esc], order[n_esc:]
+    float_part = float(np.dot(ef[kept], J[kept]))
+    dps = tol.AREA_CLOSED_MP_DPS
+    while True:
+        with mp.workdps(dps):
+            lnL, L2 = mp.log(mp.mpf(L)), mp.mpf(L) ** 2
+            acc, mag = mp.mpf(0), mp.mpf(0)
+            for k in esc:
+                a, a1, b, b1 = (_mp_vector(x) for x in edges[k])
+                e = [a1[i] - a[i] for i in range(3)]
+                f = [b1[i] - b[i] for i in range(3)]
+                efk = (e[0] * f[0] + e[1] * f[1] + e[2] * f[2]) / L2
+                Jk, Mk = _mp_edge_log_integral(a, e, b, f)
+                acc += efk * (Jk - lnL)
+                mag += abs(efk) * (Mk + abs(lnL))
+            denom = 2 * mp.pi * mp.mpf(area_s)
+            value = float((acc + mp.mpf(float_part)) / denom)
+            mp_err = float(tol.AREA_CLOSED_MP_ULPS * mag * mp.mpf(2) ** -mp.mp.prec / denom)
+        if mp_err <= 0.5 * target or 2 * dps > tol.MP_MAX_DPS:
+            break
+        dps *= 2
+    # the float part's rounding, the conversion to a float and the mpmath rounding
+    est = float(c[kept].sum()) + tol.EPS * abs(value) + mp_err
+    return value, est, n_esc
+
+
+def unoccluded_pairs(P, Qs, far=True, rtol=None):
+    """F(P -> Q) unoccluded for one emitter and many receivers, in closed form, with
+    error estimates: the batch form of :func:`unoccluded_pair`.
+
+    Each polygon is clipped here to the front of the other's plane (one-sided, as
+    :func:`unoccluded_pair`); pass them whole. The edge pairs of all receivers are
+    evaluated together (:func:`_edge_log_integrals`, the closed form of the
+    Mitalas-Stephenson contour integral). A receiver whose estimate misses
+    ``rtol * max(F, AREA_CLOSED_FLOOR)`` is taken, with ``far=True`` and when it is far
+    (:func:`is_far`), by the far-field rule if that estimate is the smaller; a receiver
+    still missing it has its costliest edge pairs re-evaluated in mpmath
+    (``AREA_CLOSED_MP_DPS`` digits). :data:`CLOSED_FORM_COUNTS` counts both.
+
+    Parameters
+    ----------
+    P : ndarray of shape (K, 3)
+        The emitter, validated (:func:`~exactff.scene.validate_polygon`), as floats.
+    Qs : sequence of ndarray of shape (K_j, 3)
+        The receivers, each validated; not clipped.
+    far : bool, default True
+        Allow the far-field rule for far receivers that miss the target.
+    rtol : float, optional
+        The relative target of the estimates (default ``AREA_CLOSED_RTOL``).
+
+    Returns
+    -------
+    (ndarray of shape (len(Qs),), ndarray of shape (len(Qs),))
+        The values (0 for a receiver with nothing in front of the other) and their error
+        estimates; never NaN, never below 0 (a value below 0 within its estimate is 0;
+        beyond it, :class:`~exactff.NumericalError`).
+
+    Examples
+    --------
+    Unit squares facing a unit square 1 and 2 apart (Howell's C-11: 0.19982489570 and
+    0.06858958882), and one turned away:
+
+    >>> P = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], float)
+    >>> Q = P[::-1] + [0, 0, 1]
+    >>> F, E = unoccluded_pairs(P, [Q, Q + [0, 0, 1], Q[::-1]])
+    >>> F.round(12).tolist(), bool(np.all(E < 1e-14))
+    ([0.199824895698, 0.068589588819, 0.0], True)
+    """
+    rtol = tol.AREA_CLOSED_RTOL if rtol is None else float(rtol)
+    m = len(Qs)
+    values, est = np.zeros(m), np.zeros(m)
+    if m == 0:
+        return values, est
+    CLOSED_FORM_COUNTS["pairs"] += m
+    AP = area_vector(P)
+    area_P = float(np.linalg.norm(AP))
+    nP = AP / area_P
+    # the receivers' area vectors, (1/2) sum v_k x v_{k+1} about each first vertex
+    V, offsets, nxt = _rings(Qs)
+    V0 = np.repeat(V[offsets[:-1]], np.diff(offsets), axis=0)
+    nQs = 0.5 * np.add.reduceat(np.cross(V - V0, V[nxt] - V0), offsets[:-1], axis=0)
+    nQs /= np.linalg.norm(nQs, axis=1)[:, None]
+    Pcs, Qcs = _front_parts(P, nP, Qs, nQs)
+    live = [j for j in range(m) if Pcs[j] is not None and Qcs[j] is not None]
+    if not live:
+        return values, est
+    # each pair scaled by a power of 2 near its centroids' distance: ln r near 0
+    cP = P.mean(axis=0)
+    r0 = np.array([np.linalg.norm(Qs[j].mean(axis=0) - cP) for j in live])
+    L = 2.0 ** np.round(np.log2(np.where(r0 > 0, r0, 1.0)))
+    Pl, Ql = [Pcs[j] for j in live], [Qcs[j] for j in live]
+    VP, po, nextP = _rings(Pl)
+    VQ, qo, nextQ = _rings(Ql)
+    # every edge pair of each receiver: owner, P's edge ip, Q's edge iq
+    kP, kQ = np.diff(po), np.diff(qo)
+    counts = kP * kQ
+    owner = np.repeat(np.arange(len(live)), counts)
+    r = np.arange(int(counts.sum())) - np.repeat(np.cumsum(counts) - counts, counts)
+    ip = po[:-1][owner] + r // kQ[owner]
+    iq = qo[:-1][owner] + r % kQ[owner]
+    inv = (1.0 / L)[owner][:, None]
+    e, f = (VP[nextP] - VP)[ip] * inv, (VQ[nextQ] - VQ)[iq] * inv
+    ef = np.einsum("ij,ij->i", e, f)
+    keep = ef != 0                          # perpendicular edges: no term
+    owner, ip, iq, e, f, ef = owner[keep], ip[keep], iq[keep], e[keep], f[keep], ef[keep]
+    w = (VP[ip] - VQ[iq]) * inv[keep]
+    J, M = _edge_log_integrals(w, e, np.zeros_like(w), f)
+    # A_P F = (1 / 2 pi) sum (e . f) J, in the scaled units; its rounding
+    area_s = area_P / L ** 2
+    scale = (2.0 * np.pi * area_s)[owner]
+    c = tol.AREA_CLOSED_ULPS * tol.EPS * np.abs(ef) * M / scale
+    v = np.bincount(owner, ef * J / scale, minlength=len(live))
+    ev = np.bincount(owner, c, minlength=len(live))
+    live = np.array(live)
+    values[live], est[live] = v, ev
+    target = rtol * np.maximum(np.abs(values), tol.AREA_CLOSED_FLOOR)
+    miss = [k for k in range(len(live)) if est[live[k]] > target[live[k]]]
+    if far and miss:
+        far_j = [live[k] for k in miss if is_far(P, Qs[live[k]])]
+        # P whole: one set of emitter nodes for all; P clipped: its own
+        groups = [[j for j in far_j if Pcs[j] is P]] + [[j] for j in far_j if Pcs[j] is not P]
+        for js in groups:
+            if not js:
+                continue
+            fv, fe = far_values(emitter_nodes(Pcs[js[0]], nP), nP, area_P, [Qcs[j] for j in js])
+            better = fe < est[js]
+            values[np.array(js)[better]] = fv[better]
+            est[np.array(js)[better]] = fe[better]
+            CLOSED_FORM_COUNTS["far_rule"] += int(better.sum())
+        miss = [k for k in miss if est[live[k]] > target[live[k]]]
+    for k in miss:
+        j = live[k]
+        sel = np.flatnonzero(owner == k)
+        edges = np.stack([VP[ip[sel]], VP[nextP[ip[sel]]], VQ[iq[sel]], VQ[nextQ[iq[sel]]]],
+                         axis=1)
+        values[j], est[j], n_esc = _mp_escalate(c[sel], ef[sel], J[sel], edges, L[k],
+                                                area_s[k], target[j])
+        CLOSED_FORM_COUNTS["escalated_pairs"] += 1
+        CLOSED_FORM_COUNTS["escalated_edge_pairs"] += n_esc
+    # the emitter's area (a Newell sum) and the last division round the value by a few
+    # units more, on every path
+    est += tol.AREA_CLOSED_ULPS * tol.EPS * np.abs(values)
+    check_finite(values, est, "area form factor")
+    return nonnegative(values, est), est
+
+
 def unoccluded_pair(P, Q, far=True):
-    """F(P -> Q) of two validated polygons, unoccluded, and an estimate of its error:
-    the rounding of the contour sum (64 units of its absolute terms) plus the
-    difference from the tanh-sinh rule one level coarser, or, for far pairs (:func:`is_far`;
-    only with ``far=True``), the difference between the 12- and 8-point area rules plus
-    rounding. A value below 0 within its estimate is 0; beyond it, NumericalError."""
+    """F(P -> Q) of two validated polygons, unoccluded, and an estimate of its error
+    (:func:`unoccluded_pairs` for one receiver): the closed form of the contour integral
+    with the rounding of its terms (``AREA_CLOSED_ULPS`` units), the far-field rule
+    (:func:`is_far`; only with ``far=True``) or mpmath where that misses
+    ``AREA_CLOSED_RTOL``. A value below 0 within its estimate is 0; beyond it,
+    NumericalError."""
+    f, e = unoccluded_pairs(P, [Q], far=far)
+    return float(f[0]), float(e[0])
+
+
+def _contour_tanh_sinh(P, Q):
+    """The tanh-sinh contour rule (the production path before the closed form; kept as a
+    test oracle): F(P -> Q) of two validated polygons, unoccluded, and its estimate, the
+    rounding of the contour sum (64 units of its absolute terms) plus the difference from
+    the tanh-sinh rule one level coarser."""
     AP, AQ = area_vector(P), area_vector(Q)
     area_P = float(np.linalg.norm(AP))
     nP, nQ = AP / area_P, AQ / np.linalg.norm(AQ)
@@ -310,9 +760,6 @@ def unoccluded_pair(P, Q, far=True):
     if Pc is None or Qc is None:
         return 0.0, 0.0
     r0 = float(np.linalg.norm(cQ - cP)) or 1.0
-    if far and is_far(P, Q):
-        f, e = far_values(emitter_nodes(Pc, nP), nP, area_P, [Qc])
-        return float(f[0]), float(e[0])
     eP = np.roll(Pc, -1, axis=0) - Pc          # (KP, 3)
     eQ = np.roll(Qc, -1, axis=0) - Qc          # (KQ, 3)
     d, upper, w, w_coarse = _NODES
