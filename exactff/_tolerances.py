@@ -53,6 +53,7 @@ __all__ = [
     "AREA_BOOLEAN_ULPS",
     "AREA_EDGE_ON_RTOL",
     "AREA_SHAFT_ENTRIES_PER_CALL",
+    "AREA_WHOLE_TOLERANCE_SHARE",
     "AREA_EDGE_CUT",
     "CLIP_MEET_ULPS",
     "C1",
@@ -345,6 +346,11 @@ AREA_BOOLEAN_ULPS = 16.0
 #: Area form factors: a blocker whose plane passes within this of a point (relative to
 #: the sub-scene's size) is seen edge-on from it and hides nothing.
 AREA_EDGE_ON_RTOL = 8 * EPS
+
+#: Area form factors: the share of a pair's tolerance the unoccluded value of an
+#: occluded pair may take (its closed form falls back to the far rule or mpmath only
+#: beyond it); the hidden part's adaptive rules have the rest.
+AREA_WHOLE_TOLERANCE_SHARE = 0.1
 
 #: Area form factors: shaft culling tests a batch of a row's pairs against every polygon
 #: at once, about this many pair-polygon entries a batch (memory, not accuracy).

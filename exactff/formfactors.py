@@ -613,8 +613,10 @@ def area_form_factors(scene, rows=None, *, tolerance=1e-9, error=False, executor
     :func:`exactff.form_factors`; here built in the receiver's plane from the blockers'
     projections), one-sided. A pair with nothing that can come
     between (no other polygon reaches into the convex hull of the two, each clipped to
-    the front of the other) is computed by :func:`polygon_form_factor` (exact to
-    rounding). Otherwise the emitter is cut along the lines where the integrand may lose
+    the front of the other) is computed in closed form (the contour integral with
+    dilogarithms, :func:`exactff.area.contour.unoccluded_pairs`, all of a row's such
+    pairs at once), accepted where its rounding estimate is within ``tolerance`` (else
+    by the far-field rule or mpmath). Otherwise the emitter is cut along the lines where the integrand may lose
     smoothness (vertex-edge visibility events between the receiver and the polygons
     that may hide it, and their planes), its cells triangulated, and each triangle
     integrated by two collapsed Gauss-Legendre rules (6 and 10 points a side) and cut in
@@ -645,7 +647,7 @@ def area_form_factors(scene, rows=None, *, tolerance=1e-9, error=False, executor
         beyond the estimates: shaft culling and the hull test (every other polygon is
         then taken as a possible blocker of every pair, and the pair goes through the
         occluded path),
-        the far-field rule (the contour integral for every unoccluded pair) and the cull
+        the far-field rule (mpmath instead where the closed form misses) and the cull
         of blocker-blocker events whose lines of sight miss the receiver. Much slower.
         Part of what a resumable ``out`` records.
     stats : dict, optional

@@ -614,7 +614,7 @@ def _mp_escalate(c, ef, J, edges, L, area_s, target):
     return value, est, n_esc
 
 
-def unoccluded_pairs(P, Qs, far=True, rtol=None):
+def unoccluded_pairs(P, Qs, far=True, rtol=None, atol=0.0):
     """F(P -> Q) unoccluded for one emitter and many receivers, in closed form, with
     error estimates: the batch form of :func:`unoccluded_pair`.
 
@@ -637,6 +637,10 @@ def unoccluded_pairs(P, Qs, far=True, rtol=None):
         Allow the far-field rule for far receivers that miss the target.
     rtol : float, optional
         The relative target of the estimates (default ``AREA_CLOSED_RTOL``).
+    atol : float, default 0
+        Also accepted: an estimate up to this (absolute); the target is then
+        ``max(atol, rtol * max(F, AREA_CLOSED_FLOOR))`` (the area rows pass their
+        tolerance: a value within it needs no fallback).
 
     Returns
     -------
@@ -703,7 +707,7 @@ def unoccluded_pairs(P, Qs, far=True, rtol=None):
     ev = np.bincount(owner, c, minlength=len(live))
     live = np.array(live)
     values[live], est[live] = v, ev
-    target = rtol * np.maximum(np.abs(values), tol.AREA_CLOSED_FLOOR)
+    target = np.maximum(float(atol), rtol * np.maximum(np.abs(values), tol.AREA_CLOSED_FLOOR))
     miss = [k for k in range(len(live)) if est[live[k]] > target[live[k]]]
     if far and miss:
         far_j = [live[k] for k in miss if is_far(P, Qs[live[k]])]
@@ -734,14 +738,14 @@ def unoccluded_pairs(P, Qs, far=True, rtol=None):
     return nonnegative(values, est), est
 
 
-def unoccluded_pair(P, Q, far=True):
+def unoccluded_pair(P, Q, far=True, atol=0.0):
     """F(P -> Q) of two validated polygons, unoccluded, and an estimate of its error
     (:func:`unoccluded_pairs` for one receiver): the closed form of the contour integral
     with the rounding of its terms (``AREA_CLOSED_ULPS`` units), the far-field rule
     (:func:`is_far`; only with ``far=True``) or mpmath where that misses
-    ``AREA_CLOSED_RTOL``. A value below 0 within its estimate is 0; beyond it,
-    NumericalError."""
-    f, e = unoccluded_pairs(P, [Q], far=far)
+    ``AREA_CLOSED_RTOL`` (and ``atol``, when given). A value below 0 within its
+    estimate is 0; beyond it, NumericalError."""
+    f, e = unoccluded_pairs(P, [Q], far=far, atol=atol)
     return float(f[0]), float(e[0])
 
 

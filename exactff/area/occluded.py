@@ -20,8 +20,8 @@ from ..kernel import clipped_sector_sums
 from ..methods import Exact
 from ..rings import padded, shapely_rings
 from ..scene import Scene
-from .contour import (clip_front, emitter_nodes, far_values, is_far, nonnegative, point_values,
-                      unoccluded_pair)
+from .contour import (CLOSED_FORM_COUNTS, clip_front, is_far, nonnegative, point_values,
+                      unoccluded_pair, unoccluded_pairs)
 
 __all__ = ["area_row", "STATS"]
 
@@ -539,7 +539,9 @@ def _occluded_pair(S, Pc, Qc, nP, tolerance, area_P, shortcuts=True, st=None, rt
     ``max(tolerance, rtol * F)``: first with the unoccluded value for F (the value is
     at most that), and where the estimate then misses ``max(tolerance, rtol * |value|)``
     once more with ``value - estimate`` for F (a lower bound where the estimate holds)."""
-    whole, whole_err = unoccluded_pair(np.asarray(Pc), np.asarray(S[0]), far=shortcuts)
+    # the pair unoccluded: its estimate may take a share of the tolerance
+    whole, whole_err = unoccluded_pair(np.asarray(Pc), np.asarray(S[0]), far=shortcuts,
+                                       atol=tol.AREA_WHOLE_TOLERANCE_SHARE * tolerance)
     if shortcuts and st is not None and is_far(np.asarray(Pc), np.asarray(S[0])):
         st["far_pairs"] = st.get("far_pairs", 0) + 1
     area_Pc = float(np.linalg.norm(area_vector(Pc)))
@@ -636,32 +638,23 @@ def _front_pairs(polys, i, nP, padded, near):
     return out
 
 
-def _unoccluded_values(polys, i, nP, area_P, pairs, shortcuts, st):
-    """The values and estimates of a row's unoccluded pairs ``(j, Pc, Qc)``: far pairs
-    with P whole by the far-field rule, all together (one set of nodes on P, one kernel
-    call), the others by the contour integral pair by pair. The one place where a
-    row's unoccluded pairs are computed (a batch of contour integrals goes here).
+def _unoccluded_values(polys, i, pairs, shortcuts, st, tolerance, rtol):
+    """The values and estimates of a row's unoccluded pairs ``(j, Pc, Qc)``, all at once
+    by the closed form (:func:`~exactff.area.contour.unoccluded_pairs`), with the far
+    rule (only with ``shortcuts``) and mpmath where its estimate misses the row's
+    target, ``max(tolerance, rtol * F)``. The one place where a row's unoccluded pairs
+    are computed.
 
     Returns
     -------
     (list of int, ndarray, ndarray)
         The receivers, their values and their estimates.
     """
-    P = polys[i]
     js = [j for j, _, _ in pairs]
-    f, e = np.zeros(len(pairs)), np.zeros(len(pairs))
-    far = [a for a, (j, Pc, _) in enumerate(pairs)
-           if shortcuts and Pc is P and is_far(P, polys[j])]
-    near = np.setdiff1d(np.arange(len(pairs)), far)
-    for a in near:
-        Q = polys[pairs[a][0]]
-        if shortcuts and is_far(P, Q):
-            st["far_pairs"] += 1
-        f[a], e[a] = unoccluded_pair(P, Q, far=shortcuts)
-    if far:
-        st["far_pairs"] += len(far)
-        f[far], e[far] = far_values(emitter_nodes(P, nP), nP, area_P,
-                                    [pairs[a][2] for a in far])
+    before = CLOSED_FORM_COUNTS["far_rule"]
+    f, e = unoccluded_pairs(polys[i], [polys[j] for j in js], far=shortcuts,
+                            rtol=max(rtol or 0.0, tol.AREA_CLOSED_RTOL), atol=tolerance)
+    st["far_pairs"] += CLOSED_FORM_COUNTS["far_rule"] - before
     return js, f, e
 
 
@@ -740,7 +733,8 @@ def area_row(scene, i, tolerance, *, rtol=None, shortcuts=True, stats=None):
             st["hull_unoccluded_pairs"] += 1
         unoccluded.append((j, Pc, Qc))
     if unoccluded:
-        js, f[js], e[js] = _unoccluded_values(polys, i, nP, area_P, unoccluded, shortcuts, st)
+        js, f[js], e[js] = _unoccluded_values(polys, i, unoccluded, shortcuts, st, tolerance,
+                                              rtol)
     if stats is not None:
         stats.update(st)
     return f, e
