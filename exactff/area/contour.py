@@ -537,9 +537,10 @@ def _mp_edge_log_integral(a, e, b, f):
 
 #: Counters of the closed form's fallbacks, since import (a caller may reset them):
 #: ``pairs`` (receivers evaluated by :func:`unoccluded_pairs`), ``far_rule`` (taken by the
-#: far-field rule instead, its estimate the smaller), ``escalated_pairs`` and
+#: far-field rule instead, its estimate the smaller), ``contour_rule`` (by the tanh-sinh
+#: contour rule, its estimate the smaller), ``escalated_pairs`` and
 #: ``escalated_edge_pairs`` (re-evaluated in mpmath, and how many of their edge pairs).
-CLOSED_FORM_COUNTS = {"pairs": 0, "far_rule": 0, "escalated_pairs": 0,
+CLOSED_FORM_COUNTS = {"pairs": 0, "far_rule": 0, "contour_rule": 0, "escalated_pairs": 0,
                       "escalated_edge_pairs": 0}
 
 
@@ -623,9 +624,11 @@ def unoccluded_pairs(P, Qs, far=True, rtol=None, atol=0.0):
     evaluated together (:func:`_edge_log_integrals`, the closed form of the
     Mitalas-Stephenson contour integral). A receiver whose estimate misses
     ``rtol * max(F, AREA_CLOSED_FLOOR)`` is taken, with ``far=True`` and when it is far
-    (:func:`is_far`), by the far-field rule if that estimate is the smaller; a receiver
-    still missing it has its costliest edge pairs re-evaluated in mpmath
-    (``AREA_CLOSED_MP_DPS`` digits). :data:`CLOSED_FORM_COUNTS` counts both.
+    (:func:`is_far`), by the far-field rule if that estimate is the smaller, then (with
+    ``atol``) by the tanh-sinh contour rule (``_contour_tanh_sinh``) if that one's is; a
+    receiver still
+    missing it has its costliest edge pairs re-evaluated in mpmath
+    (``AREA_CLOSED_MP_DPS`` digits). :data:`CLOSED_FORM_COUNTS` counts each.
 
     Parameters
     ----------
@@ -722,6 +725,17 @@ def unoccluded_pairs(P, Qs, far=True, rtol=None, atol=0.0):
             est[np.array(js)[better]] = fe[better]
             CLOSED_FORM_COUNTS["far_rule"] += int(better.sum())
         miss = [k for k in miss if est[live[k]] > target[live[k]]]
+    # with an absolute target (area rows), the tanh-sinh contour rule next (about a
+    # millisecond a pair; edges parallel only to rounding, thin or far polygons, where
+    # the closed form's terms cancel); polygon_form_factor's relative target goes to
+    # mpmath
+    for k in (list(miss) if atol > 0 else []):
+        j = live[k]
+        fv, fe = _contour_tanh_sinh(P, Qs[j])
+        if fe < est[j]:
+            values[j], est[j] = fv, fe
+            CLOSED_FORM_COUNTS["contour_rule"] += 1
+    miss = [k for k in miss if est[live[k]] > target[live[k]]]
     for k in miss:
         j = live[k]
         sel = np.flatnonzero(owner == k)
