@@ -644,7 +644,7 @@ def area_form_factors(scene, rows=None, *, tolerance=1e-9, error=False, executor
         sparse results.
     shortcuts : bool, default True
         False disables every shortcut, for testing that they never change a result
-        beyond the estimates: shaft culling and the hull test (every other polygon is
+        beyond the estimates: the convex-enclosure test, shaft culling and the hull test (every other polygon is
         then taken as a possible blocker of every pair, and the pair goes through the
         occluded path),
         the far-field rule (mpmath instead where the closed form misses) and the cull
@@ -652,8 +652,9 @@ def area_form_factors(scene, rows=None, *, tolerance=1e-9, error=False, executor
         Part of what a resumable ``out`` records.
     stats : dict, optional
         Filled with the sums over the rows computed in this call (with any executor) of
-        :data:`exactff.area.occluded.STATS`: ``hull_unoccluded_pairs`` (pairs taken by
-        the exact contour integral because shaft culling and the hull test left no
+        :data:`exactff.area.occluded.STATS`: ``enclosure_unoccluded_pairs`` (pairs of a
+        convex enclosure, where nothing can come between: no shaft or hull test),
+        ``hull_unoccluded_pairs`` (pairs taken by the closed form because shaft culling and the hull test left no
         blocker), ``hull_culled_blockers`` (the polygons they left out),
         ``shaft_culled_blockers`` (polygons in a pair's bounding box that the shaft's
         planes rejected, so the hull test never saw them), ``shaft_unoccluded_pairs``

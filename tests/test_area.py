@@ -525,7 +525,7 @@ def test_cli_matrix_area(tmp_path):
 # ---------------------------------------------------------------------------------------
 # shortcuts (issue 33): each off under shortcuts=False, counted in stats, and neutral
 # ---------------------------------------------------------------------------------------
-SHORTCUT_COUNTERS = ("hull_unoccluded_pairs", "hull_culled_blockers", "shaft_culled_blockers",
+SHORTCUT_COUNTERS = ("enclosure_unoccluded_pairs", "hull_unoccluded_pairs", "hull_culled_blockers", "shaft_culled_blockers",
                      "shaft_unoccluded_pairs", "far_pairs",
                      "culled_events")
 
@@ -552,6 +552,9 @@ def _shortcut_scene(name):
     if name.startswith("reference"):
         plate = OCCLUDED_REFERENCES[int(name[-1])][0]
         return (ef.Scene.from_polygons([_square(0, True), _square(2, False), plate]), [0], 1e-10, ())
+    if name == "cube":
+        # a closed cube: a convex enclosure, every pair unoccluded without a shaft
+        return ef.scenes.subdivided_box(1), [0, 3], 1e-7, ("enclosure_unoccluded_pairs",)
     if name == "room":
         return _room_with_plate(), [0], 1e-7, ("hull_unoccluded_pairs", "hull_culled_blockers")
     if name == "box":
@@ -569,7 +572,8 @@ def _shortcut_scene(name):
     return _far_squares(), [0, 1], 1e-13, ("far_pairs", "hull_unoccluded_pairs", "hull_culled_blockers")
 
 
-@pytest.mark.parametrize("name", ["reference0", "reference1", "room", "box", "far", "facet"])
+@pytest.mark.parametrize("name", ["reference0", "reference1", "cube", "room", "box", "far",
+                                  "facet"])
 def test_area_shortcuts_are_neutral_and_counted(name):
     # with shortcuts=False (every other polygon a blocker of every pair, the contour
     # integral for far pairs, every blocker-blocker event cut along) the values agree
@@ -587,7 +591,7 @@ def test_area_shortcuts_are_neutral_and_counted(name):
         assert (on[k] > 0) == (k in fire), (k, on)
     assert on["engine_fallbacks"] == off["engine_fallbacks"] == 0
     # shortcuts off did the work they skip: more pairs through the occluded path
-    assert off["occluded_pairs"] >= on["occluded_pairs"] > 0 or name == "far"
+    assert off["occluded_pairs"] >= on["occluded_pairs"] > 0 or name in ("far", "cube")
     if fire:
         assert off["occluded_pairs"] > on["occluded_pairs"]
 

@@ -18,6 +18,7 @@ from ..geometry import area_vector, receiver_frame, unit_normal
 from ..halfspace import clip_halfspace
 from ..kernel import clipped_sector_sums
 from ..methods import Exact
+from ..visibility import is_convex_enclosure
 from ..rings import padded, shapely_rings
 from ..scene import Scene
 from .contour import (CLOSED_FORM_COUNTS, clip_front, is_far, nonnegative, point_values,
@@ -26,7 +27,10 @@ from .contour import (CLOSED_FORM_COUNTS, clip_front, is_far, nonnegative, point
 __all__ = ["area_row", "STATS"]
 
 #: The counters :func:`area_row` fills in ``stats`` (each 0 where its shortcut is off or
-#: did not apply): pairs taken by the exact contour integral because shaft culling and
+#: did not apply): pairs of a convex enclosure, where nothing can come between
+#: (``enclosure_unoccluded_pairs``: no shaft or hull test at all;
+#: :func:`exactff.visibility.is_convex_enclosure`), pairs taken by the closed form
+#: because shaft culling and
 #: the hull test left no blocker (``hull_unoccluded_pairs``; the polygons they left out:
 #: ``hull_culled_blockers``), polygons in a pair's bounding box that the shaft's planes
 #: rejected before the hull test (``shaft_culled_blockers``) and pairs whose box held
@@ -40,7 +44,8 @@ __all__ = ["area_row", "STATS"]
 #: done:
 #: ``occluded_pairs``, ``point_values``
 #: (hidden parts evaluated).
-STATS = ("hull_unoccluded_pairs", "hull_culled_blockers", "shaft_culled_blockers",
+STATS = ("enclosure_unoccluded_pairs", "hull_unoccluded_pairs", "hull_culled_blockers",
+         "shaft_culled_blockers",
          "shaft_unoccluded_pairs", "far_pairs", "culled_events",
          "engine_fallbacks", "engine_fallback_points", "cell_fallbacks", "occluded_pairs",
          "point_values")
@@ -704,6 +709,15 @@ def area_row(scene, i, tolerance, *, rtol=None, shortcuts=True, stats=None):
     f, e = np.zeros(len(polys)), np.zeros(len(polys))
     pairs = _front_pairs(polys, i, nP, padded, near)
     if not pairs:
+        if stats is not None:
+            stats.update(st)
+        return f, e
+    # a convex enclosure (every vertex in front of or on every polygon's plane, no
+    # coplanar overlaps): nothing can come between any pair
+    enclosure = shortcuts and is_convex_enclosure(scene)
+    if enclosure:
+        st["enclosure_unoccluded_pairs"] += len(pairs)
+        js, f[js], e[js] = _unoccluded_values(polys, i, pairs, shortcuts, st, tolerance, rtol)
         if stats is not None:
             stats.update(st)
         return f, e
