@@ -228,7 +228,7 @@ class AreaRows:
     --------
     >>> import exactff as ef
     >>> (f, e, counts), = AreaRows(1e-9)(ef.scenes.subdivided_box(1), [0])
-    >>> abs(float(f.sum()) - 1) < 1e-12, counts["hull_unoccluded_pairs"]
+    >>> abs(float(f.sum()) - 1) < 1e-12, counts["enclosure_unoccluded_pairs"]
     (True, 5)
     """
 
@@ -644,9 +644,9 @@ def area_form_factors(scene, rows=None, *, tolerance=1e-9, error=False, executor
         sparse results.
     shortcuts : bool, default True
         False disables every shortcut, for testing that they never change a result
-        beyond the estimates: the convex-enclosure test, shaft culling and the hull test (every other polygon is
-        then taken as a possible blocker of every pair, and the pair goes through the
-        occluded path),
+        beyond the estimates: the convex-enclosure test, shaft culling and the hull
+        test (every other polygon is then taken as a possible blocker of every pair,
+        and the pair goes through the occluded path),
         the far-field rule (mpmath instead where the closed form misses) and the cull
         of blocker-blocker events whose lines of sight miss the receiver. Much slower.
         Part of what a resumable ``out`` records.
