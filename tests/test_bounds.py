@@ -141,8 +141,12 @@ def test_repeated_vertices_give_the_values_of_the_clean_ring(name):
         assert abs(f - HOWELL_C11) <= 1e-12
 
 
-def _nan_pair(P, Q, far=True):
+def _nan_pair(P, Q, far=True, atol=0.0):
     return float("nan"), 0.0
+
+
+def _nan_pairs(P, Qs, far=True, rtol=None, atol=0.0):
+    return np.full(len(Qs), np.nan), np.zeros(len(Qs))
 
 
 def _nan_pieces(pieces, m, **kwargs):
@@ -185,7 +189,7 @@ def _nan_calls():
     return {
         "polygon_form_factor": (contour, "unoccluded_pair", _nan_pair,
                                 lambda: ef.polygon_form_factor(UNIT_UP, UNIT_DOWN_AT_1)),
-        "area_form_factors": (occluded, "unoccluded_pair", _nan_pair,
+        "area_form_factors": (occluded, "unoccluded_pairs", _nan_pairs,
                               lambda: ef.area_form_factors(pair, error=True)),
         # the last precision tier (a polygon in the rounding band always reaches it)
         "point_polygon_form_factor": (point, "mp_form_factor", _nan_mp,

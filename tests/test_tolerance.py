@@ -241,8 +241,10 @@ def test_area_value_whose_estimate_misses_the_tolerance_raises(monkeypatch):
 
     pair = ef.Scene.from_polygons([UNIT_UP, UNIT_DOWN_AT_1])
     F0 = ef.area_form_factors(pair, tolerance=1e-9)          # meets it: no error
-    monkeypatch.setattr(occluded, "unoccluded_pair",
-                        lambda P, Q, far=True: (0.19982489569838746, 1e-6))
+    # the row's unoccluded pairs (unoccluded_pairs) with an estimate that misses
+    monkeypatch.setattr(occluded, "unoccluded_pairs",
+                        lambda P, Qs, far=True, rtol=None, atol=0.0:
+                        (np.full(len(Qs), 0.19982489569838746), np.full(len(Qs), 1e-6)))
     with pytest.raises(ef.NumericalError, match=r"row 0, polygon 1: .*misses the tolerance "
                                                 r"1e-09 absolute \(error estimate 1e-06\)"):
         ef.area_form_factors(pair, tolerance=1e-9)
