@@ -81,7 +81,9 @@ def misses_tolerance(F, E, tolerance, atol=None):
     ``atol`` instead: ``E > max(atol, tolerance * |F|)``, ``tolerance`` None meaning no
     relative part. The one acceptance criterion of every path: unoccluded values after
     their last precision tier, the Python engine's refined pieces (either integrator),
-    the compiled core's check before it falls back, area form factors. An infinite
+    area form factors. (The compiled core falls back to the Python engine earlier,
+    where a bound exceeds tolerance times the value: its bounds on slivers need that
+    engine's refinement.) An infinite
     bound misses; a NaN is refused by :func:`check_finite`.
 
     Examples
