@@ -424,3 +424,31 @@ def test_rotated_box_area_rows_take_the_contour_rule_and_sum_to_one():
     assert F[0, 9] > 0 and F[1, 0] > 0
     A = np.linalg.norm([ef.area_vector(P) for P in scene.polygons], axis=1)
     assert abs(A[0] * F[0, 9] - A[9] * F[1, 0]) <= A[0] * E[0, 9] + A[9] * E[1, 0] + 1e-16
+
+
+def test_dilogarithm_near_the_real_axis_vs_mpmath():
+    # scipy's complex spence is wrong near x = -(2 - sqrt 3) on the real axis: a half
+    # hexagon facing a triangle 1 above came out 2.3e-4 off with an estimate of 1e-15
+    import mpmath as mp
+
+    from exactff.area.contour import _li2
+
+    a = -0.2679491924311228
+    x = np.array([a + 8.41410012693027e-17j, a - 1e-14j, a + 1e-9j, -0.99 + 1e-12j,
+                  0.3 - 1e-16j, 0.4 + 0.6j, -1.0 + 0j, 1j])
+    got = _li2(x)
+    for xi, gi in zip(x, got):
+        ref = complex(mp.polylog(2, mp.mpc(xi.real, xi.imag)))
+        assert abs(gi - ref) <= 1e-14, (xi, gi, ref)
+
+
+def test_half_hexagon_facing_a_triangle_vs_the_tanh_sinh_oracle():
+    from exactff.area.contour import _contour_tanh_sinh
+
+    H = np.array([[1.0, 0.0, 0.0], [0.5, 0.8660254037844386, 0.0],
+                  [-0.5, 0.8660254037844387, 0.0], [-1.0, 0.0, 0.0]])
+    T = np.array([[0.0, 0.0, 1.0], [0.0, 2.0, 1.0], [0.5, 0.5, 1.0]])
+    f, e = ef.polygon_form_factor(H, T, error=True)
+    g, eg = _contour_tanh_sinh(H, T)
+    assert abs(f - g) <= e + eg
+    assert abs(f - 0.07630919639206139) <= 1e-13

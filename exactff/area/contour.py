@@ -348,6 +348,33 @@ def _edge_pieces(P, eP, Q, eQ):
 # w the offset of a from b along the direction.
 
 
+def _li2(x):
+    """The dilogarithm ``Li2(x)`` of complex ``x`` in the closed unit disk, by scipy's
+    ``spence`` (``Li2(x) = spence(1 - x)``), except within ``AREA_LI2_AXIS`` of the
+    real axis left of 1/2. There scipy's complex ``spence`` is wrong near
+    ``x = -(2 - sqrt 3)``: at ``x = -0.2679491924311228 - 8.4e-17 i`` it returned an
+    imaginary part of 0.028 for 7.5e-17. So the value there is the real ``spence`` plus
+    the first-order term ``i Im(x) Li2'(Re x)``, with ``Li2'(a) = -ln(1 - a) / a``. The
+    second-order term is below ``AREA_LI2_AXIS^2``.
+
+    Examples
+    --------
+    >>> z = np.array([-0.2679491924311228 - 8.41410012693027e-17j, 0.5 + 0.5j])
+    >>> np.round(_li2(z), 12).tolist()
+    [(-0.251862018609-0j), (0.45398526915+0.643767332889j)]
+    """
+    x = np.asarray(x, dtype=complex)
+    out = spence(1.0 - x)
+    a, b = x.real, x.imag
+    axis = (np.abs(b) <= tol.AREA_LI2_AXIS) & (a <= 0.5)
+    if np.any(axis):
+        aa, bb = a[axis], b[axis]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            slope = np.where(aa != 0, -np.log1p(-aa) / np.where(aa != 0, aa, 1.0), 1.0)
+        out[axis] = spence(1.0 - aa) + 1j * bb * slope
+    return out
+
+
 def _skew_edge_integrals(a, e, b, f):
     """J and the sum of its terms' magnitudes (its rounding scale) for skew edges.
 
@@ -402,8 +429,8 @@ def _skew_edge_integrals(a, e, b, f):
                 z = ((h * h - t * t) + 2j * h * t) / R2
                 phi = np.arctan2(t, h)
                 k1 = -2.0 * phi * lq
-                k2 = -spence(1.0 + (q * q) * z).imag            # -Im Li2(-rho e^{2 i phi})
-                k3 = spence(1.0 + z).imag                       # Im Li2(-e^{2 i phi})
+                k2 = -_li2(-(q * q) * z).imag                   # -Im Li2(-rho e^{2 i phi})
+                k3 = _li2(-z).imag                              # Im Li2(-e^{2 i phi})
                 kk = np.where(R2 > 0, k1 + k2 + k3, 0.0)
                 tri = tri + sgn * d2 * kk
                 # the dilogarithms' rounding: of their values, and of their arguments
