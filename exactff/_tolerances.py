@@ -55,6 +55,9 @@ __all__ = [
     "AREA_SHAFT_ENTRIES_PER_CALL",
     "AREA_WHOLE_TOLERANCE_SHARE",
     "AREA_LI2_AXIS",
+    "AREA_CLOSED_THIN",
+    "DOUBLE_TINY",
+    "AREA_STRICT_TURN",
     "AREA_EDGE_CUT",
     "CLIP_MEET_ULPS",
     "C1",
@@ -97,6 +100,9 @@ __all__ = [
 
 #: Unit roundoff of IEEE double precision, 2**-53.
 EPS = float(np.finfo(float).eps) / 2
+
+#: The smallest normal double (a floor for logarithms of quantities that may be 0).
+DOUBLE_TINY = float(np.finfo(float).tiny)
 
 #: A polygon is planar when no vertex lies farther than this fraction of its diameter
 #: from its Newell plane (the same figure as ``shared/scenes/check_scene.py``).
@@ -347,6 +353,15 @@ AREA_BOOLEAN_ULPS = 16.0
 #: Area form factors: a blocker whose plane passes within this of a point (relative to
 #: the sub-scene's size) is seen edge-on from it and hides nothing.
 AREA_EDGE_ON_RTOL = 8 * EPS
+
+#: Area rows: a receiver is strictly convex (blockers are clipped to the pyramid over it)
+#: where it turns by more than this (radians, as the sine) at every vertex.
+AREA_STRICT_TURN = 1e-6
+
+#: The closed form's skew edge pairs: a triangle of the parallelogram thinner than this
+#: share of its size (``exactff.area.contour._skew_edge_integrals``) is of no area (its
+#: terms would only underflow).
+AREA_CLOSED_THIN = 1e-100
 
 #: The closed form's dilogarithm near the real axis (``exactff.area.contour._li2``): within
 #: this of it (and left of 1/2) Li2 is the real ``spence`` plus its first-order term,

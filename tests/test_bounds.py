@@ -145,7 +145,7 @@ def _nan_pair(P, Q, far=True, atol=0.0):
     return float("nan"), 0.0
 
 
-def _nan_pairs(P, Qs, far=True, rtol=None, atol=0.0):
+def _nan_pairs(P, Qs, **options):
     return np.full(len(Qs), np.nan), np.zeros(len(Qs))
 
 

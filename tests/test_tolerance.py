@@ -243,7 +243,7 @@ def test_area_value_whose_estimate_misses_the_tolerance_raises(monkeypatch):
     F0 = ef.area_form_factors(pair, tolerance=1e-9)          # meets it: no error
     # the row's unoccluded pairs (unoccluded_pairs) with an estimate that misses
     monkeypatch.setattr(occluded, "unoccluded_pairs",
-                        lambda P, Qs, far=True, rtol=None, atol=0.0:
+                        lambda P, Qs, **options:
                         (np.full(len(Qs), 0.19982489569838746), np.full(len(Qs), 1e-6)))
     with pytest.raises(ef.NumericalError, match=r"row 0, polygon 1: .*misses the tolerance "
                                                 r"1e-09 absolute \(error estimate 1e-06\)"):

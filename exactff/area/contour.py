@@ -15,13 +15,14 @@ distance (the scale's ``ln L`` drops out: ``(sum e_i) . (sum e_j) = 0``). The er
 estimate is the rounding of the terms' magnitudes (``AREA_CLOSED_ULPS``).
 
 The contour terms cancel as (distance / size)^2 when the polygons are far apart, and for
-thin polygons: where the estimate misses ``AREA_CLOSED_RTOL`` the double integral is
-taken, for pairs beyond ``AREA_FAR`` diameters, as the area integral over P of the exact
-point form factors (smooth there) by a Gauss-Legendre rule on P's triangles, and where it
-still misses, the costliest edge pairs are evaluated again in mpmath.
+thin polygons: where the estimate misses its target (``AREA_CLOSED_RTOL``, or an area
+row's tolerance) the double integral is taken, for pairs beyond ``AREA_FAR`` diameters,
+as the area integral over P of the exact point form factors (smooth there) by a
+Gauss-Legendre rule on P's triangles, then (area rows) by the tanh-sinh rule below, and
+where it still misses, the costliest edge pairs are evaluated again in mpmath.
 
 The tanh-sinh outer quadrature of the inner closed form (``_segment_log_integral``), the
-production path before, is kept as a test oracle (``_contour_tanh_sinh``).
+production path before, is kept as a fallback and a test oracle (``_contour_tanh_sinh``).
 
 One-sided, as the point form factors: only the part of Q in front of P's plane and
 the part of P in front of Q's plane take part.
@@ -154,27 +155,40 @@ def _triangles(P, n):
 
 
 def triangle_rule(tri, rule=_GL):
-    """Nodes and weights of the collapsed (Duffy) Gauss-Legendre rule on a triangle:
-    ``n^2`` nodes, exact for polynomials of degree ``2n - 2`` in the triangle.
+    """Nodes and weights of the collapsed (Duffy) Gauss-Legendre rule on a triangle, or
+    on each of a batch: ``n^2`` nodes, exact for polynomials of degree ``2n - 2`` in the
+    triangle.
 
     Parameters
     ----------
-    tri : ndarray of shape (3, 3)
+    tri : ndarray of shape (3, 3), or (t, 3, 3) for a batch
     rule : (ndarray, ndarray)
         Gauss-Legendre nodes and weights on [-1, 1] (``scipy.special.roots_legendre``).
 
     Returns
     -------
-    (ndarray of shape (n^2, 3), ndarray of shape (n^2,))
+    (ndarray of shape (n^2, 3), ndarray of shape (n^2,)), with a leading axis of t for
+    a batch
+
+    Examples
+    --------
+    >>> X, W = triangle_rule(np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0]], float))
+    >>> X.shape, round(float(W.sum()), 15)          # the weights add up to the area
+    ((144, 3), 0.5)
     """
-    a, b, c = tri
+    T = np.asarray(tri, dtype=float)
+    batch = T[None] if T.ndim == 2 else T
     x, w = rule
     x, w = 0.5 * (x + 1.0), 0.5 * w
     U, V = np.meshgrid(x, x, indexing="ij")
-    WW = np.outer(w, w) * U                  # the collapse's Jacobian u
-    J = np.linalg.norm(np.cross(b - a, c - a))
-    X = a + U[..., None] * (b - a) + (U * V)[..., None] * (c - b)
-    return X.reshape(-1, 3), (WW * J).ravel()
+    WW = (np.outer(w, w) * U).ravel()          # the collapse's Jacobian u
+    U, UV = U.ravel()[None, :, None], (U * V).ravel()[None, :, None]
+    a, b, c = batch[:, None, 0], batch[:, None, 1], batch[:, None, 2]
+    X = a + U * (b - a) + UV * (c - b)
+    # twice each triangle's area, |(b - a) x (c - a)|
+    J = np.linalg.norm(np.cross(batch[:, 1] - batch[:, 0], batch[:, 2] - batch[:, 0]), axis=1)
+    W = WW[None] * J[:, None]
+    return (X[0], W[0]) if T.ndim == 2 else (X, W)
 
 
 def point_values(X, nP, Qs):
@@ -405,9 +419,9 @@ def _skew_edge_integrals(a, e, b, f):
             tB = tA + L
             hs = np.einsum("ij,ij->i", np.cross(A, u), n)     # signed: the triangle's side
             absA = np.sqrt(np.einsum("ij,ij->i", A, A))
-            # a triangle thinner than 1e-100 of its size is of no area (its terms, below
-            # 1e-100 of the magnitudes counted, would only underflow)
-            h = np.where(np.abs(hs) > 1e-100 * (absA + L), np.abs(hs), 0.0)
+            # a triangle thinner than AREA_CLOSED_THIN of its size is of no area (its
+            # terms, below that share of the magnitudes counted, would only underflow)
+            h = np.where(np.abs(hs) > tol.AREA_CLOSED_THIN * (absA + L), np.abs(hs), 0.0)
             m2 = h * h + d2
             m = np.sqrt(m2)
             mh = m + h
@@ -435,8 +449,9 @@ def _skew_edge_integrals(a, e, b, f):
                 tri = tri + sgn * d2 * kk
                 # the dilogarithms' rounding: of their values, and of their arguments
                 # times the derivative, ln |1 - w| / |w|, near w = 1 logarithmic
-                dl = (np.abs(np.log(np.abs(1.0 + (q * q) * z) + 1e-300))
-                      + np.abs(np.log(np.abs(1.0 + z) + 1e-300)))
+                # (|1 + z| = 0: the logarithm of the smallest normal number)
+                dl = (np.abs(np.log(np.maximum(np.abs(1.0 + (q * q) * z), tol.DOUBLE_TINY)))
+                      + np.abs(np.log(np.maximum(np.abs(1.0 + z), tol.DOUBLE_TINY))))
                 km = 2.0 * np.abs(phi) * (np.abs(lq) + 2.0) + np.abs(k2) + np.abs(k3) + dl + 4.0
                 mag = mag + d2 * np.where(R2 > 0, km, 0.0)
             # an edge through the origin (h = 0) bounds a triangle of no area
@@ -642,7 +657,7 @@ def _mp_escalate(c, ef, J, edges, L, area_s, target):
     return value, est, n_esc
 
 
-def unoccluded_pairs(P, Qs, far=True, rtol=None, atol=0.0):
+def unoccluded_pairs(P, Qs, far=True, rtol=None, atol=0.0, parts=None):
     """F(P -> Q) unoccluded for one emitter and many receivers, in closed form, with
     error estimates: the batch form of :func:`unoccluded_pair`.
 
@@ -671,6 +686,10 @@ def unoccluded_pairs(P, Qs, far=True, rtol=None, atol=0.0):
         Also accepted: an estimate up to this (absolute); the target is then
         ``max(atol, rtol * max(F, AREA_CLOSED_FLOOR))`` (the area rows pass their
         tolerance: a value within it needs no fallback).
+    parts : sequence of (ndarray or None, ndarray or None), optional
+        Each pair's parts in front of the other's plane, ``(Pc, Qc)``, where the caller
+        has them (:func:`clip_front`; ``Pc`` the emitter itself where it is whole): not
+        decided again here.
 
     Returns
     -------
@@ -699,12 +718,15 @@ def unoccluded_pairs(P, Qs, far=True, rtol=None, atol=0.0):
     AP = area_vector(P)
     area_P = float(np.linalg.norm(AP))
     nP = AP / area_P
-    # the receivers' area vectors, (1/2) sum v_k x v_{k+1} about each first vertex
-    V, offsets, nxt = _rings(Qs)
-    V0 = np.repeat(V[offsets[:-1]], np.diff(offsets), axis=0)
-    nQs = 0.5 * np.add.reduceat(np.cross(V - V0, V[nxt] - V0), offsets[:-1], axis=0)
-    nQs /= np.linalg.norm(nQs, axis=1)[:, None]
-    Pcs, Qcs = _front_parts(P, nP, Qs, nQs)
+    if parts is None:
+        # the receivers' area vectors, (1/2) sum v_k x v_{k+1} about each first vertex
+        V, offsets, nxt = _rings(Qs)
+        V0 = np.repeat(V[offsets[:-1]], np.diff(offsets), axis=0)
+        nQs = 0.5 * np.add.reduceat(np.cross(V - V0, V[nxt] - V0), offsets[:-1], axis=0)
+        nQs /= np.linalg.norm(nQs, axis=1)[:, None]
+        Pcs, Qcs = _front_parts(P, nP, Qs, nQs)
+    else:
+        Pcs, Qcs = [Pc for Pc, _ in parts], [Qc for _, Qc in parts]
     live = [j for j in range(m) if Pcs[j] is not None and Qcs[j] is not None]
     if not live:
         return values, est

@@ -22,7 +22,7 @@ from ..visibility import is_convex_enclosure
 from ..rings import padded, shapely_rings
 from ..scene import Scene
 from .contour import (CLOSED_FORM_COUNTS, clip_front, is_far, nonnegative, point_values,
-                      unoccluded_pair, unoccluded_pairs)
+                      triangle_rule, unoccluded_pair, unoccluded_pairs)
 
 __all__ = ["area_row", "STATS"]
 
@@ -453,11 +453,12 @@ def _hidden_values(X, nP, Qc, blockers, st=None, split=True):
 
 def _strictly_convex(Q2):
     """True where the 2-D polygon Q2 (counter-clockwise) turns left at every vertex by
-    more than 1e-6 radians (no three vertices nearly on a line)."""
+    more than ``AREA_STRICT_TURN`` radians (no three vertices nearly on a line)."""
     e = np.roll(Q2, -1, axis=0) - Q2
     f = np.roll(e, -1, axis=0)
     turn = e[:, 0] * f[:, 1] - e[:, 1] * f[:, 0]
-    return bool(np.all(turn > 1e-6 * np.linalg.norm(e, axis=1) * np.linalg.norm(f, axis=1)))
+    return bool(np.all(turn > tol.AREA_STRICT_TURN * np.linalg.norm(e, axis=1)
+                       * np.linalg.norm(f, axis=1)))
 
 
 def _hidden_values_split(X, nP, Qc, blockers, lost, st):
@@ -497,19 +498,6 @@ _RULES = tuple(roots_legendre(k) for k in tol.AREA_RULE_ORDERS)
 def _triangle_areas(T):
     """The areas of triangles T (t, 3, 3)."""
     return 0.5 * np.linalg.norm(np.cross(T[:, 1] - T[:, 0], T[:, 2] - T[:, 0]), axis=1)
-
-
-def _triangle_rules(T, rule):
-    """:func:`~exactff.area.contour.triangle_rule` for a batch of triangles T (t, 3, 3):
-    nodes (t, n^2, 3) and weights (t, n^2)."""
-    x, w = rule
-    x, w = 0.5 * (x + 1.0), 0.5 * w
-    U, V = np.meshgrid(x, x, indexing="ij")
-    WW = (np.outer(w, w) * U).ravel()          # the collapse's Jacobian u
-    U, UV = U.ravel()[None, :, None], (U * V).ravel()[None, :, None]
-    a, b, c = T[:, None, 0], T[:, None, 1], T[:, None, 2]
-    X = a + U * (b - a) + UV * (c - b)
-    return X, WW[None] * (2.0 * _triangle_areas(T))[:, None]
 
 
 def _corner_first(tri, blockers, nP, dP):
@@ -590,7 +578,7 @@ def _hidden_integral(S, Pc, Qc, nP, tolerance, area_P, whole, shortcuts, st):
     points = 0
     while len(T):
         # every triangle of this level together: its two rules' nodes, one call
-        (Xl, Wl), (Xh, Wh) = (_triangle_rules(T, r) for r in _RULES)
+        (Xl, Wl), (Xh, Wh) = (triangle_rule(T, r) for r in _RULES)
         nl = Xl.shape[1]
         H, EH = _hidden_values(np.concatenate([Xl, Xh], axis=1).reshape(-1, 3), nP, Qc, S[1:], st)
         points += H.size
@@ -658,7 +646,8 @@ def _unoccluded_values(polys, i, pairs, shortcuts, st, tolerance, rtol):
     js = [j for j, _, _ in pairs]
     before = CLOSED_FORM_COUNTS["far_rule"]
     f, e = unoccluded_pairs(polys[i], [polys[j] for j in js], far=shortcuts,
-                            rtol=max(rtol or 0.0, tol.AREA_CLOSED_RTOL), atol=tolerance)
+                            rtol=max(rtol or 0.0, tol.AREA_CLOSED_RTOL), atol=tolerance,
+                            parts=[(Pc, Qc) for _, Pc, Qc in pairs])
     st["far_pairs"] += CLOSED_FORM_COUNTS["far_rule"] - before
     return js, f, e
 
