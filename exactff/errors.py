@@ -82,8 +82,8 @@ def misses_tolerance(F, E, tolerance, atol=None):
     relative part. The one acceptance criterion of every path: unoccluded values after
     their last precision tier, the Python engine's refined pieces (either integrator),
     area form factors. (The compiled core falls back to the Python engine earlier,
-    where a bound exceeds tolerance times the value: its bounds on slivers need that
-    engine's refinement.) An infinite
+    where a bound exceeds tolerance times the value: its bounds on slivers hold but are
+    absolute, about 1e-18, and that engine's refinement makes them relative.) An infinite
     bound misses; a NaN is refused by :func:`check_finite`.
 
     Examples
