@@ -970,23 +970,28 @@ class Core {
         *cond = ml > 0 ? al * bl / ml : static_cast<Quad>(INFINITY);
     }
 
-    // a piece's vertex directions in quadruple precision, for integrate_quad: an input
-    // vertex's from its coordinates; a computed one's as the line where the planes
-    // through p of its two edges meet (m1 x m2, each normal within c_i QUAD_EPS of
-    // its tilt, so the line within 8 QUAD_EPS (c1 + c2 + 1) |m1| |m2| / |m1 x m2|),
-    // scaled to its long double length. The line is the true vertex wherever the
-    // piece's edges are the true ones (the topology's errors are the band's, apart), so
-    // its bound no longer carries the long double cuts' rounding, which on a sliver is
-    // absolute (about 1e-18) and not relative to its value. A computed vertex keeps its
-    // long double direction and bound where its two edges are one plane, where the
-    // planes are too close to tell, or where the line is farther from the long double
-    // direction than that direction's bound (a vertex taken as on a plane within the
-    // band, whose sliver the band's bound holds)
+    // a piece's vertex directions in quadruple precision, for integrate_quad, each with
+    // a bound on its angle off the planes through p of its two edges (what moves the
+    // piece's boundary: Core::charge_edges). An input vertex's from its coordinates. A
+    // computed one where its edges' planes meet: where they are an input edge and the
+    // exact plane it crosses, as that crossing (a + s (b - a), s from the plane's
+    // normal: off either plane by a few roundoffs of |a - p| + s |b - a| over the
+    // distance, however small the angle between them); else as the line m1 x m2, whose
+    // rounding (8 QUAD_EPS (c1 + c2 + 1) |m1| |m2| / |m1 x m2|, c the normals'
+    // conditions) grows as the planes close. Either is scaled to its long double length.
+    // The line is the true vertex wherever the piece's edges are the true ones (the
+    // topology's errors are the band's, apart), so its bound no longer carries the long
+    // double cuts' rounding, which on a sliver is absolute (about 1e-18), not relative
+    // to its value. A vertex keeps its long double direction and bound where its two
+    // edges are one plane, where the planes are too close to tell, or where the line is
+    // farther from the long double direction than that direction's bound (a vertex taken
+    // as on a plane within the band, whose sliver the band's bound holds)
     void refine(const Piece& q, int64_t f, const double* pp, const std::vector<ExactPlane>& xp,
                 std::vector<std::array<Quad, 3>>& v, std::vector<R>& err) const {
         const size_t m = q.size();
         v.resize(m);
         err.resize(m);
+        auto len = [](const Quad* x) { return q_sqrt(x[0] * x[0] + x[1] * x[1] + x[2] * x[2]); };
         for (size_t i = 0; i < m; ++i) {
             const Vertex& u = q[i];
             if (u.id >= 0) {
@@ -998,21 +1003,48 @@ class Core {
             err[i] = std::max(u.err, u.err_line);
             const int64_t e1 = q[(i + m - 1) % m].edge, e2 = u.edge;
             if (e1 == e2) continue;
-            Quad m1[3], m2[3], c1, c2;
-            quad_plane(e1, f, pp, xp, m1, &c1);
-            quad_plane(e2, f, pp, xp, m2, &c2);
-            Quad d[3] = {m1[1] * m2[2] - m1[2] * m2[1], m1[2] * m2[0] - m1[0] * m2[2],
-                         m1[0] * m2[1] - m1[1] * m2[0]};
-            const Quad dl = q_sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
-            const Quad l1 = q_sqrt(m1[0] * m1[0] + m1[1] * m1[1] + m1[2] * m1[2]);
-            const Quad l2 = q_sqrt(m2[0] * m2[0] + m2[1] * m2[1] + m2[2] * m2[2]);
-            if (!(dl > 0) || !(l1 > 0) || !(l2 > 0)) continue;
-            const R e = static_cast<R>(8 * QUAD_EPS * (c1 + c2 + 1) * (l1 * l2 / dl)) +
-                        2 * static_cast<R>(QUAD_EPS);  // and the scaling below
+            Quad d[3];
+            R e;
+            const int64_t cut = -1 - u.on_plane;
+            if (u.on_edge >= 0 && u.on_plane >= 0 &&
+                ((e1 == u.on_edge && e2 == cut) || (e2 == u.on_edge && e1 == cut))) {
+                // the crossing of input edge a -> b with the exact plane
+                const int64_t ia = u.on_edge;
+                const int64_t ib = start_[f] + (ia - start_[f] + 1) % count_[f];
+                Quad mp[3], c;
+                quad_plane(cut, f, pp, xp, mp, &c);
+                Quad A[3], Bm[3];
+                for (int k = 0; k < 3; ++k) {
+                    A[k] = static_cast<Quad>(V_[3 * ia + k]) - pp[k];
+                    Bm[k] = static_cast<Quad>(V_[3 * ib + k]) - V_[3 * ia + k];
+                }
+                const Quad den = mp[0] * Bm[0] + mp[1] * Bm[1] + mp[2] * Bm[2];
+                if (!(den != 0) || !(c < static_cast<Quad>(INFINITY))) continue;
+                const Quad sp = -(mp[0] * A[0] + mp[1] * A[1] + mp[2] * A[2]) / den;
+                for (int k = 0; k < 3; ++k) d[k] = A[k] + sp * Bm[k];
+                const Quad dl = len(d);
+                if (!(dl > 0)) continue;
+                // off the edge's plane: the sum's rounding; off the exact plane, also
+                // s's (its two dot products, each within 4 roundoffs of |m| |x|) and the
+                // normal's tilt
+                const Quad W = len(A) + q_abs(sp) * len(Bm);
+                e = static_cast<R>(QUAD_EPS * (16 * W / dl + 8 * c + 4));
+            } else {
+                Quad m1[3], m2[3], c1, c2;
+                quad_plane(e1, f, pp, xp, m1, &c1);
+                quad_plane(e2, f, pp, xp, m2, &c2);
+                d[0] = m1[1] * m2[2] - m1[2] * m2[1];
+                d[1] = m1[2] * m2[0] - m1[0] * m2[2];
+                d[2] = m1[0] * m2[1] - m1[1] * m2[0];
+                const Quad dl = len(d), l1 = len(m1), l2 = len(m2);
+                if (!(dl > 0) || !(l1 > 0) || !(l2 > 0)) continue;
+                e = static_cast<R>(8 * QUAD_EPS * (c1 + c2 + 1) * (l1 * l2 / dl));
+            }
+            e += 2 * static_cast<R>(QUAD_EPS);  // and the scaling below
             if (!(e < err[i])) continue;
             if (d[0] * v[i][0] + d[1] * v[i][1] + d[2] * v[i][2] < 0)
                 for (int k = 0; k < 3; ++k) d[k] = -d[k];
-            const Quad s = static_cast<Quad>(u.length) / dl;
+            const Quad s = static_cast<Quad>(u.length) / len(d);
             const V3 dr{static_cast<R>(d[0] * s), static_cast<R>(d[1] * s),
                         static_cast<R>(d[2] * s)};
             // the line must lie within the long double direction's bound of it (with the
