@@ -81,9 +81,8 @@ def misses_tolerance(F, E, tolerance, atol=None):
     ``atol`` instead: ``E > max(atol, tolerance * |F|)``, ``tolerance`` None meaning no
     relative part. The one acceptance criterion of every path: unoccluded values after
     their last precision tier, the Python engine's refined pieces (either integrator),
-    area form factors. (The compiled core falls back to the Python engine earlier,
-    where a bound exceeds tolerance times the value: its bounds on slivers hold but are
-    absolute, about 1e-18, and that engine's refinement makes them relative.) An infinite
+    area form factors, and the compiled core's fallback to the Python engine (after its
+    quadruple-precision tier, which makes its sliver bounds relative). An infinite
     bound misses; a NaN is refused by :func:`check_finite`.
 
     Examples

@@ -40,6 +40,20 @@ def test_rows_of_a_box_with_a_bent_wall_sum_to_one():
             assert abs(F.sum() - 1.0) <= 1e-12
 
 
+def test_compiled_core_alone_on_a_box_with_a_bent_wall():
+    # the compiled core without its fallback (tolerance None): a bent quad seen from its
+    # neighbour's centroid has a non-convex image, whose shadow as the intersection of
+    # its edges' half-spaces hid 0.74 % of row 21 behind it (bound 1e-17); it is now
+    # left out and its area charged to the band. Closed rows sum to 1 within their bounds
+    scene = box_with_a_bent_wall()
+    bent = [i for i, P in enumerate(scene.polygons) if np.any(P[:, 0] > 1.0)]
+    for i in [0, 13] + bent:
+        F, E = ef.Exact(engine="compiled", tolerance=None).point_form_factors(
+            scene, scene.centroids[i], scene.normals[i], error=True)
+        assert abs(F.sum() - 1.0) <= E.sum() + 1e-15
+        assert abs(F.sum() - 1.0) <= 1e-12
+
+
 def test_bent_quad_is_its_boundary_ring():
     scene = box_with_a_bent_wall(shift=5e-7)
     j = next(i for i, P in enumerate(scene.polygons) if np.any(P[:, 0] > 1.0))

@@ -258,11 +258,12 @@ def test_ground_truth_bound_holds_on_slivers():
 
 @pytest.mark.parametrize("gap", [1e-9, 1e-6, 1e-3])
 def test_compiled_sliver_bound_holds_without_the_fallback(gap):
-    # the compiled core's own bound on a sliver (no fallback to the Python engine):
-    # it holds against the 40-digit reference, but it is absolute (the rounding of the
-    # pieces' sector sums, about 1e-18), not relative to the sliver's value: this is
-    # why the default row falls back to the Python engine, whose refinement makes it
-    # relative (measured 2026-12-02: errors 8e-23 to 8e-21 under bounds of 1.6e-18)
+    # the compiled core's own bound on a sliver, against the 40-digit reference. Without
+    # a tolerance (no second tier) it is absolute: the long double cuts' directions,
+    # about 1e-18 (measured 2026-12-02: errors 8e-23 to 8e-21 under bounds of 1.6e-18).
+    # With one, the pieces that miss it are integrated again in quadruple precision from
+    # vertices recomputed where their edges' planes meet (Core::refine): the bound is
+    # then relative and the row needs no fallback to the Python engine
     from exactff.visibility.compiled import compiled_form_factors
 
     for seed in range(3):
@@ -272,3 +273,8 @@ def test_compiled_sliver_bound_holds_without_the_fallback(gap):
         ref = sliver_reference(polys, p, n)
         assert abs(F[0] - ref) <= E[0] + tol.EPS * ref
         assert E[0] <= 1e-16
+        st = {}
+        F, E = compiled_form_factors(scene, p, n, tolerance=1e-12, error=True, stats=st)
+        assert st["path"] == "compiled"
+        assert abs(F[0] - ref) <= E[0] + tol.EPS * ref
+        assert E[0] <= 1e-12 * F[0]

@@ -146,12 +146,11 @@ def _fake_core(monkeypatch, F0, E0, band0):
     return compiled.compiled_form_factors
 
 
-@pytest.mark.parametrize("F0,E0", [(5.3e-33, 1.8e-17), (0.0, 2.6e-17), (0.2, 1e-9)])
+@pytest.mark.parametrize("F0,E0", [(5.3e-33, 1.8e-14), (0.0, 2.6e-14), (0.2, 1e-9)])
 def test_compiled_value_that_misses_falls_back_and_the_python_row_is_checked(monkeypatch,
                                                                              F0, E0):
-    # the fallback is the compiled row's escalation: a small value is refined too (a
-    # sliver of 1.1e-10 kept a bound of 1.0e-17 without it, 2.4e-26 with it:
-    # test_refinement's ground truth)
+    # a bound that misses errors.misses_tolerance (at 1e-12: 1e-14 below a value of
+    # 1e-2) sends the row to the Python engine, whose values are then checked alike
     scene, p, n = _occluded_pair()
     row = _fake_core(monkeypatch, F0, E0, 0.0)
     st = {}
@@ -160,6 +159,19 @@ def test_compiled_value_that_misses_falls_back_and_the_python_row_is_checked(mon
     Fp, Ep = ef.Exact(engine="python").point_form_factors(scene, p, n, error=True)
     np.testing.assert_array_equal(F, Fp)
     assert not misses_tolerance(Fp, Ep, 1e-12).any()
+
+
+@pytest.mark.parametrize("F0,E0", [(5.3e-33, 1.8e-17), (0.0, 0.9e-14), (0.2, 1.9e-13)])
+def test_compiled_value_within_the_criterion_is_returned(monkeypatch, F0, E0):
+    # the same criterion accepts: a value whose bound is within it is not recomputed
+    # (cloister rows carry hundreds of slivers of 1e-23 with bounds of 1e-20, where two
+    # nearly coincident shadow planes meet: the Python engine accepts them alike)
+    scene, p, n = _occluded_pair()
+    row = _fake_core(monkeypatch, F0, E0, 0.0)
+    st = {}
+    F, E = row(scene, p, n, tolerance=1e-12, stats=st, error=True)
+    assert st["path"] == "compiled"
+    assert F[0] == F0 and E[0] == E0
 
 
 def test_compiled_band_slivers_are_in_the_bound_not_in_the_check(monkeypatch):

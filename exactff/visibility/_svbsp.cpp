@@ -332,6 +332,7 @@ struct EdgeCharge {
     int64_t src;
     R charge;
     int count;
+    bool refined;  // its ends' directions from Core::refine (quadruple precision)
 };
 
 // the row's cache of exact tests of an input point against an exact plane, by ids:
@@ -884,20 +885,26 @@ class Core {
     }
 
     // each edge's share of the error of its ends' directions: its arc length times the
-    // larger of their bounds, over pi (the area swept by moving the edge that far)
-    void charge_edges(const Piece& q, int64_t src, std::vector<R>& E, RowStats& st) const {
+    // larger of their bounds, over pi (the area swept by moving the edge that far); with
+    // `refined`, the bounds of the directions Core::refine gave the piece instead
+    R charge_edges(const Piece& q, int64_t src, std::vector<R>& E, RowStats& st,
+                   const std::vector<R>* refined = nullptr, bool record = true) const {
         const R pi = 3.14159265358979323846264338327950288L;
         const size_t m = q.size();
+        R total = 0;
         for (size_t i = 0; i < m; ++i) {
             const Vertex& a = q[i];
             const Vertex& b = q[(i + 1) % m];
             // off the plane the edge lies on: for an input edge, its ends' distances
             // from that edge's plane (a crossing slides along it, which moves nothing)
-            auto off = [&](const Vertex& u) {
+            auto off = [&](const Vertex& u, size_t k) {
+                if (refined) return (*refined)[k];
                 if (a.edge >= 0 && u.id < 0 && u.on_edge == a.edge) return u.err_line;
                 return u.err;
             };
-            const R charge = arc(a, b) * std::max(off(a), off(b)) / pi;
+            const R charge = arc(a, b) * std::max(off(a, i), off(b, (i + 1) % m)) / pi;
+            total += charge;
+            if (!record) continue;
             if (a.id >= 0 && b.id >= 0) {  // an input edge: on the fragment's boundary
                 E[src] += charge;
                 continue;
@@ -908,32 +915,155 @@ class Core {
             if (lex_less(hi->v, lo->v)) std::swap(lo, hi);
             EdgeKey k{{lo->v.x, lo->v.y, lo->v.z, hi->v.x, hi->v.y, hi->v.z}};
             auto it = st.edges.find(k);
-            if (it == st.edges.end())
-                st.edges.emplace(k, EdgeCharge{src, charge, 1});
-            else if (it->second.src == src && it->second.count == 1)
-                it->second.count = 2;  // shared by two visible pieces of src: cancels
-            else
+            const bool r = refined != nullptr;
+            if (it == st.edges.end()) {
+                st.edges.emplace(k, EdgeCharge{src, charge, 1, r});
+            } else if (it->second.src == src && it->second.count == 1) {
+                // shared by two visible pieces of src: moving it moves area from one to
+                // the other, if both place it alike; one refined and one not do not:
+                // the coarser placement's charge stays
+                it->second.count = 2;
+                if (it->second.refined != r) E[src] += std::max(charge, it->second.charge);
+            } else {
                 E[src] += charge;
+            }
+        }
+        return total;
+    }
+
+    // the normal of the plane through p that a piece's edge lies on (edge code as
+    // Vertex::edge: an input edge of fragment f, or exact plane -1 - k) in quadruple
+    // precision from the input's doubles, and its condition: |a - p| |b - p| / |m| for a
+    // plane through two points (the tilt of m is within a few roundoffs times it), 0
+    // for a plane given by its normal (exact)
+    void quad_plane(int64_t code, int64_t f, const double* pp, const std::vector<ExactPlane>& xp,
+                    Quad m[3], Quad* cond) const {
+        const double* a;
+        const double* b;
+        int kind = 0;
+        if (code >= 0) {
+            const int64_t ib = start_[f] + (code - start_[f] + 1) % count_[f];
+            a = &V_[3 * code];
+            b = &V_[3 * ib];
+        } else {
+            const ExactPlane& X = xp[static_cast<size_t>(-1 - code)];
+            kind = X.kind;
+            a = X.a;
+            b = X.b;
+        }
+        if (kind == 1) {
+            for (int k = 0; k < 3; ++k) m[k] = a[k];
+            *cond = 0;
+            return;
+        }
+        Quad A[3], B[3];
+        for (int k = 0; k < 3; ++k) {
+            A[k] = static_cast<Quad>(a[k]) - pp[k];
+            B[k] = static_cast<Quad>(b[k]) - pp[k];
+        }
+        m[0] = A[1] * B[2] - A[2] * B[1];
+        m[1] = A[2] * B[0] - A[0] * B[2];
+        m[2] = A[0] * B[1] - A[1] * B[0];
+        const Quad ml = q_sqrt(m[0] * m[0] + m[1] * m[1] + m[2] * m[2]);
+        const Quad al = q_sqrt(A[0] * A[0] + A[1] * A[1] + A[2] * A[2]);
+        const Quad bl = q_sqrt(B[0] * B[0] + B[1] * B[1] + B[2] * B[2]);
+        *cond = ml > 0 ? al * bl / ml : static_cast<Quad>(INFINITY);
+    }
+
+    // a piece's vertex directions in quadruple precision, for integrate_quad, each with
+    // a bound on its angle off the planes through p of its two edges (what moves the
+    // piece's boundary: Core::charge_edges). An input vertex's from its coordinates. A
+    // computed one where its edges' planes meet: where they are an input edge and the
+    // exact plane it crosses, as that crossing (a + s (b - a), s from the plane's
+    // normal: off either plane by a few roundoffs of |a - p| + s |b - a| over the
+    // distance, however small the angle between them); else as the line m1 x m2, whose
+    // rounding (8 QUAD_EPS (c1 + c2 + 1) |m1| |m2| / |m1 x m2|, c the normals'
+    // conditions) grows as the planes close. Either is scaled to its long double length.
+    // The line is the true vertex wherever the piece's edges are the true ones (the
+    // topology's errors are the band's, apart), so its bound no longer carries the long
+    // double cuts' rounding, which on a sliver is absolute (about 1e-18), not relative
+    // to its value. A vertex keeps its long double direction and bound where its two
+    // edges are one plane, where the planes are too close to tell, or where the line is
+    // farther from the long double direction than that direction's bound (a vertex taken
+    // as on a plane within the band, whose sliver the band's bound holds)
+    void refine(const Piece& q, int64_t f, const double* pp, const std::vector<ExactPlane>& xp,
+                std::vector<std::array<Quad, 3>>& v, std::vector<R>& err) const {
+        const size_t m = q.size();
+        v.resize(m);
+        err.resize(m);
+        auto len = [](const Quad* x) { return q_sqrt(x[0] * x[0] + x[1] * x[1] + x[2] * x[2]); };
+        for (size_t i = 0; i < m; ++i) {
+            const Vertex& u = q[i];
+            if (u.id >= 0) {
+                for (int k = 0; k < 3; ++k) v[i][k] = static_cast<Quad>(V_[3 * u.id + k]) - pp[k];
+                err[i] = 4 * static_cast<R>(QUAD_EPS);  // the differences' rounding, if any
+                continue;
+            }
+            v[i] = {static_cast<Quad>(u.v.x), static_cast<Quad>(u.v.y), static_cast<Quad>(u.v.z)};
+            err[i] = std::max(u.err, u.err_line);
+            const int64_t e1 = q[(i + m - 1) % m].edge, e2 = u.edge;
+            if (e1 == e2) continue;
+            Quad d[3];
+            R e;
+            const int64_t cut = -1 - u.on_plane;
+            if (u.on_edge >= 0 && u.on_plane >= 0 &&
+                ((e1 == u.on_edge && e2 == cut) || (e2 == u.on_edge && e1 == cut))) {
+                // the crossing of input edge a -> b with the exact plane
+                const int64_t ia = u.on_edge;
+                const int64_t ib = start_[f] + (ia - start_[f] + 1) % count_[f];
+                Quad mp[3], c;
+                quad_plane(cut, f, pp, xp, mp, &c);
+                Quad A[3], Bm[3];
+                for (int k = 0; k < 3; ++k) {
+                    A[k] = static_cast<Quad>(V_[3 * ia + k]) - pp[k];
+                    Bm[k] = static_cast<Quad>(V_[3 * ib + k]) - V_[3 * ia + k];
+                }
+                const Quad den = mp[0] * Bm[0] + mp[1] * Bm[1] + mp[2] * Bm[2];
+                if (!(den != 0) || !(c < static_cast<Quad>(INFINITY))) continue;
+                const Quad sp = -(mp[0] * A[0] + mp[1] * A[1] + mp[2] * A[2]) / den;
+                for (int k = 0; k < 3; ++k) d[k] = A[k] + sp * Bm[k];
+                const Quad dl = len(d);
+                if (!(dl > 0)) continue;
+                // off the edge's plane: the sum's rounding; off the exact plane, also
+                // s's (its two dot products, each within 4 roundoffs of |m| |x|) and the
+                // normal's tilt
+                const Quad W = len(A) + q_abs(sp) * len(Bm);
+                e = static_cast<R>(QUAD_EPS * (16 * W / dl + 8 * c + 4));
+            } else {
+                Quad m1[3], m2[3], c1, c2;
+                quad_plane(e1, f, pp, xp, m1, &c1);
+                quad_plane(e2, f, pp, xp, m2, &c2);
+                d[0] = m1[1] * m2[2] - m1[2] * m2[1];
+                d[1] = m1[2] * m2[0] - m1[0] * m2[2];
+                d[2] = m1[0] * m2[1] - m1[1] * m2[0];
+                const Quad dl = len(d), l1 = len(m1), l2 = len(m2);
+                if (!(dl > 0) || !(l1 > 0) || !(l2 > 0)) continue;
+                e = static_cast<R>(8 * QUAD_EPS * (c1 + c2 + 1) * (l1 * l2 / dl));
+            }
+            e += 2 * static_cast<R>(QUAD_EPS);  // and the scaling below
+            if (!(e < err[i])) continue;
+            if (d[0] * v[i][0] + d[1] * v[i][1] + d[2] * v[i][2] < 0)
+                for (int k = 0; k < 3; ++k) d[k] = -d[k];
+            const Quad s = static_cast<Quad>(u.length) / len(d);
+            const V3 dr{static_cast<R>(d[0] * s), static_cast<R>(d[1] * s),
+                        static_cast<R>(d[2] * s)};
+            // the line must lie within the long double direction's bound of it (with the
+            // rounding of this test: the angle, and dr's rounding to long double)
+            const R apart = std::atan2(norm(cross(dr, u.v)), dot(dr, u.v));
+            if (!(apart <= err[i] + e + 16 * K_.eps)) continue;
+            for (int k = 0; k < 3; ++k) v[i][k] = d[k] * s;
+            err[i] = e;
         }
     }
 
-    // the same sector form in quadruple precision, from the input's coordinates where
-    // the vertices are input vertices (exact there) and from the long double directions
-    // of computed ones (their errors stay in the bound), with the normal as given
-    // (unnormalised: the value is divided by its length at the end, a relative error);
-    // the second tier for pieces whose terms cancel (grazing, far, small)
-    void integrate_quad(const Piece& q, const double* pp, const double* pn, R* value,
+    // the same sector form in quadruple precision, from the directions Core::refine gave
+    // the piece's vertices (their errors are charged edge by edge, apart), with the
+    // normal as given (unnormalised: the value is divided by its length at the end, a
+    // relative error); the second tier for pieces whose terms cancel (grazing, far,
+    // small, slivers)
+    void integrate_quad(const std::vector<std::array<Quad, 3>>& v, const double* pn, R* value,
                         R* bound) const {
-        const size_t m = q.size();
-        std::vector<std::array<Quad, 3>> v(m);
-        for (size_t i = 0; i < m; ++i) {
-            const Vertex& u = q[i];
-            if (u.id >= 0)
-                for (int k = 0; k < 3; ++k) v[i][k] = static_cast<Quad>(V_[3 * u.id + k]) - pp[k];
-            else
-                v[i] = {static_cast<Quad>(u.v.x), static_cast<Quad>(u.v.y),
-                        static_cast<Quad>(u.v.z)};
-        }
+        const size_t m = v.size();
         const Quad n[3] = {pn[0], pn[1], pn[2]};
         const Quad nl = q_sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
         Quad S = 0, mag = 0, errs = 0;
@@ -1084,6 +1214,8 @@ class Core {
         std::vector<int> sg;
         std::vector<R> d;
         std::vector<Vertex> cut;
+        std::vector<std::array<Quad, 3>> qdirs;  // Core::refine's, for integrate_quad
+        std::vector<R> qerrs;
         while (!work.empty()) {
             W w = std::move(work.back());
             work.pop_back();
@@ -1102,19 +1234,28 @@ class Core {
                 ++st.visible;
                 R val, bnd;
                 integrate(w.q, f, n, &val, &bnd);
-                if (receives && st.rtol > 0 && bnd > st.rtol * val) {
-                    R qv, qb;
-                    integrate_quad(w.q, pp, st.normal, &qv, &qb);
-                    ++st.quad_pieces;
-                    if (qb < bnd) {
-                        val = qv;
-                        bnd = qb;
+                bool refined = false;
+                if (receives && st.rtol > 0) {
+                    // the second tier where the sums' rounding or the vertices' errors
+                    // exceed the tolerance times the value
+                    const R charges = charge_edges(w.q, src, E, st, nullptr, false);
+                    if (bnd + charges > st.rtol * val) {
+                        refine(w.q, f, pp, xp, qdirs, qerrs);
+                        R qv, qb;
+                        integrate_quad(qdirs, st.normal, &qv, &qb);
+                        ++st.quad_pieces;
+                        const R qcharges = charge_edges(w.q, src, E, st, &qerrs, false);
+                        if (qb + qcharges < bnd + charges) {
+                            val = qv;
+                            bnd = qb;
+                            refined = true;
+                        }
                     }
                 }
                 if (receives) {
                     F[src] += val;
                     E[src] += bnd;
-                    charge_edges(w.q, src, E, st);
+                    charge_edges(w.q, src, E, st, refined ? &qerrs : nullptr);
                 }
                 insert_shadow(w.q, f, pp, w.plane, w.positive, sv, xp, st, &st.unattributed,
                               val + bnd);
@@ -1322,6 +1463,19 @@ class Core {
                 mm = {-mm.x, -mm.y, -mm.z};
                 orient = -1;
             }
+            // and every vertex on that side, up to the plane's and its own errors: the
+            // shadow is the intersection of the edges' half-spaces only where the image
+            // is convex, which a polygon planar only within the validation tolerance,
+            // seen from nearly in its plane, need not be (a bent quad seen from its
+            // neighbour's centroid hid 0.7 % of the hemisphere behind it); such an image
+            // is a sliver too: its shadow is left out
+            for (size_t k = 0; k < m && !degenerate; ++k) {
+                if (k == i || k == (i + 1) % m) continue;
+                const Vertex& u = q[k];
+                if (dot(mm, u.v) < -(16 * K_.eps + err + u.err) * ml * u.length)
+                    degenerate = true;
+            }
+            if (degenerate) break;
             ++sides;
             // an edge along a plane the piece was cut by: that plane is on the path to
             // the leaf, whose whole cell already lies on the piece's side of it, so the

@@ -16,7 +16,7 @@ import numpy as np
 import shapely
 
 from .. import _tolerances as tol
-from ..errors import check_finite
+from ..errors import check_finite, misses_tolerance
 from ..kernel import flat_polygons
 from ..predicates import engine_sides, sides_of_point
 from ..rings import owners, successors
@@ -202,14 +202,17 @@ def compiled_form_factors(scene, point, normal, *, two_sided=False, stats=None,
     band's decisions may misplace: a vertex within rounding of a shadow plane whose
     side exact arithmetic cannot settle (a vertex computed from computed ones) is taken
     as on it, and its two edges' arc lengths times the band are added
-    (``docs/explanation/visibility.md``). Where the first two exceed ``tolerance``
-    times the value, the row is recomputed by the Python engine, which refines,
-    escalates and then checks every value against the tolerance
-    (:func:`exactff.errors.misses_tolerance`, raising where one misses it);
-    ``stats["path"]`` then says ``"compiled, then python"`` and
-    ``stats["compiled_missed"]`` counts the values that caused it. A row the compiled
-    core returns has the rounding and geometry of every value within the tolerance,
-    even without its floor. The band's slivers (``stats["max_band_bound"]``) are a
+    (``docs/explanation/visibility.md``). With a ``tolerance``, a piece whose first two
+    exceed it times its value is integrated again in quadruple precision, its computed
+    vertices recomputed where its edges' planes meet (``stats["quad_pieces"]``): on a
+    sliver the long double cuts leave an absolute bound of about 1e-18, which this makes
+    relative. Where a value's bound still misses the tolerance by the criterion of
+    every path (:func:`exactff.errors.misses_tolerance`: ``tolerance`` times the larger
+    of the value and ``VALUE_FLOOR``), the row is recomputed by the Python engine, which
+    refines, escalates and then checks every value the same way (raising where one
+    misses it); ``stats["path"]`` then says ``"compiled, then python"`` and
+    ``stats["compiled_missed"]`` counts the values that caused it. The band's slivers
+    (``stats["max_band_bound"]``) are a
     bound on the topology: they are in the returned bound but not checked against the
     tolerance, as the Python engine's topology has the same decisions and its bound
     leaves them out (a value 0 of ``office(600)``'s row 183 carries 1.8e-16 of them,
@@ -274,13 +277,10 @@ def compiled_form_factors(scene, point, normal, *, two_sided=False, stats=None,
     check_finite(F, E)
     check_finite(band)
     if tolerance is not None:
-        # the rounding and geometry of the pieces, which the Python engine's refinement
-        # and escalation narrow; the band's slivers (below) no engine here narrows
-        # (the fallback is this row's escalation, taken where a bound exceeds tolerance
-        # times the value, as refinement and the kernel's tiers start: a small value
-        # is refined too; whether a value is then accepted, with VALUE_FLOOR, is the
-        # Python engine's check, errors.misses_tolerance)
-        missed = np.flatnonzero(E > tolerance * F + tol.MP_VALUE_FLOOR)
+        # the rounding and geometry of the pieces, after the core's second tier (above),
+        # by the Python engine's own criterion; the band's slivers (below) no engine
+        # here narrows
+        missed = np.flatnonzero(misses_tolerance(F, E, tolerance))
         if len(missed):
             st.update(counters)
             st["compiled_missed"] = int(len(missed))
