@@ -84,7 +84,6 @@ __all__ = [
     "AREA_CLOSED_FLOOR",
     "AREA_CLOSED_MP_DPS",
     "AREA_CLOSED_MP_ULPS",
-    "AREA_CLOSED_SIDE_ULPS",
     "AREA_GAUSS_ORDER",
     "AREA_GAUSS_LOW_ORDER",
     "AREA_RULE_ORDERS",
@@ -518,6 +517,3 @@ AREA_CLOSED_FLOOR = 1e-3
 AREA_CLOSED_MP_DPS = 30
 AREA_CLOSED_MP_ULPS = 64.0
 
-#: Area form factors: a vertex farther than this many units of rounding of the
-#: coordinates in front of the other polygon's plane needs no clipping.
-AREA_CLOSED_SIDE_ULPS = 64.0

@@ -41,10 +41,10 @@ from ..errors import NumericalError, check_finite
 from ..geometry import area_vector, polygon_diameter, receiver_frame
 from ..halfspace import clip_halfspace
 from ..kernel import clipped_sector_sums
-from ..rings import owners, successors
+from ..rings import owners, padded, successors
 from ..scene import validate_polygon
 
-__all__ = ["polygon_form_factor", "clip_front", "triangle_rule", "point_values",
+__all__ = ["polygon_form_factor", "clip_front", "front_parts", "triangle_rule", "point_values",
            "emitter_nodes", "far_values", "unoccluded_pair", "unoccluded_pairs", "nonnegative",
            "is_far", "CLOSED_FORM_COUNTS"]
 
@@ -85,13 +85,15 @@ def is_far(P, Q):
     return r0 > tol.AREA_FAR * max(polygon_diameter(P), polygon_diameter(Q))
 
 
-def clip_front(P, n, c):
+def clip_front(P, n, c, d=None):
     """The part of polygon P with ``n . (x - c) > 0`` (None when nothing is left): the
-    engine's half-space clipping, about the point c."""
-    d = (P - c) @ n
+    engine's half-space clipping, about the point c. ``d``: the distances
+    ``(P - c) @ n`` where the caller has them (:func:`front_parts`), else computed."""
+    if d is None:
+        d = (P - c) @ n
     if np.all(d >= 0) and np.any(d > 0):
         return P
-    if np.all(d <= 0) and np.any(d < 0):
+    if np.all(d <= 0):
         return None
     V, k = clip_halfspace((P - c)[None], np.array([len(P)]), n)
     C = V[0, :k[0]] + c
@@ -593,26 +595,60 @@ def _rings(polys):
     return V, offsets, successors(offsets)
 
 
-def _front_parts(P, nP, Qs, nQs):
-    """Each pair's parts in front of the other's plane (:func:`clip_front`): lists of the
-    clipped P and Q (None where nothing is left). clip_front is called only where some
-    vertex is within rounding of the other plane, or behind it."""
-    V, offsets, _ = _rings(Qs)
-    start = offsets[:-1]
-    margin = tol.AREA_CLOSED_SIDE_ULPS * tol.EPS * (float(np.abs(V).max())
-                                                   + float(np.abs(P).max()))
-    sQ = np.minimum.reduceat((V - P[0]) @ nP, start)
-    sP = np.einsum("mkj,mj->mk", P[None] - V[start][:, None], nQs).min(axis=1)
-    whole = (sQ > margin) & (sP > margin)
-    Pcs, Qcs = [], []
-    for j, Q in enumerate(Qs):
-        if whole[j]:
-            Pcs.append(P)
-            Qcs.append(Q)
-        else:
-            Pcs.append(clip_front(P, nQs[j], Q[0]))
-            Qcs.append(clip_front(Q, nP, P[0]))
+def front_parts(P, nP, Qs, nQs, dP, dQ):
+    """Each pair's parts in front of the other's plane (one-sided: rays leave P's front
+    and reach Q's front), decided from signed distances the caller computed for all
+    pairs at once: a polygon whose distances are all >= 0 and one > 0 is whole, one with
+    none > 0 has nothing in front, and only one with distances of both signs is clipped
+    (:func:`clip_front`, with the same distances: one decision, however they round).
+
+    Parameters
+    ----------
+    P : ndarray of shape (K, 3)
+        The emitter.
+    nP : ndarray of shape (3,)
+        Its unit normal.
+    Qs : sequence of ndarray of shape (K_j, 3)
+        The receivers.
+    nQs : ndarray of shape (len(Qs), 3)
+        Their unit normals.
+    dP : ndarray of shape (len(Qs), K)
+        ``(P - Q_j[0]) @ nQs[j]``.
+    dQ : ndarray of shape (len(Qs), K')
+        ``(Q_j - P[0]) @ nP`` in row j's first K_j entries, padded by repeats (as
+        :func:`exactff.rings.padded`).
+
+    Returns
+    -------
+    (list, list)
+        The clipped P and Q of each pair (the polygon itself where it is whole, None
+        where nothing is left).
+
+    Examples
+    --------
+    >>> P = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], float)
+    >>> Q = np.array([[0, 0, 0], [0, 1, 0], [0, 1, 1], [0, 0, 1]], float)   # x = 0
+    >>> nP, nQ = np.array([0, 0, 1.0]), np.array([[1.0, 0, 0]])
+    >>> Pcs, Qcs = front_parts(P, nP, [Q], nQ, ((P - Q[0]) @ nQ.T).T, ((Q - P[0]) @ nP)[None])
+    >>> Pcs[0] is P, Qcs[0] is Q            # touching along an edge: both whole
+    (True, True)
+    """
+    none = (dP.max(axis=1) <= 0) | (dQ.max(axis=1) <= 0)
+    whole_P, whole_Q = dP.min(axis=1) >= 0, dQ.min(axis=1) >= 0
+    Pcs = [None if none[j] else P if whole_P[j] else clip_front(P, nQs[j], Q[0], dP[j])
+           for j, Q in enumerate(Qs)]
+    Qcs = [None if none[j] else Q if whole_Q[j] else clip_front(Q, nP, P[0], dQ[j, :len(Q)])
+           for j, Q in enumerate(Qs)]
     return Pcs, Qcs
+
+
+def _front_parts(P, nP, Qs, nQs):
+    """:func:`front_parts` of one emitter and its receivers, the distances computed
+    here."""
+    V, _ = padded(Qs)
+    dQ = (V - P[0]) @ nP
+    dP = np.einsum("mkj,mj->mk", P[None] - V[:, :1], nQs)
+    return front_parts(P, nP, Qs, nQs, dP, dQ)
 
 
 def _mp_vector(x):
@@ -732,7 +768,9 @@ def unoccluded_pairs(P, Qs, far=True, rtol=None, atol=0.0, parts=None):
         return values, est
     # each pair scaled by a power of 2 near its centroids' distance: ln r near 0
     cP = P.mean(axis=0)
-    r0 = np.array([np.linalg.norm(Qs[j].mean(axis=0) - cP) for j in live])
+    VQall, qo_all, _ = _rings([Qs[j] for j in live])
+    centroids = np.add.reduceat(VQall, qo_all[:-1], axis=0) / np.diff(qo_all)[:, None]
+    r0 = np.linalg.norm(centroids - cP, axis=1)
     L = 2.0 ** np.round(np.log2(np.where(r0 > 0, r0, 1.0)))
     Pl, Ql = [Pcs[j] for j in live], [Qcs[j] for j in live]
     VP, po, nextP = _rings(Pl)

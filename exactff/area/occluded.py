@@ -14,15 +14,15 @@ from scipy.special import roots_legendre
 
 from .. import _tolerances as tol
 from ..errors import NumericalError, misses_tolerance
-from ..geometry import area_vector, receiver_frame, unit_normal
+from ..geometry import area_vector, receiver_frame
 from ..halfspace import clip_halfspace
 from ..kernel import clipped_sector_sums
 from ..methods import Exact
 from ..visibility import is_convex_enclosure
 from ..rings import padded, shapely_rings
 from ..scene import Scene
-from .contour import (CLOSED_FORM_COUNTS, clip_front, is_far, nonnegative, point_values,
-                      triangle_rule, unoccluded_pair, unoccluded_pairs)
+from .contour import (CLOSED_FORM_COUNTS, clip_front, front_parts, is_far, nonnegative,
+                      point_values, triangle_rule, unoccluded_pair, unoccluded_pairs)
 
 __all__ = ["area_row", "STATS"]
 
@@ -608,27 +608,20 @@ def _hidden_integral(S, Pc, Qc, nP, tolerance, area_P, whole, shortcuts, st):
     return value, err + whole[1], points
 
 
-def _front_pairs(polys, i, nP, padded, near):
-    """The receivers j of row i with each polygon's part in front of the other's plane
-    (one-sided: rays leave P's front and reach Q's front), and those parts, as a list of
-    ``(j, Pc, Qc)``: decided for all receivers at once where every vertex is clear of
-    the other's plane by more than ``near`` (wholly behind: dropped; wholly in front:
-    kept whole, the polygon itself), by :func:`clip_front` for the others."""
+def _front_pairs(polys, i, nP, padded):
+    """The receivers j of row i with each polygon's part in front of the other's plane,
+    and those parts, as a list of ``(j, Pc, Qc)``: the distances for all receivers at
+    once, the decision by :func:`~exactff.area.contour.front_parts`."""
     V, _, _, N = padded
     P = polys[i]
     dQ = (V - P[0]) @ nP                                    # (n, kmax)
     dP = np.einsum("njx,nx->nj", P[None] - V[:, :1], N)     # (n, kP)
-    behind = (dQ.max(axis=1) < -near) | (dP.max(axis=1) < -near)
-    behind[i] = True
-    whole_Q, whole_P = dQ.min(axis=1) > near, dP.min(axis=1) > near
-    out = []
-    for j in np.flatnonzero(~behind):
-        Q = polys[j]
-        Pc = P if whole_P[j] else clip_front(P, unit_normal(Q), Q[0])
-        Qc = Q if whole_Q[j] else clip_front(Q, nP, P[0])
-        if Pc is not None and Qc is not None:
-            out.append((int(j), Pc, Qc))
-    return out
+    live = (dQ.max(axis=1) > 0) & (dP.max(axis=1) > 0)
+    live[i] = False
+    J = np.flatnonzero(live)
+    Pcs, Qcs = front_parts(P, nP, [polys[j] for j in J], N[J], dP[J], dQ[J])
+    return [(int(j), Pc, Qc) for j, Pc, Qc in zip(J, Pcs, Qcs)
+            if Pc is not None and Qc is not None]
 
 
 def _unoccluded_values(polys, i, pairs, shortcuts, st, tolerance, rtol):
@@ -696,7 +689,7 @@ def area_row(scene, i, tolerance, *, rtol=None, shortcuts=True, stats=None):
     area_P = float(np.linalg.norm(AP))
     nP = AP / area_P
     f, e = np.zeros(len(polys)), np.zeros(len(polys))
-    pairs = _front_pairs(polys, i, nP, padded, near)
+    pairs = _front_pairs(polys, i, nP, padded)
     if not pairs:
         if stats is not None:
             stats.update(st)
