@@ -165,8 +165,14 @@ def _shaft(padded, i, J, boxes, nP, p0, near, st):
         active = (p_ahead[:, 0] & q_ahead[:, 1]) | (q_ahead[:, 0] & p_ahead[:, 1])
         d = eQ - eP
         n2 = sign * np.abs(d[:, ::-1])
-        size = np.linalg.norm(n2, axis=1)[:, None]
-        n2 = np.divide(n2, size, out=np.zeros_like(n2), where=size > 0)    # 0: inactive
+        # normalised after scaling by its largest component: the boxes' offsets may be
+        # tiny (1e-217 apart: their squares underflow, and a normal of 0 put every
+        # candidate on the plane, dropped though it hid 2.7 % of the receiver)
+        big = np.abs(n2).max(axis=1)[:, None]
+        active &= big[:, 0] > 0
+        n2 = np.divide(n2, big, out=np.zeros_like(n2), where=big > 0)
+        size = np.linalg.norm(n2, axis=1)[:, None]                         # >= 1 or 0
+        n2 = np.divide(n2, size, out=np.zeros_like(n2), where=size > 0)
         off = np.einsum("mx,mx->m", n2, eP)
         on = active[a]
         if not on.any():
@@ -252,6 +258,11 @@ def _event_lines(S, nP, dP, R, c, radius, Qc, shortcuts=True, st=None):
             spans.append(np.stack([x0, x1], axis=1))
             spanned.append(ok)
     m, v, span, spanned = (np.concatenate(x) for x in (ms, vs, spans, spanned))
+    # each normal scaled by its largest component (one of tiny coordinates, 1e-217,
+    # would underflow in its norm); a normal of 0 (no plane) has no event
+    big = np.abs(m).max(axis=1)
+    nz = big > 0
+    m, v, span, spanned = m[nz] / big[nz, None], v[nz], span[nz], spanned[nz]
     # the plane meets P's plane n . x = dP in a line; x0 is its point nearest to c, d
     # its direction; the chord of the disk, or the span's part of it
     first = m[np.arange(len(m)), np.argmax(m != 0, axis=1)]
