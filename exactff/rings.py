@@ -5,14 +5,15 @@ A set of ``R`` rings is one vertex array and ``offsets`` of shape (R + 1,): ring
 owns vertices ``offsets[r]:offsets[r + 1]``. From that follow each vertex's ring
 (:func:`owners`), its successor in the ring (:func:`successors`), a selection of rings
 packed again (:func:`repack`), the padded arrays some kernels prefer
-(:func:`padded`, :func:`padded_buckets`) and the rings of shapely polygons
-(:func:`shapely_rings`). Every module reads rings through these.
+(:func:`padded`, :func:`padded_buckets`) and the polygons and rings of shapely
+geometries (:func:`polygon_parts`, :func:`shapely_rings`). Every module reads rings through these.
 """
 
 import numpy as np
 import shapely
 
-__all__ = ["owners", "successors", "repack", "padded", "padded_buckets", "shapely_rings"]
+__all__ = ["owners", "successors", "repack", "padded", "padded_buckets", "polygon_parts",
+           "shapely_rings"]
 
 
 def owners(offsets):
@@ -124,6 +125,40 @@ def padded_buckets(polygons):
         V, c = padded([polygons[i] for i in ids])
         out.append((ids, V, c))
     return out
+
+
+def polygon_parts(geoms):
+    """The non-empty polygons in shapely geometries, collections flattened to any depth
+    (GEOS may return a collection holding a multipolygon), and each one's geometry.
+
+    Parameters
+    ----------
+    geoms : ndarray of shapely geometries, shape (G,)
+
+    Returns
+    -------
+    (ndarray of shapely Polygons, shape (P,), ndarray of shape (P,))
+        The polygons, and the index in ``geoms`` of each.
+
+    Examples
+    --------
+    >>> sq, tri = shapely.box(0, 0, 1, 1), shapely.Polygon([(2, 0), (3, 0), (2, 1)])
+    >>> nested = shapely.GeometryCollection([shapely.MultiPolygon([sq, tri]),
+    ...                                      shapely.LineString([(0, 0), (1, 1)])])
+    >>> parts, of = polygon_parts(np.array([nested, sq]))
+    >>> shapely.area(parts).tolist(), of.tolist()
+    ([1.0, 1.0, 0.5], [1, 0, 0])
+    """
+    parts, part_of = shapely.get_parts(np.asarray(geoms), return_index=True)
+    while True:
+        nested = np.isin(shapely.get_type_id(parts), (4, 5, 6, 7))   # multi-*, collection
+        if not nested.any():
+            break
+        sub, k = shapely.get_parts(parts[nested], return_index=True)
+        parts = np.concatenate([parts[~nested], sub])
+        part_of = np.concatenate([part_of[~nested], part_of[nested][k]])
+    keep = (shapely.get_type_id(parts) == 3) & ~shapely.is_empty(parts)
+    return parts[keep], part_of[keep]
 
 
 def shapely_rings(polys):

@@ -19,7 +19,7 @@ from ..halfspace import clip_halfspace
 from ..kernel import clipped_sector_sums
 from ..methods import Exact
 from ..visibility import is_convex_enclosure
-from ..rings import padded, shapely_rings
+from ..rings import padded, polygon_parts, shapely_rings
 from ..scene import Scene
 from .contour import (CLOSED_FORM_COUNTS, clip_front, front_parts, is_far, nonnegative,
                       point_values, triangle_rule, unoccluded_pair, unoccluded_pairs)
@@ -428,7 +428,7 @@ def _hidden_values(X, nP, Qc, blockers, st=None, split=True):
             st["engine_fallback_points"] = st.get("engine_fallback_points", 0) + nX
         return _hidden_values_by_engine(X, nP, Qc, Kc)
     # the region's rings from each point: outer rings and holes
-    parts, part_of = shapely.get_parts(hidden, return_index=True)
+    parts, part_of = polygon_parts(hidden)
     keep = shapely.area(parts) > 0
     parts, part_of = parts[keep], part_of[keep]
     if len(parts) == 0:

@@ -8,7 +8,7 @@ import shapely
 
 from .. import _tolerances as tol
 from ..kernel import TWO_PI, clipped_sector_sums, eq3_ring_area, solid_angle_sums
-from ..rings import repack, shapely_rings
+from ..rings import polygon_parts, repack, shapely_rings
 from .charts import CHARTS, lift
 
 __all__ = ["rings_long_double", "pieces_form_factors", "pieces_solid_angles"]
@@ -82,9 +82,7 @@ def pieces_form_factors(pieces, m, tolerance=None, owner=None, integrator="secto
             continue
         frag = np.array([k for k, _ in sel])
         geoms = np.array([g for _, g in sel], dtype=object)
-        parts, part_of = shapely.get_parts(geoms, return_index=True)
-        areal = (shapely.get_type_id(parts) == 3) & ~shapely.is_empty(parts)
-        polys, poly_of = parts[areal], part_of[areal]
+        polys, poly_of = polygon_parts(geoms)
         if len(polys) == 0:
             continue
         coords, ring_of, start, count, nxt, is_hole, ring_poly = shapely_rings(polys)
@@ -238,9 +236,7 @@ def pieces_solid_angles(pieces, m):
         return W, err
     frag = np.array([k for k, _, _ in pieces])
     geoms = np.array([g for _, _, g in pieces], dtype=object)
-    parts, part_of = shapely.get_parts(geoms, return_index=True)
-    areal = (shapely.get_type_id(parts) == 3) & ~shapely.is_empty(parts)
-    polys, poly_of = parts[areal], part_of[areal]
+    polys, poly_of = polygon_parts(geoms)
     if len(polys) == 0:
         return W, err
     coords, ring_of, start, count, nxt, is_hole, ring_poly = shapely_rings(polys)
