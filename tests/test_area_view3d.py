@@ -69,6 +69,14 @@ def test_hidden_values_split_takes_the_lost_points_by_the_engine():
     assert st == {"engine_fallbacks": 1, "engine_fallback_points": 3}
 
 
+def test_gunter1_row_1_is_complete_and_sums_to_one():
+    # row 1 at 1e-6 raised an IndexError in shapely_rings: GEOS returned a hidden part
+    # as a collection holding a multipolygon (rings.polygon_parts flattens it)
+    scene = _read("gunter1.vs3")
+    F, E = ef.area_form_factors(scene, rows=[1], tolerance=1e-6, error=True)
+    _row_is_complete(F[0], E[0], 1e-6)
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("name", ["gunter1.vs3", "test4.vs3"])
 def test_view3d_enclosures_rows_sum_to_one(name):
