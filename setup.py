@@ -12,7 +12,8 @@ QUADMATH = ["-lquadmath"] if platform.machine().lower() in ("x86_64", "amd64", "
 
 setup(
     ext_modules=[Pybind11Extension("exactff.visibility._svbsp",
-                                   ["exactff/visibility/_svbsp.cpp"],
+                                   ["exactff/visibility/_svbsp.cpp",
+                                    "exactff/visibility/_bsp_build.cpp"],
                                    cxx_std=17, extra_compile_args=["-O2"],
                                    extra_link_args=QUADMATH)],
     cmdclass={"build_ext": build_ext},

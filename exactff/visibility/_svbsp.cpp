@@ -57,6 +57,8 @@ constexpr Quad QUAD_EPS = LDBL_EPSILON / 2;
 
 namespace py = pybind11;
 
+void register_bsp_build(py::module_& m);  // _bsp_build.cpp
+
 namespace {
 
 using R = long double;
@@ -1532,4 +1534,5 @@ PYBIND11_MODULE(_svbsp, m) {
         .def_property_readonly("nodes", &Core::nodes)
         .def_property_readonly("pieces", &Core::pieces)
         .def_property_readonly("unit_roundoff", &Core::unit_roundoff);
+    register_bsp_build(m);
 }

@@ -51,18 +51,20 @@ class BSPTree:
         self.splits = splits
         # coplanar ties (one rule, exactff.predicates.tie_priority): fragments whose
         # front faces the point first, then input order of their source polygons
-        self.node_fragments, self.node_fragments_behind = [], []
-        for k, here in enumerate(node_fragments):
-            here = np.asarray(here, dtype=int)
-            if len(here) > 1:
-                orient = np.sign(source_normals[source[here]] @ normals[k])
-                for facing, dest in ((orient, self.node_fragments),
-                                     (-orient, self.node_fragments_behind)):
-                    dest.append(here[np.argsort(tie_priority(facing, source[here]),
-                                                kind="stable")].tolist())
-            else:
-                self.node_fragments.append(here.tolist())
-                self.node_fragments_behind.append(self.node_fragments[-1])
+        sizes = np.array([len(here) for here in node_fragments], dtype=np.int64)
+        flat = np.fromiter((f for here in node_fragments for f in here), dtype=np.int64,
+                           count=int(sizes.sum()))
+        node = np.repeat(np.arange(len(sizes)), sizes)
+        orient = np.sign(np.einsum("ij,ij->i", source_normals[self.source[flat]],
+                                   normals[node])) if len(flat) else np.zeros(0)
+        bounds = np.concatenate([[0], np.cumsum(sizes)]).tolist()
+        for facing, dest in ((orient, "node_fragments"), (-orient, "node_fragments_behind")):
+            # tie_priority's order (facing away last, then source) within each node,
+            # stable; a lone fragment keeps its place
+            order = np.lexsort((tie_priority(facing, self.source[flat]) if len(flat) else flat,
+                                node))
+            ordered = flat[order].tolist()
+            setattr(self, dest, [ordered[a:b] for a, b in zip(bounds[:-1], bounds[1:])])
 
     def __len__(self):
         return len(self.offsets)
@@ -101,12 +103,22 @@ def _plane_scores(sign, starts):
     return 5 * nsplit + imbalance - 2 * ncop, imbalance, pos, neg
 
 
-def build_bsp(scene, *, candidates=8, seed=0):
+def build_bsp(scene, *, candidates=8, seed=0, engine="python"):
     """Build an autopartition BSP tree: split planes are the polygons' own planes.
 
     At each node up to ``candidates`` planes of the node's fragments are scored by
     ``5 * splits + |front - back| - 2 * coplanar`` and the best is taken (fewer cuts,
-    balanced, many fragments settled at once). Fragments keep their source polygon.
+    balanced, many fragments settled at once); a node with more than
+    ``BSP_SCORE_SAMPLE`` fragments scores them on a random sample of that many, and one
+    left badly unbalanced (``BSP_AXIS_IMBALANCE``) also tries a plane through the median
+    of its fragments' vertex means along their widest axis. Sides are taken with the
+    near-coplanar band (:func:`exactff.predicates.coplanar_band`). Fragments keep their
+    source polygon.
+
+    ``engine="compiled"`` builds the same partition in compiled code (``_bsp_build.cpp``,
+    without the GIL; the compiled visibility core's tree): only its random draws differ,
+    so that with every candidate tried (``candidates`` at least the scene's size) and a
+    scene of at most ``BSP_SCORE_SAMPLE`` polygons the two trees are the same.
 
     Parameters
     ----------
@@ -115,6 +127,8 @@ def build_bsp(scene, *, candidates=8, seed=0):
         Planes tried per node.
     seed : int
         Seed of the candidate sampling (the tree is deterministic for a given seed).
+    engine : {"python", "compiled"}
+        Which build: the Python engine's (numpy, the default) or the compiled one.
 
     Returns
     -------
@@ -126,7 +140,16 @@ def build_bsp(scene, *, candidates=8, seed=0):
     >>> t = build_bsp(subdivided_box(2))
     >>> len(t), len(t.fragments), t.splits
     (6, 24, 0)
+    >>> t = build_bsp(subdivided_box(2), engine="compiled")
+    >>> len(t), len(t.fragments), t.splits
+    (6, 24, 0)
     """
+    if engine not in ("python", "compiled"):
+        raise ValueError(f"engine must be 'python' or 'compiled', got {engine!r}")
+    if not isinstance(candidates, (int, np.integer)) or candidates < 1:
+        raise ValueError(f"candidates must be a positive integer, got {candidates!r}")
+    if engine == "compiled":
+        return _build_bsp_compiled(scene, candidates, seed)
     rng = np.random.default_rng(seed)
     sampler = np.random.default_rng([seed, 1])    # its own stream: the same candidates
     normals_src = scene.normals
@@ -239,6 +262,26 @@ def build_bsp(scene, *, candidates=8, seed=0):
     return BSPTree(np.array(nodes_n), np.array(nodes_d), np.array(front), np.array(back),
                    node_frags, [fragments[i] for i in live], source[np.array(live, dtype=int)],
                    splits, normals_src, whole=np.array(live, dtype=int) < len(scene))
+
+
+def _build_bsp_compiled(scene, candidates, seed):
+    from ._svbsp import build_bsp_arrays      # the compiled module imports after this one
+
+    if not isinstance(seed, (int, np.integer)) or seed < 0:
+        raise ValueError(f"seed must be a non-negative integer, got {seed!r}")
+    counts = np.array([len(P) for P in scene.polygons], dtype=np.int64)
+    start = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
+    V = (np.concatenate([np.asarray(P, dtype=float) for P in scene.polygons])
+         if len(counts) else np.zeros((0, 3)))
+    (normals, offsets, front, back, here_start, here, Vf, frag_start, source, whole,
+     splits) = build_bsp_arrays(V, start, scene.normals, scene.plane_offsets, int(candidates),
+                                tol.BSP_SCORE_SAMPLE, tol.BSP_AXIS_CANDIDATE_MIN,
+                                tol.BSP_AXIS_IMBALANCE, tol.BSP_COPLANAR_ULPS, int(seed))
+    flat, bounds = here.tolist(), here_start.tolist()
+    node_frags = [flat[a:b] for a, b in zip(bounds[:-1], bounds[1:])]
+    fragments = np.split(Vf, frag_start[1:-1]) if len(source) else []
+    return BSPTree(normals, offsets, front, back, node_frags, fragments, source, int(splits),
+                   scene.normals, whole=whole)
 
 
 def scene_bsp(scene):

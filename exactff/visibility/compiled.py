@@ -1,6 +1,6 @@
 """The compiled visibility core: exact rows whose cost follows what they see.
 
-The BSP tree of :mod:`exactff.visibility.bsp` orders the fragments front to back; the
+The BSP tree of :mod:`exactff.visibility.bsp` (its compiled build) orders the fragments front to back; the
 compiled core (``_svbsp.cpp``, C++ through pybind11) keeps the covered region as a
 shadow-volume BSP tree (planes through the point, Chin & Feiner 1989), filters each
 convex fragment down it, integrates the visible pieces with the sector form, and
@@ -22,7 +22,7 @@ from ..predicates import engine_sides, sides_of_point
 from ..rings import owners, successors
 from ..prepared import prepared
 from ._svbsp import Core
-from .bsp import scene_bsp
+from .bsp import build_bsp
 from .engine import is_convex_enclosure, visible_form_factors
 
 __all__ = ["compiled_core", "compiled_form_factors", "convex_pieces"]
@@ -86,8 +86,10 @@ def convex_pieces(polygon, normal):
 
 
 def compiled_core(scene):
-    """The scene's compiled core: its BSP tree with every fragment convex, and the
-    subtrees' bounding boxes (built once, cached with the scene).
+    """The scene's compiled core: its BSP tree (built in compiled code,
+    ``build_bsp(scene, engine="compiled")``; the Python engine has its own,
+    :func:`exactff.visibility.scene_bsp`) with every fragment convex, and the subtrees'
+    bounding boxes (built once, cached with the scene).
 
     Returns
     -------
@@ -140,7 +142,7 @@ def _ragged_ranges(starts, lengths):
 
 
 def _build_core(scene):
-    tree, _ = scene_bsp(scene)
+    tree = build_bsp(scene, engine="compiled")
     frag_normals = scene.normals[tree.source]
     counts = np.array([len(P) for P in tree.fragments], dtype=np.int64)
     offsets = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)

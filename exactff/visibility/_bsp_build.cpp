@@ -1,0 +1,367 @@
+// The BSP tree of a scene in compiled code (issue 28: the set-up of a large scene).
+//
+// The same autopartition as exactff.visibility.bsp.build_bsp (the Python build, which
+// the Python engine keeps): at each node up to `candidates` planes of the node's
+// fragments are scored by 5 splits + |front - back| - 2 coplanar, on a random sample
+// of `sample` fragments at a larger node; a node left badly unbalanced by them also
+// tries a plane through the median of its fragments' vertex means along their widest
+// axis. Sides are taken with the near-coplanar band of exactff.predicates.coplanar_band
+// (a vertex within `band_ulps` ulps of the magnitudes in n . x - d lies in the plane),
+// and a fragment is split with every crossing interpolated from its edge's front end
+// point (exactff.halfspace.split_polygon), so that an edge shared by two fragments
+// splits identically. Only the random streams differ from the Python build's: with
+// every candidate tried and no sampling the two trees are the same
+// (tests/test_bsp_compiled.py).
+//
+// The build runs without the GIL.
+
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <cstdlib>
+#include <numeric>
+#include <vector>
+
+namespace py = pybind11;
+
+namespace {
+
+using Vec3 = std::array<double, 3>;
+constexpr double UNIT_ROUNDOFF = 1.1102230246251565e-16;  // 2**-53
+
+// splitmix64: a small deterministic stream for the candidate and sample draws
+struct Stream {
+    uint64_t state;
+    explicit Stream(uint64_t seed) : state(seed) {}
+    uint64_t next() {
+        uint64_t z = (state += 0x9E3779B97F4A7C15ULL);
+        z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ULL;
+        z = (z ^ (z >> 27)) * 0x94D049BB133111EBULL;
+        return z ^ (z >> 31);
+    }
+    size_t below(size_t n) { return static_cast<size_t>(next() % n); }
+};
+
+// k distinct positions of 0 .. n-1 (a partial Fisher-Yates shuffle of `scratch`)
+void draw_distinct(Stream& rng, size_t n, size_t k, std::vector<size_t>& scratch,
+                   std::vector<size_t>& out) {
+    scratch.resize(n);
+    std::iota(scratch.begin(), scratch.end(), size_t(0));
+    out.clear();
+    for (size_t i = 0; i < k; ++i) {
+        size_t j = i + rng.below(n - i);
+        std::swap(scratch[i], scratch[j]);
+        out.push_back(scratch[i]);
+    }
+}
+
+struct Builder {
+    const double* src_normals;   // (n, 3)
+    const double* src_offsets;   // (n,)
+    int64_t n_src;
+    size_t candidates, sample, axis_min;
+    double axis_imbalance, band_ulps;
+    Stream pool_rng, sample_rng;
+
+    // fragments: vertices concatenated (x, y, z), their starts, their source polygons
+    std::vector<double> verts;
+    std::vector<int64_t> frag_start, frag_source;
+    // nodes
+    std::vector<double> node_n, node_d;
+    std::vector<int64_t> front, back;
+    std::vector<std::vector<int64_t>> here;
+    int64_t splits = 0;
+
+    Builder(const double* V, const int64_t* start, int64_t n, const double* normals,
+            const double* offsets, size_t candidates_, size_t sample_, size_t axis_min_,
+            double axis_imbalance_, double band_ulps_, uint64_t seed)
+        : src_normals(normals), src_offsets(offsets), n_src(n), candidates(candidates_),
+          sample(sample_), axis_min(axis_min_), axis_imbalance(axis_imbalance_),
+          band_ulps(band_ulps_), pool_rng(seed * 2 + 1), sample_rng(seed * 2 + 2) {
+        verts.assign(V, V + 3 * start[n]);
+        frag_start.assign(start, start + n + 1);
+        frag_source.resize(n);
+        std::iota(frag_source.begin(), frag_source.end(), int64_t(0));
+    }
+
+    size_t count(int64_t f) const { return size_t(frag_start[f + 1] - frag_start[f]); }
+    const double* vertex(int64_t f, size_t i) const { return &verts[3 * (frag_start[f] + i)]; }
+
+    // side of vertex x for the plane n . x = d with the coplanar band, and n . x - d
+    int side(const double* x, const double* n, double d, double& s) const {
+        s = x[0] * n[0] + x[1] * n[1] + x[2] * n[2] - d;
+        double mag = std::fabs(x[0]) * std::fabs(n[0]) + std::fabs(x[1]) * std::fabs(n[1]) +
+                     std::fabs(x[2]) * std::fabs(n[2]) + std::fabs(d);
+        if (std::fabs(s) <= band_ulps * UNIT_ROUNDOFF * mag) return 0;
+        return s > 0 ? 1 : -1;
+    }
+
+    // whether fragment f has vertices in front (bit 1) and behind (bit 2) of a plane
+    int classify(int64_t f, const double* n, double d) const {
+        int has = 0;
+        double s;
+        for (size_t i = 0, k = count(f); i < k; ++i) {
+            int sg = side(vertex(f, i), n, d, s);
+            if (sg > 0) has |= 1;
+            else if (sg < 0) has |= 2;
+        }
+        return has;
+    }
+
+    // score 5 splits + |front - back| - 2 coplanar over fragments `frags`; imbalance too
+    void score(const std::vector<int64_t>& frags, const double* n, double d, int64_t& sc,
+               int64_t& imbalance) const {
+        int64_t nsplit = 0, nfront = 0, nback = 0, ncop = 0;
+        for (int64_t f : frags) {
+            int has = classify(f, n, d);
+            if (has == 3) ++nsplit;
+            else if (has == 1) ++nfront;
+            else if (has == 2) ++nback;
+            else ++ncop;
+        }
+        imbalance = std::llabs(nfront - nback);
+        sc = 5 * nsplit + imbalance - 2 * ncop;
+    }
+
+    // the split of fragment f (exactff.halfspace.split_polygon): new fragments, -1 for none
+    void split(int64_t f, const double* n, double d, int64_t& f_front, int64_t& f_back) {
+        size_t k = count(f);
+        std::vector<int> sg(k);
+        std::vector<double> s(k);
+        std::vector<double> fv, bv;
+        for (size_t i = 0; i < k; ++i) sg[i] = side(vertex(f, i), n, d, s[i]);
+        for (size_t i = 0; i < k; ++i) {
+            size_t j = (i + 1) % k;
+            const double* P = vertex(f, i);
+            if (sg[i] >= 0) fv.insert(fv.end(), P, P + 3);
+            if (sg[i] <= 0) bv.insert(bv.end(), P, P + 3);
+            if (sg[i] * sg[j] < 0) {
+                // from the front end point, so that a shared edge splits identically
+                size_t a = sg[i] > 0 ? i : j, b = sg[i] > 0 ? j : i;
+                const double* A = vertex(f, a);
+                const double* B = vertex(f, b);
+                double t = s[a] / (s[a] - s[b]);
+                double X[3] = {A[0] + t * (B[0] - A[0]), A[1] + t * (B[1] - A[1]),
+                               A[2] + t * (B[2] - A[2])};
+                fv.insert(fv.end(), X, X + 3);
+                bv.insert(bv.end(), X, X + 3);
+            }
+        }
+        ++splits;
+        int64_t source = frag_source[f];
+        auto add = [&](const std::vector<double>& pv) -> int64_t {
+            if (pv.size() < 9) return -1;
+            verts.insert(verts.end(), pv.begin(), pv.end());
+            frag_start.push_back(int64_t(verts.size() / 3));
+            frag_source.push_back(source);
+            return int64_t(frag_source.size()) - 1;
+        };
+        f_front = add(fv);
+        f_back = add(bv);
+    }
+
+    struct Item {
+        std::vector<int64_t> ids;
+        int64_t parent;
+        int child;
+    };
+
+    void build() {
+        std::vector<Item> stack;
+        {
+            Item root{std::vector<int64_t>(size_t(n_src)), -1, 0};
+            std::iota(root.ids.begin(), root.ids.end(), int64_t(0));
+            if (n_src > 0) stack.push_back(std::move(root));
+        }
+        std::vector<size_t> scratch, drawn;
+        std::vector<int64_t> pool, scored;
+        while (!stack.empty()) {
+            Item item = std::move(stack.back());
+            stack.pop_back();
+            const std::vector<int64_t>& ids = item.ids;
+            int64_t node = int64_t(node_d.size());
+            if (item.parent >= 0) (item.child > 0 ? front : back)[item.parent] = node;
+            front.push_back(-1);
+            back.push_back(-1);
+            size_t m = ids.size();
+            if (m == 1) {
+                // a leaf: the one fragment's own plane holds it
+                int64_t s = frag_source[ids[0]];
+                node_n.insert(node_n.end(), src_normals + 3 * s, src_normals + 3 * s + 3);
+                node_d.push_back(src_offsets[s]);
+                here.push_back({ids[0]});
+                continue;
+            }
+            // candidates: every fragment's plane, or the first and a random draw
+            pool.clear();
+            if (m <= candidates) {
+                pool = ids;
+            } else {
+                pool.push_back(ids[0]);
+                draw_distinct(pool_rng, m, candidates - 1, scratch, drawn);
+                for (size_t i : drawn) pool.push_back(ids[i]);
+            }
+            {
+                // keep the first of each (a fragment drawn twice)
+                std::vector<int64_t> unique;
+                for (int64_t f : pool)
+                    if (std::find(unique.begin(), unique.end(), f) == unique.end())
+                        unique.push_back(f);
+                pool.swap(unique);
+            }
+            // scored on every fragment, or on a sample at a larger node
+            const std::vector<int64_t>* on = &ids;
+            if (m > sample) {
+                draw_distinct(sample_rng, m, sample, scratch, drawn);
+                std::sort(drawn.begin(), drawn.end());
+                scored.clear();
+                for (size_t i : drawn) scored.push_back(ids[i]);
+                on = &scored;
+            }
+            size_t ms = on->size();
+            int64_t best = 0, best_imbalance = 0;
+            size_t j = 0;
+            for (size_t c = 0; c < pool.size(); ++c) {
+                int64_t s = frag_source[pool[c]], sc, imb;
+                score(*on, src_normals + 3 * s, src_offsets[s], sc, imb);
+                if (c == 0 || sc < best) {
+                    best = sc;
+                    best_imbalance = imb;
+                    j = c;
+                }
+            }
+            int64_t splitter = pool[j];
+            int64_t src = frag_source[splitter];
+            double n[3] = {src_normals[3 * src], src_normals[3 * src + 1],
+                           src_normals[3 * src + 2]};
+            double d = src_offsets[src];
+            bool own_plane = true;
+            if (m > axis_min && double(best_imbalance) > axis_imbalance * double(ms)) {
+                // a chain in the making: a plane through the median of the fragments'
+                // vertex means along their widest axis
+                std::vector<Vec3> cen(m);
+                Vec3 lo{HUGE_VAL, HUGE_VAL, HUGE_VAL}, hi{-HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
+                for (size_t i = 0; i < m; ++i) {
+                    size_t k = count(ids[i]);
+                    Vec3 c{0, 0, 0};
+                    for (size_t v = 0; v < k; ++v)
+                        for (int a = 0; a < 3; ++a) c[a] += vertex(ids[i], v)[a];
+                    for (int a = 0; a < 3; ++a) {
+                        c[a] /= double(k);
+                        lo[a] = std::min(lo[a], c[a]);
+                        hi[a] = std::max(hi[a], c[a]);
+                    }
+                    cen[i] = c;
+                }
+                int axis = 0;
+                for (int a = 1; a < 3; ++a)
+                    if (hi[a] - lo[a] > hi[axis] - lo[axis]) axis = a;
+                std::vector<double> x(m);
+                for (size_t i = 0; i < m; ++i) x[i] = cen[i][axis];
+                std::sort(x.begin(), x.end());
+                double med = m % 2 ? x[m / 2] : 0.5 * (x[m / 2 - 1] + x[m / 2]);
+                double na[3] = {0, 0, 0};
+                na[axis] = 1.0;
+                int64_t a_score, a_imb;
+                score(*on, na, med, a_score, a_imb);
+                if (a_score < best) {
+                    std::copy(na, na + 3, n);
+                    d = med;
+                    own_plane = false;
+                }
+            }
+            node_n.insert(node_n.end(), n, n + 3);
+            node_d.push_back(d);
+            // in the plane (or the splitter's own pieces), wholly in front, behind, split
+            std::vector<int64_t> in_plane, to_front, to_back, front_parts, back_parts;
+            for (int64_t f : ids) {
+                int has = classify(f, n, d);
+                if (has == 0 || (own_plane && frag_source[f] == src)) {
+                    in_plane.push_back(f);
+                } else if (has == 1) {
+                    to_front.push_back(f);
+                } else if (has == 2) {
+                    to_back.push_back(f);
+                } else {
+                    int64_t ff, fb;
+                    split(f, n, d, ff, fb);
+                    if (ff >= 0) front_parts.push_back(ff);
+                    if (fb >= 0) back_parts.push_back(fb);
+                }
+            }
+            here.push_back(std::move(in_plane));
+            to_front.insert(to_front.end(), front_parts.begin(), front_parts.end());
+            to_back.insert(to_back.end(), back_parts.begin(), back_parts.end());
+            // the front child is pushed first (the back one is built first), as in Python
+            if (!to_front.empty()) stack.push_back(Item{std::move(to_front), node, 1});
+            if (!to_back.empty()) stack.push_back(Item{std::move(to_back), node, -1});
+        }
+    }
+};
+
+template <typename T>
+py::array_t<T> as_array(const std::vector<T>& v) {
+    py::array_t<T> out(py::ssize_t(v.size()));
+    std::copy(v.begin(), v.end(), out.mutable_data());
+    return out;
+}
+
+// The tree as arrays: node normals (M, 3) and offsets (M,), front and back children
+// (-1 for none), each node's fragments (here_start (M + 1,) into here (H,)), and the
+// fragments the nodes hold, renumbered in node order: vertices (N, 3), starts (F + 1,),
+// source polygons (F,), whether each is its source polygon uncut (F,), and the number
+// of splits.
+py::tuple build_bsp_arrays(py::array_t<double, py::array::c_style | py::array::forcecast> V,
+                           py::array_t<int64_t, py::array::c_style | py::array::forcecast> start,
+                           py::array_t<double, py::array::c_style | py::array::forcecast> normals,
+                           py::array_t<double, py::array::c_style | py::array::forcecast> offsets,
+                           int64_t candidates, int64_t sample, int64_t axis_min,
+                           double axis_imbalance, double band_ulps, uint64_t seed) {
+    int64_t n = int64_t(start.size()) - 1;
+    if (n < 0 || normals.size() != 3 * n || offsets.size() != n ||
+        V.size() != 3 * start.data()[n])
+        throw std::invalid_argument("build_bsp_arrays: inconsistent array sizes");
+    if (candidates < 1 || sample < 1)
+        throw std::invalid_argument("build_bsp_arrays: candidates and sample must be >= 1");
+    Builder b(V.data(), start.data(), n, normals.data(), offsets.data(), size_t(candidates),
+              size_t(sample), size_t(axis_min), axis_imbalance, band_ulps, seed);
+    std::vector<int64_t> here_start{0}, here_flat, live_start{0}, live_source;
+    std::vector<uint8_t> whole;
+    std::vector<double> live_verts;
+    {
+        py::gil_scoped_release release;
+        b.build();
+        // keep only the fragments the nodes hold, numbered in node order
+        for (const auto& h : b.here) {
+            for (int64_t f : h) {
+                here_flat.push_back(int64_t(live_source.size()));
+                live_source.push_back(b.frag_source[f]);
+                whole.push_back(f < n);
+                live_verts.insert(live_verts.end(), b.verts.begin() + 3 * b.frag_start[f],
+                                  b.verts.begin() + 3 * b.frag_start[f + 1]);
+                live_start.push_back(int64_t(live_verts.size() / 3));
+            }
+            here_start.push_back(int64_t(here_flat.size()));
+        }
+    }
+    py::array_t<double> nn({py::ssize_t(b.node_d.size()), py::ssize_t(3)});
+    std::copy(b.node_n.begin(), b.node_n.end(), nn.mutable_data());
+    py::array_t<double> vv({py::ssize_t(live_verts.size() / 3), py::ssize_t(3)});
+    std::copy(live_verts.begin(), live_verts.end(), vv.mutable_data());
+    return py::make_tuple(nn, as_array(b.node_d), as_array(b.front), as_array(b.back),
+                          as_array(here_start), as_array(here_flat), vv, as_array(live_start),
+                          as_array(live_source), as_array(whole).attr("astype")("bool"),
+                          b.splits);
+}
+
+}  // namespace
+
+void register_bsp_build(py::module_& m) {
+    m.def("build_bsp_arrays", &build_bsp_arrays,
+          "The scene's BSP tree as arrays (exactff.visibility.bsp.build_bsp, "
+          "engine='compiled')");
+}
