@@ -23,6 +23,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdlib>
+#include <limits>
 #include <numeric>
 #include <vector>
 
@@ -31,7 +32,7 @@ namespace py = pybind11;
 namespace {
 
 using Vec3 = std::array<double, 3>;
-constexpr double UNIT_ROUNDOFF = 1.1102230246251565e-16;  // 2**-53
+constexpr double UNIT_ROUNDOFF = std::numeric_limits<double>::epsilon() / 2;
 
 // splitmix64: a small deterministic stream for the candidate and sample draws
 struct Stream {

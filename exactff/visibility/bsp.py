@@ -269,12 +269,9 @@ def _build_bsp_compiled(scene, candidates, seed):
 
     if not isinstance(seed, (int, np.integer)) or seed < 0:
         raise ValueError(f"seed must be a non-negative integer, got {seed!r}")
-    counts = np.array([len(P) for P in scene.polygons], dtype=np.int64)
-    start = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
-    V = (np.concatenate([np.asarray(P, dtype=float) for P in scene.polygons])
-         if len(counts) else np.zeros((0, 3)))
+    # the scene's polygons, concatenated (scene.offsets: polygon i's vertices start)
     (normals, offsets, front, back, here_start, here, Vf, frag_start, source, whole,
-     splits) = build_bsp_arrays(V, start, scene.normals, scene.plane_offsets, int(candidates),
+     splits) = build_bsp_arrays(scene.vertices, scene.offsets, scene.normals, scene.plane_offsets, int(candidates),
                                 tol.BSP_SCORE_SAMPLE, tol.BSP_AXIS_CANDIDATE_MIN,
                                 tol.BSP_AXIS_IMBALANCE, tol.BSP_COPLANAR_ULPS, int(seed))
     flat, bounds = here.tolist(), here_start.tolist()

@@ -1,9 +1,9 @@
 """The compiled visibility core: exact rows whose cost follows what they see.
 
-The BSP tree of :mod:`exactff.visibility.bsp` (its compiled build) orders the fragments front to back; the
-compiled core (``_svbsp.cpp``, C++ through pybind11) keeps the covered region as a
-shadow-volume BSP tree (planes through the point, Chin & Feiner 1989), filters each
-convex fragment down it, integrates the visible pieces with the sector form, and
+The BSP tree of :mod:`exactff.visibility.bsp` (its compiled build) orders the fragments
+front to back; the compiled core (``_svbsp.cpp``, C++ through pybind11) keeps the
+covered region as a shadow-volume BSP tree (planes through the point, Chin & Feiner
+1989), filters each convex fragment down it, integrates the visible pieces with the sector form, and
 skips every BSP subtree whose bounding box is already covered. The row runs without
 the GIL. Values whose bound misses the requested tolerance are recomputed by the
 Python engine (:func:`exactff.visibility.visible_form_factors`), which refines and
