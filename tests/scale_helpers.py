@@ -1,5 +1,6 @@
 """A method that records, per row, the process, the scene object it was given and
-whether that scene already held its BSP tree (importable by worker processes)."""
+whether that scene already held the BSP tree of the engine that computes the row (the
+compiled core's, or the Python engine's); importable by worker processes."""
 
 import os
 
@@ -15,7 +16,9 @@ class RecordingExact(Exact):
         self.log = log
 
     def point_form_factors(self, scene, point, normal, two_sided=False, **kw):
-        had = "bsp" in prepared(scene)
+        # the accelerator each engine builds once per scene: the compiled core (its BSP
+        # tree and subtree bounds) or the Python engine's BSP tree and buckets
+        had = ("compiled_core" if self.engine == "compiled" else "bsp") in prepared(scene)
         F = super().point_form_factors(scene, point, normal, two_sided=two_sided, **kw)
         with open(self.log, "a", encoding="utf-8") as fh:
             fh.write(f"{os.getpid()} {id(scene)} {int(had)} {point.tolist()}\n")
