@@ -179,8 +179,15 @@ def sides_of_point(N, D, p):
     v = N @ p - D
     bound = gamma(4) * (np.abs(N) @ np.abs(p) + np.abs(D))
     side = np.sign(v).astype(np.int8)
-    for k in np.flatnonzero(np.abs(v) <= bound):
-        side[k] = side_of_plane(p[None, :], N[k], D[k])[0]
+    unsure = np.flatnonzero(np.abs(v) <= bound)
+    if len(unsure):
+        # each distinct plane decided once: a point in a floor sees the planes of its
+        # coplanar fragments, one plane repeated at every node that holds one
+        planes, which = np.unique(np.column_stack([N[unsure], D[unsure]]), axis=0,
+                                  return_inverse=True)
+        decided = np.array([side_of_plane(p[None, :], q[:3], q[3])[0] for q in planes],
+                           dtype=np.int8)
+        side[unsure] = decided[which.ravel()]
     return side
 
 

@@ -1,0 +1,53 @@
+"""The exact side of a point for many planes (sides_of_point) against the sign of the
+plane's value in rational arithmetic, computed here from the floats directly."""
+
+from fractions import Fraction
+
+import numpy as np
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from exactff.predicates import sides_of_point
+
+
+def rational_sides(N, D, p):
+    out = []
+    for n, d in zip(N, D):
+        v = sum(Fraction(float(a)) * Fraction(float(b)) for a, b in zip(n, p)) - Fraction(float(d))
+        out.append((v > 0) - (v < 0))
+    return out
+
+
+def test_repeated_planes_through_the_point_are_each_decided_exactly():
+    # a point in a floor (z = 0.1 + 0.2, not 0.3): the floor's plane repeated at many
+    # nodes, as coplanar fragments give, some with -0.0 components, beside planes a few
+    # ulps off in either direction and a tilted one through the point to rounding
+    p = np.array([0.7, 0.1 + 0.2, 1.3])
+    up = np.array([0.0, 1.0, 0.0])
+    N = [up, -up, np.array([-0.0, 1.0, -0.0]), up, up, up]
+    D = [0.3, -0.3, 0.3, 0.1 + 0.2, np.nextafter(0.1 + 0.2, 1), np.nextafter(0.1 + 0.2, 0)]
+    tilt = np.array([0.6, 0.8, 0.0])
+    N += [tilt] * 3
+    D += [float(tilt @ p)] * 3
+    N, D = np.array(N * 40), np.array(D * 40)
+    got = sides_of_point(N, D, p)
+    assert got.tolist() == rational_sides(N, D, p)
+    # every kind of answer occurs: the check is not one-sided
+    assert {-1, 0, 1} <= set(got.tolist())
+
+
+coords = st.floats(-4, 4, allow_nan=False).map(lambda x: round(x, 2))
+
+
+@settings(deadline=None)
+@given(p=st.tuples(coords, coords, coords), picks=st.lists(st.integers(0, 5), min_size=1,
+                                                           max_size=30))
+def test_sides_of_point_are_the_rational_signs(p, picks):
+    # planes through grid points near p, so that many values are within rounding of 0
+    p = np.array(p)
+    base = np.array([[1.0, 0, 0], [0, 1.0, 0], [0, 0, 1.0], [0.6, 0.8, 0], [0, 0.28, 0.96],
+                     [1 / 3, 2 / 3, 2 / 3]])
+    N = base[picks]
+    D = np.array([float(n @ (p + 0.1 * k)) if k % 2 else float(n @ p)
+                  for k, n in zip(picks, N)])
+    assert sides_of_point(N, D, p).tolist() == rational_sides(N, D, p)
