@@ -9,8 +9,11 @@ from hypothesis import strategies as st
 
 from exactff.predicates import sides_of_point
 
+from common import examples
+
 
 def rational_sides(N, D, p):
+    """The sign of ``N[k] . p - D[k]`` for each plane k, from the floats as rationals."""
     out = []
     for n, d in zip(N, D):
         v = sum(Fraction(float(a)) * Fraction(float(b)) for a, b in zip(n, p)) - Fraction(float(d))
@@ -19,9 +22,10 @@ def rational_sides(N, D, p):
 
 
 def test_repeated_planes_through_the_point_are_each_decided_exactly():
-    # a point in a floor (z = 0.1 + 0.2, not 0.3): the floor's plane repeated at many
-    # nodes, as coplanar fragments give, some with -0.0 components, beside planes a few
-    # ulps off in either direction and a tilted one through the point to rounding
+    # a point in a floor (y = 0.1 + 0.2, not 0.3): the floor's plane repeated at many
+    # nodes, as coplanar fragments give, some with -0.0 components, beside planes an ulp
+    # off in either direction, a tilted one through the point to rounding, and planes
+    # far from it (decided by floats, between the others)
     p = np.array([0.7, 0.1 + 0.2, 1.3])
     up = np.array([0.0, 1.0, 0.0])
     N = [up, -up, np.array([-0.0, 1.0, -0.0]), up, up, up]
@@ -29,6 +33,8 @@ def test_repeated_planes_through_the_point_are_each_decided_exactly():
     tilt = np.array([0.6, 0.8, 0.0])
     N += [tilt] * 3
     D += [float(tilt @ p)] * 3
+    N += [up, tilt]
+    D += [5.0, -2.0]
     N, D = np.array(N * 40), np.array(D * 40)
     got = sides_of_point(N, D, p)
     assert got.tolist() == rational_sides(N, D, p)
@@ -37,17 +43,18 @@ def test_repeated_planes_through_the_point_are_each_decided_exactly():
 
 
 coords = st.floats(-4, 4, allow_nan=False).map(lambda x: round(x, 2))
+BASE = np.array([[1.0, 0, 0], [0, 1.0, 0], [0, 0, 1.0], [0.6, 0.8, 0], [0, 0.28, 0.96],
+                 [1 / 3, 2 / 3, 2 / 3]])
 
 
-@settings(deadline=None)
-@given(p=st.tuples(coords, coords, coords), picks=st.lists(st.integers(0, 5), min_size=1,
-                                                           max_size=30))
-def test_sides_of_point_are_the_rational_signs(p, picks):
-    # planes through grid points near p, so that many values are within rounding of 0
+@settings(max_examples=examples(60))
+@given(p=st.tuples(coords, coords, coords),
+       planes=st.lists(st.tuples(st.integers(0, len(BASE) - 1), st.integers(-3, 3)),
+                       min_size=1, max_size=30))
+def test_sides_of_point_are_the_rational_signs(p, planes):
+    # planes through p (offset 0: their float offsets are within rounding of it) or
+    # through p shifted by a few hundredths along any of the normals
     p = np.array(p)
-    base = np.array([[1.0, 0, 0], [0, 1.0, 0], [0, 0, 1.0], [0.6, 0.8, 0], [0, 0.28, 0.96],
-                     [1 / 3, 2 / 3, 2 / 3]])
-    N = base[picks]
-    D = np.array([float(n @ (p + 0.1 * k)) if k % 2 else float(n @ p)
-                  for k, n in zip(picks, N)])
+    N = BASE[[k for k, _ in planes]]
+    D = np.array([float(n @ (p + 0.01 * shift * n)) for n, (_, shift) in zip(N, planes)])
     assert sides_of_point(N, D, p).tolist() == rational_sides(N, D, p)
