@@ -1,8 +1,7 @@
 """Issue 33: bounds that hold on every path (no silent zero, NaN or clamp).
 
 Each test here failed before its fix; the references are independent of the kernels
-(closed forms evaluated with mpmath, or an independent construction of the scene). A
-strict xfail marks a miss found and not yet fixed: it fails the run once the bound holds.
+(closed forms evaluated with mpmath, or an independent construction of the scene).
 """
 
 import mpmath as mp
@@ -310,19 +309,23 @@ def test_two_sided_is_the_option_and_one_sided_is_deprecated():
 
 
 # ---------------------------------------------------------------------------------------
-# known miss: the offset form's rounding of the point's offset is not in the estimate
+# the offset form's rounding of the point's offset is in the estimate
 # ---------------------------------------------------------------------------------------
-@pytest.mark.xfail(strict=True, reason="the point kernel's estimate leaves out the rounding "
-                   "of the vertices' offsets from the point (A0 = Q0 - p, E = Q - Q0); "
-                   "here it moves a vertex 7.6e-4 from the point by 5e-17")
-def test_point_kernel_estimate_covers_a_point_near_an_edge_in_its_horizon():
+NEAR_EDGE = (np.array([[1.0, 1.0, 0.0], [1.0, 0.0, 0.0], [1.0, 0.0, 1.0], [1.0, 1.0, 1.0]]),
+             np.array([0.9996199694573367, 0.0007600610853263808, 0.0]))
+
+
+@pytest.mark.parametrize("tolerance", [None, 1e-12])
+def test_point_kernel_estimate_covers_a_point_near_an_edge_in_its_horizon(tolerance):
     # the square x = 1 seen from 3.8e-4 before it, its edge z = 0 in the point's
-    # horizon plane: the value is 0.426100134642847 (40 digits); the kernel gave
-    # 0.4261001346428431 with an estimate of 1.4e-15
+    # horizon plane: 0.426100134642847 (40 digits). The double sums gave
+    # 0.4261001346428431 with an estimate of 1.4e-15: the rounding of Q0 - p moves the
+    # vertex 7.6e-4 from the point by 5e-17, which the estimate left out
     from exactff.testing.mp_reference import boundary_form_factor
 
-    Q = np.array([[1.0, 1.0, 0.0], [1.0, 0.0, 0.0], [1.0, 0.0, 1.0], [1.0, 1.0, 1.0]])
-    x = np.array([0.9996199694573367, 0.0007600610853263808, 0.0])
+    Q, x = NEAR_EDGE
     n = np.array([0.0, 0.0, 1.0])
-    F, E = ef.point_polygon_form_factor(x, n, Q, error=True)
+    F, E = ef.point_polygon_form_factor(x, n, Q, error=True, tolerance=tolerance)
     assert abs(F - float(boundary_form_factor(x, n, Q, dps=40))) <= E
+    if tolerance is not None:
+        assert E <= tolerance * F        # the long double tier meets it

@@ -207,7 +207,7 @@ def point_values(X, nP, Qs):
     lens = np.repeat(ks, nX)
     offsets = np.concatenate([[0], np.cumsum(lens)])
     owner, nxt = owners(offsets), successors(offsets)
-    S, mags, errs = clipped_sector_sums(A0, E, nxt, owner, m * nX)
+    S, mags, errs = clipped_sector_sums(A0, E, nxt, owner, m * nX, rounded_offsets=True)
     # the sector sums' own error model (C1 is calibrated for the unit roundoff 2**-53)
     return (np.abs(S).reshape(m, nX) / (2.0 * np.pi),
             ((tol.C1 * tol.EPS * mags + errs) / (2.0 * np.pi)).reshape(m, nX))

@@ -30,7 +30,8 @@ def extended_values(flat, ids, p, n_raw, d0, one_sided):
     first = V[starts]
     A0 = rotate(first - p.astype(ld), R)
     E = rotate(V - first[owner], R)
-    S, mags, errs = clipped_sector_sums(A0, E, nxt, owner, len(ids), eps=tol.LONGDOUBLE_EPS)
+    S, mags, errs = clipped_sector_sums(A0, E, nxt, owner, len(ids), eps=tol.LONGDOUBLE_EPS,
+                                        rounded_offsets=True)
     F, err = sector_values(S, mags, errs, d0, one_sided, eps=tol.LONGDOUBLE_EPS)
     return F.astype(float), err.astype(float)
 

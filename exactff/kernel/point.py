@@ -93,7 +93,8 @@ def unoccluded_row(flat, p, n, *, one_sided=True, tolerance=None,
     local_id = np.full(N, -1)
     local_id[ids] = np.arange(len(ids))
     owner = local_id[owner_all]
-    S, mags, errs = clipped_sector_sums(A0_all[ids], E, nxt, owner, len(ids))
+    S, mags, errs = clipped_sector_sums(A0_all[ids], E, nxt, owner, len(ids),
+                                        rounded_offsets=True)
     F[ids], err[ids] = sector_values(S, mags, errs, -side[ids].astype(float), one_sided,
                                unchecked=band[ids])
     # p within rounding of the polygon's plane (its side decided exactly): the double
