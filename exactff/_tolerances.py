@@ -75,6 +75,7 @@ __all__ = [
     "VIEW3D_EMISSIVITY_RANGE",
     "VIEW3D_ZERO_COORDINATE",
     "C2",
+    "OFFSET_ROUNDING_ULPS",
     "LONGDOUBLE_EPS",
     "AREA_FAR",
     "TANH_SINH_LEVEL",
@@ -395,6 +396,13 @@ CLIP_MEET_ULPS = 8.0
 #: ulps per unit of the cross product's condition number).
 C1 = 10.0
 C2 = 10.0
+
+#: The offsets' rounding in that estimate (``kernel.sector._offset_rounding``): a
+#: vertex's position from the point is off by at most this many ulps of
+#: ``|A0| + |E_i|`` (the differences rounded once per coordinate, then rotated: about
+#: 6.2, the frame's own rounding folded in); the cosines along an edge are good to as
+#: many ulps.
+OFFSET_ROUNDING_ULPS = 8.0
 
 #: Unit roundoff of the platform's long double (2**-64 for x87 80-bit extended; equal to
 #: EPS where long double is double, and the second tier of the ladder is then skipped).

@@ -114,10 +114,11 @@ def _offset_rounding(A0, E, nxt, owner, eps):
     The offsets are differences of the float input (from the point, and from the first
     vertex), each coordinate rounded once, then rotated to the local frame by a matrix
     of unit rows: a vertex's position ``A0 + E_i`` is off its true value by at most
-    ``eta_i = gamma_8 (|A0| + |E_i|)`` (the differences' rounding, the rotation's
-    gamma_3 per coordinate, and the frame's own rounding). A boundary point at distance
-    r moved by eta turns its direction by at most ``arcsin(eta / r)``, at most
-    ``1.01 eta / r`` where ``eta / r <= 0.1``, ``(pi / 2) eta / r`` else; an edge's image
+    ``eta_i = gamma_8 (|A0| + |E_i|)`` (8: ``OFFSET_ROUNDING_ULPS``, for the differences'
+    rounding, the rotation's gamma_3 per coordinate and the frame's own rounding). A
+    boundary point at distance r moved by eta turns its direction by at most
+    ``arcsin(eta / r)``, at most ``1.01 eta / r`` where ``eta / r <= 0.1``,
+    ``(pi / 2) eta / r`` else; an edge's image
     then sweeps a solid angle of at most that times ``int dtheta / r``. Along the edge's
     line, with h its distance from the point and phi the angle from the line's
     direction, ``r = h / sin(phi)`` and ``dtheta = dphi``, so the integral is
@@ -128,20 +129,21 @@ def _offset_rounding(A0, E, nxt, owner, eps):
     factor, eta_e its ends' larger eta. Edges wholly below the horizon by more than
     eta sweep nothing above it. An edge whose line passes within eta of the point gets
     4 pi, the whole range of a sum: its value is left to the higher tiers."""
-    g = 8 * eps / (1 - 8 * eps)
-    norm = lambda v: np.sqrt(np.einsum("ij,ij->i", v, v))
-    size = norm(E) + norm(A0)[owner]
+    ulps = tol.OFFSET_ROUNDING_ULPS
+    g = ulps * eps / (1 - ulps * eps)          # gamma_8
+    size = np.linalg.norm(E, axis=1) + np.linalg.norm(A0, axis=1)[owner]
     eta = g * np.maximum(size, size[nxt])
     a = A0[owner] + E
     b = A0[owner] + E[nxt]
     d = b - a
-    la, lb, ld = norm(a), norm(b), norm(d)
+    la, lb, ld = (np.linalg.norm(v, axis=1) for v in (a, b, d))
     with np.errstate(divide="ignore", invalid="ignore"):
-        h = norm(np.cross(a, b)) / ld
+        h = np.linalg.norm(np.cross(a, b), axis=1) / ld
         # the angle phi runs over the edge: cos(phi) is d . v / (|d| |v|) at its ends
-        # (each to a few roundings: 8 eps more, at most 2)
+        # (each to a few roundings: OFFSET_ROUNDING_ULPS more, at most 2)
         span = np.minimum(np.abs(np.einsum("ij,ij->i", d, b) / (ld * lb)
-                                 - np.einsum("ij,ij->i", d, a) / (ld * la)) + 8 * eps, 2.0)
+                                 - np.einsum("ij,ij->i", d, a) / (ld * la)) + ulps * eps,
+                          2.0)
         turn = np.where(eta <= 0.1 * h, 1.01, np.pi / 2)
         moved = np.where(h > eta, 2 * eta * turn * span / h, 4 * np.pi)
     reach = np.maximum(a[:, 2], b[:, 2]) + eta >= 0
