@@ -33,6 +33,9 @@ namespace {
 
 using Vec3 = std::array<double, 3>;
 constexpr double UNIT_ROUNDOFF = std::numeric_limits<double>::epsilon() / 2;
+using LD = long double;
+// the unit roundoff of long double (that of double where the two are one type)
+constexpr LD LD_ROUNDOFF = std::numeric_limits<LD>::epsilon() / 2;
 
 // splitmix64: a small deterministic stream for the candidate and sample draws
 struct Stream {
@@ -70,6 +73,12 @@ struct Builder {
 
     // fragments: vertices concatenated (x, y, z), their starts, their source polygons
     std::vector<double> verts;
+    // per vertex, a bound on its distance from the point it stands for (0 for the
+    // input's; a crossing's from its rounding, its ends' and its plane's: crossing_error)
+    std::vector<double> vert_err;
+    // per source polygon, a bound on how far its plane (normal, offset) passes from its
+    // vertices (the plane's own rounding, at the polygon: where it can be seen to split)
+    std::vector<double> plane_dev;
     std::vector<int64_t> frag_start, frag_source;
     // nodes
     std::vector<double> node_n, node_d;
@@ -84,6 +93,15 @@ struct Builder {
           sample(sample_), axis_min(axis_min_), axis_imbalance(axis_imbalance_),
           band_ulps(band_ulps_), pool_rng(seed * 2 + 1), sample_rng(seed * 2 + 2) {
         verts.assign(V, V + 3 * start[n]);
+        vert_err.assign(size_t(start[n]), 0.0);
+        plane_dev.assign(size_t(n), 0.0);
+        for (int64_t s = 0; s < n; ++s) {
+            for (int64_t i = start[s]; i < start[s + 1]; ++i) {
+                LD mag;
+                const LD r = distance_ld(V + 3 * i, normals + 3 * s, offsets[s], mag);
+                plane_dev[s] = std::max(plane_dev[s], double(std::fabs(r) + 8 * LD_ROUNDOFF * mag));
+            }
+        }
         frag_start.assign(start, start + n + 1);
         frag_source.resize(n);
         std::iota(frag_source.begin(), frag_source.end(), int64_t(0));
@@ -91,6 +109,48 @@ struct Builder {
 
     size_t count(int64_t f) const { return size_t(frag_start[f + 1] - frag_start[f]); }
     const double* vertex(int64_t f, size_t i) const { return &verts[3 * (frag_start[f] + i)]; }
+    double vertex_error(int64_t f, size_t i) const { return vert_err[frag_start[f] + i]; }
+
+    // n . x - d in long double, and the magnitude of its terms (its rounding is within
+    // 4 long double roundoffs of that)
+    static LD distance_ld(const double* x, const double* n, double d, LD& mag) {
+        LD s = LD(x[0]) * n[0] + LD(x[1]) * n[1] + LD(x[2]) * n[2] - d;
+        mag = std::fabs(LD(x[0]) * n[0]) + std::fabs(LD(x[1]) * n[1]) +
+              std::fabs(LD(x[2]) * n[2]) + std::fabs(LD(d));
+        return s;
+    }
+
+    // the crossing of the edge from A (front) to B (behind) with the plane n . x = d:
+    // X = A + t (B - A), t = s_a / (s_a - s_b), in long double and rounded once to
+    // double; returns a bound on |X - X*|, where X* is the crossing of the edge the ends
+    // stand for (within eA and eB of them) with the plane the splitter stands for (within
+    // `dev` of n . x = d at the splitter). Off the plane the long double X is out by at
+    // most the distances' rounding, the ends' errors and dev (w); the parameter's error
+    // moves it along the edge by w |B - A| / |s_a - s_b|; the interpolation adds 3
+    // roundoffs of |A| + |B - A| per coordinate; X* moves by at most the larger end
+    // error; rounding to double adds u |X|. First order, with a margin.
+    static double crossing(const double* A, const double* B, const double* n, double d,
+                           double eA, double eB, double dev, double* X) {
+        LD mag_a, mag_b;
+        const LD sa = distance_ld(A, n, d, mag_a), sb = distance_ld(B, n, d, mag_b);
+        const LD t = sa / (sa - sb);
+        LD len = 0, size = 0;
+        double norm2 = 0;
+        for (int k = 0; k < 3; ++k) {
+            const LD e = LD(B[k]) - A[k];
+            X[k] = double(A[k] + t * e);
+            len += e * e;
+            size += std::fabs(LD(A[k])) + std::fabs(e);
+            norm2 += X[k] * X[k];
+        }
+        const LD w = 6 * LD_ROUNDOFF * (mag_a + mag_b) + eA + eB + dev +
+                     4 * LD_ROUNDOFF * std::fabs(sa);
+        const LD gap = std::fabs(sa - sb);
+        const LD slide = gap > 0 ? w * std::sqrt(len) / gap : LD(HUGE_VAL);
+        const LD e = w + slide + 4 * std::sqrt(LD(3)) * LD_ROUNDOFF * size + std::max(eA, eB) +
+                     UNIT_ROUNDOFF * std::sqrt(LD(norm2));
+        return double(1.01L * e);
+    }
 
     // side of vertex x for the plane n . x = d with the coplanar band, and n . x - d
     int side(const double* x, const double* n, double d, double& s) const {
@@ -129,40 +189,50 @@ struct Builder {
     }
 
     // the split of fragment f (exactff.halfspace.split_polygon): new fragments, -1 for none
-    void split(int64_t f, const double* n, double d, int64_t& f_front, int64_t& f_back) {
+    void split(int64_t f, const double* n, double d, double dev, int64_t& f_front,
+               int64_t& f_back) {
         size_t k = count(f);
         std::vector<int> sg(k);
         std::vector<double> s(k);
-        std::vector<double> fv, bv;
+        std::vector<double> fv, bv, fe, be;
         for (size_t i = 0; i < k; ++i) sg[i] = side(vertex(f, i), n, d, s[i]);
         for (size_t i = 0; i < k; ++i) {
             size_t j = (i + 1) % k;
             const double* P = vertex(f, i);
-            if (sg[i] >= 0) fv.insert(fv.end(), P, P + 3);
-            if (sg[i] <= 0) bv.insert(bv.end(), P, P + 3);
+            if (sg[i] >= 0) {
+                fv.insert(fv.end(), P, P + 3);
+                fe.push_back(vertex_error(f, i));
+            }
+            if (sg[i] <= 0) {
+                bv.insert(bv.end(), P, P + 3);
+                be.push_back(vertex_error(f, i));
+            }
             if (sg[i] * sg[j] < 0) {
                 // from the front end point, so that a shared edge splits identically
                 size_t a = sg[i] > 0 ? i : j, b = sg[i] > 0 ? j : i;
                 const double* A = vertex(f, a);
                 const double* B = vertex(f, b);
-                double t = s[a] / (s[a] - s[b]);
-                double X[3] = {A[0] + t * (B[0] - A[0]), A[1] + t * (B[1] - A[1]),
-                               A[2] + t * (B[2] - A[2])};
+                double X[3];
+                const double e = crossing(A, B, n, d, vertex_error(f, a), vertex_error(f, b),
+                                          dev, X);
                 fv.insert(fv.end(), X, X + 3);
                 bv.insert(bv.end(), X, X + 3);
+                fe.push_back(e);
+                be.push_back(e);
             }
         }
         ++splits;
         int64_t source = frag_source[f];
-        auto add = [&](const std::vector<double>& pv) -> int64_t {
+        auto add = [&](const std::vector<double>& pv, const std::vector<double>& pe) -> int64_t {
             if (pv.size() < 9) return -1;
             verts.insert(verts.end(), pv.begin(), pv.end());
+            vert_err.insert(vert_err.end(), pe.begin(), pe.end());
             frag_start.push_back(int64_t(verts.size() / 3));
             frag_source.push_back(source);
             return int64_t(frag_source.size()) - 1;
         };
-        f_front = add(fv);
-        f_back = add(bv);
+        f_front = add(fv, fe);
+        f_back = add(bv, be);
     }
 
     struct Item {
@@ -241,6 +311,7 @@ struct Builder {
                            src_normals[3 * src + 2]};
             double d = src_offsets[src];
             bool own_plane = true;
+            double dev = plane_dev[size_t(src)];
             if (m > axis_min && double(best_imbalance) > axis_imbalance * double(ms)) {
                 // a chain in the making: a plane through the median of the fragments'
                 // vertex means along their widest axis
@@ -272,6 +343,7 @@ struct Builder {
                 if (a_score < best) {
                     std::copy(na, na + 3, n);
                     d = med;
+                    dev = 0;   // an axis plane is exact: it stands for itself
                     own_plane = false;
                 }
             }
@@ -289,7 +361,7 @@ struct Builder {
                     to_back.push_back(f);
                 } else {
                     int64_t ff, fb;
-                    split(f, n, d, ff, fb);
+                    split(f, n, d, dev, ff, fb);
                     if (ff >= 0) front_parts.push_back(ff);
                     if (fb >= 0) back_parts.push_back(fb);
                 }
@@ -314,8 +386,9 @@ py::array_t<T> as_array(const std::vector<T>& v) {
 // The tree as arrays: node normals (M, 3) and offsets (M,), front and back children
 // (-1 for none), each node's fragments (here_start (M + 1,) into here (H,)), and the
 // fragments the nodes hold, renumbered in node order: vertices (N, 3), starts (F + 1,),
-// source polygons (F,), whether each is its source polygon uncut (F,), and the number
-// of splits.
+// source polygons (F,), whether each is its source polygon uncut (F,), the number
+// of splits, and per vertex a bound on its distance from the exact point it stands for
+// (N,): 0 for the input's, else a crossing's (Builder::crossing_error).
 py::tuple build_bsp_arrays(py::array_t<double, py::array::c_style | py::array::forcecast> V,
                            py::array_t<int64_t, py::array::c_style | py::array::forcecast> start,
                            py::array_t<double, py::array::c_style | py::array::forcecast> normals,
@@ -332,7 +405,7 @@ py::tuple build_bsp_arrays(py::array_t<double, py::array::c_style | py::array::f
               size_t(sample), size_t(axis_min), axis_imbalance, band_ulps, seed);
     std::vector<int64_t> here_start{0}, here_flat, live_start{0}, live_source;
     std::vector<uint8_t> whole;
-    std::vector<double> live_verts;
+    std::vector<double> live_verts, live_err;
     {
         py::gil_scoped_release release;
         b.build();
@@ -344,6 +417,8 @@ py::tuple build_bsp_arrays(py::array_t<double, py::array::c_style | py::array::f
                 whole.push_back(f < n);
                 live_verts.insert(live_verts.end(), b.verts.begin() + 3 * b.frag_start[f],
                                   b.verts.begin() + 3 * b.frag_start[f + 1]);
+                live_err.insert(live_err.end(), b.vert_err.begin() + b.frag_start[f],
+                                b.vert_err.begin() + b.frag_start[f + 1]);
                 live_start.push_back(int64_t(live_verts.size() / 3));
             }
             here_start.push_back(int64_t(here_flat.size()));
@@ -356,7 +431,7 @@ py::tuple build_bsp_arrays(py::array_t<double, py::array::c_style | py::array::f
     return py::make_tuple(nn, as_array(b.node_d), as_array(b.front), as_array(b.back),
                           as_array(here_start), as_array(here_flat), vv, as_array(live_start),
                           as_array(live_source), as_array(whole).attr("astype")("bool"),
-                          b.splits);
+                          b.splits, as_array(live_err));
 }
 
 }  // namespace

@@ -251,6 +251,8 @@ struct ExactPlane {
     // the plane's identity for the row's cache of exact tests: kind 0, the distinct
     // input points a and b are (their ids, see Core::uid_); kind 1, -1 - its index
     int64_t ua = -1, ub = -1;
+    // kind 0: the part of err that is the input points' own errors (Core::input_tilt)
+    R tilt = 0;
 };
 
 struct Vertex {
@@ -271,6 +273,9 @@ struct Vertex {
     double vd[3] = {0, 0, 0};  // v, length and err rounded to double: the
     double lengthd = 0;        // classification's filter (see Core::process)
     double errd = 0;
+    R gerr = 0;  // bound on the angle off the planes of its two edges that the input's
+                 // own errors add (a BSP crossing is rounded): the geometry's, not the
+                 // computation's, so it moves values (Core::charge_edges), not decisions
 };
 
 inline void set_double(Vertex& u) {
@@ -416,9 +421,11 @@ class Core {
          py::array_t<int64_t, py::array::c_style | py::array::forcecast> here_start,
          py::array_t<int64_t, py::array::c_style | py::array::forcecast> here_front,
          py::array_t<int64_t, py::array::c_style | py::array::forcecast> here_behind,
-         int64_t n_sources, double band, double c1, double c2, double split)
+         int64_t n_sources, double band, double c1, double c2, double split,
+         py::array_t<double, py::array::c_style | py::array::forcecast> vertex_errors)
         : n_sources_(n_sources) {
         copy(vertices, V_);
+        copy(vertex_errors, VE_);
         copy(start, start_);
         copy(count, count_);
         copy(source, source_);
@@ -432,7 +439,7 @@ class Core {
             static_cast<int64_t>(here_start_.size()) != M + 1)
             throw std::invalid_argument("inconsistent BSP arrays");
         if (V_.size() % 3 != 0 || start_.size() != count_.size() ||
-            source_.size() != count_.size())
+            source_.size() != count_.size() || VE_.size() != V_.size() / 3)
             throw std::invalid_argument("inconsistent fragment arrays");
         K_.eps = std::numeric_limits<R>::epsilon() / 2;
         K_.band = band;
@@ -841,7 +848,36 @@ class Core {
         return true;
     }
 
-    // the sector form of one convex piece above the horizon: its value and bound
+    // a bound on the angle at p between input point i's direction and that of the exact
+    // point it stands for (a BSP split's crossing is rounded: VE_[i] bounds its
+    // distance), with `length` its distance from p: asin(r) <= 1.01 r for r <= 0.1,
+    // else any angle (pi)
+    R input_error(int64_t i, R length) const {
+        const R e = VE_[static_cast<size_t>(i)];
+        if (e == 0) return 0;
+        const R r = e / length;
+        return r <= static_cast<R>(0.1) ? static_cast<R>(1.01) * r
+                                        : static_cast<R>(3.14159265358979323846L);
+    }
+
+    // a bound on the angle by which the plane through p and input points a, b turns off
+    // the one through the exact points they stand for, over the wedge between them (the
+    // part of the plane where it bounds a shadow): each direction of the wedge is a mean
+    // of the two ends', so it moves by at most the sum of their angles (0 for input
+    // points that are exact)
+    R input_tilt(int64_t ia, int64_t ib, const double* pp) const {
+        const size_t a = static_cast<size_t>(ia), b = static_cast<size_t>(ib);
+        if (VE_[a] == 0 && VE_[b] == 0) return 0;
+        auto length = [&](size_t i) {
+            const R x = static_cast<R>(V_[3 * i]) - pp[0], y = static_cast<R>(V_[3 * i + 1]) - pp[1],
+                    z = static_cast<R>(V_[3 * i + 2]) - pp[2];
+            return std::sqrt(x * x + y * y + z * z);
+        };
+        const R t = input_error(ia, length(a)) + input_error(ib, length(b));
+        return t <= static_cast<R>(0.1) ? static_cast<R>(1.01) * t
+                                        : static_cast<R>(3.14159265358979323846L);
+    }
+
     // the sector form of one convex piece above the horizon, in offset form (as
     // exactff.kernel.clipped_sector_sums): each edge's plane as
     // m = a0 x (e_b - e_a) + e_a x e_b with a0 the first vertex's direction and e the
@@ -901,8 +937,8 @@ class Core {
             // from that edge's plane (a crossing slides along it, which moves nothing)
             auto off = [&](const Vertex& u, size_t k) {
                 if (refined) return (*refined)[k];
-                if (a.edge >= 0 && u.id < 0 && u.on_edge == a.edge) return u.err_line;
-                return u.err;
+                if (a.edge >= 0 && u.id < 0 && u.on_edge == a.edge) return u.err_line + u.gerr;
+                return u.err + u.gerr;
             };
             const R charge = arc(a, b) * std::max(off(a, i), off(b, (i + 1) % m)) / pi;
             total += charge;
@@ -998,11 +1034,12 @@ class Core {
             const Vertex& u = q[i];
             if (u.id >= 0) {
                 for (int k = 0; k < 3; ++k) v[i][k] = static_cast<Quad>(V_[3 * u.id + k]) - pp[k];
-                err[i] = 4 * static_cast<R>(QUAD_EPS);  // the differences' rounding, if any
+                // the differences' rounding, if any, and the point's own (a BSP crossing)
+                err[i] = 4 * static_cast<R>(QUAD_EPS) + u.gerr;
                 continue;
             }
             v[i] = {static_cast<Quad>(u.v.x), static_cast<Quad>(u.v.y), static_cast<Quad>(u.v.z)};
-            err[i] = std::max(u.err, u.err_line);
+            err[i] = std::max(u.err, u.err_line) + u.gerr;
             const int64_t e1 = q[(i + m - 1) % m].edge, e2 = u.edge;
             if (e1 == e2) continue;
             Quad d[3];
@@ -1043,6 +1080,8 @@ class Core {
                 e = static_cast<R>(8 * QUAD_EPS * (c1 + c2 + 1) * (l1 * l2 / dl));
             }
             e += 2 * static_cast<R>(QUAD_EPS);  // and the scaling below
+            // the input's own errors (BSP crossings) hold for the refined direction too
+            e += u.gerr;
             if (!(e < err[i])) continue;
             if (d[0] * v[i][0] + d[1] * v[i][1] + d[2] * v[i][2] < 0)
                 for (int k = 0; k < 3; ++k) d[k] = -d[k];
@@ -1205,7 +1244,9 @@ class Core {
                 const R vk = k == 0 ? v.x : (k == 1 ? v.y : v.z);
                 exact = exact && (vk - hi == lo);
             }
-            q.push_back({w, v, norm(v), exact ? static_cast<R>(0) : 2 * K_.eps, i, -1, -1, i});
+            const R length = norm(v);
+            q.push_back({w, v, length, exact ? static_cast<R>(0) : 2 * K_.eps, i, -1, -1, i});
+            q.back().gerr = input_error(i, length);
             set_double(q.back());
         }
         work.clear();
@@ -1343,6 +1384,8 @@ class Core {
                             std::max(x.err * x.length, y.err * y.length) / l;
                     cut[i] = {V3{0, 0, 0}, v, l, err, -1, -1, -1, -1};
                     set_double(cut[i]);
+                    // off the true plane by its tilt; off the true edge's by its ends'
+                    cut[i].gerr = xp[static_cast<size_t>(P.exact)].tilt + std::max(x.gerr, y.gerr);
                     // the parameter along the input edge the piece's edge i -> j lies on
                     const Vertex& xi = w.q[i];
                     const Vertex& yj = w.q[j];
@@ -1440,11 +1483,13 @@ class Core {
                 const int64_t ia = a.edge;
                 const int64_t ib = start_[f] + (ia - start_[f] + 1) % count_[f];
                 mm = input_plane(pp, &V_[3 * ia], &V_[3 * ib]);
+                // its rounding; the input points' own errors (BSP crossings) apart
+                const R tilt = input_tilt(ia, ib, pp);
                 err = 8 * K_.eps;
                 exact = static_cast<int>(xp.size());
                 xp.push_back({0, {V_[3 * ia], V_[3 * ia + 1], V_[3 * ia + 2]},
                               {V_[3 * ib], V_[3 * ib + 1], V_[3 * ib + 2]}, mm, err,
-                              uid_[ia], uid_[ib]});
+                              uid_[ia], uid_[ib], tilt});
             } else {
                 exact = static_cast<int>(-1 - a.edge);
                 mm = xp[exact].m;
@@ -1507,6 +1552,7 @@ class Core {
 
     int64_t n_sources_;
     std::vector<double> V_;
+    std::vector<double> VE_;  // per input point, a bound on its distance from the exact one
     std::vector<int64_t> uid_;  // distinct input point of each vertex
     std::vector<int64_t> start_, count_, source_, front_, back_, here_start_, here_front_,
         here_behind_;
@@ -1529,7 +1575,8 @@ PYBIND11_MODULE(_svbsp, m) {
                       py::array_t<int64_t, py::array::c_style | py::array::forcecast>,
                       py::array_t<int64_t, py::array::c_style | py::array::forcecast>,
                       py::array_t<int64_t, py::array::c_style | py::array::forcecast>,
-                      int64_t, double, double, double, double>())
+                      int64_t, double, double, double, double,
+                      py::array_t<double, py::array::c_style | py::array::forcecast>>())
         .def("row", &Core::row)
         .def_property_readonly("nodes", &Core::nodes)
         .def_property_readonly("pieces", &Core::pieces)

@@ -36,11 +36,17 @@ class BSPTree:
     whole : ndarray of shape (F,), bool
         Whether each fragment is its source polygon, uncut (the same vertices in the
         same order).
+    vertex_errors : list of ndarray of shape (K,), or None
+        Per fragment vertex, a bound on its distance from the exact point it stands for:
+        0 for an input vertex, the rounding of a split's crossing (and of the splitting
+        plane) for the others. The compiled build's; None for the Python build, whose
+        engine leaves the crossings' rounding out of its bounds.
     """
 
     def __init__(self, normals, offsets, front, back, node_fragments, fragments, source, splits,
-                 source_normals, whole=None):
+                 source_normals, whole=None, vertex_errors=None):
         self.normals = normals
+        self.vertex_errors = vertex_errors
         self.whole = (np.ones(len(fragments), dtype=bool) if whole is None
                       else np.asarray(whole, dtype=bool))
         self.offsets = offsets
@@ -271,14 +277,15 @@ def _build_bsp_compiled(scene, candidates, seed):
         raise ValueError(f"seed must be a non-negative integer, got {seed!r}")
     # the scene's polygons, concatenated (scene.offsets: polygon i's vertices start)
     (normals, offsets, front, back, here_start, here, Vf, frag_start, source, whole,
-     splits) = build_bsp_arrays(scene.vertices, scene.offsets, scene.normals, scene.plane_offsets, int(candidates),
+     splits, Ef) = build_bsp_arrays(scene.vertices, scene.offsets, scene.normals, scene.plane_offsets, int(candidates),
                                 tol.BSP_SCORE_SAMPLE, tol.BSP_AXIS_CANDIDATE_MIN,
                                 tol.BSP_AXIS_IMBALANCE, tol.BSP_COPLANAR_ULPS, int(seed))
     flat, bounds = here.tolist(), here_start.tolist()
     node_frags = [flat[a:b] for a, b in zip(bounds[:-1], bounds[1:])]
     fragments = np.split(Vf, frag_start[1:-1]) if len(source) else []
+    errors = np.split(Ef, frag_start[1:-1]) if len(source) else []
     return BSPTree(normals, offsets, front, back, node_frags, fragments, source, int(splits),
-                   scene.normals, whole=whole)
+                   scene.normals, whole=whole, vertex_errors=errors)
 
 
 def scene_bsp(scene):

@@ -148,13 +148,17 @@ def _build_core(scene):
     offsets = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
     convex = (_convex_rings(np.concatenate(tree.fragments), offsets, frag_normals)
               if len(counts) else np.zeros(0, bool))
-    pieces, n_pieces = [], np.ones(len(counts), dtype=np.int64)
+    pieces, errors, n_pieces = [], [], np.ones(len(counts), dtype=np.int64)
+    fragment_errors = (tree.vertex_errors if tree.vertex_errors is not None
+                       else [np.zeros(len(P)) for P in tree.fragments])
     for f, P in enumerate(tree.fragments):
         if convex[f]:
             pieces.append(P)
+            errors.append(fragment_errors[f])
             continue
         parts = convex_pieces(P, frag_normals[f])
         pieces.extend(parts)
+        errors.extend(_piece_vertex_errors(P, fragment_errors[f], parts, frag_normals[f]))
         n_pieces[f] = len(parts)
     first = np.concatenate([[0], np.cumsum(n_pieces)]).astype(np.int64)
     count = np.array([len(q) for q in pieces], dtype=np.int64)
@@ -172,8 +176,23 @@ def _build_core(scene):
     core = Core(vertices, start, count, source, tree.front.astype(np.int64),
                 tree.back.astype(np.int64), here_start, expand(tree.node_fragments),
                 expand(tree.node_fragments_behind), len(scene), tol.SVBSP_BAND,
-                tol.C1, tol.C2, tol.SVBSP_SPLIT_ULPS)
+                tol.C1, tol.C2, tol.SVBSP_SPLIT_ULPS,
+                np.concatenate(errors) if errors else np.zeros(0))
     return tree, core
+
+
+def _piece_vertex_errors(P, errors, parts, normal):
+    """Per vertex of the convex pieces of fragment ``P``, a bound on its distance from the
+    exact point it stands for: a vertex of ``P`` keeps its own (``errors``); one that
+    repairing a self-touching ring lifted onto the plane gets the fragment's largest
+    plus the lifting's rounding (16 ulps of its coordinates, scaled by the slope of the
+    plane over the coordinate plane it was lifted from)."""
+    own = {tuple(v): e for v, e in zip(P.tolist(), np.asarray(errors).tolist())}
+    axis = int(np.argmax(np.abs(normal)))
+    slope = 1 + np.abs(normal).sum() / abs(normal[axis])
+    worst = float(np.max(errors)) if len(errors) else 0.0
+    return [np.array([own.get(tuple(v), worst + 16 * tol.EPS * slope * np.abs(v).sum())
+                      for v in Q.tolist()]) for Q in parts]
 
 
 def _shadow_tiles(n):

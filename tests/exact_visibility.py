@@ -1,0 +1,271 @@
+"""The visible part of a polygon from a point, constructed in rational arithmetic, and its
+form factor in mpmath: an independent reference for occluded values.
+
+The scene's float coordinates are taken as exact rationals. The occluders are clipped to
+the cone from the point over the target (planes through the point and the target's
+edges) and to the slab between the point and the target's plane, projected centrally
+onto that plane, and subtracted from the target one convex shadow at a time; every step
+is exact, so the visible pieces are exact. Their form factor is the contour form of the
+unoccluded point-to-polygon factor (Lambert), evaluated at ``dps`` digits from the
+rational vertices. Nothing here calls exactff's kernels or predicates.
+
+A target that is not exactly planar (rounded after a rotation, say) is taken as its
+image, the spherical polygon of its vertices' directions, as the engines integrate it:
+its vertices are projected centrally onto a plane along its Newell normal. Occluders
+wholly between the point and the target's thickness hide their whole image; only one
+that reaches into the target's range needs both to be exactly planar (it is clipped in
+3-D). Where the construction does not apply (non-convex images, or those cases), the
+functions return None: undecided.
+"""
+
+from fractions import Fraction
+
+import mpmath
+
+
+def _rational(v):
+    return tuple(Fraction(float(c)) for c in v)
+
+
+def _sub(a, b):
+    return tuple(x - y for x, y in zip(a, b))
+
+
+def _dot(a, b):
+    return sum(x * y for x, y in zip(a, b))
+
+
+def _cross(a, b):
+    return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
+
+
+def _clip(poly, f):
+    """The part of a convex polygon where the linear function ``f`` is >= 0
+    (Sutherland-Hodgman against one half-space)."""
+    out = []
+    for k in range(len(poly)):
+        a, b = poly[k], poly[(k + 1) % len(poly)]
+        fa, fb = f(a), f(b)
+        if fa >= 0:
+            out.append(a)
+        if (fa > 0 > fb) or (fa < 0 < fb):
+            t = fa / (fa - fb)
+            out.append(tuple(x + t * (y - x) for x, y in zip(a, b)))
+    return out
+
+
+def _area2(poly):
+    """Twice the signed area of a polygon in the plane."""
+    m = len(poly)
+    return sum(poly[k][0] * poly[(k + 1) % m][1] - poly[(k + 1) % m][0] * poly[k][1]
+               for k in range(m))
+
+
+def _newell(poly):
+    """Newell's normal of a polygon (exact), or None if it is zero."""
+    normal = (Fraction(0),) * 3
+    for k in range(len(poly)):
+        normal = tuple(x + y for x, y in
+                       zip(normal, _cross(poly[k], poly[(k + 1) % len(poly)])))
+    return None if normal == (0, 0, 0) else normal
+
+
+def _plane(poly):
+    """A normal of an exactly planar polygon (Newell's), or None if it is not planar."""
+    normal = _newell(poly)
+    if normal is None or any(_dot(normal, _sub(v, poly[0])) != 0 for v in poly):
+        return None
+    return normal
+
+
+def _convex(poly2):
+    turns = set()
+    for k in range(len(poly2)):
+        a, b, c = poly2[k], poly2[(k + 1) % len(poly2)], poly2[(k + 2) % len(poly2)]
+        turn = (b[0] - a[0]) * (c[1] - b[1]) - (b[1] - a[1]) * (c[0] - b[0])
+        if turn != 0:
+            turns.add(turn > 0)
+    return len(turns) <= 1
+
+
+def _left_of(a, b):
+    """The linear function >= 0 on the left of the directed line ``a -> b``."""
+    return lambda v: (b[0] - a[0]) * (v[1] - a[1]) - (b[1] - a[1]) * (v[0] - a[0])
+
+
+def _target_frame(T, P):
+    """The plane ``m . x = m . T[0]`` (Newell's normal m of the target) that images are
+    projected on, the point's offset from it, and the target's half-thickness about it
+    (0 for an exactly planar target); None if the point lies within that thickness."""
+    m = _newell(T)
+    if m is None:
+        return None
+    height = _dot(m, _sub(T[0], P))
+    slab = max(abs(_dot(m, _sub(v, T[0]))) for v in T)
+    if abs(height) <= slab:
+        return None
+    return m, height, slab
+
+
+def _facing(scene, P, j):
+    return _dot(_rational(scene.normals[j]), _sub(P, _rational(scene.polygons[j][0]))) > 0
+
+
+def _in_front_on_a_tie(scene, P, j, target):
+    a, b = _facing(scene, P, j), _facing(scene, P, target)
+    return a and not b or (a == b and j < target)
+
+
+def visible_pieces(scene, point, target, exclude=()):
+    """The part of polygon ``target``'s image visible from ``point``: a list of convex
+    polygons with rational 3-D vertices on the target's plane (or, for a target that is
+    not exactly planar, on the plane its image is projected on: the same image), empty if
+    none is visible; None if undecided.
+
+    An occluder wholly between the point and the target (beyond the target's thickness)
+    hides its whole image; one that reaches into that range is clipped to the cone over
+    the target and to the near side of its plane, where both are exactly planar (its part
+    in the target's plane hides by exactff's rule for depth ties); any other case is
+    undecided. Polygons in ``exclude`` do not occlude."""
+    P = _rational(point)
+    T = [_rational(v) for v in scene.polygons[target]]
+    frame = _target_frame(T, P)
+    if frame is None:
+        return None
+    m, height, slab = frame
+    axis = max(range(3), key=lambda i: abs(m[i]))
+    keep = [i for i in range(3) if i != axis]
+
+    def depth(v):
+        # 0 at the point, 1 on the target's plane, along the plane's normal
+        return _dot(m, _sub(v, P)) / height
+
+    def image(v):
+        # central projection onto the target's plane, in its 2-D coordinates
+        g = depth(v)
+        return tuple(p + (x - p) / g for p, x in zip(P, v))
+
+    def flat(v):
+        return (v[keep[0]], v[keep[1]])
+
+    def lift(q):
+        # the point of the target's plane over the 2-D point q
+        v = [Fraction(0)] * 3
+        v[keep[0]], v[keep[1]] = q
+        v[axis] = (_dot(m, T[0]) - m[keep[0]] * q[0] - m[keep[1]] * q[1]) / m[axis]
+        return tuple(v)
+
+    if any(depth(v) <= 0 for v in T):
+        return None
+    target2 = [flat(image(v)) for v in T]
+    if not _convex(target2):
+        return None
+    if _area2(target2) < 0:
+        target2 = target2[::-1]
+    near, far = 1 - slab / abs(height), 1 + slab / abs(height)
+    planar = slab == 0
+    # the cone from the point over the target: one half-space per edge
+    centroid = tuple(sum(c) / len(T) for c in zip(*T))
+    cone = []
+    for k in range(len(T)):
+        w = _cross(_sub(T[k], P), _sub(T[(k + 1) % len(T)], P))
+        s = 1 if _dot(w, _sub(centroid, P)) > 0 else -1
+        cone.append(lambda v, w=w, s=s: s * _dot(w, _sub(v, P)))
+    pieces = [target2]
+    for j, polygon in enumerate(scene.polygons):
+        if j == target or j in exclude or not pieces:
+            continue
+        V = [_rational(v) for v in polygon]
+        g = [depth(v) for v in V]
+        if all(x <= 0 for x in g) or all(x > far for x in g):
+            continue                     # behind the point, or beyond the target
+        if not all(0 < x < near for x in g):
+            # it reaches the target's range: clip it in 3-D, both planes exact
+            plane = _plane(V)
+            if not planar or plane is None:
+                return None
+            # strictly on the point's side of the target's plane
+            V = _clip(V, lambda v: height * _dot(m, _sub(T[0], v)))
+            for half in cone:
+                if len(V) < 3:
+                    break
+                V = _clip(V, half)
+            if len(V) < 3:
+                continue
+            if all(_dot(m, _sub(v, T[0])) == 0 for v in V):
+                # in the target's plane: a depth tie (exactff.predicates.tie_priority's
+                # rule, restated: a polygon whose front faces the point is in front of
+                # one whose back does; else the first in input order)
+                if not _in_front_on_a_tie(scene, P, j, target):
+                    continue
+            if _dot(plane, _sub(V[0], P)) == 0:
+                continue                 # edge-on from the point: no image of area
+        shadow = [flat(image(v)) for v in V]
+        a = _area2(shadow)
+        if a == 0:
+            continue
+        if not _convex(shadow):
+            return None
+        if a < 0:
+            shadow = shadow[::-1]
+        # subtract the convex shadow: for each piece, its parts outside each edge
+        remaining = []
+        for piece in pieces:
+            rest = piece
+            for k in range(len(shadow)):
+                left = _left_of(shadow[k], shadow[(k + 1) % len(shadow)])
+                outside = _clip(rest, lambda v, left=left: -left(v))
+                if len(outside) >= 3 and _area2(outside) > 0:
+                    remaining.append(outside)
+                rest = _clip(rest, left)
+                if len(rest) < 3 or _area2(rest) == 0:
+                    break
+        pieces = remaining
+    return [[lift(q) for q in piece] for piece in pieces]
+
+
+def polygon_form_factor_mp(point, normal, polygon, dps=60):
+    """The unoccluded form factor from ``point`` (unit ``normal``) to a convex planar
+    polygon in front of the point's plane, from rational vertices: the contour form
+    ``F = |sum_i gamma_i n . (R_i x R_i+1) / |R_i x R_i+1|| / (2 pi)``."""
+    with mpmath.workdps(dps):
+        def mp(v):
+            return [mpmath.mpf(c.numerator) / c.denominator for c in v]
+        P, n = mp(_rational(point)), [mpmath.mpf(float(c)) for c in normal]
+        R = [[x - p for x, p in zip(mp(v), P)] for v in polygon]
+        total = mpmath.mpf(0)
+        for k in range(len(R)):
+            a, b = R[k], R[(k + 1) % len(R)]
+            c = [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+            norm = mpmath.sqrt(sum(x * x for x in c))
+            if norm == 0:
+                continue
+            gamma = mpmath.atan2(norm, sum(x * y for x, y in zip(a, b)))
+            total += gamma * sum(x * y for x, y in zip(n, c)) / norm
+        return abs(total) / (2 * mpmath.pi)
+
+
+def visible_form_factor(scene, point, normal, target, two_sided=False, exclude=(), dps=60):
+    """The form factor from ``point`` to the visible part of polygon ``target``, as an
+    mpmath number, or None if undecided; ``two_sided`` as in exactff (else the target
+    counts only where its front, by ``scene.normals``, faces the point)."""
+    P, n = _rational(point), _rational(normal)
+    T = [_rational(v) for v in scene.polygons[target]]
+    frame = _target_frame(T, P)
+    if frame is None:
+        return None
+    m = frame[0]
+    if _dot(m, _rational(scene.normals[target])) < 0:
+        m = tuple(-c for c in m)
+    if _dot(m, _sub(P, T[0])) < 0 and not two_sided:
+        return mpmath.mpf(0)              # the point is behind the target
+    pieces = visible_pieces(scene, point, target, exclude)
+    if pieces is None:
+        return None
+    front_of_point = lambda v: _dot(n, _sub(v, P))
+    total = mpmath.mpf(0)
+    for piece in pieces:
+        piece = _clip(piece, front_of_point)
+        if len(piece) >= 3:
+            total += polygon_form_factor_mp(point, normal, piece, dps)
+    return total
