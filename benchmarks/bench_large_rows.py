@@ -15,7 +15,8 @@ machine is noisy: compare the ratios):
   first desk cell: ms per row of ``Hemicube(resolution=256)`` and of the
   compiled core alone (``Exact(tolerance=None)``), their ratio, and how many polygons
   each row sees (nonzero exact values) and the core's counters (visible pieces,
-  fragments culled).
+  fragments culled, and the row's working memory: ``stats["working_bytes"]``, its own
+  containers at their largest beyond the n-long results, per visible piece).
 """
 
 import argparse
@@ -66,8 +67,8 @@ def main():
     hemi = ef.Hemicube(resolution=256)
     core = ef.Exact(tolerance=None)
     print("| row | hemicube-256 ms | core ms | core / hemicube | polygons seen | visible pieces "
-          "| fragments culled |")
-    print("|---|---|---|---|---|---|---|")
+          "| fragments culled | working memory (KiB) | bytes / visible piece |")
+    print("|---|---|---|---|---|---|---|---|---|")
     t_h_all = []
     ratios = []
     for i in rows:
@@ -80,7 +81,10 @@ def main():
         ratios.append(t_c / t_h)
         label = f"{i} (floor)" if i == under else str(i)
         print(f"| {label} | {1e3 * t_h:.0f} | {1e3 * t_c:.0f} | {t_c / t_h:.2f} | {seen} | "
-              f"{st.get('visible_pieces', 0)} | {st.get('fragments_culled', 0)} |", flush=True)
+              f"{st.get('visible_pieces', 0)} | {st.get('fragments_culled', 0)} | "
+              f"{st.get('working_bytes', 0) / 1024:.0f} | "
+              f"{st.get('working_bytes', 0) / max(st.get('visible_pieces', 0), 1):.0f} |",
+              flush=True)
     med = float(np.median(t_h_all))
     print(f"\nset-up of the compiled engine (compiled_core, its BSP included): {t_core:.2f} s, "
           f"{t_core / med:.1f} median hemicube rows (the Python engine's BSP: {t_bsp:.2f} s, "

@@ -148,3 +148,30 @@ def test_tiny_polygon_through_a_tiny_gap_keeps_its_value(monkeypatch):
         # the visible part is the gap's central projection: the same form factor, to the
         # default tolerance (1e-12 relative)
         assert gap > 0 and abs(F[-1] - gap) <= 1e-12 * gap, (shortcuts, F[-1], gap)
+
+
+def test_subtrees_behind_the_tangent_plane_are_left_out():
+    # from a floor point facing down, the whole office lies on or behind its tangent
+    # plane (y >= 0): the compiled core culls the root's box, every value is 0 exactly
+    # (and the Python engine, which overlays what it must, agrees)
+    scene = ef.scenes.office(600)
+    i = next(k for k, n in enumerate(scene.normals) if n[1] > 0.99 and
+             np.all(scene.polygons[k][:, 1] == 0))
+    p, n = scene.centroids[i], -scene.normals[i]
+    st = {}
+    F = Exact(tolerance=None, engine="compiled").point_form_factors(scene, p, n, stats=st)
+    assert np.all(F == 0)
+    assert st["fragments"] == 0 and st["fragments_culled"] > 0
+    assert np.all(Exact(engine="python").point_form_factors(scene, p, n) == 0)
+    # a quad below the floor is in front of the point: the root's box now reaches past
+    # the tangent plane, the tree is entered, and the quad gets its unoccluded value
+    below = rect_xy(p[0] - 0.5, p[0] + 0.5, p[2] - 0.5, p[2] + 0.5, 0.0)[:, [0, 2, 1]]
+    below[:, 1] = -0.5
+    if (np.cross(below[1] - below[0], below[2] - below[0]) @ [0, 1, 0]) < 0:
+        below = below[::-1].copy()
+    more = ef.Scene.from_polygons(list(scene.polygons) + [below])
+    st = {}
+    G = Exact(tolerance=None, engine="compiled").point_form_factors(more, p, n, stats=st)
+    U = ef.point_polygon_form_factors(p, n, [below])[0]
+    assert st["fragments"] > 0
+    assert np.all(G[:-1] == 0) and G[-1] == pytest.approx(U, rel=1e-13) and U > 0

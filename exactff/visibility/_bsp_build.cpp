@@ -124,31 +124,33 @@ struct Builder {
     // X = A + t (B - A), t = s_a / (s_a - s_b), in long double and rounded once to
     // double; returns a bound on |X - X*|, where X* is the crossing of the edge the ends
     // stand for (within eA and eB of them) with the plane the splitter stands for (within
-    // `dev` of n . x = d at the splitter). Off the plane the long double X is out by at
-    // most the distances' rounding, the ends' errors and dev (w); the parameter's error
-    // moves it along the edge by w |B - A| / |s_a - s_b|; the interpolation adds 3
-    // roundoffs of |A| + |B - A| per coordinate; X* moves by at most the larger end
-    // error; rounding to double adds u |X|. First order, with a margin.
+    // `dev` of n . x = d at the splitter). To first order, moving the line by d (at most
+    // the larger end error) and the plane by w along its normal (the long double
+    // distances' rounding, the quotient's, and dev) moves the crossing within the plane by
+    // at most (|d| + w) / sin(beta), beta the edge's angle with the plane
+    // (|d_t| + |d_n + w| cot(beta), by Cauchy-Schwarz); the interpolation adds 3
+    // roundoffs of |A| + |B - A| per coordinate, the rounding to double u |X|.
     static double crossing(const double* A, const double* B, const double* n, double d,
                            double eA, double eB, double dev, double* X) {
         LD mag_a, mag_b;
         const LD sa = distance_ld(A, n, d, mag_a), sb = distance_ld(B, n, d, mag_b);
         const LD t = sa / (sa - sb);
-        LD len = 0, size = 0;
+        LD len = 0, size = 0, nn = 0;
         double norm2 = 0;
         for (int k = 0; k < 3; ++k) {
             const LD e = LD(B[k]) - A[k];
             X[k] = double(A[k] + t * e);
             len += e * e;
+            nn += LD(n[k]) * n[k];
             size += std::fabs(LD(A[k])) + std::fabs(e);
             norm2 += X[k] * X[k];
         }
-        const LD w = 6 * LD_ROUNDOFF * (mag_a + mag_b) + eA + eB + dev +
-                     4 * LD_ROUNDOFF * std::fabs(sa);
-        const LD gap = std::fabs(sa - sb);
-        const LD slide = gap > 0 ? w * std::sqrt(len) / gap : LD(HUGE_VAL);
-        const LD e = w + slide + 4 * std::sqrt(LD(3)) * LD_ROUNDOFF * size + std::max(eA, eB) +
-                     UNIT_ROUNDOFF * std::sqrt(LD(norm2));
+        // 1 / sin(beta) = |n| |B - A| / |s_a - s_b| (with the distances' rounding)
+        const LD w = 6 * LD_ROUNDOFF * (mag_a + mag_b) + dev + 4 * LD_ROUNDOFF * std::fabs(sa);
+        const LD gap = std::fabs(sa - sb) - 6 * LD_ROUNDOFF * (mag_a + mag_b);
+        const LD steep = gap > 0 ? std::sqrt(len * nn) / gap : LD(HUGE_VAL);
+        const LD e = (std::max(eA, eB) + w / std::sqrt(nn)) * std::max(LD(1), steep) +
+                     4 * std::sqrt(LD(3)) * LD_ROUNDOFF * size + UNIT_ROUNDOFF * std::sqrt(LD(norm2));
         return double(1.01L * e);
     }
 

@@ -356,6 +356,7 @@ class PointCache {
             if (k.a == a && k.b == b && k.x == x) return k.on;
         }
     }
+    size_t bytes() const { return keys_.capacity() * sizeof(Key); }
     void insert(int64_t a, int64_t b, int64_t x, bool on) {
         if (2 * (used_ + 1) > keys_.size()) grow();
         size_t i = slot(a, b, x);
@@ -408,6 +409,8 @@ struct RowStats {
             node_visits = 0,   // shadow-tree nodes a piece was classified at
             near_tests = 0,    // vertices within the band of such a plane
             exact_tests = 0;   // exact tests of an input point decided (not cached)
+    int64_t held = 0, held_peak = 0;  // vertices in the filter's work list, now and at most
+    int64_t working_bytes = 0;  // the row's own containers at their largest (Core::run)
 };
 
 class Core {
@@ -526,6 +529,7 @@ class Core {
         d["exact_tests"] = st.exact_tests;
         d["quad_pieces"] = st.quad_pieces;
         d["unattributed_bound"] = static_cast<double>(st.unattributed);
+        d["working_bytes"] = st.working_bytes;
         return py::make_tuple(F, E, B, d);
     }
 
@@ -808,6 +812,31 @@ class Core {
         return std::atan2(norm(cross(a.v, b.v)), dot(a.v, b.v));
     }
 
+    // is subtree k's box wholly in the closed half-space behind the point's tangent
+    // plane, n . (x - p) <= 0 at every corner (exactly)? Then nothing in it is in front,
+    // and it hides nothing in front: a part in the tangent plane has no image of area
+    // (the box test below cannot say so for a box that touches the plane, as every
+    // subtree under a floor point's own floor does)
+    bool box_behind(int64_t k, const double* pp, const double* pn) const {
+        for (int i = 0; i < 8; ++i) {
+            const double c[3] = {i & 1 ? hi_[3 * k] : lo_[3 * k],
+                                 i & 2 ? hi_[3 * k + 1] : lo_[3 * k + 1],
+                                 i & 4 ? hi_[3 * k + 2] : lo_[3 * k + 2]};
+            R d = 0, mag = 0;
+            for (int a = 0; a < 3; ++a) {
+                const R t = (static_cast<R>(c[a]) - pp[a]) * pn[a];
+                d += t;
+                mag += std::fabs(t);
+            }
+            // the filter (the differences and products within 2 roundoffs each, the
+            // sum within 3 of the magnitudes), then the exact sign
+            if (d < -8 * K_.eps * mag) continue;
+            if (d > 8 * K_.eps * mag) return false;
+            if (sign(dot_exact(pn, pp, c)) > 0) return false;
+        }
+        return true;
+    }
+
     // is the conic hull (from p) of the box's corners wholly in covered leaves?
     bool box_hidden(const std::vector<Plane>& sv, int64_t k, const V3& p,
                     int64_t budget) const {
@@ -943,11 +972,13 @@ class Core {
             const R charge = arc(a, b) * std::max(off(a, i), off(b, (i + 1) % m)) / pi;
             total += charge;
             if (!record) continue;
-            if (a.id >= 0 && b.id >= 0) {  // an input edge: on the fragment's boundary
+            if (a.id >= 0 && b.id >= 0 && a.gerr == 0 && b.gerr == 0) {
+                // an input edge of the scene's: on its polygon's boundary
                 E[src] += charge;
                 continue;
             }
-            // a cut edge: keyed by its ends, in a fixed order
+            // a cut edge, or one a BSP split made (two fragments of one polygon share
+            // it): keyed by its ends, in a fixed order
             const Vertex* lo = &a;
             const Vertex* hi = &b;
             if (lex_less(hi->v, lo->v)) std::swap(lo, hi);
@@ -1198,7 +1229,7 @@ class Core {
             }
             if (cull && size_[k] >= 4) {
                 ++st.box_tests;
-                if (box_hidden(sv, k, p, budget)) {
+                if (box_behind(k, pp, pn) || box_hidden(sv, k, p, budget)) {
                     ++st.subtrees_culled;
                     st.fragments_culled += size_[k];
                     continue;
@@ -1212,6 +1243,17 @@ class Core {
         }
         for (const auto& [key, e] : st.edges)
             if (e.count == 1) E[e.src] += e.charge;
+        // what the row held beyond its n-long results: the shadow tree and its exact
+        // planes, the traversal's stack, the work list's pieces at their most, the edge
+        // charges and the exact tests' cache (containers only grow during a row, so their
+        // capacities are their peaks)
+        st.working_bytes = static_cast<int64_t>(
+            sv.capacity() * sizeof(Plane) + xp.capacity() * sizeof(ExactPlane) +
+            stack.capacity() * sizeof(Item) + work.capacity() * sizeof(Work) +
+            static_cast<size_t>(st.held_peak) * sizeof(Vertex) +
+            st.edges.bucket_count() * sizeof(void*) +
+            st.edges.size() * (sizeof(EdgeKey) + sizeof(EdgeCharge) + 2 * sizeof(void*)) +
+            st.on_plane.bytes());
         // a visible sliver whose shadow was left out may wrongly show any later piece
         // behind it: its area goes to every receiving polygon's band bound
         if (st.unattributed > 0)
@@ -1251,6 +1293,7 @@ class Core {
         }
         work.clear();
         work.push_back({std::move(q), 0, true});
+        st.held = static_cast<int64_t>(work.back().q.size());
         // the first step enters the root from a virtual link
         bool first = true;
         // each step's signs, distances and crossings (reused: no allocation per step)
@@ -1262,6 +1305,9 @@ class Core {
         while (!work.empty()) {
             W w = std::move(work.back());
             work.pop_back();
+            // vertices held by the work list (with this piece): for the row's peak
+            st.held_peak = std::max(st.held_peak, st.held);
+            st.held -= static_cast<int64_t>(w.q.size());
             int node;
             if (first) {
                 node = 0;
@@ -1354,10 +1400,12 @@ class Core {
             }
             if (!neg) {  // in front (or in the plane: either side)
                 work.push_back({std::move(w.q), node, true});
+                st.held += static_cast<int64_t>(work.back().q.size());
                 continue;
             }
             if (!pos) {
                 work.push_back({std::move(w.q), node, false});
+                st.held += static_cast<int64_t>(work.back().q.size());
                 continue;
             }
             ++st.splits;
@@ -1433,7 +1481,9 @@ class Core {
                 return out;
             };
             work.push_back({part(-1), node, false});
+            st.held += static_cast<int64_t>(work.back().q.size());
             work.push_back({part(1), node, true});
+            st.held += static_cast<int64_t>(work.back().q.size());
         }
     }
 

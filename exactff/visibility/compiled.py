@@ -256,7 +256,9 @@ def compiled_form_factors(scene, point, normal, *, two_sided=False, stats=None,
         ``exact_tests`` (exact tests of an input point decided, not found in the row's
         cache), ``quad_pieces`` (integrated again in
         quadruple precision), ``unattributed_bound`` (visible slivers whose shadows were
-        left out), ``max_error_estimate`` and ``max_band_bound``; after a fallback,
+        left out), ``working_bytes`` (the row's own containers at their largest: its
+        shadow tree, exact planes, work list, edge charges and cache, beyond the
+        n-long results), ``max_error_estimate`` and ``max_band_bound``; after a fallback,
         ``compiled_missed`` and the Python engine's counters.
     shortcuts : bool, default True
         False disables the convex-scene path and the culling of subtrees (results do
