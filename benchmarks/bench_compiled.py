@@ -7,7 +7,8 @@ row of ``Hemicube(resolution=256)`` (the in-run baseline), of the compiled core 
 (``tolerance=None``: no fallback), of ``Exact(engine="compiled")`` at the default
 tolerance (falls back to the Python engine where a bound misses it) and of the Python
 engine; the set-up (BSP tree, then the core's convex pieces and boxes); and rows per
-second with one and two threads (compiled core alone; the row runs without the GIL).
+second with one and two threads (compiled core alone; the row runs without the GIL; best
+of three runs each).
 """
 
 import argparse
@@ -22,7 +23,7 @@ import exactff as ef
 from exactff.visibility import compiled_core, scene_bsp
 
 sys.path.insert(0, os.path.dirname(__file__))
-from scenes_bench import machine, timed  # noqa: E402
+from scenes_bench import best_of, machine, timed  # noqa: E402
 
 
 
@@ -59,11 +60,12 @@ def main():
         core = methods["core alone"]
         work = [int(i) for i in rows] * 2
         run = lambda i: core.point_form_factors(scene, scene.centroids[i], scene.normals[i])
-        _, t1 = timed(lambda: [run(i) for i in work])
+        # best of three each (the machine is shared: a short run is easily disturbed)
+        t1 = best_of(lambda: [run(i) for i in work])
         with ThreadPoolExecutor(2) as pool:
-            _, t2 = timed(lambda: list(pool.map(run, work)))
-        print(f"threads: 1: {len(work) / t1:.2f} rows/s, 2: {len(work) / t2:.2f} rows/s, "
-              f"ratio {t1 / t2:.2f}")
+            t2 = best_of(lambda: list(pool.map(run, work)))
+        print(f"threads (best of 3 runs of {len(work)} rows): 1: {len(work) / t1:.2f} rows/s, "
+              f"2: {len(work) / t2:.2f} rows/s, ratio {t1 / t2:.2f}")
 
 
 if __name__ == "__main__":

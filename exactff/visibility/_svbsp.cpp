@@ -954,8 +954,11 @@ class Core {
     // each edge's share of the error of its ends' directions: its arc length times the
     // larger of their bounds, over pi (the area swept by moving the edge that far); with
     // `refined`, the bounds of the directions Core::refine gave the piece instead
+    // (and in *geometric, if given, the part of that total the input's own errors make:
+    // what no recomputation can narrow)
     R charge_edges(const Piece& q, int64_t src, std::vector<R>& E, RowStats& st,
-                   const std::vector<R>* refined = nullptr, bool record = true) const {
+                   const std::vector<R>* refined = nullptr, bool record = true,
+                   R* geometric = nullptr) const {
         const R pi = 3.14159265358979323846264338327950288L;
         const size_t m = q.size();
         R total = 0;
@@ -969,8 +972,10 @@ class Core {
                 if (a.edge >= 0 && u.id < 0 && u.on_edge == a.edge) return u.err_line + u.gerr;
                 return u.err + u.gerr;
             };
-            const R charge = arc(a, b) * std::max(off(a, i), off(b, (i + 1) % m)) / pi;
+            const R length = arc(a, b);
+            const R charge = length * std::max(off(a, i), off(b, (i + 1) % m)) / pi;
             total += charge;
+            if (geometric) *geometric += length * std::max(a.gerr, b.gerr) / pi;
             if (!record) continue;
             if (a.id >= 0 && b.id >= 0 && a.gerr == 0 && b.gerr == 0) {
                 // an input edge of the scene's: on its polygon's boundary
@@ -1327,8 +1332,10 @@ class Core {
                 if (receives && st.rtol > 0) {
                     // the second tier where the sums' rounding or the vertices' errors
                     // exceed the tolerance times the value
-                    const R charges = charge_edges(w.q, src, E, st, nullptr, false);
-                    if (bnd + charges > st.rtol * val) {
+                    // (not for the input's own errors alone: recomputing cannot narrow them)
+                    R fixed = 0;
+                    const R charges = charge_edges(w.q, src, E, st, nullptr, false, &fixed);
+                    if (bnd + charges - fixed > st.rtol * val) {
                         refine(w.q, f, pp, xp, qdirs, qerrs);
                         R qv, qb;
                         integrate_quad(qdirs, st.normal, &qv, &qb);
