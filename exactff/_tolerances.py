@@ -62,6 +62,7 @@ __all__ = [
     "CLIP_MEET_ULPS",
     "C1",
     "SVBSP_BAND",
+    "OCCLUDED_ATOL",
     "SVBSP_SPLIT_ULPS",
     "SVBSP_BOX_BUDGET",
     "CONVEX_TURN_ULPS",
@@ -438,6 +439,11 @@ AREA_EDGE_TERMS_PER_CALL = 200_000
 #: own error bounds added); 16 units of long double's roundoff (the sign's rounding is
 #: 3 to 5 of them).
 SVBSP_BAND = 16 * LONGDOUBLE_EPS
+#: DESIGN 6: the accuracy target of an occluded value (absolute). The compiled core's bound
+#: for the rounding of the BSP's crossings is held to it (beyond, the row goes to the
+#: Python engine): no precision tier narrows that part, and the Python engine's crossings
+#: are rounded as well.
+OCCLUDED_ATOL = 1e-11
 #: Compiled core: the rounding of a vertex split off an edge, in long double roundoffs
 #: per unit of the edge's ends' distance from the point over the new vertex's (the
 #: parameter's quotient and the three-term interpolation, with a margin).

@@ -170,7 +170,7 @@ def _nan_core(scene):
     class NaNCore:
         def row(self, p, n, node_side, source_side, *args):
             F = np.full(len(source_side), np.nan)
-            return F, np.zeros_like(F), np.zeros_like(F), {}
+            return F, np.zeros_like(F), np.zeros_like(F), np.zeros_like(F), {}
 
     return bsp.scene_bsp(scene)[0], NaNCore()
 

@@ -102,11 +102,13 @@ NAMED = {
     "building": (lambda: ef.scenes.building(2, 2), True),
     "room with sphere": (lambda: ef.scenes.room_with_sphere(1), True),
     "furnished box": (lambda: ef.scenes.furnished_box(2, FURNITURE[2]), True),
+    "vaulted hall": (lambda: ef.scenes.vaulted_hall(2, 16, 8), True),
 }
 
 
 @pytest.mark.parametrize("name", ["cornell closed", "cornell open", "cornell whole ceiling",
-                                  "building", "furnished box", "room with sphere"])
+                                  "building", "furnished box", "room with sphere",
+                                  "vaulted hall"])
 def test_named_scenes(name):
     make, closed = NAMED[name]
     scene = make()

@@ -82,3 +82,29 @@ def test_cloister_rows_sum_to_one_and_walks_see_the_sky_through_arches(cloister)
     F = ef.form_factors(cloister, cloister.centroids[i], cloister.normals[i])
     U = ef.point_polygon_form_factors(cloister.centroids[i], cloister.normals[i], cloister)
     assert 0 < F[light] < U[light]      # partly hidden by the arcade
+
+
+def test_vaulted_hall_is_closed_and_faces_in():
+    # (the columns stand open-ended on the floor, which closes them: rows sum to 1, below,
+    # though the signed areas of the surfaces do not cancel)
+    hall = ef.scenes.vaulted_hall(3, 24, 12)
+    # a point just off each surface along its normal is inside the hall (under the vault,
+    # within the walls) and outside every column
+    x = hall.centroids + 1e-6 * hall.normals
+    R, height = 4.0, 5.0
+    assert np.all((x[:, 0] > 0) & (x[:, 0] < 12) & (np.abs(x[:, 1]) < R) & (x[:, 2] > 0))
+    assert np.all(x[:, 1] ** 2 + np.maximum(x[:, 2] - height, 0) ** 2 < R ** 2)
+    for xc in (0.6, 4.0, 8.0, 11.4):
+        for yc in (-3.4, 3.4):
+            inside = ((x[:, 0] - xc) ** 2 + (x[:, 1] - yc) ** 2 < 0.2 ** 2) & (x[:, 2] < height)
+            assert not inside.any()
+    rows = np.random.default_rng(0).choice(len(hall), 6, replace=False)
+    M = ef.form_factor_matrix(hall, rows=rows)
+    assert np.all(M >= 0) and np.abs(M.sum(axis=1) - 1).max() <= 1e-12
+
+
+@pytest.mark.parametrize("kw", [{"bays": 0}, {"segments": 1}, {"column_sides": 2},
+                                {"span": 1.0}, {"bay": -1.0}, {"height": float("nan")}])
+def test_vaulted_hall_bad_arguments(kw):
+    with pytest.raises(ValueError, match=next(iter(kw))):
+        ef.scenes.vaulted_hall(**kw)

@@ -140,7 +140,7 @@ def _fake_core(monkeypatch, F0, E0, band0):
             m = 2
             F, E, band = np.zeros(m), np.zeros(m), np.zeros(m)
             F[0], E[0], band[0] = F0, E0, band0
-            return F, E, band, {}
+            return F, E, band, np.zeros(m), {}
 
     monkeypatch.setattr(compiled, "compiled_core", lambda scene: (real(scene)[0], Core()))
     return compiled.compiled_form_factors

@@ -14,7 +14,7 @@ import numpy as np
 
 from ..scene import Scene
 
-__all__ = ["office", "office_solids", "OFFICE_REFLECTANCE", "cloister", "ROOM_GROUPS"]
+__all__ = ["office", "office_solids", "OFFICE_REFLECTANCE", "cloister", "ROOM_GROUPS", "vaulted_hall"]
 
 #: reflectances of the office's groups: walls, floor and ceiling from the spec; the
 #: others are not specified there and are chosen here
@@ -503,3 +503,85 @@ def cloister(n=80884, n_arc=12):
         quads += parts
         groups += [g] * len(parts)
     return Scene.from_polygons(quads, groups=groups, materials=groups)
+
+
+# ---------------------------------------------------------------------------------------
+# the vaulted hall
+# ---------------------------------------------------------------------------------------
+def vaulted_hall(bays=12, segments=128, column_sides=32, *, span=8.0, bay=4.0, height=5.0):
+    """A closed hall under a tessellated barrel vault on two rows of round columns
+    (metres, z up): curved architecture as many long thin triangles.
+
+    The hall runs along x over ``bays`` bays of ``bay`` metres, ``span`` wide
+    (``abs(y) <= span / 2``), its side walls ``height`` tall under a semicircular barrel vault
+    (radius span / 2, axis at z = height) of ``segments`` strips per bay, each strip two
+    triangles (``bay`` long, about ``pi span / (2 segments)`` wide). The end walls are one
+    polygon each (a rectangle under a half disc: ``segments + 3`` vertices on the vault's
+    own). Columns (radius 0.25, 0.6 from the walls, one at each bay line) rise from the
+    floor to the springing, each side of ``column_sides`` facets split into two
+    triangles and a top cap of ``column_sides`` vertices. The floor and the side walls
+    are one quad per bay. Every surface faces into the hall, every column out; the
+    columns stand open-ended on the floor, which closes them: a row from any surface
+    sums to 1.
+
+    Parameters
+    ----------
+    bays, segments, column_sides : int
+    span, bay, height : float
+
+    Returns
+    -------
+    Scene
+        Groups: ``floor``, ``wall``, ``vault``, ``end_wall``, ``column``.
+
+    Examples
+    --------
+    >>> s = vaulted_hall(2, 8, 6)
+    >>> len(s), s.groups.count("vault")
+    (118, 32)
+    """
+    for name, value, least in (("bays", bays, 1), ("segments", segments, 2),
+                               ("column_sides", column_sides, 3)):
+        if not (isinstance(value, (int, np.integer)) and value >= least):
+            raise ValueError(f"{name} must be an integer of at least {least}, got {value!r}")
+    for name, value in (("span", span), ("bay", bay), ("height", height)):
+        if not (np.isfinite(value) and value > 0):
+            raise ValueError(f"{name} must be a positive finite number, got {value!r}")
+    if span < 2.0:
+        raise ValueError(f"span must be at least 2 (columns stand 0.6 from the walls), got {span!r}")
+    R, L = span / 2, bays * bay
+    xs = bay * np.arange(bays + 1)
+    theta = np.pi * np.arange(segments + 1) / segments
+    arc = np.column_stack([R * np.cos(theta), height + R * np.sin(theta)])   # (y, z)
+    polys, groups = [], []
+
+    def add(P, normal, group):
+        polys.append(_orient(P, normal))
+        groups.append(group)
+
+    for x0, x1 in zip(xs[:-1], xs[1:]):
+        add([[x0, -R, 0], [x1, -R, 0], [x1, R, 0], [x0, R, 0]], [0, 0, 1], "floor")
+        for s in (-1, 1):
+            add([[x0, s * R, 0], [x1, s * R, 0], [x1, s * R, height], [x0, s * R, height]],
+                [0, -s, 0], "wall")
+        for (y0, z0), (y1, z1) in zip(arc[:-1], arc[1:]):
+            inward = [0, -(y0 + y1) / 2, height - (z0 + z1) / 2]
+            add([[x0, y0, z0], [x1, y0, z0], [x1, y1, z1]], inward, "vault")
+            add([[x0, y0, z0], [x1, y1, z1], [x0, y1, z1]], inward, "vault")
+    for x, facing in ((0.0, 1), (L, -1)):
+        end = [[x, -R, 0], [x, R, 0]] + [[x, y, z] for y, z in arc]
+        add(end, [facing, 0, 0], "end_wall")
+    r = 0.25
+    phi = 2 * np.pi * np.arange(column_sides + 1) / column_sides
+    ring = np.column_stack([r * np.cos(phi), r * np.sin(phi)])
+    for x in xs:
+        for yc in (-(R - 0.6), R - 0.6):
+            # a column at the end walls stands 0.6 inside the hall too
+            xc = min(max(x, 0.6), L - 0.6)
+            for (a, b), (c, d) in zip(ring[:-1], ring[1:]):
+                out = [(a + c) / 2, (b + d) / 2, 0]
+                p0, p1 = [xc + a, yc + b], [xc + c, yc + d]
+                add([[*p0, 0], [*p1, 0], [*p1, height]], out, "column")
+                add([[*p0, 0], [*p1, height], [*p0, height]], out, "column")
+            add([[xc + a, yc + b, height] for a, b in ring[:-1]], [0, 0, 1], "column")
+    return Scene.from_polygons(polys, groups=groups, materials=groups)

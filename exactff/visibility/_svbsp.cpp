@@ -340,6 +340,7 @@ struct EdgeCharge {
     R charge;
     int count;
     bool refined;  // its ends' directions from Core::refine (quadruple precision)
+    R geo = 0;     // the part the input's own errors make (Vertex::gerr), held apart
 };
 
 // the row's cache of exact tests of an input point against an exact plane, by ids:
@@ -411,6 +412,9 @@ struct RowStats {
             exact_tests = 0;   // exact tests of an input point decided (not cached)
     int64_t held = 0, held_peak = 0;  // vertices in the filter's work list, now and at most
     int64_t working_bytes = 0;  // the row's own containers at their largest (Core::run)
+    // per polygon, the charges of its visible pieces' edges that the input's own errors
+    // make (BSP crossings, Vertex::gerr): reported apart from the computation's bound
+    std::vector<R> crossing;
 };
 
 class Core {
@@ -491,7 +495,7 @@ class Core {
             throw std::invalid_argument("node_side must have one entry per BSP node");
         if (source_side.size() != n_sources_)
             throw std::invalid_argument("source_side must have one entry per polygon");
-        py::array_t<double> F(n_sources_), E(n_sources_), B(n_sources_);
+        py::array_t<double> F(n_sources_), E(n_sources_), B(n_sources_), G(n_sources_);
         const double* pp = point.data();
         const double* pn = normal.data();
         const int8_t* ns = node_side.data();
@@ -499,7 +503,9 @@ class Core {
         double* pF = F.mutable_data();
         double* pE = E.mutable_data();
         double* pB = B.mutable_data();
+        double* pG = G.mutable_data();
         RowStats st;
+        st.crossing.assign(static_cast<size_t>(n_sources_), 0);
         st.rtol = rtol;
         st.normal = pn;
         {
@@ -513,6 +519,8 @@ class Core {
                 pE[i] = static_cast<double>(e[i] + half_ulp * std::fabs(f[i])) *
                         (1 + 4 * std::numeric_limits<double>::epsilon());
                 pB[i] = static_cast<double>(b[i]) * (1 + 4 * std::numeric_limits<double>::epsilon());
+                pG[i] = static_cast<double>(st.crossing[static_cast<size_t>(i)]) *
+                        (1 + 4 * std::numeric_limits<double>::epsilon());
             }
         }
         py::dict d;
@@ -530,7 +538,7 @@ class Core {
         d["quad_pieces"] = st.quad_pieces;
         d["unattributed_bound"] = static_cast<double>(st.unattributed);
         d["working_bytes"] = st.working_bytes;
-        return py::make_tuple(F, E, B, d);
+        return py::make_tuple(F, E, B, G, d);
     }
 
   private:
@@ -954,11 +962,10 @@ class Core {
     // each edge's share of the error of its ends' directions: its arc length times the
     // larger of their bounds, over pi (the area swept by moving the edge that far); with
     // `refined`, the bounds of the directions Core::refine gave the piece instead
-    // (and in *geometric, if given, the part of that total the input's own errors make:
-    // what no recomputation can narrow)
+    // (the computation's part: the one returned and added to E; the input's own errors'
+    // part, arc length times the larger of the ends' gerr over pi, goes to st.crossing)
     R charge_edges(const Piece& q, int64_t src, std::vector<R>& E, RowStats& st,
-                   const std::vector<R>* refined = nullptr, bool record = true,
-                   R* geometric = nullptr) const {
+                   const std::vector<R>* refined = nullptr, bool record = true) const {
         const R pi = 3.14159265358979323846264338327950288L;
         const size_t m = q.size();
         R total = 0;
@@ -969,13 +976,13 @@ class Core {
             // from that edge's plane (a crossing slides along it, which moves nothing)
             auto off = [&](const Vertex& u, size_t k) {
                 if (refined) return (*refined)[k];
-                if (a.edge >= 0 && u.id < 0 && u.on_edge == a.edge) return u.err_line + u.gerr;
-                return u.err + u.gerr;
+                if (a.edge >= 0 && u.id < 0 && u.on_edge == a.edge) return u.err_line;
+                return u.err;
             };
             const R length = arc(a, b);
             const R charge = length * std::max(off(a, i), off(b, (i + 1) % m)) / pi;
+            const R geo = length * std::max(a.gerr, b.gerr) / pi;
             total += charge;
-            if (geometric) *geometric += length * std::max(a.gerr, b.gerr) / pi;
             if (!record) continue;
             if (a.id >= 0 && b.id >= 0 && a.gerr == 0 && b.gerr == 0) {
                 // an input edge of the scene's: on its polygon's boundary
@@ -991,7 +998,7 @@ class Core {
             auto it = st.edges.find(k);
             const bool r = refined != nullptr;
             if (it == st.edges.end()) {
-                st.edges.emplace(k, EdgeCharge{src, charge, 1, r});
+                st.edges.emplace(k, EdgeCharge{src, charge, 1, r, geo});
             } else if (it->second.src == src && it->second.count == 1) {
                 // shared by two visible pieces of src: moving it moves area from one to
                 // the other, if both place it alike; one refined and one not do not:
@@ -1000,6 +1007,7 @@ class Core {
                 if (it->second.refined != r) E[src] += std::max(charge, it->second.charge);
             } else {
                 E[src] += charge;
+                st.crossing[static_cast<size_t>(src)] += geo;
             }
         }
         return total;
@@ -1070,12 +1078,11 @@ class Core {
             const Vertex& u = q[i];
             if (u.id >= 0) {
                 for (int k = 0; k < 3; ++k) v[i][k] = static_cast<Quad>(V_[3 * u.id + k]) - pp[k];
-                // the differences' rounding, if any, and the point's own (a BSP crossing)
-                err[i] = 4 * static_cast<R>(QUAD_EPS) + u.gerr;
+                err[i] = 4 * static_cast<R>(QUAD_EPS);  // the differences' rounding, if any
                 continue;
             }
             v[i] = {static_cast<Quad>(u.v.x), static_cast<Quad>(u.v.y), static_cast<Quad>(u.v.z)};
-            err[i] = std::max(u.err, u.err_line) + u.gerr;
+            err[i] = std::max(u.err, u.err_line);
             const int64_t e1 = q[(i + m - 1) % m].edge, e2 = u.edge;
             if (e1 == e2) continue;
             Quad d[3];
@@ -1116,8 +1123,6 @@ class Core {
                 e = static_cast<R>(8 * QUAD_EPS * (c1 + c2 + 1) * (l1 * l2 / dl));
             }
             e += 2 * static_cast<R>(QUAD_EPS);  // and the scaling below
-            // the input's own errors (BSP crossings) hold for the refined direction too
-            e += u.gerr;
             if (!(e < err[i])) continue;
             if (d[0] * v[i][0] + d[1] * v[i][1] + d[2] * v[i][2] < 0)
                 for (int k = 0; k < 3; ++k) d[k] = -d[k];
@@ -1247,7 +1252,10 @@ class Core {
             if (nearc >= 0) stack.push_back({nearc, false});
         }
         for (const auto& [key, e] : st.edges)
-            if (e.count == 1) E[e.src] += e.charge;
+            if (e.count == 1) {
+                E[e.src] += e.charge;
+                st.crossing[static_cast<size_t>(e.src)] += e.geo;
+            }
         // what the row held beyond its n-long results: the shadow tree and its exact
         // planes, the traversal's stack, the work list's pieces at their most, the edge
         // charges and the exact tests' cache (containers only grow during a row, so their
@@ -1332,10 +1340,8 @@ class Core {
                 if (receives && st.rtol > 0) {
                     // the second tier where the sums' rounding or the vertices' errors
                     // exceed the tolerance times the value
-                    // (not for the input's own errors alone: recomputing cannot narrow them)
-                    R fixed = 0;
-                    const R charges = charge_edges(w.q, src, E, st, nullptr, false, &fixed);
-                    if (bnd + charges - fixed > st.rtol * val) {
+                    const R charges = charge_edges(w.q, src, E, st, nullptr, false);
+                    if (bnd + charges > st.rtol * val) {
                         refine(w.q, f, pp, xp, qdirs, qerrs);
                         R qv, qb;
                         integrate_quad(qdirs, st.normal, &qv, &qb);

@@ -258,7 +258,10 @@ def compiled_form_factors(scene, point, normal, *, two_sided=False, stats=None,
         quadruple precision), ``unattributed_bound`` (visible slivers whose shadows were
         left out), ``working_bytes`` (the row's own containers at their largest: its
         shadow tree, exact planes, work list, edge charges and cache, beyond the
-        n-long results), ``max_error_estimate`` and ``max_band_bound``; after a fallback,
+        n-long results), ``max_error_estimate``, ``max_band_bound`` and
+        ``max_crossing_bound`` (the part of the bounds the BSP's rounded crossings make,
+        added like the band's and checked only against the accuracy target of occluded
+        values, 1e-11); after a fallback,
         ``compiled_missed`` and the Python engine's counters.
     shortcuts : bool, default True
         False disables the convex-scene path and the culling of subtrees (results do
@@ -293,17 +296,22 @@ def compiled_form_factors(scene, point, normal, *, two_sided=False, stats=None,
         return python_row()   # no occlusion: the unoccluded kernel with its ladder
     tree, core = compiled_core(scene)
     node_side = sides_of_point(tree.normals, tree.offsets, p).astype(np.int8)
-    F, E, band, counters = core.row(p, np.asarray(normal, dtype=float), node_side,
+    F, E, band, crossing, counters = core.row(p, np.asarray(normal, dtype=float), node_side,
                                     side.astype(np.int8), bool(two_sided), bool(shortcuts),
                                     tol.SVBSP_BOX_BUDGET, _shadow_tiles(len(scene)),
                                     0.0 if tolerance is None else float(tolerance))
     check_finite(F, E)
     check_finite(band)
+    check_finite(crossing)
     if tolerance is not None:
         # the rounding and geometry of the pieces, after the core's second tier (above),
         # by the Python engine's own criterion; the band's slivers (below) no engine
-        # here narrows
-        missed = np.flatnonzero(misses_tolerance(F, E, tolerance))
+        # here narrows; nor the BSP crossings' rounding (`crossing`: the Python engine's
+        # crossings are rounded too, and its bound leaves them out), which falls back
+        # only beyond the accuracy target of occluded values, where another tree's
+        # splits may fall elsewhere
+        missed = np.flatnonzero(misses_tolerance(F, E, tolerance) |
+                                (crossing > tol.OCCLUDED_ATOL))
         if len(missed):
             st.update(counters)
             st["compiled_missed"] = int(len(missed))
@@ -312,7 +320,8 @@ def compiled_form_factors(scene, point, normal, *, two_sided=False, stats=None,
             return out
     st.update(counters)
     st["path"] = "compiled"
-    E = E + band
+    E = E + band + crossing
     st["max_error_estimate"] = float(E.max(initial=0.0))
     st["max_band_bound"] = float(band.max(initial=0.0))
+    st["max_crossing_bound"] = float(crossing.max(initial=0.0))
     return (F, E) if error else F
