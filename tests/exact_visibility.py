@@ -108,7 +108,8 @@ def _target_frame(T, P):
 
 
 def _facing(scene, P, j):
-    return _dot(_rational(scene.normals[j]), _sub(P, _rational(scene.polygons[j][0]))) > 0
+    # seen edge-on sorts with the fronts, as in tie_priority
+    return _dot(_rational(scene.normals[j]), _sub(P, _rational(scene.polygons[j][0]))) >= 0
 
 
 def _in_front_on_a_tie(scene, P, j, target):
@@ -232,6 +233,8 @@ def polygon_form_factor_mp(point, normal, polygon, dps=60):
         def mp(v):
             return [mpmath.mpf(c.numerator) / c.denominator for c in v]
         P, n = mp(_rational(point)), [mpmath.mpf(float(c)) for c in normal]
+        length = mpmath.sqrt(sum(c * c for c in n))
+        n = [c / length for c in n]      # the engines take the normal's direction
         R = [[x - p for x, p in zip(mp(v), P)] for v in polygon]
         total = mpmath.mpf(0)
         for k in range(len(R)):

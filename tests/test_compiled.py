@@ -222,6 +222,25 @@ def test_values_within_their_bounds_of_the_exact_visible_part(name, two_sided):
     assert_engines_agree(scene, p, n, two_sided=two_sided)
 
 
+@pytest.mark.xfail(strict=True, reason="open: the compiled bound is 1.6x short here")
+def test_a_triangle_with_a_hole_within_its_bound():
+    # found by checking every value the exact construction decides on drawn occluded
+    # scenes, not only where the engines part (they agree here within the two bounds):
+    # a small triangle at z = 1 casts a hole wholly inside a triangle at z = 2, no BSP
+    # split. The compiled value is one double ulp (1.4e-17) off with a bound of 1.2e-17,
+    # of which 9.5e-18 is the rounding to double: the long double pieces' sum is off by
+    # at least 4.4e-18 against their bound of 2.7e-18. The Python engine is exact.
+    polygons = [[[1.0, 0.0, 2.0], [-0.4999999999999998, -0.8660254037844387, 2.0],
+                 [-0.5000000000000004, 0.8660254037844384, 2.0]],
+                [[0.125, 0.0, 1.0], [-0.06249999999999997, -0.10825317547305484, 1.0],
+                 [-0.06250000000000006, 0.1082531754730548, 1.0]]]
+    scene = ef.Scene([np.array(P) for P in polygons])
+    p, n = np.zeros(3), np.array([0.0, 0.0, 1.0])
+    F, E = COMPILED.point_form_factors(scene, p, n, error=True)
+    U = visible_form_factor(scene, p, n, 0)
+    assert abs(F[0] - U) <= E[0]
+
+
 def test_split_vertices_carry_their_rounding():
     # the compiled build's crossings are within their bound of the exact crossing (in
     # rationals: the edge's with the splitter's plane, exact for these axis planes and
@@ -244,7 +263,7 @@ def test_split_vertices_carry_their_rounding():
             t = (Fraction(2.25) - A[2]) / (B[2] - A[2])
             exact = [a + t * (b - a) for a, b in zip(A, B)]
             off = math.sqrt(sum(float(Fraction(x) - y) ** 2 for x, y in zip(v, exact)))
-            assert 0 < e and off <= e
+            assert 0 < e <= 1e-14 and off <= e   # an honest bound, and a tight one
     assert crossings == 4
 
 
@@ -291,7 +310,11 @@ def test_a_missed_tolerance_falls_back_to_the_python_engine():
     Fp, Ep = ef.Exact(engine="python", tolerance=1e-30).point_form_factors(scene, p, n,
                                                                           error=True)
     np.testing.assert_array_equal(F, Fp)
-    np.testing.assert_array_equal(E, Ep)
+    # its bounds, and the compiled tree's measure of the BSP crossings' rounding, which
+    # the Python engine's bound leaves out
+    assert np.all(E >= Ep)
+    assert np.max(E - Ep) == pytest.approx(st["max_crossing_bound"], rel=1e-9)
+    assert st["max_crossing_bound"] > 0   # the closed box's BSP splits some polygons
     with pytest.raises(ef.NumericalError, match="misses the tolerance 1e-30"):
         compiled_form_factors(scene, p, n, tolerance=1e-30)
     st = {}

@@ -124,7 +124,8 @@ struct Builder {
     // X = A + t (B - A), t = s_a / (s_a - s_b), in long double and rounded once to
     // double; returns a bound on |X - X*|, where X* is the crossing of the edge the ends
     // stand for (within eA and eB of them) with the plane the splitter stands for (within
-    // `dev` of n . x = d at the splitter). To first order, moving the line by d (at most
+    // `dev` of n . x = d at the splitter: within the splitter's hull, the only place where
+    // the split can be a visibility boundary of the splitter itself). To first order, moving the line by d (at most
     // the larger end error) and the plane by w along its normal (the long double
     // distances' rounding, the quotient's, and dev) moves the crossing within the plane by
     // at most (|d| + w) / sin(beta), beta the edge's angle with the plane
@@ -149,6 +150,9 @@ struct Builder {
         const LD w = 6 * LD_ROUNDOFF * (mag_a + mag_b) + dev + 4 * LD_ROUNDOFF * std::fabs(sa);
         const LD gap = std::fabs(sa - sb) - 6 * LD_ROUNDOFF * (mag_a + mag_b);
         const LD steep = gap > 0 ? std::sqrt(len * nn) / gap : LD(HUGE_VAL);
+        // the first order holds while the ends' errors tilt the edge well below its angle
+        // with the plane; beyond, no bound (a grazing split after an earlier one)
+        if (!(std::max(eA, eB) * steep <= 0.1L * std::sqrt(len))) return HUGE_VAL;
         const LD e = (std::max(eA, eB) + w / std::sqrt(nn)) * std::max(LD(1), steep) +
                      4 * std::sqrt(LD(3)) * LD_ROUNDOFF * size + UNIT_ROUNDOFF * std::sqrt(LD(norm2));
         return double(1.01L * e);

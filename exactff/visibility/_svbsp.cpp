@@ -899,18 +899,24 @@ class Core {
 
     // a bound on the angle by which the plane through p and input points a, b turns off
     // the one through the exact points they stand for, over the wedge between them (the
-    // part of the plane where it bounds a shadow): each direction of the wedge is a mean
-    // of the two ends', so it moves by at most the sum of their angles (0 for input
-    // points that are exact)
+    // part of the plane where it bounds a shadow): a point of the edge moves by at most
+    // the larger end error (in the world), and it is at least h = |(a - p) x (b - p)| /
+    // |b - a| from p, so its direction turns by at most that over h (0 for input points
+    // that are exact; any angle, pi, where the first order does not hold)
     R input_tilt(int64_t ia, int64_t ib, const double* pp) const {
         const size_t a = static_cast<size_t>(ia), b = static_cast<size_t>(ib);
-        if (VE_[a] == 0 && VE_[b] == 0) return 0;
-        auto length = [&](size_t i) {
-            const R x = static_cast<R>(V_[3 * i]) - pp[0], y = static_cast<R>(V_[3 * i + 1]) - pp[1],
-                    z = static_cast<R>(V_[3 * i + 2]) - pp[2];
-            return std::sqrt(x * x + y * y + z * z);
-        };
-        const R t = input_error(ia, length(a)) + input_error(ib, length(b));
+        const R e = std::max(VE_[a], VE_[b]);
+        if (e == 0) return 0;
+        R A[3], B[3], D[3];
+        for (int k = 0; k < 3; ++k) {
+            A[k] = static_cast<R>(V_[3 * a + k]) - pp[k];
+            B[k] = static_cast<R>(V_[3 * b + k]) - pp[k];
+            D[k] = static_cast<R>(V_[3 * b + k]) - V_[3 * a + k];
+        }
+        const V3 c = cross(V3{A[0], A[1], A[2]}, V3{B[0], B[1], B[2]});
+        const R d = std::sqrt(D[0] * D[0] + D[1] * D[1] + D[2] * D[2]);
+        const R h = d > 0 ? norm(c) / d : 0;
+        const R t = h > 0 ? e / h : static_cast<R>(HUGE_VAL);
         return t <= static_cast<R>(0.1) ? static_cast<R>(1.01) * t
                                         : static_cast<R>(3.14159265358979323846L);
     }
@@ -981,7 +987,17 @@ class Core {
             };
             const R length = arc(a, b);
             const R charge = length * std::max(off(a, i), off(b, (i + 1) % m)) / pi;
-            const R geo = length * std::max(a.gerr, b.gerr) / pi;
+            // the input's own errors: the edge's points move by at most the ends' world
+            // errors, and lie at least h (p's distance from the edge's line) from p
+            R geo = 0;
+            if (a.gerr > 0 || b.gerr > 0) {
+                const V3 d{b.v.x - a.v.x, b.v.y - a.v.y, b.v.z - a.v.z};
+                const R dl = norm(d);
+                const R h = dl > 0 ? norm(cross(a.v, b.v)) / dl : std::min(a.length, b.length);
+                const R moved = std::max(a.gerr * a.length, b.gerr * b.length);
+                geo = h > 0 ? length * std::min(moved / h, static_cast<R>(3.14159265358979323846L)) / pi
+                            : length;
+            }
             total += charge;
             if (!record) continue;
             if (a.id >= 0 && b.id >= 0 && a.gerr == 0 && b.gerr == 0) {
@@ -1446,7 +1462,9 @@ class Core {
                     cut[i] = {V3{0, 0, 0}, v, l, err, -1, -1, -1, -1};
                     set_double(cut[i]);
                     // off the true plane by its tilt; off the true edge's by its ends'
-                    cut[i].gerr = xp[static_cast<size_t>(P.exact)].tilt + std::max(x.gerr, y.gerr);
+                    // world errors over its distance (as the computation's, above)
+                    cut[i].gerr = xp[static_cast<size_t>(P.exact)].tilt +
+                                  std::max(x.gerr * x.length, y.gerr * y.length) / l;
                     // the parameter along the input edge the piece's edge i -> j lies on
                     const Vertex& xi = w.q[i];
                     const Vertex& yj = w.q[j];
