@@ -74,7 +74,7 @@ struct Builder {
     // fragments: vertices concatenated (x, y, z), their starts, their source polygons
     std::vector<double> verts;
     // per vertex, a bound on its distance from the point it stands for (0 for the
-    // input's; a crossing's from its rounding, its ends' and its plane's: crossing_error)
+    // input's; a crossing's from its rounding, its ends' and its plane's: Builder::crossing)
     std::vector<double> vert_err;
     // per source polygon, a bound on how far its plane (normal, offset) passes from its
     // vertices (the plane's own rounding, at the polygon: where it can be seen to split)
@@ -394,7 +394,7 @@ py::array_t<T> as_array(const std::vector<T>& v) {
 // fragments the nodes hold, renumbered in node order: vertices (N, 3), starts (F + 1,),
 // source polygons (F,), whether each is its source polygon uncut (F,), the number
 // of splits, and per vertex a bound on its distance from the exact point it stands for
-// (N,): 0 for the input's, else a crossing's (Builder::crossing_error).
+// (N,): 0 for the input's, else a crossing's (Builder::crossing).
 py::tuple build_bsp_arrays(py::array_t<double, py::array::c_style | py::array::forcecast> V,
                            py::array_t<int64_t, py::array::c_style | py::array::forcecast> start,
                            py::array_t<double, py::array::c_style | py::array::forcecast> normals,

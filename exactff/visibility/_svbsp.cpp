@@ -251,7 +251,8 @@ struct ExactPlane {
     // the plane's identity for the row's cache of exact tests: kind 0, the distinct
     // input points a and b are (their ids, see Core::uid_); kind 1, -1 - its index
     int64_t ua = -1, ub = -1;
-    // kind 0: the part of err that is the input points' own errors (Core::input_tilt)
+    // kind 0: the turn the input points' own errors give the plane (Core::input_tilt),
+    // held apart from err (the computation's)
     R tilt = 0;
 };
 
@@ -885,16 +886,19 @@ class Core {
         return true;
     }
 
+    // the angle a direction turns when its point, at distance r from p, moves by at most
+    // `ratio` r: asin(ratio) <= 1.01 ratio for ratio <= 0.1, else any angle (pi)
+    static R turn_bound(R ratio) {
+        return ratio <= static_cast<R>(0.1) ? static_cast<R>(1.01) * ratio
+                                            : static_cast<R>(3.14159265358979323846L);
+    }
+
     // a bound on the angle at p between input point i's direction and that of the exact
     // point it stands for (a BSP split's crossing is rounded: VE_[i] bounds its
-    // distance), with `length` its distance from p: asin(r) <= 1.01 r for r <= 0.1,
-    // else any angle (pi)
+    // distance), with `length` its distance from p
     R input_error(int64_t i, R length) const {
         const R e = VE_[static_cast<size_t>(i)];
-        if (e == 0) return 0;
-        const R r = e / length;
-        return r <= static_cast<R>(0.1) ? static_cast<R>(1.01) * r
-                                        : static_cast<R>(3.14159265358979323846L);
+        return e == 0 ? 0 : turn_bound(e / length);
     }
 
     // a bound on the angle by which the plane through p and input points a, b turns off
@@ -916,9 +920,7 @@ class Core {
         const V3 c = cross(V3{A[0], A[1], A[2]}, V3{B[0], B[1], B[2]});
         const R d = std::sqrt(D[0] * D[0] + D[1] * D[1] + D[2] * D[2]);
         const R h = d > 0 ? norm(c) / d : 0;
-        const R t = h > 0 ? e / h : static_cast<R>(HUGE_VAL);
-        return t <= static_cast<R>(0.1) ? static_cast<R>(1.01) * t
-                                        : static_cast<R>(3.14159265358979323846L);
+        return turn_bound(h > 0 ? e / h : static_cast<R>(HUGE_VAL));
     }
 
     // the sector form of one convex piece above the horizon, in offset form (as

@@ -309,6 +309,7 @@ def compiled_form_factors(scene, point, normal, *, two_sided=False, stats=None,
     check_finite(F, E)
     check_finite(band)
     check_finite(crossing)
+    st["max_crossing_bound"] = float(crossing.max(initial=0.0))
     if tolerance is not None:
         # the rounding and geometry of the pieces, after the core's second tier (above),
         # by the Python engine's own criterion; the band's slivers (below) no engine
@@ -321,7 +322,6 @@ def compiled_form_factors(scene, point, normal, *, two_sided=False, stats=None,
         if len(missed):
             st.update(counters)
             st["compiled_missed"] = int(len(missed))
-            st["max_crossing_bound"] = float(crossing.max(initial=0.0))
             out = python_row()
             st["path"] = "compiled, then python"
             if error:
@@ -335,5 +335,4 @@ def compiled_form_factors(scene, point, normal, *, two_sided=False, stats=None,
     E = E + band + crossing
     st["max_error_estimate"] = float(E.max(initial=0.0))
     st["max_band_bound"] = float(band.max(initial=0.0))
-    st["max_crossing_bound"] = float(crossing.max(initial=0.0))
     return (F, E) if error else F
