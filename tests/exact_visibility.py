@@ -14,10 +14,14 @@ image, the spherical polygon of its vertices' directions, as the engines integra
 its vertices are projected centrally onto a plane along its Newell normal. Occluders
 wholly between the point and the target's thickness hide their whole image; only one
 that reaches into the target's range needs both to be exactly planar (it is clipped in
-3-D). Where the construction does not apply (non-convex images, or those cases), the
+3-D). Where the construction does not apply (non-convex images, or those cases), or where
+the point is so close to a polygon's plane that the engines' convention for edge-on
+polygons decides instead of the exact side (NEAR_EDGE_ON_ULPS), or where two polygons
+are so close to coplanar that the engines' depth tie does (NEAR_COPLANAR_ULPS), the
 functions return None: undecided.
 """
 
+import math
 from fractions import Fraction
 
 import mpmath
@@ -78,6 +82,49 @@ def _plane(poly):
     return normal
 
 
+#: Near edge-on, the engines follow a convention rather than the exact side: a point
+#: within the rounding of its own coordinates and of the polygon's centroid of its plane
+#: lies in it (a few ulps; exactff.predicates.engine_sides), so the polygon has no image
+#: and hides nothing. The reference leaves every case within this many ulps undecided.
+NEAR_EDGE_ON_ULPS = 256
+
+
+def _near_edge_on(poly, P):
+    """Whether the point lies within NEAR_EDGE_ON_ULPS units of rounding (of the sizes
+    of the point, the centroid and their distance) of the polygon's plane (Newell's)."""
+    m = _newell(poly)
+    if m is None:
+        return True
+    c = tuple(sum(x) / len(poly) for x in zip(*poly))
+    size = lambda v: math.sqrt(float(_dot(v, v)))
+    distance = abs(float(_dot(m, _sub(P, c)))) / size(m)
+    return distance <= NEAR_EDGE_ON_ULPS * 2.0 ** -53 * (size(P) + size(c) + size(_sub(c, P)))
+
+
+#: Near coplanar, too: a vertex within BSP_COPLANAR_ULPS (64) units of rounding of the
+#: magnitudes in ``n . x - d`` of a plane lies in it for the engines (a depth tie,
+#: exactff.predicates.coplanar_band), whatever its exact side. The reference leaves a
+#: pair undecided where a vertex of either lies off the other's plane, but within this
+#: many such units.
+NEAR_COPLANAR_ULPS = 256
+
+
+def _near_coplanar(A, B):
+    """Whether a vertex of polygon ``A`` or ``B`` lies off the other's plane (Newell's,
+    exact) but within NEAR_COPLANAR_ULPS units of rounding of ``|n| . |x| + |n . c|``."""
+    for X, Y in ((A, B), (B, A)):
+        m = _newell(Y)
+        if m is None:
+            continue
+        d = _dot(m, Y[0])
+        for v in X:
+            off = abs(_dot(m, v) - d)
+            size = sum(abs(a * b) for a, b in zip(m, v)) + abs(d)
+            if 0 < off <= NEAR_COPLANAR_ULPS * Fraction(1, 2 ** 53) * size:
+                return True
+    return False
+
+
 def _convex(poly2):
     turns = set()
     for k in range(len(poly2)):
@@ -98,7 +145,7 @@ def _target_frame(T, P):
     projected on, the point's offset from it, and the target's half-thickness about it
     (0 for an exactly planar target); None if the point lies within that thickness."""
     m = _newell(T)
-    if m is None:
+    if m is None or _near_edge_on(T, P):
         return None
     height = _dot(m, _sub(T[0], P))
     slab = max(abs(_dot(m, _sub(v, T[0]))) for v in T)
@@ -183,7 +230,7 @@ def visible_pieces(scene, point, target, exclude=()):
         if not all(0 < x < near for x in g):
             # it reaches the target's range: clip it in 3-D, both planes exact
             plane = _plane(V)
-            if not planar or plane is None:
+            if not planar or plane is None or _near_coplanar(V, T):
                 return None
             # strictly on the point's side of the target's plane
             V = _clip(V, lambda v: height * _dot(m, _sub(T[0], v)))
@@ -205,6 +252,8 @@ def visible_pieces(scene, point, target, exclude=()):
         a = _area2(shadow)
         if a == 0:
             continue
+        if _near_edge_on([_rational(v) for v in polygon], P):
+            return None                  # the engines' convention: no image
         if not _convex(shadow):
             return None
         if a < 0:
@@ -266,9 +315,12 @@ def visible_form_factor(scene, point, normal, target, two_sided=False, exclude=(
     if pieces is None:
         return None
     front_of_point = lambda v: _dot(n, _sub(v, P))
-    total = mpmath.mpf(0)
-    for piece in pieces:
-        piece = _clip(piece, front_of_point)
-        if len(piece) >= 3:
-            total += polygon_form_factor_mp(point, normal, piece, dps)
+    # the pieces' sum at the working precision (at mpmath's default, 53 bits, it would be
+    # rounded like a double: half an ulp of the value, more than the bounds it decides)
+    with mpmath.workdps(dps):
+        total = mpmath.mpf(0)
+        for piece in pieces:
+            piece = _clip(piece, front_of_point)
+            if len(piece) >= 3:
+                total += polygon_form_factor_mp(point, normal, piece, dps)
     return total

@@ -41,6 +41,46 @@ def test_a_blocker_leaves_a_known_rectangle():
     assert area == pytest.approx(0.5, rel=1e-15)
 
 
+def _polar_form_factor(polygon, h):
+    """From the origin (normal z) to a convex polygon in the plane z = h around the z
+    axis, by quadrature in polar angle: the disc of radius R gives R^2 / (R^2 + h^2) / 2,
+    so F = int R(phi)^2 / (R(phi)^2 + h^2) dphi / (2 pi), R from each edge's line."""
+    V = [[mpmath.mpf(float(c)) for c in v[:2]] for v in polygon]
+    total = mpmath.mpf(0)
+    for k in range(len(V)):
+        (ax, ay), (bx, by) = V[k], V[(k + 1) % len(V)]
+        # the edge's line: its unit normal (cos alpha, sin alpha) at distance d
+        nx, ny = by - ay, ax - bx
+        length = mpmath.sqrt(nx * nx + ny * ny)
+        nx, ny = nx / length, ny / length
+        d = nx * ax + ny * ay
+        alpha = mpmath.atan2(ny, nx)
+        # the angle the edge subtends, signed by the polygon's orientation
+        phi_a = mpmath.atan2(ay, ax)
+        phi_b = phi_a + mpmath.atan2(ax * by - ay * bx, ax * bx + ay * by)
+
+        def share(phi):
+            R2 = (d / mpmath.cos(phi - alpha)) ** 2
+            return R2 / (R2 + h * h)
+        total += mpmath.quad(share, [phi_a, phi_b])
+    return abs(total) / (2 * mpmath.pi)
+
+
+def test_a_hole_to_the_working_precision():
+    # a triangle at z = 1 casts a hole in one at z = 2 (from the origin, looking up): the
+    # hole is the small triangle doubled (exact in floats), so the visible part's value is
+    # the big triangle's less the doubled small one's, each by quadrature in polar angle;
+    # the reference keeps its working precision (a double's rounding is 7e-18 here)
+    big = np.array([[1.0, 0.0, 2.0], [-0.4999999999999998, -0.8660254037844387, 2.0],
+                    [-0.5000000000000004, 0.8660254037844384, 2.0]])
+    small = np.array([[0.125, 0.0, 1.0], [-0.06249999999999997, -0.10825317547305484, 1.0],
+                      [-0.06250000000000006, 0.1082531754730548, 1.0]])
+    U = visible_form_factor(ef.Scene([big, small]), np.zeros(3), np.array([0.0, 0.0, 1.0]), 0)
+    with mpmath.workdps(40):
+        expected = _polar_form_factor(big, 2) - _polar_form_factor(2 * small, 2)
+        assert abs(U - expected) <= mpmath.mpf(10) ** -30
+
+
 def test_a_blocker_across_the_cone_hides_all():
     scene = ef.Scene([FLOOR, rect_xy(-5, 5, -5, 5, 1.0)])
     assert visible_pieces(scene, P, 0) == []
@@ -93,6 +133,37 @@ def test_undecided_where_the_construction_does_not_apply():
     # a non-convex target
     L = np.array([[0, 0, 0], [1, 0, 0], [1, 0.5, 0], [0.5, 0.5, 0], [0.5, 1, 0], [0, 1, 0.]])
     assert visible_form_factor(ef.Scene([L]), P, N, 0) is None
+
+
+def test_undecided_where_the_engines_conventions_decide():
+    # found by drawn scenes (occluded_scenes), from the origin looking up. A vertical
+    # triangle whose plane passes 0.4 ulp from the point: the engines see it edge-on
+    # (no image), its exact image is a sliver of F = 6.5e-20
+    big = np.array([[2.0, 0.0, 2.0], [-0.9999999999999996, -1.7320508075688774, 2.0],
+                    [-1.0000000000000009, 1.7320508075688767, 2.0]])
+    edge_on = np.array([[0.7080734182735711, -0.4546487134128409, 1.9596976941318602],
+                        [-0.7477740447502165, 0.4801401925214618, 2.041415903542922],
+                        [0.03970062647664507, -0.025491479108620707, 3.4988864023252177]])
+    p, n = np.zeros(3), np.array([0.0, 0.0, 1.0])
+    scene = ef.Scene([big, edge_on])
+    assert visible_form_factor(scene, p, n, 1) is None
+    # and the sliver it would hide of the triangle it crosses: undecided too
+    assert visible_form_factor(scene, p, n, 0) is None
+    assert visible_form_factor(ef.Scene([big]), p, n, 0) > 0
+    # a triangle and a smaller one on its plane, each rounded its own way after the
+    # rotation: in the engines' near-coplanar band, a depth tie (the first in front);
+    # exactly, the smaller one is wholly in front within the cone over it
+    outer = np.array([[2.0, 0.0, 0.7679491924311226], [0.5000000000000002, 1.7320508075688774,
+                      3.3660254037844384], [0.49999999999999956, -1.7320508075688767,
+                      3.3660254037844393]])
+    inner = np.array([[1.5, 0.0, 1.6339745962155612], [0.7500000000000001, 0.8660254037844387,
+                      2.933012701892219], [0.7499999999999998, -0.8660254037844384,
+                      2.9330127018922196]])
+    pair = ef.Scene([outer, inner])
+    for j in (0, 1):
+        assert visible_form_factor(pair, p, n, j, two_sided=True) is None
+    # both decided without the other
+    assert visible_form_factor(ef.Scene([inner]), p, n, 0, two_sided=True) > 0
 
 
 def test_mpmath_contour_converges_on_a_sliver():
