@@ -225,12 +225,16 @@ def visible_pieces(scene, point, target, exclude=()):
             continue
         V = [_rational(v) for v in polygon]
         g = [depth(v) for v in V]
-        if all(x <= 0 for x in g) or all(x > far for x in g):
-            continue                     # behind the point, or beyond the target
+        if all(x <= 0 for x in g):
+            continue                     # behind the point
+        if _near_coplanar(V, T):
+            return None                  # the engines' convention: a depth tie
+        if all(x > far for x in g):
+            continue                     # beyond the target
         if not all(0 < x < near for x in g):
             # it reaches the target's range: clip it in 3-D, both planes exact
             plane = _plane(V)
-            if not planar or plane is None or _near_coplanar(V, T):
+            if not planar or plane is None:
                 return None
             # strictly on the point's side of the target's plane
             V = _clip(V, lambda v: height * _dot(m, _sub(T[0], v)))

@@ -163,6 +163,12 @@ def test_subtrees_behind_the_tangent_plane_are_left_out():
     assert np.all(F == 0)
     assert st["fragments"] == 0 and st["fragments_culled"] > 0
     assert np.all(Exact(engine="python").point_form_factors(scene, p, n) == 0)
+    # without the shortcuts every fragment goes through the tree, to the same zeros
+    st = {}
+    off = Exact(tolerance=None, shortcuts=False, engine="compiled").point_form_factors(
+        scene, p, n, stats=st)
+    assert np.all(off == 0)
+    assert st["fragments"] > 0 and st["fragments_culled"] == 0 == st["box_tests"]
     # a quad below the floor is in front of the point: the root's box now reaches past
     # the tangent plane, the tree is entered, and the quad gets its unoccluded value
     below = rect_xy(p[0] - 0.5, p[0] + 0.5, p[2] - 0.5, p[2] + 0.5, 0.0)[:, [0, 2, 1]]
@@ -175,3 +181,6 @@ def test_subtrees_behind_the_tangent_plane_are_left_out():
     U = ef.point_polygon_form_factors(p, n, [below])[0]
     assert st["fragments"] > 0
     assert np.all(G[:-1] == 0) and G[-1] == pytest.approx(U, rel=1e-13) and U > 0
+    off = Exact(tolerance=None, shortcuts=False, engine="compiled").point_form_factors(
+        more, p, n)
+    assert_form_factors_close(G, off, rtol=0, atol=NEUTRAL_ATOL)

@@ -990,15 +990,15 @@ class Core {
             const R length = arc(a, b);
             const R charge = length * std::max(off(a, i), off(b, (i + 1) % m)) / pi;
             // the input's own errors: the edge's points move by at most the ends' world
-            // errors, and lie at least h (p's distance from the edge's line) from p
+            // errors, and lie at least h (p's distance from the edge's line) from p, so
+            // their directions turn by at most turn_bound(moved / h)
             R geo = 0;
             if (a.gerr > 0 || b.gerr > 0) {
                 const V3 d{b.v.x - a.v.x, b.v.y - a.v.y, b.v.z - a.v.z};
                 const R dl = norm(d);
                 const R h = dl > 0 ? norm(cross(a.v, b.v)) / dl : std::min(a.length, b.length);
                 const R moved = std::max(a.gerr * a.length, b.gerr * b.length);
-                geo = h > 0 ? length * std::min(moved / h, static_cast<R>(3.14159265358979323846L)) / pi
-                            : length;
+                geo = h > 0 ? length * turn_bound(moved / h) / pi : length;
             }
             total += charge;
             if (!record) continue;
