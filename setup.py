@@ -1,4 +1,5 @@
-"""Build of the compiled visibility core (exactff.visibility._svbsp); the rest of the
+"""Build of the compiled visibility core (exactff.visibility._svbsp) and of the area
+code's hidden regions (exactff.area._hidden); the rest of the
 project's metadata is in pyproject.toml."""
 
 import platform
@@ -15,6 +16,8 @@ setup(
                                    ["exactff/visibility/_svbsp.cpp",
                                     "exactff/visibility/_bsp_build.cpp"],
                                    cxx_std=17, extra_compile_args=["-O2"],
-                                   extra_link_args=QUADMATH)],
+                                   extra_link_args=QUADMATH),
+                 Pybind11Extension("exactff.area._hidden", ["exactff/area/_hidden.cpp"],
+                                   cxx_std=17, extra_compile_args=["-O2"])],
     cmdclass={"build_ext": build_ext},
 )

@@ -51,6 +51,9 @@ __all__ = [
     "AREA_ROUNDING_ULPS",
     "AREA_HIDDEN_PAD",
     "AREA_BOOLEAN_ULPS",
+    "AREA_IMAGE_ULPS",
+    "AREA_IMAGE_RTOL",
+    "AREA_IMAGE_BUDGET_SHARE",
     "AREA_EDGE_ON_RTOL",
     "AREA_SHAFT_ENTRIES_PER_CALL",
     "AREA_WHOLE_TOLERANCE_SHARE",
@@ -347,9 +350,22 @@ AREA_ROUNDING_ULPS = 64.0
 #: which event lines are kept, around the emitter.
 AREA_HIDDEN_PAD = 0.01
 
-#: Area form factors: the boundary of the hidden region built by the 2-D booleans moves
-#: by at most this many units of rounding of its largest coordinate per boolean.
+#: Area form factors: the boundary of the hidden region built by half-plane splits moves
+#: by at most this many units of rounding of its largest coordinate per splitting line.
 AREA_BOOLEAN_ULPS = 16.0
+
+#: Area form factors, hidden parts: the rounding of a blocker's offset from the point,
+#: and of each crossing of the pyramid's planes, in units of long double's roundoff of its
+#: length (a crossing's: of its edge's longer end; added to its ends' own); and the share of a point's images' extent beyond which what that rounding
+#: can move them (magnified by the projection near the point) sends the point to the
+#: engine.
+AREA_IMAGE_ULPS = 8.0
+AREA_IMAGE_RTOL = 1e-9
+
+#: Area form factors, occluded pairs: the share of the tolerance that a point value's
+#: estimate may hold for its images' rounding before the point goes to the engine (the
+#: adaptive rules integrate the estimates, so at most this share of the value's).
+AREA_IMAGE_BUDGET_SHARE = 0.01
 
 #: Area form factors: a blocker whose plane passes within this of a point (relative to
 #: the sub-scene's size) is seen edge-on from it and hides nothing.

@@ -50,25 +50,6 @@ def test_gunter1_row_8_is_complete_and_sums_to_one(tol):
     assert st["occluded_pairs"] > 0
 
 
-def test_hidden_values_split_takes_the_lost_points_by_the_engine():
-    # points whose images do not stay finite go to the engine, the others through GEOS:
-    # the same values within the estimates as all through GEOS, counted
-    from exactff.area import occluded as area
-
-    from test_area import _hidden_cases
-
-    P, Q, B = list(_hidden_cases())[5]
-    nP = np.array([0.0, 0.0, 1.0])
-    X = P[0] + np.outer(np.linspace(0.05, 0.95, 9), P[1] - P[0]) + 0.3 * (P[3] - P[0])
-    H, EH = area._hidden_values(X, nP, Q, B)
-    st = {}
-    lost = np.array([1, 4, 7])
-    G, EG = area._hidden_values_split(X, nP, Q, B, lost, st)
-    assert H[lost].max() > 0.01
-    assert np.all(np.abs(G - H) <= EG + EH + 1e-16)
-    assert st == {"engine_fallbacks": 1, "engine_fallback_points": 3}
-
-
 def test_gunter1_row_1_is_complete_and_sums_to_one():
     # row 1 at 1e-6 raised an IndexError in shapely_rings: GEOS returned a hidden part
     # as a collection holding a multipolygon (rings.polygon_parts flattens it)
@@ -121,3 +102,32 @@ def test_emitter_cut_on_a_grid_where_geos_fails_to_cut_it(monkeypatch, failures)
     g, eg = area_row(scene, 0, 1e-6, stats=fst)
     assert fst["cell_fallbacks"] == 1 and fst["occluded_pairs"] == 1
     assert abs(g[1] - ref) <= eg[1] + 1e-13, (g[1] - ref, eg[1])
+
+
+@pytest.mark.parametrize("name", ["test4.vs3", "facet.vs3"])
+def test_hidden_parts_of_every_occluded_pair_against_the_engine(name, monkeypatch):
+    # every call of the hidden parts that a full matrix makes (recorded at tolerance
+    # 1e-6), eight of its points each against the engine (BSP tree and shadow tree on the
+    # hemisphere, exact predicates): within the two estimates wherever the engine decides
+    from exactff.area import occluded as area
+
+    scene = _read(name)
+    calls, hidden = [], area._hidden_values
+
+    def record(X, nP, Qc, blockers, st=None, budget=0.0):
+        calls.append((X, nP, Qc, blockers))
+        return hidden(X, nP, Qc, blockers, st, budget)
+
+    monkeypatch.setattr(area, "_hidden_values", record)
+    ef.area_form_factors(scene, tolerance=1e-6, error=True)
+    monkeypatch.setattr(area, "_hidden_values", hidden)
+    rng = np.random.default_rng(0)
+    decided = 0
+    for X, nP, Qc, blockers in calls:
+        X = X[rng.choice(len(X), size=min(8, len(X)), replace=False)]
+        H, EH = hidden(X, nP, Qc, blockers)
+        G, EG = area._hidden_values_by_engine(X, nP, Qc, blockers)
+        sure = EG < 1e-9
+        decided += int(sure.sum())
+        assert np.all(np.abs(H - G)[sure] <= (EH + EG)[sure]), np.abs(H - G).max()
+    assert len(calls) > 20 and decided > 0.9 * 8 * len(calls)

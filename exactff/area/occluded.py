@@ -3,8 +3,9 @@ integral less the integral of the hidden part, cut along the vertex-edge visibil
 events and integrated adaptively by collapsed Gauss rules; a row of them.
 
 The hidden part at a point x of the emitter is built in the receiver's plane: each
-blocker projected from x onto that plane, the images united and cut by the receiver
-(shapely), and integrated by the sector sums (``docs/explanation/area-form-factors.md``).
+blocker projected from x onto that plane, the images united as disjoint convex pieces
+and cut by the receiver (compiled, :mod:`exactff.area._hidden`), and integrated by the
+sector sums (``docs/explanation/area-form-factors.md``).
 """
 
 import numpy as np
@@ -15,11 +16,11 @@ from scipy.special import roots_legendre
 from .. import _tolerances as tol
 from ..errors import NumericalError, misses_tolerance
 from ..geometry import area_vector, receiver_frame
-from ..halfspace import clip_halfspace
 from ..kernel import clipped_sector_sums
 from ..methods import Exact
-from ..visibility import is_convex_enclosure
-from ..rings import padded, polygon_parts, shapely_rings
+from ..visibility import convex_pieces, is_convex_enclosure
+from ._hidden import hidden_pieces
+from ..rings import owners, padded, successors
 from ..scene import Scene
 from .contour import (CLOSED_FORM_COUNTS, clip_front, front_parts, is_far, nonnegative,
                       point_values, triangle_rule, unoccluded_pair, unoccluded_pairs)
@@ -37,8 +38,8 @@ __all__ = ["area_row", "STATS"]
 #: polygons but the shaft none, so that no hull was built (``shaft_unoccluded_pairs``),
 #: far pairs by the far-field rule (``far_pairs``),
 #: blocker-blocker events not cut along because their lines of sight miss the receiver
-#: (``culled_events``), batches of hidden parts the engine computed where GEOS failed
-#: or a point's images did not stay finite (``engine_fallbacks``, their points
+#: (``culled_events``), calls whose hidden parts the engine computed at some points,
+#: where a point's images did not stay finite or could not be trusted (``engine_fallbacks``, their points
 #: ``engine_fallback_points``), pairs whose emitter GEOS failed to cut along the
 #: events in floating point, cut again on a fine grid (``cell_fallbacks``); and what was
 #: done:
@@ -312,154 +313,105 @@ def _cells(Pc, nP, lines, R, c, grid=None):
     return tris
 
 
-def _hidden_values(X, nP, Qc, blockers, st=None, split=True):
+def _hidden_values(X, nP, Qc, blockers, st=None, budget=0.0):
     """``F(x -> Qc) - F_occ(x -> Qc)`` for each point x of X (normal nP): the point form
     factor of the part of Qc that the blockers hide from x, and its error estimate.
 
-    Built in Qc's plane: each blocker, clipped to the front of that plane and to the
-    pyramid from x over Qc where Qc is strictly convex (else over a rectangle around
-    it), is projected from x onto the plane (a projective map: its image stays a simple
-    polygon within the pyramid's base); the images are united (and, over a rectangle,
-    intersected with Qc; GEOS, vectorised over the points), and the
-    region's rings integrated by the sector sums (Eq. 3's kernel) from x: outer rings
-    count positive, holes negative. The estimate adds to the sector sums' rounding the
-    effect of moving the region's boundary by the booleans' rounding (a few units of the
-    largest coordinate), through the kernel's largest value over the region's bounding
-    box, ``h / (pi r^3)``. A point on Qc's plane sees nothing of it (0). Where GEOS
-    fails, the engine computes them instead (:func:`_hidden_values_by_engine`), counted
-    in ``st["engine_fallbacks"]`` (and the points in ``st["engine_fallback_points"]``);
-    where a point's images do not stay finite (a blocker's vertex at the point, to
-    rounding), the engine computes that point's value and the others are computed as
-    above (with ``split``; :func:`_hidden_values_split`).
+    Built in Qc's plane (compiled, :mod:`exactff.area._hidden`): each blocker, clipped
+    to the front of that plane, cut into convex pieces and clipped to the pyramid from x
+    over Qc where Qc is strictly convex (else over a rectangle around it), is projected
+    from x onto the plane (a projective map: its image stays convex, within the
+    pyramid's base); each image less the images before it is added as disjoint convex
+    pieces by half-plane splits alone, along the lines the edges lie on (traced from the
+    planes through x, not from the rounded vertices), which over a rectangle are then
+    cut by Qc's convex parts; the pieces are integrated by the sector sums (Eq. 3's
+    kernel) from x. A point on Qc's plane sees nothing of it (0), nor does a blocker
+    whose plane passes through x (seen edge-on).
+
+    The estimate adds to the sector sums' rounding the effect of moving the pieces'
+    boundaries by the splits' rounding (a few units of the largest coordinate per
+    line) and by the clipped vertices' own rounding as the projection magnifies it
+    (``moved``; the 3-D work is in long double), through the kernel's largest value over
+    the region's bounding box, ``h / (pi r^3)``. Where a point's images do not stay
+    finite, or that rounding can move them by more than ``AREA_IMAGE_RTOL`` of Qc's
+    size (a crossing or a blocker's vertex at the point, to rounding) and more of the
+    value than ``budget`` (absolute; the caller's share of its tolerance), the engine
+    computes that point's value (:func:`_hidden_values_by_engine`), counted in
+    ``st["engine_fallbacks"]`` (and the points in ``st["engine_fallback_points"]``).
 
     Returns
     -------
     (ndarray of shape (len(X),), ndarray of shape (len(X),))
     """
     nX = len(X)
+    zero = np.zeros(nX)
     nQ, q0, RQ, Q2 = _plane_frame(Qc)
-    qpoly = shapely.Polygon(Q2)
+    Kc = [K for K in (clip_front(np.asarray(K), nQ, q0) for K in blockers) if K is not None]
+    if not Kc:
+        return zero, zero
     # the pyramid's base: Qc itself where it is strictly convex (the images then lie in
-    # it: their union is the hidden region, and a blocker outside the pyramid is not
-    # clipped at all), else a rectangle around it (the union then cut by Qc)
-    convex = _strictly_convex(Q2)
-    if convex:
-        corners = np.asarray(Qc, dtype=float)
+    # it), else a rectangle around it (the pieces then cut by Qc's convex parts)
+    if _strictly_convex(Q2):
+        corners, parts = np.asarray(Qc, dtype=float), np.zeros((0, 3, 2))
+        part_counts = np.zeros(0, dtype=np.int64)
     else:
         lo, hi = Q2.min(axis=0), Q2.max(axis=0)
         pad = tol.AREA_HIDDEN_PAD * float((hi - lo).max())
         lo, hi = lo - pad, hi + pad
         corners = q0 + np.array([[lo[0], lo[1]], [hi[0], lo[1]], [hi[0], hi[1]],
                                  [lo[0], hi[1]]]) @ RQ[:2]
-    Kc = [K for K in (clip_front(np.asarray(K), nQ, q0) for K in blockers) if K is not None]
-    zero = np.zeros(nX)
-    if not Kc:
-        return zero, zero
-    nb, kmax = len(Kc), max(len(K) for K in Kc)
-    V = np.array([np.vstack([K, np.repeat(K[-1:], kmax - len(K), axis=0)]) for K in Kc])
-    # the pyramid from each x over the rectangle: its four inward planes (nX, 4, 3)
-    C = corners[None] - X[:, None, :]
-    M = np.cross(C, np.roll(C, -1, axis=1))
-    M *= np.sign(np.einsum("pai,pai->pa", M, np.roll(C, -2, axis=1)))[:, :, None]
-    # (point, blocker) pairs that can reach into the pyramid: not wholly outside one of
-    # its planes, and not seen edge-on (a blocker whose plane passes through x hides
-    # nothing); only those are clipped
-    D = V[None] - X[:, None, None, :]                                   # (nX, nb, kmax, 3)
-    side = np.einsum("pbkj,paj->pbak", D, M)                            # (nX, nb, 4, kmax)
-    NK = np.array([area_vector(K) for K in Kc])
+        Qparts = [(Qp - q0) @ RQ.T for Qp in convex_pieces(np.asarray(Qc, float), nQ)]
+        parts, part_counts = padded(Qparts)
+        parts = parts[:, :, :2]
+    pieces = [Kp for K in Kc for Kp in convex_pieces(K, area_vector(K) / np.linalg.norm(area_vector(K)))]
+    V, counts = padded(pieces)
+    NK = np.array([area_vector(K) for K in pieces])
     NK /= np.linalg.norm(NK, axis=1)[:, None]
     size = float(np.ptp(np.vstack(Kc + [Qc, X]), axis=0).max())
-    edge_on = np.abs(np.einsum("pbj,bj->pb", D[:, :, 0, :], NK)) <= tol.AREA_EDGE_ON_RTOL * size
-    # a point on Q's plane (a node at Q's edge, to rounding) sees Q edge-on: nothing of
-    # it is seen, so nothing is hidden (and its images would divide 0 by 0)
-    h = (X - q0) @ nQ
-    on_plane = (h <= 0)[:, None]
-    pairs = np.flatnonzero(~(np.all(side <= 0, axis=3).any(axis=2) | edge_on | on_plane))
-    if pairs.size == 0:
-        return zero, zero
-    pt, blk = pairs // nb, pairs % nb
-    Vb = D[pt, blk]
-    cnt = np.array([len(K) for K in Kc])[blk]
-    for a in range(len(corners)):
-        # only the polygons with a vertex on or outside this plane are clipped (for the
-        # others the clip returns them as they are)
-        cnt = np.where(cnt >= 3, cnt, 0)
-        valid = np.arange(Vb.shape[1])[None, :] < cnt[:, None]
-        cut = np.any(valid & ~(np.einsum("pkj,pj->pk", Vb, M[pt, a]) > 0), axis=1)
-        if cut.any():
-            W, cnt[cut] = clip_halfspace(Vb[cut], cnt[cut], M[pt[cut], a])
-            if W.shape[1] > Vb.shape[1]:
-                Vb = np.concatenate([Vb, np.repeat(Vb[:, -1:], W.shape[1] - Vb.shape[1], axis=1)], axis=1)
-            Vb[cut, :W.shape[1]] = W
-    # central projection from x onto Qc's plane: q = x + y h / (-nQ . y), y = offset
-    live = np.flatnonzero(cnt >= 3)
-    if live.size == 0:
-        return zero, zero
-    slot = np.minimum(np.arange(Vb.shape[1])[None, :], cnt[live, None] - 1)
-    Y = np.take_along_axis(Vb[live], slot[:, :, None], axis=1)         # padded by repeats
-    pt = pt[live]                                                       # sorted
-    Y = Y * (h[pt, None] / -(Y @ nQ))[:, :, None] + (X[pt] - q0)[:, None, :]
-    Y2 = Y @ RQ[:2].T
-    lost = np.unique(pt[~np.isfinite(Y2).all(axis=(1, 2))])
-    if lost.size and split:
-        # an image through infinity (a blocker's vertex at x to rounding): those points
-        # by the engine, the others as below
-        return _hidden_values_split(X, nP, Qc, blockers, lost, st)
-    # each image's rank among its point's images: the union grows rank by rank
-    rank = np.arange(len(pt)) - np.searchsorted(pt, pt)
-    union = np.full(nX, shapely.Polygon(), dtype=object)
-    try:
-        if lost.size:
-            raise shapely.errors.GEOSException("image through infinity")
-        images = shapely.polygons(Y2)
-        bad = ~shapely.is_valid(images)
-        if bad.any():
-            images[bad] = shapely.make_valid(images[bad])
-        union[pt[rank == 0]] = images[rank == 0]
-        with np.errstate(all="ignore"):
-            for r in range(1, int(rank.max()) + 1):
-                at = rank == r
-                union[pt[at]] = shapely.union(union[pt[at]], images[at])
-            hidden = union if convex else shapely.intersection(union, qpoly)
-    except shapely.errors.GEOSException:
-        # GEOS gave up on a nearly degenerate configuration: the engine instead
+    xy, start, ring_point, lost, reach, length, box, moved = hidden_pieces(
+        X, corners, q0, nQ, RQ[:2], V, counts, NK, tol.AREA_EDGE_ON_RTOL * size,
+        tol.AREA_IMAGE_ULPS, parts, part_counts)
+    H, EH, geo = zero.copy(), zero.copy(), zero.copy()
+    if len(ring_point):
+        # the pieces' rings from each point, in offset form in the receiver's frame
+        owner = owners(start)
+        nxt = successors(start)
+        first = start[:-1]
+        R = receiver_frame(nP)
+        E = ((xy - xy[first[owner]]) @ RQ[:2]) @ R.T
+        A0 = ((q0 - X[ring_point]) + xy[first] @ RQ[:2]) @ R.T
+        S, mags, errs = clipped_sector_sums(A0, E, nxt, owner, len(first))
+        H = np.bincount(ring_point, np.abs(S), minlength=nX) / (2.0 * np.pi)
+        # the sector sums' own error model (C1 is calibrated for the unit roundoff 2**-53)
+        rnd = np.bincount(ring_point, tol.C1 * tol.EPS * mags + errs, minlength=nX) / (2.0 * np.pi)
+        # the clipping's rounding: each piece's boundary within delta of the exact one
+        # (a few units of the largest coordinate for each clipping line a vertex may
+        # descend from), through the kernel's bound h / (pi r^3) over the region's
+        # bounding box (r >= the box's distance from x)
+        lines = int(counts.sum()) + len(corners) + int(part_counts.sum()) + 1
+        delta = tol.AREA_BOOLEAN_ULPS * lines * tol.EPS * reach
+        h = (X - q0) @ nQ
+        foot = (X - q0) @ RQ[:2].T
+        dx = np.maximum(0.0, np.maximum(box[:, 0] - foot[:, 0], foot[:, 0] - box[:, 2]))
+        dy = np.maximum(0.0, np.maximum(box[:, 1] - foot[:, 1], foot[:, 1] - box[:, 3]))
+        r = np.sqrt(h ** 2 + dx * dx + dy * dy)
+        bound = np.divide(h, np.pi * r ** 3, out=np.zeros_like(r), where=(r > 0) & (h > 0))
+        geo = moved * length * bound
+        EH = rnd + delta * length * bound + geo
+    # an image the vertices' rounding can move by more than AREA_IMAGE_RTOL of Qc's size
+    # (a crossing near x, magnified by the projection), unless what that moves of the
+    # value is within the caller's budget, is not to be trusted: that point goes to the
+    # engine, as one through infinity
+    extent = float(np.ptp(Q2, axis=0).max())          # the pieces lie within Qc (or its box)
+    lost |= ((moved > tol.AREA_IMAGE_RTOL * np.maximum(reach, extent))
+             & ((length == 0) | (geo > budget)))
+    if lost.any():
+        # an image through infinity or not to be trusted: the engine
         if st is not None:
             st["engine_fallbacks"] = st.get("engine_fallbacks", 0) + 1
-            st["engine_fallback_points"] = st.get("engine_fallback_points", 0) + nX
-        return _hidden_values_by_engine(X, nP, Qc, Kc)
-    # the region's rings from each point: outer rings and holes
-    parts, part_of = polygon_parts(hidden)
-    keep = shapely.area(parts) > 0
-    parts, part_of = parts[keep], part_of[keep]
-    if len(parts) == 0:
-        return zero, zero
-    xy, owner, first, _, nxt, is_hole, ring_part = shapely_rings(parts)
-    point = part_of[ring_part]                                           # ring -> point
-    R = receiver_frame(nP)
-    E = ((xy - xy[first[owner]]) @ RQ[:2]) @ R.T
-    A0 = ((q0 - X[point]) + xy[first] @ RQ[:2]) @ R.T
-    S, mags, errs = clipped_sector_sums(A0, E, nxt, owner, len(first))
-    sign = np.where(is_hole, -1.0, 1.0)
-    value = np.bincount(point, sign * np.abs(S), minlength=nX) / (2.0 * np.pi)
-    # the sector sums' own error model (C1 is calibrated for the unit roundoff 2**-53)
-    rnd = np.bincount(point, tol.C1 * tol.EPS * mags + errs, minlength=nX) / (2.0 * np.pi)
-    # the booleans' rounding: the boundary moved by delta, through the kernel's bound
-    # h / (pi r^3) over the region's bounding box (r >= the box's distance from x);
-    # points with nothing hidden (an empty region, no bounds) have nothing to move
-    some = np.zeros(nX, dtype=bool)
-    some[point] = True
-    b = shapely.bounds(hidden[some])
-    foot = ((X - q0) @ RQ[:2].T)[some]
-    dx = np.maximum(0.0, np.maximum(b[:, 0] - foot[:, 0], foot[:, 0] - b[:, 2]))
-    dy = np.maximum(0.0, np.maximum(b[:, 1] - foot[:, 1], foot[:, 1] - b[:, 3]))
-    r = np.sqrt(h[some] ** 2 + dx * dx + dy * dy)
-    delta = tol.AREA_BOOLEAN_ULPS * (nb + 1) * tol.EPS * float(np.abs(Y2).max())
-    bound = np.divide(h[some], np.pi * r ** 3, out=np.zeros_like(r), where=r > 0)   # x on Qc's plane: Qc edge-on
-    geo = np.zeros(nX)
-    geo[some] = delta * shapely.length(hidden[some]) * bound
-    est = rnd + geo
-    # holes subtract: below 0 only by rounding, within the estimate
-    return nonnegative(value, est, "hidden part"), est
+            st["engine_fallback_points"] = st.get("engine_fallback_points", 0) + int(lost.sum())
+        H[lost], EH[lost] = _hidden_values_by_engine(X[lost], nP, Qc, Kc)
+    return nonnegative(H, EH, "hidden part"), EH
 
 
 def _strictly_convex(Q2):
@@ -472,27 +424,10 @@ def _strictly_convex(Q2):
                        * np.linalg.norm(f, axis=1)))
 
 
-def _hidden_values_split(X, nP, Qc, blockers, lost, st):
-    """:func:`_hidden_values` with the points ``lost`` (indices into X) by the engine
-    (counted as a fallback) and the others by GEOS (without a second split: if their
-    images still do not stay finite, the engine takes them all)."""
-    H, EH = np.zeros(len(X)), np.zeros(len(X))
-    keep = np.setdiff1d(np.arange(len(X)), lost)
-    if keep.size:
-        H[keep], EH[keep] = _hidden_values(X[keep], nP, Qc, blockers, st, split=False)
-    if st is not None:
-        st["engine_fallbacks"] = st.get("engine_fallbacks", 0) + 1
-        st["engine_fallback_points"] = st.get("engine_fallback_points", 0) + len(lost)
-    Kc = [K for K in (clip_front(np.asarray(K), *_plane_frame(Qc)[:2]) for K in blockers)
-          if K is not None]
-    H[lost], EH[lost] = _hidden_values_by_engine(X[lost], nP, Qc, Kc)
-    return H, EH
-
-
 def _hidden_values_by_engine(X, nP, Qc, blockers):
     """:func:`_hidden_values` by the engine instead (exact occluded point values on the
     sub-scene of Qc and the blockers, subtracted from the unoccluded ones): about a
-    hundred times slower, used where GEOS fails."""
+    thousand times slower, used where a point's images cannot be trusted."""
     sub = Scene.from_polygons([Qc] + list(blockers))
     exact = Exact()
     FE = [exact.point_form_factors(sub, x, nP, error=True) for x in np.atleast_2d(X)]
@@ -588,22 +523,26 @@ def _hidden_integral(S, Pc, Qc, nP, tolerance, area_P, whole, shortcuts, st):
     hidden = err = 0.0
     points = 0
     while len(T):
-        # every triangle of this level together: its two rules' nodes, one call
+        # a sliver (between nearly coincident events) is not evaluated: the hidden part
+        # is between 0 and 1, so its integral is half the sliver's area, within as much
+        area_t = _triangle_areas(T)
+        sliver = area_t / area_P <= tol.AREA_SLIVER_SHARE * tolerance
+        hidden += 0.5 * float(area_t[sliver].sum()) / area_P
+        err += 0.5 * float(area_t[sliver].sum()) / area_P
+        T, depth, area_t = T[~sliver], depth[~sliver], area_t[~sliver]
+        if not len(T):
+            break
+        # every other triangle of this level together: its two rules' nodes, one call
         (Xl, Wl), (Xh, Wh) = (triangle_rule(T, r) for r in _RULES)
         nl = Xl.shape[1]
-        H, EH = _hidden_values(np.concatenate([Xl, Xh], axis=1).reshape(-1, 3), nP, Qc, S[1:], st)
+        H, EH = _hidden_values(np.concatenate([Xl, Xh], axis=1).reshape(-1, 3), nP, Qc, S[1:], st,
+                               budget=tol.AREA_IMAGE_BUDGET_SHARE * tolerance)
         points += H.size
         H, EH = H.reshape(len(T), -1), EH.reshape(len(T), -1)
         lo, hi = (Wl * H[:, :nl]).sum(axis=1), (Wh * H[:, nl:]).sum(axis=1)
-        area_t = _triangle_areas(T)
         diff = np.abs(hi - lo) / area_P
-        # a sliver (between nearly coincident events): kept as it is, with the largest
-        # error it can carry (the hidden part is between 0 and 1)
-        sliver = area_t / area_P <= tol.AREA_SLIVER_SHARE * tolerance
-        hidden += float(hi[sliver].sum()) / area_P
-        err += float(area_t[sliver].sum()) / area_P
-        split = ~sliver & (diff > 0.5 * tolerance * area_t / total_area) & (depth < tol.AREA_MAX_DEPTH)
-        done = ~sliver & ~split
+        split = (diff > 0.5 * tolerance * area_t / total_area) & (depth < tol.AREA_MAX_DEPTH)
+        done = ~split
         hidden += float(hi[done].sum()) / area_P
         err += float(diff[done].sum() + (Wh[done] * EH[done, nl:]).sum() / area_P)
         # the others cut in four at their edges' midpoints
