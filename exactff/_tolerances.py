@@ -54,6 +54,8 @@ __all__ = [
     "AREA_IMAGE_ULPS",
     "AREA_IMAGE_RTOL",
     "AREA_IMAGE_BUDGET_SHARE",
+    "AREA_SLIVER_ULPS",
+    "AREA_MAX_PIECES",
     "AREA_EDGE_ON_RTOL",
     "AREA_SHAFT_ENTRIES_PER_CALL",
     "AREA_WHOLE_TOLERANCE_SHARE",
@@ -366,6 +368,13 @@ AREA_IMAGE_RTOL = 1e-9
 #: estimate may hold for its images' rounding before the point goes to the engine (the
 #: adaptive rules integrate the estimates, so at most this share of the value's).
 AREA_IMAGE_BUDGET_SHARE = 0.01
+
+#: Area form factors, hidden parts: a piece of the hidden region whose doubled area is
+#: within this many units of rounding of the squared extent of its point's images is a
+#: sliver left by splits along nearly coincident lines: dropped, its area in the
+#: estimate; and the pieces one point may hold before it goes to the engine.
+AREA_SLIVER_ULPS = 64.0
+AREA_MAX_PIECES = 20_000
 
 #: Area form factors: a blocker whose plane passes within this of a point (relative to
 #: the sub-scene's size) is seen edge-on from it and hides nothing.

@@ -18,6 +18,7 @@
 #include <pybind11/pybind11.h>
 
 #include <algorithm>
+#include <cfloat>
 #include <cmath>
 #include <limits>
 #include <vector>
@@ -176,23 +177,43 @@ bool separated_by(const Piece& A, const Piece& B) {
     return false;
 }
 
-// pieces keep the winding of their image, which may be either way
-inline bool has_area(const Piece& p) { return p.size() >= 3 && twice_area(p.v) != 0; }
+// Pieces thinner than rounding are dropped, their area counted (in the estimate): the
+// splits along nearly coincident lines (a back face's image against the front faces'
+// that share its outline) would otherwise leave slivers that every later image splits
+// again, without end. Pieces keep the winding of their image, which may be either way.
+struct Slivers {
+    double min_area = 0.0;   // twice the area below which a piece is a sliver
+    double dropped = 0.0;    // the slivers' area, for the estimate
+    Box box{INFINITY, INFINITY, -INFINITY, -INFINITY};
+    bool keep(const Piece& p) {
+        if (p.size() < 3) return false;
+        const double a = std::fabs(twice_area(p.v));
+        if (a > min_area) return true;
+        if (a > 0) {
+            dropped += 0.5 * a;
+            const Box b = box_of(p);
+            box = {std::min(box.x0, b.x0), std::min(box.y0, b.y0), std::max(box.x1, b.x1),
+                   std::max(box.y1, b.y1)};
+        }
+        return false;
+    }
+};
 
 // F less the convex E: F's parts outside each of E's lines in turn.
 void difference(const Piece& F, const Piece& E, std::vector<Piece>& out, Piece& in,
-                Piece& outside) {
+                Piece& outside, Slivers& slivers) {
     Piece rest = F;
     for (size_t i = 0, n = E.size(); i < n && rest.size() >= 3; ++i) {
         split(rest, E.l[i], in, outside);
-        if (has_area(outside)) out.push_back(outside);
+        if (slivers.keep(outside)) out.push_back(outside);
         rest.v.swap(in.v);
         rest.l.swap(in.l);
     }
 }
 
 // F cut by the convex C: its part inside every line of C.
-bool intersect(const Piece& F, const Piece& C, Piece& out, Piece& in, Piece& outside) {
+bool intersect(const Piece& F, const Piece& C, Piece& out, Piece& in, Piece& outside,
+               Slivers& slivers) {
     out = F;
     for (const Line& L : C.l) {
         split(out, L, in, outside);
@@ -200,7 +221,7 @@ bool intersect(const Piece& F, const Piece& C, Piece& out, Piece& in, Piece& out
         out.l.swap(in.l);
         if (out.size() < 3) return false;
     }
-    return has_area(out);
+    return slivers.keep(out);
 }
 
 }  // namespace
@@ -211,12 +232,15 @@ bool intersect(const Piece& F, const Piece& C, Piece& out, Piece& in, Piece& out
 // normals (b, 3); edge_on a distance within which x is on a blocker's plane (seen
 // edge-on, hiding nothing); vertex_ulps the rounding of an offset or a crossing in
 // units of long double's roundoff of its length (of the longer end's, for a crossing); parts (p, k', 2) padded convex parts of Q in the plane's
-// frame with counts (p,), none where the base is Q itself.
+// frame with counts (p,), none where the base is Q itself; sliver_ulps: a piece of at
+// most this many units of rounding of the squared reach (twice its area) is dropped and
+// counted; max_pieces: a point with more pieces is reported lost.
 // Returns (xy (V, 2) ring vertices in the plane's frame, ring_start (R + 1,), ring_point
 // (R,), lost (n,) bool: an image not finite, the point left empty for the caller,
 // reach (n,) the largest coordinate of a point's images (before the booleans), length (n,) the pieces'
-// perimeters, box (n, 4) their bounding box, and moved (n,) how far the rounding of the
-// clipped vertices can move a point's images).
+// perimeters, box (n, 4) their bounding box (the slivers' included), moved (n,) how far
+// the rounding of the clipped vertices can move a point's images, and dropped (n,) the
+// area of its slivers).
 py::tuple hidden_pieces(py::array_t<double, py::array::c_style | py::array::forcecast> X,
                         py::array_t<double, py::array::c_style | py::array::forcecast> corners,
                         py::array_t<double, py::array::c_style | py::array::forcecast> q0,
@@ -225,7 +249,8 @@ py::tuple hidden_pieces(py::array_t<double, py::array::c_style | py::array::forc
                         py::array_t<double, py::array::c_style | py::array::forcecast> blockers,
                         py::array_t<long long, py::array::c_style | py::array::forcecast> counts,
                         py::array_t<double, py::array::c_style | py::array::forcecast> normals,
-                        double edge_on, double vertex_ulps,
+                        double edge_on, double vertex_ulps, double sliver_ulps,
+                        long long max_pieces,
                         py::array_t<double, py::array::c_style | py::array::forcecast> parts,
                         py::array_t<long long, py::array::c_style | py::array::forcecast> part_counts) {
     const auto x = X.unchecked<2>();
@@ -276,7 +301,8 @@ py::tuple hidden_pieces(py::array_t<double, py::array::c_style | py::array::forc
     std::vector<double> xy;
     std::vector<long long> ring_start{0}, ring_point;
     std::vector<unsigned char> lost(n, 0);
-    std::vector<double> reach(n, 0.0), length(n, 0.0), bounds(4 * n, 0.0), moved(n, 0.0);
+    std::vector<double> reach(n, 0.0), length(n, 0.0), bounds(4 * n, 0.0), moved(n, 0.0),
+        dropped(n, 0.0);
     {
         py::gil_scoped_release release;
         std::vector<P3> M(nc);
@@ -296,6 +322,7 @@ py::tuple hidden_pieces(py::array_t<double, py::array::c_style | py::array::forc
             }
             const P3 foot = sub(p, origin);
             pieces.clear();
+            Slivers slivers;
             bool ok = true;
             for (ssize_t b = 0; b < nb && ok; ++b) {
                 // the offsets, each rounded once (within vertex_error of its length)
@@ -338,7 +365,8 @@ py::tuple hidden_pieces(py::array_t<double, py::array::c_style | py::array::forc
                                      static_cast<double>(-dot(foot, m))});
                 }
                 if (!ok) break;
-                if (!has_area(img)) continue;
+                slivers.min_area = sliver_ulps * DBL_EPSILON * reach[i] * reach[i];
+                if (!slivers.keep(img)) continue;
                 // the image less every piece already there, as disjoint convex pieces
                 incoming.assign(1, img);
                 const size_t have = pieces.size();
@@ -350,11 +378,13 @@ py::tuple hidden_pieces(py::array_t<double, py::array::c_style | py::array::forc
                         if (boxes_apart(box_of(F), be) || separated_by(E, F) || separated_by(F, E))
                             next.push_back(F);
                         else
-                            difference(F, E, next, in, outside);
+                            difference(F, E, next, in, outside, slivers);
                     }
                     incoming.swap(next);
                 }
                 for (Piece& F : incoming) pieces.push_back(std::move(F));
+                // a point whose pieces grow past max_pieces goes to the engine instead
+                if (pieces.size() > static_cast<size_t>(max_pieces)) ok = false;
             }
             if (!ok) {
                 lost[i] = 1;
@@ -366,13 +396,15 @@ py::tuple hidden_pieces(py::array_t<double, py::array::c_style | py::array::forc
                 for (const Piece& F : pieces) {
                     const Box bf = box_of(F);
                     for (ssize_t q = 0; q < np_; ++q)
-                        if (!boxes_apart(bf, Qbox[q]) && intersect(F, Qparts[q], cut, in, outside))
+                        if (!boxes_apart(bf, Qbox[q]) &&
+                            intersect(F, Qparts[q], cut, in, outside, slivers))
                             next.push_back(cut);
                 }
                 pieces.swap(next);
             }
             double len = 0.0;
-            Box bb{INFINITY, INFINITY, -INFINITY, -INFINITY};
+            Box bb = slivers.box;            // the slivers dropped lie in the region's box
+            dropped[i] = slivers.dropped;
             for (const Piece& F : pieces) {
                 for (size_t k = 0, m = F.size(); k < m; ++k) {
                     const P2& u = F.v[k];
@@ -389,7 +421,7 @@ py::tuple hidden_pieces(py::array_t<double, py::array::c_style | py::array::forc
                 ring_point.push_back(i);
             }
             length[i] = len;
-            if (!pieces.empty()) {
+            if (bb.x0 <= bb.x1) {
                 bounds[4 * i] = bb.x0;
                 bounds[4 * i + 1] = bb.y0;
                 bounds[4 * i + 2] = bb.x1;
@@ -411,10 +443,11 @@ py::tuple hidden_pieces(py::array_t<double, py::array::c_style | py::array::forc
     std::copy(length.begin(), length.end(), out_length.mutable_data());
     py::array_t<double> out_box({n, static_cast<ssize_t>(4)});
     std::copy(bounds.begin(), bounds.end(), out_box.mutable_data());
-    py::array_t<double> out_moved(n);
+    py::array_t<double> out_moved(n), out_dropped(n);
     std::copy(moved.begin(), moved.end(), out_moved.mutable_data());
+    std::copy(dropped.begin(), dropped.end(), out_dropped.mutable_data());
     return py::make_tuple(out_xy, out_start, out_point, out_lost, out_reach, out_length, out_box,
-                          out_moved);
+                          out_moved, out_dropped);
 }
 
 PYBIND11_MODULE(_hidden, m) {

@@ -368,9 +368,9 @@ def _hidden_values(X, nP, Qc, blockers, st=None, budget=0.0):
     NK = np.array([area_vector(K) for K in pieces])
     NK /= np.linalg.norm(NK, axis=1)[:, None]
     size = float(np.ptp(np.vstack(Kc + [Qc, X]), axis=0).max())
-    xy, start, ring_point, lost, reach, length, box, moved = hidden_pieces(
+    xy, start, ring_point, lost, reach, length, box, moved, dropped = hidden_pieces(
         X, corners, q0, nQ, RQ[:2], V, counts, NK, tol.AREA_EDGE_ON_RTOL * size,
-        tol.AREA_IMAGE_ULPS, parts, part_counts)
+        tol.AREA_IMAGE_ULPS, tol.AREA_SLIVER_ULPS, tol.AREA_MAX_PIECES, parts, part_counts)
     H, EH, geo = zero.copy(), zero.copy(), zero.copy()
     if len(ring_point):
         # the pieces' rings from each point, in offset form in the receiver's frame
@@ -397,7 +397,8 @@ def _hidden_values(X, nP, Qc, blockers, st=None, budget=0.0):
         r = np.sqrt(h ** 2 + dx * dx + dy * dy)
         bound = np.divide(h, np.pi * r ** 3, out=np.zeros_like(r), where=(r > 0) & (h > 0))
         geo = moved * length * bound
-        EH = rnd + delta * length * bound + geo
+        # and the slivers dropped (thinner than rounding), at the kernel's bound
+        EH = rnd + (delta * length + dropped) * bound + geo
     # an image the vertices' rounding can move by more than AREA_IMAGE_RTOL of Qc's size
     # (a crossing near x, magnified by the projection), unless what that moves of the
     # value is within the caller's budget, is not to be trusted: that point goes to the
