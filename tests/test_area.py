@@ -436,13 +436,14 @@ def test_hidden_part_falls_back_to_the_engine_where_its_images_are_lost(monkeypa
     assert st == {"engine_fallbacks": 1, "engine_fallback_points": 2}
 
 
-# points where the hidden part built in Q's plane was wrong, against the engine: a blocker
-# whose corner is 1.6e-13 from the point, nearly edge-on (the image's vertices, rounded
+# points where the hidden part built in Q's plane was wrong, against the engine: a
+# blocker whose corner is 1.6e-13 from the point, nearly edge-on (the image's vertices, rounded
 # in doubles, moved it by 1 %: long double now, and a point whose images that rounding
 # can still move goes to the engine); two walls meeting in a corner, whose images' short
 # edges (two vertices 2.5e-16 apart) once cut along a line of no true direction (the
 # union 7 % too large: every edge now carries the line it lies on); a room's corner
-# where the GEOS booleans were 7.4e-6 off (4.7e-3 relative)
+# where the GEOS booleans were 7.4e-6 off (4.7e-3 relative); every piece of a point's
+# region a sliver (dropped: its area was left out of the estimate, 0 against 4.3e-13)
 _ENGINE_CASES = (
     ([33.0, 66.99999999999989, 1.2307000475897438e-13], [-1.0, 0.0, 0.0],
      [[27, 47, 22], [27, 105, 22], [33, 105, 22], [33, 48, 22]],
@@ -457,6 +458,10 @@ _ENGINE_CASES = (
       [[33, 67, 5], [33, 153, 5], [-22, 153, 5], [-22, 67, 5]],
       [[22, 0, 0], [22, 0, 22], [15, 45, 22], [15, 45, 0]],
       [[33, 48, 0], [15, 45, 0], [15, 45, 22], [33, 48, 22]]]),
+    ([1.0, 1.0, 2.0], [0.0, 0.0, -1.0],
+     [[-50, -50, 0], [50, -50, 0], [50, 50, 0], [-50, 50, 0]],
+     [[[0.5, 1.000000000001, 0.5], [1.5, 1.000000000001, 0.5], [1.5, 1.000000000001, 1.5],
+       [0.5, 1.000000000001, 1.5]]]),
 )
 
 
@@ -466,10 +471,14 @@ def test_hidden_part_where_it_was_wrong_against_the_engine(case):
     from exactff.area.occluded import _hidden_values
 
     x, nP, Q, B = (np.asarray(v, dtype=float) for v in _ENGINE_CASES[case])
-    H, EH = _hidden_values(x[None], nP, Q, list(B))
+    st = {}
+    H, EH = _hidden_values(x[None], nP, Q, list(B), st)
+    # the first point's images cannot be trusted (it goes to the engine, counted); the
+    # others are the compiled path's own
+    assert st.get("engine_fallback_points", 0) == (1 if case == 0 else 0)
     F, E = ef.form_factors(ef.Scene.from_polygons([Q] + list(B)), x, nP, error=True)
     U, EU = (v[0] for v in _point_values(x[None], nP, [Q]))
-    assert H[0] > 1e-3
+    assert H[0] > 1e-3 or case == 3
     assert abs(H[0] - (U[0] - F[0])) <= EH[0] + EU[0] + E[0], (H[0], U[0] - F[0], EH[0], E[0])
 
 

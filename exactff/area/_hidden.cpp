@@ -354,7 +354,7 @@ py::tuple hidden_pieces(py::array_t<double, py::array::c_style | py::array::forc
                     // where the vertex's rounding e takes the image: s e (1 + |v| / |v . nQ|),
                     // large for a crossing close to p
                     moved[i] = std::max(moved[i], static_cast<double>(
-                        s * W.e[k] * (1 + std::sqrt(dot(v, v)) / std::fabs(down))));
+                        std::fabs(s) * W.e[k] * (1 + std::sqrt(dot(v, v)) / std::fabs(down))));
                     const P3 q{v.x * s + foot.x, v.y * s + foot.y, v.z * s + foot.z};
                     const P2 u{static_cast<double>(dot(q, ax)), static_cast<double>(dot(q, ay))};
                     if (!std::isfinite(u.x) || !std::isfinite(u.y)) ok = false;

@@ -371,7 +371,7 @@ def _hidden_values(X, nP, Qc, blockers, st=None, budget=0.0):
     xy, start, ring_point, lost, reach, length, box, moved, dropped = hidden_pieces(
         X, corners, q0, nQ, RQ[:2], V, counts, NK, tol.AREA_EDGE_ON_RTOL * size,
         tol.AREA_IMAGE_ULPS, tol.AREA_SLIVER_ULPS, tol.AREA_MAX_PIECES, parts, part_counts)
-    H, EH, geo = zero.copy(), zero.copy(), zero.copy()
+    H, rnd = zero.copy(), zero.copy()
     if len(ring_point):
         # the pieces' rings from each point, in offset form in the receiver's frame
         owner = owners(start)
@@ -384,21 +384,22 @@ def _hidden_values(X, nP, Qc, blockers, st=None, budget=0.0):
         H = np.bincount(ring_point, np.abs(S), minlength=nX) / (2.0 * np.pi)
         # the sector sums' own error model (C1 is calibrated for the unit roundoff 2**-53)
         rnd = np.bincount(ring_point, tol.C1 * tol.EPS * mags + errs, minlength=nX) / (2.0 * np.pi)
-        # the clipping's rounding: each piece's boundary within delta of the exact one
-        # (a few units of the largest coordinate for each clipping line a vertex may
-        # descend from), through the kernel's bound h / (pi r^3) over the region's
-        # bounding box (r >= the box's distance from x)
-        lines = int(counts.sum()) + len(corners) + int(part_counts.sum()) + 1
-        delta = tol.AREA_BOOLEAN_ULPS * lines * tol.EPS * reach
-        h = (X - q0) @ nQ
-        foot = (X - q0) @ RQ[:2].T
-        dx = np.maximum(0.0, np.maximum(box[:, 0] - foot[:, 0], foot[:, 0] - box[:, 2]))
-        dy = np.maximum(0.0, np.maximum(box[:, 1] - foot[:, 1], foot[:, 1] - box[:, 3]))
-        r = np.sqrt(h ** 2 + dx * dx + dy * dy)
-        bound = np.divide(h, np.pi * r ** 3, out=np.zeros_like(r), where=(r > 0) & (h > 0))
-        geo = moved * length * bound
-        # and the slivers dropped (thinner than rounding), at the kernel's bound
-        EH = rnd + (delta * length + dropped) * bound + geo
+    # the clipping's rounding: each piece's boundary within delta of the exact one (a
+    # few units of the largest coordinate for each clipping line a vertex may descend
+    # from), through the kernel's bound h / (pi r^3) over the region's bounding box (r >=
+    # the box's distance from x; the box holds the slivers dropped too, so this holds
+    # for points that kept no piece at all)
+    lines = int(counts.sum()) + len(corners) + int(part_counts.sum()) + 1
+    delta = tol.AREA_BOOLEAN_ULPS * lines * tol.EPS * reach
+    h = (X - q0) @ nQ
+    foot = (X - q0) @ RQ[:2].T
+    dx = np.maximum(0.0, np.maximum(box[:, 0] - foot[:, 0], foot[:, 0] - box[:, 2]))
+    dy = np.maximum(0.0, np.maximum(box[:, 1] - foot[:, 1], foot[:, 1] - box[:, 3]))
+    r = np.sqrt(h ** 2 + dx * dx + dy * dy)
+    bound = np.divide(h, np.pi * r ** 3, out=np.zeros_like(r), where=(r > 0) & (h > 0))
+    geo = moved * length * bound
+    # and the slivers dropped (thinner than rounding), at the kernel's bound
+    EH = rnd + (delta * length + dropped) * bound + geo
     # an image the vertices' rounding can move by more than AREA_IMAGE_RTOL of Qc's size
     # (a crossing near x, magnified by the projection), unless what that moves of the
     # value is within the caller's budget, is not to be trusted: that point goes to the
