@@ -334,12 +334,30 @@ py::tuple hidden_pieces(py::array_t<double, py::array::c_style | py::array::forc
                     g = {g.x + W.v.back().x, g.y + W.v.back().y, g.z + W.v.back().z};
                 }
                 if (std::fabs(dot(W.v[0], KN[b])) <= edge_on) continue;   // seen edge-on
+                // wholly outside one of the pyramid's planes: clipped away, as clip3 would
+                bool outside_pyramid = false;
+                for (ssize_t a = 0; a < nc && !outside_pyramid; ++a) {
+                    outside_pyramid = true;
+                    for (const P3& v : W.v)
+                        if (dot(M[a], v) >= 0) {
+                            outside_pyramid = false;
+                            break;
+                        }
+                }
+                if (outside_pyramid) continue;
                 // each edge's plane through p, inside towards the blocker's centroid
                 for (size_t k = 0, m = W.v.size(); k < m; ++k) {
                     P3 e = cross(W.v[k], W.v[(k + 1) % m]);
                     W.m.push_back(dot(e, g) < 0 ? neg(e) : e);
                 }
                 for (ssize_t a = 0; a < nc && W.v.size() >= 3; ++a) {
+                    bool inside = true;          // wholly inside this plane: nothing to cut
+                    for (const P3& v : W.v)
+                        if (dot(M[a], v) < 0) {
+                            inside = false;
+                            break;
+                        }
+                    if (inside) continue;
                     clip3(W, M[a], vertex_error, T);
                     std::swap(W, T);
                 }

@@ -522,7 +522,7 @@ def _hidden_integral(S, Pc, Qc, nP, tolerance, area_P, whole, shortcuts, st):
     T = np.array([_corner_first(t, S[1:], nP, dP) for t in cells]).reshape(-1, 3, 3)
     depth = np.zeros(len(T), dtype=int)
     total_area = float(_triangle_areas(T).sum())
-    hidden = err = 0.0
+    hidden = err = rules_err = 0.0
     points = 0
     while len(T):
         # a sliver (between nearly coincident events) is not evaluated: the hidden part
@@ -543,9 +543,14 @@ def _hidden_integral(S, Pc, Qc, nP, tolerance, area_P, whole, shortcuts, st):
         H, EH = H.reshape(len(T), -1), EH.reshape(len(T), -1)
         lo, hi = (Wl * H[:, :nl]).sum(axis=1), (Wh * H[:, nl:]).sum(axis=1)
         diff = np.abs(hi - lo) / area_P
-        split = (diff > 0.5 * tolerance * area_t / total_area) & (depth < tol.AREA_MAX_DEPTH)
+        # half the tolerance for the rules' differences: what the triangles accepted so
+        # far left of it is shared among the others by area (at the first level, the
+        # triangle's share of the emitter)
+        budget = max(0.5 * tolerance - rules_err, 0.0)
+        split = (diff > budget * area_t / area_t.sum()) & (depth < tol.AREA_MAX_DEPTH)
         done = ~split
         hidden += float(hi[done].sum()) / area_P
+        rules_err += float(diff[done].sum())
         err += float(diff[done].sum() + (Wh[done] * EH[done, nl:]).sum() / area_P)
         # the others cut in four at their edges' midpoints
         a_, b_, c_ = T[split, 0], T[split, 1], T[split, 2]
