@@ -53,6 +53,7 @@ __all__ = [
     "AREA_BOOLEAN_ULPS",
     "AREA_IMAGE_ULPS",
     "AREA_IMAGE_RTOL",
+    "AREA_IMAGE_PRECISE_RTOL",
     "AREA_IMAGE_BUDGET_SHARE",
     "AREA_SLIVER_ULPS",
     "AREA_MAX_PIECES",
@@ -363,6 +364,11 @@ AREA_BOOLEAN_ULPS = 16.0
 #: engine.
 AREA_IMAGE_ULPS = 8.0
 AREA_IMAGE_RTOL = 1e-9
+
+#: Area form factors, hidden parts: the 3-D clipping and projection run in doubles, and
+#: again in long double at a point whose images their rounding can move by more than
+#: this share of the receiver's size (2.4 times faster in doubles on View3D's facet).
+AREA_IMAGE_PRECISE_RTOL = 1e-13
 
 #: Area form factors, occluded pairs: the share of the tolerance that a point value's
 #: estimate may hold for its images' rounding before the point goes to the engine (the

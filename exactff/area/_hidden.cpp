@@ -30,12 +30,13 @@ namespace {
 struct P2 {
     double x, y;
 };
-// 3-D work in long double (on x86 64 bits of mantissa): a crossing near x of an edge
+// 3-D work in R: double first, long double (on x86 64 bits of mantissa) for a point
+// where what the vertices' rounding can move is too much (a crossing near x of an edge
 // whose ends are far from it loses the ends' size in absolute terms, and the projection
-// magnifies that near x
-using real = long double;
+// magnifies that near x)
+template <typename R>
 struct P3 {
-    real x, y, z;
+    R x, y, z;
 };
 // a line of Q's plane, a u + b v + c = 0, the side a u + b v + c >= 0 inside
 struct Line {
@@ -54,10 +55,11 @@ struct Piece {
 };
 // a polygon in 3-D (offsets from x), the plane through x of each edge (inside >= 0) and a
 // bound on each vertex's rounding
+template <typename R>
 struct Poly3 {
-    std::vector<P3> v;
-    std::vector<P3> m;
-    std::vector<real> e;
+    std::vector<P3<R>> v;
+    std::vector<P3<R>> m;
+    std::vector<R> e;
     void clear() {
         v.clear();
         m.clear();
@@ -65,12 +67,18 @@ struct Poly3 {
     }
 };
 
-inline real dot(const P3& a, const P3& b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
-inline P3 cross(const P3& a, const P3& b) {
+template <typename R>
+inline R dot(const P3<R>& a, const P3<R>& b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+template <typename R>
+inline P3<R> cross(const P3<R>& a, const P3<R>& b) {
     return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
 }
-inline P3 sub(const P3& a, const P3& b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
-inline P3 neg(const P3& a) { return {-a.x, -a.y, -a.z}; }
+template <typename R>
+inline P3<R> sub(const P3<R>& a, const P3<R>& b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
+template <typename R>
+inline P3<R> neg(const P3<R>& a) { return {-a.x, -a.y, -a.z}; }
+template <typename R>
+inline P3<R> to(const P3<double>& a) { return {R(a.x), R(a.y), R(a.z)}; }
 
 double twice_area(const std::vector<P2>& p) {
     double s = 0.0;
@@ -85,23 +93,24 @@ double twice_area(const std::vector<P2>& p) {
 // The part of V where dot(m, v) >= 0 (Sutherland-Hodgman; the crossing computed from the
 // inside end, as exactff.halfspace.clip_halfspace); the cut edge lies on m. A crossing's
 // rounding: its ends' larger one plus ulps units of the larger end's length.
-void clip3(const Poly3& V, const P3& m, real ulps, Poly3& out) {
+template <typename R>
+void clip3(const Poly3<R>& V, const P3<R>& m, R ulps, Poly3<R>& out) {
     out.clear();
     const size_t n = V.v.size();
     for (size_t i = 0; i < n; ++i) {
-        const P3& a = V.v[i];
-        const P3& b = V.v[(i + 1) % n];
-        const real sa = dot(m, a), sb = dot(m, b);
+        const P3<R>& a = V.v[i];
+        const P3<R>& b = V.v[(i + 1) % n];
+        const R sa = dot(m, a), sb = dot(m, b);
         if (sa >= 0) {
             out.v.push_back(a);
             out.m.push_back(V.m[i]);
             out.e.push_back(V.e[i]);
         }
         if ((sa >= 0) != (sb >= 0)) {
-            const P3& p = sa >= 0 ? a : b;
-            const P3& q = sa >= 0 ? b : a;
-            const real sp = sa >= 0 ? sa : sb, sq = sa >= 0 ? sb : sa;
-            const real t = sp / (sp - sq);
+            const P3<R>& p = sa >= 0 ? a : b;
+            const P3<R>& q = sa >= 0 ? b : a;
+            const R sp = sa >= 0 ? sa : sb, sq = sa >= 0 ? sb : sa;
+            const R t = sp / (sp - sq);
             out.v.push_back({p.x + t * (q.x - p.x), p.y + t * (q.y - p.y), p.z + t * (q.z - p.z)});
             // leaving: the edge from the crossing runs along m; entering: along V's edge
             out.m.push_back(sa >= 0 ? m : V.m[i]);
@@ -224,6 +233,157 @@ bool intersect(const Piece& F, const Piece& C, Piece& out, Piece& in, Piece& out
     return slivers.keep(out);
 }
 
+// The inputs of one call, in doubles.
+struct Inputs {
+    std::vector<P3<double>> base;              // the pyramid's base
+    std::vector<std::vector<P3<double>>> K;    // the blockers
+    std::vector<P3<double>> KN;                // their unit normals
+    std::vector<Piece> Qparts;                 // Q's convex parts (none over Q itself)
+    std::vector<Box> Qbox;
+    P3<double> origin, nq, ax, ay;
+    double edge_on, vertex_ulps, sliver_ulps;
+    size_t max_pieces;
+};
+
+// What one point's hidden region is: its pieces, and what the estimate needs.
+struct Region {
+    std::vector<Piece> pieces;
+    Slivers slivers;
+    double reach = 0.0, moved = 0.0;
+    bool ok = true;                            // false: an image not finite, too many pieces
+};
+
+// Scratch space reused from point to point.
+template <typename R>
+struct Work {
+    std::vector<P3<R>> M;
+    Poly3<R> W, T;
+    Piece img, in, outside, cut;
+    std::vector<Piece> incoming, next;
+};
+
+// The hidden region of Q from the point p, in precision R.
+template <typename R>
+void region_at(const Inputs& in, const P3<double>& pd, Region& out, Work<R>& w) {
+    out.pieces.clear();
+    out.slivers = Slivers();
+    out.reach = out.moved = 0.0;
+    out.ok = true;
+    const R vertex_error = R(in.vertex_ulps) * std::numeric_limits<R>::epsilon();
+    const P3<R> p = to<R>(pd), nq = to<R>(in.nq), ax = to<R>(in.ax), ay = to<R>(in.ay);
+    const P3<R> foot = sub(p, to<R>(in.origin));
+    const R h = dot(foot, nq);
+    if (!(h > 0)) return;              // on Q's plane: Q edge-on, nothing hidden
+    // the pyramid's inward planes through p
+    const size_t nc = in.base.size();
+    w.M.resize(nc);
+    for (size_t a = 0; a < nc; ++a) {
+        const P3<R> c0 = sub(to<R>(in.base[a]), p), c1 = sub(to<R>(in.base[(a + 1) % nc]), p),
+                    c2 = sub(to<R>(in.base[(a + 2) % nc]), p);
+        w.M[a] = cross(c0, c1);
+        if (dot(w.M[a], c2) < 0) w.M[a] = neg(w.M[a]);
+    }
+    Poly3<R>& W = w.W;
+    for (size_t b = 0; b < in.K.size(); ++b) {
+        // the offsets, each rounded once (within vertex_error of its length)
+        W.clear();
+        P3<R> g{0, 0, 0};
+        for (const P3<double>& v : in.K[b]) {
+            W.v.push_back(sub(to<R>(v), p));
+            W.e.push_back(vertex_error * std::sqrt(dot(W.v.back(), W.v.back())));
+            g = {g.x + W.v.back().x, g.y + W.v.back().y, g.z + W.v.back().z};
+        }
+        if (std::fabs(dot(W.v[0], to<R>(in.KN[b]))) <= R(in.edge_on)) continue;   // edge-on
+        // wholly outside one of the pyramid's planes: clipped away, as clip3 would
+        bool outside_pyramid = false;
+        for (size_t a = 0; a < nc && !outside_pyramid; ++a) {
+            outside_pyramid = true;
+            for (const P3<R>& v : W.v)
+                if (dot(w.M[a], v) >= 0) {
+                    outside_pyramid = false;
+                    break;
+                }
+        }
+        if (outside_pyramid) continue;
+        // each edge's plane through p, inside towards the blocker's centroid
+        for (size_t k = 0, m = W.v.size(); k < m; ++k) {
+            P3<R> e = cross(W.v[k], W.v[(k + 1) % m]);
+            W.m.push_back(dot(e, g) < 0 ? neg(e) : e);
+        }
+        for (size_t a = 0; a < nc && W.v.size() >= 3; ++a) {
+            bool inside = true;          // wholly inside this plane: nothing to cut
+            for (const P3<R>& v : W.v)
+                if (dot(w.M[a], v) < 0) {
+                    inside = false;
+                    break;
+                }
+            if (inside) continue;
+            clip3(W, w.M[a], vertex_error, w.T);
+            std::swap(W, w.T);
+        }
+        if (W.v.size() < 3) continue;
+        // central projection from p onto Q's plane, in the plane's frame; each edge's
+        // plane m traced on it: (ax . m) u + (ay . m) v + (q0 - p) . m
+        Piece& img = w.img;
+        img.clear();
+        for (size_t k = 0; k < W.v.size(); ++k) {
+            const P3<R>& v = W.v[k];
+            const R down = -dot(v, nq);
+            const R s = h / down;
+            // where the vertex's rounding e takes the image: |s| e (1 + |v| / |v . nQ|),
+            // large for a crossing close to p
+            out.moved = std::max(out.moved, static_cast<double>(
+                std::fabs(s) * W.e[k] * (1 + std::sqrt(dot(v, v)) / std::fabs(down))));
+            const P3<R> q{v.x * s + foot.x, v.y * s + foot.y, v.z * s + foot.z};
+            const P2 u{static_cast<double>(dot(q, ax)), static_cast<double>(dot(q, ay))};
+            if (!std::isfinite(u.x) || !std::isfinite(u.y)) {
+                out.ok = false;
+                return;
+            }
+            out.reach = std::max({out.reach, std::fabs(u.x), std::fabs(u.y)});
+            img.v.push_back(u);
+            const P3<R>& m = W.m[k];
+            img.l.push_back({static_cast<double>(dot(ax, m)), static_cast<double>(dot(ay, m)),
+                             static_cast<double>(-dot(foot, m))});
+        }
+        out.slivers.min_area = in.sliver_ulps * DBL_EPSILON * out.reach * out.reach;
+        if (!out.slivers.keep(img)) continue;
+        // the image less every piece already there, as disjoint convex pieces
+        w.incoming.assign(1, img);
+        const size_t have = out.pieces.size();
+        for (size_t e = 0; e < have && !w.incoming.empty(); ++e) {
+            const Piece& E = out.pieces[e];
+            const Box be = box_of(E);
+            w.next.clear();
+            for (const Piece& F : w.incoming) {
+                if (boxes_apart(box_of(F), be) || separated_by(E, F) || separated_by(F, E))
+                    w.next.push_back(F);
+                else
+                    difference(F, E, w.next, w.in, w.outside, out.slivers);
+            }
+            w.incoming.swap(w.next);
+        }
+        for (Piece& F : w.incoming) out.pieces.push_back(std::move(F));
+        // a point whose pieces grow past max_pieces goes to the engine instead
+        if (out.pieces.size() > in.max_pieces) {
+            out.ok = false;
+            return;
+        }
+    }
+    // over a base other than Q, the pieces cut by Q's convex parts
+    if (!in.Qparts.empty()) {
+        w.next.clear();
+        for (const Piece& F : out.pieces) {
+            const Box bf = box_of(F);
+            for (size_t q = 0; q < in.Qparts.size(); ++q)
+                if (!boxes_apart(bf, in.Qbox[q]) &&
+                    intersect(F, in.Qparts[q], w.cut, w.in, w.outside, out.slivers))
+                    w.next.push_back(w.cut);
+        }
+        out.pieces.swap(w.next);
+    }
+}
+
 }  // namespace
 
 // Arguments: X (n, 3) points; corners (c, 3) the pyramid's convex base in Q's plane;
@@ -231,10 +391,13 @@ bool intersect(const Piece& F, const Piece& C, Piece& out, Piece& in, Piece& out
 // the plane's axes; blockers (b, k, 3) padded convex polygons with counts (b,) and unit
 // normals (b, 3); edge_on a distance within which x is on a blocker's plane (seen
 // edge-on, hiding nothing); vertex_ulps the rounding of an offset or a crossing in
-// units of long double's roundoff of its length (of the longer end's, for a crossing); parts (p, k', 2) padded convex parts of Q in the plane's
+// units of the working precision's roundoff of its length (of the longer end's, for a crossing); parts (p, k', 2) padded convex parts of Q in the plane's
 // frame with counts (p,), none where the base is Q itself; sliver_ulps: a piece of at
 // most this many units of rounding of the squared reach (twice its area) is dropped and
-// counted; max_pieces: a point with more pieces is reported lost.
+// counted; max_pieces: a point with more pieces is reported lost; precise_rtol, extent:
+// a point is computed again in long double where an image is not finite or the
+// vertices' rounding can move its images by more than precise_rtol of the larger of
+// their reach and extent (Q's size).
 // Returns (xy (V, 2) ring vertices in the plane's frame, ring_start (R + 1,), ring_point
 // (R,), lost (n,) bool: an image not finite, the point left empty for the caller,
 // reach (n,) the largest coordinate of a point's images (before the booleans), length (n,) the pieces'
@@ -250,7 +413,7 @@ py::tuple hidden_pieces(py::array_t<double, py::array::c_style | py::array::forc
                         py::array_t<long long, py::array::c_style | py::array::forcecast> counts,
                         py::array_t<double, py::array::c_style | py::array::forcecast> normals,
                         double edge_on, double vertex_ulps, double sliver_ulps,
-                        long long max_pieces,
+                        long long max_pieces, double precise_rtol, double extent,
                         py::array_t<double, py::array::c_style | py::array::forcecast> parts,
                         py::array_t<long long, py::array::c_style | py::array::forcecast> part_counts) {
     const auto x = X.unchecked<2>();
@@ -260,27 +423,27 @@ py::tuple hidden_pieces(py::array_t<double, py::array::c_style | py::array::forc
     const auto bn = normals.unchecked<2>();
     const auto pa = parts.unchecked<3>();
     const auto pc = part_counts.unchecked<1>();
-    const real vertex_error = vertex_ulps * std::numeric_limits<real>::epsilon();
-    const P3 origin{q0.at(0), q0.at(1), q0.at(2)};
-    const P3 nq{nQ.at(0), nQ.at(1), nQ.at(2)};
-    const P3 ax{RQ.at(0, 0), RQ.at(0, 1), RQ.at(0, 2)};
-    const P3 ay{RQ.at(1, 0), RQ.at(1, 1), RQ.at(1, 2)};
+    Inputs in;
+    in.origin = {q0.at(0), q0.at(1), q0.at(2)};
+    in.nq = {nQ.at(0), nQ.at(1), nQ.at(2)};
+    in.ax = {RQ.at(0, 0), RQ.at(0, 1), RQ.at(0, 2)};
+    in.ay = {RQ.at(1, 0), RQ.at(1, 1), RQ.at(1, 2)};
+    in.edge_on = edge_on;
+    in.vertex_ulps = vertex_ulps;
+    in.sliver_ulps = sliver_ulps;
+    in.max_pieces = static_cast<size_t>(max_pieces);
     const ssize_t n = x.shape(0), nc = cr.shape(0), nb = bl.shape(0), np_ = pa.shape(0);
-
-    std::vector<P3> base(nc);
-    for (ssize_t a = 0; a < nc; ++a) base[a] = {cr(a, 0), cr(a, 1), cr(a, 2)};
-    std::vector<std::vector<P3>> K(nb);
-    std::vector<P3> KN(nb);
+    for (ssize_t a = 0; a < nc; ++a) in.base.push_back({cr(a, 0), cr(a, 1), cr(a, 2)});
+    in.K.resize(nb);
     for (ssize_t b = 0; b < nb; ++b) {
-        for (ssize_t k = 0; k < bc(b); ++k) K[b].push_back({bl(b, k, 0), bl(b, k, 1), bl(b, k, 2)});
-        KN[b] = {bn(b, 0), bn(b, 1), bn(b, 2)};
+        for (ssize_t k = 0; k < bc(b); ++k) in.K[b].push_back({bl(b, k, 0), bl(b, k, 1), bl(b, k, 2)});
+        in.KN.push_back({bn(b, 0), bn(b, 1), bn(b, 2)});
     }
     // Q's convex parts, each edge's line from its two vertices (the input's own edges
     // and the diagonals between its vertices), inside towards the part's centroid
-    std::vector<Piece> Qparts(np_);
-    std::vector<Box> Qbox(np_);
+    in.Qparts.resize(np_);
     for (ssize_t q = 0; q < np_; ++q) {
-        Piece& C = Qparts[q];
+        Piece& C = in.Qparts[q];
         P2 g{0.0, 0.0};
         for (ssize_t k = 0; k < pc(q); ++k) {
             C.v.push_back({pa(q, k, 0), pa(q, k, 1)});
@@ -295,7 +458,7 @@ py::tuple hidden_pieces(py::array_t<double, py::array::c_style | py::array::forc
             if (L.at(g) < 0) L = {-L.a, -L.b, -L.c};
             C.l.push_back(L);
         }
-        Qbox[q] = box_of(C);
+        in.Qbox.push_back(box_of(C));
     }
 
     std::vector<double> xy;
@@ -305,125 +468,26 @@ py::tuple hidden_pieces(py::array_t<double, py::array::c_style | py::array::forc
         dropped(n, 0.0);
     {
         py::gil_scoped_release release;
-        std::vector<P3> M(nc);
-        Poly3 W, T;
-        Piece img, in, outside, cut;
-        std::vector<Piece> pieces, incoming, next;
+        Region region;
+        Work<double> fast;
+        Work<long double> precise;
         for (ssize_t i = 0; i < n; ++i) {
-            const P3 p{x(i, 0), x(i, 1), x(i, 2)};
-            const real h = dot(sub(p, origin), nq);
-            if (!(h > 0)) continue;          // on Q's plane: Q edge-on, nothing hidden
-            // the pyramid's inward planes through p
-            for (ssize_t a = 0; a < nc; ++a) {
-                const P3 c0 = sub(base[a], p), c1 = sub(base[(a + 1) % nc], p),
-                         c2 = sub(base[(a + 2) % nc], p);
-                M[a] = cross(c0, c1);
-                if (dot(M[a], c2) < 0) M[a] = neg(M[a]);
-            }
-            const P3 foot = sub(p, origin);
-            pieces.clear();
-            Slivers slivers;
-            bool ok = true;
-            for (ssize_t b = 0; b < nb && ok; ++b) {
-                // the offsets, each rounded once (within vertex_error of its length)
-                W.clear();
-                P3 g{0.0, 0.0, 0.0};
-                for (const P3& v : K[b]) {
-                    W.v.push_back(sub(v, p));
-                    W.e.push_back(vertex_error * std::sqrt(dot(W.v.back(), W.v.back())));
-                    g = {g.x + W.v.back().x, g.y + W.v.back().y, g.z + W.v.back().z};
-                }
-                if (std::fabs(dot(W.v[0], KN[b])) <= edge_on) continue;   // seen edge-on
-                // wholly outside one of the pyramid's planes: clipped away, as clip3 would
-                bool outside_pyramid = false;
-                for (ssize_t a = 0; a < nc && !outside_pyramid; ++a) {
-                    outside_pyramid = true;
-                    for (const P3& v : W.v)
-                        if (dot(M[a], v) >= 0) {
-                            outside_pyramid = false;
-                            break;
-                        }
-                }
-                if (outside_pyramid) continue;
-                // each edge's plane through p, inside towards the blocker's centroid
-                for (size_t k = 0, m = W.v.size(); k < m; ++k) {
-                    P3 e = cross(W.v[k], W.v[(k + 1) % m]);
-                    W.m.push_back(dot(e, g) < 0 ? neg(e) : e);
-                }
-                for (ssize_t a = 0; a < nc && W.v.size() >= 3; ++a) {
-                    bool inside = true;          // wholly inside this plane: nothing to cut
-                    for (const P3& v : W.v)
-                        if (dot(M[a], v) < 0) {
-                            inside = false;
-                            break;
-                        }
-                    if (inside) continue;
-                    clip3(W, M[a], vertex_error, T);
-                    std::swap(W, T);
-                }
-                if (W.v.size() < 3) continue;
-                // central projection from p onto Q's plane, in the plane's frame; each
-                // edge's plane m traced on it: (ax . m) u + (ay . m) v + (q0 - p) . m
-                img.clear();
-                for (size_t k = 0; k < W.v.size(); ++k) {
-                    const P3& v = W.v[k];
-                    const real down = -dot(v, nq);
-                    const real s = h / down;
-                    // where the vertex's rounding e takes the image: s e (1 + |v| / |v . nQ|),
-                    // large for a crossing close to p
-                    moved[i] = std::max(moved[i], static_cast<double>(
-                        std::fabs(s) * W.e[k] * (1 + std::sqrt(dot(v, v)) / std::fabs(down))));
-                    const P3 q{v.x * s + foot.x, v.y * s + foot.y, v.z * s + foot.z};
-                    const P2 u{static_cast<double>(dot(q, ax)), static_cast<double>(dot(q, ay))};
-                    if (!std::isfinite(u.x) || !std::isfinite(u.y)) ok = false;
-                    reach[i] = std::max({reach[i], std::fabs(u.x), std::fabs(u.y)});
-                    img.v.push_back(u);
-                    const P3& m = W.m[k];
-                    img.l.push_back({static_cast<double>(dot(ax, m)), static_cast<double>(dot(ay, m)),
-                                     static_cast<double>(-dot(foot, m))});
-                }
-                if (!ok) break;
-                slivers.min_area = sliver_ulps * DBL_EPSILON * reach[i] * reach[i];
-                if (!slivers.keep(img)) continue;
-                // the image less every piece already there, as disjoint convex pieces
-                incoming.assign(1, img);
-                const size_t have = pieces.size();
-                for (size_t e = 0; e < have && !incoming.empty(); ++e) {
-                    const Piece& E = pieces[e];
-                    const Box be = box_of(E);
-                    next.clear();
-                    for (const Piece& F : incoming) {
-                        if (boxes_apart(box_of(F), be) || separated_by(E, F) || separated_by(F, E))
-                            next.push_back(F);
-                        else
-                            difference(F, E, next, in, outside, slivers);
-                    }
-                    incoming.swap(next);
-                }
-                for (Piece& F : incoming) pieces.push_back(std::move(F));
-                // a point whose pieces grow past max_pieces goes to the engine instead
-                if (pieces.size() > static_cast<size_t>(max_pieces)) ok = false;
-            }
-            if (!ok) {
+            const P3<double> p{x(i, 0), x(i, 1), x(i, 2)};
+            // in doubles first; in long double where an image is not finite or the
+            // vertices' rounding can move it by more than precise_rtol of its extent
+            region_at(in, p, region, fast);
+            if (!region.ok || region.moved > precise_rtol * std::max(region.reach, extent))
+                region_at(in, p, region, precise);
+            reach[i] = region.reach;
+            moved[i] = region.moved;
+            if (!region.ok) {
                 lost[i] = 1;
                 continue;
             }
-            // over a base other than Q, the pieces cut by Q's convex parts
-            if (np_ > 0) {
-                next.clear();
-                for (const Piece& F : pieces) {
-                    const Box bf = box_of(F);
-                    for (ssize_t q = 0; q < np_; ++q)
-                        if (!boxes_apart(bf, Qbox[q]) &&
-                            intersect(F, Qparts[q], cut, in, outside, slivers))
-                            next.push_back(cut);
-                }
-                pieces.swap(next);
-            }
             double len = 0.0;
-            Box bb = slivers.box;            // the slivers dropped lie in the region's box
-            dropped[i] = slivers.dropped;
-            for (const Piece& F : pieces) {
+            Box bb = region.slivers.box;     // the slivers dropped lie in the region's box
+            dropped[i] = region.slivers.dropped;
+            for (const Piece& F : region.pieces) {
                 for (size_t k = 0, m = F.size(); k < m; ++k) {
                     const P2& u = F.v[k];
                     const P2& v = F.v[(k + 1) % m];

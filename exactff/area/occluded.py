@@ -331,7 +331,8 @@ def _hidden_values(X, nP, Qc, blockers, st=None, budget=0.0):
     The estimate adds to the sector sums' rounding the effect of moving the pieces'
     boundaries by the splits' rounding (a few units of the largest coordinate per
     line) and by the clipped vertices' own rounding as the projection magnifies it
-    (``moved``; the 3-D work is in long double), through the kernel's largest value over
+    (``moved``; the 3-D work is in doubles, and again in long double at a point where
+    that is more than ``AREA_IMAGE_PRECISE_RTOL`` of Qc's size), through the kernel's largest value over
     the region's bounding box, ``h / (pi r^3)``. Where a point's images do not stay
     finite, or that rounding can move them by more than ``AREA_IMAGE_RTOL`` of Qc's
     size (a crossing or a blocker's vertex at the point, to rounding) and more of the
@@ -368,9 +369,11 @@ def _hidden_values(X, nP, Qc, blockers, st=None, budget=0.0):
     NK = np.array([area_vector(K) for K in pieces])
     NK /= np.linalg.norm(NK, axis=1)[:, None]
     size = float(np.ptp(np.vstack(Kc + [Qc, X]), axis=0).max())
+    extent = float(np.ptp(Q2, axis=0).max())          # the pieces lie within Qc (or its box)
     xy, start, ring_point, lost, reach, length, box, moved, dropped = hidden_pieces(
         X, corners, q0, nQ, RQ[:2], V, counts, NK, tol.AREA_EDGE_ON_RTOL * size,
-        tol.AREA_IMAGE_ULPS, tol.AREA_SLIVER_ULPS, tol.AREA_MAX_PIECES, parts, part_counts)
+        tol.AREA_IMAGE_ULPS, tol.AREA_SLIVER_ULPS, tol.AREA_MAX_PIECES,
+        tol.AREA_IMAGE_PRECISE_RTOL, extent, parts, part_counts)
     H, rnd = zero.copy(), zero.copy()
     if len(ring_point):
         # the pieces' rings from each point, in offset form in the receiver's frame
@@ -404,7 +407,6 @@ def _hidden_values(X, nP, Qc, blockers, st=None, budget=0.0):
     # (a crossing near x, magnified by the projection), unless what that moves of the
     # value is within the caller's budget, is not to be trusted: that point goes to the
     # engine, as one through infinity
-    extent = float(np.ptp(Q2, axis=0).max())          # the pieces lie within Qc (or its box)
     lost |= ((moved > tol.AREA_IMAGE_RTOL * np.maximum(reach, extent))
              & ((length == 0) | (geo > budget)))
     if lost.any():
