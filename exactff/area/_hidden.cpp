@@ -391,19 +391,20 @@ void region_at(const Inputs& in, const P3<double>& pd, Region& out, Work<R>& w) 
 // the plane's axes; blockers (b, k, 3) padded convex polygons with counts (b,) and unit
 // normals (b, 3); edge_on a distance within which x is on a blocker's plane (seen
 // edge-on, hiding nothing); vertex_ulps the rounding of an offset or a crossing in
-// units of the working precision's roundoff of its length (of the longer end's, for a crossing); parts (p, k', 2) padded convex parts of Q in the plane's
-// frame with counts (p,), none where the base is Q itself; sliver_ulps: a piece of at
-// most this many units of rounding of the squared reach (twice its area) is dropped and
-// counted; max_pieces: a point with more pieces is reported lost; precise_rtol, extent:
-// a point is computed again in long double where an image is not finite or the
-// vertices' rounding can move its images by more than precise_rtol of the larger of
-// their reach and extent (Q's size).
+// units of the working precision's roundoff of its length (of the longer end's, for a
+// crossing); sliver_ulps: a piece of at most this many units of rounding of the squared
+// reach (twice its area) is dropped and counted; max_pieces: a point with more pieces
+// is reported lost; precise_rtol, extent: a point is computed again in long double
+// where an image is not finite or the vertices' rounding can move its images by more
+// than precise_rtol of the larger of their reach and extent (Q's size); parts (p, k', 2)
+// padded convex parts of Q in the plane's frame with counts (p,), none where the base
+// is Q itself.
 // Returns (xy (V, 2) ring vertices in the plane's frame, ring_start (R + 1,), ring_point
-// (R,), lost (n,) bool: an image not finite, the point left empty for the caller,
-// reach (n,) the largest coordinate of a point's images (before the booleans), length (n,) the pieces'
-// perimeters, box (n, 4) their bounding box (the slivers' included), moved (n,) how far
-// the rounding of the clipped vertices can move a point's images, and dropped (n,) the
-// area of its slivers).
+// (R,), lost (n,) bool: an image not finite or too many pieces, the point left empty
+// for the caller, reach (n,) the largest coordinate of a point's images (before the
+// booleans), length (n,) the pieces' perimeters, box (n, 4) their bounding box (the
+// slivers' included), moved (n,) how far the rounding of the clipped vertices can move
+// a point's images, and dropped (n,) the area of its slivers).
 py::tuple hidden_pieces(py::array_t<double, py::array::c_style | py::array::forcecast> X,
                         py::array_t<double, py::array::c_style | py::array::forcecast> corners,
                         py::array_t<double, py::array::c_style | py::array::forcecast> q0,
