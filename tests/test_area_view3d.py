@@ -114,9 +114,9 @@ def test_hidden_parts_of_every_occluded_pair_against_the_engine(name, monkeypatc
     scene = _read(name)
     calls, hidden = [], area._hidden_values
 
-    def record(X, nP, Qc, blockers, st=None, budget=0.0):
+    def record(X, nP, Qc, blockers, st=None, budget=0.0, setup=None):
         calls.append((X, nP, Qc, blockers))
-        return hidden(X, nP, Qc, blockers, st, budget)
+        return hidden(X, nP, Qc, blockers, st, budget, setup)
 
     monkeypatch.setattr(area, "_hidden_values", record)
     ef.area_form_factors(scene, tolerance=1e-6, error=True)

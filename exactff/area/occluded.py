@@ -297,8 +297,9 @@ def _cells(Pc, nP, lines, R, c, grid=None):
     cut to P first, so every cell lies in P; with ``grid``, the noding snaps the
     vertices to a grid of that size, and the cells lie in P to that size)."""
     poly = shapely.Polygon((Pc - c) @ R[:2].T)
-    segs = [g for g in (shapely.LineString([p0, p1]).intersection(poly) for p0, p1 in lines)
-            if not g.is_empty]
+    cut = (shapely.intersection(shapely.linestrings(np.asarray(lines, dtype=float)), poly)
+           if len(lines) else np.empty(0, dtype=object))
+    segs = list(cut[~shapely.is_empty(cut)])
     # the union nodes the segments (already cut to P) and P's boundary; cutting the
     # union to P again would lose nodes on the boundary, and with them whole cells
     pieces = shapely.get_parts(shapely.polygonize(
@@ -313,7 +314,41 @@ def _cells(Pc, nP, lines, R, c, grid=None):
     return tris
 
 
-def _hidden_values(X, nP, Qc, blockers, st=None, budget=0.0):
+def _hidden_setup(Qc, blockers):
+    """What :func:`_hidden_values` needs of a receiver and its blockers whatever the
+    points (computed once per pair): Qc's frame, the blockers' parts in front of its
+    plane as convex pieces with their unit normals, the pyramid's base (Qc where it is
+    strictly convex, else a rectangle around it, with Qc's convex parts), the box of the
+    blockers and Qc, and Qc's size in its plane. None where no blocker is in front."""
+    nQ, q0, RQ, Q2 = _plane_frame(Qc)
+    Kc = [K for K in (clip_front(np.asarray(K), nQ, q0) for K in blockers) if K is not None]
+    if not Kc:
+        return None
+    # the pyramid's base: Qc itself where it is strictly convex (the images then lie in
+    # it), else a rectangle around it (the pieces then cut by Qc's convex parts)
+    if _strictly_convex(Q2):
+        corners, parts = np.asarray(Qc, dtype=float), np.zeros((0, 3, 2))
+        part_counts = np.zeros(0, dtype=np.int64)
+    else:
+        lo, hi = Q2.min(axis=0), Q2.max(axis=0)
+        pad = tol.AREA_HIDDEN_PAD * float((hi - lo).max())
+        lo, hi = lo - pad, hi + pad
+        corners = q0 + np.array([[lo[0], lo[1]], [hi[0], lo[1]], [hi[0], hi[1]],
+                                 [lo[0], hi[1]]]) @ RQ[:2]
+        Qparts = [(Qp - q0) @ RQ.T for Qp in convex_pieces(np.asarray(Qc, float), nQ)]
+        parts, part_counts = padded(Qparts)
+        parts = parts[:, :, :2]
+    pieces = [Kp for K in Kc for Kp in convex_pieces(K, area_vector(K) / np.linalg.norm(area_vector(K)))]
+    V, counts = padded(pieces)
+    NK = np.array([area_vector(K) for K in pieces])
+    NK /= np.linalg.norm(NK, axis=1)[:, None]
+    allv = np.vstack(Kc + [Qc])
+    extent = float(np.ptp(Q2, axis=0).max())          # the pieces lie within Qc (or its box)
+    return (nQ, q0, RQ, Q2, Kc, corners, parts, part_counts, V, counts, NK,
+            allv.min(axis=0), allv.max(axis=0), extent)
+
+
+def _hidden_values(X, nP, Qc, blockers, st=None, budget=0.0, setup=None):
     """``F(x -> Qc) - F_occ(x -> Qc)`` for each point x of X (normal nP): the point form
     factor of the part of Qc that the blockers hide from x, and its error estimate.
 
@@ -339,6 +374,7 @@ def _hidden_values(X, nP, Qc, blockers, st=None, budget=0.0):
     value than ``budget`` (absolute; the caller's share of its tolerance), the engine
     computes that point's value (:func:`_hidden_values_by_engine`), counted in
     ``st["engine_fallbacks"]`` (and the points in ``st["engine_fallback_points"]``).
+    ``setup``: :func:`_hidden_setup` of Qc and the blockers, where the caller has it.
 
     Returns
     -------
@@ -346,30 +382,12 @@ def _hidden_values(X, nP, Qc, blockers, st=None, budget=0.0):
     """
     nX = len(X)
     zero = np.zeros(nX)
-    nQ, q0, RQ, Q2 = _plane_frame(Qc)
-    Kc = [K for K in (clip_front(np.asarray(K), nQ, q0) for K in blockers) if K is not None]
-    if not Kc:
+    setup = _hidden_setup(Qc, blockers) if setup is None else setup
+    if setup is None:
         return zero, zero
-    # the pyramid's base: Qc itself where it is strictly convex (the images then lie in
-    # it), else a rectangle around it (the pieces then cut by Qc's convex parts)
-    if _strictly_convex(Q2):
-        corners, parts = np.asarray(Qc, dtype=float), np.zeros((0, 3, 2))
-        part_counts = np.zeros(0, dtype=np.int64)
-    else:
-        lo, hi = Q2.min(axis=0), Q2.max(axis=0)
-        pad = tol.AREA_HIDDEN_PAD * float((hi - lo).max())
-        lo, hi = lo - pad, hi + pad
-        corners = q0 + np.array([[lo[0], lo[1]], [hi[0], lo[1]], [hi[0], hi[1]],
-                                 [lo[0], hi[1]]]) @ RQ[:2]
-        Qparts = [(Qp - q0) @ RQ.T for Qp in convex_pieces(np.asarray(Qc, float), nQ)]
-        parts, part_counts = padded(Qparts)
-        parts = parts[:, :, :2]
-    pieces = [Kp for K in Kc for Kp in convex_pieces(K, area_vector(K) / np.linalg.norm(area_vector(K)))]
-    V, counts = padded(pieces)
-    NK = np.array([area_vector(K) for K in pieces])
-    NK /= np.linalg.norm(NK, axis=1)[:, None]
-    size = float(np.ptp(np.vstack(Kc + [Qc, X]), axis=0).max())
-    extent = float(np.ptp(Q2, axis=0).max())          # the pieces lie within Qc (or its box)
+    nQ, q0, RQ, Q2, Kc, corners, parts, part_counts, V, counts, NK, lo, hi, extent = setup
+    # the scene's size here: the box of the blockers, Qc and the points
+    size = float((np.maximum(hi, X.max(axis=0)) - np.minimum(lo, X.min(axis=0))).max())
     xy, start, ring_point, lost, reach, length, box, moved, dropped = hidden_pieces(
         X, corners, q0, nQ, RQ[:2], V, counts, NK, tol.AREA_EDGE_ON_RTOL * size,
         tol.AREA_IMAGE_ULPS, tol.AREA_SLIVER_ULPS, tol.AREA_MAX_PIECES,
@@ -523,6 +541,7 @@ def _hidden_integral(S, Pc, Qc, nP, tolerance, area_P, whole, shortcuts, st):
                                  f"visibility events: {exc}") from exc
     T = np.array([_corner_first(t, S[1:], nP, dP) for t in cells]).reshape(-1, 3, 3)
     depth = np.zeros(len(T), dtype=int)
+    setup = _hidden_setup(Qc, S[1:])
     total_area = float(_triangle_areas(T).sum())
     hidden = err = rules_err = 0.0
     points = 0
@@ -540,7 +559,7 @@ def _hidden_integral(S, Pc, Qc, nP, tolerance, area_P, whole, shortcuts, st):
         (Xl, Wl), (Xh, Wh) = (triangle_rule(T, r) for r in _RULES)
         nl = Xl.shape[1]
         H, EH = _hidden_values(np.concatenate([Xl, Xh], axis=1).reshape(-1, 3), nP, Qc, S[1:], st,
-                               budget=tol.AREA_IMAGE_BUDGET_SHARE * tolerance)
+                               budget=tol.AREA_IMAGE_BUDGET_SHARE * tolerance, setup=setup)
         points += H.size
         H, EH = H.reshape(len(T), -1), EH.reshape(len(T), -1)
         lo, hi = (Wl * H[:, :nl]).sum(axis=1), (Wh * H[:, nl:]).sum(axis=1)
