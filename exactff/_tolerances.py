@@ -57,6 +57,7 @@ __all__ = [
     "AREA_IMAGE_BUDGET_SHARE",
     "AREA_SLIVER_ULPS",
     "AREA_MAX_PIECES",
+    "AREA_POINTS_PER_CALL",
     "AREA_EDGE_ON_RTOL",
     "AREA_SHAFT_ENTRIES_PER_CALL",
     "AREA_WHOLE_TOLERANCE_SHARE",
@@ -381,6 +382,11 @@ AREA_IMAGE_BUDGET_SHARE = 0.01
 #: estimate; and the pieces one point may hold before it goes to the engine.
 AREA_SLIVER_ULPS = 64.0
 AREA_MAX_PIECES = 20_000
+
+#: Area form factors, hidden parts: points per call of the compiled hidden regions and
+#: their sector sums (bounds the temporaries: a closed Cornell box's floor, one call for
+#: a level's 300,000 points, needed 43 million edges' worth, over 8 GiB).
+AREA_POINTS_PER_CALL = 20_000
 
 #: Area form factors: a blocker whose plane passes within this of a point (relative to
 #: the sub-scene's size) is seen edge-on from it and hides nothing.

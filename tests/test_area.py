@@ -443,7 +443,10 @@ def test_hidden_part_falls_back_to_the_engine_where_its_images_are_lost(monkeypa
 # edges (two vertices 2.5e-16 apart) once cut along a line of no true direction (the
 # union 7 % too large: every edge now carries the line it lies on); a room's corner
 # where the GEOS booleans were 7.4e-6 off (4.7e-3 relative); every piece of a point's
-# region a sliver (dropped: its area was left out of the estimate, 0 against 4.3e-13)
+# region a sliver (dropped: its area was left out of the estimate, 0 against 4.3e-13); a
+# receiver clipped to two vertices 3e-13 apart, whose pyramid plane through that edge
+# was the cross product of two long offsets (in doubles its direction was lost: 0.0004
+# against 0.1166, and a closed Cornell box's pair was cut to the last level)
 _ENGINE_CASES = (
     ([33.0, 66.99999999999989, 1.2307000475897438e-13], [-1.0, 0.0, 0.0],
      [[27, 47, 22], [27, 105, 22], [33, 105, 22], [33, 48, 22]],
@@ -462,6 +465,15 @@ _ENGINE_CASES = (
      [[-50, -50, 0], [50, -50, 0], [50, 50, 0], [-50, 50, 0]],
      [[[0.5, 1.000000000001, 0.5], [1.5, 1.000000000001, 0.5], [1.5, 1.000000000001, 1.5],
        [0.5, 1.000000000001, 1.5]]]),
+    ([554.2179920619797, 243.1856386295061, 246.30287385543963],
+     [-0.999983000713969, 0.005830804668886199, 0.0],
+     [[549.6, 0.0, 559.2], [0.0, 0.0, 559.2], [0.0, 548.8, 559.2], [556.0, 548.8000000000001, 559.2],
+      [556.0, 548.7999999999998, 559.1999999999998]],
+     [[[423, 330, 247], [265, 330, 296], [314, 330, 456], [472, 330, 406]],
+      [[423, 0, 247], [423, 330, 247], [472, 330, 406], [472, 0, 406]],
+      [[472, 0, 406], [472, 330, 406], [314, 330, 456], [314, 0, 456]],
+      [[314, 0, 456], [314, 330, 456], [265, 330, 296], [265, 0, 296]],
+      [[265, 0, 296], [265, 330, 296], [423, 330, 247], [423, 0, 247]]]),
 )
 
 

@@ -236,6 +236,7 @@ bool intersect(const Piece& F, const Piece& C, Piece& out, Piece& in, Piece& out
 // The inputs of one call, in doubles.
 struct Inputs {
     std::vector<P3<double>> base;              // the pyramid's base
+    P3<double> base_centroid;
     std::vector<std::vector<P3<double>>> K;    // the blockers
     std::vector<P3<double>> KN;                // their unit normals
     std::vector<Piece> Qparts;                 // Q's convex parts (none over Q itself)
@@ -274,14 +275,17 @@ void region_at(const Inputs& in, const P3<double>& pd, Region& out, Work<R>& w) 
     const P3<R> foot = sub(p, to<R>(in.origin));
     const R h = dot(foot, nq);
     if (!(h > 0)) return;              // on Q's plane: Q edge-on, nothing hidden
-    // the pyramid's inward planes through p
+    // the pyramid's inward planes through p: (a - p) x (b - a) for its edge a -> b, the
+    // edge's vector from the input's coordinates (exact where a and b are close: a
+    // short edge keeps its direction, where (a - p) x (b - p) would lose it), inside
+    // towards the base's centroid
     const size_t nc = in.base.size();
     w.M.resize(nc);
     for (size_t a = 0; a < nc; ++a) {
-        const P3<R> c0 = sub(to<R>(in.base[a]), p), c1 = sub(to<R>(in.base[(a + 1) % nc]), p),
-                    c2 = sub(to<R>(in.base[(a + 2) % nc]), p);
-        w.M[a] = cross(c0, c1);
-        if (dot(w.M[a], c2) < 0) w.M[a] = neg(w.M[a]);
+        const P3<double>& a0 = in.base[a];
+        const P3<double>& a1 = in.base[(a + 1) % nc];
+        w.M[a] = cross(sub(to<R>(a0), p), to<R>(sub(a1, a0)));
+        if (dot(w.M[a], sub(to<R>(in.base_centroid), p)) < 0) w.M[a] = neg(w.M[a]);
     }
     Poly3<R>& W = w.W;
     for (size_t b = 0; b < in.K.size(); ++b) {
@@ -305,9 +309,10 @@ void region_at(const Inputs& in, const P3<double>& pd, Region& out, Work<R>& w) 
                 }
         }
         if (outside_pyramid) continue;
-        // each edge's plane through p, inside towards the blocker's centroid
+        // each edge's plane through p (as the pyramid's, from the edge's own vector),
+        // inside towards the blocker's centroid
         for (size_t k = 0, m = W.v.size(); k < m; ++k) {
-            P3<R> e = cross(W.v[k], W.v[(k + 1) % m]);
+            P3<R> e = cross(W.v[k], to<R>(sub(in.K[b][(k + 1) % m], in.K[b][k])));
             W.m.push_back(dot(e, g) < 0 ? neg(e) : e);
         }
         for (size_t a = 0; a < nc && W.v.size() >= 3; ++a) {
@@ -434,7 +439,12 @@ py::tuple hidden_pieces(py::array_t<double, py::array::c_style | py::array::forc
     in.sliver_ulps = sliver_ulps;
     in.max_pieces = static_cast<size_t>(max_pieces);
     const ssize_t n = x.shape(0), nc = cr.shape(0), nb = bl.shape(0), np_ = pa.shape(0);
-    for (ssize_t a = 0; a < nc; ++a) in.base.push_back({cr(a, 0), cr(a, 1), cr(a, 2)});
+    in.base_centroid = {0.0, 0.0, 0.0};
+    for (ssize_t a = 0; a < nc; ++a) {
+        in.base.push_back({cr(a, 0), cr(a, 1), cr(a, 2)});
+        in.base_centroid = {in.base_centroid.x + cr(a, 0) / nc, in.base_centroid.y + cr(a, 1) / nc,
+                            in.base_centroid.z + cr(a, 2) / nc};
+    }
     in.K.resize(nb);
     for (ssize_t b = 0; b < nb; ++b) {
         for (ssize_t k = 0; k < bc(b); ++k) in.K[b].push_back({bl(b, k, 0), bl(b, k, 1), bl(b, k, 2)});

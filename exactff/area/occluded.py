@@ -385,6 +385,13 @@ def _hidden_values(X, nP, Qc, blockers, st=None, budget=0.0, setup=None):
     setup = _hidden_setup(Qc, blockers) if setup is None else setup
     if setup is None:
         return zero, zero
+    if nX > tol.AREA_POINTS_PER_CALL:
+        # in chunks: a point's pieces hold tens of vertices, and the sector sums'
+        # temporaries a few dozen bytes each of them
+        parts_ = [_hidden_values(X[k:k + tol.AREA_POINTS_PER_CALL], nP, Qc, blockers, st,
+                                 budget, setup)
+                  for k in range(0, nX, tol.AREA_POINTS_PER_CALL)]
+        return np.concatenate([h for h, _ in parts_]), np.concatenate([e for _, e in parts_])
     nQ, q0, RQ, Q2, Kc, corners, parts, part_counts, V, counts, NK, lo, hi, extent = setup
     # the scene's size here: the box of the blockers, Qc and the points
     size = float((np.maximum(hi, X.max(axis=0)) - np.minimum(lo, X.min(axis=0))).max())
@@ -566,9 +573,12 @@ def _hidden_integral(S, Pc, Qc, nP, tolerance, area_P, whole, shortcuts, st):
         diff = np.abs(hi - lo) / area_P
         # half the tolerance for the rules' differences: what the triangles accepted so
         # far left of it is shared among the others by area (at the first level, the
-        # triangle's share of the emitter)
+        # triangle's share of the emitter), never less than the triangle's share of the
+        # emitter (triangles accepted at the last level above their share would
+        # otherwise leave none, and every other triangle would be cut to the last level)
         budget = max(0.5 * tolerance - rules_err, 0.0)
-        split = (diff > budget * area_t / area_t.sum()) & (depth < tol.AREA_MAX_DEPTH)
+        share = np.maximum(budget / area_t.sum(), 0.5 * tolerance / total_area) * area_t
+        split = (diff > share) & (depth < tol.AREA_MAX_DEPTH)
         done = ~split
         hidden += float(hi[done].sum()) / area_P
         rules_err += float(diff[done].sum())
