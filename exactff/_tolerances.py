@@ -359,10 +359,11 @@ AREA_HIDDEN_PAD = 0.01
 AREA_BOOLEAN_ULPS = 16.0
 
 #: Area form factors, hidden parts: the rounding of a blocker's offset from the point,
-#: and of each crossing of the pyramid's planes, in units of long double's roundoff of its
-#: length (a crossing's: of its edge's longer end; added to its ends' own); and the share of a point's images' extent beyond which what that rounding
-#: can move them (magnified by the projection near the point) sends the point to the
-#: engine.
+#: and of each crossing of the pyramid's planes, in units of the working precision's
+#: roundoff (doubles, or long double) of its length (a crossing's: of its edge's longer
+#: end; added to its ends' own); and the share of the receiver's size beyond which what
+#: that rounding can move a point's images (magnified by the projection near the point)
+#: sends the point to the engine.
 AREA_IMAGE_ULPS = 8.0
 AREA_IMAGE_RTOL = 1e-9
 

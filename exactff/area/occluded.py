@@ -15,13 +15,13 @@ from scipy.special import roots_legendre
 
 from .. import _tolerances as tol
 from ..errors import NumericalError, misses_tolerance
-from ..geometry import area_vector, receiver_frame
+from ..geometry import area_vector, receiver_frame, unit_normal
 from ..kernel import clipped_sector_sums
 from ..methods import Exact
 from ..visibility import convex_pieces, is_convex_enclosure
-from ._hidden import hidden_pieces
 from ..rings import owners, padded, successors
 from ..scene import Scene
+from ._hidden import hidden_pieces
 from .contour import (CLOSED_FORM_COUNTS, clip_front, front_parts, is_far, nonnegative,
                       point_values, triangle_rule, unoccluded_pair, unoccluded_pairs)
 
@@ -39,10 +39,10 @@ __all__ = ["area_row", "STATS"]
 #: far pairs by the far-field rule (``far_pairs``),
 #: blocker-blocker events not cut along because their lines of sight miss the receiver
 #: (``culled_events``), calls whose hidden parts the engine computed at some points,
-#: where a point's images did not stay finite or could not be trusted (``engine_fallbacks``, their points
-#: ``engine_fallback_points``), pairs whose emitter GEOS failed to cut along the
-#: events in floating point, cut again on a fine grid (``cell_fallbacks``); and what was
-#: done:
+#: where a point's images did not stay finite or could not be trusted
+#: (``engine_fallbacks``, their points ``engine_fallback_points``), pairs whose emitter
+#: GEOS failed to cut along the events in floating point, cut again on a fine grid
+#: (``cell_fallbacks``); and what was done:
 #: ``occluded_pairs``, ``point_values``
 #: (hidden parts evaluated).
 STATS = ("enclosure_unoccluded_pairs", "hull_unoccluded_pairs", "hull_culled_blockers",
@@ -338,13 +338,12 @@ def _hidden_setup(Qc, blockers):
         Qparts = [(Qp - q0) @ RQ.T for Qp in convex_pieces(np.asarray(Qc, float), nQ)]
         parts, part_counts = padded(Qparts)
         parts = parts[:, :, :2]
-    pieces = [Kp for K in Kc for Kp in convex_pieces(K, area_vector(K) / np.linalg.norm(area_vector(K)))]
+    pieces = [Kp for K in Kc for Kp in convex_pieces(K, unit_normal(K))]
     V, counts = padded(pieces)
-    NK = np.array([area_vector(K) for K in pieces])
-    NK /= np.linalg.norm(NK, axis=1)[:, None]
+    NK = np.array([unit_normal(K) for K in pieces])
     allv = np.vstack(Kc + [Qc])
     extent = float(np.ptp(Q2, axis=0).max())          # the pieces lie within Qc (or its box)
-    return (nQ, q0, RQ, Q2, Kc, corners, parts, part_counts, V, counts, NK,
+    return (nQ, q0, RQ, Kc, corners, parts, part_counts, V, counts, NK,
             allv.min(axis=0), allv.max(axis=0), extent)
 
 
@@ -367,13 +366,14 @@ def _hidden_values(X, nP, Qc, blockers, st=None, budget=0.0, setup=None):
     boundaries by the splits' rounding (a few units of the largest coordinate per
     line) and by the clipped vertices' own rounding as the projection magnifies it
     (``moved``; the 3-D work is in doubles, and again in long double at a point where
-    that is more than ``AREA_IMAGE_PRECISE_RTOL`` of Qc's size), through the kernel's largest value over
-    the region's bounding box, ``h / (pi r^3)``. Where a point's images do not stay
-    finite, or that rounding can move them by more than ``AREA_IMAGE_RTOL`` of Qc's
-    size (a crossing or a blocker's vertex at the point, to rounding) and more of the
-    value than ``budget`` (absolute; the caller's share of its tolerance), the engine
-    computes that point's value (:func:`_hidden_values_by_engine`), counted in
-    ``st["engine_fallbacks"]`` (and the points in ``st["engine_fallback_points"]``).
+    that is more than ``AREA_IMAGE_PRECISE_RTOL`` of Qc's size), through the kernel's
+    largest value over the region's bounding box, ``h / (pi r^3)``. Where a point's
+    images do not stay finite, or that rounding can move them by more than
+    ``AREA_IMAGE_RTOL`` of Qc's size (a crossing or a blocker's vertex at the point, to
+    rounding) and more of the value than ``budget`` (absolute; the caller's share of its
+    tolerance), the engine computes that point's value
+    (:func:`_hidden_values_by_engine`), counted in ``st["engine_fallbacks"]`` (and the
+    points in ``st["engine_fallback_points"]``).
     ``setup``: :func:`_hidden_setup` of Qc and the blockers, where the caller has it.
 
     Returns
@@ -392,7 +392,7 @@ def _hidden_values(X, nP, Qc, blockers, st=None, budget=0.0, setup=None):
                                  budget, setup)
                   for k in range(0, nX, tol.AREA_POINTS_PER_CALL)]
         return np.concatenate([h for h, _ in parts_]), np.concatenate([e for _, e in parts_])
-    nQ, q0, RQ, Q2, Kc, corners, parts, part_counts, V, counts, NK, lo, hi, extent = setup
+    nQ, q0, RQ, Kc, corners, parts, part_counts, V, counts, NK, lo, hi, extent = setup
     # the scene's size here: the box of the blockers, Qc and the points
     size = float((np.maximum(hi, X.max(axis=0)) - np.minimum(lo, X.min(axis=0))).max())
     xy, start, ring_point, lost, reach, length, box, moved, dropped = hidden_pieces(
@@ -565,8 +565,9 @@ def _hidden_integral(S, Pc, Qc, nP, tolerance, area_P, whole, shortcuts, st):
         # every other triangle of this level together: its two rules' nodes, one call
         (Xl, Wl), (Xh, Wh) = (triangle_rule(T, r) for r in _RULES)
         nl = Xl.shape[1]
-        H, EH = _hidden_values(np.concatenate([Xl, Xh], axis=1).reshape(-1, 3), nP, Qc, S[1:], st,
-                               budget=tol.AREA_IMAGE_BUDGET_SHARE * tolerance, setup=setup)
+        H, EH = _hidden_values(np.concatenate([Xl, Xh], axis=1).reshape(-1, 3), nP, Qc,
+                               S[1:], st, budget=tol.AREA_IMAGE_BUDGET_SHARE * tolerance,
+                               setup=setup)
         points += H.size
         H, EH = H.reshape(len(T), -1), EH.reshape(len(T), -1)
         lo, hi = (Wl * H[:, :nl]).sum(axis=1), (Wh * H[:, nl:]).sum(axis=1)
