@@ -96,6 +96,8 @@ __all__ = [
     "AREA_GAUSS_ORDER",
     "AREA_GAUSS_LOW_ORDER",
     "AREA_RULE_ORDERS",
+    "AREA_RULE_ORDERS_MANY_CELLS",
+    "AREA_MANY_CELLS",
     "AREA_MAX_DEPTH",
     "AREA_EDGE_TERMS_PER_CALL",
     "REMAINDER_SPLIT_POLYGONS",
@@ -467,6 +469,13 @@ AREA_GAUSS_LOW_ORDER = 8
 #: a side), and how many times a triangle may be cut in four.
 AREA_RULE_ORDERS = (6, 10)
 AREA_MAX_DEPTH = 7
+#: ... and the lower pair that each triangle of a pair tries first where the events cut
+#: its emitter into more than AREA_MANY_CELLS triangles (small ones, which rarely need
+#: more points; a triangle the lower pair misses takes the pair above). Measured on
+#: View3D's examples and the closed Cornell box (docs/benchmarks.md): 20 and 100 were
+#: no better than 50.
+AREA_RULE_ORDERS_MANY_CELLS = (3, 5)
+AREA_MANY_CELLS = 50
 
 #: Area form factors: receivers per call of the vectorised point values (bounds the
 #: temporaries: about 2e5 edge terms per call).

@@ -241,32 +241,38 @@ def _matrix_summary(M):
 DENSE_OUTPUT_BYTES = 2 ** 31
 
 
-def _area_matrix(scene, rows, args, out):
+def _area_matrix(scene, rows, args, out, executor):
     """``exactff matrix --area``: the area-to-area matrix, each value within
-    ``--tolerance``, written to a .npy (and its bounds beside it, STEM.error.npy)."""
+    ``--tolerance``, and its bounds beside it (STEM.error.SUFFIX), by the matrix driver
+    of the point rows: ``--jobs`` or ``--scheduler``, ``--sparse``, a ``.zarr`` store,
+    and a killed run resumed from ``out``. With ``--combine`` (the surfaces View3D
+    reports, computed in memory): a dense ``.npy``."""
     from .formfactors import area_form_factors
+    from .storage import beside_path
 
-    if args.sparse or args.scheduler or args.two_sided or not out.endswith(".npy"):
-        raise ValueError("--area writes a dense .npy (not with --sparse, --scheduler, "
-                         "--two-sided, .zarr or .npz)")
+    if args.two_sided:
+        raise ValueError("--area is one-sided (not with --two-sided)")
     if not (args.tolerance > 0):
         raise ValueError(f"--tolerance must be positive, got {args.tolerance}")
-    executor = None
-    if args.jobs > 1:
-        from concurrent.futures import ProcessPoolExecutor
-
-        executor = ProcessPoolExecutor(args.jobs)
-    try:
+    jobs = args.jobs if args.jobs > 1 else None
+    error_path = beside_path(out, "error")
+    if args.combine:
+        if args.sparse or not out.endswith(".npy"):
+            raise ValueError("--area --combine writes a dense .npy (not with --sparse, "
+                             ".zarr or .npz)")
         F, E = area_form_factors(scene, rows, tolerance=args.tolerance, error=True,
-                                 executor=executor, progress=not args.no_progress,
-                                 combine=args.combine)
-    finally:
-        if executor is not None:
-            executor.shutdown()
-    np.save(out, F)
-    np.save(out[:-4] + ".error.npy", E)
-    print(f"error bounds     max {E.max():.3g} (tolerance {args.tolerance:g}) "
-          f"-> {out[:-4] + '.error.npy'}")
+                                 executor=executor, jobs=jobs,
+                                 progress=not args.no_progress, combine=True)
+        np.save(out, F)
+        np.save(error_path, E)
+    else:
+        F, E = area_form_factors(scene, rows, tolerance=args.tolerance, error=True,
+                                 executor=executor, jobs=jobs,
+                                 progress=not args.no_progress, out=out, sparse=args.sparse)
+    largest = max((float(np.asarray(E[a:a + 1024].max())) for a in range(0, E.shape[0], 1024)),
+                  default=0.0)
+    print(f"error bounds     max {largest:.3g} (tolerance {args.tolerance:g}) "
+          f"-> {error_path}")
     return F, E
 
 
@@ -356,13 +362,15 @@ def cmd_matrix(args):
                                                  else "a .npz output needs --sparse"))
     stem = path_stem(out)
     if args.overwrite:
-        beside = [stem + ".remainder" + e for e in (".npy", ".done.npy", ".meta.json", ".parts")]
+        beside = [stem + "." + what + e for what in ("remainder", "error")
+                  for e in (".npy", ".done.npy", ".meta.json", ".parts", ".npz", ".zarr")]
         for path in (out, stem + ".done.npy", stem + ".meta.json", stem + ".parts", *beside):
             if os.path.isdir(path):
                 shutil.rmtree(path)
             elif os.path.exists(path):
                 os.remove(path)
-    elif not (args.area or args.sphere) and (os.path.exists(out) or os.path.exists(stem + ".parts")):
+    elif (not (args.sphere or args.combine)
+          and (os.path.exists(out) or os.path.exists(stem + ".parts"))):
         print(f"resuming {out} (rows already written are kept; --overwrite to start over)")
     executor = client = None
     if args.scheduler:
@@ -381,7 +389,7 @@ def cmd_matrix(args):
         if args.sphere:
             M = _sphere_matrix(scene, rows, args, out)
         elif args.area:
-            M, E = _area_matrix(scene, rows, args, out)
+            M, E = _area_matrix(scene, rows, args, out, executor)
         else:
             M = form_factor_matrix(scene, rows=rows, two_sided=args.two_sided,
                                    executor=executor, jobs=args.jobs if args.jobs > 1 else None,
@@ -551,7 +559,8 @@ def build_parser():
                    help="keep the non-zero values only (scipy.sparse CSR in a .npz)")
     p.add_argument("--area", action="store_true",
                    help="area-to-area form factors (the paper's Eq. 1) with occlusion, "
-                        "each within --tolerance, instead of rows from the centroids")
+                        "each within --tolerance, instead of rows from the centroids; "
+                        "their bounds to STEM.error.SUFFIX beside the output")
     p.add_argument("--combine", action="store_true",
                    help="with --area: one row and column per surface View3D reports (a "
                         ".vs3 file's combined surfaces merged, subsurfaces separated, "

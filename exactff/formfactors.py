@@ -21,7 +21,7 @@ from .checks import as_normal, as_receivers, check_tolerance, row_indices
 from .methods import FormFactorMethod, resolve
 from .remainder import hemisphere_sky_share, remainder_row
 from .scene import Scene, as_scene
-from .storage import ZARR_CHUNK_VALUES, MatrixOutput, output_path, path_stem, path_suffix
+from .storage import ZARR_CHUNK_VALUES, MatrixOutput, beside_path, output_path
 
 __all__ = ["form_factors", "form_factor_matrix", "area_form_factors", "run_rows",
            "PointRows", "AreaRows", "Progress", "fingerprint", "method_record"]
@@ -493,13 +493,6 @@ def form_factor_matrix(scene: Scene, *, method: str | FormFactorMethod = "exact"
     return (got[0], got[1]) if remainder else got[0]
 
 
-def _beside_path(out, what, suffix=None):
-    """Where a second output goes: ``STEM.WHAT.SUFFIX`` beside ``out`` (the error
-    estimates: ``STEM.error.SUFFIX``; the remainder: ``STEM.remainder.npy``)."""
-    out = os.fspath(out)
-    return path_stem(out) + "." + what + (path_suffix(out) if suffix is None else suffix)
-
-
 def run_rows(scene, rows, computation, *, executor=None, jobs=None, progress=False, out=None,
              sparse=False, chunk_rows=None, desc="rows"):
     """The one matrix driver: rows ``rows`` of ``computation`` (:class:`PointRows`,
@@ -552,7 +545,7 @@ def run_rows(scene, rows, computation, *, executor=None, jobs=None, progress=Fal
     for what, width in zip(getattr(computation, "suffixes", ()),
                            getattr(computation, "widths", ())):
         narrow = width is not None
-        path = None if out is None else _beside_path(out, what, ".npy" if narrow else None)
+        path = None if out is None else beside_path(out, what, ".npy" if narrow else None)
         results.append(MatrixOutput((len(rows), width if narrow else n),
                                     sparse=sparse and not narrow, out=path, meta=meta,
                                     block=step))
@@ -620,7 +613,10 @@ def area_form_factors(scene, rows=None, *, tolerance=1e-9, error=False, executor
     smoothness (vertex-edge visibility events between the receiver and the polygons
     that may hide it, and their planes), its cells triangulated, and each triangle
     integrated by two collapsed Gauss-Legendre rules (6 and 10 points a side) and cut in
-    four while they differ by more than its share of ``tolerance``.
+    four while they differ by more than its share of ``tolerance`` (an emitter cut into
+    many small triangles tries 3 and 5 points a side first). Between two faces of one
+    closed convex solid (a box) there is no vertex-edge event: their images united are
+    the solid's.
 
     Parameters
     ----------
@@ -648,7 +644,8 @@ def area_form_factors(scene, rows=None, *, tolerance=1e-9, error=False, executor
         test (every other polygon is then taken as a possible blocker of every pair,
         and the pair goes through the occluded path),
         the far-field rule (mpmath instead where the closed form misses) and the cull
-        of blocker-blocker events whose lines of sight miss the receiver. Much slower.
+        of blocker-blocker events whose lines of sight miss the receiver or join two
+        faces of one convex solid. Much slower.
         Part of what a resumable ``out`` records.
     stats : dict, optional
         Filled with the sums over the rows computed in this call (with any executor) of
@@ -659,7 +656,8 @@ def area_form_factors(scene, rows=None, *, tolerance=1e-9, error=False, executor
         ``shaft_culled_blockers`` (polygons in a pair's bounding box that the shaft's
         planes rejected, so the hull test never saw them), ``shaft_unoccluded_pairs``
         (pairs whose box held polygons but the shaft none: no hull built),
-        ``far_pairs`` (by the far-field rule), ``culled_events``,
+        ``far_pairs`` (by the far-field rule), ``culled_events``, ``solid_events``
+        (vertex-edge pairs of two faces of one convex solid, not cut along),
         ``engine_fallbacks`` and ``engine_fallback_points`` (hidden parts the engine
         computed where GEOS failed or a point's images did not stay finite),
         ``cell_fallbacks`` (emitters GEOS failed to cut along their visibility events,

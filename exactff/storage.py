@@ -31,7 +31,8 @@ import shutil
 
 import numpy as np
 
-__all__ = ["load_matrix", "MatrixOutput", "output_path", "path_stem", "path_suffix", "SUFFIXES",
+__all__ = ["beside_path", "load_matrix", "MatrixOutput", "output_path", "path_stem", "path_suffix",
+           "SUFFIXES",
            "ZARR_CHUNK_VALUES"]
 
 SUFFIXES = (".npy", ".zarr", ".npz")
@@ -44,6 +45,17 @@ def path_stem(path):
         if path.endswith(s):
             return path[: -len(s)]
     return path
+
+
+def beside_path(out, what, suffix=None):
+    """Where a second output goes: ``STEM.WHAT.SUFFIX`` beside ``out`` (the error
+    estimates: ``STEM.error.SUFFIX``; the remainder: ``STEM.remainder.npy``).
+
+    >>> beside_path("m.npz", "error"), beside_path("m.zarr", "remainder", ".npy")
+    ('m.error.npz', 'm.remainder.npy')
+    """
+    out = os.fspath(out)
+    return path_stem(out) + "." + what + (path_suffix(out) if suffix is None else suffix)
 
 
 def path_suffix(path, name="out"):

@@ -289,7 +289,11 @@ OCCLUDED_REFERENCES = [
 
 @pytest.mark.parametrize("plate, reference", OCCLUDED_REFERENCES)
 @pytest.mark.parametrize("tolerance", [1e-6, 1e-10])
-def test_occluded_references(plate, reference, tolerance):
+@pytest.mark.parametrize("low_first", [False, True])
+def test_occluded_references(plate, reference, tolerance, low_first, monkeypatch):
+    # low_first: every pair starts with the low pair of rules, as one with many cells
+    if low_first:
+        monkeypatch.setattr(ef._tolerances, "AREA_MANY_CELLS", 0)
     scene = ef.Scene.from_polygons([_square(0, True), _square(2, False), plate])
     F, E = ef.area_form_factors(scene, rows=[0], tolerance=tolerance, error=True)
     err = abs(F[0, 1] - reference)
@@ -578,9 +582,51 @@ def test_cli_matrix_area(tmp_path):
     assert np.array_equal(F, ef.area_form_factors(scene))
     assert E.shape == F.shape and E.max() <= 1e-10
     r = subprocess.run([sys.executable, "-m", "exactff", "matrix", str(path), "--area",
-                        "--sparse", "--no-progress"], capture_output=True, text=True,
+                        "--two-sided", "--no-progress"], capture_output=True, text=True,
                        cwd=tmp_path, timeout=300, env=checkout_env())
-    assert r.returncode == 2 and "--area writes a dense .npy" in r.stderr
+    assert r.returncode == 2 and "--area is one-sided" in r.stderr
+
+
+def test_cli_matrix_area_sparse_jobs_and_a_killed_run_resumed(tmp_path, capsys, monkeypatch):
+    # the matrix driver of the point rows: --sparse (values and bounds in .npz), --jobs,
+    # and a run killed after its first blocks resumed from what it wrote, computing the
+    # other rows only
+    import scipy.sparse as sp
+
+    from exactff.cli import main
+    from exactff.formfactors import AreaRows
+
+    scene = ef.scenes.subdivided_box(3)                 # 54 quads: blocks of 16 rows
+    F, E = ef.area_form_factors(scene, tolerance=1e-9, error=True)
+    out = str(tmp_path / "s.npz")
+    assert main(["matrix", "box:3", "--area", "--tolerance", "1e-9", "--sparse", "--jobs", "2",
+                 "--no-progress", "-o", out]) == 0
+    S, SE = sp.load_npz(out), sp.load_npz(str(tmp_path / "s.error.npz"))
+    assert np.array_equal(S.toarray(), F) and np.array_equal(SE.toarray(), E)
+    assert "error bounds     max" in capsys.readouterr().out
+
+    computed, call = [], AreaRows.__call__
+
+    def killed_after_two_blocks(self, scene, rows):
+        if len(computed) == 2:
+            raise KeyboardInterrupt
+        computed.append(len(rows))
+        return call(self, scene, rows)
+
+    monkeypatch.setattr(AreaRows, "__call__", killed_after_two_blocks)
+    out = str(tmp_path / "d.npy")
+    with pytest.raises(KeyboardInterrupt):
+        main(["matrix", "box:3", "--area", "--tolerance", "1e-9", "--no-progress", "-o", out])
+    assert computed == [16, 16]
+    computed.clear()
+    monkeypatch.setattr(AreaRows, "__call__", lambda self, scene, rows: (
+        computed.append(len(rows)), call(self, scene, rows))[1])
+    assert main(["matrix", "box:3", "--area", "--tolerance", "1e-9", "--no-progress",
+                 "-o", out]) == 0
+    assert "resuming" in capsys.readouterr().out
+    assert sum(computed) == 54 - 32
+    assert np.array_equal(np.load(out), F)
+    assert np.array_equal(np.load(str(tmp_path / "d.error.npy")), E)
 
 
 # ---------------------------------------------------------------------------------------
@@ -588,7 +634,7 @@ def test_cli_matrix_area(tmp_path):
 # ---------------------------------------------------------------------------------------
 SHORTCUT_COUNTERS = ("enclosure_unoccluded_pairs", "hull_unoccluded_pairs", "hull_culled_blockers", "shaft_culled_blockers",
                      "shaft_unoccluded_pairs", "far_pairs",
-                     "culled_events")
+                     "culled_events", "solid_events")
 
 
 def _far_squares():
@@ -608,6 +654,19 @@ def _box_on_a_floor():
         + _box_faces([.2, .3, 0], [.6, .7, .35])[1:])
 
 
+def _closed_box(lo, hi):
+    """The six faces of a closed box, facing outwards."""
+    (x0, y0, z0), (x1, y1, _) = lo, hi
+    bottom = np.array([[x0, y0, z0], [x0, y1, z0], [x1, y1, z0], [x1, y0, z0]], float)
+    return _box_faces(lo, hi) + [bottom]
+
+
+def _floating_box():
+    """The unit room (six faces, facing in) with a closed box floating inside it."""
+    room = [np.asarray(p, float) for p in ef.scenes.subdivided_box(1).polygons]
+    return ef.Scene.from_polygons(room + _closed_box([.3, .35, .3], [.6, .7, .55]))
+
+
 def _shortcut_scene(name):
     """(scene, rows, tolerance, the counters that must fire with shortcuts on)."""
     if name.startswith("reference"):
@@ -617,24 +676,32 @@ def _shortcut_scene(name):
         # a closed cube: a convex enclosure, every pair unoccluded without a shaft
         return ef.scenes.subdivided_box(1), [0, 3], 1e-7, ("enclosure_unoccluded_pairs",)
     if name == "room":
-        return _room_with_plate(), [0], 1e-7, ("hull_unoccluded_pairs", "hull_culled_blockers")
+        # (the plate's two faces, back to back, are a flat solid: no events between them)
+        return _room_with_plate(), [0], 1e-7, ("hull_unoccluded_pairs", "hull_culled_blockers",
+                                               "solid_events")
     if name == "box":
         return _box_on_a_floor(), [0], 1e-7, ("hull_unoccluded_pairs", "hull_culled_blockers", "culled_events")
+    if name == "floating":
+        # a closed box inside a room: between two of its faces no event but their planes
+        return _floating_box(), [0], 1e-7, ("hull_unoccluded_pairs", "hull_culled_blockers",
+                                            "shaft_culled_blockers", "solid_events")
     if name == "facet":
         # View3D's facet box (a plate inside a unit box): row 5, the wall behind the
         # plate, whose pairs with the side walls have the plate in their boxes but
         # outside their shafts
         import os
         scene = ef.read_vs3(os.path.join(os.path.dirname(__file__), "data", "view3d", "facet.vs3"))
+        # (and the plate's two faces, back to back, are a flat solid)
         return scene, [5], 1e-7, ("hull_unoccluded_pairs", "hull_culled_blockers",
-                                  "shaft_culled_blockers", "shaft_unoccluded_pairs")
+                                  "shaft_culled_blockers", "shaft_unoccluded_pairs",
+                                  "solid_events")
     # far squares at a tolerance the closed form's rounding misses (its estimate there
     # is 3e-12): the far rule takes them (off: mpmath)
     return _far_squares(), [0, 1], 1e-13, ("far_pairs", "hull_unoccluded_pairs", "hull_culled_blockers")
 
 
 @pytest.mark.parametrize("name", ["reference0", "reference1", "cube", "room", "box", "far",
-                                  "facet"])
+                                  "facet", "floating"])
 def test_area_shortcuts_are_neutral_and_counted(name):
     # with shortcuts=False (every other polygon a blocker of every pair, the contour
     # integral for far pairs, every blocker-blocker event cut along) the values agree
@@ -655,6 +722,57 @@ def test_area_shortcuts_are_neutral_and_counted(name):
     assert off["occluded_pairs"] >= on["occluded_pairs"] > 0 or name in ("far", "cube")
     if fire:
         assert off["occluded_pairs"] > on["occluded_pairs"]
+
+
+def test_convex_solids_are_the_closed_convex_groups_of_faces():
+    from exactff.area.occluded import _closed_solids, _convex_solids
+
+    # the Cornell box: each block (five faces, open at the floor) is a group
+    label, _, _ = _convex_solids(ef.scenes.cornell_box(closed=True))
+    assert len(set(label[10:15])) == len(set(label[15:20])) == 1
+    assert -1 < label[10] != label[15] > -1
+    # a zigzag of three quads (the middle one's plane between the others) is none, nor
+    # are three quads on one edge
+    zig = ef.Scene.from_polygons([
+        np.array([[0, 0, 0], [1, 0, 0], [1, 0, 1], [0, 0, 1]], float),
+        np.array([[0, 0, 1], [1, 0, 1], [1, 1, 1], [0, 1, 1]], float),
+        np.array([[0, 1, 1], [1, 1, 1], [1, 1, 2], [0, 1, 2]], float)])
+    assert _convex_solids(zig)[0].tolist() == [-1, -1, -1]
+    fan = ef.Scene.from_polygons([
+        np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], float),
+        np.array([[0, 0, 0], [0, 1, 0], [0, 1, 1], [0, 0, 1]], float),
+        np.array([[0, 1, 0], [0, 0, 0], [-1, 0, 0.5], [-1, 1, 0.5]], float)])
+    assert _convex_solids(fan)[0].tolist() == [-1, -1, -1]
+
+    def solid(box, planes):
+        scene = ef.Scene.from_polygons(box)
+        n = np.array([p[0] for p in planes], float)
+        d = np.array([p[1] for p in planes], float)
+        return _closed_solids(_convex_solids(scene), np.arange(len(box)), (n, d)).tolist()
+
+    floor, ceiling, back = ((0, 0, 1), 0), ((0, 0, -1), -1), ((0, -1, 0), -1)
+    # a closed box away from both planes is a solid; so is one open at the floor, between
+    # the floor and the ceiling (its open face in the floor's plane, which it stands on)
+    assert solid(_closed_box([.3, .3, .3], [.6, .7, .5]), [floor, ceiling]) == [0] * 6
+    assert solid(_box_faces([.3, .3, 0], [.6, .7, .5]), [floor, ceiling]) == [0] * 5
+    # but not between the floor and the back wall if also open at the top (its open
+    # edges at z = 0.5 lie in neither plane), nor as a chimney from the floor to the
+    # ceiling (open at both: a line of sight may pass through it from end to end)
+    assert solid(_box_faces([.3, .3, 0], [.6, .7, .5])[1:], [floor, back]) == [-1] * 4
+    assert solid(_box_faces([.3, .3, 0], [.6, .7, 1])[1:], [floor, ceiling]) == [-1] * 4
+
+
+def test_closed_box_in_a_room_rows_sum_to_one():
+    # the vertex-edge events between the floating box's faces are not cut along (its
+    # faces' images united are its hull's): every row of the closed scene still sums to 1
+    # within its estimates, and reciprocity holds
+    scene = _floating_box()
+    st = {}
+    F, E = ef.area_form_factors(scene, tolerance=1e-8, error=True, stats=st)
+    assert st["solid_events"] > 0
+    assert np.all(E <= 1e-8)
+    assert np.all(np.abs(F.sum(axis=1) - 1.0) <= E.sum(axis=1) + 1e-14)
+    assert np.all(_within_estimates(scene, F, E))
 
 
 def test_area_stats_from_worker_processes_and_the_options_in_the_record(tmp_path):

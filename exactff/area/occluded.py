@@ -10,6 +10,8 @@ sector sums (``docs/explanation/area-form-factors.md``).
 
 import numpy as np
 import shapely
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components
 from scipy.spatial import ConvexHull, QhullError
 from scipy.special import roots_legendre
 
@@ -18,6 +20,8 @@ from ..errors import NumericalError, misses_tolerance
 from ..geometry import area_vector, receiver_frame, unit_normal
 from ..kernel import clipped_sector_sums
 from ..methods import Exact
+from ..predicates import coplanar_band_sides
+from ..prepared import prepared
 from ..visibility import convex_pieces, is_convex_enclosure
 from ..rings import owners, padded, successors
 from ..scene import Scene
@@ -38,7 +42,8 @@ __all__ = ["area_row", "STATS"]
 #: polygons but the shaft none, so that no hull was built (``shaft_unoccluded_pairs``),
 #: far pairs by the far-field rule (``far_pairs``),
 #: blocker-blocker events not cut along because their lines of sight miss the receiver
-#: (``culled_events``), calls whose hidden parts the engine computed at some points,
+#: (``culled_events``), vertex-edge pairs of two faces of one convex solid, whose
+#: images united change only at the faces' planes (``solid_events``), calls whose hidden parts the engine computed at some points,
 #: where a point's images did not stay finite or could not be trusted
 #: (``engine_fallbacks``, their points ``engine_fallback_points``), pairs whose emitter
 #: GEOS failed to cut along the events in floating point, cut again on a fine grid
@@ -47,7 +52,7 @@ __all__ = ["area_row", "STATS"]
 #: (hidden parts evaluated).
 STATS = ("enclosure_unoccluded_pairs", "hull_unoccluded_pairs", "hull_culled_blockers",
          "shaft_culled_blockers",
-         "shaft_unoccluded_pairs", "far_pairs", "culled_events",
+         "shaft_unoccluded_pairs", "far_pairs", "culled_events", "solid_events",
          "engine_fallbacks", "engine_fallback_points", "cell_fallbacks", "occluded_pairs",
          "point_values")
 
@@ -188,6 +193,87 @@ def _shaft(padded, i, J, boxes, nP, p0, near, st):
     return np.split(k, np.cumsum(left)[:-1])
 
 
+def _convex_solids(scene):
+    """The scene's polygons grouped into convex solids: connected by shared edges (equal
+    coordinates), no edge shared by more than two of them, and every vertex of the group
+    on or behind each member's plane or on or in front of it (the coplanar band of
+    :func:`~exactff.predicates.coplanar_band_sides`): each member on the boundary of the
+    group's convex hull. Returns ``(label, open_edges, vertices)``: the group of each
+    polygon (-1: none, or alone), and per group the ends of its edges that only one
+    member has, shape (m, 2, 3), and its vertices. A group whose open edges all lie in a
+    plane that supports it (the emitter's or the receiver's, :func:`_closed_solids`) is
+    the boundary of its hull less a face in that plane."""
+    polys = [np.asarray(p, dtype=float) for p in scene.polygons]
+    faces_of = {}
+    for f, P in enumerate(polys):
+        for a, b in zip(P + 0.0, np.roll(P, -1, axis=0) + 0.0):   # -0.0 is 0.0
+            ka, kb = tuple(a), tuple(b)
+            if ka != kb:
+                faces_of.setdefault((min(ka, kb), max(ka, kb)), []).append(f)
+    shared = [fs for fs in faces_of.values() if len(fs) > 1]
+    n = len(polys)
+    rows = [f for fs in shared for f in fs[:1] * (len(fs) - 1)]
+    cols = [g for fs in shared for g in fs[1:]]
+    _, label = connected_components(coo_matrix((np.ones(len(rows)), (rows, cols)),
+                                               shape=(n, n)), directed=False)
+    label = np.asarray(label)
+    size = np.bincount(label, minlength=n)
+    bad = {int(label[fs[0]]) for fs in shared if len(fs) > 2}     # three faces on an edge
+    N, D = scene.normals, scene.plane_offsets
+    open_edges, vertices = {}, {}
+    for g in np.flatnonzero(size > 1):
+        members = np.flatnonzero(label == g)
+        if int(g) in bad:
+            continue
+        V = np.unique(np.vstack([polys[f] for f in members]), axis=0)
+        sign, _ = coplanar_band_sides(V, N[members], D[members])
+        if np.any((sign > 0).any(axis=0) & (sign < 0).any(axis=0)):
+            continue                                     # a member's plane cuts the group
+        edges = [k for k, fs in faces_of.items() if len(fs) == 1 and label[fs[0]] == g]
+        open_edges[int(g)] = np.array(edges, dtype=float).reshape(-1, 2, 3)
+        vertices[int(g)] = V
+    label = np.where(np.isin(label, list(open_edges)), label, -1)
+    return label, open_edges, vertices
+
+
+def _closed_solids(solids, blockers, planes):
+    """The group (:func:`_convex_solids`) of each blocker where the group is a solid for
+    the pair, -1 elsewhere. ``planes`` are the emitter's and the receiver's, as
+    ``(normals (2, 3), offsets (2,))``. A group is a solid for the pair where two or
+    more of its members are blockers, each of its open edges lies in one of the planes
+    and that plane has the whole group on one side, and one of the planes meets the
+    group's hull in no area (at most two of its vertices in the plane).
+
+    Then a line of sight from x on the emitter to y on the receiver crosses the
+    blockers of the group exactly where it crosses their hull: its open part misses both
+    planes, and the hull's boundary off them is the members'; and the segment cannot lie
+    in the hull from end to end, as x and y would both be in it, which one plane rules
+    out (up to points of no area). So from x the members' images united are the hull's
+    image, whose outline changes only where x crosses a member's plane: a vertex-edge
+    event between two members is no event. The emitter and the receiver may be members
+    (their faces lie in the planes)."""
+    label, open_edges, vertices = solids
+    ids = label[blockers]
+    out = np.full(len(blockers), -1)
+    N, D = planes
+    for g in set(ids[ids >= 0].tolist()):
+        if np.count_nonzero(ids == g) < 2:
+            continue
+        sign, _ = coplanar_band_sides(vertices[g], N, D)
+        supports = ~((sign > 0).any(axis=0) & (sign < 0).any(axis=0))        # (2,)
+        no_area = supports & ((sign == 0).sum(axis=0) < 3)
+        if not no_area.any():
+            continue
+        E = open_edges[g]
+        if len(E):
+            on, _ = coplanar_band_sides(E.reshape(-1, 3), N, D)
+            on = (on == 0).reshape(len(E), 2, len(D)).all(axis=1) & supports
+            if not on.any(axis=1).all():
+                continue
+        out[ids == g] = g
+    return out
+
+
 def _plane_frame(Q):
     """A planar polygon's unit normal, origin (its first vertex), frame (rows t1, t2, n:
     :func:`receiver_frame`) and 2-D coordinates in that frame."""
@@ -197,7 +283,7 @@ def _plane_frame(Q):
     return nQ, Q[0], RQ, (Q - Q[0]) @ RQ[:2].T
 
 
-def _event_lines(S, nP, dP, R, c, radius, Qc, shortcuts=True, st=None):
+def _event_lines(S, nP, dP, R, c, radius, Qc, shortcuts=True, st=None, solid=None):
     """The segments of P's plane (in its 2-D frame ``R`` about ``c``) across which the
     integrand may lose smoothness: for a vertex ``v`` of one polygon of S and an edge of
     another, the image of the edge through ``v`` on P's plane (the points from which
@@ -209,8 +295,12 @@ def _event_lines(S, nP, dP, R, c, radius, Qc, shortcuts=True, st=None):
     (a disk that holds P) as a segment ``(point, point)``, its ends placed on the exact
     line (the intersection of two planes), so that events through one point (a corner
     of a blocker on P) cross there to rounding; an image through infinity is kept as the
-    whole chord. Without ``shortcuts`` every blocker-blocker event is kept; the ones
-    culled are counted in ``st["culled_events"]``."""
+    whole chord. Between two faces of one convex solid (``solid``: the group of each
+    polygon of S, -1 for none, :func:`_closed_solids`) there is no event but the faces'
+    planes: the faces' images united are the solid's, whose outline changes only there.
+    Without ``shortcuts`` every blocker-blocker event is kept; the ones culled are
+    counted in ``st["culled_events"]``, the vertex-edge pairs of one solid in
+    ``st["solid_events"]``."""
     st = {} if st is None else st
     nQ, q0, RQ, Q2 = _plane_frame(Qc)
     seen = shapely.Polygon(Q2)
@@ -225,6 +315,9 @@ def _event_lines(S, nP, dP, R, c, radius, Qc, shortcuts=True, st=None):
         spanned.append(np.zeros(1, dtype=bool))
         for b, B in enumerate(S):
             if a == b:
+                continue
+            if shortcuts and solid is not None and solid[a] >= 0 and solid[a] == solid[b]:
+                st["solid_events"] = st.get("solid_events", 0) + len(A) * len(B)
                 continue
             # every vertex of A against every edge of B, (kA * kB) rows in loop order
             v = np.repeat(A, len(B), axis=0)
@@ -467,7 +560,8 @@ def _hidden_values_by_engine(X, nP, Qc, blockers):
     return nonnegative(U - F[:, 0], est, "hidden part"), est
 
 
-_RULES = tuple(roots_legendre(k) for k in tol.AREA_RULE_ORDERS)
+_RULE_PAIRS = tuple(tuple(roots_legendre(k) for k in orders) for orders in
+                    (tol.AREA_RULE_ORDERS_MANY_CELLS, tol.AREA_RULE_ORDERS))
 
 
 def _triangle_areas(T):
@@ -475,23 +569,28 @@ def _triangle_areas(T):
     return 0.5 * np.linalg.norm(np.cross(T[:, 1] - T[:, 0], T[:, 2] - T[:, 0]), axis=1)
 
 
-def _corner_first(tri, blockers, nP, dP):
-    """The triangle with first a vertex where a blocker's vertex touches the emitter's
-    plane, if it has one. Near such a point the hidden part depends on the direction
-    from it (to first order), and the collapsed rule, whose collapsed vertex is the first,
-    integrates functions of that direction alone without cutting towards the point."""
-    size = float(np.ptp(tri, axis=0).max())
-    for K in blockers:
-        on = np.abs(K @ nP - dP) <= tol.AREA_HULL_RTOL * size
-        for v in K[on]:
-            d = np.linalg.norm(tri - v, axis=1)
-            k = int(np.argmin(d))
-            if d[k] <= tol.AREA_HULL_RTOL * size:
-                return np.roll(tri, -k, axis=0)
-    return tri
+def _corner_first(T, blockers, nP, dP):
+    """The triangles T (t, 3, 3), each with first a vertex where a blocker's vertex
+    touches the emitter's plane, if it has one (the first such blocker vertex, in order,
+    within ``AREA_HULL_RTOL`` of the triangle's size of the plane and of one of its
+    vertices). Near such a point the hidden part depends on the direction from it (to
+    first order), and the collapsed rule, whose collapsed vertex is the first, integrates
+    functions of that direction alone without cutting towards the point."""
+    if not len(T) or not blockers:
+        return T
+    Vb = np.vstack(blockers)                                        # (m, 3)
+    near = tol.AREA_HULL_RTOL * np.ptp(T, axis=1).max(axis=1)       # (t,)
+    on = np.abs(Vb @ nP - dP)[None, :] <= near[:, None]             # (t, m)
+    d = np.linalg.norm(T[:, None, :, :] - Vb[None, :, None, :], axis=3)   # (t, m, 3)
+    k = np.argmin(d, axis=2)
+    hit = on & (np.take_along_axis(d, k[:, :, None], axis=2)[:, :, 0] <= near[:, None])
+    first = np.argmax(hit, axis=1)
+    shift = np.where(hit.any(axis=1), k[np.arange(len(T)), first], 0)
+    return T[np.arange(len(T))[:, None], (np.arange(3)[None, :] + shift[:, None]) % 3]
 
 
-def _occluded_pair(S, Pc, Qc, nP, tolerance, area_P, shortcuts=True, st=None, rtol=None):
+def _occluded_pair(S, Pc, Qc, nP, tolerance, area_P, shortcuts=True, st=None, rtol=None,
+                   solid=None):
     """``(1 / A_P) int_Pc F_occ(x -> S[0]) dA`` with S = [receiver, blockers...], as the
     unoccluded value (the contour integral, exact) less the integral of the hidden part
     ``F(x -> Qc) - F_occ(x -> S[0])`` (exact point values of the hidden region, built
@@ -499,14 +598,17 @@ def _occluded_pair(S, Pc, Qc, nP, tolerance, area_P, shortcuts=True, st=None, rt
     touch (the unoccluded part carries the edge singularities), so it is integrated over
     the cells of Pc between visibility events, each cell's triangles by two collapsed
     Gauss-Legendre rules (6 and 10 points a side), a triangle cut in four where the two
-    differ by more than its share of the tolerance. Returns the value, its error
+    differ by more than its share of the tolerance. Where the events cut Pc into more
+    than ``AREA_MANY_CELLS`` triangles (small ones), each starts with a lower pair (3
+    and 5 points a side) and takes the higher pair where that pair misses its share. Returns the value, its error
     estimate (the contour sum's, the rules' differences, the point values' bounds) and
     the number of point values used.
 
     The rules' target is the absolute ``tolerance``, or with ``rtol`` the bound
     ``max(tolerance, rtol * F)``: first with the unoccluded value for F (the value is
     at most that), and where the estimate then misses ``max(tolerance, rtol * |value|)``
-    once more with ``value - estimate`` for F (a lower bound where the estimate holds)."""
+    once more with ``value - estimate`` for F (a lower bound where the estimate holds).
+    ``solid``: as for :func:`_event_lines`."""
     # the pair unoccluded: its estimate may take a share of the tolerance
     whole, whole_err = unoccluded_pair(np.asarray(Pc), np.asarray(S[0]), far=shortcuts,
                                        atol=tol.AREA_WHOLE_TOLERANCE_SHARE * tolerance)
@@ -515,16 +617,18 @@ def _occluded_pair(S, Pc, Qc, nP, tolerance, area_P, shortcuts=True, st=None, rt
     area_Pc = float(np.linalg.norm(area_vector(Pc)))
     whole = (whole * area_Pc / area_P, whole_err * area_Pc / area_P)
     target = tolerance if rtol is None else max(tolerance, rtol * whole[0])
-    value, err, points = _hidden_integral(S, Pc, Qc, nP, target, area_P, whole, shortcuts, st)
+    value, err, points = _hidden_integral(S, Pc, Qc, nP, target, area_P, whole, shortcuts, st,
+                                          solid)
     if rtol is not None and target > tolerance and misses_tolerance(value, err, rtol,
                                                                      atol=tolerance):
         target = max(tolerance, rtol * max(value - err, 0.0))
-        value, err, more = _hidden_integral(S, Pc, Qc, nP, target, area_P, whole, shortcuts, st)
+        value, err, more = _hidden_integral(S, Pc, Qc, nP, target, area_P, whole, shortcuts,
+                                           st, solid)
         points += more
     return value, err, points
 
 
-def _hidden_integral(S, Pc, Qc, nP, tolerance, area_P, whole, shortcuts, st):
+def _hidden_integral(S, Pc, Qc, nP, tolerance, area_P, whole, shortcuts, st, solid=None):
     """The adaptive integral of :func:`_occluded_pair` to the absolute target
     ``tolerance``, with ``whole`` the pair's unoccluded value and estimate (per unit area
     of P)."""
@@ -532,7 +636,7 @@ def _hidden_integral(S, Pc, Qc, nP, tolerance, area_P, whole, shortcuts, st):
     c = Pc.mean(axis=0)
     dP = float(nP @ Pc[0])
     radius = (1.0 + tol.AREA_HIDDEN_PAD) * float(np.linalg.norm(Pc - c, axis=1).max())
-    lines = _event_lines(S, nP, dP, R, c, radius, Qc, shortcuts, st)
+    lines = _event_lines(S, nP, dP, R, c, radius, Qc, shortcuts, st, solid)
     try:
         cells = _cells(Pc, nP, lines, R, c)
     except shapely.errors.GEOSException:
@@ -546,8 +650,12 @@ def _hidden_integral(S, Pc, Qc, nP, tolerance, area_P, whole, shortcuts, st):
         except shapely.errors.GEOSException as exc:
             raise NumericalError(f"could not cut the emitter along its {len(lines)} "
                                  f"visibility events: {exc}") from exc
-    T = np.array([_corner_first(t, S[1:], nP, dP) for t in cells]).reshape(-1, 3, 3)
+    T = _corner_first(np.array(cells).reshape(-1, 3, 3), S[1:], nP, dP)
     depth = np.zeros(len(T), dtype=int)
+    # many cells (small ones) start with the low pair of rules, few with the high pair
+    # (and so do the triangles they are cut into)
+    start = int(len(T) <= tol.AREA_MANY_CELLS)
+    rung = np.full(len(T), start)
     setup = _hidden_setup(Qc, S[1:])
     total_area = float(_triangle_areas(T).sum())
     hidden = err = rules_err = 0.0
@@ -559,19 +667,29 @@ def _hidden_integral(S, Pc, Qc, nP, tolerance, area_P, whole, shortcuts, st):
         sliver = area_t / area_P <= tol.AREA_SLIVER_SHARE * tolerance
         hidden += 0.5 * float(area_t[sliver].sum()) / area_P
         err += 0.5 * float(area_t[sliver].sum()) / area_P
-        T, depth, area_t = T[~sliver], depth[~sliver], area_t[~sliver]
+        T, depth, rung, area_t = T[~sliver], depth[~sliver], rung[~sliver], area_t[~sliver]
         if not len(T):
             break
-        # every other triangle of this level together: its two rules' nodes, one call
-        (Xl, Wl), (Xh, Wh) = (triangle_rule(T, r) for r in _RULES)
-        nl = Xl.shape[1]
-        H, EH = _hidden_values(np.concatenate([Xl, Xh], axis=1).reshape(-1, 3), nP, Qc,
-                               S[1:], st, budget=tol.AREA_IMAGE_BUDGET_SHARE * tolerance,
-                               setup=setup)
+        # every other triangle of this level together: its rules' nodes, one call
+        X, groups = [], []
+        for r, (low, high) in enumerate(_RULE_PAIRS):
+            sel = np.flatnonzero(rung == r)
+            if len(sel):
+                (Xl, Wl), (Xh, Wh) = triangle_rule(T[sel], low), triangle_rule(T[sel], high)
+                X.append(np.concatenate([Xl, Xh], axis=1).reshape(-1, 3))
+                groups.append((sel, Wl, Wh))
+        H, EH = _hidden_values(np.concatenate(X), nP, Qc, S[1:], st,
+                               budget=tol.AREA_IMAGE_BUDGET_SHARE * tolerance, setup=setup)
         points += H.size
-        H, EH = H.reshape(len(T), -1), EH.reshape(len(T), -1)
-        lo, hi = (Wl * H[:, :nl]).sum(axis=1), (Wh * H[:, nl:]).sum(axis=1)
-        diff = np.abs(hi - lo) / area_P
+        hi, diff, rnd = np.empty(len(T)), np.empty(len(T)), np.empty(len(T))
+        at = 0
+        for sel, Wl, Wh in groups:
+            nl, n = Wl.shape[1], len(sel) * (Wl.shape[1] + Wh.shape[1])
+            Hg, EHg = H[at:at + n].reshape(len(sel), -1), EH[at:at + n].reshape(len(sel), -1)
+            at += n
+            hi[sel] = (Wh * Hg[:, nl:]).sum(axis=1)
+            diff[sel] = np.abs(hi[sel] - (Wl * Hg[:, :nl]).sum(axis=1)) / area_P
+            rnd[sel] = (Wh * EHg[:, nl:]).sum(axis=1) / area_P
         # half the tolerance for the rules' differences: what the triangles accepted so
         # far left of it is shared among the others by area (at the first level, the
         # triangle's share of the emitter), never less than the triangle's share of the
@@ -579,18 +697,23 @@ def _hidden_integral(S, Pc, Qc, nP, tolerance, area_P, whole, shortcuts, st):
         # otherwise leave none, and every other triangle would be cut to the last level)
         budget = max(0.5 * tolerance - rules_err, 0.0)
         share = np.maximum(budget / area_t.sum(), 0.5 * tolerance / total_area) * area_t
-        split = (diff > share) & (depth < tol.AREA_MAX_DEPTH)
-        done = ~split
+        missed = diff > share
+        # a triangle the low pair missed takes the high pair; one the high pair missed
+        # is cut in four at its edges' midpoints (up to AREA_MAX_DEPTH)
+        again = missed & (rung == 0)
+        split = missed & (rung == 1) & (depth < tol.AREA_MAX_DEPTH)
+        done = ~(again | split)
         hidden += float(hi[done].sum()) / area_P
         rules_err += float(diff[done].sum())
-        err += float(diff[done].sum() + (Wh[done] * EH[done, nl:]).sum() / area_P)
-        # the others cut in four at their edges' midpoints
+        err += float(diff[done].sum() + rnd[done].sum())
         a_, b_, c_ = T[split, 0], T[split, 1], T[split, 2]
         ab, bc, ca = (a_ + b_) / 2, (b_ + c_) / 2, (c_ + a_) / 2
-        T = np.stack([np.stack(t, axis=1) for t in
-                      ((a_, ab, ca), (ab, b_, bc), (ca, bc, c_), (ab, bc, ca))],
-                     axis=1).reshape(-1, 3, 3)
-        depth = np.repeat(depth[split] + 1, 4)
+        T = np.concatenate([T[again], np.stack([np.stack(t, axis=1) for t in
+                            ((a_, ab, ca), (ab, b_, bc), (ca, bc, c_), (ab, bc, ca))],
+                            axis=1).reshape(-1, 3, 3)])
+        depth = np.concatenate([depth[again], np.repeat(depth[split] + 1, 4)])
+        rung = np.concatenate([np.ones(int(again.sum()), dtype=int),
+                               np.full(4 * int(split.sum()), start)])
     area_Pc = float(np.linalg.norm(area_vector(Pc)))
     value = whole[0] - hidden
     err += max(area_Pc - total_area, 0.0) / area_P      # cells dropped as slivers
@@ -658,7 +781,7 @@ def area_row(scene, i, tolerance, *, rtol=None, shortcuts=True, stats=None):
         beyond the estimates): shaft culling and the hull test (every other polygon is
         then a blocker of every pair), the far-field rule (the contour integral for
         every pair) and the cull of blocker-blocker events whose lines of sight miss
-        the receiver.
+        the receiver or that join two faces of one convex solid (:func:`_closed_solids`).
     stats : dict, optional
         Filled with this row's counters (:data:`STATS`).
 
@@ -700,6 +823,8 @@ def area_row(scene, i, tolerance, *, rtol=None, shortcuts=True, stats=None):
         per = max(1, tol.AREA_SHAFT_ENTRIES_PER_CALL // len(polys))
         cands = [c for s in range(0, len(J), per)
                  for c in _shaft(padded, i, J[s:s + per], boxes[s:s + per], nP, P[0], near, st)]
+    if shortcuts:
+        solids = prepared(scene).get("area_convex_solids", _convex_solids)
     unoccluded = []               # (j, Pc, Qc): computed together at the end
     for a, (j, Pc, Qc) in enumerate(pairs):
         if shortcuts:
@@ -709,8 +834,13 @@ def area_row(scene, i, tolerance, *, rtol=None, shortcuts=True, stats=None):
             B = [k for k in range(len(polys)) if k not in (i, j)]
         if B:
             st["occluded_pairs"] += 1
+            solid = None
+            if shortcuts:
+                solid = np.concatenate([[-1], _closed_solids(
+                    solids, np.array(B), (scene.normals[[i, j]], scene.plane_offsets[[i, j]]))])
             f[j], e[j], points = _occluded_pair([polys[j]] + [polys[k] for k in B], Pc, Qc,
-                                                nP, tolerance, area_P, shortcuts, st, rtol)
+                                                nP, tolerance, area_P, shortcuts, st, rtol,
+                                                solid)
             st["point_values"] += points
             f[j] = nonnegative(f[j], e[j])
             continue
