@@ -98,6 +98,7 @@ __all__ = [
     "AREA_RULE_ORDERS",
     "AREA_RULE_ORDERS_MANY_CELLS",
     "AREA_MANY_CELLS",
+    "AREA_CUT_EXTEND_RTOL",
     "AREA_MAX_DEPTH",
     "AREA_EDGE_TERMS_PER_CALL",
     "REMAINDER_SPLIT_POLYGONS",
@@ -476,6 +477,11 @@ AREA_MAX_DEPTH = 7
 #: no better than 50.
 AREA_RULE_ORDERS_MANY_CELLS = (3, 5)
 AREA_MANY_CELLS = 50
+#: Area form factors: each event line, cut to the emitter, is lengthened at both ends by
+#: this share of the emitter's size (the square root of its area) before it is noded
+#: with the emitter's boundary, so that it crosses it (its ends as GEOS rounds them may
+#: fall a few ulps inside: a dangle, dropped, and a cell left uncut).
+AREA_CUT_EXTEND_RTOL = 1e-9
 
 #: Area form factors: receivers per call of the vectorised point values (bounds the
 #: temporaries: about 2e5 edge terms per call).

@@ -386,25 +386,51 @@ def _event_lines(S, nP, dP, R, c, radius, Qc, shortcuts=True, st=None, solid=Non
 
 
 def _cells(Pc, nP, lines, R, c, grid=None):
-    """P (clipped) cut along the event lines, as triangles in the world (the lines are
-    cut to P first, so every cell lies in P; with ``grid``, the noding snaps the
-    vertices to a grid of that size, and the cells lie in P to that size)."""
+    """P (clipped) cut along the event lines, as triangles (t, 3, 3) in the world (with
+    ``grid``, the noding snaps the vertices to a grid of that size, and the cells lie in
+    P to that size).
+
+    The lines are cut to P, each piece lengthened at both ends by
+    ``AREA_CUT_EXTEND_RTOL`` of P's size, and noded with P's boundary. (A piece ends
+    where GEOS rounds its crossing with the boundary: a line through a corner of P
+    ended 3e-15 inside it, a dangle that polygonizing drops, and the cell it should
+    have cut was left whole, with a kink of the hidden part across it. Lengthened, it
+    crosses the boundary; what sticks out is a dangle, dropped.)"""
     poly = shapely.Polygon((Pc - c) @ R[:2].T)
     cut = (shapely.intersection(shapely.linestrings(np.asarray(lines, dtype=float)), poly)
            if len(lines) else np.empty(0, dtype=object))
-    segs = list(cut[~shapely.is_empty(cut)])
-    # the union nodes the segments (already cut to P) and P's boundary; cutting the
-    # union to P again would lose nodes on the boundary, and with them whole cells
-    pieces = shapely.get_parts(shapely.polygonize(
+    pieces = shapely.get_parts(shapely.get_parts(cut[~shapely.is_empty(cut)]))
+    pieces = pieces[shapely.get_type_id(pieces) == 1]                   # line strings
+    segs = []
+    if len(pieces):
+        ends = shapely.get_coordinates(pieces).reshape(-1, 2, 2)   # a cut line is straight
+        d = ends[:, 1] - ends[:, 0]
+        length = np.linalg.norm(d, axis=1)
+        step = tol.AREA_CUT_EXTEND_RTOL * np.sqrt(poly.area)
+        ok = length > 0
+        d = d[ok] / length[ok, None] * step
+        segs = list(shapely.linestrings(np.stack([ends[ok, 0] - d, ends[ok, 1] + d], axis=1)))
+    faces = shapely.get_parts(shapely.polygonize(
         shapely.get_parts(shapely.union_all([poly.boundary, *segs], grid_size=grid))))
-    tris = []
-    for cell in pieces:
-        if cell.area <= tol.AREA_SLIVER_CELL * poly.area:   # counted in the estimate
-            continue
-        for t in shapely.get_parts(shapely.constrained_delaunay_triangles(cell)):
-            uv = np.asarray(t.exterior.coords)[:3]
-            tris.append(c + uv @ R[:2])
-    return tris
+    tris, face = shapely.get_parts(shapely.constrained_delaunay_triangles(faces),
+                                   return_index=True)
+    if not len(tris):
+        return np.zeros((0, 3, 3))
+    uv = shapely.get_coordinates(shapely.get_exterior_ring(tris)).reshape(-1, 4, 2)[:, :3]
+    e1, e2 = uv[:, 1] - uv[:, 0], uv[:, 2] - uv[:, 0]
+    area_t = 0.5 * np.abs(e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0])
+    # a face of the arrangement lies in P or outside it (P's boundary is in the noding):
+    # decided at the centroid of its largest triangle, well inside it (a point on a thin
+    # face may be a vertex on P's boundary; GEOS once cut a face inside P with P to
+    # nothing)
+    order = np.lexsort((-area_t, face))
+    first = order[np.r_[True, face[order][1:] != face[order][:-1]]]
+    g = uv[first].mean(axis=1)
+    inside = np.zeros(len(faces), dtype=bool)
+    inside[face[first]] = shapely.contains_xy(poly, g[:, 0], g[:, 1])
+    # cells of P thinner than rounding are dropped (their area is counted in the estimate)
+    inside &= shapely.area(faces) > tol.AREA_SLIVER_CELL * poly.area
+    return c + uv[inside[face]] @ R[:2]
 
 
 def _hidden_setup(Qc, blockers):
@@ -571,21 +597,38 @@ def _triangle_areas(T):
 
 def _corner_first(T, blockers, nP, dP):
     """The triangles T (t, 3, 3), each with first a vertex where a blocker's vertex
-    touches the emitter's plane, if it has one (the first such blocker vertex, in order,
-    within ``AREA_HULL_RTOL`` of the triangle's size of the plane and of one of its
-    vertices). Near such a point the hidden part depends on the direction from it (to
-    first order), and the collapsed rule, whose collapsed vertex is the first, integrates
-    functions of that direction alone without cutting towards the point."""
+    touches the emitter's plane, if it has one (within ``AREA_HULL_RTOL`` of the
+    triangle's size of the plane and of that vertex; the first such blocker vertex, in
+    order). Near such a point the hidden part depends on the direction from it (to first
+    order), and the collapsed rule, whose collapsed vertex is the first, integrates
+    functions of that direction alone without cutting towards the point. A triangle with
+    two or three such vertices is first cut in four at its edges' midpoints (so that
+    each of its corner quarters has one): returns as many triangles or more."""
     if not len(T) or not blockers:
         return T
     Vb = np.vstack(blockers)                                        # (m, 3)
-    near = tol.AREA_HULL_RTOL * np.ptp(T, axis=1).max(axis=1)       # (t,)
-    on = np.abs(Vb @ nP - dP)[None, :] <= near[:, None]             # (t, m)
-    d = np.linalg.norm(T[:, None, :, :] - Vb[None, :, None, :], axis=3)   # (t, m, 3)
-    k = np.argmin(d, axis=2)
-    hit = on & (np.take_along_axis(d, k[:, :, None], axis=2)[:, :, 0] <= near[:, None])
-    first = np.argmax(hit, axis=1)
-    shift = np.where(hit.any(axis=1), k[np.arange(len(T)), first], 0)
+    off = np.abs(Vb @ nP - dP)
+
+    def touching(T):
+        """Per triangle and vertex, whether a blocker's vertex touches it on the plane,
+        and the index (into Vb) of the first that does."""
+        near = tol.AREA_HULL_RTOL * np.ptp(T, axis=1).max(axis=1)   # (t,)
+        d = np.linalg.norm(T[:, :, None, :] - Vb[None, None, :, :], axis=3)   # (t, 3, m)
+        hit = (d <= near[:, None, None]) & (off <= near[:, None])[:, None, :]
+        return hit.any(axis=2), np.where(hit.any(axis=2), np.argmax(hit, axis=2), len(Vb))
+
+    touched, _ = touching(T)
+    several = touched.sum(axis=1) > 1
+    if several.any():
+        a_, b_, c_ = T[several, 0], T[several, 1], T[several, 2]
+        ab, bc, ca = (a_ + b_) / 2, (b_ + c_) / 2, (c_ + a_) / 2
+        quarters = np.stack([np.stack(t, axis=1) for t in
+                             ((a_, ab, ca), (ab, b_, bc), (ca, bc, c_), (ab, bc, ca))],
+                            axis=1).reshape(-1, 3, 3)
+        T = np.concatenate([T[~several], quarters])
+    touched, first = touching(T)
+    # the vertex touched by the earliest blocker vertex first
+    shift = np.where(touched.any(axis=1), np.argmin(first, axis=1), 0)
     return T[np.arange(len(T))[:, None], (np.arange(3)[None, :] + shift[:, None]) % 3]
 
 
@@ -650,7 +693,7 @@ def _hidden_integral(S, Pc, Qc, nP, tolerance, area_P, whole, shortcuts, st, sol
         except shapely.errors.GEOSException as exc:
             raise NumericalError(f"could not cut the emitter along its {len(lines)} "
                                  f"visibility events: {exc}") from exc
-    T = _corner_first(np.array(cells).reshape(-1, 3, 3), S[1:], nP, dP)
+    T = _corner_first(cells, S[1:], nP, dP)
     depth = np.zeros(len(T), dtype=int)
     # many cells (small ones) start with the low pair of rules, few with the high pair
     # (and so do the triangles they are cut into)
