@@ -20,8 +20,10 @@ Usage: python benchmarks/bench_area.py [--cube-k 8]
    row's sum of estimates; then the cube of ``subdivided_box(k)`` (``--cube-k``)
    against pyviewfactor's unoccluded matrix (``compute_viewfactor_matrix``, SA-30
    kernel, Numba threads, obstruction skipped) when it is importable, process time
-   (all threads) and wall time of each. ``--skip-slow`` leaves out gunter1 at 1e-9
-   (minutes); ``--only-view3d`` runs this part alone.
+   (all threads) and wall time of each; and the closed Cornell box's full matrix at
+   1e-6 and 1e-9 (process and wall time, the rows' and reciprocity's invariants).
+   ``--skip-slow`` leaves out gunter1 at 1e-9; ``--only-view3d`` runs this part
+   alone.
 """
 
 import argparse
@@ -206,7 +208,38 @@ def view3d_table(args):
                   f"| {v3d if v3d else 'not measured'} | {ratio} | {E.max():.1e} | {rows} | {brief} |",
                   flush=True)
     print()
+    cornell_matrix()
+    print()
     cube_against_pyviewfactor(args.cube_k)
+
+
+def cornell_matrix():
+    """The closed Cornell box's full area matrix (21 polygons, ten block faces between
+    the floor and the light; issue 30's goal: 1e-9 in under a minute): process and wall
+    time, points, and the invariants (every row sums to 1 but the floor's, which sums to
+    1 less the blocks' footprints, as the blocks are open below; reciprocity), each
+    within the estimates."""
+    scene = ef.scenes.cornell_box(closed=True)
+    A = scene.areas
+    want = np.ones(len(scene))
+    want[1] = 1.0 - (A[10] + A[15]) / A[1]       # the blocks' tops are their footprints
+    print("Closed Cornell box, full area matrix (one process):")
+    print()
+    print("| tolerance | process s | wall s | points | max estimate | worst abs(row sum - "
+          "expected) | largest row's sum of estimates | rows within | reciprocity within | stats |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
+    for tol in (1e-6, 1e-9):
+        st = {}
+        t0, w0 = time.process_time(), time.perf_counter()
+        F, E = ef.area_form_factors(scene, tolerance=tol, error=True, stats=st)
+        dt, dw = time.process_time() - t0, time.perf_counter() - w0
+        dev = np.abs(F.sum(axis=1) - want)
+        AF, AE = A[:, None] * F, A[:, None] * E
+        brief = ", ".join(f"{k} {v}" for k, v in st.items() if v and k != "point_values")
+        print(f"| {tol:g} | {dt:.1f} | {dw:.1f} | {st['point_values']:,} | {E.max():.1e} "
+              f"| {dev.max():.1e} | {E.sum(axis=1).max():.1e} "
+              f"| {bool(np.all(dev <= E.sum(axis=1) + 1e-13))} "
+              f"| {bool(np.all(np.abs(AF - AF.T) <= AE + AE.T + 1e-12))} | {brief} |", flush=True)
 
 
 def cube_against_pyviewfactor(k):

@@ -99,6 +99,7 @@ __all__ = [
     "AREA_RULE_ORDERS_MANY_CELLS",
     "AREA_MANY_CELLS",
     "AREA_CUT_EXTEND_RTOL",
+    "AREA_CELL_COVER_RTOL",
     "AREA_MAX_DEPTH",
     "AREA_EDGE_TERMS_PER_CALL",
     "REMAINDER_SPLIT_POLYGONS",
@@ -477,11 +478,14 @@ AREA_MAX_DEPTH = 7
 #: no better than 50.
 AREA_RULE_ORDERS_MANY_CELLS = (3, 5)
 AREA_MANY_CELLS = 50
-#: Area form factors: each event line, cut to the emitter, is lengthened at both ends by
-#: this share of the emitter's size (the square root of its area) before it is noded
-#: with the emitter's boundary, so that it crosses it (its ends as GEOS rounds them may
-#: fall a few ulps inside: a dangle, dropped, and a cell left uncut).
+#: Area form factors: an end of an event line cut to the emitter this close to its
+#: boundary (relative to its size, the square root of its area) is moved out by as much
+#: before the lines are noded, so that it crosses the boundary (as GEOS rounds it, a
+#: line through a corner ended 3e-15 inside: a dangle, dropped, and a cell left uncut).
 AREA_CUT_EXTEND_RTOL = 1e-9
+#: ... and the emitter's cells must cover it to this share of its area, else it is cut
+#: again another way (as cut, then on a grid: the cells that cover most are kept).
+AREA_CELL_COVER_RTOL = 1e-12
 
 #: Area form factors: receivers per call of the vectorised point values (bounds the
 #: temporaries: about 2e5 edge terms per call).

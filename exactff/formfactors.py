@@ -660,8 +660,10 @@ def area_form_factors(scene, rows=None, *, tolerance=1e-9, error=False, executor
         (vertex-edge pairs of two faces of one convex solid, not cut along),
         ``engine_fallbacks`` and ``engine_fallback_points`` (hidden parts the engine
         computed where GEOS failed or a point's images did not stay finite),
-        ``cell_fallbacks`` (emitters GEOS failed to cut along their visibility events,
-        cut again on a grid of 1e-12 of their size), ``occluded_pairs`` and
+        ``cell_fallbacks`` (emitters cut along their visibility events another way,
+        where GEOS failed or the cells did not cover the emitter: the lines not
+        lengthened across its boundary, or noded on a grid of 1e-12 of its size),
+        ``occluded_pairs`` and
         ``point_values``. Every shortcut's counter is 0 with ``shortcuts=False``.
     combine : bool, default False
         The matrix View3D prints for a scene read from a ``.vs3`` file

@@ -46,8 +46,8 @@ __all__ = ["area_row", "STATS"]
 #: images united change only at the faces' planes (``solid_events``), calls whose hidden parts the engine computed at some points,
 #: where a point's images did not stay finite or could not be trusted
 #: (``engine_fallbacks``, their points ``engine_fallback_points``), pairs whose emitter
-#: GEOS failed to cut along the events in floating point, cut again on a fine grid
-#: (``cell_fallbacks``); and what was done:
+#: was cut along the events another way (GEOS failed, or the cells did not cover it:
+#: the lines as cut, or on a fine grid; ``cell_fallbacks``); and what was done:
 #: ``occluded_pairs``, ``point_values``
 #: (hidden parts evaluated).
 STATS = ("enclosure_unoccluded_pairs", "hull_unoccluded_pairs", "hull_culled_blockers",
@@ -385,52 +385,45 @@ def _event_lines(S, nP, dP, R, c, radius, Qc, shortcuts=True, st=None, solid=Non
     return [(p0, p1) for p0, p1 in E2]
 
 
-def _cells(Pc, nP, lines, R, c, grid=None):
-    """P (clipped) cut along the event lines, as triangles (t, 3, 3) in the world (with
-    ``grid``, the noding snaps the vertices to a grid of that size, and the cells lie in
-    P to that size).
+def _cells(Pc, nP, lines, R, c, grid=None, lengthen=True):
+    """P (clipped) cut along the event lines, as triangles (t, 3, 3) in the world (the
+    lines are cut to P first, so every cell lies in P; with ``grid``, the noding snaps
+    the vertices to a grid of that size, and the cells lie in P to that size).
 
-    The lines are cut to P, each piece lengthened at both ends by
-    ``AREA_CUT_EXTEND_RTOL`` of P's size, and noded with P's boundary. (A piece ends
-    where GEOS rounds its crossing with the boundary: a line through a corner of P
-    ended 3e-15 inside it, a dangle that polygonizing drops, and the cell it should
-    have cut was left whole, with a kink of the hidden part across it. Lengthened, it
-    crosses the boundary; what sticks out is a dangle, dropped.)"""
+    With ``lengthen``, an end of a cut line within ``AREA_CUT_EXTEND_RTOL`` of P's size
+    of P's boundary is moved out by as much, across the boundary; what sticks out is a
+    dangle, dropped. (GEOS rounds a line's crossing with the boundary, which may leave
+    the end a few ulps inside: a dangle that polygonizing drops, and the cell it should
+    have cut left whole, with a kink of the hidden part across it; a line through a
+    corner of gunter1's ceiling did that.)"""
     poly = shapely.Polygon((Pc - c) @ R[:2].T)
     cut = (shapely.intersection(shapely.linestrings(np.asarray(lines, dtype=float)), poly)
            if len(lines) else np.empty(0, dtype=object))
     pieces = shapely.get_parts(shapely.get_parts(cut[~shapely.is_empty(cut)]))
     pieces = pieces[shapely.get_type_id(pieces) == 1]                   # line strings
-    segs = []
-    if len(pieces):
+
+    def faces_of(segments):
+        # the union nodes the segments (already cut to P) and P's boundary; cutting the
+        # union to P again would lose nodes on the boundary, and with them whole cells
+        return shapely.get_parts(shapely.polygonize(shapely.get_parts(
+            shapely.union_all([poly.boundary, *segments], grid_size=grid))))
+
+    if len(pieces) and lengthen:
         ends = shapely.get_coordinates(pieces).reshape(-1, 2, 2)   # a cut line is straight
+        step = tol.AREA_CUT_EXTEND_RTOL * np.sqrt(poly.area)
         d = ends[:, 1] - ends[:, 0]
         length = np.linalg.norm(d, axis=1)
-        step = tol.AREA_CUT_EXTEND_RTOL * np.sqrt(poly.area)
-        ok = length > 0
-        d = d[ok] / length[ok, None] * step
-        segs = list(shapely.linestrings(np.stack([ends[ok, 0] - d, ends[ok, 1] + d], axis=1)))
-    faces = shapely.get_parts(shapely.polygonize(
-        shapely.get_parts(shapely.union_all([poly.boundary, *segs], grid_size=grid))))
-    tris, face = shapely.get_parts(shapely.constrained_delaunay_triangles(faces),
-                                   return_index=True)
-    if not len(tris):
-        return np.zeros((0, 3, 3))
-    uv = shapely.get_coordinates(shapely.get_exterior_ring(tris)).reshape(-1, 4, 2)[:, :3]
-    e1, e2 = uv[:, 1] - uv[:, 0], uv[:, 2] - uv[:, 0]
-    area_t = 0.5 * np.abs(e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0])
-    # a face of the arrangement lies in P or outside it (P's boundary is in the noding):
-    # decided at the centroid of its largest triangle, well inside it (a point on a thin
-    # face may be a vertex on P's boundary; GEOS once cut a face inside P with P to
-    # nothing)
-    order = np.lexsort((-area_t, face))
-    first = order[np.r_[True, face[order][1:] != face[order][:-1]]]
-    g = uv[first].mean(axis=1)
-    inside = np.zeros(len(faces), dtype=bool)
-    inside[face[first]] = shapely.contains_xy(poly, g[:, 0], g[:, 1])
+        d = np.divide(d * step, length[:, None], out=np.zeros_like(d), where=length[:, None] > 0)
+        on = shapely.distance(shapely.points(ends), poly.boundary) <= step    # (n, 2)
+        faces = faces_of(shapely.linestrings(ends + np.stack([-d * on[:, :1], d * on[:, 1:]],
+                                                            axis=1)))
+    else:
+        faces = faces_of(pieces)
     # cells of P thinner than rounding are dropped (their area is counted in the estimate)
-    inside &= shapely.area(faces) > tol.AREA_SLIVER_CELL * poly.area
-    return c + uv[inside[face]] @ R[:2]
+    faces = faces[shapely.area(faces) > tol.AREA_SLIVER_CELL * poly.area]
+    tris = shapely.get_parts(shapely.constrained_delaunay_triangles(faces))
+    uv = shapely.get_coordinates(shapely.get_exterior_ring(tris)).reshape(-1, 4, 2)[:, :3]
+    return c + uv @ R[:2]
 
 
 def _hidden_setup(Qc, blockers):
@@ -680,19 +673,32 @@ def _hidden_integral(S, Pc, Qc, nP, tolerance, area_P, whole, shortcuts, st, sol
     dP = float(nP @ Pc[0])
     radius = (1.0 + tol.AREA_HIDDEN_PAD) * float(np.linalg.norm(Pc - c, axis=1).max())
     lines = _event_lines(S, nP, dP, R, c, radius, Qc, shortcuts, st, solid)
-    try:
-        cells = _cells(Pc, nP, lines, R, c)
-    except shapely.errors.GEOSException:
-        # GEOS gave up noding the events in floating point: noded again on a grid of
-        # AREA_HULL_RTOL of P's size (the cuts move by that much, the cells' area
-        # missing from P is in the estimate), counted
-        if st is not None:
-            st["cell_fallbacks"] = st.get("cell_fallbacks", 0) + 1
+    # the emitter cut along the events: in floating point with the lines lengthened
+    # across its boundary, else as cut, else noded on a grid of AREA_HULL_RTOL of P's
+    # size (the cuts move by that much), each way with and without lengthening; the
+    # first whose cells cover P (to AREA_CELL_COVER_RTOL) is taken, else the one that
+    # covers most (the area missing is in the estimate). GEOS may give up noding, or
+    # polygonizing drop a ring it finds invalid and the cell inside it (7 % of a wall of
+    # the closed Cornell box): counted
+    area_Pc = float(np.linalg.norm(area_vector(Pc)))
+    cells, failure = None, None
+    for k, (grid, lengthen) in enumerate(((None, True), (None, False),
+                                          (tol.AREA_HULL_RTOL * radius, True),
+                                          (tol.AREA_HULL_RTOL * radius, False))):
         try:
-            cells = _cells(Pc, nP, lines, R, c, grid=tol.AREA_HULL_RTOL * radius)
+            T = _cells(Pc, nP, lines, R, c, grid=grid, lengthen=lengthen)
         except shapely.errors.GEOSException as exc:
-            raise NumericalError(f"could not cut the emitter along its {len(lines)} "
-                                 f"visibility events: {exc}") from exc
+            failure = exc
+            continue
+        if cells is None or len(T) and _triangle_areas(T).sum() > _triangle_areas(cells).sum():
+            cells = T
+        if _triangle_areas(cells).sum() >= (1 - tol.AREA_CELL_COVER_RTOL) * area_Pc:
+            break
+    if k and st is not None:
+        st["cell_fallbacks"] = st.get("cell_fallbacks", 0) + 1
+    if cells is None:
+        raise NumericalError(f"could not cut the emitter along its {len(lines)} "
+                             f"visibility events: {failure}") from failure
     T = _corner_first(cells, S[1:], nP, dP)
     depth = np.zeros(len(T), dtype=int)
     # many cells (small ones) start with the low pair of rules, few with the high pair
@@ -757,7 +763,6 @@ def _hidden_integral(S, Pc, Qc, nP, tolerance, area_P, whole, shortcuts, st, sol
         depth = np.concatenate([depth[again], np.repeat(depth[split] + 1, 4)])
         rung = np.concatenate([np.ones(int(again.sum()), dtype=int),
                                np.full(4 * int(split.sum()), start)])
-    area_Pc = float(np.linalg.norm(area_vector(Pc)))
     value = whole[0] - hidden
     err += max(area_Pc - total_area, 0.0) / area_P      # cells dropped as slivers
     return value, err + whole[1], points
