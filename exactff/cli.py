@@ -263,8 +263,8 @@ def _area_matrix(scene, rows, args, out, executor):
         F, E = area_form_factors(scene, rows, tolerance=args.tolerance, error=True,
                                  executor=executor, jobs=jobs,
                                  progress=not args.no_progress, combine=True)
-        np.save(out, F)
-        np.save(error_path, E)
+        _save_without_records(out, F)
+        _save_without_records(error_path, E)
     else:
         F, E = area_form_factors(scene, rows, tolerance=args.tolerance, error=True,
                                  executor=executor, jobs=jobs,
@@ -274,6 +274,24 @@ def _area_matrix(scene, rows, args, out, executor):
     print(f"error bounds     max {largest:.3g} (tolerance {args.tolerance:g}) "
           f"-> {error_path}")
     return F, E
+
+
+def _save_without_records(path, M):
+    """``np.save`` a matrix computed in memory, removing what a resumable run to the same
+    path left beside it (its record and its rows done), which would otherwise pass the
+    file for that run's."""
+    import os
+    import shutil
+
+    from .storage import path_stem
+
+    stem = path_stem(path)
+    for beside in (stem + ".meta.json", stem + ".done.npy", stem + ".parts"):
+        if os.path.isdir(beside):
+            shutil.rmtree(beside)
+        elif os.path.exists(beside):
+            os.remove(beside)
+    np.save(path, M)
 
 
 def read_points(path):
@@ -309,8 +327,8 @@ def _sphere_matrix(scene, rows, args, out):
                          "--area, --jobs or .zarr)")
     points = read_points(args.points) if args.points else scene.centroids[rows]
     S, E = sphere_form_factors(scene, points, two_sided=not args.front_only, error=True)
-    np.save(out, S)
-    np.save(out[:-4] + ".error.npy", E)
+    _save_without_records(out, S)
+    _save_without_records(out[:-4] + ".error.npy", E)
     what = f"{len(points)} points of {args.points}" if args.points else "the centroids"
     print(f"sphere           visible solid angle / 4 pi from {what}"
           + ("" if args.points else " (each polygon edge-on from its own centroid: a "
@@ -325,7 +343,7 @@ def cmd_matrix(args):
     import time
 
     from .formfactors import form_factor_matrix
-    from .storage import output_path, path_stem, path_suffix
+    from .storage import beside_path, output_path, path_stem, path_suffix
 
     scene = _open(args)
     if args.combine and not args.area:
@@ -362,8 +380,9 @@ def cmd_matrix(args):
                                                  else "a .npz output needs --sparse"))
     stem = path_stem(out)
     if args.overwrite:
-        beside = [stem + "." + what + e for what in ("remainder", "error")
-                  for e in (".npy", ".done.npy", ".meta.json", ".parts", ".npz", ".zarr")]
+        beside = [s + e for s in (stem + ".remainder", path_stem(beside_path(out, "error")))
+                  for e in (".done.npy", ".meta.json", ".parts")]
+        beside += [stem + ".remainder.npy", beside_path(out, "error")]
         for path in (out, stem + ".done.npy", stem + ".meta.json", stem + ".parts", *beside):
             if os.path.isdir(path):
                 shutil.rmtree(path)
@@ -419,7 +438,9 @@ def cmd_matrix(args):
     print(f"time             {elapsed:.3f} s ({elapsed / max(M.shape[0], 1) * 1e3:.2f} ms per row)")
     print(f"zero entries     {zero_share:.1%}")
     if not args.sphere:  # spherical rows have no invariant of 1 to report
-        _write_report(M, scene, E, R, rows, args.area, stem + ".report.json")
+        # (the surfaces View3D reports are not the scene's polygons: judged alone)
+        _write_report(M, None if args.combine else scene, E, R,
+                      None if args.combine else rows, args.area, stem + ".report.json")
     return 0
 
 

@@ -701,8 +701,10 @@ def area_form_factors(scene, rows=None, *, tolerance=1e-9, error=False, executor
     What the estimate rests on: for unoccluded pairs, the rounding of the contour sum
     and the difference between its tanh-sinh rule and the next coarser one (tested
     against Howell's catalogue, reciprocity and splitting); for occluded pairs, that on a triangle between visibility events the
-    integrand is smooth, so that the difference between the 6- and 10-point rules
-    bounds the 10-point rule's error, plus the point values' own bounds. Curved events
+    integrand is smooth, so that the difference between a triangle's two rules (6 and
+    10 points a side, or 3 and 5 where the emitter is cut into many small triangles)
+    bounds the finer rule's error, plus the point values' own bounds and the area of any
+    cell the cutting lost (counted at the largest value the hidden part can take). Curved events
     (three skew edges) are not cut along; the adaptive cutting resolves them, and a
     triangle still unresolved after ``MAX_DEPTH`` cuts keeps its (large) estimate, so
     that a value whose estimate exceeds ``tolerance`` says so: it raises, or with

@@ -202,6 +202,8 @@ class MatrixOutput:
     def _reopen(self):
         if self.kind == ".npz":
             if os.path.exists(self.out) and not os.path.exists(self.parts):
+                with np.load(self.out) as z:
+                    self._check_shape(tuple(z["shape"]) if "shape" in z else None)
                 self.done = np.ones(self.shape[0], bool)
                 return
             self.done = np.zeros(self.shape[0], bool)
@@ -216,6 +218,15 @@ class MatrixOutput:
             self.M = np.lib.format.open_memmap(self.out, mode="r+")
         else:
             self.M = _zarr().open_array(store=self.out, mode="r+")
+        self._check_shape(tuple(self.M.shape))
+
+    def _check_shape(self, shape):
+        """A file whose record matches but whose array does not (written over by another
+        writer, its record left behind) is not taken for this computation's."""
+        if shape != self.shape:
+            raise ValueError(f"out: {self.out!r} holds an array of shape {shape}, not the "
+                             f"{self.shape} its record says (written over since); remove it "
+                             f"or choose another path")
 
     # -- rows --------------------------------------------------------------------------
     def write(self, pos, values):

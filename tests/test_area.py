@@ -636,6 +636,33 @@ def test_cli_matrix_area(tmp_path):
     assert r.returncode == 2 and "--area is one-sided" in r.stderr
 
 
+def test_cli_matrix_area_combine_leaves_no_record_a_later_run_would_resume(tmp_path, capsys):
+    # an area run to m.npy, then --combine to the same path (the surfaces View3D
+    # reports: 8 of 12 polygons; it exits 0 with its report), then an area run again:
+    # the combined matrix is not taken for its own (refused, as a file of another
+    # computation), and --overwrite starts afresh
+    import os
+
+    from exactff.cli import main
+
+    path = os.path.join(os.path.dirname(__file__), "data", "view3d", "l_room_f3.vs3")
+    scene = ef.read_vs3(path)
+    out = str(tmp_path / "m.npy")
+    base = ["matrix", path, "--area", "--tolerance", "1e-6", "--no-progress", "-o", out]
+    assert main(base) == 0 and np.load(out).shape == (12, 12)
+    assert main(base + ["--combine"]) == 0
+    n = len(ef.combined_surfaces(scene))
+    assert n == 8 and np.load(out).shape == (n, n)
+    capsys.readouterr()
+    assert main(base) == 2
+    assert "not written by this computation" in capsys.readouterr().err
+    assert main(base + ["--overwrite"]) == 0 and np.load(out).shape == (12, 12)
+    # a record left beside a file written over otherwise: refused, not resumed
+    np.save(out, np.zeros((3, 3)))
+    with pytest.raises(ValueError, match="holds an array of shape"):
+        ef.area_form_factors(scene, tolerance=1e-6, error=True, out=out)
+
+
 def test_cli_matrix_area_sparse_jobs_and_a_killed_run_resumed(tmp_path, capsys, monkeypatch):
     # the matrix driver of the point rows: --sparse (values and bounds in .npz), --jobs,
     # and a run killed after its first blocks resumed from what it wrote, computing the
@@ -734,6 +761,18 @@ def _shortcut_scene(name):
         # a closed box inside a room: between two of its faces no event but their planes
         return _floating_box(), [0], 1e-7, ("hull_unoccluded_pairs", "hull_culled_blockers",
                                             "shaft_culled_blockers", "solid_events")
+    if name in ("straddling", "hanging"):
+        # a closed box straddling the receiver's plane (its part behind the receiver
+        # clipped away), and a box open at the top hanging from the receiver's plane
+        # (its open face there, the emitter's plane meeting it in no area)
+        floor = _rect_xy(0, 1, 0, 1)
+        ceiling = _rect_xy(0, 1, 0, 1)[::-1] + [0, 0, 1]
+        box = (_closed_box([.3, .35, .7], [.6, .7, 1.2]) if name == "straddling" else
+               _box_faces([.3, .35, 1], [.6, .7, .6])[1:] + [_closed_box([.3, .35, .6],
+                                                                         [.6, .7, 1])[-1]])
+        fire = ("hull_unoccluded_pairs", "hull_culled_blockers", "solid_events")
+        return (ef.Scene.from_polygons([floor, ceiling] + box), [0], 1e-7,
+                fire + (("shaft_culled_blockers",) if name == "hanging" else ()))
     if name == "facet":
         # View3D's facet box (a plate inside a unit box): row 5, the wall behind the
         # plate, whose pairs with the side walls have the plate in their boxes but
@@ -750,7 +789,7 @@ def _shortcut_scene(name):
 
 
 @pytest.mark.parametrize("name", ["reference0", "reference1", "cube", "room", "box", "far",
-                                  "facet", "floating"])
+                                  "facet", "floating", "straddling", "hanging"])
 def test_area_shortcuts_are_neutral_and_counted(name):
     # with shortcuts=False (every other polygon a blocker of every pair, the contour
     # integral for far pairs, every blocker-blocker event cut along) the values agree

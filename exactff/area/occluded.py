@@ -601,6 +601,11 @@ def _corner_first(T, blockers, nP, dP):
         return T
     Vb = np.vstack(blockers)                                        # (m, 3)
     off = np.abs(Vb @ nP - dP)
+    # only the blocker vertices that may be on the plane for some triangle (in order)
+    keep = off <= tol.AREA_HULL_RTOL * np.ptp(T, axis=1).max()
+    if not keep.any():
+        return T
+    Vb, off = Vb[keep], off[keep]
 
     def touching(T):
         """Per triangle and vertex, whether a blocker's vertex touches it on the plane,
@@ -764,7 +769,7 @@ def _hidden_integral(S, Pc, Qc, nP, tolerance, area_P, whole, shortcuts, st, sol
         rung = np.concatenate([np.ones(int(again.sum()), dtype=int),
                                np.full(4 * int(split.sum()), start)])
     value = whole[0] - hidden
-    err += max(area_Pc - total_area, 0.0) / area_P      # cells dropped as slivers
+    err += max(area_Pc - total_area, 0.0) / area_P      # cells dropped or lost
     return value, err + whole[1], points
 
 
