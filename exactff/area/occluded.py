@@ -220,17 +220,23 @@ def _convex_solids(scene):
     size = np.bincount(label, minlength=n)
     bad = {int(label[fs[0]]) for fs in shared if len(fs) > 2}     # three faces on an edge
     N, D = scene.normals, scene.plane_offsets
+    # each group's members and its edges that only one member has, in one pass each
+    members_of, edges_of = {}, {}
+    for f, g in enumerate(label.tolist()):
+        members_of.setdefault(g, []).append(f)
+    for k, fs in faces_of.items():
+        if len(fs) == 1:
+            edges_of.setdefault(int(label[fs[0]]), []).append(k)
     open_edges, vertices = {}, {}
     for g in np.flatnonzero(size > 1):
-        members = np.flatnonzero(label == g)
+        members = np.array(members_of[int(g)])
         if int(g) in bad:
             continue
         V = np.unique(np.vstack([polys[f] for f in members]), axis=0)
         sign, _ = coplanar_band_sides(V, N[members], D[members])
         if np.any((sign > 0).any(axis=0) & (sign < 0).any(axis=0)):
             continue                                     # a member's plane cuts the group
-        edges = [k for k, fs in faces_of.items() if len(fs) == 1 and label[fs[0]] == g]
-        open_edges[int(g)] = np.array(edges, dtype=float).reshape(-1, 2, 3)
+        open_edges[int(g)] = np.array(edges_of.get(int(g), []), dtype=float).reshape(-1, 2, 3)
         vertices[int(g)] = V
     label = np.where(np.isin(label, list(open_edges)), label, -1)
     return label, open_edges, vertices
