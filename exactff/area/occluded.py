@@ -43,8 +43,9 @@ __all__ = ["area_row", "STATS"]
 #: far pairs by the far-field rule (``far_pairs``),
 #: blocker-blocker events not cut along because their lines of sight miss the receiver
 #: (``culled_events``), vertex-edge pairs of two faces of one convex solid, whose
-#: images united change only at the faces' planes (``solid_events``), calls whose hidden parts the engine computed at some points,
-#: where a point's images did not stay finite or could not be trusted
+#: images united change only at the faces' planes (``solid_events``), calls whose
+#: hidden parts the engine computed at some points, where a point's images did not
+#: stay finite or could not be trusted
 #: (``engine_fallbacks``, their points ``engine_fallback_points``), pairs whose emitter
 #: was cut along the events another way (GEOS failed, or the cells did not cover it:
 #: the lines as cut, or on a fine grid; ``cell_fallbacks``); and what was done:
@@ -647,9 +648,9 @@ def _occluded_pair(S, Pc, Qc, nP, tolerance, area_P, shortcuts=True, st=None, rt
     Gauss-Legendre rules (6 and 10 points a side), a triangle cut in four where the two
     differ by more than its share of the tolerance. Where the events cut Pc into more
     than ``AREA_MANY_CELLS`` triangles (small ones), each starts with a lower pair (3
-    and 5 points a side) and takes the higher pair where that pair misses its share. Returns the value, its error
-    estimate (the contour sum's, the rules' differences, the point values' bounds) and
-    the number of point values used.
+    and 5 points a side) and takes the higher pair where that pair misses its share.
+    Returns the value, its error estimate (the contour sum's, the rules' differences,
+    the point values' bounds) and the number of point values used.
 
     The rules' target is the absolute ``tolerance``, or with ``rtol`` the bound
     ``max(tolerance, rtol * F)``: first with the unoccluded value for F (the value is
