@@ -314,51 +314,63 @@ def _event_lines(S, nP, dP, R, c, radius, Qc, shortcuts=True, st=None, solid=Non
     shapely.prepare(seen)
     # the events in order (per polygon A: its plane, then per other polygon B, vertex v
     # of A and edge of B): the plane m . (x - v) = 0 through v, and the span's ends
-    ms, vs, spans, spanned = [], [], [], []
-    for a, A in enumerate(S):
-        ms.append(np.cross(A[1] - A[0], A[2] - A[0])[None])
-        vs.append(A[:1])
-        spans.append(np.zeros((1, 2, 3)))
-        spanned.append(np.zeros(1, dtype=bool))
-        for b, B in enumerate(S):
-            if a == b:
-                continue
-            if shortcuts and solid is not None and solid[a] >= 0 and solid[a] == solid[b]:
-                st["solid_events"] = st.get("solid_events", 0) + len(A) * len(B)
-                continue
-            # every vertex of A against every edge of B, (kA * kB) rows in loop order
-            v = np.repeat(A, len(B), axis=0)
-            e0, e1 = np.tile(B, (len(A), 1)), np.tile(np.roll(B, -1, axis=0), (len(A), 1))
-            m = np.cross(e0 - v, e1 - v)
-            keep = np.any(m != 0, axis=1)
-            if shortcuts and a and b:
-                # the lines through v and the points of the edge meet Qc's plane along
-                # the edge's central image from v: does it cross Qc? (unbounded: kept)
-                d0, d1 = (e0 - v) @ nQ, (e1 - v) @ nQ
-                bounded = keep & (d0 * d1 > 0)
-                if bounded.any():
-                    vb, h = v[bounded], (q0 - v[bounded]) @ nQ
-                    ia = vb + (h / d0[bounded])[:, None] * (e0[bounded] - vb) - q0
-                    ib = vb + (h / d1[bounded])[:, None] * (e1[bounded] - vb) - q0
-                    segs = shapely.linestrings(np.stack([ia @ RQ[:2].T, ib @ RQ[:2].T], axis=1))
-                    miss = ~shapely.intersects(seen, segs)
-                    st["culled_events"] = st.get("culled_events", 0) + int(miss.sum())
-                    keep[np.flatnonzero(bounded)[miss]] = False
-            v, e0, e1, m = v[keep], e0[keep], e1[keep], m[keep]
-            # where the lines from v through the edge's ends meet P's plane (None:
-            # parallel, or the image passes through infinity: the whole chord)
-            den0, den1 = (e0 - v) @ nP, (e1 - v) @ nP
-            ok = ((np.abs(den0) >= tol.AREA_RAY_PARALLEL * np.linalg.norm(e0 - v, axis=1))
-                  & (np.abs(den1) >= tol.AREA_RAY_PARALLEL * np.linalg.norm(e1 - v, axis=1))
-                  & (den0 * den1 > 0))
-            with np.errstate(divide="ignore", invalid="ignore"):
-                x0 = v + ((dP - v @ nP) / den0)[:, None] * (e0 - v)
-                x1 = v + ((dP - v @ nP) / den1)[:, None] * (e1 - v)
-            ms.append(m)
-            vs.append(v)
-            spans.append(np.stack([x0, x1], axis=1))
-            spanned.append(ok)
-    m, v, span, spanned = (np.concatenate(x) for x in (ms, vs, spans, spanned))
+    n = len(S)
+    k = np.array([len(A) for A in S])
+    start = np.concatenate([[0], np.cumsum(k)])
+    W = np.concatenate([np.asarray(A, dtype=float) for A in S])
+    nxt = successors(start)
+    # the ordered pairs (a, b) of different polygons, a-major, less those within one
+    # convex solid
+    pa, pb = (g.ravel() for g in np.meshgrid(np.arange(n), np.arange(n), indexing="ij"))
+    pair = pa != pb
+    if shortcuts and solid is not None:
+        sol = np.asarray(solid)
+        same = pair & (sol[pa] >= 0) & (sol[pa] == sol[pb])
+        if same.any():
+            st["solid_events"] = st.get("solid_events", 0) + int((k[pa] * k[pb])[same].sum())
+        pair &= ~same
+    pa, pb = pa[pair], pb[pair]
+    # every vertex of A against every edge of B, (kA * kB) rows per pair in loop order
+    size = k[pa] * k[pb]
+    row_pair = np.repeat(np.arange(len(pa)), size)
+    off = np.arange(int(size.sum())) - np.repeat(np.cumsum(size) - size, size)
+    ra, kb = pa[row_pair], k[pb[row_pair]]
+    vi = start[ra] + off // kb
+    ei = start[pb[row_pair]] + off % kb
+    v, e0, e1 = W[vi], W[ei], W[nxt[ei]]
+    m = np.cross(e0 - v, e1 - v)
+    keep = np.any(m != 0, axis=1)
+    if shortcuts:
+        # between two blockers, the lines through v and the points of the edge meet Qc's
+        # plane along the edge's central image from v: does it cross Qc? (unbounded: kept)
+        d0, d1 = (e0 - v) @ nQ, (e1 - v) @ nQ
+        bounded = keep & (ra > 0) & (pb[row_pair] > 0) & (d0 * d1 > 0)
+        if bounded.any():
+            vb, h = v[bounded], (q0 - v[bounded]) @ nQ
+            ia = vb + (h / d0[bounded])[:, None] * (e0[bounded] - vb) - q0
+            ib = vb + (h / d1[bounded])[:, None] * (e1[bounded] - vb) - q0
+            segs = shapely.linestrings(np.stack([ia @ RQ[:2].T, ib @ RQ[:2].T], axis=1))
+            miss = ~shapely.intersects(seen, segs)
+            st["culled_events"] = st.get("culled_events", 0) + int(miss.sum())
+            keep[np.flatnonzero(bounded)[miss]] = False
+    v, e0, e1, m, ra = v[keep], e0[keep], e1[keep], m[keep], ra[keep]
+    # where the lines from v through the edge's ends meet P's plane (not spanned:
+    # parallel, or the image passes through infinity: the whole chord)
+    den0, den1 = (e0 - v) @ nP, (e1 - v) @ nP
+    ok = ((np.abs(den0) >= tol.AREA_RAY_PARALLEL * np.linalg.norm(e0 - v, axis=1))
+          & (np.abs(den1) >= tol.AREA_RAY_PARALLEL * np.linalg.norm(e1 - v, axis=1))
+          & (den0 * den1 > 0))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        x0 = v + ((dP - v @ nP) / den0)[:, None] * (e0 - v)
+        x1 = v + ((dP - v @ nP) / den1)[:, None] * (e1 - v)
+    # each polygon's own plane, through its first vertex, before its vertex-edge events
+    first = W[start[:-1]]
+    planes = np.cross(W[start[:-1] + 1] - first, W[start[:-1] + 2] - first)
+    order = np.argsort(np.concatenate([2 * np.arange(n), 2 * ra + 1]), kind="stable")
+    m = np.concatenate([planes, m])[order]
+    v = np.concatenate([first, v])[order]
+    span = np.concatenate([np.zeros((n, 2, 3)), np.stack([x0, x1], axis=1)])[order]
+    spanned = np.concatenate([np.zeros(n, dtype=bool), ok])[order]
     # each normal scaled by its largest component (one of tiny coordinates, 1e-217,
     # would underflow in its norm); a normal of 0 (no plane) has no event
     big = np.abs(m).max(axis=1)
