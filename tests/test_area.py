@@ -364,6 +364,41 @@ def test_hidden_part_against_the_engine(case):
     assert np.all(EU <= 1e-13 + 1e-12 * U), (EU / U).max()
 
 
+@pytest.mark.parametrize("tilt", [0.0, 0.6, 1.4])
+def test_compiled_sector_sums_of_the_hidden_pieces_against_the_kernel(tilt):
+    # the compiled Eq. 3 sector sums of the hidden pieces (and their rounding estimate)
+    # against the kernel's clipped_sector_sums on the same pieces: from the emitter's
+    # frame, and from frames tilted so that the pieces cross the horizon (its clipping
+    # and arcs, which the emitter's own frame never needs)
+    from exactff.area import occluded as area
+    from exactff.kernel import clipped_sector_sums
+    from exactff.rings import owners, successors
+
+    P, Q, B = list(_hidden_cases())[5]
+    n = np.array([np.sin(tilt), 0.3 * np.sin(tilt), np.cos(tilt)])
+    n /= np.linalg.norm(n)
+    X = P[0] + np.outer(np.linspace(0.05, 0.95, 9), P[1] - P[0]) + 0.3 * (P[3] - P[0])
+    nQ, q0, RQ, Kc, corners, parts, part_counts, V, counts, NK, lo, hi, extent = (
+        area._hidden_setup(Q, B))
+    R = ef.geometry.receiver_frame(n)
+    out = area.hidden_pieces(X, corners, q0, nQ, RQ[:2], V, counts, NK, 1e-12, 8.0, 4.0,
+                             20000, 1e-13, extent, parts, part_counts, R, 10.0, 10.0,
+                             2.0 ** -53, True)
+    xy, start, ring_point, H, rnd = out[0], out[1], out[2], out[9], out[10]
+    owner, first = owners(start), start[:-1]
+    E = ((xy - xy[first[owner]]) @ RQ[:2]) @ R.T
+    A0 = ((q0 - X[ring_point]) + xy[first] @ RQ[:2]) @ R.T
+    S, mags, errs = clipped_sector_sums(A0, E, successors(start), owner, len(first))
+    G = np.bincount(ring_point, np.abs(S), minlength=len(X)) / (2 * np.pi)
+    EG = np.bincount(ring_point, 10.0 * 2.0 ** -53 * mags + errs, minlength=len(X)) / (2 * np.pi)
+    z = (A0[owner] + E)[:, 2]
+    crossing = np.any(np.bincount(owner, z > 0) * np.bincount(owner, z < 0) > 0)
+    assert crossing == (tilt > 0)                   # the tilted frames clip at the horizon
+    assert H.max() > 0.01 and np.all(H >= 0)
+    assert np.all(np.abs(H - G) <= rnd + EG), np.abs(H - G).max()
+    assert np.allclose(rnd, EG, rtol=1e-6, atol=1e-18)
+
+
 def _within_estimates(scene, F, E):
     """Reciprocity of every pair, within the two values' estimates (areas equal or not)."""
     A = scene.areas

@@ -389,6 +389,96 @@ void region_at(const Inputs& in, const P3<double>& pd, Region& out, Work<R>& w) 
     }
 }
 
+// Eq. 3's sector sum of one piece seen from x, with its rounding estimate: the port to
+// doubles of exactff.kernel.clipped_sector_sums (offset form, the horizon z = 0 of the
+// receiving frame clipped and its arcs added; tests/test_area.py checks the two agree).
+// The piece's vertices in Q's plane frame; w = q0 - x; R the receiving frame (rows);
+// ax, ay the plane's axes. Adds |sum| to *value and c1 eps sum|terms| + the terms'
+// errors to *rounding (both before the division by 2 pi).
+struct SectorWork {
+    std::vector<P3<double>> E;
+    std::vector<double> term;
+    std::vector<P3<double>> crossing;
+    std::vector<size_t> crossing_edge;
+    std::vector<unsigned char> crossing_enters;
+};
+
+inline P3<double> rotate(const double R[3][3], const P3<double>& u) {
+    return {R[0][0] * u.x + R[0][1] * u.y + R[0][2] * u.z,
+            R[1][0] * u.x + R[1][1] * u.y + R[1][2] * u.z,
+            R[2][0] * u.x + R[2][1] * u.y + R[2][2] * u.z};
+}
+
+void sector_sum(const Piece& F, const P3<double>& w, const double R[3][3], const P3<double>& ax,
+                const P3<double>& ay, double c1, double c2, double eps, SectorWork& k,
+                double* value, double* rounding) {
+    const size_t m = F.size();
+    const P2& f = F.v[0];
+    // the reference vertex relative to x, and the offsets from it, in the receiving frame
+    const P3<double> A = rotate(R, {w.x + (f.x * ax.x + f.y * ay.x), w.y + (f.x * ax.y + f.y * ay.y),
+                                    w.z + (f.x * ax.z + f.y * ay.z)});
+    k.E.resize(m);
+    for (size_t i = 0; i < m; ++i) {
+        const double du = F.v[i].x - f.x, dv = F.v[i].y - f.y;
+        k.E[i] = rotate(R, {du * ax.x + dv * ay.x, du * ax.y + dv * ay.y, du * ax.z + dv * ay.z});
+    }
+    k.term.assign(m, 0.0);
+    k.crossing.clear();
+    k.crossing_edge.clear();
+    k.crossing_enters.clear();
+    double errs = 0.0;
+    for (size_t i = 0; i < m; ++i) {
+        P3<double> Ea = k.E[i], Eb = k.E[(i + 1) % m];
+        const double za = A.z + Ea.z, zb = A.z + Eb.z;
+        const bool above_a = za > 0, above_b = zb > 0;
+        if (!above_a && !above_b) continue;
+        if (above_a != above_b) {
+            // the edge's horizon crossing, as an offset (its height exactly 0)
+            const double t = za / (za - zb);
+            const P3<double> X{Ea.x + t * (Eb.x - Ea.x), Ea.y + t * (Eb.y - Ea.y),
+                               Ea.z + t * (Eb.z - Ea.z)};
+            if (!above_a) Ea = X;
+            else Eb = X;
+            k.crossing.push_back({A.x + X.x, A.y + X.y, A.z + X.z});
+            k.crossing_edge.push_back(i);
+            k.crossing_enters.push_back(!above_a);
+        }
+        // the edge's plane in offset form: m = A x (Eb - Ea) + Ea x Eb
+        const double Dx = Eb.x - Ea.x, Dy = Eb.y - Ea.y, Dz = Eb.z - Ea.z;
+        const double p1 = A.x * Dy, p2 = A.y * Dx, p3 = Ea.x * Eb.y, p4 = Ea.y * Eb.x;
+        const double Mz = (p1 - p2) + (p3 - p4);
+        const double Mx = (A.y * Dz - A.z * Dy) + (Ea.y * Eb.z - Ea.z * Eb.y);
+        const double My = (A.z * Dx - A.x * Dz) + (Ea.z * Eb.x - Ea.x * Eb.z);
+        const double sm = std::sqrt(Mx * Mx + My * My + Mz * Mz);
+        const P3<double> a{A.x + Ea.x, A.y + Ea.y, A.z + Ea.z}, b{A.x + Eb.x, A.y + Eb.y, A.z + Eb.z};
+        const double theta = std::atan2(sm, dot(a, b));
+        const bool ok = sm > 0;
+        if (ok) k.term[i] = theta * Mz / sm;
+        // the term's rounding (first order; see clipped_sector_sums)
+        const double Z = std::fabs(p1) + std::fabs(p2) + std::fabs(p3) + std::fabs(p4);
+        const double Nm = std::sqrt(dot(a, a) * dot(b, b));
+        const double rel = ok ? c2 * eps * (Z + theta * theta * Nm) / sm
+                              : (Nm > 0 ? std::numeric_limits<double>::infinity() : 0.0);
+        errs += theta * std::min(2.0, rel);
+    }
+    // the horizon arcs: the signed angle of each crossing from the piece's first one
+    if (!k.crossing.empty()) {
+        const P3<double>& g = k.crossing[0];
+        for (size_t j = 0; j < k.crossing.size(); ++j) {
+            const P3<double>& X = k.crossing[j];
+            const double phi = std::atan2(g.x * X.y - g.y * X.x, g.x * X.x + g.y * X.y);
+            k.term[k.crossing_edge[j]] += k.crossing_enters[j] ? phi : -phi;
+        }
+    }
+    double S = 0.0, mag = 0.0;
+    for (size_t i = 0; i < m; ++i) {
+        S += k.term[i];
+        mag += std::fabs(k.term[i]);
+    }
+    *value += std::fabs(S);
+    *rounding += c1 * eps * mag + errs;
+}
+
 }  // namespace
 
 // Arguments: X (n, 3) points; corners (c, 3) the pyramid's convex base in Q's plane;
@@ -403,13 +493,17 @@ void region_at(const Inputs& in, const P3<double>& pd, Region& out, Work<R>& w) 
 // where an image is not finite or the vertices' rounding can move its images by more
 // than precise_rtol of the larger of their reach and extent (Q's size); parts (p, k', 2)
 // padded convex parts of Q in the plane's frame with counts (p,), none where the base
-// is Q itself.
+// is Q itself; frame (3, 3) the receiving frame of the points (rows: two axes of the
+// emitter's plane and its normal); c1, c2, eps the sector sums' error model; rings: also
+// return the pieces (else xy, ring_start and ring_point are empty).
 // Returns (xy (V, 2) ring vertices in the plane's frame, ring_start (R + 1,), ring_point
 // (R,), lost (n,) bool: an image not finite or too many pieces, the point left empty
 // for the caller, reach (n,) the largest coordinate of a point's images (before the
 // booleans), length (n,) the pieces' perimeters, box (n, 4) their bounding box (the
 // slivers' included), moved (n,) how far the rounding of the clipped vertices can move
-// a point's images, and dropped (n,) the area of its slivers).
+// a point's images, dropped (n,) the area of its slivers, hidden (n,) the point form
+// factor of the pieces (Eq. 3's sector sums over 2 pi) and rounding (n,) its sector sums'
+// rounding estimate).
 py::tuple hidden_pieces(py::array_t<double, py::array::c_style | py::array::forcecast> X,
                         py::array_t<double, py::array::c_style | py::array::forcecast> corners,
                         py::array_t<double, py::array::c_style | py::array::forcecast> q0,
@@ -421,7 +515,9 @@ py::tuple hidden_pieces(py::array_t<double, py::array::c_style | py::array::forc
                         double edge_on, double vertex_ulps, double sliver_ulps,
                         long long max_pieces, double precise_rtol, double extent,
                         py::array_t<double, py::array::c_style | py::array::forcecast> parts,
-                        py::array_t<long long, py::array::c_style | py::array::forcecast> part_counts) {
+                        py::array_t<long long, py::array::c_style | py::array::forcecast> part_counts,
+                        py::array_t<double, py::array::c_style | py::array::forcecast> frame,
+                        double c1, double c2, double eps, bool rings) {
     const auto x = X.unchecked<2>();
     const auto cr = corners.unchecked<2>();
     const auto bl = blockers.unchecked<3>();
@@ -429,6 +525,10 @@ py::tuple hidden_pieces(py::array_t<double, py::array::c_style | py::array::forc
     const auto bn = normals.unchecked<2>();
     const auto pa = parts.unchecked<3>();
     const auto pc = part_counts.unchecked<1>();
+    const auto fr = frame.unchecked<2>();
+    double R[3][3];
+    for (int a = 0; a < 3; ++a)
+        for (int b = 0; b < 3; ++b) R[a][b] = fr(a, b);
     Inputs in;
     in.origin = {q0.at(0), q0.at(1), q0.at(2)};
     in.nq = {nQ.at(0), nQ.at(1), nQ.at(2)};
@@ -476,12 +576,14 @@ py::tuple hidden_pieces(py::array_t<double, py::array::c_style | py::array::forc
     std::vector<long long> ring_start{0}, ring_point;
     std::vector<unsigned char> lost(n, 0);
     std::vector<double> reach(n, 0.0), length(n, 0.0), bounds(4 * n, 0.0), moved(n, 0.0),
-        dropped(n, 0.0);
+        dropped(n, 0.0), hidden(n, 0.0), rounding(n, 0.0);
     {
         py::gil_scoped_release release;
         Region region;
         Work<double> fast;
         Work<long double> precise;
+        SectorWork sectors;
+        const double two_pi = 6.283185307179586;
         for (ssize_t i = 0; i < n; ++i) {
             const P3<double> p{x(i, 0), x(i, 1), x(i, 2)};
             // in doubles first; in long double where an image is not finite or the
@@ -495,25 +597,33 @@ py::tuple hidden_pieces(py::array_t<double, py::array::c_style | py::array::forc
                 lost[i] = 1;
                 continue;
             }
-            double len = 0.0;
+            double len = 0.0, value = 0.0, rnd = 0.0;
+            const P3<double> w{in.origin.x - p.x, in.origin.y - p.y, in.origin.z - p.z};
             Box bb = region.slivers.box;     // the slivers dropped lie in the region's box
             dropped[i] = region.slivers.dropped;
             for (const Piece& F : region.pieces) {
                 for (size_t k = 0, m = F.size(); k < m; ++k) {
                     const P2& u = F.v[k];
                     const P2& v = F.v[(k + 1) % m];
-                    xy.push_back(u.x);
-                    xy.push_back(u.y);
+                    if (rings) {
+                        xy.push_back(u.x);
+                        xy.push_back(u.y);
+                    }
                     len += std::hypot(v.x - u.x, v.y - u.y);
                     bb.x0 = std::min(bb.x0, u.x);
                     bb.y0 = std::min(bb.y0, u.y);
                     bb.x1 = std::max(bb.x1, u.x);
                     bb.y1 = std::max(bb.y1, u.y);
                 }
-                ring_start.push_back(static_cast<long long>(xy.size() / 2));
-                ring_point.push_back(i);
+                sector_sum(F, w, R, in.ax, in.ay, c1, c2, eps, sectors, &value, &rnd);
+                if (rings) {
+                    ring_start.push_back(static_cast<long long>(xy.size() / 2));
+                    ring_point.push_back(i);
+                }
             }
             length[i] = len;
+            hidden[i] = value / two_pi;
+            rounding[i] = rnd / two_pi;
             if (bb.x0 <= bb.x1) {
                 bounds[4 * i] = bb.x0;
                 bounds[4 * i + 1] = bb.y0;
@@ -539,8 +649,11 @@ py::tuple hidden_pieces(py::array_t<double, py::array::c_style | py::array::forc
     py::array_t<double> out_moved(n), out_dropped(n);
     std::copy(moved.begin(), moved.end(), out_moved.mutable_data());
     std::copy(dropped.begin(), dropped.end(), out_dropped.mutable_data());
+    py::array_t<double> out_hidden(n), out_rounding(n);
+    std::copy(hidden.begin(), hidden.end(), out_hidden.mutable_data());
+    std::copy(rounding.begin(), rounding.end(), out_rounding.mutable_data());
     return py::make_tuple(out_xy, out_start, out_point, out_lost, out_reach, out_length, out_box,
-                          out_moved, out_dropped);
+                          out_moved, out_dropped, out_hidden, out_rounding);
 }
 
 PYBIND11_MODULE(_hidden, m) {

@@ -18,12 +18,11 @@ from scipy.special import roots_legendre
 from .. import _tolerances as tol
 from ..errors import NumericalError, misses_tolerance
 from ..geometry import area_vector, receiver_frame, unit_normal
-from ..kernel import clipped_sector_sums
 from ..methods import Exact
 from ..predicates import coplanar_band_sides
 from ..prepared import prepared
 from ..visibility import convex_pieces, is_convex_enclosure
-from ..rings import owners, padded, successors
+from ..rings import padded, successors
 from ..scene import Scene
 from ._hidden import hidden_pieces
 from .contour import (CLOSED_FORM_COUNTS, clip_front, front_parts, is_far, nonnegative,
@@ -526,23 +525,13 @@ def _hidden_values(X, nP, Qc, blockers, st=None, budget=0.0, setup=None):
     nQ, q0, RQ, Kc, corners, parts, part_counts, V, counts, NK, lo, hi, extent = setup
     # the scene's size here: the box of the blockers, Qc and the points
     size = float((np.maximum(hi, X.max(axis=0)) - np.minimum(lo, X.min(axis=0))).max())
-    xy, start, ring_point, lost, reach, length, box, moved, dropped = hidden_pieces(
+    # the pieces, and their point form factors by the sector sums (Eq. 3's kernel) with
+    # their own rounding (C1, C2 calibrated for the unit roundoff 2**-53), compiled
+    (_, _, _, lost, reach, length, box, moved, dropped, H, rnd) = hidden_pieces(
         X, corners, q0, nQ, RQ[:2], V, counts, NK, tol.AREA_EDGE_ON_RTOL * size,
         tol.AREA_IMAGE_ULPS, tol.AREA_SLIVER_ULPS, tol.AREA_MAX_PIECES,
-        tol.AREA_IMAGE_PRECISE_RTOL, extent, parts, part_counts)
-    H, rnd = zero.copy(), zero.copy()
-    if len(ring_point):
-        # the pieces' rings from each point, in offset form in the receiver's frame
-        owner = owners(start)
-        nxt = successors(start)
-        first = start[:-1]
-        R = receiver_frame(nP)
-        E = ((xy - xy[first[owner]]) @ RQ[:2]) @ R.T
-        A0 = ((q0 - X[ring_point]) + xy[first] @ RQ[:2]) @ R.T
-        S, mags, errs = clipped_sector_sums(A0, E, nxt, owner, len(first))
-        H = np.bincount(ring_point, np.abs(S), minlength=nX) / (2.0 * np.pi)
-        # the sector sums' own error model (C1 is calibrated for the unit roundoff 2**-53)
-        rnd = np.bincount(ring_point, tol.C1 * tol.EPS * mags + errs, minlength=nX) / (2.0 * np.pi)
+        tol.AREA_IMAGE_PRECISE_RTOL, extent, parts, part_counts, receiver_frame(nP),
+        tol.C1, tol.C2, tol.EPS, False)
     # the clipping's rounding: each piece's boundary within delta of the exact one (a
     # few units of the largest coordinate for each clipping line a vertex may descend
     # from), through the kernel's bound h / (pi r^3) over the region's bounding box (r >=
