@@ -9,6 +9,7 @@ __all__ = [
     "to_local",
     "rotate",
     "area_vector",
+    "cross",
     "polygon_area",
     "unit_normal",
     "polygon_centroid",
@@ -40,7 +41,38 @@ def area_vector(polygon: ArrayLike) -> np.ndarray:
     """
     P = np.asarray(polygon, dtype=float)
     Q = P - P[0]
-    return 0.5 * np.cross(Q, np.roll(Q, -1, axis=0)).sum(axis=0)
+    # (v_i - v_0) x (v_{i+1} - v_0) for i = 1 .. K-2: the two terms with v_0 are zero
+    return 0.5 * cross(Q[1:-1], Q[2:]).sum(axis=0)
+
+
+def cross(a: ArrayLike, b: ArrayLike) -> np.ndarray:
+    """Cross product over the last axis (of length 3), broadcast over the others.
+
+    The same products and differences as :func:`numpy.cross` (bit-identical values)
+    without its set-up, which costs more than the arithmetic on the short arrays of
+    the area code's inner loops.
+
+    Parameters
+    ----------
+    a, b : array_like of shape (..., 3)
+
+    Returns
+    -------
+    ndarray of shape broadcast(a, b), float
+
+    Examples
+    --------
+    >>> cross([1, 0, 0], [[0, 1, 0], [0, 0, 1]]).tolist()
+    [[0.0, 0.0, 1.0], [0.0, -1.0, 0.0]]
+    """
+    a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
+    a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
+    b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
+    out = np.empty(np.broadcast_shapes(a.shape, b.shape))
+    out[..., 0] = a1 * b2 - a2 * b1
+    out[..., 1] = a2 * b0 - a0 * b2
+    out[..., 2] = a0 * b1 - a1 * b0
+    return out
 
 
 def polygon_area(polygon: ArrayLike) -> float:
@@ -80,7 +112,7 @@ def polygon_centroid(polygon: ArrayLike) -> np.ndarray:
     Q = P - P[0]
     N = area_vector(P)
     # fan triangles (0, i, i+1): signed area along N, centroid (q_i + q_{i+1}) / 3
-    w = np.cross(Q[1:-1], Q[2:]) @ N
+    w = cross(Q[1:-1], Q[2:]) @ N
     c = ((Q[1:-1] + Q[2:]) / 3.0 * w[:, None]).sum(axis=0) / w.sum()
     return P[0] + c
 

@@ -11,6 +11,7 @@ exactly on ``z = 0``). Every module clips through these.
 import numpy as np
 
 from . import _tolerances as tol
+from .geometry import cross
 
 __all__ = ["clip_halfspace", "split_polygon", "clip_above_horizon"]
 
@@ -51,7 +52,7 @@ def clip_halfspace(V, counts, h):
     sn = np.take_along_axis(s, nxt, axis=1)
     inside = (s > 0) & valid
     inside_n = (sn > 0) & valid
-    cross = (inside != inside_n) & valid
+    crosses = (inside != inside_n) & valid
     # crossing point computed from the inside end point, whichever way the edge runs:
     # an edge shared by two polygons gets bit-identical clip points in both (GEOS then
     # sees exactly shared vertices instead of rounding-thin slivers)
@@ -69,17 +70,17 @@ def clip_halfspace(V, counts, h):
     # form stays where the edge's line runs through the origin (m = 0 to its rounding: the
     # crossing is then the origin itself, and only rounding says which way it points).
     with np.errstate(divide="ignore", invalid="ignore"):
-        t = np.where(cross, sa / (sa - sb), 0.0)
+        t = np.where(crosses, sa / (sa - sb), 0.0)
     X = A + t[:, :, None] * (B - A)
-    pm, pk = np.nonzero(cross)
+    pm, pk = np.nonzero(crosses)
     if len(pm):
         a, e, d = A[pm, pk], B[pm, pk] - A[pm, pk], (sa - sb)[pm, pk]
         hc = h[pm] if h.ndim == 2 else np.broadcast_to(h, a.shape)
-        m = np.cross(a, e)
+        m = cross(a, e)
         x = X[pm, pk]
         la, le = np.abs(a).sum(axis=1), np.abs(e).sum(axis=1)
         with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-            meet = np.cross(m, hc) / d[:, None]
+            meet = cross(m, hc) / d[:, None]
             cond = 1.0 + np.abs(hc).sum(axis=1) * le / np.abs(d)
             # the meet where it is the same point as the interpolated one within the
             # latter's error, the crossing is well conditioned and no product underflows
@@ -94,7 +95,7 @@ def clip_halfspace(V, counts, h):
     out[:, 1::2] = X
     keep = np.empty((M, 2 * K), dtype=bool)
     keep[:, 0::2] = inside
-    keep[:, 1::2] = cross
+    keep[:, 1::2] = crosses
     new_counts = keep.sum(axis=1)
     Kn = max(int(new_counts.max(initial=0)), 1)
     order = np.argsort(~keep, axis=1, kind="stable")[:, :Kn]

@@ -111,3 +111,32 @@ def test_batch_validation_matches_per_polygon(polys, bad_at):
     broken.insert(k, [[0, 0, 0], [1, 0, 0], [2, 0, 0], [3, 0, 0]])
     with pytest.raises(ef.SceneError, match=f"polygon {k}: zero area"):
         ef.Scene.from_polygons(broken)
+
+
+@given(st.integers(0, 2**32 - 1), st.integers(1, 6))
+def test_cross_is_numpys_cross_bit_for_bit_and_broadcasts(seed, n):
+    from exactff.geometry import cross
+
+    rng = np.random.default_rng(seed)
+    a = rng.normal(size=(n, 1, 3)) * 10.0 ** rng.uniform(-150, 150, size=(n, 1, 1))
+    b = rng.normal(size=(4, 3)) * 10.0 ** rng.uniform(-150, 150, size=(4, 1))
+    want = np.cross(a, b)
+    assert cross(a, b).shape == want.shape == (n, 4, 3)
+    assert np.array_equal(cross(a, b), want, equal_nan=True)
+    assert np.array_equal(cross(a[0, 0], b[0]), np.cross(a[0, 0], b[0]), equal_nan=True)
+
+
+@given(st.lists(st.tuples(st.integers(-1000, 1000), st.integers(-1000, 1000)), min_size=3,
+                max_size=12))
+def test_area_vector_of_integer_polygons_is_the_exact_shoelace_area(xy):
+    from exactff.geometry import area_vector
+
+    # integer vertices: every product and partial sum is an exact double, so the Newell
+    # vector is the shoelace sum exactly, in each of the three coordinate planes
+    twice = sum(x0 * y1 - x1 * y0 for (x0, y0), (x1, y1) in zip(xy, xy[1:] + xy[:1]))
+    for axes in ([0, 1, 2], [1, 2, 0], [2, 0, 1]):
+        P = np.zeros((len(xy), 3))
+        P[:, axes[0]], P[:, axes[1]], P[:, axes[2]] = [p[0] for p in xy], [p[1] for p in xy], 7
+        want = np.zeros(3)
+        want[axes[2]] = twice / 2
+        assert np.array_equal(area_vector(P), want)

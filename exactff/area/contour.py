@@ -38,7 +38,7 @@ from scipy.special import roots_legendre, spence, xlogy
 
 from .. import _tolerances as tol
 from ..errors import NumericalError, check_finite
-from ..geometry import area_vector, polygon_diameter, receiver_frame
+from ..geometry import area_vector, cross, polygon_diameter, receiver_frame
 from ..halfspace import clip_halfspace
 from ..kernel import clipped_sector_sums
 from ..rings import owners, padded, successors
@@ -129,7 +129,7 @@ def _segment_log_integral(W, E):
     ``int ln(u^2 + k^2) du = u ln(u^2 + k^2) - 2 u + 2 k atan(u / k)``."""
     a = np.einsum("...i,...i->...", E, E)
     b = np.einsum("...i,...i->...", W, E) / a
-    k = np.linalg.norm(np.cross(W, E), axis=-1) / a
+    k = np.linalg.norm(cross(W, E), axis=-1) / a
     u0, u1 = b, b + 1.0
 
     def prim(u):
@@ -188,7 +188,7 @@ def triangle_rule(tri, rule=_GL):
     a, b, c = batch[:, None, 0], batch[:, None, 1], batch[:, None, 2]
     X = a + U * (b - a) + UV * (c - b)
     # twice each triangle's area, |(b - a) x (c - a)|
-    J = np.linalg.norm(np.cross(batch[:, 1] - batch[:, 0], batch[:, 2] - batch[:, 0]), axis=1)
+    J = np.linalg.norm(cross(batch[:, 1] - batch[:, 0], batch[:, 2] - batch[:, 0]), axis=1)
     W = WW[None] * J[:, None]
     return (X[0], W[0]) if T.ndim == 2 else (X, W)
 
@@ -305,9 +305,9 @@ def _edge_pieces(P, eP, Q, eQ):
     ee = np.einsum("ij,ij->i", eP, eP)
     # nearest points to Q's vertices, and to the lines of Q's edges (not when parallel)
     at_vertex = np.einsum("pqj,pj->pq", Q[None] - P[:, None], eP) / ee[:, None]
-    c = np.cross(eP[:, None, :], eQ[None, :, :])                          # (KP, KQ, 3)
+    c = cross(eP[:, None, :], eQ[None, :, :])                          # (KP, KQ, 3)
     cc = np.einsum("pqj,pqj->pq", c, c)
-    crossing = np.einsum("pqj,pqj->pq", np.cross(Q[None] - P[:, None], eQ[None]), c)
+    crossing = np.einsum("pqj,pqj->pq", cross(Q[None] - P[:, None], eQ[None]), c)
     ok = cc > tol.AREA_EVENT_PARALLEL * ee[:, None] * np.einsum("qj,qj->q", eQ, eQ)[None]
     at_line = np.where(ok, crossing / np.where(ok, cc, 1.0), -1.0)
     S = np.concatenate([at_vertex, at_line], axis=1)                      # (KP, 2 KQ)
@@ -403,7 +403,7 @@ def _skew_edge_integrals(a, e, b, f):
     -------
     (ndarray of shape (N,), ndarray of shape (N,))
     """
-    c = np.cross(e, f)
+    c = cross(e, f)
     cn = np.sqrt(np.einsum("ij,ij->i", c, c))
     n = c / cn[:, None]
     w = a - b
@@ -419,7 +419,7 @@ def _skew_edge_integrals(a, e, b, f):
             u = D / L[:, None]
             tA = np.einsum("ij,ij->i", A, u)
             tB = tA + L
-            hs = np.einsum("ij,ij->i", np.cross(A, u), n)     # signed: the triangle's side
+            hs = np.einsum("ij,ij->i", cross(A, u), n)     # signed: the triangle's side
             absA = np.sqrt(np.einsum("ij,ij->i", A, A))
             # a triangle thinner than AREA_CLOSED_THIN of its size is of no area (its
             # terms, below that share of the magnitudes counted, would only underflow)
@@ -440,14 +440,19 @@ def _skew_edge_integrals(a, e, b, f):
                 p1, p2 = t * lg, 2.0 * m * np.arctan2(t, m)
                 tri = tri + sgn * h * (p1 - 2.0 * t + p2)
                 mag = mag + H * (np.abs(t) * (np.abs(lg) + 4.0) + np.abs(p2) + 2.0 * m)
-                # K(phi): the dilogarithms, e^{2 i phi} = ((h^2 - t^2) + 2 i h t) / (h^2 + t^2)
-                R2 = h * h + t * t
-                z = ((h * h - t * t) + 2j * h * t) / R2
+                # K(phi): the dilogarithms, e^{2 i phi} = ((h^2 - t^2) + 2 i h t) / (h^2 + t^2),
+                # with h and t scaled by the larger (h^2 + t^2 in [1, 2]: never under- or
+                # overflows); only where h > 0 (where h = 0 the triangle is dropped below)
+                live = h > 0
+                sc = np.maximum(h, np.abs(t))
+                sc = np.where(sc > 0, sc, 1.0)
+                hn, tn = h / sc, t / sc
+                z = ((hn * hn - tn * tn) + 2j * hn * tn) / (hn * hn + tn * tn)
                 phi = np.arctan2(t, h)
                 k1 = -2.0 * phi * lq
                 k2 = -_li2(-(q * q) * z).imag                   # -Im Li2(-rho e^{2 i phi})
                 k3 = _li2(-z).imag                              # Im Li2(-e^{2 i phi})
-                kk = np.where(R2 > 0, k1 + k2 + k3, 0.0)
+                kk = np.where(live, k1 + k2 + k3, 0.0)
                 tri = tri + sgn * d2 * kk
                 # the dilogarithms' rounding: of their values, and of their arguments
                 # times the derivative, ln |1 - w| / |w|, near w = 1 logarithmic
@@ -455,7 +460,7 @@ def _skew_edge_integrals(a, e, b, f):
                 dl = (np.abs(np.log(np.maximum(np.abs(1.0 + (q * q) * z), tol.DOUBLE_TINY)))
                       + np.abs(np.log(np.maximum(np.abs(1.0 + z), tol.DOUBLE_TINY))))
                 km = 2.0 * np.abs(phi) * (np.abs(lq) + 2.0) + np.abs(k2) + np.abs(k3) + dl + 4.0
-                mag = mag + d2 * np.where(R2 > 0, km, 0.0)
+                mag = mag + d2 * np.where(live, km, 0.0)
             # an edge through the origin (h = 0) bounds a triangle of no area
             tri = np.where(h > 0, tri, 0.0)
             S += np.sign(hs) * tri
@@ -507,7 +512,7 @@ def _edge_log_integrals(a, e, b, f):
         J, and the magnitudes whose rounding bounds its error (the caller's
         ``AREA_CLOSED_ULPS`` units of EPS of them; at least ``|J|``).
     """
-    c = np.cross(e, f)
+    c = cross(e, f)
     par = np.einsum("ij,ij->i", c, c) == 0     # (a cross product below 1e-154 is 0)
     J, M = np.empty(len(a)), np.empty(len(a))
     if np.any(par):
@@ -758,7 +763,7 @@ def unoccluded_pairs(P, Qs, far=True, rtol=None, atol=0.0, parts=None):
         # the receivers' area vectors, (1/2) sum v_k x v_{k+1} about each first vertex
         V, offsets, nxt = _rings(Qs)
         V0 = np.repeat(V[offsets[:-1]], np.diff(offsets), axis=0)
-        nQs = 0.5 * np.add.reduceat(np.cross(V - V0, V[nxt] - V0), offsets[:-1], axis=0)
+        nQs = 0.5 * np.add.reduceat(cross(V - V0, V[nxt] - V0), offsets[:-1], axis=0)
         nQs /= np.linalg.norm(nQs, axis=1)[:, None]
         Pcs, Qcs = _front_parts(P, nP, Qs, nQs)
     else:

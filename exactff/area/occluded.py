@@ -17,7 +17,7 @@ from scipy.special import roots_legendre
 
 from .. import _tolerances as tol
 from ..errors import NumericalError, misses_tolerance
-from ..geometry import area_vector, receiver_frame, unit_normal
+from ..geometry import area_vector, cross, receiver_frame, unit_normal
 from ..methods import Exact
 from ..predicates import coplanar_band_sides
 from ..prepared import prepared
@@ -63,7 +63,7 @@ def _padded(polys):
     the first vertex as :func:`area_vector`; the repeats add nothing)."""
     V, _ = padded(polys)
     W = V - V[:, :1]
-    A = 0.5 * np.cross(W, np.roll(W, -1, axis=1)).sum(axis=1)
+    A = 0.5 * cross(W, np.roll(W, -1, axis=1)).sum(axis=1)
     return V, V.min(axis=1), V.max(axis=1), A / np.linalg.norm(A, axis=1)[:, None]
 
 
@@ -337,7 +337,7 @@ def _event_lines(S, nP, dP, R, c, radius, Qc, shortcuts=True, st=None, solid=Non
     vi = start[ra] + off // kb
     ei = start[pb[row_pair]] + off % kb
     v, e0, e1 = W[vi], W[ei], W[nxt[ei]]
-    m = np.cross(e0 - v, e1 - v)
+    m = cross(e0 - v, e1 - v)
     keep = np.any(m != 0, axis=1)
     if shortcuts:
         # between two blockers, the lines through v and the points of the edge meet Qc's
@@ -364,7 +364,7 @@ def _event_lines(S, nP, dP, R, c, radius, Qc, shortcuts=True, st=None, solid=Non
         x1 = v + ((dP - v @ nP) / den1)[:, None] * (e1 - v)
     # each polygon's own plane, through its first vertex, before its vertex-edge events
     first = W[start[:-1]]
-    planes = np.cross(W[start[:-1] + 1] - first, W[start[:-1] + 2] - first)
+    planes = cross(W[start[:-1] + 1] - first, W[start[:-1] + 2] - first)
     order = np.argsort(np.concatenate([2 * np.arange(n), 2 * ra + 1]), kind="stable")
     m = np.concatenate([planes, m])[order]
     v = np.concatenate([first, v])[order]
@@ -379,7 +379,7 @@ def _event_lines(S, nP, dP, R, c, radius, Qc, shortcuts=True, st=None, solid=Non
     # its direction; the chord of the disk, or the span's part of it
     first = m[np.arange(len(m)), np.argmax(m != 0, axis=1)]
     m = np.where((first > 0)[:, None], m, -m)          # one line for either orientation
-    d = np.cross(nP, m)
+    d = cross(nP, m)
     dn = np.linalg.norm(d, axis=1)
     live = dn >= tol.AREA_EVENT_PARALLEL * np.linalg.norm(m, axis=1)
     m, v, span, spanned, d = m[live], v[live], span[live], spanned[live], d[live] / dn[live, None]
@@ -593,7 +593,7 @@ _RULE_PAIRS = tuple(tuple(roots_legendre(k) for k in orders) for orders in
 
 def _triangle_areas(T):
     """The areas of triangles T (t, 3, 3)."""
-    return 0.5 * np.linalg.norm(np.cross(T[:, 1] - T[:, 0], T[:, 2] - T[:, 0]), axis=1)
+    return 0.5 * np.linalg.norm(cross(T[:, 1] - T[:, 0], T[:, 2] - T[:, 0]), axis=1)
 
 
 def _corner_first(T, blockers, nP, dP):

@@ -17,6 +17,7 @@ import shapely
 
 from .. import _tolerances as tol
 from ..errors import check_finite, misses_tolerance
+from ..geometry import cross
 from ..kernel import flat_polygons
 from ..predicates import engine_sides, sides_of_point
 from ..rings import owners, successors
@@ -79,7 +80,7 @@ def convex_pieces(polygon, normal):
         ring = np.asarray(t.exterior.coords)[:-1]
         Q = np.array([lifted(q) for q in ring.tolist()])
         # the polygon's own winding
-        if np.cross(Q[1] - Q[0], Q[2] - Q[0]) @ normal < 0:
+        if cross(Q[1] - Q[0], Q[2] - Q[0]) @ normal < 0:
             Q = Q[::-1]
         pieces.append(Q)
     return pieces
@@ -125,7 +126,7 @@ def _convex_rings(V, offsets, normals):
     e = V[nxt] - V
     e_next = e[nxt]
     # each corner's turn about the normal, and its cross product's rounding scale
-    turn = np.einsum("ij,ij->i", np.cross(e, e_next), normals[owners(offsets)])
+    turn = np.einsum("ij,ij->i", cross(e, e_next), normals[owners(offsets)])
     scale = np.sqrt(np.einsum("ij,ij->i", e, e) * np.einsum("ij,ij->i", e_next, e_next))
     ok = turn >= -tol.CONVEX_TURN_ULPS * tol.EPS * scale
     return np.logical_and.reduceat(ok, offsets[:-1])
