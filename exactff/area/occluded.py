@@ -648,8 +648,9 @@ def _occluded_pair(S, Pc, Qc, nP, tolerance, area_P, shortcuts=True, st=None, rt
     the cells of Pc between visibility events, each cell's triangles by two collapsed
     Gauss-Legendre rules (6 and 10 points a side), a triangle cut in four where the two
     differ by more than its share of the tolerance. Where the events cut Pc into more
-    than ``AREA_MANY_CELLS`` triangles (small ones), each starts with a lower pair (3
-    and 5 points a side) and takes the higher pair where that pair misses its share.
+    than ``AREA_MANY_CELLS`` triangles (small ones), or the target is at least
+    ``AREA_LOW_RULES_TOLERANCE``, each starts with a lower pair (3 and 5 points a side)
+    and takes the higher pair where that pair misses its share.
     Returns the value, its error estimate (the contour sum's, the rules' differences,
     the point values' bounds) and the number of point values used.
 
@@ -715,8 +716,8 @@ def _hidden_integral(S, Pc, Qc, nP, tolerance, area_P, whole, shortcuts, st, sol
     T = _corner_first(cells, S[1:], nP, dP)
     depth = np.zeros(len(T), dtype=int)
     # many cells (small ones) start with the low pair of rules, few with the high pair
-    # (and so do the triangles they are cut into)
-    start = int(len(T) <= tol.AREA_MANY_CELLS)
+    # (and so do the triangles they are cut into); at a coarse target, all start low
+    start = int(len(T) <= tol.AREA_MANY_CELLS and tolerance < tol.AREA_LOW_RULES_TOLERANCE)
     rung = np.full(len(T), start)
     setup = _hidden_setup(Qc, S[1:])
     total_area = float(_triangle_areas(T).sum())
