@@ -25,8 +25,8 @@ from ..visibility import convex_pieces, is_convex_enclosure
 from ..rings import padded, successors
 from ..scene import Scene
 from ._hidden import hidden_pieces
-from .contour import (CLOSED_FORM_COUNTS, clip_front, front_parts, is_far, nonnegative,
-                      point_values, triangle_rule, unoccluded_pair, unoccluded_pairs)
+from .contour import (CLOSED_FORM_COUNTS, clip_front, front_parts, nonnegative, point_values,
+                      triangle_rule, unoccluded_pairs)
 
 __all__ = ["area_row", "STATS"]
 
@@ -638,8 +638,8 @@ def _corner_first(T, blockers, nP, dP):
     return T[np.arange(len(T))[:, None], (np.arange(3)[None, :] + shift[:, None]) % 3]
 
 
-def _occluded_pair(S, Pc, Qc, nP, tolerance, area_P, shortcuts=True, st=None, rtol=None,
-                   solid=None):
+def _occluded_pair(S, Pc, Qc, nP, tolerance, area_P, whole, shortcuts=True, st=None,
+                   rtol=None, solid=None):
     """``(1 / A_P) int_Pc F_occ(x -> S[0]) dA`` with S = [receiver, blockers...], as the
     unoccluded value (the contour integral, exact) less the integral of the hidden part
     ``F(x -> Qc) - F_occ(x -> S[0])`` (exact point values of the hidden region, built
@@ -658,14 +658,10 @@ def _occluded_pair(S, Pc, Qc, nP, tolerance, area_P, shortcuts=True, st=None, rt
     ``max(tolerance, rtol * F)``: first with the unoccluded value for F (the value is
     at most that), and where the estimate then misses ``max(tolerance, rtol * |value|)``
     once more with ``value - estimate`` for F (a lower bound where the estimate holds).
-    ``solid``: as for :func:`_event_lines`."""
-    # the pair unoccluded: its estimate may take a share of the tolerance
-    whole, whole_err = unoccluded_pair(np.asarray(Pc), np.asarray(S[0]), far=shortcuts,
-                                       atol=tol.AREA_WHOLE_TOLERANCE_SHARE * tolerance)
-    if shortcuts and st is not None and is_far(np.asarray(Pc), np.asarray(S[0])):
-        st["far_pairs"] = st.get("far_pairs", 0) + 1
-    area_Pc = float(np.linalg.norm(area_vector(Pc)))
-    whole = (whole * area_Pc / area_P, whole_err * area_Pc / area_P)
+    ``whole``: the pair's unoccluded value and estimate, per unit area of P (the
+    row's occluded pairs take theirs together, :func:`_unoccluded_values`, the estimate
+    within ``AREA_WHOLE_TOLERANCE_SHARE`` of the tolerance). ``solid``: as for
+    :func:`_event_lines`."""
     target = tolerance if rtol is None else max(tolerance, rtol * whole[0])
     value, err, points = _hidden_integral(S, Pc, Qc, nP, target, area_P, whole, shortcuts, st,
                                           solid)
@@ -826,8 +822,8 @@ def area_row(scene, i, tolerance, *, rtol=None, shortcuts=True, stats=None):
     front of them, :func:`_front_pairs`), then each pair's blockers by shaft culling
     (:func:`_shaft`, all pairs and polygons at once) and the hull test on what survives
     (:func:`_hull_blockers`); occluded pairs are integrated one by one
-    (:func:`_occluded_pair`), the unoccluded ones together at the end
-    (:func:`_unoccluded_values`).
+    (:func:`_occluded_pair`), after their unoccluded values are taken together
+    (:func:`_unoccluded_values`), and the unoccluded pairs together at the end.
 
     Parameters
     ----------
@@ -888,6 +884,7 @@ def area_row(scene, i, tolerance, *, rtol=None, shortcuts=True, stats=None):
     if shortcuts:
         solids = prepared(scene).get("area_convex_solids", _convex_solids)
     unoccluded = []               # (j, Pc, Qc): computed together at the end
+    occluded = []                 # ((j, Pc, Qc), blockers, solid): integrated one by one
     for a, (j, Pc, Qc) in enumerate(pairs):
         if shortcuts:
             B = _hull_blockers(V, cands[a], Pc, Qc, near)
@@ -900,15 +897,24 @@ def area_row(scene, i, tolerance, *, rtol=None, shortcuts=True, stats=None):
             if shortcuts:
                 solid = np.concatenate([[-1], _closed_solids(
                     solids, np.array(B), (scene.normals[[i, j]], scene.plane_offsets[[i, j]]))])
-            f[j], e[j], points = _occluded_pair([polys[j]] + [polys[k] for k in B], Pc, Qc,
-                                                nP, tolerance, area_P, shortcuts, st, rtol,
-                                                solid)
-            st["point_values"] += points
-            f[j] = nonnegative(f[j], e[j])
+            occluded.append(((j, Pc, Qc), B, solid))
             continue
         if len(polys) > 2 and shortcuts:
             st["hull_unoccluded_pairs"] += 1
         unoccluded.append((j, Pc, Qc))
+    if occluded:
+        # the occluded pairs unoccluded, together: each estimate may take a share of the
+        # tolerance
+        _, whole, whole_err = _unoccluded_values(
+            polys, i, [pair for pair, _, _ in occluded], shortcuts, st,
+            tol.AREA_WHOLE_TOLERANCE_SHARE * tolerance, None)
+    for ((j, Pc, Qc), B, solid), w, we in zip(occluded, whole if occluded else [],
+                                             whole_err if occluded else []):
+        f[j], e[j], points = _occluded_pair([polys[j]] + [polys[k] for k in B], Pc, Qc, nP,
+                                            tolerance, area_P, (float(w), float(we)),
+                                            shortcuts, st, rtol, solid)
+        st["point_values"] += points
+        f[j] = nonnegative(f[j], e[j])
     if unoccluded:
         js, f[js], e[js] = _unoccluded_values(polys, i, unoccluded, shortcuts, st, tolerance,
                                               rtol)
