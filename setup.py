@@ -18,6 +18,6 @@ setup(
                                    cxx_std=17, extra_compile_args=["-O2"],
                                    extra_link_args=QUADMATH),
                  Pybind11Extension("exactff.area._hidden", ["exactff/area/_hidden.cpp"],
-                                   cxx_std=17, extra_compile_args=["-O2"])],
+                                   cxx_std=17, extra_compile_args=["-O3", "-fno-math-errno"])],
     cmdclass={"build_ext": build_ext},
 )
