@@ -99,6 +99,7 @@ __all__ = [
     "AREA_RULE_ORDERS_MANY_CELLS",
     "AREA_MANY_CELLS",
     "AREA_LOW_RULES_TOLERANCE",
+    "AREA_BACK_FACE_RTOL",
     "AREA_CUT_EXTEND_RTOL",
     "AREA_CELL_COVER_RTOL",
     "AREA_MAX_DEPTH",
@@ -397,6 +398,11 @@ AREA_POINTS_PER_CALL = 20_000
 #: Area form factors: a blocker whose plane passes within this of a point (relative to
 #: the sub-scene's size) is seen edge-on from it and hides nothing.
 AREA_EDGE_ON_RTOL = 8 * EPS
+#: ... and a convex solid's member whose plane passes more than this (relative to the
+#: same size) behind a point is seen from behind: skipped where the point is this far in
+#: front of another member's plane (outside the hull). Within it the member is kept,
+#: which is always right (a skipped one only saves work).
+AREA_BACK_FACE_RTOL = 1e-12
 
 #: Area rows: a receiver is strictly convex (blockers are clipped to the pyramid over it)
 #: where it turns by more than this (radians, as the sine) at every vertex.

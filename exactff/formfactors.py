@@ -658,6 +658,8 @@ def area_form_factors(scene, rows=None, *, tolerance=1e-9, error=False, executor
         (pairs whose box held polygons but the shaft none: no hull built),
         ``far_pairs`` (by the far-field rule), ``culled_events``, ``solid_events``
         (vertex-edge pairs of two faces of one convex solid, not cut along),
+        ``back_faces`` (members of such a solid that a point saw from behind, left out
+        of its hidden region; per point),
         ``engine_fallbacks`` and ``engine_fallback_points`` (hidden parts the engine
         computed where GEOS failed or a point's images did not stay finite),
         ``cell_fallbacks`` (emitters cut along their visibility events another way,

@@ -367,6 +367,50 @@ def test_hidden_part_against_the_engine(case):
     assert np.all(EU <= 1e-13 + 1e-12 * U), (EU / U).max()
 
 
+@pytest.mark.parametrize("which", ["cornell", "sliced"])
+def test_hidden_part_skipping_back_faces_against_the_engine(which):
+    # members of a convex solid seen from behind left out of the hidden region: the
+    # closed Cornell box's floor against its light past the two blocks (ten faces), and
+    # a floor whose plane cuts through a closed box (points inside its hull skip none);
+    # against the engine, and against the values with every blocker projected
+    from exactff.area.contour import point_values as _point_values
+    from exactff.area.occluded import (_closed_solids, _convex_solids, _hidden_setup,
+                                       _hidden_values)
+
+    if which == "cornell":
+        scene = ef.scenes.cornell_box(closed=True)
+        i, j, B = 1, 0, list(range(10, 20))          # the floor, the light, the blocks
+    else:
+        floor = _rect_xy(0, 1, 0, 1)
+        scene = ef.Scene.from_polygons([floor, floor[::-1] + [0, 0, 1]]
+                                       + _closed_box([.3, .35, -.2], [.6, .7, .4]))
+        i, j, B = 0, 1, list(range(2, 8))
+    P, Q = (np.asarray(scene.polygons[k], float) for k in (i, j))
+    solids = _convex_solids(scene)
+    solid = _closed_solids(solids, np.array(B), (scene.normals[[i, j]],
+                                                 scene.plane_offsets[[i, j]]))
+    assert np.all(solid >= 0)
+    inner = np.array([solids[2][g].mean(axis=0) for g in solid])
+    blockers = [np.asarray(scene.polygons[k], float) for k in B]
+    nP = scene.normals[i]
+    a, b = np.random.default_rng(7).random((2, 300))
+    X = P[0] + np.outer(a, P[1] - P[0]) + np.outer(b, P[3] - P[0])
+    st = {}
+    H, EH = _hidden_values(X, nP, Q, blockers, st,
+                           setup=_hidden_setup(Q, blockers, solid, inner))
+    H0, EH0 = _hidden_values(X, nP, Q, blockers)
+    assert st["back_faces"] > len(X)          # at least one member skipped per point
+    assert np.all(np.abs(H - H0) <= EH + EH0)
+    F, E = ef.form_factors(ef.Scene.from_polygons([Q] + blockers), X, nP, error=True)
+    U, EU = (v[0] for v in _point_values(X, nP, [Q]))
+    assert H.max() > 0.01 and np.all(H >= 0)
+    assert np.all(np.abs(H - (U - F[:, 0])) <= EH + EU + E[:, 0] + 1e-16)
+    if which == "sliced":
+        # the points on the box's footprint see none of the ceiling: hidden is all of it
+        under = (X[:, 0] > .3) & (X[:, 0] < .6) & (X[:, 1] > .35) & (X[:, 1] < .7)
+        assert under.any() and np.all(np.abs(H[under] - U[under]) <= EH[under] + EU[under])
+
+
 @pytest.mark.parametrize("tilt", [0.0, 0.6, 1.4])
 def test_compiled_sector_sums_of_the_hidden_pieces_against_the_kernel(tilt):
     # the compiled Eq. 3 sector sums of the hidden pieces (and their rounding estimate)
@@ -381,10 +425,11 @@ def test_compiled_sector_sums_of_the_hidden_pieces_against_the_kernel(tilt):
     n = np.array([np.sin(tilt), 0.3 * np.sin(tilt), np.cos(tilt)])
     n /= np.linalg.norm(n)
     X = P[0] + np.outer(np.linspace(0.05, 0.95, 9), P[1] - P[0]) + 0.3 * (P[3] - P[0])
-    nQ, q0, RQ, Kc, corners, parts, part_counts, V, counts, NK, lo, hi, extent = (
+    nQ, q0, RQ, Kc, corners, parts, part_counts, V, counts, NK, group, lo, hi, extent = (
         area._hidden_setup(Q, B))
     R = ef.geometry.receiver_frame(n)
-    out = area.hidden_pieces(X, corners, q0, nQ, RQ[:2], V, counts, NK, 1e-12, 8.0, 4.0,
+    out = area.hidden_pieces(X, corners, q0, nQ, RQ[:2], V, counts, NK, group, 1e-12, 1e-12,
+                             8.0, 4.0,
                              20000, 1e-13, extent, parts, part_counts, R, 10.0, 10.0,
                              2.0 ** -53, True)
     xy, start, ring_point, H, rnd = out[0], out[1], out[2], out[9], out[10]
@@ -585,8 +630,9 @@ def test_hidden_parts_of_the_closed_cornell_box_against_the_engine(monkeypatch):
     # each block make at 1e-6 (the blocks' faces nearly coincident in projection: the
     # 3e-13 edge of a65e74b showed up here, not on View3D's examples), eight points each
     # against the engine, within the two estimates wherever the engine decides
-    hidden_parts_against_the_engine(monkeypatch, ef.scenes.cornell_box(closed=True),
-                                    rows=[0, 1, 10, 16], seed=1)
+    st = hidden_parts_against_the_engine(monkeypatch, ef.scenes.cornell_box(closed=True),
+                                         rows=[0, 1, 10, 16], seed=1)
+    assert st["back_faces"] > 0
 
 
 def hidden_parts_against_the_engine(monkeypatch, scene, rows=None, seed=0):
@@ -600,7 +646,7 @@ def hidden_parts_against_the_engine(monkeypatch, scene, rows=None, seed=0):
     calls, hidden = [], area._hidden_values
 
     def record(X, nP, Qc, blockers, st=None, budget=0.0, setup=None):
-        calls.append((X, nP, Qc, blockers))
+        calls.append((X, nP, Qc, blockers, setup))
         return hidden(X, nP, Qc, blockers, st, budget, setup)
 
     monkeypatch.setattr(area, "_hidden_values", record)
@@ -608,14 +654,16 @@ def hidden_parts_against_the_engine(monkeypatch, scene, rows=None, seed=0):
     monkeypatch.setattr(area, "_hidden_values", hidden)
     rng = np.random.default_rng(seed)
     decided, st = 0, {}
-    for X, nP, Qc, blockers in calls:
+    for X, nP, Qc, blockers, setup in calls:
+        # with the row's setup: its solids' members seen from behind skipped
         X = X[rng.choice(len(X), size=min(8, len(X)), replace=False)]
-        H, EH = hidden(X, nP, Qc, blockers, st)
+        H, EH = hidden(X, nP, Qc, blockers, st, setup=setup)
         G, EG = area._hidden_values_by_engine(X, nP, Qc, blockers)
         sure = EG < 1e-9
         decided += int(sure.sum())
         assert np.all(np.abs(H - G)[sure] <= (EH + EG)[sure]), np.abs(H - G).max()
     assert len(calls) > 20 and decided > 0.9 * 8 * len(calls) and not st.get("engine_fallbacks")
+    return st
 
 
 def test_closed_cornell_box_wall_cut_into_cells_that_cover_it():
@@ -748,7 +796,7 @@ def test_cli_matrix_area_sparse_jobs_and_a_killed_run_resumed(tmp_path, capsys, 
 # ---------------------------------------------------------------------------------------
 SHORTCUT_COUNTERS = ("enclosure_unoccluded_pairs", "hull_unoccluded_pairs", "hull_culled_blockers", "shaft_culled_blockers",
                      "shaft_unoccluded_pairs", "far_pairs",
-                     "culled_events", "solid_events")
+                     "culled_events", "solid_events", "back_faces")
 
 
 def _far_squares():
@@ -790,7 +838,8 @@ def _shortcut_scene(name):
         # a closed cube: a convex enclosure, every pair unoccluded without a shaft
         return ef.scenes.subdivided_box(1), [0, 3], 1e-7, ("enclosure_unoccluded_pairs",)
     if name == "room":
-        # (the plate's two faces, back to back, are a flat solid: no events between them)
+        # (the plate's two faces, back to back, are a flat solid: no events between them;
+        # no back face is skipped, as no point is inside it)
         return _room_with_plate(), [0], 1e-7, ("hull_unoccluded_pairs", "hull_culled_blockers",
                                                "solid_events")
     if name == "box":
@@ -798,7 +847,8 @@ def _shortcut_scene(name):
     if name == "floating":
         # a closed box inside a room: between two of its faces no event but their planes
         return _floating_box(), [0], 1e-7, ("hull_unoccluded_pairs", "hull_culled_blockers",
-                                            "shaft_culled_blockers", "solid_events")
+                                            "shaft_culled_blockers", "solid_events",
+                                            "back_faces")
     if name in ("straddling", "hanging"):
         # a closed box straddling the receiver's plane (its part behind the receiver
         # clipped away), and a box open at the top hanging from the receiver's plane
@@ -808,9 +858,17 @@ def _shortcut_scene(name):
         box = (_closed_box([.3, .35, .7], [.6, .7, 1.2]) if name == "straddling" else
                _box_faces([.3, .35, 1], [.6, .7, .6])[1:] + [_closed_box([.3, .35, .6],
                                                                          [.6, .7, 1])[-1]])
-        fire = ("hull_unoccluded_pairs", "hull_culled_blockers", "solid_events")
+        fire = ("hull_unoccluded_pairs", "hull_culled_blockers", "solid_events", "back_faces")
         return (ef.Scene.from_polygons([floor, ceiling] + box), [0], 1e-7,
                 fire + (("shaft_culled_blockers",) if name == "hanging" else ()))
+    if name == "sliced":
+        # a closed box the emitter's plane cuts through: the points of the floor inside
+        # its hull see every member from behind, and none may be skipped there
+        floor = _rect_xy(0, 1, 0, 1)
+        ceiling = _rect_xy(0, 1, 0, 1)[::-1] + [0, 0, 1]
+        box = _closed_box([.3, .35, -.2], [.6, .7, .4])
+        return (ef.Scene.from_polygons([floor, ceiling] + box), [0], 1e-7,
+                ("hull_unoccluded_pairs", "hull_culled_blockers", "solid_events", "back_faces"))
     if name == "facet":
         # View3D's facet box (a plate inside a unit box): row 5, the wall behind the
         # plate, whose pairs with the side walls have the plate in their boxes but
@@ -827,7 +885,7 @@ def _shortcut_scene(name):
 
 
 @pytest.mark.parametrize("name", ["reference0", "reference1", "cube", "room", "box", "far",
-                                  "facet", "floating", "straddling", "hanging"])
+                                  "facet", "floating", "straddling", "hanging", "sliced"])
 def test_area_shortcuts_are_neutral_and_counted(name):
     # with shortcuts=False (every other polygon a blocker of every pair, the contour
     # integral for far pairs, every blocker-blocker event cut along) the values agree

@@ -238,7 +238,10 @@ struct Inputs {
     std::vector<P3<double>> base;              // the pyramid's base
     P3<double> base_centroid;
     std::vector<std::vector<P3<double>>> K;    // the blockers
-    std::vector<P3<double>> KN;                // their unit normals
+    std::vector<P3<double>> KN;                // their unit normals (outward for a solid's)
+    std::vector<long long> group;              // each one's convex solid, -1: none
+    long long groups = 0;                      // 1 + the largest solid's label
+    double back_face = 0.0;                    // a distance beyond which p is off a plane
     std::vector<Piece> Qparts;                 // Q's convex parts (none over Q itself)
     std::vector<Box> Qbox;
     P3<double> origin, nq, ax, ay;
@@ -251,6 +254,7 @@ struct Region {
     std::vector<Piece> pieces;
     Slivers slivers;
     double reach = 0.0, moved = 0.0;
+    long long back_faces = 0;                  // a solid's members skipped, seen from behind
     bool ok = true;                            // false: an image not finite, too many pieces
 };
 
@@ -258,6 +262,7 @@ struct Region {
 template <typename R>
 struct Work {
     std::vector<P3<R>> M;
+    std::vector<unsigned char> off_hull;       // per solid: p is outside its hull
     Poly3<R> W, T;
     Piece img, in, outside, cut;
     std::vector<Piece> incoming, next;
@@ -269,6 +274,7 @@ void region_at(const Inputs& in, const P3<double>& pd, Region& out, Work<R>& w) 
     out.pieces.clear();
     out.slivers = Slivers();
     out.reach = out.moved = 0.0;
+    out.back_faces = 0;
     out.ok = true;
     const R vertex_error = R(in.vertex_ulps) * std::numeric_limits<R>::epsilon();
     const P3<R> p = to<R>(pd), nq = to<R>(in.nq), ax = to<R>(in.ax), ay = to<R>(in.ay);
@@ -287,8 +293,23 @@ void region_at(const Inputs& in, const P3<double>& pd, Region& out, Work<R>& w) 
         w.M[a] = cross(sub(to<R>(a0), p), to<R>(sub(a1, a0)));
         if (dot(w.M[a], sub(to<R>(in.base_centroid), p)) < 0) w.M[a] = neg(w.M[a]);
     }
+    // a convex solid's members seen from behind hide nothing that those seen from the
+    // front do not, where p is outside the solid's hull (in front of one member's
+    // plane): a line of sight through a member it sees from behind enters the hull
+    // first through one it sees from the front (the solid is closed but in the emitter's
+    // plane, which p is on, and the receiver's, which p sees it from behind), and the
+    // shaft culling keeps every member that meets a line of sight
+    w.off_hull.assign(static_cast<size_t>(in.groups), 0);
+    for (size_t b = 0; b < in.K.size(); ++b)
+        if (in.group[b] >= 0 && dot(sub(in.K[b][0], pd), in.KN[b]) < -in.back_face)
+            w.off_hull[static_cast<size_t>(in.group[b])] = 1;
     Poly3<R>& W = w.W;
     for (size_t b = 0; b < in.K.size(); ++b) {
+        if (in.group[b] >= 0 && w.off_hull[static_cast<size_t>(in.group[b])] &&
+            dot(sub(in.K[b][0], pd), in.KN[b]) > in.back_face) {
+            ++out.back_faces;
+            continue;
+        }
         // the offsets, each rounded once (within vertex_error of its length)
         W.clear();
         P3<R> g{0, 0, 0};
@@ -484,8 +505,10 @@ void sector_sum(const Piece& F, const P3<double>& w, const double R[3][3], const
 // Arguments: X (n, 3) points; corners (c, 3) the pyramid's convex base in Q's plane;
 // q0 (3,) a point of the plane, nQ (3,) its unit normal towards the front, RQ (2, 3)
 // the plane's axes; blockers (b, k, 3) padded convex polygons with counts (b,) and unit
-// normals (b, 3); edge_on a distance within which x is on a blocker's plane (seen
-// edge-on, hiding nothing); vertex_ulps the rounding of an offset or a crossing in
+// normals (b, 3), outward for the members of a convex solid; groups (b,) the solid of
+// each (-1: none), back_face a distance beyond which x is off a member's plane (a solid's
+// members that x sees from behind are skipped where it sees one from the front); edge_on
+// a distance within which x is on a blocker's plane (seen edge-on, hiding nothing); vertex_ulps the rounding of an offset or a crossing in
 // units of the working precision's roundoff of its length (of the longer end's, for a
 // crossing); sliver_ulps: a piece of at most this many units of rounding of the squared
 // reach (twice its area) is dropped and counted; max_pieces: a point with more pieces
@@ -502,8 +525,8 @@ void sector_sum(const Piece& F, const P3<double>& w, const double R[3][3], const
 // booleans), length (n,) the pieces' perimeters, box (n, 4) their bounding box (the
 // slivers' included), moved (n,) how far the rounding of the clipped vertices can move
 // a point's images, dropped (n,) the area of its slivers, hidden (n,) the point form
-// factor of the pieces (Eq. 3's sector sums over 2 pi) and rounding (n,) its sector sums'
-// rounding estimate).
+// factor of the pieces (Eq. 3's sector sums over 2 pi), rounding (n,) its sector sums'
+// rounding estimate, and back_faces: how many times a solid's member was skipped).
 py::tuple hidden_pieces(py::array_t<double, py::array::c_style | py::array::forcecast> X,
                         py::array_t<double, py::array::c_style | py::array::forcecast> corners,
                         py::array_t<double, py::array::c_style | py::array::forcecast> q0,
@@ -512,7 +535,8 @@ py::tuple hidden_pieces(py::array_t<double, py::array::c_style | py::array::forc
                         py::array_t<double, py::array::c_style | py::array::forcecast> blockers,
                         py::array_t<long long, py::array::c_style | py::array::forcecast> counts,
                         py::array_t<double, py::array::c_style | py::array::forcecast> normals,
-                        double edge_on, double vertex_ulps, double sliver_ulps,
+                        py::array_t<long long, py::array::c_style | py::array::forcecast> groups,
+                        double back_face, double edge_on, double vertex_ulps, double sliver_ulps,
                         long long max_pieces, double precise_rtol, double extent,
                         py::array_t<double, py::array::c_style | py::array::forcecast> parts,
                         py::array_t<long long, py::array::c_style | py::array::forcecast> part_counts,
@@ -523,6 +547,7 @@ py::tuple hidden_pieces(py::array_t<double, py::array::c_style | py::array::forc
     const auto bl = blockers.unchecked<3>();
     const auto bc = counts.unchecked<1>();
     const auto bn = normals.unchecked<2>();
+    const auto bg = groups.unchecked<1>();
     const auto pa = parts.unchecked<3>();
     const auto pc = part_counts.unchecked<1>();
     const auto fr = frame.unchecked<2>();
@@ -549,7 +574,10 @@ py::tuple hidden_pieces(py::array_t<double, py::array::c_style | py::array::forc
     for (ssize_t b = 0; b < nb; ++b) {
         for (ssize_t k = 0; k < bc(b); ++k) in.K[b].push_back({bl(b, k, 0), bl(b, k, 1), bl(b, k, 2)});
         in.KN.push_back({bn(b, 0), bn(b, 1), bn(b, 2)});
+        in.group.push_back(bg(b));
+        in.groups = std::max(in.groups, bg(b) + 1);
     }
+    in.back_face = back_face;
     // Q's convex parts, each edge's line from its two vertices (the input's own edges
     // and the diagonals between its vertices), inside towards the part's centroid
     in.Qparts.resize(np_);
@@ -575,6 +603,7 @@ py::tuple hidden_pieces(py::array_t<double, py::array::c_style | py::array::forc
     std::vector<double> xy;
     std::vector<long long> ring_start{0}, ring_point;
     std::vector<unsigned char> lost(n, 0);
+    long long back_faces = 0;
     std::vector<double> reach(n, 0.0), length(n, 0.0), bounds(4 * n, 0.0), moved(n, 0.0),
         dropped(n, 0.0), hidden(n, 0.0), rounding(n, 0.0);
     {
@@ -593,6 +622,7 @@ py::tuple hidden_pieces(py::array_t<double, py::array::c_style | py::array::forc
                 region_at(in, p, region, precise);
             reach[i] = region.reach;
             moved[i] = region.moved;
+            back_faces += region.back_faces;
             if (!region.ok) {
                 lost[i] = 1;
                 continue;
@@ -653,7 +683,7 @@ py::tuple hidden_pieces(py::array_t<double, py::array::c_style | py::array::forc
     std::copy(hidden.begin(), hidden.end(), out_hidden.mutable_data());
     std::copy(rounding.begin(), rounding.end(), out_rounding.mutable_data());
     return py::make_tuple(out_xy, out_start, out_point, out_lost, out_reach, out_length, out_box,
-                          out_moved, out_dropped, out_hidden, out_rounding);
+                          out_moved, out_dropped, out_hidden, out_rounding, back_faces);
 }
 
 PYBIND11_MODULE(_hidden, m) {

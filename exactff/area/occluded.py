@@ -42,7 +42,9 @@ __all__ = ["area_row", "STATS"]
 #: far pairs by the far-field rule (``far_pairs``),
 #: blocker-blocker events not cut along because their lines of sight miss the receiver
 #: (``culled_events``), vertex-edge pairs of two faces of one convex solid, whose
-#: images united change only at the faces' planes (``solid_events``), calls whose
+#: images united change only at the faces' planes (``solid_events``), members of such a
+#: solid that a point sees from behind, skipped in its hidden region as the members it
+#: sees from the front cover their images (``back_faces``, per point), calls whose
 #: hidden parts the engine computed at some points, where a point's images did not
 #: stay finite or could not be trusted
 #: (``engine_fallbacks``, their points ``engine_fallback_points``), pairs whose emitter
@@ -53,7 +55,7 @@ __all__ = ["area_row", "STATS"]
 STATS = ("enclosure_unoccluded_pairs", "hull_unoccluded_pairs", "hull_culled_blockers",
          "shaft_culled_blockers",
          "shaft_unoccluded_pairs", "far_pairs", "culled_events", "solid_events",
-         "engine_fallbacks", "engine_fallback_points", "cell_fallbacks", "occluded_pairs",
+         "back_faces", "engine_fallbacks", "engine_fallback_points", "cell_fallbacks", "occluded_pairs",
          "point_values")
 
 
@@ -444,14 +446,24 @@ def _cells(Pc, nP, lines, R, c, grid=None, lengthen=True):
     return c + uv @ R[:2]
 
 
-def _hidden_setup(Qc, blockers):
+def _hidden_setup(Qc, blockers, solid=None, inner=None):
     """What :func:`_hidden_values` needs of a receiver and its blockers whatever the
     points (computed once per pair): Qc's frame, the blockers' parts in front of its
-    plane as convex pieces with their unit normals, the pyramid's base (Qc where it is
-    strictly convex, else a rectangle around it, with Qc's convex parts), the box of the
-    blockers and Qc, and Qc's size in its plane. None where no blocker is in front."""
+    plane as convex pieces with their unit normals and convex solids, the pyramid's
+    base (Qc where it is strictly convex, else a rectangle around it, with Qc's convex
+    parts), the box of the blockers and Qc, and Qc's size in its plane. None where no
+    blocker is in front.
+
+    ``solid``: the convex solid of each blocker for the pair (:func:`_closed_solids`),
+    -1 for none, and ``inner`` a point inside its hull: a solid's members get their
+    outward normals, and from a point outside the hull those it sees from behind are
+    skipped (their images lie in those of the members it sees from the front). A
+    member whose plane passes within ``AREA_HULL_RTOL`` of the hull's size of the inner
+    point leaves its solid as a whole (which side is out is not certain)."""
     nQ, q0, RQ, Q2 = _plane_frame(Qc)
-    Kc = [K for K in (clip_front(np.asarray(K), nQ, q0) for K in blockers) if K is not None]
+    clipped = [clip_front(np.asarray(K), nQ, q0) for K in blockers]
+    kept = [k for k, K in enumerate(clipped) if K is not None]
+    Kc = [clipped[k] for k in kept]
     if not Kc:
         return None
     # the pyramid's base: Qc itself where it is strictly convex (the images then lie in
@@ -468,12 +480,25 @@ def _hidden_setup(Qc, blockers):
         Qparts = [(Qp - q0) @ RQ.T for Qp in convex_pieces(np.asarray(Qc, float), nQ)]
         parts, part_counts = padded(Qparts)
         parts = parts[:, :, :2]
-    pieces = [Kp for K in Kc for Kp in convex_pieces(K, unit_normal(K))]
+    pieces = [[Kp for Kp in convex_pieces(K, unit_normal(K))] for K in Kc]
+    owner = np.repeat(kept, [len(p) for p in pieces])
+    pieces = [Kp for p in pieces for Kp in p]
     V, counts = padded(pieces)
     NK = np.array([unit_normal(K) for K in pieces])
+    group = np.full(len(pieces), -1, dtype=np.int64)
+    if solid is not None:
+        # outward: the inner point behind the plane
+        solid, inner = np.asarray(solid), np.asarray(inner, dtype=float)
+        group = solid[owner].astype(np.int64)
+        mine = group >= 0
+        depth = np.einsum("kx,kx->k", inner[owner[mine]] - V[mine, 0], NK[mine])
+        NK[mine] *= np.where(depth > 0, -1.0, 1.0)[:, None]
+        size = float(np.ptp(np.vstack(Kc), axis=0).max())
+        unsure = np.unique(group[mine][np.abs(depth) <= tol.AREA_HULL_RTOL * size])
+        group[np.isin(group, unsure)] = -1
     allv = np.vstack(Kc + [Qc])
     extent = float(np.ptp(Q2, axis=0).max())          # the pieces lie within Qc (or its box)
-    return (nQ, q0, RQ, Kc, corners, parts, part_counts, V, counts, NK,
+    return (nQ, q0, RQ, Kc, corners, parts, part_counts, V, counts, NK, group,
             allv.min(axis=0), allv.max(axis=0), extent)
 
 
@@ -522,16 +547,19 @@ def _hidden_values(X, nP, Qc, blockers, st=None, budget=0.0, setup=None):
                                  budget, setup)
                   for k in range(0, nX, tol.AREA_POINTS_PER_CALL)]
         return np.concatenate([h for h, _ in parts_]), np.concatenate([e for _, e in parts_])
-    nQ, q0, RQ, Kc, corners, parts, part_counts, V, counts, NK, lo, hi, extent = setup
+    nQ, q0, RQ, Kc, corners, parts, part_counts, V, counts, NK, group, lo, hi, extent = setup
     # the scene's size here: the box of the blockers, Qc and the points
     size = float((np.maximum(hi, X.max(axis=0)) - np.minimum(lo, X.min(axis=0))).max())
     # the pieces, and their point form factors by the sector sums (Eq. 3's kernel) with
     # their own rounding (C1, C2 calibrated for the unit roundoff 2**-53), compiled
-    (_, _, _, lost, reach, length, box, moved, dropped, H, rnd) = hidden_pieces(
-        X, corners, q0, nQ, RQ[:2], V, counts, NK, tol.AREA_EDGE_ON_RTOL * size,
+    (_, _, _, lost, reach, length, box, moved, dropped, H, rnd, back) = hidden_pieces(
+        X, corners, q0, nQ, RQ[:2], V, counts, NK, group, tol.AREA_BACK_FACE_RTOL * size,
+        tol.AREA_EDGE_ON_RTOL * size,
         tol.AREA_IMAGE_ULPS, tol.AREA_SLIVER_ULPS, tol.AREA_MAX_PIECES,
         tol.AREA_IMAGE_PRECISE_RTOL, extent, parts, part_counts, receiver_frame(nP),
         tol.C1, tol.C2, tol.EPS, False)
+    if st is not None and back:
+        st["back_faces"] = st.get("back_faces", 0) + int(back)
     # the clipping's rounding: each piece's boundary within delta of the exact one (a
     # few units of the largest coordinate for each clipping line a vertex may descend
     # from), through the kernel's bound h / (pi r^3) over the region's bounding box (r >=
@@ -639,7 +667,7 @@ def _corner_first(T, blockers, nP, dP):
 
 
 def _occluded_pair(S, Pc, Qc, nP, tolerance, area_P, whole, shortcuts=True, st=None,
-                   rtol=None, solid=None):
+                   rtol=None, solid=None, inner=None):
     """``(1 / A_P) int_Pc F_occ(x -> S[0]) dA`` with S = [receiver, blockers...], as the
     unoccluded value (the contour integral, exact) less the integral of the hidden part
     ``F(x -> Qc) - F_occ(x -> S[0])`` (exact point values of the hidden region, built
@@ -661,20 +689,22 @@ def _occluded_pair(S, Pc, Qc, nP, tolerance, area_P, whole, shortcuts=True, st=N
     ``whole``: the pair's unoccluded value and estimate, per unit area of P (the
     row's occluded pairs take theirs together, :func:`_unoccluded_values`, the estimate
     within ``AREA_WHOLE_TOLERANCE_SHARE`` of the tolerance). ``solid``: as for
-    :func:`_event_lines`."""
+    :func:`_event_lines`; ``inner``: for each polygon of S with a solid, a point inside
+    the solid's hull (NaN elsewhere; :func:`_hidden_setup`)."""
     target = tolerance if rtol is None else max(tolerance, rtol * whole[0])
     value, err, points = _hidden_integral(S, Pc, Qc, nP, target, area_P, whole, shortcuts, st,
-                                          solid)
+                                          solid, inner)
     if rtol is not None and target > tolerance and misses_tolerance(value, err, rtol,
                                                                      atol=tolerance):
         target = max(tolerance, rtol * max(value - err, 0.0))
         value, err, more = _hidden_integral(S, Pc, Qc, nP, target, area_P, whole, shortcuts,
-                                           st, solid)
+                                           st, solid, inner)
         points += more
     return value, err, points
 
 
-def _hidden_integral(S, Pc, Qc, nP, tolerance, area_P, whole, shortcuts, st, solid=None):
+def _hidden_integral(S, Pc, Qc, nP, tolerance, area_P, whole, shortcuts, st, solid=None,
+                     inner=None):
     """The adaptive integral of :func:`_occluded_pair` to the absolute target
     ``tolerance``, with ``whole`` the pair's unoccluded value and estimate (per unit area
     of P)."""
@@ -715,7 +745,8 @@ def _hidden_integral(S, Pc, Qc, nP, tolerance, area_P, whole, shortcuts, st, sol
     # (and so do the triangles they are cut into); at a coarse target, all start low
     start = int(len(T) <= tol.AREA_MANY_CELLS and tolerance < tol.AREA_LOW_RULES_TOLERANCE)
     rung = np.full(len(T), start)
-    setup = _hidden_setup(Qc, S[1:])
+    setup = (_hidden_setup(Qc, S[1:]) if solid is None or inner is None
+             else _hidden_setup(Qc, S[1:], solid[1:], inner[1:]))
     total_area = float(_triangle_areas(T).sum())
     hidden = err = rules_err = 0.0
     points = 0
@@ -884,7 +915,7 @@ def area_row(scene, i, tolerance, *, rtol=None, shortcuts=True, stats=None):
     if shortcuts:
         solids = prepared(scene).get("area_convex_solids", _convex_solids)
     unoccluded = []               # (j, Pc, Qc): computed together at the end
-    occluded = []                 # ((j, Pc, Qc), blockers, solid): integrated one by one
+    occluded = []                 # ((j, Pc, Qc), blockers, solid, inner): one by one
     for a, (j, Pc, Qc) in enumerate(pairs):
         if shortcuts:
             B = _hull_blockers(V, cands[a], Pc, Qc, near)
@@ -893,11 +924,15 @@ def area_row(scene, i, tolerance, *, rtol=None, shortcuts=True, stats=None):
             B = [k for k in range(len(polys)) if k not in (i, j)]
         if B:
             st["occluded_pairs"] += 1
-            solid = None
+            solid = inner = None
             if shortcuts:
                 solid = np.concatenate([[-1], _closed_solids(
                     solids, np.array(B), (scene.normals[[i, j]], scene.plane_offsets[[i, j]]))])
-            occluded.append(((j, Pc, Qc), B, solid))
+                # a point inside each solid's hull: the mean of its vertices
+                inner = np.full((len(solid), 3), np.nan)
+                for g in set(solid[solid >= 0].tolist()):
+                    inner[solid == g] = solids[2][g].mean(axis=0)
+            occluded.append(((j, Pc, Qc), B, solid, inner))
             continue
         if len(polys) > 2 and shortcuts:
             st["hull_unoccluded_pairs"] += 1
@@ -906,13 +941,13 @@ def area_row(scene, i, tolerance, *, rtol=None, shortcuts=True, stats=None):
         # the occluded pairs unoccluded, together: each estimate may take a share of the
         # tolerance
         _, whole, whole_err = _unoccluded_values(
-            polys, i, [pair for pair, _, _ in occluded], shortcuts, st,
+            polys, i, [pair for pair, _, _, _ in occluded], shortcuts, st,
             tol.AREA_WHOLE_TOLERANCE_SHARE * tolerance, None)
-    for ((j, Pc, Qc), B, solid), w, we in zip(occluded, whole if occluded else [],
-                                             whole_err if occluded else []):
+    for ((j, Pc, Qc), B, solid, inner), w, we in zip(occluded, whole if occluded else [],
+                                                    whole_err if occluded else []):
         f[j], e[j], points = _occluded_pair([polys[j]] + [polys[k] for k in B], Pc, Qc, nP,
                                             tolerance, area_P, (float(w), float(we)),
-                                            shortcuts, st, rtol, solid)
+                                            shortcuts, st, rtol, solid, inner)
         st["point_values"] += points
         f[j] = nonnegative(f[j], e[j])
     if unoccluded:
