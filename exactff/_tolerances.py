@@ -380,7 +380,9 @@ AREA_IMAGE_PRECISE_RTOL = 1e-13
 
 #: Area form factors, occluded pairs: the share of the tolerance that a point value's
 #: estimate may hold for its images' rounding before the point goes to the engine (the
-#: adaptive rules integrate the estimates, so at most this share of the value's).
+#: adaptive rules integrate the estimates, so at most this share of the value's); and
+#: what the bound 0 <= hidden <= unoccluded of a call's untrusted points may cost, their
+#: weights in the rules applied, for it to stand in for the engine.
 AREA_IMAGE_BUDGET_SHARE = 0.01
 
 #: Area form factors, hidden parts: a piece of the hidden region whose doubled area is

@@ -662,6 +662,8 @@ def area_form_factors(scene, rows=None, *, tolerance=1e-9, error=False, executor
         of its hidden region; per point),
         ``engine_fallbacks`` and ``engine_fallback_points`` (hidden parts the engine
         computed where GEOS failed or a point's images did not stay finite),
+        ``bounded_points`` (such points of little weight given the bound
+        ``0 <= hidden <= unoccluded`` instead of the engine's value),
         ``cell_fallbacks`` (emitters cut along their visibility events another way,
         where GEOS failed or the cells did not cover the emitter: the lines not
         lengthened across its boundary, or noded on a grid of 1e-12 of its size),

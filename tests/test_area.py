@@ -645,9 +645,9 @@ def hidden_parts_against_the_engine(monkeypatch, scene, rows=None, seed=0):
 
     calls, hidden = [], area._hidden_values
 
-    def record(X, nP, Qc, blockers, st=None, budget=0.0, setup=None):
+    def record(X, nP, Qc, blockers, st=None, budget=0.0, setup=None, weights=None):
         calls.append((X, nP, Qc, blockers, setup))
-        return hidden(X, nP, Qc, blockers, st, budget, setup)
+        return hidden(X, nP, Qc, blockers, st, budget, setup, weights)
 
     monkeypatch.setattr(area, "_hidden_values", record)
     ef.area_form_factors(scene, rows=rows, tolerance=1e-6, error=True)
@@ -796,7 +796,7 @@ def test_cli_matrix_area_sparse_jobs_and_a_killed_run_resumed(tmp_path, capsys, 
 # ---------------------------------------------------------------------------------------
 SHORTCUT_COUNTERS = ("enclosure_unoccluded_pairs", "hull_unoccluded_pairs", "hull_culled_blockers", "shaft_culled_blockers",
                      "shaft_unoccluded_pairs", "far_pairs",
-                     "culled_events", "solid_events", "back_faces")
+                     "culled_events", "solid_events", "back_faces", "bounded_points")
 
 
 def _far_squares():

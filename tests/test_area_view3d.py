@@ -182,3 +182,36 @@ def test_hidden_parts_of_every_occluded_pair_against_the_engine(name, monkeypatc
     from test_area import hidden_parts_against_the_engine
 
     hidden_parts_against_the_engine(monkeypatch, _read(name))
+
+
+def test_gunter1_points_given_the_bound_against_the_engine(monkeypatch):
+    # row 17 at 1e-9: points of a strip 1e-8 wide along the emitter's edge y = 67 (a wall
+    # meets it there) have images that rounding can move too far to trust; their weight
+    # is small enough that the bound 0 <= hidden <= F(x -> Qc) stands for them (U / 2
+    # within U / 2). Each such value against the engine, and the row within 1e-9
+    from exactff.area import occluded as area
+    from exactff.area.contour import point_values
+
+    calls, hidden = [], area._hidden_values
+
+    def record(X, nP, Qc, blockers, st=None, budget=0.0, setup=None, weights=None):
+        before = st.get("bounded_points", 0)
+        H, EH = hidden(X, nP, Qc, blockers, st, budget, setup, weights)
+        if st.get("bounded_points", 0) > before:
+            calls.append((X, nP, Qc, blockers, H, EH, st["bounded_points"] - before))
+        return H, EH
+
+    monkeypatch.setattr(area, "_hidden_values", record)
+    st = {}
+    F, E = ef.area_form_factors(_read("gunter1.vs3"), rows=[17], tolerance=1e-9, error=True,
+                                stats=st)
+    assert np.all(E <= 1e-9) and st["bounded_points"] > 100 and not st["engine_fallbacks"]
+    assert sum(c[-1] for c in calls) == st["bounded_points"]
+    rng = np.random.default_rng(3)
+    for X, nP, Qc, blockers, H, EH, count in calls:
+        U, EU = (v[0] for v in point_values(X, nP, [Qc]))
+        bounded = np.flatnonzero((H == 0.5 * U) & (EH == 0.5 * U + EU))
+        assert len(bounded) == count
+        pick = rng.choice(bounded, size=8, replace=False)
+        G, EG = area._hidden_values_by_engine(X[pick], nP, Qc, blockers)
+        assert np.all(np.abs(H[pick] - G) <= EH[pick] + EG)
