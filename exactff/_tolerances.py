@@ -99,6 +99,7 @@ __all__ = [
     "AREA_RULE_ORDERS_MANY_CELLS",
     "AREA_MANY_CELLS",
     "AREA_LOW_RULES_TOLERANCE",
+    "AREA_SYMMETRIC_DEGREES",
     "AREA_BACK_FACE_RTOL",
     "AREA_CUT_EXTEND_RTOL",
     "AREA_CELL_COVER_RTOL",
@@ -487,6 +488,10 @@ AREA_MAX_DEPTH = 7
 #: no better than 50.
 AREA_RULE_ORDERS_MANY_CELLS = (3, 5)
 AREA_MANY_CELLS = 50
+#: ... that pair's degrees (4 and 8) in symmetric rules of 6 and 16 points
+#: (exactff.area.contour.SYMMETRIC_RULES), on every triangle but those whose first vertex
+#: a blocker touches (they keep the collapsed rule, whose collapsed vertex it is).
+AREA_SYMMETRIC_DEGREES = (4, 8)
 #: ... and every pair's triangles start with the lower pair where the target (absolute)
 #: is at least this: at 1e-6 the lower pair converges on most cells, large or not
 #: (gunter1: 266,288 points instead of 450,466, 2.74 -> 2.24 s; the closed Cornell box

@@ -330,6 +330,38 @@ def _box_faces(lo, hi):
         [[x0, y1, z0], [x0, y0, z0], [x0, y0, z1], [x0, y1, z1]])]
 
 
+@pytest.mark.parametrize("rule, degree", [("symmetric 4", 4), ("symmetric 8", 8),
+                                          ("collapsed 3", 4), ("collapsed 5", 8),
+                                          ("collapsed 6", 10), ("collapsed 10", 18)])
+@given(seed=st.integers(0, 2**32 - 1))
+def test_triangle_rules_integrate_their_degree_exactly(rule, degree, seed):
+    # the integral of L^k over a triangle, L linear, is 2 A k! / (k + 2)! times the
+    # complete homogeneous polynomial of degree k in L's values at the vertices
+    # (evaluated in mpmath at 40 digits): exact up to the rule's degree
+    from scipy.special import roots_legendre
+
+    from exactff.area.contour import symmetric_triangle_rule, triangle_rule
+
+    rng = np.random.default_rng(seed)
+    T = rng.normal(size=(3, 3))
+    u, c = rng.normal(size=3), rng.normal()
+    kind, n = rule.split()
+    n = int(n)
+    X, W = (symmetric_triangle_rule(T, n) if kind == "symmetric"
+            else triangle_rule(T, roots_legendre(n)))
+    assert len(W) == ({4: 6, 8: 16}[n] if kind == "symmetric" else n * n)
+    with mp.workdps(40):
+        A = mp.mpf(float(np.linalg.norm(np.cross(T[1] - T[0], T[2] - T[0])))) / 2
+        La, Lb, Lc = (mp.mpf(float(v)) for v in T @ u + c)
+        for k in range(degree + 1):
+            h = sum(La ** i * Lb ** j * Lc ** (k - i - j) for i in range(k + 1)
+                    for j in range(k + 1 - i))
+            want = 2 * A * mp.factorial(k) / mp.factorial(k + 2) * h
+            scale = 2 * A * max(abs(La), abs(Lb), abs(Lc)) ** k
+            got = float((W * (X @ u + c) ** k).sum())
+            assert abs(got - float(want)) / float(scale) <= 1e-13, k
+
+
 def _hidden_cases():
     sq0, sq2 = np.array(_square(0, True), float), np.array(_square(2, False), float)
     for plate, _ in OCCLUDED_REFERENCES:

@@ -44,7 +44,8 @@ from ..kernel import clipped_sector_sums
 from ..rings import owners, padded, successors
 from ..scene import validate_polygon
 
-__all__ = ["polygon_form_factor", "clip_front", "front_parts", "triangle_rule", "point_values",
+__all__ = ["polygon_form_factor", "clip_front", "front_parts", "triangle_rule",
+           "symmetric_triangle_rule", "point_values",
            "emitter_nodes", "far_values", "unoccluded_pair", "unoccluded_pairs", "nonnegative",
            "is_far", "CLOSED_FORM_COUNTS"]
 
@@ -190,6 +191,76 @@ def triangle_rule(tri, rule=_GL):
     # twice each triangle's area, |(b - a) x (c - a)|
     J = np.linalg.norm(cross(batch[:, 1] - batch[:, 0], batch[:, 2] - batch[:, 0]), axis=1)
     W = WW[None] * J[:, None]
+    return (X[0], W[0]) if T.ndim == 2 else (X, W)
+
+
+def _orbits(rule):
+    """The barycentric points and weights (summing to 1) of a fully symmetric rule given
+    by its orbits: ``(w, ())`` the centroid, ``(w, (a,))`` the three points
+    ``(a, a, 1 - 2a)``, ``(w, (a, b))`` the six permutations of ``(a, b, 1 - a - b)``."""
+    B, W = [], []
+    for w, orbit in rule:
+        if not orbit:
+            pts = [(1 / 3, 1 / 3, 1 / 3)]
+        elif len(orbit) == 1:
+            a = orbit[0]
+            pts = [(a, a, 1 - 2 * a), (a, 1 - 2 * a, a), (1 - 2 * a, a, a)]
+        else:
+            a, b = orbit
+            c = 1 - a - b
+            pts = [(a, b, c), (a, c, b), (b, a, c), (b, c, a), (c, a, b), (c, b, a)]
+        B += pts
+        W += [w] * len(pts)
+    return np.array(B), np.array(W)
+
+
+#: Fully symmetric rules on the triangle (Dunavant, IJNME 21 (1985) 1129-1148): degree 4
+#: in 6 points and degree 8 in 16, every point inside and every weight positive. The
+#: published 15 digits refined to 20 by Newton's method on the moment equations of the
+#: S3-invariant polynomials (mpmath, 40 digits); tests/test_area.py checks the degrees.
+SYMMETRIC_RULES = {
+    4: _orbits([(0.22338158967801146570, (0.44594849091596488632,)),
+                (0.10995174365532186764, (0.09157621350977074346,))]),
+    8: _orbits([(0.14431560767778716825, ()),
+                (0.095091634267284624794, (0.45929258829272315603,)),
+                (0.10321737053471825028, (0.17056930775176020662,)),
+                (0.032458497623198080311, (0.050547228317030975458,)),
+                (0.027230314174434994265, (0.26311282963463811342, 0.0083947774099576053372))]),
+}
+
+
+def symmetric_triangle_rule(tri, degree):
+    """Nodes and weights of a fully symmetric rule (:data:`SYMMETRIC_RULES`) on a
+    triangle, or on each of a batch: exact for polynomials of ``degree`` (4: 6 nodes, 8:
+    16), with fewer nodes than :func:`triangle_rule` for the same degree (9 and 25), but
+    no vertex of its own (the collapsed rule integrates functions of the direction from
+    its first vertex alone).
+
+    Parameters
+    ----------
+    tri : ndarray of shape (3, 3), or (t, 3, 3) for a batch
+    degree : {4, 8}
+
+    Returns
+    -------
+    (ndarray of shape (n, 3), ndarray of shape (n,)), with a leading axis of t for a
+    batch
+
+    Examples
+    --------
+    The unit triangle's area, and its integral of ``x^8`` (``8! / 10! = 1 / 90``):
+
+    >>> X, W = symmetric_triangle_rule(np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0]], float), 8)
+    >>> X.shape, round(float(W.sum()), 15), round(float(W @ X[:, 0] ** 8), 15)
+    ((16, 3), 0.5, 0.011111111111111)
+    """
+    T = np.asarray(tri, dtype=float)
+    batch = T[None] if T.ndim == 2 else T
+    B, w = SYMMETRIC_RULES[degree]
+    X = np.einsum("nk,tkx->tnx", B, batch)
+    # the triangle's area, |(b - a) x (c - a)| / 2
+    A = 0.5 * np.linalg.norm(cross(batch[:, 1] - batch[:, 0], batch[:, 2] - batch[:, 0]), axis=1)
+    W = w[None] * A[:, None]
     return (X[0], W[0]) if T.ndim == 2 else (X, W)
 
 

@@ -26,7 +26,7 @@ from ..rings import padded, successors
 from ..scene import Scene
 from ._hidden import hidden_pieces
 from .contour import (CLOSED_FORM_COUNTS, clip_front, front_parts, nonnegative, point_values,
-                      triangle_rule, unoccluded_pairs)
+                      symmetric_triangle_rule, triangle_rule, unoccluded_pairs)
 
 __all__ = ["area_row", "STATS"]
 
@@ -641,6 +641,18 @@ _RULE_PAIRS = tuple(tuple(roots_legendre(k) for k in orders) for orders in
                     (tol.AREA_RULE_ORDERS_MANY_CELLS, tol.AREA_RULE_ORDERS))
 
 
+def _rule_pair(T, rung, corner):
+    """The nodes and weights of the two rules of rung ``rung`` on the triangles T (t, 3,
+    3): at rung 0 the symmetric rules of degree 4 and 8 (6 and 16 nodes), or where the
+    first vertex is a corner that a blocker touches, the collapsed rules of the same
+    degrees (3 and 5 points a side, 9 and 25 nodes: their collapsed vertex integrates
+    functions of the direction from it); at rung 1 the collapsed rules of 6 and 10
+    points a side."""
+    if rung == 0 and not corner:
+        return tuple(symmetric_triangle_rule(T, d) for d in tol.AREA_SYMMETRIC_DEGREES)
+    return tuple(triangle_rule(T, rule) for rule in _RULE_PAIRS[rung])
+
+
 def _triangle_areas(T):
     """The areas of triangles T (t, 3, 3)."""
     return 0.5 * np.linalg.norm(cross(T[:, 1] - T[:, 0], T[:, 2] - T[:, 0]), axis=1)
@@ -654,15 +666,17 @@ def _corner_first(T, blockers, nP, dP):
     order), and the collapsed rule, whose collapsed vertex is the first, integrates
     functions of that direction alone without cutting towards the point. A triangle with
     two or three such vertices is first cut in four at its edges' midpoints (so that
-    each of its corner quarters has one): returns as many triangles or more."""
+    each of its corner quarters has one): returns as many triangles or more, and per
+    triangle whether its first vertex is such a corner."""
+    none = np.zeros(len(T), dtype=bool)
     if not len(T) or not blockers:
-        return T
+        return T, none
     Vb = np.vstack(blockers)                                        # (m, 3)
     off = np.abs(Vb @ nP - dP)
     # only the blocker vertices that may be on the plane for some triangle (in order)
     keep = off <= tol.AREA_HULL_RTOL * np.ptp(T, axis=1).max()
     if not keep.any():
-        return T
+        return T, none
     Vb, off = Vb[keep], off[keep]
 
     def touching(T):
@@ -685,7 +699,8 @@ def _corner_first(T, blockers, nP, dP):
     touched, first = touching(T)
     # the vertex touched by the earliest blocker vertex first
     shift = np.where(touched.any(axis=1), np.argmin(first, axis=1), 0)
-    return T[np.arange(len(T))[:, None], (np.arange(3)[None, :] + shift[:, None]) % 3]
+    return (T[np.arange(len(T))[:, None], (np.arange(3)[None, :] + shift[:, None]) % 3],
+            touched.any(axis=1))
 
 
 def _occluded_pair(S, Pc, Qc, nP, tolerance, area_P, whole, shortcuts=True, st=None,
@@ -699,8 +714,10 @@ def _occluded_pair(S, Pc, Qc, nP, tolerance, area_P, whole, shortcuts=True, st=N
     Gauss-Legendre rules (6 and 10 points a side), a triangle cut in four where the two
     differ by more than its share of the tolerance. Where the events cut Pc into more
     than ``AREA_MANY_CELLS`` triangles (small ones), or the target is at least
-    ``AREA_LOW_RULES_TOLERANCE``, each starts with a lower pair (3 and 5 points a side)
-    and takes the higher pair where that pair misses its share.
+    ``AREA_LOW_RULES_TOLERANCE``, each starts with a lower pair (degrees 4 and 8: the
+    symmetric rules of 6 and 16 points, or the collapsed ones of 3 and 5 points a side
+    where a blocker touches its first vertex; :func:`_rule_pair`) and takes the higher
+    pair where that pair misses its share.
     Returns the value, its error estimate (the contour sum's, the rules' differences,
     the point values' bounds) and the number of point values used.
 
@@ -761,7 +778,7 @@ def _hidden_integral(S, Pc, Qc, nP, tolerance, area_P, whole, shortcuts, st, sol
     if cells is None:
         raise NumericalError(f"could not cut the emitter along its {len(lines)} "
                              f"visibility events: {failure}") from failure
-    T = _corner_first(cells, S[1:], nP, dP)
+    T, corner = _corner_first(cells, S[1:], nP, dP)
     depth = np.zeros(len(T), dtype=int)
     # many cells (small ones) start with the low pair of rules, few with the high pair
     # (and so do the triangles they are cut into); at a coarse target, all start low
@@ -780,14 +797,15 @@ def _hidden_integral(S, Pc, Qc, nP, tolerance, area_P, whole, shortcuts, st, sol
         hidden += 0.5 * float(area_t[sliver].sum()) / area_P
         err += 0.5 * float(area_t[sliver].sum()) / area_P
         T, depth, rung, area_t = T[~sliver], depth[~sliver], rung[~sliver], area_t[~sliver]
+        corner = corner[~sliver]
         if not len(T):
             break
         # every other triangle of this level together: its rules' nodes, one call
         X, weights, groups = [], [], []
-        for r, (low, high) in enumerate(_RULE_PAIRS):
-            sel = np.flatnonzero(rung == r)
+        for r, c in ((0, False), (0, True), (1, False), (1, True)):
+            sel = np.flatnonzero((rung == r) & (corner == c))
             if len(sel):
-                (Xl, Wl), (Xh, Wh) = triangle_rule(T[sel], low), triangle_rule(T[sel], high)
+                (Xl, Wl), (Xh, Wh) = _rule_pair(T[sel], r, c)
                 X.append(np.concatenate([Xl, Xh], axis=1).reshape(-1, 3))
                 weights.append(np.concatenate([Wl, Wh], axis=1).reshape(-1) / area_P)
                 groups.append((sel, Wl, Wh))
@@ -826,6 +844,9 @@ def _hidden_integral(S, Pc, Qc, nP, tolerance, area_P, whole, shortcuts, st, sol
                             ((a_, ab, ca), (ab, b_, bc), (ca, bc, c_), (ab, bc, ca))],
                             axis=1).reshape(-1, 3, 3)])
         depth = np.concatenate([depth[again], np.repeat(depth[split] + 1, 4)])
+        # the first quarter keeps the corner (its first vertex), the others have none
+        corner = np.concatenate([corner[again], np.stack(
+            [corner[split]] + [np.zeros(int(split.sum()), dtype=bool)] * 3, axis=1).ravel()])
         rung = np.concatenate([np.ones(int(again.sum()), dtype=int),
                                np.full(4 * int(split.sum()), start)])
     value = whole[0] - hidden
