@@ -431,7 +431,9 @@ def test_hidden_part_skipping_back_faces_against_the_engine(which):
     H, EH = _hidden_values(X, nP, Q, blockers, st,
                            setup=_hidden_setup(Q, blockers, solid, inner))
     H0, EH0 = _hidden_values(X, nP, Q, blockers)
-    assert st["back_faces"] > len(X)          # at least one member skipped per point
+    # members skipped that the point would have projected (inside the pyramid over Q):
+    # about one a point
+    assert st["back_faces"] > len(X) // 2
     assert np.all(np.abs(H - H0) <= EH + EH0)
     F, E = ef.form_factors(ef.Scene.from_polygons([Q] + blockers), X, nP, error=True)
     U, EU = (v[0] for v in _point_values(X, nP, [Q]))
@@ -441,6 +443,37 @@ def test_hidden_part_skipping_back_faces_against_the_engine(which):
         # the points on the box's footprint see none of the ceiling: hidden is all of it
         under = (X[:, 0] > .3) & (X[:, 0] < .6) & (X[:, 1] > .35) & (X[:, 1] < .7)
         assert under.any() and np.all(np.abs(H[under] - U[under]) <= EH[under] + EU[under])
+
+
+def test_back_faces_kept_where_a_member_of_the_solid_was_culled(monkeypatch):
+    # a closed box floating 3e-13 above the floor (the emitter), the wall x = 1 the
+    # receiver: the shaft culls the box's bottom (within rounding of the floor's plane),
+    # so no member may be skipped; skipping them let lines of sight through the gap
+    # under the near face from points 1e-11 off the footprint (233 times the estimate)
+    from exactff.area import occluded as area
+
+    floor = _rect_xy(0, 1, 0, 1)
+    wall = np.array([[1, 0, 0], [1, 0, 1], [1, 1, 1], [1, 1, 0]], float)
+    box = _closed_box([.3, .35, 3e-13], [.6, .7, .4])
+    scene = ef.Scene.from_polygons([floor, wall] + box)
+    calls, hidden = [], area._hidden_values
+
+    def record(X, nP, Qc, blockers, st=None, budget=0.0, setup=None, weights=None,
+               bound_budget=None):
+        calls.append((nP, Qc, blockers, setup))
+        return hidden(X, nP, Qc, blockers, st, budget, setup, weights, bound_budget)
+
+    monkeypatch.setattr(area, "_hidden_values", record)
+    ef.area_form_factors(scene, rows=[0], tolerance=1e-7, error=True)
+    monkeypatch.setattr(area, "_hidden_values", hidden)
+    nP, Qc, blockers, setup = calls[0]
+    assert len(blockers) < 6                    # the bottom culled
+    X = np.array([[0.3 - d, 0.5, 0.0] for d in (1e-11, 1e-10, 1e-9)])
+    st = {}
+    H, EH = hidden(X, nP, Qc, blockers, st, budget=1e-6, setup=setup)
+    G, EG = area._hidden_values_by_engine(X, nP, Qc, box)
+    assert not st.get("back_faces")
+    assert np.all(np.abs(H - G) <= EH + EG), np.abs(H - G) / (EH + EG)
 
 
 @pytest.mark.parametrize("tilt", [0.0, 0.6, 1.4])
@@ -677,9 +710,10 @@ def hidden_parts_against_the_engine(monkeypatch, scene, rows=None, seed=0):
 
     calls, hidden = [], area._hidden_values
 
-    def record(X, nP, Qc, blockers, st=None, budget=0.0, setup=None, weights=None):
+    def record(X, nP, Qc, blockers, st=None, budget=0.0, setup=None, weights=None,
+               bound_budget=None):
         calls.append((X, nP, Qc, blockers, setup))
-        return hidden(X, nP, Qc, blockers, st, budget, setup, weights)
+        return hidden(X, nP, Qc, blockers, st, budget, setup, weights, bound_budget)
 
     monkeypatch.setattr(area, "_hidden_values", record)
     ef.area_form_factors(scene, rows=rows, tolerance=1e-6, error=True)

@@ -188,15 +188,18 @@ def test_gunter1_points_given_the_bound_against_the_engine(monkeypatch):
     # row 17 at 1e-9: points of a strip 1e-8 wide along the emitter's edge y = 67 (a wall
     # meets it there) have images that rounding can move too far to trust; their weight
     # is small enough that the bound 0 <= hidden <= F(x -> Qc) stands for them (U / 2
-    # within U / 2). Each such value against the engine, and the row within 1e-9
+    # within U / 2). Each such value against the engine, and the row against the row at
+    # 1e-11 (where the budget is too small for the bound: those points go to the
+    # engine), within the two estimates
     from exactff.area import occluded as area
     from exactff.area.contour import point_values
 
     calls, hidden = [], area._hidden_values
 
-    def record(X, nP, Qc, blockers, st=None, budget=0.0, setup=None, weights=None):
+    def record(X, nP, Qc, blockers, st=None, budget=0.0, setup=None, weights=None,
+               bound_budget=None):
         before = st.get("bounded_points", 0)
-        H, EH = hidden(X, nP, Qc, blockers, st, budget, setup, weights)
+        H, EH = hidden(X, nP, Qc, blockers, st, budget, setup, weights, bound_budget)
         if st.get("bounded_points", 0) > before:
             calls.append((X, nP, Qc, blockers, H, EH, st["bounded_points"] - before))
         return H, EH
@@ -215,3 +218,9 @@ def test_gunter1_points_given_the_bound_against_the_engine(monkeypatch):
         pick = rng.choice(bounded, size=8, replace=False)
         G, EG = area._hidden_values_by_engine(X[pick], nP, Qc, blockers)
         assert np.all(np.abs(H[pick] - G) <= EH[pick] + EG)
+    monkeypatch.setattr(area, "_hidden_values", hidden)
+    fine = {}
+    G, EG = ef.area_form_factors(_read("gunter1.vs3"), rows=[17], tolerance=1e-11, error=True,
+                                 stats=fine)
+    assert not fine["bounded_points"] and fine["engine_fallback_points"] == st["bounded_points"]
+    assert np.all(EG <= 1e-11) and np.all(np.abs(F - G) <= E + EG)

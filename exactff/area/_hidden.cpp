@@ -305,11 +305,6 @@ void region_at(const Inputs& in, const P3<double>& pd, Region& out, Work<R>& w) 
             w.off_hull[static_cast<size_t>(in.group[b])] = 1;
     Poly3<R>& W = w.W;
     for (size_t b = 0; b < in.K.size(); ++b) {
-        if (in.group[b] >= 0 && w.off_hull[static_cast<size_t>(in.group[b])] &&
-            dot(sub(in.K[b][0], pd), in.KN[b]) > in.back_face) {
-            ++out.back_faces;
-            continue;
-        }
         // the offsets, each rounded once (within vertex_error of its length)
         W.clear();
         P3<R> g{0, 0, 0};
@@ -330,6 +325,12 @@ void region_at(const Inputs& in, const P3<double>& pd, Region& out, Work<R>& w) 
                 }
         }
         if (outside_pyramid) continue;
+        // seen from behind, off the hull (counted only here, where it would be projected)
+        if (in.group[b] >= 0 && w.off_hull[static_cast<size_t>(in.group[b])] &&
+            dot(sub(in.K[b][0], pd), in.KN[b]) > in.back_face) {
+            ++out.back_faces;
+            continue;
+        }
         // each edge's plane through p (as the pyramid's, from the edge's own vector),
         // inside towards the blocker's centroid
         for (size_t k = 0, m = W.v.size(); k < m; ++k) {

@@ -462,11 +462,13 @@ def _hidden_setup(Qc, blockers, solid=None, inner=None):
     blocker is in front.
 
     ``solid``: the convex solid of each blocker for the pair (:func:`_closed_solids`),
-    -1 for none, and ``inner`` a point inside its hull: a solid's members get their
-    outward normals, and from a point outside the hull those it sees from behind are
-    skipped (their images lie in those of the members it sees from the front). A
-    member whose plane passes within ``AREA_HULL_RTOL`` of the hull's size of the inner
-    point leaves its solid as a whole (which side is out is not certain)."""
+    -1 for none, and ``inner`` a point inside its hull (NaN where not every member of
+    the solid is a blocker of the pair: a member culled within rounding of a line of
+    sight could not stand in for one skipped): a solid's members get their outward
+    normals, and from a point outside the hull those it sees from behind are skipped
+    (their images lie in those of the members it sees from the front). A member whose
+    plane passes within ``AREA_HULL_RTOL`` of the hull's size of the inner point leaves
+    its solid as a whole (which side is out is not certain)."""
     nQ, q0, RQ, Q2 = _plane_frame(Qc)
     clipped = [clip_front(np.asarray(K), nQ, q0) for K in blockers]
     kept = [k for k, K in enumerate(clipped) if K is not None]
@@ -496,20 +498,25 @@ def _hidden_setup(Qc, blockers, solid=None, inner=None):
     if solid is not None:
         # outward: the inner point behind the plane
         solid, inner = np.asarray(solid), np.asarray(inner, dtype=float)
-        group = solid[owner].astype(np.int64)
+        # (no inner point: the solid's members are not all blockers)
+        group = np.where(np.isnan(inner[owner]).any(axis=1), -1, solid[owner]).astype(np.int64)
         mine = group >= 0
         depth = np.einsum("kx,kx->k", inner[owner[mine]] - V[mine, 0], NK[mine])
         NK[mine] *= np.where(depth > 0, -1.0, 1.0)[:, None]
         size = float(np.ptp(np.vstack(Kc), axis=0).max())
         unsure = np.unique(group[mine][np.abs(depth) <= tol.AREA_HULL_RTOL * size])
         group[np.isin(group, unsure)] = -1
+        # labels 0, 1, ... (the compiled call keeps a flag per label at every point)
+        live = group >= 0
+        group[live] = np.unique(group[live], return_inverse=True)[1]
     allv = np.vstack(Kc + [Qc])
     extent = float(np.ptp(Q2, axis=0).max())          # the pieces lie within Qc (or its box)
     return (nQ, q0, RQ, Kc, corners, parts, part_counts, V, counts, NK, group,
             allv.min(axis=0), allv.max(axis=0), extent)
 
 
-def _hidden_values(X, nP, Qc, blockers, st=None, budget=0.0, setup=None, weights=None):
+def _hidden_values(X, nP, Qc, blockers, st=None, budget=0.0, setup=None, weights=None,
+                   bound_budget=None):
     """``F(x -> Qc) - F_occ(x -> Qc)`` for each point x of X (normal nP): the point form
     factor of the part of Qc that the blockers hide from x, and its error estimate.
 
@@ -536,11 +543,13 @@ def _hidden_values(X, nP, Qc, blockers, st=None, budget=0.0, setup=None, weights
     tolerance), the engine computes that point's value
     (:func:`_hidden_values_by_engine`), counted in ``st["engine_fallbacks"]`` (and the
     points in ``st["engine_fallback_points"]``). With ``weights`` (each point's weight
-    in the caller's rules, per unit area of the emitter), such points whose bound
-    ``0 <= hidden <= F(x -> Qc)`` costs the weighted sum at most ``budget`` take it
-    instead (``U / 2`` within ``U / 2`` and U's own estimate; counted in
-    ``st["bounded_points"]``): thin cells along a blocker that touches the emitter hold
-    such points by the hundred, at a thousandth of the engine's cost each.
+    in the caller's rules, per unit area of the emitter) and ``bound_budget`` (a list
+    of one number, what the caller's pair has left for this), such points whose bound
+    ``0 <= hidden <= F(x -> Qc)`` costs the weighted sum at most that take it instead
+    (``U / 2`` within ``U / 2`` and U's own estimate; the cost is taken off the
+    budget; counted in ``st["bounded_points"]``): thin cells along a blocker that
+    touches the emitter hold such points by the hundred, at a thousandth of the
+    engine's cost each.
     ``setup``: :func:`_hidden_setup` of Qc and the blockers, where the caller has it.
 
     Returns
@@ -557,7 +566,7 @@ def _hidden_values(X, nP, Qc, blockers, st=None, budget=0.0, setup=None, weights
         # temporaries a few dozen bytes each of them
         parts_ = [_hidden_values(X[k:k + tol.AREA_POINTS_PER_CALL], nP, Qc, blockers, st,
                                  budget, setup, None if weights is None else
-                                 weights[k:k + tol.AREA_POINTS_PER_CALL])
+                                 weights[k:k + tol.AREA_POINTS_PER_CALL], bound_budget)
                   for k in range(0, nX, tol.AREA_POINTS_PER_CALL)]
         return np.concatenate([h for h, _ in parts_]), np.concatenate([e for _, e in parts_])
     nQ, q0, RQ, Kc, corners, parts, part_counts, V, counts, NK, group, lo, hi, extent = setup
@@ -595,11 +604,13 @@ def _hidden_values(X, nP, Qc, blockers, st=None, budget=0.0, setup=None, weights
     # engine, as one through infinity
     lost |= ((moved > tol.AREA_IMAGE_RTOL * np.maximum(reach, extent))
              & ((length == 0) | (geo > budget)))
-    if lost.any() and weights is not None:
+    if lost.any() and weights is not None and bound_budget is not None:
         # the hidden part lies between 0 and the unoccluded value: where the weights
         # make that cheap enough, it is the value
         U, EU = (v[0] for v in point_values(X[lost], nP, [Qc]))
-        if float((weights[lost] * (0.5 * U + EU)).sum()) <= budget:
+        cost = float((weights[lost] * (0.5 * U + EU)).sum())
+        if cost <= bound_budget[0]:
+            bound_budget[0] -= cost
             H[lost], EH[lost] = 0.5 * U, 0.5 * U + EU
             if st is not None:
                 st["bounded_points"] = st.get("bounded_points", 0) + int(lost.sum())
@@ -786,6 +797,8 @@ def _hidden_integral(S, Pc, Qc, nP, tolerance, area_P, whole, shortcuts, st, sol
     rung = np.full(len(T), start)
     setup = (_hidden_setup(Qc, S[1:]) if solid is None or inner is None
              else _hidden_setup(Qc, S[1:], solid[1:], inner[1:]))
+    # what the bound 0 <= hidden <= unoccluded may cost the pair (_hidden_values)
+    bound_budget = [tol.AREA_IMAGE_BUDGET_SHARE * tolerance]
     total_area = float(_triangle_areas(T).sum())
     hidden = err = rules_err = 0.0
     points = 0
@@ -811,7 +824,8 @@ def _hidden_integral(S, Pc, Qc, nP, tolerance, area_P, whole, shortcuts, st, sol
                 groups.append((sel, Wl, Wh))
         H, EH = _hidden_values(np.concatenate(X), nP, Qc, S[1:], st,
                                budget=tol.AREA_IMAGE_BUDGET_SHARE * tolerance, setup=setup,
-                               weights=np.concatenate(weights) if shortcuts else None)
+                               weights=np.concatenate(weights) if shortcuts else None,
+                               bound_budget=bound_budget)
         points += H.size
         hi, diff, rnd = np.empty(len(T)), np.empty(len(T)), np.empty(len(T))
         at = 0
@@ -821,7 +835,9 @@ def _hidden_integral(S, Pc, Qc, nP, tolerance, area_P, whole, shortcuts, st, sol
             at += n
             hi[sel] = (Wh * Hg[:, nl:]).sum(axis=1)
             diff[sel] = np.abs(hi[sel] - (Wl * Hg[:, :nl]).sum(axis=1)) / area_P
-            rnd[sel] = (Wh * EHg[:, nl:]).sum(axis=1) / area_P
+            # the high rule's nodes' estimates, and the low rule's: they bound what the
+            # point values' errors can hide of the rules' difference
+            rnd[sel] = ((Wh * EHg[:, nl:]).sum(axis=1) + (Wl * EHg[:, :nl]).sum(axis=1)) / area_P
         # half the tolerance for the rules' differences: what the triangles accepted so
         # far left of it is shared among the others by area (at the first level, the
         # triangle's share of the emitter), never less than the triangle's share of the
@@ -973,10 +989,19 @@ def area_row(scene, i, tolerance, *, rtol=None, shortcuts=True, stats=None):
             if shortcuts:
                 solid = np.concatenate([[-1], _closed_solids(
                     solids, np.array(B), (scene.normals[[i, j]], scene.plane_offsets[[i, j]]))])
-                # a point inside each solid's hull: the mean of its vertices
+                # a point inside each solid's hull, the mean of its vertices, where every
+                # member is a blocker, the emitter, the receiver, or on or behind one's
+                # plane (no line of sight meets it): one culled otherwise, as within
+                # rounding of the shaft's planes, would not hide what the members seen
+                # from behind hide, and they are skipped
                 inner = np.full((len(solid), 3), np.nan)
+                kept = set(B) | {i, j}
+                N, D = scene.normals, scene.plane_offsets
                 for g in set(solid[solid >= 0].tolist()):
-                    inner[solid == g] = solids[2][g].mean(axis=0)
+                    if all(k in kept or (polys[k] @ N[i] - D[i]).max() <= 0
+                           or (polys[k] @ N[j] - D[j]).max() <= 0
+                           for k in np.flatnonzero(solids[0] == g).tolist()):
+                        inner[solid == g] = solids[2][g].mean(axis=0)
             occluded.append(((j, Pc, Qc), B, solid, inner))
             continue
         if len(polys) > 2 and shortcuts:
