@@ -105,6 +105,7 @@ __all__ = [
     "AREA_CELL_COVER_RTOL",
     "AREA_MAX_DEPTH",
     "AREA_EDGE_TERMS_PER_CALL",
+    "AREA_EVENT_ROWS_PER_CALL",
     "REMAINDER_SPLIT_POLYGONS",
     "REMAINDER_SLACK",
     "MATRIX_ROUNDING_ULPS",
@@ -510,6 +511,9 @@ AREA_CELL_COVER_RTOL = 1e-12
 #: Area form factors: receivers per call of the vectorised point values (bounds the
 #: temporaries: about 2e5 edge terms per call).
 AREA_EDGE_TERMS_PER_CALL = 200_000
+#: ... and vertex-edge rows per batch of a pair's visibility events (its blockers' every
+#: vertex against every other's edges: bounds the temporaries, a few hundred bytes a row).
+AREA_EVENT_ROWS_PER_CALL = 200_000
 
 #: Compiled core (exactff.visibility.compiled): a vertex lies on a plane through the
 #: point when its distance is within this band (radians, with the plane's and vertex's

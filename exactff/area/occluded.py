@@ -293,6 +293,37 @@ def _plane_frame(Q):
     return nQ, Q[0], RQ, (Q - Q[0]) @ RQ[:2].T
 
 
+def _vertex_edge_rows(pa, pb, k, start, W, nxt, shortcuts, nQ, q0, RQ, seen, st):
+    """:func:`_event_lines`' rows for the ordered polygon pairs (pa, pb): every vertex v
+    of polygon pa against every edge (e0, e1) of pb, its plane's normal m (rows of no
+    plane dropped) and pa, less the blocker-blocker events whose lines of sight miss Qc
+    (``seen``, in Qc's frame ``RQ`` about q0) with ``shortcuts``."""
+    # every vertex of A against every edge of B, (kA * kB) rows per pair in loop order
+    size = k[pa] * k[pb]
+    row_pair = np.repeat(np.arange(len(pa)), size)
+    off = np.arange(int(size.sum())) - np.repeat(np.cumsum(size) - size, size)
+    ra, kb = pa[row_pair], k[pb[row_pair]]
+    vi = start[ra] + off // kb
+    ei = start[pb[row_pair]] + off % kb
+    v, e0, e1 = W[vi], W[ei], W[nxt[ei]]
+    m = cross(e0 - v, e1 - v)
+    keep = np.any(m != 0, axis=1)
+    if shortcuts:
+        # between two blockers, the lines through v and the points of the edge meet Qc's
+        # plane along the edge's central image from v: does it cross Qc? (unbounded: kept)
+        d0, d1 = (e0 - v) @ nQ, (e1 - v) @ nQ
+        bounded = keep & (ra > 0) & (pb[row_pair] > 0) & (d0 * d1 > 0)
+        if bounded.any():
+            vb, h = v[bounded], (q0 - v[bounded]) @ nQ
+            ia = vb + (h / d0[bounded])[:, None] * (e0[bounded] - vb) - q0
+            ib = vb + (h / d1[bounded])[:, None] * (e1[bounded] - vb) - q0
+            segs = shapely.linestrings(np.stack([ia @ RQ[:2].T, ib @ RQ[:2].T], axis=1))
+            miss = ~shapely.intersects(seen, segs)
+            st["culled_events"] = st.get("culled_events", 0) + int(miss.sum())
+            keep[np.flatnonzero(bounded)[miss]] = False
+    return v[keep], e0[keep], e1[keep], m[keep], ra[keep]
+
+
 def _event_lines(S, nP, dP, R, c, radius, Qc, shortcuts=True, st=None, solid=None):
     """The segments of P's plane (in its 2-D frame ``R`` about ``c``) across which the
     integrand may lose smoothness: for a vertex ``v`` of one polygon of S and an edge of
@@ -333,30 +364,14 @@ def _event_lines(S, nP, dP, R, c, radius, Qc, shortcuts=True, st=None, solid=Non
             st["solid_events"] = st.get("solid_events", 0) + int((k[pa] * k[pb])[same].sum())
         pair &= ~same
     pa, pb = pa[pair], pb[pair]
-    # every vertex of A against every edge of B, (kA * kB) rows per pair in loop order
+    # in batches of pairs (the rows' temporaries bounded), in order
     size = k[pa] * k[pb]
-    row_pair = np.repeat(np.arange(len(pa)), size)
-    off = np.arange(int(size.sum())) - np.repeat(np.cumsum(size) - size, size)
-    ra, kb = pa[row_pair], k[pb[row_pair]]
-    vi = start[ra] + off // kb
-    ei = start[pb[row_pair]] + off % kb
-    v, e0, e1 = W[vi], W[ei], W[nxt[ei]]
-    m = cross(e0 - v, e1 - v)
-    keep = np.any(m != 0, axis=1)
-    if shortcuts:
-        # between two blockers, the lines through v and the points of the edge meet Qc's
-        # plane along the edge's central image from v: does it cross Qc? (unbounded: kept)
-        d0, d1 = (e0 - v) @ nQ, (e1 - v) @ nQ
-        bounded = keep & (ra > 0) & (pb[row_pair] > 0) & (d0 * d1 > 0)
-        if bounded.any():
-            vb, h = v[bounded], (q0 - v[bounded]) @ nQ
-            ia = vb + (h / d0[bounded])[:, None] * (e0[bounded] - vb) - q0
-            ib = vb + (h / d1[bounded])[:, None] * (e1[bounded] - vb) - q0
-            segs = shapely.linestrings(np.stack([ia @ RQ[:2].T, ib @ RQ[:2].T], axis=1))
-            miss = ~shapely.intersects(seen, segs)
-            st["culled_events"] = st.get("culled_events", 0) + int(miss.sum())
-            keep[np.flatnonzero(bounded)[miss]] = False
-    v, e0, e1, m, ra = v[keep], e0[keep], e1[keep], m[keep], ra[keep]
+    per = tol.AREA_EVENT_ROWS_PER_CALL
+    cut = np.searchsorted(np.cumsum(size), per * np.arange(1, int(size.sum()) // per + 1))
+    parts_ = [_vertex_edge_rows(a, b, k, start, W, nxt, shortcuts, nQ, q0, RQ, seen, st)
+              for a, b in zip(np.split(pa, cut), np.split(pb, cut)) if len(a)]
+    v, e0, e1, m, ra = ((np.concatenate([q[t] for q in parts_]) if parts_ else
+                         np.zeros((0, 3)) if t < 4 else np.zeros(0, dtype=int)) for t in range(5))
     # where the lines from v through the edge's ends meet P's plane (not spanned:
     # parallel, or the image passes through infinity: the whole chord)
     den0, den1 = (e0 - v) @ nP, (e1 - v) @ nP
