@@ -830,10 +830,10 @@ def _hidden_integral(S, Pc, Qc, nP, tolerance, area_P, whole, shortcuts, st, sol
             break
         # every other triangle of this level together: its rules' nodes, one call
         X, weights, groups = [], [], []
-        for r, c in ((0, False), (0, True), (1, False), (1, True)):
-            sel = np.flatnonzero((rung == r) & (corner == c))
+        for r, at_corner in ((0, False), (0, True), (1, False), (1, True)):
+            sel = np.flatnonzero((rung == r) & (corner == at_corner))
             if len(sel):
-                (Xl, Wl), (Xh, Wh) = _rule_pair(T[sel], r, c)
+                (Xl, Wl), (Xh, Wh) = _rule_pair(T[sel], r, at_corner)
                 X.append(np.concatenate([Xl, Xh], axis=1).reshape(-1, 3))
                 weights.append(np.concatenate([Wl, Wh], axis=1).reshape(-1) / area_P)
                 groups.append((sel, Wl, Wh))
