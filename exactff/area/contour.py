@@ -45,7 +45,7 @@ from ..rings import owners, padded, successors
 from ..scene import validate_polygon
 
 __all__ = ["polygon_form_factor", "clip_front", "front_parts", "triangle_rule",
-           "symmetric_triangle_rule", "point_values",
+           "symmetric_triangle_rule", "SYMMETRIC_RULES", "point_values",
            "emitter_nodes", "far_values", "unoccluded_pair", "unoccluded_pairs", "nonnegative",
            "is_far", "CLOSED_FORM_COUNTS"]
 
