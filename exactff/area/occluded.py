@@ -667,7 +667,7 @@ _RULE_PAIRS = tuple(tuple(roots_legendre(k) for k in orders) for orders in
                     (tol.AREA_RULE_ORDERS_MANY_CELLS, tol.AREA_RULE_ORDERS))
 
 
-def _rule_pair(T, rung, corner, tolerance=1.0):
+def _rule_pair(T, rung, corner, tolerance):
     """The nodes and weights of the two rules of rung ``rung`` on the triangles T (t, 3,
     3): at rung 0 the symmetric rules of degree 4 and 8 (6 and 16 nodes), or where the
     first vertex is a corner that a blocker touches, the collapsed rules of the same
