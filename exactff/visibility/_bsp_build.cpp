@@ -37,6 +37,49 @@ using LD = long double;
 // the unit roundoff of long double (that of double where the two are one type)
 constexpr LD LD_ROUNDOFF = std::numeric_limits<LD>::epsilon() / 2;
 
+// The crossings' working precision: quadruple (GCC's __float128 on x86, long double on
+// aarch64, where it is quadruple already). Only + - * / are used, no libquadmath call.
+#if defined(__SIZEOF_FLOAT128__) && !defined(__aarch64__)
+using Q = __float128;
+const LD Q_ROUNDOFF = std::ldexp(1.0L, -113);
+#else
+using Q = long double;
+constexpr LD Q_ROUNDOFF = std::numeric_limits<LD>::epsilon() / 2;
+#endif
+inline Q q_fabs(Q x) { return x < 0 ? -x : x; }
+
+// A splitting plane as the crossings use it: through the input point `a` with normal
+// N = (b - a) x (c - a) from three of its polygon's input vertices, in quadruple
+// precision (the differences of doubles are exact there, their products too, so each
+// component is rounded once: within Q_ROUNDOFF of M, the magnitude of its two
+// products). Its polygon's vertices lie within `dev` of it (the quadruple rounding of
+// their distances, for a triangle or any exactly planar polygon; their true distances
+// for one planar only within the validation tolerance). An axis plane x_k = c is N = e_k
+// through a point with x_k = c, exactly.
+struct SplitPlane {
+    double a[3] = {0, 0, 0};
+    Q N[3] = {0, 0, 0};
+    LD M[3] = {0, 0, 0};
+    LD norm = 0;
+    double dev = 0;
+};
+
+// N . (x - a) for a point x in quadruple precision, and a bound on its error: each
+// component of N within Q_ROUNDOFF M_k of the exact normal's, the differences, products
+// and sums rounded within 4 roundoffs of their magnitudes
+inline Q plane_value(const SplitPlane& P, const Q* x, LD& err) {
+    Q s = 0;
+    LD mag = 0;
+    for (int k = 0; k < 3; ++k) {
+        const Q dx = x[k] - Q(P.a[k]);
+        s += P.N[k] * dx;
+        const LD adx = LD(q_fabs(dx));
+        mag += (LD(q_fabs(P.N[k])) * 5 + P.M[k]) * adx;
+    }
+    err = 2 * Q_ROUNDOFF * mag;
+    return s;
+}
+
 // splitmix64: a small deterministic stream for the candidate and sample draws
 struct Stream {
     uint64_t state;
@@ -76,9 +119,14 @@ struct Builder {
     // per vertex, a bound on its distance from the point it stands for (0 for the
     // input's; a crossing's from its rounding, its ends' and its plane's: Builder::crossing)
     std::vector<double> vert_err;
-    // per source polygon, a bound on how far its plane (normal, offset) passes from its
-    // vertices (the plane's own rounding, at the polygon: where it can be seen to split)
-    std::vector<double> plane_dev;
+    // per vertex, the point in quadruple precision and a bound on its distance from the
+    // point it stands for (the input's exactly, with 0): the crossings of later splits
+    // start from these, so that a chain of splits does not compound the rounding to double
+    std::vector<Q> verts_q;
+    std::vector<double> vert_err_q;
+    // per source polygon, the plane its splits cut along (SplitPlane: through three of
+    // its vertices, in quadruple precision)
+    std::vector<SplitPlane> planes;
     std::vector<int64_t> frag_start, frag_source;
     // nodes
     std::vector<double> node_n, node_d;
@@ -94,13 +142,11 @@ struct Builder {
           band_ulps(band_ulps_), pool_rng(seed * 2 + 1), sample_rng(seed * 2 + 2) {
         verts.assign(V, V + 3 * start[n]);
         vert_err.assign(size_t(start[n]), 0.0);
-        plane_dev.assign(size_t(n), 0.0);
+        verts_q.assign(V, V + 3 * start[n]);
+        vert_err_q.assign(size_t(start[n]), 0.0);
+        planes.resize(size_t(n));
         for (int64_t s = 0; s < n; ++s) {
-            for (int64_t i = start[s]; i < start[s + 1]; ++i) {
-                LD mag;
-                const LD r = distance_ld(V + 3 * i, normals + 3 * s, offsets[s], mag);
-                plane_dev[s] = std::max(plane_dev[s], double(std::fabs(r) + 8 * LD_ROUNDOFF * mag));
-            }
+            planes[size_t(s)] = polygon_plane(V, start[s], start[s + 1], normals + 3 * s);
         }
         frag_start.assign(start, start + n + 1);
         frag_source.resize(n);
@@ -110,52 +156,124 @@ struct Builder {
     size_t count(int64_t f) const { return size_t(frag_start[f + 1] - frag_start[f]); }
     const double* vertex(int64_t f, size_t i) const { return &verts[3 * (frag_start[f] + i)]; }
     double vertex_error(int64_t f, size_t i) const { return vert_err[frag_start[f] + i]; }
+    const Q* vertex_q(int64_t f, size_t i) const { return &verts_q[3 * (frag_start[f] + i)]; }
+    double vertex_error_q(int64_t f, size_t i) const { return vert_err_q[frag_start[f] + i]; }
 
-    // n . x - d in long double, and the magnitude of its terms (its rounding is within
-    // 4 long double roundoffs of that)
-    static LD distance_ld(const double* x, const double* n, double d, LD& mag) {
-        LD s = LD(x[0]) * n[0] + LD(x[1]) * n[1] + LD(x[2]) * n[2] - d;
-        mag = std::fabs(LD(x[0]) * n[0]) + std::fabs(LD(x[1]) * n[1]) +
-              std::fabs(LD(x[2]) * n[2]) + std::fabs(LD(d));
-        return s;
+    // the plane of input polygon V[i0:i1] (normal `n`, for the orientation) through its
+    // first vertex a, the vertex b farthest from it and the vertex c farthest from the line
+    // ab: the best conditioned of such triples for a convex polygon, and a triangle's
+    // own plane
+    static SplitPlane polygon_plane(const double* V, int64_t i0, int64_t i1, const double* n) {
+        SplitPlane P;
+        const double* a = V + 3 * i0;
+        auto diff = [&](const double* x, int k) { return LD(x[k]) - LD(a[k]); };
+        int64_t ib = i0 + 1, ic = i0 + 2;
+        LD far = -1;
+        for (int64_t i = i0 + 1; i < i1; ++i) {
+            const double* x = V + 3 * i;
+            const LD d2 = diff(x, 0) * diff(x, 0) + diff(x, 1) * diff(x, 1) + diff(x, 2) * diff(x, 2);
+            if (d2 > far) { far = d2; ib = i; }
+        }
+        LD wide = -1;
+        const double* b = V + 3 * ib;
+        for (int64_t i = i0 + 1; i < i1; ++i) {
+            if (i == ib) continue;
+            const double* x = V + 3 * i;
+            const LD u[3] = {diff(b, 0), diff(b, 1), diff(b, 2)};
+            const LD v[3] = {diff(x, 0), diff(x, 1), diff(x, 2)};
+            const LD c0 = u[1] * v[2] - u[2] * v[1], c1 = u[2] * v[0] - u[0] * v[2],
+                     c2 = u[0] * v[1] - u[1] * v[0];
+            const LD w2 = c0 * c0 + c1 * c1 + c2 * c2;
+            if (w2 > wide) { wide = w2; ic = i; }
+        }
+        const double* c = V + 3 * ic;
+        Q u[3], v[3];
+        for (int k = 0; k < 3; ++k) {
+            P.a[k] = a[k];
+            u[k] = Q(b[k]) - Q(a[k]);
+            v[k] = Q(c[k]) - Q(a[k]);
+        }
+        for (int k = 0; k < 3; ++k) {
+            const int i = (k + 1) % 3, j = (k + 2) % 3;
+            P.N[k] = u[i] * v[j] - u[j] * v[i];
+            P.M[k] = LD(q_fabs(u[i] * v[j])) + LD(q_fabs(u[j] * v[i]));
+        }
+        LD dotn = 0, nn = 0;
+        for (int k = 0; k < 3; ++k) {
+            dotn += LD(P.N[k]) * n[k];
+            nn += LD(P.N[k]) * LD(P.N[k]);
+        }
+        if (dotn < 0)
+            for (int k = 0; k < 3; ++k) P.N[k] = -P.N[k];
+        P.norm = std::sqrt(nn);
+        // how far its polygon's vertices lie from it (0 up to the rounding for a triangle
+        // or an exactly planar polygon)
+        LD dev = 0;
+        for (int64_t i = i0; i < i1; ++i) {
+            Q x[3] = {V[3 * i], V[3 * i + 1], V[3 * i + 2]};
+            LD err;
+            const Q s = plane_value(P, x, err);
+            dev = std::max(dev, LD(q_fabs(s)) + err);
+        }
+        P.dev = P.norm > 0 ? double(1.01L * dev / P.norm) : HUGE_VAL;
+        return P;
     }
 
-    // the crossing of the edge from A (front) to B (behind) with the plane n . x = d:
-    // X = A + t (B - A), t = s_a / (s_a - s_b), in long double and rounded once to
-    // double; returns a bound on |X - X*|, where X* is the crossing of the edge the ends
-    // stand for (within eA and eB of them) with the plane the splitter stands for (within
-    // `dev` of n . x = d at the splitter: within the splitter's hull, the only place where
-    // the split can be a visibility boundary of the splitter itself). To first order, moving the line by d (at most
-    // the larger end error) and the plane by w along its normal (the long double
-    // distances' rounding, the quotient's, and dev) moves the crossing within the plane by
-    // at most (|d| + w) / sin(beta), beta the edge's angle with the plane
-    // (|d_t| + |d_n + w| cot(beta), by Cauchy-Schwarz); the interpolation adds 3
-    // roundoffs of |A| + |B - A| per coordinate, the rounding to double u |X|.
-    static double crossing(const double* A, const double* B, const double* n, double d,
-                           double eA, double eB, double dev, double* X) {
-        LD mag_a, mag_b;
-        const LD sa = distance_ld(A, n, d, mag_a), sb = distance_ld(B, n, d, mag_b);
-        const LD t = sa / (sa - sb);
-        LD len = 0, size = 0, nn = 0;
-        double norm2 = 0;
+    // an axis plane x_k = c (exact)
+    static SplitPlane axis_plane(int axis, double c) {
+        SplitPlane P;
+        P.a[axis] = c;
+        P.N[axis] = 1;
+        P.norm = 1;
+        return P;
+    }
+
+    // the crossing of the edge from A (front) to B (behind) with the splitting plane P,
+    // from the ends' quadruple-precision points (within eA and eB of the points they stand
+    // for): X = A + t (B - A), t = s_a / (s_a - s_b), in quadruple precision (Xq, within
+    // the returned eq of the crossing of the exact edge with P's plane), then rounded to
+    // double (X; the return value bounds |X - X*|). To first order, moving the line by d
+    // (at most the larger end error) and the plane by w along its normal (the distances'
+    // rounding, and P.dev where the splitter's own vertices stand off its plane) moves the
+    // crossing within the plane by at most (|d| + w) / sin(beta), beta the edge's angle
+    // with the plane (|d_t| + |d_n + w| cot(beta), by Cauchy-Schwarz); the interpolation
+    // adds a few quadruple roundoffs of |A| + |B - A| per coordinate. In quadruple
+    // precision the distances of a grazing edge (its ends 1e-13 from a slab's plane) keep
+    // 20 digits, where long double kept 5 and the rounding to double of the ends none: a
+    // crossing 1e-1 m along the edge from where it stands for becomes one within an ulp.
+    static double crossing(const Q* A, const Q* B, const SplitPlane& P, double eA, double eB,
+                           double* X, Q* Xq, double* eq) {
+        LD wa, wb;
+        const Q sa = plane_value(P, A, wa), sb = plane_value(P, B, wb);
+        Q t = sa / (sa - sb);
+        if (t < 0) t = 0;
+        if (t > 1) t = 1;
+        LD len = 0, size = 0, off = 0;
         for (int k = 0; k < 3; ++k) {
-            const LD e = LD(B[k]) - A[k];
-            X[k] = double(A[k] + t * e);
-            len += e * e;
-            nn += LD(n[k]) * n[k];
-            size += std::fabs(LD(A[k])) + std::fabs(e);
-            norm2 += X[k] * X[k];
+            const Q e = B[k] - A[k];
+            Xq[k] = A[k] + t * e;
+            X[k] = double(Xq[k]);
+            const LD le = LD(q_fabs(e));
+            len += le * le;
+            size += LD(q_fabs(A[k])) + le;
+            const LD r = LD(Xq[k] - Q(X[k]));
+            off += r * r;
         }
-        // 1 / sin(beta) = |n| |B - A| / |s_a - s_b| (with the distances' rounding)
-        const LD w = 6 * LD_ROUNDOFF * (mag_a + mag_b) + dev + 4 * LD_ROUNDOFF * std::fabs(sa);
-        const LD gap = std::fabs(sa - sb) - 6 * LD_ROUNDOFF * (mag_a + mag_b);
-        const LD steep = gap > 0 ? std::sqrt(len * nn) / gap : LD(HUGE_VAL);
+        len = std::sqrt(len);
+        // 1 / sin(beta) = |N| |B - A| / |s_a - s_b| (with the distances' rounding)
+        const LD w = std::max(wa, wb) / P.norm + P.dev;
+        const LD gap = LD(q_fabs(sa - sb)) - wa - wb;
+        const LD steep = gap > 0 ? P.norm * len / gap : LD(HUGE_VAL);
         // the first order holds while the ends' errors tilt the edge well below its angle
-        // with the plane; beyond, no bound (a grazing split after an earlier one)
-        if (!(std::max(eA, eB) * steep <= 0.1L * std::sqrt(len))) return HUGE_VAL;
-        const LD e = (std::max(eA, eB) + w / std::sqrt(nn)) * std::max(LD(1), steep) +
-                     4 * std::sqrt(LD(3)) * LD_ROUNDOFF * size + UNIT_ROUNDOFF * std::sqrt(LD(norm2));
-        return double(1.01L * e);
+        // with the plane; beyond, no bound
+        if (!(std::max(eA, eB) * steep <= 0.1L * len)) {
+            *eq = HUGE_VAL;
+            return HUGE_VAL;
+        }
+        const LD e = (std::max(eA, eB) + w) * std::max(LD(1), steep) +
+                     8 * std::sqrt(LD(3)) * Q_ROUNDOFF * size;
+        *eq = double(1.01L * e);
+        return double(1.01L * (e + std::sqrt(off)) + 2 * LD_ROUNDOFF * std::sqrt(off));
     }
 
     // side of vertex x for the plane n . x = d with the coplanar band, and n . x - d
@@ -195,50 +313,62 @@ struct Builder {
     }
 
     // the split of fragment f (exactff.halfspace.split_polygon): new fragments, -1 for none
-    void split(int64_t f, const double* n, double d, double dev, int64_t& f_front,
-               int64_t& f_back) {
+    void split(int64_t f, const double* n, double d, const SplitPlane& plane,
+               int64_t& f_front, int64_t& f_back) {
         size_t k = count(f);
         std::vector<int> sg(k);
         std::vector<double> s(k);
-        std::vector<double> fv, bv, fe, be;
+        std::vector<double> fv, bv, fe, be, fqe, bqe;
+        std::vector<Q> fq, bq;
         for (size_t i = 0; i < k; ++i) sg[i] = side(vertex(f, i), n, d, s[i]);
         for (size_t i = 0; i < k; ++i) {
             size_t j = (i + 1) % k;
             const double* P = vertex(f, i);
+            const Q* Pq = vertex_q(f, i);
             if (sg[i] >= 0) {
                 fv.insert(fv.end(), P, P + 3);
                 fe.push_back(vertex_error(f, i));
+                fq.insert(fq.end(), Pq, Pq + 3);
+                fqe.push_back(vertex_error_q(f, i));
             }
             if (sg[i] <= 0) {
                 bv.insert(bv.end(), P, P + 3);
                 be.push_back(vertex_error(f, i));
+                bq.insert(bq.end(), Pq, Pq + 3);
+                bqe.push_back(vertex_error_q(f, i));
             }
             if (sg[i] * sg[j] < 0) {
                 // from the front end point, so that a shared edge splits identically
                 size_t a = sg[i] > 0 ? i : j, b = sg[i] > 0 ? j : i;
-                const double* A = vertex(f, a);
-                const double* B = vertex(f, b);
-                double X[3];
-                const double e = crossing(A, B, n, d, vertex_error(f, a), vertex_error(f, b),
-                                          dev, X);
+                double X[3], eq;
+                Q Xq[3];
+                const double e = crossing(vertex_q(f, a), vertex_q(f, b), plane,
+                                          vertex_error_q(f, a), vertex_error_q(f, b), X, Xq, &eq);
                 fv.insert(fv.end(), X, X + 3);
                 bv.insert(bv.end(), X, X + 3);
                 fe.push_back(e);
                 be.push_back(e);
+                fq.insert(fq.end(), Xq, Xq + 3);
+                bq.insert(bq.end(), Xq, Xq + 3);
+                fqe.push_back(eq);
+                bqe.push_back(eq);
             }
         }
         ++splits;
         int64_t source = frag_source[f];
-        auto add = [&](const std::vector<double>& pv, const std::vector<double>& pe) -> int64_t {
+        auto add = [&](const std::vector<double>& pv, const std::vector<double>& pe,
+                       const std::vector<Q>& pq, const std::vector<double>& pqe) -> int64_t {
             if (pv.size() < 9) return -1;
             verts.insert(verts.end(), pv.begin(), pv.end());
             vert_err.insert(vert_err.end(), pe.begin(), pe.end());
+            verts_q.insert(verts_q.end(), pq.begin(), pq.end());
+            vert_err_q.insert(vert_err_q.end(), pqe.begin(), pqe.end());
             frag_start.push_back(int64_t(verts.size() / 3));
             frag_source.push_back(source);
             return int64_t(frag_source.size()) - 1;
         };
-        f_front = add(fv, fe);
-        f_back = add(bv, be);
+        f_front = add(fv, fe, fq, fqe);
+        f_back = add(bv, be, bq, bqe);
     }
 
     struct Item {
@@ -317,7 +447,7 @@ struct Builder {
                            src_normals[3 * src + 2]};
             double d = src_offsets[src];
             bool own_plane = true;
-            double dev = plane_dev[size_t(src)];
+            SplitPlane plane = planes[size_t(src)];
             if (m > axis_min && double(best_imbalance) > axis_imbalance * double(ms)) {
                 // a chain in the making: a plane through the median of the fragments'
                 // vertex means along their widest axis
@@ -349,7 +479,7 @@ struct Builder {
                 if (a_score < best) {
                     std::copy(na, na + 3, n);
                     d = med;
-                    dev = 0;   // an axis plane is exact: it stands for itself
+                    plane = axis_plane(axis, med);   // exact: it stands for itself
                     own_plane = false;
                 }
             }
@@ -367,7 +497,7 @@ struct Builder {
                     to_back.push_back(f);
                 } else {
                     int64_t ff, fb;
-                    split(f, n, d, dev, ff, fb);
+                    split(f, n, d, plane, ff, fb);
                     if (ff >= 0) front_parts.push_back(ff);
                     if (fb >= 0) back_parts.push_back(fb);
                 }
