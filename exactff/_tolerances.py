@@ -69,6 +69,7 @@ __all__ = [
     "CLIP_MEET_ULPS",
     "C1",
     "SVBSP_BAND",
+    "COMPILED_FALLBACK_MAX_POLYGONS",
     "OCCLUDED_ATOL",
     "SVBSP_SPLIT_ULPS",
     "SVBSP_BOX_BUDGET",
@@ -525,6 +526,12 @@ SVBSP_BAND = 16 * LONGDOUBLE_EPS
 #: Python engine): no precision tier narrows that part, and the Python engine's crossings
 #: are rounded as well.
 OCCLUDED_ATOL = 1e-11
+#: Compiled core: the largest scene whose compiled values that miss the tolerance are
+#: recomputed by the Python engine (per polygon: its row, of which only those values
+#: are kept; ``stats["python_polygons"]``). Its rows cost 5 to 20 times the compiled
+#: core's and grow with the scene, so that on a larger scene such a value raises at once
+#: (or is returned with its bound, ``error=True``) instead of after a minute.
+COMPILED_FALLBACK_MAX_POLYGONS = 5_000
 #: Compiled core: the rounding of a vertex split off an edge, in long double roundoffs
 #: per unit of the edge's ends' distance from the point over the new vertex's (the
 #: parameter's quotient and the three-term interpolation, with a margin).

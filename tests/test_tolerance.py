@@ -150,14 +150,15 @@ def _fake_core(monkeypatch, F0, E0, band0):
 def test_compiled_value_that_misses_falls_back_and_the_python_row_is_checked(monkeypatch,
                                                                              F0, E0):
     # a bound that misses errors.misses_tolerance (at 1e-12: 1e-14 below a value of
-    # 1e-2) sends the row to the Python engine, whose values are then checked alike
+    # 1e-2) sends that value to the Python engine, whose values are then checked alike
     scene, p, n = _occluded_pair()
     row = _fake_core(monkeypatch, F0, E0, 0.0)
     st = {}
     F = row(scene, p, n, tolerance=1e-12, stats=st)
-    assert st["path"] == "compiled, then python" and st["compiled_missed"] == 1
+    assert st["path"] == "compiled, python for some polygons"
+    assert st["compiled_missed"] == st["python_polygons"] == 1
     Fp, Ep = ef.Exact(engine="python").point_form_factors(scene, p, n, error=True)
-    np.testing.assert_array_equal(F, Fp)
+    assert F[0] == Fp[0] and F[1] == 0.0    # the fake core's other value is kept
     assert not misses_tolerance(Fp, Ep, 1e-12).any()
 
 

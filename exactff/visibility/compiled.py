@@ -16,7 +16,7 @@ import numpy as np
 import shapely
 
 from .. import _tolerances as tol
-from ..errors import check_finite, misses_tolerance
+from ..errors import NumericalError, check_finite, misses_tolerance
 from ..geometry import cross
 from ..kernel import flat_polygons
 from ..predicates import engine_sides, sides_of_point
@@ -182,6 +182,19 @@ def _build_core(scene):
     return tree, core
 
 
+def _missed_message(j, F, E, crossing, tolerance, count, python=False):
+    """The error of a row whose value ``j`` (one of ``count``) missed the tolerance."""
+    j = int(j)
+    where = ("after the Python engine's refinement" if python else
+             "in the compiled core (no second engine for a scene of this size)")
+    part = ("" if python or not crossing[j] > tol.OCCLUDED_ATOL else
+            f"; {crossing[j]:.3g} of it from the BSP's rounded crossings")
+    return (f"polygon {j}: the form factor {F[j]!r} misses the tolerance {tolerance:g} "
+            f"relative (times the larger of |F| and {tol.VALUE_FLOOR:g}) {where}: "
+            f"error bound {E[j]:.3g}{part} ({count} value(s) of the row miss it); ask "
+            f"error=True for the row with its bounds, or a larger tolerance")
+
+
 def _piece_vertex_errors(P, errors, parts, normal):
     """Per vertex of the convex pieces of fragment ``P``, a bound on its distance from the
     exact point it stands for: a vertex of ``P`` keeps its own (``errors``); one that
@@ -232,10 +245,16 @@ def compiled_form_factors(scene, point, normal, *, two_sided=False, stats=None,
     sliver the long double cuts leave an absolute bound of about 1e-18, which this makes
     relative. Where a value's bound still misses the tolerance by the criterion of
     every path (:func:`exactff.errors.misses_tolerance`: ``tolerance`` times the larger
-    of the value and ``VALUE_FLOOR``), the row is recomputed by the Python engine, which
-    refines, escalates and then checks every value the same way (raising where one
-    misses it); ``stats["path"]`` then says ``"compiled, then python"`` and
-    ``stats["compiled_missed"]`` counts the values that caused it. The band's slivers
+    of the value and ``VALUE_FLOOR``), or its BSP crossings' part exceeds the accuracy
+    target of occluded values, those values (and only those) are taken from the Python
+    engine, which refines and escalates, on scenes of at most
+    ``COMPILED_FALLBACK_MAX_POLYGONS`` polygons (``stats["path"]`` then says
+    ``"compiled, python for some polygons"``, ``stats["compiled_missed"]`` and
+    ``stats["python_polygons"]`` count them); a value that still misses raises
+    :class:`exactff.NumericalError` naming its polygon, unless ``error=True``, which
+    returns it with its bound. On a larger scene such a value raises at once (or is
+    returned with its bound): the Python engine's row would cost 5 to 20 times the
+    compiled one's, and more on a scene that size. The band's slivers
     (``stats["max_band_bound"]``) are a
     bound on the topology: they are in the returned bound but not checked against the
     tolerance, as the Python engine's topology has the same decisions and its bound
@@ -264,8 +283,8 @@ def compiled_form_factors(scene, point, normal, *, two_sided=False, stats=None,
         n-long results), ``max_error_estimate``, ``max_band_bound`` and
         ``max_crossing_bound`` (the part of the bounds the BSP's rounded crossings make,
         added like the band's and checked only against the accuracy target of occluded
-        values, 1e-11); after a fallback,
-        ``compiled_missed`` and the Python engine's counters.
+        values, 1e-11); where values missed the tolerance, ``compiled_missed`` and,
+        after the Python engine, ``python_polygons``.
     shortcuts : bool, default True
         False disables the convex-scene path and the culling of subtrees (results do
         not depend on it).
@@ -315,22 +334,37 @@ def compiled_form_factors(scene, point, normal, *, two_sided=False, stats=None,
         # the rounding and geometry of the pieces, after the core's second tier (above),
         # by the Python engine's own criterion; the band's slivers (below) no engine
         # here narrows; nor the BSP crossings' rounding (`crossing`: the Python engine's
-        # crossings are rounded too, and its bound leaves them out), which falls back
-        # only beyond the accuracy target of occluded values, where another tree's
-        # splits may fall elsewhere
+        # crossings are rounded too, and its bound leaves them out), which is held to
+        # the accuracy target of occluded values
         missed = np.flatnonzero(misses_tolerance(F, E, tolerance) |
                                 (crossing > tol.OCCLUDED_ATOL))
         if len(missed):
             st.update(counters)
             st["compiled_missed"] = int(len(missed))
-            out = python_row()
-            st["path"] = "compiled, then python"
-            if error:
+            if len(scene) > tol.COMPILED_FALLBACK_MAX_POLYGONS:
+                # no second engine at this size: say so now, or return the bounds
+                if not error:
+                    raise NumericalError(_missed_message(missed[0], F, E, crossing, tolerance,
+                                                         len(missed)))
+            else:
+                # the Python engine (it refines and escalates) for these values only
+                G, H = visible_form_factors(scene, p, normal, two_sided=two_sided, stats={},
+                                            shortcuts=shortcuts, tolerance=tolerance,
+                                            error=True)
+                F, E = F.copy(), E.copy()
+                F[missed], E[missed] = G[missed], H[missed]
+                st["python_polygons"] = int(len(missed))
+                st["path"] = "compiled, python for some polygons"
                 # the Python engine's bound leaves its own crossings' rounding out: the
                 # compiled tree's measure of it stands in (the same geometry, split by
                 # another tree)
-                return out[0], out[1] + crossing
-            return out
+                E = E + band + crossing
+                st["max_error_estimate"] = float(E.max(initial=0.0))
+                still = missed[misses_tolerance(F[missed], H[missed], tolerance)]
+                if len(still) and not error:
+                    raise NumericalError(_missed_message(still[0], F, H, crossing, tolerance,
+                                                         len(still), python=True))
+                return (F, E) if error else F
     st.update(counters)
     st["path"] = "compiled"
     E = E + band + crossing

@@ -1,0 +1,154 @@
+"""Real scene files, row by row (issue 48): every default row delivers, right and
+bounded, at hemicube speed.
+
+Usage: python benchmarks/bench_real_rows.py [FILE ...] [--rows 8] [--engines]
+       [--extra FILE:ROW ...]
+
+Files: by default the real files beside the clone (``../shared/scenes/real``: the three
+IFC building models and the others), each loaded with ``degenerate="drop"`` (and
+``nonplanar="split"`` for ``quadknot.obj``). Rows: the centroids and normals of
+``--rows`` polygons of at least median area
+(``numpy.random.default_rng(0).choice(..., rows, replace=False)``), plus the rows
+``--extra`` names (``FILE:ROW``, 0-based polygon indices of the loaded file). Per file,
+in one run:
+
+- ``rows``, ``raised``: rows tried, rows whose default call
+  (``Exact().point_form_factors(scene, c, n)``) raised ``NumericalError``;
+- ``python rows``: rows that left the compiled core for the Python engine
+  (``stats["path"]``);
+- ``misses``: values whose whole compiled bound (``error=True``: rounding, vertices,
+  band and BSP crossings) exceeds ``1e-12 * max(|F|, VALUE_FLOOR)``, over the values
+  with ``F > 0`` or a bound ``> 0``, and the share of them that meets it;
+- ``worst bound``: the largest bound over ``max(|F|, VALUE_FLOOR)``;
+- ``exact / hemicube``: the median and largest ratio of a row's time to
+  ``Hemicube(256)``'s on the same row (its numpy rasteriser, one call each), and the
+  slowest exact row;
+- with ``--engines``: the Python engine at ``tolerance=None`` on the same rows, and the
+  worst gap ``|Fc - Fp| / (Ec + Ep)`` (values where the two bounds do not cover the gap
+  are counted: the rational reference, ``tests/exact_visibility.py``, decides those in
+  the tests).
+"""
+
+import argparse
+import os
+import sys
+import time
+
+import numpy as np
+
+sys.path.insert(0, os.path.dirname(__file__))
+from scenes_bench import machine  # noqa: E402
+
+import exactff as ef  # noqa: E402
+from exactff import _tolerances as tol  # noqa: E402
+from exactff.errors import NumericalError  # noqa: E402
+
+REAL = os.path.join(os.path.dirname(__file__), "..", "..", "shared", "scenes", "real")
+DEFAULT_FILES = ["ifc-Duplex_A.obj", "ifc-tested_sample_project.obj", "ifc-SampleHouse4.obj",
+                 "CornellBox-Water.obj", "CornellBox-Sphere.obj", "ADIS16480.STL",
+                 "idler_riser.STL", "quadknot.obj"]
+#: rows facing flush pairs, named in ../shared/scenes/real/README.md
+README_ROWS = {"ifc-Duplex_A.obj": [15025, 1009], "ifc-tested_sample_project.obj": [47609, 43212],
+               "ifc-SampleHouse4.obj": [21905]}
+
+
+def load(path):
+    """A real file as a new user loads it."""
+    options = {"degenerate": "drop"}
+    if os.path.basename(path) == "quadknot.obj":
+        options["nonplanar"] = "split"
+    return ef.load_scene(path, **options)
+
+
+def seeded_rows(scene, k):
+    """``k`` polygons of at least median area, as the issue and the README draw them."""
+    big = np.flatnonzero(scene.areas >= np.median(scene.areas))
+    return [int(i) for i in np.random.default_rng(0).choice(big, min(k, len(big)), replace=False)]
+
+
+def measure(path, rows, engines):
+    scene = load(path)
+    exact = ef.Exact()
+    hemicube = ef.methods.Hemicube(resolution=256)
+    c, n = scene.centroids, scene.normals
+    exact.point_form_factors(scene, c[rows[0]], n[rows[0]])       # the set-up, untimed
+    hemicube.point_form_factors(scene, c[rows[0]], n[rows[0]])
+    out = {"rows": len(rows), "raised": 0, "python": 0, "values": 0, "misses": 0,
+           "worst": 0.0, "ratios": [], "slowest": 0.0, "gap": 0.0, "beyond": 0, "notes": []}
+    for r in rows:
+        st = {}
+        t = time.perf_counter()
+        try:
+            exact.point_form_factors(scene, c[r], n[r], stats=st)
+        except NumericalError as e:
+            out["raised"] += 1
+            out["notes"].append(f"row {r} raised: {str(e)[:120]}")
+        t_exact = time.perf_counter() - t
+        t = time.perf_counter()
+        hemicube.point_form_factors(scene, c[r], n[r])
+        t_hc = time.perf_counter() - t
+        out["ratios"].append(t_exact / t_hc)
+        out["slowest"] = max(out["slowest"], t_exact)
+        if str(st.get("path", "")).endswith("python"):
+            out["python"] += 1
+        F, E = exact.point_form_factors(scene, c[r], n[r], error=True)
+        live = (F > 0) | (E > 0)
+        scale = np.maximum(np.abs(F), tol.VALUE_FLOOR)
+        out["values"] += int(live.sum())
+        out["misses"] += int((E > tol.DEFAULT_RTOL * scale).sum())
+        out["worst"] = max(out["worst"], float((E / scale).max(initial=0.0)))
+        if engines:
+            Fc, Ec = ef.Exact(tolerance=None).point_form_factors(scene, c[r], n[r], error=True)
+            Fp, Ep = ef.Exact(tolerance=None, engine="python").point_form_factors(
+                scene, c[r], n[r], error=True)
+            gap = np.abs(Fc - Fp)
+            cover = Ec + Ep
+            with np.errstate(divide="ignore", invalid="ignore"):
+                ratio = np.where(gap > 0, gap / cover, 0.0)
+            beyond = np.flatnonzero(gap > cover)
+            out["beyond"] += len(beyond)
+            out["gap"] = max(out["gap"], float(ratio.max(initial=0.0)))
+            for j in beyond[:3]:
+                out["notes"].append(f"row {r}, polygon {j}: Fc {Fc[j]:.6g} Fp {Fp[j]:.6g} "
+                                    f"gap {gap[j]:.2g} > Ec + Ep {cover[j]:.2g}")
+    return len(scene), out
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("files", nargs="*", help="scene files (default: the real files beside the clone)")
+    ap.add_argument("--rows", type=int, default=8, help="seeded rows per file")
+    ap.add_argument("--engines", action="store_true",
+                    help="also compare with the Python engine (slow)")
+    args = ap.parse_args()
+    files = args.files or [os.path.join(REAL, f) for f in DEFAULT_FILES
+                           if os.path.exists(os.path.join(REAL, f))]
+    if not files:
+        sys.exit(f"no scene files given and none found in {REAL}")
+    print(machine())
+    print(f"exactff {ef.__version__}; rows per file: {args.rows} seeded + the README's flush rows")
+    head = ("| file | polygons | rows | raised | python rows | values | bounds over 1e-12 (share met) "
+            "| worst bound / max(F, floor) | exact / hemicube-256, median (max) | slowest row (s) |")
+    if args.engines:
+        head += " engines: worst gap / (Ec + Ep), values beyond |"
+    print(head)
+    print("|---" * (head.count("|") - 1) + "|")
+    notes = []
+    for path in files:
+        name = os.path.basename(path)
+        scene_rows = seeded_rows(load(path), args.rows) + README_ROWS.get(name, [])
+        size, o = measure(path, scene_rows, args.engines)
+        share = 1 - o["misses"] / max(o["values"], 1)
+        line = (f"| {name} | {size:,} | {o['rows']} | {o['raised']} | {o['python']} | "
+                f"{o['values']:,} | {o['misses']} ({share:.4%}) | {o['worst']:.2g} | "
+                f"{np.median(o['ratios']):.2f} ({max(o['ratios']):.2f}) | {o['slowest']:.2f} |")
+        if args.engines:
+            line += f" {o['gap']:.2g}, {o['beyond']} |"
+        print(line, flush=True)
+        notes += [f"{name}: {t}" for t in o["notes"]]
+    for t in notes:
+        print("-", t)
+
+
+if __name__ == "__main__":
+    main()
