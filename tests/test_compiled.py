@@ -12,7 +12,7 @@ from hypothesis import given
 import exactff as ef
 from exactff.kernel.ladder import mp_sector_value
 from exactff.visibility import compiled_core, compiled_form_factors, convex_pieces
-from exactff.testing.strategies import enclosures, occluded_scenes
+from exactff.testing.strategies import enclosures, flush_faces, occluded_scenes
 
 from common import rect_xy
 from exact_visibility import visible_form_factor
@@ -396,3 +396,54 @@ def test_engine_argument():
         ef.Exact(engine="gpu")
     with pytest.raises(ValueError, match="eq3"):
         ef.Exact(engine="compiled", integrator="eq3")
+
+
+@given(case=flush_faces())
+def test_flush_faces(case):
+    # issue 48: faces flush to 1e-16..1e-9 of their size, crossing each other's plane at
+    # grazing angles, far from the origin (walls on slabs, rafters under roofs in IFC
+    # exports). The BSP's crossings there slid along their edges by the splitter's
+    # rounding over the sine of the angle (a bound of 4e-4 on these scenes, 1.4e15 on a
+    # house); from the splitter's own plane in quadruple precision each is within an ulp
+    # (7e-15 over 300 drawn scenes). Every value the exact construction decides holds
+    # against it within the compiled bound (over 200 drawn scenes it decided 348 of 600
+    # values, and the Python engine, whose crossings are rounded in double and whose
+    # bound leaves them out, missed 6 of them: FLUSH_PYTHON_MISS). The construction
+    # leaves pairs within 256 ulps of coplanar undecided, where the engines' band decides
+    # (per vertex in the BSP builds: 6 of the 252 undecided values part by more than
+    # the target, an open question of issue 48), so no engine agreement is asked there.
+    scene, p, n = case
+    F, E = COMPILED.point_form_factors(scene, p, n, error=True)
+    assert np.all(F >= 0) and np.all(E <= OCC_ATOL), E
+    for j in range(len(scene)):
+        U = visible_form_factor(scene, p, n, j)
+        if U is not None:
+            assert abs(F[j] - U) <= E[j], (j, F[j], float(U), E[j])
+
+
+# A flush pair hypothesis found where the Python engine's double crossings miss: a
+# triangle 1.7e-9 of its size off a rotated triangle's plane, crossing it. The
+# construction gives 0.0631155693781842 for the base; the compiled core 0.06311556937818426
+# (bound 5.5e-17), the Python engine 0.06311557582738951 (6.4e-9 off, bound 6.8e-15).
+FLUSH_PYTHON_MISS = (
+    [[[1.3660254037844388, 0.0, -0.3660254037844386],
+      [0.6160254037844388, -0.8660254037844387, 0.9330127018922193],
+      [0.6160254037844385, 0.8660254037844384, 0.9330127018922199]],
+     [[1.3660254022844387, 0.0, -0.366025404650464],
+      [0.6160254022844388, 0.8660254037844387, 0.9330127010261938],
+      [0.6160254052844384, -0.8660254037844384, 0.9330127027582452]],
+     [[0.6830127018922194, 1.0, -0.1830127018922193],
+      [0.3080127018922194, 0.5669872981077806, 0.46650635094610965],
+      [0.30801270189221924, 1.4330127018922192, 0.4665063509461099]]],
+    [0.0, 0.0, 0.0], [0.8660254037844387, 0.0, 0.5000000000000001])
+
+
+def test_flush_pair_the_python_engine_misses():
+    polys, p, n = FLUSH_PYTHON_MISS
+    scene = ef.Scene.from_polygons([np.array(P) for P in polys])
+    p, n = np.array(p), np.array(n)
+    F, E = COMPILED.point_form_factors(scene, p, n, error=True)
+    G, H = PYTHON.point_form_factors(scene, p, n, error=True)
+    U = visible_form_factor(scene, p, n, 0)
+    assert U is not None and abs(F[0] - U) <= E[0] <= 1e-16
+    assert abs(G[0] - U) > 1e3 * H[0]      # the oracle's known miss (its crossings)

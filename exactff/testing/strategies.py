@@ -11,7 +11,7 @@ import numpy as np
 from hypothesis import strategies as st
 
 __all__ = ["unit_vectors", "points", "polygons_2d", "planar_polygons", "convex_polygons",
-           "embed", "points_above", "scenes", "enclosures", "occluded_scenes"]
+           "embed", "points_above", "scenes", "enclosures", "occluded_scenes", "flush_faces"]
 
 
 def _spherical(z, phi):
@@ -284,4 +284,70 @@ def _occluded_scenes(draw, max_extra):
     scale = draw(_magnitude(-2, 2))
     shift = np.array(draw(points(10.0))) * scale
     moved = [scale * (P @ R) + shift for P in polys]
+    return Scene.from_polygons(moved), shift.copy(), n_local @ R
+
+
+def flush_faces(*, min_gap_exponent=-16, max_gap_exponent=-9, max_shift_exponent=4):
+    """``(scene, point, normal)`` with two faces flush to within rounding: a base
+    triangle, and a second triangle overlapping it whose vertices lie ``10**k``
+    times the size off the base's plane (``k`` drawn in ``[min_gap_exponent,
+    max_gap_exponent]``, each vertex on its own side, so that the face may cross the
+    plane at a grazing angle or lie parallel to it), facing either way, with a third
+    polygon that may hide part of both (triangles stay exactly planar whatever the
+    rotation, as the triangles of an export are); the whole turned by a random rotation and moved
+    up to ``10**max_shift_exponent`` sizes from the origin, as building models exported
+    from IFC place walls on slabs and rafters under roofs.
+
+    Polygon 0 is the base, polygon 1 the flush face (the rotation's rounding moves each
+    vertex by an ulp of the shifted coordinates, which at the far shifts is more than the
+    smaller gaps: the faces are then flush, coplanar or crossing as rounding leaves them).
+
+    Examples
+    --------
+    >>> from hypothesis import given, settings
+    >>> import exactff as ef
+    >>> @settings(max_examples=3, deadline=None)
+    ... @given(flush_faces())
+    ... def check(case):
+    ...     scene, p, n = case
+    ...     F = ef.form_factors(scene, p, n, tolerance=None)
+    ...     assert len(scene) == 3 and F.min() >= 0
+    >>> check()
+    """
+    _check_int("max_shift_exponent", max_shift_exponent, 0)
+    if not min_gap_exponent <= max_gap_exponent:
+        raise ValueError(f"min_gap_exponent must be at most max_gap_exponent, got "
+                         f"{min_gap_exponent!r} > {max_gap_exponent!r}")
+    return _flush_faces(min_gap_exponent, max_gap_exponent, max_shift_exponent)
+
+
+@st.composite
+def _flush_faces(draw, min_gap, max_gap, max_shift):
+    from ..geometry import receiver_frame
+    from ..scene import Scene
+
+    h = draw(st.floats(0.5, 2.0))
+    down = np.array([0.0, 0.0, -1.0])
+    # a triangle, as the exports are: exactly planar after any rotation
+    base = embed(draw(polygons_2d(convex=True, max_vertices=3)), down, np.array([0.0, 0.0, h]),
+                 h * draw(st.floats(0.5, 1.5)))
+    # the flush face: overlapping the base, each vertex its own gap off the base's plane
+    centre = np.array([draw(st.floats(-0.3, 0.3)) * h, draw(st.floats(-0.3, 0.3)) * h, h])
+    facing = down if draw(st.booleans()) else -down
+    flush = embed(draw(polygons_2d(convex=True, max_vertices=3)), facing, centre,
+                  h * draw(st.floats(0.3, 1.2)))
+    size = float(np.ptp(flush, axis=0).max())
+    for v in flush:
+        v[2] = h + draw(st.sampled_from([-1.0, 1.0])) * size * 10.0 ** draw(
+            st.floats(min_gap, max_gap))
+    if np.cross(flush[1] - flush[0], flush[2] - flush[0]) @ facing < 0:
+        flush = flush[::-1]
+    # an occluder between the point and the pair, or beside it
+    occluder = embed(draw(polygons_2d(convex=True)), down,
+                     np.array([draw(st.floats(-1, 1)) * h, draw(st.floats(-1, 1)) * h,
+                               h * draw(st.floats(0.3, 0.8))]), h * draw(st.floats(0.1, 0.5)))
+    n_local = draw(unit_vectors().filter(lambda v: v[2] > 0.5))
+    R = receiver_frame(draw(unit_vectors()))
+    shift = np.array(draw(points(1.0))) * h * 10.0 ** draw(st.floats(0, max_shift))
+    moved = [(P @ R) + shift for P in (base, flush, occluder)]
     return Scene.from_polygons(moved), shift.copy(), n_local @ R

@@ -48,28 +48,32 @@ constexpr LD Q_ROUNDOFF = std::numeric_limits<LD>::epsilon() / 2;
 #endif
 inline Q q_fabs(Q x) { return x < 0 ? -x : x; }
 
-// A splitting plane as the crossings use it: through the input point `a` with normal
-// N = (b - a) x (c - a) from three of its polygon's input vertices, in quadruple
-// precision (the differences of doubles are exact there, their products too, so each
-// component is rounded once: within Q_ROUNDOFF of M, the magnitude of its two
-// products). Its polygon's vertices lie within `dev` of it (the quadruple rounding of
-// their distances, for a triangle or any exactly planar polygon; their true distances
-// for one planar only within the validation tolerance). An axis plane x_k = c is N = e_k
-// through a point with x_k = c, exactly.
+// A splitting plane as the crossings use it: N . (x - a) = d0. For a polygon that is
+// planar exactly (every triangle, and most polygons of more vertices the input has on
+// axis planes), its own plane: through its input vertex `a` with normal N = (b - a) x
+// (c - a) from three of its vertices, in quadruple precision (the differences of doubles
+// are exact there, their products too, so each component is rounded once: within
+// Q_ROUNDOFF of M, the magnitude of its two products), d0 = 0; its vertices lie on it
+// within `dev`, the quadruple rounding of their distances. For one planar only within
+// the validation tolerance there is no such plane: its splits cut along its plane
+// (n, d) as the scene stores it, exactly (a = 0, N = n, d0 = d, dev = 0), the plane the
+// rest of the engine orders it by. An axis plane x_k = c is N = e_k through a point
+// with x_k = c, exactly.
 struct SplitPlane {
     double a[3] = {0, 0, 0};
     Q N[3] = {0, 0, 0};
     LD M[3] = {0, 0, 0};
+    Q d0 = 0;
     LD norm = 0;
     double dev = 0;
 };
 
-// N . (x - a) for a point x in quadruple precision, and a bound on its error: each
+// N . (x - a) - d0 for a point x in quadruple precision, and a bound on its error: each
 // component of N within Q_ROUNDOFF M_k of the exact normal's, the differences, products
 // and sums rounded within 4 roundoffs of their magnitudes
 inline Q plane_value(const SplitPlane& P, const Q* x, LD& err) {
-    Q s = 0;
-    LD mag = 0;
+    Q s = -P.d0;
+    LD mag = 2 * LD(q_fabs(P.d0));
     for (int k = 0; k < 3; ++k) {
         const Q dx = x[k] - Q(P.a[k]);
         s += P.N[k] * dx;
@@ -146,7 +150,8 @@ struct Builder {
         vert_err_q.assign(size_t(start[n]), 0.0);
         planes.resize(size_t(n));
         for (int64_t s = 0; s < n; ++s) {
-            planes[size_t(s)] = polygon_plane(V, start[s], start[s + 1], normals + 3 * s);
+            planes[size_t(s)] = polygon_plane(V, start[s], start[s + 1], normals + 3 * s,
+                                              offsets[s]);
         }
         frag_start.assign(start, start + n + 1);
         frag_source.resize(n);
@@ -159,11 +164,12 @@ struct Builder {
     const Q* vertex_q(int64_t f, size_t i) const { return &verts_q[3 * (frag_start[f] + i)]; }
     double vertex_error_q(int64_t f, size_t i) const { return vert_err_q[frag_start[f] + i]; }
 
-    // the plane of input polygon V[i0:i1] (normal `n`, for the orientation) through its
-    // first vertex a, the vertex b farthest from it and the vertex c farthest from the line
-    // ab: the best conditioned of such triples for a convex polygon, and a triangle's
-    // own plane
-    static SplitPlane polygon_plane(const double* V, int64_t i0, int64_t i1, const double* n) {
+    // the plane input polygon V[i0:i1] (plane n . x = d) splits along (SplitPlane): where
+    // it is exactly planar, the plane through its first vertex a, the vertex b farthest
+    // from it and the vertex c farthest from the line ab (the best conditioned of such
+    // triples for a convex polygon; a triangle's own plane), oriented as n; else (n, d)
+    static SplitPlane polygon_plane(const double* V, int64_t i0, int64_t i1, const double* n,
+                                    double d) {
         SplitPlane P;
         const double* a = V + 3 * i0;
         auto diff = [&](const double* x, int k) { return LD(x[k]) - LD(a[k]); };
@@ -216,7 +222,16 @@ struct Builder {
             dev = std::max(dev, LD(q_fabs(s)) + err);
         }
         P.dev = P.norm > 0 ? double(1.01L * dev / P.norm) : HUGE_VAL;
-        return P;
+        // exactly planar up to the quadruple rounding (a few 1e-32 of its size), or not
+        LD size = 0;
+        for (int64_t i = i0; i < i1; ++i)
+            for (int k = 0; k < 3; ++k) size = std::max(size, std::fabs(LD(V[3 * i + k])));
+        if (P.dev <= 1e4L * Q_ROUNDOFF * size) return P;
+        SplitPlane G;
+        for (int k = 0; k < 3; ++k) G.N[k] = n[k];
+        G.d0 = d;
+        G.norm = std::sqrt(LD(n[0]) * n[0] + LD(n[1]) * n[1] + LD(n[2]) * n[2]);
+        return G;
     }
 
     // an axis plane x_k = c (exact)
