@@ -48,6 +48,112 @@ constexpr LD Q_ROUNDOFF = std::numeric_limits<LD>::epsilon() / 2;
 #endif
 inline Q q_fabs(Q x) { return x < 0 ? -x : x; }
 
+// A crossing computed in quadruple precision is kept where its bound is within this
+// share of a double roundoff of its coordinates (the rounding to double then dominates);
+// beyond, it is computed exactly (Builder::split)
+constexpr double QUAD_TRUST = 1e-3;
+
+// ---- exact arithmetic on the input's doubles (Shewchuk's expansions, nonoverlapping,
+// increasing magnitude, zeros dropped; compressed after each product so that they stay
+// a few terms long): the crossings the quadruple precision cannot place, where a chain
+// of grazing splits would compound its rounding (Builder::exact_crossing)
+using Exp = std::vector<double>;
+
+inline void two_sum(double a, double b, double& x, double& y) {
+    x = a + b;
+    const double bv = x - a;
+    y = (a - (x - bv)) + (b - bv);
+}
+
+// e + f (repeated grow-expansion)
+Exp e_add(const Exp& e, const Exp& f) {
+    Exp h = e;
+    for (double b : f) {
+        double q = b;
+        size_t k = 0;
+        for (size_t i = 0; i < h.size(); ++i) {
+            double x, y;
+            two_sum(q, h[i], x, y);
+            if (y != 0) h[k++] = y;
+            q = x;
+        }
+        h.resize(k);
+        if (q != 0) h.push_back(q);
+    }
+    return h;
+}
+
+// Shewchuk's compress: the same value in the fewest nonoverlapping terms
+void e_compress(Exp& e) {
+    if (e.size() < 2) return;
+    const size_t m = e.size();
+    std::vector<double> g(m);
+    size_t bottom = m - 1;
+    double q = e[m - 1];
+    for (size_t i = m - 1; i-- > 0;) {
+        double x, y;
+        two_sum(q, e[i], x, y);
+        if (y != 0) {
+            g[bottom--] = x;
+            q = y;
+        } else {
+            q = x;
+        }
+    }
+    g[bottom] = q;
+    Exp h;
+    for (size_t i = bottom + 1; i < m; ++i) {
+        double x, y;
+        two_sum(g[i], q, x, y);
+        q = x;
+        if (y != 0) h.push_back(y);
+    }
+    if (q != 0) h.push_back(q);
+    e.swap(h);
+}
+
+Exp e_mul(const Exp& e, const Exp& f) {
+    Exp h;
+    for (double b : f) {
+        Exp t;
+        for (double a : e) {
+            const double x = a * b;
+            const double y = std::fma(a, b, -x);
+            if (y != 0) t.push_back(y);
+            if (x != 0) t.push_back(x);
+        }
+        // t's terms overlap one another: add them one at a time
+        Exp acc;
+        for (double v : t) acc = e_add(acc, Exp{v});
+        h = e_add(h, acc);
+    }
+    e_compress(h);
+    return h;
+}
+
+inline Exp e_sub(const Exp& e, Exp f) {
+    for (double& v : f) v = -v;
+    Exp h = e_add(e, f);
+    e_compress(h);
+    return h;
+}
+
+inline Exp e_of(double a) { return a != 0 ? Exp{a} : Exp{}; }
+
+// its value in quadruple precision (the terms summed from the smallest: within a few
+// roundoffs of it)
+inline Q e_value(const Exp& e) {
+    Q s = 0;
+    for (double v : e) s += Q(v);
+    return s;
+}
+
+// a plane N . x = d with N and d exact (expansions of the input's doubles)
+struct ExactSplitPlane {
+    Exp N[3];
+    Exp d;
+};
+
 // A splitting plane as the crossings use it: N . (x - a) = d0. For a polygon that is
 // planar exactly (every triangle, and most polygons of more vertices the input has on
 // axis planes), its own plane: through its input vertex `a` with normal N = (b - a) x
@@ -128,6 +234,20 @@ struct Builder {
     // start from these, so that a chain of splits does not compound the rounding to double
     std::vector<Q> verts_q;
     std::vector<double> vert_err_q;
+    // per vertex, what the edge from it to the next vertex lies on: an input edge (the
+    // input vertex it starts from, >= 0) or a splitting plane (-1 - its index in
+    // split_planes): the exact crossings are taken from it, not from the vertices
+    std::vector<int64_t> carrier;
+    // every plane a split has cut along (a polygon's, or an axis plane), and its exact
+    // form where there is one (a polygon planar only within tolerance has none)
+    std::vector<SplitPlane> split_planes;
+    std::vector<ExactSplitPlane> split_exact;
+    std::vector<int64_t> polygon_split_plane;  // per source polygon, -1 until it splits
+    std::vector<std::array<const double*, 3>> triple_;  // per polygon, its plane's points
+    const double* input_V;
+    const int64_t* input_start;
+    std::vector<int64_t> input_owner;  // per input vertex, its polygon
+    int64_t exact_crossings = 0;
     // per source polygon, the plane its splits cut along (SplitPlane: through three of
     // its vertices, in quadruple precision)
     std::vector<SplitPlane> planes;
@@ -148,6 +268,14 @@ struct Builder {
         vert_err.assign(size_t(start[n]), 0.0);
         verts_q.assign(V, V + 3 * start[n]);
         vert_err_q.assign(size_t(start[n]), 0.0);
+        carrier.resize(size_t(start[n]));
+        std::iota(carrier.begin(), carrier.end(), int64_t(0));
+        input_V = V;
+        input_start = start;
+        input_owner.resize(size_t(start[n]));
+        for (int64_t s = 0; s < n; ++s)
+            for (int64_t i = start[s]; i < start[s + 1]; ++i) input_owner[size_t(i)] = s;
+        polygon_split_plane.assign(size_t(n), -1);
         planes.resize(size_t(n));
         for (int64_t s = 0; s < n; ++s) {
             planes[size_t(s)] = polygon_plane(V, start[s], start[s + 1], normals + 3 * s,
@@ -168,8 +296,8 @@ struct Builder {
     // it is exactly planar, the plane through its first vertex a, the vertex b farthest
     // from it and the vertex c farthest from the line ab (the best conditioned of such
     // triples for a convex polygon; a triangle's own plane), oriented as n; else (n, d)
-    static SplitPlane polygon_plane(const double* V, int64_t i0, int64_t i1, const double* n,
-                                    double d) {
+    SplitPlane polygon_plane(const double* V, int64_t i0, int64_t i1, const double* n,
+                             double d) {
         SplitPlane P;
         const double* a = V + 3 * i0;
         auto diff = [&](const double* x, int k) { return LD(x[k]) - LD(a[k]); };
@@ -193,6 +321,7 @@ struct Builder {
             if (w2 > wide) { wide = w2; ic = i; }
         }
         const double* c = V + 3 * ic;
+        triple_.push_back({a, b, c});
         Q u[3], v[3];
         for (int k = 0; k < 3; ++k) {
             P.a[k] = a[k];
@@ -232,6 +361,130 @@ struct Builder {
         G.d0 = d;
         G.norm = std::sqrt(LD(n[0]) * n[0] + LD(n[1]) * n[1] + LD(n[2]) * n[2]);
         return G;
+    }
+
+    // the exact form of polygon s's split plane (SplitPlane): through three of its
+    // input vertices, N = (b - a) x (c - a) and d = N . a; or its stored (n, d)
+    ExactSplitPlane exact_polygon_plane(int64_t s, const SplitPlane& P) const {
+        ExactSplitPlane X;
+        if (P.d0 != 0 || P.M[0] + P.M[1] + P.M[2] == 0) {
+            // (n, d) as stored; or an exactly planar polygon whose normal came out
+            // of a degenerate triple (not reached: a valid polygon has a triple)
+            for (int k = 0; k < 3; ++k) X.N[k] = e_of(src_normals[3 * s + k]);
+            X.d = e_of(src_offsets[s]);
+            return X;
+        }
+        const double* a = triple_[size_t(s)][0];
+        const double* b = triple_[size_t(s)][1];
+        const double* c = triple_[size_t(s)][2];
+        Exp u[3], v[3];
+        for (int k = 0; k < 3; ++k) {
+            u[k] = e_sub(e_of(b[k]), e_of(a[k]));
+            v[k] = e_sub(e_of(c[k]), e_of(a[k]));
+        }
+        for (int k = 0; k < 3; ++k) {
+            const int i = (k + 1) % 3, j = (k + 2) % 3;
+            X.N[k] = e_sub(e_mul(u[i], v[j]), e_mul(u[j], v[i]));
+        }
+        // oriented as P (which polygon_plane turned to agree with the stored normal):
+        // the sign of P's largest component decides
+        int big = 0;
+        for (int k = 1; k < 3; ++k)
+            if (q_fabs(P.N[k]) > q_fabs(P.N[big])) big = k;
+        if ((e_value(X.N[big]) > 0) != (P.N[big] > 0))
+            for (int k = 0; k < 3; ++k)
+                for (double& t : X.N[k]) t = -t;
+        Exp d;
+        for (int k = 0; k < 3; ++k) d = e_add(d, e_mul(X.N[k], e_of(a[k])));
+        e_compress(d);
+        X.d = d;
+        return X;
+    }
+
+    // the index in split_planes of polygon s's plane (registered at its first split)
+    int64_t polygon_plane_index(int64_t s) {
+        int64_t& k = polygon_split_plane[size_t(s)];
+        if (k < 0) {
+            k = int64_t(split_planes.size());
+            split_planes.push_back(planes[size_t(s)]);
+            split_exact.push_back(exact_polygon_plane(s, planes[size_t(s)]));
+        }
+        return k;
+    }
+
+    int64_t axis_plane_index(int axis, double c) {
+        split_planes.push_back(axis_plane(axis, c));
+        ExactSplitPlane X;
+        X.N[axis] = Exp{1.0};
+        X.d = e_of(c);
+        split_exact.push_back(X);
+        return int64_t(split_planes.size()) - 1;
+    }
+
+    // N . x - d exactly, for a point x of the input
+    static Exp exact_value(const ExactSplitPlane& X, const double* x) {
+        Exp s;
+        for (int k = 0; k < 3; ++k) s = e_add(s, e_mul(X.N[k], e_of(x[k])));
+        s = e_sub(s, X.d);
+        return s;
+    }
+
+    // the crossing of what fragment f's edge lies on (`on`: an input edge, or the split
+    // plane -1 - k together with the fragment's own polygon's plane) with split plane
+    // `cut`, computed exactly and rounded once to quadruple precision: false where the
+    // edge's line has no exact form (a split edge of a polygon planar only within
+    // tolerance: it lies on no plane of the polygon's) or the planes meet in no point
+    bool exact_crossing(int64_t on, int64_t source, int64_t cut, Q* Xq) {
+        const ExactSplitPlane& P = split_exact[size_t(cut)];
+        if (on >= 0) {
+            // the input edge A -> B: X = (o_A B - o_B A) / (o_A - o_B), o = N . x - d
+            const int64_t s = input_owner[size_t(on)];
+            const int64_t nb = input_start[s] + (on - input_start[s] + 1) %
+                                                    (input_start[s + 1] - input_start[s]);
+            const double* A = input_V + 3 * on;
+            const double* B = input_V + 3 * nb;
+            const Exp oa = exact_value(P, A), ob = exact_value(P, B);
+            const Exp den = e_sub(oa, ob);
+            const Q D = e_value(den);
+            if (D == 0) return false;
+            for (int k = 0; k < 3; ++k) {
+                const Exp num = e_sub(e_mul(oa, e_of(B[k])), e_mul(ob, e_of(A[k])));
+                Xq[k] = e_value(num) / D;
+            }
+            ++exact_crossings;
+            return true;
+        }
+        // the line where the fragment's own plane meets split plane k, cut by P:
+        // X = (d1 (N2 x N3) + d2 (N3 x N1) + d3 (N1 x N2)) / (N1 . (N2 x N3))
+        const int64_t k = -1 - on;
+        if (!(planes[size_t(source)].d0 == 0 && planes[size_t(source)].norm > 0)) return false;
+        const int64_t own = polygon_plane_index(source);
+        // (split_exact may have grown: take the references after)
+        const ExactSplitPlane* pl[3] = {&split_exact[size_t(own)], &split_exact[size_t(k)],
+                                        &split_exact[size_t(cut)]};
+        auto crossp = [](const ExactSplitPlane& a, const ExactSplitPlane& b, Exp* c) {
+            for (int i = 0; i < 3; ++i) {
+                const int j = (i + 1) % 3, l = (i + 2) % 3;
+                c[i] = e_sub(e_mul(a.N[j], b.N[l]), e_mul(a.N[l], b.N[j]));
+            }
+        };
+        Exp c23[3], c31[3], c12[3];
+        crossp(*pl[1], *pl[2], c23);
+        crossp(*pl[2], *pl[0], c31);
+        crossp(*pl[0], *pl[1], c12);
+        Exp det;
+        for (int i = 0; i < 3; ++i) det = e_add(det, e_mul(pl[0]->N[i], c23[i]));
+        e_compress(det);
+        const Q D = e_value(det);
+        if (D == 0) return false;
+        for (int i = 0; i < 3; ++i) {
+            Exp num = e_add(e_add(e_mul(pl[0]->d, c23[i]), e_mul(pl[1]->d, c31[i])),
+                            e_mul(pl[2]->d, c12[i]));
+            e_compress(num);
+            Xq[i] = e_value(num) / D;
+        }
+        ++exact_crossings;
+        return true;
     }
 
     // an axis plane x_k = c (exact)
@@ -327,63 +580,88 @@ struct Builder {
         sc = 5 * nsplit + imbalance - 2 * ncop;
     }
 
-    // the split of fragment f (exactff.halfspace.split_polygon): new fragments, -1 for none
-    void split(int64_t f, const double* n, double d, const SplitPlane& plane,
-               int64_t& f_front, int64_t& f_back) {
+    // the split of fragment f (exactff.halfspace.split_polygon) by the plane n . x = d
+    // (its sides, with the band) along split plane `cut` (its crossings): new fragments,
+    // -1 for none. Each crossing is computed in quadruple precision from its edge's ends
+    // (Builder::crossing); where that is not within QUAD_TRUST of an ulp (a chain of
+    // grazing splits, or one steeper than 1e12), exactly from what the edge lies on
+    // (Builder::exact_crossing). Every vertex records what its outgoing edge lies on.
+    void split(int64_t f, const double* n, double d, int64_t cut, int64_t& f_front,
+               int64_t& f_back) {
+        const SplitPlane& plane = split_planes[size_t(cut)];
         size_t k = count(f);
         std::vector<int> sg(k);
         std::vector<double> s(k);
         std::vector<double> fv, bv, fe, be, fqe, bqe;
         std::vector<Q> fq, bq;
+        std::vector<int64_t> fc, bc;
+        const int64_t source = frag_source[f];
+        const int64_t along = -1 - cut;
         for (size_t i = 0; i < k; ++i) sg[i] = side(vertex(f, i), n, d, s[i]);
+        auto keep = [&](std::vector<double>& pv, std::vector<double>& pe, std::vector<Q>& pq,
+                        std::vector<double>& pqe, std::vector<int64_t>& pc, const double* X,
+                        double e, const Q* Xq, double eq, int64_t on) {
+            pv.insert(pv.end(), X, X + 3);
+            pe.push_back(e);
+            pq.insert(pq.end(), Xq, Xq + 3);
+            pqe.push_back(eq);
+            pc.push_back(on);
+        };
         for (size_t i = 0; i < k; ++i) {
             size_t j = (i + 1) % k;
-            const double* P = vertex(f, i);
-            const Q* Pq = vertex_q(f, i);
-            if (sg[i] >= 0) {
-                fv.insert(fv.end(), P, P + 3);
-                fe.push_back(vertex_error(f, i));
-                fq.insert(fq.end(), Pq, Pq + 3);
-                fqe.push_back(vertex_error_q(f, i));
-            }
-            if (sg[i] <= 0) {
-                bv.insert(bv.end(), P, P + 3);
-                be.push_back(vertex_error(f, i));
-                bq.insert(bq.end(), Pq, Pq + 3);
-                bqe.push_back(vertex_error_q(f, i));
-            }
+            const int64_t on = carrier[size_t(frag_start[f]) + i];
+            // the outgoing edge of vertex i in the front piece: its own edge where that
+            // edge stays in front (or reaches a crossing from in front), else the cut
+            if (sg[i] >= 0)
+                keep(fv, fe, fq, fqe, fc, vertex(f, i), vertex_error(f, i), vertex_q(f, i),
+                     vertex_error_q(f, i), (sg[j] >= 0 || sg[i] > 0) ? on : along);
+            if (sg[i] <= 0)
+                keep(bv, be, bq, bqe, bc, vertex(f, i), vertex_error(f, i), vertex_q(f, i),
+                     vertex_error_q(f, i), (sg[j] <= 0 || sg[i] < 0) ? on : along);
             if (sg[i] * sg[j] < 0) {
                 // from the front end point, so that a shared edge splits identically
                 size_t a = sg[i] > 0 ? i : j, b = sg[i] > 0 ? j : i;
                 double X[3], eq;
                 Q Xq[3];
-                const double e = crossing(vertex_q(f, a), vertex_q(f, b), plane,
-                                          vertex_error_q(f, a), vertex_error_q(f, b), X, Xq, &eq);
-                fv.insert(fv.end(), X, X + 3);
-                bv.insert(bv.end(), X, X + 3);
-                fe.push_back(e);
-                be.push_back(e);
-                fq.insert(fq.end(), Xq, Xq + 3);
-                bq.insert(bq.end(), Xq, Xq + 3);
-                fqe.push_back(eq);
-                bqe.push_back(eq);
+                double e = crossing(vertex_q(f, a), vertex_q(f, b), plane, vertex_error_q(f, a),
+                                    vertex_error_q(f, b), X, Xq, &eq);
+                LD size = 0;
+                for (int c = 0; c < 3; ++c) size = std::max(size, LD(q_fabs(Xq[c])));
+                if (!(eq <= QUAD_TRUST * UNIT_ROUNDOFF * double(size)) &&
+                    exact_crossing(on, source, cut, Xq)) {
+                    // exact, rounded to quadruple precision (three roundoffs of the
+                    // quotient and the terms' sum), then to double
+                    LD off = 0;
+                    for (int c = 0; c < 3; ++c) {
+                        X[c] = double(Xq[c]);
+                        const LD r = LD(Xq[c] - Q(X[c]));
+                        off += r * r;
+                    }
+                    eq = double(8 * std::sqrt(LD(3)) * Q_ROUNDOFF * size);
+                    e = double(1.01L * (LD(eq) + std::sqrt(off)));
+                }
+                // the crossing leaves the front piece along the cut, and the back piece
+                // along its own edge; or the other way round
+                keep(fv, fe, fq, fqe, fc, X, e, Xq, eq, sg[i] > 0 ? along : on);
+                keep(bv, be, bq, bqe, bc, X, e, Xq, eq, sg[i] < 0 ? along : on);
             }
         }
         ++splits;
-        int64_t source = frag_source[f];
         auto add = [&](const std::vector<double>& pv, const std::vector<double>& pe,
-                       const std::vector<Q>& pq, const std::vector<double>& pqe) -> int64_t {
+                       const std::vector<Q>& pq, const std::vector<double>& pqe,
+                       const std::vector<int64_t>& pc) -> int64_t {
             if (pv.size() < 9) return -1;
             verts.insert(verts.end(), pv.begin(), pv.end());
             vert_err.insert(vert_err.end(), pe.begin(), pe.end());
             verts_q.insert(verts_q.end(), pq.begin(), pq.end());
             vert_err_q.insert(vert_err_q.end(), pqe.begin(), pqe.end());
+            carrier.insert(carrier.end(), pc.begin(), pc.end());
             frag_start.push_back(int64_t(verts.size() / 3));
             frag_source.push_back(source);
             return int64_t(frag_source.size()) - 1;
         };
-        f_front = add(fv, fe, fq, fqe);
-        f_back = add(bv, be, bq, bqe);
+        f_front = add(fv, fe, fq, fqe, fc);
+        f_back = add(bv, be, bq, bqe, bc);
     }
 
     struct Item {
@@ -462,7 +740,7 @@ struct Builder {
                            src_normals[3 * src + 2]};
             double d = src_offsets[src];
             bool own_plane = true;
-            SplitPlane plane = planes[size_t(src)];
+            int axis_chosen = -1;
             if (m > axis_min && double(best_imbalance) > axis_imbalance * double(ms)) {
                 // a chain in the making: a plane through the median of the fragments'
                 // vertex means along their widest axis
@@ -494,12 +772,13 @@ struct Builder {
                 if (a_score < best) {
                     std::copy(na, na + 3, n);
                     d = med;
-                    plane = axis_plane(axis, med);   // exact: it stands for itself
+                    axis_chosen = axis;   // exact: it stands for itself
                     own_plane = false;
                 }
             }
             node_n.insert(node_n.end(), n, n + 3);
             node_d.push_back(d);
+            int64_t cut = -1;   // the split plane, registered at the node's first split
             // in the plane (or the splitter's own pieces), wholly in front, behind, split
             std::vector<int64_t> in_plane, to_front, to_back, front_parts, back_parts;
             for (int64_t f : ids) {
@@ -512,7 +791,10 @@ struct Builder {
                     to_back.push_back(f);
                 } else {
                     int64_t ff, fb;
-                    split(f, n, d, plane, ff, fb);
+                    if (cut < 0)
+                        cut = axis_chosen >= 0 ? axis_plane_index(axis_chosen, d)
+                                               : polygon_plane_index(src);
+                    split(f, n, d, cut, ff, fb);
                     if (ff >= 0) front_parts.push_back(ff);
                     if (fb >= 0) back_parts.push_back(fb);
                 }
