@@ -22,7 +22,11 @@ in one run:
 - ``worst bound``: the largest bound over ``max(|F|, VALUE_FLOOR)``;
 - ``exact / hemicube``: the median and largest ratio of a row's time to
   ``Hemicube(256)``'s on the same row (its numpy rasteriser, one call each), and the
-  slowest exact row;
+  slowest exact row; ``< 50 seen``: the largest ratio over the rows that see fewer than
+  50 polygons (``F > 0``);
+- ``KiB / piece``: the row's own working memory (``stats["working_bytes"]``: its shadow
+  tree, work list, edge charges and caches) per visible piece, the largest over the
+  rows whose working memory passed its initial reserves (1.2 MiB);
 - with ``--engines``: the Python engine at ``tolerance=None`` on the same rows, and the
   worst gap ``|Fc - Fp| / (Ec + Ep)`` (values where the two bounds do not cover the gap
   are counted: the rational reference, ``tests/exact_visibility.py``, decides those in
@@ -74,7 +78,8 @@ def measure(path, rows, engines):
     exact.point_form_factors(scene, c[rows[0]], n[rows[0]])       # the set-up, untimed
     hemicube.point_form_factors(scene, c[rows[0]], n[rows[0]])
     out = {"rows": len(rows), "raised": 0, "python": 0, "values": 0, "misses": 0,
-           "worst": 0.0, "ratios": [], "slowest": 0.0, "gap": 0.0, "beyond": 0, "notes": []}
+           "worst": 0.0, "ratios": [], "slowest": 0.0, "gap": 0.0, "beyond": 0, "notes": [],
+           "few": 0.0, "kib": 0.0}
     for r in rows:
         st = {}
         t = time.perf_counter()
@@ -92,6 +97,10 @@ def measure(path, rows, engines):
         if str(st.get("path", "")).endswith("python"):
             out["python"] += 1
         F, E = exact.point_form_factors(scene, c[r], n[r], error=True)
+        if (F > 0).sum() < 50:
+            out["few"] = max(out["few"], t_exact / t_hc)
+        if st.get("working_bytes", 0) > 1.25 * 2**20 and st.get("visible_pieces"):
+            out["kib"] = max(out["kib"], st["working_bytes"] / st["visible_pieces"] / 1024)
         live = (F > 0) | (E > 0)
         scale = np.maximum(np.abs(F), tol.VALUE_FLOOR)
         out["values"] += int(live.sum())
@@ -128,7 +137,8 @@ def main():
     print(machine())
     print(f"exactff {ef.__version__}; rows per file: {args.rows} seeded + the README's flush rows")
     head = ("| file | polygons | rows | raised | python rows | values | bounds over 1e-12 (share met) "
-            "| worst bound / max(F, floor) | exact / hemicube-256, median (max) | slowest row (s) |")
+            "| worst bound / max(F, floor) | exact / hemicube-256, median (max) | < 50 seen "
+            "| slowest row (s) | KiB / piece |")
     if args.engines:
         head += " engines: worst gap / (Ec + Ep), values beyond |"
     print(head)
@@ -141,7 +151,8 @@ def main():
         share = 1 - o["misses"] / max(o["values"], 1)
         line = (f"| {name} | {size:,} | {o['rows']} | {o['raised']} | {o['python']} | "
                 f"{o['values']:,} | {o['misses']} ({share:.4%}) | {o['worst']:.2g} | "
-                f"{np.median(o['ratios']):.2f} ({max(o['ratios']):.2f}) | {o['slowest']:.2f} |")
+                f"{np.median(o['ratios']):.2f} ({max(o['ratios']):.2f}) | {o['few']:.2f} | "
+                f"{o['slowest']:.2f} | {o['kib']:.2f} |")
         if args.engines:
             line += f" {o['gap']:.2g}, {o['beyond']} |"
         print(line, flush=True)
