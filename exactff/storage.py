@@ -26,6 +26,7 @@ when every row is done).
 """
 
 import json
+import logging
 import os
 import shutil
 
@@ -298,13 +299,36 @@ def _zarr():
     return zarr
 
 
+def _with_suffix(path):
+    """``path`` itself where it ends in a known suffix; else the one output named
+    ``path`` + suffix that exists (finished, or interrupted: its error says so)."""
+    if any(path.endswith(s) for s in SUFFIXES):
+        return path
+    found = [path + s for s in SUFFIXES
+             if os.path.exists(path + s) or
+             (s == ".npz" and os.path.exists(path + ".parts"))]
+    if not found:
+        raise FileNotFoundError(f"path: no matrix at {path!r}, nor at "
+                                f"{', '.join(repr(path + s) for s in SUFFIXES)}")
+    if len(found) > 1:
+        raise ValueError(f"path: {path!r} has no suffix and names {len(found)} outputs "
+                         f"({', '.join(map(repr, found))}); give the one to read")
+    logging.getLogger("exactff").info("load_matrix: %r has no suffix: reading %r", path,
+                                      found[0])
+    return found[0]
+
+
 def load_matrix(path):
     """Read back a matrix written by :func:`exactff.form_factor_matrix` (``out=PATH``).
 
     Parameters
     ----------
     path : str or os.PathLike
-        A ``.npy`` (dense), ``.zarr`` (chunked store) or ``.npz`` (sparse) output.
+        A ``.npy`` (dense), ``.zarr`` (chunked store) or ``.npz`` (sparse) output. A
+        path without one of those suffixes names the output that ``out=PATH`` wrote for
+        it, as :func:`numpy.load` users expect: ``PATH.npy``, ``PATH.npz`` or
+        ``PATH.zarr``, whichever exists (the one read is logged at INFO level on the
+        ``exactff`` logger; two of them raise ``ValueError``).
 
     Returns
     -------
@@ -316,10 +340,10 @@ def load_matrix(path):
     ------
     ValueError
         The file is not a finished output (a run was interrupted: call
-        ``form_factor_matrix`` again with the same arguments to finish it), or its suffix
-        is unknown.
+        ``form_factor_matrix`` again with the same arguments to finish it), or a path
+        without a suffix matches more than one output.
     FileNotFoundError
-        Nothing at ``path``.
+        Nothing at ``path`` (nor, without a suffix, at any of its three names).
 
     Examples
     --------
@@ -330,8 +354,10 @@ def load_matrix(path):
     >>> S = load_matrix(os.path.join(d, "box.npz"))
     >>> S.shape, S.nnz, bool((S != M).nnz == 0)
     ((6, 6), 30, True)
+    >>> load_matrix(os.path.join(d, "box")).nnz      # box.npz, as out="box" wrote it
+    30
     """
-    path = os.fspath(path)
+    path = _with_suffix(os.fspath(path))
     kind = path_suffix(path, "path")
     stem = path_stem(path)
     if not os.path.exists(path):

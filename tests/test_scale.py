@@ -184,8 +184,34 @@ def test_bad_outputs_and_options(tmp_path):
         ef.form_factor_matrix(SCENE, chunk_rows=0)
     with pytest.raises(FileNotFoundError):
         ef.load_matrix(tmp_path / "none.npy")
-    with pytest.raises(ValueError, match="suffix"):
+    with pytest.raises(FileNotFoundError, match="none.txt.npy"):
         ef.load_matrix(tmp_path / "none.txt")
+
+
+def test_load_matrix_finds_the_suffix_out_wrote(tmp_path, caplog):
+    # issue 53: out="m" writes m.npy (dense) or m.npz (sparse), and a .zarr store keeps
+    # its name; load_matrix("m") reads whichever exists and says which, as np.load users
+    # expect. The values: against the matrix computed in memory.
+    import logging
+
+    F = ef.form_factor_matrix(SCENE)
+    ef.form_factor_matrix(SCENE, out=tmp_path / "dense")
+    ef.form_factor_matrix(SCENE, sparse=True, out=tmp_path / "sparse")
+    ef.form_factor_matrix(SCENE, out=tmp_path / "chunked.zarr")
+    with caplog.at_level(logging.INFO, logger="exactff"):
+        dense = ef.load_matrix(tmp_path / "dense")
+        sparse = ef.load_matrix(tmp_path / "sparse")
+        chunked = ef.load_matrix(tmp_path / "chunked")
+    np.testing.assert_array_equal(np.asarray(dense), F)
+    np.testing.assert_array_equal(sparse.toarray(), F)
+    np.testing.assert_array_equal(np.asarray(chunked[:]), F)
+    read = [r.getMessage() for r in caplog.records]
+    for name in ("dense.npy", "sparse.npz", "chunked.zarr"):
+        assert any(name in m for m in read), read
+    # two outputs of one name: no guess
+    np.save(tmp_path / "sparse.npy", F)
+    with pytest.raises(ValueError, match="names 2 outputs"):
+        ef.load_matrix(tmp_path / "sparse")
 
 
 KILLED = """
