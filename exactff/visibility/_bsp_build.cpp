@@ -435,8 +435,8 @@ struct Builder {
     // edge's line has no exact form (a split edge of a polygon planar only within
     // tolerance: it lies on no plane of the polygon's) or the planes meet in no point
     bool exact_crossing(int64_t on, int64_t source, int64_t cut, Q* Xq) {
-        const ExactSplitPlane& P = split_exact[size_t(cut)];
         if (on >= 0) {
+            const ExactSplitPlane& P = split_exact[size_t(cut)];
             // the input edge A -> B: X = (o_A B - o_B A) / (o_A - o_B), o = N . x - d
             const int64_t s = input_owner[size_t(on)];
             const int64_t nb = input_start[s] + (on - input_start[s] + 1) %
@@ -588,7 +588,8 @@ struct Builder {
     // (Builder::exact_crossing). Every vertex records what its outgoing edge lies on.
     void split(int64_t f, const double* n, double d, int64_t cut, int64_t& f_front,
                int64_t& f_back) {
-        const SplitPlane& plane = split_planes[size_t(cut)];
+        // a copy: exact_crossing may register the fragment's own plane (split_planes grows)
+        const SplitPlane plane = split_planes[size_t(cut)];
         size_t k = count(f);
         std::vector<int> sg(k);
         std::vector<double> s(k);
