@@ -211,17 +211,55 @@ def test_cornell_obj_refused_naming_the_wall_and_the_line(cornell_obj):
     assert "--split-nonplanar" in msg and info.value.index == 3
 
 
+def _same_cycle(P, Q):
+    """Whether two polygons have the same vertices in the same cyclic order."""
+    P, Q = np.asarray(P, dtype=float), np.asarray(Q, dtype=float)
+    return len(P) == len(Q) and any(np.array_equal(np.roll(P, k, axis=0), Q)
+                                    for k in range(len(P)))
+
+
 def test_cornell_obj_split_equals_the_same_triangles_by_hand(cornell_obj):
     scene = load_scene(cornell_obj, nonplanar="split")
     assert len(scene) == 18 and describe(scene)["split_faces"] == 1
     assert scene.groups[3] == scene.groups[4] == "leftWall"
     assert scene.materials[4] == "leftWall"
-    # the same scene built by hand: the left wall as the two triangles of a fan
-    # (either diagonal is a valid split; the reader's choice is the flatter one)
-    by_hand_faces = list(scene.polygons)
-    tris = [by_hand_faces[3], by_hand_faces[4]]
+    # the same scene built by hand from the OBJ text: the left wall as the two
+    # triangles of either diagonal (both are valid splits; the reader's choice is the
+    # flatter one), every other face as written (the boxes' bottom faces repeat the
+    # vertices of their right and front faces: "f -12 -11 -10 -9", "f -8 -7 -6 -5")
+    tris = [scene.polygons[3], scene.polygons[4]]
     for t in tris:
         assert all(any(np.array_equal(v, w) for w in LEFT_WALL) for v in t)
+    splits = [[LEFT_WALL[[0, 1, 2]], LEFT_WALL[[0, 2, 3]]],
+              [LEFT_WALL[[0, 1, 3]], LEFT_WALL[[1, 2, 3]]]]
+    left = next(pair for pair in splits
+                if all(any(_same_cycle(t, u) for u in pair) for t in tris))
+    short_right = [[0.70, 0.00, 0.17], [0.70, 0.60, 0.17], [0.53, 0.60, 0.75],
+                   [0.53, 0.00, 0.75]]
+    tall_front = [[0.04, 0.00, -0.09], [0.04, 1.20, -0.09], [-0.53, 1.20, 0.09],
+                  [-0.53, 0.00, 0.09]]
+    by_hand_faces = [
+        [[-1.01, 0.00, 0.99], [1.00, 0.00, 0.99], [1.00, 0.00, -1.04], [-0.99, 0.00, -1.04]],
+        [[-1.02, 1.99, 0.99], [-1.02, 1.99, -1.04], [1.00, 1.99, -1.04], [1.00, 1.99, 0.99]],
+        [[1.00, 0.00, -1.04], [1.00, 0.00, 0.99], [1.00, 1.99, 0.99], [1.00, 1.99, -1.04]],
+        left[0], left[1],
+        [[0.53, 0.60, 0.75], [0.70, 0.60, 0.17], [0.13, 0.60, 0.00], [-0.05, 0.60, 0.57]],
+        [[-0.05, 0.00, 0.57], [-0.05, 0.60, 0.57], [0.13, 0.60, 0.00], [0.13, 0.00, 0.00]],
+        [[0.53, 0.00, 0.75], [0.53, 0.60, 0.75], [-0.05, 0.60, 0.57], [-0.05, 0.00, 0.57]],
+        short_right,
+        [[0.13, 0.00, 0.00], [0.13, 0.60, 0.00], [0.70, 0.60, 0.17], [0.70, 0.00, 0.17]],
+        short_right,
+        [[-0.53, 1.20, 0.09], [0.04, 1.20, -0.09], [-0.14, 1.20, -0.67], [-0.71, 1.20, -0.49]],
+        [[-0.53, 0.00, 0.09], [-0.53, 1.20, 0.09], [-0.71, 1.20, -0.49], [-0.71, 0.00, -0.49]],
+        [[-0.71, 0.00, -0.49], [-0.71, 1.20, -0.49], [-0.14, 1.20, -0.67], [-0.14, 0.00, -0.67]],
+        [[-0.14, 0.00, -0.67], [-0.14, 1.20, -0.67], [0.04, 1.20, -0.09], [0.04, 0.00, -0.09]],
+        tall_front,
+        tall_front,
+        [[-0.24, 1.98, 0.16], [-0.24, 1.98, -0.22], [0.23, 1.98, -0.22], [0.23, 1.98, 0.16]],
+    ]
+    assert len(by_hand_faces) == 18
+    for j, (P, Q) in enumerate(zip(scene.polygons, by_hand_faces)):
+        assert _same_cycle(P, Q), j
     assert np.isclose(sum(np.linalg.norm(np.cross(t[1] - t[0], t[2] - t[0])) / 2 for t in tris),
                       sum(np.linalg.norm(np.cross(t[1] - t[0], t[2] - t[0])) / 2
                           for t in split_nonplanar(LEFT_WALL)), rtol=1e-14, atol=0)
