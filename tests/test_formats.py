@@ -3,6 +3,7 @@ OFF / VTK through meshio, pyvista meshes, View3D ``.vs3``."""
 
 from types import SimpleNamespace
 
+import meshio
 import numpy as np
 import pytest
 
@@ -323,7 +324,6 @@ def _box_triangles():
 
 @pytest.mark.parametrize("binary", [False, True])
 def test_stl_box_rows_sum_to_one(tmp_path, binary):
-    meshio = pytest.importorskip("meshio")
     tris = _box_triangles()
     points = np.concatenate(tris)
     cells = [("triangle", np.arange(len(points)).reshape(-1, 3))]
@@ -341,7 +341,6 @@ def test_stl_box_rows_sum_to_one(tmp_path, binary):
 @pytest.mark.parametrize("ext", [".ply", ".off", ".vtk"])
 def test_mesh_formats_keep_quads(tmp_path, ext):
     # quads stay quads where the format has them (meshio writes OFF as triangles only)
-    meshio = pytest.importorskip("meshio")
     box = ef.scenes.subdivided_box(2)
     if ext == ".off":
         faces = [t for P in box.polygons for t in (P[[0, 1, 2]], P[[0, 2, 3]])]
@@ -364,7 +363,6 @@ def test_mesh_formats_keep_quads(tmp_path, ext):
     ("not a mesh at all\n", "box.stl"),
 ])
 def test_malformed_mesh_refused_in_one_line(tmp_path, text, needle, capsys):
-    pytest.importorskip("meshio")
     path = tmp_path / "box.stl"
     path.write_text(text)
     with pytest.raises(ValueError) as info:
