@@ -13,6 +13,8 @@ from exactff.io import load_scene
 from exactff.scene import split_nonplanar
 from exactff.reports import describe
 
+from common import parallel_rect_corner
+
 # The original Cornell box in OBJ format, as published by Guedis Cardenas and Morgan
 # McGuire, Williams College, 2011 (public domain; http://graphics.cs.williams.edu/data,
 # after http://www.graphics.cornell.edu/online/box/data.html), with its back wall
@@ -444,7 +446,16 @@ def test_vs3_reads_surfaces_and_obstructions(tmp_path):
     assert np.allclose(scene.normals[:2], [[0, 0, 1], [0, 0, -1]], rtol=0, atol=1e-15)
     F_open = ef.form_factors(ef.Scene.from_polygons(scene.polygons[:2]), [0.1, 0.1, 0], [0, 0, 1])
     F = ef.form_factors(scene, [0.1, 0.1, 0], [0, 0, 1])
-    assert 0 < F[1] < F_open[1]
+    # Howell superposition: from (0.1, 0.1, 0) the obstruction [0, .5]^2 at z = .5 casts
+    # [-0.1, 0.9]^2 at z = 1, so [0, 0.9]^2 of the upper square is hidden; the visible
+    # part is the square minus that rectangle (corner rectangles, odd in each side)
+    def rect(x1, x2, y1, y2, p=(0.1, 0.1), c=1.0):
+        f = lambda a, b: parallel_rect_corner(a, b, c)
+        return (f(x2 - p[0], y2 - p[1]) - f(x1 - p[0], y2 - p[1])
+                - f(x2 - p[0], y1 - p[1]) + f(x1 - p[0], y1 - p[1]))
+    assert abs(F_open[1] - rect(0, 1, 0, 1)) <= 1e-13
+    # DESIGN 6: an occluded value within 1e-11 absolute
+    assert abs(F[1] - (rect(0, 1, 0, 1) - rect(0, 0.9, 0, 0.9))) <= 1e-11
 
 
 @pytest.mark.parametrize("line,needle", [
