@@ -30,6 +30,34 @@ def test_view3d_examples_are_read(name, surfaces):
     assert np.all(scene.areas > 0)
 
 
+#: Howell C-11, opposed unit squares one apart (mpmath, 25 digits)
+UNIT_SQUARES_ONE_APART = 0.19982489569838738
+#: the 0.2 x 0.2 square centred under them to the upper square: the mean over it of
+#: Howell's point-to-rectangle value (corner superposition), mpmath quadrature at 25
+#: digits (0.2376441865228382244...)
+MASK_TO_TOP = 0.23764418652283822
+
+
+def test_parallel_planes_mask_values():
+    # the file winds the mask (vertices 12 11 10 9: clockwise seen from above) like the
+    # top, so it faces down, away from the top: no exchange either way; the squares
+    # exchange Howell's value whatever lies in their planes
+    scene = _read("ParallelPlanesMasked.vs3")
+    V = scene.polygons[2]
+    assert np.cross(V[1] - V[0], V[2] - V[1])[2] < 0 and scene.groups[2] == "mask"
+    F, E = ef.area_form_factors(scene, tolerance=1e-12, error=True)
+    assert F[2, 1] == 0 and F[1, 2] == 0 and F[2, 0] == 0 and F[0, 2] == 0
+    for i, j in ((0, 1), (1, 0)):
+        assert abs(F[i, j] - UNIT_SQUARES_ONE_APART) <= E[i, j] + 1e-16
+    # wound facing up, the mask sees the top: its value, and the top's by reciprocity
+    # (areas 0.04 and 1)
+    up = ef.Scene.from_polygons([scene.polygons[0], scene.polygons[1], V[::-1]])
+    F, E = ef.area_form_factors(up, tolerance=1e-12, error=True)
+    assert abs(F[2, 1] - MASK_TO_TOP) <= E[2, 1] + 1e-16
+    assert abs(F[1, 2] - 0.04 * MASK_TO_TOP) <= E[1, 2] + 1e-16
+    assert F[2, 0] == 0 and F[0, 2] == 0           # coplanar with the bottom
+
+
 def _row_is_complete(F, E, tol):
     """A row of an enclosure: finite, each estimate within the tolerance, summing to 1
     within the sum of its estimates (and rounding)."""
