@@ -229,7 +229,8 @@ def test_gunter1_points_given_the_bound_against_the_engine(monkeypatch):
         before = st.get("bounded_points", 0)
         H, EH = hidden(X, nP, Qc, blockers, st, budget, setup, weights, bound_budget)
         if st.get("bounded_points", 0) > before:
-            calls.append((X, nP, Qc, blockers, H, EH, st["bounded_points"] - before))
+            calls.append((X, nP, Qc, blockers, H, EH, st["bounded_points"] - before,
+                          weights, id(bound_budget)))
         return H, EH
 
     monkeypatch.setattr(area, "_hidden_values", record)
@@ -237,15 +238,24 @@ def test_gunter1_points_given_the_bound_against_the_engine(monkeypatch):
     F, E = ef.area_form_factors(_read("gunter1.vs3"), rows=[17], tolerance=1e-9, error=True,
                                 stats=st)
     assert np.all(E <= 1e-9) and st["bounded_points"] > 100 and not st["engine_fallbacks"]
-    assert sum(c[-1] for c in calls) == st["bounded_points"]
+    assert sum(c[6] for c in calls) == st["bounded_points"]
     rng = np.random.default_rng(3)
-    for X, nP, Qc, blockers, H, EH, count in calls:
+    spent = {}
+    for X, nP, Qc, blockers, H, EH, count, weights, pair in calls:
         U, EU = (v[0] for v in point_values(X, nP, [Qc]))
         bounded = np.flatnonzero((H == 0.5 * U) & (EH == 0.5 * U + EU))
         assert len(bounded) == count
+        # the bound 0 <= hidden <= U holds at them (the engine's value, within its
+        # estimate, lies in [0, U]: any value there would pass, so the weights decide)
         pick = rng.choice(bounded, size=8, replace=False)
         G, EG = area._hidden_values_by_engine(X[pick], nP, Qc, blockers)
         assert np.all(np.abs(H[pick] - G) <= EH[pick] + EG)
+        spent[pair] = spent.get(pair, 0.0) + float(np.dot(weights[bounded], EH[bounded]))
+    # what the bounded points cost each pair, summed here from their weights and
+    # estimates: within the pair's share for them (AREA_IMAGE_BUDGET_SHARE of the
+    # tolerance), the claim that their weight is small enough
+    share = ef._tolerances.AREA_IMAGE_BUDGET_SHARE * 1e-9
+    assert spent and max(spent.values()) <= share * (1 + 1e-12), (max(spent.values()), share)
     monkeypatch.setattr(area, "_hidden_values", hidden)
     fine = {}
     G, EG = ef.area_form_factors(_read("gunter1.vs3"), rows=[17], tolerance=1e-11, error=True,
