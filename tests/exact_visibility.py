@@ -164,6 +164,26 @@ def _in_front_on_a_tie(scene, P, j, target):
     return a and not b or (a == b and j < target)
 
 
+def _point_and_target(scene, point, target):
+    """The point and the target's vertices in rationals, and the target's frame
+    (:func:`_target_frame`; None where undecided)."""
+    P = _rational(point)
+    T = [_rational(v) for v in scene.polygons[target]]
+    return P, T, _target_frame(T, P)
+
+
+def _cone(P, V):
+    """The cone from ``P`` over the convex polygon ``V``: one linear function a side,
+    >= 0 on the side of V's centroid."""
+    centroid = tuple(sum(c) / len(V) for c in zip(*V))
+    cone = []
+    for k in range(len(V)):
+        w = _cross(_sub(V[k], P), _sub(V[(k + 1) % len(V)], P))
+        s = 1 if _dot(w, _sub(centroid, P)) > 0 else -1
+        cone.append(lambda v, w=w, s=s: s * _dot(w, _sub(v, P)))
+    return cone
+
+
 def visible_pieces(scene, point, target, exclude=()):
     """The part of polygon ``target``'s image visible from ``point``: a list of convex
     polygons with rational 3-D vertices on the target's plane (or, for a target that is
@@ -175,9 +195,7 @@ def visible_pieces(scene, point, target, exclude=()):
     the target and to the near side of its plane, where both are exactly planar (its part
     in the target's plane hides by exactff's rule for depth ties); any other case is
     undecided. Polygons in ``exclude`` do not occlude."""
-    P = _rational(point)
-    T = [_rational(v) for v in scene.polygons[target]]
-    frame = _target_frame(T, P)
+    P, T, frame = _point_and_target(scene, point, target)
     if frame is None:
         return None
     m, height, slab = frame
@@ -213,12 +231,7 @@ def visible_pieces(scene, point, target, exclude=()):
     near, far = 1 - slab / abs(height), 1 + slab / abs(height)
     planar = slab == 0
     # the cone from the point over the target: one half-space per edge
-    centroid = tuple(sum(c) / len(T) for c in zip(*T))
-    cone = []
-    for k in range(len(T)):
-        w = _cross(_sub(T[k], P), _sub(T[(k + 1) % len(T)], P))
-        s = 1 if _dot(w, _sub(centroid, P)) > 0 else -1
-        cone.append(lambda v, w=w, s=s: s * _dot(w, _sub(v, P)))
+    cone = _cone(P, T)
     pieces = [target2]
     for j, polygon in enumerate(scene.polygons):
         if j == target or j in exclude or not pieces:
@@ -355,9 +368,7 @@ def seen_whole(scene, point, target):
     from the point) may hide part of the target, and so may any piece of a polygon that
     is not exactly planar or lies within the engines' depth-tie band of the target
     (conservative: False)."""
-    P = _rational(point)
-    T = [_rational(v) for v in scene.polygons[target]]
-    frame = _target_frame(T, P)
+    P, T, frame = _point_and_target(scene, point, target)
     if frame is None:
         return False
     m, height, slab = frame
@@ -372,12 +383,7 @@ def seen_whole(scene, point, target):
                    key=lambda v: (v[keep[0]], v[keep[1]]))
     H = _hull(image, keep)
     far = 1 + slab / abs(height)
-    centroid = tuple(sum(c) / len(H) for c in zip(*H))
-    halves = [lambda v: depth(v), lambda v: far - depth(v)]
-    for k in range(len(H)):
-        w = _cross(_sub(H[k], P), _sub(H[(k + 1) % len(H)], P))
-        s = 1 if _dot(w, _sub(centroid, P)) > 0 else -1
-        halves.append(lambda v, w=w, s=s: s * _dot(w, _sub(v, P)))
+    halves = [lambda v: depth(v), lambda v: far - depth(v)] + _cone(P, H)
     for j, polygon in enumerate(scene.polygons):
         if j == target:
             continue
