@@ -148,6 +148,9 @@ def edge_pairs(draw):
 # crossing lines drawn as skew (both edges in x = 0): a bound of 1.04e-12
 @example(("skew", np.array([0.0, -1.0, 0.0]), np.array([0.0, 0.125, 1.0]),
           np.array([0.0, 1.0, 0.0]), np.array([0.0, 0.0, 0.25])))
+# nearly perpendicular (a cosine of 1e-38): a bound of 1.7e-12
+@example(("skew", np.array([2.0, 1.0, 0.0]), np.array([0.0, 1.0, 1.175494351e-38]),
+          np.zeros(3), np.array([0.0, 0.0, 0.125])))
 def test_edge_integral_against_mpmath(case):
     kind, a, e, b, f = case
     with mp.workdps(24):
@@ -174,13 +177,15 @@ def test_edge_integral_against_mpmath(case):
         assert abs(float(Jm) - ref) <= fixed, (kind, float(Jm), ref, dps)
     size = max(np.linalg.norm(e), np.linalg.norm(f))
     apart = np.linalg.norm((a + 0.5 * e) - (b + 0.5 * f))
-    # (perpendicular edges have no term in the contour sum, e . f = 0: their bound is not
-    # used; thorough found one at 1.16e-12: e = (0, 0, .5), f = (0, .125, 0), 2.2 apart.
-    # A "skew" draw whose lines lie in one plane crosses, like the "crossing" kind: ci
-    # found one at 1.04e-12, both edges in x = 0)
+    # (the term enters the contour sum times e . f: its bound is weighted by the cosine
+    # between the edges; perpendicular edges, no term: thorough found 1.16e-12 at e = (0,
+    # 0, .5), f = (0, .125, 0), and 1.7e-12 at a cosine of 1e-38. A "skew" draw whose
+    # lines lie in one plane crosses, like the "crossing" kind: ci found one at 1.04e-12,
+    # both edges in x = 0)
     coplanar = kind == "skew" and np.dot(b - a, np.cross(e, f)) == 0
+    cos = abs(np.dot(e, f)) / (np.linalg.norm(e) * np.linalg.norm(f))
     if kind in ("skew", "vertex", "parallel", "collinear") and apart <= 8 * size \
-            and np.dot(e, f) != 0 and not coplanar:
+            and not coplanar:
         # the terms' magnitudes stay within a modest factor of the value for edges not
         # far apart next to their lengths (not so 1e-8 from parallel, 1 / sin of the
         # angle; crossing lines, d rounded to 1e-16 and the lines' nearest points tiny,
@@ -189,7 +194,7 @@ def test_edge_integral_against_mpmath(case):
         # Skew terms are divided by |e x f|: edges within 0.1 of parallel get 0.1 / sin
         sin = np.linalg.norm(np.cross(e, f)) / (np.linalg.norm(e) * np.linalg.norm(f))
         widen = max(1.0, 0.1 / sin) if kind in ("skew", "vertex") and sin > 0 else 1.0
-        assert bound <= 1e-12 * widen * max(1.0, abs(ref)), (kind, bound)
+        assert cos * bound <= 1e-12 * widen * max(1.0, abs(ref)), (kind, bound, cos)
 
 
 def test_mp_edge_integral_matches_the_reference():
