@@ -1,6 +1,7 @@
 """Scene zoo and closed forms shared by the tests (independent of exactff's kernels)."""
 
 import math
+import os
 
 import numpy as np
 
@@ -128,3 +129,30 @@ def random_rotation(rng):
     return np.array([[a*a + b*b - c*c - d*d, 2*(b*c - a*d), 2*(b*d + a*c)],
                      [2*(b*c + a*d), a*a - b*b + c*c - d*d, 2*(c*d - a*b)],
                      [2*(b*d - a*c), 2*(c*d + a*b), a*a - b*b - c*c + d*d]])
+
+
+#: real files vendored for the tests (sources and licences: tests/data/README.md)
+REAL_DATA = os.path.join(os.path.dirname(os.path.abspath(__file__)), "data", "real")
+
+
+def real_file_path(name, tmp_dir):
+    """The path of the vendored real file ``name`` (tests/data/real), as its reader sees
+    it: a gzip-compressed one (``name.gz``) is written out under ``tmp_dir`` first, so
+    that ``load_scene`` chooses the reader by the file's own extension."""
+    import gzip
+    import shutil
+
+    path = os.path.join(REAL_DATA, name)
+    if os.path.exists(path):
+        return path
+    out = os.path.join(tmp_dir, name)
+    with gzip.open(path + ".gz", "rb") as src, open(out, "wb") as dst:
+        shutil.copyfileobj(src, dst)
+    return out
+
+
+def load_real_file(name, tmp_dir, **options):
+    """The scene of the vendored real file ``name`` (``load_scene`` with ``options``)."""
+    import exactff as ef
+
+    return ef.load_scene(real_file_path(name, tmp_dir), **options)

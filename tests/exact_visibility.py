@@ -164,6 +164,26 @@ def _in_front_on_a_tie(scene, P, j, target):
     return a and not b or (a == b and j < target)
 
 
+def _point_and_target(scene, point, target):
+    """The point and the target's vertices in rationals, and the target's frame
+    (:func:`_target_frame`; None where undecided)."""
+    P = _rational(point)
+    T = [_rational(v) for v in scene.polygons[target]]
+    return P, T, _target_frame(T, P)
+
+
+def _cone(P, V):
+    """The cone from ``P`` over the convex polygon ``V``: one linear function a side,
+    >= 0 on the side of V's centroid."""
+    centroid = tuple(sum(c) / len(V) for c in zip(*V))
+    cone = []
+    for k in range(len(V)):
+        w = _cross(_sub(V[k], P), _sub(V[(k + 1) % len(V)], P))
+        s = 1 if _dot(w, _sub(centroid, P)) > 0 else -1
+        cone.append(lambda v, w=w, s=s: s * _dot(w, _sub(v, P)))
+    return cone
+
+
 def visible_pieces(scene, point, target, exclude=()):
     """The part of polygon ``target``'s image visible from ``point``: a list of convex
     polygons with rational 3-D vertices on the target's plane (or, for a target that is
@@ -175,9 +195,7 @@ def visible_pieces(scene, point, target, exclude=()):
     the target and to the near side of its plane, where both are exactly planar (its part
     in the target's plane hides by exactff's rule for depth ties); any other case is
     undecided. Polygons in ``exclude`` do not occlude."""
-    P = _rational(point)
-    T = [_rational(v) for v in scene.polygons[target]]
-    frame = _target_frame(T, P)
+    P, T, frame = _point_and_target(scene, point, target)
     if frame is None:
         return None
     m, height, slab = frame
@@ -213,12 +231,7 @@ def visible_pieces(scene, point, target, exclude=()):
     near, far = 1 - slab / abs(height), 1 + slab / abs(height)
     planar = slab == 0
     # the cone from the point over the target: one half-space per edge
-    centroid = tuple(sum(c) / len(T) for c in zip(*T))
-    cone = []
-    for k in range(len(T)):
-        w = _cross(_sub(T[k], P), _sub(T[(k + 1) % len(T)], P))
-        s = 1 if _dot(w, _sub(centroid, P)) > 0 else -1
-        cone.append(lambda v, w=w, s=s: s * _dot(w, _sub(v, P)))
+    cone = _cone(P, T)
     pieces = [target2]
     for j, polygon in enumerate(scene.polygons):
         if j == target or j in exclude or not pieces:
@@ -328,3 +341,87 @@ def visible_form_factor(scene, point, normal, target, two_sided=False, exclude=(
             if len(piece) >= 3:
                 total += polygon_form_factor_mp(point, normal, piece, dps)
     return total
+
+
+def _hull(points, keep):
+    """The convex hull (monotone chain, exact) of points sorted by their ``keep``
+    coordinates, as a list of those points in counter-clockwise order of ``keep``."""
+    flat = lambda v: (v[keep[0]], v[keep[1]])
+
+    def chain(seq):
+        out = []
+        for v in seq:
+            while len(out) >= 2 and _left_of(flat(out[-2]), flat(out[-1]))(flat(v)) <= 0:
+                out.pop()
+            out.append(v)
+        return out[:-1]
+    return chain(points) + chain(points[::-1])
+
+
+def seen_whole(scene, point, target):
+    """Whether no other polygon hides any part of polygon ``target`` from ``point``
+    (exact, in rationals); False where that is not decided here.
+
+    Every other polygon is clipped to the cone from the point over the convex hull of the
+    target's image and to the near side of the target's far
+    thickness; a piece left with an image of positive area (exactly planar, not edge-on
+    from the point) may hide part of the target, and so may any piece of a polygon that
+    is not exactly planar or lies within the engines' depth-tie band of the target
+    (conservative: False)."""
+    P, T, frame = _point_and_target(scene, point, target)
+    if frame is None:
+        return False
+    m, height, slab = frame
+    depth = lambda v: _dot(m, _sub(v, P)) / height
+    if any(depth(v) <= 0 for v in T):
+        return False
+    axis = max(range(3), key=lambda i: abs(m[i]))
+    keep = [i for i in range(3) if i != axis]
+    # the cone over the convex hull of the target's image (its vertices projected onto
+    # the plane m . x = m . T[0])
+    image = sorted({tuple(p + (x - p) / depth(v) for p, x in zip(P, v)) for v in T},
+                   key=lambda v: (v[keep[0]], v[keep[1]]))
+    H = _hull(image, keep)
+    far = 1 + slab / abs(height)
+    halves = [lambda v: depth(v), lambda v: far - depth(v)] + _cone(P, H)
+    for j, polygon in enumerate(scene.polygons):
+        if j == target:
+            continue
+        V = [_rational(v) for v in polygon]
+        if _near_coplanar(V, T):
+            return False
+        # the piece in the closed pyramid from the point to the target's far thickness
+        for half in halves:
+            if len(V) < 3:
+                break
+            V = _clip(V, half)
+        if len(V) < 3:
+            continue
+        if _plane([_rational(v) for v in polygon]) is None:
+            return False
+        normal = _newell(V)
+        if normal is None or _dot(normal, _sub(V[0], P)) == 0:
+            continue                     # no area, or edge-on from the point: no image
+        return False
+    return True
+
+
+def unoccluded_form_factor(scene, point, normal, target, two_sided=False, dps=60):
+    """The form factor from ``point`` to the whole of polygon ``target`` (its part in
+    front of the point's plane), as an mpmath number, where :func:`seen_whole` holds;
+    else None. The contour form over the target's boundary clipped to the point's front
+    half-space (valid for a non-convex target: the clip's bridging edges cancel)."""
+    if not seen_whole(scene, point, target):
+        return None
+    P = _rational(point)
+    T = [_rational(v) for v in scene.polygons[target]]
+    m = _newell(T)
+    if _dot(m, _rational(scene.normals[target])) < 0:
+        m = tuple(-c for c in m)
+    if _dot(m, _sub(P, T[0])) < 0 and not two_sided:
+        return mpmath.mpf(0)              # the point is behind the target
+    n = _rational(normal)
+    piece = _clip(T, lambda v: _dot(n, _sub(v, P)))
+    if len(piece) < 3:
+        return mpmath.mpf(0)
+    return polygon_form_factor_mp(point, normal, piece, dps)

@@ -30,6 +30,34 @@ def test_view3d_examples_are_read(name, surfaces):
     assert np.all(scene.areas > 0)
 
 
+#: Howell C-11, opposed unit squares one apart (mpmath, 25 digits)
+UNIT_SQUARES_ONE_APART = 0.19982489569838738
+#: the 0.2 x 0.2 square centred under them to the upper square: the mean over it of
+#: Howell's point-to-rectangle value (corner superposition), mpmath quadrature at 25
+#: digits (0.2376441865228382244...)
+MASK_TO_TOP = 0.23764418652283822
+
+
+def test_parallel_planes_mask_values():
+    # the file winds the mask (vertices 12 11 10 9: clockwise seen from above) like the
+    # top, so it faces down, away from the top: no exchange either way; the squares
+    # exchange Howell's value whatever lies in their planes
+    scene = _read("ParallelPlanesMasked.vs3")
+    V = scene.polygons[2]
+    assert np.cross(V[1] - V[0], V[2] - V[1])[2] < 0 and scene.groups[2] == "mask"
+    F, E = ef.area_form_factors(scene, tolerance=1e-12, error=True)
+    assert F[2, 1] == 0 and F[1, 2] == 0 and F[2, 0] == 0 and F[0, 2] == 0
+    for i, j in ((0, 1), (1, 0)):
+        assert abs(F[i, j] - UNIT_SQUARES_ONE_APART) <= E[i, j] + 1e-16
+    # wound facing up, the mask sees the top: its value, and the top's by reciprocity
+    # (areas 0.04 and 1)
+    up = ef.Scene.from_polygons([scene.polygons[0], scene.polygons[1], V[::-1]])
+    F, E = ef.area_form_factors(up, tolerance=1e-12, error=True)
+    assert abs(F[2, 1] - MASK_TO_TOP) <= E[2, 1] + 1e-16
+    assert abs(F[1, 2] - 0.04 * MASK_TO_TOP) <= E[1, 2] + 1e-16
+    assert F[2, 0] == 0 and F[0, 2] == 0           # coplanar with the bottom
+
+
 def _row_is_complete(F, E, tol):
     """A row of an enclosure: finite, each estimate within the tolerance, summing to 1
     within the sum of its estimates (and rounding)."""
@@ -201,7 +229,8 @@ def test_gunter1_points_given_the_bound_against_the_engine(monkeypatch):
         before = st.get("bounded_points", 0)
         H, EH = hidden(X, nP, Qc, blockers, st, budget, setup, weights, bound_budget)
         if st.get("bounded_points", 0) > before:
-            calls.append((X, nP, Qc, blockers, H, EH, st["bounded_points"] - before))
+            calls.append((X, nP, Qc, blockers, H, EH, st["bounded_points"] - before,
+                          weights, id(bound_budget)))
         return H, EH
 
     monkeypatch.setattr(area, "_hidden_values", record)
@@ -209,15 +238,24 @@ def test_gunter1_points_given_the_bound_against_the_engine(monkeypatch):
     F, E = ef.area_form_factors(_read("gunter1.vs3"), rows=[17], tolerance=1e-9, error=True,
                                 stats=st)
     assert np.all(E <= 1e-9) and st["bounded_points"] > 100 and not st["engine_fallbacks"]
-    assert sum(c[-1] for c in calls) == st["bounded_points"]
+    assert sum(c[6] for c in calls) == st["bounded_points"]
     rng = np.random.default_rng(3)
-    for X, nP, Qc, blockers, H, EH, count in calls:
+    spent = {}
+    for X, nP, Qc, blockers, H, EH, count, weights, pair in calls:
         U, EU = (v[0] for v in point_values(X, nP, [Qc]))
         bounded = np.flatnonzero((H == 0.5 * U) & (EH == 0.5 * U + EU))
         assert len(bounded) == count
+        # the bound 0 <= hidden <= U holds at them (the engine's value, within its
+        # estimate, lies in [0, U]: any value there would pass, so the weights decide)
         pick = rng.choice(bounded, size=8, replace=False)
         G, EG = area._hidden_values_by_engine(X[pick], nP, Qc, blockers)
         assert np.all(np.abs(H[pick] - G) <= EH[pick] + EG)
+        spent[pair] = spent.get(pair, 0.0) + float(np.dot(weights[bounded], EH[bounded]))
+    # what the bounded points cost each pair, summed here from their weights and
+    # estimates: within the pair's share for them (AREA_IMAGE_BUDGET_SHARE of the
+    # tolerance), the claim that their weight is small enough
+    share = ef._tolerances.AREA_IMAGE_BUDGET_SHARE * 1e-9
+    assert spent and max(spent.values()) <= share * (1 + 1e-12), (max(spent.values()), share)
     monkeypatch.setattr(area, "_hidden_values", hidden)
     fine = {}
     G, EG = ef.area_form_factors(_read("gunter1.vs3"), rows=[17], tolerance=1e-11, error=True,

@@ -102,6 +102,12 @@ def test_remainder_makes_open_rows_sum_to_one(box):
     assert ef.check_matrix(M, open_box).judged is None          # open: not judged
     r = ef.check_matrix(M, open_box, remainder=R)
     assert r.judged == "remainder" and r.ok
+    # the remainder itself: the closed box's values of the missing top face (z = 1, above
+    # every row's point: all sky)
+    kept = list(range(4)) + list(range(8, len(box)))
+    full = ef.form_factors(box, box.centroids[kept], box.normals[kept])
+    assert np.abs(R[:, 0] - full[:, 4:8].sum(axis=1)).max() <= 1e-12
+    assert np.all(R[:, 1] == 0)
     bad = R.copy()
     bad[2, 0] += 1e-6
     assert ef.check_matrix(M, open_box, remainder=bad).rows_missing == [2]

@@ -2,6 +2,8 @@
 it does not compute: the kernel's mpmath value of the visible part where that part is
 known in closed form, and the invariants a visible part must keep."""
 
+from fractions import Fraction
+
 import mpmath
 import numpy as np
 import pytest
@@ -10,7 +12,8 @@ import exactff as ef
 from exactff.kernel import mp_form_factor
 
 from common import rect_xy, rotation
-from exact_visibility import visible_form_factor, visible_pieces
+from exact_visibility import (polygon_form_factor_mp, seen_whole, unoccluded_form_factor,
+                              visible_form_factor, visible_pieces)
 
 P, N = np.array([0.5, 0.5, 2.0]), np.array([0.0, 0.0, -1.0])
 FLOOR = rect_xy(0, 1, 0, 1, 0.0, facing_down=False)
@@ -180,3 +183,32 @@ def test_mpmath_contour_converges_on_a_sliver():
 def _area_xy(q):
     return sum(q[k][0] * q[(k + 1) % len(q)][1] - q[(k + 1) % len(q)][0] * q[k][1]
                for k in range(len(q))) / 2
+
+
+#: an L-shaped target at z = 2 facing down (its image is not convex: visible_pieces
+#: leaves it undecided) over the point (0.5, 0.5, 0) facing up
+L_SHAPE = np.array([[0, 0, 2], [2, 0, 2], [2, 1, 2], [1, 1, 2], [1, 2, 2], [0, 2, 2.0]])[::-1]
+
+
+def _speck(x, d=2e-6, z=1.0):
+    return np.array([[x, x, z], [x + d, x, z], [x + d, x + d, z], [x, x + d, z]])[::-1]
+
+
+def test_seen_whole_finds_a_speck_of_shadow_on_a_nonconvex_target():
+    p, n = np.array([0.5, 0.5, 0.0]), np.array([0.0, 0.0, 1.0])
+    # a speck at x casts its shadow at 2x - 0.5: at 0.3 (on the L) for x = 0.4, at -0.3
+    # (off it) for x = 0.1, at 1.3 (in the L's notch: inside its hull, so not decided
+    # whole: the check is conservative) for x = 0.9
+    hiding = ef.Scene.from_polygons([L_SHAPE, _speck(0.4)])
+    aside = ef.Scene.from_polygons([L_SHAPE, _speck(0.1)])
+    behind = ef.Scene.from_polygons([L_SHAPE, _speck(0.4, z=3.0)])
+    assert not seen_whole(hiding, p, 0) and seen_whole(hiding, p, 1)
+    assert seen_whole(aside, p, 0) and seen_whole(behind, p, 0)
+    assert not seen_whole(ef.Scene.from_polygons([L_SHAPE, _speck(0.9)]), p, 0)
+    assert unoccluded_form_factor(hiding, p, n, 0) is None
+    # the L's whole value: the sum of its two rectangles' (contour form at 60 digits)
+    rects = [rect_xy(0, 2, 0, 1, 2.0), rect_xy(0, 1, 1, 2, 2.0)]
+    with mpmath.workdps(60):
+        expect = sum(polygon_form_factor_mp(
+            p, n, [tuple(Fraction(float(c)) for c in v) for v in R]) for R in rects)
+        assert abs(unoccluded_form_factor(aside, p, n, 0) - expect) < 1e-50

@@ -3,6 +3,7 @@ OFF / VTK through meshio, pyvista meshes, View3D ``.vs3``."""
 
 from types import SimpleNamespace
 
+import meshio
 import numpy as np
 import pytest
 
@@ -11,6 +12,8 @@ from exactff.cli import main
 from exactff.io import load_scene
 from exactff.scene import split_nonplanar
 from exactff.reports import describe
+
+from common import parallel_rect_corner
 
 # The original Cornell box in OBJ format, as published by Guedis Cardenas and Morgan
 # McGuire, Williams College, 2011 (public domain; http://graphics.cs.williams.edu/data,
@@ -211,17 +214,55 @@ def test_cornell_obj_refused_naming_the_wall_and_the_line(cornell_obj):
     assert "--split-nonplanar" in msg and info.value.index == 3
 
 
+def _same_cycle(P, Q):
+    """Whether two polygons have the same vertices in the same cyclic order."""
+    P, Q = np.asarray(P, dtype=float), np.asarray(Q, dtype=float)
+    return len(P) == len(Q) and any(np.array_equal(np.roll(P, k, axis=0), Q)
+                                    for k in range(len(P)))
+
+
 def test_cornell_obj_split_equals_the_same_triangles_by_hand(cornell_obj):
     scene = load_scene(cornell_obj, nonplanar="split")
     assert len(scene) == 18 and describe(scene)["split_faces"] == 1
     assert scene.groups[3] == scene.groups[4] == "leftWall"
     assert scene.materials[4] == "leftWall"
-    # the same scene built by hand: the left wall as the two triangles of a fan
-    # (either diagonal is a valid split; the reader's choice is the flatter one)
-    by_hand_faces = list(scene.polygons)
-    tris = [by_hand_faces[3], by_hand_faces[4]]
+    # the same scene built by hand from the OBJ text: the left wall as the two
+    # triangles of either diagonal (both are valid splits; the reader's choice is the
+    # flatter one), every other face as written (the boxes' bottom faces repeat the
+    # vertices of their right and front faces: "f -12 -11 -10 -9", "f -8 -7 -6 -5")
+    tris = [scene.polygons[3], scene.polygons[4]]
     for t in tris:
         assert all(any(np.array_equal(v, w) for w in LEFT_WALL) for v in t)
+    splits = [[LEFT_WALL[[0, 1, 2]], LEFT_WALL[[0, 2, 3]]],
+              [LEFT_WALL[[0, 1, 3]], LEFT_WALL[[1, 2, 3]]]]
+    left = next(pair for pair in splits
+                if all(any(_same_cycle(t, u) for u in pair) for t in tris))
+    short_right = [[0.70, 0.00, 0.17], [0.70, 0.60, 0.17], [0.53, 0.60, 0.75],
+                   [0.53, 0.00, 0.75]]
+    tall_front = [[0.04, 0.00, -0.09], [0.04, 1.20, -0.09], [-0.53, 1.20, 0.09],
+                  [-0.53, 0.00, 0.09]]
+    by_hand_faces = [
+        [[-1.01, 0.00, 0.99], [1.00, 0.00, 0.99], [1.00, 0.00, -1.04], [-0.99, 0.00, -1.04]],
+        [[-1.02, 1.99, 0.99], [-1.02, 1.99, -1.04], [1.00, 1.99, -1.04], [1.00, 1.99, 0.99]],
+        [[1.00, 0.00, -1.04], [1.00, 0.00, 0.99], [1.00, 1.99, 0.99], [1.00, 1.99, -1.04]],
+        left[0], left[1],
+        [[0.53, 0.60, 0.75], [0.70, 0.60, 0.17], [0.13, 0.60, 0.00], [-0.05, 0.60, 0.57]],
+        [[-0.05, 0.00, 0.57], [-0.05, 0.60, 0.57], [0.13, 0.60, 0.00], [0.13, 0.00, 0.00]],
+        [[0.53, 0.00, 0.75], [0.53, 0.60, 0.75], [-0.05, 0.60, 0.57], [-0.05, 0.00, 0.57]],
+        short_right,
+        [[0.13, 0.00, 0.00], [0.13, 0.60, 0.00], [0.70, 0.60, 0.17], [0.70, 0.00, 0.17]],
+        short_right,
+        [[-0.53, 1.20, 0.09], [0.04, 1.20, -0.09], [-0.14, 1.20, -0.67], [-0.71, 1.20, -0.49]],
+        [[-0.53, 0.00, 0.09], [-0.53, 1.20, 0.09], [-0.71, 1.20, -0.49], [-0.71, 0.00, -0.49]],
+        [[-0.71, 0.00, -0.49], [-0.71, 1.20, -0.49], [-0.14, 1.20, -0.67], [-0.14, 0.00, -0.67]],
+        [[-0.14, 0.00, -0.67], [-0.14, 1.20, -0.67], [0.04, 1.20, -0.09], [0.04, 0.00, -0.09]],
+        tall_front,
+        tall_front,
+        [[-0.24, 1.98, 0.16], [-0.24, 1.98, -0.22], [0.23, 1.98, -0.22], [0.23, 1.98, 0.16]],
+    ]
+    assert len(by_hand_faces) == 18
+    for j, (P, Q) in enumerate(zip(scene.polygons, by_hand_faces)):
+        assert _same_cycle(P, Q), j
     assert np.isclose(sum(np.linalg.norm(np.cross(t[1] - t[0], t[2] - t[0])) / 2 for t in tris),
                       sum(np.linalg.norm(np.cross(t[1] - t[0], t[2] - t[0])) / 2
                           for t in split_nonplanar(LEFT_WALL)), rtol=1e-14, atol=0)
@@ -285,7 +326,6 @@ def _box_triangles():
 
 @pytest.mark.parametrize("binary", [False, True])
 def test_stl_box_rows_sum_to_one(tmp_path, binary):
-    meshio = pytest.importorskip("meshio")
     tris = _box_triangles()
     points = np.concatenate(tris)
     cells = [("triangle", np.arange(len(points)).reshape(-1, 3))]
@@ -303,7 +343,6 @@ def test_stl_box_rows_sum_to_one(tmp_path, binary):
 @pytest.mark.parametrize("ext", [".ply", ".off", ".vtk"])
 def test_mesh_formats_keep_quads(tmp_path, ext):
     # quads stay quads where the format has them (meshio writes OFF as triangles only)
-    meshio = pytest.importorskip("meshio")
     box = ef.scenes.subdivided_box(2)
     if ext == ".off":
         faces = [t for P in box.polygons for t in (P[[0, 1, 2]], P[[0, 2, 3]])]
@@ -326,7 +365,6 @@ def test_mesh_formats_keep_quads(tmp_path, ext):
     ("not a mesh at all\n", "box.stl"),
 ])
 def test_malformed_mesh_refused_in_one_line(tmp_path, text, needle, capsys):
-    pytest.importorskip("meshio")
     path = tmp_path / "box.stl"
     path.write_text(text)
     with pytest.raises(ValueError) as info:
@@ -408,7 +446,16 @@ def test_vs3_reads_surfaces_and_obstructions(tmp_path):
     assert np.allclose(scene.normals[:2], [[0, 0, 1], [0, 0, -1]], rtol=0, atol=1e-15)
     F_open = ef.form_factors(ef.Scene.from_polygons(scene.polygons[:2]), [0.1, 0.1, 0], [0, 0, 1])
     F = ef.form_factors(scene, [0.1, 0.1, 0], [0, 0, 1])
-    assert 0 < F[1] < F_open[1]
+    # Howell superposition: from (0.1, 0.1, 0) the obstruction [0, .5]^2 at z = .5 casts
+    # [-0.1, 0.9]^2 at z = 1, so [0, 0.9]^2 of the upper square is hidden; the visible
+    # part is the square minus that rectangle (corner rectangles, odd in each side)
+    def rect(x1, x2, y1, y2, p=(0.1, 0.1), c=1.0):
+        f = lambda a, b: parallel_rect_corner(a, b, c)
+        return (f(x2 - p[0], y2 - p[1]) - f(x1 - p[0], y2 - p[1])
+                - f(x2 - p[0], y1 - p[1]) + f(x1 - p[0], y1 - p[1]))
+    assert abs(F_open[1] - rect(0, 1, 0, 1)) <= 1e-13
+    # DESIGN 6: an occluded value within 1e-11 absolute
+    assert abs(F[1] - (rect(0, 1, 0, 1) - rect(0, 0.9, 0, 0.9))) <= 1e-11
 
 
 @pytest.mark.parametrize("line,needle", [

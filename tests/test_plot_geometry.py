@@ -1,6 +1,7 @@
 """The geometry drawings: the visible graph on the disk, the arcs' x-extremes (the ends
 of Eq. 3's monotone spans), and the plot helpers that draw them."""
 
+import matplotlib
 import numpy as np
 import pytest
 from hypothesis import assume, given, settings, strategies as st
@@ -9,7 +10,6 @@ import exactff as ef
 from exactff.kernel import arc_x_extremes
 from exactff.visibility import visible_graph
 
-matplotlib = pytest.importorskip("matplotlib")
 matplotlib.use("Agg")
 
 

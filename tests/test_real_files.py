@@ -1,9 +1,14 @@
 """Real scene files (issue 29): degenerate faces dropped on request and counted
 otherwise, collinear triangles far from the origin, nonplanar="split" at the cost of
-what it splits, the scene summary without the BSP tree."""
+what it splits, the scene summary without the BSP tree; the real files vendored in
+tests/data/real (issue 50): read against their own text, closed rows that sum to 1, the
+engines' agreement."""
 
+import gzip
+import math
 import os
 import re
+import struct
 from fractions import Fraction
 
 import numpy as np
@@ -12,8 +17,9 @@ import pytest
 import exactff as ef
 from exactff.predicates import collinear
 
-#: small real files (sources and licences: shared/scenes/real/README.md)
-REAL = os.path.join(os.path.dirname(__file__), "..", "..", "shared", "scenes", "real")
+from common import REAL_DATA, load_real_file, real_file_path
+from test_compiled import assert_engines_agree
+
 
 #: the issue's triangle: exactly collinear (its vertices differ in y only), 1e3 from the
 #: origin
@@ -375,10 +381,7 @@ def test_describe_planarity_and_edges_match_the_per_polygon_definitions(which):
 
     if which == "knot":
         # the knot's quads are bent (up to 0.014 of their diameter): planarity counts
-        path = os.path.join(REAL, "quadknot.obj")
-        if not os.path.exists(path):
-            pytest.skip("the shared real files are not beside this clone")
-        scene = ef.load_scene(path, planarity_rtol=0.1)
+        scene = ef.load_scene(os.path.join(REAL_DATA, "quadknot.obj"), planarity_rtol=0.1)
     else:
         scene = {"cornell": ef.scenes.cornell_box, "office": lambda: ef.scenes.office(400),
                  "desk": _desk_room}[which]()
@@ -436,3 +439,176 @@ def test_collected_errors_keep_no_frame_alive():
     with pytest.raises(ef.SceneError) as info:     # raised: the traceback is kept
         ef.validate_polygons([FAR_COLLINEAR])
     assert info.value.__traceback__ is not None
+
+
+
+# ---------------------------------------------------------------------------------------
+# issue 50: the real files vendored in tests/data/real (sources: tests/data/README.md),
+# read against their own text, rows that close, and the engines' agreement
+# ---------------------------------------------------------------------------------------
+#: file -> (load_scene options, polygons, groups): counts from shared/scenes/real/README.md
+#: (the knot: 1,440 quads, 1,438 of them bent and split in two)
+REAL_FILES = {
+    "idler_riser.STL": ({}, 1572, None),
+    "ADIS16480.STL": ({}, 7436, None),
+    "quadknot.obj": ({"nonplanar": "split"}, 2878, None),
+    "CornellBox-Sphere.obj": ({}, 2188, None),
+    "CornellBox-Water.obj": ({}, 7088, None),
+    "ifc-Duplex_A.obj": ({}, 26348, 215),
+    "ifc-tested_sample_project.obj": ({}, 76100, 93),
+    "ifc-SampleHouse4.obj": ({}, 25154, 58),
+}
+
+
+#: the building models' pairs flush to 1e-15..4e-13 (describe: near_coplanar_overlaps)
+IFC_FLUSH = {"ifc-Duplex_A.obj": 1716, "ifc-tested_sample_project.obj": 329,
+             "ifc-SampleHouse4.obj": 80}
+
+
+def _raw_text(name, tmp_path):
+    with open(real_file_path(name, str(tmp_path)), "rb") as f:
+        return f.read()
+
+
+def _obj_faces(data):
+    """The faces of an OBJ text as vertex arrays, its group names: a reading of ``v``,
+    ``f`` and ``g`` lines by hand (1-based or negative references, ``i/t/n`` forms)."""
+    verts, faces, groups = [], [], set()
+    for line in data.decode().splitlines():
+        w = line.split()
+        if not w:
+            continue
+        if w[0] == "v":
+            verts.append([float(c) for c in w[1:4]])
+        elif w[0] == "f":
+            refs = [int(r.split("/")[0]) for r in w[1:]]
+            faces.append(np.array([verts[r - 1 if r > 0 else len(verts) + r] for r in refs]))
+        elif w[0] == "g":
+            groups.add(" ".join(w[1:]))
+    return faces, groups
+
+
+def _stl_faces(data):
+    """The triangles of an STL file: binary by its size (84 + 50 per triangle, the count
+    at byte 80), whatever its header says; else ASCII ``vertex`` lines."""
+    (count,) = struct.unpack_from("<I", data, 80)
+    if len(data) == 84 + 50 * count:
+        return [np.array(struct.unpack_from("<9f", data, 84 + 50 * k + 12), dtype=float)
+                .reshape(3, 3) for k in range(count)]
+    V = [[float(c) for c in line.split()[1:4]] for line in data.decode().splitlines()
+         if line.strip().startswith("vertex")]
+    return [np.array(V[k:k + 3]) for k in range(0, len(V), 3)]
+
+
+def _area(P):
+    """Half the norm of the area vector (the polygon's fan of triangles)."""
+    return 0.5 * np.linalg.norm(sum(np.cross(P[k] - P[0], P[k + 1] - P[0])
+                                    for k in range(1, len(P) - 1)))
+
+
+@pytest.mark.parametrize("name", sorted(REAL_FILES))
+def test_real_file_reads_as_its_text(name, tmp_path):
+    options, count, groups = REAL_FILES[name]
+    scene = load_real_file(name, str(tmp_path), **options)
+    data = _raw_text(name, tmp_path)
+    faces, named = _obj_faces(data) if name.endswith(".obj") else (_stl_faces(data), None)
+    assert len(scene) == count
+    if groups is not None:
+        assert len(set(scene.groups)) == len(named) == groups
+    d = ef.describe(scene)
+    assert d["polygons"] == count and d["dropped_faces"] == 0
+    if name in IFC_FLUSH:
+        # the figures measured on the building models (shared/scenes/real/README.md):
+        # planarity within 1.5e-12 of the diameter (rounded there: Duplex_A's is
+        # 1.507e-12), and the pairs flush to 1e-15..4e-13
+        assert d["max_planarity_deviation"] <= 1.51e-12
+        assert len(d["near_coplanar_overlaps"]) == IFC_FLUSH[name]
+    # the total area: the faces' own, summed by hand (a split face keeps its outline;
+    # the knot's bent quads differ by their bend)
+    total = math.fsum(_area(P) for P in faces)
+    assert d["total_area"] == pytest.approx(total, rel=1e-3 if options else 1e-12)
+    if options:
+        return
+    # face by face: the same vertices (STL: single precision, widened exactly)
+    assert len(faces) == count
+    for P, Q in zip(scene.polygons, faces):
+        assert P.shape == Q.shape and np.array_equal(P, Q)
+
+
+def test_binary_stl_whose_header_says_solid(tmp_path):
+    # idler_riser.STL: a binary STL whose 80-byte header starts with "solid", the start
+    # of an ASCII STL: read as binary, by its size (84 + 50 x 1,572 bytes)
+    data = _raw_text("idler_riser.STL", tmp_path)
+    assert data[:5] == b"solid" and len(data) == 84 + 50 * 1572
+    scene = load_real_file("idler_riser.STL", str(tmp_path))
+    assert len(scene) == 1572
+    assert np.array_equal(scene.polygons[0], _stl_faces(data)[0])
+
+
+def _cornell_lid(scene):
+    """The missing front wall of McGuire's Cornell boxes (z = 0.99, between the front
+    edges of floor, walls and ceiling; the boxes' corners from the file), facing in."""
+    V = np.unique(np.concatenate(scene.polygons), axis=0)
+    front = V[V[:, 2] == 0.99]
+    low, high = front[front[:, 1] == front[:, 1].min()], front[front[:, 1] == front[:, 1].max()]
+    corners = [low[np.argmin(low[:, 0])], low[np.argmax(low[:, 0])],
+               high[np.argmax(high[:, 0])], high[np.argmin(high[:, 0])]]
+    return np.array(corners)[::-1]          # clockwise from the front: facing -z, inside
+
+
+def _signed_volume(scene):
+    """The enclosed volume by the divergence theorem (> 0: the normals point out)."""
+    return math.fsum(float(np.dot(P[0], np.cross(P[k], P[k + 1])))
+                     for P in scene.polygons for k in range(1, len(P) - 1)) / 6
+
+
+def _inside_rows(scene, k):
+    """Points just inside a closed surface (1e-6 of its size behind the centroids of its
+    k largest polygons), facing in."""
+    size = np.ptp(np.concatenate(scene.polygons), axis=0).max()
+    rows = []
+    for i in np.argsort(-scene.areas, kind="stable")[:k]:
+        rows.append((scene.centroids[i] - 1e-6 * size * scene.normals[i], -scene.normals[i]))
+    return rows
+
+
+#: closed surfaces: file -> rows (the k-th point _inside_rows gives); the box files are
+#: closed by their missing front wall and seen from points in the room. A row whose
+#: compiled bound is above the accuracy target is marked (issue 48; figures measured)
+ISSUE_48 = "issue 48: the compiled core's bound on real files"
+CLOSED_ROWS = [
+    ("idler_riser.STL", 0),
+    pytest.param("idler_riser.STL", 1, marks=pytest.mark.xfail(
+        strict=False, reason=ISSUE_48 + ": bound 0.32 (row behind polygon 102)")),
+    ("ADIS16480.STL", 0),
+    pytest.param("quadknot.obj", 0, marks=pytest.mark.xfail(
+        strict=False, reason=ISSUE_48 + ": engines part on polygon 850, compiled 0 +- 2.0e-19,"
+        " Python 5.7e-19 +- 1.3e-34; the exact construction does not decide")),
+    ("quadknot.obj", 1),
+    ("CornellBox-Sphere.obj", 0), ("CornellBox-Sphere.obj", 1),
+    ("CornellBox-Water.obj", 0),
+]
+ROOM_POINTS = [(np.array([0.0, 1.2, 0.3]), np.array([0.0, 1.0, 0.0])),
+               (np.array([-0.5, 1.0, 0.0]), np.array([-1.0, 0.0, 0.0]))]
+
+
+def _closed_scene_and_row(name, k, tmp_path):
+    options = REAL_FILES[name][0]
+    scene = load_real_file(name, str(tmp_path), **options)
+    if name.startswith("CornellBox"):
+        scene = ef.Scene.from_polygons(list(scene.polygons) + [_cornell_lid(scene)])
+        p, n = ROOM_POINTS[k]
+    else:
+        # a watertight surface, outward (by its volume): just inside, every direction
+        # ends on it
+        assert ef.describe(scene)["unpaired_edges"] == 0 or name == "idler_riser.STL"
+        assert _signed_volume(scene) > 0
+        p, n = _inside_rows(scene, k + 1)[k]
+    return scene, p, n
+
+
+@pytest.mark.parametrize("name, k", CLOSED_ROWS)
+def test_real_closed_rows_sum_to_one_and_engines_agree(name, k, tmp_path):
+    scene, p, n = _closed_scene_and_row(name, k, tmp_path)
+    # both engines within their bounds and the accuracy target; the row sums to 1
+    assert_engines_agree(scene, p, n, two_sided=True, closed=True)

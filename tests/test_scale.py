@@ -34,7 +34,8 @@ def serial():
 
 @pytest.fixture(scope="module")
 def cluster():
-    distributed = pytest.importorskip("distributed")
+    import distributed
+
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
                                   dashboard_address=None) as c:
         yield c
@@ -122,8 +123,6 @@ def test_the_scene_reaches_each_worker_once(tmp_path, cluster):
 # ---------------------------------------------------------------------------------------
 @pytest.mark.parametrize("suffix, sparse", [(".npy", False), (".zarr", False), (".npz", True)])
 def test_outputs_round_trip_and_refuse_other_computations(tmp_path, serial, suffix, sparse):
-    if suffix == ".zarr":
-        pytest.importorskip("zarr")
     path = str(tmp_path / ("m" + suffix))
     M = ef.form_factor_matrix(SCENE, out=path, sparse=sparse, chunk_rows=5)
     back = ef.load_matrix(path)
@@ -243,8 +242,6 @@ def _done_rows(path, suffix):
 
 @pytest.mark.parametrize("suffix, sparse", [(".npy", False), (".zarr", False), (".npz", True)])
 def test_sigkill_then_resume_gives_the_identical_matrix(tmp_path, serial, suffix, sparse):
-    if suffix == ".zarr":
-        pytest.importorskip("zarr")
     out, log = str(tmp_path / ("m" + suffix)), str(tmp_path / "killed.log")
     code = KILLED.format(tests=str(ROOT / "tests"), log=log, out=out, sparse=sparse)
     proc = subprocess.Popen([sys.executable, "-c", code], cwd=tmp_path, env=checkout_env())

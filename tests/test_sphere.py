@@ -246,13 +246,13 @@ def test_sphere_shortcuts_are_neutral():
         assert_form_factors_close(b, a, rtol=0, atol=1e-14)
 
 
-def test_sphere_hemispheres_add_up_and_engines_agree():
+def test_sphere_hemispheres_add_up():
+    # (both engine names are served by the Python engine: the compiled core has no
+    # solid-angle measure, as hemisphere_solid_angles documents; no engine comparison)
     scene = ef.scenes.cornell_box(closed=True)
     p = np.array([200.0, 300.0, 250.0])
-    halves = [hemisphere_solid_angles(scene, p, n, engine=e)
-              for n in ([0, 0, 1.0], [0, 0, -1.0]) for e in ("compiled", "python")]
-    assert np.array_equal(halves[0][0], halves[1][0])
-    total = halves[0][0] + halves[2][0]
+    halves = [hemisphere_solid_angles(scene, p, n) for n in ([0, 0, 1.0], [0, 0, -1.0])]
+    total = halves[0][0] + halves[1][0]
     assert abs(total.sum() - FOUR_PI) <= 1e-11
     # any frame: the hemispheres about x give the same sphere
     other = sum(hemisphere_solid_angles(scene, p, n)[0] for n in ([1.0, 0, 0], [-1.0, 0, 0]))

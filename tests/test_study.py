@@ -3,6 +3,7 @@
 
 import json
 
+import matplotlib
 import numpy as np
 import pytest
 
@@ -10,7 +11,6 @@ import exactff as ef
 from exactff.cli import main
 from exactff.reports import compare
 
-matplotlib = pytest.importorskip("matplotlib")
 matplotlib.use("Agg")
 
 
