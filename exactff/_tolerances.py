@@ -104,6 +104,7 @@ __all__ = [
     "AREA_CUT_EXTEND_RTOL",
     "AREA_CELL_COVER_RTOL",
     "AREA_MAX_DEPTH",
+    "AREA_RULE_CHECK_SHARE",
     "AREA_EDGE_TERMS_PER_CALL",
     "AREA_EVENT_ROWS_PER_CALL",
     "REMAINDER_SPLIT_POLYGONS",
@@ -499,6 +500,10 @@ AREA_SYMMETRIC_DEGREES = (4, 8)
 #: 5 % fewer points; test4 and facet 6 to 10 % faster); at 1e-9 the large cells of
 #: test4 and facet take the higher pair in the end, and starting low cost them 15 %.
 AREA_LOW_RULES_TOLERANCE = 1e-7
+#: Area form factors: a triangle whose rules' difference the closed form of the
+#: unoccluded part shows to be too small (``occluded._checked_difference``) is refined,
+#: where what it shows exceeds this share of the triangle's share of the tolerance.
+AREA_RULE_CHECK_SHARE = 0.1
 #: Area form factors: an end of an event line cut to the emitter this close to its
 #: boundary (relative to its size, the square root of its area) is moved out by as much
 #: before the lines are noded, so that it crosses the boundary (as GEOS rounds it, a

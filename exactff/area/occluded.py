@@ -53,12 +53,15 @@ __all__ = ["area_row", "STATS"]
 #: was cut along the events another way (GEOS failed, or the cells did not cover it:
 #: the lines as cut, or on a fine grid; ``cell_fallbacks``); and what was done:
 #: ``occluded_pairs``, ``point_values``
-#: (hidden parts evaluated).
+#: (hidden parts evaluated); and the check of the rules' differences (not a shortcut):
+#: triangles checked one by one against their closed form where a pair's sum missed
+#: (``checked_triangles``), and those the check sent back to be refined
+#: (``refined_triangles``).
 STATS = ("enclosure_unoccluded_pairs", "hull_unoccluded_pairs", "hull_culled_blockers",
          "shaft_culled_blockers",
          "shaft_unoccluded_pairs", "far_pairs", "culled_events", "solid_events",
          "back_faces", "bounded_points", "engine_fallbacks", "engine_fallback_points", "cell_fallbacks", "occluded_pairs",
-         "point_values")
+         "point_values", "checked_triangles", "refined_triangles")
 
 
 def _padded(polys):
@@ -681,6 +684,23 @@ def _rule_pair(T, rung, corner, tolerance):
     return tuple(triangle_rule(T, rule) for rule in _RULE_PAIRS[rung])
 
 
+def _triangle_unoccluded(T, nP, Qc):
+    """``int_T F(x -> Qc) dA_x`` for each triangle T (t, 3, 3) in the plane of normal nP,
+    unoccluded (Qc wholly in front of that plane, each T in front of Qc's), and its
+    rounding estimate: by reciprocity ``A_Qc F(Qc -> T)``, the closed form
+    (:func:`~exactff.area.contour.unoccluded_pairs`, no fallback: where its terms cancel
+    the estimate says so)."""
+    if not len(T):
+        return np.zeros(0), np.zeros(0)
+    # counter-clockwise seen from nP's side
+    flip = np.einsum("tx,x->t", cross(T[:, 1] - T[:, 0], T[:, 2] - T[:, 0]), nP) < 0
+    T = np.where(flip[:, None, None], T[:, ::-1], T)
+    f, e = unoccluded_pairs(Qc, list(T), far=False, atol=np.inf,
+                            parts=[(Qc, t) for t in T])
+    area_Q = float(np.linalg.norm(area_vector(Qc)))
+    return area_Q * f, area_Q * e
+
+
 def _triangle_areas(T):
     """The areas of triangles T (t, 3, 3)."""
     return 0.5 * np.linalg.norm(cross(T[:, 1] - T[:, 0], T[:, 2] - T[:, 0]), axis=1)
@@ -817,15 +837,92 @@ def _hidden_integral(S, Pc, Qc, nP, tolerance, area_P, whole, shortcuts, st, sol
     # what the bound 0 <= hidden <= unoccluded may cost the pair (_hidden_values)
     bound_budget = [tol.AREA_IMAGE_BUDGET_SHARE * tolerance]
     total_area = float(_triangle_areas(T).sum())
-    hidden = err = rules_err = 0.0
-    points = 0
+    slivers = points = 0
+    # the triangles accepted: vertices, level, rung; per unit area of P, the high rule's
+    # integral of the hidden part H, the rules' difference on H, the point values'
+    # estimates, and the same two rules' integrals of U (the unoccluded point values)
+    acc = {k: [] for k in ("T", "depth", "rung", "corner", "hi", "diff", "rnd", "hiU", "loU",
+                           "lo", "rndU", "checked")}
+    while True:
+        T, depth, rung, corner, sl, pts = _adaptive_levels(
+            T, depth, rung, corner, nP, Qc, S, st, setup, tolerance, area_P, total_area,
+            start, shortcuts, bound_budget, acc)
+        slivers += sl
+        points += pts
+        # the rules' errors on U add up to the error of their sum over the emitter,
+        # known exactly (the pair's closed form less the slivers', at most their area):
+        # where the differences bounded every triangle's errors on H and on F_occ = U -
+        # H, that sum is within the differences' (_checked_difference); where it is
+        # not, the triangles are checked one by one against their own closed forms, and
+        # those whose differences prove too small are refined
+        cat = {k: np.concatenate(v) if v else np.zeros(0) for k, v in acc.items()}
+        dF = np.abs((cat["hiU"] - cat["loU"]) - (cat["hi"] - cat["lo"]))
+        lost = (slivers + max(area_Pc - total_area, 0.0)) / area_P
+        missed_U = (abs(float(cat["hiU"].sum()) - whole[0]) - float((cat["diff"] + dF).sum())
+                    - float(cat["rndU"].sum()) - whole[1] - lost)
+        todo = np.flatnonzero(~cat["checked"].astype(bool))
+        if missed_U <= 0 or not len(todo):
+            break
+        Ta = np.concatenate(acc["T"])
+        exU, exE = _triangle_unoccluded(Ta[todo], nP, Qc)
+        shown = (np.abs(cat["hiU"][todo] - exU / area_P) - dF[todo] - cat["rndU"][todo]
+                 - exE / area_P)
+        cat["diff"][todo] = np.maximum(cat["diff"][todo], shown)
+        cat["checked"][todo] = True
+        share = 0.5 * tolerance / total_area * _triangle_areas(Ta)
+        suspect = np.zeros(len(Ta), dtype=bool)
+        suspect[todo] = shown > tol.AREA_RULE_CHECK_SHARE * share[todo]
+        a_rung, a_depth = cat["rung"].astype(int), cat["depth"].astype(int)
+        again = suspect & ~((a_rung == 1) & (a_depth >= tol.AREA_MAX_DEPTH))
+        if st is not None:
+            st["checked_triangles"] = st.get("checked_triangles", 0) + len(todo)
+            st["refined_triangles"] = st.get("refined_triangles", 0) + int(again.sum())
+        keep = ~again
+        for k in acc:
+            acc[k] = [cat[k][keep] if k != "T" else Ta[keep]]
+        if not again.any():
+            break
+        # the suspects start again: rung 0 takes the high pair, rung 1 is cut in four
+        T, depth, rung, corner = _refined(Ta[again], a_depth[again], a_rung[again],
+                                          cat["corner"][again].astype(bool), start)
+    cat = {k: np.concatenate(v) if v else np.zeros(0) for k, v in acc.items()}
+    hidden = 0.5 * slivers / area_P + float(cat["hi"].sum())
+    err = 0.5 * slivers / area_P + float((cat["diff"] + cat["rnd"]).sum())
+    value = whole[0] - hidden
+    err += max(area_Pc - total_area, 0.0) / area_P      # cells dropped or lost
+    return value, err + whole[1], points
+
+
+def _refined(T, depth, rung, corner, start):
+    """Triangles that missed their share: at rung 0 the same triangle at rung 1; at rung 1
+    its four quarters (cut at its edges' midpoints; the first keeps a corner, the first
+    vertex) at the level below, on rung ``start``. Returns ``(T, depth, rung, corner)``."""
+    again, split = rung == 0, rung == 1
+    a_, b_, c_ = T[split, 0], T[split, 1], T[split, 2]
+    ab, bc, ca = (a_ + b_) / 2, (b_ + c_) / 2, (c_ + a_) / 2
+    T = np.concatenate([T[again], np.stack([np.stack(t, axis=1) for t in
+                        ((a_, ab, ca), (ab, b_, bc), (ca, bc, c_), (ab, bc, ca))],
+                        axis=1).reshape(-1, 3, 3)])
+    depth = np.concatenate([depth[again], np.repeat(depth[split] + 1, 4)])
+    corner = np.concatenate([corner[again], np.stack(
+        [corner[split]] + [np.zeros(int(split.sum()), dtype=bool)] * 3, axis=1).ravel()])
+    rung = np.concatenate([np.ones(int(again.sum()), dtype=int),
+                           np.full(4 * int(split.sum()), start)])
+    return T, depth, rung, corner
+
+
+def _adaptive_levels(T, depth, rung, corner, nP, Qc, S, st, setup, tolerance, area_P,
+                     total_area, start, shortcuts, bound_budget, acc):
+    """:func:`_hidden_integral`'s adaptive rules, level by level until every triangle is
+    accepted: the accepted ones appended to ``acc`` (see there). Returns the (empty)
+    triangles left, the slivers' area (not evaluated) and the points used."""
+    slivers = points = 0
     while len(T):
         # a sliver (between nearly coincident events) is not evaluated: the hidden part
         # is between 0 and 1, so its integral is half the sliver's area, within as much
         area_t = _triangle_areas(T)
         sliver = area_t / area_P <= tol.AREA_SLIVER_SHARE * tolerance
-        hidden += 0.5 * float(area_t[sliver].sum()) / area_P
-        err += 0.5 * float(area_t[sliver].sum()) / area_P
+        slivers += float(area_t[sliver].sum())
         T, depth, rung, area_t = T[~sliver], depth[~sliver], rung[~sliver], area_t[~sliver]
         corner = corner[~sliver]
         if not len(T):
@@ -839,27 +936,37 @@ def _hidden_integral(S, Pc, Qc, nP, tolerance, area_P, whole, shortcuts, st, sol
                 X.append(np.concatenate([Xl, Xh], axis=1).reshape(-1, 3))
                 weights.append(np.concatenate([Wl, Wh], axis=1).reshape(-1) / area_P)
                 groups.append((sel, Wl, Wh))
-        H, EH = _hidden_values(np.concatenate(X), nP, Qc, S[1:], st,
+        X = np.concatenate(X)
+        H, EH = _hidden_values(X, nP, Qc, S[1:], st,
                                budget=tol.AREA_IMAGE_BUDGET_SHARE * tolerance, setup=setup,
                                weights=np.concatenate(weights) if shortcuts else None,
                                bound_budget=bound_budget)
+        # the unoccluded point values at the same nodes, for the check of the rules'
+        # differences (_hidden_integral)
+        U, EU = (v[0] for v in point_values(X, nP, [Qc]))
         points += H.size
-        hi, diff, rnd = np.empty(len(T)), np.empty(len(T)), np.empty(len(T))
+        hi, lo, rnd = np.empty(len(T)), np.empty(len(T)), np.empty(len(T))
+        hiU, loU, rndU = np.empty(len(T)), np.empty(len(T)), np.empty(len(T))
         at = 0
         for sel, Wl, Wh in groups:
             nl, n = Wl.shape[1], len(sel) * (Wl.shape[1] + Wh.shape[1])
             Hg, EHg = H[at:at + n].reshape(len(sel), -1), EH[at:at + n].reshape(len(sel), -1)
+            Ug, EUg = U[at:at + n].reshape(len(sel), -1), EU[at:at + n].reshape(len(sel), -1)
             at += n
-            hi[sel] = (Wh * Hg[:, nl:]).sum(axis=1)
-            diff[sel] = np.abs(hi[sel] - (Wl * Hg[:, :nl]).sum(axis=1)) / area_P
+            hi[sel], lo[sel] = (Wh * Hg[:, nl:]).sum(axis=1), (Wl * Hg[:, :nl]).sum(axis=1)
+            hiU[sel], loU[sel] = (Wh * Ug[:, nl:]).sum(axis=1), (Wl * Ug[:, :nl]).sum(axis=1)
             # the high rule's nodes' estimates, and the low rule's: they bound what the
             # point values' errors can hide of the rules' difference
-            rnd[sel] = ((Wh * EHg[:, nl:]).sum(axis=1) + (Wl * EHg[:, :nl]).sum(axis=1)) / area_P
+            rnd[sel] = (Wh * EHg[:, nl:]).sum(axis=1) + (Wl * EHg[:, :nl]).sum(axis=1)
+            rndU[sel] = (Wh * EUg[:, nl:]).sum(axis=1) + (Wl * EUg[:, :nl]).sum(axis=1)
+        hi, lo, rnd, hiU, loU, rndU = (v / area_P for v in (hi, lo, rnd, hiU, loU, rndU))
+        diff = np.abs(hi - lo)
         # half the tolerance for the rules' differences: what the triangles accepted so
         # far left of it is shared among the others by area (at the first level, the
         # triangle's share of the emitter), never less than the triangle's share of the
         # emitter (triangles accepted at the last level above their share would
         # otherwise leave none, and every other triangle would be cut to the last level)
+        rules_err = float(sum(float(d.sum()) for d in acc["diff"]))
         budget = max(0.5 * tolerance - rules_err, 0.0)
         share = np.maximum(budget / area_t.sum(), 0.5 * tolerance / total_area) * area_t
         missed = diff > share
@@ -868,23 +975,13 @@ def _hidden_integral(S, Pc, Qc, nP, tolerance, area_P, whole, shortcuts, st, sol
         again = missed & (rung == 0)
         split = missed & (rung == 1) & (depth < tol.AREA_MAX_DEPTH)
         done = ~(again | split)
-        hidden += float(hi[done].sum()) / area_P
-        rules_err += float(diff[done].sum())
-        err += float(diff[done].sum() + rnd[done].sum())
-        a_, b_, c_ = T[split, 0], T[split, 1], T[split, 2]
-        ab, bc, ca = (a_ + b_) / 2, (b_ + c_) / 2, (c_ + a_) / 2
-        T = np.concatenate([T[again], np.stack([np.stack(t, axis=1) for t in
-                            ((a_, ab, ca), (ab, b_, bc), (ca, bc, c_), (ab, bc, ca))],
-                            axis=1).reshape(-1, 3, 3)])
-        depth = np.concatenate([depth[again], np.repeat(depth[split] + 1, 4)])
-        # the first quarter keeps the corner (its first vertex), the others have none
-        corner = np.concatenate([corner[again], np.stack(
-            [corner[split]] + [np.zeros(int(split.sum()), dtype=bool)] * 3, axis=1).ravel()])
-        rung = np.concatenate([np.ones(int(again.sum()), dtype=int),
-                               np.full(4 * int(split.sum()), start)])
-    value = whole[0] - hidden
-    err += max(area_Pc - total_area, 0.0) / area_P      # cells dropped or lost
-    return value, err + whole[1], points
+        for k, v in (("T", T), ("depth", depth), ("rung", rung), ("corner", corner),
+                     ("hi", hi), ("lo", lo), ("diff", diff), ("rnd", rnd), ("hiU", hiU),
+                     ("loU", loU), ("rndU", rndU), ("checked", np.zeros(len(T), dtype=bool))):
+            acc[k].append(v[done])
+        T, depth, rung, corner = _refined(T[again | split], depth[again | split],
+                                          rung[again | split], corner[again | split], start)
+    return T, depth, rung, corner, slivers, points
 
 
 def _front_pairs(polys, i, nP, padded):
