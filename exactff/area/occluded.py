@@ -19,7 +19,7 @@ from .. import _tolerances as tol
 from ..errors import NumericalError, misses_tolerance
 from ..geometry import area_vector, cross, receiver_frame, unit_normal
 from ..methods import Exact
-from ..predicates import coplanar_band_sides
+from ..predicates import coplanar_band_sides, coplanar_pairs
 from ..prepared import prepared
 from ..visibility import convex_pieces, is_convex_enclosure
 from ..rings import padded, successors
@@ -999,6 +999,66 @@ def _front_pairs(polys, i, nP, padded):
             if Pc is not None and Qc is not None]
 
 
+def _tie_covers(scene):
+    """The depth ties of coplanar overlapping polygons, for area rows: per polygon j, the
+    polygons that cover part of it from any point in front of it, by the tie rule
+    (:func:`exactff.predicates.tie_priority`): those coplanar with it
+    (:func:`exactff.predicates.coplanar_pairs`, the BSP tree's rule), facing the same way
+    and earlier in input order, whose overlap with it has an area above
+    ``AREA_SLIVER_CELL`` of its own (a window on its wall, given first: the wall
+    receives only around it). A polygon facing the other way shows its back to every
+    point in front of j, and the rule puts j in front of it. Returns a dict of the
+    covered polygons only, ``{j: [k, ...]}``."""
+    polys = [np.asarray(p, dtype=float) for p in scene.polygons]
+    n = len(polys)
+    if n < 2:
+        return {}
+    N, D = scene.normals, scene.plane_offsets
+    lo = np.array([p.min(axis=0) for p in polys])
+    hi = np.array([p.max(axis=0) for p in polys])
+    size = float(np.ptp(scene.vertices, axis=0).max()) or 1.0
+    near = tol.AREA_HULL_RTOL * size
+    out = {}
+    for j in range(1, n):
+        # earlier polygons facing the same way whose boxes overlap j's with interior
+        # (coplanar ones share a flat box: its thickness is not required to overlap)
+        k = np.flatnonzero((N[:j] @ N[j] > 0)
+                           & np.all((hi[:j] > lo[j] - near) & (lo[:j] < hi[j] + near), axis=1))
+        if not len(k):
+            continue
+        k = k[coplanar_pairs(scene.vertices, scene.offsets, N, D, k, np.full(len(k), j))]
+        if not len(k):
+            continue
+        _, q0, RQ, Q2 = _plane_frame(polys[j])
+        Qs = shapely.Polygon(Q2)
+        K2 = shapely.polygons([(polys[m] - q0) @ RQ[:2].T for m in k])
+        over = shapely.area(shapely.intersection(K2, Qs)) > tol.AREA_SLIVER_CELL * Qs.area
+        if over.any():
+            out[j] = [int(m) for m in k[over]]
+    return out
+
+
+def _uncovered(Qc, covers):
+    """The part of the receiver Qc (clipped, planar) that the polygons ``covers`` do not
+    cover (:func:`_tie_covers`), as triangles (t, 3, 3), counter-clockwise seen from Qc's
+    front, in Qc's plane (the covers projected onto it); none where nothing is left."""
+    nQ, q0, RQ, Q2 = _plane_frame(Qc)
+    whole = shapely.Polygon(Q2)
+    region = shapely.difference(whole, shapely.union_all(
+        shapely.polygons([(K - q0) @ RQ[:2].T for K in covers])))
+    parts = shapely.get_parts(region)
+    parts = parts[(shapely.get_type_id(parts) == 3)
+                  & (shapely.area(parts) > tol.AREA_SLIVER_CELL * whole.area)]
+    if not len(parts):
+        return np.zeros((0, 3, 3))
+    tris = shapely.get_parts(shapely.constrained_delaunay_triangles(parts))
+    uv = shapely.get_coordinates(shapely.get_exterior_ring(tris)).reshape(-1, 4, 2)[:, :3]
+    T = q0 + uv @ RQ[:2]
+    flip = np.einsum("tx,x->t", cross(T[:, 1] - T[:, 0], T[:, 2] - T[:, 0]), nQ) < 0
+    T = np.where(flip[:, None, None], T[:, ::-1], T)
+    return T[_triangle_areas(T) > tol.AREA_SLIVER_CELL * whole.area]
+
+
 def _unoccluded_values(polys, i, pairs, shortcuts, st, tolerance, rtol):
     """The values and estimates of a row's unoccluded pairs ``(j, Pc, Qc)``, all at once
     by the closed form (:func:`~exactff.area.contour.unoccluded_pairs`), with the far
@@ -1063,23 +1123,50 @@ def area_row(scene, i, tolerance, *, rtol=None, shortcuts=True, stats=None):
     AP = area_vector(P)
     area_P = float(np.linalg.norm(AP))
     nP = AP / area_P
-    f, e = np.zeros(len(polys)), np.zeros(len(polys))
+    n = len(polys)
+    f, e = np.zeros(n), np.zeros(n)
     pairs = _front_pairs(polys, i, nP, padded)
-    if not pairs:
+    # a receiver that coplanar polygons earlier in input order partly cover (the tie
+    # rule) receives only its uncovered part, as triangles: receivers n, n + 1, ... of
+    # the row, each adding to its polygon's value (owner)
+    covers = prepared(scene).get("area_tie_covers", _tie_covers)
+    owner = list(range(n))
+    receivers = list(polys)
+    if covers and any(j in covers for j, _, _ in pairs):
+        tied = []
+        for j, Pc, Qc in pairs:
+            if j not in covers:
+                tied.append((j, Pc, Qc))
+                continue
+            for T in _uncovered(Qc, [polys[k] for k in covers[j]]):
+                tied.append((len(receivers), Pc, T))
+                receivers.append(T)
+                owner.append(j)
+        pairs = tied
+    owner = np.array(owner)
+    fx, ex = np.zeros(len(receivers)), np.zeros(len(receivers))
+    # the tolerance of a value shared among its receiver's parts
+    share = 1.0 / np.bincount(owner, minlength=n)[owner]
+    tolerance_all = tolerance * float(share.min())
+
+    def result():
+        # each receiver's parts added up
         if stats is not None:
             stats.update(st)
-        return f, e
+        return (np.bincount(owner, fx, minlength=n)[:n], np.bincount(owner, ex, minlength=n)[:n])
+
+    if not pairs:
+        return result()
     # a convex enclosure (every vertex in front of or on every polygon's plane, no
     # coplanar overlaps): nothing can come between any pair
     enclosure = shortcuts and is_convex_enclosure(scene)
     if enclosure:
         st["enclosure_unoccluded_pairs"] += len(pairs)
-        js, f[js], e[js] = _unoccluded_values(polys, i, pairs, shortcuts, st, tolerance, rtol)
-        if stats is not None:
-            stats.update(st)
-        return f, e
+        js, fx[js], ex[js] = _unoccluded_values(receivers, i, pairs, shortcuts, st,
+                                                tolerance_all, rtol)
+        return result()
     if shortcuts:
-        J = np.array([j for j, _, _ in pairs])
+        J = owner[[j for j, _, _ in pairs]]
         boxes = np.array([(Pc.min(axis=0), Pc.max(axis=0), Qc.min(axis=0), Qc.max(axis=0))
                           for _, Pc, Qc in pairs])
         # the pairs in batches: each batch tests its pairs against every polygon
@@ -1095,24 +1182,25 @@ def area_row(scene, i, tolerance, *, rtol=None, shortcuts=True, stats=None):
             B = _hull_blockers(V, cands[a], Pc, Qc, near)
             st["hull_culled_blockers"] += len(polys) - 2 - len(B)
         else:
-            B = [k for k in range(len(polys)) if k not in (i, j)]
+            B = [k for k in range(len(polys)) if k not in (i, owner[j])]
         if B:
             st["occluded_pairs"] += 1
             solid = inner = None
             if shortcuts:
+                jj = owner[j]
                 solid = np.concatenate([[-1], _closed_solids(
-                    solids, np.array(B), (scene.normals[[i, j]], scene.plane_offsets[[i, j]]))])
+                    solids, np.array(B), (scene.normals[[i, jj]], scene.plane_offsets[[i, jj]]))])
                 # a point inside each solid's hull, the mean of its vertices, where every
                 # member is a blocker, the emitter, the receiver, or on or behind one's
                 # plane (no line of sight meets it): one culled otherwise, as within
                 # rounding of the shaft's planes, would not hide what the members seen
                 # from behind hide, and they are skipped
                 inner = np.full((len(solid), 3), np.nan)
-                kept = set(B) | {i, j}
+                kept = set(B) | {i, jj}
                 N, D = scene.normals, scene.plane_offsets
                 for g in set(solid[solid >= 0].tolist()):
                     if all(k in kept or (polys[k] @ N[i] - D[i]).max() <= 0
-                           or (polys[k] @ N[j] - D[j]).max() <= 0
+                           or (polys[k] @ N[jj] - D[jj]).max() <= 0
                            for k in np.flatnonzero(solids[0] == g).tolist()):
                         inner[solid == g] = solids[2][g].mean(axis=0)
             occluded.append(((j, Pc, Qc), B, solid, inner))
@@ -1124,18 +1212,17 @@ def area_row(scene, i, tolerance, *, rtol=None, shortcuts=True, stats=None):
         # the occluded pairs unoccluded, together: each estimate may take a share of the
         # tolerance
         _, whole, whole_err = _unoccluded_values(
-            polys, i, [pair for pair, _, _, _ in occluded], shortcuts, st,
-            tol.AREA_WHOLE_TOLERANCE_SHARE * tolerance, None)
+            receivers, i, [pair for pair, _, _, _ in occluded], shortcuts, st,
+            tol.AREA_WHOLE_TOLERANCE_SHARE * tolerance_all, None)
     for ((j, Pc, Qc), B, solid, inner), w, we in zip(occluded, whole if occluded else [],
                                                     whole_err if occluded else []):
-        f[j], e[j], points = _occluded_pair([polys[j]] + [polys[k] for k in B], Pc, Qc, nP,
-                                            tolerance, area_P, (float(w), float(we)),
-                                            shortcuts, st, rtol, solid, inner)
+        fx[j], ex[j], points = _occluded_pair([receivers[j]] + [polys[k] for k in B], Pc, Qc,
+                                              nP, tolerance * share[j], area_P,
+                                              (float(w), float(we)),
+                                              shortcuts, st, rtol, solid, inner)
         st["point_values"] += points
-        f[j] = nonnegative(f[j], e[j])
+        fx[j] = nonnegative(fx[j], ex[j])
     if unoccluded:
-        js, f[js], e[js] = _unoccluded_values(polys, i, unoccluded, shortcuts, st, tolerance,
-                                              rtol)
-    if stats is not None:
-        stats.update(st)
-    return f, e
+        js, fx[js], ex[js] = _unoccluded_values(receivers, i, unoccluded, shortcuts, st,
+                                                tolerance_all, rtol)
+    return result()
