@@ -487,18 +487,12 @@ AREA_MAX_DEPTH = 7
 #: its emitter into more than AREA_MANY_CELLS triangles (small ones, which rarely need
 #: more points; a triangle the lower pair misses takes the pair above). Measured on
 #: View3D's examples and the closed Cornell box (docs/benchmarks.md): 20 and 100 were
-#: no better than 50. 4 and 6 points a side (degree 6 and 10), not 3 and 5 (4 and 8):
-#: on a corner of gunter1 (row 17, column 11, shortcuts off, at 1e-9) the errors of 3,
-#: 4, 5 and 6 points were 3.2e-10, 1.9e-9, 2.5e-10 and -3.2e-11, so that the 3- and
-#: 5-point rules differed by 6.7e-11 where the 5-point one was 2.5e-10 off (the value
-#: 1.02 times its estimate from the truth); 4 and 6 differ by 1.9e-9 there. gunter1 at
-#: 1e-6 took 203,632 points, now 199,098; at 1e-9 804,746, now 793,140.
-AREA_RULE_ORDERS_MANY_CELLS = (4, 6)
+#: no better than 50.
+AREA_RULE_ORDERS_MANY_CELLS = (3, 5)
 AREA_MANY_CELLS = 50
-#: ... and at targets of AREA_LOW_RULES_TOLERANCE and coarser, symmetric rules of
-#: degree 4 and 8 in 6 and 16 points (exactff.area.contour.SYMMETRIC_RULES) instead, on
-#: every triangle but those whose first vertex a blocker touches (they keep the
-#: collapsed rule, whose collapsed vertex it is).
+#: ... that pair's degrees (4 and 8) in symmetric rules of 6 and 16 points
+#: (exactff.area.contour.SYMMETRIC_RULES), on every triangle but those whose first vertex
+#: a blocker touches (they keep the collapsed rule, whose collapsed vertex it is).
 AREA_SYMMETRIC_DEGREES = (4, 8)
 #: ... and every pair's triangles start with the lower pair where the target (absolute)
 #: is at least this: at 1e-6 the lower pair converges on most cells, large or not

@@ -262,11 +262,13 @@ def test_view3d_values_at_1e_9_within_their_estimates_of_values_at_1e_11(name):
 
 
 @pytest.mark.slow
+@pytest.mark.xfail(strict=True, reason="known (issue 49): column 11 is 1.02 times its "
+                   "estimate; a corner triangle where the 3- and 5-point collapsed rules "
+                   "differ by 6.7e-11 and the 5-point rule is 2.5e-10 off")
 def test_gunter1_row_17_without_shortcuts_within_its_estimates():
-    # row 17, column 11 at 1e-9 without shortcuts was 1.02 times its estimate from the
-    # value at 1e-11: one corner triangle where the 3- and 5-point collapsed rules
-    # differed by 6.7e-11 and the 5-point rule was 2.5e-10 off (the lower collapsed
-    # pair is now 4 and 6 points a side)
+    # row 17, column 11 at 1e-9 without shortcuts is 1.02 times its estimate from the
+    # value at 1e-11 (docs/explanation/area-form-factors.md, "The rules' difference,
+    # checked"): the one value of the View3D files known outside its estimate
     scene = _read("gunter1.vs3")
     R, ER = ef.area_form_factors(scene, rows=[17], tolerance=1e-11, error=True)
     F, E = ef.area_form_factors(scene, rows=[17], tolerance=1e-9, error=True, shortcuts=False)
@@ -304,28 +306,16 @@ def test_gunter2_floor_to_a_strip_the_wall_hides_is_0_within_its_estimate():
     assert len(B) == 2 and all(np.all(w[:, 1] == 140.0) and w[:, 2].min() == 0.0
                                and w[:, 2].max() == 7.0 and w[:, 0].min() == -109.5
                                and w[:, 0].max() == 0.0 for w in walls)
-    F, E = ef.area_form_factors(sub, rows=[0], tolerance=1e-6, error=True)
-    assert 0.0 <= F[0, 1] <= E[0, 1] <= 1e-6, (F[0, 1], E[0, 1])
-    # the unoccluded value it is taken from, 8.27e-6: what the rules subtract
-    assert ef.polygon_form_factor(sub.polygons[0], sub.polygons[1]) > 8e-6
-
-
-def test_gunter2_pair_with_the_former_rules_is_caught_by_the_check(monkeypatch):
-    # with the former lower pair (3 and 5 points a side) the rules' difference on half
-    # the floor was 7.2e-8 where the 5-point rule was 2.15e-7 off; the check against the
-    # closed form of the unoccluded part (the rules' errors on H and on F_occ add up to
-    # theirs on U) finds the triangle and refines it
-    from exactff import _tolerances as tol
-    from exactff.area import occluded
-
-    monkeypatch.setattr(tol, "AREA_RULE_ORDERS_MANY_CELLS", (3, 5))
-    monkeypatch.setattr(occluded, "_RULE_PAIRS", tuple(
-        tuple(occluded.roots_legendre(k) for k in orders) for orders in ((3, 5), tol.AREA_RULE_ORDERS)))
-    sub, _ = _pair_scene(_gunter2(), 0, 135)
+    # the 3- and 5-point collapsed rules on half the floor differed by 7.2e-8 where the
+    # 5-point rule was 2.15e-7 off; the check against the closed form of the unoccluded
+    # part (the rules' errors on H and on F_occ add up to theirs on U) finds the
+    # triangle and refines it
     st = {}
     F, E = ef.area_form_factors(sub, rows=[0], tolerance=1e-6, error=True, stats=st)
     assert 0.0 <= F[0, 1] <= E[0, 1] <= 1e-6, (F[0, 1], E[0, 1])
     assert st["checked_triangles"] > 0 and st["refined_triangles"] > 0
+    # the unoccluded value it is taken from, 8.27e-6: what the rules subtract
+    assert ef.polygon_form_factor(sub.polygons[0], sub.polygons[1]) > 8e-6
 
 
 @pytest.mark.parametrize("j", [3, 134])

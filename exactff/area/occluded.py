@@ -672,11 +672,11 @@ _RULE_PAIRS = tuple(tuple(roots_legendre(k) for k in orders) for orders in
 
 def _rule_pair(T, rung, corner, tolerance):
     """The nodes and weights of the two rules of rung ``rung`` on the triangles T (t, 3,
-    3): at rung 0 the symmetric rules of degree 4 and 8 (6 and 16 nodes) at targets of
-    ``AREA_LOW_RULES_TOLERANCE`` and coarser, else (and where the first vertex is a
-    corner that a blocker touches) the collapsed rules of 4 and 6 points a side (degree
-    6 and 10, 16 and 36 nodes: their collapsed vertex integrates functions of the
-    direction from it); at rung 1 the collapsed rules of 6 and 10 points a side."""
+    3): at rung 0 the symmetric rules of degree 4 and 8 (6 and 16 nodes), or where the
+    first vertex is a corner that a blocker touches, the collapsed rules of the same
+    degrees (3 and 5 points a side, 9 and 25 nodes: their collapsed vertex integrates
+    functions of the direction from it); at rung 1 the collapsed rules of 6 and 10
+    points a side."""
     # (symmetric only at coarse targets: at 1e-9 their difference missed the closed
     # Cornell box's back-to-right-wall error, 4.2e-10 against 1.8e-10)
     if rung == 0 and not corner and tolerance >= tol.AREA_LOW_RULES_TOLERANCE:
@@ -762,9 +762,10 @@ def _occluded_pair(S, Pc, Qc, nP, tolerance, area_P, whole, shortcuts=True, st=N
     Gauss-Legendre rules (6 and 10 points a side), a triangle cut in four where the two
     differ by more than its share of the tolerance. Where the events cut Pc into more
     than ``AREA_MANY_CELLS`` triangles (small ones), or the target is at least
-    ``AREA_LOW_RULES_TOLERANCE``, each starts with a lower pair (the symmetric rules of
-    6 and 16 points, or the collapsed ones of 4 and 6 points a side; :func:`_rule_pair`)
-    and takes the higher pair where that pair misses its share.
+    ``AREA_LOW_RULES_TOLERANCE``, each starts with a lower pair (degrees 4 and 8: the
+    symmetric rules of 6 and 16 points, or the collapsed ones of 3 and 5 points a side
+    where a blocker touches its first vertex; :func:`_rule_pair`) and takes the higher
+    pair where that pair misses its share.
     Returns the value, its error estimate (the contour sum's, the rules' differences,
     the point values' bounds) and the number of point values used.
 
