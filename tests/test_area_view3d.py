@@ -262,13 +262,11 @@ def test_view3d_values_at_1e_9_within_their_estimates_of_values_at_1e_11(name):
 
 
 @pytest.mark.slow
-@pytest.mark.xfail(strict=True, reason="known (issue 49): column 11 is 1.02 times its "
-                   "estimate; a corner triangle where the 3- and 5-point collapsed rules "
-                   "differ by 6.7e-11 and the 5-point rule is 2.5e-10 off")
 def test_gunter1_row_17_without_shortcuts_within_its_estimates():
-    # row 17, column 11 at 1e-9 without shortcuts is 1.02 times its estimate from the
-    # value at 1e-11 (docs/explanation/area-form-factors.md, "The rules' difference,
-    # checked"): the one value of the View3D files known outside its estimate
+    # row 17, column 11 at 1e-9 without shortcuts was 1.02 times its estimate from the
+    # value at 1e-11: one corner triangle where the 3- and 5-point collapsed rules
+    # differed by 6.7e-11 and the 5-point rule was 2.5e-10 off; a third rule of 4
+    # points a side at corners (AREA_CORNER_MIDDLE_ORDER) shows it
     scene = _read("gunter1.vs3")
     R, ER = ef.area_form_factors(scene, rows=[17], tolerance=1e-11, error=True)
     F, E = ef.area_form_factors(scene, rows=[17], tolerance=1e-9, error=True, shortcuts=False)
