@@ -236,14 +236,14 @@ _CLOSED = {"cube.vs3", "facet.vs3", "test4.vs3", "l_room_f3.vs3", "l_room_f3a.vs
            "gunter1.vs3", "gunter2.vs3"}
 
 
-def _within_estimates_of_tighter(scene, name, tolerances, rows=None, check_tol=True, **kw):
+def _within_estimates_of_tighter(scene, name, tolerances, rows=None, **kw):
     R, ER = ef.area_form_factors(scene, rows=rows, tolerance=1e-11, error=True, **kw)
     for tol in tolerances:
         F, E = ef.area_form_factors(scene, rows=rows, tolerance=tol, error=True, **kw)
         bad = np.abs(F - R) > E + ER
         assert not bad.any(), (tol, np.argwhere(bad)[:5].tolist(),
                                (np.abs(F - R) / (E + ER))[bad].max())
-        assert np.all(F >= 0) and (np.all(E <= tol) or not check_tol), (tol, E.max())
+        assert np.all(F >= 0) and np.all(E <= tol), (tol, E.max())
     if name in _CLOSED and rows is None:
         assert np.all(np.abs(R.sum(axis=1) - 1.0) <= ER.sum(axis=1) + 1e-13)
     return R, ER
@@ -258,18 +258,11 @@ def test_view3d_values_within_their_estimates_of_values_at_1e_11(name):
 @pytest.mark.parametrize("name", _SMALL + ["gunter1.vs3"])
 def test_view3d_values_at_1e_9_within_their_estimates_of_values_at_1e_11(name):
     tols = [1e-6, 1e-9] if name == "gunter1.vs3" else [1e-9]
-    # l_room_f3a's row 8, column 0 keeps an estimate of 1.3e-9 at any tolerance (below)
-    _within_estimates_of_tighter(_read(name), name, tols, check_tol=name != "l_room_f3a.vs3")
-
-
-@pytest.mark.slow
-@pytest.mark.xfail(strict=True, reason="known, not fixed (issue 49): l_room_f3a row 8, "
-                   "column 0 keeps an estimate of 1.36e-9 at 1e-9 and 1.27e-9 at 1e-11: "
-                   "one triangle of area 3.5e-5 at the last level (7 cuts) whose rules "
-                   "still differ by 1.26e-9, a kink no event cut along")
-def test_l_room_f3a_estimates_within_the_tolerance_at_1e_9():
-    F, E = ef.area_form_factors(_read("l_room_f3a.vs3"), tolerance=1e-9, error=True)
-    assert np.all(E <= 1e-9), E.max()
+    # (l_room_f3a's row 8, column 0 kept an estimate of 1.36e-9 at 1e-9 and 1.27e-9 at
+    # 1e-11: a cell's corner 1.4e-9 from the walls' corner on the ceiling, where the cut
+    # lines were lengthened, was not taken as the collapsed vertex, and a triangle at the
+    # last level kept rules differing by 1.26e-9; now 2.6e-10 at most)
+    _within_estimates_of_tighter(_read(name), name, tols)
 
 
 @pytest.mark.slow
