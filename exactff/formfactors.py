@@ -614,7 +614,7 @@ def area_form_factors(scene, rows=None, *, tolerance=1e-9, error=False, executor
     that may hide it, and their planes), its cells triangulated, and each triangle
     integrated by two collapsed Gauss-Legendre rules (6 and 10 points a side) and cut in
     four while they differ by more than its share of ``tolerance`` (an emitter cut into
-    many small triangles tries 3 and 5 points a side first). Between two faces of one
+    many small triangles tries a lower pair first). Between two faces of one
     closed convex solid (a box) there is no vertex-edge event: their images united are
     the solid's.
 
@@ -633,7 +633,14 @@ def area_form_factors(scene, rows=None, *, tolerance=1e-9, error=False, executor
         ``max(tolerance, rtol * |F[i, j]|)`` (say ``tolerance=1e-15, rtol=1e-9`` for a
         relative target). Default: the absolute ``tolerance`` alone.
     error : bool, default False
-        Also return the per-value error estimates.
+        Also return the per-value error estimates. For an unoccluded pair the estimate
+        bounds the closed form's rounding; for an occluded pair it is an **estimate**,
+        not a proven bound: it counts the point values' bounds and any area lost, but
+        the adaptive rules' share is the difference of two rules on each triangle,
+        which two rules that miss the same feature of the integrand can make too small
+        (see Notes). It is checked against what is known exactly (the unoccluded point
+        values' integral, in closed form) and has held against independent values on
+        every View3D example the tests have (``tests/test_area_view3d.py``).
     executor, jobs, progress, out, sparse, chunk_rows
         As for :func:`form_factor_matrix`: rows in parallel, a progress bar, streamed to
         ``out`` and resumed from it (the estimates to ``STEM.error.SUFFIX`` beside it),
@@ -667,8 +674,10 @@ def area_form_factors(scene, rows=None, *, tolerance=1e-9, error=False, executor
         ``cell_fallbacks`` (emitters cut along their visibility events another way,
         where GEOS failed or the cells did not cover the emitter: the lines not
         lengthened across its boundary, or noded on a grid of 1e-12 of its size),
-        ``occluded_pairs`` and
-        ``point_values``. Every shortcut's counter is 0 with ``shortcuts=False``.
+        ``occluded_pairs``, ``point_values``, and the check of the rules'
+        differences: ``checked_triangles`` (triangles checked one by one against their
+        closed form, where a pair's sum missed) and ``refined_triangles`` (those it sent
+        back to be refined). Every shortcut's counter is 0 with ``shortcuts=False``.
     combine : bool, default False
         The matrix View3D prints for a scene read from a ``.vs3`` file
         (:func:`exactff.read_vs3`; :mod:`exactff.combine`): one row and column per
@@ -702,13 +711,21 @@ def area_form_factors(scene, rows=None, *, tolerance=1e-9, error=False, executor
 
     Notes
     -----
-    What the estimate rests on: for unoccluded pairs, the rounding of the contour sum
-    and the difference between its tanh-sinh rule and the next coarser one (tested
-    against Howell's catalogue, reciprocity and splitting); for occluded pairs, that on a triangle between visibility events the
-    integrand is smooth, so that the difference between a triangle's two rules (6 and
-    10 points a side, or 3 and 5 where the emitter is cut into many small triangles)
-    bounds the finer rule's error, plus the point values' own bounds and the area of any
-    cell the cutting lost (counted at the largest value the hidden part can take). Curved events
+    What the estimate rests on: for unoccluded pairs, the rounding of the closed form's
+    terms (tested against mpmath, Howell's catalogue, reciprocity and splitting); for
+    occluded pairs, that on a triangle between visibility events the integrand is
+    smooth, so that the difference between a triangle's two rules (6 and 10 points a
+    side, or a lower pair first) estimates the finer rule's error, plus the point
+    values' own bounds and the area of any cell the cutting lost (counted at the largest
+    value the hidden part can take). The rules' difference is an estimate, not a bound:
+    on View3D's gunter2 two collapsed rules on half a floor differed by 7.2e-8 where
+    the finer one was 2.1e-7 off (both missed the kernel's peak near a corner), and
+    the value came out -2.1e-7. So it is checked: the rules' errors on the hidden part
+    and on the occluded point values add up to their error on the unoccluded point
+    values, whose integral is known in closed form, per pair and, where the pair's sum
+    misses, per triangle; a triangle whose difference that shows too small is refined
+    (``stats``: ``checked_triangles``, ``refined_triangles``). The check can only
+    show an estimate too small, never prove one right. Curved events
     (three skew edges) are not cut along; the adaptive cutting resolves them, and a
     triangle still unresolved after ``MAX_DEPTH`` cuts keeps its (large) estimate, so
     that a value whose estimate exceeds ``tolerance`` says so: it raises, or with

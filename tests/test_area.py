@@ -1175,3 +1175,72 @@ def test_rtol_is_checked_and_recorded():
             ef.area_form_factors(scene, rtol=bad)
     assert AreaRows(1e-9).record() != AreaRows(1e-9, rtol=1e-6).record()
     assert np.array_equal(ef.area_form_factors(scene, rtol=1e-6), ef.area_form_factors(scene))
+
+
+def _room_with_a_window(window_first, block=False):
+    """A 4 x 3 x 2.5 room (fronts inward) with a window lying on its wall y = 0 (the
+    same plane, facing the same way), given before or after the wall, optionally with a
+    closed box floating above the floor, in front of that wall; and the wall cut
+    around the window by hand (four rectangles), the construction the tie rule must
+    agree with."""
+    faces = ef.scenes.box_polygons([0, 0, 0], [4, 3, 2.5])
+    wall = faces[2]
+    n = np.cross(wall[1] - wall[0], wall[2] - wall[0])
+
+    def rect(x0, x1, z0, z1):
+        R = np.array([[x0, 0, z0], [x1, 0, z0], [x1, 0, z1], [x0, 0, z1]], float)
+        return R if np.cross(R[1] - R[0], R[2] - R[0]) @ n > 0 else R[::-1]
+
+    win = rect(1, 2.5, 0.8, 1.8)
+    pieces = [rect(0, 1, 0, 2.5), rect(2.5, 4, 0, 2.5), rect(1, 2.5, 0, 0.8),
+              rect(1, 2.5, 1.8, 2.5)]
+    extra = ef.scenes.box_polygons([1.2, 0.5, 0.3], [2.2, 1.3, 0.9], facing="out") if block else []
+    polys = ([win] + faces if window_first else faces[:3] + [win] + faces[3:]) + extra
+    return ef.Scene.from_polygons(polys), faces, win, pieces, extra
+
+
+@pytest.mark.parametrize("block", [False, True])
+def test_window_on_its_wall_follows_the_tie_rule(block):
+    # a window given first covers its part of the wall (the tie rule: of coplanar
+    # polygons facing the same way, the first in input order is in front), so the wall
+    # receives only around it: against the wall cut around the window by hand (a scene
+    # without overlaps), every row summing to 1. Before, the overlap was counted twice
+    # (the floor's row summed to 1 + F(floor -> window))
+    scene, faces, win, pieces, extra = _room_with_a_window(True, block)
+    tol = 1e-9
+    F, E = ef.area_form_factors(scene, tolerance=tol, error=True)
+    assert np.all(E <= tol)
+    assert np.all(np.abs(F.sum(axis=1) - 1.0) <= E.sum(axis=1) + 1e-13), F.sum(axis=1) - 1
+    # the reference: the wall replaced by its four pieces around the window (scene:
+    # window 0, floor 1, ceiling 2, wall 3, faces 4-6, box 7...; cut: window 0, floor 1,
+    # ceiling 2, pieces 3-6, faces 7-9, box 10...)
+    cut = ef.Scene.from_polygons([win] + faces[:2] + pieces + faces[3:] + extra)
+    G, EG = ef.area_form_factors(cut, tolerance=tol, error=True)
+    at = {c: [c] for c in range(3)} | {3: [3, 4, 5, 6]} | {c: [c + 3] for c in range(4, len(scene))}
+    for r in range(len(scene)):
+        for c in range(len(scene)):
+            if r == 3:
+                # the wall emits as its pieces and the window's part together (by area)
+                A = cut.areas
+                g = (A[3:7] @ G[3:7][:, at[c]].sum(axis=1) + A[0] * G[0, at[c]].sum()) / scene.areas[3]
+                eg = (A[3:7] @ EG[3:7][:, at[c]].sum(axis=1) + A[0] * EG[0, at[c]].sum()) / scene.areas[3]
+            else:
+                g, eg = G[at[r][0], at[c]].sum(), EG[at[r][0], at[c]].sum()
+            assert abs(F[r, c] - g) <= E[r, c] + eg + 1e-14, (r, c, F[r, c], g)
+    if not block:
+        # unoccluded: the floor's values in closed form
+        floor = faces[0]
+        ref = sum(ef.polygon_form_factor(floor, p) for p in pieces)
+        assert abs(F[1, 3] - ref) <= E[1, 3] + 1e-15
+        assert abs(F[1, 0] - ef.polygon_form_factor(floor, win)) <= E[1, 0] + 1e-15
+
+
+def test_window_after_its_wall_receives_nothing():
+    # given after the wall, the window is covered whole: 0 from every emitter, and the
+    # wall receives as if the window were not there
+    scene, faces, win, _, _ = _room_with_a_window(False)
+    F, E = ef.area_form_factors(scene, tolerance=1e-9, error=True)
+    assert np.all(F[:, 3] == 0.0)
+    assert np.all(np.abs(F.sum(axis=1) - 1.0) <= E.sum(axis=1) + 1e-13)
+    floor = faces[0]
+    assert abs(F[0, 2] - ef.polygon_form_factor(floor, faces[2])) <= E[0, 2] + 1e-15
