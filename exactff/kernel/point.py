@@ -16,13 +16,14 @@ from numpy.typing import ArrayLike
 from .. import _tolerances as tol
 from ..checks import as_normal, as_point, check_sides, check_tolerance
 from ..errors import check_finite, misses_tolerance, tolerance_missed
-from ..geometry import area_vector, receiver_frame, rotate, to_local
+from ..geometry import area_vector, receiver_frame
 from ..halfspace import clip_above_horizon
 from ..predicates import plane_sides, polygon_side
 from ..scene import Scene, validate_polygon
 from .flat import flat_polygons
 from .ladder import extended_values, mp_form_factor
-from .sector import clipped_sector_sums, sector_values
+from ._sector import row_sums
+from .sector import sector_values
 
 __all__ = ["unoccluded_row", "point_polygon_form_factors", "sector_form_factor",
            "point_polygon_form_factor", "local_clipped"]
@@ -67,34 +68,17 @@ def unoccluded_row(flat, p, n, *, one_sided=True, tolerance=None,
     err = np.zeros(N)
     if not live.any():
         return (F, err) if return_error else F
-    R = receiver_frame(n_raw)
-    vmask = live[flat.owner]
-    idx = np.flatnonzero(vmask)
-    newpos = np.cumsum(vmask) - 1
-    owner_all = flat.owner[idx]
-    A0_all = to_local(flat.first, p, R)
-    E = rotate(flat.E[idx], R)
-    # wholly below the horizon: nothing to integrate
-    zmax = np.full(N, -np.inf)
-    np.maximum.at(zmax, owner_all, A0_all[owner_all, 2] + E[:, 2])
-    live &= zmax > 0
-    if not live.any():
-        return (F, err) if return_error else F
-    keep_v = live[owner_all]
-    if not keep_v.all():
-        sel = np.flatnonzero(keep_v)
-        newpos2 = np.cumsum(keep_v) - 1
-        nxt = newpos2[newpos[flat.nxt[idx[sel]]]]
-        E = E[sel]
-        owner_all = owner_all[sel]
-    else:
-        nxt = newpos[flat.nxt[idx]]
+    # the sector sums of every live polygon in one compiled pass (kernel/_sector.cpp:
+    # clipped_sector_sums with rounded offsets, the same arithmetic); those wholly below
+    # the horizon have nothing to integrate
     ids = np.flatnonzero(live)
-    local_id = np.full(N, -1)
-    local_id[ids] = np.arange(len(ids))
-    owner = local_id[owner_all]
-    S, mags, errs = clipped_sector_sums(A0_all[ids], E, nxt, owner, len(ids),
-                                        rounded_offsets=True)
+    S, mags, errs, above = row_sums(flat.V, flat.offsets, ids, p, receiver_frame(n_raw),
+                                    tol.EPS, tol.OFFSET_ROUNDING_ULPS, tol.C2 * tol.EPS)
+    if not above.all():
+        live[ids[~above]] = False
+        ids, S, mags, errs = ids[above], S[above], mags[above], errs[above]
+    if not len(ids):
+        return (F, err) if return_error else F
     F[ids], err[ids] = sector_values(S, mags, errs, -side[ids].astype(float), one_sided,
                                unchecked=band[ids])
     # p within rounding of the polygon's plane (its side decided exactly): the double

@@ -18,7 +18,7 @@ import shapely
 from .. import _tolerances as tol
 from ..errors import check_finite, misses_tolerance
 from ..geometry import cross
-from ..kernel import flat_polygons
+from ..kernel import flat_polygons, unoccluded_row
 from ..predicates import engine_sides, sides_of_point
 from ..rings import owners, successors
 from ..prepared import prepared
@@ -293,14 +293,18 @@ def compiled_form_factors(scene, point, normal, *, two_sided=False, stats=None,
     st = stats if stats is not None else {}
     p = np.asarray(point, dtype=float)
     flat = flat_polygons(scene)
-    side, _ = engine_sides(flat, p)
+    side, band = engine_sides(flat, p)
 
     def python_row():
         return visible_form_factors(scene, p, normal, two_sided=two_sided, stats=st,
                                     shortcuts=shortcuts, tolerance=tolerance, error=error)
 
     if shortcuts and is_convex_enclosure(scene) and np.all(side >= 0):
-        return python_row()   # no occlusion: the unoccluded kernel with its ladder
+        # no occlusion: the unoccluded kernel (compiled sector sums) with its ladder,
+        # straight from here, as the Python engine's convex-scene path has it
+        st["path"] = "unoccluded"
+        return unoccluded_row(flat, p, normal, one_sided=not two_sided, tolerance=tolerance,
+                              sides=(side, band), return_error=error, strict=not error)
     tree, core = compiled_core(scene)
     node_side = sides_of_point(tree.normals, tree.offsets, p).astype(np.int8)
     F, E, band, crossing, counters = core.row(p, np.asarray(normal, dtype=float), node_side,
