@@ -34,9 +34,12 @@ def unoccluded_row(flat, p, n, *, one_sided=True, tolerance=None,
     """Unoccluded form factors from ``p`` (normal ``n``) to every polygon of ``flat``.
 
     The hot path: culls polygons seen edge-on, facing away (one-sided) or wholly below
-    the horizon, then evaluates the sector form over all remaining edges at once, in
-    offset form, with a rounding-error estimate per polygon. With a ``tolerance``, every
-    value whose estimate exceeds ``tolerance * F`` is re-evaluated with mpmath from the
+    the horizon, then evaluates the sector form over all remaining edges in one compiled
+    pass (``kernel/_sector.cpp``, the arithmetic of
+    :func:`~exactff.kernel.sector.clipped_sector_sums` with rounded offsets), in offset
+    form, with a rounding-error estimate per polygon. With a ``tolerance``, every
+    value whose estimate exceeds ``tolerance * F`` is re-evaluated (long double, then
+    mpmath) from the
     original float input (:func:`mp_form_factor`). Returns (N,) values, and their error estimates if
     ``return_error``.
 
@@ -86,7 +89,8 @@ def unoccluded_row(flat, p, n, *, one_sided=True, tolerance=None,
     err[ids[band[ids]]] = np.inf
     if tolerance is not None:
         flagged = ids[err[ids] > tolerance * F[ids]]
-        extended = flagged[~band[flagged]]
+        in_extended = np.flatnonzero(~band[flagged])   # positions in flagged
+        extended = flagged[in_extended]
         if len(extended) and tol.LONGDOUBLE_EPS < tol.EPS / 100:
             # second tier: the same vectorised sums in extended precision (x87 80-bit
             # long double where the platform has it), from the original float input
@@ -94,7 +98,9 @@ def unoccluded_row(flat, p, n, *, one_sided=True, tolerance=None,
                                       -side[extended].astype(float), one_sided)
             good = el <= tolerance * Fl
             F[extended[good]], err[extended[good]] = Fl[good], el[good]
-            flagged = np.setdiff1d(flagged, extended[good])
+            settled = np.zeros(len(flagged), dtype=bool)
+            settled[in_extended[good]] = True
+            flagged = flagged[~settled]
         # last tier (DESIGN 2.2): mpmath at the digits the value needs
         for i in flagged:
             P = flat.V[flat.offsets[i]:flat.offsets[i + 1]]
