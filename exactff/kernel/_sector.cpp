@@ -29,12 +29,21 @@ struct V3 {
 template <typename R>
 inline R norm3(R x, R y, R z) { return std::sqrt(x * x + y * y + z * z); }
 
+// a vertex in offset form and what the edges on either side of it share: its offset E
+// from the polygon's first vertex, its position a = A + E from the point, |a|, and
+// |E| + |A| (the scale of its rounding)
+template <typename R>
+struct Vx {
+    V3<R> e, a;
+    R la, size;
+};
+
 // per polygon: its sum of sector terms, the sum of their magnitudes, the terms' rounding
 // estimate plus the offsets' (kernel/sector.py, clipped_sector_sums and _offset_rounding)
 // (the constants as kernel/sector.py has them: Python floats, rounded to double, then
 // converted to R)
 template <typename R>
-void polygon_sums(const V3<R>& A, const std::vector<V3<R>>& E, double eps, double ulps,
+void polygon_sums(const V3<R>& A, const std::vector<Vx<R>>& E, double eps, double ulps,
                   double c2eps_, R* sum, R* mag, R* errs) {
     const size_t K = E.size();
     const double pi_d = 3.14159265358979323846;
@@ -43,24 +52,21 @@ void polygon_sums(const V3<R>& A, const std::vector<V3<R>>& E, double eps, doubl
     const R g = static_cast<R>(ulps * eps / (1 - ulps * eps));
     const R slack = static_cast<R>(ulps * eps);
     const R c2eps = static_cast<R>(c2eps_);
-    const R lA = norm3(A.x, A.y, A.z);
     R S = 0, M = 0, Er = 0;
     bool have_first = false;
     R fx = 0, fy = 0;   // the polygon's first horizon crossing (x, y)
     for (size_t i = 0; i < K; ++i) {
         const size_t j = i + 1 == K ? 0 : i + 1;
-        V3<R> Ea = E[i], Eb = E[j];
+        V3<R> Ea = E[i].e, Eb = E[j].e;
         // _offset_rounding: what the offsets' rounding can move this edge's term
         R moved;
         {
-            const R size_a = norm3(Ea.x, Ea.y, Ea.z) + lA;
-            const R size_b = norm3(Eb.x, Eb.y, Eb.z) + lA;
+            const R size_a = E[i].size, size_b = E[j].size;
             const R eta = g * (size_a >= size_b ? size_a : size_b);
-            const V3<R> a{A.x + Ea.x, A.y + Ea.y, A.z + Ea.z};
-            const V3<R> b{A.x + Eb.x, A.y + Eb.y, A.z + Eb.z};
+            const V3<R>& a = E[i].a;
+            const V3<R>& b = E[j].a;
             const V3<R> d{b.x - a.x, b.y - a.y, b.z - a.z};
-            const R la = norm3(a.x, a.y, a.z), lb = norm3(b.x, b.y, b.z),
-                    ld = norm3(d.x, d.y, d.z);
+            const R la = E[i].la, lb = E[j].la, ld = norm3(d.x, d.y, d.z);
             const R cx = a.y * b.z - a.z * b.y, cy = a.z * b.x - a.x * b.z,
                     cz = a.x * b.y - a.y * b.x;
             const R h = norm3(cx, cy, cz) / ld;
@@ -158,7 +164,7 @@ py::tuple row_sums(py::array_t<double, py::array::c_style | py::array::forcecast
             throw std::out_of_range("row_sums: polygon id out of range or empty");
     {
         py::gil_scoped_release release;
-        std::vector<V3<R>> E;
+        std::vector<Vx<R>> E;
         for (int64_t k = 0; k < n; ++k) {
             const int64_t i = ids[k];
             const int64_t a = off[i], b = off[i + 1];
@@ -171,15 +177,19 @@ py::tuple row_sums(py::array_t<double, py::array::c_style | py::array::forcecast
                           dx * Rm[3] + dy * Rm[4] + dz * Rm[5],
                           dx * Rm[6] + dy * Rm[7] + dz * Rm[8]};
             E.resize(static_cast<size_t>(b - a));
+            const R lA = norm3(A.x, A.y, A.z);
             bool above = false;
             for (int64_t v = a; v < b; ++v) {
                 const R ex = static_cast<R>(V[3 * v]) - fx,
                         ey = static_cast<R>(V[3 * v + 1]) - fy,
                         ez = static_cast<R>(V[3 * v + 2]) - fz;
-                V3<R>& e = E[static_cast<size_t>(v - a)];
-                e = {ex * Rm[0] + ey * Rm[1] + ez * Rm[2], ex * Rm[3] + ey * Rm[4] + ez * Rm[5],
-                     ex * Rm[6] + ey * Rm[7] + ez * Rm[8]};
-                above |= A.z + e.z > 0;
+                Vx<R>& u = E[static_cast<size_t>(v - a)];
+                u.e = {ex * Rm[0] + ey * Rm[1] + ez * Rm[2], ex * Rm[3] + ey * Rm[4] + ez * Rm[5],
+                       ex * Rm[6] + ey * Rm[7] + ez * Rm[8]};
+                u.a = {A.x + u.e.x, A.y + u.e.y, A.z + u.e.z};
+                u.la = norm3(u.a.x, u.a.y, u.a.z);
+                u.size = norm3(u.e.x, u.e.y, u.e.z) + lA;
+                above |= u.a.z > 0;
             }
             up[k] = above;   // wholly below the horizon: the caller culls it
             polygon_sums(A, E, eps_, ulps_, c2eps_, S + k, M + k, Er + k);
