@@ -124,14 +124,15 @@ def exact_side(P, p):
     return (val > 0) - (val < 0)
 
 
-def plane_sides(flat, p, exact=True):
+def plane_sides(flat, p, exact=True, distances=None):
     """Side of ``p`` for every polygon (+1 front, -1 back, 0 in the plane), and the mask
     of polygons whose plane passes within rounding of ``p`` (the band).
 
     Beyond the band the float value decides. Inside it, ``exact=True`` decides in
     rational arithmetic (the double-precision form factor is then unreliable), and
-    ``exact=False`` gives 0: seen edge-on, as the visibility engine counts them."""
-    d, dtol = plane_distances(flat, p)
+    ``exact=False`` gives 0: seen edge-on, as the visibility engine counts them.
+    ``distances``: :func:`plane_distances` of ``p``, when the caller has them."""
+    d, dtol = plane_distances(flat, p) if distances is None else distances
     side = np.sign(d).astype(np.int8)
     band = np.abs(d) <= dtol
     side[band] = 0
@@ -345,10 +346,10 @@ def engine_sides(flat, p):
     -------
     (ndarray of int8, ndarray of bool), each of shape (len(flat.normals),)
     """
-    side, band = plane_sides(flat, p, exact=False)   # 0 in the band
+    d, dtol = plane_distances(flat, p)
+    side, band = plane_sides(flat, p, exact=False, distances=(d, dtol))   # 0 in the band
     ids = np.flatnonzero(band)
     if len(ids):
-        d, _ = plane_distances(flat, p)
         nrm, c = np.abs(flat.normals[ids]), flat.centroids[ids]
         on_plane = np.abs(d[ids]) <= EPS * (
             ON_PLANE_ULPS * (nrm @ np.abs(p) + np.einsum("ij,ij->i", nrm, np.abs(c)))
