@@ -19,11 +19,11 @@ setup(
                                    cxx_std=17, extra_compile_args=["-O2"],
                                    extra_link_args=QUADMATH),
                  Pybind11Extension("exactff.area._hidden", ["exactff/area/_hidden.cpp"],
-                                   cxx_std=17, extra_compile_args=["-O3", "-fno-math-errno"]),
+                                   depends=["exactff/kernel/_sector_term.h"], cxx_std=17, extra_compile_args=["-O3", "-fno-math-errno"]),
                  # the same arithmetic as kernel/sector.py's numpy: no contraction into
                  # fused multiply-adds, no reassociation
                  Pybind11Extension("exactff.kernel._sector", ["exactff/kernel/_sector.cpp"],
-                                   cxx_std=17, extra_compile_args=["-O3", "-fno-math-errno",
+                                   depends=["exactff/kernel/_sector_term.h"], cxx_std=17, extra_compile_args=["-O3", "-fno-math-errno",
                                                                    "-ffp-contract=off"])],
     cmdclass={"build_ext": build_ext},
 )

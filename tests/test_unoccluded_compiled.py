@@ -80,15 +80,20 @@ def test_closed_cube_rows_sum_to_one():
         assert E.max() <= 1e-12 * np.maximum(F, tol.VALUE_FLOOR).min()
 
 
+def receivers(scene, count, seed, lift):
+    """Points just in front of random polygons, with random normals (most rows cross
+    the horizon of many polygons)."""
+    rng = np.random.default_rng(seed)
+    for _ in range(count):
+        i = int(rng.integers(len(scene)))
+        n = rng.normal(size=3)
+        yield scene.centroids[i] + lift * scene.normals[i], n / np.linalg.norm(n)
+
+
 def test_rows_crossing_the_horizon_vs_mpmath():
     office = ef.scenes.office()
     flat = flat_polygons(office)
-    rng = np.random.default_rng(3)
-    for _ in range(2):
-        i = int(rng.integers(len(office)))
-        p = office.centroids[i] + 0.05 * office.normals[i]
-        n = rng.normal(size=3)
-        n /= np.linalg.norm(n)
+    for p, n in receivers(office, 2, seed=3, lift=0.05):
         F, E = ef.point_polygon_form_factors(p, n, office, error=True)
         # the polygons the horizon cuts, and a few it leaves whole
         S, _, _, above = row_sums(flat.V, flat.offsets, np.arange(len(office)), p,
@@ -122,12 +127,7 @@ def test_compiled_sums_reproduce_the_numpy_sums(tier):
                       (np.longdouble, row_sums_extended, tol.LONGDOUBLE_EPS))
     scene = ef.scenes.office()
     flat = flat_polygons(scene)
-    rng = np.random.default_rng(1)
-    for _ in range(4):
-        i = int(rng.integers(len(scene)))
-        p = scene.centroids[i] + 0.01 * scene.normals[i]
-        n = rng.normal(size=3)
-        n /= np.linalg.norm(n)
+    for p, n in receivers(scene, 4, seed=1, lift=0.01):
         ids = np.arange(len(scene))
         S0, M0, E0 = numpy_sums(flat, ids, p, n, dtype)
         S1, M1, E1, _ = fn(flat.V, flat.offsets, ids, p, receiver_frame(n, dtype=dtype), eps,

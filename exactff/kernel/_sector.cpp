@@ -17,6 +17,8 @@
 #include <stdexcept>
 #include <vector>
 
+#include "_sector_term.h"
+
 namespace py = pybind11;
 
 namespace {
@@ -104,26 +106,12 @@ void polygon_sums(const V3<R>& A, const std::vector<Vx<R>>& E, double eps, doubl
         }
         R term = 0, err = 0;
         if (above_a || above_b) {
-            // the edge's plane in offset form: m = A x (Eb - Ea) + Ea x Eb
-            const R Dx = Eb.x - Ea.x, Dy = Eb.y - Ea.y, Dz = Eb.z - Ea.z;
-            const R p1 = A.x * Dy, p2 = A.y * Dx, p3 = Ea.x * Eb.y, p4 = Ea.y * Eb.x;
-            const R Mz = (p1 - p2) + (p3 - p4);
-            const R Mx = (A.y * Dz - A.z * Dy) + (Ea.y * Eb.z - Ea.z * Eb.y);
-            const R My = (A.z * Dx - A.x * Dz) + (Ea.z * Eb.x - Ea.x * Eb.z);
-            const R s = std::sqrt(Mx * Mx + My * My + Mz * Mz);
-            const R ax = A.x + Ea.x, ay = A.y + Ea.y, az = A.z + Ea.z;
-            const R bx = A.x + Eb.x, by = A.y + Eb.y, bz = A.z + Eb.z;
-            const R theta = std::atan2(s, ax * bx + ay * by + az * bz);
-            const bool ok = s > 0;
-            if (ok) term = theta * Mz / s;
-            // the term's rounding, first order (kernel/sector.py)
-            const R Z = std::fabs(p1) + std::fabs(p2) + std::fabs(p3) + std::fabs(p4);
-            const R Nm = std::sqrt((ax * ax + ay * ay + az * az) * (bx * bx + by * by + bz * bz));
-            R rel;
-            if (ok) rel = c2eps * (Z + theta * theta * Nm) / s;
-            else rel = Nm > 0 ? std::numeric_limits<R>::infinity() : R(0);
-            err = theta * (rel < 2 ? rel : R(2));
-            if (std::isnan(rel)) err = theta * rel;   // as numpy's minimum propagates NaN
+            // the edge's term and its rounding (kernel/_sector_term.h)
+            const exactff::SectorTerm<R> st = exactff::sector_term(
+                A.x, A.y, A.z, Ea.x, Ea.y, Ea.z, Eb.x, Eb.y, Eb.z, c2eps);
+            term = st.term;
+            err = st.err;
+            if (std::isnan(st.rel)) err = st.rel;   // as numpy's minimum propagates NaN
         }
         term += phi_term;
         S += term;
