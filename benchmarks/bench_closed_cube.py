@@ -9,9 +9,10 @@ the tolerance, 1e-12). Its time is compared, in the same run, with the least a
 vectorised evaluation of the same values costs: Lambert's sum of every edge of every
 polygon from every centroid in numpy, ``chunk`` rows at a time, in double, with no
 culling, horizon clipping (nothing crosses a centroid's horizon here), error bound or
-escalation. The script prints the two times, their ratio, the largest difference of the
-two matrices and of a row sum from 1, and exits with status 1 if the ratio exceeds
-``--goal``.
+escalation. The script prints the two times (process time, and wall), their ratios,
+the largest difference of the two matrices and of a row sum from 1, and exits with
+status 1 if the ratio of process times exceeds ``--goal`` (the machines are shared: wall
+time counts the other jobs' share of the cores; both runs are single-threaded).
 """
 
 import argparse
@@ -63,23 +64,24 @@ def main():
     print(machine())
     box = ef.scenes.subdivided_box(args.k)
     ef.form_factors(box, box.centroids[0], box.normals[0])   # the scene's caches
-    t = time.perf_counter()
+    t, c = time.perf_counter(), time.process_time()
     G = bare_matrix(box, args.chunk)
-    t_bare = time.perf_counter() - t
+    t_bare, c_bare = time.perf_counter() - t, time.process_time() - c
     st = {}
     Exact().point_form_factors(box, box.centroids[0], box.normals[0], stats=st)
-    t = time.perf_counter()
+    t, c = time.perf_counter(), time.process_time()
     F = ef.form_factor_matrix(box)
-    t_exact = time.perf_counter() - t
-    ratio = t_exact / t_bare
-    print("| scene | N | exact matrix (s) | bare kernel, all pairs (s) | ratio | goal | "
-          "row path | max abs difference | max abs(row sum - 1) |")
-    print("|---|---|---|---|---|---|---|---|---|")
-    print(f"| subdivided_box({args.k}) | {len(box)} | {t_exact:.2f} | {t_bare:.2f} | "
-          f"{ratio:.2f} | <= {args.goal:g} | {st.get('path')} | {np.abs(F - G).max():.1e} | "
+    t_exact, c_exact = time.perf_counter() - t, time.process_time() - c
+    ratio = c_exact / c_bare
+    print("| scene | N | exact matrix (s) | bare kernel, all pairs (s) | ratio (process time) | "
+          "ratio (wall) | goal | row path | max abs difference | max abs(row sum - 1) |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
+    print(f"| subdivided_box({args.k}) | {len(box)} | {c_exact:.2f} ({t_exact:.2f} wall) | "
+          f"{c_bare:.2f} ({t_bare:.2f} wall) | {ratio:.2f} | {t_exact / t_bare:.2f} | "
+          f"<= {args.goal:g} | {st.get('path')} | {np.abs(F - G).max():.1e} | "
           f"{np.abs(F.sum(axis=1) - 1).max():.1e} |")
-    print(f"goal: exact matrix / bare kernel = {ratio:.2f} (goal <= {args.goal:g}): "
-          f"{'MISSED' if ratio > args.goal else 'met'}")
+    print(f"goal: exact matrix / bare kernel = {ratio:.2f} in process time (goal <= "
+          f"{args.goal:g}): {'MISSED' if ratio > args.goal else 'met'}")
     if ratio > args.goal:
         sys.exit(1)
 

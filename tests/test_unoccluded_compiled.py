@@ -96,8 +96,9 @@ def test_rows_crossing_the_horizon_vs_mpmath():
     for p, n in receivers(office, 2, seed=3, lift=0.05):
         F, E = ef.point_polygon_form_factors(p, n, office, error=True)
         # the polygons the horizon cuts, and a few it leaves whole
-        S, _, _, above = row_sums(flat.V, flat.offsets, np.arange(len(office)), p,
-                                  receiver_frame(n), tol.EPS, 8.0, tol.C2 * tol.EPS)
+        ids = np.arange(len(office))
+        S, _, _, above = row_sums(flat.V, flat.offsets, ids, np.zeros_like(ids), p[None],
+                                  receiver_frame(n)[None], tol.EPS, 8.0, tol.C2 * tol.EPS)
         z = rotate(office.vertices - p, receiver_frame(n))[:, 2]
         low = np.minimum.reduceat(z, office.offsets[:-1]) < 0
         cut = np.flatnonzero(above & low & (F > 0))
@@ -130,7 +131,8 @@ def test_compiled_sums_reproduce_the_numpy_sums(tier):
     for p, n in receivers(scene, 4, seed=1, lift=0.01):
         ids = np.arange(len(scene))
         S0, M0, E0 = numpy_sums(flat, ids, p, n, dtype)
-        S1, M1, E1, _ = fn(flat.V, flat.offsets, ids, p, receiver_frame(n, dtype=dtype), eps,
+        S1, M1, E1, _ = fn(flat.V, flat.offsets, ids, np.zeros_like(ids), p[None],
+                           receiver_frame(n, dtype=dtype)[None], eps,
                            tol.OFFSET_ROUNDING_ULPS, tol.C2 * eps)
         assert S1.dtype == dtype
         # the same arithmetic up to the order of libm's and numpy's last bits: within the
@@ -144,5 +146,32 @@ def test_compiled_sums_reproduce_the_numpy_sums(tier):
 def test_ids_out_of_range_are_refused():
     flat = flat_polygons(ef.scenes.subdivided_box(1))
     with pytest.raises(IndexError):
-        row_sums(flat.V, flat.offsets, np.array([6]), np.zeros(3), np.eye(3), tol.EPS, 8.0,
-                 tol.C2 * tol.EPS)
+        row_sums(flat.V, flat.offsets, np.array([6]), np.array([0]), np.zeros((1, 3)),
+                 np.eye(3)[None], tol.EPS, 8.0, tol.C2 * tol.EPS)
+    with pytest.raises(IndexError):     # a row beyond the points
+        row_sums(flat.V, flat.offsets, np.array([0]), np.array([1]), np.zeros((1, 3)),
+                 np.eye(3)[None], tol.EPS, 8.0, tol.C2 * tol.EPS)
+
+
+@pytest.mark.parametrize("scene", ["cube", "cornell"])
+def test_rows_together_are_the_rows_one_by_one(scene):
+    # a closed cube's rows go together (unoccluded_rows), the open Cornell box's one by
+    # one (occluded); either way the matrix is the rows of point_form_factors, bit for bit
+    s = ef.scenes.subdivided_box(3) if scene == "cube" else ef.scenes.cornell_box()
+    M = ef.form_factor_matrix(s)
+    single = np.array([Exact().point_form_factors(s, c, n)
+                       for c, n in zip(s.centroids, s.normals)])
+    assert np.array_equal(M, single)
+    rows = Exact().point_rows(s, s.centroids[::2], s.normals[::2], two_sided=True)
+    assert np.array_equal(rows, [Exact().point_form_factors(s, c, n, two_sided=True)
+                                 for c, n in zip(s.centroids[::2], s.normals[::2])])
+    if scene == "cube":
+        assert np.abs(M.sum(axis=1) - 1).max() <= 1e-14   # a closed enclosure's rows
+
+
+def test_point_rows_refuse_bad_receivers():
+    box = ef.scenes.subdivided_box(1)
+    with pytest.raises(ValueError, match="normal"):
+        Exact().point_rows(box, box.centroids, np.zeros((6, 3)))
+    with pytest.raises(ValueError, match="point"):
+        Exact().point_rows(box, np.full((6, 3), np.nan), box.normals)

@@ -123,38 +123,49 @@ void polygon_sums(const V3<R>& A, const std::vector<Vx<R>>& E, double eps, doubl
     *errs = Er;
 }
 
+// Pair k: polygon ids[k] from point P[rows[k]] in frame Rm[rows[k]] (rows of the frame:
+// the local axes, geometry.receiver_frame), the pairs of one row or of many.
 template <typename R>
 py::tuple row_sums(py::array_t<double, py::array::c_style | py::array::forcecast> V_,
                    py::array_t<int64_t, py::array::c_style | py::array::forcecast> offsets_,
                    py::array_t<int64_t, py::array::c_style | py::array::forcecast> ids_,
-                   py::array_t<double, py::array::c_style | py::array::forcecast> p_,
+                   py::array_t<int64_t, py::array::c_style | py::array::forcecast> rows_,
+                   py::array_t<double, py::array::c_style | py::array::forcecast> P_,
                    py::array_t<R, py::array::c_style | py::array::forcecast> R_, double eps_,
                    double ulps_, double c2eps_) {
     const double* V = V_.data();
     const int64_t* off = offsets_.data();
     const int64_t* ids = ids_.data();
-    const double* pd = p_.data();
-    const R* Rm = R_.data();
+    const int64_t* rows = rows_.data();
+    const double* Pd = P_.data();
+    const R* Rall = R_.data();
     const int64_t n = ids_.size();
     const int64_t npoly = offsets_.size() - 1;
-    if (V_.ndim() != 2 || V_.shape(1) != 3 || p_.size() != 3 || R_.size() != 9)
-        throw std::invalid_argument("row_sums: V (N, 3), p (3,), R (3, 3) expected");
+    const int64_t nrows = P_.size() / 3;
+    if (V_.ndim() != 2 || V_.shape(1) != 3 || P_.size() != 3 * nrows ||
+        R_.size() != 9 * nrows || rows_.size() != n)
+        throw std::invalid_argument(
+            "row_sums: V (N, 3), ids (K,), rows (K,), P (M, 3), R (M, 3, 3) expected");
+    for (int64_t k = 0; k < n; ++k) {
+        if (ids[k] < 0 || ids[k] >= npoly || off[ids[k]] >= off[ids[k] + 1] ||
+            off[ids[k] + 1] > V_.shape(0))
+            throw std::out_of_range("row_sums: polygon id out of range or empty");
+        if (rows[k] < 0 || rows[k] >= nrows) throw std::out_of_range("row_sums: row out of range");
+    }
     py::array_t<R> S_(n), M_(n), E_(n);
     py::array_t<bool> up_(n);
     R* S = S_.mutable_data();
     R* M = M_.mutable_data();
     R* Er = E_.mutable_data();
     bool* up = up_.mutable_data();
-    const R p[3] = {static_cast<R>(pd[0]), static_cast<R>(pd[1]), static_cast<R>(pd[2])};
-    for (int64_t k = 0; k < n; ++k)
-        if (ids[k] < 0 || ids[k] >= npoly || off[ids[k]] >= off[ids[k] + 1] ||
-            off[ids[k] + 1] > V_.shape(0))
-            throw std::out_of_range("row_sums: polygon id out of range or empty");
     {
         py::gil_scoped_release release;
         std::vector<Vx<R>> E;
         for (int64_t k = 0; k < n; ++k) {
             const int64_t i = ids[k];
+            const double* pd = Pd + 3 * rows[k];
+            const R* Rm = Rall + 9 * rows[k];
+            const R p[3] = {static_cast<R>(pd[0]), static_cast<R>(pd[1]), static_cast<R>(pd[2])};
             const int64_t a = off[i], b = off[i + 1];
             const double* f = V + 3 * a;
             // geometry.rotate of (first - p) and of (vertex - first), in R
@@ -189,10 +200,10 @@ py::tuple row_sums(py::array_t<double, py::array::c_style | py::array::forcecast
 }  // namespace
 
 PYBIND11_MODULE(_sector, m) {
-    m.doc() = "Sector sums of an unoccluded row (exactff.kernel.point.unoccluded_row)";
+    m.doc() = "Sector sums of unoccluded rows (exactff.kernel.point.unoccluded_rows)";
     m.def("row_sums", &row_sums<double>,
-          "row_sums(V, offsets, ids, p, R, eps, ulps, c2eps) -> (S, mags, errs, above): "
-          "double precision");
+          "row_sums(V, offsets, ids, rows, P, R, eps, ulps, c2eps) -> (S, mags, errs, above): "
+          "polygon ids[k] from P[rows[k]] in the frame R[rows[k]], double precision");
     m.def("row_sums_extended", &row_sums<long double>,
           "the same in long double (R a longdouble frame)");
 }

@@ -19,6 +19,7 @@ from .. import _tolerances as tol
 from ..errors import check_finite, misses_tolerance
 from ..geometry import cross
 from ..kernel import flat_polygons, unoccluded_row
+from ..kernel.point import unoccluded_rows
 from ..predicates import engine_sides, sides_of_point
 from ..rings import owners, successors
 from ..prepared import prepared
@@ -26,7 +27,8 @@ from ._svbsp import Core
 from .bsp import build_bsp
 from .engine import is_convex_enclosure, visible_form_factors
 
-__all__ = ["compiled_core", "compiled_form_factors", "convex_pieces"]
+__all__ = ["compiled_core", "compiled_form_factors", "compiled_form_factor_rows",
+           "convex_pieces"]
 
 
 def convex_pieces(polygon, normal):
@@ -341,3 +343,48 @@ def compiled_form_factors(scene, point, normal, *, two_sided=False, stats=None,
     st["max_error_estimate"] = float(E.max(initial=0.0))
     st["max_band_bound"] = float(band.max(initial=0.0))
     return (F, E) if error else F
+
+
+def compiled_form_factor_rows(scene, points, normals, *, two_sided=False, shortcuts=True,
+                              tolerance=None):
+    """Rows of :func:`compiled_form_factors` from many receivers, value for value: the
+    rows a convex enclosure leaves unoccluded (with ``shortcuts``, the point in front of
+    or in every polygon's plane) computed together, their sector sums in one compiled
+    call per tier (:func:`exactff.kernel.point.unoccluded_rows`); the others one by one.
+
+    Parameters
+    ----------
+    scene : Scene
+    points, normals : ndarray of shape (R, 3)
+        The receivers (unit normals, or normalised here).
+    two_sided, shortcuts, tolerance
+        As for :func:`compiled_form_factors`.
+
+    Returns
+    -------
+    ndarray of shape (R, len(scene))
+
+    Examples
+    --------
+    >>> import exactff as ef
+    >>> box = ef.scenes.subdivided_box(4)
+    >>> F = compiled_form_factor_rows(box, box.centroids, box.normals, tolerance=1e-12)
+    >>> F.shape, bool(np.abs(F.sum(axis=1) - 1).max() < 1e-13)
+    ((96, 96), True)
+    """
+    P = np.asarray(points, dtype=float).reshape(-1, 3)
+    N = np.asarray(normals, dtype=float).reshape(-1, 3)
+    out = np.zeros((len(P), len(scene)))
+    flat = flat_polygons(scene)
+    sides = [engine_sides(flat, p) for p in P]
+    convex = shortcuts and is_convex_enclosure(scene)
+    together = [r for r, (side, _) in enumerate(sides) if convex and np.all(side >= 0)]
+    if together:
+        out[together] = unoccluded_rows(
+            flat, P[together], N[together], np.array([sides[r][0] for r in together]),
+            np.array([sides[r][1] for r in together]), one_sided=not two_sided,
+            tolerance=tolerance)[0]
+    for r in sorted(set(range(len(P))) - set(together)):
+        out[r] = compiled_form_factors(scene, P[r], N[r], two_sided=two_sided,
+                                       shortcuts=shortcuts, tolerance=tolerance)
+    return out
