@@ -18,8 +18,7 @@ import shapely
 from .. import _tolerances as tol
 from ..errors import check_finite, misses_tolerance
 from ..geometry import cross
-from ..kernel import flat_polygons, unoccluded_row
-from ..kernel.point import unoccluded_rows
+from ..kernel import flat_polygons, unoccluded_row, unoccluded_rows
 from ..predicates import engine_sides, sides_of_point
 from ..rings import owners, successors
 from ..prepared import prepared
