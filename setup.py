@@ -1,5 +1,6 @@
-"""Build of the compiled visibility core (exactff.visibility._svbsp) and of the area
-code's hidden regions (exactff.area._hidden); the rest of the
+"""Build of the compiled visibility core (exactff.visibility._svbsp), of the area
+code's hidden regions (exactff.area._hidden) and of the unoccluded rows' sector sums
+(exactff.kernel._sector); the rest of the
 project's metadata is in pyproject.toml."""
 
 import platform
@@ -18,6 +19,11 @@ setup(
                                    cxx_std=17, extra_compile_args=["-O2"],
                                    extra_link_args=QUADMATH),
                  Pybind11Extension("exactff.area._hidden", ["exactff/area/_hidden.cpp"],
-                                   cxx_std=17, extra_compile_args=["-O3", "-fno-math-errno"])],
+                                   depends=["exactff/kernel/_sector_term.h"], cxx_std=17, extra_compile_args=["-O3", "-fno-math-errno"]),
+                 # the same arithmetic as kernel/sector.py's numpy: no contraction into
+                 # fused multiply-adds, no reassociation
+                 Pybind11Extension("exactff.kernel._sector", ["exactff/kernel/_sector.cpp"],
+                                   depends=["exactff/kernel/_sector_term.h"], cxx_std=17, extra_compile_args=["-O3", "-fno-math-errno",
+                                                                   "-ffp-contract=off"])],
     cmdclass={"build_ext": build_ext},
 )

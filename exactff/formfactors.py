@@ -208,6 +208,11 @@ class PointRows:
                                                 self.method, self.two_sided, False, self.up)
                 out.append((F, np.array([sky, ground])))
             return out
+        rows = list(rows)
+        if hasattr(self.method, "point_rows"):
+            # the rows together, where the method can share work among them
+            return list(self.method.point_rows(scene, scene.centroids[rows],
+                                               scene.normals[rows], two_sided=self.two_sided))
         return [self.method.point_form_factors(scene, scene.centroids[i], scene.normals[i],
                                                two_sided=self.two_sided) for i in rows]
 

@@ -58,3 +58,23 @@ def test_sides_of_point_are_the_rational_signs(p, planes):
     N = BASE[[k for k, _ in planes]]
     D = np.array([float(n @ (p + 0.01 * shift * n)) for n, (_, shift) in zip(N, planes)])
     assert sides_of_point(N, D, p).tolist() == rational_sides(N, D, p)
+
+
+def test_coplanar_pairs_repeated_and_long_polygons():
+    # squares at z = 15 and just below it: 1e-13 is within the near-coplanar band there
+    # (2.1e-13), 3.5e-13 beyond it; and a 5,000-gon at z = 15 (a table top), asked about
+    # in many repeated pairs, as a z-buffer's cells ask (issue 52: each distinct pair is
+    # tested once)
+    from exactff.predicates import coplanar_pairs
+
+    sq = lambda z: [[0, 0, z], [0, 1, z], [1, 1, z], [1, 0, z]]
+    t = 2 * np.pi * np.arange(5000) / 5000
+    disc = np.column_stack([np.cos(t), np.sin(t), np.full(5000, 15.0)])[::-1]
+    V = np.vstack([sq(15.0), sq(15.0 - 1e-13), sq(15.0 - 3.5e-13), disc])
+    offsets = np.array([0, 4, 8, 12, 5012])
+    N = np.array([[0, 0, -1.0]] * 4)
+    D = -V[offsets[:-1], 2]
+    a = np.array([0, 0, 3, 1, 3, 0, 2, 3, 3, 0] * 30)
+    b = np.array([1, 2, 0, 3, 2, 1, 3, 0, 1, 2] * 30)
+    expected = [True, False, True, True, False, True, False, True, True, False] * 30
+    assert coplanar_pairs(V, offsets, N, D, a, b).tolist() == expected

@@ -23,6 +23,8 @@
 #include <limits>
 #include <vector>
 
+#include "../kernel/_sector_term.h"
+
 namespace py = pybind11;
 
 namespace {
@@ -465,23 +467,11 @@ void sector_sum(const Piece& F, const P3<double>& w, const double R[3][3], const
             k.crossing_edge.push_back(i);
             k.crossing_enters.push_back(!above_a);
         }
-        // the edge's plane in offset form: m = A x (Eb - Ea) + Ea x Eb
-        const double Dx = Eb.x - Ea.x, Dy = Eb.y - Ea.y, Dz = Eb.z - Ea.z;
-        const double p1 = A.x * Dy, p2 = A.y * Dx, p3 = Ea.x * Eb.y, p4 = Ea.y * Eb.x;
-        const double Mz = (p1 - p2) + (p3 - p4);
-        const double Mx = (A.y * Dz - A.z * Dy) + (Ea.y * Eb.z - Ea.z * Eb.y);
-        const double My = (A.z * Dx - A.x * Dz) + (Ea.z * Eb.x - Ea.x * Eb.z);
-        const double sm = std::sqrt(Mx * Mx + My * My + Mz * Mz);
-        const P3<double> a{A.x + Ea.x, A.y + Ea.y, A.z + Ea.z}, b{A.x + Eb.x, A.y + Eb.y, A.z + Eb.z};
-        const double theta = std::atan2(sm, dot(a, b));
-        const bool ok = sm > 0;
-        if (ok) k.term[i] = theta * Mz / sm;
-        // the term's rounding (first order; see clipped_sector_sums)
-        const double Z = std::fabs(p1) + std::fabs(p2) + std::fabs(p3) + std::fabs(p4);
-        const double Nm = std::sqrt(dot(a, a) * dot(b, b));
-        const double rel = ok ? c2 * eps * (Z + theta * theta * Nm) / sm
-                              : (Nm > 0 ? std::numeric_limits<double>::infinity() : 0.0);
-        errs += theta * std::min(2.0, rel);
+        // the edge's term and its rounding (kernel/_sector_term.h, as clipped_sector_sums)
+        const exactff::SectorTerm<double> st =
+            exactff::sector_term(A.x, A.y, A.z, Ea.x, Ea.y, Ea.z, Eb.x, Eb.y, Eb.z, c2 * eps);
+        k.term[i] = st.term;
+        errs += st.err;
     }
     // the horizon arcs: the signed angle of each crossing from the piece's first one
     if (!k.crossing.empty()) {

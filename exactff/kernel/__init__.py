@@ -15,12 +15,13 @@ from .eq3 import arc_x_extremes, eq3_edge_integral, eq3_form_factor, eq3_ring_ar
 from .flat import FlatPolygons, flat_polygons
 from .ladder import mp_form_factor
 from .point import (point_polygon_form_factor, point_polygon_form_factors,
-                    sector_form_factor, unoccluded_row)
+                    sector_form_factor, unoccluded_row, unoccluded_rows)
 from .sector import TWO_PI, clipped_sector_sums, sector_values
 from .solid_angle import mp_solid_angle, offset_error, polygon_solid_angles, solid_angle_sums
 
 __all__ = ["mp_form_factor", "point_polygon_form_factor", "point_polygon_form_factors",
            "sector_form_factor", "eq3_form_factor", "eq3_ring_area", "eq3_edge_integral",
-           "arc_x_extremes", "unoccluded_row", "clipped_sector_sums", "sector_values",
+           "arc_x_extremes", "unoccluded_row", "unoccluded_rows", "clipped_sector_sums",
+           "sector_values",
            "FlatPolygons", "flat_polygons", "TWO_PI", "solid_angle_sums",
            "polygon_solid_angles", "offset_error", "mp_solid_angle"]

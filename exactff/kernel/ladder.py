@@ -12,26 +12,25 @@ from numpy.typing import ArrayLike
 from .. import _tolerances as tol
 from ..checks import check_sides
 from ..errors import NumericalError
-from ..geometry import mp_receiver_frame, receiver_frame, rotate
+from ..geometry import mp_receiver_frame, receiver_frame
 from ..halfspace import clip_above_horizon
-from ..rings import repack
-from .sector import clipped_sector_sums, sector_values
+from ._sector import row_sums_extended
+from .sector import sector_values
 
 __all__ = ["extended_values", "mp_converge", "mp_sector_sum", "mp_sector_value",
            "mp_form_factor"]
 
 
-def extended_values(flat, ids, p, n_raw, d0, one_sided):
-    """Form factors and error estimates of polygons ``ids`` in long double arithmetic."""
-    ld = np.longdouble
-    vidx, owner, starts, nxt = repack(flat.offsets[ids], flat.counts[ids])
-    R = receiver_frame(n_raw, dtype=ld)
-    V = flat.V[vidx].astype(ld)
-    first = V[starts]
-    A0 = rotate(first - p.astype(ld), R)
-    E = rotate(V - first[owner], R)
-    S, mags, errs = clipped_sector_sums(A0, E, nxt, owner, len(ids), eps=tol.LONGDOUBLE_EPS,
-                                        rounded_offsets=True)
+def extended_values(flat, ids, rows, P, N, d0, one_sided):
+    """Form factors and error estimates of polygons ``ids[k]`` from points ``P[rows[k]]``
+    (normals ``N[rows[k]]``) in long double arithmetic: the sector sums with rounded
+    offsets from the float input, in one compiled pass (``kernel/_sector.cpp``,
+    :func:`exactff.kernel.sector.clipped_sector_sums`'s arithmetic)."""
+    frames = np.array([receiver_frame(n, dtype=np.longdouble) for n in N])
+    S, mags, errs, _ = row_sums_extended(
+        flat.V, flat.offsets, np.asarray(ids, dtype=np.int64),
+        np.asarray(rows, dtype=np.int64), P, frames, tol.LONGDOUBLE_EPS,
+        tol.OFFSET_ROUNDING_ULPS, tol.C2 * tol.LONGDOUBLE_EPS)
     F, err = sector_values(S, mags, errs, d0, one_sided, eps=tol.LONGDOUBLE_EPS)
     return F.astype(float), err.astype(float)
 

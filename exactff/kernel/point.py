@@ -16,15 +16,16 @@ from numpy.typing import ArrayLike
 from .. import _tolerances as tol
 from ..checks import as_normal, as_point, check_sides, check_tolerance
 from ..errors import check_finite, misses_tolerance, tolerance_missed
-from ..geometry import area_vector, receiver_frame, rotate, to_local
+from ..geometry import area_vector, receiver_frame
 from ..halfspace import clip_above_horizon
 from ..predicates import plane_sides, polygon_side
 from ..scene import Scene, validate_polygon
 from .flat import flat_polygons
 from .ladder import extended_values, mp_form_factor
-from .sector import clipped_sector_sums, sector_values
+from ._sector import row_sums
+from .sector import sector_values
 
-__all__ = ["unoccluded_row", "point_polygon_form_factors", "sector_form_factor",
+__all__ = ["unoccluded_row", "unoccluded_rows", "point_polygon_form_factors", "sector_form_factor",
            "point_polygon_form_factor", "local_clipped"]
 
 
@@ -33,9 +34,12 @@ def unoccluded_row(flat, p, n, *, one_sided=True, tolerance=None,
     """Unoccluded form factors from ``p`` (normal ``n``) to every polygon of ``flat``.
 
     The hot path: culls polygons seen edge-on, facing away (one-sided) or wholly below
-    the horizon, then evaluates the sector form over all remaining edges at once, in
-    offset form, with a rounding-error estimate per polygon. With a ``tolerance``, every
-    value whose estimate exceeds ``tolerance * F`` is re-evaluated with mpmath from the
+    the horizon, then evaluates the sector form over all remaining edges in one compiled
+    pass (``kernel/_sector.cpp``, the arithmetic of
+    :func:`~exactff.kernel.sector.clipped_sector_sums` with rounded offsets), in offset
+    form, with a rounding-error estimate per polygon. With a ``tolerance``, every
+    value whose estimate exceeds ``tolerance * F`` is re-evaluated (long double, then
+    mpmath) from the
     original float input (:func:`mp_form_factor`). Returns (N,) values, and their error estimates if
     ``return_error``.
 
@@ -53,81 +57,116 @@ def unoccluded_row(flat, p, n, *, one_sided=True, tolerance=None,
     """
     if strict is None:
         strict = not return_error
-    N = len(flat.normals)
     p = np.asarray(p, dtype=float)
-    n_raw = np.asarray(n, dtype=float)
     if sides is not None:
         side, band = (np.array(a) for a in sides)
     else:
         side, band = plane_sides(flat, p, exact=(in_band == "exact"))
         if in_band == "edge_on":
             band[:] = False
+    F, err = unoccluded_rows(flat, p[None], np.asarray(n, dtype=float)[None], side[None],
+                             band[None], one_sided=one_sided, tolerance=tolerance,
+                             strict=strict)
+    return (F[0], err[0]) if return_error else F[0]
+
+
+def unoccluded_rows(flat, P, N, side, band, *, one_sided=True, tolerance=None, strict=True):
+    """Unoccluded form factors from many points at once, and their error estimates: the
+    rows of :func:`unoccluded_row`, value for value, with the compiled sums of all the
+    rows in one call per tier (what a convex enclosure's matrix does row after row).
+
+    Parameters
+    ----------
+    flat : FlatPolygons
+    P, N : ndarray of shape (R, 3)
+        The points and their normals (normalised here).
+    side : ndarray of shape (R, len(flat.normals)), int
+        The side of each point for each polygon (+1 front, -1 back, 0 edge-on), as
+        :func:`exactff.predicates.plane_sides` or
+        :func:`exactff.predicates.engine_sides` decide it.
+    band : ndarray of shape (R, len(flat.normals)), bool
+        Where the polygon's plane passes within rounding of the point (a non-zero side
+        there was decided exactly, and only mpmath can give the value).
+    one_sided : bool, default True
+    tolerance : float or None
+        As for :func:`unoccluded_row`.
+    strict : bool, default True
+        Raise :class:`NumericalError` where a value misses the tolerance even in the
+        last tier (else return it with its estimate).
+
+    Returns
+    -------
+    (ndarray of shape (R, len(flat.normals)), ndarray of the same shape)
+
+    Examples
+    --------
+    From the centres of the floor and of a wall of a closed box, each row sums to 1:
+
+    >>> import exactff as ef
+    >>> from exactff.predicates import engine_sides
+    >>> box = ef.scenes.subdivided_box(2)
+    >>> flat = flat_polygons(box)
+    >>> P, N = np.array([[0.5, 0.5, 0.0], [0.0, 0.5, 0.5]]), np.eye(3)[[2, 0]]
+    >>> side, band = zip(*(engine_sides(flat, p) for p in P))
+    >>> F, E = unoccluded_rows(flat, P, N, np.array(side), np.array(band), tolerance=1e-12)
+    >>> bool(np.abs(F.sum(axis=1) - 1).max() < 1e-14), bool(E.max() < 1e-14)
+    (True, True)
+    """
+    F = np.zeros(side.shape)
+    err = np.zeros(side.shape)
     live = (side > 0) if one_sided else (side != 0)
-    F = np.zeros(N)
-    err = np.zeros(N)
-    if not live.any():
-        return (F, err) if return_error else F
-    R = receiver_frame(n_raw)
-    vmask = live[flat.owner]
-    idx = np.flatnonzero(vmask)
-    newpos = np.cumsum(vmask) - 1
-    owner_all = flat.owner[idx]
-    A0_all = to_local(flat.first, p, R)
-    E = rotate(flat.E[idx], R)
-    # wholly below the horizon: nothing to integrate
-    zmax = np.full(N, -np.inf)
-    np.maximum.at(zmax, owner_all, A0_all[owner_all, 2] + E[:, 2])
-    live &= zmax > 0
-    if not live.any():
-        return (F, err) if return_error else F
-    keep_v = live[owner_all]
-    if not keep_v.all():
-        sel = np.flatnonzero(keep_v)
-        newpos2 = np.cumsum(keep_v) - 1
-        nxt = newpos2[newpos[flat.nxt[idx[sel]]]]
-        E = E[sel]
-        owner_all = owner_all[sel]
-    else:
-        nxt = newpos[flat.nxt[idx]]
-    ids = np.flatnonzero(live)
-    local_id = np.full(N, -1)
-    local_id[ids] = np.arange(len(ids))
-    owner = local_id[owner_all]
-    S, mags, errs = clipped_sector_sums(A0_all[ids], E, nxt, owner, len(ids),
-                                        rounded_offsets=True)
-    F[ids], err[ids] = sector_values(S, mags, errs, -side[ids].astype(float), one_sided,
-                               unchecked=band[ids])
+    rows, ids = np.nonzero(live)
+    if not len(ids):
+        return F, err
+    # the sector sums of every live pair in one compiled pass (kernel/_sector.cpp:
+    # clipped_sector_sums with rounded offsets, the same arithmetic); polygons wholly
+    # below a row's horizon have nothing to integrate
+    frames = np.array([receiver_frame(n) for n in N])
+    S, mags, errs, above = row_sums(flat.V, flat.offsets, ids, rows, P, frames, tol.EPS,
+                                    tol.OFFSET_ROUNDING_ULPS, tol.C2 * tol.EPS)
+    if not above.all():
+        rows, ids, S, mags, errs = (a[above] for a in (rows, ids, S, mags, errs))
+    if not len(ids):
+        return F, err
+    in_band = band[rows, ids]
+    F[rows, ids], err[rows, ids] = sector_values(S, mags, errs, -side[rows, ids].astype(float),
+                                                 one_sided, unchecked=in_band)
     # p within rounding of the polygon's plane (its side decided exactly): the double
     # value can be anything; only the high-precision tier can give it
-    err[ids[band[ids]]] = np.inf
+    err[rows[in_band], ids[in_band]] = np.inf
     if tolerance is not None:
-        flagged = ids[err[ids] > tolerance * F[ids]]
-        extended = flagged[~band[flagged]]
-        if len(extended) and tol.LONGDOUBLE_EPS < tol.EPS / 100:
-            # second tier: the same vectorised sums in extended precision (x87 80-bit
-            # long double where the platform has it), from the original float input
-            Fl, el = extended_values(flat, extended, p, n_raw,
-                                      -side[extended].astype(float), one_sided)
+        flagged = np.flatnonzero(err[rows, ids] > tolerance * F[rows, ids])
+        fr, fi = rows[flagged], ids[flagged]
+        in_extended = np.flatnonzero(~band[fr, fi])   # positions in flagged
+        er, ei = fr[in_extended], fi[in_extended]
+        if len(ei) and tol.LONGDOUBLE_EPS < tol.EPS / 100:
+            # second tier: the same sums in extended precision (x87 80-bit long double
+            # where the platform has it), from the original float input
+            Fl, el = extended_values(flat, ei, er, P, N, -side[er, ei].astype(float),
+                                     one_sided)
             good = el <= tolerance * Fl
-            F[extended[good]], err[extended[good]] = Fl[good], el[good]
-            flagged = np.setdiff1d(flagged, extended[good])
+            F[er[good], ei[good]], err[er[good], ei[good]] = Fl[good], el[good]
+            settled = np.zeros(len(fi), dtype=bool)
+            settled[in_extended[good]] = True
+            fr, fi = fr[~settled], fi[~settled]
         # last tier (DESIGN 2.2): mpmath at the digits the value needs
-        for i in flagged:
-            P = flat.V[flat.offsets[i]:flat.offsets[i + 1]]
-            F[i], err[i] = mp_form_factor(p, n_raw, P, two_sided=not one_sided,
-                                          tolerance=tolerance, error=True,
-                                          side=int(side[i]))
+        for r, i in zip(fr.tolist(), fi.tolist()):
+            Q = flat.V[flat.offsets[i]:flat.offsets[i + 1]]
+            F[r, i], err[r, i] = mp_form_factor(P[r], N[r], Q, two_sided=not one_sided,
+                                                tolerance=tolerance, error=True,
+                                                side=int(side[r, i]))
         # the last tier's values are checked too: one that still misses the tolerance
         # (mpmath stopped at its precision limit) is returned with its estimate when the
         # caller asks for estimates, and raises otherwise
-        missed = flagged[misses_tolerance(F[flagged], err[flagged], tolerance)]
+        missed = np.flatnonzero(misses_tolerance(F[fr, fi], err[fr, fi], tolerance))
         if len(missed) and strict:
-            i = int(missed[0])
-            raise tolerance_missed(f"polygon {i}", F[i], err[i], tolerance,
+            r, i = int(fr[missed[0]]), int(fi[missed[0]])
+            where = f"polygon {i}" if len(P) == 1 else f"row {r}, polygon {i}"
+            raise tolerance_missed(where, F[r, i], err[r, i], tolerance,
                                    f"even in {tol.MP_MAX_DPS}-digit arithmetic")
     # (a NaN is not "missed" above: it is refused here, on every tier's way out)
     check_finite(F, err)
-    return (F, err) if return_error else F
+    return F, err
 
 
 def point_polygon_form_factors(point: ArrayLike, normal: ArrayLike, polygons, *,

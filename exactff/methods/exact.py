@@ -5,13 +5,13 @@ import math
 import numpy as np
 
 from .._tolerances import DEFAULT_RTOL
-from ..checks import as_point, as_receiver
+from ..checks import as_point, as_receiver, as_receivers
 from ..errors import NumericalError, check_finite
 from ..kernel import flat_polygons, mp_solid_angle, offset_error, solid_angle_sums
 from ..predicates import engine_sides
 from ..scene import as_scene
-from ..visibility import (compiled_form_factors, is_convex_enclosure, visible_form_factors,
-                          visible_solid_angles)
+from ..visibility import (compiled_form_factor_rows, compiled_form_factors,
+                          is_convex_enclosure, visible_form_factors, visible_solid_angles)
 from ._base import FormFactorMethod
 
 __all__ = ["Exact", "INTEGRATORS", "ENGINES", "hemisphere_solid_angles",
@@ -116,6 +116,42 @@ class Exact(FormFactorMethod):
                                     shortcuts=self.shortcuts, tolerance=self.tolerance,
                                     integrator=self.integrator, error=error)
 
+    def point_rows(self, scene, points, normals, *, two_sided=False):
+        """Many rows, value for value those of :meth:`point_form_factors`: with the
+        compiled engine, the rows a convex enclosure leaves unoccluded are computed
+        together (:func:`exactff.visibility.compiled_form_factor_rows`), what a matrix's
+        rows of a closed room do; otherwise one by one. Where :meth:`point_form_factors`
+        is not this class's own (a subclass's override, or a replacement), every row is
+        its call, one by one.
+
+        Parameters
+        ----------
+        scene : Scene
+        points, normals : array_like of shape (R, 3)
+
+        Returns
+        -------
+        ndarray of shape (R, len(scene))
+
+        Examples
+        --------
+        >>> import exactff as ef
+        >>> box = ef.scenes.subdivided_box(2)
+        >>> F = Exact().point_rows(box, box.centroids[:3], box.normals[:3])
+        >>> F.shape, bool(np.abs(F.sum(axis=1) - 1).max() < 1e-14)
+        ((3, 24), True)
+        """
+        as_scene(scene)
+        P, N, _ = as_receivers(points, normals)
+        if self.engine == "compiled" and type(self).point_form_factors is _OWN_ROW:
+            return compiled_form_factor_rows(scene, P, N, two_sided=two_sided,
+                                             shortcuts=self.shortcuts,
+                                             tolerance=self.tolerance)
+        out = np.zeros((len(P), len(scene)))
+        for r in range(len(P)):
+            out[r] = self.point_form_factors(scene, P[r], N[r], two_sided=two_sided)
+        return out
+
     def point_sphere_factors(self, scene, point, *, two_sided=True, stats=None,
                              error=False):
         """One row of spherical factors: the visible solid angle of every polygon from
@@ -152,6 +188,11 @@ class Exact(FormFactorMethod):
         if self.engine != ("python" if self.integrator == "eq3" else "compiled"):
             extra += f", engine={self.engine!r}"
         return f"Exact(tolerance={self.tolerance}, shortcuts={self.shortcuts}{extra})"
+
+
+#: :meth:`Exact.point_form_factors` as defined here (what :meth:`Exact.point_rows` may
+#: share work for)
+_OWN_ROW = Exact.point_form_factors
 
 
 def hemisphere_solid_angles(scene, point, normal, *, two_sided=True, engine="compiled",

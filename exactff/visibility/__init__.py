@@ -8,7 +8,8 @@ covered region as a shadow-volume BSP tree instead, and is the default. Shortcut
 ``stats`` and tested to be neutral.
 """
 
-from .compiled import compiled_core, compiled_form_factors, convex_pieces
+from .compiled import (compiled_core, compiled_form_factor_rows, compiled_form_factors,
+                       convex_pieces)
 from .bsp import BSPTree, build_bsp, coplanar_overlaps, front_to_back, scene_bsp
 from .coplanar import plane_overlaps
 from .engine import (is_convex_enclosure, visible_form_factors, visible_graph,
@@ -16,4 +17,5 @@ from .engine import (is_convex_enclosure, visible_form_factors, visible_graph,
 
 __all__ = ["visible_form_factors", "visible_solid_angles", "visible_graph", "is_convex_enclosure", "scene_bsp", "build_bsp",
            "front_to_back", "coplanar_overlaps", "plane_overlaps", "BSPTree",
-           "compiled_form_factors", "compiled_core", "convex_pieces"]
+           "compiled_form_factors", "compiled_form_factor_rows", "compiled_core",
+           "convex_pieces"]

@@ -18,7 +18,7 @@ import shapely
 from .. import _tolerances as tol
 from ..errors import NumericalError, check_finite, misses_tolerance
 from ..geometry import cross
-from ..kernel import flat_polygons
+from ..kernel import flat_polygons, unoccluded_row, unoccluded_rows
 from ..predicates import engine_sides, sides_of_point
 from ..rings import owners, successors
 from ..prepared import prepared
@@ -26,7 +26,8 @@ from ._svbsp import Core
 from .bsp import build_bsp
 from .engine import is_convex_enclosure, visible_form_factors
 
-__all__ = ["compiled_core", "compiled_form_factors", "convex_pieces"]
+__all__ = ["compiled_core", "compiled_form_factors", "compiled_form_factor_rows",
+           "convex_pieces"]
 
 
 def convex_pieces(polygon, normal):
@@ -312,14 +313,13 @@ def compiled_form_factors(scene, point, normal, *, two_sided=False, stats=None,
     st = stats if stats is not None else {}
     p = np.asarray(point, dtype=float)
     flat = flat_polygons(scene)
-    side, _ = engine_sides(flat, p)
-
-    def python_row():
-        return visible_form_factors(scene, p, normal, two_sided=two_sided, stats=st,
-                                    shortcuts=shortcuts, tolerance=tolerance, error=error)
-
+    side, band = engine_sides(flat, p)
     if shortcuts and is_convex_enclosure(scene) and np.all(side >= 0):
-        return python_row()   # no occlusion: the unoccluded kernel with its ladder
+        # no occlusion: the unoccluded kernel (compiled sector sums) with its ladder,
+        # straight from here, as the Python engine's convex-scene path has it
+        st["path"] = "unoccluded"
+        return unoccluded_row(flat, p, normal, one_sided=not two_sided, tolerance=tolerance,
+                              sides=(side, band), return_error=error, strict=not error)
     tree, core = compiled_core(scene)
     node_side = sides_of_point(tree.normals, tree.offsets, p).astype(np.int8)
     F, E, band, crossing, counters = core.row(p, np.asarray(normal, dtype=float), node_side,
@@ -371,3 +371,48 @@ def compiled_form_factors(scene, point, normal, *, two_sided=False, stats=None,
     st["max_error_estimate"] = float(E.max(initial=0.0))
     st["max_band_bound"] = float(band.max(initial=0.0))
     return (F, E) if error else F
+
+
+def compiled_form_factor_rows(scene, points, normals, *, two_sided=False, shortcuts=True,
+                              tolerance=None):
+    """Rows of :func:`compiled_form_factors` from many receivers, value for value: the
+    rows a convex enclosure leaves unoccluded (with ``shortcuts``, the point in front of
+    or in every polygon's plane) computed together, their sector sums in one compiled
+    call per tier (:func:`exactff.kernel.point.unoccluded_rows`); the others one by one.
+
+    Parameters
+    ----------
+    scene : Scene
+    points, normals : ndarray of shape (R, 3)
+        The receivers (unit normals, or normalised here).
+    two_sided, shortcuts, tolerance
+        As for :func:`compiled_form_factors`.
+
+    Returns
+    -------
+    ndarray of shape (R, len(scene))
+
+    Examples
+    --------
+    >>> import exactff as ef
+    >>> box = ef.scenes.subdivided_box(4)
+    >>> F = compiled_form_factor_rows(box, box.centroids, box.normals, tolerance=1e-12)
+    >>> F.shape, bool(np.abs(F.sum(axis=1) - 1).max() < 1e-13)
+    ((96, 96), True)
+    """
+    P = np.asarray(points, dtype=float).reshape(-1, 3)
+    N = np.asarray(normals, dtype=float).reshape(-1, 3)
+    out = np.zeros((len(P), len(scene)))
+    flat = flat_polygons(scene)
+    sides = [engine_sides(flat, p) for p in P]
+    convex = shortcuts and is_convex_enclosure(scene)
+    together = [r for r, (side, _) in enumerate(sides) if convex and np.all(side >= 0)]
+    if together:
+        out[together] = unoccluded_rows(
+            flat, P[together], N[together], np.array([sides[r][0] for r in together]),
+            np.array([sides[r][1] for r in together]), one_sided=not two_sided,
+            tolerance=tolerance)[0]
+    for r in sorted(set(range(len(P))) - set(together)):
+        out[r] = compiled_form_factors(scene, P[r], N[r], two_sided=two_sided,
+                                       shortcuts=shortcuts, tolerance=tolerance)
+    return out
