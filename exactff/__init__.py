@@ -21,6 +21,7 @@ from .area import polygon_form_factor
 from .methods import (METHODS, CubicTetrahedron, DiscretePPBH, Exact, FormFactorMethod,
                       Hemicube, MonteCarlo, PolarPlane, SinglePlane)
 from .reports import MatrixReport, check_matrix, compare, describe, to_markdown
+from .audits import AuditReport, audit
 from .rings import padded, padded_buckets
 from .scene import (DEGENERATE, NONPLANAR, Scene, split_nonplanar, validate_polygon,
                     validate_polygons)
@@ -45,4 +46,4 @@ __all__ = ["catalog", "scenes", "__version__",
            "sphere_form_factors",
            "METHODS", "FormFactorMethod", "Exact", "DiscretePPBH", "Hemicube",
            "CubicTetrahedron", "SinglePlane", "PolarPlane", "MonteCarlo",
-           "compare", "to_markdown", "check_matrix", "MatrixReport"]
+           "compare", "to_markdown", "check_matrix", "MatrixReport", "audit", "AuditReport"]

@@ -73,6 +73,7 @@ LAYERS = {
     "exactff.formfactors": 6,
     "exactff.sphere": 6,
     "exactff.reports": 6,
+    "exactff.audits": 6,
     "exactff.io": 6,
     "exactff.io.obj": 6,
     "exactff.io.scene_json": 6,
