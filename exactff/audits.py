@@ -68,6 +68,10 @@ class AuditReport:
         :data:`CONFIGURATIONS`, symmetric, the diagonal left out.
     other_check, exact_check : MatrixReport
         :func:`exactff.check_matrix` of the two matrices (the exact one with its bounds).
+    points : ndarray of shape (N, 3) or None
+        The receivers of point rows, where given.
+    other_bound : ndarray of shape (N, N) or None
+        The other matrix's own error bounds, where given.
     """
 
     kind: str
@@ -86,6 +90,7 @@ class AuditReport:
     other_check: MatrixReport
     exact_check: MatrixReport
     points: np.ndarray | None = field(default=None, repr=False)
+    other_bound: np.ndarray | None = field(default=None, repr=False)
 
     # -- per entry -----------------------------------------------------------------
     @property
@@ -96,9 +101,11 @@ class AuditReport:
     @property
     def slack(self):
         """What an entry's error may be without saying anything about the other tool:
-        the exact value's bound plus the rounding of the difference
-        (``MATRIX_ROUNDING_ULPS`` roundoffs of the larger value)."""
-        return self.bound + tol.MATRIX_ROUNDING_ULPS * tol.EPS * np.maximum(
+        the exact value's bound, the other's own bound where it was given
+        (``other_bound``), and the rounding of the difference (``MATRIX_ROUNDING_ULPS``
+        roundoffs of the larger value)."""
+        own = 0.0 if self.other_bound is None else self.other_bound
+        return self.bound + own + tol.MATRIX_ROUNDING_ULPS * tol.EPS * np.maximum(
             np.abs(self.other), np.abs(self.exact))
 
     @property
@@ -507,8 +514,8 @@ def _other_matrix(F_other, n):
 
 
 def audit(scene: Scene, F_other, *, kind: str = "area", points=None,
-          tolerance: float | None = None, jobs: int | None = None, executor=None,
-          out=None, progress: bool = False) -> AuditReport:
+          tolerance: float | None = None, other_bound=None, jobs: int | None = None,
+          executor=None, out=None, progress: bool = False) -> AuditReport:
     """How wrong is another tool's form-factor matrix? Every entry against the exact
     value, with its bound.
 
@@ -533,6 +540,10 @@ def audit(scene: Scene, F_other, *, kind: str = "area", points=None,
         The exact values' tolerance: absolute for ``"area"`` (default 1e-9, as
         :func:`exactff.area_form_factors`), relative for ``"point"`` (default the exact
         method's). The bounds returned are what the computation reached.
+    other_bound : array_like of shape (N, N), optional
+        The other matrix's own bound on each entry's error, where it states one (an
+        exact code's, a Monte Carlo code's confidence interval): an entry is then an
+        error only beyond both bounds.
     jobs, executor, out, progress
         As for :func:`exactff.form_factor_matrix`: rows in worker processes or on an
         executor, the exact matrix streamed to ``out`` (its bounds beside it in
@@ -583,6 +594,11 @@ def audit(scene: Scene, F_other, *, kind: str = "area", points=None,
         raise ValueError(f"kind must be one of {KINDS}, got {kind!r}")
     M, present = _other_matrix(F_other, n)
     check_tolerance(tolerance)
+    if other_bound is not None:
+        other_bound = np.array(other_bound, dtype=float)
+        if other_bound.shape != (n, n) or not np.all(other_bound >= 0):
+            raise ValueError(f"other_bound must be an array of shape ({n}, {n}) of bounds "
+                             f">= 0, got shape {other_bound.shape}")
     P = None
     if points is not None:
         if kind != "point":
@@ -612,4 +628,5 @@ def audit(scene: Scene, F_other, *, kind: str = "area", points=None,
         names=scene.names, groups=scene.groups, areas=np.array(scene.areas), other=M,
         present=present, exact=exact, bound=bound, unoccluded=U, separation=sep,
         configurations=conf, other_check=check_matrix(M, scene, area=area),
-        exact_check=check_matrix(exact, scene, bound, area=area), points=P)
+        exact_check=check_matrix(exact, scene, bound, area=area), points=P,
+        other_bound=other_bound)
