@@ -13,7 +13,9 @@ from .combine import combined_surfaces
 from .io import (load_scene, read_idf, read_mesh, read_obj, read_rad, read_scene_json,
                  read_view3d_factors, read_vs3, scene_from_json, script_f, to_dataframe,
                  write_elmer_view_factors, write_energyplus_view_factors,
-                 write_openfoam_view_factors, write_view3d_factors, write_vs3)
+                 write_openfoam_view_factors, write_view3d_factors, write_vs3,
+                 read_view_factors, read_energyplus_view_factors, read_elmer_view_factors,
+                 read_openfoam_view_factors)
 from .kernel import (arc_x_extremes, eq3_edge_integral, eq3_form_factor, eq3_ring_area,
                      mp_form_factor, point_polygon_form_factor, point_polygon_form_factors,
                      sector_form_factor)
@@ -36,7 +38,9 @@ __all__ = ["catalog", "scenes", "__version__",
            "read_idf", "read_rad", "read_mesh", "describe", "write_vs3",
            "write_view3d_factors", "read_view3d_factors", "script_f", "combined_surfaces",
            "write_energyplus_view_factors", "write_elmer_view_factors",
-           "write_openfoam_view_factors", "to_dataframe",
+           "write_openfoam_view_factors", "to_dataframe", "read_view_factors",
+           "read_energyplus_view_factors", "read_elmer_view_factors",
+           "read_openfoam_view_factors",
            "area_vector", "polygon_area", "polygon_centroid", "polygon_diameter", "unit_normal",
            "receiver_frame", "rotate", "to_local", "padded", "padded_buckets",
            "point_polygon_form_factor", "point_polygon_form_factors", "sector_form_factor",

@@ -115,6 +115,7 @@ __all__ = [
     "AUDIT_CONTACT_RTOL",
     "AUDIT_NEAR_SEPARATION",
     "AUDIT_GRAZING_RTOL",
+    "AUDIT_AREA_RTOL",
 ]
 
 #: Unit roundoff of IEEE double precision, 2**-53.
@@ -584,6 +585,10 @@ AUDIT_NEAR_SEPARATION = 3.0
 #: the other's plane (or crosses it) from its front: the horizon of every point of the
 #: other, where rays and hemicube cells graze it.
 AUDIT_GRAZING_RTOL = 0.05
+#: reading another tool's matrix: a surface's area from its file matches its polygon's
+#: within this share (View3D prints areas with %g, six digits: 5e-6 of rounding; its
+#: binary files hold float32, 6e-8).
+AUDIT_AREA_RTOL = 1e-5
 
 #: View3D surfaces (exactff.combine): cuts of a polygon around its subsurfaces closer
 #: than this share of its size are one cut, and pieces smaller than this share of its

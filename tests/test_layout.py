@@ -84,6 +84,7 @@ LAYERS = {
     "exactff.io.radiance": 6,
     "exactff.io.solvers": 6,
     "exactff.io.dataframe": 6,
+    "exactff.io.view_factors": 6,
     "exactff.plot": 6,
     "exactff.cli": 6,
     "exactff.__main__": 6,
