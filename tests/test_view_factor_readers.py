@@ -50,8 +50,9 @@ def test_view3d_refuses_another_order_or_size(room, tmp_path):
     with pytest.raises(ValueError, match="surface 1 has area .* but polygon 0 of the scene "
                                          ".* in another order"):
         ef.read_view_factors(tmp_path / "o.vf", swapped)
+    ef.write_view3d_factors(tmp_path / "r.vf", F, scene)
     with pytest.raises(ValueError, match="6 surfaces, but the scene has 24 polygons"):
-        ef.read_view_factors(tmp_path / "o.vf", ef.scenes.subdivided_box(2))
+        ef.read_view_factors(tmp_path / "r.vf", ef.scenes.subdivided_box(2))
     ef.write_view3d_factors(tmp_path / "e.vf", F, scene, emit=True,
                             emissivities=np.full(6, 0.9))
     with pytest.raises(ValueError, match="emit=1"):
