@@ -241,3 +241,54 @@ def test_audit_refuses_bad_input():
         ef.audit(box, np.zeros((6, 6)), kind="point", points=np.zeros((5, 3)))
     with pytest.raises(ValueError, match="tolerance"):
         ef.audit(box, np.zeros((6, 6)), tolerance=-1.0)
+
+
+def test_cli_audit_writes_json_csv_and_figures(tmp_path, capsys):
+    from exactff.cli import main
+
+    box = ef.scenes.subdivided_box(2)
+    F = ef.area_form_factors(box, tolerance=1e-10)
+    F[3, 9] += 0.02
+    np.save(tmp_path / "m.npy", F)
+    out = tmp_path / "out"
+    assert main(["audit", "box:2", str(tmp_path / "m.npy"), "--area", "--out", str(out),
+                 "--no-progress", "--worst", "3"]) == 0
+    text = capsys.readouterr().out
+    assert "3 -> 9" in text and "differs" in text
+    doc = json.loads((out / "audit.json").read_text())
+    assert doc["kind"] == "area" and doc["clean"] is False and doc["polygons"] == 24
+    assert doc["worst"][0]["i"] == 3 and doc["worst"][0]["j"] == 9
+    assert doc["worst"][0]["error"] == pytest.approx(0.02, abs=1e-9)
+    assert doc["entries_outside"] == 1 and doc["rows_off"] == [3]
+    lines = (out / "worst.csv").read_text().splitlines()
+    assert lines[0].startswith("i,j,from,to") and len(lines) == 4
+    assert lines[1].startswith("3,9,")
+    for name in ("error_vs_distance.png", "relative_errors.png", "row_errors.png"):
+        assert (out / name).stat().st_size > 0
+    # a second run resumes the exact values from OUT
+    assert main(["audit", "box:2", str(tmp_path / "m.npy"), "--out", str(out),
+                 "--no-progress"]) == 0
+
+
+def test_cli_audit_without_matplotlib(tmp_path, capsys, monkeypatch):
+    import sys
+
+    from exactff.cli import main
+
+    box = ef.scenes.subdivided_box(1)
+    np.save(tmp_path / "m.npy", ef.form_factor_matrix(box))
+    monkeypatch.setitem(sys.modules, "matplotlib", None)
+    assert main(["audit", "box:1", str(tmp_path / "m.npy"), "--centroids", "--out",
+                 str(tmp_path / "o"), "--no-progress"]) == 0
+    text = capsys.readouterr().out
+    assert "figures: not drawn" in text and "clean" in text
+    assert sorted(p.name for p in (tmp_path / "o").glob("*.png")) == []
+    assert json.loads((tmp_path / "o" / "audit.json").read_text())["clean"] is True
+
+
+def test_cli_audit_refuses_a_matrix_of_another_scene(tmp_path, capsys):
+    from exactff.cli import main
+
+    np.save(tmp_path / "m.npy", np.zeros((5, 5)))
+    assert main(["audit", "box:1", str(tmp_path / "m.npy"), "--out", str(tmp_path / "o")]) == 2
+    assert "5 surfaces, but the scene has 6 polygons" in capsys.readouterr().err
