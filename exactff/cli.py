@@ -572,8 +572,11 @@ def cmd_audit(args):
     F = read_view_factors(args.matrix, scene, format=args.format, zone=args.zone,
                           region=args.region)
     os.makedirs(args.out, exist_ok=True)
-    # the exact values stream to OUT (resumed by a second run of the same audit)
-    exact_path = os.path.join(args.out, f"exact_{kind}.npy")
+    # the exact values stream to OUT, or --exact (resumed by a second run of the same
+    # audit: of another matrix of the same scene too)
+    exact_path = args.exact or os.path.join(args.out, f"exact_{kind}.npy")
+    if not exact_path.endswith(".npy"):
+        raise ValueError(f"--exact {exact_path}: expected a .npy file")
     if args.overwrite:
         from .storage import beside_path, path_stem
 
@@ -738,9 +741,14 @@ def build_parser():
     p.add_argument("--worst", type=int, default=20,
                    help="how many of the worst entries to list (default 20)")
     p.add_argument("--out", default="audit", help="output directory (default ./audit)")
+    p.add_argument("--exact", metavar="PATH.npy",
+                   help="where the exact values go (their bounds beside it, "
+                        "PATH.error.npy), resumed from it by the next audit of the same "
+                        "scene, kind and tolerance (default OUT/exact_area.npy or "
+                        "OUT/exact_point.npy)")
     p.add_argument("--jobs", type=int, default=1, help="worker processes on this machine")
     p.add_argument("--overwrite", action="store_true",
-                   help="recompute the exact values instead of resuming OUT/exact_*.npy")
+                   help="recompute the exact values instead of resuming them")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.set_defaults(func=cmd_audit)
     return parser
