@@ -408,38 +408,40 @@ def _grazing(scene):
     return g
 
 
-def _unoccluded(scene, kind, points):
-    """The pairs' values without occlusion, (N, N): closed-form area form factors, or
-    point form factors from the rows' receivers."""
+def _unoccluded(scene, kind, points, tolerance):
+    """The pairs' values without occlusion, (N, N): closed-form area form factors (each
+    within ``tolerance``: no mpmath where the closed form's estimate meets it), or point
+    form factors from the rows' receivers (exact to rounding), and their estimates."""
     n = len(scene)
-    U = np.zeros((n, n))
+    U, UE = np.zeros((n, n)), np.zeros((n, n))
     if kind == "area":
         from .area.contour import unoccluded_pairs
 
         for i in range(n):
             others = [j for j in range(n) if j != i]
             if others:
-                U[i, others] = unoccluded_pairs(scene.polygons[i],
-                                                [scene.polygons[j] for j in others])[0]
-        return U
+                U[i, others], UE[i, others] = unoccluded_pairs(
+                    scene.polygons[i], [scene.polygons[j] for j in others], atol=tolerance)
+        return U, UE
     from .kernel import point_polygon_form_factors
 
     P = scene.centroids if points is None else points
     for i in range(n):
         U[i] = point_polygon_form_factors(P[i], scene.normals[i], scene)
-    return U
+    return U, UE
 
 
-def pair_configurations(scene, exact=None, bound=None, unoccluded=None):
+def pair_configurations(scene, exact=None, bound=None, unoccluded=None,
+                        unoccluded_bound=None):
     """The configurations of a scene's pairs (:data:`CONFIGURATIONS`), and their
     separation.
 
     Parameters
     ----------
     scene : Scene
-    exact, bound, unoccluded : ndarray of shape (N, N), optional
-        The exact values, their bounds and the unoccluded values: needed for
-        ``partly_occluded`` (all False without them).
+    exact, bound, unoccluded, unoccluded_bound : ndarray of shape (N, N), optional
+        The exact values, their bounds, the unoccluded values and their bounds: needed
+        for ``partly_occluded`` (all False without them).
 
     Returns
     -------
@@ -471,6 +473,7 @@ def pair_configurations(scene, exact=None, bound=None, unoccluded=None):
     occ = np.zeros((n, n), bool)
     if exact is not None and unoccluded is not None:
         slack = (np.zeros((n, n)) if bound is None else bound) + (
+            0.0 if unoccluded_bound is None else unoccluded_bound) + (
             tol.MATRIX_ROUNDING_ULPS * tol.EPS * np.abs(unoccluded))
         occ = (unoccluded - exact > slack) & (exact > slack)
         occ = occ | occ.T
@@ -620,8 +623,8 @@ def audit(scene: Scene, F_other, *, kind: str = "area", points=None,
         E_exact = run_rows(scene, rows, PointRows(method, False, error=True, points=P),
                            **options)
     exact, bound = (np.asarray(A, dtype=float) for A in E_exact)
-    U = _unoccluded(scene, kind, P)
-    conf, sep = pair_configurations(scene, exact, bound, U)
+    U, UE = _unoccluded(scene, kind, P, tolerance)
+    conf, sep = pair_configurations(scene, exact, bound, U, UE)
     area = kind == "area"
     return AuditReport(
         kind=kind, tolerance=float(tolerance), labels=polygon_labels(scene),
