@@ -622,7 +622,7 @@ def audit(scene: Scene, F_other, *, kind: str = "area", points=None,
         tolerance = method.tolerance
         E_exact = run_rows(scene, rows, PointRows(method, False, error=True, points=P),
                            **options)
-    exact, bound = (np.asarray(A, dtype=float) for A in E_exact)
+    exact, bound = (np.array(A, dtype=float) for A in E_exact)      # in memory, not the file
     U, UE = _unoccluded(scene, kind, P, tolerance)
     conf, sep = pair_configurations(scene, exact, bound, U, UE)
     area = kind == "area"

@@ -486,6 +486,32 @@ def _int_list(text, name):
     return vals
 
 
+def _save_figures(out, figures):
+    """Draw ``figures``, pairs ``(name, draw)`` with ``draw(exactff.plot)`` returning
+    the Axes it drew, to ``OUT/NAME.png``; the names written (none, said so, without
+    matplotlib)."""
+    import os
+
+    try:
+        import matplotlib
+    except ImportError:
+        print("figures: not drawn (pip install exactff[plots] for them)")
+        return []
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from . import plot
+
+    written = []
+    for name, draw in figures:
+        ax = draw(plot)
+        ax.figure.tight_layout()
+        ax.figure.savefig(os.path.join(out, name + ".png"), dpi=120)
+        plt.close(ax.figure)
+        written.append(name + ".png")
+    return written
+
+
 def cmd_compare(args):
     import csv
     import json
@@ -524,26 +550,17 @@ def cmd_compare(args):
         w = csv.DictWriter(fh, fieldnames=list(records[0]))
         w.writeheader()
         w.writerows(records)
-    written = ["results.csv", "results.json"]
-    try:
-        import matplotlib
-    except ImportError:
-        print("figures: not drawn (pip install exactff[plots] for them)")
-    else:
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-
-        from . import plot
-
-        for name, draw in (("error_vs_samples", plot.error_vs_samples),
-                           ("time_vs_samples", plot.time_vs_samples),
-                           ("error_vs_time", plot.error_vs_time)):
-            ax = draw(records)
+    def titled(draw):
+        def drawn(plot):
+            ax = draw(plot)(records)
             ax.set_title(f"{ax.get_title()}: {args.scene}, {len(rows)} rows")
-            ax.figure.tight_layout()
-            ax.figure.savefig(os.path.join(args.out, name + ".png"), dpi=120)
-            plt.close(ax.figure)
-            written.append(name + ".png")
+            return ax
+        return drawn
+
+    written = ["results.csv", "results.json"] + _save_figures(args.out, [
+        ("error_vs_samples", titled(lambda plot: plot.error_vs_samples)),
+        ("time_vs_samples", titled(lambda plot: plot.time_vs_samples)),
+        ("error_vs_time", titled(lambda plot: plot.error_vs_time))])
     print(f"written to {args.out}: {', '.join(written)}")
     return 0
 
@@ -602,25 +619,10 @@ def cmd_audit(args):
         for row in rep.worst_entries(args.worst):
             w.writerow({k: ";".join(v) if isinstance(v, list) else v
                         for k, v in row.items()})
-    written = ["audit.json", "worst.csv", os.path.basename(exact_path)]
-    try:
-        import matplotlib
-    except ImportError:
-        print("figures: not drawn (pip install exactff[plots] for them)")
-    else:
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-
-        from . import plot
-
-        for name, draw in (("error_vs_distance", plot.audit_error_vs_distance),
-                           ("relative_errors", plot.audit_relative_errors),
-                           ("row_errors", lambda r: plot.audit_row_errors(r, scene))):
-            ax = draw(rep)
-            ax.figure.tight_layout()
-            ax.figure.savefig(os.path.join(args.out, name + ".png"), dpi=120)
-            plt.close(ax.figure)
-            written.append(name + ".png")
+    written = ["audit.json", "worst.csv", exact_path] + _save_figures(args.out, [
+        ("error_vs_distance", lambda plot: plot.audit_error_vs_distance(rep)),
+        ("relative_errors", lambda plot: plot.audit_relative_errors(rep)),
+        ("row_errors", lambda plot: plot.audit_row_errors(rep, scene))])
     print(f"written to {args.out}: {', '.join(written)}")
     return 0
 
