@@ -292,3 +292,39 @@ def test_cli_audit_refuses_a_matrix_of_another_scene(tmp_path, capsys):
     np.save(tmp_path / "m.npy", np.zeros((5, 5)))
     assert main(["audit", "box:1", str(tmp_path / "m.npy"), "--out", str(tmp_path / "o")]) == 2
     assert "5 surfaces, but the scene has 6 polygons" in capsys.readouterr().err
+
+
+def test_audit_relative_error_and_workers():
+    box = ef.scenes.subdivided_box(2)
+    F = ef.area_form_factors(box)
+    G = F.copy()
+    G[0, 1] = 0.5                     # coplanar neighbours: exact 0
+    G[0, 8] *= 1.25
+    rep = ef.audit(box, G, jobs=2)    # the exact values in two worker processes
+    serial = ef.audit(box, G)
+    assert np.array_equal(rep.exact, serial.exact) and np.array_equal(rep.bound, serial.bound)
+    rel = rep.relative_error
+    assert rel[0, 1] == np.inf and rel[0, 2] == 0.0      # 0.5 / 0, and 0 / 0
+    assert rel[0, 8] == pytest.approx(0.25, abs=1e-12)
+    assert rep.to_dict()["worst"][0]["relative_error"] == "inf"
+
+
+def test_cli_audit_point_rows_from_a_points_file(tmp_path, capsys):
+    from exactff.cli import main
+
+    box = ef.scenes.subdivided_box(1)
+    P = np.array(box.centroids) + 0.1 * np.array([[1, 1, 0], [1, 1, 0], [0, 1, 1],
+                                                  [0, 1, 1], [1, 0, 1], [1, 0, 1]])
+    np.savetxt(tmp_path / "p.txt", P)
+    F = ef.form_factors(box, P, box.normals)
+    np.save(tmp_path / "m.npy", F)
+    assert main(["audit", "box:1", str(tmp_path / "m.npy"), "--points", str(tmp_path / "p.txt"),
+                 "--out", str(tmp_path / "o"), "--no-progress"]) == 0
+    doc = json.loads((tmp_path / "o" / "audit.json").read_text())
+    assert doc["kind"] == "point" and doc["clean"] is True
+    # the same matrix against the centroids' rows: every row differs
+    assert main(["audit", "box:1", str(tmp_path / "m.npy"), "--centroids",
+                 "--out", str(tmp_path / "c"), "--no-progress"]) == 0
+    doc = json.loads((tmp_path / "c" / "audit.json").read_text())
+    assert doc["clean"] is False and doc["rows"]["max_abs_error"][0] > 1e-3
+    capsys.readouterr()
