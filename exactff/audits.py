@@ -399,10 +399,16 @@ def _grazing(scene):
     n = len(scene)
     size = np.array([polygon_diameter(p) for p in scene.polygons])
     V, off = scene.vertices, scene.offsets
-    h = scene.normals @ V.T - scene.plane_offsets[:, None]          # (N, vertices)
-    low = np.minimum.reduceat(h, off[:-1], axis=1)                  # [i, j]: j over plane i
-    high = np.maximum.reduceat(h, off[:-1], axis=1)
-    g = (low < tol.AUDIT_GRAZING_RTOL * size[None, :]) & (high > 0)
+    g = np.zeros((n, n), bool)
+    step = max(1, 2 ** 22 // max(len(V), 1))          # blocks of rows of about 4M heights
+    for a in range(0, n, step):
+        b = min(n, a + step)
+        # heights of every vertex over the planes of polygons a:b, then [i, j]: the lowest
+        # and highest of polygon j's over the plane of polygon i
+        h = scene.normals[a:b] @ V.T - scene.plane_offsets[a:b, None]
+        low = np.minimum.reduceat(h, off[:-1], axis=1)
+        high = np.maximum.reduceat(h, off[:-1], axis=1)
+        g[a:b] = (low < tol.AUDIT_GRAZING_RTOL * size[None, :]) & (high > 0)
     g = g | g.T
     np.fill_diagonal(g, False)
     return g

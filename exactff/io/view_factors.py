@@ -105,8 +105,15 @@ def align_view_factors(F, scene, *, names=None, areas=None, patches=None, source
     if F.ndim != 2 or F.shape[0] != F.shape[1]:
         raise ValueError(f"{source}: expected a square matrix, got shape {F.shape}")
     if F.shape[0] != n:
+        hint = ""
+        if "view3d" in scene.metadata:
+            from ..combine import combined_surfaces
+
+            if len(combined_surfaces(scene)) == F.shape[0]:
+                hint = ("; it has the surfaces View3D reports for the scene (combined "
+                        "surfaces, subsurfaces), which an audit does not compare yet")
         raise ValueError(f"{source}: {F.shape[0]} surfaces, but the scene has {n} polygons "
-                         f"(one row and column per polygon, in the scene's order)")
+                         f"(one row and column per polygon, in the scene's order){hint}")
     if areas is not None:
         A = np.asarray(areas, dtype=float)
         rel = np.abs(A - scene.areas) / scene.areas
