@@ -124,6 +124,7 @@ def test_audit_finds_a_constant_on_edge_neighbours():
     edge = _shared_vertex_pairs(box)
     conf, _ = pair_configurations(box)
     assert np.array_equal(conf["edge_sharing"], edge)
+    assert not conf["partly_occluded"].any()          # no exact values given
     # OpenFOAM's viewFactorsGen defect: +0.00965 on every edge neighbour
     rep = ef.audit(box, F + 0.00965 * edge, kind="area", tolerance=1e-9)
     assert not rep.clean
@@ -133,6 +134,7 @@ def test_audit_finds_a_constant_on_edge_neighbours():
     assert b["edge_sharing"]["outside"] == b["edge_sharing"]["pairs"] == int(edge.sum())
     assert b["other"]["outside"] == 0 and b["other"]["max_abs_error"] < 1e-12
     assert b["edge_sharing"]["share"] == pytest.approx(1.0, abs=1e-9)
+    assert b["partly_occluded"]["pairs"] == 0         # a convex enclosure
     i, j, other, exact, error = rep.worst(1)[0]
     assert edge[i, j] and error == pytest.approx(0.00965, abs=1e-12)
 
@@ -146,7 +148,12 @@ def test_audit_finds_a_pair_given_binary_visibility(sandwich):
     assert unoccluded > F[0, 1] + 0.02
     G[0, 1] = unoccluded
     rep = ef.audit(scene, G, kind="area", tolerance=1e-7)
-    assert rep.configurations["partly_occluded"][0, 1]
+    # the squares' pair is the one partly occluded (the plate's faces see the squares
+    # whole); nothing grazes; the plate's two faces share their edges
+    occluded = rep.configurations["partly_occluded"]
+    assert list(zip(*np.nonzero(occluded))) == [(0, 1), (1, 0)]
+    assert not rep.configurations["grazing"].any()
+    assert list(zip(*np.nonzero(rep.configurations["edge_sharing"]))) == [(2, 3), (3, 2)]
     assert rep.worst(1)[0][:2] == (0, 1)
     assert rep.worst(1)[0][4] == pytest.approx(unoccluded - F[0, 1], abs=1e-7)
     assert list(zip(*np.nonzero(rep.outside))) == [(0, 1)]
@@ -328,3 +335,22 @@ def test_cli_audit_point_rows_from_a_points_file(tmp_path, capsys):
     doc = json.loads((tmp_path / "c" / "audit.json").read_text())
     assert doc["clean"] is False and doc["rows"]["max_abs_error"][0] > 1e-3
     capsys.readouterr()
+
+
+def test_pair_configurations_of_boxes_and_far_squares():
+    box = ef.scenes.subdivided_box(1)
+    conf, sep = pair_configurations(box)
+    # faces 0 and 1 are opposite: centroids 1 apart, circumradius sqrt(2) / 2
+    assert sep[0, 1] == pytest.approx(np.sqrt(2), rel=1e-15)
+    assert conf["near"][0, 1] and not conf["grazing"][0, 1] and not conf["edge_sharing"][0, 1]
+    # faces 0 and 2 meet at an edge: each reaches the other's plane
+    assert conf["edge_sharing"][0, 2] and conf["grazing"][0, 2]
+    far = ef.Scene.from_polygons([_sq(0, True), _sq(10, False)])
+    conf, sep = pair_configurations(far)
+    assert sep[0, 1] == pytest.approx(10 / (np.sqrt(2) / 2), rel=1e-15)
+    assert not any(conf[c].any() for c in CONFIGURATIONS)
+    # a square tilted so that a corner dips 1 % of its size below the other's plane
+    tilted = ef.Scene.from_polygons([_sq(0, True), [[3, 0, -0.01], [3, 1, -0.01], [3, 1, 1],
+                                                    [3, 0, 1]][::-1]])
+    conf, _ = pair_configurations(tilted)
+    assert conf["grazing"][0, 1] and conf["grazing"][1, 0] and not conf["near"][0, 1]
