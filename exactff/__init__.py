@@ -13,7 +13,9 @@ from .combine import combined_surfaces
 from .io import (load_scene, read_idf, read_mesh, read_obj, read_rad, read_scene_json,
                  read_view3d_factors, read_vs3, scene_from_json, script_f, to_dataframe,
                  write_elmer_view_factors, write_energyplus_view_factors,
-                 write_openfoam_view_factors, write_view3d_factors, write_vs3)
+                 write_openfoam_view_factors, write_view3d_factors, write_vs3,
+                 read_view_factors, read_energyplus_view_factors, read_elmer_view_factors,
+                 read_openfoam_view_factors)
 from .kernel import (arc_x_extremes, eq3_edge_integral, eq3_form_factor, eq3_ring_area,
                      mp_form_factor, point_polygon_form_factor, point_polygon_form_factors,
                      sector_form_factor)
@@ -21,6 +23,7 @@ from .area import polygon_form_factor
 from .methods import (METHODS, CubicTetrahedron, DiscretePPBH, Exact, FormFactorMethod,
                       Hemicube, MonteCarlo, PolarPlane, SinglePlane)
 from .reports import MatrixReport, check_matrix, compare, describe, to_markdown
+from .audits import AuditReport, audit
 from .rings import padded, padded_buckets
 from .scene import (DEGENERATE, NONPLANAR, Scene, split_nonplanar, validate_polygon,
                     validate_polygons)
@@ -35,7 +38,9 @@ __all__ = ["catalog", "scenes", "__version__",
            "read_idf", "read_rad", "read_mesh", "describe", "write_vs3",
            "write_view3d_factors", "read_view3d_factors", "script_f", "combined_surfaces",
            "write_energyplus_view_factors", "write_elmer_view_factors",
-           "write_openfoam_view_factors", "to_dataframe",
+           "write_openfoam_view_factors", "to_dataframe", "read_view_factors",
+           "read_energyplus_view_factors", "read_elmer_view_factors",
+           "read_openfoam_view_factors",
            "area_vector", "polygon_area", "polygon_centroid", "polygon_diameter", "unit_normal",
            "receiver_frame", "rotate", "to_local", "padded", "padded_buckets",
            "point_polygon_form_factor", "point_polygon_form_factors", "sector_form_factor",
@@ -45,4 +50,4 @@ __all__ = ["catalog", "scenes", "__version__",
            "sphere_form_factors",
            "METHODS", "FormFactorMethod", "Exact", "DiscretePPBH", "Hemicube",
            "CubicTetrahedron", "SinglePlane", "PolarPlane", "MonteCarlo",
-           "compare", "to_markdown", "check_matrix", "MatrixReport"]
+           "compare", "to_markdown", "check_matrix", "MatrixReport", "audit", "AuditReport"]

@@ -115,6 +115,10 @@ __all__ = [
     "MATRIX_ROW_SUM_ATOL",
     "MATRIX_RECIPROCITY_RTOL",
     "CLOSED_RESIDUAL",
+    "AUDIT_CONTACT_RTOL",
+    "AUDIT_NEAR_SEPARATION",
+    "AUDIT_GRAZING_RTOL",
+    "AUDIT_AREA_RTOL",
 ]
 
 #: Unit roundoff of IEEE double precision, 2**-53.
@@ -588,6 +592,22 @@ MATRIX_RECIPROCITY_RTOL = 1e-9
 #: check_matrix: a scene is closed when its vector area |sum A n| is within this share
 #: of its total area (and every edge is paired): the figure `exactff info` uses.
 CLOSED_RESIDUAL = 1e-12
+#: audit: two polygons share an edge when an edge of each lies within this share of the
+#: pair's larger diameter of the other's line and they overlap by more than it (files
+#: round shared vertices alike, or within a few digits of the coordinates: far below).
+AUDIT_CONTACT_RTOL = 1e-9
+#: audit: a pair is near when its centroids are less than this many of the larger
+#: circumradius apart: there 1/r^2 varies over the polygons by a factor of about
+#: ((s + 1) / (s - 1))^2 = 4 or more, where point samples and low-order rules go wrong.
+AUDIT_NEAR_SEPARATION = 3.0
+#: audit: a pair is grazing when one polygon comes within this share of its diameter of
+#: the other's plane (or crosses it) from its front: the horizon of every point of the
+#: other, where rays and hemicube cells graze it.
+AUDIT_GRAZING_RTOL = 0.05
+#: reading another tool's matrix: a surface's area from its file matches its polygon's
+#: within this share (View3D prints areas with %g, six digits: 5e-6 of rounding; its
+#: binary files hold float32, 6e-8).
+AUDIT_AREA_RTOL = 1e-5
 
 #: View3D surfaces (exactff.combine): cuts of a polygon around its subsurfaces closer
 #: than this share of its size are one cut, and pieces smaller than this share of its

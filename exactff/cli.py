@@ -7,7 +7,7 @@ import numpy as np
 
 __all__ = ["main", "PROCEDURAL", "build_parser", "open_scene", "parse_rows", "read_points",
            "cmd_info", "cmd_ff",
-           "cmd_matrix", "cmd_compare", "BUILTIN", "DENSE_OUTPUT_BYTES"]
+           "cmd_matrix", "cmd_compare", "cmd_audit", "BUILTIN", "DENSE_OUTPUT_BYTES"]
 
 BUILTIN = {
     "cornell_box": lambda: _scenes().cornell_box(),
@@ -486,6 +486,32 @@ def _int_list(text, name):
     return vals
 
 
+def _save_figures(out, figures):
+    """Draw ``figures``, pairs ``(name, draw)`` with ``draw(exactff.plot)`` returning
+    the Axes it drew, to ``OUT/NAME.png``; the names written (none, said so, without
+    matplotlib)."""
+    import os
+
+    try:
+        import matplotlib
+    except ImportError:
+        print("figures: not drawn (pip install exactff[plots] for them)")
+        return []
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from . import plot
+
+    written = []
+    for name, draw in figures:
+        ax = draw(plot)
+        ax.figure.tight_layout()
+        ax.figure.savefig(os.path.join(out, name + ".png"), dpi=120)
+        plt.close(ax.figure)
+        written.append(name + ".png")
+    return written
+
+
 def cmd_compare(args):
     import csv
     import json
@@ -524,26 +550,79 @@ def cmd_compare(args):
         w = csv.DictWriter(fh, fieldnames=list(records[0]))
         w.writeheader()
         w.writerows(records)
-    written = ["results.csv", "results.json"]
-    try:
-        import matplotlib
-    except ImportError:
-        print("figures: not drawn (pip install exactff[plots] for them)")
-    else:
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-
-        from . import plot
-
-        for name, draw in (("error_vs_samples", plot.error_vs_samples),
-                           ("time_vs_samples", plot.time_vs_samples),
-                           ("error_vs_time", plot.error_vs_time)):
-            ax = draw(records)
+    def titled(draw):
+        def drawn(plot):
+            ax = draw(plot)(records)
             ax.set_title(f"{ax.get_title()}: {args.scene}, {len(rows)} rows")
-            ax.figure.tight_layout()
-            ax.figure.savefig(os.path.join(args.out, name + ".png"), dpi=120)
-            plt.close(ax.figure)
-            written.append(name + ".png")
+            return ax
+        return drawn
+
+    written = ["results.csv", "results.json"] + _save_figures(args.out, [
+        ("error_vs_samples", titled(lambda plot: plot.error_vs_samples)),
+        ("time_vs_samples", titled(lambda plot: plot.time_vs_samples)),
+        ("error_vs_time", titled(lambda plot: plot.error_vs_time))])
+    print(f"written to {args.out}: {', '.join(written)}")
+    return 0
+
+
+def cmd_audit(args):
+    """``exactff audit SCENE MATRIX``: another tool's matrix against the exact one
+    (:func:`exactff.audit`), its report printed and written to ``OUT/audit.json``, the
+    worst entries to ``OUT/worst.csv``, figures where matplotlib is installed."""
+    import csv
+    import json
+    import os
+
+    from .audits import audit
+    from .io import read_view_factors
+    from .version import __version__
+
+    scene = _open(args)
+    kind = "point" if (args.points or args.centroids) else "area"
+    points = read_points(args.points) if args.points else None
+    if args.jobs < 1:
+        raise ValueError(f"--jobs must be at least 1, got {args.jobs}")
+    if args.worst < 0:
+        raise ValueError(f"--worst must be at least 0, got {args.worst}")
+    if args.tolerance is not None and not (args.tolerance > 0):
+        raise ValueError(f"--tolerance must be positive, got {args.tolerance}")
+    F = read_view_factors(args.matrix, scene, format=args.format, zone=args.zone,
+                          region=args.region)
+    os.makedirs(args.out, exist_ok=True)
+    # the exact values stream to OUT, or --exact (resumed by a second run of the same
+    # audit: of another matrix of the same scene too)
+    exact_path = args.exact or os.path.join(args.out, f"exact_{kind}.npy")
+    if not exact_path.endswith(".npy"):
+        raise ValueError(f"--exact {exact_path}: expected a .npy file")
+    if args.overwrite:
+        from .storage import beside_path, path_stem
+
+        for path in (exact_path, beside_path(exact_path, "error")):
+            for p in (path, path_stem(path) + ".done.npy", path_stem(path) + ".meta.json"):
+                if os.path.exists(p):
+                    os.remove(p)
+    rep = audit(scene, F, kind=kind, points=points, tolerance=args.tolerance,
+                jobs=args.jobs if args.jobs > 1 else None, out=exact_path,
+                progress=not args.no_progress)
+    print(f"scene            {args.scene} ({len(scene)} polygons)")
+    print(f"matrix           {args.matrix}")
+    print(str(rep))
+    doc = dict(rep.to_dict(worst=args.worst), scene=args.scene, matrix=args.matrix,
+               exactff=__version__)
+    with open(os.path.join(args.out, "audit.json"), "w", encoding="utf-8") as fh:
+        json.dump(doc, fh, indent=1, allow_nan=False)
+    fields = ["i", "j", "from", "to", "from_group", "to_group", "other", "exact", "bound",
+              "error", "relative_error", "present", "configurations"]
+    with open(os.path.join(args.out, "worst.csv"), "w", newline="", encoding="utf-8") as fh:
+        w = csv.DictWriter(fh, fieldnames=fields)
+        w.writeheader()
+        for row in rep.worst_entries(args.worst):
+            w.writerow({k: ";".join(v) if isinstance(v, list) else v
+                        for k, v in row.items()})
+    written = ["audit.json", "worst.csv", exact_path] + _save_figures(args.out, [
+        ("error_vs_distance", lambda plot: plot.audit_error_vs_distance(rep)),
+        ("relative_errors", lambda plot: plot.audit_relative_errors(rep)),
+        ("row_errors", lambda plot: plot.audit_row_errors(rep, scene))])
     print(f"written to {args.out}: {', '.join(written)}")
     return 0
 
@@ -632,6 +711,48 @@ def build_parser():
     p.add_argument("--two-sided", action="store_true", help="polygons receive on both sides")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.set_defaults(func=cmd_compare)
+    p = sub.add_parser("audit", help="another tool's form-factor matrix against the exact "
+                                     "one: errors per entry, row sums, reciprocity, the "
+                                     "worst entries, by configuration; JSON, CSV, figures")
+    _scene_arguments(p)
+    p.add_argument("matrix", help="the other tool's matrix: View3D output (text or "
+                                  "binary), an OpenFOAM case (constant/F and "
+                                  "globalFaceFaces), an EnergyPlus IDF "
+                                  "(ZoneProperty:UserViewFactors:BySurfaceName), Elmer's "
+                                  "ViewFactors.dat, .npy, .npz or .csv")
+    from .io.view_factors import VIEW_FACTOR_FORMATS
+
+    p.add_argument("--format", choices=list(VIEW_FACTOR_FORMATS),
+                   help="the matrix's format (default: from its name and first bytes)")
+    which = p.add_mutually_exclusive_group()
+    which.add_argument("--area", action="store_true",
+                       help="area-to-area form factors (the default: View3D, OpenFOAM, "
+                            "EnergyPlus and Elmer compute these)")
+    which.add_argument("--centroids", action="store_true",
+                       help="point rows from the polygons' centroids (hemicubes, ray "
+                            "casters from patch centres)")
+    which.add_argument("--points", metavar="FILE",
+                       help="point rows from these receivers, one per polygon (.npy of "
+                            "shape (N, 3) or three numbers a line), with the polygons' "
+                            "normals")
+    p.add_argument("--tolerance", type=float, default=None,
+                   help="of the exact values: absolute with --area (default 1e-9), "
+                        "relative for point rows (default the exact method's)")
+    p.add_argument("--zone", help="EnergyPlus: the zone whose view factors to read")
+    p.add_argument("--region", help="OpenFOAM: the mesh region")
+    p.add_argument("--worst", type=int, default=20,
+                   help="how many of the worst entries to list (default 20)")
+    p.add_argument("--out", default="audit", help="output directory (default ./audit)")
+    p.add_argument("--exact", metavar="PATH.npy",
+                   help="where the exact values go (their bounds beside it, "
+                        "PATH.error.npy), resumed from it by the next audit of the same "
+                        "scene, kind and tolerance (default OUT/exact_area.npy or "
+                        "OUT/exact_point.npy)")
+    p.add_argument("--jobs", type=int, default=1, help="worker processes on this machine")
+    p.add_argument("--overwrite", action="store_true",
+                   help="recompute the exact values instead of resuming them")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.set_defaults(func=cmd_audit)
     return parser
 
 

@@ -174,7 +174,11 @@ class PointRows:
     """A matrix's rows as point samples: row ``i`` from the centroid of polygon ``i``
     (with its normal) by ``method``. What :func:`form_factor_matrix` computes; with
     ``remainder``, each row is the pair ``(values, [sky, ground])`` (``up`` the up
-    direction, default +z).
+    direction, default +z). With ``error`` (the exact method only), each row is the
+    pair ``(values, bounds)``, the bounds going to ``STEM.error.SUFFIX`` beside an
+    output (what :func:`exactff.audit` computes). ``points``, an array of shape
+    (len(scene), 3), moves row ``i``'s receiver from the centroid to ``points[i]``
+    (still with polygon ``i``'s normal); a hash of it is in :meth:`record`.
 
     Examples
     --------
@@ -185,35 +189,56 @@ class PointRows:
     [1.0]
     """
 
-    def __init__(self, method, two_sided, remainder=False, up=None):
+    def __init__(self, method, two_sided, remainder=False, up=None, error=False, points=None):
         self.method, self.two_sided = method, bool(two_sided)
         self.remainder = bool(remainder)
+        self.error = bool(error)
+        if self.remainder and self.error:
+            raise ValueError("PointRows: remainder and error are not computed together")
+        if self.error and method.name != "exact":
+            raise ValueError(f"error=True needs method='exact' (an error bound per value); "
+                             f"got method={method.name!r}")
+        self.points = None if points is None else np.array(points, dtype=float)
         self.up = None if up is None else tuple(float(v) for v in np.asarray(up).ravel())
-        # with the remainder: a second output, (sky, ground) per row, in STEM.remainder.npy
-        self.outputs = 2 if self.remainder else 1
-        self.suffixes = ("remainder",) if self.remainder else ()
-        self.widths = (2,) if self.remainder else ()
+        # with the remainder: a second output, (sky, ground) per row, in STEM.remainder.npy;
+        # with the error: the bounds, as wide as the scene, in STEM.error.SUFFIX
+        self.outputs = 2 if self.remainder or self.error else 1
+        self.suffixes = ("remainder",) if self.remainder else ("error",) if self.error else ()
+        self.widths = (2,) if self.remainder else (None,) if self.error else ()
 
     def record(self):
         rec = {"method": method_record(self.method), "two_sided": self.two_sided}
         if self.remainder:
             rec.update(remainder=True, up=repr(self.up))
+        if self.error:
+            rec.update(error=True)
+        if self.points is not None:
+            rec.update(points=hashlib.sha256(
+                np.ascontiguousarray(self.points).tobytes()).hexdigest())
         return rec
 
     def __call__(self, scene, rows):
+        if self.points is not None and self.points.shape != (len(scene), 3):
+            raise ValueError(f"points must have shape ({len(scene)}, 3) (one receiver per "
+                             f"polygon), got {self.points.shape}")
+        P = scene.centroids if self.points is None else self.points
+        if self.error:
+            return [self.method.point_form_factors(scene, P[i], scene.normals[i],
+                                                   two_sided=self.two_sided, error=True)
+                    for i in rows]
         if self.remainder:
             out = []
             for i in rows:
-                F, sky, ground = _remainder_row(scene, scene.centroids[i], scene.normals[i],
+                F, sky, ground = _remainder_row(scene, P[i], scene.normals[i],
                                                 self.method, self.two_sided, False, self.up)
                 out.append((F, np.array([sky, ground])))
             return out
         rows = list(rows)
         if hasattr(self.method, "point_rows"):
             # the rows together, where the method can share work among them
-            return list(self.method.point_rows(scene, scene.centroids[rows],
-                                               scene.normals[rows], two_sided=self.two_sided))
-        return [self.method.point_form_factors(scene, scene.centroids[i], scene.normals[i],
+            return list(self.method.point_rows(scene, P[rows], scene.normals[rows],
+                                               two_sided=self.two_sided))
+        return [self.method.point_form_factors(scene, P[i], scene.normals[i],
                                                two_sided=self.two_sided) for i in rows]
 
 

@@ -5,13 +5,16 @@ matplotlib).
 The study's functions take :func:`exactff.compare`'s records and draw one line per
 method on log axes; the geometry's draw a polygon's projection onto the hemisphere and
 its base (:func:`hemisphere_projection`) and a row's visible graph on the unit disk
-(:func:`visible_graph`). Each returns the Axes it drew on.
+(:func:`visible_graph`); the audit's (:func:`exactff.audit`) draw another tool's errors
+against the pairs' separation, their relative errors, and the scene coloured by each
+row's error. Each returns the Axes it drew on.
 """
 
 import numpy as np
 
 __all__ = ["error_vs_samples", "time_vs_samples", "error_vs_time", "hemisphere_projection",
-           "visible_graph"]
+           "visible_graph", "audit_error_vs_distance", "audit_relative_errors",
+           "audit_row_errors"]
 
 
 def _axes(ax, projection=None, figsize=(6.4, 4.4)):
@@ -314,4 +317,154 @@ def visible_graph(scene, point, normal, ax=None, *, two_sided=False, labels=Fals
     ax.set_xlabel("x")
     ax.set_ylabel("y")
     ax.set_title(f"visible graph: {len(best)} polygons seen, {len(pieces)} pieces")
+    return ax
+
+
+def _first_configuration(report):
+    """Each pair's first configuration (in :data:`exactff.audits.CONFIGURATIONS` order),
+    or "other"."""
+    from .audits import CONFIGURATIONS
+
+    n = len(report.areas)
+    label = np.full((n, n), "other", dtype=object)
+    for c in CONFIGURATIONS[::-1]:
+        label[report.configurations[c]] = c
+    return label
+
+
+def audit_error_vs_distance(report, ax=None):
+    """Each entry's ``|error|`` against its pair's separation (distance between
+    centroids over the larger circumradius), coloured by configuration; the exact
+    values' bounds in grey.
+
+    Parameters
+    ----------
+    report : AuditReport
+    ax : matplotlib Axes, optional
+
+    Returns
+    -------
+    matplotlib Axes
+
+    Examples
+    --------
+    >>> import matplotlib
+    >>> matplotlib.use("Agg")
+    >>> import exactff as ef
+    >>> box = ef.scenes.subdivided_box(1)
+    >>> rep = ef.audit(box, ef.area_form_factors(box) + 1e-3)
+    >>> len(audit_error_vs_distance(rep).collections) > 0
+    True
+    """
+    ax = _axes(ax)
+    off = ~np.eye(len(report.areas), dtype=bool)
+    err = np.abs(report.error)
+    label = _first_configuration(report)
+    both = np.concatenate([err[off], report.bound[off]])
+    # log axes: zeros (exact entries, zero bounds) drawn a decade below the least value
+    floor = _positive(both[both > 0].min() / 10 if (both > 0).any() else 0.0)
+    for c in ("edge_sharing", "near", "partly_occluded", "grazing", "other"):
+        m = off & (label == c)
+        if m.any():
+            ax.scatter(report.separation[m], np.maximum(err[m], floor), s=10, label=c)
+    ax.scatter(report.separation[off], np.maximum(report.bound[off], floor), s=4,
+               c="0.6", marker="_", label="exact bound")
+    from matplotlib.ticker import NullFormatter
+
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.xaxis.set_minor_formatter(NullFormatter())
+    ax.set_xlabel("separation (centroid distance / larger circumradius)")
+    ax.set_ylabel("|F_other - F_exact|")
+    ax.set_title(f"audit ({report.kind}): error against separation")
+    ax.legend(fontsize=7)
+    ax.grid(True, which="major", alpha=0.3)
+    return ax
+
+
+def audit_relative_errors(report, ax=None, bins=40):
+    """A histogram of ``log10 |relative error|`` over the entries whose exact value
+    exceeds its bound (the others have no relative error to speak of).
+
+    Parameters
+    ----------
+    report : AuditReport
+    ax : matplotlib Axes, optional
+    bins : int, default 40
+
+    Returns
+    -------
+    matplotlib Axes
+
+    Examples
+    --------
+    >>> import matplotlib
+    >>> matplotlib.use("Agg")
+    >>> import exactff as ef
+    >>> box = ef.scenes.subdivided_box(1)
+    >>> rep = ef.audit(box, ef.area_form_factors(box) * 1.01)
+    >>> len(audit_relative_errors(rep).patches) > 0
+    True
+    """
+    ax = _axes(ax)
+    rel = np.abs(report.relative_error)
+    m = (report.exact > report.slack) & np.isfinite(rel)
+    exact = rel[m] == 0
+    values = np.log10(rel[m][~exact]) if (~exact).any() else np.zeros(0)
+    # values within a thousandth of a decade (a matrix scaled by a constant): one decade
+    # around them, as bins narrower than their rounding cannot be made
+    lo, hi = (values.min(), values.max()) if values.size else (0.0, 0.0)
+    span = None if hi - lo > 1e-3 else (lo - 0.5, hi + 0.5)
+    ax.hist(values, bins=bins, range=span, color="C0")
+    ax.set_xlabel("log10 |(F_other - F_exact) / F_exact|")
+    ax.set_ylabel("entries")
+    ax.set_title(f"audit ({report.kind}): relative errors of {int(m.sum())} entries"
+                 + (f" ({int(exact.sum())} exact, not shown)" if exact.any() else ""))
+    return ax
+
+
+def audit_row_errors(report, scene, ax=None):
+    """The scene, each polygon coloured by its row's largest ``|error|``.
+
+    Parameters
+    ----------
+    report : AuditReport
+    scene : Scene
+        The scene audited.
+    ax : matplotlib 3-D Axes, optional
+
+    Returns
+    -------
+    matplotlib Axes
+
+    Examples
+    --------
+    >>> import matplotlib
+    >>> matplotlib.use("Agg")
+    >>> import exactff as ef
+    >>> box = ef.scenes.subdivided_box(1)
+    >>> rep = ef.audit(box, ef.area_form_factors(box) + 1e-3)
+    >>> len(audit_row_errors(rep, box).collections)
+    1
+    """
+    import matplotlib
+    from mpl_toolkits.mplot3d.art3d import Poly3DCollection
+
+    ax = _axes(ax, projection="3d", figsize=(6.4, 5.6))
+    row = np.abs(report.error).max(axis=1)
+    top = row.max() if row.max() > 0 else 1.0
+    norm = matplotlib.colors.Normalize(0.0, top)
+    cmap = matplotlib.colormaps["viridis"]
+    coll = Poly3DCollection([np.asarray(p) for p in scene.polygons],
+                            facecolors=cmap(norm(row)), edgecolors="k", linewidths=0.3,
+                            alpha=0.85)
+    ax.add_collection3d(coll)
+    lo, hi = scene.bounds
+    c, r = (lo + hi) / 2, (hi - lo).max() / 2
+    ax.set_xlim(c[0] - r, c[0] + r)
+    ax.set_ylim(c[1] - r, c[1] + r)
+    ax.set_zlim(c[2] - r, c[2] + r)
+    sm = matplotlib.cm.ScalarMappable(norm=norm, cmap=cmap)
+    ax.figure.colorbar(sm, ax=ax, shrink=0.6, label="row's largest |error|")
+    ax.set_title(f"audit ({report.kind}): each polygon's row error")
     return ax

@@ -2,7 +2,8 @@
 ``.vs3``, EnergyPlus ``.idf``, Radiance ``.rad``, and the mesh formats of meshio (STL,
 PLY, OFF, VTK, ...), one module each; :func:`load_scene` chooses the reader by
 extension. Writing View3D's input and output files (:mod:`exactff.io.vs3`), and
-matrices for other tools: EnergyPlus, Elmer, OpenFOAM, pandas."""
+matrices for other tools: EnergyPlus, Elmer, OpenFOAM, pandas; and their matrices
+read back onto a scene (:func:`read_view_factors`)."""
 
 from __future__ import annotations
 
@@ -10,12 +11,15 @@ import os
 
 from .. import _tolerances as tol
 from .dataframe import to_dataframe
-from .energyplus import read_idf, write_energyplus_view_factors
+from .energyplus import (read_energyplus_view_factors, read_idf,
+                         write_energyplus_view_factors)
 from .mesh import MESHIO_EXTENSIONS, read_mesh
 from .obj import read_obj
 from .radiance import read_rad
 from .scene_json import read_scene_json, scene_from_json
-from .solvers import write_elmer_view_factors, write_openfoam_view_factors
+from .solvers import (read_elmer_view_factors, read_openfoam_view_factors,
+                      write_elmer_view_factors, write_openfoam_view_factors)
+from .view_factors import read_view_factors
 from .vs3 import (read_view3d_factors, read_vs3, script_f, write_view3d_factors,
                   write_vs3)
 from ..scene import Scene
@@ -24,7 +28,9 @@ __all__ = ["load_scene", "read_obj", "read_scene_json", "scene_from_json", "read
            "read_idf", "read_rad", "read_mesh", "MESHIO_EXTENSIONS", "write_vs3",
            "write_view3d_factors", "read_view3d_factors", "script_f",
            "write_energyplus_view_factors", "write_elmer_view_factors",
-           "write_openfoam_view_factors", "to_dataframe"]
+           "write_openfoam_view_factors", "to_dataframe", "read_view_factors",
+           "read_energyplus_view_factors", "read_elmer_view_factors",
+           "read_openfoam_view_factors"]
 
 
 def load_scene(path: str | os.PathLike, *, nonplanar: str = "error",

@@ -11,7 +11,8 @@ from ..checks import finite_float
 from ..scene import Scene, build_scene
 from .matrices import FULL_PRECISION, as_square_matrix, check_number_format
 
-__all__ = ["read_idf", "write_energyplus_view_factors", "parse_idf", "IDF_SURFACES",
+__all__ = ["read_idf", "write_energyplus_view_factors", "read_energyplus_view_factors",
+           "parse_idf", "IDF_SURFACES",
            "IDF_SKIPPED", "ENERGYPLUS_NAME_LENGTH"]
 
 #: The surface objects read, with the positions of their fields: ``(zone, construction,
@@ -433,3 +434,80 @@ def write_energyplus_view_factors(path, F, *, names, zone, fmt=FULL_PRECISION,
         if append:
             fh.write("\n")
         fh.write("".join(out))
+
+
+def read_energyplus_view_factors(path, *, zone=None):
+    """Read a ``ZoneProperty:UserViewFactors:BySurfaceName`` object (as EnergyPlus reads
+    it and :func:`write_energyplus_view_factors` writes it).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        An IDF file (a whole model, or a fragment) holding the object.
+    zone : str, optional
+        The zone whose object to read (any case); needed when the file holds several.
+
+    Returns
+    -------
+    (list of str, scipy.sparse.csr_array of shape (N, N))
+        The surface names in the order they first appear (From Surface, then To
+        Surface), and ``F[i, j]`` = F(names[i] -> names[j]) for the pairs listed (the
+        others left out).
+
+    Raises
+    ------
+    ValueError
+        No such object (or several without ``zone``), a triple cut short, a view factor
+        that is not a number, a pair listed twice (the message names the file and
+        line).
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> p = pathlib.Path(tempfile.mkdtemp()) / "vf.idf"
+    >>> write_energyplus_view_factors(p, [[0, 1], [1, 0]], names=["A", "B"], zone="Room")
+    >>> names, F = read_energyplus_view_factors(p)
+    >>> names, F.toarray().tolist()
+    (['A', 'B'], [[0.0, 1.0], [1.0, 0.0]])
+    """
+    import scipy.sparse as sp
+
+    path = os.fspath(path)
+    found = [o for o in parse_idf(path)
+             if o.kind.lower() == "zoneproperty:userviewfactors:bysurfacename"]
+    if zone is not None:
+        found = [o for o in found if o.get(0).lower() == str(zone).lower()]
+    if not found:
+        raise ValueError(f"{path}: no ZoneProperty:UserViewFactors:BySurfaceName object"
+                         + (f" for zone {zone!r}" if zone is not None else ""))
+    if len(found) > 1:
+        zones = ", ".join(repr(o.get(0)) for o in found)
+        raise ValueError(f"{path}: {len(found)} ZoneProperty:UserViewFactors:BySurfaceName "
+                         f"objects (zones {zones}): say which with zone=")
+    obj = found[0]
+    fields = obj.fields[1:]
+    if len(fields) % 3:
+        raise ValueError(f"{obj.where(path)}: {len(fields)} fields after the zone name, not "
+                         f"From Surface, To Surface, View Factor triples")
+    index, names, entries = {}, [], {}
+    for t in range(0, len(fields), 3):
+        ends = []
+        for name in fields[t:t + 2]:
+            if not name:
+                raise ValueError(f"{obj.where(path, t + 1)}: an empty surface name")
+            key = name.lower()
+            if key not in index:
+                index[key] = len(names)
+                names.append(name)
+            ends.append(index[key])
+        value = _number(obj, t + 3, path, "View Factor")
+        pair = tuple(ends)
+        if pair in entries:
+            raise ValueError(f"{obj.where(path, t + 3)}: the pair {fields[t]!r} -> "
+                             f"{fields[t + 1]!r} again")
+        entries[pair] = value
+    n = len(names)
+    rows = np.array([p[0] for p in entries], dtype=np.int64)
+    cols = np.array([p[1] for p in entries], dtype=np.int64)
+    return names, sp.csr_array((np.array(list(entries.values()), dtype=float),
+                                (rows, cols)), shape=(n, n))

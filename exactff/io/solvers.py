@@ -6,7 +6,8 @@ import os
 from ..scene import Scene
 from .matrices import FULL_PRECISION, check_number_format, matrix_rows
 
-__all__ = ["write_elmer_view_factors", "write_openfoam_view_factors", "patch_ranges"]
+__all__ = ["write_elmer_view_factors", "write_openfoam_view_factors", "patch_ranges",
+           "read_elmer_view_factors", "read_openfoam_view_factors"]
 
 
 def write_elmer_view_factors(path, F, *, min_factor=0.0, fmt=FULL_PRECISION):
@@ -211,3 +212,212 @@ def write_openfoam_view_factors(case, F, *, patches=None, region=None, min_facto
             fh.write(_foam_file(cls, name, location, comments, data))
         out.append(target)
     return tuple(out)
+
+
+def read_elmer_view_factors(path):
+    """Read Elmer's view-factor file (as :func:`write_elmer_view_factors` and Elmer's
+    ViewFactors program write it).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+
+    Returns
+    -------
+    scipy.sparse.csr_array of shape (N, N)
+        ``F[i, j]`` for the entries the file lists (the others left out); N is the
+        number of rows (radiation elements) in the file.
+
+    Raises
+    ------
+    ValueError
+        A line that is not a count or ``i j F_ij``, a row out of order, a column out of
+        range, or a file that ends inside a row (the message names the file and line).
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> p = pathlib.Path(tempfile.mkdtemp()) / "ViewFactors.dat"
+    >>> write_elmer_view_factors(p, [[0, 0.75, 0.25], [0.5, 0, 0.5], [0, 0, 0]])
+    >>> read_elmer_view_factors(p).toarray().tolist()
+    [[0.0, 0.75, 0.25], [0.5, 0.0, 0.5], [0.0, 0.0, 0.0]]
+    """
+    import numpy as np
+    import scipy.sparse as sp
+
+    path = os.fspath(path)
+    with open(path, encoding="utf-8") as fh:
+        lines = [(k, line.split()) for k, line in enumerate(fh, start=1) if line.strip()]
+    rows, cols, vals = [], [], []
+    n = 0
+    pos = 0
+    while pos < len(lines):
+        k, words = lines[pos]
+        if len(words) != 1:
+            raise ValueError(f"{path}:{k}: expected the number of factors of row {n + 1}, "
+                             f"got {' '.join(words)!r}")
+        try:
+            count = int(words[0])
+        except ValueError:
+            raise ValueError(f"{path}:{k}: expected the number of factors of row {n + 1}, "
+                             f"got {words[0]!r}") from None
+        n += 1
+        if count < 0 or pos + 1 + count > len(lines):
+            raise ValueError(f"{path}: ends inside row {n} ({count} factors announced at "
+                             f"line {k})")
+        for k2, w in lines[pos + 1:pos + 1 + count]:
+            try:
+                if len(w) != 3:
+                    raise ValueError(w)
+                i, j, f = int(w[0]), int(w[1]), float(w[2])
+            except ValueError:
+                raise ValueError(f"{path}:{k2}: expected 'i j F_ij', got "
+                                 f"{' '.join(w)!r}") from None
+            if i != n:
+                raise ValueError(f"{path}:{k2}: row {i} where row {n} was expected")
+            rows.append(i - 1)
+            cols.append(j - 1)
+            vals.append(f)
+        pos += 1 + count
+    if any(j < 0 or j >= n for j in cols):
+        bad = next(j for j in cols if j < 0 or j >= n)
+        raise ValueError(f"{path}: column {bad + 1} outside 1..{n} (the file has {n} rows)")
+    if not np.all(np.isfinite(vals)):
+        raise ValueError(f"{path}: a view factor is NaN or infinite")
+    return sp.csr_array((np.array(vals, dtype=float), (np.array(rows, dtype=np.int64),
+                                                       np.array(cols, dtype=np.int64))),
+                        shape=(n, n))
+
+
+def _foam_tokens(text, path):
+    """The tokens of an OpenFOAM ASCII file after its ``FoamFile`` header: numbers and
+    parentheses, comments removed."""
+    import re
+
+    text = re.sub(r"/\*.*?\*/", " ", text, flags=re.S)
+    if re.search(r"format\s+binary", text):
+        raise ValueError(f"{path}: a binary OpenFOAM file (format binary): run "
+                         f"'foamFormatConvert' to write it in ascii first")
+    text = re.sub(r"//[^\n]*", " ", text)
+    head = re.search(r"FoamFile\s*\{[^}]*\}", text)
+    if head:
+        text = text[head.end():]
+    return re.findall(r"[()]|[^\s()]+", text)
+
+
+def _foam_list_list(path, kind):
+    """An OpenFOAM ``labelListList`` or ``scalarListList`` (ASCII) as a list of lists."""
+    with open(path, encoding="utf-8", errors="replace") as fh:
+        tokens = _foam_tokens(fh.read(), path)
+    pos = 0
+
+    def take(what):
+        nonlocal pos
+        if pos >= len(tokens):
+            raise ValueError(f"{path}: ends where {what} was expected")
+        pos += 1
+        return tokens[pos - 1]
+
+    def count(what):
+        t = take(what)
+        try:
+            return int(t)
+        except ValueError:
+            raise ValueError(f"{path}: expected {what} (an integer), got {t!r}") from None
+
+    n = count("the number of faces")
+    if take("'('") != "(":
+        raise ValueError(f"{path}: expected '(' after the number of faces")
+    out = []
+    for i in range(n):
+        k = count(f"the length of list {i}")
+        if take("'('") != "(":
+            raise ValueError(f"{path}: expected '(' after the length of list {i}")
+        items = [take(f"item of list {i}") for _ in range(k)]
+        if take("')'") != ")":
+            raise ValueError(f"{path}: list {i} holds more than its {k} items")
+        try:
+            out.append([kind(t) for t in items])
+        except ValueError:
+            raise ValueError(f"{path}: list {i}: not {kind.__name__}s: {items[:4]}") from None
+    if take("')'") != ")":
+        raise ValueError(f"{path}: more than the {n} lists announced")
+    return out
+
+
+def read_openfoam_view_factors(case, *, region=None):
+    """Read OpenFOAM's view-factor pair ``constant/F`` and ``constant/globalFaceFaces``
+    (as viewFactorsGen and :func:`write_openfoam_view_factors` write them; ASCII).
+
+    Parameters
+    ----------
+    case : str or os.PathLike
+        The case directory, or the path of its ``F`` file (``globalFaceFaces`` beside
+        it).
+    region : str, optional
+        A mesh region (``constant/REGION/``).
+
+    Returns
+    -------
+    (scipy.sparse.csr_array of shape (N, N), list of str or None)
+        ``F[i, j]`` for the faces j that face i sees (the others left out), and each
+        face's patch where the file says it (the comments
+        :func:`write_openfoam_view_factors` writes), else None.
+
+    Raises
+    ------
+    ValueError
+        A file missing, binary, or malformed; the two files' lists not of one shape; a
+        face index out of range (the message names the file).
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> case = tempfile.mkdtemp()
+    >>> _ = write_openfoam_view_factors(case, [[0, 1], [0.5, 0.5]], patches=["a", "b"])
+    >>> F, patches = read_openfoam_view_factors(case)
+    >>> F.toarray().tolist(), patches
+    ([[0.0, 1.0], [0.5, 0.5]], ['a', 'b'])
+    """
+    import re
+
+    import numpy as np
+    import scipy.sparse as sp
+
+    case = os.fspath(case)
+    if os.path.isdir(case):
+        where = os.path.join(case, "constant", *([region] if region else []))
+        f_path = os.path.join(where, "F")
+    else:
+        f_path = case
+        where = os.path.dirname(case)
+    g_path = os.path.join(where, "globalFaceFaces")
+    for p in (f_path, g_path):
+        if not os.path.exists(p):
+            raise ValueError(f"{p}: not found (OpenFOAM's view factors are the pair F and "
+                             f"globalFaceFaces in constant/)")
+    values = _foam_list_list(f_path, float)
+    faces = _foam_list_list(g_path, int)
+    n = len(values)
+    if len(faces) != n or any(len(a) != len(b) for a, b in zip(values, faces)):
+        raise ValueError(f"{f_path} and {g_path}: the lists differ in shape (row i of F "
+                         f"holds the factors to the faces of row i of globalFaceFaces)")
+    rows = np.repeat(np.arange(n), [len(v) for v in values])
+    cols = np.array([j for r in faces for j in r], dtype=np.int64)
+    data = np.array([v for r in values for v in r], dtype=float)
+    if cols.size and (cols.min() < 0 or cols.max() >= n):
+        raise ValueError(f"{g_path}: face {int(cols[(cols < 0) | (cols >= n)][0])} outside "
+                         f"0..{n - 1} (a decomposed case's compact numbering is not read)")
+    if not np.all(np.isfinite(data)):
+        raise ValueError(f"{f_path}: a view factor is NaN or infinite")
+    with open(f_path, encoding="utf-8", errors="replace") as fh:
+        ranges = re.findall(r"//\s*patch\s+(\S+):\s*faces\s+(\d+)\s+to\s+(\d+)", fh.read())
+    patches = None
+    if ranges:
+        patches = [None] * n
+        for name, a, b in ranges:
+            for k in range(int(a), min(int(b) + 1, n)):
+                patches[k] = name
+        if any(p is None for p in patches):
+            patches = None
+    return sp.csr_array((data, (rows, cols)), shape=(n, n)), patches
