@@ -91,12 +91,9 @@ class Exact(FormFactorMethod):
         if integrator not in INTEGRATORS:
             raise ValueError(f"integrator must be one of {INTEGRATORS}, got {integrator!r}")
         if engine is None:
-            engine = "python" if integrator == "eq3" else "compiled"
+            engine = "compiled"
         if engine not in ENGINES:
             raise ValueError(f"engine must be one of {ENGINES}, got {engine!r}")
-        if engine == "compiled" and integrator != "sector":
-            raise ValueError(f"engine='compiled' integrates with the sector form; "
-                             f"integrator={integrator!r} needs engine='python'")
         self.tolerance = tolerance
         self.shortcuts = bool(shortcuts)
         self.integrator = integrator
@@ -111,7 +108,8 @@ class Exact(FormFactorMethod):
         if self.engine == "compiled":
             return compiled_form_factors(scene, point, normal, two_sided=two_sided,
                                          stats=stats, shortcuts=self.shortcuts,
-                                         tolerance=self.tolerance, error=error)
+                                         tolerance=self.tolerance, error=error,
+                                         integrator=self.integrator)
         return visible_form_factors(scene, point, normal, two_sided=two_sided, stats=stats,
                                     shortcuts=self.shortcuts, tolerance=self.tolerance,
                                     integrator=self.integrator, error=error)
@@ -149,7 +147,7 @@ class Exact(FormFactorMethod):
 
     def __repr__(self):
         extra = "" if self.integrator == "sector" else f", integrator={self.integrator!r}"
-        if self.engine != ("python" if self.integrator == "eq3" else "compiled"):
+        if self.engine != "compiled":
             extra += f", engine={self.engine!r}"
         return f"Exact(tolerance={self.tolerance}, shortcuts={self.shortcuts}{extra})"
 
