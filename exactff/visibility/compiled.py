@@ -334,7 +334,7 @@ def compiled_form_factors(scene, point, normal, *, two_sided=False, stats=None,
                                     side.astype(np.int8), bool(two_sided), bool(shortcuts),
                                     tol.SVBSP_BOX_BUDGET, _shadow_tiles(len(scene)),
                                     0.0 if tolerance is None else float(tolerance),
-                                    eq3=integrator == "eq3")
+                                    integrator == "eq3")
     check_finite(F, E)
     check_finite(band)
     check_finite(crossing)
