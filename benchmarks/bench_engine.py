@@ -187,7 +187,8 @@ def integrators_report(rows_per_scene=6, real=None):
         all_s += ts
         all_e += te
         print(f"| {name} | {len(scene):,} | {len(rows)} | {1e3 * np.mean(ts):.1f} | "
-              f"{1e3 * np.mean(te):.1f} | {np.sum(te) / np.sum(ts):.2f} | {raised[0]}, {raised[1]} | "
+              f"{1e3 * np.mean(te):.1f} | {np.sum(te) / np.sum(ts):.2f} | "
+              f"{raised[0]}, {raised[1]} | "
               f"{worst:.2f} | {quad[0]}, {quad[1]} |")
     ratio = np.array(all_e) / np.array(all_s)
     print(f"\nEq. 3 / sector per row over all {len(ratio)} rows: median {np.median(ratio):.2f}, "

@@ -54,8 +54,8 @@ def test_kernel_edge_integral_vs_sympy_antiderivative():
 
 # ---------------------------------------------------------------------------------------
 # the stable form (issue 51) against Eq. 3 as printed (corrected), span by span, in
-# mpmath at 60 digits (the stable form's own mpmath sum at 40): asin and square root, the branch of each monotone span from its
-# midpoint; independent of the rearrangement
+# mpmath at 60 digits (the stable form's own mpmath sum at 40): asin and square root,
+# the branch of each monotone span from its midpoint; independent of the rearrangement
 # ---------------------------------------------------------------------------------------
 import mpmath as mp  # noqa: E402
 import numpy as np  # noqa: E402

@@ -183,3 +183,15 @@ def test_eq3_compiled_on_real_files(name):
     big = np.flatnonzero(scene.areas >= np.median(scene.areas))
     for i in np.random.default_rng(0).choice(big, min(4, len(big)), replace=False):
         assert_integrators_agree(scene, scene.centroids[i], scene.normals[i])
+
+
+def test_compiled_core_uses_the_kernels_midpoint_rounding_constant():
+    # Core::integrate's bound of Eq. 3's midpoint factor is the kernel's (one constant,
+    # mirrored in the C++ source)
+    from exactff import _tolerances as tol
+
+    src = os.path.join(os.path.dirname(ef.__file__), "visibility", "_svbsp.cpp")
+    if not os.path.exists(src):
+        pytest.skip("the C++ source is not installed beside the package")
+    text = open(src).read()
+    assert f"constexpr int EQ3_FACTOR_ULPS = {int(tol.EQ3_FACTOR_ULPS)};" in text

@@ -34,12 +34,6 @@ from .point import local_clipped
 __all__ = ["eq3_edge_integral", "arc_x_extremes", "eq3_form_factor", "eq3_ring_area",
            "eq3_ring_sums", "mp_eq3_sum"]
 
-#: Roundoffs bounding the error of the midpoint factor ``v_x u_y + u_x v_y`` of the
-#: stable form, times ``2 sin(theta / 2)`` (its normalisations, cross product and dot
-#: products, each a few roundoffs of unit vectors; 1 / cos(theta / 2) from the midpoint's
-#: length, which ``sin theta`` turns into ``2 sin(theta / 2)``)
-EQ3_FACTOR_ULPS = 64
-
 
 def eq3_edge_integral(a: ArrayLike, b: ArrayLike, *,
                       scale: bool = False) -> float | tuple[float, float]:
@@ -193,9 +187,10 @@ def eq3_form_factor(point: ArrayLike, normal: ArrayLike, polygon: ArrayLike, *,
     also returns a rounding-error estimate (``C1 u`` times the sum of the absolute
     terms of Eq. 3 over the edges, plus their planes' and midpoints' rounding, over
     2 pi). With a ``tolerance`` (default None: double precision only), a value whose
-    estimate exceeds it times the value (as :func:`sector_form_factor`) is evaluated again with mpmath from the
-    float input, Eq. 3 again (:func:`mp_eq3_sum`), at two precisions 20 digits apart
-    raised until they agree to ``tolerance``; where mpmath stops first it raises
+    estimate exceeds it times the value (as :func:`sector_form_factor`) is evaluated
+    again with mpmath from the float input, Eq. 3 again (:func:`mp_eq3_sum`), at two
+    precisions 20 digits apart raised until they agree to ``tolerance``; where mpmath
+    stops first it raises
     :class:`exactff.NumericalError`, unless ``error=True``.
 
     Examples
@@ -306,7 +301,8 @@ def eq3_ring_sums(A0, E, nxt, owner, m, eps=tol.EPS):
         ``S`` (twice the counter-clockwise signed area of each image), ``mags`` (the sum
         of the absolute values of its terms: ``C1 eps mags`` bounds the sum's rounding)
         and ``errs`` (the terms' own rounding: the planes' as in the sector form, and
-        ``EQ3_FACTOR_ULPS eps 2 sin(theta / 2)`` for each midpoint factor).
+        ``EQ3_FACTOR_ULPS eps 2 sin(theta / 2)`` for each midpoint factor, the constant
+        in ``exactff._tolerances``).
 
     Examples
     --------
@@ -357,7 +353,7 @@ def eq3_ring_sums(A0, E, nxt, owner, m, eps=tol.EPS):
         rel = np.where(ok, tol.C2 * eps * (Z + theta * theta * Nm) / s,
                        np.where(Nm > 0, np.inf, 0.0))
         err = (2 * theta * np.minimum(2.0, rel)
-               + np.where(ok, EQ3_FACTOR_ULPS * eps * 2 * np.sin(theta / 2), 0.0)
+               + np.where(ok, tol.EQ3_FACTOR_ULPS * eps * 2 * np.sin(theta / 2), 0.0)
                + np.where(ok & ~mid, sin_theta, 0.0))
     # summed per ring in the working precision (bincount would round to double)
     out = []

@@ -54,25 +54,20 @@ class Exact(FormFactorMethod):
         of overlays) and the early stop once a chart is covered. Results do not depend
         on it (tested to 1e-15); False is for checking that.
     integrator : {"sector", "eq3"}, default "sector"
-        How visible pieces are integrated: Lambert's sector form (vectorised over all
-        pieces, with error estimates and escalation) or the paper's Eq. 3, corrected,
-        with monotone-span splitting (one ring at a time in Python, no escalation).
-        Both are exact; the sector form is the default because it is faster (see
-        ``docs/benchmarks.md``) and escalates where double precision falls short.
-        Eq. 3 is integrated by the Python engine only. With ``"eq3"`` nothing is
-        refined or escalated, but the values are still checked against
-        ``tolerance``: one whose bound misses it raises
-        :class:`exactff.NumericalError` (suggesting ``integrator="sector"``) unless
-        ``error=True`` was asked, as it does on most occluded rows at the default
-        tolerance; ``tolerance=None`` turns the check off (to compare the
-        integrators).
+        How visible pieces are integrated: Lambert's sector form, or the paper's Eq. 3
+        (corrected, with monotone-span splitting) in its stable form, the large
+        ``C asin`` terms subtracted analytically (``tools/derive_eq3.py``,
+        ``docs/explanation/ppbh-method.md``). Both are exact, run in either engine and
+        take the same refinement and precision tiers; they agree within the sum of
+        their bounds. The sector form is the default: over a closed contour Eq. 3's
+        stable form is its sum plus terms that telescope to zero, whose rounding makes
+        Eq. 3's bound the larger (``docs/benchmarks.md``).
     engine : {"compiled", "python"} or None, default None
         ``"compiled"``: the compiled core (:mod:`exactff.visibility.compiled`), whose
         cost follows what a row sees; a row any of whose values misses the tolerance is
         recomputed by the Python engine. ``"python"``: the Python engine
         (:func:`exactff.visibility.visible_form_factors`), unchanged, the oracle the
-        compiled core is tested against. None: compiled, or Python with
-        ``integrator="eq3"`` (the compiled core integrates with the sector form).
+        compiled core is tested against. None: compiled, with either integrator.
 
     Examples
     --------

@@ -70,7 +70,7 @@ using R = long double;
 // / 2 each) of |m| |v| of its long double value (6 needed, 8 kept)
 constexpr double FILTER_ROUNDOFFS = 4;  // in units of DBL_EPSILON = 2 roundoffs
 // roundoffs bounding the error of Eq. 3's midpoint factor v_x u_y + u_x v_y, times
-// 2 sin(theta / 2) (exactff.kernel.eq3.EQ3_FACTOR_ULPS)
+// 2 sin(theta / 2) (exactff._tolerances.EQ3_FACTOR_ULPS)
 constexpr int EQ3_FACTOR_ULPS = 64;
 constexpr int OUT = -1;  // a free leaf of the shadow tree
 constexpr int IN = -2;   // a covered leaf
