@@ -193,5 +193,6 @@ def test_compiled_core_uses_the_kernels_midpoint_rounding_constant():
     src = os.path.join(os.path.dirname(ef.__file__), "visibility", "_svbsp.cpp")
     if not os.path.exists(src):
         pytest.skip("the C++ source is not installed beside the package")
-    text = open(src).read()
+    with open(src) as f:
+        text = f.read()
     assert f"constexpr int EQ3_FACTOR_ULPS = {int(tol.EQ3_FACTOR_ULPS)};" in text
