@@ -160,7 +160,7 @@ def integrators_report(rows_per_scene=6, real=None):
     print("| scene | polygons | rows | sector (ms/row) | Eq. 3 (ms/row) | Eq. 3 / sector | "
           "raised (sector, Eq. 3) | max gap / (sum of bounds) | quad pieces (sector, Eq. 3) |")
     print("|---|---|---|---|---|---|---|---|---|")
-    all_s, all_e = [], []
+    all_s, all_e, rows_seen = [], [], []
     for name, scene, rows in scenes:
         c, n = scene.centroids, scene.normals
         sector.point_form_factors(scene, c[rows[0]], n[rows[0]])          # caches, untimed
@@ -186,13 +186,17 @@ def integrators_report(rows_per_scene=6, real=None):
                 worst = max(worst, float(r.max()))
         all_s += ts
         all_e += te
+        rows_seen += [(name, i) for i in rows]
         print(f"| {name} | {len(scene):,} | {len(rows)} | {1e3 * np.mean(ts):.1f} | "
               f"{1e3 * np.mean(te):.1f} | {np.sum(te) / np.sum(ts):.2f} | "
               f"{raised[0]}, {raised[1]} | "
               f"{worst:.2f} | {quad[0]}, {quad[1]} |")
     ratio = np.array(all_e) / np.array(all_s)
+    k = int(np.argmax(ratio))
     print(f"\nEq. 3 / sector per row over all {len(ratio)} rows: median {np.median(ratio):.2f}, "
-          f"max {ratio.max():.2f}, total {np.sum(all_e) / np.sum(all_s):.2f}")
+          f"max {ratio.max():.2f} ({rows_seen[k][0]} row {rows_seen[k][1]}: "
+          f"{1e3 * all_s[k]:.1f} / {1e3 * all_e[k]:.1f} ms), "
+          f"total {np.sum(all_e) / np.sum(all_s):.2f}")
     stiff_accuracy()
 
 
