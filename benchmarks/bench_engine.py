@@ -1,12 +1,22 @@
 """Visibility-engine benchmark: time per row, BSP build, fragments, peak memory.
 
 Usage: python benchmarks/bench_engine.py [--quick] [--rows 40] [--visibility-only]
+       python benchmarks/bench_engine.py --integrators [--rows-per-scene 6]
 
 Output-sensitivity (issue 9): for the procedural office and cloister, exact ms per row
 against ``Hemicube(resolution=256)`` ms per row on the same rows (the in-run baseline),
 what the clipper left out (tile rejections, predicate decisions) and did (overlays), the
 row's tracemalloc peak, the estimated time of the full cloister matrix on 1 and 64
 cores, and the two integrators (sector form, Eq. 3) on the same rows.
+
+Integrators (issue 51, ``--integrators``): the compiled core with the sector form and with
+Eq. 3 (stable form), both at the default tolerance, on the same rows of the office, the
+cloister (every group) and the real files beside the clone (``../shared/scenes/real``):
+per-row time (best of 3) and its ratio (goal: Eq. 3 at most 1.5x), rows that raised, the
+largest gap over the sum of the two bounds, pieces in quadruple precision; then the stiff
+catalogue against its 60-digit references (goal: at most 1e-13 relative): the kernel
+(``eq3_form_factor`` / ``sector_form_factor`` at tolerance 1e-13) and the compiled core
+(each case as a one-polygon scene, shortcuts off, tolerance 1e-13).
 
 Cases: the open and the closed Cornell box (full matrices); closed cubes with k x k quads
 per face, N = 1,536 and N = 6,144 (full matrices, convex: the clipper is skipped), also
@@ -31,7 +41,7 @@ from exactff.methods import Exact
 from exactff.visibility import build_bsp
 
 sys.path.insert(0, os.path.dirname(__file__))
-from scenes_bench import furnished_room, machine, timed  # noqa: E402
+from scenes_bench import best_of, furnished_room, machine, timed  # noqa: E402
 
 
 
@@ -126,14 +136,120 @@ def visibility_report(n_office_rows=12):
         print(f"| {name} | {i} | {ts:.3f} | {tq:.3f} | {tq / ts:.1f} | {d:.1e} |")
 
 
+#: the real files of bench_real_rows.py that the integrators' table runs
+REAL_FILES = ["CornellBox-Sphere.obj", "CornellBox-Water.obj", "quadknot.obj",
+              "ADIS16480.STL", "idler_riser.STL", "ifc-SampleHouse4.obj"]
+
+
+def integrators_report(rows_per_scene=6, real=None):
+    """Eq. 3 against the sector form in the compiled core (issue 51); ``real``: the
+    folder of the real files (default: bench_real_rows.py's)."""
+    from bench_real_rows import REAL, load, seeded_rows   # noqa: E402
+
+    real = real or REAL
+    sector, eq3 = Exact(), Exact(integrator="eq3")
+    scenes = [("office", ef.scenes.office(),
+               np.random.default_rng(0).choice(4478, rows_per_scene, replace=False).tolist())]
+    cloister = ef.scenes.cloister()
+    scenes.append(("cloister", cloister, cloister_rows(cloister, per_group=1)))
+    for f in REAL_FILES:
+        path = os.path.join(real, f)
+        if os.path.exists(path):
+            scene = load(path)
+            scenes.append((f, scene, seeded_rows(scene, rows_per_scene)))
+    print("| scene | polygons | rows | sector (ms/row) | Eq. 3 (ms/row) | Eq. 3 / sector | "
+          "raised (sector, Eq. 3) | max gap / (sum of bounds) | quad pieces (sector, Eq. 3) |")
+    print("|---|---|---|---|---|---|---|---|---|")
+    all_s, all_e, rows_seen = [], [], []
+    for name, scene, rows in scenes:
+        c, n = scene.centroids, scene.normals
+        sector.point_form_factors(scene, c[rows[0]], n[rows[0]])          # caches, untimed
+        ts, te, raised, worst, quad = [], [], [0, 0], 0.0, [0, 0]
+        for i in rows:
+            out = []
+            for k, method in enumerate((sector, eq3)):
+                st = {}
+                try:
+                    FE = method.point_form_factors(scene, c[i], n[i], error=True, stats=st)
+                    method.point_form_factors(scene, c[i], n[i])         # raises if missed
+                except ef.NumericalError:
+                    raised[k] += 1
+                    FE = None
+                quad[k] += st.get("quad_pieces", 0)
+                out.append(FE)
+                t = best_of(lambda: method.point_form_factors(scene, c[i], n[i], error=True))
+                (ts if k == 0 else te).append(t)
+            if out[0] is not None and out[1] is not None:
+                (F, E), (G, H) = out
+                with np.errstate(divide="ignore", invalid="ignore"):
+                    r = np.where(E + H > 0, np.abs(F - G) / (E + H), np.where(F == G, 0, np.inf))
+                worst = max(worst, float(r.max()))
+        all_s += ts
+        all_e += te
+        rows_seen += [(name, i) for i in rows]
+        print(f"| {name} | {len(scene):,} | {len(rows)} | {1e3 * np.mean(ts):.1f} | "
+              f"{1e3 * np.mean(te):.1f} | {np.sum(te) / np.sum(ts):.2f} | "
+              f"{raised[0]}, {raised[1]} | "
+              f"{worst:.2f} | {quad[0]}, {quad[1]} |")
+    ratio = np.array(all_e) / np.array(all_s)
+    k = int(np.argmax(ratio))
+    print(f"\nEq. 3 / sector per row over all {len(ratio)} rows: median {np.median(ratio):.2f}, "
+          f"max {ratio.max():.2f} ({rows_seen[k][0]} row {rows_seen[k][1]}: "
+          f"{1e3 * all_s[k]:.1f} / {1e3 * all_e[k]:.1f} ms), "
+          f"total {np.sum(all_e) / np.sum(all_s):.2f}")
+    stiff_accuracy()
+
+
+def stiff_accuracy(tolerance=1e-13):
+    """Both integrators on the stiff catalogue against its 60-digit references."""
+    import mpmath as mp
+
+    from exactff.catalog import stiff_cases
+    from exactff.visibility import compiled_form_factors
+
+    worst = {}
+    print()
+    print("| case | reference | Eq. 3 kernel (rel) | sector kernel (rel) | "
+          "Eq. 3 compiled (rel) | sector compiled (rel) |")
+    print("|---|---|---|---|---|---|")
+    for c in stiff_cases():
+        ref = mp.mpf(c.reference)
+        scene = ef.Scene.from_polygons([c.polygon])
+        vals = [ef.eq3_form_factor(c.point, c.normal, c.polygon, two_sided=not c.one_sided,
+                                   tolerance=tolerance),
+                ef.sector_form_factor(c.point, c.normal, c.polygon, two_sided=not c.one_sided,
+                                      tolerance=tolerance)]
+        for integ in ("eq3", "sector"):
+            try:
+                vals.append(float(compiled_form_factors(
+                    scene, c.point, c.normal, two_sided=not c.one_sided, shortcuts=False,
+                    tolerance=tolerance, integrator=integ)[0]))
+            except ef.NumericalError:
+                vals.append(float("nan"))
+        rel = [float(abs(v - ref) / ref) if ref else abs(v) for v in vals]
+        for k, r in zip(("eq3 kernel", "sector kernel", "eq3 compiled", "sector compiled"), rel):
+            worst[k] = max(worst.get(k, 0.0), r) if r == r else float("nan")
+        print(f"| {c.name} | {mp.nstr(ref, 6)} | " + " | ".join(f"{r:.1e}" for r in rel) + " |")
+    print("\nlargest relative error on the stiff catalogue (goal <= 1e-13): "
+          + ", ".join(f"{k} {v:.1e}" for k, v in worst.items()))
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="skip the N = 6,144 cube")
     ap.add_argument("--rows", type=int, default=40, help="sampled rows of the furnished room")
     ap.add_argument("--visibility-only", action="store_true",
                     help="only the office / cloister output-sensitivity tables")
+    ap.add_argument("--integrators", action="store_true",
+                    help="only Eq. 3 against the sector form in the compiled core (issue 51)")
+    ap.add_argument("--rows-per-scene", type=int, default=6,
+                    help="rows per scene of the integrators' table")
+    ap.add_argument("--real", default=None, help="folder of the real files (integrators)")
     args = ap.parse_args()
     print(machine())
+    if args.integrators:
+        integrators_report(args.rows_per_scene, args.real)
+        return
     visibility_report()
     if args.visibility_only:
         return

@@ -74,6 +74,7 @@ __all__ = [
     "SVBSP_SPLIT_ULPS",
     "SVBSP_BOX_BUDGET",
     "CONVEX_TURN_ULPS",
+    "EQ3_FACTOR_ULPS",
     "SVBSP_TILES",
     "SVBSP_TILES_MAX",
     "SVBSP_POLYGONS_PER_CELL",
@@ -457,6 +458,12 @@ CLIP_MEET_ULPS = 8.0
 #: ulps per unit of the cross product's condition number).
 C1 = 10.0
 C2 = 10.0
+#: Roundoffs bounding the error of the midpoint factor ``v_x u_y + u_x v_y`` of Eq. 3's
+#: stable form (``exactff.kernel.eq3_ring_sums``; the compiled core's is the same),
+#: times ``2 sin(theta / 2)``: its normalisations, cross product and dot products, each
+#: a few roundoffs of unit vectors, and ``1 / cos(theta / 2)`` from the midpoint's
+#: length, which ``sin(theta)`` turns into ``2 sin(theta / 2)``.
+EQ3_FACTOR_ULPS = 64.0
 
 #: The offsets' rounding in that estimate (``kernel.sector._offset_rounding``): a
 #: vertex's position from the point is off by at most this many ulps of

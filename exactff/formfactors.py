@@ -86,9 +86,8 @@ def form_factors(scene: Scene, point: ArrayLike, normal: ArrayLike, *,
         missed the method's tolerance (relative, with an absolute floor of
         ``tolerance * 1e-4``: :func:`exactff.errors.misses_tolerance`) after
         refinement and every precision tier (on
-        every path; with ``integrator="eq3"``, which neither refines nor escalates, as
-        soon as its bound misses it). With ``error=True`` such a value is returned
-        with its bound.
+        every path, with either integrator). With ``error=True`` such a value is
+        returned with its bound.
 
     Notes
     -----

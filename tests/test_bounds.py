@@ -204,7 +204,8 @@ def _nan_calls():
                                                          engine="python")),
         "form_factors_compiled": (compiled, "compiled_core", _nan_core,
                                   lambda: ef.form_factors(alone, p, n, shortcuts=False)),
-        "eq3_form_factor": (eq3, "eq3_ring_area", lambda ring: (float("nan"), 1.0),
+        "eq3_form_factor": (eq3, "eq3_ring_sums",
+                            lambda *a, **k: (np.array([np.nan]), np.ones(1), np.zeros(1)),
                             lambda: ef.eq3_form_factor([0, 0, 0], [0, 0, 1],
                                                        UNIT_DOWN_AT_1)),
     }
@@ -276,7 +277,9 @@ def test_eq3_value_below_zero_is_judged_against_its_own_estimate(monkeypatch, ar
     import exactff.kernel.eq3 as integ
 
     sq = [[-.5, -.5, 1], [-.5, .5, 1], [.5, .5, 1], [.5, -.5, 1]]   # faces p: F = -area / pi
-    monkeypatch.setattr(integ, "eq3_ring_area", lambda ring: (area * np.pi, mag))
+    # twice the image's area, and the absolute terms (twice the magnitude)
+    monkeypatch.setattr(integ, "eq3_ring_sums", lambda *a, **k: (
+        np.array([2 * area * np.pi]), np.array([2 * mag]), np.zeros(1)))
     if ok:
         F, E = ef.eq3_form_factor([0, 0, 0], [0, 0, 1], sq, error=True)
         assert F == 0.0 and E >= area

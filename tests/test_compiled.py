@@ -401,11 +401,10 @@ def test_core_refuses_inconsistent_arrays():
 def test_engine_argument():
     assert ef.Exact().engine == "compiled"
     assert ef.Exact(engine="python").engine == "python"
-    assert ef.Exact(integrator="eq3").engine == "python"
+    assert ef.Exact(integrator="eq3").engine == "compiled"
+    assert ef.Exact(integrator="eq3", engine="python").engine == "python"
     with pytest.raises(ValueError, match="engine"):
         ef.Exact(engine="gpu")
-    with pytest.raises(ValueError, match="eq3"):
-        ef.Exact(engine="compiled", integrator="eq3")
 
 
 @given(case=flush_faces())

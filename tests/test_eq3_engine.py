@@ -1,6 +1,10 @@
-"""The engine with the paper's integrator: ``Exact(integrator="eq3")`` integrates every
-visible piece with Eq. 3 (corrected, monotone-span splitting) and agrees with the sector
-form on the engine's scenes; both are checked against independent constructions."""
+"""The engines with the paper's integrator: ``Exact(integrator="eq3")`` integrates every
+visible piece with Eq. 3 (corrected, monotone-span splitting, in its stable form), in the
+compiled core (the default) and in the Python engine, and agrees with the sector form
+within the sum of the two bounds on the engines' families, at the default tolerance
+without raising; both are checked against independent constructions."""
+
+import os
 
 import numpy as np
 import pytest
@@ -9,18 +13,36 @@ from hypothesis import given
 import exactff as ef
 from exactff.kernel import eq3_ring_area
 from exactff.testing import assert_form_factors_close
+from exactff.testing.strategies import enclosures, flush_faces, occluded_scenes
 
 from common import upward_unit_vectors
+from test_compiled import NAMED, rows_of
+from test_real_files import REAL
 from test_visibility import (FURNITURE, OCC_ATOL, inside_any_box, layered_reference,
                              layered_scenes)
 
 # the two exact integrations of one piece differ by rounding only
 AGREE_ATOL = 1e-13
-# Eq. 3 is neither refined nor escalated: on occluded rows its bounds (the clipper's
-# vertices, unrefined) miss the default 1e-12 relative tolerance and it raises (issue 33,
-# item 3; tests/test_tolerance.py); here it is compared with the sector form and the
-# 2-d construction to absolute tolerances, so it is asked for no relative tolerance
-EQ3 = ef.Exact(integrator="eq3", tolerance=None)
+# at the default tolerance (1e-12): the compiled core by default, refined and escalated
+# as the sector form is
+EQ3 = ef.Exact(integrator="eq3")
+SECTOR = ef.Exact()
+
+
+def assert_integrators_agree(scene, p, n, two_sided=False, engine="compiled"):
+    """Eq. 3 and the sector form, each at the default tolerance with its bounds: their
+    values within the sum of the bounds, Eq. 3's row without ``error=True`` does not
+    raise and gives the same values. Returns the Eq. 3 row's stats."""
+    st = {}
+    eq3 = ef.Exact(integrator="eq3", engine=engine)
+    G, H = eq3.point_form_factors(scene, p, n, two_sided=two_sided, error=True, stats=st)
+    F, E = ef.Exact(engine=engine).point_form_factors(scene, p, n, two_sided=two_sided,
+                                                      error=True)
+    assert np.all(G >= 0) and np.all(np.isfinite(H)) and np.all(H >= 0)
+    gap = np.abs(F - G)
+    assert np.all(gap <= E + H), (np.flatnonzero(gap > E + H), gap.max())
+    assert np.array_equal(eq3.point_form_factors(scene, p, n, two_sided=two_sided), G)
+    return st
 
 
 def agree(scene, rows):
@@ -75,3 +97,102 @@ def test_eq3_ring_area_of_a_spherical_lune():
 def test_bad_integrator_is_a_value_error():
     with pytest.raises(ValueError, match="integrator"):
         ef.Exact(integrator="simpson")
+
+
+# ---------------------------------------------------------------------------------------
+# issue 51: Eq. 3 in the compiled core, against the sector form, on the engine's families
+# ---------------------------------------------------------------------------------------
+def test_eq3_runs_the_compiled_engine_by_default():
+    assert EQ3.engine == "compiled"
+    assert ef.Exact(integrator="eq3", engine="python").engine == "python"
+    scene = ef.scenes.cornell_box(closed=True)
+    i = 3
+    st = {}
+    F = EQ3.point_form_factors(scene, scene.centroids[i], scene.normals[i], stats=st)
+    assert st["path"] == "compiled" and abs(F.sum() - 1) <= 1e-12
+
+
+@given(case=enclosures())
+def test_eq3_compiled_on_enclosures(case):
+    scene, p, n = case
+    assert_integrators_agree(scene, p, n)
+
+
+@given(case=occluded_scenes())
+def test_eq3_compiled_on_occluded_scenes(case):
+    scene, p, n = case
+    assert_integrators_agree(scene, p, n)
+    assert_integrators_agree(scene, p, n, two_sided=True)
+
+
+@given(case=flush_faces())
+def test_eq3_compiled_on_flush_faces(case):
+    scene, p, n = case[:3]
+    assert_integrators_agree(scene, p, n)
+
+
+@pytest.mark.parametrize("name", sorted(NAMED))
+def test_eq3_compiled_on_named_scenes(name):
+    make, closed = NAMED[name]
+    scene = make()
+    for i in rows_of(scene, 8):
+        p, n = scene.centroids[i], scene.normals[i]
+        assert_integrators_agree(scene, p, n)
+        if closed:
+            assert abs(EQ3.point_form_factors(scene, p, n).sum() - 1) <= 1e-12
+
+
+def test_eq3_compiled_on_office_and_cloister_rows():
+    office = ef.scenes.office(600)
+    quad = 0
+    for i in rows_of(office, 5):
+        quad += assert_integrators_agree(office, office.centroids[i],
+                                         office.normals[i]).get("quad_pieces", 0)
+    assert quad > 0   # the quadruple-precision tier ran with Eq. 3
+    cloister = ef.scenes.cloister(3000)
+    groups = np.array(cloister.groups)
+    rng = np.random.default_rng(0)
+    for g in sorted(set(cloister.groups)):
+        i = rng.choice(np.flatnonzero(groups == g))
+        assert_integrators_agree(cloister, cloister.centroids[i], cloister.normals[i])
+
+
+def test_eq3_python_engine_refines_and_escalates():
+    # the Python engine's Eq. 3 runs the same tiers as its sector form (long double,
+    # mpmath), Eq. 3 at each: office rows at the default tolerance, no raise
+    office = ef.scenes.office(600)
+    refined = 0
+    for i in rows_of(office, 2, seed=1):
+        st = assert_integrators_agree(office, office.centroids[i], office.normals[i],
+                                      engine="python")
+        refined += st.get("refined_rings", 0)
+    assert refined > 0
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", ["CornellBox-Sphere.obj", "CornellBox-Water.obj",
+                                  "quadknot.obj", "ADIS16480.STL"])
+def test_eq3_compiled_on_real_files(name):
+    path = os.path.join(REAL, name)
+    if not os.path.exists(path):
+        pytest.skip(f"{name} not beside the clone")
+    options = {"degenerate": "drop"}
+    if name == "quadknot.obj":
+        options["nonplanar"] = "split"
+    scene = ef.load_scene(path, **options)
+    big = np.flatnonzero(scene.areas >= np.median(scene.areas))
+    for i in np.random.default_rng(0).choice(big, min(4, len(big)), replace=False):
+        assert_integrators_agree(scene, scene.centroids[i], scene.normals[i])
+
+
+def test_compiled_core_uses_the_kernels_midpoint_rounding_constant():
+    # Core::integrate's bound of Eq. 3's midpoint factor is the kernel's (one constant,
+    # mirrored in the C++ source)
+    from exactff import _tolerances as tol
+
+    src = os.path.join(os.path.dirname(ef.__file__), "visibility", "_svbsp.cpp")
+    if not os.path.exists(src):
+        pytest.skip("the C++ source is not installed beside the package")
+    with open(src) as f:
+        text = f.read()
+    assert f"constexpr int EQ3_FACTOR_ULPS = {int(tol.EQ3_FACTOR_ULPS)};" in text

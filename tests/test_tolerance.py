@@ -96,8 +96,8 @@ def test_unrefinable_sliver_raises_instead_of_returning_the_clippers_bound(monke
     scene = ef.Scene.from_polygons(polys)
     real = Refiner.refine_ld
 
-    def unrefinable(self, ci, chart, coords, nxt, ring_of, n_rings, frag):
-        val, est, ok, lab = real(self, ci, chart, coords, nxt, ring_of, n_rings, frag)
+    def unrefinable(self, ci, chart, coords, nxt, ring_of, n_rings, frag, **kw):
+        val, est, ok, lab = real(self, ci, chart, coords, nxt, ring_of, n_rings, frag, **kw)
         return val, np.full(n_rings, np.inf), np.zeros(n_rings, dtype=bool), None
 
     monkeypatch.setattr(Refiner, "refine_ld", unrefinable)
@@ -188,31 +188,34 @@ def test_compiled_band_slivers_are_in_the_bound_not_in_the_check(monkeypatch):
 
 
 # ---------------------------------------------------------------------------------------
-# (b) integrator="eq3": not refined, but checked
+# (b) integrator="eq3": refined and escalated as the sector form (issue 51)
 # ---------------------------------------------------------------------------------------
-#: a strip 1e-3 above the horizon of the origin, 1 away (F ~ 4e-7): Eq. 3's rounding
-#: (its terms' absolute values, ~1) gives a bound of 2.5e-15, 25 times what 1e-12 allows
+#: a strip 1e-3 above the horizon of the origin, 1 away (F ~ 4e-7): Eq. 3's rounding in
+#: double (its terms' absolute values, ~1) gives a bound of 2.5e-15, 25 times what 1e-12
+#: allows; before issue 51 Eq. 3 raised here
 STRIP = np.array([[1, 0.5, 1e-3], [1, -0.5, 1e-3], [1, -0.5, 2e-3], [1, 0.5, 2e-3]])
 
 
+@pytest.mark.parametrize("engine", ["compiled", "python"])
 @pytest.mark.parametrize("shortcuts", [True, False], ids=["unoccluded_path", "clipper"])
-def test_eq3_value_that_misses_the_tolerance_raises_and_suggests_sector(shortcuts):
+def test_eq3_escalates_to_the_tolerance(shortcuts, engine):
     scene = ef.Scene.from_polygons([STRIP])
     p, n = np.zeros(3), np.array([0, 0, 1.0])
-    eq3 = ef.Exact(integrator="eq3", shortcuts=shortcuts, tolerance=1e-15)
-    F, E = eq3.point_form_factors(scene, p, n, error=True)
-    assert F[0] > 0 and misses_tolerance(F[0], E[0], 1e-15)
-    with pytest.raises(ef.NumericalError, match=r"polygon 0: .*integrator='eq3'.*"
-                                                r"integrator='sector'"):
-        eq3.point_form_factors(scene, p, n)
-    # no tolerance asked: the same value, unchecked
-    assert ef.Exact(integrator="eq3", shortcuts=shortcuts, tolerance=None
-                    ).point_form_factors(scene, p, n)[0] == F[0]
-    # the sector integrator escalates and meets it
-    ref = ef.mp_form_factor(p, n, STRIP)
-    Fs, Es = ef.Exact(shortcuts=shortcuts, tolerance=1e-15).point_form_factors(
-        scene, p, n, error=True)
-    assert abs(Fs[0] - ref) <= 1e-12 * ref and not misses_tolerance(Fs[0], Es[0], 1e-15)
+    ref = ef.mp_form_factor(p, n, STRIP, tolerance=1e-20)
+    # unescalated: within its bound; in double precision (the Python engine, and the
+    # unoccluded path) that bound misses 1e-15 (the compiled core's long double meets it)
+    F0, E0 = ef.Exact(integrator="eq3", shortcuts=shortcuts, engine=engine,
+                      tolerance=None).point_form_factors(scene, p, n, error=True)
+    assert abs(F0[0] - ref) <= E0[0]
+    if engine == "python" or shortcuts:
+        assert misses_tolerance(F0[0], E0[0], 1e-15)
+    # escalated: Eq. 3 meets it, as the sector form does
+    for integrator in ("eq3", "sector"):
+        method = ef.Exact(integrator=integrator, shortcuts=shortcuts, engine=engine,
+                          tolerance=1e-15)
+        F, E = method.point_form_factors(scene, p, n, error=True)
+        assert abs(F[0] - ref) <= 1e-14 * ref and not misses_tolerance(F[0], E[0], 1e-15)
+        assert method.point_form_factors(scene, p, n)[0] == F[0]
 
 
 # ---------------------------------------------------------------------------------------

@@ -6,12 +6,14 @@ ladder (float, long double, mpmath).
 * :mod:`~exactff.kernel.flat`: a scene's polygons as flat arrays;
 * :mod:`~exactff.kernel.ladder`: long double and mpmath re-evaluation;
 * :mod:`~exactff.kernel.point`: one point to one polygon, many polygons, a scene's row;
-* :mod:`~exactff.kernel.eq3`: Eq. 3 with monotone-span splitting;
+* :mod:`~exactff.kernel.eq3`: Eq. 3 with monotone-span splitting, as printed (corrected)
+  and in its stable form;
 * :mod:`~exactff.kernel.solid_angle`: solid angles (Van Oosterom and Strackee), the
   measure of the spherical factors.
 """
 
-from .eq3 import arc_x_extremes, eq3_edge_integral, eq3_form_factor, eq3_ring_area
+from .eq3 import (arc_x_extremes, eq3_edge_integral, eq3_form_factor, eq3_ring_area,
+                  eq3_ring_sums, mp_eq3_sum)
 from .flat import FlatPolygons, flat_polygons
 from .ladder import mp_form_factor
 from .point import (point_polygon_form_factor, point_polygon_form_factors,
@@ -21,7 +23,7 @@ from .solid_angle import mp_solid_angle, offset_error, polygon_solid_angles, sol
 
 __all__ = ["mp_form_factor", "point_polygon_form_factor", "point_polygon_form_factors",
            "sector_form_factor", "eq3_form_factor", "eq3_ring_area", "eq3_edge_integral",
-           "arc_x_extremes", "unoccluded_row", "unoccluded_rows", "clipped_sector_sums",
-           "sector_values",
+           "eq3_ring_sums", "mp_eq3_sum", "arc_x_extremes", "unoccluded_row", "unoccluded_rows",
+           "clipped_sector_sums", "sector_values",
            "FlatPolygons", "flat_polygons", "TWO_PI", "solid_angle_sums",
            "polygon_solid_angles", "offset_error", "mp_solid_angle"]

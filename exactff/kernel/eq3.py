@@ -2,7 +2,20 @@
 
 The image of a great-circle arc on the base disk lies on the ellipse of Eq. 2; each
 arc is split at its x-extremes into monotone spans, each integrated on its own branch
-with the corrected antiderivative (DESIGN 2, ``tools/derive_eq3.py``).
+with the corrected antiderivative (DESIGN 2, ``tools/derive_eq3.py``):
+:func:`eq3_edge_integral` evaluates it as printed (corrected), span by span.
+
+The integrators evaluate the same spans in the *stable form* (issue 51, proved in
+``tools/derive_eq3.py``): on a span the branch is the sign of ``sin t`` (``t`` the arc's
+angle from its x-maximum), ``asin`` differences are ``-sigma (t1 - t0)``, and the spans'
+differences add up, over an arc of angle ``theta`` with ends ``u0``, ``u1`` and unit plane
+normal ``m = (A, B, C)``, to
+
+``int y dx = (1/2) [ -C theta + sin(theta) (C cos(t0 + t1) + A B sin(t0 + t1)) ]``
+
+where the factor is ``v_x u_y + u_x v_y`` at the arc's midpoint ``u`` (``v = m x u``): every
+term is O(theta), the large ``C asin`` terms having been subtracted analytically, and no
+eta or rotation of the frame enters (:func:`eq3_ring_sums`, :func:`mp_eq3_sum`).
 """
 
 from __future__ import annotations
@@ -15,9 +28,11 @@ from numpy.typing import ArrayLike
 from .. import _tolerances as tol
 from ..checks import check_sides
 from ..errors import NumericalError, check_finite
+from .ladder import mp_converge, mp_sector_value
 from .point import local_clipped
 
-__all__ = ["eq3_edge_integral", "arc_x_extremes", "eq3_form_factor", "eq3_ring_area"]
+__all__ = ["eq3_edge_integral", "arc_x_extremes", "eq3_form_factor", "eq3_ring_area",
+           "eq3_ring_sums", "mp_eq3_sum"]
 
 
 def eq3_edge_integral(a: ArrayLike, b: ArrayLike, *,
@@ -161,15 +176,22 @@ def arc_x_extremes(a: ArrayLike, b: ArrayLike) -> tuple:
 
 def eq3_form_factor(point: ArrayLike, normal: ArrayLike, polygon: ArrayLike, *,
                     two_sided: bool = False, one_sided: bool | None = None,
+                    tolerance: float | None = None,
                     error: bool = False) -> float | tuple[float, float]:
     """Unoccluded form factor by the paper's Eq. 3 (corrected), with span splitting.
 
-    The frame is first rotated about ``n`` (which changes no area) so that no edge
-    plane is close to ``x = 0``, where ``eta -> 0`` makes Eq. 3 ill-conditioned.
+    Evaluated in the stable form (:func:`eq3_ring_sums`), which needs no rotation of
+    the frame.
 
     Parameters and return value as :func:`point_polygon_form_factor`; ``error=True``
     also returns a rounding-error estimate (``C1 u`` times the sum of the absolute
-    terms of Eq. 3 over the edges, over pi).
+    terms of Eq. 3 over the edges, plus their planes' and midpoints' rounding, over
+    2 pi). With a ``tolerance`` (default None: double precision only), a value whose
+    estimate exceeds it times the value (as :func:`sector_form_factor`) is evaluated
+    again with mpmath from the float input, Eq. 3 again (:func:`mp_eq3_sum`), at two
+    precisions 20 digits apart raised until they agree to ``tolerance``; where mpmath
+    stops first it raises
+    :class:`exactff.NumericalError`, unless ``error=True``.
 
     Examples
     --------
@@ -181,11 +203,27 @@ def eq3_form_factor(point: ArrayLike, normal: ArrayLike, polygon: ArrayLike, *,
     C, sign = local_clipped(point, normal, polygon, one_sided)
     if not sign or len(C) < 2:
         return (0.0, 0.0) if error else 0.0
-    area, mag = eq3_ring_area(np.array(C))
+    R = np.array(C, dtype=float)
+    S, mags, errs = eq3_ring_sums(R[:1], R - R[0], np.roll(np.arange(len(R)), -1),
+                                  np.zeros(len(R), dtype=np.int64), 1)
     # a polygon whose front faces p has a clockwise image (seen from above the disk)
-    F = -sign * area / math.pi
-    est = tol.C1 * tol.EPS * mag / math.pi
+    F = float(-sign * S[0] / (2 * math.pi))
+    est = float((tol.C1 * tol.EPS * mags[0] + errs[0]) / (2 * math.pi))
     check_finite(F, est, "Eq. 3 form factor")
+    if tolerance is not None and not est <= tolerance * abs(F):
+        # the last tier: Eq. 3's stable form in mpmath from the float input, clipped and
+        # sided as the sector form's tier
+        P = np.asarray(polygon, dtype=float)
+        hi, diff, converged = mp_converge(
+            lambda dps: mp_sector_value(point, normal, P, one_sided, dps, sign,
+                                        ring_sum=mp_eq3_sum), tolerance)
+        if not converged and not error:
+            raise NumericalError(
+                f"Eq. 3 in mpmath did not converge at {tol.MP_MAX_DPS} digits: two "
+                f"evaluations differ by {float(diff):.3g} (value {float(hi):.3g}); ask "
+                f"error=True to get the value with this estimate")
+        F = max(float(hi), 0.0)
+        est = float(diff) + F * tol.EPS
     # below 0 by at most its own estimate: clamped to 0, which the estimate covers;
     # beyond it, a defect
     if not F >= -est:
@@ -196,10 +234,8 @@ def eq3_form_factor(point: ArrayLike, normal: ArrayLike, polygon: ArrayLike, *,
 
 def eq3_ring_area(ring: ArrayLike) -> tuple[float, float]:
     """Signed area (counter-clockwise positive) of the image on the base disk of a closed
-    chain of great-circle arcs, by Eq. 3 (corrected) with monotone-span splitting.
-
-    The frame is rotated about z (which changes no area) so that no arc's plane is
-    close to ``x = 0``, where ``eta -> 0`` makes Eq. 3 ill-conditioned.
+    chain of great-circle arcs, by Eq. 3 (corrected) with monotone-span splitting, in
+    its stable form (:func:`eq3_ring_sums`).
 
     Parameters
     ----------
@@ -212,35 +248,151 @@ def eq3_ring_area(ring: ArrayLike) -> tuple[float, float]:
     Returns
     -------
     (float, float)
-        The signed area and the sum of the absolute values of the terms of Eq. 3 that
-        make it up (the scale of its rounding error; see :func:`eq3_edge_integral`).
+        The signed area and a bound on its rounding error.
 
     Examples
     --------
     The quarter of the upper hemisphere over the first quadrant projects onto a
     quarter of the unit disk:
 
-    >>> a, m = eq3_ring_area(np.array([[0, 0, 1.0], [1, 0, 0], [0, 1, 0]]))
-    >>> round(a / (math.pi / 4), 12)
-    1.0
+    >>> a, e = eq3_ring_area(np.array([[0, 0, 1.0], [1, 0, 0], [0, 1, 0]]))
+    >>> round(a / (math.pi / 4), 12), bool(e < 1e-13)
+    (1.0, True)
     """
     Q = np.array(ring, dtype=float)
-    M = np.cross(Q, np.roll(Q, -1, axis=0))
-    Ml = np.linalg.norm(M, axis=1)
-    M = M[Ml > 0] / Ml[Ml > 0, None]
-    if len(M) == 0:
+    if len(Q) < 2:
         return 0.0, 0.0
-    # rotation about z maximising the smallest eta = sqrt(1 - m_x^2) over the edges
-    k = 2 * len(Q) + 2
-    phis = np.arange(k) * math.pi / k
-    mx = np.cos(phis)[:, None] * M[None, :, 0] + np.sin(phis)[:, None] * M[None, :, 1]
-    phi = phis[int(np.argmin(np.abs(mx).max(axis=1)))]
-    c, s = math.cos(phi), math.sin(phi)
-    Rz = np.array([[c, s, 0.0], [-s, c, 0.0], [0.0, 0.0, 1.0]])
-    z = Q[:, 2].copy()
-    Q = Q @ Rz.T
-    Q[:, 2] = z
-    parts = [eq3_edge_integral(Q[i], Q[(i + 1) % len(Q)], scale=True)
-             for i in range(len(Q))]
-    # image area (counter-clockwise positive) = - sum of y dx
-    return -math.fsum(v for v, _ in parts), math.fsum(m for _, m in parts)
+    S, mags, errs = eq3_ring_sums(Q[:1], Q - Q[0], np.roll(np.arange(len(Q)), -1),
+                                  np.zeros(len(Q), dtype=np.int64), 1)
+    return float(S[0] / 2), float((tol.C1 * tol.EPS * mags[0] + errs[0]) / 2)
+
+
+def eq3_ring_sums(A0, E, nxt, owner, m, eps=tol.EPS):
+    """Eq. 3 (corrected, monotone spans) in its stable form over rings in offset form:
+    per ring twice the signed area of its image on the base disk, with the scale and
+    the bound of its rounding error.
+
+    Each edge ``a -> b`` (directions in the local frame, z along the normal, ``z >= 0``)
+    adds ``C theta - sin(theta) (v_x u_y + u_x v_y)``: minus twice the integral of
+    ``y dx`` along its image (module docstring; ``tools/derive_eq3.py``), with
+    ``m = a x b`` evaluated in offset form as ``A0 x (e_b - e_a) + e_a x e_b`` (as
+    :func:`exactff.kernel.clipped_sector_sums`, accurate for rings small next to their
+    distance), ``C = m_z / |m|``, ``theta`` the arc's angle, ``sin(theta) = |m| / (|a| |b|)``,
+    ``u`` the unit midpoint direction and ``v = m x u / |m|``.
+
+    Parameters
+    ----------
+    A0 : ndarray of shape (m, 3)
+        A reference vertex of each ring (the first), relative to the point, local frame.
+    E : ndarray of shape (V, 3)
+        Every vertex's offset from its ring's reference vertex.
+    nxt : ndarray of shape (V,)
+        Index of each vertex's successor in its ring.
+    owner : ndarray of shape (V,)
+        Ring of each vertex.
+    m : int
+        Number of rings.
+    eps : float
+        Unit roundoff of the working precision (``A0``'s dtype: float64 or longdouble).
+
+    Returns
+    -------
+    (ndarray of shape (m,), ndarray of shape (m,), ndarray of shape (m,))
+        ``S`` (twice the counter-clockwise signed area of each image), ``mags`` (the sum
+        of the absolute values of its terms: ``C1 eps mags`` bounds the sum's rounding)
+        and ``errs`` (the terms' own rounding: the planes' as in the sector form, and
+        ``EQ3_FACTOR_ULPS eps 2 sin(theta / 2)`` for each midpoint factor, the constant
+        in ``exactff._tolerances``).
+
+    Examples
+    --------
+    The quarter of the upper hemisphere over the first quadrant: twice pi / 4.
+
+    >>> R = np.array([[0, 0, 1.0], [1, 0, 0], [0, 1, 0]])
+    >>> S, mags, errs = eq3_ring_sums(R[:1], R - R[0], np.array([1, 2, 0]), np.zeros(3, int), 1)
+    >>> round(float(S[0]) / (math.pi / 2), 12)
+    1.0
+    """
+    dt = A0.dtype
+    Ax, Ay, Az = (A0[owner, k] for k in range(3))
+    Eax, Eay, Eaz = E[:, 0], E[:, 1], E[:, 2]
+    Ebx, Eby, Ebz = Eax[nxt], Eay[nxt], Eaz[nxt]
+    # the edge's plane in offset form: m = A x (Eb - Ea) + Ea x Eb
+    Dx, Dy, Dz = Ebx - Eax, Eby - Eay, Ebz - Eaz
+    p1, p2, p3, p4 = Ax * Dy, Ay * Dx, Eax * Eby, Eay * Ebx
+    Mz = (p1 - p2) + (p3 - p4)
+    Mx = (Ay * Dz - Az * Dy) + (Eay * Ebz - Eaz * Eby)
+    My = (Az * Dx - Ax * Dz) + (Eaz * Ebx - Eax * Ebz)
+    s = np.sqrt(Mx * Mx + My * My + Mz * Mz)
+    ax, ay, az = Ax + Eax, Ay + Eay, Az + Eaz
+    bx, by, bz = Ax + Ebx, Ay + Eby, Az + Ebz
+    la = np.sqrt(ax * ax + ay * ay + az * az)
+    lb = np.sqrt(bx * bx + by * by + bz * bz)
+    Nm = la * lb
+    theta = np.arctan2(s, ax * bx + ay * by + az * bz)
+    ok = s > 0
+    with np.errstate(divide="ignore", invalid="ignore"):
+        # the arc's midpoint u (unit) and its tangent v = m x u / |m| there
+        ux, uy, uz = ax / la + bx / lb, ay / la + by / lb, az / la + bz / lb
+        lu = np.sqrt(ux * ux + uy * uy + uz * uz)
+        ux, uy, uz = ux / lu, uy / lu, uz / lu
+        vx, vy = (My * uz - Mz * uy) / s, (Mz * ux - Mx * uz) / s
+        # d(x y)/dt at the midpoint, times sin(theta): x1 y1 - x0 y0, in O(theta) form;
+        # ends that are opposite directions have no midpoint: the factor (at most 1 in
+        # absolute value) is left out and sin(theta) goes to the bound
+        sin_theta = s / Nm
+        mid = ok & (lu > 0)
+        xy = np.where(mid, sin_theta * (vx * uy + ux * vy), 0.0)
+        sector = theta * Mz / s
+        terms = np.where(ok, sector - xy, 0.0)
+        absterms = np.where(ok, np.abs(sector) + np.abs(xy), 0.0)
+        # rounding of each term: the plane's direction (as clipped_sector_sums: m_z's
+        # summands, and |m| at relative order theta^2), which moves C theta and sin theta
+        # alike, and the midpoint factor's
+        Z = np.abs(p1) + np.abs(p2) + np.abs(p3) + np.abs(p4)
+        rel = np.where(ok, tol.C2 * eps * (Z + theta * theta * Nm) / s,
+                       np.where(Nm > 0, np.inf, 0.0))
+        err = (2 * theta * np.minimum(2.0, rel)
+               + np.where(ok, tol.EQ3_FACTOR_ULPS * eps * 2 * np.sin(theta / 2), 0.0)
+               + np.where(ok & ~mid, sin_theta, 0.0))
+    # summed per ring in the working precision (bincount would round to double)
+    out = []
+    for w in (terms, absterms, err):
+        acc = np.zeros(m, dtype=dt)
+        np.add.at(acc, owner, w)
+        out.append(acc)
+    return tuple(out)
+
+
+def mp_eq3_sum(ring):
+    """Eq. 3's stable form over a closed ring of directions in mpmath numbers, at the
+    working precision: twice the counter-clockwise signed area of its image,
+    ``sum_k C theta_k - sin(theta_k) (v_x u_y + u_x v_y)`` (:func:`eq3_ring_sums`; an mpf;
+    zero-length edges add nothing).
+
+    Examples
+    --------
+    >>> import mpmath as mp
+    >>> ring = [[mp.mpf(0), 0, 1], [mp.mpf(1), 0, 0], [mp.mpf(0), 1, 0]]
+    >>> float(mp_eq3_sum(ring) / (mp.pi / 2))
+    1.0
+    """
+    import mpmath as mp
+
+    total = mp.mpf(0)
+    for i in range(len(ring)):
+        a, b = ring[i], ring[(i + 1) % len(ring)]
+        m = [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+        sm = mp.sqrt(sum(c * c for c in m))
+        if sm == 0:
+            continue
+        la = mp.sqrt(sum(c * c for c in a))
+        lb = mp.sqrt(sum(c * c for c in b))
+        u = [a[k] / la + b[k] / lb for k in range(3)]
+        lu = mp.sqrt(sum(c * c for c in u))
+        u = [c / lu for c in u]
+        vx = (m[1] * u[2] - m[2] * u[1]) / sm
+        vy = (m[2] * u[0] - m[0] * u[2]) / sm
+        theta = mp.atan2(sm, sum(a[k] * b[k] for k in range(3)))
+        total += theta * m[2] / sm - sm / (la * lb) * (vx * u[1] + u[0] * vy)
+    return total

@@ -91,10 +91,13 @@ def mp_sector_sum(ring):
     return total
 
 
-def mp_sector_value(point, normal, polygon, one_sided, dps, side_hint=None):
+def mp_sector_value(point, normal, polygon, one_sided, dps, side_hint=None,
+                    ring_sum=mp_sector_sum):
     """The form factor of one polygon by the sector form at ``dps`` digits (an mpf),
     from the float input taken as exact; ``side_hint`` is the side of the point when
-    it is already decided exactly (+1: in front)."""
+    it is already decided exactly (+1: in front). ``ring_sum`` integrates the clipped
+    ring (twice its image's signed area): the sector form, or Eq. 3's stable form
+    (:func:`exactff.kernel.eq3.mp_eq3_sum`)."""
     import mpmath as mp
 
     with mp.workdps(dps):
@@ -120,7 +123,7 @@ def mp_sector_value(point, normal, polygon, one_sided, dps, side_hint=None):
         if side == 0 or (one_sided and side > 0):
             return mp.mpf(0)
         C = clip_above_horizon(Q, zero=mp.mpf(0))
-        total = mp_sector_sum(C)
+        total = ring_sum(C)
         # the image of the boundary ring, whichever way it winds: for a point within
         # rounding of a polygon that is planar only to rounding, the ring's winding can
         # disagree with the side decided from the polygon's Newell plane (value 0 for

@@ -54,25 +54,20 @@ class Exact(FormFactorMethod):
         of overlays) and the early stop once a chart is covered. Results do not depend
         on it (tested to 1e-15); False is for checking that.
     integrator : {"sector", "eq3"}, default "sector"
-        How visible pieces are integrated: Lambert's sector form (vectorised over all
-        pieces, with error estimates and escalation) or the paper's Eq. 3, corrected,
-        with monotone-span splitting (one ring at a time in Python, no escalation).
-        Both are exact; the sector form is the default because it is faster (see
-        ``docs/benchmarks.md``) and escalates where double precision falls short.
-        Eq. 3 is integrated by the Python engine only. With ``"eq3"`` nothing is
-        refined or escalated, but the values are still checked against
-        ``tolerance``: one whose bound misses it raises
-        :class:`exactff.NumericalError` (suggesting ``integrator="sector"``) unless
-        ``error=True`` was asked, as it does on most occluded rows at the default
-        tolerance; ``tolerance=None`` turns the check off (to compare the
-        integrators).
+        How visible pieces are integrated: Lambert's sector form, or the paper's Eq. 3
+        (corrected, with monotone-span splitting) in its stable form, the large
+        ``C asin`` terms subtracted analytically (``tools/derive_eq3.py``,
+        ``docs/explanation/ppbh-method.md``). Both are exact, run in either engine and
+        take the same refinement and precision tiers; they agree within the sum of
+        their bounds. The sector form is the default: over a closed contour Eq. 3's
+        stable form is its sum plus terms that telescope to zero, whose rounding makes
+        Eq. 3's bound the larger (``docs/benchmarks.md``).
     engine : {"compiled", "python"} or None, default None
         ``"compiled"``: the compiled core (:mod:`exactff.visibility.compiled`), whose
         cost follows what a row sees; a row any of whose values misses the tolerance is
         recomputed by the Python engine. ``"python"``: the Python engine
         (:func:`exactff.visibility.visible_form_factors`), unchanged, the oracle the
-        compiled core is tested against. None: compiled, or Python with
-        ``integrator="eq3"`` (the compiled core integrates with the sector form).
+        compiled core is tested against. None: compiled, with either integrator.
 
     Examples
     --------
@@ -91,12 +86,9 @@ class Exact(FormFactorMethod):
         if integrator not in INTEGRATORS:
             raise ValueError(f"integrator must be one of {INTEGRATORS}, got {integrator!r}")
         if engine is None:
-            engine = "python" if integrator == "eq3" else "compiled"
+            engine = "compiled"
         if engine not in ENGINES:
             raise ValueError(f"engine must be one of {ENGINES}, got {engine!r}")
-        if engine == "compiled" and integrator != "sector":
-            raise ValueError(f"engine='compiled' integrates with the sector form; "
-                             f"integrator={integrator!r} needs engine='python'")
         self.tolerance = tolerance
         self.shortcuts = bool(shortcuts)
         self.integrator = integrator
@@ -111,7 +103,8 @@ class Exact(FormFactorMethod):
         if self.engine == "compiled":
             return compiled_form_factors(scene, point, normal, two_sided=two_sided,
                                          stats=stats, shortcuts=self.shortcuts,
-                                         tolerance=self.tolerance, error=error)
+                                         tolerance=self.tolerance, error=error,
+                                         integrator=self.integrator)
         return visible_form_factors(scene, point, normal, two_sided=two_sided, stats=stats,
                                     shortcuts=self.shortcuts, tolerance=self.tolerance,
                                     integrator=self.integrator, error=error)
@@ -185,7 +178,7 @@ class Exact(FormFactorMethod):
 
     def __repr__(self):
         extra = "" if self.integrator == "sector" else f", integrator={self.integrator!r}"
-        if self.engine != ("python" if self.integrator == "eq3" else "compiled"):
+        if self.engine != "compiled":
             extra += f", engine={self.engine!r}"
         return f"Exact(tolerance={self.tolerance}, shortcuts={self.shortcuts}{extra})"
 

@@ -6,7 +6,7 @@
 // planes through p whose leaves are covered (IN) or free (OUT); its root is the
 // horizon plane (below it: covered). Each fragment is filtered down the tree; the
 // parts reaching free leaves are visible: they are integrated with the sector form
-// (Lambert) and the leaf is replaced by the planes through p and their edges (their
+// (Lambert), or with the paper's Eq. 3 in its stable form (a row's choice), and the leaf is replaced by the planes through p and their edges (their
 // shadow volume). Splitting convex pieces by planes needs no polygon booleans, and
 // the topology follows from one sign per vertex and plane.
 //
@@ -43,6 +43,7 @@
 using Quad = __float128;
 inline Quad q_atan2(Quad y, Quad x) { return atan2q(y, x); }
 inline Quad q_sqrt(Quad x) { return sqrtq(x); }
+inline Quad q_sin(Quad x) { return sinq(x); }
 inline Quad q_abs(Quad x) { return fabsq(x); }
 const Quad QUAD_EPS = static_cast<Quad>(std::ldexp(1.0L, -113));  // unit roundoff
 #else
@@ -51,6 +52,7 @@ const Quad QUAD_EPS = static_cast<Quad>(std::ldexp(1.0L, -113));  // unit roundo
 using Quad = long double;
 inline Quad q_atan2(Quad y, Quad x) { return std::atan2(y, x); }
 inline Quad q_sqrt(Quad x) { return std::sqrt(x); }
+inline Quad q_sin(Quad x) { return std::sin(x); }
 inline Quad q_abs(Quad x) { return std::fabs(x); }
 constexpr Quad QUAD_EPS = LDBL_EPSILON / 2;
 #endif
@@ -67,6 +69,9 @@ using R = long double;
 // double vectors rounded to double is within this many double roundoffs (DBL_EPSILON
 // / 2 each) of |m| |v| of its long double value (6 needed, 8 kept)
 constexpr double FILTER_ROUNDOFFS = 4;  // in units of DBL_EPSILON = 2 roundoffs
+// roundoffs bounding the error of Eq. 3's midpoint factor v_x u_y + u_x v_y, times
+// 2 sin(theta / 2) (exactff._tolerances.EQ3_FACTOR_ULPS)
+constexpr int EQ3_FACTOR_ULPS = 64;
 constexpr int OUT = -1;  // a free leaf of the shadow tree
 constexpr int IN = -2;   // a covered leaf
 
@@ -405,6 +410,10 @@ struct RowStats {
     R rtol = 0;          // pieces whose bound exceeds this times their value are
                          // integrated again in quadruple precision (0: never)
     const double* normal = nullptr;  // the receiver normal as given
+    // integrate with Eq. 3's stable form instead of the sector form, in the frame
+    // (e1, e2, n) (Core::integrate)
+    bool eq3 = false;
+    V3 e1{0, 0, 0}, e2{0, 0, 0};
     int64_t quad_pieces = 0;
     int64_t fragments = 0, visible = 0, hidden = 0, splits = 0, subtrees_culled = 0,
             fragments_culled = 0, box_tests = 0, shadow_planes = 0,
@@ -489,7 +498,7 @@ class Core {
                   py::array_t<int8_t, py::array::c_style | py::array::forcecast> node_side,
                   py::array_t<int8_t, py::array::c_style | py::array::forcecast> source_side,
                   bool two_sided, bool cull, int64_t box_budget, int64_t tiles,
-                  double rtol) const {
+                  double rtol, bool eq3) const {
         if (point.size() != 3 || normal.size() != 3)
             throw std::invalid_argument("point and normal must have 3 coordinates");
         if (node_side.size() != nodes())
@@ -509,6 +518,21 @@ class Core {
         st.crossing.assign(static_cast<size_t>(n_sources_), 0);
         st.rtol = rtol;
         st.normal = pn;
+        st.eq3 = eq3;
+        if (eq3) {
+            // Eq. 3's frame: e1 = n x (the axis n is least along), e2 = n x e1
+            const R nl = std::sqrt(static_cast<R>(pn[0]) * pn[0] + static_cast<R>(pn[1]) * pn[1] +
+                                   static_cast<R>(pn[2]) * pn[2]);
+            const V3 un{pn[0] / nl, pn[1] / nl, pn[2] / nl};
+            const int k = std::fabs(pn[0]) <= std::fabs(pn[1])
+                              ? (std::fabs(pn[0]) <= std::fabs(pn[2]) ? 0 : 2)
+                              : (std::fabs(pn[1]) <= std::fabs(pn[2]) ? 1 : 2);
+            const V3 ax{k == 0 ? 1.0L : 0.0L, k == 1 ? 1.0L : 0.0L, k == 2 ? 1.0L : 0.0L};
+            const V3 c = cross(un, ax);
+            const R cl = norm(c);
+            st.e1 = {c.x / cl, c.y / cl, c.z / cl};
+            st.e2 = cross(un, st.e1);
+        }
         {
             py::gil_scoped_release release;
             std::vector<R> f(n_sources_, 0), e(n_sources_, 0), b(n_sources_, 0);
@@ -929,7 +953,16 @@ class Core {
     // world offsets from it, accurate for pieces small next to their distance; each
     // term's rounding bounded by the magnitudes of the products in n . m (C2 ulps per
     // unit of the cross product's condition), the sum's by C1 ulps of its terms
-    void integrate(const Piece& q, int64_t f, const V3& n, R* value, R* bound) const {
+    //
+    // With `eq3` (its frame e1, e2 with e1 x e2 = n), each edge is integrated by the
+    // paper's Eq. 3 (corrected) over its monotone spans, in its stable form
+    // (tools/derive_eq3.py, exactff.kernel.eq3_ring_sums): minus twice int y dx along
+    // the arc's image is C theta - sin(theta) (v_x u_y + u_x v_y), the sector term and
+    // d(x y)/dt at the arc's midpoint u (v = m x u / |m|) times sin(theta), every term
+    // O(theta); the second term's rounding is the plane's (as the first's) and a few
+    // roundoffs of the unit midpoint and tangent, times 2 sin(theta / 2)
+    void integrate(const Piece& q, int64_t f, const V3& n, R* value, R* bound,
+                   const RowStats* eq3 = nullptr) const {
         R S = 0, mag = 0, errs = 0;
         const size_t m = q.size();
         const V3 a0 = q[0].v;
@@ -961,6 +994,24 @@ class Core {
             mag += std::fabs(t);
             const R rel = K_.c2 * K_.eps * (Z + theta * theta * Nm) / cl;
             errs += theta * std::min(static_cast<R>(2), rel);
+            if (eq3) {
+                const R sin_t = cl / Nm;
+                const V3 um{a.v.x / a.length + b.v.x / b.length, a.v.y / a.length + b.v.y / b.length,
+                            a.v.z / a.length + b.v.z / b.length};
+                const R lu = norm(um);
+                if (lu > 0) {
+                    const V3 u{um.x / lu, um.y / lu, um.z / lu};
+                    const V3 v = cross(c, u);
+                    const R xy = sin_t * (dot(v, eq3->e1) * dot(u, eq3->e2) +
+                                          dot(u, eq3->e1) * dot(v, eq3->e2)) / cl;
+                    S -= xy;
+                    mag += std::fabs(xy);
+                } else {
+                    errs += sin_t;  // opposite ends: no midpoint, the factor is within 1
+                }
+                errs += theta * std::min(static_cast<R>(2), rel) +
+                        EQ3_FACTOR_ULPS * K_.eps * 2 * std::sin(theta / 2);
+            }
         }
         const R two_pi = 6.283185307179586476925286766559L;
         *value = std::fabs(S) / two_pi;
@@ -1161,12 +1212,34 @@ class Core {
     // normal as given (unnormalised: the value is divided by its length at the end, a
     // relative error); the second tier for pieces whose terms cancel (grazing, far,
     // small, slivers)
+    //
+    // With `eq3`, Eq. 3's stable form as in Core::integrate, in a frame (e1, e2, n)
+    // built here in quadruple precision (the midpoint terms telescope around the ring
+    // for any frame: only their rounding depends on it)
     void integrate_quad(const std::vector<std::array<Quad, 3>>& v, const double* pn, R* value,
-                        R* bound) const {
+                        R* bound, bool eq3 = false) const {
         const size_t m = v.size();
         const Quad n[3] = {pn[0], pn[1], pn[2]};
         const Quad nl = q_sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
         Quad S = 0, mag = 0, errs = 0;
+        Quad e1[3] = {0, 0, 0}, e2[3] = {0, 0, 0};
+        if (eq3) {
+            // e1: n crossed with the axis n is least along, e2 = n x e1 (n unit here)
+            Quad un[3] = {n[0] / nl, n[1] / nl, n[2] / nl};
+            int k = 0;
+            for (int j = 1; j < 3; ++j)
+                if (q_abs(un[j]) < q_abs(un[k])) k = j;
+            Quad ax[3] = {0, 0, 0};
+            ax[k] = 1;
+            e1[0] = un[1] * ax[2] - un[2] * ax[1];
+            e1[1] = un[2] * ax[0] - un[0] * ax[2];
+            e1[2] = un[0] * ax[1] - un[1] * ax[0];
+            const Quad l1 = q_sqrt(e1[0] * e1[0] + e1[1] * e1[1] + e1[2] * e1[2]);
+            for (int j = 0; j < 3; ++j) e1[j] /= l1;
+            e2[0] = un[1] * e1[2] - un[2] * e1[1];
+            e2[1] = un[2] * e1[0] - un[0] * e1[2];
+            e2[2] = un[0] * e1[1] - un[1] * e1[0];
+        }
         const auto& a0 = v[0];
         for (size_t i = 0; i < m; ++i) {
             const size_t j = (i + 1) % m;
@@ -1204,6 +1277,27 @@ class Core {
             const Quad rel = static_cast<Quad>(K_.c2) * QUAD_EPS *
                              (Z / nl + theta * theta * la * lb) / cl;
             errs += theta * (rel < 2 ? rel : static_cast<Quad>(2));
+            if (eq3) {
+                const Quad sin_t = cl / (la * lb);
+                Quad u[3];
+                for (int k = 0; k < 3; ++k) u[k] = v[i][k] / la + v[j][k] / lb;
+                const Quad lu = q_sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
+                if (lu > 0) {
+                    for (int k = 0; k < 3; ++k) u[k] /= lu;
+                    const Quad w[3] = {c[1] * u[2] - c[2] * u[1], c[2] * u[0] - c[0] * u[2],
+                                       c[0] * u[1] - c[1] * u[0]};
+                    auto dt = [](const Quad* x, const Quad* y) {
+                        return x[0] * y[0] + x[1] * y[1] + x[2] * y[2];
+                    };
+                    const Quad xy = sin_t * (dt(w, e1) * dt(u, e2) + dt(u, e1) * dt(w, e2)) / cl;
+                    S -= xy;
+                    mag += q_abs(xy);
+                } else {
+                    errs += sin_t;
+                }
+                errs += theta * (rel < 2 ? rel : static_cast<Quad>(2)) +
+                        EQ3_FACTOR_ULPS * QUAD_EPS * 2 * q_sin(theta / 2);
+            }
         }
         const Quad two_pi = static_cast<Quad>(6.283185307179586476925286766559L);
         *value = static_cast<R>(q_abs(S) / two_pi);
@@ -1353,7 +1447,7 @@ class Core {
             if (node == OUT) {
                 ++st.visible;
                 R val, bnd;
-                integrate(w.q, f, n, &val, &bnd);
+                integrate(w.q, f, n, &val, &bnd, st.eq3 ? &st : nullptr);
                 bool refined = false;
                 if (receives && st.rtol > 0) {
                     // the second tier where the sums' rounding or the vertices' errors
@@ -1362,7 +1456,7 @@ class Core {
                     if (bnd + charges > st.rtol * val) {
                         refine(w.q, f, pp, xp, qdirs, qerrs);
                         R qv, qb;
-                        integrate_quad(qdirs, st.normal, &qv, &qb);
+                        integrate_quad(qdirs, st.normal, &qv, &qb, st.eq3);
                         ++st.quad_pieces;
                         const R qcharges = charge_edges(w.q, src, E, st, &qerrs, false);
                         if (qb + qcharges < bnd + charges) {
@@ -1660,7 +1754,9 @@ PYBIND11_MODULE(_svbsp, m) {
                       py::array_t<int64_t, py::array::c_style | py::array::forcecast>,
                       int64_t, double, double, double, double,
                       py::array_t<double, py::array::c_style | py::array::forcecast>>())
-        .def("row", &Core::row)
+        .def("row", &Core::row, py::arg("point"), py::arg("normal"), py::arg("node_side"),
+             py::arg("source_side"), py::arg("two_sided"), py::arg("cull"),
+             py::arg("box_budget"), py::arg("tiles"), py::arg("rtol"), py::arg("eq3") = false)
         .def_property_readonly("nodes", &Core::nodes)
         .def_property_readonly("pieces", &Core::pieces)
         .def_property_readonly("unit_roundoff", &Core::unit_roundoff);

@@ -3,7 +3,8 @@
 The BSP tree of :mod:`exactff.visibility.bsp` (its compiled build) orders the fragments
 front to back; the compiled core (``_svbsp.cpp``, C++ through pybind11) keeps the
 covered region as a shadow-volume BSP tree (planes through the point, Chin & Feiner
-1989), filters each convex fragment down it, integrates the visible pieces with the sector form, and
+1989), filters each convex fragment down it, integrates the visible pieces with the sector form
+(or the paper's Eq. 3 in its stable form), and
 skips every BSP subtree whose bounding box is already covered. The row runs without
 the GIL. Values whose bound misses the requested tolerance are recomputed by the
 Python engine (:func:`exactff.visibility.visible_form_factors`), which refines and
@@ -229,7 +230,7 @@ def _shadow_tiles(n):
 
 
 def compiled_form_factors(scene, point, normal, *, two_sided=False, stats=None,
-                          shortcuts=True, tolerance=None, error=False):
+                          shortcuts=True, tolerance=None, error=False, integrator="sector"):
     """Exact form factors with occlusion from one point to every polygon of a scene, by
     the compiled core.
 
@@ -297,6 +298,12 @@ def compiled_form_factors(scene, point, normal, *, two_sided=False, stats=None,
         the tolerance by those parts alone is returned with that bound, unchecked.
     error : bool, default False
         Also return each value's bound.
+    integrator : {"sector", "eq3"}, default "sector"
+        How the core integrates visible pieces, in both of its precisions: the sector
+        form, or the paper's Eq. 3 (corrected, monotone spans) in its stable form
+        (:func:`exactff.kernel.eq3_ring_sums`); the pieces, the vertices' and edges'
+        charges and the quadruple-precision tier are the same. The paths that leave
+        the core (the convex-scene shortcut, the fallback) use the same integrator.
 
     Returns
     -------
@@ -314,6 +321,12 @@ def compiled_form_factors(scene, point, normal, *, two_sided=False, stats=None,
     p = np.asarray(point, dtype=float)
     flat = flat_polygons(scene)
     side, band = engine_sides(flat, p)
+    if shortcuts and is_convex_enclosure(scene) and np.all(side >= 0) and integrator == "eq3":
+        # no occlusion, Eq. 3: the Python engine's convex-scene path, which integrates
+        # whole polygons with it and escalates
+        return visible_form_factors(scene, p, normal, two_sided=two_sided, stats=st,
+                                    shortcuts=shortcuts, tolerance=tolerance, error=error,
+                                    integrator=integrator)
     if shortcuts and is_convex_enclosure(scene) and np.all(side >= 0):
         # no occlusion: the unoccluded kernel (compiled sector sums) with its ladder,
         # straight from here, as the Python engine's convex-scene path has it
@@ -325,7 +338,8 @@ def compiled_form_factors(scene, point, normal, *, two_sided=False, stats=None,
     F, E, band, crossing, counters = core.row(p, np.asarray(normal, dtype=float), node_side,
                                     side.astype(np.int8), bool(two_sided), bool(shortcuts),
                                     tol.SVBSP_BOX_BUDGET, _shadow_tiles(len(scene)),
-                                    0.0 if tolerance is None else float(tolerance))
+                                    0.0 if tolerance is None else float(tolerance),
+                                    integrator == "eq3")
     check_finite(F, E)
     check_finite(band)
     check_finite(crossing)
@@ -350,7 +364,7 @@ def compiled_form_factors(scene, point, normal, *, two_sided=False, stats=None,
                 # the Python engine (it refines and escalates) for these values only
                 G, H = visible_form_factors(scene, p, normal, two_sided=two_sided, stats={},
                                             shortcuts=shortcuts, tolerance=tolerance,
-                                            error=True)
+                                            error=True, integrator=integrator)
                 F, E = F.copy(), E.copy()
                 F[missed], E[missed] = G[missed], H[missed]
                 st["python_polygons"] = int(len(missed))

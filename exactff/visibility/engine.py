@@ -91,12 +91,11 @@ def visible_form_factors(scene, point, normal, *, two_sided=False, stats=None,
         testing that they never change a result).
     integrator : {"sector", "eq3"}, default "sector"
         How visible pieces (and, on the convex-scene path, whole polygons) are
-        integrated: Lambert's sector form (vectorised, with escalation) or the paper's
-        Eq. 3, corrected, with monotone-span splitting (one ring at a time, no
-        escalation). Eq. 3's values are neither refined nor escalated, but they are
-        checked against ``tolerance`` as the sector form's are: one that misses it
-        raises :class:`exactff.NumericalError` suggesting ``integrator="sector"``
-        (unless ``error=True``).
+        integrated: Lambert's sector form or the paper's Eq. 3, corrected, with
+        monotone-span splitting, in its stable form
+        (:func:`exactff.kernel.eq3_ring_sums`). Both are vectorised, refined and
+        escalated alike (long double, then mpmath: Eq. 3 at every tier) and checked
+        against ``tolerance``.
 
     error : bool, default False
         Also return a bound on each value's error: the rounding of its integration
@@ -112,8 +111,8 @@ def visible_form_factors(scene, point, normal, *, two_sided=False, stats=None,
     Raises
     ------
     NumericalError
-        A value missed ``tolerance`` after refinement and escalation (or with
-        ``integrator="eq3"``, which has neither), and ``error`` is False; a value fell
+        A value missed ``tolerance`` after refinement and escalation, and ``error`` is
+        False; a value fell
         below 0 beyond its bound; a value or bound came out NaN.
     """
     st = stats if stats is not None else {}
@@ -127,7 +126,7 @@ def visible_form_factors(scene, point, normal, *, two_sided=False, stats=None,
         st["path"] = "unoccluded"
         if integrator == "eq3":
             FE = np.array([(0.0, 0.0) if s == 0 else eq3_form_factor(
-                p, normal, P, two_sided=two_sided, error=True)
+                p, normal, P, two_sided=two_sided, tolerance=tolerance, error=True)
                 for P, s in zip(scene.polygons, side)])
             if not error:
                 _require_tolerance(FE[:, 0], FE[:, 1], tolerance, integrator, st)
@@ -221,18 +220,14 @@ def _require_tolerance(F, E, tolerance, integrator, st):
     """Raise :class:`NumericalError` for the first polygon of a row whose bound misses
     ``tolerance`` (:func:`exactff.errors.misses_tolerance`, the criterion of the
     unoccluded path's last tier), after everything the row could do: refinement and
-    escalation with the sector form, nothing more with Eq. 3."""
+    escalation, with either integrator."""
     if tolerance is None:
         return
     bad = np.flatnonzero(misses_tolerance(F, E, tolerance))
     if not len(bad):
         return
     i = int(bad[0])
-    if integrator == "eq3":
-        why = ("with integrator='eq3', which neither refines nor escalates "
-               f"({st.get('path', 'clipper')} path)")
-        hint = "integrator='sector' (the default) refines and escalates"
-    elif st.get("path") == "clipper":
+    if st.get("path") == "clipper":
         why = "after refining its visible pieces"
         if st.get("unrefined_rings"):
             why += f" ({st['unrefined_rings']} ring(s) of the row could not be refined)"
@@ -242,6 +237,8 @@ def _require_tolerance(F, E, tolerance, integrator, st):
         hint = ""
     else:
         why, hint = "", ""
+    if integrator == "eq3":
+        why += " (integrator='eq3')"
     raise tolerance_missed(f"polygon {i}", F[i], E[i], tolerance, why, hint)
 
 

@@ -1,13 +1,13 @@
 """Integration of visible pieces: each piece's rings lifted from its chart to exact
-great-circle arcs and integrated by the sector form (or Eq. 3), with refinement and
-long double where a bound misses the tolerance; or measured by their solid angles (the
+great-circle arcs and integrated by the sector form (or Eq. 3's stable form), with
+refinement, long double and mpmath where a bound misses the tolerance; or measured by their solid angles (the
 spherical factors)."""
 
 import numpy as np
 import shapely
 
 from .. import _tolerances as tol
-from ..kernel import TWO_PI, clipped_sector_sums, eq3_ring_area, solid_angle_sums
+from ..kernel import TWO_PI, clipped_sector_sums, eq3_ring_sums, solid_angle_sums
 from ..rings import polygon_parts, repack, shapely_rings
 from .charts import CHARTS, lift
 
@@ -38,8 +38,8 @@ def pieces_form_factors(pieces, m, tolerance=None, owner=None, integrator="secto
     orientation.
 
     ``integrator="eq3"`` integrates every ring with the paper's Eq. 3 (corrected, with
-    monotone-span splitting; :func:`exactff.kernel.eq3_ring_area`) instead, one ring
-    at a time; it is neither refined nor escalated.
+    monotone-span splitting) in its stable form instead
+    (:func:`exactff.kernel.eq3_ring_sums`, in the same offset form), at every tier.
 
     Each estimate is the rounding of the ring's sum (``C1 u`` times its absolute terms,
     as in the kernel) plus the clipper's geometry: the ring's perimeter in chart units
@@ -75,6 +75,8 @@ def pieces_form_factors(pieces, m, tolerance=None, owner=None, integrator="secto
     err = np.zeros(m)
     if not pieces:
         return F, err
+    # twice the signed image area of rings in offset form: the sector form or Eq. 3
+    ring_sums = eq3_ring_sums if integrator == "eq3" else clipped_sector_sums
     charts = []
     for ci, chart in enumerate(CHARTS):
         sel = [(k, g) for k, c, g in pieces if c == ci]
@@ -87,15 +89,10 @@ def pieces_form_factors(pieces, m, tolerance=None, owner=None, integrator="secto
             continue
         coords, ring_of, start, count, nxt, is_hole, ring_poly = shapely_rings(polys)
         D = lift(coords, chart)
-        if integrator == "eq3":
-            res = np.array([eq3_ring_area(D[a:a + c]) for a, c in zip(start, count)])
-            val = np.abs(res[:, 0]) / np.pi
-            e_ring = tol.C1 * tol.EPS * res[:, 1] / np.pi
-        else:
-            A0 = D[start]
-            S, mags, errs = clipped_sector_sums(A0, D - A0[ring_of], nxt, ring_of, len(start))
-            val = np.abs(S) / TWO_PI
-            e_ring = (tol.C1 * tol.EPS * mags + errs) / TWO_PI
+        A0 = D[start]
+        S, mags, errs = ring_sums(A0, D - A0[ring_of], nxt, ring_of, len(start))
+        val = np.abs(S) / TWO_PI
+        e_ring = (tol.C1 * tol.EPS * mags + errs) / TWO_PI
         # the clipper's geometry: every vertex within CHART_VERTEX_ERROR of its place
         perimeter = np.bincount(ring_of, weights=np.hypot(*(coords[nxt] - coords).T),
                                 minlength=len(start))
@@ -125,7 +122,7 @@ def pieces_form_factors(pieces, m, tolerance=None, owner=None, integrator="secto
         c["over_val"][g] = np.where(agree, total, v[g])
         c["over_err"][g] = np.where(agree, est, e[g] + diff)
 
-    if tolerance is not None and integrator != "eq3" and refiner is not None and charts:
+    if tolerance is not None and refiner is not None and charts:
         group = np.arange(m) if owner is None else np.asarray(owner)
         ng = group.max() + 1
 
@@ -158,7 +155,8 @@ def pieces_form_factors(pieces, m, tolerance=None, owner=None, integrator="secto
             frag_v = c["frag"][c["geom"][rsel]][ring_sub]
             with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
                 rv, re, ok, lab = refiner.refine_ld(c["ci"], c["chart"], c["coords"][vsel],
-                                                    nxt_sub, ring_sub, len(rsel), frag_v)
+                                                    nxt_sub, ring_sub, len(rsel), frag_v,
+                                                    integrator=integrator)
             labels[-1] = (rsel, None if lab is None else (vsel, st_sub, lab, ok))
             st["refined_rings"] += int(ok.sum())
             st["unrefined_rings"] += int((~ok).sum())
@@ -189,7 +187,7 @@ def pieces_form_factors(pieces, m, tolerance=None, owner=None, integrator="secto
                     sl = slice(a, a + cnt)
                     rv, re, converged = refiner.refine_mp(
                         c["chart"], c["coords"][vsel[sl]], label[sl], statics, point[sl],
-                        drop[sl], cut[k], tolerance)
+                        drop[sl], cut[k], tolerance, integrator=integrator)
                     # stopped at MP_MAX_DPS: the difference of its last two evaluations
                     # is its estimate, which the caller checks with the others
                     st["refine_mp_unconverged"] += int(not converged)

@@ -39,7 +39,8 @@ import shapely
 
 from .. import _tolerances as tol
 from ..geometry import mp_receiver_frame, receiver_frame
-from ..kernel import clipped_sector_sums
+from ..kernel import clipped_sector_sums, eq3_ring_sums
+from ..kernel.eq3 import mp_eq3_sum
 from ..kernel.flat import flat_polygons
 from ..kernel.ladder import mp_converge, mp_sector_sum
 from ..rings import successors
@@ -420,8 +421,9 @@ class Refiner:
             point[hit] = X[hit]
         return prev, same, point, A, B
 
-    def refine_ld(self, ci, chart, coords, nxt, ring_of, n_rings, frag):
-        """Refined rings of chart ``ci`` in long double.
+    def refine_ld(self, ci, chart, coords, nxt, ring_of, n_rings, frag, integrator="sector"):
+        """Refined rings of chart ``ci`` in long double, integrated by the sector form or
+        (``integrator="eq3"``) Eq. 3's stable form.
 
         Parameters
         ----------
@@ -510,8 +512,9 @@ class Refiner:
         nx2 = successors(np.append(st, len(kv)))
         Xk = X[kv]
         A0 = Xk[st]
-        S, mags, errs = clipped_sector_sums(A0, Xk - A0[ridx], nx2, ridx, len(rings),
-                                             eps=tol.LONGDOUBLE_EPS)
+        ring_sums = eq3_ring_sums if integrator == "eq3" else clipped_sector_sums
+        S, mags, errs = ring_sums(A0, Xk - A0[ridx], nx2, ridx, len(rings),
+                                  eps=tol.LONGDOUBLE_EPS)
         v = np.abs(S) / (2 * np.pi)                 # long double: summed per piece
         # the vertices' geometry: each refined edge (the arc through its two computed
         # end points) is off its input plane by its end points' residuals (measured),
@@ -531,8 +534,10 @@ class Refiner:
         val[deg], est[deg] = 0.0, 0.0
         return val, est, ok_ring, labels
 
-    def refine_mp(self, chart, coords, label, statics, point, drop, cut, tolerance):
-        """One refined ring in mpmath (labels from :meth:`refine_ld`): planes and
+    def refine_mp(self, chart, coords, label, statics, point, drop, cut, tolerance,
+                  integrator="sector"):
+        """One refined ring in mpmath (labels from :meth:`refine_ld`), integrated by the
+        sector form or (``integrator="eq3"``) Eq. 3's stable form: planes and
         vertices from the input at the working precision, evaluated at two precisions
         20 digits apart, raised until they agree to ``tolerance``. Returns the absolute
         form factor of its image (an mpf, to be summed per piece before rounding), its
@@ -600,7 +605,8 @@ class Refiner:
                     if sum(float(x[j]) * Dflt[i, j] for j in range(3)) < 0:
                         x = [-c for c in x]
                     X.append(x)
-                return abs(mp_sector_sum(X)) / (2 * mp.pi) if len(X) >= 3 else mp.mpf(0)
+                ring_sum = mp_eq3_sum if integrator == "eq3" else mp_sector_sum
+                return abs(ring_sum(X)) / (2 * mp.pi) if len(X) >= 3 else mp.mpf(0)
 
         hi, diff, converged = mp_converge(evaluate, tolerance)
         return hi, float(diff) + cut, converged
