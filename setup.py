@@ -1,6 +1,6 @@
-"""Build of the compiled visibility core (exactff.visibility._svbsp) and of the area
-code's hidden regions (exactff.area._hidden); the rest of the
-project's metadata is in pyproject.toml."""
+"""Build of the compiled visibility core (exactff.visibility._svbsp), of the area
+code's hidden regions (exactff.area._hidden) and of the discrete methods' z-buffer
+(exactff.methods._zbuffer); the rest of the project's metadata is in pyproject.toml."""
 
 import platform
 
@@ -18,6 +18,10 @@ setup(
                                    cxx_std=17, extra_compile_args=["-O2"],
                                    extra_link_args=QUADMATH),
                  Pybind11Extension("exactff.area._hidden", ["exactff/area/_hidden.cpp"],
-                                   cxx_std=17, extra_compile_args=["-O3", "-fno-math-errno"])],
+                                   cxx_std=17, extra_compile_args=["-O3", "-fno-math-errno"]),
+                 # no contraction into fused multiply-adds: the z-buffer mirrors the numpy
+                 # rasteriser's expressions bit for bit
+                 Pybind11Extension("exactff.methods._zbuffer", ["exactff/methods/_zbuffer.cpp"],
+                                   cxx_std=17, extra_compile_args=["-O2", "-ffp-contract=off"])],
     cmdclass={"build_ext": build_ext},
 )

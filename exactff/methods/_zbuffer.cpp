@@ -1,0 +1,418 @@
+// The compiled z-buffer of the discrete methods (issue 55): scan conversion of
+// polygons already clipped and projected onto a method's planar face, and the depth
+// buffer, one row at a time.
+//
+// It does what the numpy rasteriser does (exactff/methods/_raster.py,
+// rasterise_face, and exactff/methods/_sampling.py, resolve_depths), cell for cell,
+// so that the numpy code stays its test oracle:
+//
+// - scanlines at the face's row centres within each polygon's extent; an edge
+//   crosses a scanline y when exactly one end point is above it ("at or below" to
+//   "above"), and the crossing is evaluated from the edge's lower end point,
+//   x = a_x + (y - a_y) (c_x - a_x) / (c_y - a_y), so that an edge shared by two
+//   polygons gives the same crossing in both; crossings sorted, spans [x1, x2),
+//   [x3, x4), ... of cell centres (even-odd rule);
+// - the depth along a cell's direction d, t = n . (c - p) / (n . d); of the polygons
+//   at the nearest depth and those tied with them (coplanar by the BSP tree's rule,
+//   exactff.predicates.coplanar_pairs), the one of lowest tie priority
+//   (exactff.predicates.tie_priority);
+// - candidates are resolved in the same chunks as the numpy code (PAIR_CHUNK
+//   polygon-scanline pairs, DEPTH_CHUNK candidates), with the same rule inside a
+//   chunk and across chunks, so that even a depth tie that is not transitive (three
+//   polygons, two pairs coplanar) resolves identically;
+// - every floating-point expression in the numpy order (numpy's einsum over three
+//   components adds the first and third products, then the second).
+//
+// The work runs without the GIL.
+
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <stdexcept>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+namespace py = pybind11;
+
+namespace {
+
+using i64 = std::int64_t;
+constexpr double INF = std::numeric_limits<double>::infinity();
+// unit roundoff (exactff._tolerances.EPS)
+constexpr double EPS = 1.1102230246251565e-16;
+
+// numpy's einsum("ij,ij->i") over three components: (x0 y0 + x2 y2) + x1 y1
+inline double dot3(const double* a, const double* b) {
+    return (a[0] * b[0] + a[2] * b[2]) + a[1] * b[1];
+}
+
+inline double absdot3(const double* a, const double* b) {
+    return (std::fabs(a[0]) * std::fabs(b[0]) + std::fabs(a[2]) * std::fabs(b[2]))
+           + std::fabs(a[1]) * std::fabs(b[1]);
+}
+
+class ZBuffer {
+  public:
+    // D (C, 3) cell directions, Dnorm (C,) their norms (np.linalg.norm, passed in so
+    // that they are numpy's); nl (L, 3), dl (L,), band (L,), prio (L,) the live
+    // polygons' depth data (ZBufferRow); V, offsets, N, Dp, ids the scene's polygons
+    // and planes and the live polygons' scene indices (the coplanar rule);
+    // coplanar_ulps: exactff._tolerances.BSP_COPLANAR_ULPS; tie_slack_ulps:
+    // ZBUFFER_ROUNDING_ULPS + 1.
+    ZBuffer(py::array_t<double, py::array::c_style | py::array::forcecast> D,
+            py::array_t<double, py::array::c_style | py::array::forcecast> Dnorm,
+            py::array_t<double, py::array::c_style | py::array::forcecast> nl,
+            py::array_t<double, py::array::c_style | py::array::forcecast> dl,
+            py::array_t<double, py::array::c_style | py::array::forcecast> band,
+            py::array_t<i64, py::array::c_style | py::array::forcecast> prio,
+            py::array_t<double, py::array::c_style | py::array::forcecast> V,
+            py::array_t<i64, py::array::c_style | py::array::forcecast> offsets,
+            py::array_t<double, py::array::c_style | py::array::forcecast> N,
+            py::array_t<double, py::array::c_style | py::array::forcecast> Dp,
+            py::array_t<i64, py::array::c_style | py::array::forcecast> ids,
+            double coplanar_ulps, double tie_slack_ulps)
+        : D_(D), Dnorm_(Dnorm), nl_(nl), dl_(dl), band_(band), prio_(prio), V_(V),
+          offsets_(offsets), N_(N), Dp_(Dp), ids_(ids), coplanar_ulps_(coplanar_ulps),
+          tie_slack_ulps_(tie_slack_ulps) {
+        if (D.ndim() != 2 || D.shape(1) != 3)
+            throw std::invalid_argument("D must have shape (C, 3)");
+        n_cells_ = D.shape(0);
+        n_live_ = dl.shape(0);
+        if (Dnorm.shape(0) != n_cells_)
+            throw std::invalid_argument("Dnorm must have shape (C,)");
+        if (nl.ndim() != 2 || nl.shape(0) != n_live_ || nl.shape(1) != 3 ||
+            band.shape(0) != n_live_ || prio.shape(0) != n_live_ || ids.shape(0) != n_live_)
+            throw std::invalid_argument("nl, dl, band, prio, ids: one row per live polygon");
+        if (V.ndim() != 2 || V.shape(1) != 3 || N.ndim() != 2 || N.shape(1) != 3 ||
+            offsets.shape(0) != N.shape(0) + 1 || Dp.shape(0) != N.shape(0))
+            throw std::invalid_argument("V, offsets, N, Dp: the scene's polygons and planes");
+        t_min_.assign(n_cells_, INF);
+        near_.assign(n_cells_, -1);
+        p_min_.assign(n_cells_, std::numeric_limits<i64>::max());
+        pick_.assign(n_cells_, -1);
+        mark_.assign(n_cells_, 0);
+    }
+
+    // Scan-convert M polygons on a face and depth-test them into (best_t, best).
+    // UV (M, K, 2): face coordinates, padded by repeating the last vertex; scanlines
+    // along UV[..., 0] at centres uc, spans along UV[..., 1] over centres vc;
+    // cl (M,) vertex counts; src (M,) live indices; table (len(uc), len(vc)) the
+    // layout's cell of each grid cell (-1: none).
+    void face(py::array_t<double, py::array::c_style | py::array::forcecast> UV,
+              py::array_t<i64, py::array::c_style | py::array::forcecast> cl,
+              py::array_t<i64, py::array::c_style | py::array::forcecast> src,
+              py::array_t<double, py::array::c_style | py::array::forcecast> uc,
+              py::array_t<double, py::array::c_style | py::array::forcecast> vc,
+              py::array_t<i64, py::array::c_style | py::array::forcecast> table,
+              py::array best_t, py::array best, i64 pair_chunk,
+              i64 depth_chunk) {
+        if (UV.ndim() != 3 || UV.shape(2) != 2)
+            throw std::invalid_argument("UV must have shape (M, K, 2)");
+        const i64 M = UV.shape(0), K = UV.shape(1);
+        if (cl.shape(0) != M || src.shape(0) != M)
+            throw std::invalid_argument("cl and src must have shape (M,)");
+        const i64 nu = uc.shape(0), nv = vc.shape(0);
+        if (table.ndim() != 2 || table.shape(0) != nu || table.shape(1) != nv)
+            throw std::invalid_argument("table must have shape (len(uc), len(vc))");
+        check_buffer(best_t, best);
+        const double* uv = UV.data();
+        const i64* c = cl.data();
+        const i64* s = src.data();
+        const double* u = uc.data();
+        const double* v = vc.data();
+        const i64* tab = table.data();
+        double* bt = static_cast<double*>(best_t.mutable_data());
+        i64* bs = static_cast<i64*>(best.mutable_data());
+        for (i64 m = 0; m < M; ++m) {
+            if (s[m] < 0 || s[m] >= n_live_)
+                throw std::invalid_argument("src out of range");
+            if (c[m] > K) throw std::invalid_argument("cl exceeds K");
+        }
+        py::gil_scoped_release release;
+        // the numpy code's chunks: (polygon, scanline) pairs by PAIR_CHUNK // K
+        const i64 step = std::max<i64>(1, pair_chunk / std::max<i64>(K, 1));
+        i64 pairs_in_chunk = 0;
+        std::vector<double> X;
+        X.reserve(static_cast<size_t>(K));
+        cells_.clear();
+        srcs_.clear();
+        for (i64 m = 0; m < M; ++m) {
+            const double* P = uv + m * K * 2;
+            const i64 n = c[m];
+            // the scanlines whose centre lies in [min y, max y] (none if a coordinate
+            // is NaN, as numpy's min and searchsorted have it)
+            double lo = INF, hi = -INF;
+            bool nan = false;
+            for (i64 e = 0; e < K; ++e) {
+                const double y = P[2 * e];
+                if (std::isnan(y)) nan = true;
+                lo = std::min(lo, y);
+                hi = std::max(hi, y);
+            }
+            if (nan) continue;
+            const i64 j0 = std::lower_bound(u, u + nu, lo) - u;
+            const i64 j1 = std::upper_bound(u, u + nu, hi) - u;
+            for (i64 r = j0; r < j1; ++r) {
+                const double y = u[r];
+                X.clear();
+                for (i64 e = 0; e < n; ++e) {
+                    const double* a = P + 2 * e;
+                    const double* b = P + 2 * ((e + 1) % n);
+                    if ((a[0] > y) == (b[0] > y)) continue;
+                    // from the lower end point, whichever way the edge runs
+                    if (a[0] > b[0]) std::swap(a, b);
+                    const double x = a[1] + (y - a[0]) * (b[1] - a[1]) / (b[0] - a[0]);
+                    if (!std::isnan(x)) X.push_back(x);
+                }
+                std::sort(X.begin(), X.end());
+                const size_t npairs = std::min<size_t>(X.size() / 2, static_cast<size_t>(K / 2));
+                for (size_t k = 0; k < npairs; ++k) {
+                    const i64 ia = std::lower_bound(v, v + nv, X[2 * k]) - v;
+                    const i64 ib = std::lower_bound(v, v + nv, X[2 * k + 1]) - v;
+                    for (i64 col = ia; col < ib; ++col) {
+                        const i64 cell = tab[r * nv + col];
+                        if (cell < 0) continue;
+                        cells_.push_back(cell);
+                        srcs_.push_back(s[m]);
+                        if (static_cast<i64>(cells_.size()) == depth_chunk) flush(bt, bs);
+                    }
+                }
+                if (++pairs_in_chunk == step) {
+                    flush(bt, bs);
+                    pairs_in_chunk = 0;
+                }
+            }
+        }
+        flush(bt, bs);
+    }
+
+    // Depth-test candidate (cell, live polygon) pairs, in chunks of depth_chunk.
+    void candidates(py::array_t<i64, py::array::c_style | py::array::forcecast> cell,
+                    py::array_t<i64, py::array::c_style | py::array::forcecast> src,
+                    py::array best_t, py::array best, i64 depth_chunk) {
+        check_buffer(best_t, best);
+        const i64 n = cell.shape(0);
+        if (src.shape(0) != n) throw std::invalid_argument("cell and src differ in length");
+        const i64* c = cell.data();
+        const i64* s = src.data();
+        for (i64 k = 0; k < n; ++k)
+            if (c[k] < 0 || c[k] >= n_cells_ || s[k] < 0 || s[k] >= n_live_)
+                throw std::invalid_argument("cell or src out of range");
+        double* bt = static_cast<double*>(best_t.mutable_data());
+        i64* bs = static_cast<i64*>(best.mutable_data());
+        py::gil_scoped_release release;
+        cells_.clear();
+        srcs_.clear();
+        for (i64 k = 0; k < n; ++k) {
+            cells_.push_back(c[k]);
+            srcs_.push_back(s[k]);
+            if (static_cast<i64>(cells_.size()) == depth_chunk) flush(bt, bs);
+        }
+        flush(bt, bs);
+    }
+
+    // whether live polygons a[k] and b[k] are coplanar (the BSP tree's rule)
+    py::array_t<bool> coplanar_many(py::array_t<i64, py::array::c_style | py::array::forcecast> a,
+                                    py::array_t<i64, py::array::c_style | py::array::forcecast> b) {
+        const i64 n = a.shape(0);
+        py::array_t<bool> out(n);
+        bool* o = out.mutable_data();
+        for (i64 k = 0; k < n; ++k) o[k] = coplanar(a.data()[k], b.data()[k]);
+        return out;
+    }
+
+  private:
+    void check_buffer(const py::array& best_t, const py::array& best) const {
+        if (!best_t.dtype().is(py::dtype::of<double>()) || !best.dtype().is(py::dtype::of<i64>()))
+            throw std::invalid_argument("best_t and best must be float64 and int64");
+        if (best_t.ndim() != 1 || best_t.shape(0) != n_cells_ || best.ndim() != 1 ||
+            best.shape(0) != n_cells_)
+            throw std::invalid_argument("best_t and best must have shape (C,)");
+        if (!(best_t.flags() & py::array::c_style) || !(best.flags() & py::array::c_style) ||
+            !best_t.writeable() || !best.writeable())
+            throw std::invalid_argument("best_t and best must be writeable and contiguous");
+    }
+
+    // every vertex of polygon q (scene index) within the near-coplanar band of p's
+    // plane: |n . x - d| <= BSP_COPLANAR_ULPS u (|n| . |x| + |d|)
+    bool within(i64 p, i64 q) const {
+        const double* n = N_.data() + 3 * p;
+        const double d = Dp_.data()[p];
+        const i64* off = offsets_.data();
+        const double* V = V_.data();
+        const double w = coplanar_ulps_ * EPS;
+        for (i64 i = off[q]; i < off[q + 1]; ++i) {
+            const double* x = V + 3 * i;
+            const double mag = absdot3(x, n) + std::fabs(d);
+            if (!(std::fabs(dot3(x, n) - d) <= w * mag)) return false;
+        }
+        return true;
+    }
+
+    // exactff.predicates.coplanar_pairs for live polygons (cached per pair)
+    bool coplanar(i64 a, i64 b) {
+        const i64 lo = std::min(a, b), hi = std::max(a, b);
+        const std::uint64_t key = (static_cast<std::uint64_t>(lo) << 32) | static_cast<std::uint64_t>(hi);
+        // neighbouring cells mostly ask about the same pair
+        if (key == last_key_) return last_value_;
+        auto it = cache_.find(key);
+        bool r;
+        if (it != cache_.end()) {
+            r = it->second;
+        } else {
+            const i64 pa = ids_.data()[a], pb = ids_.data()[b];
+            r = within(pa, pb) || within(pb, pa);
+            cache_.emplace(key, r);
+        }
+        last_key_ = key;
+        last_value_ = r;
+        return r;
+    }
+
+    // resolve_depths on the buffered candidates
+    void flush(double* best_t, i64* best) {
+        const size_t n0 = cells_.size();
+        if (n0 == 0) return;
+        const double* D = D_.data();
+        const double* Dn = Dnorm_.data();
+        const double* nl = nl_.data();
+        const double* dl = dl_.data();
+        const double* band = band_.data();
+        const i64* prio = prio_.data();
+        // depths; a ray along its polygon's plane hits nothing
+        cand_t_.resize(n0);
+        cand_den_.resize(n0);
+        size_t n = 0;
+        for (size_t k = 0; k < n0; ++k) {
+            const i64 cell = cells_[k], s = srcs_[k];
+            const double den = dot3(nl + 3 * s, D + 3 * cell);
+            const double t = dl[s] / den;
+            if (!std::isfinite(t)) continue;
+            cells_[n] = cell;
+            srcs_[n] = s;
+            cand_t_[n] = t;
+            cand_den_[n] = den;
+            ++n;
+        }
+        // the nearest depth per cell
+        touched_.clear();
+        for (size_t k = 0; k < n; ++k) {
+            const i64 cell = cells_[k];
+            if (!mark_[cell]) {
+                mark_[cell] = 1;
+                touched_.push_back(cell);
+            }
+            if (cand_t_[k] < t_min_[cell]) t_min_[cell] = cand_t_[k];
+        }
+        // one of the polygons at the nearest depth (the last, as numpy's assignment)
+        tied_.assign(n, 0);
+        for (size_t k = 0; k < n; ++k) {
+            if (cand_t_[k] == t_min_[cells_[k]]) {
+                tied_[k] = 1;
+                near_[cells_[k]] = srcs_[k];
+            }
+        }
+        // ties: within four times the tie test's band of the nearest depth, and
+        // coplanar with the polygon there
+        const double slack_ulps = tie_slack_ulps_;
+        for (size_t k = 0; k < n; ++k) {
+            if (tied_[k]) continue;
+            const i64 cell = cells_[k], s = srcs_[k];
+            const double t_near = t_min_[cell];
+            const double slack = 4.0 * (band[s] + EPS * (slack_ulps * std::fabs(t_near) * Dn[cell]
+                                                         + std::fabs(dl[s])));
+            if (std::fabs(t_near - cand_t_[k]) * std::fabs(cand_den_[k]) <= slack)
+                tied_[k] = coplanar(near_[cell], s) ? 1 : 0;
+        }
+        // of the tied polygons, the one of lowest priority (priorities are distinct
+        // per polygon, and a polygon is a candidate of a cell once in a chunk)
+        for (size_t k = 0; k < n; ++k)
+            if (tied_[k]) {
+                const i64 p = prio[srcs_[k]];
+                if (p < p_min_[cells_[k]]) {
+                    p_min_[cells_[k]] = p;
+                    pick_[cells_[k]] = srcs_[k];
+                }
+            }
+        // merge with the cells' best so far: the nearer wins unless the other is
+        // coplanar with it and of lower priority
+        for (const i64 cell : touched_) {
+            const i64 s = pick_[cell];
+            if (s >= 0) {
+                const double t = t_min_[cell];
+                const i64 old = best[cell];
+                const bool has_old = old >= 0;
+                const bool new_nearer = t < best_t[cell];
+                bool take;
+                if (!has_old)
+                    take = true;
+                else if (new_nearer)
+                    take = prio[s] < prio[old] || !coplanar(old, s);
+                else
+                    take = prio[s] < prio[old] && coplanar(s, old);
+                if (t < best_t[cell]) best_t[cell] = t;
+                if (take) best[cell] = s;
+            }
+            mark_[cell] = 0;
+            t_min_[cell] = INF;
+            near_[cell] = -1;
+            p_min_[cell] = std::numeric_limits<i64>::max();
+            pick_[cell] = -1;
+        }
+        cells_.clear();
+        srcs_.clear();
+    }
+
+    py::array_t<double, py::array::c_style | py::array::forcecast> D_, Dnorm_, nl_, dl_, band_;
+    py::array_t<i64, py::array::c_style | py::array::forcecast> prio_;
+    py::array_t<double, py::array::c_style | py::array::forcecast> V_;
+    py::array_t<i64, py::array::c_style | py::array::forcecast> offsets_;
+    py::array_t<double, py::array::c_style | py::array::forcecast> N_, Dp_;
+    py::array_t<i64, py::array::c_style | py::array::forcecast> ids_;
+    double coplanar_ulps_, tie_slack_ulps_;
+    i64 n_cells_ = 0, n_live_ = 0;
+    // candidates of the current chunk
+    std::vector<i64> cells_, srcs_;
+    std::vector<double> cand_t_, cand_den_;
+    std::vector<char> tied_;
+    // per-cell scratch of a chunk (reset after it)
+    std::vector<double> t_min_;
+    std::vector<i64> near_, p_min_, pick_, touched_;
+    std::vector<char> mark_;
+    std::unordered_map<std::uint64_t, bool> cache_;
+    std::uint64_t last_key_ = ~std::uint64_t(0);
+    bool last_value_ = false;
+};
+
+}  // namespace
+
+PYBIND11_MODULE(_zbuffer, m) {
+    m.doc() = "The compiled z-buffer of the discrete methods: scan conversion and depth test.";
+    py::class_<ZBuffer>(m, "ZBuffer")
+        .def(py::init<py::array_t<double, py::array::c_style | py::array::forcecast>,
+                      py::array_t<double, py::array::c_style | py::array::forcecast>,
+                      py::array_t<double, py::array::c_style | py::array::forcecast>,
+                      py::array_t<double, py::array::c_style | py::array::forcecast>,
+                      py::array_t<double, py::array::c_style | py::array::forcecast>,
+                      py::array_t<i64, py::array::c_style | py::array::forcecast>,
+                      py::array_t<double, py::array::c_style | py::array::forcecast>,
+                      py::array_t<i64, py::array::c_style | py::array::forcecast>,
+                      py::array_t<double, py::array::c_style | py::array::forcecast>,
+                      py::array_t<double, py::array::c_style | py::array::forcecast>,
+                      py::array_t<i64, py::array::c_style | py::array::forcecast>, double,
+                      double>(),
+             py::arg("D"), py::arg("Dnorm"), py::arg("nl"), py::arg("dl"), py::arg("band"),
+             py::arg("prio"), py::arg("V"), py::arg("offsets"), py::arg("N"), py::arg("Dp"),
+             py::arg("ids"), py::arg("coplanar_ulps"), py::arg("tie_slack_ulps"))
+        .def("face", &ZBuffer::face, py::arg("UV"), py::arg("cl"), py::arg("src"),
+             py::arg("uc"), py::arg("vc"), py::arg("table"), py::arg("best_t"),
+             py::arg("best"), py::arg("pair_chunk"), py::arg("depth_chunk"))
+        .def("candidates", &ZBuffer::candidates, py::arg("cell"), py::arg("src"),
+             py::arg("best_t"), py::arg("best"), py::arg("depth_chunk"))
+        .def("coplanar", &ZBuffer::coplanar_many, py::arg("a"), py::arg("b"));
+}
