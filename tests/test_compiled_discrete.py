@@ -1,4 +1,6 @@
-"""The compiled z-buffer of the discrete methods against its numpy oracle (issue 55).
+"""The compiled z-buffer of the discrete methods against its numpy oracle (issue 55):
+the hemicube, the cubic tetrahedron and the single plane (every method that
+rasterises planar faces, ``exactff.methods._raster.rasterise_face``).
 
 The compiled backend (``exactff.methods._zbuffer``) scan-converts and depth-tests as
 the numpy rasteriser does, cell for cell: the same scanlines, the same crossings from
@@ -26,8 +28,16 @@ COMPILED = {
     "hemicube-16": lambda **k: ef.Hemicube(resolution=16, **k),
     "hemicube-64": lambda **k: ef.Hemicube(resolution=64, **k),
     "hemicube-130": lambda **k: ef.Hemicube(resolution=130, **k),
+    "tetra-15": lambda **k: ef.CubicTetrahedron(resolution=15, **k),
+    "tetra-52": lambda **k: ef.CubicTetrahedron(resolution=52, **k),
+    "plane-equal_ff": lambda **k: ef.SinglePlane(resolution=48, **k),
+    "plane-uniform": lambda **k: ef.SinglePlane(resolution=41, cells="uniform", **k),
+    "plane-refined": lambda **k: ef.SinglePlane(resolution=40, cells="uniform_refined",
+                                                refine=3, **k),
 }
-SMALL = [lambda **k: ef.Hemicube(resolution=32, **k)]
+SMALL = [lambda **k: ef.Hemicube(resolution=32, **k),
+         lambda **k: ef.CubicTetrahedron(resolution=30, **k),
+         lambda **k: ef.SinglePlane(resolution=30, cells="uniform_refined", **k)]
 
 
 def assert_backends_identical(make, scene, point, normal):
@@ -62,21 +72,24 @@ def test_compiled_cells_identical_to_numpy(method, scene_name):
         assert_backends_identical(COMPILED[method], scene, p, n)
 
 
+@pytest.mark.parametrize("method", ["hemicube-64", "tetra-52", "plane-refined"])
 @pytest.mark.parametrize("scene_name", ["walls_low", "walls_high", "light_on_ceiling"])
-def test_compiled_cells_identical_to_numpy_on_ties_from_the_floor(scene_name):
+def test_compiled_cells_identical_to_numpy_on_ties_from_the_floor(method, scene_name):
     # the rows of test_ties.py: from the floors, through zero-thickness walls (back to
     # back, coplanar) and a light on a whole ceiling (same facing, coplanar)
     scene = SCENES[scene_name]()
     floors = [i for i, g in enumerate(scene.groups) if g == "floor"] or [
         scene.names.index("floor")]
     for i in floors:
-        hit = assert_backends_identical(COMPILED["hemicube-64"], scene, scene.centroids[i],
+        hit = assert_backends_identical(COMPILED[method], scene, scene.centroids[i],
                                         scene.normals[i])
-        assert np.all(hit >= 0)     # closed: every cell shows a polygon
+        if method.startswith("hemicube"):
+            assert np.all(hit >= 0)     # closed: every cell shows a polygon
 
 
+@pytest.mark.parametrize("method", ["hemicube-64", "tetra-52", "plane-refined"])
 @pytest.mark.parametrize("scene_name", ["office", "building", "light_on_ceiling"])
-def test_compiled_cells_identical_to_numpy_in_small_chunks(scene_name, monkeypatch):
+def test_compiled_cells_identical_to_numpy_in_small_chunks(method, scene_name, monkeypatch):
     # chunks of a few scanlines and a few hundred candidates: the depth buffer merges
     # chunk after chunk, the tie rule across chunks included (both backends use the
     # module's chunk sizes)
@@ -84,7 +97,7 @@ def test_compiled_cells_identical_to_numpy_in_small_chunks(scene_name, monkeypat
     monkeypatch.setattr(raster, "DEPTH_CHUNK", 300)
     scene = SCENES[scene_name]()
     for p, n in _rows(scene, 2, seed=1):
-        assert_backends_identical(COMPILED["hemicube-64"], scene, p, n)
+        assert_backends_identical(COMPILED[method], scene, p, n)
 
 
 def aligned_box():
@@ -149,21 +162,23 @@ def test_compiled_cells_identical_to_numpy_on_flush_faces_in_small_chunks(case):
             assert_backends_identical(make, scene, p, n)
 
 
-def test_compiled_rows_equal_numpy_rows():
+@pytest.mark.parametrize("method", ["hemicube-64", "tetra-52", "plane-refined"])
+def test_compiled_rows_equal_numpy_rows(method):
     # through the public interface: the rows are equal to the last bit
     scene = ef.scenes.office()
     for p, n in _rows(scene, 2, seed=3):
-        F1 = ef.form_factors(scene, p, n, method=ef.Hemicube(resolution=64))
-        F0 = ef.form_factors(scene, p, n, method=ef.Hemicube(resolution=64, backend="numpy"))
+        F1 = ef.form_factors(scene, p, n, method=COMPILED[method]())
+        F0 = ef.form_factors(scene, p, n, method=COMPILED[method](backend="numpy"))
         assert np.array_equal(F1, F0)
 
 
-def test_backend_option_checked_and_in_repr():
-    assert ef.Hemicube(resolution=8).backend == "compiled"
-    assert "backend" not in repr(ef.Hemicube(resolution=8))
-    assert "backend='numpy'" in repr(ef.Hemicube(resolution=8, backend="numpy"))
+@pytest.mark.parametrize("method", sorted(COMPILED))
+def test_backend_option_checked_and_in_repr(method):
+    assert COMPILED[method]().backend == "compiled"
+    assert "backend" not in repr(COMPILED[method]())
+    assert "backend='numpy'" in repr(COMPILED[method](backend="numpy"))
     with pytest.raises(ValueError, match="backend"):
-        ef.Hemicube(resolution=8, backend="cuda")
+        COMPILED[method](backend="cuda")
 
 
 def test_zbuffer_rejects_a_buffer_it_cannot_write():
