@@ -163,6 +163,40 @@ def test_compiled_cells_identical_to_numpy_on_flush_faces_in_small_chunks(case):
 
 
 @pytest.mark.parametrize("method", ["hemicube-64", "tetra-52", "plane-refined"])
+def assert_chart_clips_identical(scene, p, n):
+    """The compiled chart clipper gives chart_clip's live polygons, counts and chart
+    coordinates, bit for bit, for every chart and bucket of the row."""
+    from exactff.methods import _zbuffer
+    from exactff.methods._sampling import ZBufferRow
+    from exactff.visibility.charts import CHARTS, chart_clip, chart_planes
+
+    p, n = as_receiver(p, n)
+    for chart in CHARTS:
+        for _, V, counts in ZBufferRow(scene, p, n).local:
+            live, UV, cl = chart_clip(V, counts, chart)
+            live_c, UV_c, cl_c = _zbuffer.chart_clip(V, counts, np.array(chart_planes(chart)),
+                                                     *chart)
+            assert np.array_equal(live_c, live) and np.array_equal(cl_c, cl)
+            assert UV_c.shape == UV.shape
+            assert np.array_equal(UV_c, UV, equal_nan=True)
+
+
+@pytest.mark.parametrize("scene_name", ["office", "building", "cornell"])
+def test_compiled_chart_clip_identical_to_numpy(scene_name):
+    scene = SCENES[scene_name]()
+    for p, n in _rows(scene, 4, seed=2):
+        assert_chart_clips_identical(scene, p, n)
+        # from the polygon's centroid itself: the point on its plane
+        i = int(np.argmin(np.linalg.norm(scene.centroids - p, axis=1)))
+        assert_chart_clips_identical(scene, scene.centroids[i], scene.normals[i])
+
+
+@given(strategies.occluded_scenes() | strategies.enclosures() | strategies.flush_faces())
+@settings(max_examples=examples(40), deadline=None)
+def test_compiled_chart_clip_identical_to_numpy_in_random_scenes(case):
+    assert_chart_clips_identical(*case)
+
+
 def test_compiled_rows_equal_numpy_rows(method):
     # through the public interface: the rows are equal to the last bit
     scene = ef.scenes.office()

@@ -23,7 +23,7 @@ import numpy as np
 
 from .. import _tolerances as tol
 from ..halfspace import clip_halfspace
-from ..visibility.charts import chart_clip
+from ..visibility.charts import chart_clip, chart_planes
 from ._sampling import PAIR_CHUNK, resolve_depths
 from ._zbuffer import ZBuffer
 
@@ -165,7 +165,14 @@ def rasterise_face(z, chart, uc, vc, cell_of, D, best_t, best, clip=None, zbuffe
         table = np.ascontiguousarray(np.broadcast_to(
             cell_of(np.arange(len(uc))[:, None], np.arange(len(vc))[None, :]),
             (len(uc), len(vc))), dtype=np.int64)
+        if clip is None:
+            planes = np.array(chart_planes(chart))
     for g_ids, V, counts in z.local:
+        if zbuffer is not None and clip is None:
+            # the chart's clipping (chart_clip, bit for bit) compiled too
+            zbuffer.chart_face(V, counts, g_ids, planes, *chart, uc, vc, table, best_t, best,
+                               PAIR_CHUNK, DEPTH_CHUNK)
+            continue
         live, UV, cl = chart_clip(V, counts, chart) if clip is None else clip(V, counts)
         if len(live) == 0:
             continue

@@ -134,6 +134,110 @@ class ZBuffer {
             if (c[m] > K) throw std::invalid_argument("cl exceeds K");
         }
         py::gil_scoped_release release;
+        scan(uv, M, K, c, s, nullptr, u, nu, v, nv, tab, bt, bs, pair_chunk, depth_chunk);
+    }
+
+    // The same for one bucket of polygons (local frame) clipped to a chart's frustum
+    // first, as exactff.visibility.charts.chart_clip does (clip_chart below): V (M, K,
+    // 3) padded vertices, counts (M,), g_ids (M,) their live indices, the chart's
+    // frustum planes (4, 3) and axes.
+    void chart_face(py::array_t<double, py::array::c_style | py::array::forcecast> V,
+                    py::array_t<i64, py::array::c_style | py::array::forcecast> counts,
+                    py::array_t<i64, py::array::c_style | py::array::forcecast> g_ids,
+                    py::array_t<double, py::array::c_style | py::array::forcecast> planes,
+                    py::array_t<double, py::array::c_style | py::array::forcecast> eu,
+                    py::array_t<double, py::array::c_style | py::array::forcecast> ev,
+                    py::array_t<double, py::array::c_style | py::array::forcecast> ew,
+                    bool side,
+                    py::array_t<double, py::array::c_style | py::array::forcecast> uc,
+                    py::array_t<double, py::array::c_style | py::array::forcecast> vc,
+                    py::array_t<i64, py::array::c_style | py::array::forcecast> table,
+                    py::array best_t, py::array best, i64 pair_chunk, i64 depth_chunk) {
+        const i64 M = check_bucket(V, counts, planes, eu, ev, ew);
+        if (g_ids.shape(0) != M) throw std::invalid_argument("g_ids must have shape (M,)");
+        const i64 nu = uc.shape(0), nv = vc.shape(0);
+        if (table.ndim() != 2 || table.shape(0) != nu || table.shape(1) != nv)
+            throw std::invalid_argument("table must have shape (len(uc), len(vc))");
+        check_buffer(best_t, best);
+        for (i64 m = 0; m < M; ++m)
+            if (g_ids.data()[m] < 0 || g_ids.data()[m] >= n_live_)
+                throw std::invalid_argument("g_ids out of range");
+        double* bt = static_cast<double*>(best_t.mutable_data());
+        i64* bs = static_cast<i64*>(best.mutable_data());
+        py::gil_scoped_release release;
+        Clipped c;
+        clip_chart(V.data(), M, V.shape(1), counts.data(), planes.data(), eu.data(), ev.data(),
+                   ew.data(), side, c);
+        scan(c.UV.data(), static_cast<i64>(c.live.size()), c.K, c.cl.data(), g_ids.data(),
+             c.live.data(), uc.data(), nu, vc.data(), nv, table.data(), bt, bs, pair_chunk,
+             depth_chunk);
+    }
+
+    // Depth-test candidate (cell, live polygon) pairs, in chunks of depth_chunk.
+    void candidates(py::array_t<i64, py::array::c_style | py::array::forcecast> cell,
+                    py::array_t<i64, py::array::c_style | py::array::forcecast> src,
+                    py::array best_t, py::array best, i64 depth_chunk) {
+        check_buffer(best_t, best);
+        const i64 n = cell.shape(0);
+        if (src.shape(0) != n) throw std::invalid_argument("cell and src differ in length");
+        const i64* c = cell.data();
+        const i64* s = src.data();
+        for (i64 k = 0; k < n; ++k)
+            if (c[k] < 0 || c[k] >= n_cells_ || s[k] < 0 || s[k] >= n_live_)
+                throw std::invalid_argument("cell or src out of range");
+        double* bt = static_cast<double*>(best_t.mutable_data());
+        i64* bs = static_cast<i64*>(best.mutable_data());
+        py::gil_scoped_release release;
+        cells_.clear();
+        srcs_.clear();
+        for (i64 k = 0; k < n; ++k) {
+            cells_.push_back(c[k]);
+            srcs_.push_back(s[k]);
+            if (static_cast<i64>(cells_.size()) == depth_chunk) flush(bt, bs);
+        }
+        flush(bt, bs);
+    }
+
+    // exactff.visibility.charts.chart_clip (margin 0) of one bucket: (live, UV, cl)
+    static py::tuple chart_clip(py::array_t<double, py::array::c_style | py::array::forcecast> V,
+                                py::array_t<i64, py::array::c_style | py::array::forcecast> counts,
+                                py::array_t<double, py::array::c_style | py::array::forcecast> planes,
+                                py::array_t<double, py::array::c_style | py::array::forcecast> eu,
+                                py::array_t<double, py::array::c_style | py::array::forcecast> ev,
+                                py::array_t<double, py::array::c_style | py::array::forcecast> ew,
+                                bool side) {
+        const i64 M = check_bucket(V, counts, planes, eu, ev, ew);
+        Clipped c;
+        {
+            py::gil_scoped_release release;
+            clip_chart(V.data(), M, V.shape(1), counts.data(), planes.data(), eu.data(),
+                       ev.data(), ew.data(), side, c);
+        }
+        const i64 L = static_cast<i64>(c.live.size());
+        py::array_t<i64> live(L), cl(L);
+        py::array_t<double> UV({L, c.K, static_cast<i64>(2)});
+        std::copy(c.live.begin(), c.live.end(), live.mutable_data());
+        std::copy(c.cl.begin(), c.cl.end(), cl.mutable_data());
+        std::copy(c.UV.begin(), c.UV.end(), UV.mutable_data());
+        return py::make_tuple(live, UV, cl);
+    }
+
+    // whether live polygons a[k] and b[k] are coplanar (the BSP tree's rule)
+    py::array_t<bool> coplanar_many(py::array_t<i64, py::array::c_style | py::array::forcecast> a,
+                                    py::array_t<i64, py::array::c_style | py::array::forcecast> b) {
+        const i64 n = a.shape(0);
+        py::array_t<bool> out(n);
+        bool* o = out.mutable_data();
+        for (i64 k = 0; k < n; ++k) o[k] = coplanar(a.data()[k], b.data()[k]);
+        return out;
+    }
+
+  private:
+    // scan conversion of M polygons UV (M, K, 2) with counts c, live indices
+    // src[pos[m]] (pos null: src[m]), into the depth buffer
+    void scan(const double* uv, i64 M, i64 K, const i64* c, const i64* src, const i64* pos,
+              const double* u, i64 nu, const double* v, i64 nv, const i64* tab, double* bt,
+              i64* bs, i64 pair_chunk, i64 depth_chunk) {
         // the numpy code's chunks: (polygon, scanline) pairs by PAIR_CHUNK // K
         const i64 step = std::max<i64>(1, pair_chunk / std::max<i64>(K, 1));
         i64 pairs_in_chunk = 0;
@@ -144,6 +248,7 @@ class ZBuffer {
         for (i64 m = 0; m < M; ++m) {
             const double* P = uv + m * K * 2;
             const i64 n = c[m];
+            const i64 sm = src[pos ? pos[m] : m];
             // the scanlines whose centre lies in [min y, max y] (none if a coordinate
             // is NaN, as numpy's min and searchsorted have it)
             double lo = INF, hi = -INF;
@@ -178,7 +283,7 @@ class ZBuffer {
                         const i64 cell = tab[r * nv + col];
                         if (cell < 0) continue;
                         cells_.push_back(cell);
-                        srcs_.push_back(s[m]);
+                        srcs_.push_back(sm);
                         if (static_cast<i64>(cells_.size()) == depth_chunk) flush(bt, bs);
                     }
                 }
@@ -191,42 +296,266 @@ class ZBuffer {
         flush(bt, bs);
     }
 
-    // Depth-test candidate (cell, live polygon) pairs, in chunks of depth_chunk.
-    void candidates(py::array_t<i64, py::array::c_style | py::array::forcecast> cell,
-                    py::array_t<i64, py::array::c_style | py::array::forcecast> src,
-                    py::array best_t, py::array best, i64 depth_chunk) {
-        check_buffer(best_t, best);
-        const i64 n = cell.shape(0);
-        if (src.shape(0) != n) throw std::invalid_argument("cell and src differ in length");
-        const i64* c = cell.data();
-        const i64* s = src.data();
-        for (i64 k = 0; k < n; ++k)
-            if (c[k] < 0 || c[k] >= n_cells_ || s[k] < 0 || s[k] >= n_live_)
-                throw std::invalid_argument("cell or src out of range");
-        double* bt = static_cast<double*>(best_t.mutable_data());
-        i64* bs = static_cast<i64*>(best.mutable_data());
-        py::gil_scoped_release release;
-        cells_.clear();
-        srcs_.clear();
-        for (i64 k = 0; k < n; ++k) {
-            cells_.push_back(c[k]);
-            srcs_.push_back(s[k]);
-            if (static_cast<i64>(cells_.size()) == depth_chunk) flush(bt, bs);
+
+    // ---- the chart clipper: exactff.visibility.charts.chart_clip (margin 0) and
+    // exactff.halfspace.clip_halfspace, expression for expression ----
+
+    struct Clipped {
+        std::vector<i64> live, cl;   // indices into the bucket, vertex counts
+        std::vector<double> UV;      // (live, K, 2), padded by the last vertex
+        i64 K = 0;
+    };
+
+    static i64 check_bucket(const py::array_t<double, py::array::c_style | py::array::forcecast>& V,
+                            const py::array_t<i64, py::array::c_style | py::array::forcecast>& counts,
+                            const py::array_t<double, py::array::c_style | py::array::forcecast>& planes,
+                            const py::array_t<double, py::array::c_style | py::array::forcecast>& eu,
+                            const py::array_t<double, py::array::c_style | py::array::forcecast>& ev,
+                            const py::array_t<double, py::array::c_style | py::array::forcecast>& ew) {
+        if (V.ndim() != 3 || V.shape(2) != 3)
+            throw std::invalid_argument("V must have shape (M, K, 3)");
+        const i64 M = V.shape(0);
+        if (counts.shape(0) != M) throw std::invalid_argument("counts must have shape (M,)");
+        for (i64 m = 0; m < M; ++m)
+            if (counts.data()[m] > V.shape(1) || counts.data()[m] < 0)
+                throw std::invalid_argument("counts out of range");
+        if (planes.ndim() != 2 || planes.shape(0) != 4 || planes.shape(1) != 3)
+            throw std::invalid_argument("planes must have shape (4, 3)");
+        if (eu.size() != 3 || ev.size() != 3 || ew.size() != 3)
+            throw std::invalid_argument("eu, ev, ew must have shape (3,)");
+        return M;
+    }
+
+    // V @ h with h of the chart's axes (components 0, +-1): exact whatever the order
+    static inline double hdot(const double* h, const double* x) {
+        return (h[0] * x[0] + h[1] * x[1]) + h[2] * x[2];
+    }
+
+    static inline double sum_abs3(double a, double b, double c) {
+        return (std::fabs(a) + std::fabs(b)) + std::fabs(c);
+    }
+
+    // clip_halfspace: polygons V (M, K, 3) with counts to h . x > 0; out (M, Kn, 3)
+    static void clip_halfspace(const std::vector<double>& V, i64 M, i64 K,
+                               const std::vector<i64>& counts, const double* h,
+                               std::vector<double>& out, i64& Kn, std::vector<i64>& nc) {
+        constexpr double C = 8.0;                          // CLIP_MEET_ULPS
+        const double floor_ = std::numeric_limits<double>::min() / EPS;   // _NORMAL_FLOOR
+        const double hsum = sum_abs3(h[0], h[1], h[2]);
+        std::vector<double> tmp(static_cast<size_t>(M * 2 * K * 3));
+        std::vector<double> s(static_cast<size_t>(K));
+        nc.assign(static_cast<size_t>(M), 0);
+        i64 kmax = 0;
+        for (i64 m = 0; m < M; ++m) {
+            const double* P = V.data() + m * K * 3;
+            const i64 n = counts[m];
+            for (i64 k = 0; k < K; ++k) s[k] = hdot(h, P + 3 * k);
+            double* o = tmp.data() + m * 2 * K * 3;
+            i64 w = 0;
+            for (i64 k = 0; k < n; ++k) {
+                const i64 j = (k + 1) % n;
+                const bool in = s[k] > 0, in_n = s[j] > 0;
+                if (in) {
+                    for (int i = 0; i < 3; ++i) o[3 * w + i] = P[3 * k + i];
+                    ++w;
+                }
+                if (in == in_n) continue;
+                // the crossing from the inside end point: interpolated, or the meet of
+                // the edge's plane through the origin with h where it is as good
+                const double* A = in ? P + 3 * k : P + 3 * j;
+                const double* B = in ? P + 3 * j : P + 3 * k;
+                const double sa = in ? s[k] : s[j], sb = in ? s[j] : s[k];
+                const double t = sa / (sa - sb);
+                double X[3], e[3];
+                for (int i = 0; i < 3; ++i) {
+                    X[i] = A[i] + t * (B[i] - A[i]);
+                    e[i] = B[i] - A[i];
+                }
+                const double d = sa - sb;
+                const double mm[3] = {A[1] * e[2] - A[2] * e[1], A[2] * e[0] - A[0] * e[2],
+                                      A[0] * e[1] - A[1] * e[0]};
+                const double la = sum_abs3(A[0], A[1], A[2]), le = sum_abs3(e[0], e[1], e[2]);
+                const double meet[3] = {(mm[1] * h[2] - mm[2] * h[1]) / d,
+                                        (mm[2] * h[0] - mm[0] * h[2]) / d,
+                                        (mm[0] * h[1] - mm[1] * h[0]) / d};
+                const double cond = 1.0 + hsum * le / std::fabs(d);
+                const bool use =
+                    (sum_abs3(meet[0] - X[0], meet[1] - X[1], meet[2] - X[2]) <=
+                     C * EPS * (la + le) * cond) &&
+                    (cond * C * EPS < 1.0) &&
+                    (sum_abs3(mm[0], mm[1], mm[2]) > C * EPS * la * le) &&
+                    (std::fabs(d) > floor_) && (la * le > floor_);
+                for (int i = 0; i < 3; ++i) o[3 * w + i] = use ? meet[i] + 0.0 : X[i];
+                ++w;
+            }
+            nc[m] = w;
+            kmax = std::max(kmax, w);
         }
-        flush(bt, bs);
+        Kn = std::max<i64>(kmax, 1);
+        out.assign(static_cast<size_t>(M * Kn * 3), 0.0);
+        for (i64 m = 0; m < M; ++m)
+            std::copy(tmp.data() + m * 2 * K * 3, tmp.data() + m * 2 * K * 3 + nc[m] * 3,
+                      out.data() + m * Kn * 3);
     }
 
-    // whether live polygons a[k] and b[k] are coplanar (the BSP tree's rule)
-    py::array_t<bool> coplanar_many(py::array_t<i64, py::array::c_style | py::array::forcecast> a,
-                                    py::array_t<i64, py::array::c_style | py::array::forcecast> b) {
-        const i64 n = a.shape(0);
-        py::array_t<bool> out(n);
-        bool* o = out.mutable_data();
-        for (i64 k = 0; k < n; ++k) o[k] = coplanar(a.data()[k], b.data()[k]);
-        return out;
+    // np.spacing(|x|): the gap to the next double (NaN for inf and NaN)
+    static inline double spacing_abs(double x) {
+        x = std::fabs(x);
+        if (!std::isfinite(x)) return std::numeric_limits<double>::quiet_NaN();
+        return std::nextafter(x, INF) - x;
     }
 
-  private:
+    // charts.merge_close over the values x: near-coincident ones (each within
+    // CHART_EDGE_ULPS ulps of the previous, sorted) replaced by the first of their run;
+    // NaN sorts last and compares false, as numpy's unique and diff have it
+    static void merge_close(std::vector<double>& x, double ulps) {
+        std::vector<double> u(x);
+        std::sort(u.begin(), u.end(), [](double a, double b) {
+            if (std::isnan(a)) return false;
+            if (std::isnan(b)) return true;
+            return a < b;
+        });
+        // unique (NaNs collapsed)
+        std::vector<double> q;
+        for (const double a : u) {
+            if (!q.empty() && (q.back() == a || (std::isnan(q.back()) && std::isnan(a)))) continue;
+            q.push_back(a);
+        }
+        std::vector<double> first(q.size());
+        for (size_t i = 0; i < q.size(); ++i) {
+            const bool new_run = i == 0 || (q[i] - q[i - 1] > ulps * spacing_abs(q[i]));
+            first[i] = new_run ? q[i] : first[i - 1];
+        }
+        for (double& a : x) {
+            size_t i;
+            if (std::isnan(a)) {
+                i = q.size() - 1;
+            } else {
+                i = std::lower_bound(q.begin(), q.end(), a, [](double p, double v) {
+                        return !std::isnan(p) && p < v;
+                    }) - q.begin();
+            }
+            a = first[i];
+        }
+    }
+
+    static void clip_chart(const double* V, i64 M, i64 K, const i64* counts,
+                           const double* planes, const double* eu, const double* ev,
+                           const double* ew, bool side, Clipped& out) {
+        // which polygons reach the frustum, which lie wholly inside it
+        std::vector<i64> reach, straddle;
+        std::vector<char> inside_all;
+        for (i64 m = 0; m < M; ++m) {
+            const double* P = V + m * K * 3;
+            const i64 n = counts[m];
+            bool outside = false, inside = true;
+            for (int j = 0; j < 4; ++j) {
+                bool all_out = true;
+                for (i64 k = 0; k < n; ++k) {
+                    const double sv = hdot(planes + 3 * j, P + 3 * k);
+                    // (a NaN is neither out nor in, as numpy's comparisons have it)
+                    if (!(sv <= 0)) all_out = false;
+                    if (!(sv > 0)) inside = false;
+                }
+                if (all_out) outside = true;
+            }
+            if (!outside && n >= 3) {
+                reach.push_back(m);
+                inside_all.push_back(inside ? 1 : 0);
+                if (!inside) straddle.push_back(m);
+            }
+        }
+        // the straddling ones clipped plane by plane
+        const i64 S = static_cast<i64>(straddle.size());
+        std::vector<double> Vc(static_cast<size_t>(S * K * 3));
+        std::vector<i64> cc(static_cast<size_t>(S));
+        for (i64 i = 0; i < S; ++i) {
+            std::copy(V + straddle[i] * K * 3, V + (straddle[i] + 1) * K * 3, Vc.data() + i * K * 3);
+            cc[i] = counts[straddle[i]];
+        }
+        i64 Kc = K;
+        std::vector<double> next;
+        std::vector<i64> ncount;
+        for (int j = 0; j < 4; ++j) {
+            bool any = false;
+            for (const i64 n : cc) any = any || n >= 3;
+            if (!any) break;
+            for (i64& n : cc) if (n < 3) n = 0;
+            i64 Kn;
+            clip_halfspace(Vc, S, Kc, cc, planes + 3 * j, next, Kn, ncount);
+            Vc.swap(next);
+            cc.swap(ncount);
+            Kc = Kn;
+        }
+        const i64 Kr = std::max(K, Kc);
+        // the live ones, padded by their last vertex, projected into the chart
+        out.live.clear();
+        out.cl.clear();
+        out.K = Kr;
+        std::vector<double> P3(static_cast<size_t>(Kr * 3));
+        i64 si = 0;
+        for (size_t r = 0; r < reach.size(); ++r) {
+            const i64 m = reach[r];
+            const double* src;
+            i64 n, Ks;
+            if (inside_all[r]) {
+                src = V + m * K * 3;
+                n = counts[m];
+                Ks = K;
+            } else {
+                src = Vc.data() + si * Kc * 3;
+                n = cc[si];
+                Ks = Kc;
+                ++si;
+            }
+            if (n < 3) continue;
+            if (n > Ks) throw std::logic_error("clipped count exceeds its width");
+            for (i64 k = 0; k < Kr; ++k) {
+                const i64 kk = k < n ? k : n - 1;
+                for (int i = 0; i < 3; ++i) P3[3 * k + i] = src[3 * kk + i];
+            }
+            out.live.push_back(m);
+            out.cl.push_back(n);
+            for (i64 k = 0; k < Kr; ++k) {
+                const double* x = P3.data() + 3 * k;
+                const double w = hdot(ew, x);
+                out.UV.push_back(hdot(eu, x) / w);
+                out.UV.push_back(hdot(ev, x) / w);
+            }
+        }
+        std::vector<double>& UV = out.UV;
+        const double tiny = std::numeric_limits<double>::min();
+        // subnormal chart coordinates flushed to zero
+        for (double& a : UV)
+            if (std::fabs(a) < tiny) a = 0.0;
+        // points within CHART_EDGE_ULPS ulps of the chart's edges snapped onto them
+        constexpr double EDGE_ULPS = 8.0;                    // CHART_EDGE_ULPS
+        const double near1 = EDGE_ULPS * (std::nextafter(1.0, 2.0) - 1.0);
+        for (const double val : {-1.0, 1.0})
+            for (double& a : UV)
+                if (std::fabs(a - val) <= near1) a = val;
+        if (side)
+            for (size_t i = 1; i < UV.size(); i += 2)
+                if (std::fabs(UV[i]) <= near1) UV[i] = 0.0;
+        // and points along an edge within a few ulps of each other merged
+        const std::vector<double> e01 = {-1.0, 1.0};
+        const std::vector<double> e1 = side ? std::vector<double>{-1.0, 0.0, 1.0} : e01;
+        std::vector<size_t> idx;
+        std::vector<double> vals;
+        for (int k = 0; k < 2; ++k) {
+            const std::vector<double>& edge_vals = k == 0 ? e1 : e01;
+            for (const double val : edge_vals) {
+                idx.clear();
+                for (size_t i = 0; i < UV.size() / 2; ++i)
+                    if (UV[2 * i + (1 - k)] == val) idx.push_back(2 * i + k);
+                if (idx.size() <= 1) continue;
+                vals.resize(idx.size());
+                for (size_t i = 0; i < idx.size(); ++i) vals[i] = UV[idx[i]];
+                merge_close(vals, EDGE_ULPS);
+                for (size_t i = 0; i < idx.size(); ++i) UV[idx[i]] = vals[i];
+            }
+        }
+    }
     void check_buffer(const py::array& best_t, const py::array& best) const {
         if (!best_t.dtype().is(py::dtype::of<double>()) || !best.dtype().is(py::dtype::of<i64>()))
             throw std::invalid_argument("best_t and best must be float64 and int64");
@@ -414,5 +743,13 @@ PYBIND11_MODULE(_zbuffer, m) {
              py::arg("best"), py::arg("pair_chunk"), py::arg("depth_chunk"))
         .def("candidates", &ZBuffer::candidates, py::arg("cell"), py::arg("src"),
              py::arg("best_t"), py::arg("best"), py::arg("depth_chunk"))
+        .def("chart_face", &ZBuffer::chart_face, py::arg("V"), py::arg("counts"),
+             py::arg("g_ids"), py::arg("planes"), py::arg("eu"), py::arg("ev"), py::arg("ew"),
+             py::arg("side"), py::arg("uc"), py::arg("vc"), py::arg("table"),
+             py::arg("best_t"), py::arg("best"), py::arg("pair_chunk"), py::arg("depth_chunk"))
         .def("coplanar", &ZBuffer::coplanar_many, py::arg("a"), py::arg("b"));
+    m.def("chart_clip", &ZBuffer::chart_clip, py::arg("V"), py::arg("counts"), py::arg("planes"),
+          py::arg("eu"), py::arg("ev"), py::arg("ew"), py::arg("side"),
+          "exactff.visibility.charts.chart_clip (margin 0) of one bucket, compiled: "
+          "(live, UV, cl).");
 }
