@@ -56,6 +56,22 @@ inline double absdot3(const double* a, const double* b) {
            + std::fabs(a[1]) * std::fabs(b[1]);
 }
 
+// the depth buffer's per-cell scratch within a chunk
+struct CellScratch {
+    double t_min = INF;                                  // the nearest depth
+    std::int64_t near = -1;                              // a polygon at that depth
+    std::int64_t p_min = std::numeric_limits<std::int64_t>::max();   // the lowest priority tied
+    std::int64_t pick = -1;                              // its polygon
+};
+
+// one scratch per thread, grown as needed and reset cell by cell after every chunk
+// (a row's buffer of 200,000 cells is not allocated and cleared again row by row)
+std::vector<CellScratch>& scratch(std::int64_t n_cells) {
+    thread_local std::vector<CellScratch> sc;
+    if (static_cast<std::int64_t>(sc.size()) < n_cells) sc.resize(static_cast<size_t>(n_cells));
+    return sc;
+}
+
 class ZBuffer {
   public:
     // D (C, 3) cell directions, Dnorm (C,) their norms (np.linalg.norm, passed in so
@@ -91,11 +107,6 @@ class ZBuffer {
         if (V.ndim() != 2 || V.shape(1) != 3 || N.ndim() != 2 || N.shape(1) != 3 ||
             offsets.shape(0) != N.shape(0) + 1 || Dp.shape(0) != N.shape(0))
             throw std::invalid_argument("V, offsets, N, Dp: the scene's polygons and planes");
-        t_min_.assign(n_cells_, INF);
-        near_.assign(n_cells_, -1);
-        p_min_.assign(n_cells_, std::numeric_limits<i64>::max());
-        pick_.assign(n_cells_, -1);
-        mark_.assign(n_cells_, 0);
     }
 
     // Scan-convert M polygons on a face and depth-test them into (best_t, best).
@@ -628,52 +639,52 @@ class ZBuffer {
             cand_den_[n] = den;
             ++n;
         }
+        // per-cell scratch of this thread, left reset after every chunk
+        std::vector<CellScratch>& sc = scratch(n_cells_);
         // the nearest depth per cell
         touched_.clear();
         for (size_t k = 0; k < n; ++k) {
-            const i64 cell = cells_[k];
-            if (!mark_[cell]) {
-                mark_[cell] = 1;
-                touched_.push_back(cell);
-            }
-            if (cand_t_[k] < t_min_[cell]) t_min_[cell] = cand_t_[k];
+            CellScratch& c = sc[cells_[k]];
+            if (c.t_min == INF) touched_.push_back(cells_[k]);
+            if (cand_t_[k] < c.t_min) c.t_min = cand_t_[k];
         }
-        // one of the polygons at the nearest depth (the last, as numpy's assignment)
-        tied_.assign(n, 0);
+        // one of the polygons at the nearest depth (the last, as numpy's assignment),
+        // and of the polygons there the one of lowest priority (priorities are
+        // distinct per polygon; a polygon is a candidate of a cell once in a chunk)
         for (size_t k = 0; k < n; ++k) {
-            if (cand_t_[k] == t_min_[cells_[k]]) {
-                tied_[k] = 1;
-                near_[cells_[k]] = srcs_[k];
+            CellScratch& c = sc[cells_[k]];
+            if (cand_t_[k] == c.t_min) {
+                const i64 s = srcs_[k];
+                c.near = s;
+                if (prio[s] < c.p_min) {
+                    c.p_min = prio[s];
+                    c.pick = s;
+                }
             }
         }
         // ties: within four times the tie test's band of the nearest depth, and
         // coplanar with the polygon there
         const double slack_ulps = tie_slack_ulps_;
         for (size_t k = 0; k < n; ++k) {
-            if (tied_[k]) continue;
+            CellScratch& c = sc[cells_[k]];
+            if (cand_t_[k] == c.t_min) continue;
             const i64 cell = cells_[k], s = srcs_[k];
-            const double t_near = t_min_[cell];
+            const double t_near = c.t_min;
             const double slack = 4.0 * (band[s] + EPS * (slack_ulps * std::fabs(t_near) * Dn[cell]
                                                          + std::fabs(dl[s])));
-            if (std::fabs(t_near - cand_t_[k]) * std::fabs(cand_den_[k]) <= slack)
-                tied_[k] = coplanar(near_[cell], s) ? 1 : 0;
-        }
-        // of the tied polygons, the one of lowest priority (priorities are distinct
-        // per polygon, and a polygon is a candidate of a cell once in a chunk)
-        for (size_t k = 0; k < n; ++k)
-            if (tied_[k]) {
-                const i64 p = prio[srcs_[k]];
-                if (p < p_min_[cells_[k]]) {
-                    p_min_[cells_[k]] = p;
-                    pick_[cells_[k]] = srcs_[k];
-                }
+            if (std::fabs(t_near - cand_t_[k]) * std::fabs(cand_den_[k]) <= slack &&
+                coplanar(c.near, s) && prio[s] < c.p_min) {
+                c.p_min = prio[s];
+                c.pick = s;
             }
+        }
         // merge with the cells' best so far: the nearer wins unless the other is
         // coplanar with it and of lower priority
         for (const i64 cell : touched_) {
-            const i64 s = pick_[cell];
+            CellScratch& c = sc[cell];
+            const i64 s = c.pick;
             if (s >= 0) {
-                const double t = t_min_[cell];
+                const double t = c.t_min;
                 const i64 old = best[cell];
                 const bool has_old = old >= 0;
                 const bool new_nearer = t < best_t[cell];
@@ -687,11 +698,7 @@ class ZBuffer {
                 if (t < best_t[cell]) best_t[cell] = t;
                 if (take) best[cell] = s;
             }
-            mark_[cell] = 0;
-            t_min_[cell] = INF;
-            near_[cell] = -1;
-            p_min_[cell] = std::numeric_limits<i64>::max();
-            pick_[cell] = -1;
+            c = CellScratch();
         }
         cells_.clear();
         srcs_.clear();
@@ -708,11 +715,7 @@ class ZBuffer {
     // candidates of the current chunk
     std::vector<i64> cells_, srcs_;
     std::vector<double> cand_t_, cand_den_;
-    std::vector<char> tied_;
-    // per-cell scratch of a chunk (reset after it)
-    std::vector<double> t_min_;
-    std::vector<i64> near_, p_min_, pick_, touched_;
-    std::vector<char> mark_;
+    std::vector<i64> touched_;
     std::unordered_map<std::uint64_t, bool> cache_;
     std::uint64_t last_key_ = ~std::uint64_t(0);
     bool last_value_ = false;
