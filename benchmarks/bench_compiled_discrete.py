@@ -20,6 +20,7 @@ import time
 import numpy as np
 
 import exactff as ef
+from exactff import _tolerances as tol
 from exactff.methods._sampling import ZBufferRow
 from exactff.methods import _zbuffer
 from exactff.visibility.charts import CHARTS, chart_clip, chart_planes
@@ -45,7 +46,8 @@ def clip_time(scene, p, n):
     out = []
     for clip in (lambda V, counts, chart: chart_clip(V, counts, chart),
                  lambda V, counts, chart: _zbuffer.chart_clip(
-                     V, counts, np.array(chart_planes(chart)), *chart)):
+                     V, counts, np.array(chart_planes(chart)), *chart, tol.CLIP_MEET_ULPS,
+                     tol.CHART_EDGE_ULPS)):
         c = time.process_time()
         for chart in CHARTS:
             for _, V, counts in z.local:

@@ -18,6 +18,7 @@ from hypothesis import given, settings
 
 import exactff as ef
 import exactff.methods._raster as raster
+from exactff import _tolerances as tol
 from exactff.checks import as_receiver
 from exactff.testing import strategies
 
@@ -174,7 +175,8 @@ def assert_chart_clips_identical(scene, p, n):
         for _, V, counts in ZBufferRow(scene, p, n).local:
             live, UV, cl = chart_clip(V, counts, chart)
             live_c, UV_c, cl_c = _zbuffer.chart_clip(V, counts, np.array(chart_planes(chart)),
-                                                     *chart)
+                                                     *chart, tol.CLIP_MEET_ULPS,
+                                                     tol.CHART_EDGE_ULPS)
             assert np.array_equal(live_c, live) and np.array_equal(cl_c, cl)
             assert UV_c.shape == UV.shape
             assert np.array_equal(UV_c, UV, equal_nan=True)

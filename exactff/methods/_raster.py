@@ -17,6 +17,10 @@ in exactly one). The depth test is the shared depth buffer
   to the horizon and projected once; every edge's image is an ellipse arc (Eq. 2),
   split at its extreme in y (monotone-span splitting, as for Eq. 3, here across rows)
   so that each piece crosses a row at most once; the crossing solves a quadratic.
+
+:func:`rasterise_face` has a compiled backend (:func:`compiled_zbuffer`,
+``exactff/methods/_zbuffer.cpp``): the same clipping of a chart, scanlines, spans,
+chunks and depth rule in C++, cell for cell (the numpy code here is its oracle).
 """
 
 import numpy as np
@@ -49,7 +53,8 @@ def compiled_zbuffer(z, layout):
     s = z.scene
     return ZBuffer(layout.directions, layout.direction_norms, z.nl, z.dl, z.band, z.prio,
                    s.vertices, s.offsets, s.normals, s.plane_offsets, z.ids,
-                   tol.BSP_COPLANAR_ULPS, tol.ZBUFFER_ROUNDING_ULPS + 1.0)
+                   tol.BSP_COPLANAR_ULPS, tol.ZBUFFER_ROUNDING_ULPS + 1.0, tol.CLIP_MEET_ULPS,
+                   tol.CHART_EDGE_ULPS)
 
 
 def _first_at_or_above(centres, x):

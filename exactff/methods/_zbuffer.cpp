@@ -79,7 +79,8 @@ class ZBuffer {
     // polygons' depth data (ZBufferRow); V, offsets, N, Dp, ids the scene's polygons
     // and planes and the live polygons' scene indices (the coplanar rule);
     // coplanar_ulps: exactff._tolerances.BSP_COPLANAR_ULPS; tie_slack_ulps:
-    // ZBUFFER_ROUNDING_ULPS + 1.
+    // ZBUFFER_ROUNDING_ULPS + 1; clip_meet_ulps, chart_edge_ulps: CLIP_MEET_ULPS and
+    // CHART_EDGE_ULPS (the chart clipper's).
     ZBuffer(py::array_t<double, py::array::c_style | py::array::forcecast> D,
             py::array_t<double, py::array::c_style | py::array::forcecast> Dnorm,
             py::array_t<double, py::array::c_style | py::array::forcecast> nl,
@@ -91,10 +92,12 @@ class ZBuffer {
             py::array_t<double, py::array::c_style | py::array::forcecast> N,
             py::array_t<double, py::array::c_style | py::array::forcecast> Dp,
             py::array_t<i64, py::array::c_style | py::array::forcecast> ids,
-            double coplanar_ulps, double tie_slack_ulps)
+            double coplanar_ulps, double tie_slack_ulps, double clip_meet_ulps,
+            double chart_edge_ulps)
         : D_(D), Dnorm_(Dnorm), nl_(nl), dl_(dl), band_(band), prio_(prio), V_(V),
           offsets_(offsets), N_(N), Dp_(Dp), ids_(ids), coplanar_ulps_(coplanar_ulps),
-          tie_slack_ulps_(tie_slack_ulps) {
+          tie_slack_ulps_(tie_slack_ulps), clip_meet_ulps_(clip_meet_ulps),
+          chart_edge_ulps_(chart_edge_ulps) {
         if (D.ndim() != 2 || D.shape(1) != 3)
             throw std::invalid_argument("D must have shape (C, 3)");
         n_cells_ = D.shape(0);
@@ -178,7 +181,7 @@ class ZBuffer {
         py::gil_scoped_release release;
         Clipped c;
         clip_chart(V.data(), M, V.shape(1), counts.data(), planes.data(), eu.data(), ev.data(),
-                   ew.data(), side, c);
+                   ew.data(), side, clip_meet_ulps_, chart_edge_ulps_, c);
         scan(c.UV.data(), static_cast<i64>(c.live.size()), c.K, c.cl.data(), g_ids.data(),
              c.live.data(), uc.data(), nu, vc.data(), nv, table.data(), bt, bs, pair_chunk,
              depth_chunk);
@@ -216,13 +219,13 @@ class ZBuffer {
                                 py::array_t<double, py::array::c_style | py::array::forcecast> eu,
                                 py::array_t<double, py::array::c_style | py::array::forcecast> ev,
                                 py::array_t<double, py::array::c_style | py::array::forcecast> ew,
-                                bool side) {
+                                bool side, double clip_meet_ulps, double chart_edge_ulps) {
         const i64 M = check_bucket(V, counts, planes, eu, ev, ew);
         Clipped c;
         {
             py::gil_scoped_release release;
             clip_chart(V.data(), M, V.shape(1), counts.data(), planes.data(), eu.data(),
-                       ev.data(), ew.data(), side, c);
+                       ev.data(), ew.data(), side, clip_meet_ulps, chart_edge_ulps, c);
         }
         const i64 L = static_cast<i64>(c.live.size());
         py::array_t<i64> live(L), cl(L);
@@ -348,9 +351,8 @@ class ZBuffer {
 
     // clip_halfspace: polygons V (M, K, 3) with counts to h . x > 0; out (M, Kn, 3)
     static void clip_halfspace(const std::vector<double>& V, i64 M, i64 K,
-                               const std::vector<i64>& counts, const double* h,
+                               const std::vector<i64>& counts, const double* h, const double C,
                                std::vector<double>& out, i64& Kn, std::vector<i64>& nc) {
-        constexpr double C = 8.0;                          // CLIP_MEET_ULPS
         const double floor_ = std::numeric_limits<double>::min() / EPS;   // _NORMAL_FLOOR
         const double hsum = sum_abs3(h[0], h[1], h[2]);
         std::vector<double> tmp(static_cast<size_t>(M * 2 * K * 3));
@@ -452,7 +454,8 @@ class ZBuffer {
 
     static void clip_chart(const double* V, i64 M, i64 K, const i64* counts,
                            const double* planes, const double* eu, const double* ev,
-                           const double* ew, bool side, Clipped& out) {
+                           const double* ew, bool side, double meet_ulps, double edge_ulps,
+                           Clipped& out) {
         // which polygons reach the frustum, which lie wholly inside it
         std::vector<i64> reach, straddle;
         std::vector<char> inside_all;
@@ -493,7 +496,7 @@ class ZBuffer {
             if (!any) break;
             for (i64& n : cc) if (n < 3) n = 0;
             i64 Kn;
-            clip_halfspace(Vc, S, Kc, cc, planes + 3 * j, next, Kn, ncount);
+            clip_halfspace(Vc, S, Kc, cc, planes + 3 * j, meet_ulps, next, Kn, ncount);
             Vc.swap(next);
             cc.swap(ncount);
             Kc = Kn;
@@ -540,8 +543,7 @@ class ZBuffer {
         for (double& a : UV)
             if (std::fabs(a) < tiny) a = 0.0;
         // points within CHART_EDGE_ULPS ulps of the chart's edges snapped onto them
-        constexpr double EDGE_ULPS = 8.0;                    // CHART_EDGE_ULPS
-        const double near1 = EDGE_ULPS * (std::nextafter(1.0, 2.0) - 1.0);
+        const double near1 = edge_ulps * (std::nextafter(1.0, 2.0) - 1.0);
         for (const double val : {-1.0, 1.0})
             for (double& a : UV)
                 if (std::fabs(a - val) <= near1) a = val;
@@ -562,7 +564,7 @@ class ZBuffer {
                 if (idx.size() <= 1) continue;
                 vals.resize(idx.size());
                 for (size_t i = 0; i < idx.size(); ++i) vals[i] = UV[idx[i]];
-                merge_close(vals, EDGE_ULPS);
+                merge_close(vals, edge_ulps);
                 for (size_t i = 0; i < idx.size(); ++i) UV[idx[i]] = vals[i];
             }
         }
@@ -710,7 +712,7 @@ class ZBuffer {
     py::array_t<i64, py::array::c_style | py::array::forcecast> offsets_;
     py::array_t<double, py::array::c_style | py::array::forcecast> N_, Dp_;
     py::array_t<i64, py::array::c_style | py::array::forcecast> ids_;
-    double coplanar_ulps_, tie_slack_ulps_;
+    double coplanar_ulps_, tie_slack_ulps_, clip_meet_ulps_, chart_edge_ulps_;
     i64 n_cells_ = 0, n_live_ = 0;
     // candidates of the current chunk
     std::vector<i64> cells_, srcs_;
@@ -737,10 +739,11 @@ PYBIND11_MODULE(_zbuffer, m) {
                       py::array_t<double, py::array::c_style | py::array::forcecast>,
                       py::array_t<double, py::array::c_style | py::array::forcecast>,
                       py::array_t<i64, py::array::c_style | py::array::forcecast>, double,
-                      double>(),
+                      double, double, double>(),
              py::arg("D"), py::arg("Dnorm"), py::arg("nl"), py::arg("dl"), py::arg("band"),
              py::arg("prio"), py::arg("V"), py::arg("offsets"), py::arg("N"), py::arg("Dp"),
-             py::arg("ids"), py::arg("coplanar_ulps"), py::arg("tie_slack_ulps"))
+             py::arg("ids"), py::arg("coplanar_ulps"), py::arg("tie_slack_ulps"),
+             py::arg("clip_meet_ulps"), py::arg("chart_edge_ulps"))
         .def("face", &ZBuffer::face, py::arg("UV"), py::arg("cl"), py::arg("src"),
              py::arg("uc"), py::arg("vc"), py::arg("table"), py::arg("best_t"),
              py::arg("best"), py::arg("pair_chunk"), py::arg("depth_chunk"))
@@ -753,6 +756,7 @@ PYBIND11_MODULE(_zbuffer, m) {
         .def("coplanar", &ZBuffer::coplanar_many, py::arg("a"), py::arg("b"));
     m.def("chart_clip", &ZBuffer::chart_clip, py::arg("V"), py::arg("counts"), py::arg("planes"),
           py::arg("eu"), py::arg("ev"), py::arg("ew"), py::arg("side"),
+          py::arg("clip_meet_ulps"), py::arg("chart_edge_ulps"),
           "exactff.visibility.charts.chart_clip (margin 0) of one bucket, compiled: "
           "(live, UV, cl).");
 }
