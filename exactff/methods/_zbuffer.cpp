@@ -102,6 +102,9 @@ class ZBuffer {
             throw std::invalid_argument("D must have shape (C, 3)");
         n_cells_ = D.shape(0);
         n_live_ = dl.shape(0);
+        D_p_ = D_.data();
+        nl_p_ = nl_.data();
+        dl_p_ = dl_.data();
         if (Dnorm.shape(0) != n_cells_)
             throw std::invalid_argument("Dnorm must have shape (C,)");
         if (nl.ndim() != 2 || nl.shape(0) != n_live_ || nl.shape(1) != 3 ||
@@ -202,13 +205,8 @@ class ZBuffer {
         double* bt = static_cast<double*>(best_t.mutable_data());
         i64* bs = static_cast<i64*>(best.mutable_data());
         py::gil_scoped_release release;
-        cells_.clear();
-        srcs_.clear();
-        for (i64 k = 0; k < n; ++k) {
-            cells_.push_back(c[k]);
-            srcs_.push_back(s[k]);
-            if (static_cast<i64>(cells_.size()) == depth_chunk) flush(bt, bs);
-        }
+        sc_ = &scratch(n_cells_);
+        for (i64 k = 0; k < n; ++k) add(c[k], s[k], bt, bs, depth_chunk);
         flush(bt, bs);
     }
 
@@ -257,8 +255,7 @@ class ZBuffer {
         i64 pairs_in_chunk = 0;
         std::vector<double> X;
         X.reserve(static_cast<size_t>(K));
-        cells_.clear();
-        srcs_.clear();
+        sc_ = &scratch(n_cells_);
         for (i64 m = 0; m < M; ++m) {
             const double* P = uv + m * K * 2;
             const i64 n = c[m];
@@ -296,9 +293,7 @@ class ZBuffer {
                     for (i64 col = ia; col < ib; ++col) {
                         const i64 cell = tab[r * nv + col];
                         if (cell < 0) continue;
-                        cells_.push_back(cell);
-                        srcs_.push_back(sm);
-                        if (static_cast<i64>(cells_.size()) == depth_chunk) flush(bt, bs);
+                        add(cell, sm, bt, bs, depth_chunk);
                     }
                 }
                 if (++pairs_in_chunk == step) {
@@ -617,39 +612,34 @@ class ZBuffer {
     }
 
     // resolve_depths on the buffered candidates
+    // one candidate (cell, live polygon) of the current chunk: its depth, the cell's
+    // nearest depth so far; a ray along its polygon's plane hits nothing
+    inline void add(i64 cell, i64 s, double* best_t, i64* best, i64 depth_chunk) {
+        const double den = dot3(nl_p_ + 3 * s, D_p_ + 3 * cell);
+        const double t = dl_p_[s] / den;
+        if (std::isfinite(t)) {
+            CellScratch& c = (*sc_)[cell];
+            if (c.t_min == INF) touched_.push_back(cell);
+            if (t < c.t_min) c.t_min = t;
+            cells_.push_back(cell);
+            srcs_.push_back(s);
+            cand_t_.push_back(t);
+            cand_den_.push_back(den);
+        }
+        // the numpy code's chunks count every candidate, hit or not
+        if (++in_chunk_ == depth_chunk) flush(best_t, best);
+    }
+
+    // resolve_depths on the chunk's candidates, merged into the buffer
     void flush(double* best_t, i64* best) {
-        const size_t n0 = cells_.size();
-        if (n0 == 0) return;
-        const double* D = D_.data();
+        in_chunk_ = 0;
+        const size_t n = cells_.size();
+        if (n == 0) return;
         const double* Dn = Dnorm_.data();
-        const double* nl = nl_.data();
         const double* dl = dl_.data();
         const double* band = band_.data();
         const i64* prio = prio_.data();
-        // depths; a ray along its polygon's plane hits nothing
-        cand_t_.resize(n0);
-        cand_den_.resize(n0);
-        size_t n = 0;
-        for (size_t k = 0; k < n0; ++k) {
-            const i64 cell = cells_[k], s = srcs_[k];
-            const double den = dot3(nl + 3 * s, D + 3 * cell);
-            const double t = dl[s] / den;
-            if (!std::isfinite(t)) continue;
-            cells_[n] = cell;
-            srcs_[n] = s;
-            cand_t_[n] = t;
-            cand_den_[n] = den;
-            ++n;
-        }
-        // per-cell scratch of this thread, left reset after every chunk
-        std::vector<CellScratch>& sc = scratch(n_cells_);
-        // the nearest depth per cell
-        touched_.clear();
-        for (size_t k = 0; k < n; ++k) {
-            CellScratch& c = sc[cells_[k]];
-            if (c.t_min == INF) touched_.push_back(cells_[k]);
-            if (cand_t_[k] < c.t_min) c.t_min = cand_t_[k];
-        }
+        std::vector<CellScratch>& sc = *sc_;
         // one of the polygons at the nearest depth (the last, as numpy's assignment),
         // and of the polygons there the one of lowest priority (priorities are
         // distinct per polygon; a polygon is a candidate of a cell once in a chunk)
@@ -704,6 +694,9 @@ class ZBuffer {
         }
         cells_.clear();
         srcs_.clear();
+        cand_t_.clear();
+        cand_den_.clear();
+        touched_.clear();
     }
 
     py::array_t<double, py::array::c_style | py::array::forcecast> D_, Dnorm_, nl_, dl_, band_;
@@ -718,6 +711,9 @@ class ZBuffer {
     std::vector<i64> cells_, srcs_;
     std::vector<double> cand_t_, cand_den_;
     std::vector<i64> touched_;
+    i64 in_chunk_ = 0;                       // candidates in the chunk, hit or not
+    std::vector<CellScratch>* sc_ = nullptr;  // this thread's per-cell scratch
+    const double *D_p_ = nullptr, *nl_p_ = nullptr, *dl_p_ = nullptr;
     std::unordered_map<std::uint64_t, bool> cache_;
     std::uint64_t last_key_ = ~std::uint64_t(0);
     bool last_value_ = false;
