@@ -1,7 +1,7 @@
 """Build of the compiled visibility core (exactff.visibility._svbsp), of the area
-code's hidden regions (exactff.area._hidden) and of the unoccluded rows' sector sums
-(exactff.kernel._sector); the rest of the
-project's metadata is in pyproject.toml."""
+code's hidden regions (exactff.area._hidden), of the unoccluded rows' sector sums
+(exactff.kernel._sector) and of the discrete methods' z-buffer (exactff.methods._zbuffer);
+the rest of the project's metadata is in pyproject.toml."""
 
 import platform
 
@@ -19,11 +19,17 @@ setup(
                                    cxx_std=17, extra_compile_args=["-O2"],
                                    extra_link_args=QUADMATH),
                  Pybind11Extension("exactff.area._hidden", ["exactff/area/_hidden.cpp"],
-                                   depends=["exactff/kernel/_sector_term.h"], cxx_std=17, extra_compile_args=["-O3", "-fno-math-errno"]),
+                                   depends=["exactff/kernel/_sector_term.h"], cxx_std=17,
+                                   extra_compile_args=["-O3", "-fno-math-errno"]),
                  # the same arithmetic as kernel/sector.py's numpy: no contraction into
                  # fused multiply-adds, no reassociation
                  Pybind11Extension("exactff.kernel._sector", ["exactff/kernel/_sector.cpp"],
-                                   depends=["exactff/kernel/_sector_term.h"], cxx_std=17, extra_compile_args=["-O3", "-fno-math-errno",
-                                                                   "-ffp-contract=off"])],
+                                   depends=["exactff/kernel/_sector_term.h"], cxx_std=17,
+                                   extra_compile_args=["-O3", "-fno-math-errno",
+                                                       "-ffp-contract=off"]),
+                 # no contraction into fused multiply-adds: the z-buffer mirrors the numpy
+                 # rasteriser's expressions bit for bit
+                 Pybind11Extension("exactff.methods._zbuffer", ["exactff/methods/_zbuffer.cpp"],
+                                   cxx_std=17, extra_compile_args=["-O2", "-ffp-contract=off"])],
     cmdclass={"build_ext": build_ext},
 )

@@ -17,16 +17,44 @@ in exactly one). The depth test is the shared depth buffer
   to the horizon and projected once; every edge's image is an ellipse arc (Eq. 2),
   split at its extreme in y (monotone-span splitting, as for Eq. 3, here across rows)
   so that each piece crosses a row at most once; the crossing solves a quadratic.
+
+:func:`rasterise_face` has a compiled backend (:func:`compiled_zbuffer`,
+``exactff/methods/_zbuffer.cpp``): the same clipping of a chart, scanlines, spans,
+chunks and depth rule in C++, cell for cell (the numpy code here is its oracle).
 """
 
 import numpy as np
 
 from .. import _tolerances as tol
 from ..halfspace import clip_halfspace
-from ..visibility.charts import chart_clip
+from ..visibility.charts import chart_clip, chart_planes
 from ._sampling import PAIR_CHUNK, resolve_depths
+from ._zbuffer import ZBuffer
 
-__all__ = ["rasterise_face", "rasterise_disk", "rasterise_polar", "face_clipper", "DEPTH_CHUNK"]
+__all__ = ["rasterise_face", "rasterise_disk", "rasterise_polar", "face_clipper", "DEPTH_CHUNK",
+           "compiled_zbuffer", "BACKENDS", "check_backend"]
+
+#: Where the native rasterisers scan-convert and depth-test: "compiled" (the C++
+#: z-buffer, exactff.methods._zbuffer) or "numpy" (vectorised numpy; its oracle)
+BACKENDS = ("compiled", "numpy")
+
+
+def check_backend(backend):
+    """The backend name, checked against :data:`BACKENDS`."""
+    if backend not in BACKENDS:
+        raise ValueError(f"backend must be one of {list(BACKENDS)}, got {backend!r}")
+    return backend
+
+
+def compiled_zbuffer(z, layout):
+    """The compiled z-buffer (``exactff.methods._zbuffer.ZBuffer``) of one row: the
+    layout's cell directions and the live polygons' depth data of ``z``
+    (:class:`ZBufferRow`), with the scene's planes for the coplanar rule."""
+    s = z.scene
+    return ZBuffer(layout.directions, layout.direction_norms, z.nl, z.dl, z.band, z.prio,
+                   s.vertices, s.offsets, s.normals, s.plane_offsets, z.ids,
+                   tol.BSP_COPLANAR_ULPS, tol.ZBUFFER_ROUNDING_ULPS + 1.0, tol.CLIP_MEET_ULPS,
+                   tol.CHART_EDGE_ULPS)
 
 
 def _first_at_or_above(centres, x):
@@ -113,7 +141,7 @@ def face_clipper(eu, ev, ew, planes):
     return clip
 
 
-def rasterise_face(z, chart, uc, vc, cell_of, D, best_t, best, clip=None):
+def rasterise_face(z, chart, uc, vc, cell_of, D, best_t, best, clip=None, zbuffer=None):
     """Scan-convert every live polygon on one planar face; depth-test into the buffer.
 
     Parameters
@@ -134,10 +162,29 @@ def rasterise_face(z, chart, uc, vc, cell_of, D, best_t, best, clip=None):
     clip : callable, optional
         ``clip(V, counts) -> (live, UV, counts)``: the face's frustum clipping and
         projection (:func:`face_clipper`); default the chart's.
+    zbuffer : exactff.methods._zbuffer.ZBuffer, optional
+        The row's compiled z-buffer (:func:`compiled_zbuffer`): scan conversion and
+        depth test in C++, cell for cell as here; default the numpy code below.
     """
+    if zbuffer is not None:
+        table = np.ascontiguousarray(np.broadcast_to(
+            cell_of(np.arange(len(uc))[:, None], np.arange(len(vc))[None, :]),
+            (len(uc), len(vc))), dtype=np.int64)
+        if clip is None:
+            planes = np.array(chart_planes(chart))
     for g_ids, V, counts in z.local:
+        if zbuffer is not None and clip is None:
+            # the chart's clipping (chart_clip, bit for bit) compiled too
+            zbuffer.chart_face(V, counts, g_ids, planes, *chart, uc, vc, table, best_t, best,
+                               PAIR_CHUNK, DEPTH_CHUNK)
+            continue
         live, UV, cl = chart_clip(V, counts, chart) if clip is None else clip(V, counts)
         if len(live) == 0:
+            continue
+        if zbuffer is not None:
+            # the same scanlines (along u), spans (along v), chunks and depth rule
+            zbuffer.face(UV, cl, g_ids[live], uc, vc, table, best_t, best, PAIR_CHUNK,
+                         DEPTH_CHUNK)
             continue
         # scanlines u = const, spans along v: the layout's fast axis (cell index
         # ``cell_of(i, j)`` grows by one along v), so a span is a run of cells

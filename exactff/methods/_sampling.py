@@ -63,6 +63,13 @@ class CellLayout:
         return len(self.weights)
 
     @property
+    def direction_norms(self):
+        """Norms of the directions (1 to rounding; cached), for the depth-tie slack."""
+        if getattr(self, "_norms", None) is None:
+            self._norms = np.linalg.norm(self.directions, axis=1)
+        return self._norms
+
+    @property
     def missed(self):
         """Form factor of the part of the hemisphere no cell covers."""
         return 1.0 - self.covered
@@ -136,6 +143,8 @@ class ZBufferRow:
     nl, dl : ndarray
         Local unit normals and ``n . (c - p)``: the depth along a direction d is
         ``dl / (nl . d)``.
+    scene : Scene
+        The scene (its planes decide the coplanar ties).
     band, prio : ndarray
         Depth-tie band (the near-coplanar band of each polygon's plane,
         :func:`exactff.predicates.polygon_coplanar_bands`, the BSP tree's, plus the
@@ -182,11 +191,11 @@ class ZBufferRow:
         self.band = (_scene_bands(scene)[ids]
                      + tol.ZBUFFER_ROUNDING_ULPS * tol.EPS * np.linalg.norm(rel, axis=1))
         self.prio = tie_priority(side)[ids]
-        self._scene = scene
+        self.scene = scene
 
     def coplanar(self, i, j):
         """Whether live polygons ``i[k]`` and ``j[k]`` are coplanar (the BSP's rule)."""
-        s = self._scene
+        s = self.scene
         return coplanar_pairs(s.vertices, s.offsets, s.normals, s.plane_offsets,
                               self.ids[i], self.ids[j])
 

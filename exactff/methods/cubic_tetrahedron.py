@@ -2,7 +2,7 @@
 
 import numpy as np
 
-from ._raster import face_clipper, rasterise_face
+from ._raster import check_backend, compiled_zbuffer, face_clipper, rasterise_face
 from ._sampling import CellLayout, SampledMethod, ZBufferRow, resolution_from
 
 __all__ = ["CubicTetrahedron", "cubic_tetrahedron_frame"]
@@ -51,6 +51,10 @@ class CubicTetrahedron(SampledMethod):
         (its triangle above the base) and scan-converted on the face's grid
         (:func:`exactff.methods._raster.rasterise_face`). False: the shared sampling
         core (the test oracle).
+    backend : {"compiled", "numpy"}, default "compiled"
+        Where the native rasterisation runs: the compiled z-buffer
+        (``exactff.methods._zbuffer``, C++ without the GIL) or the vectorised numpy
+        code, its test oracle; the two give the same polygon in every cell.
 
     Examples
     --------
@@ -63,9 +67,10 @@ class CubicTetrahedron(SampledMethod):
 
     name = "cubic_tetrahedron"
 
-    def __init__(self, resolution=None, *, samples=None, native=True):
+    def __init__(self, resolution=None, *, samples=None, native=True, backend="compiled"):
         self.resolution = resolution_from(resolution, samples, 1.5)
         self.native = bool(native)
+        self.backend = check_backend(backend)
         self._layout = None
 
     def build_layout(self):
@@ -95,7 +100,8 @@ class CubicTetrahedron(SampledMethod):
         up = np.array([0.0, 0.0, 1.0])
         z = ZBufferRow(scene, point, normal)
         best_t = np.full(len(L), np.inf)
-        best = np.full(len(L), -1)
+        best = np.full(len(L), -1, dtype=np.int64)
+        zb = compiled_zbuffer(z, L) if self.backend == "compiled" else None
         # the faces x' = 1, y' = 1, z' = 1 in the layout's order, each with the plane
         # axes of its grid (v, w); the frustum: u, v <= 1 and above the base
         for k, (ew, eu, ev) in enumerate(((a1, a2, a3), (a2, a3, a1), (a3, a1, a2))):
@@ -103,9 +109,11 @@ class CubicTetrahedron(SampledMethod):
             index_of[keep] = k * n_face + np.arange(n_face)
             clip = face_clipper(eu, ev, ew, [ew - eu, ew - ev, up])
             rasterise_face(z, None, c, c, lambda i, j, m=index_of: m[i * r + j],
-                           L.directions, best_t, best, clip=clip)
+                           L.directions, best_t, best, clip=clip, zbuffer=zb)
         return z.hits(best)
 
     def __repr__(self):
         extra = "" if self.native else ", native=False"
+        if self.backend != "compiled":
+            extra += f", backend={self.backend!r}"
         return f"CubicTetrahedron(resolution={self.resolution}{extra})"

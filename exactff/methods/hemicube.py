@@ -3,7 +3,7 @@
 import numpy as np
 
 from ..visibility.charts import CHARTS
-from ._raster import rasterise_face
+from ._raster import check_backend, compiled_zbuffer, rasterise_face
 from ._sampling import CellLayout, SampledMethod, ZBufferRow, resolution_from
 
 __all__ = ["Hemicube"]
@@ -40,6 +40,10 @@ class Hemicube(SampledMethod):
         (:func:`exactff.methods._raster.rasterise_face`). False: the shared sampling
         core (the test oracle; the same cells, the same rows up to cells exactly on
         an edge).
+    backend : {"compiled", "numpy"}, default "compiled"
+        Where the native rasterisation runs: the compiled z-buffer
+        (``exactff.methods._zbuffer``, C++ without the GIL) or the vectorised numpy
+        code, its test oracle; the two give the same polygon in every cell.
 
     Examples
     --------
@@ -52,9 +56,10 @@ class Hemicube(SampledMethod):
 
     name = "hemicube"
 
-    def __init__(self, resolution=None, *, samples=None, native=True):
+    def __init__(self, resolution=None, *, samples=None, native=True, backend="compiled"):
         self.resolution = resolution_from(resolution, samples, 3.0, even=True)
         self.native = bool(native)
+        self.backend = check_backend(backend)
         self._layout = None
 
     def build_layout(self):
@@ -81,17 +86,20 @@ class Hemicube(SampledMethod):
         cz, _ = _grid(r // 2, 0.0, 1.0)
         z = ZBufferRow(scene, point, normal)
         best_t = np.full(len(L), np.inf)
-        best = np.full(len(L), -1)
+        best = np.full(len(L), -1, dtype=np.int64)
+        zb = compiled_zbuffer(z, L) if self.backend == "compiled" else None
         # the top face (r x r cells), then the four half side faces (r x r/2 each), in
         # the layout's order; the faces are the engine's charts
         rasterise_face(z, CHARTS[0], c, c, lambda i, j: i * r + j, L.directions,
-                       best_t, best)
+                       best_t, best, zbuffer=zb)
         for k in range(4):
             off = r * r + k * r * (r // 2)
             rasterise_face(z, CHARTS[1 + k], c, cz, lambda i, j, off=off: off + i * (r // 2) + j,
-                           L.directions, best_t, best)
+                           L.directions, best_t, best, zbuffer=zb)
         return z.hits(best)
 
     def __repr__(self):
         extra = "" if self.native else ", native=False"
+        if self.backend != "compiled":
+            extra += f", backend={self.backend!r}"
         return f"Hemicube(resolution={self.resolution}{extra})"

@@ -2,7 +2,7 @@
 
 import numpy as np
 
-from ._raster import face_clipper, rasterise_face
+from ._raster import check_backend, compiled_zbuffer, face_clipper, rasterise_face
 from ._sampling import (CellLayout, SampledMethod, ZBufferRow, check_resolution,
                         resolution_from)
 
@@ -70,6 +70,10 @@ class SinglePlane(SampledMethod):
         scan-converted on the plane's grid (two grids for ``"uniform_refined"``)
         (:func:`exactff.methods._raster.rasterise_face`). False: the shared sampling
         core (the test oracle).
+    backend : {"compiled", "numpy"}, default "compiled"
+        Where the native rasterisation runs: the compiled z-buffer
+        (``exactff.methods._zbuffer``, C++ without the GIL) or the vectorised numpy
+        code, its test oracle; the two give the same polygon in every cell.
 
     Examples
     --------
@@ -85,7 +89,7 @@ class SinglePlane(SampledMethod):
     name = "single_plane"
 
     def __init__(self, resolution=None, *, samples=None, extent=4.0, cells="equal_ff",
-                 refine=2, native=True):
+                 refine=2, native=True, backend="compiled"):
         if cells not in ("equal_ff", "uniform", "uniform_refined"):
             raise ValueError(f"cells must be 'equal_ff', 'uniform' or 'uniform_refined', "
                              f"got {cells!r}")
@@ -96,6 +100,7 @@ class SinglePlane(SampledMethod):
         self.extent = float(extent)
         self.cells = cells
         self.native = bool(native)
+        self.backend = check_backend(backend)
         self._layout = None
 
     def _cells(self):
@@ -151,7 +156,8 @@ class SinglePlane(SampledMethod):
         clip = face_clipper(X, Y, Z, [E * Z - X, E * Z + X, E * Z - Y, E * Z + Y])
         z = ZBufferRow(scene, point, normal)
         best_t = np.full(len(L), np.inf)
-        best = np.full(len(L), -1)
+        best = np.full(len(L), -1, dtype=np.int64)
+        zb = compiled_zbuffer(z, L) if self.backend == "compiled" else None
         # each grid of cell centres (the plane's, or the coarse and the fine ones of
         # the refined variant), scan-converted on its own rows and columns
         for x, y, index in self._cells()[3]:
@@ -159,10 +165,12 @@ class SinglePlane(SampledMethod):
             m = np.full(len(xs) * len(ys), -1)
             m[np.searchsorted(xs, x) * len(ys) + np.searchsorted(ys, y)] = index
             rasterise_face(z, None, xs, ys, lambda i, j, m=m, n=len(ys): m[i * n + j],
-                           L.directions, best_t, best, clip=clip)
+                           L.directions, best_t, best, clip=clip, zbuffer=zb)
         return z.hits(best)
 
     def __repr__(self):
         extra = "" if self.native else ", native=False"
+        if self.backend != "compiled":
+            extra += f", backend={self.backend!r}"
         return (f"SinglePlane(resolution={self.resolution}, extent={self.extent}, "
                 f"cells={self.cells!r}{extra})")

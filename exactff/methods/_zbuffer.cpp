@@ -1,0 +1,758 @@
+// The compiled z-buffer of the discrete methods (issue 55): scan conversion of
+// polygons already clipped and projected onto a method's planar face, and the depth
+// buffer, one row at a time.
+//
+// It does what the numpy rasteriser does (exactff/methods/_raster.py,
+// rasterise_face, and exactff/methods/_sampling.py, resolve_depths), cell for cell,
+// so that the numpy code stays its test oracle:
+//
+// - scanlines at the face's row centres within each polygon's extent; an edge
+//   crosses a scanline y when exactly one end point is above it ("at or below" to
+//   "above"), and the crossing is evaluated from the edge's lower end point,
+//   x = a_x + (y - a_y) (c_x - a_x) / (c_y - a_y), so that an edge shared by two
+//   polygons gives the same crossing in both; crossings sorted, spans [x1, x2),
+//   [x3, x4), ... of cell centres (even-odd rule);
+// - the depth along a cell's direction d, t = n . (c - p) / (n . d); of the polygons
+//   at the nearest depth and those tied with them (coplanar by the BSP tree's rule,
+//   exactff.predicates.coplanar_pairs), the one of lowest tie priority
+//   (exactff.predicates.tie_priority);
+// - candidates are resolved in the same chunks as the numpy code (PAIR_CHUNK
+//   polygon-scanline pairs, DEPTH_CHUNK candidates), with the same rule inside a
+//   chunk and across chunks, so that even a depth tie that is not transitive (three
+//   polygons, two pairs coplanar) resolves identically;
+// - every floating-point expression in the numpy order (numpy's einsum over three
+//   components adds the first and third products, then the second).
+//
+// The work runs without the GIL.
+
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <stdexcept>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+namespace py = pybind11;
+
+namespace {
+
+using i64 = std::int64_t;
+constexpr double INF = std::numeric_limits<double>::infinity();
+// unit roundoff (exactff._tolerances.EPS)
+constexpr double EPS = 1.1102230246251565e-16;
+
+// numpy's einsum("ij,ij->i") over three components: (x0 y0 + x2 y2) + x1 y1
+inline double dot3(const double* a, const double* b) {
+    return (a[0] * b[0] + a[2] * b[2]) + a[1] * b[1];
+}
+
+inline double absdot3(const double* a, const double* b) {
+    return (std::fabs(a[0]) * std::fabs(b[0]) + std::fabs(a[2]) * std::fabs(b[2]))
+           + std::fabs(a[1]) * std::fabs(b[1]);
+}
+
+// the depth buffer's per-cell scratch within a chunk
+struct CellScratch {
+    double t_min = INF;                                  // the nearest depth
+    std::int64_t near = -1;                              // a polygon at that depth
+    std::int64_t p_min = std::numeric_limits<std::int64_t>::max();   // the lowest priority tied
+    std::int64_t pick = -1;                              // its polygon
+};
+
+// one scratch per thread, grown as needed and reset cell by cell after every chunk
+// (a row's buffer of 200,000 cells is not allocated and cleared again row by row)
+std::vector<CellScratch>& scratch(std::int64_t n_cells) {
+    thread_local std::vector<CellScratch> sc;
+    if (static_cast<std::int64_t>(sc.size()) < n_cells) sc.resize(static_cast<size_t>(n_cells));
+    return sc;
+}
+
+class ZBuffer {
+  public:
+    // D (C, 3) cell directions, Dnorm (C,) their norms (np.linalg.norm, passed in so
+    // that they are numpy's); nl (L, 3), dl (L,), band (L,), prio (L,) the live
+    // polygons' depth data (ZBufferRow); V, offsets, N, Dp, ids the scene's polygons
+    // and planes and the live polygons' scene indices (the coplanar rule);
+    // coplanar_ulps: exactff._tolerances.BSP_COPLANAR_ULPS; tie_slack_ulps:
+    // ZBUFFER_ROUNDING_ULPS + 1; clip_meet_ulps, chart_edge_ulps: CLIP_MEET_ULPS and
+    // CHART_EDGE_ULPS (the chart clipper's).
+    ZBuffer(py::array_t<double, py::array::c_style | py::array::forcecast> D,
+            py::array_t<double, py::array::c_style | py::array::forcecast> Dnorm,
+            py::array_t<double, py::array::c_style | py::array::forcecast> nl,
+            py::array_t<double, py::array::c_style | py::array::forcecast> dl,
+            py::array_t<double, py::array::c_style | py::array::forcecast> band,
+            py::array_t<i64, py::array::c_style | py::array::forcecast> prio,
+            py::array_t<double, py::array::c_style | py::array::forcecast> V,
+            py::array_t<i64, py::array::c_style | py::array::forcecast> offsets,
+            py::array_t<double, py::array::c_style | py::array::forcecast> N,
+            py::array_t<double, py::array::c_style | py::array::forcecast> Dp,
+            py::array_t<i64, py::array::c_style | py::array::forcecast> ids,
+            double coplanar_ulps, double tie_slack_ulps, double clip_meet_ulps,
+            double chart_edge_ulps)
+        : D_(D), Dnorm_(Dnorm), nl_(nl), dl_(dl), band_(band), prio_(prio), V_(V),
+          offsets_(offsets), N_(N), Dp_(Dp), ids_(ids), coplanar_ulps_(coplanar_ulps),
+          tie_slack_ulps_(tie_slack_ulps), clip_meet_ulps_(clip_meet_ulps),
+          chart_edge_ulps_(chart_edge_ulps) {
+        if (D.ndim() != 2 || D.shape(1) != 3)
+            throw std::invalid_argument("D must have shape (C, 3)");
+        n_cells_ = D.shape(0);
+        n_live_ = dl.shape(0);
+        D_p_ = D_.data();
+        nl_p_ = nl_.data();
+        dl_p_ = dl_.data();
+        if (Dnorm.shape(0) != n_cells_)
+            throw std::invalid_argument("Dnorm must have shape (C,)");
+        if (nl.ndim() != 2 || nl.shape(0) != n_live_ || nl.shape(1) != 3 ||
+            band.shape(0) != n_live_ || prio.shape(0) != n_live_ || ids.shape(0) != n_live_)
+            throw std::invalid_argument("nl, dl, band, prio, ids: one row per live polygon");
+        if (V.ndim() != 2 || V.shape(1) != 3 || N.ndim() != 2 || N.shape(1) != 3 ||
+            offsets.shape(0) != N.shape(0) + 1 || Dp.shape(0) != N.shape(0))
+            throw std::invalid_argument("V, offsets, N, Dp: the scene's polygons and planes");
+    }
+
+    // Scan-convert M polygons on a face and depth-test them into (best_t, best).
+    // UV (M, K, 2): face coordinates, padded by repeating the last vertex; scanlines
+    // along UV[..., 0] at centres uc, spans along UV[..., 1] over centres vc;
+    // cl (M,) vertex counts; src (M,) live indices; table (len(uc), len(vc)) the
+    // layout's cell of each grid cell (-1: none).
+    void face(py::array_t<double, py::array::c_style | py::array::forcecast> UV,
+              py::array_t<i64, py::array::c_style | py::array::forcecast> cl,
+              py::array_t<i64, py::array::c_style | py::array::forcecast> src,
+              py::array_t<double, py::array::c_style | py::array::forcecast> uc,
+              py::array_t<double, py::array::c_style | py::array::forcecast> vc,
+              py::array_t<i64, py::array::c_style | py::array::forcecast> table,
+              py::array best_t, py::array best, i64 pair_chunk,
+              i64 depth_chunk) {
+        if (UV.ndim() != 3 || UV.shape(2) != 2)
+            throw std::invalid_argument("UV must have shape (M, K, 2)");
+        const i64 M = UV.shape(0), K = UV.shape(1);
+        if (cl.shape(0) != M || src.shape(0) != M)
+            throw std::invalid_argument("cl and src must have shape (M,)");
+        const i64 nu = uc.shape(0), nv = vc.shape(0);
+        if (table.ndim() != 2 || table.shape(0) != nu || table.shape(1) != nv)
+            throw std::invalid_argument("table must have shape (len(uc), len(vc))");
+        check_buffer(best_t, best);
+        const double* uv = UV.data();
+        const i64* c = cl.data();
+        const i64* s = src.data();
+        const double* u = uc.data();
+        const double* v = vc.data();
+        const i64* tab = table.data();
+        double* bt = static_cast<double*>(best_t.mutable_data());
+        i64* bs = static_cast<i64*>(best.mutable_data());
+        for (i64 m = 0; m < M; ++m) {
+            if (s[m] < 0 || s[m] >= n_live_)
+                throw std::invalid_argument("src out of range");
+            if (c[m] > K) throw std::invalid_argument("cl exceeds K");
+        }
+        py::gil_scoped_release release;
+        scan(uv, M, K, c, s, nullptr, u, nu, v, nv, tab, bt, bs, pair_chunk, depth_chunk);
+    }
+
+    // The same for one bucket of polygons (local frame) clipped to a chart's frustum
+    // first, as exactff.visibility.charts.chart_clip does (clip_chart below): V (M, K,
+    // 3) padded vertices, counts (M,), g_ids (M,) their live indices, the chart's
+    // frustum planes (4, 3) and axes.
+    void chart_face(py::array_t<double, py::array::c_style | py::array::forcecast> V,
+                    py::array_t<i64, py::array::c_style | py::array::forcecast> counts,
+                    py::array_t<i64, py::array::c_style | py::array::forcecast> g_ids,
+                    py::array_t<double, py::array::c_style | py::array::forcecast> planes,
+                    py::array_t<double, py::array::c_style | py::array::forcecast> eu,
+                    py::array_t<double, py::array::c_style | py::array::forcecast> ev,
+                    py::array_t<double, py::array::c_style | py::array::forcecast> ew,
+                    bool side,
+                    py::array_t<double, py::array::c_style | py::array::forcecast> uc,
+                    py::array_t<double, py::array::c_style | py::array::forcecast> vc,
+                    py::array_t<i64, py::array::c_style | py::array::forcecast> table,
+                    py::array best_t, py::array best, i64 pair_chunk, i64 depth_chunk) {
+        const i64 M = check_bucket(V, counts, planes, eu, ev, ew);
+        if (g_ids.shape(0) != M) throw std::invalid_argument("g_ids must have shape (M,)");
+        const i64 nu = uc.shape(0), nv = vc.shape(0);
+        if (table.ndim() != 2 || table.shape(0) != nu || table.shape(1) != nv)
+            throw std::invalid_argument("table must have shape (len(uc), len(vc))");
+        check_buffer(best_t, best);
+        for (i64 m = 0; m < M; ++m)
+            if (g_ids.data()[m] < 0 || g_ids.data()[m] >= n_live_)
+                throw std::invalid_argument("g_ids out of range");
+        double* bt = static_cast<double*>(best_t.mutable_data());
+        i64* bs = static_cast<i64*>(best.mutable_data());
+        py::gil_scoped_release release;
+        Clipped c;
+        clip_chart(V.data(), M, V.shape(1), counts.data(), planes.data(), eu.data(), ev.data(),
+                   ew.data(), side, clip_meet_ulps_, chart_edge_ulps_, c);
+        scan(c.UV.data(), static_cast<i64>(c.live.size()), c.K, c.cl.data(), g_ids.data(),
+             c.live.data(), uc.data(), nu, vc.data(), nv, table.data(), bt, bs, pair_chunk,
+             depth_chunk);
+    }
+
+    // Depth-test candidate (cell, live polygon) pairs, in chunks of depth_chunk.
+    void candidates(py::array_t<i64, py::array::c_style | py::array::forcecast> cell,
+                    py::array_t<i64, py::array::c_style | py::array::forcecast> src,
+                    py::array best_t, py::array best, i64 depth_chunk) {
+        check_buffer(best_t, best);
+        const i64 n = cell.shape(0);
+        if (src.shape(0) != n) throw std::invalid_argument("cell and src differ in length");
+        const i64* c = cell.data();
+        const i64* s = src.data();
+        for (i64 k = 0; k < n; ++k)
+            if (c[k] < 0 || c[k] >= n_cells_ || s[k] < 0 || s[k] >= n_live_)
+                throw std::invalid_argument("cell or src out of range");
+        double* bt = static_cast<double*>(best_t.mutable_data());
+        i64* bs = static_cast<i64*>(best.mutable_data());
+        py::gil_scoped_release release;
+        sc_ = &scratch(n_cells_);
+        for (i64 k = 0; k < n; ++k) add(c[k], s[k], bt, bs, depth_chunk);
+        flush(bt, bs);
+    }
+
+    // exactff.visibility.charts.chart_clip (margin 0) of one bucket: (live, UV, cl)
+    static py::tuple chart_clip(py::array_t<double, py::array::c_style | py::array::forcecast> V,
+                                py::array_t<i64, py::array::c_style | py::array::forcecast> counts,
+                                py::array_t<double, py::array::c_style | py::array::forcecast> planes,
+                                py::array_t<double, py::array::c_style | py::array::forcecast> eu,
+                                py::array_t<double, py::array::c_style | py::array::forcecast> ev,
+                                py::array_t<double, py::array::c_style | py::array::forcecast> ew,
+                                bool side, double clip_meet_ulps, double chart_edge_ulps) {
+        const i64 M = check_bucket(V, counts, planes, eu, ev, ew);
+        Clipped c;
+        {
+            py::gil_scoped_release release;
+            clip_chart(V.data(), M, V.shape(1), counts.data(), planes.data(), eu.data(),
+                       ev.data(), ew.data(), side, clip_meet_ulps, chart_edge_ulps, c);
+        }
+        const i64 L = static_cast<i64>(c.live.size());
+        py::array_t<i64> live(L), cl(L);
+        py::array_t<double> UV({L, c.K, static_cast<i64>(2)});
+        std::copy(c.live.begin(), c.live.end(), live.mutable_data());
+        std::copy(c.cl.begin(), c.cl.end(), cl.mutable_data());
+        std::copy(c.UV.begin(), c.UV.end(), UV.mutable_data());
+        return py::make_tuple(live, UV, cl);
+    }
+
+    // whether live polygons a[k] and b[k] are coplanar (the BSP tree's rule)
+    py::array_t<bool> coplanar_many(py::array_t<i64, py::array::c_style | py::array::forcecast> a,
+                                    py::array_t<i64, py::array::c_style | py::array::forcecast> b) {
+        const i64 n = a.shape(0);
+        py::array_t<bool> out(n);
+        bool* o = out.mutable_data();
+        for (i64 k = 0; k < n; ++k) o[k] = coplanar(a.data()[k], b.data()[k]);
+        return out;
+    }
+
+  private:
+    // scan conversion of M polygons UV (M, K, 2) with counts c, live indices
+    // src[pos[m]] (pos null: src[m]), into the depth buffer
+    void scan(const double* uv, i64 M, i64 K, const i64* c, const i64* src, const i64* pos,
+              const double* u, i64 nu, const double* v, i64 nv, const i64* tab, double* bt,
+              i64* bs, i64 pair_chunk, i64 depth_chunk) {
+        // the numpy code's chunks: (polygon, scanline) pairs by PAIR_CHUNK // K
+        const i64 step = std::max<i64>(1, pair_chunk / std::max<i64>(K, 1));
+        i64 pairs_in_chunk = 0;
+        std::vector<double> X;
+        X.reserve(static_cast<size_t>(K));
+        sc_ = &scratch(n_cells_);
+        for (i64 m = 0; m < M; ++m) {
+            const double* P = uv + m * K * 2;
+            const i64 n = c[m];
+            const i64 sm = src[pos ? pos[m] : m];
+            // the scanlines whose centre lies in [min y, max y] (none if a coordinate
+            // is NaN, as numpy's min and searchsorted have it)
+            double lo = INF, hi = -INF;
+            bool nan = false;
+            for (i64 e = 0; e < K; ++e) {
+                const double y = P[2 * e];
+                if (std::isnan(y)) nan = true;
+                lo = std::min(lo, y);
+                hi = std::max(hi, y);
+            }
+            if (nan) continue;
+            const i64 j0 = std::lower_bound(u, u + nu, lo) - u;
+            const i64 j1 = std::upper_bound(u, u + nu, hi) - u;
+            for (i64 r = j0; r < j1; ++r) {
+                const double y = u[r];
+                X.clear();
+                for (i64 e = 0; e < n; ++e) {
+                    const double* a = P + 2 * e;
+                    const double* b = P + 2 * ((e + 1) % n);
+                    if ((a[0] > y) == (b[0] > y)) continue;
+                    // from the lower end point, whichever way the edge runs
+                    if (a[0] > b[0]) std::swap(a, b);
+                    const double x = a[1] + (y - a[0]) * (b[1] - a[1]) / (b[0] - a[0]);
+                    if (!std::isnan(x)) X.push_back(x);
+                }
+                std::sort(X.begin(), X.end());
+                const size_t npairs = std::min<size_t>(X.size() / 2, static_cast<size_t>(K / 2));
+                for (size_t k = 0; k < npairs; ++k) {
+                    const i64 ia = std::lower_bound(v, v + nv, X[2 * k]) - v;
+                    const i64 ib = std::lower_bound(v, v + nv, X[2 * k + 1]) - v;
+                    for (i64 col = ia; col < ib; ++col) {
+                        const i64 cell = tab[r * nv + col];
+                        if (cell < 0) continue;
+                        add(cell, sm, bt, bs, depth_chunk);
+                    }
+                }
+                if (++pairs_in_chunk == step) {
+                    flush(bt, bs);
+                    pairs_in_chunk = 0;
+                }
+            }
+        }
+        flush(bt, bs);
+    }
+
+
+    // ---- the chart clipper: exactff.visibility.charts.chart_clip (margin 0) and
+    // exactff.halfspace.clip_halfspace, expression for expression ----
+
+    struct Clipped {
+        std::vector<i64> live, cl;   // indices into the bucket, vertex counts
+        std::vector<double> UV;      // (live, K, 2), padded by the last vertex
+        i64 K = 0;
+    };
+
+    static i64 check_bucket(const py::array_t<double, py::array::c_style | py::array::forcecast>& V,
+                            const py::array_t<i64, py::array::c_style | py::array::forcecast>& counts,
+                            const py::array_t<double, py::array::c_style | py::array::forcecast>& planes,
+                            const py::array_t<double, py::array::c_style | py::array::forcecast>& eu,
+                            const py::array_t<double, py::array::c_style | py::array::forcecast>& ev,
+                            const py::array_t<double, py::array::c_style | py::array::forcecast>& ew) {
+        if (V.ndim() != 3 || V.shape(2) != 3)
+            throw std::invalid_argument("V must have shape (M, K, 3)");
+        const i64 M = V.shape(0);
+        if (counts.shape(0) != M) throw std::invalid_argument("counts must have shape (M,)");
+        for (i64 m = 0; m < M; ++m)
+            if (counts.data()[m] > V.shape(1) || counts.data()[m] < 0)
+                throw std::invalid_argument("counts out of range");
+        if (planes.ndim() != 2 || planes.shape(0) != 4 || planes.shape(1) != 3)
+            throw std::invalid_argument("planes must have shape (4, 3)");
+        if (eu.size() != 3 || ev.size() != 3 || ew.size() != 3)
+            throw std::invalid_argument("eu, ev, ew must have shape (3,)");
+        return M;
+    }
+
+    // V @ h with h of the chart's axes (components 0, +-1): exact whatever the order
+    static inline double hdot(const double* h, const double* x) {
+        return (h[0] * x[0] + h[1] * x[1]) + h[2] * x[2];
+    }
+
+    static inline double sum_abs3(double a, double b, double c) {
+        return (std::fabs(a) + std::fabs(b)) + std::fabs(c);
+    }
+
+    // clip_halfspace: polygons V (M, K, 3) with counts to h . x > 0; out (M, Kn, 3)
+    static void clip_halfspace(const std::vector<double>& V, i64 M, i64 K,
+                               const std::vector<i64>& counts, const double* h, const double C,
+                               std::vector<double>& out, i64& Kn, std::vector<i64>& nc) {
+        const double floor_ = std::numeric_limits<double>::min() / EPS;   // _NORMAL_FLOOR
+        const double hsum = sum_abs3(h[0], h[1], h[2]);
+        std::vector<double> tmp(static_cast<size_t>(M * 2 * K * 3));
+        std::vector<double> s(static_cast<size_t>(K));
+        nc.assign(static_cast<size_t>(M), 0);
+        i64 kmax = 0;
+        for (i64 m = 0; m < M; ++m) {
+            const double* P = V.data() + m * K * 3;
+            const i64 n = counts[m];
+            for (i64 k = 0; k < K; ++k) s[k] = hdot(h, P + 3 * k);
+            double* o = tmp.data() + m * 2 * K * 3;
+            i64 w = 0;
+            for (i64 k = 0; k < n; ++k) {
+                const i64 j = (k + 1) % n;
+                const bool in = s[k] > 0, in_n = s[j] > 0;
+                if (in) {
+                    for (int i = 0; i < 3; ++i) o[3 * w + i] = P[3 * k + i];
+                    ++w;
+                }
+                if (in == in_n) continue;
+                // the crossing from the inside end point: interpolated, or the meet of
+                // the edge's plane through the origin with h where it is as good
+                const double* A = in ? P + 3 * k : P + 3 * j;
+                const double* B = in ? P + 3 * j : P + 3 * k;
+                const double sa = in ? s[k] : s[j], sb = in ? s[j] : s[k];
+                const double t = sa / (sa - sb);
+                double X[3], e[3];
+                for (int i = 0; i < 3; ++i) {
+                    X[i] = A[i] + t * (B[i] - A[i]);
+                    e[i] = B[i] - A[i];
+                }
+                const double d = sa - sb;
+                const double mm[3] = {A[1] * e[2] - A[2] * e[1], A[2] * e[0] - A[0] * e[2],
+                                      A[0] * e[1] - A[1] * e[0]};
+                const double la = sum_abs3(A[0], A[1], A[2]), le = sum_abs3(e[0], e[1], e[2]);
+                const double meet[3] = {(mm[1] * h[2] - mm[2] * h[1]) / d,
+                                        (mm[2] * h[0] - mm[0] * h[2]) / d,
+                                        (mm[0] * h[1] - mm[1] * h[0]) / d};
+                const double cond = 1.0 + hsum * le / std::fabs(d);
+                const bool use =
+                    (sum_abs3(meet[0] - X[0], meet[1] - X[1], meet[2] - X[2]) <=
+                     C * EPS * (la + le) * cond) &&
+                    (cond * C * EPS < 1.0) &&
+                    (sum_abs3(mm[0], mm[1], mm[2]) > C * EPS * la * le) &&
+                    (std::fabs(d) > floor_) && (la * le > floor_);
+                for (int i = 0; i < 3; ++i) o[3 * w + i] = use ? meet[i] + 0.0 : X[i];
+                ++w;
+            }
+            nc[m] = w;
+            kmax = std::max(kmax, w);
+        }
+        Kn = std::max<i64>(kmax, 1);
+        out.assign(static_cast<size_t>(M * Kn * 3), 0.0);
+        for (i64 m = 0; m < M; ++m)
+            std::copy(tmp.data() + m * 2 * K * 3, tmp.data() + m * 2 * K * 3 + nc[m] * 3,
+                      out.data() + m * Kn * 3);
+    }
+
+    // np.spacing(|x|): the gap to the next double (NaN for inf and NaN)
+    static inline double spacing_abs(double x) {
+        x = std::fabs(x);
+        if (!std::isfinite(x)) return std::numeric_limits<double>::quiet_NaN();
+        return std::nextafter(x, INF) - x;
+    }
+
+    // charts.merge_close over the values x: near-coincident ones (each within
+    // CHART_EDGE_ULPS ulps of the previous, sorted) replaced by the first of their run;
+    // NaN sorts last and compares false, as numpy's unique and diff have it
+    static void merge_close(std::vector<double>& x, double ulps) {
+        std::vector<double> u(x);
+        std::sort(u.begin(), u.end(), [](double a, double b) {
+            if (std::isnan(a)) return false;
+            if (std::isnan(b)) return true;
+            return a < b;
+        });
+        // unique (NaNs collapsed)
+        std::vector<double> q;
+        for (const double a : u) {
+            if (!q.empty() && (q.back() == a || (std::isnan(q.back()) && std::isnan(a)))) continue;
+            q.push_back(a);
+        }
+        std::vector<double> first(q.size());
+        for (size_t i = 0; i < q.size(); ++i) {
+            const bool new_run = i == 0 || (q[i] - q[i - 1] > ulps * spacing_abs(q[i]));
+            first[i] = new_run ? q[i] : first[i - 1];
+        }
+        for (double& a : x) {
+            size_t i;
+            if (std::isnan(a)) {
+                i = q.size() - 1;
+            } else {
+                i = std::lower_bound(q.begin(), q.end(), a, [](double p, double v) {
+                        return !std::isnan(p) && p < v;
+                    }) - q.begin();
+            }
+            a = first[i];
+        }
+    }
+
+    static void clip_chart(const double* V, i64 M, i64 K, const i64* counts,
+                           const double* planes, const double* eu, const double* ev,
+                           const double* ew, bool side, double meet_ulps, double edge_ulps,
+                           Clipped& out) {
+        // which polygons reach the frustum, which lie wholly inside it
+        std::vector<i64> reach, straddle;
+        std::vector<char> inside_all;
+        for (i64 m = 0; m < M; ++m) {
+            const double* P = V + m * K * 3;
+            const i64 n = counts[m];
+            bool outside = false, inside = true;
+            for (int j = 0; j < 4; ++j) {
+                bool all_out = true;
+                for (i64 k = 0; k < n; ++k) {
+                    const double sv = hdot(planes + 3 * j, P + 3 * k);
+                    // (a NaN is neither out nor in, as numpy's comparisons have it)
+                    if (!(sv <= 0)) all_out = false;
+                    if (!(sv > 0)) inside = false;
+                }
+                if (all_out) outside = true;
+            }
+            if (!outside && n >= 3) {
+                reach.push_back(m);
+                inside_all.push_back(inside ? 1 : 0);
+                if (!inside) straddle.push_back(m);
+            }
+        }
+        // the straddling ones clipped plane by plane
+        const i64 S = static_cast<i64>(straddle.size());
+        std::vector<double> Vc(static_cast<size_t>(S * K * 3));
+        std::vector<i64> cc(static_cast<size_t>(S));
+        for (i64 i = 0; i < S; ++i) {
+            std::copy(V + straddle[i] * K * 3, V + (straddle[i] + 1) * K * 3, Vc.data() + i * K * 3);
+            cc[i] = counts[straddle[i]];
+        }
+        i64 Kc = K;
+        std::vector<double> next;
+        std::vector<i64> ncount;
+        for (int j = 0; j < 4; ++j) {
+            bool any = false;
+            for (const i64 n : cc) any = any || n >= 3;
+            if (!any) break;
+            for (i64& n : cc) if (n < 3) n = 0;
+            i64 Kn;
+            clip_halfspace(Vc, S, Kc, cc, planes + 3 * j, meet_ulps, next, Kn, ncount);
+            Vc.swap(next);
+            cc.swap(ncount);
+            Kc = Kn;
+        }
+        const i64 Kr = std::max(K, Kc);
+        // the live ones, padded by their last vertex, projected into the chart
+        out.live.clear();
+        out.cl.clear();
+        out.K = Kr;
+        std::vector<double> P3(static_cast<size_t>(Kr * 3));
+        i64 si = 0;
+        for (size_t r = 0; r < reach.size(); ++r) {
+            const i64 m = reach[r];
+            const double* src;
+            i64 n, Ks;
+            if (inside_all[r]) {
+                src = V + m * K * 3;
+                n = counts[m];
+                Ks = K;
+            } else {
+                src = Vc.data() + si * Kc * 3;
+                n = cc[si];
+                Ks = Kc;
+                ++si;
+            }
+            if (n < 3) continue;
+            if (n > Ks) throw std::logic_error("clipped count exceeds its width");
+            for (i64 k = 0; k < Kr; ++k) {
+                const i64 kk = k < n ? k : n - 1;
+                for (int i = 0; i < 3; ++i) P3[3 * k + i] = src[3 * kk + i];
+            }
+            out.live.push_back(m);
+            out.cl.push_back(n);
+            for (i64 k = 0; k < Kr; ++k) {
+                const double* x = P3.data() + 3 * k;
+                const double w = hdot(ew, x);
+                out.UV.push_back(hdot(eu, x) / w);
+                out.UV.push_back(hdot(ev, x) / w);
+            }
+        }
+        std::vector<double>& UV = out.UV;
+        const double tiny = std::numeric_limits<double>::min();
+        // subnormal chart coordinates flushed to zero
+        for (double& a : UV)
+            if (std::fabs(a) < tiny) a = 0.0;
+        // points within CHART_EDGE_ULPS ulps of the chart's edges snapped onto them
+        const double near1 = edge_ulps * (std::nextafter(1.0, 2.0) - 1.0);
+        for (const double val : {-1.0, 1.0})
+            for (double& a : UV)
+                if (std::fabs(a - val) <= near1) a = val;
+        if (side)
+            for (size_t i = 1; i < UV.size(); i += 2)
+                if (std::fabs(UV[i]) <= near1) UV[i] = 0.0;
+        // and points along an edge within a few ulps of each other merged
+        const std::vector<double> e01 = {-1.0, 1.0};
+        const std::vector<double> e1 = side ? std::vector<double>{-1.0, 0.0, 1.0} : e01;
+        std::vector<size_t> idx;
+        std::vector<double> vals;
+        for (int k = 0; k < 2; ++k) {
+            const std::vector<double>& edge_vals = k == 0 ? e1 : e01;
+            for (const double val : edge_vals) {
+                idx.clear();
+                for (size_t i = 0; i < UV.size() / 2; ++i)
+                    if (UV[2 * i + (1 - k)] == val) idx.push_back(2 * i + k);
+                if (idx.size() <= 1) continue;
+                vals.resize(idx.size());
+                for (size_t i = 0; i < idx.size(); ++i) vals[i] = UV[idx[i]];
+                merge_close(vals, edge_ulps);
+                for (size_t i = 0; i < idx.size(); ++i) UV[idx[i]] = vals[i];
+            }
+        }
+    }
+    void check_buffer(const py::array& best_t, const py::array& best) const {
+        if (!best_t.dtype().is(py::dtype::of<double>()) || !best.dtype().is(py::dtype::of<i64>()))
+            throw std::invalid_argument("best_t and best must be float64 and int64");
+        if (best_t.ndim() != 1 || best_t.shape(0) != n_cells_ || best.ndim() != 1 ||
+            best.shape(0) != n_cells_)
+            throw std::invalid_argument("best_t and best must have shape (C,)");
+        if (!(best_t.flags() & py::array::c_style) || !(best.flags() & py::array::c_style) ||
+            !best_t.writeable() || !best.writeable())
+            throw std::invalid_argument("best_t and best must be writeable and contiguous");
+    }
+
+    // every vertex of polygon q (scene index) within the near-coplanar band of p's
+    // plane: |n . x - d| <= BSP_COPLANAR_ULPS u (|n| . |x| + |d|)
+    bool within(i64 p, i64 q) const {
+        const double* n = N_.data() + 3 * p;
+        const double d = Dp_.data()[p];
+        const i64* off = offsets_.data();
+        const double* V = V_.data();
+        const double w = coplanar_ulps_ * EPS;
+        for (i64 i = off[q]; i < off[q + 1]; ++i) {
+            const double* x = V + 3 * i;
+            const double mag = absdot3(x, n) + std::fabs(d);
+            if (!(std::fabs(dot3(x, n) - d) <= w * mag)) return false;
+        }
+        return true;
+    }
+
+    // exactff.predicates.coplanar_pairs for live polygons (cached per pair)
+    bool coplanar(i64 a, i64 b) {
+        const i64 lo = std::min(a, b), hi = std::max(a, b);
+        const std::uint64_t key = (static_cast<std::uint64_t>(lo) << 32) | static_cast<std::uint64_t>(hi);
+        // neighbouring cells mostly ask about the same pair
+        if (key == last_key_) return last_value_;
+        auto it = cache_.find(key);
+        bool r;
+        if (it != cache_.end()) {
+            r = it->second;
+        } else {
+            const i64 pa = ids_.data()[a], pb = ids_.data()[b];
+            r = within(pa, pb) || within(pb, pa);
+            cache_.emplace(key, r);
+        }
+        last_key_ = key;
+        last_value_ = r;
+        return r;
+    }
+
+    // resolve_depths on the buffered candidates
+    // one candidate (cell, live polygon) of the current chunk: its depth, the cell's
+    // nearest depth so far; a ray along its polygon's plane hits nothing
+    inline void add(i64 cell, i64 s, double* best_t, i64* best, i64 depth_chunk) {
+        const double den = dot3(nl_p_ + 3 * s, D_p_ + 3 * cell);
+        const double t = dl_p_[s] / den;
+        if (std::isfinite(t)) {
+            CellScratch& c = (*sc_)[cell];
+            if (c.t_min == INF) touched_.push_back(cell);
+            if (t < c.t_min) c.t_min = t;
+            cells_.push_back(cell);
+            srcs_.push_back(s);
+            cand_t_.push_back(t);
+            cand_den_.push_back(den);
+        }
+        // the numpy code's chunks count every candidate, hit or not
+        if (++in_chunk_ == depth_chunk) flush(best_t, best);
+    }
+
+    // resolve_depths on the chunk's candidates, merged into the buffer
+    void flush(double* best_t, i64* best) {
+        in_chunk_ = 0;
+        const size_t n = cells_.size();
+        if (n == 0) return;
+        const double* Dn = Dnorm_.data();
+        const double* dl = dl_.data();
+        const double* band = band_.data();
+        const i64* prio = prio_.data();
+        std::vector<CellScratch>& sc = *sc_;
+        // one of the polygons at the nearest depth (the last, as numpy's assignment),
+        // and of the polygons there the one of lowest priority (priorities are
+        // distinct per polygon; a polygon is a candidate of a cell once in a chunk)
+        for (size_t k = 0; k < n; ++k) {
+            CellScratch& c = sc[cells_[k]];
+            if (cand_t_[k] == c.t_min) {
+                const i64 s = srcs_[k];
+                c.near = s;
+                if (prio[s] < c.p_min) {
+                    c.p_min = prio[s];
+                    c.pick = s;
+                }
+            }
+        }
+        // ties: within four times the tie test's band of the nearest depth, and
+        // coplanar with the polygon there
+        const double slack_ulps = tie_slack_ulps_;
+        for (size_t k = 0; k < n; ++k) {
+            CellScratch& c = sc[cells_[k]];
+            if (cand_t_[k] == c.t_min) continue;
+            const i64 cell = cells_[k], s = srcs_[k];
+            const double t_near = c.t_min;
+            const double slack = 4.0 * (band[s] + EPS * (slack_ulps * std::fabs(t_near) * Dn[cell]
+                                                         + std::fabs(dl[s])));
+            if (std::fabs(t_near - cand_t_[k]) * std::fabs(cand_den_[k]) <= slack &&
+                coplanar(c.near, s) && prio[s] < c.p_min) {
+                c.p_min = prio[s];
+                c.pick = s;
+            }
+        }
+        // merge with the cells' best so far: the nearer wins unless the other is
+        // coplanar with it and of lower priority
+        for (const i64 cell : touched_) {
+            CellScratch& c = sc[cell];
+            const i64 s = c.pick;
+            if (s >= 0) {
+                const double t = c.t_min;
+                const i64 old = best[cell];
+                const bool has_old = old >= 0;
+                const bool new_nearer = t < best_t[cell];
+                bool take;
+                if (!has_old)
+                    take = true;
+                else if (new_nearer)
+                    take = prio[s] < prio[old] || !coplanar(old, s);
+                else
+                    take = prio[s] < prio[old] && coplanar(s, old);
+                if (t < best_t[cell]) best_t[cell] = t;
+                if (take) best[cell] = s;
+            }
+            c = CellScratch();
+        }
+        cells_.clear();
+        srcs_.clear();
+        cand_t_.clear();
+        cand_den_.clear();
+        touched_.clear();
+    }
+
+    py::array_t<double, py::array::c_style | py::array::forcecast> D_, Dnorm_, nl_, dl_, band_;
+    py::array_t<i64, py::array::c_style | py::array::forcecast> prio_;
+    py::array_t<double, py::array::c_style | py::array::forcecast> V_;
+    py::array_t<i64, py::array::c_style | py::array::forcecast> offsets_;
+    py::array_t<double, py::array::c_style | py::array::forcecast> N_, Dp_;
+    py::array_t<i64, py::array::c_style | py::array::forcecast> ids_;
+    double coplanar_ulps_, tie_slack_ulps_, clip_meet_ulps_, chart_edge_ulps_;
+    i64 n_cells_ = 0, n_live_ = 0;
+    // candidates of the current chunk
+    std::vector<i64> cells_, srcs_;
+    std::vector<double> cand_t_, cand_den_;
+    std::vector<i64> touched_;
+    i64 in_chunk_ = 0;                       // candidates in the chunk, hit or not
+    std::vector<CellScratch>* sc_ = nullptr;  // this thread's per-cell scratch
+    const double *D_p_ = nullptr, *nl_p_ = nullptr, *dl_p_ = nullptr;
+    std::unordered_map<std::uint64_t, bool> cache_;
+    std::uint64_t last_key_ = ~std::uint64_t(0);
+    bool last_value_ = false;
+};
+
+}  // namespace
+
+PYBIND11_MODULE(_zbuffer, m) {
+    m.doc() = "The compiled z-buffer of the discrete methods: scan conversion and depth test.";
+    py::class_<ZBuffer>(m, "ZBuffer")
+        .def(py::init<py::array_t<double, py::array::c_style | py::array::forcecast>,
+                      py::array_t<double, py::array::c_style | py::array::forcecast>,
+                      py::array_t<double, py::array::c_style | py::array::forcecast>,
+                      py::array_t<double, py::array::c_style | py::array::forcecast>,
+                      py::array_t<double, py::array::c_style | py::array::forcecast>,
+                      py::array_t<i64, py::array::c_style | py::array::forcecast>,
+                      py::array_t<double, py::array::c_style | py::array::forcecast>,
+                      py::array_t<i64, py::array::c_style | py::array::forcecast>,
+                      py::array_t<double, py::array::c_style | py::array::forcecast>,
+                      py::array_t<double, py::array::c_style | py::array::forcecast>,
+                      py::array_t<i64, py::array::c_style | py::array::forcecast>, double,
+                      double, double, double>(),
+             py::arg("D"), py::arg("Dnorm"), py::arg("nl"), py::arg("dl"), py::arg("band"),
+             py::arg("prio"), py::arg("V"), py::arg("offsets"), py::arg("N"), py::arg("Dp"),
+             py::arg("ids"), py::arg("coplanar_ulps"), py::arg("tie_slack_ulps"),
+             py::arg("clip_meet_ulps"), py::arg("chart_edge_ulps"))
+        .def("face", &ZBuffer::face, py::arg("UV"), py::arg("cl"), py::arg("src"),
+             py::arg("uc"), py::arg("vc"), py::arg("table"), py::arg("best_t"),
+             py::arg("best"), py::arg("pair_chunk"), py::arg("depth_chunk"))
+        .def("candidates", &ZBuffer::candidates, py::arg("cell"), py::arg("src"),
+             py::arg("best_t"), py::arg("best"), py::arg("depth_chunk"))
+        .def("chart_face", &ZBuffer::chart_face, py::arg("V"), py::arg("counts"),
+             py::arg("g_ids"), py::arg("planes"), py::arg("eu"), py::arg("ev"), py::arg("ew"),
+             py::arg("side"), py::arg("uc"), py::arg("vc"), py::arg("table"),
+             py::arg("best_t"), py::arg("best"), py::arg("pair_chunk"), py::arg("depth_chunk"))
+        .def("coplanar", &ZBuffer::coplanar_many, py::arg("a"), py::arg("b"));
+    m.def("chart_clip", &ZBuffer::chart_clip, py::arg("V"), py::arg("counts"), py::arg("planes"),
+          py::arg("eu"), py::arg("ev"), py::arg("ew"), py::arg("side"),
+          py::arg("clip_meet_ulps"), py::arg("chart_edge_ulps"),
+          "exactff.visibility.charts.chart_clip (margin 0) of one bucket, compiled: "
+          "(live, UV, cl).");
+}

@@ -1,0 +1,236 @@
+"""The compiled z-buffer of the discrete methods against its numpy oracle (issue 55):
+the hemicube, the cubic tetrahedron and the single plane (every method that
+rasterises planar faces, ``exactff.methods._raster.rasterise_face``).
+
+The compiled backend (``exactff.methods._zbuffer``) scan-converts and depth-tests as
+the numpy rasteriser does, cell for cell: the same scanlines, the same crossings from
+an edge's lower end point, the same even-odd spans, the same depths and the same
+chunked depth-tie rule (coplanar by the BSP tree's rule, then ``tie_priority``). So
+the polygon shown in every cell is identical, not merely close: every test here asks
+for ``array_equal``, on the scene families of the native tests (tests/test_native_discrete.py),
+the zero-thickness walls and same-facing overlaps of tests/test_ties.py and the faces flush
+to within rounding of tests/test_near_coplanar_band.py.
+"""
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+
+import exactff as ef
+import exactff.methods._raster as raster
+from exactff import _tolerances as tol
+from exactff.checks import as_receiver
+from exactff.testing import strategies
+
+from common import examples
+
+#: the methods with a compiled backend, and their resolutions
+COMPILED = {
+    "hemicube-16": lambda **k: ef.Hemicube(resolution=16, **k),
+    "hemicube-64": lambda **k: ef.Hemicube(resolution=64, **k),
+    "hemicube-130": lambda **k: ef.Hemicube(resolution=130, **k),
+    "tetra-15": lambda **k: ef.CubicTetrahedron(resolution=15, **k),
+    "tetra-52": lambda **k: ef.CubicTetrahedron(resolution=52, **k),
+    "plane-equal_ff": lambda **k: ef.SinglePlane(resolution=48, **k),
+    "plane-uniform": lambda **k: ef.SinglePlane(resolution=41, cells="uniform", **k),
+    "plane-refined": lambda **k: ef.SinglePlane(resolution=40, cells="uniform_refined",
+                                                refine=3, **k),
+}
+SMALL = [lambda **k: ef.Hemicube(resolution=32, **k),
+         lambda **k: ef.CubicTetrahedron(resolution=30, **k),
+         lambda **k: ef.SinglePlane(resolution=30, cells="uniform_refined", **k)]
+
+
+def assert_backends_identical(make, scene, point, normal):
+    """Every cell shows the same polygon with both backends; returns the cells."""
+    p, n = as_receiver(point, normal)
+    compiled = make().native_hits(scene, p, n)
+    oracle = make(backend="numpy").native_hits(scene, p, n)
+    diff = np.flatnonzero(compiled != oracle)
+    assert len(diff) == 0, (len(diff), diff[:5], compiled[diff[:5]], oracle[diff[:5]])
+    return compiled
+
+
+def _rows(scene, k, seed=0):
+    rng = np.random.default_rng(seed)
+    for i in rng.choice(len(scene), k, replace=False):
+        yield scene.centroids[i] + 1e-3 * scene.normals[i], scene.normals[i]
+
+
+SCENES = {"cornell": ef.scenes.cornell_box, "office": ef.scenes.office,
+          "box": lambda: ef.scenes.subdivided_box(3),
+          "building": lambda: ef.scenes.building(2, 2),
+          "walls_low": lambda: ef.scenes.building(2, 1, walls_first="low"),
+          "walls_high": lambda: ef.scenes.building(2, 1, walls_first="high"),
+          "light_on_ceiling": lambda: ef.scenes.cornell_box(ceiling="whole", closed=True)}
+
+
+@pytest.mark.parametrize("method", sorted(COMPILED))
+@pytest.mark.parametrize("scene_name", sorted(SCENES))
+def test_compiled_cells_identical_to_numpy(method, scene_name):
+    scene = SCENES[scene_name]()
+    for p, n in _rows(scene, 3):
+        assert_backends_identical(COMPILED[method], scene, p, n)
+
+
+@pytest.mark.parametrize("method", ["hemicube-64", "tetra-52", "plane-refined"])
+@pytest.mark.parametrize("scene_name", ["walls_low", "walls_high", "light_on_ceiling"])
+def test_compiled_cells_identical_to_numpy_on_ties_from_the_floor(method, scene_name):
+    # the rows of test_ties.py: from the floors, through zero-thickness walls (back to
+    # back, coplanar) and a light on a whole ceiling (same facing, coplanar)
+    scene = SCENES[scene_name]()
+    floors = [i for i, g in enumerate(scene.groups) if g == "floor"] or [
+        scene.names.index("floor")]
+    for i in floors:
+        hit = assert_backends_identical(COMPILED[method], scene, scene.centroids[i],
+                                        scene.normals[i])
+        if method.startswith("hemicube"):
+            assert np.all(hit >= 0)     # closed: every cell shows a polygon
+
+
+@pytest.mark.parametrize("method", ["hemicube-64", "tetra-52", "plane-refined"])
+@pytest.mark.parametrize("scene_name", ["office", "building", "light_on_ceiling"])
+def test_compiled_cells_identical_to_numpy_in_small_chunks(method, scene_name, monkeypatch):
+    # chunks of a few scanlines and a few hundred candidates: the depth buffer merges
+    # chunk after chunk, the tie rule across chunks included (both backends use the
+    # module's chunk sizes)
+    monkeypatch.setattr(raster, "PAIR_CHUNK", 40)
+    monkeypatch.setattr(raster, "DEPTH_CHUNK", 300)
+    scene = SCENES[scene_name]()
+    for p, n in _rows(scene, 2, seed=1):
+        assert_backends_identical(COMPILED[method], scene, p, n)
+
+
+def aligned_box():
+    """A closed box [-1, 1]^2 x [0, 1], each face in 16 x 16 tiles: from the origin the
+    tiles' edges project exactly onto the scanlines and cell centres of a hemicube of
+    resolution 8 (odd multiples of 1/8), where the shared-edge rule decides."""
+    box = ef.scenes.subdivided_box(16, size=(2.0, 2.0, 1.0))
+    return ef.Scene.from_polygons([P - [1.0, 1.0, 0.0] for P in box.polygons])
+
+
+@pytest.mark.parametrize("resolution", [8, 16])
+@pytest.mark.parametrize("point", [(0.0, 0.0, 0.0), (0.125, -0.25, 0.0)])
+def test_compiled_cells_identical_to_numpy_on_edges_through_cell_centres(resolution, point):
+    scene = aligned_box()
+    make = lambda **k: ef.Hemicube(resolution=resolution, **k)
+    hit = assert_backends_identical(make, scene, point, [0.0, 0.0, 1.0])
+    assert np.all(hit >= 0)
+    if resolution == 8:
+        # the premise: every top-face cell centre lies on a corner of the ceiling's
+        # tiles (x / z and y / z odd multiples of 1/8), on the tiles' shared edges
+        from exactff.methods.hemicube import _grid
+
+        c = 8.0 * (_grid(8, -1.0, 1.0)[0][:, None] - np.array(point[:2]))
+        assert np.array_equal(c, np.round(c))
+
+
+@given(strategies.enclosures())
+@settings(max_examples=examples(25), deadline=None)
+def test_compiled_cells_identical_to_numpy_in_random_rooms(case):
+    scene, p, n = case
+    for make in SMALL:
+        assert_backends_identical(make, scene, p, n)
+
+
+@given(strategies.occluded_scenes())
+@settings(max_examples=examples(25), deadline=None)
+def test_compiled_cells_identical_to_numpy_in_occluded_scenes(case):
+    scene, p, n = case
+    for make in SMALL:
+        assert_backends_identical(make, scene, p, n)
+
+
+@given(strategies.flush_faces())
+@settings(max_examples=examples(40), deadline=None)
+def test_compiled_cells_identical_to_numpy_on_flush_faces(case):
+    # faces flush to within rounding: coplanar by the band or ordered by the geometry,
+    # crossing at grazing angles; the tie rule decides many cells
+    scene, p, n = case
+    for make in SMALL:
+        assert_backends_identical(make, scene, p, n)
+
+
+@given(strategies.flush_faces())
+@settings(max_examples=examples(40), deadline=None)
+def test_compiled_cells_identical_to_numpy_on_flush_faces_in_small_chunks(case):
+    # the tie rule across chunks: a face flush with one drawn in an earlier chunk
+    scene, p, n = case
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(raster, "PAIR_CHUNK", 5)
+        mp.setattr(raster, "DEPTH_CHUNK", 50)
+        for make in SMALL:
+            assert_backends_identical(make, scene, p, n)
+
+
+def assert_chart_clips_identical(scene, p, n):
+    """The compiled chart clipper gives chart_clip's live polygons, counts and chart
+    coordinates, bit for bit, for every chart and bucket of the row."""
+    from exactff.methods import _zbuffer
+    from exactff.methods._sampling import ZBufferRow
+    from exactff.visibility.charts import CHARTS, chart_clip, chart_planes
+
+    p, n = as_receiver(p, n)
+    for chart in CHARTS:
+        for _, V, counts in ZBufferRow(scene, p, n).local:
+            live, UV, cl = chart_clip(V, counts, chart)
+            live_c, UV_c, cl_c = _zbuffer.chart_clip(V, counts, np.array(chart_planes(chart)),
+                                                     *chart, tol.CLIP_MEET_ULPS,
+                                                     tol.CHART_EDGE_ULPS)
+            assert np.array_equal(live_c, live) and np.array_equal(cl_c, cl)
+            assert UV_c.shape == UV.shape
+            assert np.array_equal(UV_c, UV, equal_nan=True)
+
+
+@pytest.mark.parametrize("scene_name", ["office", "building", "cornell"])
+def test_compiled_chart_clip_identical_to_numpy(scene_name):
+    scene = SCENES[scene_name]()
+    for p, n in _rows(scene, 4, seed=2):
+        assert_chart_clips_identical(scene, p, n)
+        # from the polygon's centroid itself: the point on its plane
+        i = int(np.argmin(np.linalg.norm(scene.centroids - p, axis=1)))
+        assert_chart_clips_identical(scene, scene.centroids[i], scene.normals[i])
+
+
+@given(strategies.occluded_scenes() | strategies.enclosures() | strategies.flush_faces())
+@settings(max_examples=examples(40), deadline=None)
+def test_compiled_chart_clip_identical_to_numpy_in_random_scenes(case):
+    assert_chart_clips_identical(*case)
+
+
+@pytest.mark.parametrize("method", ["hemicube-64", "tetra-52", "plane-refined"])
+def test_compiled_rows_equal_numpy_rows(method):
+    # through the public interface: the rows are equal to the last bit
+    scene = ef.scenes.office()
+    for p, n in _rows(scene, 2, seed=3):
+        F1 = ef.form_factors(scene, p, n, method=COMPILED[method]())
+        F0 = ef.form_factors(scene, p, n, method=COMPILED[method](backend="numpy"))
+        assert np.array_equal(F1, F0)
+
+
+@pytest.mark.parametrize("method", sorted(COMPILED))
+def test_backend_option_checked_and_in_repr(method):
+    assert COMPILED[method]().backend == "compiled"
+    assert "backend" not in repr(COMPILED[method]())
+    assert "backend='numpy'" in repr(COMPILED[method](backend="numpy"))
+    with pytest.raises(ValueError, match="backend"):
+        COMPILED[method](backend="cuda")
+
+
+def test_zbuffer_rejects_a_buffer_it_cannot_write():
+    # a depth buffer of another dtype would be converted, and the results lost
+    from exactff.methods._sampling import ZBufferRow
+
+    scene = ef.scenes.cornell_box()
+    m = ef.Hemicube(resolution=8)
+    L = m.layout()
+    z = ZBufferRow(scene, scene.centroids[0], scene.normals[0])
+    zb = raster.compiled_zbuffer(z, L)
+    UV = np.zeros((1, 3, 2))
+    args = (UV, np.array([3]), np.array([0]), np.arange(8.0), np.arange(8.0),
+            np.zeros((8, 8), dtype=np.int64))
+    with pytest.raises(ValueError, match="best_t and best"):
+        zb.face(*args, np.full(len(L), np.inf), np.full(len(L), -1, dtype=np.int32), 10, 10)
+    with pytest.raises(ValueError, match="src out of range"):
+        zb.face(UV, np.array([3]), np.array([10 ** 6]), *args[3:], np.full(len(L), np.inf),
+                np.full(len(L), -1, dtype=np.int64), 10, 10)
