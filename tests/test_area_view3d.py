@@ -49,13 +49,15 @@ def test_parallel_planes_mask_values():
     assert F[2, 1] == 0 and F[1, 2] == 0 and F[2, 0] == 0 and F[0, 2] == 0
     for i, j in ((0, 1), (1, 0)):
         assert abs(F[i, j] - UNIT_SQUARES_ONE_APART) <= E[i, j] + 1e-16
-    # wound facing up, the mask sees the top: its value, and the top's by reciprocity
-    # (areas 0.04 and 1)
-    up = ef.Scene.from_polygons([scene.polygons[0], scene.polygons[1], V[::-1]])
+    # wound facing up and listed before the bottom (the tie rule of
+    # docs/explanation/conventions.md: of coplanar polygons facing alike, the first is
+    # in front, as a window listed before its wall), the mask sees the top: its value,
+    # and the top's by reciprocity (areas 0.04 and 1)
+    up = ef.Scene.from_polygons([V[::-1], scene.polygons[0], scene.polygons[1]])
     F, E = ef.area_form_factors(up, tolerance=1e-12, error=True)
-    assert abs(F[2, 1] - MASK_TO_TOP) <= E[2, 1] + 1e-16
-    assert abs(F[1, 2] - 0.04 * MASK_TO_TOP) <= E[1, 2] + 1e-16
-    assert F[2, 0] == 0 and F[0, 2] == 0           # coplanar with the bottom
+    assert abs(F[0, 2] - MASK_TO_TOP) <= E[0, 2] + 1e-16
+    assert abs(F[2, 0] - 0.04 * MASK_TO_TOP) <= E[2, 0] + 1e-16
+    assert F[0, 1] == 0 and F[1, 0] == 0           # coplanar with the bottom
 
 
 def _row_is_complete(F, E, tol):

@@ -15,9 +15,8 @@ from exactff.kernel import eq3_ring_area
 from exactff.testing import assert_form_factors_close
 from exactff.testing.strategies import enclosures, flush_faces, occluded_scenes
 
-from common import upward_unit_vectors
+from common import load_real_file, upward_unit_vectors
 from test_compiled import NAMED, rows_of
-from test_real_files import REAL
 from test_visibility import (FURNITURE, OCC_ATOL, inside_any_box, layered_reference,
                              layered_scenes)
 
@@ -172,14 +171,11 @@ def test_eq3_python_engine_refines_and_escalates():
 @pytest.mark.slow
 @pytest.mark.parametrize("name", ["CornellBox-Sphere.obj", "CornellBox-Water.obj",
                                   "quadknot.obj", "ADIS16480.STL"])
-def test_eq3_compiled_on_real_files(name):
-    path = os.path.join(REAL, name)
-    if not os.path.exists(path):
-        pytest.skip(f"{name} not beside the clone")
+def test_eq3_compiled_on_real_files(name, tmp_path):
     options = {"degenerate": "drop"}
     if name == "quadknot.obj":
         options["nonplanar"] = "split"
-    scene = ef.load_scene(path, **options)
+    scene = load_real_file(name, str(tmp_path), **options)
     big = np.flatnonzero(scene.areas >= np.median(scene.areas))
     for i in np.random.default_rng(0).choice(big, min(4, len(big)), replace=False):
         assert_integrators_agree(scene, scene.centroids[i], scene.normals[i])
