@@ -30,6 +30,7 @@ from ..checks import check_sides
 from ..errors import NumericalError, check_finite
 from .ladder import mp_converge, mp_sector_value
 from .point import local_clipped
+from .sector import offset_edge_planes
 
 __all__ = ["eq3_edge_integral", "arc_x_extremes", "eq3_form_factor", "eq3_ring_area",
            "eq3_ring_sums", "mp_eq3_sum"]
@@ -317,19 +318,12 @@ def eq3_ring_sums(A0, E, nxt, owner, m, eps=tol.EPS):
     Ax, Ay, Az = (A0[owner, k] for k in range(3))
     Eax, Eay, Eaz = E[:, 0], E[:, 1], E[:, 2]
     Ebx, Eby, Ebz = Eax[nxt], Eay[nxt], Eaz[nxt]
-    # the edge's plane in offset form: m = A x (Eb - Ea) + Ea x Eb
-    Dx, Dy, Dz = Ebx - Eax, Eby - Eay, Ebz - Eaz
-    p1, p2, p3, p4 = Ax * Dy, Ay * Dx, Eax * Eby, Eay * Ebx
-    Mz = (p1 - p2) + (p3 - p4)
-    Mx = (Ay * Dz - Az * Dy) + (Eay * Ebz - Eaz * Eby)
-    My = (Az * Dx - Ax * Dz) + (Eaz * Ebx - Eax * Ebz)
-    s = np.sqrt(Mx * Mx + My * My + Mz * Mz)
-    ax, ay, az = Ax + Eax, Ay + Eay, Az + Eaz
-    bx, by, bz = Ax + Ebx, Ay + Eby, Az + Ebz
+    # the edge's plane in offset form, as the sector form takes it
+    (Mx, My, Mz), s, (ax, ay, az), (bx, by, bz), theta, Z = offset_edge_planes(
+        Ax, Ay, Az, Eax, Eay, Eaz, Ebx, Eby, Ebz)
     la = np.sqrt(ax * ax + ay * ay + az * az)
     lb = np.sqrt(bx * bx + by * by + bz * bz)
     Nm = la * lb
-    theta = np.arctan2(s, ax * bx + ay * by + az * bz)
     ok = s > 0
     with np.errstate(divide="ignore", invalid="ignore"):
         # the arc's midpoint u (unit) and its tangent v = m x u / |m| there
@@ -349,7 +343,6 @@ def eq3_ring_sums(A0, E, nxt, owner, m, eps=tol.EPS):
         # rounding of each term: the plane's direction (as clipped_sector_sums: m_z's
         # summands, and |m| at relative order theta^2), which moves C theta and sin theta
         # alike, and the midpoint factor's
-        Z = np.abs(p1) + np.abs(p2) + np.abs(p3) + np.abs(p4)
         rel = np.where(ok, tol.C2 * eps * (Z + theta * theta * Nm) / s,
                        np.where(Nm > 0, np.inf, 0.0))
         err = (2 * theta * np.minimum(2.0, rel)

@@ -10,7 +10,7 @@ import numpy as np
 from .. import _tolerances as tol
 from ..errors import NumericalError
 
-__all__ = ["TWO_PI", "clipped_sector_sums", "sector_values"]
+__all__ = ["TWO_PI", "clipped_sector_sums", "sector_values", "offset_edge_planes"]
 
 TWO_PI = 2.0 * math.pi
 
@@ -61,16 +61,8 @@ def clipped_sector_sums(A0, E, nxt, owner, m, eps=tol.EPS, rounded_offsets=False
             v[kk] for v in (Ax, Ay, Az, Eax, Eay, Eaz, Ebx, Eby, Ebz))
     else:
         kk = slice(None)
-    # the edge's plane in offset form: m = A x (Eb - Ea) + Ea x Eb
-    Dx, Dy, Dz = Ebx - Eax, Eby - Eay, Ebz - Eaz
-    p1, p2, p3, p4 = Ax * Dy, Ay * Dx, Eax * Eby, Eay * Ebx
-    Mz = (p1 - p2) + (p3 - p4)
-    Mx = (Ay * Dz - Az * Dy) + (Eay * Ebz - Eaz * Eby)
-    My = (Az * Dx - Ax * Dz) + (Eaz * Ebx - Eax * Ebz)
-    s = np.sqrt(Mx * Mx + My * My + Mz * Mz)
-    ax, ay, az = Ax + Eax, Ay + Eay, Az + Eaz
-    bx, by, bz = Ax + Ebx, Ay + Eby, Az + Ebz
-    theta = np.arctan2(s, ax * bx + ay * by + az * bz)
+    (Mx, My, Mz), s, (ax, ay, az), (bx, by, bz), theta, Z = offset_edge_planes(
+        Ax, Ay, Az, Eax, Eay, Eaz, Ebx, Eby, Ebz)
     ok = s > 0
     terms = np.zeros(n_e, dtype=dt)
     terms[kk] = np.divide(theta * Mz, s, out=np.zeros_like(s), where=ok)
@@ -78,7 +70,6 @@ def clipped_sector_sums(A0, E, nxt, owner, m, eps=tol.EPS, rounded_offsets=False
     # is about m_z / (a . b), so the error of m_z dominates, bounded componentwise by the
     # magnitudes of its summands (Z); the error of |m| enters at relative order theta^2,
     # bounded by |a| |b| (at least the cross product's condition)
-    Z = np.abs(p1) + np.abs(p2) + np.abs(p3) + np.abs(p4)
     Nm = np.sqrt((ax * ax + ay * ay + az * az) * (bx * bx + by * by + bz * bz))
     with np.errstate(divide="ignore", invalid="ignore"):
         rel = np.where(ok, tol.C2 * eps * (Z + theta * theta * Nm) / s,
@@ -105,6 +96,39 @@ def clipped_sector_sums(A0, E, nxt, owner, m, eps=tol.EPS, rounded_offsets=False
     mags = np.add.reduceat(np.abs(terms), starts)
     errs = np.add.reduceat(err + moved, starts)
     return sums, mags, errs
+
+
+def offset_edge_planes(Ax, Ay, Az, Eax, Eay, Eaz, Ebx, Eby, Ebz):
+    """Each edge's plane through the point in offset form, ``m = A x (Eb - Ea) + Ea x Eb``
+    (``A`` the ring's first direction, ``Ea``, ``Eb`` the edge's ends' offsets from it,
+    componentwise), and what the sector form and Eq. 3 take from it: ``m``, ``|m|``, the
+    ends' directions ``a = A + Ea`` and ``b = A + Eb``, the arc's angle
+    ``theta = atan2(|m|, a . b)`` and the magnitude ``Z`` of ``m_z``'s summands (its
+    rounding's scale).
+
+    Returns
+    -------
+    ((Mx, My, Mz), s, (ax, ay, az), (bx, by, bz), theta, Z), arrays of the edges' shape
+
+    Examples
+    --------
+    >>> one, zero = np.ones(1), np.zeros(1)
+    >>> (Mx, My, Mz), s, a, b, theta, Z = offset_edge_planes(
+    ...     one, zero, zero, zero, zero, zero, -one, one, zero)
+    >>> float(Mz[0]), round(float(theta[0] / (math.pi / 2)), 12)
+    (1.0, 1.0)
+    """
+    Dx, Dy, Dz = Ebx - Eax, Eby - Eay, Ebz - Eaz
+    p1, p2, p3, p4 = Ax * Dy, Ay * Dx, Eax * Eby, Eay * Ebx
+    Mz = (p1 - p2) + (p3 - p4)
+    Mx = (Ay * Dz - Az * Dy) + (Eay * Ebz - Eaz * Eby)
+    My = (Az * Dx - Ax * Dz) + (Eaz * Ebx - Eax * Ebz)
+    s = np.sqrt(Mx * Mx + My * My + Mz * Mz)
+    ax, ay, az = Ax + Eax, Ay + Eay, Az + Eaz
+    bx, by, bz = Ax + Ebx, Ay + Eby, Az + Ebz
+    theta = np.arctan2(s, ax * bx + ay * by + az * bz)
+    Z = np.abs(p1) + np.abs(p2) + np.abs(p3) + np.abs(p4)
+    return (Mx, My, Mz), s, (ax, ay, az), (bx, by, bz), theta, Z
 
 
 def _offset_rounding(A0, E, nxt, owner, eps):

@@ -321,13 +321,13 @@ def compiled_form_factors(scene, point, normal, *, two_sided=False, stats=None,
     p = np.asarray(point, dtype=float)
     flat = flat_polygons(scene)
     side, band = engine_sides(flat, p)
-    if shortcuts and is_convex_enclosure(scene) and np.all(side >= 0) and integrator == "eq3":
-        # no occlusion, Eq. 3: the Python engine's convex-scene path, which integrates
-        # whole polygons with it and escalates
-        return visible_form_factors(scene, p, normal, two_sided=two_sided, stats=st,
-                                    shortcuts=shortcuts, tolerance=tolerance, error=error,
-                                    integrator=integrator)
     if shortcuts and is_convex_enclosure(scene) and np.all(side >= 0):
+        if integrator == "eq3":
+            # no occlusion, Eq. 3: the Python engine's convex-scene path, which
+            # integrates whole polygons with it and escalates
+            return visible_form_factors(scene, p, normal, two_sided=two_sided, stats=st,
+                                        shortcuts=shortcuts, tolerance=tolerance,
+                                        error=error, integrator=integrator)
         # no occlusion: the unoccluded kernel (compiled sector sums) with its ladder,
         # straight from here, as the Python engine's convex-scene path has it
         st["path"] = "unoccluded"
