@@ -172,6 +172,7 @@ struct SplitPlane {
     Q d0 = 0;
     LD norm = 0;
     double dev = 0;
+    bool own = false;  // through three of the polygon's vertices (exactly planar), not (n, d)
 };
 
 // N . (x - a) - d0 for a point x in quadruple precision, and a bound on its error: each
@@ -355,7 +356,10 @@ struct Builder {
         LD size = 0;
         for (int64_t i = i0; i < i1; ++i)
             for (int k = 0; k < 3; ++k) size = std::max(size, std::fabs(LD(V[3 * i + k])));
-        if (P.dev <= 1e4L * Q_ROUNDOFF * size) return P;
+        if (P.dev <= 1e4L * Q_ROUNDOFF * size) {
+            P.own = true;
+            return P;
+        }
         SplitPlane G;
         for (int k = 0; k < 3; ++k) G.N[k] = n[k];
         G.d0 = d;
@@ -367,9 +371,8 @@ struct Builder {
     // input vertices, N = (b - a) x (c - a) and d = N . a; or its stored (n, d)
     ExactSplitPlane exact_polygon_plane(int64_t s, const SplitPlane& P) const {
         ExactSplitPlane X;
-        if (P.d0 != 0 || P.M[0] + P.M[1] + P.M[2] == 0) {
-            // (n, d) as stored; or an exactly planar polygon whose normal came out
-            // of a degenerate triple (not reached: a valid polygon has a triple)
+        if (!P.own) {
+            // (n, d) as stored
             for (int k = 0; k < 3; ++k) X.N[k] = e_of(src_normals[3 * s + k]);
             X.d = e_of(src_offsets[s]);
             return X;
@@ -457,7 +460,7 @@ struct Builder {
         // the line where the fragment's own plane meets split plane k, cut by P:
         // X = (d1 (N2 x N3) + d2 (N3 x N1) + d3 (N1 x N2)) / (N1 . (N2 x N3))
         const int64_t k = -1 - on;
-        if (!(planes[size_t(source)].d0 == 0 && planes[size_t(source)].norm > 0)) return false;
+        if (!(planes[size_t(source)].own && planes[size_t(source)].norm > 0)) return false;
         const int64_t own = polygon_plane_index(source);
         // (split_exact may have grown: take the references after)
         const ExactSplitPlane* pl[3] = {&split_exact[size_t(own)], &split_exact[size_t(k)],
