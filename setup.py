@@ -3,6 +3,7 @@ code's hidden regions (exactff.area._hidden), of the unoccluded rows' sector sum
 (exactff.kernel._sector) and of the discrete methods' z-buffer (exactff.methods._zbuffer);
 the rest of the project's metadata is in pyproject.toml."""
 
+import os
 import platform
 
 from pybind11.setup_helpers import Pybind11Extension, build_ext
@@ -10,12 +11,16 @@ from setuptools import setup
 
 # the quadruple-precision tier uses GCC's libquadmath on x86 (long double is already
 # quadruple on aarch64)
+HEADERS = [os.path.join("exactff", "_core", h) for h in sorted(os.listdir(os.path.join("exactff", "_core"))) if h.endswith(".h")]
 QUADMATH = ["-lquadmath"] if platform.machine().lower() in ("x86_64", "amd64", "i686") else []
 
 setup(
     ext_modules=[Pybind11Extension("exactff.visibility._svbsp",
-                                   ["exactff/visibility/_svbsp.cpp",
-                                    "exactff/visibility/_bsp_build.cpp"],
+                                   ["exactff/_core/bind_svbsp.cpp", "exactff/_core/core.cpp",
+                                    "exactff/_core/culling.cpp", "exactff/_core/shadow_tree.cpp",
+                                    "exactff/_core/pieces.cpp", "exactff/_core/integrate.cpp",
+                                    "exactff/_core/bounds.cpp", "exactff/_core/bsp_build.cpp"],
+                                   depends=HEADERS,
                                    cxx_std=17, extra_compile_args=["-O2"],
                                    extra_link_args=QUADMATH),
                  Pybind11Extension("exactff.area._hidden", ["exactff/area/_hidden.cpp"],

@@ -15,9 +15,6 @@
 //
 // The build runs without the GIL.
 
-#include <pybind11/numpy.h>
-#include <pybind11/pybind11.h>
-
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -27,126 +24,25 @@
 #include <numeric>
 #include <vector>
 
-namespace py = pybind11;
+#include "bsp_build.h"
+#include "constants.h"
+#include "expansion.h"
+#include "precision.h"
+#include "vec.h"
 
+namespace exactff {
 namespace {
 
-using Vec3 = std::array<double, 3>;
 constexpr double UNIT_ROUNDOFF = std::numeric_limits<double>::epsilon() / 2;
 using LD = long double;
 // the unit roundoff of long double (that of double where the two are one type)
 constexpr LD LD_ROUNDOFF = std::numeric_limits<LD>::epsilon() / 2;
 
-// The crossings' working precision: quadruple (GCC's __float128 on x86, long double on
-// aarch64, where it is quadruple already). Only + - * / are used, no libquadmath call.
-#if defined(__SIZEOF_FLOAT128__) && !defined(__aarch64__)
-using Q = __float128;
-const LD Q_ROUNDOFF = std::ldexp(1.0L, -113);
-#else
-using Q = long double;
-constexpr LD Q_ROUNDOFF = std::numeric_limits<LD>::epsilon() / 2;
-#endif
+// The crossings' working precision: quadruple (precision.h). Only + - * / are used, no
+// libquadmath call.
+using Q = Quad;
+const LD Q_ROUNDOFF = static_cast<LD>(QUAD_EPS);
 inline Q q_fabs(Q x) { return x < 0 ? -x : x; }
-
-// A crossing computed in quadruple precision is kept where its bound is within this
-// share of a double roundoff of its coordinates (the rounding to double then dominates);
-// beyond, it is computed exactly (Builder::split)
-constexpr double QUAD_TRUST = 1e-3;
-
-// ---- exact arithmetic on the input's doubles (Shewchuk's expansions, nonoverlapping,
-// increasing magnitude, zeros dropped; compressed after each product so that they stay
-// a few terms long): the crossings the quadruple precision cannot place, where a chain
-// of grazing splits would compound its rounding (Builder::exact_crossing)
-using Exp = std::vector<double>;
-
-inline void two_sum(double a, double b, double& x, double& y) {
-    x = a + b;
-    const double bv = x - a;
-    y = (a - (x - bv)) + (b - bv);
-}
-
-// e + f (repeated grow-expansion)
-Exp e_add(const Exp& e, const Exp& f) {
-    Exp h = e;
-    for (double b : f) {
-        double q = b;
-        size_t k = 0;
-        for (size_t i = 0; i < h.size(); ++i) {
-            double x, y;
-            two_sum(q, h[i], x, y);
-            if (y != 0) h[k++] = y;
-            q = x;
-        }
-        h.resize(k);
-        if (q != 0) h.push_back(q);
-    }
-    return h;
-}
-
-// Shewchuk's compress: the same value in the fewest nonoverlapping terms
-void e_compress(Exp& e) {
-    if (e.size() < 2) return;
-    const size_t m = e.size();
-    std::vector<double> g(m);
-    size_t bottom = m - 1;
-    double q = e[m - 1];
-    for (size_t i = m - 1; i-- > 0;) {
-        double x, y;
-        two_sum(q, e[i], x, y);
-        if (y != 0) {
-            g[bottom--] = x;
-            q = y;
-        } else {
-            q = x;
-        }
-    }
-    g[bottom] = q;
-    Exp h;
-    for (size_t i = bottom + 1; i < m; ++i) {
-        double x, y;
-        two_sum(g[i], q, x, y);
-        q = x;
-        if (y != 0) h.push_back(y);
-    }
-    if (q != 0) h.push_back(q);
-    e.swap(h);
-}
-
-Exp e_mul(const Exp& e, const Exp& f) {
-    Exp h;
-    for (double b : f) {
-        Exp t;
-        for (double a : e) {
-            const double x = a * b;
-            const double y = std::fma(a, b, -x);
-            if (y != 0) t.push_back(y);
-            if (x != 0) t.push_back(x);
-        }
-        // t's terms overlap one another: add them one at a time
-        Exp acc;
-        for (double v : t) acc = e_add(acc, Exp{v});
-        h = e_add(h, acc);
-    }
-    e_compress(h);
-    return h;
-}
-
-inline Exp e_sub(const Exp& e, Exp f) {
-    for (double& v : f) v = -v;
-    Exp h = e_add(e, f);
-    e_compress(h);
-    return h;
-}
-
-inline Exp e_of(double a) { return a != 0 ? Exp{a} : Exp{}; }
-
-// its value in quadruple precision (the terms summed from the smallest: within a few
-// roundoffs of it)
-inline Q e_value(const Exp& e) {
-    Q s = 0;
-    for (double v : e) s += Q(v);
-    return s;
-}
 
 // a plane N . x = d with N and d exact (expansions of the input's doubles)
 struct ExactSplitPlane {
@@ -586,7 +482,7 @@ struct Builder {
     // the split of fragment f (exactff.halfspace.split_polygon) by the plane n . x = d
     // (its sides, with the band) along split plane `cut` (its crossings): new fragments,
     // -1 for none. Each crossing is computed in quadruple precision from its edge's ends
-    // (Builder::crossing); where that is not within QUAD_TRUST of an ulp (a chain of
+    // (Builder::crossing); where that is not within BSP_QUAD_TRUST of an ulp (a chain of
     // grazing splits, or one steeper than 1e12), exactly from what the edge lies on
     // (Builder::exact_crossing). Every vertex records what its outgoing edge lies on.
     void split(int64_t f, const double* n, double d, int64_t cut, int64_t& f_front,
@@ -631,7 +527,7 @@ struct Builder {
                                     vertex_error_q(f, b), X, Xq, &eq);
                 LD size = 0;
                 for (int c = 0; c < 3; ++c) size = std::max(size, LD(q_fabs(Xq[c])));
-                if (!(eq <= QUAD_TRUST * UNIT_ROUNDOFF * double(size)) &&
+                if (!(eq <= BSP_QUAD_TRUST * UNIT_ROUNDOFF * double(size)) &&
                     exact_crossing(on, source, cut, Xq)) {
                     // exact, rounded to quadruple precision (three roundoffs of the
                     // quotient and the terms' sum), then to double
@@ -748,11 +644,11 @@ struct Builder {
             if (m > axis_min && double(best_imbalance) > axis_imbalance * double(ms)) {
                 // a chain in the making: a plane through the median of the fragments'
                 // vertex means along their widest axis
-                std::vector<Vec3> cen(m);
-                Vec3 lo{HUGE_VAL, HUGE_VAL, HUGE_VAL}, hi{-HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
+                std::vector<Vec3<double>> cen(m);
+                Vec3<double> lo{HUGE_VAL, HUGE_VAL, HUGE_VAL}, hi{-HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
                 for (size_t i = 0; i < m; ++i) {
                     size_t k = count(ids[i]);
-                    Vec3 c{0, 0, 0};
+                    Vec3<double> c{0, 0, 0};
                     for (size_t v = 0; v < k; ++v)
                         for (int a = 0; a < 3; ++a) c[a] += vertex(ids[i], v)[a];
                     for (int a = 0; a < 3; ++a) {
@@ -813,68 +709,37 @@ struct Builder {
     }
 };
 
-template <typename T>
-py::array_t<T> as_array(const std::vector<T>& v) {
-    py::array_t<T> out(py::ssize_t(v.size()));
-    std::copy(v.begin(), v.end(), out.mutable_data());
+}  // namespace
+
+BspArrays build_bsp(const double* V, const int64_t* start, int64_t n, const double* normals,
+                    const double* offsets, size_t candidates, size_t sample, size_t axis_min,
+                    double axis_imbalance, double band_ulps, uint64_t seed) {
+    Builder b(V, start, n, normals, offsets, candidates, sample, axis_min, axis_imbalance,
+              band_ulps, seed);
+    BspArrays out;
+    out.here_start.push_back(0);
+    out.live_start.push_back(0);
+    b.build();
+    // keep only the fragments the nodes hold, numbered in node order
+    for (const auto& h : b.here) {
+        for (int64_t f : h) {
+            out.here.push_back(int64_t(out.live_source.size()));
+            out.live_source.push_back(b.frag_source[f]);
+            out.whole.push_back(f < n);
+            out.live_verts.insert(out.live_verts.end(), b.verts.begin() + 3 * b.frag_start[f],
+                                  b.verts.begin() + 3 * b.frag_start[f + 1]);
+            out.live_err.insert(out.live_err.end(), b.vert_err.begin() + b.frag_start[f],
+                                b.vert_err.begin() + b.frag_start[f + 1]);
+            out.live_start.push_back(int64_t(out.live_verts.size() / 3));
+        }
+        out.here_start.push_back(int64_t(out.here.size()));
+    }
+    out.node_n = std::move(b.node_n);
+    out.node_d = std::move(b.node_d);
+    out.front = std::move(b.front);
+    out.back = std::move(b.back);
+    out.splits = b.splits;
     return out;
 }
 
-// The tree as arrays: node normals (M, 3) and offsets (M,), front and back children
-// (-1 for none), each node's fragments (here_start (M + 1,) into here (H,)), and the
-// fragments the nodes hold, renumbered in node order: vertices (N, 3), starts (F + 1,),
-// source polygons (F,), whether each is its source polygon uncut (F,), the number
-// of splits, and per vertex a bound on its distance from the exact point it stands for
-// (N,): 0 for the input's, else a crossing's (Builder::crossing).
-py::tuple build_bsp_arrays(py::array_t<double, py::array::c_style | py::array::forcecast> V,
-                           py::array_t<int64_t, py::array::c_style | py::array::forcecast> start,
-                           py::array_t<double, py::array::c_style | py::array::forcecast> normals,
-                           py::array_t<double, py::array::c_style | py::array::forcecast> offsets,
-                           int64_t candidates, int64_t sample, int64_t axis_min,
-                           double axis_imbalance, double band_ulps, uint64_t seed) {
-    int64_t n = int64_t(start.size()) - 1;
-    if (n < 0 || normals.size() != 3 * n || offsets.size() != n ||
-        V.size() != 3 * start.data()[n])
-        throw std::invalid_argument("build_bsp_arrays: inconsistent array sizes");
-    if (candidates < 1 || sample < 1)
-        throw std::invalid_argument("build_bsp_arrays: candidates and sample must be >= 1");
-    Builder b(V.data(), start.data(), n, normals.data(), offsets.data(), size_t(candidates),
-              size_t(sample), size_t(axis_min), axis_imbalance, band_ulps, seed);
-    std::vector<int64_t> here_start{0}, here_flat, live_start{0}, live_source;
-    std::vector<uint8_t> whole;
-    std::vector<double> live_verts, live_err;
-    {
-        py::gil_scoped_release release;
-        b.build();
-        // keep only the fragments the nodes hold, numbered in node order
-        for (const auto& h : b.here) {
-            for (int64_t f : h) {
-                here_flat.push_back(int64_t(live_source.size()));
-                live_source.push_back(b.frag_source[f]);
-                whole.push_back(f < n);
-                live_verts.insert(live_verts.end(), b.verts.begin() + 3 * b.frag_start[f],
-                                  b.verts.begin() + 3 * b.frag_start[f + 1]);
-                live_err.insert(live_err.end(), b.vert_err.begin() + b.frag_start[f],
-                                b.vert_err.begin() + b.frag_start[f + 1]);
-                live_start.push_back(int64_t(live_verts.size() / 3));
-            }
-            here_start.push_back(int64_t(here_flat.size()));
-        }
-    }
-    py::array_t<double> nn({py::ssize_t(b.node_d.size()), py::ssize_t(3)});
-    std::copy(b.node_n.begin(), b.node_n.end(), nn.mutable_data());
-    py::array_t<double> vv({py::ssize_t(live_verts.size() / 3), py::ssize_t(3)});
-    std::copy(live_verts.begin(), live_verts.end(), vv.mutable_data());
-    return py::make_tuple(nn, as_array(b.node_d), as_array(b.front), as_array(b.back),
-                          as_array(here_start), as_array(here_flat), vv, as_array(live_start),
-                          as_array(live_source), as_array(whole).attr("astype")("bool"),
-                          b.splits, as_array(live_err));
-}
-
-}  // namespace
-
-void register_bsp_build(py::module_& m) {
-    m.def("build_bsp_arrays", &build_bsp_arrays,
-          "The scene's BSP tree as arrays (exactff.visibility.bsp.build_bsp, "
-          "engine='compiled')");
-}
+}  // namespace exactff

@@ -1,0 +1,242 @@
+// The visibility core: one row of exact occluded form factors from a point p.
+//
+// A BSP tree of convex fragments (built by exactff.visibility.bsp, convexified by
+// exactff.visibility.compiled) gives the fragments front to back from p. The covered
+// region is a shadow-volume BSP tree (shadow_tree.h): each fragment is filtered down the
+// tree; the parts reaching free leaves are visible: they are integrated with the sector
+// form (Lambert), or with the paper's Eq. 3 in its stable form (a row's choice), and the
+// leaf is replaced by the planes through p and their edges (their shadow volume).
+// Splitting convex pieces by planes needs no polygon booleans, and the topology follows
+// from one sign per vertex and plane.
+//
+// Before a BSP subtree is entered, the conic hull of its bounding box's corners is
+// filtered down the shadow tree: a subtree whose box is wholly covered is skipped
+// without touching its fragments (hierarchical occlusion culling), so that the cost of a
+// row follows what it sees.
+//
+// Arithmetic is in long double (x87 80-bit where the platform has it). Every vertex
+// carries a bound on the error of its direction (radians); every plane a bound on its
+// tilt. A piece's value is bounded by the rounding of its sector sum plus, for each edge,
+// its arc length times the larger of its end points' bounds over pi. The Python wrapper
+// checks those bounds against the tolerance and falls back to the Python engine where
+// they miss it.
+//
+// Where each part lives: core.cpp (the constructor and the row's set-up and results),
+// culling.cpp (the subtrees' boxes and the hierarchical culling), shadow_tree.cpp (the
+// shadow tree's operations and exact tests), pieces.cpp (the piece loop: the front-to-back
+// walk and each fragment's filtering), integrate.cpp (a visible piece's sector sum, long
+// double and quadruple precision), bounds.cpp (the vertices' error charges and the
+// quadruple-precision refinement).
+
+#ifndef EXACTFF_CORE_CORE_H
+#define EXACTFF_CORE_CORE_H
+
+#include <array>
+#include <cstdint>
+#include <cstring>
+#include <unordered_map>
+#include <vector>
+
+#include "precision.h"
+#include "predicates.h"
+#include "shadow_tree.h"
+#include "vec.h"
+
+namespace exactff {
+
+struct EdgeKey {
+    R c[6];
+    bool operator==(const EdgeKey& o) const {
+        for (int i = 0; i < 6; ++i)
+            if (c[i] != o.c[i]) return false;
+        return true;
+    }
+};
+struct EdgeKeyHash {
+    size_t operator()(const EdgeKey& k) const {
+        size_t h = 1469598103934665603ull;
+        for (int i = 0; i < 6; ++i) {
+            double d = static_cast<double>(k.c[i]);
+            uint64_t bits;
+            std::memcpy(&bits, &d, sizeof bits);
+            h = (h ^ bits) * 1099511628211ull;
+        }
+        return h;
+    }
+};
+struct EdgeCharge {
+    int64_t src;
+    R charge;
+    int count;
+    bool refined;  // its ends' directions from Core::refine (quadruple precision)
+    R geo = 0;     // the part the input's own errors make (Vertex::gerr), held apart
+};
+
+// the row's cache of exact tests of an input point against an exact plane, by ids:
+// open addressing (linear probing, power-of-two capacity, at most half full), one probe
+// run and no allocation per test in the usual case
+class PointCache {
+  public:
+    // -1: not decided yet; else whether the point is on the plane
+    int find(int64_t a, int64_t b, int64_t x) const {
+        if (keys_.empty()) return -1;
+        for (size_t i = slot(a, b, x);; i = (i + 1) & (keys_.size() - 1)) {
+            const Key& k = keys_[i];
+            if (k.x == EMPTY) return -1;
+            if (k.a == a && k.b == b && k.x == x) return k.on;
+        }
+    }
+    size_t bytes() const { return keys_.capacity() * sizeof(Key); }
+    void insert(int64_t a, int64_t b, int64_t x, bool on) {
+        if (2 * (used_ + 1) > keys_.size()) grow();
+        size_t i = slot(a, b, x);
+        while (keys_[i].x != EMPTY) i = (i + 1) & (keys_.size() - 1);
+        keys_[i] = {a, b, x, on ? 1 : 0};
+        ++used_;
+    }
+
+  private:
+    static constexpr int64_t EMPTY = INT64_MIN;
+    struct Key {
+        int64_t a, b, x;
+        int on;
+    };
+    size_t slot(int64_t a, int64_t b, int64_t x) const {
+        uint64_t h = static_cast<uint64_t>(a) * 0x9E3779B97F4A7C15ull;
+        h ^= static_cast<uint64_t>(b) + 0x632BE59BD9B4E019ull + (h << 6) + (h >> 2);
+        h ^= static_cast<uint64_t>(x) * 0xC2B2AE3D27D4EB4Full;
+        h ^= h >> 29;
+        h *= 0xBF58476D1CE4E5B9ull;
+        h ^= h >> 32;
+        return static_cast<size_t>(h) & (keys_.size() - 1);
+    }
+    void grow() {
+        std::vector<Key> old = std::move(keys_);
+        keys_.assign(old.empty() ? 1 << 12 : 2 * old.size(), Key{0, 0, EMPTY, 0});
+        used_ = 0;
+        for (const Key& k : old)
+            if (k.x != EMPTY) insert(k.a, k.b, k.x, k.on != 0);
+    }
+    std::vector<Key> keys_;
+    size_t used_ = 0;
+};
+
+struct RowStats {
+    // exact tests of input points against planes through p already decided this row
+    // (the same mesh vertex and edge recur in every fragment that shares them)
+    PointCache on_plane;
+    // the vertex-error charges of visible pieces' edges with a computed end, by edge:
+    // an edge two visible pieces of one polygon share cancels (the two pieces' sums
+    // carry it with opposite signs); the rest is charged at the end of the row
+    std::unordered_map<EdgeKey, EdgeCharge, EdgeKeyHash> edges;
+    R unattributed = 0;  // value of visible slivers whose shadows were left out
+    R rtol = 0;          // pieces whose bound exceeds this times their value are
+                         // integrated again in quadruple precision (0: never)
+    const double* normal = nullptr;  // the receiver normal as given
+    // integrate with Eq. 3's stable form instead of the sector form, in the frame
+    // (e1, e2, n) (Core::integrate)
+    bool eq3 = false;
+    V3 e1{0, 0, 0}, e2{0, 0, 0};
+    int64_t quad_pieces = 0;
+    int64_t fragments = 0, visible = 0, hidden = 0, splits = 0, subtrees_culled = 0,
+            fragments_culled = 0, box_tests = 0, shadow_planes = 0,
+            node_visits = 0,   // shadow-tree nodes a piece was classified at
+            near_tests = 0,    // vertices within the band of such a plane
+            exact_tests = 0;   // exact tests of an input point decided (not cached)
+    int64_t held = 0, held_peak = 0;  // vertices in the filter's work list, now and at most
+    int64_t working_bytes = 0;  // the row's own containers at their largest (Core::run)
+    // per polygon, the charges of its visible pieces' edges that the input's own errors
+    // make (BSP crossings, Vertex::gerr): reported apart from the computation's bound
+    std::vector<R> crossing;
+};
+
+// the row's results: values, bounds (the computation's, the near-coplanar band's, the
+// input's rounded crossings'), one per polygon, and the row's counters
+struct RowResult {
+    std::vector<double> F, E, B, G;
+    RowStats stats;
+};
+
+class Core {
+  public:
+    // the fragments' vertices (3 V doubles) and their errors (V), each fragment's start,
+    // count and source polygon, the BSP nodes' children, fragments (here_start into
+    // here_front) and fragments behind (here_behind), the number of polygons, the band,
+    // the sector sums' C1 and C2 and the split vertices' rounding (exactff._tolerances)
+    Core(std::vector<double> vertices, std::vector<int64_t> start, std::vector<int64_t> count,
+         std::vector<int64_t> source, std::vector<int64_t> front, std::vector<int64_t> back,
+         std::vector<int64_t> here_start, std::vector<int64_t> here_front,
+         std::vector<int64_t> here_behind, int64_t n_sources, double band, double c1, double c2,
+         double split, std::vector<double> vertex_errors);
+
+    // one row from point (3,) with normal (3,), given each BSP node's side of the point
+    // and each polygon's (+1 front, -1 back, 0 on)
+    RowResult row(const double* point, const double* normal, const int8_t* node_side,
+                  const int8_t* source_side, bool two_sided, bool cull, int64_t box_budget,
+                  int64_t tiles, double rtol, bool eq3) const;
+    int64_t n_sources() const { return n_sources_; }
+    int64_t nodes() const { return static_cast<int64_t>(front_.size()); }
+    int64_t pieces() const { return static_cast<int64_t>(start_.size()); }
+    double unit_roundoff() const { return static_cast<double>(K_.eps); }
+
+  private:
+    int64_t n_sources_;
+    std::vector<double> V_;
+    std::vector<double> VE_;  // per input point, a bound on its distance from the exact one
+    std::vector<int64_t> uid_;  // distinct input point of each vertex
+    std::vector<int64_t> start_, count_, source_, front_, back_, here_start_, here_front_,
+        here_behind_;
+    std::vector<double> lo_, hi_;
+    std::vector<int64_t> size_;
+    Constants K_;
+    // culling.cpp
+    void build_boxes();
+    bool box_behind(int64_t k, const double* pp, const double* pn) const;
+    bool box_hidden(const std::vector<Plane>& sv, int64_t k, const V3& p,
+                    int64_t budget) const;
+    // shadow_tree.cpp
+    static int side(const Plane& P, const Vertex& x, const Constants& K, R* d_out);
+    int tile_tree(const double* pn, int64_t tiles, std::vector<Plane>& sv,
+                  std::vector<ExactPlane>& xp) const;
+    static Expansion exact_value(const ExactPlane& X, const double* p, const double* x);
+    bool point_on_plane(const ExactPlane& Q, const double* p, const double* x, int64_t ux,
+                        RowStats& st) const;
+    bool exactly_on(std::vector<ExactPlane>& xp, int k, const double* p, int64_t f,
+                    const Vertex& u, RowStats& st) const;
+    bool exactly_on_input(const ExactPlane& Q, const double* p, const double* x) const;
+    static V3 input_plane(const double* p, const double* a, const double* b);
+    void insert_shadow(const Piece& q, int64_t f, const double* pp, int plane, bool positive,
+                       std::vector<Plane>& sv, std::vector<ExactPlane>& xp, RowStats& st,
+                       R* unattributed, R piece_bound) const;
+    // pieces.cpp
+    V3 between(const Vertex& a, const Vertex& b, int64_t f, R* scale) const;
+    static bool lex_less(const V3& x, const V3& y);
+    static R arc(const Vertex& a, const Vertex& b);
+    void run(const double* pp, const double* pn, const int8_t* node_side,
+             const int8_t* source_side, bool two_sided, bool cull, int64_t budget,
+             int64_t tiles, std::vector<R>& F, std::vector<R>& E, std::vector<R>& B, RowStats& st) const;
+    template <class W>
+    void process(int64_t f, const double* pp, const V3& p, const V3& n,
+                 const int8_t* source_side, bool two_sided, std::vector<Plane>& sv,
+                 std::vector<ExactPlane>& xp, std::vector<W>& work, std::vector<R>& F,
+                 std::vector<R>& E, std::vector<R>& B, RowStats& st) const;
+    // bounds.cpp
+    static R turn_bound(R ratio);
+    R input_error(int64_t i, R length) const;
+    R input_tilt(int64_t ia, int64_t ib, const double* pp) const;
+    R charge_edges(const Piece& q, int64_t src, std::vector<R>& E, RowStats& st,
+                   const std::vector<R>* refined = nullptr, bool record = true) const;
+    void quad_plane(int64_t code, int64_t f, const double* pp, const std::vector<ExactPlane>& xp,
+                    Quad m[3], Quad* cond) const;
+    void refine(const Piece& q, int64_t f, const double* pp, const std::vector<ExactPlane>& xp,
+                std::vector<std::array<Quad, 3>>& v, std::vector<R>& err) const;
+    // integrate.cpp
+    void integrate(const Piece& q, int64_t f, const V3& n, R* value, R* bound,
+                   const RowStats* eq3 = nullptr) const;
+    void integrate_quad(const std::vector<std::array<Quad, 3>>& v, const double* pn, R* value,
+                        R* bound, bool eq3 = false) const;
+};
+
+}  // namespace exactff
+
+#endif

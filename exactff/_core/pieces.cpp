@@ -1,0 +1,382 @@
+// The piece loop of the visibility core: the BSP walked front to back from the point
+// (with the culling tests), each fragment filtered down the shadow tree as convex
+// pieces split by its planes, the visible ones integrated (integrate.cpp), charged
+// (bounds.cpp) and turned into shadows (shadow_tree.cpp).
+
+#include <algorithm>
+#include <array>
+#include <cfloat>
+#include <cmath>
+#include <functional>
+#include <limits>
+#include <vector>
+
+#include "constants.h"
+#include "core.h"
+
+namespace exactff {
+
+// b - a: from the world coordinates where both are input vertices (exact doubles:
+// their difference loses nothing to the distance from p), else from the
+// directions (a computed vertex's world position would be rounded at the scale of
+// its coordinates, far coarser than its direction from p far from the origin; the
+// directions' rounding is in the vertices' own error bounds)
+//
+// A vertex on an input edge is anchored there (its start plus its parameter times
+// the edge), so differences of anchored vertices come from the input's own
+// differences too. ``scale`` receives the magnitude the difference's rounding is
+// relative to.
+V3 Core::between(const Vertex& a, const Vertex& b, int64_t f, R* scale) const {
+    if (a.id >= 0 && b.id >= 0) {
+        V3 e{b.w.x - a.w.x, b.w.y - a.w.y, b.w.z - a.w.z};
+        *scale = norm(e);
+        return e;
+    }
+    const bool anchored_a = a.id >= 0 || a.on_edge >= 0;
+    const bool anchored_b = b.id >= 0 || b.on_edge >= 0;
+    if (anchored_a && anchored_b) {
+        auto anchor = [&](const Vertex& u, V3* base, V3* edge, R* t) {
+            const int64_t i0 = u.id >= 0 ? u.id : u.on_edge;
+            *base = {V_[3 * i0], V_[3 * i0 + 1], V_[3 * i0 + 2]};
+            *edge = {0, 0, 0};
+            *t = 0;
+            if (u.id < 0) {
+                const int64_t i1 = start_[f] + (i0 - start_[f] + 1) % count_[f];
+                *edge = {V_[3 * i1] - base->x, V_[3 * i1 + 1] - base->y,
+                         V_[3 * i1 + 2] - base->z};
+                *t = u.t;
+            }
+        };
+        V3 ba, ea, bb, eb;
+        R ta, tb;
+        anchor(a, &ba, &ea, &ta);
+        anchor(b, &bb, &eb, &tb);
+        V3 d0{bb.x - ba.x, bb.y - ba.y, bb.z - ba.z};
+        V3 e{d0.x + tb * eb.x - ta * ea.x, d0.y + tb * eb.y - ta * ea.y,
+             d0.z + tb * eb.z - ta * ea.z};
+        *scale = norm(d0) + std::fabs(tb) * norm(eb) + std::fabs(ta) * norm(ea);
+        return e;
+    }
+    *scale = a.length + b.length;
+    return {b.v.x - a.v.x, b.v.y - a.v.y, b.v.z - a.v.z};
+}
+
+bool Core::lex_less(const V3& x, const V3& y) {
+    if (x.x != y.x) return x.x < y.x;
+    if (x.y != y.y) return x.y < y.y;
+    return x.z < y.z;
+}
+
+// arc length between two directions
+R Core::arc(const Vertex& a, const Vertex& b) {
+    return std::atan2(norm(cross(a.v, b.v)), dot(a.v, b.v));
+}
+
+void Core::run(const double* pp, const double* pn, const int8_t* node_side,
+               const int8_t* source_side, bool two_sided, bool cull, int64_t budget,
+               int64_t tiles, std::vector<R>& F, std::vector<R>& E, std::vector<R>& B, RowStats& st) const {
+    const V3 p{pp[0], pp[1], pp[2]};
+    V3 n{pn[0], pn[1], pn[2]};
+    R nl = norm(n);
+    n = {n.x / nl, n.y / nl, n.z / nl};
+    std::vector<Plane> sv;
+    sv.reserve(1024);
+    std::vector<ExactPlane> xp;
+    xp.reserve(1024);
+    // the root: the horizon, covered below
+    sv.push_back({n, 1, 2 * K_.eps, OUT, IN, 0, 1});
+    set_double(sv.back());
+    xp.push_back({1, {pn[0], pn[1], pn[2]}, {0, 0, 0}, n, 2 * K_.eps, -1, -1});
+    if (tiles > 0) sv[0].pos = tile_tree(pn, tiles, sv, xp);
+    if (nodes() == 0) return;
+    struct Item {
+        int64_t node;
+        bool emit;
+    };
+    std::vector<Item> stack{{0, false}};
+    // work list of the filter: a piece and the link (plane, branch) it arrived by
+    struct Work {
+        Piece q;
+        int plane;
+        bool positive;
+    };
+    std::vector<Work> work;
+    Piece q0, qp, qn;
+    while (!stack.empty()) {
+        Item it = stack.back();
+        stack.pop_back();
+        const int64_t k = it.node;
+        const bool near_front = node_side[k] >= 0;
+        if (it.emit) {
+            const auto& list = near_front ? here_front_ : here_behind_;
+            for (int64_t j = here_start_[k]; j < here_start_[k + 1]; ++j)
+                process(list[j], pp, p, n, source_side, two_sided, sv, xp, work, F, E,
+                        B, st);
+            continue;
+        }
+        if (cull && size_[k] >= 4) {
+            ++st.box_tests;
+            if (box_behind(k, pp, pn) || box_hidden(sv, k, p, budget)) {
+                ++st.subtrees_culled;
+                st.fragments_culled += size_[k];
+                continue;
+            }
+        }
+        int64_t nearc = near_front ? front_[k] : back_[k];
+        int64_t farc = near_front ? back_[k] : front_[k];
+        if (farc >= 0) stack.push_back({farc, false});
+        stack.push_back({k, true});
+        if (nearc >= 0) stack.push_back({nearc, false});
+    }
+    for (const auto& [key, e] : st.edges)
+        if (e.count == 1) {
+            E[e.src] += e.charge;
+            st.crossing[static_cast<size_t>(e.src)] += e.geo;
+        }
+    // what the row held beyond its n-long results: the shadow tree and its exact
+    // planes, the traversal's stack, the work list's pieces at their most, the edge
+    // charges and the exact tests' cache (containers only grow during a row, so their
+    // capacities are their peaks)
+    st.working_bytes = static_cast<int64_t>(
+        sv.capacity() * sizeof(Plane) + xp.capacity() * sizeof(ExactPlane) +
+        stack.capacity() * sizeof(Item) + work.capacity() * sizeof(Work) +
+        static_cast<size_t>(st.held_peak) * sizeof(Vertex) +
+        st.edges.bucket_count() * sizeof(void*) +
+        st.edges.size() * (sizeof(EdgeKey) + sizeof(EdgeCharge) + 2 * sizeof(void*)) +
+        st.on_plane.bytes());
+    // a visible sliver whose shadow was left out may wrongly show any later piece
+    // behind it: its area goes to every receiving polygon's band bound
+    if (st.unattributed > 0)
+        for (int64_t i = 0; i < n_sources_; ++i)
+            if (source_side[i] > 0 || (two_sided && source_side[i] < 0))
+                B[i] += st.unattributed;
+}
+
+template <class W>
+void Core::process(int64_t f, const double* pp, const V3& p, const V3& n,
+                   const int8_t* source_side, bool two_sided, std::vector<Plane>& sv,
+                   std::vector<ExactPlane>& xp, std::vector<W>& work, std::vector<R>& F,
+                   std::vector<R>& E, std::vector<R>& B, RowStats& st) const {
+    const int64_t src = source_[f];
+    const int s = source_side[src];
+    if (s == 0) return;  // seen edge-on: no image, hides nothing
+    ++st.fragments;
+    const bool receives = s > 0 || two_sided;
+    Piece q;
+    q.reserve(count_[f]);
+    for (int64_t i = start_[f]; i < start_[f] + count_[f]; ++i) {
+        V3 w{V_[3 * i], V_[3 * i + 1], V_[3 * i + 2]};
+        V3 v{w.x - p.x, w.y - p.y, w.z - p.z};
+        // the difference is exact where it fits long double (the usual case): the
+        // direction has no error then, else half an ulp per coordinate
+        bool exact = true;
+        for (int k = 0; k < 3; ++k) {
+            double hi, lo;
+            two_sum(V_[3 * i + k], -pp[k], hi, lo);
+            const R vk = k == 0 ? v.x : (k == 1 ? v.y : v.z);
+            exact = exact && (vk - hi == lo);
+        }
+        const R length = norm(v);
+        q.push_back({w, v, length, exact ? static_cast<R>(0) : 2 * K_.eps, i, -1, -1, i});
+        q.back().gerr = input_error(i, length);
+        set_double(q.back());
+    }
+    work.clear();
+    work.push_back({std::move(q), 0, true});
+    st.held = static_cast<int64_t>(work.back().q.size());
+    // the first step enters the root from a virtual link
+    bool first = true;
+    // each step's signs, distances and crossings (reused: no allocation per step)
+    std::vector<int> sg;
+    std::vector<R> d;
+    std::vector<Vertex> cut;
+    std::vector<std::array<Quad, 3>> qdirs;  // Core::refine's, for integrate_quad
+    std::vector<R> qerrs;
+    while (!work.empty()) {
+        W w = std::move(work.back());
+        work.pop_back();
+        // vertices held by the work list (with this piece): for the row's peak
+        st.held_peak = std::max(st.held_peak, st.held);
+        st.held -= static_cast<int64_t>(w.q.size());
+        int node;
+        if (first) {
+            node = 0;
+            first = false;
+        } else {
+            node = w.positive ? sv[w.plane].pos : sv[w.plane].neg;
+        }
+        if (node == IN) {
+            ++st.hidden;
+            continue;
+        }
+        if (node == OUT) {
+            ++st.visible;
+            R val, bnd;
+            integrate(w.q, f, n, &val, &bnd, st.eq3 ? &st : nullptr);
+            bool refined = false;
+            if (receives && st.rtol > 0) {
+                // the second tier where the sums' rounding or the vertices' errors
+                // exceed the tolerance times the value
+                const R charges = charge_edges(w.q, src, E, st, nullptr, false);
+                if (bnd + charges > st.rtol * val) {
+                    refine(w.q, f, pp, xp, qdirs, qerrs);
+                    R qv, qb;
+                    integrate_quad(qdirs, st.normal, &qv, &qb, st.eq3);
+                    ++st.quad_pieces;
+                    const R qcharges = charge_edges(w.q, src, E, st, &qerrs, false);
+                    if (qb + qcharges < bnd + charges) {
+                        val = qv;
+                        bnd = qb;
+                        refined = true;
+                    }
+                }
+            }
+            if (receives) {
+                F[src] += val;
+                E[src] += bnd;
+                charge_edges(w.q, src, E, st, refined ? &qerrs : nullptr);
+            }
+            insert_shadow(w.q, f, pp, w.plane, w.positive, sv, xp, st, &st.unattributed,
+                          val + bnd);
+            continue;
+        }
+        const Plane P = sv[node];
+        const size_t m = w.q.size();
+        ++st.node_visits;
+        sg.resize(m);
+        d.resize(m);
+        bool pos = false, neg = false;
+        const double plane_width = static_cast<double>(K_.band + P.err + P.slack);
+        for (size_t i = 0; i < m; ++i) {
+            // a vertex within the rounding band of d is taken as on the plane (it
+            // goes with the others); one within that band plus the plane's and its
+            // own errors may lie on the other side of the true plane by up to them:
+            // the sliver along its two edges is charged to the piece
+            const Vertex& u = w.q[i];
+            // the filter: P.m . u.v in double, off its long double value by at most
+            // 6 double roundoffs of |m| |v| (the roundings to double, the products
+            // and sums); a vertex clearly beyond the widest band is decided by it
+            // (its long double distance is then computed only if the piece is cut)
+            {
+                const double dd = P.md[0] * u.vd[0] + P.md[1] * u.vd[1] + P.md[2] * u.vd[2];
+                const double widthd = plane_width + u.errd;
+                if (std::fabs(dd) > (widthd + SVBSP_FILTER_ROUNDOFFS * DBL_EPSILON) *
+                                        (P.mnormd * u.lengthd) * (1 + 8 * DBL_EPSILON)) {
+                    sg[i] = dd > 0 ? 1 : -1;
+                    pos |= dd > 0;
+                    neg |= dd < 0;
+                    d[i] = NAN;
+                    continue;
+                }
+            }
+            d[i] = dot(P.m, u.v);
+            const R scale = P.mnorm * u.length;
+            sg[i] = d[i] > K_.band * scale ? 1 : (d[i] < -K_.band * scale ? -1 : 0);
+            pos |= sg[i] > 0;
+            neg |= sg[i] < 0;
+            const R width = K_.band + P.err + P.slack + u.err;
+            if (!(std::fabs(d[i]) <= width * scale)) continue;
+            ++st.near_tests;
+            if (!exactly_on(xp, P.exact, pp, f, u, st)) {
+                R adjacent = arc(w.q[(i + m - 1) % m], u) + arc(u, w.q[(i + 1) % m]);
+                if (receives)
+                    B[src] += adjacent * width / 3.14159265358979323846264338327950288L;
+                // the sliver, on whichever side it truly is, also hides or uncovers
+                // what lies behind it near this plane: every later piece classified
+                // or cut here is charged it too (the plane's slack; not fed back into
+                // the slack itself, so that it does not grow hit by hit)
+                sv[node].slack = std::max(sv[node].slack, K_.band + P.err + u.err);
+            }
+        }
+        if (!neg) {  // in front (or in the plane: either side)
+            work.push_back({std::move(w.q), node, true});
+            st.held += static_cast<int64_t>(work.back().q.size());
+            continue;
+        }
+        if (!pos) {
+            work.push_back({std::move(w.q), node, false});
+            st.held += static_cast<int64_t>(work.back().q.size());
+            continue;
+        }
+        ++st.splits;
+        for (size_t i = 0; i < m; ++i)
+            if (std::isnan(d[i])) d[i] = dot(P.m, w.q[i].v);
+        cut.resize(m);
+        for (size_t i = 0; i < m; ++i) {
+            const size_t j = (i + 1) % m;
+            if ((sg[i] > 0 && sg[j] < 0) || (sg[i] < 0 && sg[j] > 0)) {
+                // the crossing computed from the edge's ends in a fixed order, so
+                // that the piece across the edge gets the same point bit for bit
+                const bool swap = lex_less(w.q[j].v, w.q[i].v);
+                const Vertex& x = swap ? w.q[j] : w.q[i];
+                const Vertex& y = swap ? w.q[i] : w.q[j];
+                const R dx = swap ? d[j] : d[i], dy = swap ? d[i] : d[j];
+                R t = dx / (dx - dy);
+                V3 v{x.v.x + t * (y.v.x - x.v.x), x.v.y + t * (y.v.y - x.v.y),
+                     x.v.z + t * (y.v.z - x.v.z)};
+                R l = norm(v);
+                // the new vertex: within K.split ulps of its ends' interpolated distance
+                // (and its own), plus its ends' and the plane's errors carried over
+                R err = P.err + P.slack +
+                        K_.split * K_.eps * ((1 - t) * x.length + t * y.length + l) / l +
+                        std::max(x.err * x.length, y.err * y.length) / l;
+                cut[i] = {V3{0, 0, 0}, v, l, err, -1, -1, -1, -1};
+                set_double(cut[i]);
+                // off the true plane by its tilt; off the true edge's by its ends'
+                // world errors over its distance (as the computation's, above)
+                cut[i].gerr = xp[static_cast<size_t>(P.exact)].tilt +
+                              std::max(x.gerr * x.length, y.gerr * y.length) / l;
+                // the parameter along the input edge the piece's edge i -> j lies on
+                const Vertex& xi = w.q[i];
+                const Vertex& yj = w.q[j];
+                const R ti = swap ? 1 - t : t;
+                if (xi.edge >= 0) {  // on an input edge: exactly known
+                    const int64_t ia = xi.edge;
+                    const int64_t ib = start_[f] + (ia - start_[f] + 1) % count_[f];
+                    R tx = -1, ty = -1;  // the ends' parameters along it
+                    if (xi.id == ia) tx = 0;
+                    else if (xi.on_edge == ia) tx = xi.t;
+                    if (yj.id == ib) ty = 1;
+                    else if (yj.on_edge == ia) ty = yj.t;
+                    if (tx >= 0 && ty >= 0) {
+                        cut[i].on_edge = ia;
+                        cut[i].on_plane = P.exact;
+                        cut[i].t = tx + ti * (ty - tx);
+                        // off the edge's line: the interpolation's rounding, and its
+                        // ends' own distances from it
+                        auto off = [&](const Vertex& u) {
+                            return u.id >= 0 ? u.err : u.err_line;
+                        };
+                        cut[i].err_line =
+                            4 * K_.eps + std::max(off(xi) * xi.length, off(yj) * yj.length) / l;
+                    }
+                }
+            }
+        }
+        // the two parts, each vertex with the edge to its successor: the input edge
+        // it was on, or the cut along this plane
+        const int64_t cut_edge = -1 - static_cast<int64_t>(P.exact);
+        auto part = [&](int sigma) {
+            Piece out;
+            for (size_t i = 0; i < m; ++i) {
+                const size_t j = (i + 1) % m;
+                const int si = sigma * sg[i], sj = sigma * sg[j];
+                if (si >= 0) {
+                    out.push_back(w.q[i]);
+                    if (si == 0 && sj < 0) out.back().edge = cut_edge;
+                }
+                if ((si > 0 && sj < 0) || (si < 0 && sj > 0)) {
+                    out.push_back(cut[i]);
+                    out.back().edge = si > 0 ? cut_edge : w.q[i].edge;
+                }
+            }
+            return out;
+        };
+        work.push_back({part(-1), node, false});
+        st.held += static_cast<int64_t>(work.back().q.size());
+        work.push_back({part(1), node, true});
+        st.held += static_cast<int64_t>(work.back().q.size());
+    }
+}
+
+}  // namespace exactff

@@ -1,0 +1,309 @@
+// The shadow-volume tree's operations: the conservative side of a direction against a
+// plane, the tiling of the upper hemisphere, the exact tests of a vertex against a
+// plane through the point (cached per row), and the insertion of a visible piece's
+// shadow volume at a free leaf.
+
+#include <algorithm>
+#include <array>
+#include <cfloat>
+#include <cmath>
+#include <functional>
+#include <limits>
+#include <vector>
+
+#include "core.h"
+
+namespace exactff {
+
+// side of a direction against a plane, conservatively: +1, -1, or 0 where the
+// sign is not sure (within the rounding of d and the plane's and vertex's errors)
+int Core::side(const Plane& P, const Vertex& x, const Constants& K, R* d_out) {
+    R d = dot(P.m, x.v);
+    *d_out = d;
+    R band = (K.band + P.err + x.err) * P.mnorm * x.length;
+    if (d > band) return 1;
+    if (d < -band) return -1;
+    return 0;
+}
+
+// the upper hemisphere cut into (tiles + 1)^2 cells by planes through p with double
+// normals cos t u - sin t n and cos t v - sin t n (t evenly spaced in angle; u, v, n
+// a frame), as balanced trees: each cell's shadows grow on their own, so a piece
+// is filtered down the shadows of its own part of the sky only
+int Core::tile_tree(const double* pn, int64_t tiles, std::vector<Plane>& sv,
+                    std::vector<ExactPlane>& xp) const {
+    double n[3] = {pn[0], pn[1], pn[2]};
+    const double nl = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+    for (double& c : n) c /= nl;
+    int a = 0;
+    for (int i = 1; i < 3; ++i)
+        if (std::fabs(n[i]) < std::fabs(n[a])) a = i;
+    double e[3] = {0, 0, 0};
+    e[a] = 1;
+    double u[3] = {e[1] * n[2] - e[2] * n[1], e[2] * n[0] - e[0] * n[2],
+                   e[0] * n[1] - e[1] * n[0]};
+    const double ul = std::sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
+    for (double& c : u) c /= ul;
+    double v[3] = {n[1] * u[2] - n[2] * u[1], n[2] * u[0] - n[0] * u[2],
+                   n[0] * u[1] - n[1] * u[0]};
+    const double pi = 3.14159265358979323846;
+    auto planes = [&](const double* w) {
+        std::vector<std::array<double, 3>> out;
+        for (int64_t k = 0; k < tiles; ++k) {
+            double t = -pi / 2 + pi * static_cast<double>(k + 1) / (tiles + 1);
+            out.push_back({std::cos(t) * w[0] - std::sin(t) * n[0],
+                           std::cos(t) * w[1] - std::sin(t) * n[1],
+                           std::cos(t) * w[2] - std::sin(t) * n[2]});
+        }
+        return out;
+    };
+    const auto xs = planes(u), ys = planes(v);
+    using Normals = std::vector<std::array<double, 3>>;
+    std::function<int(const Normals&, int64_t, int64_t, const std::function<int()>&)>
+        build = [&](const Normals& ms, int64_t lo, int64_t hi,
+                    const std::function<int()>& inner) -> int {
+        if (lo >= hi) return inner();
+        const int64_t mid = (lo + hi) / 2;
+        const auto& m = ms[mid];
+        V3 mm{m[0], m[1], m[2]};
+        const int node = static_cast<int>(sv.size());
+        const int exact = static_cast<int>(xp.size());
+        xp.push_back({1, {m[0], m[1], m[2]}, {0, 0, 0}, mm, 2 * K_.eps,
+                      -1 - exact, -1 - exact});
+        sv.push_back({mm, norm(mm), 2 * K_.eps, OUT, OUT, exact, 1});
+        set_double(sv.back());
+        const int neg = build(ms, lo, mid, inner);
+        const int pos = build(ms, mid + 1, hi, inner);
+        sv[node].neg = neg;
+        sv[node].pos = pos;
+        return node;
+    };
+    std::function<int()> out_leaf = []() { return OUT; };
+    std::function<int()> cells = [&]() { return build(ys, 0, tiles, out_leaf); };
+    return build(xs, 0, tiles, cells);
+}
+
+// an exact plane's value at a point of the input
+Expansion Core::exact_value(const ExactPlane& X, const double* p, const double* x) {
+    return X.kind == 0 ? orient_exact(p, X.a, X.b, x) : dot_exact(X.a, p, x);
+}
+
+// whether input point x lies exactly on exact plane Q, decided once a row (the same
+// mesh vertex and edge recur in every fragment that shares them)
+bool Core::point_on_plane(const ExactPlane& Q, const double* p, const double* x, int64_t ux,
+                          RowStats& st) const {
+    const int64_t a = std::min(Q.ua, Q.ub), b = std::max(Q.ua, Q.ub);
+    const int known = st.on_plane.find(a, b, ux);
+    if (known >= 0) return known != 0;
+    ++st.exact_tests;
+    const bool on = exactly_on_input(Q, p, x);
+    st.on_plane.insert(a, b, ux, on);
+    return on;
+}
+
+// whether a vertex lies exactly on an exact plane: an input vertex, or the crossing
+// of an input edge a -> b with an exact plane P, x = a + t (b - a) with
+// t = P(a) / (P(a) - P(b)): Q(x) = (Q(a) P(b) - P(a) Q(b)) / (P(b) - P(a)).
+// False where it cannot be told (the vertex is then charged its sliver).
+bool Core::exactly_on(std::vector<ExactPlane>& xp, int k, const double* p, int64_t f,
+                      const Vertex& u, RowStats& st) const {
+    ExactPlane& Q = xp[k];
+    if (u.id >= 0) return point_on_plane(Q, p, &V_[3 * u.id], uid_[u.id], st);
+    if (u.on_edge < 0) return false;
+    if (u.on_plane == k) return true;
+    {   // the plane it was cut by, instantiated again (the same input edge's plane
+        // from another piece's shadow, or the same normal): on it
+        const ExactPlane& P0 = xp[u.on_plane];
+        if (P0.kind == Q.kind &&
+            ((same_point(P0.a, Q.a) && (Q.kind == 1 || same_point(P0.b, Q.b))) ||
+             (Q.kind == 0 && same_point(P0.a, Q.b) && same_point(P0.b, Q.a))))
+            return true;
+    }
+    const int64_t ia = u.on_edge;
+    const int64_t ib = start_[f] + (ia - start_[f] + 1) % count_[f];
+    const ExactPlane& P = xp[u.on_plane];
+    {   // the edge is one that defines Q (a shared edge): its whole line lies on Q
+        const double* A = &V_[3 * ia];
+        const double* Bv = &V_[3 * ib];
+        if (Q.kind == 0 && ((same_point(A, Q.a) && same_point(Bv, Q.b)) ||
+                            (same_point(A, Q.b) && same_point(Bv, Q.a))))
+            return true;
+    }
+    // P and Q through p and a common input point v (two silhouette edges that meet
+    // at v): two distinct such planes meet in the line through p and v, so the
+    // crossing of the edge with P lies on Q exactly where that line meets the
+    // edge's line, i.e. where v lies on the plane through p and the edge (one
+    // orientation test of degree 3, against Q(a) P(b) - P(a) Q(b) of degree 6).
+    // Where P and Q are one plane this says false, which only charges a sliver.
+    if (P.kind == 0 && Q.kind == 0) {
+        const double* v = nullptr;
+        int64_t uv = -1;
+        if (P.ua == Q.ua || P.ua == Q.ub) {
+            v = P.a;
+            uv = P.ua;
+        } else if (P.ub == Q.ua || P.ub == Q.ub) {
+            v = P.b;
+            uv = P.ub;
+        }
+        if (v != nullptr && !same_point(v, p)) {
+            ExactPlane R{0, {}, {}, V3{0, 0, 0}, 0, uid_[ia], uid_[ib]};
+            std::memcpy(R.a, &V_[3 * ia], sizeof R.a);
+            std::memcpy(R.b, &V_[3 * ib], sizeof R.b);
+            return point_on_plane(R, p, v, uv, st);
+        }
+    }
+    // P and Q one plane, given by other points (the bottom edges of walls standing
+    // on the receiver's plane, collinear edges of separate polygons): every point
+    // of P lies on Q. Told by the points that define one lying on the other
+    // (degree 3 each, and the same pair of planes recurs all row long)
+    if ((Q.kind == 0 && point_on_plane(P, p, Q.a, Q.ua, st) &&
+         point_on_plane(P, p, Q.b, Q.ub, st)) ||
+        (P.kind == 0 && point_on_plane(Q, p, P.a, P.ua, st) &&
+         point_on_plane(Q, p, P.b, P.ub, st))) {
+        return true;
+    }
+    {   // the filter: Q(a) P(b) - P(a) Q(b) in long double, with its error bound
+        R qa, eqa, qb, eqb, pa, epa, pb, epb;
+        filtered(Q.kind, p, Q.a, Q.b, &V_[3 * ia], &qa, &eqa);
+        filtered(Q.kind, p, Q.a, Q.b, &V_[3 * ib], &qb, &eqb);
+        filtered(P.kind, p, P.a, P.b, &V_[3 * ia], &pa, &epa);
+        filtered(P.kind, p, P.a, P.b, &V_[3 * ib], &pb, &epb);
+        const R c = qa * pb - pa * qb;
+        const R err = (std::fabs(qa) + eqa) * epb + eqa * std::fabs(pb) +
+                      (std::fabs(pa) + epa) * eqb + epa * std::fabs(qb) +
+                      4 * std::numeric_limits<R>::epsilon() *
+                          (std::fabs(qa * pb) + std::fabs(pa * qb));
+        if (std::fabs(c) > err) return false;
+    }
+    Expansion Pa = exact_value(P, p, &V_[3 * ia]), Pb = exact_value(P, p, &V_[3 * ib]);
+    Expansion Qa = exact_value(Q, p, &V_[3 * ia]), Qb = exact_value(Q, p, &V_[3 * ib]);
+    Expansion r;
+    mul_into(r, Qa, Pb, 1.0);
+    mul_into(r, Pa, Qb, -1.0);
+    return sign(r) == 0;
+}
+
+// an input point against an exact plane
+bool Core::exactly_on_input(const ExactPlane& Q, const double* p, const double* x) const {
+    // one of the two points that define the plane (a shared edge's end): on it
+    if (Q.kind == 0 && ((x[0] == Q.a[0] && x[1] == Q.a[1] && x[2] == Q.a[2]) ||
+                        (x[0] == Q.b[0] && x[1] == Q.b[1] && x[2] == Q.b[2])))
+        return true;
+    if (surely_off(Q.kind, p, Q.a, Q.b, x)) return false;
+    return sign(exact_value(Q, p, x)) == 0;
+}
+
+// replace the free leaf reached by (plane, branch) with the piece's shadow volume
+// the plane through p and input points a, b: (a - p) x (b - a), from the doubles'
+// error-free differences and products (two-sum, two-product), so that its direction
+// is good to a few long double roundoffs even for an edge seen nearly end-on
+V3 Core::input_plane(const double* p, const double* a, const double* b) {
+    double Ah[3], Al[3], Eh[3], El[3];
+    for (int i = 0; i < 3; ++i) {
+        two_sum(a[i], -p[i], Ah[i], Al[i]);
+        two_sum(b[i], -a[i], Eh[i], El[i]);
+    }
+    auto term = [&](int i, int j) {  // A_i E_j - A_j E_i
+        const double p1 = Ah[i] * Eh[j], p2 = Ah[j] * Eh[i];
+        const double e1 = std::fma(Ah[i], Eh[j], -p1), e2 = std::fma(Ah[j], Eh[i], -p2);
+        return (static_cast<R>(p1) - p2) + (static_cast<R>(e1) - e2) +
+               (static_cast<R>(Ah[i]) * El[j] + static_cast<R>(Al[i]) * Eh[j]) -
+               (static_cast<R>(Ah[j]) * El[i] + static_cast<R>(Al[j]) * Eh[i]);
+    };
+    return {term(1, 2), term(2, 0), term(0, 1)};
+}
+
+// replace the free leaf reached by (plane, branch) with the piece's shadow volume:
+// for each edge, the plane it lies on (its input edge's plane through p, or the
+// plane it was cut along), oriented to hold the piece
+void Core::insert_shadow(const Piece& q, int64_t f, const double* pp, int plane, bool positive,
+                         std::vector<Plane>& sv, std::vector<ExactPlane>& xp, RowStats& st,
+                         R* unattributed, R piece_bound) const {
+    const size_t m = q.size();
+    V3 c{0, 0, 0};
+    for (const Vertex& u : q) {
+        c.x += u.v.x / u.length;
+        c.y += u.v.y / u.length;
+        c.z += u.v.z / u.length;
+    }
+    const R cl = norm(c);
+    std::vector<Plane> chain;
+    size_t sides = 0;  // the piece's edges that bound its shadow, cut ones included
+    bool degenerate = m < 3;
+    for (size_t i = 0; i < m && !degenerate; ++i) {
+        const Vertex& a = q[i];
+        V3 mm;
+        R err;
+        int exact;
+        if (a.edge >= 0) {
+            const int64_t ia = a.edge;
+            const int64_t ib = start_[f] + (ia - start_[f] + 1) % count_[f];
+            mm = input_plane(pp, &V_[3 * ia], &V_[3 * ib]);
+            // its rounding; the input points' own errors (BSP crossings) apart
+            const R tilt = input_tilt(ia, ib, pp);
+            err = 8 * K_.eps;
+            exact = static_cast<int>(xp.size());
+            xp.push_back({0, {V_[3 * ia], V_[3 * ia + 1], V_[3 * ia + 2]},
+                          {V_[3 * ib], V_[3 * ib + 1], V_[3 * ib + 2]}, mm, err,
+                          uid_[ia], uid_[ib], tilt});
+        } else {
+            exact = static_cast<int>(-1 - a.edge);
+            mm = xp[exact].m;
+            err = xp[exact].err;
+        }
+        const bool on_cut = a.edge < 0;
+        const R ml = norm(mm);
+        if (!(ml > 0)) continue;  // an input edge through p (seen end-on exactly)
+        int orient = 1;
+        const R dc = dot(mm, c);
+        // the piece must lie clearly on one side: else it is a sliver along this
+        // plane, whose shadow is left out (its area goes to every value's bound)
+        if (!(std::fabs(dc) > (16 * K_.eps + err) * ml * cl)) {
+            degenerate = true;
+            break;
+        }
+        if (dc < 0) {
+            mm = {-mm.x, -mm.y, -mm.z};
+            orient = -1;
+        }
+        // and every vertex on that side, up to the plane's and its own errors: the
+        // shadow is the intersection of the edges' half-spaces only where the image
+        // is convex, which a polygon planar only within the validation tolerance,
+        // seen from nearly in its plane, need not be (a bent quad seen from its
+        // neighbour's centroid hid 0.7 % of the hemisphere behind it); such an image
+        // is a sliver too: its shadow is left out
+        for (size_t k = 0; k < m && !degenerate; ++k) {
+            if (k == i || k == (i + 1) % m) continue;
+            const Vertex& u = q[k];
+            if (dot(mm, u.v) < -(16 * K_.eps + err + u.err) * ml * u.length)
+                degenerate = true;
+        }
+        if (degenerate) break;
+        ++sides;
+        // an edge along a plane the piece was cut by: that plane is on the path to
+        // the leaf, whose whole cell already lies on the piece's side of it, so the
+        // shadow needs no plane there
+        if (!on_cut) {
+            chain.push_back({mm, ml, err, OUT, OUT, exact, orient});
+            set_double(chain.back());
+        }
+    }
+    if (degenerate || sides < 3) {
+        *unattributed += piece_bound;
+        return;
+    }
+    if (chain.empty()) {  // the piece fills its leaf's cell: the cell is covered
+        (positive ? sv[plane].pos : sv[plane].neg) = IN;
+        return;
+    }
+    const int base = static_cast<int>(sv.size());
+    for (size_t i = 0; i < chain.size(); ++i) {
+        chain[i].pos = i + 1 < chain.size() ? base + static_cast<int>(i) + 1 : IN;
+        chain[i].neg = OUT;
+        sv.push_back(chain[i]);
+    }
+    (positive ? sv[plane].pos : sv[plane].neg) = base;
+    st.shadow_planes += static_cast<int64_t>(chain.size());
+}
+
+}  // namespace exactff

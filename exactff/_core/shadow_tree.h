@@ -1,0 +1,84 @@
+// The shadow-volume BSP tree of the visibility core (Chin & Feiner 1989): a BSP tree of
+// planes through the point p whose leaves are covered (IN) or free (OUT); its root is
+// the horizon plane. Its nodes (Plane), the vertices of the convex pieces filtered down
+// it (Vertex, Piece), each with its error bound, and the core's rounding constants
+// (Constants). The tree's operations are Core's (shadow_tree.cpp: side, tile_tree,
+// insert_shadow and the exact tests of a vertex against a plane).
+
+#ifndef EXACTFF_CORE_SHADOW_TREE_H
+#define EXACTFF_CORE_SHADOW_TREE_H
+
+#include <cstdint>
+#include <vector>
+
+#include "precision.h"
+#include "vec.h"
+
+namespace exactff {
+
+constexpr int OUT = -1;  // a free leaf of the shadow tree
+constexpr int IN = -2;   // a covered leaf
+
+struct Vertex {
+    V3 w;       // position in the world: input vertices only (a computed vertex's
+                // differences come from its anchor or its direction, see between())
+    V3 v;       // w - p: its direction from p (not normalised)
+    R length;   // |v|
+    R err;      // bound on the error of its direction, radians
+    int64_t id; // index of an input vertex (its coordinates exact), or -1: computed
+    int64_t on_edge, on_plane;  // a computed vertex where input edge on_edge (the
+                                // input vertex it starts from) crosses exact plane
+                                // on_plane, or -1
+    int64_t edge;  // the edge to the next vertex: on input edge id (>= 0: the input
+                   // vertex it starts from) or on exact plane -1 - k
+    R t = 0;       // with on_edge: its parameter along that input edge
+    R err_line = 0;  // with on_edge: bound on its direction's error off that edge's
+                     // plane through p (its error along the edge moves no boundary)
+    double vd[3] = {0, 0, 0};  // v, length and err rounded to double: the
+    double lengthd = 0;        // classification's filter (see Core::process)
+    double errd = 0;
+    R gerr = 0;  // bound on the angle off the planes of its two edges that the input's
+                 // own errors add (a BSP crossing is rounded): the geometry's, not the
+                 // computation's, so it moves values (Core::charge_edges), not decisions
+};
+
+inline void set_double(Vertex& u) {
+    u.vd[0] = static_cast<double>(u.v.x);
+    u.vd[1] = static_cast<double>(u.v.y);
+    u.vd[2] = static_cast<double>(u.v.z);
+    u.lengthd = static_cast<double>(u.length);
+    u.errd = static_cast<double>(u.err);
+}
+using Piece = std::vector<Vertex>;
+
+struct Plane {  // m . x = 0 through p; positive side first
+    V3 m;
+    R mnorm;
+    R err;      // bound on its tilt, radians
+    int pos, neg;
+    int exact;  // the exact plane it is (ExactPlane index)
+    int orient; // +1 or -1: m's orientation against the exact plane's
+    R slack = 0;  // the widest sliver decided against it so far: the covered region
+                  // next to it is uncertain by that much for every later piece
+    double md[3] = {0, 0, 0};  // m and mnorm rounded to double, for the filter
+    double mnormd = 0;
+};
+
+inline void set_double(Plane& P) {
+    P.md[0] = static_cast<double>(P.m.x);
+    P.md[1] = static_cast<double>(P.m.y);
+    P.md[2] = static_cast<double>(P.m.z);
+    P.mnormd = static_cast<double>(P.mnorm);
+}
+
+struct Constants {
+    R eps;      // unit roundoff of R
+    R band;     // relative band of "on the plane" (radians)
+    R c1;       // rounding constants of a sector sum (the Python kernel's C1, C2)
+    R c2;
+    R split;    // rounding of a split vertex, in units of eps
+};
+
+}  // namespace exactff
+
+#endif

@@ -1,0 +1,109 @@
+"""Record, or compare bit for bit, what the compiled modules return on a fixed set of rows.
+
+Used when the C++ is moved between files or rebuilt with other flags: the values and bounds
+of the compiled core (``exactff.visibility._svbsp``), of the area rows' hidden parts
+(``exactff.area._hidden``) and of the unoccluded sector sums (``exactff.kernel._sector``)
+must not move.
+
+    python tools/core_bits.py save before.npz       # on the old build
+    python tools/core_bits.py save after.npz        # on the new build
+    python tools/core_bits.py compare before.npz after.npz
+
+``save`` also prints the wall time of each group (one run; compare runs made under the same
+conditions).
+"""
+
+import os
+import sys
+import tempfile
+import time
+
+import numpy as np
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, os.path.join(HERE, "..", "tests"))
+
+
+def _record_sector_sums(out):
+    """Wrap the kernel's compiled row sums so that every call's outputs are kept."""
+    from exactff.kernel import ladder, point
+
+    def wrap(module, name):
+        inner = getattr(module, name)
+
+        def recorded(*args):
+            result = inner(*args)
+            k = sum(1 for key in out if key.startswith(f"sector/{name}/"))
+            for i, a in enumerate(result):
+                out[f"sector/{name}/{k}/{i}"] = np.array(a)
+            return result
+        setattr(module, name, recorded)
+
+    wrap(point, "row_sums")
+    wrap(ladder, "row_sums_extended")
+
+
+def compute():
+    """The arrays to compare, by name, and the wall time of each group."""
+    import exactff as ef
+    from common import load_real_file
+
+    out, times = {}, {}
+    _record_sector_sums(out)
+
+    def point_rows(tag, scene, rows):
+        t0 = time.perf_counter()
+        for r in rows:
+            F, E = ef.form_factors(scene, scene.centroids[r], scene.normals[r], error=True)
+            out[f"{tag}/{r}/F"], out[f"{tag}/{r}/E"] = F, E
+        times[tag] = time.perf_counter() - t0
+
+    office = ef.scenes.office(2000)
+    point_rows("office2000", office, range(0, len(office), len(office) // 20)[:20])
+    cloister = ef.scenes.cloister(5000)
+    point_rows("cloister5000", cloister, range(0, len(cloister), len(cloister) // 10)[:10])
+    duplex = load_real_file("ifc-Duplex_A.obj", tempfile.mkdtemp(prefix="exactff-bits-"))
+    point_rows("duplex", duplex, [1009, 15025, 0, 5000, 20000])
+
+    t0 = time.perf_counter()
+    cornell = ef.scenes.cornell_box()
+    M = ef.form_factor_matrix(cornell)
+    out["cornell/matrix"] = np.asarray(M.todense() if hasattr(M, "todense") else M)
+    times["cornell"] = time.perf_counter() - t0
+
+    view3d = os.path.join(HERE, "..", "tests", "data", "view3d")
+    for name, rows in (("cube.vs3", None), ("gunter1.vs3", [0, 1, 2])):
+        scene = ef.load_scene(os.path.join(view3d, name))
+        t0 = time.perf_counter()
+        F, E = ef.area_form_factors(scene, rows=rows, tolerance=1e-6, error=True)
+        out[f"area/{name}/F"] = np.asarray(F.todense() if hasattr(F, "todense") else F)
+        out[f"area/{name}/E"] = np.asarray(E.todense() if hasattr(E, "todense") else E)
+        times[f"area {name}"] = time.perf_counter() - t0
+    return out, times
+
+
+def main(argv):
+    if len(argv) == 3 and argv[1] == "save":
+        out, times = compute()
+        np.savez(argv[2], **out)
+        print(f"{len(out)} arrays saved to {argv[2]}")
+        for tag, t in times.items():
+            print(f"  {tag:20s} {t:8.2f} s")
+        return 0
+    if len(argv) == 4 and argv[1] == "compare":
+        a, b = np.load(argv[2]), np.load(argv[3])
+        if set(a.files) != set(b.files):
+            print("different arrays:", sorted(set(a.files) ^ set(b.files)))
+            return 1
+        bad = [k for k in a.files if not (a[k].dtype == b[k].dtype and a[k].shape == b[k].shape
+                                          and a[k].tobytes() == b[k].tobytes())]
+        print(f"{len(a.files) - len(bad)} of {len(a.files)} arrays equal bit for bit")
+        for k in bad:
+            print("  differs:", k)
+        return 1 if bad else 0
+    print(__doc__)
+    return 2
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv))
