@@ -23,13 +23,14 @@ setup(
                                    depends=HEADERS,
                                    cxx_std=17, extra_compile_args=["-O2"],
                                    extra_link_args=QUADMATH),
-                 Pybind11Extension("exactff.area._hidden", ["exactff/area/_hidden.cpp"],
-                                   depends=["exactff/kernel/_sector_term.h"], cxx_std=17,
+                 Pybind11Extension("exactff.area._hidden", ["exactff/_core/bind_hidden.cpp",
+                                                            "exactff/_core/hidden.cpp"],
+                                   depends=HEADERS, cxx_std=17,
                                    extra_compile_args=["-O3", "-fno-math-errno"]),
                  # the same arithmetic as kernel/sector.py's numpy: no contraction into
                  # fused multiply-adds, no reassociation
-                 Pybind11Extension("exactff.kernel._sector", ["exactff/kernel/_sector.cpp"],
-                                   depends=["exactff/kernel/_sector_term.h"], cxx_std=17,
+                 Pybind11Extension("exactff.kernel._sector", ["exactff/_core/bind_sector.cpp"],
+                                   depends=HEADERS, cxx_std=17,
                                    extra_compile_args=["-O3", "-fno-math-errno",
                                                        "-ffp-contract=off"]),
                  # no contraction into fused multiply-adds: the z-buffer mirrors the numpy

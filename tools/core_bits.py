@@ -71,6 +71,30 @@ def compute():
     out["cornell/matrix"] = np.asarray(M.todense() if hasattr(M, "todense") else M)
     times["cornell"] = time.perf_counter() - t0
 
+    # the unoccluded rows' compiled sector sums, double and long double tiers, on every
+    # pair of 20 rows of the office (kernel/_sector.cpp)
+    from exactff import _tolerances as tol
+    from exactff.geometry import receiver_frame
+    from exactff.kernel import ladder, point
+    from exactff.kernel.flat import flat_polygons
+
+    t0 = time.perf_counter()
+    flat = flat_polygons(office)
+    picked = np.arange(0, len(office), len(office) // 20)[:20]
+    P, N = office.centroids[picked], office.normals[picked]
+    rows = np.repeat(np.arange(len(picked)), len(office)).astype(np.int64)
+    ids = np.tile(np.arange(len(office)), len(picked)).astype(np.int64)
+    frames = np.array([receiver_frame(n) for n in N])
+    for i, a in enumerate(point.row_sums(flat.V, flat.offsets, ids, rows, P, frames, tol.EPS,
+                                         tol.OFFSET_ROUNDING_ULPS, tol.C2 * tol.EPS)):
+        out[f"kernel/row_sums/{i}"] = np.array(a)
+    ldframes = np.array([receiver_frame(n, dtype=np.longdouble) for n in N])
+    for i, a in enumerate(ladder.row_sums_extended(
+            flat.V, flat.offsets, ids, rows, P, ldframes, tol.LONGDOUBLE_EPS,
+            tol.OFFSET_ROUNDING_ULPS, tol.C2 * tol.LONGDOUBLE_EPS)):
+        out[f"kernel/row_sums_extended/{i}"] = np.array(a)
+    times["kernel sums"] = time.perf_counter() - t0
+
     view3d = os.path.join(HERE, "..", "tests", "data", "view3d")
     for name, rows in (("cube.vs3", None), ("gunter1.vs3", [0, 1, 2])):
         scene = ef.load_scene(os.path.join(view3d, name))
@@ -80,6 +104,18 @@ def compute():
         out[f"area/{name}/E"] = np.asarray(E.todense() if hasattr(E, "todense") else E)
         times[f"area {name}"] = time.perf_counter() - t0
     return out, times
+
+
+def same_bits(x, y):
+    """Whether two arrays hold the same values bit for bit (long double: its 10 bytes of
+    x87 extended precision, not the padding of its 16)."""
+    if x.dtype != y.dtype or x.shape != y.shape:
+        return False
+    if x.dtype == np.longdouble and np.finfo(np.longdouble).nmant == 63:
+        size = x.dtype.itemsize
+        return np.array_equal(x.reshape(-1).view(np.uint8).reshape(-1, size)[:, :10],
+                              y.reshape(-1).view(np.uint8).reshape(-1, size)[:, :10])
+    return x.tobytes() == y.tobytes()
 
 
 def main(argv):
@@ -95,8 +131,7 @@ def main(argv):
         if set(a.files) != set(b.files):
             print("different arrays:", sorted(set(a.files) ^ set(b.files)))
             return 1
-        bad = [k for k in a.files if not (a[k].dtype == b[k].dtype and a[k].shape == b[k].shape
-                                          and a[k].tobytes() == b[k].tobytes())]
+        bad = [k for k in a.files if not same_bits(a[k], b[k])]
         print(f"{len(a.files) - len(bad)} of {len(a.files)} arrays equal bit for bit")
         for k in bad:
             print("  differs:", k)

@@ -14,32 +14,26 @@
 // exact one, and there is no topology to get wrong. The pieces are returned as rings for
 // the sector sums (kernel/sector.py).
 
-#include <pybind11/numpy.h>
-#include <pybind11/pybind11.h>
-
 #include <algorithm>
 #include <cfloat>
 #include <cmath>
 #include <limits>
 #include <vector>
 
-#include "../kernel/_sector_term.h"
+#include "hidden.h"
+#include "sector.h"
+#include "vec.h"
 
-namespace py = pybind11;
-
+namespace exactff {
 namespace {
 
 struct P2 {
     double x, y;
 };
-// 3-D work in R: double first, long double (on x86 64 bits of mantissa) for a point
-// where what the vertices' rounding can move is too much (a crossing near x of an edge
-// whose ends are far from it loses the ends' size in absolute terms, and the projection
-// magnifies that near x)
-template <typename R>
-struct P3 {
-    R x, y, z;
-};
+// 3-D work in R (Vec3<R>, vec.h): double first, long double (on x86 64 bits of mantissa)
+// for a point where what the vertices' rounding can move is too much (a crossing near x of
+// an edge whose ends are far from it loses the ends' size in absolute terms, and the
+// projection magnifies that near x)
 // a line of Q's plane, a u + b v + c = 0, the side a u + b v + c >= 0 inside
 struct Line {
     double a, b, c;
@@ -59,8 +53,8 @@ struct Piece {
 // bound on each vertex's rounding
 template <typename R>
 struct Poly3 {
-    std::vector<P3<R>> v;
-    std::vector<P3<R>> m;
+    std::vector<Vec3<R>> v;
+    std::vector<Vec3<R>> m;
     std::vector<R> e;
     void clear() {
         v.clear();
@@ -68,19 +62,6 @@ struct Poly3 {
         e.clear();
     }
 };
-
-template <typename R>
-inline R dot(const P3<R>& a, const P3<R>& b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
-template <typename R>
-inline P3<R> cross(const P3<R>& a, const P3<R>& b) {
-    return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
-}
-template <typename R>
-inline P3<R> sub(const P3<R>& a, const P3<R>& b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
-template <typename R>
-inline P3<R> neg(const P3<R>& a) { return {-a.x, -a.y, -a.z}; }
-template <typename R>
-inline P3<R> to(const P3<double>& a) { return {R(a.x), R(a.y), R(a.z)}; }
 
 double twice_area(const std::vector<P2>& p) {
     double s = 0.0;
@@ -96,12 +77,12 @@ double twice_area(const std::vector<P2>& p) {
 // inside end, as exactff.halfspace.clip_halfspace); the cut edge lies on m. A crossing's
 // rounding: its ends' larger one plus ulps units of the larger end's length.
 template <typename R>
-void clip3(const Poly3<R>& V, const P3<R>& m, R ulps, Poly3<R>& out) {
+void clip3(const Poly3<R>& V, const Vec3<R>& m, R ulps, Poly3<R>& out) {
     out.clear();
     const size_t n = V.v.size();
     for (size_t i = 0; i < n; ++i) {
-        const P3<R>& a = V.v[i];
-        const P3<R>& b = V.v[(i + 1) % n];
+        const Vec3<R>& a = V.v[i];
+        const Vec3<R>& b = V.v[(i + 1) % n];
         const R sa = dot(m, a), sb = dot(m, b);
         if (sa >= 0) {
             out.v.push_back(a);
@@ -109,8 +90,8 @@ void clip3(const Poly3<R>& V, const P3<R>& m, R ulps, Poly3<R>& out) {
             out.e.push_back(V.e[i]);
         }
         if ((sa >= 0) != (sb >= 0)) {
-            const P3<R>& p = sa >= 0 ? a : b;
-            const P3<R>& q = sa >= 0 ? b : a;
+            const Vec3<R>& p = sa >= 0 ? a : b;
+            const Vec3<R>& q = sa >= 0 ? b : a;
             const R sp = sa >= 0 ? sa : sb, sq = sa >= 0 ? sb : sa;
             const R t = sp / (sp - sq);
             out.v.push_back({p.x + t * (q.x - p.x), p.y + t * (q.y - p.y), p.z + t * (q.z - p.z)});
@@ -127,7 +108,7 @@ void clip3(const Poly3<R>& V, const P3<R>& m, R ulps, Poly3<R>& out) {
 void split(const Piece& F, const Line& L, Piece& in, Piece& out) {
     in.clear();
     out.clear();
-    const Line R{-L.a, -L.b, -L.c};
+    const Line rev{-L.a, -L.b, -L.c};
     const size_t n = F.size();
     for (size_t i = 0; i < n; ++i) {
         const P2& p = F.v[i];
@@ -151,7 +132,7 @@ void split(const Piece& F, const Line& L, Piece& in, Piece& out) {
             in.v.push_back(c);
             in.l.push_back(pin ? L : F.l[i]);
             out.v.push_back(c);
-            out.l.push_back(pin ? F.l[i] : R);
+            out.l.push_back(pin ? F.l[i] : rev);
         }
     }
 }
@@ -237,16 +218,16 @@ bool intersect(const Piece& F, const Piece& C, Piece& out, Piece& in, Piece& out
 
 // The inputs of one call, in doubles.
 struct Inputs {
-    std::vector<P3<double>> base;              // the pyramid's base
-    P3<double> base_centroid;
-    std::vector<std::vector<P3<double>>> K;    // the blockers
-    std::vector<P3<double>> KN;                // their unit normals (outward for a solid's)
+    std::vector<Vec3<double>> base;              // the pyramid's base
+    Vec3<double> base_centroid;
+    std::vector<std::vector<Vec3<double>>> K;    // the blockers
+    std::vector<Vec3<double>> KN;                // their unit normals (outward for a solid's)
     std::vector<long long> group;              // each one's convex solid, -1: none
     long long groups = 0;                      // 1 + the largest solid's label
     double back_face = 0.0;                    // a distance beyond which p is off a plane
     std::vector<Piece> Qparts;                 // Q's convex parts (none over Q itself)
     std::vector<Box> Qbox;
-    P3<double> origin, nq, ax, ay;
+    Vec3<double> origin, nq, ax, ay;
     double edge_on, vertex_ulps, sliver_ulps;
     size_t max_pieces;
 };
@@ -263,7 +244,7 @@ struct Region {
 // Scratch space reused from point to point.
 template <typename R>
 struct Work {
-    std::vector<P3<R>> M;
+    std::vector<Vec3<R>> M;
     std::vector<unsigned char> off_hull;       // per solid: p is outside its hull
     Poly3<R> W, T;
     Piece img, in, outside, cut;
@@ -272,15 +253,15 @@ struct Work {
 
 // The hidden region of Q from the point p, in precision R.
 template <typename R>
-void region_at(const Inputs& in, const P3<double>& pd, Region& out, Work<R>& w) {
+void region_at(const Inputs& in, const Vec3<double>& pd, Region& out, Work<R>& w) {
     out.pieces.clear();
     out.slivers = Slivers();
     out.reach = out.moved = 0.0;
     out.back_faces = 0;
     out.ok = true;
     const R vertex_error = R(in.vertex_ulps) * std::numeric_limits<R>::epsilon();
-    const P3<R> p = to<R>(pd), nq = to<R>(in.nq), ax = to<R>(in.ax), ay = to<R>(in.ay);
-    const P3<R> foot = sub(p, to<R>(in.origin));
+    const Vec3<R> p = to<R>(pd), nq = to<R>(in.nq), ax = to<R>(in.ax), ay = to<R>(in.ay);
+    const Vec3<R> foot = sub(p, to<R>(in.origin));
     const R h = dot(foot, nq);
     if (!(h > 0)) return;              // on Q's plane: Q edge-on, nothing hidden
     // the pyramid's inward planes through p: (a - p) x (b - a) for its edge a -> b, the
@@ -290,8 +271,8 @@ void region_at(const Inputs& in, const P3<double>& pd, Region& out, Work<R>& w) 
     const size_t nc = in.base.size();
     w.M.resize(nc);
     for (size_t a = 0; a < nc; ++a) {
-        const P3<double>& a0 = in.base[a];
-        const P3<double>& a1 = in.base[(a + 1) % nc];
+        const Vec3<double>& a0 = in.base[a];
+        const Vec3<double>& a1 = in.base[(a + 1) % nc];
         w.M[a] = cross(sub(to<R>(a0), p), to<R>(sub(a1, a0)));
         if (dot(w.M[a], sub(to<R>(in.base_centroid), p)) < 0) w.M[a] = neg(w.M[a]);
     }
@@ -309,8 +290,8 @@ void region_at(const Inputs& in, const P3<double>& pd, Region& out, Work<R>& w) 
     for (size_t b = 0; b < in.K.size(); ++b) {
         // the offsets, each rounded once (within vertex_error of its length)
         W.clear();
-        P3<R> g{0, 0, 0};
-        for (const P3<double>& v : in.K[b]) {
+        Vec3<R> g{0, 0, 0};
+        for (const Vec3<double>& v : in.K[b]) {
             W.v.push_back(sub(to<R>(v), p));
             W.e.push_back(vertex_error * std::sqrt(dot(W.v.back(), W.v.back())));
             g = {g.x + W.v.back().x, g.y + W.v.back().y, g.z + W.v.back().z};
@@ -320,7 +301,7 @@ void region_at(const Inputs& in, const P3<double>& pd, Region& out, Work<R>& w) 
         bool outside_pyramid = false;
         for (size_t a = 0; a < nc && !outside_pyramid; ++a) {
             outside_pyramid = true;
-            for (const P3<R>& v : W.v)
+            for (const Vec3<R>& v : W.v)
                 if (dot(w.M[a], v) >= 0) {
                     outside_pyramid = false;
                     break;
@@ -336,12 +317,12 @@ void region_at(const Inputs& in, const P3<double>& pd, Region& out, Work<R>& w) 
         // each edge's plane through p (as the pyramid's, from the edge's own vector),
         // inside towards the blocker's centroid
         for (size_t k = 0, m = W.v.size(); k < m; ++k) {
-            P3<R> e = cross(W.v[k], to<R>(sub(in.K[b][(k + 1) % m], in.K[b][k])));
+            Vec3<R> e = cross(W.v[k], to<R>(sub(in.K[b][(k + 1) % m], in.K[b][k])));
             W.m.push_back(dot(e, g) < 0 ? neg(e) : e);
         }
         for (size_t a = 0; a < nc && W.v.size() >= 3; ++a) {
             bool inside = true;          // wholly inside this plane: nothing to cut
-            for (const P3<R>& v : W.v)
+            for (const Vec3<R>& v : W.v)
                 if (dot(w.M[a], v) < 0) {
                     inside = false;
                     break;
@@ -356,14 +337,14 @@ void region_at(const Inputs& in, const P3<double>& pd, Region& out, Work<R>& w) 
         Piece& img = w.img;
         img.clear();
         for (size_t k = 0; k < W.v.size(); ++k) {
-            const P3<R>& v = W.v[k];
+            const Vec3<R>& v = W.v[k];
             const R down = -dot(v, nq);
             const R s = h / down;
             // where the vertex's rounding e takes the image: |s| e (1 + |v| / |v . nQ|),
             // large for a crossing close to p
             out.moved = std::max(out.moved, static_cast<double>(
                 std::fabs(s) * W.e[k] * (1 + std::sqrt(dot(v, v)) / std::fabs(down))));
-            const P3<R> q{v.x * s + foot.x, v.y * s + foot.y, v.z * s + foot.z};
+            const Vec3<R> q{v.x * s + foot.x, v.y * s + foot.y, v.z * s + foot.z};
             const P2 u{static_cast<double>(dot(q, ax)), static_cast<double>(dot(q, ay))};
             if (!std::isfinite(u.x) || !std::isfinite(u.y)) {
                 out.ok = false;
@@ -371,7 +352,7 @@ void region_at(const Inputs& in, const P3<double>& pd, Region& out, Work<R>& w) 
             }
             out.reach = std::max({out.reach, std::fabs(u.x), std::fabs(u.y)});
             img.v.push_back(u);
-            const P3<R>& m = W.m[k];
+            const Vec3<R>& m = W.m[k];
             img.l.push_back({static_cast<double>(dot(ax, m)), static_cast<double>(dot(ay, m)),
                              static_cast<double>(-dot(foot, m))});
         }
@@ -416,35 +397,35 @@ void region_at(const Inputs& in, const P3<double>& pd, Region& out, Work<R>& w) 
 // Eq. 3's sector sum of one piece seen from x, with its rounding estimate: the port to
 // doubles of exactff.kernel.clipped_sector_sums (offset form, the horizon z = 0 of the
 // receiving frame clipped and its arcs added; tests/test_area.py checks the two agree).
-// The piece's vertices in Q's plane frame; w = q0 - x; R the receiving frame (rows);
+// The piece's vertices in Q's plane frame; w = q0 - x; frame the receiving frame (rows);
 // ax, ay the plane's axes. Adds |sum| to *value and c1 eps sum|terms| + the terms'
 // errors to *rounding (both before the division by 2 pi).
 struct SectorWork {
-    std::vector<P3<double>> E;
+    std::vector<Vec3<double>> E;
     std::vector<double> term;
-    std::vector<P3<double>> crossing;
+    std::vector<Vec3<double>> crossing;
     std::vector<size_t> crossing_edge;
     std::vector<unsigned char> crossing_enters;
 };
 
-inline P3<double> rotate(const double R[3][3], const P3<double>& u) {
-    return {R[0][0] * u.x + R[0][1] * u.y + R[0][2] * u.z,
-            R[1][0] * u.x + R[1][1] * u.y + R[1][2] * u.z,
-            R[2][0] * u.x + R[2][1] * u.y + R[2][2] * u.z};
+inline Vec3<double> rotate(const double frame[3][3], const Vec3<double>& u) {
+    return {frame[0][0] * u.x + frame[0][1] * u.y + frame[0][2] * u.z,
+            frame[1][0] * u.x + frame[1][1] * u.y + frame[1][2] * u.z,
+            frame[2][0] * u.x + frame[2][1] * u.y + frame[2][2] * u.z};
 }
 
-void sector_sum(const Piece& F, const P3<double>& w, const double R[3][3], const P3<double>& ax,
-                const P3<double>& ay, double c1, double c2, double eps, SectorWork& k,
+void sector_sum(const Piece& F, const Vec3<double>& w, const double frame[3][3], const Vec3<double>& ax,
+                const Vec3<double>& ay, double c1, double c2, double eps, SectorWork& k,
                 double* value, double* rounding) {
     const size_t m = F.size();
     const P2& f = F.v[0];
     // the reference vertex relative to x, and the offsets from it, in the receiving frame
-    const P3<double> A = rotate(R, {w.x + (f.x * ax.x + f.y * ay.x), w.y + (f.x * ax.y + f.y * ay.y),
+    const Vec3<double> A = rotate(frame, {w.x + (f.x * ax.x + f.y * ay.x), w.y + (f.x * ax.y + f.y * ay.y),
                                     w.z + (f.x * ax.z + f.y * ay.z)});
     k.E.resize(m);
     for (size_t i = 0; i < m; ++i) {
         const double du = F.v[i].x - f.x, dv = F.v[i].y - f.y;
-        k.E[i] = rotate(R, {du * ax.x + dv * ay.x, du * ax.y + dv * ay.y, du * ax.z + dv * ay.z});
+        k.E[i] = rotate(frame, {du * ax.x + dv * ay.x, du * ax.y + dv * ay.y, du * ax.z + dv * ay.z});
     }
     k.term.assign(m, 0.0);
     k.crossing.clear();
@@ -452,14 +433,14 @@ void sector_sum(const Piece& F, const P3<double>& w, const double R[3][3], const
     k.crossing_enters.clear();
     double errs = 0.0;
     for (size_t i = 0; i < m; ++i) {
-        P3<double> Ea = k.E[i], Eb = k.E[(i + 1) % m];
+        Vec3<double> Ea = k.E[i], Eb = k.E[(i + 1) % m];
         const double za = A.z + Ea.z, zb = A.z + Eb.z;
         const bool above_a = za > 0, above_b = zb > 0;
         if (!above_a && !above_b) continue;
         if (above_a != above_b) {
             // the edge's horizon crossing, as an offset (its height exactly 0)
             const double t = za / (za - zb);
-            const P3<double> X{Ea.x + t * (Eb.x - Ea.x), Ea.y + t * (Eb.y - Ea.y),
+            const Vec3<double> X{Ea.x + t * (Eb.x - Ea.x), Ea.y + t * (Eb.y - Ea.y),
                                Ea.z + t * (Eb.z - Ea.z)};
             if (!above_a) Ea = X;
             else Eb = X;
@@ -467,17 +448,17 @@ void sector_sum(const Piece& F, const P3<double>& w, const double R[3][3], const
             k.crossing_edge.push_back(i);
             k.crossing_enters.push_back(!above_a);
         }
-        // the edge's term and its rounding (kernel/_sector_term.h, as clipped_sector_sums)
-        const exactff::SectorTerm<double> st =
-            exactff::sector_term(A.x, A.y, A.z, Ea.x, Ea.y, Ea.z, Eb.x, Eb.y, Eb.z, c2 * eps);
+        // the edge's term and its rounding (sector.h, as clipped_sector_sums)
+        const SectorTerm<double> st =
+            sector_term(A.x, A.y, A.z, Ea.x, Ea.y, Ea.z, Eb.x, Eb.y, Eb.z, c2 * eps);
         k.term[i] = st.term;
         errs += st.err;
     }
     // the horizon arcs: the signed angle of each crossing from the piece's first one
     if (!k.crossing.empty()) {
-        const P3<double>& g = k.crossing[0];
+        const Vec3<double>& g = k.crossing[0];
         for (size_t j = 0; j < k.crossing.size(); ++j) {
-            const P3<double>& X = k.crossing[j];
+            const Vec3<double>& X = k.crossing[j];
             const double phi = std::atan2(g.x * X.y - g.y * X.x, g.x * X.x + g.y * X.y);
             k.term[k.crossing_edge[j]] += k.crossing_enters[j] ? phi : -phi;
         }
@@ -488,82 +469,55 @@ void sector_sum(const Piece& F, const P3<double>& w, const double R[3][3], const
         mag += std::fabs(k.term[i]);
     }
     *value += std::fabs(S);
-    *rounding += c1 * eps * mag + errs;
+    *rounding += sum_rounding(c1 * eps, mag, errs);
 }
 
 }  // namespace
 
-// Arguments: X (n, 3) points; corners (c, 3) the pyramid's convex base in Q's plane;
-// q0 (3,) a point of the plane, nQ (3,) its unit normal towards the front, RQ (2, 3)
-// the plane's axes; blockers (b, k, 3) padded convex polygons with counts (b,) and unit
-// normals (b, 3), outward for the members of a convex solid; groups (b,) the solid of
-// each (-1: none), back_face a distance beyond which x is off a member's plane (a solid's
-// members that x sees from behind are skipped where it sees one from the front); edge_on
-// a distance within which x is on a blocker's plane (seen edge-on, hiding nothing); vertex_ulps the rounding of an offset or a crossing in
-// units of the working precision's roundoff of its length (of the longer end's, for a
-// crossing); sliver_ulps: a piece of at most this many units of rounding of the squared
-// reach (twice its area) is dropped and counted; max_pieces: a point with more pieces
-// is reported lost; precise_rtol, extent: a point is computed again in long double
-// where an image is not finite or the vertices' rounding can move its images by more
-// than precise_rtol of the larger of their reach and extent (Q's size); parts (p, k', 2)
-// padded convex parts of Q in the plane's frame with counts (p,), none where the base
-// is Q itself; frame (3, 3) the receiving frame of the points (rows: two axes of the
-// emitter's plane and its normal); c1, c2, eps the sector sums' error model; rings: also
-// return the pieces (else xy, ring_start and ring_point are empty).
-// Returns (xy (V, 2) ring vertices in the plane's frame, ring_start (R + 1,), ring_point
-// (R,), lost (n,) bool: an image not finite or too many pieces, the point left empty
-// for the caller, reach (n,) the largest coordinate of a point's images (before the
-// booleans), length (n,) the pieces' perimeters, box (n, 4) their bounding box (the
-// slivers' included), moved (n,) how far the rounding of the clipped vertices can move
-// a point's images, dropped (n,) the area of its slivers, hidden (n,) the point form
-// factor of the pieces (Eq. 3's sector sums over 2 pi), rounding (n,) its sector sums'
-// rounding estimate, and back_faces: how many times a solid's member was skipped).
-py::tuple hidden_pieces(py::array_t<double, py::array::c_style | py::array::forcecast> X,
-                        py::array_t<double, py::array::c_style | py::array::forcecast> corners,
-                        py::array_t<double, py::array::c_style | py::array::forcecast> q0,
-                        py::array_t<double, py::array::c_style | py::array::forcecast> nQ,
-                        py::array_t<double, py::array::c_style | py::array::forcecast> RQ,
-                        py::array_t<double, py::array::c_style | py::array::forcecast> blockers,
-                        py::array_t<long long, py::array::c_style | py::array::forcecast> counts,
-                        py::array_t<double, py::array::c_style | py::array::forcecast> normals,
-                        py::array_t<long long, py::array::c_style | py::array::forcecast> groups,
-                        double back_face, double edge_on, double vertex_ulps, double sliver_ulps,
-                        long long max_pieces, double precise_rtol, double extent,
-                        py::array_t<double, py::array::c_style | py::array::forcecast> parts,
-                        py::array_t<long long, py::array::c_style | py::array::forcecast> part_counts,
-                        py::array_t<double, py::array::c_style | py::array::forcecast> frame,
-                        double c1, double c2, double eps, bool rings) {
-    const auto x = X.unchecked<2>();
-    const auto cr = corners.unchecked<2>();
-    const auto bl = blockers.unchecked<3>();
-    const auto bc = counts.unchecked<1>();
-    const auto bn = normals.unchecked<2>();
-    const auto bg = groups.unchecked<1>();
-    const auto pa = parts.unchecked<3>();
-    const auto pc = part_counts.unchecked<1>();
-    const auto fr = frame.unchecked<2>();
-    double R[3][3];
+HiddenResult hidden_pieces(const HiddenArgs& args) {
+    // the arrays as the loops read them (C order)
+    const auto x = [&](std::ptrdiff_t i, int k) { return args.X[3 * i + k]; };
+    const auto cr = [&](std::ptrdiff_t i, int k) { return args.corners[3 * i + k]; };
+    const auto bl = [&](std::ptrdiff_t b, std::ptrdiff_t k, int j) {
+        return args.blockers[(b * args.blocker_stride + k) * 3 + j];
+    };
+    const auto bc = [&](std::ptrdiff_t b) { return args.counts[b]; };
+    const auto bn = [&](std::ptrdiff_t b, int j) { return args.normals[3 * b + j]; };
+    const auto bg = [&](std::ptrdiff_t b) { return args.groups[b]; };
+    const auto pa = [&](std::ptrdiff_t q, std::ptrdiff_t k, int j) {
+        return args.parts[(q * args.part_stride + k) * 2 + j];
+    };
+    const auto pc = [&](std::ptrdiff_t q) { return args.part_counts[q]; };
+    double frame[3][3];
     for (int a = 0; a < 3; ++a)
-        for (int b = 0; b < 3; ++b) R[a][b] = fr(a, b);
+        for (int b = 0; b < 3; ++b) frame[a][b] = args.frame[3 * a + b];
+    const double *q0 = args.q0, *nQ = args.nQ, *RQ = args.RQ;
+    const double back_face = args.back_face, edge_on = args.edge_on,
+                 vertex_ulps = args.vertex_ulps, sliver_ulps = args.sliver_ulps,
+                 precise_rtol = args.precise_rtol, extent = args.extent, c1 = args.c1,
+                 c2 = args.c2, eps = args.eps;
+    const long long max_pieces = args.max_pieces;
+    const bool rings = args.rings;
     Inputs in;
-    in.origin = {q0.at(0), q0.at(1), q0.at(2)};
-    in.nq = {nQ.at(0), nQ.at(1), nQ.at(2)};
-    in.ax = {RQ.at(0, 0), RQ.at(0, 1), RQ.at(0, 2)};
-    in.ay = {RQ.at(1, 0), RQ.at(1, 1), RQ.at(1, 2)};
+    in.origin = {q0[0], q0[1], q0[2]};
+    in.nq = {nQ[0], nQ[1], nQ[2]};
+    in.ax = {RQ[0], RQ[1], RQ[2]};
+    in.ay = {RQ[3], RQ[4], RQ[5]};
     in.edge_on = edge_on;
     in.vertex_ulps = vertex_ulps;
     in.sliver_ulps = sliver_ulps;
     in.max_pieces = static_cast<size_t>(max_pieces);
-    const ssize_t n = x.shape(0), nc = cr.shape(0), nb = bl.shape(0), np_ = pa.shape(0);
+    const std::ptrdiff_t n = args.n, nc = args.n_corners, nb = args.n_blockers,
+                         np_ = args.n_parts;
     in.base_centroid = {0.0, 0.0, 0.0};
-    for (ssize_t a = 0; a < nc; ++a) {
+    for (std::ptrdiff_t a = 0; a < nc; ++a) {
         in.base.push_back({cr(a, 0), cr(a, 1), cr(a, 2)});
         in.base_centroid = {in.base_centroid.x + cr(a, 0) / nc, in.base_centroid.y + cr(a, 1) / nc,
                             in.base_centroid.z + cr(a, 2) / nc};
     }
     in.K.resize(nb);
-    for (ssize_t b = 0; b < nb; ++b) {
-        for (ssize_t k = 0; k < bc(b); ++k) in.K[b].push_back({bl(b, k, 0), bl(b, k, 1), bl(b, k, 2)});
+    for (std::ptrdiff_t b = 0; b < nb; ++b) {
+        for (std::ptrdiff_t k = 0; k < bc(b); ++k) in.K[b].push_back({bl(b, k, 0), bl(b, k, 1), bl(b, k, 2)});
         in.KN.push_back({bn(b, 0), bn(b, 1), bn(b, 2)});
         in.group.push_back(bg(b));
         in.groups = std::max(in.groups, bg(b) + 1);
@@ -572,10 +526,10 @@ py::tuple hidden_pieces(py::array_t<double, py::array::c_style | py::array::forc
     // Q's convex parts, each edge's line from its two vertices (the input's own edges
     // and the diagonals between its vertices), inside towards the part's centroid
     in.Qparts.resize(np_);
-    for (ssize_t q = 0; q < np_; ++q) {
+    for (std::ptrdiff_t q = 0; q < np_; ++q) {
         Piece& C = in.Qparts[q];
         P2 g{0.0, 0.0};
-        for (ssize_t k = 0; k < pc(q); ++k) {
+        for (std::ptrdiff_t k = 0; k < pc(q); ++k) {
             C.v.push_back({pa(q, k, 0), pa(q, k, 1)});
             g.x += pa(q, k, 0) / static_cast<double>(pc(q));
             g.y += pa(q, k, 1) / static_cast<double>(pc(q));
@@ -591,21 +545,28 @@ py::tuple hidden_pieces(py::array_t<double, py::array::c_style | py::array::forc
         in.Qbox.push_back(box_of(C));
     }
 
-    std::vector<double> xy;
-    std::vector<long long> ring_start{0}, ring_point;
-    std::vector<unsigned char> lost(n, 0);
-    long long back_faces = 0;
-    std::vector<double> reach(n, 0.0), length(n, 0.0), bounds(4 * n, 0.0), moved(n, 0.0),
-        dropped(n, 0.0), hidden(n, 0.0), rounding(n, 0.0);
+    HiddenResult res;
+    std::vector<double>& xy = res.xy;
+    std::vector<long long>& ring_start = res.ring_start;
+    std::vector<long long>& ring_point = res.ring_point;
+    ring_start.push_back(0);
+    std::vector<unsigned char>& lost = res.lost;
+    lost.assign(n, 0);
+    long long& back_faces = res.back_faces;
+    std::vector<double>&reach = res.reach, &length = res.length, &bounds = res.box,
+                       &moved = res.moved, &dropped = res.dropped, &hidden = res.hidden,
+                       &rounding = res.rounding;
+    for (std::vector<double>* v : {&reach, &length, &moved, &dropped, &hidden, &rounding})
+        v->assign(n, 0.0);
+    bounds.assign(4 * n, 0.0);
     {
-        py::gil_scoped_release release;
         Region region;
         Work<double> fast;
         Work<long double> precise;
         SectorWork sectors;
         const double two_pi = 6.283185307179586;
-        for (ssize_t i = 0; i < n; ++i) {
-            const P3<double> p{x(i, 0), x(i, 1), x(i, 2)};
+        for (std::ptrdiff_t i = 0; i < n; ++i) {
+            const Vec3<double> p{x(i, 0), x(i, 1), x(i, 2)};
             // in doubles first; in long double where an image is not finite or the
             // vertices' rounding can move it by more than precise_rtol of its extent
             region_at(in, p, region, fast);
@@ -619,7 +580,7 @@ py::tuple hidden_pieces(py::array_t<double, py::array::c_style | py::array::forc
                 continue;
             }
             double len = 0.0, value = 0.0, rnd = 0.0;
-            const P3<double> w{in.origin.x - p.x, in.origin.y - p.y, in.origin.z - p.z};
+            const Vec3<double> w{in.origin.x - p.x, in.origin.y - p.y, in.origin.z - p.z};
             Box bb = region.slivers.box;     // the slivers dropped lie in the region's box
             dropped[i] = region.slivers.dropped;
             for (const Piece& F : region.pieces) {
@@ -636,7 +597,7 @@ py::tuple hidden_pieces(py::array_t<double, py::array::c_style | py::array::forc
                     bb.x1 = std::max(bb.x1, u.x);
                     bb.y1 = std::max(bb.y1, u.y);
                 }
-                sector_sum(F, w, R, in.ax, in.ay, c1, c2, eps, sectors, &value, &rnd);
+                sector_sum(F, w, frame, in.ax, in.ay, c1, c2, eps, sectors, &value, &rnd);
                 if (rings) {
                     ring_start.push_back(static_cast<long long>(xy.size() / 2));
                     ring_point.push_back(i);
@@ -653,32 +614,7 @@ py::tuple hidden_pieces(py::array_t<double, py::array::c_style | py::array::forc
             }
         }
     }
-    const ssize_t nv = static_cast<ssize_t>(xy.size() / 2);
-    py::array_t<double> out_xy({nv, static_cast<ssize_t>(2)});
-    std::copy(xy.begin(), xy.end(), out_xy.mutable_data());
-    py::array_t<long long> out_start(static_cast<ssize_t>(ring_start.size()));
-    std::copy(ring_start.begin(), ring_start.end(), out_start.mutable_data());
-    py::array_t<long long> out_point(static_cast<ssize_t>(ring_point.size()));
-    std::copy(ring_point.begin(), ring_point.end(), out_point.mutable_data());
-    py::array_t<bool> out_lost(n);
-    std::copy(lost.begin(), lost.end(), out_lost.mutable_data());
-    py::array_t<double> out_reach(n), out_length(n);
-    std::copy(reach.begin(), reach.end(), out_reach.mutable_data());
-    std::copy(length.begin(), length.end(), out_length.mutable_data());
-    py::array_t<double> out_box({n, static_cast<ssize_t>(4)});
-    std::copy(bounds.begin(), bounds.end(), out_box.mutable_data());
-    py::array_t<double> out_moved(n), out_dropped(n);
-    std::copy(moved.begin(), moved.end(), out_moved.mutable_data());
-    std::copy(dropped.begin(), dropped.end(), out_dropped.mutable_data());
-    py::array_t<double> out_hidden(n), out_rounding(n);
-    std::copy(hidden.begin(), hidden.end(), out_hidden.mutable_data());
-    std::copy(rounding.begin(), rounding.end(), out_rounding.mutable_data());
-    return py::make_tuple(out_xy, out_start, out_point, out_lost, out_reach, out_length, out_box,
-                          out_moved, out_dropped, out_hidden, out_rounding, back_faces);
+    return res;
 }
 
-PYBIND11_MODULE(_hidden, m) {
-    m.doc() = "The hidden region of a receiver from many points, as disjoint convex pieces "
-              "(exactff.area.occluded).";
-    m.def("hidden_pieces", &hidden_pieces);
-}
+}  // namespace exactff

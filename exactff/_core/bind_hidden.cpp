@@ -1,0 +1,93 @@
+// Python module exactff.area._hidden: the hidden pieces (hidden.h). Arrays in and out,
+// the GIL released around the computation; no math.
+
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+
+#include <algorithm>
+#include <stdexcept>
+#include <vector>
+
+#include "hidden.h"
+
+namespace py = pybind11;
+
+namespace {
+
+template <typename T>
+using Array = py::array_t<T, py::array::c_style | py::array::forcecast>;
+
+template <typename T>
+py::array_t<T> as_array(const std::vector<T>& v, py::ssize_t columns = 0) {
+    py::array_t<T> out = columns
+        ? py::array_t<T>({py::ssize_t(v.size()) / columns, columns})
+        : py::array_t<T>(py::ssize_t(v.size()));
+    std::copy(v.begin(), v.end(), out.mutable_data());
+    return out;
+}
+
+py::tuple hidden_pieces(Array<double> X, Array<double> corners, Array<double> q0,
+                        Array<double> nQ, Array<double> RQ, Array<double> blockers,
+                        Array<long long> counts, Array<double> normals, Array<long long> groups,
+                        double back_face, double edge_on, double vertex_ulps, double sliver_ulps,
+                        long long max_pieces, double precise_rtol, double extent,
+                        Array<double> parts, Array<long long> part_counts, Array<double> frame,
+                        double c1, double c2, double eps, bool rings) {
+    if (X.ndim() != 2 || corners.ndim() != 2 || blockers.ndim() != 3 || parts.ndim() != 3 ||
+        q0.size() != 3 || nQ.size() != 3 || RQ.size() != 6 || frame.size() != 9)
+        throw std::invalid_argument("hidden_pieces: arrays of the wrong shapes");
+    exactff::HiddenArgs a;
+    a.X = X.data();
+    a.n = X.shape(0);
+    a.corners = corners.data();
+    a.n_corners = corners.shape(0);
+    a.q0 = q0.data();
+    a.nQ = nQ.data();
+    a.RQ = RQ.data();
+    a.blockers = blockers.data();
+    a.n_blockers = blockers.shape(0);
+    a.blocker_stride = blockers.shape(1);
+    a.counts = counts.data();
+    a.normals = normals.data();
+    a.groups = groups.data();
+    a.back_face = back_face;
+    a.edge_on = edge_on;
+    a.vertex_ulps = vertex_ulps;
+    a.sliver_ulps = sliver_ulps;
+    a.max_pieces = max_pieces;
+    a.precise_rtol = precise_rtol;
+    a.extent = extent;
+    a.parts = parts.data();
+    a.n_parts = parts.shape(0);
+    a.part_stride = parts.shape(1);
+    a.part_counts = part_counts.data();
+    a.frame = frame.data();
+    a.c1 = c1;
+    a.c2 = c2;
+    a.eps = eps;
+    a.rings = rings;
+    exactff::HiddenResult r;
+    {
+        py::gil_scoped_release release;
+        r = exactff::hidden_pieces(a);
+    }
+    py::array_t<bool> lost(py::ssize_t(r.lost.size()));
+    std::copy(r.lost.begin(), r.lost.end(), lost.mutable_data());
+    return py::make_tuple(as_array(r.xy, 2), as_array(r.ring_start), as_array(r.ring_point),
+                          lost, as_array(r.reach), as_array(r.length), as_array(r.box, 4),
+                          as_array(r.moved), as_array(r.dropped), as_array(r.hidden),
+                          as_array(r.rounding), r.back_faces);
+}
+
+}  // namespace
+
+PYBIND11_MODULE(_hidden, m) {
+    m.doc() = "The hidden region of a receiver from many points, as disjoint convex pieces "
+              "(exactff.area.occluded).";
+    m.def("hidden_pieces", &hidden_pieces, py::arg("X"), py::arg("corners"), py::arg("q0"),
+          py::arg("nQ"), py::arg("RQ"), py::arg("blockers"), py::arg("counts"),
+          py::arg("normals"), py::arg("groups"), py::arg("back_face"), py::arg("edge_on"),
+          py::arg("vertex_ulps"), py::arg("sliver_ulps"), py::arg("max_pieces"),
+          py::arg("precise_rtol"), py::arg("extent"), py::arg("parts"), py::arg("part_counts"),
+          py::arg("frame"), py::arg("c1"), py::arg("c2"), py::arg("eps"), py::arg("rings"));
+}
