@@ -8,9 +8,12 @@ must not move.
     python tools/core_bits.py save before.npz       # on the old build
     python tools/core_bits.py save after.npz        # on the new build
     python tools/core_bits.py compare before.npz after.npz
+    python tools/core_bits.py time 3                 # each group's best of 3 runs
 
 ``save`` also prints the wall time of each group (one run; compare runs made under the same
-conditions).
+conditions). ``--from DIR`` first (``python tools/core_bits.py --from DIR save ...``)
+imports exactff from the checkout DIR (built in place) instead of the installed one, to
+record or time another build in the same environment.
 """
 
 import os
@@ -119,12 +122,28 @@ def same_bits(x, y):
 
 
 def main(argv):
+    if len(argv) > 2 and argv[1] == "--from":
+        # another checkout's package before the installed (editable) one
+        sys.meta_path[:] = [f for f in sys.meta_path if "editable" not in repr(f).lower()]
+        sys.path.insert(0, os.path.abspath(argv[2]))
+        argv = argv[:1] + argv[3:]
     if len(argv) == 3 and argv[1] == "save":
         out, times = compute()
         np.savez(argv[2], **out)
         print(f"{len(out)} arrays saved to {argv[2]}")
         for tag, t in times.items():
             print(f"  {tag:20s} {t:8.2f} s")
+        return 0
+    if len(argv) == 3 and argv[1] == "time":
+        import exactff
+
+        best = {}
+        for _ in range(int(argv[2])):
+            for tag, t in compute()[1].items():
+                best[tag] = min(best.get(tag, t), t)
+        print(f"exactff from {os.path.dirname(exactff.__file__)}: best of {argv[2]} runs")
+        for tag, t in best.items():
+            print(f"  {tag:20s} {t:8.3f} s")
         return 0
     if len(argv) == 4 and argv[1] == "compare":
         a, b = np.load(argv[2]), np.load(argv[3])

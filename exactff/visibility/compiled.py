@@ -1,7 +1,7 @@
 """The compiled visibility core: exact rows whose cost follows what they see.
 
 The BSP tree of :mod:`exactff.visibility.bsp` (its compiled build) orders the fragments
-front to back; the compiled core (``_svbsp.cpp``, C++ through pybind11) keeps the
+front to back; the compiled core (``exactff/_core/``, C++ through pybind11) keeps the
 covered region as a shadow-volume BSP tree (planes through the point, Chin & Feiner
 1989), filters each convex fragment down it, integrates the visible pieces with the sector form
 (or the paper's Eq. 3 in its stable form), and
@@ -176,11 +176,12 @@ def _build_core(scene):
 
     sizes = [int(n_pieces[here].sum()) if len(here) else 0 for here in tree.node_fragments]
     here_start = np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64)
-    core = Core(vertices, start, count, source, tree.front.astype(np.int64),
-                tree.back.astype(np.int64), here_start, expand(tree.node_fragments),
-                expand(tree.node_fragments_behind), len(scene), tol.SVBSP_BAND,
-                tol.C1, tol.C2, tol.SVBSP_SPLIT_ULPS,
-                np.concatenate(errors) if errors else np.zeros(0))
+    core = Core(vertices=vertices, start=start, count=count, source=source,
+                front=tree.front.astype(np.int64), back=tree.back.astype(np.int64),
+                here_start=here_start, here_front=expand(tree.node_fragments),
+                here_behind=expand(tree.node_fragments_behind), n_sources=len(scene),
+                band=tol.SVBSP_BAND, c1=tol.C1, c2=tol.C2, split=tol.SVBSP_SPLIT_ULPS,
+                vertex_errors=np.concatenate(errors) if errors else np.zeros(0))
     return tree, core
 
 
@@ -335,11 +336,11 @@ def compiled_form_factors(scene, point, normal, *, two_sided=False, stats=None,
                               sides=(side, band), return_error=error, strict=not error)
     tree, core = compiled_core(scene)
     node_side = sides_of_point(tree.normals, tree.offsets, p).astype(np.int8)
-    F, E, band, crossing, counters = core.row(p, np.asarray(normal, dtype=float), node_side,
-                                    side.astype(np.int8), bool(two_sided), bool(shortcuts),
-                                    tol.SVBSP_BOX_BUDGET, _shadow_tiles(len(scene)),
-                                    0.0 if tolerance is None else float(tolerance),
-                                    integrator == "eq3")
+    F, E, band, crossing, counters = core.row(
+        point=p, normal=np.asarray(normal, dtype=float), node_side=node_side,
+        source_side=side.astype(np.int8), two_sided=bool(two_sided), cull=bool(shortcuts),
+        box_budget=tol.SVBSP_BOX_BUDGET, tiles=_shadow_tiles(len(scene)),
+        rtol=0.0 if tolerance is None else float(tolerance), eq3=integrator == "eq3")
     check_finite(F, E)
     check_finite(band)
     check_finite(crossing)
