@@ -7,6 +7,7 @@ import does not hide a coupling.
 """
 
 import ast
+import re
 from pathlib import Path
 
 import pytest
@@ -287,3 +288,106 @@ def test_the_checks_would_catch_a_coupling(tmp_path, monkeypatch):
     assert privates == ["_helper"]
     with pytest.raises(AssertionError):
         test_the_module_graph_is_acyclic()
+
+
+# ---- the C++ library, exactff/_core/ (docs/explanation/layout.md, "The C++ layout")
+
+CORE = PACKAGE / "_core"
+_CPP_COMMENT = re.compile(r"//[^\n]*|/\*.*?\*/", re.S)
+_CPP_STRING = re.compile(r'(?<!#include )"(?:\\.|[^"\\\n])*"')
+
+
+def _cpp_code(path_or_text):
+    """A C++ file's text without its comments and string literals."""
+    text = path_or_text.read_text() if isinstance(path_or_text, Path) else path_or_text
+    return _CPP_STRING.sub('""', _CPP_COMMENT.sub("", text))
+
+
+def _header_names(code):
+    """The names a header declares at its top level: types, aliases, constants, functions."""
+    names = set(re.findall(r"\b(?:struct|class)\s+(\w+)\s*[{:]", code))
+    names |= set(re.findall(r"\busing\s+(\w+)\s*=", code))
+    names |= set(re.findall(r"\bconstexpr\s+[\w:<> ]+?\s(\w+)\s*=", code))
+    names |= set(re.findall(r"\binline\s+const\s+\w+\s+(\w+)\s*=", code))
+    names |= set(re.findall(r"^(?:template\s*<[^>]*>\s*)?(?:inline\s+)?[\w:<>]+[\s*&]+(\w+)\(",
+                            code, re.M))
+    return names - {"operator"}
+
+
+def _core_includes(code):
+    return re.findall(r'#include\s+"(\w+\.h)"', code)
+
+
+def _unused_includes(files):
+    """(includer, header) pairs where the includer uses none of the header's names."""
+    headers = {p.name: _header_names(_cpp_code(p)) for p in CORE.glob("*.h")}
+    unused = []
+    for path, text in files.items():
+        code = _cpp_code(text)
+        for h in _core_includes(code):
+            body = re.sub(r'#include\s+"\w+\.h"', "", code)
+            if not any(re.search(rf"\b{re.escape(n)}\b", body) for n in headers.get(h, ())):
+                unused.append((path, h))
+    return unused
+
+
+def _binding_math(code):
+    """What in a binding file's code is arithmetic on values rather than on shapes."""
+    return (re.findall(r"\bstd::(?:sqrt|atan2|fabs|sin|cos|hypot|fma|exp|log|pow)\b", code) +
+            re.findall(r"\b\d+\.\d*(?:e[-+]?\d+)?\b|\b\d+e[-+]?\d+\b", code) +
+            re.findall(r"\b(?:double|long double|float)\s+\w+\s*=[^;]*[-+*/][^;]*;", code))
+
+
+def _core_files():
+    return {p: p.read_text() for p in sorted(CORE.glob("*.[ch]*"))}
+
+
+def test_core_headers_are_included_only_where_used():
+    """Each header of exactff/_core/ is included only by files that use one of its names."""
+    assert list(CORE.glob("*.h")), "no headers found"
+    assert _unused_includes(_core_files()) == []
+
+
+def test_core_binding_files_hold_no_math():
+    """The pybind11 files (bind_*.cpp, one per Python module) convert arrays and call the
+    library: no math functions, no floating-point constants, no computed values."""
+    bindings = sorted(CORE.glob("bind_*.cpp"))
+    assert [p.name for p in bindings] == ["bind_hidden.cpp", "bind_sector.cpp", "bind_svbsp.cpp"]
+    for p in bindings:
+        assert _binding_math(_cpp_code(p)) == [], p.name
+    others = [p.name for p in CORE.glob("*.cpp") if p not in bindings and "pybind11" in p.read_text()]
+    assert others == [], "only the binding files include pybind11"
+
+
+def test_core_sources_are_built_and_headers_tracked():
+    """setup.py builds every source of exactff/_core/ and rebuilds on any header."""
+    setup = (PACKAGE.parent / "setup.py").read_text()
+    unbuilt = [p.name for p in CORE.glob("*.cpp") if f'"{p.name}"' not in setup]
+    assert unbuilt == []
+    assert "depends=HEADERS" in setup
+
+
+def test_core_constants_match_tolerances():
+    """exactff/_core/constants.h is what tools/gen_core_constants.py writes from
+    exactff/_tolerances.py: each constant is named and explained in one place."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location(
+        "gen_core_constants", PACKAGE.parent / "tools" / "gen_core_constants.py")
+    gen = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(gen)
+    assert (CORE / "constants.h").read_text() == gen.header_text()
+    # and every constant it writes is one _tolerances.py names and explains
+    from exactff import _tolerances as tol
+
+    for name, _ in gen.CONSTANTS:
+        assert name in tol.__all__, name
+
+
+def test_the_core_checks_would_catch_a_stray_include_or_math():
+    """The textual checks see an include nothing uses, and math in a binding."""
+    files = _core_files()
+    path = CORE / "core.cpp"
+    files[path] = files[path].replace('#include "core.h"', '#include "core.h"\n#include "hidden.h"')
+    assert _unused_includes(files) == [(path, "hidden.h")]
+    assert _binding_math("double r = std::sqrt(x * x + 1.0);") != []
