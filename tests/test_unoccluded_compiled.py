@@ -1,4 +1,4 @@
-"""Unoccluded rows by the compiled sector sums (kernel/_sector.cpp, issue 52): the closed
+"""Unoccluded rows by the compiled sector sums (exactff/_core/sector_sums.h, issue 52): the closed
 cube's rows against Howell's closed forms and their row sums, rows that cross the
 horizon against mpmath, and the compiled sums against the numpy reference
 (kernel/sector.py's clipped_sector_sums) they reproduce, in both tiers."""

@@ -75,7 +75,7 @@ def compute():
     times["cornell"] = time.perf_counter() - t0
 
     # the unoccluded rows' compiled sector sums, double and long double tiers, on every
-    # pair of 20 rows of the office (kernel/_sector.cpp)
+    # pair of 20 rows of the office (exactff/_core/sector_sums.h)
     from exactff import _tolerances as tol
     from exactff.geometry import receiver_frame
     from exactff.kernel import ladder, point

@@ -24,7 +24,7 @@ __all__ = ["extended_values", "mp_converge", "mp_sector_sum", "mp_sector_value",
 def extended_values(flat, ids, rows, P, N, d0, one_sided):
     """Form factors and error estimates of polygons ``ids[k]`` from points ``P[rows[k]]``
     (normals ``N[rows[k]]``) in long double arithmetic: the sector sums with rounded
-    offsets from the float input, in one compiled pass (``kernel/_sector.cpp``,
+    offsets from the float input, in one compiled pass (``exactff/_core/sector_sums.h``,
     :func:`exactff.kernel.sector.clipped_sector_sums`'s arithmetic)."""
     frames = np.array([receiver_frame(n, dtype=np.longdouble) for n in N])
     S, mags, errs, _ = row_sums_extended(

@@ -35,7 +35,7 @@ def unoccluded_row(flat, p, n, *, one_sided=True, tolerance=None,
 
     The hot path: culls polygons seen edge-on, facing away (one-sided) or wholly below
     the horizon, then evaluates the sector form over all remaining edges in one compiled
-    pass (``kernel/_sector.cpp``, the arithmetic of
+    pass (``exactff/_core/sector_sums.h``, the arithmetic of
     :func:`~exactff.kernel.sector.clipped_sector_sums` with rounded offsets), in offset
     form, with a rounding-error estimate per polygon. With a ``tolerance``, every
     value whose estimate exceeds ``tolerance * F`` is re-evaluated (long double, then
@@ -118,7 +118,7 @@ def unoccluded_rows(flat, P, N, side, band, *, one_sided=True, tolerance=None, s
     rows, ids = np.nonzero(live)
     if not len(ids):
         return F, err
-    # the sector sums of every live pair in one compiled pass (kernel/_sector.cpp:
+    # the sector sums of every live pair in one compiled pass (exactff/_core/sector_sums.h:
     # clipped_sector_sums with rounded offsets, the same arithmetic); polygons wholly
     # below a row's horizon have nothing to integrate
     frames = np.array([receiver_frame(n) for n in N])
