@@ -349,14 +349,17 @@ def test_core_headers_are_included_only_where_used():
 
 
 def test_core_binding_files_hold_no_math():
-    """The pybind11 files (bind_*.cpp, one per Python module) convert arrays and call the
-    library: no math functions, no floating-point constants, no computed values."""
+    """The pybind11 files (bind_*.cpp, one per Python module, and bind_arrays.h, what they
+    share) convert arrays and call the library: no math functions, no floating-point
+    constants, no computed values."""
     bindings = sorted(CORE.glob("bind_*.cpp"))
     assert [p.name for p in bindings] == ["bind_hidden.cpp", "bind_sector.cpp", "bind_svbsp.cpp"]
     for p in bindings:
         assert _binding_math(_cpp_code(p)) == [], p.name
-    others = [p.name for p in CORE.glob("*.cpp") if p not in bindings and "pybind11" in p.read_text()]
-    assert others == [], "only the binding files include pybind11"
+    others = [p.name for p in CORE.glob("*.[ch]*")
+              if not p.name.startswith("bind_") and "pybind11" in p.read_text()]
+    assert others == [], "only the binding files (bind_*) include pybind11"
+    assert _binding_math(_cpp_code(CORE / "bind_arrays.h")) == []
 
 
 def test_core_sources_are_built_and_headers_tracked():

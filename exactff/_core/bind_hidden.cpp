@@ -1,30 +1,18 @@
 // Python module exactff.area._hidden: the hidden pieces (hidden.h). Arrays in and out,
 // the GIL released around the computation; no math.
 
-#include <pybind11/numpy.h>
-#include <pybind11/pybind11.h>
-
 #include <algorithm>
 #include <stdexcept>
 #include <vector>
 
+#include "bind_arrays.h"
 #include "hidden.h"
 
 namespace py = pybind11;
+using exactff::bind::Array;
+using exactff::bind::as_array;
 
 namespace {
-
-template <typename T>
-using Array = py::array_t<T, py::array::c_style | py::array::forcecast>;
-
-template <typename T>
-py::array_t<T> as_array(const std::vector<T>& v, py::ssize_t columns = 0) {
-    py::array_t<T> out = columns
-        ? py::array_t<T>({py::ssize_t(v.size()) / columns, columns})
-        : py::array_t<T>(py::ssize_t(v.size()));
-    std::copy(v.begin(), v.end(), out.mutable_data());
-    return out;
-}
 
 py::tuple hidden_pieces(Array<double> X, Array<double> corners, Array<double> q0,
                         Array<double> nQ, Array<double> RQ, Array<double> blockers,

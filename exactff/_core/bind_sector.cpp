@@ -2,20 +2,17 @@
 // in double and in long double. Arrays in and out, the GIL released around the
 // computation; no math.
 
-#include <pybind11/numpy.h>
-#include <pybind11/pybind11.h>
-
 #include <cstdint>
 #include <stdexcept>
 
+#include "bind_arrays.h"
 #include "sector_sums.h"
 
 namespace py = pybind11;
+using exactff::bind::Array;
+using exactff::bind::as_array;
 
 namespace {
-
-template <typename T>
-using Array = py::array_t<T, py::array::c_style | py::array::forcecast>;
 
 template <typename R>
 py::tuple row_sums(Array<double> V, Array<int64_t> offsets, Array<int64_t> ids,

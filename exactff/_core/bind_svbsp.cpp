@@ -1,41 +1,30 @@
 // Python module exactff.visibility._svbsp: the visibility core (core.h) and the BSP build
 // (bsp_build.h). Arrays in and out, the GIL released around the computation; no math.
 
-#include <pybind11/numpy.h>
-#include <pybind11/pybind11.h>
-
 #include <cstdint>
 #include <stdexcept>
 #include <vector>
 
+#include "bind_arrays.h"
 #include "bsp_build.h"
 #include "core.h"
 
 namespace py = pybind11;
+using exactff::bind::Array;
+using exactff::bind::as_array;
+using exactff::bind::to_vector;
 
 namespace {
-
-template <typename T>
-using Array = py::array_t<T, py::array::c_style | py::array::forcecast>;
-
-template <typename T>
-std::vector<T> vec(const Array<T>& a) { return std::vector<T>(a.data(), a.data() + a.size()); }
-
-template <typename T>
-py::array_t<T> as_array(const std::vector<T>& v) {
-    py::array_t<T> out(py::ssize_t(v.size()));
-    std::copy(v.begin(), v.end(), out.mutable_data());
-    return out;
-}
 
 exactff::Core make_core(Array<double> vertices, Array<int64_t> start, Array<int64_t> count,
                         Array<int64_t> source, Array<int64_t> front, Array<int64_t> back,
                         Array<int64_t> here_start, Array<int64_t> here_front,
                         Array<int64_t> here_behind, int64_t n_sources, double band, double c1,
                         double c2, double split, Array<double> vertex_errors) {
-    return exactff::Core(vec(vertices), vec(start), vec(count), vec(source), vec(front),
-                         vec(back), vec(here_start), vec(here_front), vec(here_behind),
-                         n_sources, band, c1, c2, split, vec(vertex_errors));
+    return exactff::Core(to_vector(vertices), to_vector(start), to_vector(count),
+                         to_vector(source), to_vector(front), to_vector(back),
+                         to_vector(here_start), to_vector(here_front), to_vector(here_behind),
+                         n_sources, band, c1, c2, split, to_vector(vertex_errors));
 }
 
 py::tuple row(const exactff::Core& core, Array<double> point, Array<double> normal,
