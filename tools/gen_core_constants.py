@@ -30,7 +30,6 @@ CONSTANTS = [
 
 def header_text():
     """The text of constants.h for the values in exactff._tolerances."""
-    sys.path.insert(0, os.path.join(HERE, ".."))
     import importlib.util
 
     spec = importlib.util.spec_from_file_location(

@@ -21,7 +21,9 @@ using Array = py::array_t<T, py::array::c_style | py::array::forcecast>;
 
 // an argument's values, copied
 template <typename T>
-std::vector<T> to_vector(const Array<T>& a) { return std::vector<T>(a.data(), a.data() + a.size()); }
+std::vector<T> to_vector(const Array<T>& a) {
+    return std::vector<T>(a.data(), a.data() + a.size());
+}
 
 // a result as a numpy array: 1-D, or with `columns` columns
 template <typename T>

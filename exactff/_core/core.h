@@ -214,7 +214,8 @@ class Core {
     static R arc(const Vertex& a, const Vertex& b);
     void run(const double* pp, const double* pn, const int8_t* node_side,
              const int8_t* source_side, bool two_sided, bool cull, int64_t budget,
-             int64_t tiles, std::vector<R>& F, std::vector<R>& E, std::vector<R>& B, RowStats& st) const;
+             int64_t tiles, std::vector<R>& F, std::vector<R>& E, std::vector<R>& B,
+             RowStats& st) const;
     template <class W>
     void process(int64_t f, const double* pp, const V3& p, const V3& n,
                  const int8_t* source_side, bool two_sided, std::vector<Plane>& sv,

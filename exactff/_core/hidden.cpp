@@ -517,7 +517,8 @@ HiddenResult hidden_pieces(const HiddenArgs& args) {
     }
     in.K.resize(nb);
     for (std::ptrdiff_t b = 0; b < nb; ++b) {
-        for (std::ptrdiff_t k = 0; k < bc(b); ++k) in.K[b].push_back({bl(b, k, 0), bl(b, k, 1), bl(b, k, 2)});
+        for (std::ptrdiff_t k = 0; k < bc(b); ++k)
+            in.K[b].push_back({bl(b, k, 0), bl(b, k, 1), bl(b, k, 2)});
         in.KN.push_back({bn(b, 0), bn(b, 1), bn(b, 2)});
         in.group.push_back(bg(b));
         in.groups = std::max(in.groups, bg(b) + 1);

@@ -16,7 +16,8 @@ namespace exactff {
 // normals (b, 3), outward for the members of a convex solid; groups (b,) the solid of
 // each (-1: none), back_face a distance beyond which x is off a member's plane (a solid's
 // members that x sees from behind are skipped where it sees one from the front); edge_on
-// a distance within which x is on a blocker's plane (seen edge-on, hiding nothing); vertex_ulps the rounding of an offset or a crossing in
+// a distance within which x is on a blocker's plane (seen edge-on, hiding nothing);
+// vertex_ulps the rounding of an offset or a crossing in
 // units of the working precision's roundoff of its length (of the longer end's, for a
 // crossing); sliver_ulps: a piece of at most this many units of rounding of the squared
 // reach (twice its area) is dropped and counted; max_pieces: a point with more pieces

@@ -74,7 +74,8 @@ R Core::arc(const Vertex& a, const Vertex& b) {
 
 void Core::run(const double* pp, const double* pn, const int8_t* node_side,
                const int8_t* source_side, bool two_sided, bool cull, int64_t budget,
-               int64_t tiles, std::vector<R>& F, std::vector<R>& E, std::vector<R>& B, RowStats& st) const {
+               int64_t tiles, std::vector<R>& F, std::vector<R>& E, std::vector<R>& B,
+               RowStats& st) const {
     const V3 p{pp[0], pp[1], pp[2]};
     V3 n{pn[0], pn[1], pn[2]};
     R nl = norm(n);

@@ -1,7 +1,7 @@
 // The sector sums of an unoccluded row in one compiled pass (exactff/kernel/point.py,
 // unoccluded_row; exactff/kernel/ladder.py, extended_values): for each polygon of a list,
 // its vertices taken to the receiver's local frame in offset form, clipped to the upper
-// half-space, and the sector form's sum (DESIGN 2.1) with its rounding model (DESIGN 2.2)
+// half-space, and the sector form's sum with its rounding model (sector.h)
 // and the offsets' rounding. The same arithmetic, in the same order, as
 // kernel/sector.py's clipped_sector_sums(..., rounded_offsets=True) and _offset_rounding,
 // which stay the reference (tests/test_unoccluded_compiled.py compares them); templated
@@ -83,7 +83,7 @@ inline void polygon_sums(const Vec3<R>& A, const std::vector<Vx<R>>& E, double e
             // horizon crossing of the edge, as an offset (its height is exactly 0)
             const R t = za / (za - zb);
             const Vec3<R> EX{Ea.x + t * (Eb.x - Ea.x), Ea.y + t * (Eb.y - Ea.y),
-                           Ea.z + t * (Eb.z - Ea.z)};
+                             Ea.z + t * (Eb.z - Ea.z)};
             const R Xx = A.x + EX.x, Xy = A.y + EX.y;
             if (!have_first) {
                 have_first = true;
@@ -138,8 +138,8 @@ void row_sums(const double* V, const int64_t* off, const int64_t* ids, const int
                 fz = static_cast<R>(f[2]);
         const R dx = fx - p[0], dy = fy - p[1], dz = fz - p[2];
         const Vec3<R> A{dx * Rm[0] + dy * Rm[1] + dz * Rm[2],
-                      dx * Rm[3] + dy * Rm[4] + dz * Rm[5],
-                      dx * Rm[6] + dy * Rm[7] + dz * Rm[8]};
+                        dx * Rm[3] + dy * Rm[4] + dz * Rm[5],
+                        dx * Rm[6] + dy * Rm[7] + dz * Rm[8]};
         E.resize(static_cast<size_t>(b - a));
         const R lA = norm3(A.x, A.y, A.z);
         bool above = false;
