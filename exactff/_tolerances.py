@@ -421,11 +421,11 @@ AREA_BACK_FACE_RTOL = 1e-12
 AREA_STRICT_TURN = 1e-6
 
 #: The closed form's skew edge pairs: a triangle of the parallelogram thinner than this
-#: share of its size (``exactff.area.contour._skew_edge_integrals``) is of no area (its
+#: share of its size (``exactff.area.edge_integrals._skew_edge_integrals``) is of no area (its
 #: terms would only underflow).
 AREA_CLOSED_THIN = 1e-100
 
-#: The closed form's dilogarithm near the real axis (``exactff.area.contour._li2``): within
+#: The closed form's dilogarithm near the real axis (``exactff.area.edge_integrals._li2``): within
 #: this of it (and left of 1/2) Li2 is the real ``spence`` plus its first-order term,
 #: as scipy's complex ``spence`` is wrong there near x = -0.268 (measured: an imaginary
 #: part of 0.028 for 7.5e-17; on 23,000 points of the disk and near the axis the other
@@ -510,7 +510,7 @@ AREA_MANY_CELLS = 50
 #: of 3, 4, 5 and 6 points a side were 3.2e-10, 1.9e-9, 2.5e-10 and -3.2e-11.
 AREA_CORNER_MIDDLE_ORDER = 4
 #: ... that pair's degrees (4 and 8) in symmetric rules of 6 and 16 points
-#: (exactff.area.contour.SYMMETRIC_RULES), on every triangle but those whose first vertex
+#: (exactff.area.rules.SYMMETRIC_RULES), on every triangle but those whose first vertex
 #: a blocker touches (they keep the collapsed rule, whose collapsed vertex it is).
 AREA_SYMMETRIC_DEGREES = (4, 8)
 #: ... and every pair's triangles start with the lower pair where the target (absolute)
@@ -520,7 +520,7 @@ AREA_SYMMETRIC_DEGREES = (4, 8)
 #: test4 and facet take the higher pair in the end, and starting low cost them 15 %.
 AREA_LOW_RULES_TOLERANCE = 1e-7
 #: Area form factors: a triangle whose rules' difference the closed form of the
-#: unoccluded part shows to be too small (``occluded._checked_difference``) is refined,
+#: unoccluded part shows to be too small (``exactff.area.adaptive``) is refined,
 #: where what it shows exceeds this share of the triangle's share of the tolerance.
 AREA_RULE_CHECK_SHARE = 0.1
 #: Area form factors: an end of an event line cut to the emitter this close to its

@@ -6,7 +6,7 @@ import numpy as np
 from . import _tolerances as tol
 
 __all__ = ["SceneError", "NumericalError", "check_finite", "misses_tolerance",
-           "tolerance_missed"]
+           "tolerance_missed", "nonnegative"]
 
 
 class SceneError(ValueError):
@@ -119,6 +119,35 @@ def tolerance_missed(where, value, estimate, allowed, why="", hint=""):
     return NumericalError(f"{where}: the form factor {float(value):.17g} misses the tolerance "
                           f"{allowed} (error estimate {float(estimate):.3g}){why}{hint}; "
                           f"ask error=True for the value with its estimate")
+
+
+def nonnegative(value, estimate, what="area form factor"):
+    """``value`` (a float or an array) with what rounding left below 0 set to 0, where
+    it lies within its own error ``estimate`` (the estimate still covers it:
+    ``0 <= exact <= value + estimate <= estimate``); a value below 0 beyond it, or NaN,
+    raises :class:`~exactff.NumericalError` instead of being hidden.
+
+    Examples
+    --------
+    >>> float(nonnegative(-1e-17, 1e-16))
+    0.0
+    >>> nonnegative(-1e-15, 1e-16)
+    Traceback (most recent call last):
+    ...
+    exactff.NumericalError: area form factor -1e-15 below 0 beyond its error estimate 1e-16
+    """
+    v, e = np.asarray(value, dtype=float), np.asarray(estimate, dtype=float)
+    bad = ~(v >= -e)
+    if np.any(bad):
+        bad = np.broadcast_to(bad, np.broadcast(v, e).shape)
+        k = int(np.flatnonzero(bad.ravel())[0])
+        vk = float(np.broadcast_to(v, bad.shape).ravel()[k])
+        ek = float(np.broadcast_to(e, bad.shape).ravel()[k])
+        why = "is NaN" if np.isnan(vk) else (
+            "has a NaN error estimate" if np.isnan(ek) else "below 0 beyond its error estimate")
+        raise NumericalError(f"{what} {vk!r} {why} {ek!r}")
+    out = np.maximum(v, 0.0)
+    return float(out) if out.ndim == 0 else out
 
 
 # shown (and pickled) by their public name, as numpy does for its exceptions

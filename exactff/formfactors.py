@@ -15,7 +15,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from . import _tolerances as tol
-from .area import area_row
+from .area import AreaStats, area_row
 from .errors import check_finite, misses_tolerance, tolerance_missed
 from .checks import as_normal, as_receivers, check_tolerance, row_indices
 from .methods import FormFactorMethod, resolve
@@ -257,7 +257,7 @@ class AreaRows:
     --------
     >>> import exactff as ef
     >>> (f, e, counts), = AreaRows(1e-9)(ef.scenes.subdivided_box(1), [0])
-    >>> abs(float(f.sum()) - 1) < 1e-12, counts["enclosure_unoccluded_pairs"]
+    >>> abs(float(f.sum()) - 1) < 1e-12, counts.enclosure_unoccluded_pairs
     (True, 5)
     """
 
@@ -280,7 +280,7 @@ class AreaRows:
     def __call__(self, scene, rows):
         out = []
         for i in rows:
-            st = {}
+            st = AreaStats()
             f, e = area_row(scene, i, self.tolerance, rtol=self.rtol, shortcuts=self.shortcuts,
                             stats=st)
             # every row checked before it is stored: a NaN is never returned, nor (strict)
@@ -298,12 +298,12 @@ class AreaRows:
         return out
 
     def collect(self, values):
-        """Add the counters of stored rows (``(values, estimates, counters)``) to
-        ``stats``."""
+        """Add the counters of stored rows (``(values, estimates, AreaStats)``) to
+        ``stats``, a dict keyed by :class:`~exactff.area.AreaStats`' attributes."""
         if self.stats is None:
             return
         for *_, st in values:
-            for k, v in st.items():
+            for k, v in st.as_dict().items():
                 self.stats[k] = self.stats.get(k, 0) + v
 
 
@@ -636,7 +636,7 @@ def area_form_factors(scene, rows=None, *, tolerance=1e-9, error=False, executor
     projections), one-sided. A pair with nothing that can come
     between (no other polygon reaches into the convex hull of the two, each clipped to
     the front of the other) is computed in closed form (the contour integral with
-    dilogarithms, :func:`exactff.area.contour.unoccluded_pairs`, all of a row's such
+    dilogarithms, :func:`exactff.area.closed_form.unoccluded_pairs`, all of a row's such
     pairs at once), accepted where its rounding estimate is within ``tolerance`` (else
     by the far-field rule or mpmath). Otherwise the emitter is cut along the lines where the integrand may lose
     smoothness (vertex-edge visibility events between the receiver and the polygons
@@ -685,7 +685,7 @@ def area_form_factors(scene, rows=None, *, tolerance=1e-9, error=False, executor
         Part of what a resumable ``out`` records.
     stats : dict, optional
         Filled with the sums over the rows computed in this call (with any executor) of
-        :data:`exactff.area.occluded.STATS`: ``enclosure_unoccluded_pairs`` (pairs of a
+        :class:`exactff.area.AreaStats`' counters: ``enclosure_unoccluded_pairs`` (pairs of a
         convex enclosure, where nothing can come between: no shaft or hull test),
         ``hull_unoccluded_pairs`` (pairs taken by the closed form because shaft culling and the hull test left no
         blocker), ``hull_culled_blockers`` (the polygons they left out),
