@@ -141,7 +141,7 @@ def test_repeated_vertices_give_the_values_of_the_clean_ring(name):
         assert abs(f - HOWELL_C11) <= 1e-12
 
 
-def _nan_pair(P, Q, far=True, atol=0.0):
+def _nan_pair(P, Q, shortcuts=True, atol=0.0):
     return float("nan"), 0.0
 
 
@@ -176,8 +176,8 @@ def _nan_core(scene):
 
 
 def _nan_calls():
-    import exactff.area.contour as contour
-    import exactff.area.occluded as occluded
+    import exactff.area.closed_form as closed_form
+    import exactff.area.row as row
     import exactff.kernel.eq3 as eq3
     import exactff.kernel.point as point
     import exactff.visibility.compiled as compiled
@@ -187,9 +187,9 @@ def _nan_calls():
     pair = ef.Scene.from_polygons([UNIT_UP, UNIT_DOWN_AT_1])
     alone = ef.Scene.from_polygons([sq])
     return {
-        "polygon_form_factor": (contour, "unoccluded_pair", _nan_pair,
+        "polygon_form_factor": (closed_form, "unoccluded_pair", _nan_pair,
                                 lambda: ef.polygon_form_factor(UNIT_UP, UNIT_DOWN_AT_1)),
-        "area_form_factors": (occluded, "unoccluded_pairs", _nan_pairs,
+        "area_form_factors": (row, "unoccluded_pairs", _nan_pairs,
                               lambda: ef.area_form_factors(pair, error=True)),
         # the last precision tier (a polygon in the rounding band always reaches it)
         "point_polygon_form_factor": (point, "mp_form_factor", _nan_mp,

@@ -43,8 +43,11 @@ class AreaStats:
     shaft_culled_blockers, shaft_unoccluded_pairs : int
         Polygons in a pair's bounding box that the shaft's planes rejected before the
         hull test, and pairs whose box held polygons but the shaft none (no hull built).
-    far_pairs : int
-        Pairs taken by the far-field rule.
+    far_pairs, contour_rule_pairs, escalated_pairs : int
+        Unoccluded values (of unoccluded pairs, or of occluded ones before the hidden
+        part is subtracted) whose closed form's estimate missed: taken by the far-field
+        rule (a shortcut), by the tanh-sinh contour rule, or with edge pairs
+        re-evaluated in mpmath.
     culled_events, solid_events : int
         Blocker-blocker events not cut along because their lines of sight miss the
         receiver, and vertex-edge pairs of two faces of one convex solid, whose images
@@ -83,6 +86,8 @@ class AreaStats:
     shaft_culled_blockers: int = 0
     shaft_unoccluded_pairs: int = 0
     far_pairs: int = 0
+    contour_rule_pairs: int = 0
+    escalated_pairs: int = 0
     culled_events: int = 0
     solid_events: int = 0
     back_faces: int = 0
@@ -123,6 +128,8 @@ def _unoccluded_values(polys, i, pairs, shortcuts, st, atol, rtol):
                             rtol=max(rtol or 0.0, tol.AREA_CLOSED_RTOL), atol=atol,
                             parts=[(Pc, Qc) for _, Pc, Qc in pairs], counts=counts)
     st.far_pairs += counts.far_rule
+    st.contour_rule_pairs += counts.contour_rule
+    st.escalated_pairs += counts.escalated_pairs
     return js, f, e
 
 
