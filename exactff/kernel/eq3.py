@@ -200,8 +200,8 @@ def eq3_form_factor(point: ArrayLike, normal: ArrayLike, polygon: ArrayLike, *,
     >>> round(eq3_form_factor([0, 0, 0], [0, 0, 1], sq), 12)
     0.239456470461
     """
-    one_sided = check_sides(two_sided, one_sided)
-    C, sign = local_clipped(point, normal, polygon, one_sided)
+    two_sided = check_sides(two_sided, one_sided)
+    C, sign = local_clipped(point, normal, polygon, two_sided)
     if not sign or len(C) < 2:
         return (0.0, 0.0) if error else 0.0
     R = np.array(C, dtype=float)
@@ -216,7 +216,7 @@ def eq3_form_factor(point: ArrayLike, normal: ArrayLike, polygon: ArrayLike, *,
         # sided as the sector form's tier
         P = np.asarray(polygon, dtype=float)
         hi, diff, converged = mp_converge(
-            lambda dps: mp_sector_value(point, normal, P, one_sided, dps, sign,
+            lambda dps: mp_sector_value(point, normal, P, two_sided, dps, sign,
                                         ring_sum=mp_eq3_sum), tolerance)
         if not converged and not error:
             raise NumericalError(

@@ -176,13 +176,13 @@ def _offset_rounding(A0, E, nxt, owner, eps):
     return np.where(reach & (ld > 0), moved, 0.0).astype(A0.dtype)
 
 
-def sector_values(S, mags, errs, d0, one_sided, eps=tol.EPS, unchecked=None):
+def sector_values(S, mags, errs, d0, two_sided, eps=tol.EPS, unchecked=None):
     """Form factors and their error estimates from signed sector sums ``S``
-    (front-facing polygons have S < 0). ``unchecked`` marks values known to be
-    unreliable, exempt from the sign check."""
+    (front-facing polygons have S < 0; without ``two_sided`` the others receive 0).
+    ``unchecked`` marks values known to be unreliable, exempt from the sign check."""
     F = np.sign(d0) * S / TWO_PI
     err = (tol.C1 * eps * mags + errs) / TWO_PI
-    if one_sided:
+    if not two_sided:
         F[d0 >= 0] = 0.0
         err[d0 >= 0] = 0.0
     # rounding can leave a value below 0 by at most its error estimate: there it is

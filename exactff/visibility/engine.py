@@ -131,7 +131,7 @@ def visible_form_factors(scene, point, normal, *, two_sided=False, stats=None,
             if not error:
                 _require_tolerance(FE[:, 0], FE[:, 1], tolerance, integrator, st)
             return (FE[:, 0], FE[:, 1]) if error else FE[:, 0]
-        return unoccluded_row(flat, p, normal, one_sided=not two_sided, tolerance=tolerance,
+        return unoccluded_row(flat, p, normal, two_sided=two_sided, tolerance=tolerance,
                               sides=(side, band), return_error=error, strict=not error)
     st["path"] = "clipper"
     tree, order, src, kept, world, receives = _row_fragments(scene, p, normal, side, two_sided,
