@@ -83,8 +83,10 @@ def form_factors(scene: Scene, point: ArrayLike, normal: ArrayLike, *,
     NumericalError
         The exact method: a value fell below 0 beyond its bound or came out NaN or
         infinite (never returned); unless ``error=True``, also a value whose bound
-        missed the method's tolerance (relative, with an absolute floor of
-        ``tolerance * 1e-4``: :func:`exactff.errors.misses_tolerance`) after
+        missed the method's tolerance (**relative**, with an absolute floor of
+        ``tolerance * 1e-2``: :func:`exactff.errors.misses_tolerance`; the area
+        factors' ``tolerance`` is absolute instead, ``docs/explanation/conventions.md``)
+        after
         refinement and every precision tier (on
         every path, with either integrator). With ``error=True`` such a value is
         returned with its bound.
@@ -653,10 +655,13 @@ def area_form_factors(scene, rows=None, *, tolerance=1e-9, error=False, executor
     rows : sequence of int, optional
         Emitters (default: every polygon).
     tolerance : float, default 1e-9
-        Absolute error allowed per value: the target of the adaptive rules on occluded
-        pairs, ``|F[i, j] - exact| <= tolerance`` (unlike the point functions'
-        ``tolerance``, which is relative to each value). Unoccluded pairs are exact to
-        rounding whatever it is.
+        **Absolute** error allowed per value: the target of the adaptive rules on
+        occluded pairs, ``|F[i, j] - exact| <= tolerance`` whatever the value's size
+        (unlike the point functions' and :class:`exactff.Exact`'s ``tolerance``, which is
+        relative to each value, with a floor of 1e-2 of it:
+        ``docs/explanation/conventions.md``). Passed down as ``atol``
+        (:func:`exactff.area.area_row`). Unoccluded pairs are exact to rounding
+        whatever it is.
     rtol : float, optional
         Also allowed: this share of each value; the bound per value is then
         ``max(tolerance, rtol * |F[i, j]|)`` (say ``tolerance=1e-15, rtol=1e-9`` for a
@@ -749,7 +754,8 @@ def area_form_factors(scene, rows=None, *, tolerance=1e-9, error=False, executor
     value the hidden part can take). The rules' difference is an estimate, not a bound:
     on View3D's gunter2 two collapsed rules on half a floor differed by 7.2e-8 where
     the finer one was 2.1e-7 off (both missed the kernel's peak near a corner), and
-    the value came out -2.1e-7. So it is checked: the rules' errors on the hidden part
+    the value came out -2.1e-7 (pinned: ``tests/test_area_view3d.py``, gunter2's floor
+    to a strip the wall hides). So it is checked: the rules' errors on the hidden part
     and on the occluded point values add up to their error on the unoccluded point
     values, whose integral is known in closed form, per pair and, where the pair's sum
     misses, per triangle; a triangle whose difference that shows too small is refined

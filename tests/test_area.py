@@ -1045,6 +1045,14 @@ def test_area_stats_from_worker_processes_and_the_options_in_the_record(tmp_path
     F = ef.area_form_factors(scene, tolerance=1e-13, stats=serial)
     G = ef.area_form_factors(scene, tolerance=1e-13, stats=pooled, jobs=2, chunk_rows=1)
     assert np.array_equal(F, G) and serial == pooled and serial["far_pairs"] == 6
+    # and from threads: each row counts its own (no counter shared between calls)
+    from concurrent.futures import ThreadPoolExecutor
+
+    threaded = {}
+    with ThreadPoolExecutor(2) as pool:
+        H = ef.area_form_factors(scene, tolerance=1e-13, stats=threaded, executor=pool,
+                                 chunk_rows=1)
+    assert np.array_equal(F, H) and threaded == serial
     rows = pickle.loads(pickle.dumps(AreaRows(1e-9, shortcuts=False, stats={"far_pairs": 1})))
     assert rows.shortcuts is False and rows.stats is None
     assert AreaRows(1e-9).record() != AreaRows(1e-9, shortcuts=False).record()

@@ -447,6 +447,27 @@ def test_escalation_fires_where_needed_and_only_there():
     assert e[0] <= 1e-13 * ref < raw_e[0]
 
 
+def test_closed_form_counts_are_per_call_under_threads():
+    # each call counts into the ClosedFormCounts it is given: two threads evaluating at
+    # once get the counts each would alone (a global read as before-and-after
+    # differences mixed them)
+    from concurrent.futures import ThreadPoolExecutor
+
+    strips, square = parallel_pair(10, 0.01, 3), parallel_pair(1, 1, 1)
+
+    def run(pair, times):
+        counts = ClosedFormCounts()
+        for _ in range(times):
+            unoccluded_pairs(pair[0], [pair[1]], shortcuts=False, counts=counts)
+        return counts
+
+    alone = [run(strips, 4), run(square, 40)]
+    with ThreadPoolExecutor(2) as pool:
+        together = list(pool.map(run, [strips, square], [4, 40]))
+    assert together == alone
+    assert alone[0].escalated_pairs == 4 and alone[1] == ClosedFormCounts(pairs=40)
+
+
 def test_error_flag_and_bad_input():
     P, Q = parallel_pair(1, 1, 1)
     f = ef.polygon_form_factor(P, Q)

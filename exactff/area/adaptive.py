@@ -137,8 +137,8 @@ def _hidden_integral(S, Pc, Qc, nP, atol, area_P, whole, shortcuts, st, solid=No
     # size (the cuts move by that much), each way with and without lengthening; the
     # first whose cells cover P (to AREA_CELL_COVER_RTOL) is taken, else the one that
     # covers most (the area missing is in the estimate). GEOS may give up noding, or
-    # polygonizing drop a ring it finds invalid and the cell inside it (7 % of a wall of
-    # the closed Cornell box): counted
+    # polygonizing drop a ring of nearly coincident lines it finds invalid and the cell
+    # inside it: counted (test_closed_cornell_box_wall_cut_into_cells_that_cover_it)
     area_Pc = float(np.linalg.norm(area_vector(Pc)))
     cells, failure = None, None
     for k, (grid, lengthen) in enumerate(((None, True), (None, False),
@@ -158,10 +158,12 @@ def _hidden_integral(S, Pc, Qc, nP, atol, area_P, whole, shortcuts, st, solid=No
     if cells is None:
         raise NumericalError(f"could not cut the emitter along its {len(lines)} "
                              f"visibility events: {failure}") from failure
-    # a corner of a cell may lie as far from the crossing of its events as the cut lines
-    # were lengthened (l_room_f3a, row 8: 1.4e-9 from the walls' corner on the ceiling,
-    # which the collapsed vertex then missed, and a triangle at the last level kept an
-    # estimate of 1.3e-9)
+    # a blocker's vertex on the emitter is where the hidden part depends on the direction
+    # alone; a cell's corner may lie as far from it as the cut lines were lengthened
+    # (twice AREA_CUT_EXTEND_RTOL of P's size: both lines through it moved), and is
+    # still that point for the collapsed rule (else no vertex of the cell is, and the
+    # rules' differences there shrink only as the triangles do: pinned in
+    # tests/test_regressions.py)
     T, corner = _corner_first(cells, S[1:], nP, dP,
                               2.0 * tol.AREA_CUT_EXTEND_RTOL * np.sqrt(area_Pc))
     depth = np.zeros(len(T), dtype=int)
@@ -301,9 +303,10 @@ def _adaptive_levels(T, depth, rung, corner, nP, Qc, S, st, setup, atol, area_P,
         hi, lo, mid, rnd, hiU, loU, rndU = (v / area_P for v in (hi, lo, mid, rnd, hiU, loU,
                                                                  rndU))
         # the high rule's error estimated by the low rule's difference from it, and at a
-        # corner on the lower pair also by the third rule's (between the two): at a
-        # corner of gunter1 the 3- and 5-point rules agreed to 6.7e-11 where the 5-point
-        # one was 2.5e-10 off (3, 4, 5, 6 points: 3.2e-10, 1.9e-9, 2.5e-10, -3.2e-11)
+        # corner on the lower pair also by the third rule's (between the two): near a
+        # corner the collapsed rules' errors do not fall monotonically with the order,
+        # so two of them can agree by chance far closer than either is to the integral
+        # (AREA_CORNER_MIDDLE_ORDER; test_gunter1_row_17_without_shortcuts_within_its_estimates)
         diff = np.maximum(np.abs(hi - lo), np.abs(hi - mid))
         # half of atol for the rules' differences: what the triangles accepted so
         # far left of it is shared among the others by area (at the first level, the

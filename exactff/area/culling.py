@@ -136,8 +136,9 @@ def shaft(padded, i, J, boxes, nP, p0, near, st):
         d = eQ - eP
         n2 = sign * np.abs(d[:, ::-1])
         # normalised after scaling by its largest component: the boxes' offsets may be
-        # tiny (1e-217 apart: their squares underflow, and a normal of 0 put every
-        # candidate on the plane, dropped though it hid 2.7 % of the receiver)
+        # so small that their squares underflow, and a normal of 0 would put every
+        # candidate on the plane and drop it (pinned in tests/test_area_shaft.py:
+        # test_shaft_planes_of_tiny_box_offsets_keep_their_blockers)
         big = np.abs(n2).max(axis=1)[:, None]
         active &= big[:, 0] > 0
         n2 = np.divide(n2, big, out=np.zeros_like(n2), where=big > 0)

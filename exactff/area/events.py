@@ -141,9 +141,10 @@ def event_lines(S, nP, dP, R, c, radius, Qc, shortcuts=True, st=None, solid=None
     use = spanned[:, None] & (np.stack([t[:, 0] > -half, t[:, 1] < half], axis=1))
     ends = np.where(use[:, :, None], span, ends)[inside]
     E2 = (ends - c) @ R[:2].T
-    # one copy of each segment (the same plane through a vertex and an edge comes from
-    # several vertex-edge pairs: three in four of the closed Cornell box's lines were
-    # exact copies, and noding them cost GEOS as much as distinct ones)
+    # one copy of each segment: the plane through a vertex and an edge is the same for
+    # every pair of polygons sharing them (a vertex of k faces against an edge of two
+    # gives 2k copies), and GEOS nodes a copy at the cost of a distinct line; the ends
+    # are computed alike for each copy, so the copies are equal to the bit
     swap = (E2[:, 0, 0] > E2[:, 1, 0]) | ((E2[:, 0, 0] == E2[:, 1, 0]) & (E2[:, 0, 1] > E2[:, 1, 1]))
     E2 = np.unique(np.where(swap[:, None, None], E2[:, ::-1], E2) + 0.0, axis=0)
     return [(p0, p1) for p0, p1 in E2]
@@ -158,8 +159,8 @@ def cut_cells(Pc, nP, lines, R, c, grid=None, lengthen=True):
     of P's boundary is moved out by as much, across the boundary; what sticks out is a
     dangle, dropped. (GEOS rounds a line's crossing with the boundary, which may leave
     the end a few ulps inside: a dangle that polygonizing drops, and the cell it should
-    have cut left whole, with a kink of the hidden part across it; a line through a
-    corner of gunter1's ceiling did that.)"""
+    have cut left whole, with a kink of the hidden part across it; pinned in
+    tests/test_area_view3d.py: a line through a corner of the emitter.)"""
     poly = shapely.Polygon((Pc - c) @ R[:2].T)
     cut = (shapely.intersection(shapely.linestrings(np.asarray(lines, dtype=float)), poly)
            if len(lines) else np.empty(0, dtype=object))

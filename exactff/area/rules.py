@@ -139,9 +139,10 @@ def rule_pair(T, rung, corner, atol):
     degrees (3 and 5 points a side, 9 and 25 nodes: their collapsed vertex integrates
     functions of the direction from it); at rung 1 the collapsed rules of 6 and 10
     points a side. The symmetric pair only for a coarse absolute tolerance ``atol``
-    (at least ``AREA_LOW_RULES_TOLERANCE``): their difference underestimates the error
-    of the degree-8 rule on integrands with steep corners (pinned in
-    ``tests/test_regressions.py``)."""
+    (at least ``AREA_LOW_RULES_TOLERANCE``): with no vertex of their own, both miss a
+    peak of the kernel near a corner alike, so that at a fine tolerance their
+    difference can fall below the degree-8 rule's error, and the triangles would rest
+    on the check against the closed form alone."""
     if rung == 0 and not corner and atol >= tol.AREA_LOW_RULES_TOLERANCE:
         return tuple(symmetric_triangle_rule(T, d) for d in tol.AREA_SYMMETRIC_DEGREES)
     return tuple(triangle_rule(T, rule) for rule in _RULE_PAIRS[rung])

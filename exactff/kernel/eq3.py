@@ -2,10 +2,11 @@
 
 The image of a great-circle arc on the base disk lies on the ellipse of Eq. 2; each
 arc is split at its x-extremes into monotone spans, each integrated on its own branch
-with the corrected antiderivative (DESIGN 2, ``tools/derive_eq3.py``):
+with the corrected antiderivative (``docs/explanation/ppbh-method.md``,
+``tools/derive_eq3.py``):
 :func:`eq3_edge_integral` evaluates it as printed (corrected), span by span.
 
-The integrators evaluate the same spans in the *stable form* (issue 51, proved in
+The integrators evaluate the same spans in the *stable form* (proved in
 ``tools/derive_eq3.py``): on a span the branch is the sign of ``sin t`` (``t`` the arc's
 angle from its x-maximum), ``asin`` differences are ``-sigma (t1 - t0)``, and the spans'
 differences add up, over an arc of angle ``theta`` with ends ``u0``, ``u1`` and unit plane

@@ -1,4 +1,4 @@
-"""The escalation ladder (DESIGN 2.2): a value whose double-precision error estimate
+"""The escalation ladder (``docs/explanation/robustness.md``, "Escalation"): a value whose double-precision error estimate
 misses the tolerance is evaluated again from the float input, first in long double
 (the same vectorised sums), then with mpmath at growing precision until two
 evaluations agree. Point rows and the refinement of visible pieces climb the same
@@ -126,8 +126,10 @@ def mp_sector_value(point, normal, polygon, two_sided, dps, side_hint=None,
         total = ring_sum(C)
         # the image of the boundary ring, whichever way it winds: for a point within
         # rounding of a polygon that is planar only to rounding, the ring's winding can
-        # disagree with the side decided from the polygon's Newell plane (value 0 for
-        # 0.5 before); every other path integrates the ring as given too
+        # disagree with the side decided from the polygon's Newell plane, and only the
+        # ring's own orientation gives the image's area (pinned:
+        # test_mpmath_tier_integrates_the_ring_whichever_way_it_winds); every other path
+        # integrates the ring as given too
         return abs(total) / (2 * mp.pi)
 
 

@@ -150,7 +150,7 @@ def unoccluded_rows(flat, P, N, side, band, *, two_sided=False, tolerance=None, 
             settled = np.zeros(len(fi), dtype=bool)
             settled[in_extended[good]] = True
             fr, fi = fr[~settled], fi[~settled]
-        # last tier (DESIGN 2.2): mpmath at the digits the value needs
+        # last tier (docs/explanation/robustness.md): mpmath at the digits the value needs
         for r, i in zip(fr.tolist(), fi.tolist()):
             Q = flat.V[flat.offsets[i]:flat.offsets[i + 1]]
             F[r, i], err[r, i] = mp_form_factor(P[r], N[r], Q, two_sided=two_sided,
@@ -262,8 +262,9 @@ def sector_form_factor(point: ArrayLike, normal: ArrayLike, polygon: ArrayLike, 
     """Unoccluded form factor by the sector (Lambert) form, one polygon.
 
     ``F = (1 / 2 pi) sum_k atan2(|a_k x b_k|, a_k . b_k) (a_k x b_k)_z / |a_k x b_k|``
-    over the edges of the horizon-clipped polygon (DESIGN 2.1), in offset form, with a
-    rounding-error estimate and automatic escalation to mpmath (DESIGN 2.2).
+    over the edges of the horizon-clipped polygon (``docs/explanation/ppbh-method.md``,
+    "The sector form"), in offset form, with a rounding-error estimate and automatic
+    escalation to mpmath (``docs/explanation/robustness.md``).
 
     Parameters
     ----------

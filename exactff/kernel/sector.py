@@ -1,6 +1,7 @@
-"""The sector (Lambert) form, vectorised over edges: the sums of DESIGN 2.1 for many
-horizon-clipped polygons at once, in offset form, with their rounding-error model
-(DESIGN 2.2). Every exact path integrates with these sums: point rows, the visible
+"""The sector (Lambert) form, vectorised over edges: the sums of
+``docs/explanation/ppbh-method.md`` ("The sector form") for many horizon-clipped
+polygons at once, in offset form, with their rounding-error model
+(``docs/explanation/robustness.md``, "The estimate"). Every exact path integrates with these sums: point rows, the visible
 pieces of the engine, refinement and the area code's hidden parts."""
 
 import math
@@ -18,7 +19,8 @@ TWO_PI = 2.0 * math.pi
 def clipped_sector_sums(A0, E, nxt, owner, m, eps=tol.EPS, rounded_offsets=False):
     """Sector sums of horizon-clipped polygons, with their rounding-error estimates.
 
-    The polygons are given in *offset form* (DESIGN 2.2): ``A0`` (m, 3) is a reference
+    The polygons are given in *offset form* (``docs/explanation/robustness.md``): ``A0``
+    (m, 3) is a reference
     vertex of each polygon relative to the point, in the local frame, and ``E`` (V, 3)
     are the vertices' offsets from it. The edge plane ``m = a x b`` is evaluated as
     ``A0 x (e_b - e_a) + e_a x e_b``, which stays accurate for polygons small next to
@@ -133,7 +135,8 @@ def offset_edge_planes(Ax, Ay, Az, Eax, Eay, Eaz, Ebx, Eby, Ebz):
 
 def _offset_rounding(A0, E, nxt, owner, eps):
     """Per edge, a first-order bound on how far the rounding of the offsets moves its
-    polygon's sector sum (DESIGN 2.2's model covers the sums' own rounding only).
+    polygon's sector sum (the sums' error model, C1 and C2, covers their own rounding
+    only).
 
     The offsets are differences of the float input (from the point, and from the first
     vertex), each coordinate rounded once, then rotated to the local frame by a matrix

@@ -260,8 +260,9 @@ def compiled_form_factors(scene, point, normal, *, two_sided=False, stats=None,
     (``stats["max_band_bound"]``) are a
     bound on the topology: they are in the returned bound but not checked against the
     tolerance, as the Python engine's topology has the same decisions and its bound
-    leaves them out (a value 0 of ``office(600)``'s row 183 carries 1.8e-16 of them,
-    above the tolerance's floor).
+    leaves them out. No precision tier narrows them (they come from the decisions, not
+    from the arithmetic), so checking them would only send to the Python engine values
+    that its own check accepts.
 
     Parameters
     ----------
