@@ -28,7 +28,7 @@ from numpy.typing import ArrayLike
 
 from .. import _tolerances as tol
 from ..checks import check_sides
-from ..errors import NumericalError, check_finite
+from ..errors import NumericalError, check_finite, nonnegative
 from .ladder import mp_converge, mp_sector_value
 from .point import local_clipped
 from .sector import offset_edge_planes
@@ -228,10 +228,8 @@ def eq3_form_factor(point: ArrayLike, normal: ArrayLike, polygon: ArrayLike, *,
         est = float(diff) + F * tol.EPS
     # below 0 by at most its own estimate: clamped to 0, which the estimate covers;
     # beyond it, a defect
-    if not F >= -est:
-        raise NumericalError(f"Eq. 3 gave the form factor {F!r}, below 0 beyond its "
-                             f"rounding error estimate {est:.3g}")
-    return (max(F, 0.0), est) if error else max(F, 0.0)
+    F = nonnegative(F, est, "Eq. 3 form factor")
+    return (F, est) if error else F
 
 
 def eq3_ring_area(ring: ArrayLike) -> tuple[float, float]:

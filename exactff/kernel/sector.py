@@ -9,7 +9,7 @@ import math
 import numpy as np
 
 from .. import _tolerances as tol
-from ..errors import NumericalError
+from ..errors import nonnegative
 
 __all__ = ["TWO_PI", "clipped_sector_sums", "sector_values", "offset_edge_planes"]
 
@@ -191,11 +191,4 @@ def sector_values(S, mags, errs, d0, two_sided, eps=tol.EPS, unchecked=None):
     # rounding can leave a value below 0 by at most its error estimate: there it is
     # clamped to 0, which the estimate still covers (0 <= exact <= F + err <= err);
     # beyond it, the value is a defect and raises
-    ok = F >= -err
-    if unchecked is not None:
-        ok |= unchecked
-    if not np.all(ok):
-        i = int(np.flatnonzero(~ok)[0])
-        raise NumericalError(f"polygon {i}: form factor {F[i]!r} below 0 beyond its rounding "
-                             f"error estimate {err[i]:.3g}")
-    return np.maximum(F, 0.0), err
+    return nonnegative(F, err, "form factor", unchecked, item="polygon"), err

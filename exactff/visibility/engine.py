@@ -13,7 +13,7 @@ from scipy.spatial import ConvexHull, QhullError
 
 from .. import _tolerances as tol
 from ..checks import as_receiver
-from ..errors import NumericalError, check_finite, misses_tolerance, tolerance_missed
+from ..errors import check_finite, misses_tolerance, nonnegative, tolerance_missed
 from ..geometry import receiver_frame, to_local
 from ..kernel import eq3_form_factor, flat_polygons, unoccluded_row
 from ..predicates import coplanar_band_sides, engine_sides
@@ -207,13 +207,10 @@ def _per_polygon(src, Vf, Ef, n, what, stats):
     V = np.bincount(src, weights=Vf, minlength=n)
     E = np.bincount(src, weights=Ef, minlength=n)
     check_finite(V, E)
-    bad = np.flatnonzero(~(V >= -E))
-    if len(bad):
-        raise NumericalError(f"polygon {bad[0]}: occluded {what} {V[bad[0]]!r} below 0 "
-                             f"beyond its rounding error estimate {E[bad[0]]:.3g}")
+    V = nonnegative(V, E, f"occluded {what}", item="polygon")
     if stats is not None:
         stats["max_error_estimate"] = float(E.max(initial=0.0))
-    return np.maximum(V, 0.0), E
+    return V, E
 
 
 def _require_tolerance(F, E, tolerance, integrator, st):
