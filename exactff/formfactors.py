@@ -697,7 +697,10 @@ def area_form_factors(scene, rows=None, *, tolerance=1e-9, error=False, executor
         ``shaft_culled_blockers`` (polygons in a pair's bounding box that the shaft's
         planes rejected, so the hull test never saw them), ``shaft_unoccluded_pairs``
         (pairs whose box held polygons but the shaft none: no hull built),
-        ``far_pairs`` (by the far-field rule), ``culled_events``, ``solid_events``
+        ``far_pairs`` (by the far-field rule), ``contour_rule_pairs`` and
+        ``escalated_pairs`` (unoccluded values whose closed form missed, taken by the
+        tanh-sinh contour rule or with edge pairs in mpmath), ``culled_events``,
+        ``solid_events``
         (vertex-edge pairs of two faces of one convex solid, not cut along),
         ``back_faces`` (members of such a solid that a point saw from behind, left out
         of its hidden region; per point),

@@ -85,8 +85,9 @@ def occluded_pair(S, Pc, Qc, nP, atol, area_P, whole, shortcuts=True, st=None,
     """``(1 / A_P) int_Pc F_occ(x -> S[0]) dA`` with S = [receiver, blockers...], as the
     unoccluded value (the contour integral, exact) less the integral of the hidden part
     ``F(x -> Qc) - F_occ(x -> S[0])`` (exact point values of the hidden region, built
-    in Qc's plane: :func:`~exactff.area.hidden.hidden_values`). The hidden part is smooth where the polygons
-    touch (the unoccluded part carries the edge singularities), so it is integrated over
+    in Qc's plane: :func:`~exactff.area.hidden.hidden_values`). The hidden part is
+    smooth where the polygons touch (the unoccluded part carries the edge
+    singularities), so it is integrated over
     the cells of Pc between visibility events, each cell's triangles by two collapsed
     Gauss-Legendre rules (6 and 10 points a side), a triangle cut in four where the two
     differ by more than its share of ``atol``. Where the events cut Pc into more

@@ -195,8 +195,8 @@ def _mp_vector(x):
 def _mp_escalate(c, ef, J, edges, L, area_s, atol):
     """One receiver's value and estimate with its costliest edge pairs re-evaluated in
     mpmath: the fewest (by decreasing rounding estimate ``c``) that bring the rest within
-    half of ``atol`` (the absolute error allowed). The rest are summed in floats; the re-evaluated ones in mpmath,
-    from the float vertices (``edges``: for each pair, the vertices a, a', b, b' of its
+    half of ``atol`` (the absolute error allowed). The rest are summed in floats; the
+    re-evaluated ones in mpmath, from the float vertices (``edges``: for each pair, the vertices a, a', b, b' of its
     edges ``a -> a'`` and ``b -> b'``, unscaled), with ln L taken out as in the floats,
     at ``AREA_CLOSED_MP_DPS`` digits, doubled (up to ``MP_MAX_DPS``) while their rounding
     (``AREA_CLOSED_MP_ULPS`` units of the precision of the closed form's terms) misses
@@ -236,10 +236,11 @@ def unoccluded_pairs(P, Qs, shortcuts=True, rtol=None, atol=0.0, parts=None, cou
 
     Each polygon is clipped here to the front of the other's plane (one-sided, as
     :func:`unoccluded_pair`); pass them whole. The edge pairs of all receivers are
-    evaluated together (:func:`~exactff.area.edge_integrals.edge_log_integrals`, the closed form of the
-    Mitalas-Stephenson contour integral). A receiver whose estimate misses
+    evaluated together (:func:`~exactff.area.edge_integrals.edge_log_integrals`, the
+    closed form of the Mitalas-Stephenson contour integral). A receiver whose estimate misses
     ``rtol * max(F, AREA_CLOSED_FLOOR)`` is taken, with ``shortcuts`` and when it is far
-    (:func:`~exactff.area.far_field.is_far`), by the far-field rule if that estimate is the smaller, then (with
+    (:func:`~exactff.area.far_field.is_far`), by the far-field rule if that estimate is
+    the smaller, then (with
     ``atol``) by the tanh-sinh contour rule
     (:func:`~exactff.area.contour_rule.contour_tanh_sinh`) if that one's is; a
     receiver still
@@ -265,8 +266,8 @@ def unoccluded_pairs(P, Qs, shortcuts=True, rtol=None, atol=0.0, parts=None, cou
         Adds what this call did (per call: safe under threads, one per thread).
     parts : sequence of (ndarray or None, ndarray or None), optional
         Each pair's parts in front of the other's plane, ``(Pc, Qc)``, where the caller
-        has them (:func:`exactff.halfspace.clip_front`; ``Pc`` the emitter itself where it is whole): not
-        decided again here.
+        has them (:func:`exactff.halfspace.clip_front`; ``Pc`` the emitter itself where
+        it is whole): not decided again here.
 
     Returns
     -------
@@ -389,7 +390,8 @@ def unoccluded_pair(P, Q, shortcuts=True, atol=0.0):
     """F(P -> Q) of two validated polygons, unoccluded, and an estimate of its error
     (:func:`unoccluded_pairs` for one receiver): the closed form of the contour integral
     with the rounding of its terms (``AREA_CLOSED_ULPS`` units), the far-field rule
-    (:func:`~exactff.area.far_field.is_far`; only with ``shortcuts``) or mpmath where that misses
+    (:func:`~exactff.area.far_field.is_far`; only with ``shortcuts``) or mpmath where that
+    misses
     ``AREA_CLOSED_RTOL`` (and ``atol``, when given). A value below 0 within its
     estimate is 0; beyond it, NumericalError."""
     f, e = unoccluded_pairs(P, [Q], shortcuts=shortcuts, atol=atol)

@@ -60,11 +60,12 @@ def event_lines(S, nP, dP, R, c, radius, Qc, shortcuts=True, st=None, solid=None
     line (the intersection of two planes), so that events through one point (a corner
     of a blocker on P) cross there to rounding; an image through infinity is kept as the
     whole chord. Between two faces of one convex solid (``solid``: the group of each
-    polygon of S, -1 for none, :func:`~exactff.area.culling.closed_solids`) there is no event but the faces'
-    planes: the faces' images united are the solid's, whose outline changes only there.
-    Without ``shortcuts`` every blocker-blocker event is kept; the ones culled are
-    counted in ``st.culled_events``, the vertex-edge pairs of one solid in
-    ``st.solid_events`` (``st``: an :class:`~exactff.area.row.AreaStats`, optional)."""
+    polygon of S, -1 for none, :func:`~exactff.area.culling.closed_solids`) there is no
+    event but the faces' planes: the faces' images united are the solid's, whose outline
+    changes only there. Without ``shortcuts`` every blocker-blocker event is kept; the
+    ones culled are counted in ``st.culled_events``, the vertex-edge pairs of one solid
+    in ``st.solid_events`` (``st``: an :class:`~exactff.area.row.AreaStats`,
+    optional)."""
     nQ, q0, RQ, Q2 = plane_frame(Qc)
     seen = shapely.Polygon(Q2)
     shapely.prepare(seen)
@@ -143,7 +144,7 @@ def event_lines(S, nP, dP, R, c, radius, Qc, shortcuts=True, st=None, solid=None
     E2 = (ends - c) @ R[:2].T
     # one copy of each segment: the plane through a vertex and an edge is the same for
     # every pair of polygons sharing them (a vertex of k faces against an edge of two
-    # gives 2k copies), and GEOS nodes a copy at the cost of a distinct line; the ends
+    # gives up to 2k copies), and GEOS nodes a copy at the cost of a distinct line; the ends
     # are computed alike for each copy, so the copies are equal to the bit
     swap = (E2[:, 0, 0] > E2[:, 1, 0]) | ((E2[:, 0, 0] == E2[:, 1, 0]) & (E2[:, 0, 1] > E2[:, 1, 1]))
     E2 = np.unique(np.where(swap[:, None, None], E2[:, ::-1], E2) + 0.0, axis=0)

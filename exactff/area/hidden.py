@@ -63,8 +63,8 @@ def hidden_setup(Qc, blockers, solid=None, inner=None):
     Qc's size in its plane. None where no blocker is in front.
 
     ``solid``: the convex solid of each blocker for the pair
-    (:func:`~exactff.area.culling.closed_solids`), -1 for none, and ``inner`` a point inside its hull (NaN where not every member of
-    the solid is a blocker of the pair: a member culled within rounding of a line of
+    (:func:`~exactff.area.culling.closed_solids`), -1 for none, and ``inner`` a point
+    inside its hull (NaN where not every member of the solid is a blocker of the pair: a member culled within rounding of a line of
     sight could not stand in for one skipped): a solid's members get their outward
     normals, and from a point outside the hull those it sees from behind are skipped
     (their images lie in those of the members it sees from the front). A member whose

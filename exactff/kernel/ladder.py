@@ -1,8 +1,8 @@
-"""The escalation ladder (``docs/explanation/robustness.md``, "Escalation"): a value whose double-precision error estimate
-misses the tolerance is evaluated again from the float input, first in long double
-(the same vectorised sums), then with mpmath at growing precision until two
-evaluations agree. Point rows and the refinement of visible pieces climb the same
-ladder (:func:`mp_converge`)."""
+"""The escalation ladder (``docs/explanation/robustness.md``, "Escalation"): a value
+whose double-precision error estimate misses the tolerance is evaluated again from the
+float input, first in long double (the same vectorised sums), then with mpmath at
+growing precision until two evaluations agree. Point rows and the refinement of visible
+pieces climb the same ladder (:func:`mp_converge`)."""
 
 from __future__ import annotations
 

@@ -1,8 +1,9 @@
 """The sector (Lambert) form, vectorised over edges: the sums of
 ``docs/explanation/ppbh-method.md`` ("The sector form") for many horizon-clipped
 polygons at once, in offset form, with their rounding-error model
-(``docs/explanation/robustness.md``, "The estimate"). Every exact path integrates with these sums: point rows, the visible
-pieces of the engine, refinement and the area code's hidden parts."""
+(``docs/explanation/robustness.md``, "The estimate"). Every exact path integrates with
+these sums: point rows, the visible pieces of the engine, refinement and the area code's
+hidden parts."""
 
 import math
 

@@ -1,10 +1,10 @@
 """Exact visibility: occluded form factors from a point to every polygon of a scene.
 
-The engine (``docs/explanation/visibility.md``): a BSP tree orders the fragments front to back from the point;
-the area-sorting clipper keeps the covered region in five gnomonic charts and cuts
-each new fragment's image against it; every visible piece is integrated exactly with
-the sector form. Shortcuts leave out what a row does not need; each is reported in
-``stats`` and tested to be neutral.
+The engine (``docs/explanation/visibility.md``): a BSP tree orders the fragments front
+to back from the point; the area-sorting clipper keeps the covered region in five
+gnomonic charts and cuts each new fragment's image against it; every visible piece is
+integrated exactly with the sector form. Shortcuts leave out what a row does not need;
+each is reported in ``stats`` and tested to be neutral.
 """
 
 import numpy as np
