@@ -62,6 +62,19 @@ def far_values(nodes, nP, area_P, Qs):
     Returns
     -------
     (ndarray of shape (len(Qs),), ndarray of shape (len(Qs),))
+        The values and their estimates.
+
+    Examples
+    --------
+    A unit square facing one 20 above it, against Howell's C-11 (7.9445e-4, from the
+    closed form :func:`exactff.polygon_form_factor`):
+
+    >>> import exactff as ef
+    >>> P = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], float)
+    >>> Q, nP = P[::-1] + [0, 0, 20], np.array([0, 0, 1.0])
+    >>> F, E = far_values(emitter_nodes(P, nP), nP, 1.0, [Q])
+    >>> bool(abs(F[0] - ef.polygon_form_factor(P, Q)) <= E[0] < 1e-15)
+    True
     """
     X, W_hi, W_lo = nodes
     hi, lo = np.empty(len(Qs)), np.empty(len(Qs))

@@ -157,6 +157,21 @@ def hidden_values(X, nP, Qc, blockers, st=None, atol=0.0, setup=None, shortcuts=
     Returns
     -------
     (ndarray of shape (len(X),), ndarray of shape (len(X),))
+
+    Examples
+    --------
+    A plate halfway between the centre of the floor and a ceiling square twice its size
+    hides all of the ceiling from there (its shadow is the whole square), and a quarter
+    of the way across, less:
+
+    >>> from exactff.area.points import point_values
+    >>> sq = lambda z: np.array([[0, 0, z], [1, 0, z], [1, 1, z], [0, 1, z]], float)
+    >>> Q, plate = sq(2)[::-1], 0.5 * sq(2) + [0.25, 0.25, 0]
+    >>> X, nP = np.array([[0.5, 0.5, 0], [0.25, 0.5, 0]]), np.array([0, 0, 1.0])
+    >>> H, EH = hidden_values(X, nP, Q, [plate])
+    >>> U, EU = (v[0] for v in point_values(X, nP, [Q]))
+    >>> bool(abs(H[0] - U[0]) <= EH[0] + EU[0]), bool(0 < H[1] < U[1])
+    (True, True)
     """
     nX = len(X)
     zero = np.zeros(nX)

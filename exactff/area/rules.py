@@ -167,13 +167,21 @@ def quarter(T):
 
 
 def triangle_areas(T):
-    """The areas of triangles T (t, 3, 3): ``|(b - a) x (c - a)| / 2``."""
+    """The areas of triangles T (t, 3, 3): ``|(b - a) x (c - a)| / 2``, shape (t,)."""
     return 0.5 * np.linalg.norm(cross(T[:, 1] - T[:, 0], T[:, 2] - T[:, 0]), axis=1)
 
 
 def triangulate(P, n):
     """Triangles covering a planar polygon P (K, 3) of unit normal n (constrained
-    Delaunay in its plane), as a list of (3, 3) arrays."""
+    Delaunay in its plane), as a list of (3, 3) arrays.
+
+    Examples
+    --------
+    >>> P = np.array([[0, 0, 0], [2, 0, 0], [2, 1, 0], [1, 0.5, 0], [0, 1, 0]], float)
+    >>> T = np.array(triangulate(P, np.array([0, 0, 1.0])))
+    >>> len(T), float(triangle_areas(T).sum())           # the polygon's area, 1.5
+    (3, 1.5)
+    """
     R = receiver_frame(n)
     uv = (P - P[0]) @ R[:2].T
     tris = shapely.get_parts(shapely.constrained_delaunay_triangles(shapely.Polygon(uv)))
