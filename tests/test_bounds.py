@@ -168,7 +168,7 @@ def _nan_core(scene):
     import exactff.visibility.bsp as bsp
 
     class NaNCore:
-        def row(self, p, n, node_side, source_side, *args):
+        def row(self, point, normal, node_side, source_side, **options):
             F = np.full(len(source_side), np.nan)
             return F, np.zeros_like(F), np.zeros_like(F), np.zeros_like(F), {}
 
