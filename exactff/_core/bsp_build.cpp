@@ -1,4 +1,4 @@
-// The BSP tree of a scene in compiled code (issue 28: the set-up of a large scene).
+// The BSP tree of a scene in compiled code (the set-up of a large scene).
 //
 // The same autopartition as exactff.visibility.bsp.build_bsp (the Python build, which
 // the Python engine keeps): at each node up to `candidates` planes of the node's
