@@ -10,6 +10,7 @@ __all__ = [
     "PLANE_SIDE_ULPS",
     "ON_PLANE_ULPS",
     "BSP_COPLANAR_ULPS",
+    "BSP_SPLIT_SNAP_EPS",
     "ZBUFFER_ROUNDING_ULPS",
     "COVERED_RTOL",
     "DEFAULT_RTOL",
@@ -164,6 +165,14 @@ ON_PLANE_ULPS = 2.0
 #: order faces by their geometry (issue 29: a rafter 3.5e-13 below a slab's plane at
 #: 15 m, where the band is 2.1e-13, is in front of it for every method).
 BSP_COPLANAR_ULPS = 64.0
+#: BSP tree: a split's crossing within this many machine epsilons (of an end point's
+#: largest coordinate, in every coordinate) of one of its edge's end points is that end
+#: point, in both parts (exactff.halfspace.split_polygon, Builder::split): an exact
+#: split of a polygon that nearly lies in the plane would otherwise leave edges an ulp
+#: long, whose planes through the point the compiled core cannot orient (it leaves such
+#: a piece's shadow out and charges its value to every value of the row). The compiled
+#: build charges the end point's distance from the crossing to its vertex bound.
+BSP_SPLIT_SNAP_EPS = 16.0
 
 #: The z-buffers' depth-tie test evaluates ``n . (X - c)`` for a hit point ``X = t d``
 #: in the receiver's local frame, not the input coordinates: on top of the band, it
