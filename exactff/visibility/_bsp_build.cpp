@@ -252,6 +252,7 @@ struct Builder {
     const int64_t* input_start;
     std::vector<int64_t> input_owner;  // per input vertex, its polygon
     int64_t exact_crossings = 0;
+    int64_t outside_crossings = 0;  // exact crossings beyond their edge (Builder::split)
     // per source polygon, the plane its splits cut along (SplitPlane: through three of
     // its vertices, in quadruple precision)
     std::vector<SplitPlane> planes;
@@ -729,6 +730,32 @@ struct Builder {
                 // core could not orient; the end point's copy stands for the crossing,
                 // within their distance and the crossing's bound
                 int near = -1;
+                // the crossing must lie on the edge: one beyond its ends (by more than
+                // their errors) is the crossing of the carrier line, nearly parallel to
+                // the plane, that the rounded ends straddle while the true ones do not
+                // (both within their roundings of the plane). The edge then does not
+                // cross: it touches the plane at the end nearer to it, which stands for
+                // the crossing within its own error and its distance from the plane
+                bool outside = false;
+                {
+                    const double* A = vertex(f, a);
+                    const double* B = vertex(f, b);
+                    const double slack = vertex_error(f, a) + vertex_error(f, b);
+                    for (int c = 0; c < 3; ++c)
+                        outside |= !(X[c] >= std::min(A[c], B[c]) - slack &&
+                                     X[c] <= std::max(A[c], B[c]) + slack);
+                }
+                LD off_plane = 0, off_plane_q = 0;
+                if (outside) {
+                    LD ea, eb;
+                    const LD va = LD(q_fabs(plane_value(plane, vertex_q(f, i), ea)));
+                    const LD vb = LD(q_fabs(plane_value(plane, vertex_q(f, j), eb)));
+                    near = va <= vb ? 0 : 1;
+                    const LD norm = LD(plane.norm);
+                    off_plane = ((near == 0 ? va + ea : vb + eb) / norm) * (1 + 1e-15L);
+                    off_plane_q = off_plane;
+                    ++outside_crossings;
+                }
                 for (int w = 0; w < 2 && near < 0; ++w) {
                     const double* E = vertex(f, w == 0 ? i : j);
                     const double amax = std::max({std::fabs(E[0]), std::fabs(E[1]), std::fabs(E[2])});
@@ -754,8 +781,10 @@ struct Builder {
                     const LD rq = LD(Xq[c] - Eq[c]);
                     dq2 += rq * rq;
                 }
-                const double ec = double(1.01L * (std::sqrt(d2) + LD(e)));
-                const double eqc = double(1.01L * (std::sqrt(dq2) + LD(eq)));
+                const double ec = outside ? double(1.01L * (off_plane + LD(vertex_error(f, w))))
+                                          : double(1.01L * (std::sqrt(d2) + LD(e)));
+                const double eqc = outside ? double(1.01L * (off_plane_q + LD(vertex_error_q(f, w))))
+                                           : double(1.01L * (std::sqrt(dq2) + LD(eq)));
                 const bool front_side = near == 0 ? sg[i] < 0 : sg[i] > 0;
                 if (front_side) {
                     keep(fv, fe, fq, fqe, fc, E, ec, Eq, eqc, near == 0 ? on : along);
