@@ -1500,7 +1500,12 @@ class Core {
                     charge_edges(w.q, src, E, st, refined ? &qerrs : nullptr);
                 }
                 if (receives) B[src] += leaked(w.q, val + bnd, st);
-                insert_shadow(w.q, f, pp, w.plane, w.positive, sv, xp, st, val + bnd);
+                // a piece whose shadow is left out is an image folded or flat along a
+                // side (seen from within the band of a plane it is not planar in): its
+                // own value is charged it too, as the band's slivers are
+                if (!insert_shadow(w.q, f, pp, w.plane, w.positive, sv, xp, st, val + bnd) &&
+                    receives)
+                    B[src] += val + bnd;
                 continue;
             }
             const Plane P = sv[node];
@@ -1665,7 +1670,8 @@ class Core {
     // replace the free leaf reached by (plane, branch) with the piece's shadow volume:
     // for each edge, the plane it lies on (its input edge's plane through p, or the
     // plane it was cut along), oriented to hold the piece
-    void insert_shadow(const Piece& q, int64_t f, const double* pp, int plane, bool positive,
+    // (false: the shadow is left out)
+    bool insert_shadow(const Piece& q, int64_t f, const double* pp, int plane, bool positive,
                        std::vector<Plane>& sv, std::vector<ExactPlane>& xp, RowStats& st,
                        R piece_bound) const {
         constexpr R PI = 3.14159265358979323846264338327950288L;
@@ -1690,7 +1696,7 @@ class Core {
         std::vector<Side> e(m);
         if (m < 3) {
             leave_out(q, piece_bound, 0, st);
-            return;
+            return false;
         }
         for (size_t i = 0; i < m; ++i) {
             const Vertex& a = q[i];
@@ -1804,7 +1810,7 @@ class Core {
         // out more than the piece is worth: no shadow at all
         if (straddled || sides < 3 || kernel_charge + omit_charge > piece_bound) {
             leave_out(q, piece_bound, straddled ? 1 : (sides < 3 ? 3 : 2), st);
-            return;
+            return false;
         }
         leave_out(q, kernel_charge, -1, st);
         // what the omitted sides' triangles may hide is not attributed to a piece
@@ -1813,7 +1819,7 @@ class Core {
         st.kernels += kernel_charge > 0;
         if (chain.empty()) {  // the piece fills its leaf's cell: the cell is covered
             (positive ? sv[plane].pos : sv[plane].neg) = IN;
-            return;
+            return true;
         }
         const int base = static_cast<int>(sv.size());
         for (size_t i = 0; i < chain.size(); ++i) {
@@ -1823,6 +1829,7 @@ class Core {
         }
         (positive ? sv[plane].pos : sv[plane].neg) = base;
         st.shadow_planes += static_cast<int64_t>(chain.size());
+        return true;
     }
 
     // a part of the hemisphere that a piece covers but its shadow does not (all of a
