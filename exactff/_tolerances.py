@@ -169,8 +169,8 @@ BSP_COPLANAR_ULPS = 64.0
 #: largest coordinate, in every coordinate) of one of its edge's end points is that end
 #: point, in both parts (exactff.halfspace.split_polygon, Builder::split): an exact
 #: split of a polygon that nearly lies in the plane would otherwise leave edges an ulp
-#: long, whose planes through the point the compiled core cannot orient (it leaves such
-#: a piece's shadow out and charges its value to every value of the row). The compiled
+#: long, whose planes through the point the compiled core cannot orient (such a piece
+#: has no shadow, and what it covers is charged to the pieces behind it). The compiled
 #: build charges the end point's distance from the crossing to its vertex bound.
 BSP_SPLIT_SNAP_EPS = 16.0
 
