@@ -43,17 +43,17 @@ def main():
         P = random_polygon(rng)
         n = rng.normal(size=3)
         n /= np.linalg.norm(n)
-        one_sided = bool(rng.random() < 0.5)
+        two_sided = bool(rng.random() >= 0.5)
         if abs(ef.unit_normal(P) @ P.mean(axis=0)) < 1e-9:
             continue
         z = P @ n
         crossing += bool(z.min() < 0 < z.max())
-        ref = float(boundary_form_factor(np.zeros(3), n, P, one_sided=one_sided, dps=args.dps))
+        ref = float(boundary_form_factor(np.zeros(3), n, P, two_sided=two_sided, dps=args.dps))
         received += ref > 0
         vals = {
-            "sector": sector_form_factor(np.zeros(3), n, P, two_sided=not one_sided),
-            "eq3": eq3_form_factor(np.zeros(3), n, P, two_sided=not one_sided),
-            "vectorised": float(ef.point_polygon_form_factors(np.zeros(3), n, [P], two_sided=not one_sided)[0]),
+            "sector": sector_form_factor(np.zeros(3), n, P, two_sided=two_sided),
+            "eq3": eq3_form_factor(np.zeros(3), n, P, two_sided=two_sided),
+            "vectorised": float(ef.point_polygon_form_factors(np.zeros(3), n, [P], two_sided=two_sided)[0]),
         }
         for k, v in vals.items():
             err = abs(v - ref)

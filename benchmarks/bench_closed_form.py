@@ -21,7 +21,8 @@ import numpy as np
 sys.path.insert(0, os.path.join(os.path.dirname(__file__), "..", "tests"))
 
 import exactff as ef                                                  # noqa: E402
-from exactff.area import contour                                      # noqa: E402
+from exactff.area.closed_form import ClosedFormCounts, unoccluded_pairs  # noqa: E402
+from exactff.area.contour_rule import contour_tanh_sinh               # noqa: E402
 from hypothesis import given, settings                                # noqa: E402
 from test_area import (howell_parallel, howell_perpendicular,         # noqa: E402
                        parallel_pair, perpendicular_pair)
@@ -49,7 +50,7 @@ def accuracy(n_random):
     print(f"{'cases':32s} {'n':>4s} {'old (tanh-sinh)':>16s} {'new (closed)':>13s} {'covered':>8s}")
     for name, cases in [("Howell's catalogue", howell), ("extreme aspect ratios", extreme),
                         ("random facing pairs", randoms)]:
-        old = max(abs(contour._contour_tanh_sinh(*p)[0] - r) / r for _, p, r in cases)
+        old = max(abs(contour_tanh_sinh(*p)[0] - r) / r for _, p, r in cases)
         new, covered = 0.0, 0
         for _, p, r in cases:
             f, e = ef.polygon_form_factor(*p, error=True)
@@ -57,30 +58,29 @@ def accuracy(n_random):
             covered += abs(f - r) <= e + 2.0 ** -53 * r
         print(f"{name:32s} {len(cases):4d} {old:16.2e} {new:13.2e} {covered:5d}/{len(cases)}")
     for name, p, r in extreme:
-        print(f"  {name}: old {abs(contour._contour_tanh_sinh(*p)[0] - r) / r:.2e}, "
+        print(f"  {name}: old {abs(contour_tanh_sinh(*p)[0] - r) / r:.2e}, "
               f"new {abs(ef.polygon_form_factor(*p) - r) / r:.2e}")
 
 
 def speed(k=16, row=0):
     polys = [np.asarray(p, float) for p in ef.scenes.subdivided_box(k).polygons]
     P, Qs = polys[row], [Q for j, Q in enumerate(polys) if j != row]
-    before = dict(contour.CLOSED_FORM_COUNTS)
+    counts = ClosedFormCounts()
     t = time.process_time()
-    F, E = contour.unoccluded_pairs(P, Qs)
+    F, E = unoccluded_pairs(P, Qs, counts=counts)
     t_new = time.process_time() - t
-    counts = {key: contour.CLOSED_FORM_COUNTS[key] - before[key] for key in before}
     t = time.process_time()
-    G = np.array([contour._contour_tanh_sinh(P, Q)[0] for Q in Qs])
+    G = np.array([contour_tanh_sinh(P, Q)[0] for Q in Qs])
     t_old = time.process_time() - t
     n = len(Qs)
     print(f"\nsubdivided_box({k}), row {row}: {n} receivers, row sum {F.sum():.15f}")
     print(f"  unoccluded_pairs (closed form, batch): {t_new:.3f} s, {1e6 * t_new / n:.1f} us a pair")
-    print(f"  _contour_tanh_sinh per pair (old):     {t_old:.3f} s, {1e6 * t_old / n:.1f} us a pair")
+    print(f"  contour_tanh_sinh per pair (old):      {t_old:.3f} s, {1e6 * t_old / n:.1f} us a pair")
     print(f"  ratio old / new: {t_old / t_new:.1f}; largest difference {np.abs(F - G).max():.1e}")
     print(f"  counts: {counts}")
     pr = cProfile.Profile()
     pr.enable()
-    contour.unoccluded_pairs(P, Qs)
+    unoccluded_pairs(P, Qs)
     pr.disable()
     pstats.Stats(pr).sort_stats("tottime").print_stats(8)
 

@@ -215,14 +215,14 @@ def stiff_accuracy(tolerance=1e-13):
     for c in stiff_cases():
         ref = mp.mpf(c.reference)
         scene = ef.Scene.from_polygons([c.polygon])
-        vals = [ef.eq3_form_factor(c.point, c.normal, c.polygon, two_sided=not c.one_sided,
+        vals = [ef.eq3_form_factor(c.point, c.normal, c.polygon, two_sided=c.two_sided,
                                    tolerance=tolerance),
-                ef.sector_form_factor(c.point, c.normal, c.polygon, two_sided=not c.one_sided,
+                ef.sector_form_factor(c.point, c.normal, c.polygon, two_sided=c.two_sided,
                                       tolerance=tolerance)]
         for integ in ("eq3", "sector"):
             try:
                 vals.append(float(compiled_form_factors(
-                    scene, c.point, c.normal, two_sided=not c.one_sided, shortcuts=False,
+                    scene, c.point, c.normal, two_sided=c.two_sided, shortcuts=False,
                     tolerance=tolerance, integrator=integ)[0]))
             except ef.NumericalError:
                 vals.append(float("nan"))

@@ -20,7 +20,7 @@ import time
 import numpy as np
 
 import exactff as ef
-import exactff.area.contour as contour
+import exactff.area.points as points
 import exactff.kernel.ladder as ladder
 import exactff.kernel.point as point
 from exactff.kernel import sector
@@ -38,7 +38,7 @@ def without(*args, rounded_offsets=False, **kwargs):
 
 
 def use(fn):
-    for module in (point, ladder, contour):
+    for module in (point, ladder, points):
         module.clipped_sector_sums = fn
 
 

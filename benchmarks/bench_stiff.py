@@ -88,7 +88,7 @@ def main():
     cases = stiff_cases()
     for c in cases:
         args_ = (c.point, c.normal, c.polygon)
-        kw = {"one_sided": c.one_sided}
+        kw = {"two_sided": c.two_sided}
         Fd, est = ef.point_polygon_form_factor(*args_, tolerance=None, error=True, **kw)
         td = best_of(lambda: ef.point_polygon_form_factor(*args_, tolerance=None, **kw))
         te = best_of(lambda: ef.point_polygon_form_factor(*args_, **kw))

@@ -168,7 +168,7 @@ ON_PLANE_ULPS = 2.0
 #: float cannot place it more precisely, and splitting there would only cut
 #: rounding-thin slivers); in the discrete methods' z-buffers a polygon whose plane
 #: passes within it of the nearest hit point ties with it in depth. Beyond it both
-#: order faces by their geometry (issue 29: a rafter 3.5e-13 below a slab's plane at
+#: order faces by their geometry (a rafter 3.5e-13 below a slab's plane at
 #: 15 m, where the band is 2.1e-13, is in front of it for every method).
 BSP_COPLANAR_ULPS = 64.0
 #: BSP tree: a split's crossing within this many machine epsilons (of an end point's
@@ -196,7 +196,7 @@ COVERED_RTOL = 1e-13
 
 #: Default relative accuracy requested of every unoccluded form factor: where the
 #: rounding-error estimate of the double-precision value exceeds it, the value is
-#: re-evaluated with mpmath (DESIGN 2.2).
+#: re-evaluated with mpmath (docs/explanation/robustness.md).
 DEFAULT_RTOL = 1e-12
 
 #: The sampling z-buffer clips polygons to chart frusta widened by this much (chart
@@ -301,8 +301,9 @@ MP_VALUE_FLOOR = 1e-300
 #: relative to the 1e-17 rounding of its neighbours (a sliver left between touching
 #: polygons by moved coordinates, a polygon all but edge-on; hypothesis found a 0 with
 #: a bound of 1.6e-16 from a rigid motion of an occluded row), while 100 such values
-#: keep a row's sum within ``tolerance``; DESIGN 6's targets are absolute plus relative
-#: too (1e-13 + 1e-12 F, ten times looser than this floor's 1e-14 at the default).
+#: keep a row's sum within ``tolerance``; the accuracy targets are absolute plus relative
+#: too (1e-13 + 1e-12 F, ten times looser than this floor's 1e-14 at the default;
+#: docs/explanation/robustness.md, "Accuracy targets").
 VALUE_FLOOR = 1e-2
 
 #: The axis-plane candidate is tried at a BSP node when the best of the polygons' own
@@ -436,11 +437,11 @@ AREA_BACK_FACE_RTOL = 1e-12
 AREA_STRICT_TURN = 1e-6
 
 #: The closed form's skew edge pairs: a triangle of the parallelogram thinner than this
-#: share of its size (``exactff.area.contour._skew_edge_integrals``) is of no area (its
+#: share of its size (``exactff.area.edge_integrals._skew_edge_integrals``) is of no area (its
 #: terms would only underflow).
 AREA_CLOSED_THIN = 1e-100
 
-#: The closed form's dilogarithm near the real axis (``exactff.area.contour._li2``): within
+#: The closed form's dilogarithm near the real axis (``exactff.area.edge_integrals._li2``): within
 #: this of it (and left of 1/2) Li2 is the real ``spence`` plus its first-order term,
 #: as scipy's complex ``spence`` is wrong there near x = -0.268 (measured: an imaginary
 #: part of 0.028 for 7.5e-17; on 23,000 points of the disk and near the axis the other
@@ -468,7 +469,8 @@ AREA_EDGE_CUT = 1e-9
 #: times the crossing's condition ``1 + |h|_1 |e|_1 / |h . e|``.
 CLIP_MEET_ULPS = 8.0
 
-#: Constants of the sector sums' rounding-error estimate (DESIGN 2.2): per edge term,
+#: Constants of the sector sums' rounding-error estimate (docs/explanation/robustness.md):
+#: per edge term,
 #: the relative error of its angle and sum (C1 ulps), and of its plane's direction (C2
 #: ulps per unit of the cross product's condition number).
 C1 = 10.0
@@ -525,7 +527,7 @@ AREA_MANY_CELLS = 50
 #: of 3, 4, 5 and 6 points a side were 3.2e-10, 1.9e-9, 2.5e-10 and -3.2e-11.
 AREA_CORNER_MIDDLE_ORDER = 4
 #: ... that pair's degrees (4 and 8) in symmetric rules of 6 and 16 points
-#: (exactff.area.contour.SYMMETRIC_RULES), on every triangle but those whose first vertex
+#: (exactff.area.rules.SYMMETRIC_RULES), on every triangle but those whose first vertex
 #: a blocker touches (they keep the collapsed rule, whose collapsed vertex it is).
 AREA_SYMMETRIC_DEGREES = (4, 8)
 #: ... and every pair's triangles start with the lower pair where the target (absolute)
@@ -535,7 +537,7 @@ AREA_SYMMETRIC_DEGREES = (4, 8)
 #: test4 and facet take the higher pair in the end, and starting low cost them 15 %.
 AREA_LOW_RULES_TOLERANCE = 1e-7
 #: Area form factors: a triangle whose rules' difference the closed form of the
-#: unoccluded part shows to be too small (``occluded._checked_difference``) is refined,
+#: unoccluded part shows to be too small (``exactff.area.adaptive``) is refined,
 #: where what it shows exceeds this share of the triangle's share of the tolerance.
 AREA_RULE_CHECK_SHARE = 0.1
 #: Area form factors: an end of an event line cut to the emitter this close to its
@@ -559,7 +561,8 @@ AREA_EVENT_ROWS_PER_CALL = 200_000
 #: own error bounds added); 16 units of long double's roundoff (the sign's rounding is
 #: 3 to 5 of them).
 SVBSP_BAND = 16 * LONGDOUBLE_EPS
-#: DESIGN 6: the accuracy target of an occluded value (absolute). The compiled core's bound
+#: The accuracy target of an occluded value (absolute; docs/explanation/robustness.md,
+#: "Accuracy targets"). The compiled core's bound
 #: for the rounding of the BSP's crossings is held to it (beyond, the row goes to the
 #: Python engine): no precision tier narrows that part, and the Python engine's crossings
 #: are rounded as well.
@@ -622,7 +625,7 @@ SVBSP_POLYGONS_PER_CELL = 64
 #: splits six at a time: a split and its BSP tree cost about what the scene does).
 REMAINDER_SPLIT_POLYGONS = 500_000
 #: Open scenes, the exact method without error=True: how far below 0 a sky or ground
-#: may come out and still be rounding (then set to 0): ten times DESIGN 6's row-sum
+#: may come out and still be rounding (then set to 0): ten times the row-sum accuracy
 #: target (1e-11), since a remainder is a share minus a row's sum.
 REMAINDER_SLACK = 1e-10
 #: check_matrix: the rounding allowed on top of the error estimates, in units of the
@@ -630,7 +633,7 @@ REMAINDER_SLACK = 1e-10
 #: this many times that, for the values' own last roundings).
 MATRIX_ROUNDING_ULPS = 4.0
 #: check_matrix without error estimates: how far a row may sum from 1, and a value
-#: exceed its unobstructed one (DESIGN 6's targets for the exact method: row sums and
+#: exceed its unobstructed one (the exact method's accuracy targets: row sums and
 #: occluded values within 1e-11).
 MATRIX_ROW_SUM_ATOL = 1e-11
 #: check_matrix without error estimates: the reciprocity defect allowed, relative to the

@@ -421,7 +421,7 @@ def _unoccluded(scene, kind, points, tolerance):
     n = len(scene)
     U, UE = np.zeros((n, n)), np.zeros((n, n))
     if kind == "area":
-        from .area.contour import unoccluded_pairs
+        from .area.closed_form import unoccluded_pairs
 
         for i in range(n):
             others = [j for j in range(n) if j != i]

@@ -15,7 +15,9 @@ __all__ = ["StiffCase", "stiff_cases"]
 
 
 class StiffCase(NamedTuple):
-    """One catalogue entry; ``reference`` is a 60-digit decimal string."""
+    """One catalogue entry; ``reference`` is a 60-digit decimal string. ``one_sided`` is
+    the data file's field (whether only the polygon's front receives); read it as
+    :attr:`two_sided`, the options' name."""
 
     name: str
     point: np.ndarray
@@ -24,6 +26,11 @@ class StiffCase(NamedTuple):
     one_sided: bool
     reference: str
     double_rel_error_when_generated: float
+
+    @property
+    def two_sided(self):
+        """Whether the polygon's back receives too: the ``two_sided=`` to pass."""
+        return not self.one_sided
 
 
 def stiff_cases():

@@ -143,22 +143,23 @@ def row_indices(rows, n):
 
 
 def check_sides(two_sided, one_sided=None):
-    """Whether only the front of a polygon receives, from ``two_sided`` (the option's
-    name everywhere) and the deprecated ``one_sided`` (its old name in the point
-    functions: a DeprecationWarning; ValueError when the two disagree).
+    """Whether both sides of a polygon receive, from ``two_sided`` (the option's name
+    everywhere) and the deprecated ``one_sided`` (its old name in the point functions,
+    ``one_sided = not two_sided``: a DeprecationWarning; ValueError when the two
+    disagree). What the public functions pass down as ``two_sided``.
 
     Examples
     --------
     >>> check_sides(False), check_sides(True)
-    (True, False)
+    (False, True)
     """
     if not isinstance(two_sided, (bool, np.bool_)):
         raise ValueError(f"two_sided must be True or False, got {two_sided!r}")
     if one_sided is None:
-        return not two_sided
+        return bool(two_sided)
     warnings.warn("one_sided= is deprecated: use two_sided= (two_sided=not one_sided)",
                   DeprecationWarning, stacklevel=3)
     if two_sided and one_sided:
         raise ValueError("one_sided=True contradicts two_sided=True (one_sided is "
                          "deprecated: give two_sided only)")
-    return bool(one_sided)
+    return not one_sided

@@ -15,7 +15,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from . import _tolerances as tol
-from .area import area_row
+from .area import AreaStats, area_row
 from .errors import check_finite, misses_tolerance, tolerance_missed
 from .checks import as_normal, as_receivers, check_tolerance, row_indices
 from .methods import FormFactorMethod, resolve
@@ -83,8 +83,10 @@ def form_factors(scene: Scene, point: ArrayLike, normal: ArrayLike, *,
     NumericalError
         The exact method: a value fell below 0 beyond its bound or came out NaN or
         infinite (never returned); unless ``error=True``, also a value whose bound
-        missed the method's tolerance (relative, with an absolute floor of
-        ``tolerance * 1e-4``: :func:`exactff.errors.misses_tolerance`) after
+        missed the method's tolerance (**relative**, with an absolute floor of
+        ``tolerance * 1e-2``: :func:`exactff.errors.misses_tolerance`; the area
+        factors' ``tolerance`` is absolute instead, ``docs/explanation/conventions.md``)
+        after
         refinement and every precision tier (on
         every path, with either integrator). With ``error=True`` such a value is
         returned with its bound.
@@ -257,7 +259,7 @@ class AreaRows:
     --------
     >>> import exactff as ef
     >>> (f, e, counts), = AreaRows(1e-9)(ef.scenes.subdivided_box(1), [0])
-    >>> abs(float(f.sum()) - 1) < 1e-12, counts["enclosure_unoccluded_pairs"]
+    >>> abs(float(f.sum()) - 1) < 1e-12, counts.enclosure_unoccluded_pairs
     (True, 5)
     """
 
@@ -280,7 +282,7 @@ class AreaRows:
     def __call__(self, scene, rows):
         out = []
         for i in rows:
-            st = {}
+            st = AreaStats()
             f, e = area_row(scene, i, self.tolerance, rtol=self.rtol, shortcuts=self.shortcuts,
                             stats=st)
             # every row checked before it is stored: a NaN is never returned, nor (strict)
@@ -298,12 +300,12 @@ class AreaRows:
         return out
 
     def collect(self, values):
-        """Add the counters of stored rows (``(values, estimates, counters)``) to
-        ``stats``."""
+        """Add the counters of stored rows (``(values, estimates, AreaStats)``) to
+        ``stats``, a dict keyed by :class:`~exactff.area.AreaStats`' attributes."""
         if self.stats is None:
             return
         for *_, st in values:
-            for k, v in st.items():
+            for k, v in st.as_dict().items():
                 self.stats[k] = self.stats.get(k, 0) + v
 
 
@@ -636,7 +638,7 @@ def area_form_factors(scene, rows=None, *, tolerance=1e-9, error=False, executor
     projections), one-sided. A pair with nothing that can come
     between (no other polygon reaches into the convex hull of the two, each clipped to
     the front of the other) is computed in closed form (the contour integral with
-    dilogarithms, :func:`exactff.area.contour.unoccluded_pairs`, all of a row's such
+    dilogarithms, :func:`exactff.area.closed_form.unoccluded_pairs`, all of a row's such
     pairs at once), accepted where its rounding estimate is within ``tolerance`` (else
     by the far-field rule or mpmath). Otherwise the emitter is cut along the lines where the integrand may lose
     smoothness (vertex-edge visibility events between the receiver and the polygons
@@ -653,10 +655,13 @@ def area_form_factors(scene, rows=None, *, tolerance=1e-9, error=False, executor
     rows : sequence of int, optional
         Emitters (default: every polygon).
     tolerance : float, default 1e-9
-        Absolute error allowed per value: the target of the adaptive rules on occluded
-        pairs, ``|F[i, j] - exact| <= tolerance`` (unlike the point functions'
-        ``tolerance``, which is relative to each value). Unoccluded pairs are exact to
-        rounding whatever it is.
+        **Absolute** error allowed per value: the target of the adaptive rules on
+        occluded pairs, ``|F[i, j] - exact| <= tolerance`` whatever the value's size
+        (unlike the point functions' and :class:`exactff.Exact`'s ``tolerance``, which is
+        relative to each value, with a floor of 1e-2 of it:
+        ``docs/explanation/conventions.md``). Passed down as ``atol``
+        (:func:`exactff.area.area_row`). Unoccluded pairs are exact to rounding
+        whatever it is.
     rtol : float, optional
         Also allowed: this share of each value; the bound per value is then
         ``max(tolerance, rtol * |F[i, j]|)`` (say ``tolerance=1e-15, rtol=1e-9`` for a
@@ -685,14 +690,17 @@ def area_form_factors(scene, rows=None, *, tolerance=1e-9, error=False, executor
         Part of what a resumable ``out`` records.
     stats : dict, optional
         Filled with the sums over the rows computed in this call (with any executor) of
-        :data:`exactff.area.occluded.STATS`: ``enclosure_unoccluded_pairs`` (pairs of a
+        :class:`exactff.area.AreaStats`' counters: ``enclosure_unoccluded_pairs`` (pairs of a
         convex enclosure, where nothing can come between: no shaft or hull test),
         ``hull_unoccluded_pairs`` (pairs taken by the closed form because shaft culling and the hull test left no
         blocker), ``hull_culled_blockers`` (the polygons they left out),
         ``shaft_culled_blockers`` (polygons in a pair's bounding box that the shaft's
         planes rejected, so the hull test never saw them), ``shaft_unoccluded_pairs``
         (pairs whose box held polygons but the shaft none: no hull built),
-        ``far_pairs`` (by the far-field rule), ``culled_events``, ``solid_events``
+        ``far_pairs`` (by the far-field rule), ``contour_rule_pairs`` and
+        ``escalated_pairs`` (unoccluded values whose closed form missed, taken by the
+        tanh-sinh contour rule or with edge pairs in mpmath), ``culled_events``,
+        ``solid_events``
         (vertex-edge pairs of two faces of one convex solid, not cut along),
         ``back_faces`` (members of such a solid that a point saw from behind, left out
         of its hidden region; per point),
@@ -749,7 +757,8 @@ def area_form_factors(scene, rows=None, *, tolerance=1e-9, error=False, executor
     value the hidden part can take). The rules' difference is an estimate, not a bound:
     on View3D's gunter2 two collapsed rules on half a floor differed by 7.2e-8 where
     the finer one was 2.1e-7 off (both missed the kernel's peak near a corner), and
-    the value came out -2.1e-7. So it is checked: the rules' errors on the hidden part
+    the value came out -2.1e-7 (pinned: ``tests/test_area_view3d.py``, gunter2's floor
+    to a strip the wall hides). So it is checked: the rules' errors on the hidden part
     and on the occluded point values add up to their error on the unoccluded point
     values, whose integral is known in closed form, per pair and, where the pair's sum
     misses, per triangle; a triangle whose difference that shows too small is refined

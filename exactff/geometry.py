@@ -16,6 +16,7 @@ __all__ = [
     "polygon_diameter",
     "receiver_frame",
     "mp_receiver_frame",
+    "plane_frame",
 ]
 
 
@@ -268,3 +269,23 @@ def rotate(D: np.ndarray, R: np.ndarray) -> np.ndarray:
     for k in range(3):
         out[..., k] = x * R[k, 0] + y * R[k, 1] + z * R[k, 2]
     return out
+
+
+def plane_frame(Q: ArrayLike):
+    """A planar polygon's unit normal, origin (its first vertex), frame (rows t1, t2, n:
+    :func:`receiver_frame` of the normal) and 2-D coordinates in that frame.
+
+    Returns
+    -------
+    (ndarray of shape (3,), ndarray of shape (3,), ndarray of shape (3, 3), ndarray of shape (K, 2))
+
+    Examples
+    --------
+    >>> n, q0, R, Q2 = plane_frame([[0, 0, 1], [2, 0, 1], [2, 1, 1], [0, 1, 1]])
+    >>> n.tolist(), q0.tolist(), R[2].tolist(), Q2.shape
+    ([0.0, 0.0, 1.0], [0.0, 0.0, 1.0], [0.0, 0.0, 1.0], (4, 2))
+    """
+    Q = np.asarray(Q, dtype=float)
+    nQ = unit_normal(Q)
+    RQ = receiver_frame(nQ)
+    return nQ, Q[0], RQ, (Q - Q[0]) @ RQ[:2].T

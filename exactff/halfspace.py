@@ -5,7 +5,8 @@ needs: a batch over padded polygons and any planes (:func:`clip_halfspace`: char
 frusta, the area code's fronts), one polygon split in two by a plane
 (:func:`split_polygon`: the BSP tree), and horizon clipping in the receiver's frame
 (:func:`clip_above_horizon`, in floats or mpmath numbers: ``z > 0`` kept, crossings put
-exactly on ``z = 0``). Every module clips through these.
+exactly on ``z = 0``), and one polygon's part in front of a plane through a point
+(:func:`clip_front`: the area code's one-sided pairs). Every module clips through these.
 """
 
 import numpy as np
@@ -13,7 +14,7 @@ import numpy as np
 from . import _tolerances as tol
 from .geometry import cross
 
-__all__ = ["clip_halfspace", "split_polygon", "clip_above_horizon"]
+__all__ = ["clip_halfspace", "split_polygon", "clip_above_horizon", "clip_front"]
 
 # far above the subnormals: a meet of planes whose products stay normal numbers
 _NORMAL_FLOOR = float(np.finfo(float).tiny) / tol.EPS
@@ -209,3 +210,31 @@ def clip_above_horizon(Q, zero=0.0):
             t = a[2] / (a[2] - b[2])
             out.append((a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1]), zero))
     return out
+
+
+def clip_front(P, n, c, d=None):
+    """The part of polygon P (K, 3) with ``n . (x - c) > 0`` (None when nothing is
+    left): :func:`clip_halfspace` about the point c. ``d``: the distances
+    ``(P - c) @ n`` where the caller has them (one decision for a batch of pairs,
+    however they round), else computed. A polygon with every distance >= 0 and one > 0
+    is returned itself.
+
+    Examples
+    --------
+    >>> P = np.array([[-1, 0, 0], [1, 0, 0], [1, 1, 0], [-1, 1, 0]], float)
+    >>> clip_front(P, np.array([1.0, 0, 0]), np.zeros(3)).tolist()
+    [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0]]
+    >>> clip_front(P, np.array([1.0, 0, 0]), np.array([2.0, 0, 0])) is None
+    True
+    """
+    if d is None:
+        d = (P - c) @ n
+    if np.all(d >= 0) and np.any(d > 0):
+        return P
+    if np.all(d <= 0):
+        return None
+    V, k = clip_halfspace((P - c)[None], np.array([len(P)]), n)
+    C = V[0, :k[0]] + c
+    # a cut through a vertex repeats it: no edge of zero length
+    C = C[np.any(C != np.roll(C, 1, axis=0), axis=1)]
+    return C if len(C) >= 3 else None

@@ -204,7 +204,7 @@ def hemisphere_projection(point, normal, polygon, ax=None, view="base"):
     if view not in ("base", "3d"):
         raise ValueError(f"view must be 'base' or '3d', got {view!r}")
     F = point_polygon_form_factor(point, normal, polygon, two_sided=True)
-    ring, _ = local_clipped(point, normal, polygon, one_sided=False)
+    ring, _ = local_clipped(point, normal, polygon, two_sided=True)
     ring = np.array(ring, dtype=float).reshape(-1, 3)
     arcs = [_arc_points(ring[i], ring[(i + 1) % len(ring)]) for i in range(len(ring))]
     image = np.concatenate(arcs) if arcs else np.zeros((0, 3))

@@ -348,7 +348,7 @@ def engine_sides(flat, p):
     coplanar neighbours and back-to-back twin, whose exact sides are rounding noise (a
     centroid of a rotated polygon lies off its plane by up to an ulp). Beyond it the
     input is taken as exact: a unit square at 1e8 seen from 1e-7 below it (7 ulps)
-    has F = 1 - 4e-14 (issue 33).
+    has F = 1 - 4e-14 (pinned: test_point_within_rounding_of_a_far_plane_is_decided_exactly).
 
     Returns
     -------

@@ -11,6 +11,7 @@ import pytest
 from hypothesis import given, settings, strategies as st
 
 import exactff as ef
+from exactff.area import AreaStats
 from exactff.testing.strategies import occluded_scenes, polygons_2d
 
 from common import checkout_env, examples, rotations
@@ -248,7 +249,7 @@ def test_clipping_twice_repeats_no_vertex():
     # 0: 0/0 in the contour rule's cuts, NaN had it been the receiver's)
     import warnings
 
-    from exactff.area.contour import clip_front as _clip_front
+    from exactff.halfspace import clip_front as _clip_front
 
     scene = ef.scenes.cornell_box(closed=True)
     P, Q = (np.asarray(scene.polygons[k], float) for k in (3, 8))
@@ -343,7 +344,7 @@ def test_triangle_rules_integrate_their_degree_exactly(rule, degree, seed):
     # (evaluated in mpmath at 40 digits): exact up to the rule's degree
     from scipy.special import roots_legendre
 
-    from exactff.area.contour import symmetric_triangle_rule, triangle_rule
+    from exactff.area.rules import symmetric_triangle_rule, triangle_rule
 
     rng = np.random.default_rng(seed)
     T = rng.normal(size=(3, 3))
@@ -383,8 +384,8 @@ def test_hidden_part_against_the_engine(case):
     # the hidden part F(x -> Q) - F_occ(x -> Q), built by 2-D booleans in Q's plane,
     # against the engine (BSP tree and clipper on the hemisphere) and the kernel, at
     # random points of the emitter (and on the box's footprint lines)
-    from exactff.area.contour import point_values as _point_values
-    from exactff.area.occluded import _hidden_values
+    from exactff.area.hidden import hidden_values as _hidden_values
+    from exactff.area.points import point_values as _point_values
 
     P, Q, B = list(_hidden_cases())[case]
     nP = ef.area_vector(P) / np.linalg.norm(ef.area_vector(P))
@@ -408,9 +409,10 @@ def test_hidden_part_skipping_back_faces_against_the_engine(which):
     # closed Cornell box's floor against its light past the two blocks (ten faces), and
     # a floor whose plane cuts through a closed box (points inside its hull skip none);
     # against the engine, and against the values with every blocker projected
-    from exactff.area.contour import point_values as _point_values
-    from exactff.area.occluded import (_closed_solids, _convex_solids, _hidden_setup,
-                                       _hidden_values)
+    from exactff.area.culling import (closed_solids as _closed_solids,
+                                      convex_solids as _convex_solids)
+    from exactff.area.hidden import hidden_setup as _hidden_setup, hidden_values as _hidden_values
+    from exactff.area.points import point_values as _point_values
 
     if which == "cornell":
         scene = ef.scenes.cornell_box(closed=True)
@@ -430,13 +432,13 @@ def test_hidden_part_skipping_back_faces_against_the_engine(which):
     nP = scene.normals[i]
     a, b = np.random.default_rng(7).random((2, 300))
     X = P[0] + np.outer(a, P[1] - P[0]) + np.outer(b, P[3] - P[0])
-    st = {}
+    st = AreaStats()
     H, EH = _hidden_values(X, nP, Q, blockers, st,
                            setup=_hidden_setup(Q, blockers, solid, inner))
     H0, EH0 = _hidden_values(X, nP, Q, blockers)
     # members skipped that the point would have projected (inside the pyramid over Q):
     # about one a point
-    assert st["back_faces"] > len(X) // 2
+    assert st.back_faces > len(X) // 2
     assert np.all(np.abs(H - H0) <= EH + EH0)
     F, E = ef.form_factors(ef.Scene.from_polygons([Q] + blockers), X, nP, error=True)
     U, EU = (v[0] for v in _point_values(X, nP, [Q]))
@@ -453,29 +455,29 @@ def test_back_faces_kept_where_a_member_of_the_solid_was_culled(monkeypatch):
     # receiver: the shaft culls the box's bottom (within rounding of the floor's plane),
     # so no member may be skipped; skipping them let lines of sight through the gap
     # under the near face from points 1e-11 off the footprint (233 times the estimate)
-    from exactff.area import occluded as area
+    from exactff.area import adaptive, hidden as hidden_module
 
     floor = _rect_xy(0, 1, 0, 1)
     wall = np.array([[1, 0, 0], [1, 0, 1], [1, 1, 1], [1, 1, 0]], float)
     box = _closed_box([.3, .35, 3e-13], [.6, .7, .4])
     scene = ef.Scene.from_polygons([floor, wall] + box)
-    calls, hidden = [], area._hidden_values
+    calls, hidden = [], adaptive.hidden_values
 
-    def record(X, nP, Qc, blockers, st=None, budget=0.0, setup=None, weights=None,
-               bound_budget=None):
+    def record(X, nP, Qc, blockers, st=None, atol=0.0, setup=None, shortcuts=True,
+               weights=None, bound_atol=None):
         calls.append((nP, Qc, blockers, setup))
-        return hidden(X, nP, Qc, blockers, st, budget, setup, weights, bound_budget)
+        return hidden(X, nP, Qc, blockers, st, atol, setup, shortcuts, weights, bound_atol)
 
-    monkeypatch.setattr(area, "_hidden_values", record)
+    monkeypatch.setattr(adaptive, "hidden_values", record)
     ef.area_form_factors(scene, rows=[0], tolerance=1e-7, error=True)
-    monkeypatch.setattr(area, "_hidden_values", hidden)
+    monkeypatch.setattr(adaptive, "hidden_values", hidden)
     nP, Qc, blockers, setup = calls[0]
     assert len(blockers) < 6                    # the bottom culled
     X = np.array([[0.3 - d, 0.5, 0.0] for d in (1e-11, 1e-10, 1e-9)])
-    st = {}
-    H, EH = hidden(X, nP, Qc, blockers, st, budget=1e-6, setup=setup)
-    G, EG = area._hidden_values_by_engine(X, nP, Qc, box)
-    assert not st.get("back_faces")
+    st = AreaStats()
+    H, EH = hidden(X, nP, Qc, blockers, st, atol=1e-6, setup=setup)
+    G, EG = hidden_module.hidden_values_by_engine(X, nP, Qc, box)
+    assert not st.back_faces
     assert np.all(np.abs(H - G) <= EH + EG), np.abs(H - G) / (EH + EG)
 
 
@@ -485,7 +487,7 @@ def test_compiled_sector_sums_of_the_hidden_pieces_against_the_kernel(tilt):
     # against the kernel's clipped_sector_sums on the same pieces: from the emitter's
     # frame, and from frames tilted so that the pieces cross the horizon (its clipping
     # and arcs, which the emitter's own frame never needs)
-    from exactff.area import occluded as area
+    from exactff.area import hidden as area
     from exactff.kernel import clipped_sector_sums
     from exactff.rings import owners, successors
 
@@ -494,7 +496,7 @@ def test_compiled_sector_sums_of_the_hidden_pieces_against_the_kernel(tilt):
     n /= np.linalg.norm(n)
     X = P[0] + np.outer(np.linspace(0.05, 0.95, 9), P[1] - P[0]) + 0.3 * (P[3] - P[0])
     nQ, q0, RQ, Kc, corners, parts, part_counts, V, counts, NK, group, lo, hi, extent = (
-        area._hidden_setup(Q, B))
+        area.hidden_setup(Q, B))
     R = ef.geometry.receiver_frame(n)
     out = area.hidden_pieces(X, corners, q0, nQ, RQ[:2], V, counts, NK, group, 1e-12, 1e-12,
                              8.0, 4.0,
@@ -541,8 +543,9 @@ def test_hidden_part_against_the_engine_on_drawn_scenes(case):
     # a far polygon partly hidden by a nearer one, and up to three others anywhere (not
     # convex, crossing the point's plane or Q's): the hidden part built in Q's plane
     # against the engine, within the two estimates
-    from exactff.area.contour import clip_front as _clip_front, point_values as _point_values
-    from exactff.area.occluded import _hidden_values
+    from exactff.area.hidden import hidden_values as _hidden_values
+    from exactff.area.points import point_values as _point_values
+    from exactff.halfspace import clip_front as _clip_front
 
     scene, p, n = case
     polys = [np.asarray(P, float) for P in scene.polygons]
@@ -578,17 +581,17 @@ def _lose_images(monkeypatch, area, which=None, length=None):
 
 
 def test_hidden_part_falls_back_to_the_engine_where_its_images_are_lost(monkeypatch):
-    from exactff.area import occluded as area
+    from exactff.area import hidden as area
 
     P, Q, B = list(_hidden_cases())[5]
     nP = np.array([0.0, 0.0, 1.0])
     X = P[0] + np.outer(np.linspace(0.05, 0.95, 7), P[1] - P[0]) + 0.3 * (P[3] - P[0])
-    H, EH = area._hidden_values(X, nP, Q, B)
-    st = {}
+    H, EH = area.hidden_values(X, nP, Q, B)
+    st = AreaStats()
     _lose_images(monkeypatch, area, which=[1, 4])
-    G, EG = area._hidden_values(X, nP, Q, B, st)
+    G, EG = area.hidden_values(X, nP, Q, B, st)
     assert H[[1, 4]].max() > 0.01 and np.all(np.abs(G - H) <= EG + EH + 1e-16)
-    assert st == {"engine_fallbacks": 1, "engine_fallback_points": 2}
+    assert st == AreaStats(engine_fallbacks=1, engine_fallback_points=2)
 
 
 # points where the hidden part built in Q's plane was wrong, against the engine: a
@@ -634,15 +637,15 @@ _ENGINE_CASES = (
 
 @pytest.mark.parametrize("case", range(len(_ENGINE_CASES)))
 def test_hidden_part_where_it_was_wrong_against_the_engine(case):
-    from exactff.area.contour import point_values as _point_values
-    from exactff.area.occluded import _hidden_values
+    from exactff.area.hidden import hidden_values as _hidden_values
+    from exactff.area.points import point_values as _point_values
 
     x, nP, Q, B = (np.asarray(v, dtype=float) for v in _ENGINE_CASES[case])
-    st = {}
+    st = AreaStats()
     H, EH = _hidden_values(x[None], nP, Q, list(B), st)
     # the first point's images cannot be trusted (it goes to the engine, counted); the
     # others are the compiled path's own
-    assert st.get("engine_fallback_points", 0) == (1 if case == 0 else 0)
+    assert st.engine_fallback_points == (1 if case == 0 else 0)
     F, E = ef.form_factors(ef.Scene.from_polygons([Q] + list(B)), x, nP, error=True)
     U, EU = (v[0] for v in _point_values(x[None], nP, [Q]))
     assert H[0] > 1e-3 or case == 3
@@ -700,7 +703,7 @@ def test_hidden_parts_of_the_closed_cornell_box_against_the_engine(monkeypatch):
     # against the engine, within the two estimates wherever the engine decides
     st = hidden_parts_against_the_engine(monkeypatch, ef.scenes.cornell_box(closed=True),
                                          rows=[0, 1, 10, 16], seed=1)
-    assert st["back_faces"] > 0
+    assert st.back_faces > 0
 
 
 def hidden_parts_against_the_engine(monkeypatch, scene, rows=None, seed=0):
@@ -709,29 +712,29 @@ def hidden_parts_against_the_engine(monkeypatch, scene, rows=None, seed=0):
     tree on the hemisphere, exact predicates): within the two estimates wherever the
     engine decides (its estimate below 1e-9), and every value the compiled path's own,
     none the engine's."""
-    from exactff.area import occluded as area
+    from exactff.area import adaptive, hidden as hidden_module
 
-    calls, hidden = [], area._hidden_values
+    calls, hidden = [], adaptive.hidden_values
 
-    def record(X, nP, Qc, blockers, st=None, budget=0.0, setup=None, weights=None,
-               bound_budget=None):
+    def record(X, nP, Qc, blockers, st=None, atol=0.0, setup=None, shortcuts=True,
+               weights=None, bound_atol=None):
         calls.append((X, nP, Qc, blockers, setup))
-        return hidden(X, nP, Qc, blockers, st, budget, setup, weights, bound_budget)
+        return hidden(X, nP, Qc, blockers, st, atol, setup, shortcuts, weights, bound_atol)
 
-    monkeypatch.setattr(area, "_hidden_values", record)
+    monkeypatch.setattr(adaptive, "hidden_values", record)
     ef.area_form_factors(scene, rows=rows, tolerance=1e-6, error=True)
-    monkeypatch.setattr(area, "_hidden_values", hidden)
+    monkeypatch.setattr(adaptive, "hidden_values", hidden)
     rng = np.random.default_rng(seed)
-    decided, st = 0, {}
+    decided, st = 0, AreaStats()
     for X, nP, Qc, blockers, setup in calls:
         # with the row's setup: its solids' members seen from behind skipped
         X = X[rng.choice(len(X), size=min(8, len(X)), replace=False)]
         H, EH = hidden(X, nP, Qc, blockers, st, setup=setup)
-        G, EG = area._hidden_values_by_engine(X, nP, Qc, blockers)
+        G, EG = hidden_module.hidden_values_by_engine(X, nP, Qc, blockers)
         sure = EG < 1e-9
         decided += int(sure.sum())
         assert np.all(np.abs(H - G)[sure] <= (EH + EG)[sure]), np.abs(H - G).max()
-    assert len(calls) > 20 and decided > 0.9 * 8 * len(calls) and not st.get("engine_fallbacks")
+    assert len(calls) > 20 and decided > 0.9 * 8 * len(calls) and not st.engine_fallbacks
     return st
 
 
@@ -978,7 +981,8 @@ def test_area_shortcuts_are_neutral_and_counted(name):
 
 
 def test_convex_solids_are_the_closed_convex_groups_of_faces():
-    from exactff.area.occluded import _closed_solids, _convex_solids
+    from exactff.area.culling import (closed_solids as _closed_solids,
+                                      convex_solids as _convex_solids)
 
     # the Cornell box: each block (five faces, open at the floor) is a group
     label, _, _ = _convex_solids(ef.scenes.cornell_box(closed=True))
@@ -1041,6 +1045,14 @@ def test_area_stats_from_worker_processes_and_the_options_in_the_record(tmp_path
     F = ef.area_form_factors(scene, tolerance=1e-13, stats=serial)
     G = ef.area_form_factors(scene, tolerance=1e-13, stats=pooled, jobs=2, chunk_rows=1)
     assert np.array_equal(F, G) and serial == pooled and serial["far_pairs"] == 6
+    # and from threads: each row counts its own (no counter shared between calls)
+    from concurrent.futures import ThreadPoolExecutor
+
+    threaded = {}
+    with ThreadPoolExecutor(2) as pool:
+        H = ef.area_form_factors(scene, tolerance=1e-13, stats=threaded, executor=pool,
+                                 chunk_rows=1)
+    assert np.array_equal(F, H) and threaded == serial
     rows = pickle.loads(pickle.dumps(AreaRows(1e-9, shortcuts=False, stats={"far_pairs": 1})))
     assert rows.shortcuts is False and rows.stats is None
     assert AreaRows(1e-9).record() != AreaRows(1e-9, shortcuts=False).record()
@@ -1053,18 +1065,17 @@ def test_area_stats_from_worker_processes_and_the_options_in_the_record(tmp_path
 def test_area_engine_fallbacks_are_counted(monkeypatch):
     # where a point's images are lost the engine computes the hidden part: counted (0
     # otherwise), and the value agrees within the estimates
-    from exactff.area import area_row
-    from exactff.area import occluded as area
+    from exactff.area import area_row, hidden as area
 
     scene = ef.Scene.from_polygons([_square(0, True), _square(2, False), OCCLUDED_REFERENCES[0][0]])
-    st = {}
+    st = AreaStats()
     f, e = area_row(scene, 0, 1e-6, stats=st)
-    assert st["engine_fallbacks"] == st["engine_fallback_points"] == 0
+    assert st.engine_fallbacks == st.engine_fallback_points == 0
 
     _lose_images(monkeypatch, area)
-    fst = {}
+    fst = AreaStats()
     g, eg = area_row(scene, 0, 1e-6, stats=fst)
-    assert fst["engine_fallbacks"] > 0 and fst["engine_fallback_points"] == fst["point_values"]
+    assert fst.engine_fallbacks > 0 and fst.engine_fallback_points == fst.point_values
     assert abs(g[1] - f[1]) <= e[1] + eg[1] and abs(g[1] - OCCLUDED_REFERENCES[0][1]) <= eg[1] + 1e-13
 
 
@@ -1072,7 +1083,7 @@ def test_area_engine_fallbacks_are_counted(monkeypatch):
 # no silent clamp (issue 33): below 0 within a value's own estimate is 0, beyond it raises
 # ---------------------------------------------------------------------------------------
 def test_nonnegative_clamps_only_within_the_estimate():
-    from exactff.area.contour import nonnegative
+    from exactff.errors import nonnegative
 
     assert nonnegative(-1e-17, 1e-16) == 0.0 and nonnegative(0.25, 0.0) == 0.25
     assert np.array_equal(nonnegative(np.array([-1e-17, 0.5]), np.array([1e-16, 0.0])), [0.0, 0.5])
@@ -1086,46 +1097,45 @@ def test_nonnegative_clamps_only_within_the_estimate():
 def test_area_row_raises_on_a_negative_beyond_its_estimate(monkeypatch):
     # an occluded pair coming out -1e-6 with an estimate of 1e-9 was set to 0 (max(f, 0));
     # within its estimate it is 0 and keeps the estimate
-    from exactff.area import area_row
-    from exactff.area import occluded as area
+    from exactff.area import area_row, row
 
     scene = ef.Scene.from_polygons([_square(0, True), _square(2, False), OCCLUDED_REFERENCES[0][0]])
-    monkeypatch.setattr(area, "_occluded_pair", lambda *a, **k: (-1e-6, 1e-9, 0))
+    monkeypatch.setattr(row, "occluded_pair", lambda *a, **k: (-1e-6, 1e-9, 0))
     with pytest.raises(ef.NumericalError, match="below 0 beyond"):
         area_row(scene, 0, 1e-9)
-    monkeypatch.setattr(area, "_occluded_pair", lambda *a, **k: (-1e-10, 1e-9, 0))
+    monkeypatch.setattr(row, "occluded_pair", lambda *a, **k: (-1e-10, 1e-9, 0))
     f, e = area_row(scene, 0, 1e-9)
     assert f[1] == 0.0 and e[1] == 1e-9
 
 
 def test_contour_and_far_rule_raise_on_a_negative_beyond_the_estimate(monkeypatch):
-    from exactff.area import contour
+    from exactff.area import closed_form, contour_rule, far_field
 
     P, Q = parallel_pair(1, 1, 1)
     # the closed form's edge integrals negated (the sum then comes out -F)
-    closed = contour._edge_log_integrals
-    monkeypatch.setattr(contour, "_edge_log_integrals",
+    closed = closed_form.edge_log_integrals
+    monkeypatch.setattr(closed_form, "edge_log_integrals",
                         lambda a, e, b, f: (-closed(a, e, b, f)[0], closed(a, e, b, f)[1]))
     with pytest.raises(ef.NumericalError, match="below 0 beyond"):
-        contour.unoccluded_pair(P, Q)
+        closed_form.unoccluded_pair(P, Q)
     monkeypatch.undo()
     # and the tanh-sinh oracle's
-    log_integral = contour._segment_log_integral
-    monkeypatch.setattr(contour, "_segment_log_integral", lambda W, E: -log_integral(W, E))
+    log_integral = contour_rule._segment_log_integral
+    monkeypatch.setattr(contour_rule, "_segment_log_integral", lambda W, E: -log_integral(W, E))
     with pytest.raises(ef.NumericalError, match="below 0 beyond"):
-        contour._contour_tanh_sinh(P, Q)
+        contour_rule.contour_tanh_sinh(P, Q)
     monkeypatch.undo()
     far = Q + [0, 0, 10]
-    nodes = contour.emitter_nodes(P, np.array([0.0, 0.0, 1.0]))
-    monkeypatch.setattr(contour, "point_values", lambda X, n, Qs: (-np.ones((len(Qs), len(X))),) * 2)
+    nodes = far_field.emitter_nodes(P, np.array([0.0, 0.0, 1.0]))
+    monkeypatch.setattr(far_field, "point_values", lambda X, n, Qs: (-np.ones((len(Qs), len(X))),) * 2)
     with pytest.raises(ef.NumericalError, match="below 0 beyond"):
-        contour.far_values(nodes, np.array([0.0, 0.0, 1.0]), 1.0, [far])
+        far_field.far_values(nodes, np.array([0.0, 0.0, 1.0]), 1.0, [far])
 
 
 def test_hidden_part_raises_on_a_nan_estimate_and_a_negative_beyond_it(monkeypatch):
     # the booleans' part of the estimate came out NaN: it was made 0 (nan_to_num), an
     # understated bound; and the engine's hidden part U - F was clamped with no check
-    from exactff.area import occluded as area
+    from exactff.area import hidden as area
 
     P, Q, B = list(_hidden_cases())[5]
     nP = np.array([0.0, 0.0, 1.0])
@@ -1133,10 +1143,10 @@ def test_hidden_part_raises_on_a_nan_estimate_and_a_negative_beyond_it(monkeypat
     with monkeypatch.context() as m:
         _lose_images(m, area, which=[], length=np.nan)
         with pytest.raises(ef.NumericalError, match="NaN error estimate"):
-            area._hidden_values(X, nP, Q, B)
+            area.hidden_values(X, nP, Q, B)
     monkeypatch.setattr(area, "point_values", lambda X, n, Qs: (np.zeros((1, len(X))),) * 2)
     with pytest.raises(ef.NumericalError, match="below 0 beyond"):
-        area._hidden_values_by_engine(X, nP, Q, B)
+        area.hidden_values_by_engine(X, nP, Q, B)
 
 
 def test_area_estimates_use_the_unit_roundoff_of_the_tolerances_module():

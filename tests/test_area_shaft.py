@@ -11,8 +11,9 @@ import numpy as np
 from hypothesis import assume, event, given, reject, settings, strategies as st
 
 import exactff as ef
-from exactff.area import occluded as area
-from exactff.area.contour import clip_front
+from exactff.area import AreaStats, area_row, culling
+from exactff.area.hidden import hidden_values
+from exactff.halfspace import clip_front
 from exactff.geometry import area_vector, unit_normal
 
 from common import examples
@@ -65,12 +66,12 @@ def _check_shaft(scene):
     shaft left out, each checked to hide nothing."""
     polys = [np.asarray(p, float) for p in scene.polygons]
     checked = 0
-    padded = area._padded(polys)
+    padded = culling.padded_polygons(polys)
     scale = float(np.ptp(scene.vertices, axis=0).max())
     near = ef._tolerances.AREA_HULL_RTOL * scale
     for i, P in enumerate(polys):
         nP = unit_normal(P)
-        pairs = area._front_pairs(polys, i, nP, padded)
+        pairs = culling.front_pairs(polys, i, nP, padded)
         plain = _plain_pairs(polys, i)
         # the same parts to rounding: equal areas and vertices; a pair in one list only
         # has a part of no area (a polygon touching the other's plane, to rounding)
@@ -91,18 +92,18 @@ def _check_shaft(scene):
             continue
         J = np.array([j for j, _, _ in pairs])
         boxes = np.array([(Pc.min(0), Pc.max(0), Qc.min(0), Qc.max(0)) for _, Pc, Qc in pairs])
-        st_ = {"shaft_culled_blockers": 0, "shaft_unoccluded_pairs": 0}
-        cands = area._shaft(padded, i, J, boxes, nP, P[0], near, st_)
+        st_ = AreaStats()
+        cands = culling.shaft(padded, i, J, boxes, nP, P[0], near, st_)
         for (j, Pc, Qc), c in zip(pairs, cands):
-            shaft = set(area._hull_blockers(padded[0], c, Pc, Qc, near))
-            hull = set(area._blockers(padded, i, j, Pc, Qc, scale))
+            shaft = set(culling.hull_blockers(padded[0], c, Pc, Qc, near))
+            hull = set(culling.pair_blockers(padded, i, j, Pc, Qc, scale))
             assert shaft <= hull, (i, j, shaft, hull)
             # what the shaft left out and the hull test kept hides nothing: the hidden
             # part of Qc by it alone is 0 (within its estimate) at points of Pc
             c0 = Pc.mean(axis=0)
             X = np.vstack([c0, c0 + 0.5 * (Pc - c0), c0 + 0.9 * (Pc - c0)])
             for k in hull - shaft:
-                H, EH = area._hidden_values(X, nP, Qc, [polys[k]])
+                H, EH = hidden_values(X, nP, Qc, [polys[k]])
                 assert np.all(H <= EH + 1e-15), (i, j, k, H.max())
                 checked += 1
     return checked
@@ -153,17 +154,17 @@ def test_shaft_planes_of_tiny_box_offsets_keep_their_blockers():
     K = np.array([[0, 0.25, 0.25], [0, 0, 0], [0.25, 0, 0]])
     Q = np.array([[0, 1.6237323163141884e-217, 0], [0.25, 0.25, 0], [0, 0.25, 0]])
     polys = [P, K, Q]
-    padded = area._padded(polys)
+    padded = culling.padded_polygons(polys)
     nP = unit_normal(P)
-    (j, Pc, Qc), = [t for t in area._front_pairs(polys, 0, nP, padded) if t[0] == 2]
+    (j, Pc, Qc), = [t for t in culling.front_pairs(polys, 0, nP, padded) if t[0] == 2]
     boxes = np.array([(Pc.min(0), Pc.max(0), Qc.min(0), Qc.max(0))])
-    st_ = {"shaft_culled_blockers": 0, "shaft_unoccluded_pairs": 0}
+    st_ = AreaStats()
     near = ef._tolerances.AREA_HULL_RTOL * 0.25
-    assert area._shaft(padded, 0, np.array([2]), boxes, nP, P[0], near, st_)[0].tolist() == [1]
+    assert culling.shaft(padded, 0, np.array([2]), boxes, nP, P[0], near, st_)[0].tolist() == [1]
     # the row with and without shortcuts: the same value within the estimates
     scene = ef.Scene.from_polygons(polys)
     f, e = ef.area_form_factors(scene, rows=[0], tolerance=1e-9, error=True)
-    g, d = area.area_row(scene, 0, tolerance=1e-9, shortcuts=False)
+    g, d = area_row(scene, 0, 1e-9, shortcuts=False)
     assert abs(f[0, 2] - g[2]) <= e[0, 2] + d[2]
     u = ef.polygon_form_factor(P, Q)
     assert f[0, 2] < u - 1e-3                  # the blocker hides a share of Q

@@ -118,7 +118,7 @@ def test_emitter_cells_cut_along_a_line_through_its_corner_and_cover_it():
     # to the emitter before noding, the line ended 3e-15 inside it, a dangle that
     # polygonizing drops: the cell it should cut was left whole, with the hidden part's
     # kink across it, and the pair took the last level (its estimate 1.9e-9 at 1e-9).
-    from exactff.area.occluded import _cells, _event_lines
+    from exactff.area.events import cut_cells, event_lines
     from exactff.geometry import receiver_frame
 
     scene = _read("gunter1.vs3")
@@ -127,8 +127,8 @@ def test_emitter_cells_cut_along_a_line_through_its_corner_and_cover_it():
     nP = scene.normals[6]
     R, c = receiver_frame(nP), P.mean(axis=0)
     radius = 1.0001 * float(np.linalg.norm(P - c, axis=1).max())
-    lines = _event_lines([Q, FN1, FN2], nP, float(nP @ P[0]), R, c, radius, Q, False)
-    T = _cells(P, nP, lines, R, c)
+    lines = event_lines([Q, FN1, FN2], nP, float(nP @ P[0]), R, c, radius, Q, False)
+    T = cut_cells(P, nP, lines, R, c)
     # no cell crosses FN1's plane (each triangle on one side, to rounding)
     n1 = scene.normals[14]
     side = (T - FN1[0]) @ n1
@@ -143,9 +143,9 @@ def test_every_occluded_pair_of_gunter1_cut_into_cells_that_cover_the_emitter(mo
     # the event lines, cut to the emitter and lengthened across its boundary, cut it
     # into cells that cover it, none lost, at the first way of cutting it (the estimate
     # would count a lost cell's whole area), for every occluded pair of the matrix
-    from exactff.area import occluded
+    from exactff.area import adaptive
 
-    cut, covered = occluded._cells, []
+    cut, covered = adaptive.cut_cells, []
 
     def cells(Pc, nP, lines, R, c, grid=None, lengthen=True):
         T = cut(Pc, nP, lines, R, c, grid, lengthen)
@@ -153,7 +153,7 @@ def test_every_occluded_pair_of_gunter1_cut_into_cells_that_cover_the_emitter(mo
         covered.append((grid, lengthen, abs(a.sum() / np.linalg.norm(ef.area_vector(Pc)) - 1)))
         return T
 
-    monkeypatch.setattr(occluded, "_cells", cells)
+    monkeypatch.setattr(adaptive, "cut_cells", cells)
     scene = _read("gunter1.vs3")
     st = {}
     ef.area_form_factors(scene, tolerance=1e-6, error=True, stats=st)
@@ -170,16 +170,15 @@ def test_emitter_cut_on_a_grid_where_geos_fails_to_cut_it(monkeypatch, failures)
     # estimate; where every way fails, NumericalError (not a GEOSException)
     import shapely
 
-    from exactff.area import area_row
-    from exactff.area import occluded as area
+    from exactff.area import AreaStats, area_row
 
     from test_area import OCCLUDED_REFERENCES, _square
 
     plate, ref = OCCLUDED_REFERENCES[1]
     scene = ef.Scene.from_polygons([_square(0, True), _square(2, False), plate])
-    st = {}
+    st = AreaStats()
     area_row(scene, 0, 1e-6, stats=st)
-    assert st["cell_fallbacks"] == 0
+    assert st.cell_fallbacks == 0
     polygonize, calls = shapely.polygonize, []
 
     def fail(*args, **kwargs):
@@ -191,14 +190,14 @@ def test_emitter_cut_on_a_grid_where_geos_fails_to_cut_it(monkeypatch, failures)
             raise shapely.errors.GEOSException("TopologyException: found non-noded intersection")
         return polygonize(*args, **kwargs)
 
-    monkeypatch.setattr(area.shapely, "polygonize", fail)
-    fst = {}
+    monkeypatch.setattr(shapely, "polygonize", fail)
+    fst = AreaStats()
     if failures == 4:
         with pytest.raises(ef.NumericalError):
             area_row(scene, 0, 1e-6, stats=fst)
         return
     g, eg = area_row(scene, 0, 1e-6, stats=fst)
-    assert fst["cell_fallbacks"] == 1 and fst["occluded_pairs"] == 1
+    assert fst.cell_fallbacks == 1 and fst.occluded_pairs == 1
     assert len(calls) == (2 if failures == "lost" else failures + 1)
     assert abs(g[1] - ref) <= eg[1] + 1e-13, (g[1] - ref, eg[1])
     assert eg[1] <= 1e-6
@@ -221,21 +220,22 @@ def test_gunter1_points_given_the_bound_against_the_engine(monkeypatch):
     # within U / 2). Each such value against the engine, and the row against the row at
     # 1e-11 (where the budget is too small for the bound: those points go to the
     # engine), within the two estimates
-    from exactff.area import occluded as area
-    from exactff.area.contour import point_values
+    from exactff.area import adaptive
+    from exactff.area.hidden import hidden_values_by_engine
+    from exactff.area.points import point_values
 
-    calls, hidden = [], area._hidden_values
+    calls, hidden = [], adaptive.hidden_values
 
-    def record(X, nP, Qc, blockers, st=None, budget=0.0, setup=None, weights=None,
-               bound_budget=None):
-        before = st.get("bounded_points", 0)
-        H, EH = hidden(X, nP, Qc, blockers, st, budget, setup, weights, bound_budget)
-        if st.get("bounded_points", 0) > before:
-            calls.append((X, nP, Qc, blockers, H, EH, st["bounded_points"] - before,
-                          weights, id(bound_budget)))
+    def record(X, nP, Qc, blockers, st=None, atol=0.0, setup=None, shortcuts=True,
+               weights=None, bound_atol=None):
+        before = st.bounded_points
+        H, EH = hidden(X, nP, Qc, blockers, st, atol, setup, shortcuts, weights, bound_atol)
+        if st.bounded_points > before:
+            calls.append((X, nP, Qc, blockers, H, EH, st.bounded_points - before,
+                          weights, id(bound_atol)))
         return H, EH
 
-    monkeypatch.setattr(area, "_hidden_values", record)
+    monkeypatch.setattr(adaptive, "hidden_values", record)
     st = {}
     F, E = ef.area_form_factors(_read("gunter1.vs3"), rows=[17], tolerance=1e-9, error=True,
                                 stats=st)
@@ -250,7 +250,7 @@ def test_gunter1_points_given_the_bound_against_the_engine(monkeypatch):
         # the bound 0 <= hidden <= U holds at them (the engine's value, within its
         # estimate, lies in [0, U]: any value there would pass, so the weights decide)
         pick = rng.choice(bounded, size=8, replace=False)
-        G, EG = area._hidden_values_by_engine(X[pick], nP, Qc, blockers)
+        G, EG = hidden_values_by_engine(X[pick], nP, Qc, blockers)
         assert np.all(np.abs(H[pick] - G) <= EH[pick] + EG)
         spent[pair] = spent.get(pair, 0.0) + float(np.dot(weights[bounded], EH[bounded]))
     # what the bounded points cost each pair, summed here from their weights and
@@ -258,7 +258,7 @@ def test_gunter1_points_given_the_bound_against_the_engine(monkeypatch):
     # tolerance), the claim that their weight is small enough
     share = ef._tolerances.AREA_IMAGE_BUDGET_SHARE * 1e-9
     assert spent and max(spent.values()) <= share * (1 + 1e-12), (max(spent.values()), share)
-    monkeypatch.setattr(area, "_hidden_values", hidden)
+    monkeypatch.setattr(adaptive, "hidden_values", hidden)
     fine = {}
     G, EG = ef.area_form_factors(_read("gunter1.vs3"), rows=[17], tolerance=1e-11, error=True,
                                  stats=fine)
@@ -325,13 +325,13 @@ def _pair_scene(scene, i, j):
     """The emitter i, the receiver j and the polygons that may come between them (the
     hull test on the whole scene) as a scene of their own: its row 0, column 1 is the
     pair's value (nothing else can hide anything of j from i)."""
-    from exactff.area.occluded import _blockers, _front_pairs, _padded
+    from exactff.area.culling import front_pairs, padded_polygons, pair_blockers
 
     polys = [np.asarray(p, float) for p in scene.polygons]
-    pad = _padded(polys)
-    (_, Pc, Qc), = [p for p in _front_pairs(polys, i, scene.normals[i], pad) if p[0] == j]
+    pad = padded_polygons(polys)
+    (_, Pc, Qc), = [p for p in front_pairs(polys, i, scene.normals[i], pad) if p[0] == j]
     scale = float(np.ptp(scene.vertices, axis=0).max())
-    B = _blockers(pad, i, j, Pc, Qc, scale)
+    B = pair_blockers(pad, i, j, Pc, Qc, scale)
     return ef.Scene.from_polygons([polys[i], polys[j]] + [polys[k] for k in B]), B
 
 

@@ -141,7 +141,7 @@ def test_repeated_vertices_give_the_values_of_the_clean_ring(name):
         assert abs(f - HOWELL_C11) <= 1e-12
 
 
-def _nan_pair(P, Q, far=True, atol=0.0):
+def _nan_pair(P, Q, shortcuts=True, atol=0.0):
     return float("nan"), 0.0
 
 
@@ -168,7 +168,7 @@ def _nan_core(scene):
     import exactff.visibility.bsp as bsp
 
     class NaNCore:
-        def row(self, p, n, node_side, source_side, *args):
+        def row(self, point, normal, node_side, source_side, **options):
             F = np.full(len(source_side), np.nan)
             return F, np.zeros_like(F), np.zeros_like(F), np.zeros_like(F), {}
 
@@ -176,8 +176,8 @@ def _nan_core(scene):
 
 
 def _nan_calls():
-    import exactff.area.contour as contour
-    import exactff.area.occluded as occluded
+    import exactff.area.closed_form as closed_form
+    import exactff.area.row as row
     import exactff.kernel.eq3 as eq3
     import exactff.kernel.point as point
     import exactff.visibility.compiled as compiled
@@ -187,9 +187,9 @@ def _nan_calls():
     pair = ef.Scene.from_polygons([UNIT_UP, UNIT_DOWN_AT_1])
     alone = ef.Scene.from_polygons([sq])
     return {
-        "polygon_form_factor": (contour, "unoccluded_pair", _nan_pair,
+        "polygon_form_factor": (closed_form, "unoccluded_pair", _nan_pair,
                                 lambda: ef.polygon_form_factor(UNIT_UP, UNIT_DOWN_AT_1)),
-        "area_form_factors": (occluded, "unoccluded_pairs", _nan_pairs,
+        "area_form_factors": (row, "unoccluded_pairs", _nan_pairs,
                               lambda: ef.area_form_factors(pair, error=True)),
         # the last precision tier (a polygon in the rounding band always reaches it)
         "point_polygon_form_factor": (point, "mp_form_factor", _nan_mp,
@@ -238,13 +238,13 @@ def test_unoccluded_value_below_zero_is_clamped_only_within_its_bound(k):
     S = np.array([k * e])
     F_raw, err_raw = -k * e / (2 * np.pi), e / (2 * np.pi)
     if k <= 1.0:
-        F, err = sector_values(S, np.zeros(1), np.array([e]), np.array([-1.0]), True)
+        F, err = sector_values(S, np.zeros(1), np.array([e]), np.array([-1.0]), False)
         assert F[0] == 0.0
         # 0 <= exact <= F_raw + err: the bound still covers the clamped value
         assert err[0] >= F_raw + err_raw >= 0.0
     else:
         with pytest.raises(ef.NumericalError, match="below 0 beyond"):
-            sector_values(S, np.zeros(1), np.array([e]), np.array([-1.0]), True)
+            sector_values(S, np.zeros(1), np.array([e]), np.array([-1.0]), False)
 
 
 @pytest.mark.parametrize("k", [0.5, 2.0, 500.0])
@@ -294,16 +294,22 @@ def test_eq3_value_below_zero_is_judged_against_its_own_estimate(monkeypatch, ar
 def test_two_sided_is_the_option_and_one_sided_is_deprecated():
     # a unit square facing away from p (front towards +z, p below): 0 one-sided; seen
     # from behind, Howell's point below the centre of a parallel square at distance 1
+    # (the mpmath reference of exactff.testing too)
+    from exactff.testing.mp_reference import boundary_form_factor
+
     sq = np.array([[-.5, -.5, 1], [.5, -.5, 1], [.5, .5, 1], [-.5, .5, 1]], dtype=float)
     p, n = np.zeros(3), np.array([0, 0, 1.0])
     ref = 0.2394564705
     for f in (ef.point_polygon_form_factor, ef.sector_form_factor, ef.eq3_form_factor,
               ef.mp_form_factor,
-              lambda p, n, P, **k: float(ef.point_polygon_form_factors(p, n, [P], **k)[0])):
+              lambda p, n, P, **k: float(ef.point_polygon_form_factors(p, n, [P], **k)[0]),
+              lambda p, n, P, **k: float(boundary_form_factor(p, n, P, dps=20, **k))):
         assert f(p, n, sq) == 0.0
         assert abs(f(p, n, sq, two_sided=True) - ref) < 1e-10
         with pytest.warns(DeprecationWarning, match="two_sided"):
             assert abs(f(p, n, sq, one_sided=False) - ref) < 1e-10
+        with pytest.warns(DeprecationWarning, match="two_sided"):
+            assert f(p, n, sq, one_sided=True) == 0.0
         with pytest.raises(ValueError, match="contradicts"), \
                 pytest.warns(DeprecationWarning):
             f(p, n, sq, two_sided=True, one_sided=True)

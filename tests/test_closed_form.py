@@ -16,8 +16,8 @@ from hypothesis import assume, example, given, settings, strategies as st
 
 import exactff as ef
 from exactff import _tolerances as tol
-from exactff.area import contour
-from exactff.area.contour import CLOSED_FORM_COUNTS, unoccluded_pairs
+from exactff.area import closed_form, contour_rule, edge_integrals
+from exactff.area.closed_form import ClosedFormCounts, unoccluded_pairs
 
 from common import examples
 
@@ -155,12 +155,12 @@ def test_edge_integral_against_mpmath(case):
     kind, a, e, b, f = case
     with mp.workdps(24):
         ref = float(mp_edge_integral(*(_mp_vec(x) for x in (a, e, b, f))))
-    J, M = contour._edge_log_integrals(*(x[None] for x in (a, e, b, f)))
+    J, M = edge_integrals.edge_log_integrals(*(x[None] for x in (a, e, b, f)))
     assert np.isfinite(M[0])
     bound = tol.AREA_CLOSED_ULPS * tol.EPS * M[0]
     assert abs(J[0] - ref) <= bound + UNIT * abs(ref), (kind, J[0], ref, bound)
     # at a fixed tolerance: the closed form where its bound is within it; else the bound
-    # sends the pair to mpmath (contour._mp_escalate), whose value must be within it (at
+    # sends the pair to mpmath (closed_form._mp_escalate), whose value must be within it (at
     # its starting precision, doubled while its rounding misses the tolerance)
     fixed = 1e-12 * max(1.0, abs(ref))
     if bound <= fixed:
@@ -169,7 +169,7 @@ def test_edge_integral_against_mpmath(case):
         dps = tol.AREA_CLOSED_MP_DPS
         while True:
             with mp.workdps(dps):
-                Jm, Mm = contour._mp_edge_log_integral(*(_mp_vec(x) for x in (a, e, b, f)))
+                Jm, Mm = edge_integrals.mp_edge_log_integral(*(_mp_vec(x) for x in (a, e, b, f)))
                 rounding = float(tol.AREA_CLOSED_MP_ULPS * Mm * mp.mpf(2) ** -mp.mp.prec)
             if rounding <= fixed / 2 or 2 * dps > tol.MP_MAX_DPS:
                 break
@@ -207,7 +207,7 @@ def test_mp_edge_integral_matches_the_reference():
     with mp.workdps(40):
         for a, e, b, f in cases:
             args = [_mp_vec(x) for x in (a, e, b, f)]
-            J, M = contour._mp_edge_log_integral(*args)
+            J, M = edge_integrals.mp_edge_log_integral(*args)
             assert abs(J - mp_edge_integral(*args)) < mp.mpf(10) ** -35 and M < 100
 
 
@@ -361,7 +361,7 @@ def facing_pairs(draw):
 def test_random_pairs_against_the_tanh_sinh_oracle(pair):
     P, Q = pair
     f, e = ef.polygon_form_factor(P, Q, error=True)
-    g, eg = contour._contour_tanh_sinh(P, Q)
+    g, eg = contour_rule.contour_tanh_sinh(P, Q)
     # the oracle carries its own estimate (rounding and the step to the coarser rule):
     # the two agree within the sum of the estimates, and within 1e-13 but for the
     # oracle's share
@@ -429,22 +429,43 @@ def test_closed_cube_rows_sum_to_one():
 # ---------------------------------------------------------------------------------------
 
 def test_escalation_fires_where_needed_and_only_there():
-    before = dict(CLOSED_FORM_COUNTS)
-    ef.polygon_form_factor(*parallel_pair(1, 1, 1))
-    ef.polygon_form_factor(*perpendicular_pair(1, 2, 0.5))
-    assert CLOSED_FORM_COUNTS["escalated_pairs"] == before["escalated_pairs"]
-    assert CLOSED_FORM_COUNTS["pairs"] == before["pairs"] + 2
+    # (polygon_form_factor's path: unoccluded_pairs with its defaults, counted per call)
+    counts = ClosedFormCounts()
+    for P, Q in (parallel_pair(1, 1, 1), perpendicular_pair(1, 2, 0.5)):
+        unoccluded_pairs(P, [Q], counts=counts)
+    assert counts == ClosedFormCounts(pairs=2)
     # the strips: the float closed form cancels (its estimate misses 1e-13)
     P, Q = parallel_pair(10, 0.01, 3)
-    raw, raw_e = unoccluded_pairs(P, [Q], far=False, rtol=1.0)
+    raw, raw_e = unoccluded_pairs(P, [Q], shortcuts=False, rtol=1.0)
     assert raw_e[0] > 1e-13 * raw[0]
-    f, e = unoccluded_pairs(P, [Q], far=False)
-    assert CLOSED_FORM_COUNTS["escalated_pairs"] == before["escalated_pairs"] + 1
-    assert CLOSED_FORM_COUNTS["escalated_edge_pairs"] > before["escalated_edge_pairs"]
+    counts = ClosedFormCounts()
+    f, e = unoccluded_pairs(P, [Q], shortcuts=False, counts=counts)
+    assert counts.escalated_pairs == 1 and counts.escalated_edge_pairs > 0
     ref = howell_parallel(10, 0.01, 3)
     assert abs(f[0] - ref) <= 1e-15 * ref + UNIT * ref
     assert abs(f[0] - ref) <= e[0] + UNIT * ref
     assert e[0] <= 1e-13 * ref < raw_e[0]
+
+
+def test_closed_form_counts_are_per_call_under_threads():
+    # each call counts into the ClosedFormCounts it is given: two threads evaluating at
+    # once get the counts each would alone (a global read as before-and-after
+    # differences mixed them)
+    from concurrent.futures import ThreadPoolExecutor
+
+    strips, square = parallel_pair(10, 0.01, 3), parallel_pair(1, 1, 1)
+
+    def run(pair, times):
+        counts = ClosedFormCounts()
+        for _ in range(times):
+            unoccluded_pairs(pair[0], [pair[1]], shortcuts=False, counts=counts)
+        return counts
+
+    alone = [run(strips, 4), run(square, 40)]
+    with ThreadPoolExecutor(2) as pool:
+        together = list(pool.map(run, [strips, square], [4, 40]))
+    assert together == alone
+    assert alone[0].escalated_pairs == 4 and alone[1] == ClosedFormCounts(pairs=40)
 
 
 def test_error_flag_and_bad_input():
@@ -471,16 +492,13 @@ def test_rotated_box_area_rows_take_the_contour_rule_and_sum_to_one():
     # form's skew terms carry large estimates; area rows (an absolute target) take the
     # tanh-sinh rule there instead of mpmath, counted; the closed enclosure's rows sum
     # to 1 within their estimates, and reciprocity holds (an independent invariant)
-    from exactff.area.contour import CLOSED_FORM_COUNTS
-
     th = 0.3
     R = (np.array([[np.cos(th), -np.sin(th), 0], [np.sin(th), np.cos(th), 0], [0, 0, 1]])
          @ np.array([[1, 0, 0], [0, np.cos(th), -np.sin(th)], [0, np.sin(th), np.cos(th)]]))
     scene = ef.Scene.from_polygons([P @ R.T for P in ef.scenes.subdivided_box(2).polygons])
-    before = dict(CLOSED_FORM_COUNTS)
-    F, E = ef.area_form_factors(scene, rows=[0, 9], tolerance=1e-9, error=True)
-    assert CLOSED_FORM_COUNTS["contour_rule"] > before["contour_rule"]
-    assert CLOSED_FORM_COUNTS["escalated_pairs"] == before["escalated_pairs"]
+    st = {}
+    F, E = ef.area_form_factors(scene, rows=[0, 9], tolerance=1e-9, error=True, stats=st)
+    assert st["contour_rule_pairs"] > 0 and st["escalated_pairs"] == 0
     assert np.all(np.abs(F.sum(axis=1) - 1.0) <= E.sum(axis=1) + 1e-14)
     assert F[0, 9] > 0 and F[1, 0] > 0
     A = np.linalg.norm([ef.area_vector(P) for P in scene.polygons], axis=1)
@@ -492,7 +510,7 @@ def test_dilogarithm_near_the_real_axis_vs_mpmath():
     # hexagon facing a triangle 1 above came out 2.3e-4 off with an estimate of 1e-15
     import mpmath as mp
 
-    from exactff.area.contour import _li2
+    from exactff.area.edge_integrals import _li2
 
     a = -0.2679491924311228
     x = np.array([a + 8.41410012693027e-17j, a - 1e-14j, a + 1e-9j, -0.99 + 1e-12j,
@@ -504,7 +522,7 @@ def test_dilogarithm_near_the_real_axis_vs_mpmath():
 
 
 def test_half_hexagon_facing_a_triangle_vs_the_tanh_sinh_oracle():
-    from exactff.area.contour import _contour_tanh_sinh
+    from exactff.area.contour_rule import contour_tanh_sinh as _contour_tanh_sinh
 
     H = np.array([[1.0, 0.0, 0.0], [0.5, 0.8660254037844386, 0.0],
                   [-0.5, 0.8660254037844387, 0.0], [-1.0, 0.0, 0.0]])

@@ -86,7 +86,7 @@ def test_negative_values_beyond_rounding_raise_a_named_error():
 
     S = np.array([-1.0, 1e-3])          # the second would be a form factor of -1.6e-4
     with pytest.raises(ef.NumericalError, match="polygon 1"):
-        integ.sector_values(S, np.ones(2), np.zeros(2), np.array([-1.0, -1.0]), True)
+        integ.sector_values(S, np.ones(2), np.zeros(2), np.array([-1.0, -1.0]), False)
 
 
 

@@ -70,16 +70,16 @@ def test_fine_polygon_converges_to_disc():
 # against mpmath (40 digits), random polygons including horizon crossings
 # ---------------------------------------------------------------------------------------
 @settings(max_examples=examples(25))
-@given(P=planar_polygons(), n=unit_vectors(), one_sided=st.booleans())
+@given(P=planar_polygons(), n=unit_vectors(), two_sided=st.booleans())
 @example(P=rect_xy(-1, 1, -1, 1, 0.5) + [0, 0, -0.7], n=np.array([0.0, 0.6, 0.8]),
-         one_sided=False).via("horizon crossing")
-def test_random_polygons_vs_mpmath(P, n, one_sided):
+         two_sided=True).via("horizon crossing")
+def test_random_polygons_vs_mpmath(P, n, two_sided):
     # p (the origin) within rounding of the polygon's plane is undecidable from float
     # input (exactff returns 0 there, by convention); keep clear of it
     assume(abs(ef.unit_normal(P) @ P.mean(axis=0)) > 1e-9)
-    ref = float(boundary_form_factor(ORIGIN, n, P, one_sided=one_sided, dps=40))
+    ref = float(boundary_form_factor(ORIGIN, n, P, two_sided=two_sided, dps=40))
     for kernel in KERNELS.values():
-        assert_form_factors_close(kernel(ORIGIN, n, P, two_sided=not one_sided), ref,
+        assert_form_factors_close(kernel(ORIGIN, n, P, two_sided=two_sided), ref,
                                   rtol=RTOL, atol=ATOL)
 
 
@@ -104,9 +104,9 @@ def test_eq3_vs_sector_form(P, n, p):
     # Eq. 3 has no escalation: keep p clear of the polygon's plane (there only the
     # sector form's high-precision tier is reliable)
     assume(abs(ef.unit_normal(P) @ (P.mean(axis=0) - p)) > 1e-9)
-    for one_sided in (True, False):
-        assert_form_factors_close(eq3_form_factor(p, n, P, two_sided=not one_sided),
-                                  sector_form_factor(p, n, P, two_sided=not one_sided),
+    for two_sided in (False, True):
+        assert_form_factors_close(eq3_form_factor(p, n, P, two_sided=two_sided),
+                                  sector_form_factor(p, n, P, two_sided=two_sided),
                                   rtol=RTOL, atol=ATOL)
 
 
@@ -233,7 +233,7 @@ def test_eq3_estimate_covers_its_error_near_the_horizon(P, tilt, azimuth, lift):
     Q = Q @ rotation(axis, tilt).T + [0, 0, lift]
     assume(abs(ef.unit_normal(Q) @ Q.mean(axis=0)) > 1e-14)  # p not on the plane
     F, est = eq3_form_factor(ORIGIN, UP, Q, two_sided=True, error=True)
-    ref = float(boundary_form_factor(ORIGIN, UP, Q, one_sided=False, dps=40))
+    ref = float(boundary_form_factor(ORIGIN, UP, Q, two_sided=True, dps=40))
     assert abs(F - ref) <= est + 4 * np.finfo(float).eps * ref
 
 
@@ -265,17 +265,17 @@ def test_nonunit_normal_is_normalised():
 
 
 @given(polys=st.lists(planar_polygons(), min_size=1, max_size=12), n=unit_vectors(),
-       p=points(0.5), one_sided=st.booleans())
-def test_vectorised_vs_eq3_scalar_loop(polys, n, p, one_sided):
+       p=points(0.5), two_sided=st.booleans())
+def test_vectorised_vs_eq3_scalar_loop(polys, n, p, two_sided):
     # the vectorised sector form against the scalar Eq. 3, an independent formula (the
     # scalar sector form calls the vectorised path). Not within rounding of a polygon's
     # plane: there the vectorised kernel escalates to mpmath, and the scalar Eq. 3 (no
     # higher tier) is rounding noise (its horizon chord passes within 1e-17 of p)
     for P in polys:
         assume(abs(ef.unit_normal(P) @ (P.mean(axis=0) - p)) > 1e-9)
-    F = ef.point_polygon_form_factors(p, n, polys, two_sided=not one_sided)
+    F = ef.point_polygon_form_factors(p, n, polys, two_sided=two_sided)
     assert F.shape == (len(polys),)
-    loop = [eq3_form_factor(p, n, P, two_sided=not one_sided) for P in polys]
+    loop = [eq3_form_factor(p, n, P, two_sided=two_sided) for P in polys]
     assert_form_factors_close(F, loop, rtol=RTOL, atol=ATOL)
     assert np.all(F >= 0) and np.all(np.isfinite(F))
 

@@ -37,14 +37,14 @@ def test_catalogue_with_escalation_within_the_default_tolerance(case):
     # the default tolerance is 1e-12 relative (DESIGN's stiff target, 1e-10, is what
     # the cases must meet at least); the value returned is rounded to double once more
     F = ef.point_polygon_form_factor(case.point, case.normal, case.polygon,
-                                     two_sided=not case.one_sided)
+                                     two_sided=case.two_sided)
     assert rel_error(F, case.reference) <= 1e-12 + 2.0**-53
 
 
 @pytest.mark.parametrize("case", CASES, ids=IDS)
 def test_error_estimate_bounds_the_double_error(case):
     F, est = ef.point_polygon_form_factor(case.point, case.normal, case.polygon,
-                                          two_sided=not case.one_sided, tolerance=None,
+                                          two_sided=case.two_sided, tolerance=None,
                                           error=True)
     err = abs(mp.mpf(F) - mp.mpf(case.reference))
     assert err <= est * 1.0000001 + 1e-300
@@ -58,7 +58,7 @@ def test_double_precision_fails_where_escalation_is_needed(case):
     # the proof that escalation is needed: plain double misses 1e-10 on these cases,
     # and its own error estimate says so (so escalation triggers)
     F, est = ef.point_polygon_form_factor(case.point, case.normal, case.polygon,
-                                          two_sided=not case.one_sided, tolerance=None,
+                                          two_sided=case.two_sided, tolerance=None,
                                           error=True)
     assert rel_error(F, case.reference) > 1e-10
     assert est > 1e-12 * F
@@ -67,17 +67,17 @@ def test_double_precision_fails_where_escalation_is_needed(case):
 def test_escalation_reports_small_error_and_mpmath_matches():
     case = next(c for c in CASES if c.name == "horizon_sliver_1e-08")
     F, est = ef.point_polygon_form_factor(case.point, case.normal, case.polygon,
-                                          two_sided=not case.one_sided, error=True)
+                                          two_sided=case.two_sided, error=True)
     assert est <= 1e-12 * F
     assert rel_error(ef.mp_form_factor(case.point, case.normal, case.polygon,
-                                       two_sided=not case.one_sided), case.reference) < 1e-14
+                                       two_sided=case.two_sided), case.reference) < 1e-14
 
 
 def test_vectorised_path_escalates_too():
     for c in CASES:
         if c.name.startswith(("tiny_square", "horizon_sliver", "needle")):
             F = ef.point_polygon_form_factors(c.point, c.normal, [c.polygon],
-                                              two_sided=not c.one_sided)[0]
+                                              two_sided=c.two_sided)[0]
             assert rel_error(F, c.reference) <= 1e-10
 
 
@@ -106,7 +106,7 @@ def test_magnitudes_1e_minus_8_to_1e8_vs_mpmath(P2, n_poly, n_recv, size_exp, di
         assume(False)
     assume(abs(ef.unit_normal(P) @ (P.mean(axis=0) - p)) > 1e-6 * dist)
     F = ef.point_polygon_form_factor(p, n_recv, P, two_sided=True)
-    ref = boundary_form_factor(p, n_recv, P, one_sided=False, dps=50)
+    ref = boundary_form_factor(p, n_recv, P, two_sided=True, dps=50)
     if ref == 0:
         assert F == 0
     else:

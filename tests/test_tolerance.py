@@ -253,12 +253,12 @@ def test_refinement_mpmath_that_does_not_converge_raises(monkeypatch):
 # (d) area form factors
 # ---------------------------------------------------------------------------------------
 def test_area_value_whose_estimate_misses_the_tolerance_raises(monkeypatch):
-    import exactff.area.occluded as occluded
+    import exactff.area.row as row
 
     pair = ef.Scene.from_polygons([UNIT_UP, UNIT_DOWN_AT_1])
     F0 = ef.area_form_factors(pair, tolerance=1e-9)          # meets it: no error
     # the row's unoccluded pairs (unoccluded_pairs) with an estimate that misses
-    monkeypatch.setattr(occluded, "unoccluded_pairs",
+    monkeypatch.setattr(row, "unoccluded_pairs",
                         lambda P, Qs, **options:
                         (np.full(len(Qs), 0.19982489569838746), np.full(len(Qs), 1e-6)))
     with pytest.raises(ef.NumericalError, match=r"row 0, polygon 1: .*misses the tolerance "

@@ -34,7 +34,7 @@ def layered_reference(p, n, polygons, measure=None):
     of a lifted ring (``n`` is then unused)."""
     if measure is None:
         def measure(ring):
-            return float(boundary_form_factor(p, n, ring, one_sided=False, dps=30))
+            return float(boundary_form_factor(p, n, ring, two_sided=True, dps=30))
     h = [P[0, 2] - p[2] for P in polygons]
     images = [shapely.Polygon((P[:, :2] - p[:2]) / hk) for P, hk in zip(polygons, h)]
     F = np.zeros(len(polygons))

@@ -126,8 +126,8 @@ def main():
     data = []
     for name, p, n, P, one_sided in cases():
         with mp.workdps(80):
-            ref = boundary_form_factor(p, n, P, one_sided=one_sided, dps=80)
-            check = mp_sector_value(p, n, P, one_sided, 80)
+            ref = boundary_form_factor(p, n, P, two_sided=not one_sided, dps=80)
+            check = mp_sector_value(p, n, P, not one_sided, 80)
             if abs(ref - check) > mp.mpf(10) ** -50 * max(abs(ref), mp.mpf(10) ** -300):
                 raise SystemExit(f"{name}: quadrature {ref} and closed form {check} disagree")
             ref_s = mp.nstr(ref, 60, min_fixed=1, max_fixed=0)

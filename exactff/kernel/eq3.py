@@ -2,10 +2,11 @@
 
 The image of a great-circle arc on the base disk lies on the ellipse of Eq. 2; each
 arc is split at its x-extremes into monotone spans, each integrated on its own branch
-with the corrected antiderivative (DESIGN 2, ``tools/derive_eq3.py``):
+with the corrected antiderivative (``docs/explanation/ppbh-method.md``,
+``tools/derive_eq3.py``):
 :func:`eq3_edge_integral` evaluates it as printed (corrected), span by span.
 
-The integrators evaluate the same spans in the *stable form* (issue 51, proved in
+The integrators evaluate the same spans in the *stable form* (proved in
 ``tools/derive_eq3.py``): on a span the branch is the sign of ``sin t`` (``t`` the arc's
 angle from its x-maximum), ``asin`` differences are ``-sigma (t1 - t0)``, and the spans'
 differences add up, over an arc of angle ``theta`` with ends ``u0``, ``u1`` and unit plane
@@ -27,7 +28,7 @@ from numpy.typing import ArrayLike
 
 from .. import _tolerances as tol
 from ..checks import check_sides
-from ..errors import NumericalError, check_finite
+from ..errors import NumericalError, check_finite, nonnegative
 from .ladder import mp_converge, mp_sector_value
 from .point import local_clipped
 from .sector import offset_edge_planes
@@ -200,8 +201,8 @@ def eq3_form_factor(point: ArrayLike, normal: ArrayLike, polygon: ArrayLike, *,
     >>> round(eq3_form_factor([0, 0, 0], [0, 0, 1], sq), 12)
     0.239456470461
     """
-    one_sided = check_sides(two_sided, one_sided)
-    C, sign = local_clipped(point, normal, polygon, one_sided)
+    two_sided = check_sides(two_sided, one_sided)
+    C, sign = local_clipped(point, normal, polygon, two_sided)
     if not sign or len(C) < 2:
         return (0.0, 0.0) if error else 0.0
     R = np.array(C, dtype=float)
@@ -216,7 +217,7 @@ def eq3_form_factor(point: ArrayLike, normal: ArrayLike, polygon: ArrayLike, *,
         # sided as the sector form's tier
         P = np.asarray(polygon, dtype=float)
         hi, diff, converged = mp_converge(
-            lambda dps: mp_sector_value(point, normal, P, one_sided, dps, sign,
+            lambda dps: mp_sector_value(point, normal, P, two_sided, dps, sign,
                                         ring_sum=mp_eq3_sum), tolerance)
         if not converged and not error:
             raise NumericalError(
@@ -227,10 +228,8 @@ def eq3_form_factor(point: ArrayLike, normal: ArrayLike, polygon: ArrayLike, *,
         est = float(diff) + F * tol.EPS
     # below 0 by at most its own estimate: clamped to 0, which the estimate covers;
     # beyond it, a defect
-    if not F >= -est:
-        raise NumericalError(f"Eq. 3 gave the form factor {F!r}, below 0 beyond its "
-                             f"rounding error estimate {est:.3g}")
-    return (max(F, 0.0), est) if error else max(F, 0.0)
+    F = nonnegative(F, est, "Eq. 3 form factor")
+    return (F, est) if error else F
 
 
 def eq3_ring_area(ring: ArrayLike) -> tuple[float, float]:

@@ -1,8 +1,8 @@
-"""The escalation ladder (DESIGN 2.2): a value whose double-precision error estimate
-misses the tolerance is evaluated again from the float input, first in long double
-(the same vectorised sums), then with mpmath at growing precision until two
-evaluations agree. Point rows and the refinement of visible pieces climb the same
-ladder (:func:`mp_converge`)."""
+"""The escalation ladder (``docs/explanation/robustness.md``, "Escalation"): a value
+whose double-precision error estimate misses the tolerance is evaluated again from the
+float input, first in long double (the same vectorised sums), then with mpmath at
+growing precision until two evaluations agree. Point rows and the refinement of visible
+pieces climb the same ladder (:func:`mp_converge`)."""
 
 from __future__ import annotations
 
@@ -21,7 +21,7 @@ __all__ = ["extended_values", "mp_converge", "mp_sector_sum", "mp_sector_value",
            "mp_form_factor"]
 
 
-def extended_values(flat, ids, rows, P, N, d0, one_sided):
+def extended_values(flat, ids, rows, P, N, d0, two_sided):
     """Form factors and error estimates of polygons ``ids[k]`` from points ``P[rows[k]]``
     (normals ``N[rows[k]]``) in long double arithmetic: the sector sums with rounded
     offsets from the float input, in one compiled pass (``exactff/_core/sector_sums.h``,
@@ -31,7 +31,7 @@ def extended_values(flat, ids, rows, P, N, d0, one_sided):
         flat.V, flat.offsets, np.asarray(ids, dtype=np.int64),
         np.asarray(rows, dtype=np.int64), P, frames, tol.LONGDOUBLE_EPS,
         tol.OFFSET_ROUNDING_ULPS, tol.C2 * tol.LONGDOUBLE_EPS)
-    F, err = sector_values(S, mags, errs, d0, one_sided, eps=tol.LONGDOUBLE_EPS)
+    F, err = sector_values(S, mags, errs, d0, two_sided, eps=tol.LONGDOUBLE_EPS)
     return F.astype(float), err.astype(float)
 
 
@@ -91,7 +91,7 @@ def mp_sector_sum(ring):
     return total
 
 
-def mp_sector_value(point, normal, polygon, one_sided, dps, side_hint=None,
+def mp_sector_value(point, normal, polygon, two_sided, dps, side_hint=None,
                     ring_sum=mp_sector_sum):
     """The form factor of one polygon by the sector form at ``dps`` digits (an mpf),
     from the float input taken as exact; ``side_hint`` is the side of the point when
@@ -120,14 +120,16 @@ def mp_sector_value(point, normal, polygon, one_sided, dps, side_hint=None,
             # the exact side (rational arithmetic): the working precision may not resolve
             # a point extremely close to the plane (side < 0 means p in front)
             side = -side_hint
-        if side == 0 or (one_sided and side > 0):
+        if side == 0 or (not two_sided and side > 0):
             return mp.mpf(0)
         C = clip_above_horizon(Q, zero=mp.mpf(0))
         total = ring_sum(C)
         # the image of the boundary ring, whichever way it winds: for a point within
         # rounding of a polygon that is planar only to rounding, the ring's winding can
-        # disagree with the side decided from the polygon's Newell plane (value 0 for
-        # 0.5 before); every other path integrates the ring as given too
+        # disagree with the side decided from the polygon's Newell plane, and only the
+        # ring's own orientation gives the image's area (pinned:
+        # test_mpmath_tier_integrates_the_ring_whichever_way_it_winds); every other path
+        # integrates the ring as given too
         return abs(total) / (2 * mp.pi)
 
 
@@ -168,10 +170,10 @@ def mp_form_factor(point: ArrayLike, normal: ArrayLike, polygon: ArrayLike, *,
     >>> mp_form_factor([0, 0, 0], [0, 0, 1], sq)  # F = A / pi to first order
     3.183098861837907e-19
     """
-    one_sided = check_sides(two_sided, one_sided)
+    two_sided = check_sides(two_sided, one_sided)
     P = np.asarray(polygon, dtype=float)
     hi, diff, converged = mp_converge(
-        lambda prec: mp_sector_value(point, normal, P, one_sided, prec, side),
+        lambda prec: mp_sector_value(point, normal, P, two_sided, prec, side),
         tolerance if tolerance else 1e-15, dps=30 if dps is None else int(dps))
     if not converged and not error:
         raise NumericalError(

@@ -29,11 +29,11 @@ __all__ = ["unoccluded_row", "unoccluded_rows", "point_polygon_form_factors", "s
            "point_polygon_form_factor", "local_clipped"]
 
 
-def unoccluded_row(flat, p, n, *, one_sided=True, tolerance=None,
+def unoccluded_row(flat, p, n, *, two_sided=False, tolerance=None,
                    return_error=False, in_band="exact", strict=None, sides=None):
     """Unoccluded form factors from ``p`` (normal ``n``) to every polygon of ``flat``.
 
-    The hot path: culls polygons seen edge-on, facing away (one-sided) or wholly below
+    The hot path: culls polygons seen edge-on, facing away (unless ``two_sided``) or wholly below
     the horizon, then evaluates the sector form over all remaining edges in one compiled
     pass (``exactff/_core/sector_sums.h``, the arithmetic of
     :func:`~exactff.kernel.sector.clipped_sector_sums` with rounded offsets), in offset
@@ -65,12 +65,12 @@ def unoccluded_row(flat, p, n, *, one_sided=True, tolerance=None,
         if in_band == "edge_on":
             band[:] = False
     F, err = unoccluded_rows(flat, p[None], np.asarray(n, dtype=float)[None], side[None],
-                             band[None], one_sided=one_sided, tolerance=tolerance,
+                             band[None], two_sided=two_sided, tolerance=tolerance,
                              strict=strict)
     return (F[0], err[0]) if return_error else F[0]
 
 
-def unoccluded_rows(flat, P, N, side, band, *, one_sided=True, tolerance=None, strict=True):
+def unoccluded_rows(flat, P, N, side, band, *, two_sided=False, tolerance=None, strict=True):
     """Unoccluded form factors from many points at once, and their error estimates: the
     rows of :func:`unoccluded_row`, value for value, with the compiled sums of all the
     rows in one call per tier (what a convex enclosure's matrix does row after row).
@@ -87,7 +87,8 @@ def unoccluded_rows(flat, P, N, side, band, *, one_sided=True, tolerance=None, s
     band : ndarray of shape (R, len(flat.normals)), bool
         Where the polygon's plane passes within rounding of the point (a non-zero side
         there was decided exactly, and only mpmath can give the value).
-    one_sided : bool, default True
+    two_sided : bool, default False
+        Whether a polygon's back receives too (default: only its front).
     tolerance : float or None
         As for :func:`unoccluded_row`.
     strict : bool, default True
@@ -114,7 +115,7 @@ def unoccluded_rows(flat, P, N, side, band, *, one_sided=True, tolerance=None, s
     """
     F = np.zeros(side.shape)
     err = np.zeros(side.shape)
-    live = (side > 0) if one_sided else (side != 0)
+    live = (side != 0) if two_sided else (side > 0)
     rows, ids = np.nonzero(live)
     if not len(ids):
         return F, err
@@ -130,7 +131,7 @@ def unoccluded_rows(flat, P, N, side, band, *, one_sided=True, tolerance=None, s
         return F, err
     in_band = band[rows, ids]
     F[rows, ids], err[rows, ids] = sector_values(S, mags, errs, -side[rows, ids].astype(float),
-                                                 one_sided, unchecked=in_band)
+                                                 two_sided, unchecked=in_band)
     # p within rounding of the polygon's plane (its side decided exactly): the double
     # value can be anything; only the high-precision tier can give it
     err[rows[in_band], ids[in_band]] = np.inf
@@ -143,16 +144,16 @@ def unoccluded_rows(flat, P, N, side, band, *, one_sided=True, tolerance=None, s
             # second tier: the same sums in extended precision (x87 80-bit long double
             # where the platform has it), from the original float input
             Fl, el = extended_values(flat, ei, er, P, N, -side[er, ei].astype(float),
-                                     one_sided)
+                                     two_sided)
             good = el <= tolerance * Fl
             F[er[good], ei[good]], err[er[good], ei[good]] = Fl[good], el[good]
             settled = np.zeros(len(fi), dtype=bool)
             settled[in_extended[good]] = True
             fr, fi = fr[~settled], fi[~settled]
-        # last tier (DESIGN 2.2): mpmath at the digits the value needs
+        # last tier (docs/explanation/robustness.md): mpmath at the digits the value needs
         for r, i in zip(fr.tolist(), fi.tolist()):
             Q = flat.V[flat.offsets[i]:flat.offsets[i + 1]]
-            F[r, i], err[r, i] = mp_form_factor(P[r], N[r], Q, two_sided=not one_sided,
+            F[r, i], err[r, i] = mp_form_factor(P[r], N[r], Q, two_sided=two_sided,
                                                 tolerance=tolerance, error=True,
                                                 side=int(side[r, i]))
         # the last tier's values are checked too: one that still misses the tolerance
@@ -217,7 +218,7 @@ def point_polygon_form_factors(point: ArrayLike, normal: ArrayLike, polygons, *,
     >>> point_polygon_form_factors([0, 0, 0], [0, 0, 1], [sq, sq + [1, 0, 0]]).round(6)
     array([0.239456, 0.084354])
     """
-    one_sided = check_sides(two_sided, one_sided)
+    two_sided = check_sides(two_sided, one_sided)
     p = as_point(point)
     as_normal(normal)
     n = np.asarray(normal, dtype=float)
@@ -225,18 +226,18 @@ def point_polygon_form_factors(point: ArrayLike, normal: ArrayLike, polygons, *,
         raise ValueError("point and normal must have shape (3,)")
     check_tolerance(tolerance)
     scene = polygons if isinstance(polygons, Scene) else Scene.from_polygons(polygons)
-    F, err = unoccluded_row(flat_polygons(scene), p, n, one_sided=one_sided,
+    F, err = unoccluded_row(flat_polygons(scene), p, n, two_sided=two_sided,
                             tolerance=tolerance, return_error=True, strict=not error)
     return (F, err) if error else F
 
 
-def local_clipped(point, normal, polygon, one_sided):
+def local_clipped(point, normal, polygon, two_sided):
     """Validated polygon in the local frame of ``p``, clipped to z >= 0, and the sign
     that turns its signed image area into a form factor (0: nothing received).
 
     Examples
     --------
-    >>> ring, sign = local_clipped([0, 0, 0], [0, 0, 1], [[0, 0, 1], [0, 1, 1], [1, 0, 1]], True)
+    >>> ring, sign = local_clipped([0, 0, 0], [0, 0, 1], [[0, 0, 1], [0, 1, 1], [1, 0, 1]], False)
     >>> len(ring), sign
     (3, 1.0)
     """
@@ -250,7 +251,7 @@ def local_clipped(point, normal, polygon, one_sided):
     # the side of p, from the validated polygon's own (world) plane
     N = area_vector(P)
     side = polygon_side(P, p, N / np.linalg.norm(N))
-    if side == 0 or (one_sided and side < 0):
+    if side == 0 or (not two_sided and side < 0):
         return [], 0.0
     return clip_above_horizon(Q), (1.0 if side > 0 else -1.0)
 
@@ -261,8 +262,9 @@ def sector_form_factor(point: ArrayLike, normal: ArrayLike, polygon: ArrayLike, 
     """Unoccluded form factor by the sector (Lambert) form, one polygon.
 
     ``F = (1 / 2 pi) sum_k atan2(|a_k x b_k|, a_k . b_k) (a_k x b_k)_z / |a_k x b_k|``
-    over the edges of the horizon-clipped polygon (DESIGN 2.1), in offset form, with a
-    rounding-error estimate and automatic escalation to mpmath (DESIGN 2.2).
+    over the edges of the horizon-clipped polygon (``docs/explanation/ppbh-method.md``,
+    "The sector form"), in offset form, with a rounding-error estimate and automatic
+    escalation to mpmath (``docs/explanation/robustness.md``).
 
     Parameters
     ----------
@@ -286,8 +288,8 @@ def sector_form_factor(point: ArrayLike, normal: ArrayLike, polygon: ArrayLike, 
     >>> round(sector_form_factor([0, 0, 0], [0, 0, 1], sq), 12)
     0.239456470461
     """
-    one_sided = check_sides(two_sided, one_sided)
-    F, err = point_polygon_form_factors(point, normal, [polygon], two_sided=not one_sided,
+    two_sided = check_sides(two_sided, one_sided)
+    F, err = point_polygon_form_factors(point, normal, [polygon], two_sided=two_sided,
                                         tolerance=tolerance, error=True)
     return (float(F[0]), float(err[0])) if error else float(F[0])
 
@@ -350,6 +352,6 @@ def point_polygon_form_factor(point: ArrayLike, normal: ArrayLike, polygon: Arra
     >>> round(point_polygon_form_factor([0, 0, 0], [0, 0, 1], rect), 10)
     0.1673750099
     """
-    one_sided = check_sides(two_sided, one_sided)
-    return sector_form_factor(point, normal, polygon, two_sided=not one_sided,
+    two_sided = check_sides(two_sided, one_sided)
+    return sector_form_factor(point, normal, polygon, two_sided=two_sided,
                               tolerance=tolerance, error=error)

@@ -1,14 +1,16 @@
-"""The sector (Lambert) form, vectorised over edges: the sums of DESIGN 2.1 for many
-horizon-clipped polygons at once, in offset form, with their rounding-error model
-(DESIGN 2.2). Every exact path integrates with these sums: point rows, the visible
-pieces of the engine, refinement and the area code's hidden parts."""
+"""The sector (Lambert) form, vectorised over edges: the sums of
+``docs/explanation/ppbh-method.md`` ("The sector form") for many horizon-clipped
+polygons at once, in offset form, with their rounding-error model
+(``docs/explanation/robustness.md``, "The estimate"). Every exact path integrates with
+these sums: point rows, the visible pieces of the engine, refinement and the area code's
+hidden parts."""
 
 import math
 
 import numpy as np
 
 from .. import _tolerances as tol
-from ..errors import NumericalError
+from ..errors import nonnegative
 
 __all__ = ["TWO_PI", "clipped_sector_sums", "sector_values", "offset_edge_planes"]
 
@@ -18,7 +20,8 @@ TWO_PI = 2.0 * math.pi
 def clipped_sector_sums(A0, E, nxt, owner, m, eps=tol.EPS, rounded_offsets=False):
     """Sector sums of horizon-clipped polygons, with their rounding-error estimates.
 
-    The polygons are given in *offset form* (DESIGN 2.2): ``A0`` (m, 3) is a reference
+    The polygons are given in *offset form* (``docs/explanation/robustness.md``): ``A0``
+    (m, 3) is a reference
     vertex of each polygon relative to the point, in the local frame, and ``E`` (V, 3)
     are the vertices' offsets from it. The edge plane ``m = a x b`` is evaluated as
     ``A0 x (e_b - e_a) + e_a x e_b``, which stays accurate for polygons small next to
@@ -133,7 +136,8 @@ def offset_edge_planes(Ax, Ay, Az, Eax, Eay, Eaz, Ebx, Eby, Ebz):
 
 def _offset_rounding(A0, E, nxt, owner, eps):
     """Per edge, a first-order bound on how far the rounding of the offsets moves its
-    polygon's sector sum (DESIGN 2.2's model covers the sums' own rounding only).
+    polygon's sector sum (the sums' error model, C1 and C2, covers their own rounding
+    only).
 
     The offsets are differences of the float input (from the point, and from the first
     vertex), each coordinate rounded once, then rotated to the local frame by a matrix
@@ -176,23 +180,16 @@ def _offset_rounding(A0, E, nxt, owner, eps):
     return np.where(reach & (ld > 0), moved, 0.0).astype(A0.dtype)
 
 
-def sector_values(S, mags, errs, d0, one_sided, eps=tol.EPS, unchecked=None):
+def sector_values(S, mags, errs, d0, two_sided, eps=tol.EPS, unchecked=None):
     """Form factors and their error estimates from signed sector sums ``S``
-    (front-facing polygons have S < 0). ``unchecked`` marks values known to be
-    unreliable, exempt from the sign check."""
+    (front-facing polygons have S < 0; without ``two_sided`` the others receive 0).
+    ``unchecked`` marks values known to be unreliable, exempt from the sign check."""
     F = np.sign(d0) * S / TWO_PI
     err = (tol.C1 * eps * mags + errs) / TWO_PI
-    if one_sided:
+    if not two_sided:
         F[d0 >= 0] = 0.0
         err[d0 >= 0] = 0.0
     # rounding can leave a value below 0 by at most its error estimate: there it is
     # clamped to 0, which the estimate still covers (0 <= exact <= F + err <= err);
     # beyond it, the value is a defect and raises
-    ok = F >= -err
-    if unchecked is not None:
-        ok |= unchecked
-    if not np.all(ok):
-        i = int(np.flatnonzero(~ok)[0])
-        raise NumericalError(f"polygon {i}: form factor {F[i]!r} below 0 beyond its rounding "
-                             f"error estimate {err[i]:.3g}")
-    return np.maximum(F, 0.0), err
+    return nonnegative(F, err, "form factor", unchecked, item="polygon"), err

@@ -22,7 +22,7 @@ SPHERE_AXES = (np.array([0.0, 0.0, 1.0]), np.array([0.0, 0.0, -1.0]))
 
 _FOUR_PI = 4.0 * math.pi
 
-#: How visible pieces can be integrated (both exact; DESIGN 2).
+#: How visible pieces can be integrated (both exact; ``docs/explanation/ppbh-method.md``).
 INTEGRATORS = ("sector", "eq3")
 
 #: Which visibility engine computes a row: the compiled core (shadow-volume BSP tree,
@@ -31,12 +31,15 @@ ENGINES = ("compiled", "python")
 
 
 class Exact(FormFactorMethod):
-    """Exact occluded form factors (continuous PPBH; DESIGN 2 and 3).
+    """Exact occluded form factors (continuous PPBH: ``docs/explanation/ppbh-method.md``
+    and ``docs/explanation/visibility.md``).
 
     Parameters
     ----------
     tolerance : float or None, default 1e-12
-        Requested relative accuracy: values whose error estimate exceeds it are
+        Requested **relative** accuracy (unlike :func:`exactff.area_form_factors`'
+        ``tolerance``, which is absolute; ``docs/explanation/conventions.md``): values
+        whose error estimate exceeds it are
         re-evaluated; unoccluded ones in long double or mpmath, visible pieces refined
         (their vertices recomputed from the input, where the clipper's double-precision
         coordinates fall short) and integrated in long double or mpmath (see

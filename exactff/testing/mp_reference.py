@@ -14,6 +14,8 @@ signs over a fan from the mean of the vertices (not from a vertex, as the kernel
 
 import mpmath as mp
 
+from ..checks import check_sides
+
 __all__ = ["boundary_form_factor", "area_form_factor", "solid_angle"]
 
 
@@ -73,12 +75,15 @@ def _side(Q):
     return sum(N[i] * c[i] for i in range(3)), N
 
 
-def boundary_form_factor(point, normal, polygon, one_sided=True, dps=40):
-    """F by mpmath quadrature of the image's boundary integral, at ``dps`` digits."""
+def boundary_form_factor(point, normal, polygon, two_sided=False, dps=40, *, one_sided=None):
+    """F by mpmath quadrature of the image's boundary integral, at ``dps`` digits; with
+    ``two_sided`` the polygon's back receives too (``one_sided=``: its deprecated old
+    name, ``one_sided = not two_sided``)."""
+    two_sided = check_sides(two_sided, one_sided)
     with mp.workdps(dps):
         Q = _local(point, normal, polygon)
         d, _ = _side(Q)  # < 0: p in front
-        if d == 0 or (one_sided and d > 0):
+        if d == 0 or (not two_sided and d > 0):
             return mp.mpf(0)
         C = _clip(Q)
         area = mp.mpf(0)

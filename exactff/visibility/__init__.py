@@ -1,11 +1,12 @@
 """Exact visibility: occluded form factors from a point to every polygon of a scene.
 
-The engine (DESIGN 3): a BSP tree orders the fragments front to back from the point;
-the area-sorting clipper keeps the covered region in five gnomonic charts and cuts
-each new fragment's image against it; every visible piece is integrated exactly with
-the sector form. The compiled core (:mod:`exactff.visibility.compiled`) keeps the
-covered region as a shadow-volume BSP tree instead, and is the default. Shortcuts leave out what a row does not need; each is reported in
-``stats`` and tested to be neutral.
+The engine (``docs/explanation/visibility.md``): a BSP tree orders the fragments front
+to back from the point; the area-sorting clipper keeps the covered region in five
+gnomonic charts and cuts each new fragment's image against it; every visible piece is
+integrated exactly with the sector form. The compiled core
+(:mod:`exactff.visibility.compiled`) keeps the covered region as a shadow-volume BSP
+tree instead, and is the default. Shortcuts leave out what a row does not need; each is
+reported in ``stats`` and tested to be neutral.
 """
 
 from .compiled import (compiled_core, compiled_form_factor_rows, compiled_form_factors,

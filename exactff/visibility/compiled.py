@@ -261,8 +261,9 @@ def compiled_form_factors(scene, point, normal, *, two_sided=False, stats=None,
     (``stats["max_band_bound"]``) are a
     bound on the topology: they are in the returned bound but not checked against the
     tolerance, as the Python engine's topology has the same decisions and its bound
-    leaves them out (a value 0 of ``office(600)``'s row 183 carries 1.8e-16 of them,
-    above the tolerance's floor).
+    leaves them out. No precision tier narrows them (they come from the decisions, not
+    from the arithmetic), so checking them would only send to the Python engine values
+    that its own check accepts.
 
     Parameters
     ----------
@@ -337,7 +338,7 @@ def compiled_form_factors(scene, point, normal, *, two_sided=False, stats=None,
         # no occlusion: the unoccluded kernel (compiled sector sums) with its ladder,
         # straight from here, as the Python engine's convex-scene path has it
         st["path"] = "unoccluded"
-        return unoccluded_row(flat, p, normal, one_sided=not two_sided, tolerance=tolerance,
+        return unoccluded_row(flat, p, normal, two_sided=two_sided, tolerance=tolerance,
                               sides=(side, band), return_error=error, strict=not error)
     tree, core = compiled_core(scene)
     node_side = sides_of_point(tree.normals, tree.offsets, p).astype(np.int8)
@@ -430,7 +431,7 @@ def compiled_form_factor_rows(scene, points, normals, *, two_sided=False, shortc
     if together:
         out[together] = unoccluded_rows(
             flat, P[together], N[together], np.array([sides[r][0] for r in together]),
-            np.array([sides[r][1] for r in together]), one_sided=not two_sided,
+            np.array([sides[r][1] for r in together]), two_sided=two_sided,
             tolerance=tolerance)[0]
     for r in sorted(set(range(len(P))) - set(together)):
         out[r] = compiled_form_factors(scene, P[r], N[r], two_sided=two_sided,

@@ -1,10 +1,10 @@
 """Exact visibility: occluded form factors from a point to every polygon of a scene.
 
-The engine (DESIGN 3): a BSP tree orders the fragments front to back from the point;
-the area-sorting clipper keeps the covered region in five gnomonic charts and cuts
-each new fragment's image against it; every visible piece is integrated exactly with
-the sector form. Shortcuts leave out what a row does not need; each is reported in
-``stats`` and tested to be neutral.
+The engine (``docs/explanation/visibility.md``): a BSP tree orders the fragments front
+to back from the point; the area-sorting clipper keeps the covered region in five
+gnomonic charts and cuts each new fragment's image against it; every visible piece is
+integrated exactly with the sector form. Shortcuts leave out what a row does not need;
+each is reported in ``stats`` and tested to be neutral.
 """
 
 import numpy as np
@@ -13,7 +13,7 @@ from scipy.spatial import ConvexHull, QhullError
 
 from .. import _tolerances as tol
 from ..checks import as_receiver
-from ..errors import NumericalError, check_finite, misses_tolerance, tolerance_missed
+from ..errors import check_finite, misses_tolerance, nonnegative, tolerance_missed
 from ..geometry import receiver_frame, to_local
 from ..kernel import eq3_form_factor, flat_polygons, unoccluded_row
 from ..predicates import coplanar_band_sides, engine_sides
@@ -131,7 +131,7 @@ def visible_form_factors(scene, point, normal, *, two_sided=False, stats=None,
             if not error:
                 _require_tolerance(FE[:, 0], FE[:, 1], tolerance, integrator, st)
             return (FE[:, 0], FE[:, 1]) if error else FE[:, 0]
-        return unoccluded_row(flat, p, normal, one_sided=not two_sided, tolerance=tolerance,
+        return unoccluded_row(flat, p, normal, two_sided=two_sided, tolerance=tolerance,
                               sides=(side, band), return_error=error, strict=not error)
     st["path"] = "clipper"
     tree, order, src, kept, world, receives = _row_fragments(scene, p, normal, side, two_sided,
@@ -207,13 +207,10 @@ def _per_polygon(src, Vf, Ef, n, what, stats):
     V = np.bincount(src, weights=Vf, minlength=n)
     E = np.bincount(src, weights=Ef, minlength=n)
     check_finite(V, E)
-    bad = np.flatnonzero(~(V >= -E))
-    if len(bad):
-        raise NumericalError(f"polygon {bad[0]}: occluded {what} {V[bad[0]]!r} below 0 "
-                             f"beyond its rounding error estimate {E[bad[0]]:.3g}")
+    V = nonnegative(V, E, f"occluded {what}", item="polygon")
     if stats is not None:
         stats["max_error_estimate"] = float(E.max(initial=0.0))
-    return np.maximum(V, 0.0), E
+    return V, E
 
 
 def _require_tolerance(F, E, tolerance, integrator, st):

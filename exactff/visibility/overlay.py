@@ -151,10 +151,10 @@ class TiledRegion:
     grown by batches of fragments taken front to back.
 
     A single covered region grows with everything visible, and every overlay with it
-    costs in proportion (DESIGN 3, measured: 26 s for 4,000 quads with one region, 0.67 s
-    with 16 x 16 tiles). Here each tile has its own small region, and fragments are
-    decided a batch at a time with vectorised shapely calls (one C call per step for the
-    whole batch, not one Python round per fragment):
+    costs in proportion (measured: 26 s for 4,000 quads with one region, 0.67 s with 16
+    x 16 tiles; ``docs/explanation/visibility.md``). Here each tile has its own small
+    region, and fragments are decided a batch at a time with vectorised shapely calls
+    (one C call per step for the whole batch, not one Python round per fragment):
 
     1. a fragment whose tiles are all full is hidden, without geometry (a tile is full
        when its region covers it, an exact predicate asked once its uncovered area is

@@ -4,8 +4,8 @@ The clipper (:mod:`exactff.visibility.clipper`) finds the visible pieces with st
 images in gnomonic charts, in double precision: every vertex of a piece is rounded there
 (to a few ulps of the chart's unit), which costs a small or thin piece its relative
 accuracy (a piece 1e-12 wide keeps about four digits). Here each piece keeps the
-clipper's topology and gets its geometry back from the input (DESIGN 3, "arcs
-approximated, then refined"):
+clipper's topology and gets its geometry back from the input
+(``docs/explanation/robustness.md``, "Visible pieces: approximated, then refined"):
 
 1. **Labels.** Every edge of a piece lies on a great circle through the point: the plane
    of an edge of its own fragment or of a fragment in front of it, a chart's edge or a

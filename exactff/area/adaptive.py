@@ -1,0 +1,332 @@
+"""The adaptive integral of the hidden part over the emitter: an occluded pair's value
+is its unoccluded value (closed form) less the integral of the hidden part, taken over
+the cells between visibility events by pairs of triangle rules, a triangle refined (the
+higher pair, then cut in four) while its rules differ by more than its share of the
+absolute tolerance ``atol``, and the rules' differences checked against the unoccluded
+point values' integral, known exactly (docs/explanation/area-form-factors.md).
+"""
+
+import numpy as np
+import shapely
+
+from .. import _tolerances as tol
+from ..errors import NumericalError, misses_tolerance
+from ..geometry import area_vector, cross, receiver_frame
+from .closed_form import unoccluded_pairs
+from .events import cut_cells, event_lines
+from .hidden import hidden_setup, hidden_values
+from .points import point_values
+from .rules import CORNER_MIDDLE_RULE, quarter, rule_pair, triangle_areas, triangle_rule
+
+__all__ = ["occluded_pair"]
+
+
+def _triangle_unoccluded(T, nP, Qc):
+    """``int_T F(x -> Qc) dA_x`` for each triangle T (t, 3, 3) in the plane of normal nP,
+    unoccluded (Qc wholly in front of that plane, each T in front of Qc's), and its
+    rounding estimate: by reciprocity ``A_Qc F(Qc -> T)``, the closed form
+    (:func:`~exactff.area.closed_form.unoccluded_pairs`, no fallback: where its terms cancel
+    the estimate says so)."""
+    if not len(T):
+        return np.zeros(0), np.zeros(0)
+    # counter-clockwise seen from nP's side
+    flip = np.einsum("tx,x->t", cross(T[:, 1] - T[:, 0], T[:, 2] - T[:, 0]), nP) < 0
+    T = np.where(flip[:, None, None], T[:, ::-1], T)
+    f, e = unoccluded_pairs(Qc, list(T), shortcuts=False, atol=np.inf,
+                            parts=[(Qc, t) for t in T])
+    area_Q = float(np.linalg.norm(area_vector(Qc)))
+    return area_Q * f, area_Q * e
+
+
+def _corner_first(T, blockers, nP, dP, reach=0.0):
+    """The triangles T (t, 3, 3), each with first a vertex where a blocker's vertex
+    touches the emitter's plane, if it has one (within ``AREA_HULL_RTOL`` of the
+    triangle's size of the plane, and of that vertex or within ``reach`` of it: the
+    cells' corners may lie as far from the events' crossing as the cut lines were
+    lengthened, :func:`~exactff.area.events.cut_cells`; the first such blocker vertex, in
+    order). Near such a point the hidden part depends on the direction from it (to first
+    order), and the collapsed rule, whose collapsed vertex is the first, integrates
+    functions of that direction alone without cutting towards the point. A triangle with
+    two or three such vertices is first cut in four at its edges' midpoints (so that
+    each of its corner quarters has one): returns as many triangles or more, and per
+    triangle whether its first vertex is such a corner."""
+    none = np.zeros(len(T), dtype=bool)
+    if not len(T) or not blockers:
+        return T, none
+    Vb = np.vstack(blockers)                                        # (m, 3)
+    off = np.abs(Vb @ nP - dP)
+    # only the blocker vertices that may be on the plane for some triangle (in order)
+    keep = off <= tol.AREA_HULL_RTOL * np.ptp(T, axis=1).max()
+    if not keep.any():
+        return T, none
+    Vb, off = Vb[keep], off[keep]
+
+    def touching(T):
+        """Per triangle and vertex, whether a blocker's vertex touches it on the plane,
+        and the index (into Vb) of the first that does."""
+        near = tol.AREA_HULL_RTOL * np.ptp(T, axis=1).max(axis=1)   # (t,)
+        d = np.linalg.norm(T[:, :, None, :] - Vb[None, None, :, :], axis=3)   # (t, 3, m)
+        hit = (d <= np.maximum(near, reach)[:, None, None]) & (off <= near[:, None])[:, None, :]
+        return hit.any(axis=2), np.where(hit.any(axis=2), np.argmax(hit, axis=2), len(Vb))
+
+    touched, _ = touching(T)
+    several = touched.sum(axis=1) > 1
+    if several.any():
+        T = np.concatenate([T[~several], quarter(T[several])])
+    touched, first = touching(T)
+    # the vertex touched by the earliest blocker vertex first
+    shift = np.where(touched.any(axis=1), np.argmin(first, axis=1), 0)
+    return (T[np.arange(len(T))[:, None], (np.arange(3)[None, :] + shift[:, None]) % 3],
+            touched.any(axis=1))
+
+
+def occluded_pair(S, Pc, Qc, nP, atol, area_P, whole, shortcuts=True, st=None,
+                  rtol=None, solid=None, inner=None):
+    """``(1 / A_P) int_Pc F_occ(x -> S[0]) dA`` with S = [receiver, blockers...], as the
+    unoccluded value (the contour integral, exact) less the integral of the hidden part
+    ``F(x -> Qc) - F_occ(x -> S[0])`` (exact point values of the hidden region, built
+    in Qc's plane: :func:`~exactff.area.hidden.hidden_values`). The hidden part is
+    smooth where the polygons touch (the unoccluded part carries the edge
+    singularities), so it is integrated over
+    the cells of Pc between visibility events, each cell's triangles by two collapsed
+    Gauss-Legendre rules (6 and 10 points a side), a triangle cut in four where the two
+    differ by more than its share of ``atol``. Where the events cut Pc into more
+    than ``AREA_MANY_CELLS`` triangles (small ones), or the target is at least
+    ``AREA_LOW_RULES_TOLERANCE``, each starts with a lower pair (degrees 4 and 8: the
+    symmetric rules of 6 and 16 points, or the collapsed ones of 3 and 5 points a side
+    where a blocker touches its first vertex;
+    :func:`~exactff.area.rules.rule_pair`) and takes the higher
+    pair where that pair misses its share.
+    Returns the value, its error estimate (the contour sum's, the rules' differences,
+    the point values' bounds) and the number of point values used.
+
+    The rules' target is the absolute error ``atol`` allowed the value, or with
+    ``rtol`` the bound ``max(atol, rtol * F)``: first with the unoccluded value for F
+    (the value is at most that), and where the estimate then misses
+    ``max(atol, rtol * |value|)`` once more with ``value - estimate`` for F (a lower
+    bound where the estimate holds).
+    ``whole``: the pair's unoccluded value and estimate, per unit area of P (the
+    row's occluded pairs take theirs together, the estimate within
+    ``AREA_WHOLE_TOLERANCE_SHARE`` of the row's ``atol``). ``solid``: as for
+    :func:`~exactff.area.events.event_lines`; ``inner``: for each polygon of S with a
+    solid, a point inside the solid's hull (NaN elsewhere;
+    :func:`~exactff.area.hidden.hidden_setup`)."""
+    # with rtol, the value's share where it is the larger: max(atol, rtol * F)
+    relative = rtol is not None and rtol * whole[0] > atol
+    value, err, points = _hidden_integral(S, Pc, Qc, nP, rtol * whole[0] if relative else atol,
+                                          area_P, whole, shortcuts, st, solid, inner)
+    if relative and misses_tolerance(value, err, rtol, atol=atol):
+        value, err, more = _hidden_integral(S, Pc, Qc, nP,
+                                           max(atol, rtol * max(value - err, 0.0)), area_P,
+                                           whole, shortcuts, st, solid, inner)
+        points += more
+    return value, err, points
+
+
+def _hidden_integral(S, Pc, Qc, nP, atol, area_P, whole, shortcuts, st, solid=None,
+                     inner=None):
+    """The adaptive integral of :func:`occluded_pair` to the absolute error ``atol``,
+    with ``whole`` the pair's unoccluded value and estimate (per unit area
+    of P)."""
+    R = receiver_frame(nP)
+    c = Pc.mean(axis=0)
+    dP = float(nP @ Pc[0])
+    radius = (1.0 + tol.AREA_HIDDEN_PAD) * float(np.linalg.norm(Pc - c, axis=1).max())
+    lines = event_lines(S, nP, dP, R, c, radius, Qc, shortcuts, st, solid)
+    # the emitter cut along the events: in floating point with the lines lengthened
+    # across its boundary, else as cut, else noded on a grid of AREA_HULL_RTOL of P's
+    # size (the cuts move by that much), each way with and without lengthening; the
+    # first whose cells cover P (to AREA_CELL_COVER_RTOL) is taken, else the one that
+    # covers most (the area missing is in the estimate). GEOS may give up noding, or
+    # polygonizing drop a ring of nearly coincident lines it finds invalid and the cell
+    # inside it: counted (test_closed_cornell_box_wall_cut_into_cells_that_cover_it)
+    area_Pc = float(np.linalg.norm(area_vector(Pc)))
+    cells, failure = None, None
+    for k, (grid, lengthen) in enumerate(((None, True), (None, False),
+                                          (tol.AREA_HULL_RTOL * radius, True),
+                                          (tol.AREA_HULL_RTOL * radius, False))):
+        try:
+            T = cut_cells(Pc, nP, lines, R, c, grid=grid, lengthen=lengthen)
+        except shapely.errors.GEOSException as exc:
+            failure = exc
+            continue
+        if cells is None or len(T) and triangle_areas(T).sum() > triangle_areas(cells).sum():
+            cells = T
+        if triangle_areas(cells).sum() >= (1 - tol.AREA_CELL_COVER_RTOL) * area_Pc:
+            break
+    if k and st is not None:
+        st.cell_fallbacks += 1
+    if cells is None:
+        raise NumericalError(f"could not cut the emitter along its {len(lines)} "
+                             f"visibility events: {failure}") from failure
+    # a blocker's vertex on the emitter is where the hidden part depends on the direction
+    # alone; a cell's corner may lie as far from it as the cut lines were lengthened
+    # (twice AREA_CUT_EXTEND_RTOL of P's size: both lines through it moved), and is
+    # still that point for the collapsed rule (else no vertex of the cell is, and the
+    # rules' differences there shrink only as the triangles do: pinned in
+    # tests/test_regressions.py)
+    T, corner = _corner_first(cells, S[1:], nP, dP,
+                              2.0 * tol.AREA_CUT_EXTEND_RTOL * np.sqrt(area_Pc))
+    depth = np.zeros(len(T), dtype=int)
+    # many cells (small ones) start with the low pair of rules, few with the high pair
+    # (and so do the triangles they are cut into); at a coarse target, all start low
+    start = int(len(T) <= tol.AREA_MANY_CELLS and atol < tol.AREA_LOW_RULES_TOLERANCE)
+    rung = np.full(len(T), start)
+    setup = (hidden_setup(Qc, S[1:]) if solid is None or inner is None
+             else hidden_setup(Qc, S[1:], solid[1:], inner[1:]))
+    # what the bound 0 <= hidden <= unoccluded may cost the pair (hidden_values)
+    bound_atol = [tol.AREA_IMAGE_BUDGET_SHARE * atol]
+    total_area = float(triangle_areas(T).sum())
+    slivers = points = 0
+    # the triangles accepted: vertices, level, rung; per unit area of P, the high rule's
+    # integral of the hidden part H, the rules' difference on H, the point values'
+    # estimates, and the same two rules' integrals of U (the unoccluded point values)
+    acc = {k: [] for k in ("T", "depth", "rung", "corner", "hi", "diff", "rnd", "hiU", "loU",
+                           "lo", "rndU", "checked")}
+    while True:
+        T, depth, rung, corner, sl, pts = _adaptive_levels(
+            T, depth, rung, corner, nP, Qc, S, st, setup, atol, area_P, total_area,
+            start, shortcuts, bound_atol, acc)
+        slivers += sl
+        points += pts
+        # the rules' errors on U add up to the error of their sum over the emitter,
+        # known exactly (the pair's closed form less the slivers', at most their area):
+        # where the differences bounded every triangle's errors on H and on F_occ = U -
+        # H, that sum is within the differences' (missed_U <= 0 below); where it is
+        # not, the triangles are checked one by one against their own closed forms, and
+        # those whose differences prove too small are refined
+        cat = {k: np.concatenate(v) if v else np.zeros(0) for k, v in acc.items()}
+        dF = np.abs((cat["hiU"] - cat["loU"]) - (cat["hi"] - cat["lo"]))
+        lost = (slivers + max(area_Pc - total_area, 0.0)) / area_P
+        missed_U = (abs(float(cat["hiU"].sum()) - whole[0]) - float((cat["diff"] + dF).sum())
+                    - float(cat["rndU"].sum()) - whole[1] - lost)
+        todo = np.flatnonzero(~cat["checked"].astype(bool))
+        if missed_U <= 0 or not len(todo):
+            break
+        Ta = np.concatenate(acc["T"])
+        exU, exE = _triangle_unoccluded(Ta[todo], nP, Qc)
+        shown = (np.abs(cat["hiU"][todo] - exU / area_P) - dF[todo] - cat["rndU"][todo]
+                 - exE / area_P)
+        cat["diff"][todo] = np.maximum(cat["diff"][todo], shown)
+        cat["checked"][todo] = True
+        share = 0.5 * atol / total_area * triangle_areas(Ta)
+        suspect = np.zeros(len(Ta), dtype=bool)
+        suspect[todo] = shown > tol.AREA_RULE_CHECK_SHARE * share[todo]
+        a_rung, a_depth = cat["rung"].astype(int), cat["depth"].astype(int)
+        again = suspect & ~((a_rung == 1) & (a_depth >= tol.AREA_MAX_DEPTH))
+        if st is not None:
+            st.checked_triangles += len(todo)
+            st.refined_triangles += int(again.sum())
+        keep = ~again
+        for k in acc:
+            acc[k] = [cat[k][keep] if k != "T" else Ta[keep]]
+        if not again.any():
+            break
+        # the suspects start again: rung 0 takes the high pair, rung 1 is cut in four
+        T, depth, rung, corner = _refined(Ta[again], a_depth[again], a_rung[again],
+                                          cat["corner"][again].astype(bool), start)
+    cat = {k: np.concatenate(v) if v else np.zeros(0) for k, v in acc.items()}
+    hidden = 0.5 * slivers / area_P + float(cat["hi"].sum())
+    err = 0.5 * slivers / area_P + float((cat["diff"] + cat["rnd"]).sum())
+    value = whole[0] - hidden
+    err += max(area_Pc - total_area, 0.0) / area_P      # cells dropped or lost
+    return value, err + whole[1], points
+
+
+def _refined(T, depth, rung, corner, start):
+    """Triangles that missed their share: at rung 0 the same triangle at rung 1; at rung 1
+    its four quarters (cut at its edges' midpoints; the first keeps a corner, the first
+    vertex) at the level below, on rung ``start``. Returns ``(T, depth, rung, corner)``."""
+    again, split = rung == 0, rung == 1
+    T = np.concatenate([T[again], quarter(T[split])])
+    depth = np.concatenate([depth[again], np.repeat(depth[split] + 1, 4)])
+    corner = np.concatenate([corner[again], np.stack(
+        [corner[split]] + [np.zeros(int(split.sum()), dtype=bool)] * 3, axis=1).ravel()])
+    rung = np.concatenate([np.ones(int(again.sum()), dtype=int),
+                           np.full(4 * int(split.sum()), start)])
+    return T, depth, rung, corner
+
+
+def _adaptive_levels(T, depth, rung, corner, nP, Qc, S, st, setup, atol, area_P,
+                     total_area, start, shortcuts, bound_atol, acc):
+    """:func:`_hidden_integral`'s adaptive rules, level by level until every triangle is
+    accepted: the accepted ones appended to ``acc`` (see there). Returns the (empty)
+    triangles left, the slivers' area (not evaluated) and the points used."""
+    slivers = points = 0
+    while len(T):
+        # a sliver (between nearly coincident events) is not evaluated: the hidden part
+        # is between 0 and 1, so its integral is half the sliver's area, within as much
+        area_t = triangle_areas(T)
+        sliver = area_t / area_P <= tol.AREA_SLIVER_SHARE * atol
+        slivers += float(area_t[sliver].sum())
+        T, depth, rung, area_t = T[~sliver], depth[~sliver], rung[~sliver], area_t[~sliver]
+        corner = corner[~sliver]
+        if not len(T):
+            break
+        # every other triangle of this level together: its rules' nodes, one call
+        X, weights, groups = [], [], []
+        for r, at_corner in ((0, False), (0, True), (1, False), (1, True)):
+            sel = np.flatnonzero((rung == r) & (corner == at_corner))
+            if len(sel):
+                (Xl, Wl), (Xh, Wh) = rule_pair(T[sel], r, at_corner, atol)
+                # at a corner on the lower pair, a third rule between the two
+                Xm, Wm = (triangle_rule(T[sel], CORNER_MIDDLE_RULE) if r == 0 and at_corner
+                          else (np.zeros((len(sel), 0, 3)), np.zeros((len(sel), 0))))
+                X.append(np.concatenate([Xl, Xh, Xm], axis=1).reshape(-1, 3))
+                weights.append(np.concatenate([Wl, Wh, Wm], axis=1).reshape(-1) / area_P)
+                groups.append((sel, Wl, Wh, Wm))
+        X = np.concatenate(X)
+        H, EH = hidden_values(X, nP, Qc, S[1:], st, atol=tol.AREA_IMAGE_BUDGET_SHARE * atol,
+                              setup=setup, shortcuts=shortcuts,
+                              weights=np.concatenate(weights), bound_atol=bound_atol)
+        # the unoccluded point values at the same nodes, for the check of the rules'
+        # differences (_hidden_integral)
+        U, EU = (v[0] for v in point_values(X, nP, [Qc]))
+        points += H.size
+        hi, lo, mid, rnd = (np.empty(len(T)) for _ in range(4))
+        hiU, loU, rndU = np.empty(len(T)), np.empty(len(T)), np.empty(len(T))
+        at = 0
+        for sel, Wl, Wh, Wm in groups:
+            nl, nh = Wl.shape[1], Wl.shape[1] + Wh.shape[1]
+            n = len(sel) * (nh + Wm.shape[1])
+            Hg, EHg = H[at:at + n].reshape(len(sel), -1), EH[at:at + n].reshape(len(sel), -1)
+            Ug, EUg = U[at:at + n].reshape(len(sel), -1), EU[at:at + n].reshape(len(sel), -1)
+            at += n
+            hi[sel], lo[sel] = (Wh * Hg[:, nl:nh]).sum(axis=1), (Wl * Hg[:, :nl]).sum(axis=1)
+            # the third rule's value, where there is one (else the low rule's)
+            mid[sel] = (Wm * Hg[:, nh:]).sum(axis=1) if Wm.shape[1] else lo[sel]
+            hiU[sel], loU[sel] = (Wh * Ug[:, nl:nh]).sum(axis=1), (Wl * Ug[:, :nl]).sum(axis=1)
+            # the rules' nodes' estimates: they bound what the point values' errors can
+            # hide of the rules' differences
+            rnd[sel] = ((Wh * EHg[:, nl:nh]).sum(axis=1) + (Wl * EHg[:, :nl]).sum(axis=1)
+                        + (Wm * EHg[:, nh:]).sum(axis=1))
+            rndU[sel] = (Wh * EUg[:, nl:nh]).sum(axis=1) + (Wl * EUg[:, :nl]).sum(axis=1)
+        hi, lo, mid, rnd, hiU, loU, rndU = (v / area_P for v in (hi, lo, mid, rnd, hiU, loU,
+                                                                 rndU))
+        # the high rule's error estimated by the low rule's difference from it, and at a
+        # corner on the lower pair also by the third rule's (between the two): near a
+        # corner the collapsed rules' errors do not fall monotonically with the order,
+        # so two of them can agree by chance far closer than either is to the integral
+        # (AREA_CORNER_MIDDLE_ORDER; test_gunter1_row_17_without_shortcuts_within_its_estimates)
+        diff = np.maximum(np.abs(hi - lo), np.abs(hi - mid))
+        # half of atol for the rules' differences: what the triangles accepted so
+        # far left of it is shared among the others by area (at the first level, the
+        # triangle's share of the emitter), never less than the triangle's share of the
+        # emitter (triangles accepted at the last level above their share would
+        # otherwise leave none, and every other triangle would be cut to the last level)
+        rules_err = float(sum(float(d.sum()) for d in acc["diff"]))
+        left = max(0.5 * atol - rules_err, 0.0)
+        share = np.maximum(left / area_t.sum(), 0.5 * atol / total_area) * area_t
+        missed = diff > share
+        # a triangle the low pair missed takes the high pair; one the high pair missed
+        # is cut in four at its edges' midpoints (up to AREA_MAX_DEPTH)
+        again = missed & (rung == 0)
+        split = missed & (rung == 1) & (depth < tol.AREA_MAX_DEPTH)
+        done = ~(again | split)
+        for k, v in (("T", T), ("depth", depth), ("rung", rung), ("corner", corner),
+                     ("hi", hi), ("lo", lo), ("diff", diff), ("rnd", rnd), ("hiU", hiU),
+                     ("loU", loU), ("rndU", rndU), ("checked", np.zeros(len(T), dtype=bool))):
+            acc[k].append(v[done])
+        T, depth, rung, corner = _refined(T[again | split], depth[again | split],
+                                          rung[again | split], corner[again | split], start)
+    return T, depth, rung, corner, slivers, points

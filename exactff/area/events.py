@@ -1,0 +1,192 @@
+"""The emitter cut along its visibility events: the lines of the emitter's plane across
+which the hidden part of a receiver may lose smoothness (vertex-edge events between the
+receiver and its blockers, and the planes of the polygons), and the cells between them,
+triangulated, on which the adaptive rules integrate a smooth function
+(docs/explanation/area-form-factors.md).
+"""
+
+import numpy as np
+import shapely
+
+from .. import _tolerances as tol
+from ..geometry import cross, plane_frame
+from ..rings import successors
+
+__all__ = ["event_lines", "cut_cells"]
+
+
+def _vertex_edge_rows(pa, pb, k, start, W, nxt, shortcuts, nQ, q0, RQ, seen, st):
+    """:func:`event_lines`' rows for the ordered polygon pairs (pa, pb): every vertex v
+    of polygon pa against every edge (e0, e1) of pb, its plane's normal m (rows of no
+    plane dropped) and pa, less the blocker-blocker events whose lines of sight miss Qc
+    (``seen``, in Qc's frame ``RQ`` about q0) with ``shortcuts``."""
+    # every vertex of A against every edge of B, (kA * kB) rows per pair in loop order
+    size = k[pa] * k[pb]
+    row_pair = np.repeat(np.arange(len(pa)), size)
+    off = np.arange(int(size.sum())) - np.repeat(np.cumsum(size) - size, size)
+    ra, kb = pa[row_pair], k[pb[row_pair]]
+    vi = start[ra] + off // kb
+    ei = start[pb[row_pair]] + off % kb
+    v, e0, e1 = W[vi], W[ei], W[nxt[ei]]
+    m = cross(e0 - v, e1 - v)
+    keep = np.any(m != 0, axis=1)
+    if shortcuts:
+        # between two blockers, the lines through v and the points of the edge meet Qc's
+        # plane along the edge's central image from v: does it cross Qc? (unbounded: kept)
+        d0, d1 = (e0 - v) @ nQ, (e1 - v) @ nQ
+        bounded = keep & (ra > 0) & (pb[row_pair] > 0) & (d0 * d1 > 0)
+        if bounded.any():
+            vb, h = v[bounded], (q0 - v[bounded]) @ nQ
+            ia = vb + (h / d0[bounded])[:, None] * (e0[bounded] - vb) - q0
+            ib = vb + (h / d1[bounded])[:, None] * (e1[bounded] - vb) - q0
+            segs = shapely.linestrings(np.stack([ia @ RQ[:2].T, ib @ RQ[:2].T], axis=1))
+            miss = ~shapely.intersects(seen, segs)
+            if st is not None:
+                st.culled_events += int(miss.sum())
+            keep[np.flatnonzero(bounded)[miss]] = False
+    return v[keep], e0[keep], e1[keep], m[keep], ra[keep]
+
+
+def event_lines(S, nP, dP, R, c, radius, Qc, shortcuts=True, st=None, solid=None):
+    """The segments of P's plane (in its 2-D frame ``R`` about ``c``) across which the
+    integrand may lose smoothness: for a vertex ``v`` of one polygon of S and an edge of
+    another, the image of the edge through ``v`` on P's plane (the points from which
+    ``v`` is seen on the edge: vertex-edge visibility events); and the lines where the
+    planes of the polygons of S meet P's plane. An event between two blockers (S[1:])
+    counts only where its lines of sight go on to meet Qc, the part of the receiver S[0]
+    in front of P (elsewhere it changes nothing that is seen of Qc). Each is kept
+    within ``radius`` of ``c``
+    (a disk that holds P) as a segment ``(point, point)``, its ends placed on the exact
+    line (the intersection of two planes), so that events through one point (a corner
+    of a blocker on P) cross there to rounding; an image through infinity is kept as the
+    whole chord. Between two faces of one convex solid (``solid``: the group of each
+    polygon of S, -1 for none, :func:`~exactff.area.culling.closed_solids`) there is no
+    event but the faces' planes: the faces' images united are the solid's, whose outline
+    changes only there. Without ``shortcuts`` every blocker-blocker event is kept; the
+    ones culled are counted in ``st.culled_events``, the vertex-edge pairs of one solid
+    in ``st.solid_events`` (``st``: an :class:`~exactff.area.row.AreaStats`,
+    optional)."""
+    nQ, q0, RQ, Q2 = plane_frame(Qc)
+    seen = shapely.Polygon(Q2)
+    shapely.prepare(seen)
+    # the events in order (per polygon A: its plane, then per other polygon B, vertex v
+    # of A and edge of B): the plane m . (x - v) = 0 through v, and the span's ends
+    n = len(S)
+    k = np.array([len(A) for A in S])
+    start = np.concatenate([[0], np.cumsum(k)])
+    W = np.concatenate([np.asarray(A, dtype=float) for A in S])
+    nxt = successors(start)
+    # the ordered pairs (a, b) of different polygons, a-major, less those within one
+    # convex solid
+    pa, pb = (g.ravel() for g in np.meshgrid(np.arange(n), np.arange(n), indexing="ij"))
+    pair = pa != pb
+    if shortcuts and solid is not None:
+        sol = np.asarray(solid)
+        same = pair & (sol[pa] >= 0) & (sol[pa] == sol[pb])
+        if same.any() and st is not None:
+            st.solid_events += int((k[pa] * k[pb])[same].sum())
+        pair &= ~same
+    pa, pb = pa[pair], pb[pair]
+    # in batches of pairs (the rows' temporaries bounded), in order
+    size = k[pa] * k[pb]
+    per = tol.AREA_EVENT_ROWS_PER_CALL
+    cut = np.searchsorted(np.cumsum(size), per * np.arange(1, int(size.sum()) // per + 1))
+    parts_ = [_vertex_edge_rows(a, b, k, start, W, nxt, shortcuts, nQ, q0, RQ, seen, st)
+              for a, b in zip(np.split(pa, cut), np.split(pb, cut)) if len(a)]
+    v, e0, e1, m, ra = ((np.concatenate([q[t] for q in parts_]) if parts_ else
+                         np.zeros((0, 3)) if t < 4 else np.zeros(0, dtype=int)) for t in range(5))
+    # where the lines from v through the edge's ends meet P's plane (not spanned:
+    # parallel, or the image passes through infinity: the whole chord)
+    den0, den1 = (e0 - v) @ nP, (e1 - v) @ nP
+    ok = ((np.abs(den0) >= tol.AREA_RAY_PARALLEL * np.linalg.norm(e0 - v, axis=1))
+          & (np.abs(den1) >= tol.AREA_RAY_PARALLEL * np.linalg.norm(e1 - v, axis=1))
+          & (den0 * den1 > 0))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        x0 = v + ((dP - v @ nP) / den0)[:, None] * (e0 - v)
+        x1 = v + ((dP - v @ nP) / den1)[:, None] * (e1 - v)
+    # each polygon's own plane, through its first vertex, before its vertex-edge events
+    first = W[start[:-1]]
+    planes = cross(W[start[:-1] + 1] - first, W[start[:-1] + 2] - first)
+    order = np.argsort(np.concatenate([2 * np.arange(n), 2 * ra + 1]), kind="stable")
+    m = np.concatenate([planes, m])[order]
+    v = np.concatenate([first, v])[order]
+    span = np.concatenate([np.zeros((n, 2, 3)), np.stack([x0, x1], axis=1)])[order]
+    spanned = np.concatenate([np.zeros(n, dtype=bool), ok])[order]
+    # each normal scaled by its largest component (one of tiny coordinates, 1e-217,
+    # would underflow in its norm); a normal of 0 (no plane) has no event
+    big = np.abs(m).max(axis=1)
+    nz = big > 0
+    m, v, span, spanned = m[nz] / big[nz, None], v[nz], span[nz], spanned[nz]
+    # the plane meets P's plane n . x = dP in a line; x0 is its point nearest to c, d
+    # its direction; the chord of the disk, or the span's part of it
+    first = m[np.arange(len(m)), np.argmax(m != 0, axis=1)]
+    m = np.where((first > 0)[:, None], m, -m)          # one line for either orientation
+    d = cross(nP, m)
+    dn = np.linalg.norm(d, axis=1)
+    live = dn >= tol.AREA_EVENT_PARALLEL * np.linalg.norm(m, axis=1)
+    m, v, span, spanned, d = m[live], v[live], span[live], spanned[live], d[live] / dn[live, None]
+    A = np.stack([np.broadcast_to(nP, m.shape), m, d], axis=1)
+    rhs = np.stack([np.full(len(m), dP), np.einsum("lx,lx->l", m, v), d @ c], axis=1)
+    x0 = np.linalg.solve(A, rhs[:, :, None])[:, :, 0]
+    h2 = radius * radius - np.einsum("lx,lx->l", x0 - c, x0 - c)
+    live = h2 > 0
+    x0, d, span, spanned, half = x0[live], d[live], span[live], spanned[live], np.sqrt(h2[live])
+    ends = np.stack([x0 - half[:, None] * d, x0 + half[:, None] * d], axis=1)
+    # the span's ends where they lie on the chord (as computed: segments that meet there
+    # join exactly), else the chord's ends
+    t = np.einsum("lex,lx->le", span - x0[:, None], d)
+    swap = t[:, 1] < t[:, 0]
+    t = np.where(swap[:, None], t[:, ::-1], t)
+    span = np.where(swap[:, None, None], span[:, ::-1], span)
+    inside = ~spanned | ((t[:, 0] < half) & (t[:, 1] > -half))
+    use = spanned[:, None] & (np.stack([t[:, 0] > -half, t[:, 1] < half], axis=1))
+    ends = np.where(use[:, :, None], span, ends)[inside]
+    E2 = (ends - c) @ R[:2].T
+    # one copy of each segment: the plane through a vertex and an edge is the same for
+    # every pair of polygons sharing them (a vertex of k faces against an edge of two
+    # gives up to 2k copies), and GEOS nodes a copy at the cost of a distinct line; the ends
+    # are computed alike for each copy, so the copies are equal to the bit
+    swap = (E2[:, 0, 0] > E2[:, 1, 0]) | ((E2[:, 0, 0] == E2[:, 1, 0]) & (E2[:, 0, 1] > E2[:, 1, 1]))
+    E2 = np.unique(np.where(swap[:, None, None], E2[:, ::-1], E2) + 0.0, axis=0)
+    return [(p0, p1) for p0, p1 in E2]
+
+
+def cut_cells(Pc, nP, lines, R, c, grid=None, lengthen=True):
+    """P (clipped) cut along the event lines, as triangles (t, 3, 3) in the world (the
+    lines are cut to P first, so every cell lies in P; with ``grid``, the noding snaps
+    the vertices to a grid of that size, and the cells lie in P to that size).
+
+    With ``lengthen``, an end of a cut line within ``AREA_CUT_EXTEND_RTOL`` of P's size
+    of P's boundary is moved out by as much, across the boundary; what sticks out is a
+    dangle, dropped. (GEOS rounds a line's crossing with the boundary, which may leave
+    the end a few ulps inside: a dangle that polygonizing drops, and the cell it should
+    have cut left whole, with a kink of the hidden part across it; pinned in
+    tests/test_area_view3d.py: a line through a corner of the emitter.)"""
+    poly = shapely.Polygon((Pc - c) @ R[:2].T)
+    cut = (shapely.intersection(shapely.linestrings(np.asarray(lines, dtype=float)), poly)
+           if len(lines) else np.empty(0, dtype=object))
+    pieces = shapely.get_parts(shapely.get_parts(cut[~shapely.is_empty(cut)]))
+    pieces = pieces[shapely.get_type_id(pieces) == 1]                   # line strings
+
+    def faces_of(segments):
+        # the union nodes the segments (already cut to P) and P's boundary; cutting the
+        # union to P again would lose nodes on the boundary, and with them whole cells
+        return shapely.get_parts(shapely.polygonize(shapely.get_parts(
+            shapely.union_all([poly.boundary, *segments], grid_size=grid))))
+
+    if len(pieces) and lengthen:
+        ends = shapely.get_coordinates(pieces).reshape(-1, 2, 2)   # a cut line is straight
+        step = tol.AREA_CUT_EXTEND_RTOL * np.sqrt(poly.area)
+        d = ends[:, 1] - ends[:, 0]
+        length = np.linalg.norm(d, axis=1)
+        d = np.divide(d * step, length[:, None], out=np.zeros_like(d), where=length[:, None] > 0)
+        on = shapely.distance(shapely.points(ends), poly.boundary) <= step    # (n, 2)
+        faces = faces_of(shapely.linestrings(ends + np.stack([-d * on[:, :1], d * on[:, 1:]],
+                                                            axis=1)))
+    else:
+        faces = faces_of(pieces)
+    # cells of P thinner than rounding are dropped (their area is counted in the estimate)
+    faces = faces[shapely.area(faces) > tol.AREA_SLIVER_CELL * poly.area]
+    tris = shapely.get_parts(shapely.constrained_delaunay_triangles(faces))
+    uv = shapely.get_coordinates(shapely.get_exterior_ring(tris)).reshape(-1, 4, 2)[:, :3]
+    return c + uv @ R[:2]
