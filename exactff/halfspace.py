@@ -169,13 +169,13 @@ def _snapped(X, A, B, snap):
     if snap is None:
         return None
     for which, E in ((0, A), (1, B)):
-        if np.all(np.abs(X - E) <= snap * EPS_DOUBLE * np.abs(E).max()):
+        if np.all(np.abs(X - E) <= snap * _EPS_DOUBLE * np.abs(E).max()):
             return which
     return None
 
 
 #: the double precision machine epsilon (2 roundoffs): the snap of split_polygon
-EPS_DOUBLE = float(np.finfo(float).eps)
+_EPS_DOUBLE = float(np.finfo(float).eps)
 
 
 def clip_above_horizon(Q, zero=0.0):

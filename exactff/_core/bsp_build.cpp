@@ -634,10 +634,16 @@ struct Builder {
                 // cross: it touches the plane at the end nearer to it, which stands for
                 // the crossing within its own error and its distance from the plane
                 bool outside = false;
+                double slack = 0;
                 {
                     const double* A = vertex(f, a);
                     const double* B = vertex(f, b);
-                    const double slack = vertex_error(f, a) + vertex_error(f, b);
+                    // their errors, the crossing's own and a few roundoffs of their
+                    // magnitudes (a subnormal coordinate keeps fewer digits)
+                    double amax = 0;
+                    for (int c = 0; c < 3; ++c)
+                        amax = std::max({amax, std::fabs(A[c]), std::fabs(B[c])});
+                    slack = vertex_error(f, a) + vertex_error(f, b) + e + 4 * DBL_EPSILON_ * amax;
                     for (int c = 0; c < 3; ++c)
                         outside |= !(X[c] >= std::min(A[c], B[c]) - slack &&
                                      X[c] <= std::max(A[c], B[c]) + slack);
@@ -647,11 +653,18 @@ struct Builder {
                     LD ea, eb;
                     const LD va = LD(q_fabs(plane_value(plane, vertex_q(f, i), ea)));
                     const LD vb = LD(q_fabs(plane_value(plane, vertex_q(f, j), eb)));
-                    near = va <= vb ? 0 : 1;
                     const LD norm = LD(plane.norm);
-                    off_plane = ((near == 0 ? va + ea : vb + eb) / norm) * (1 + 1e-15L);
+                    const int nearer = va <= vb ? 0 : 1;
+                    off_plane = ((nearer == 0 ? va + ea : vb + eb) / norm) * (1 + 1e-15L);
                     off_plane_q = off_plane;
-                    ++outside_crossings;
+                    // only where that end lies within its roundings of the plane; else
+                    // the crossing is off the edge's box by its own rounding only
+                    if (off_plane <= 16 * LD(slack)) {
+                        near = nearer;
+                        ++outside_crossings;
+                    } else {
+                        outside = false;
+                    }
                 }
                 for (int w = 0; w < 2 && near < 0; ++w) {
                     const double* E = vertex(f, w == 0 ? i : j);
