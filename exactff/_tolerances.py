@@ -10,6 +10,7 @@ __all__ = [
     "PLANE_SIDE_ULPS",
     "ON_PLANE_ULPS",
     "BSP_COPLANAR_ULPS",
+    "BSP_SPLIT_SNAP_EPS",
     "ZBUFFER_ROUNDING_ULPS",
     "COVERED_RTOL",
     "DEFAULT_RTOL",
@@ -77,6 +78,7 @@ __all__ = [
     "EXACT_FILTER_ROUNDOFFS",
     "SVBSP_BOX_MARGIN",
     "SVBSP_BOX_FLOOR",
+    "SVBSP_LEAK_BUDGET_SHARE",
     "BSP_QUAD_TRUST",
     "CONVEX_TURN_ULPS",
     "EQ3_FACTOR_ULPS",
@@ -169,6 +171,14 @@ ON_PLANE_ULPS = 2.0
 #: order faces by their geometry (a rafter 3.5e-13 below a slab's plane at
 #: 15 m, where the band is 2.1e-13, is in front of it for every method).
 BSP_COPLANAR_ULPS = 64.0
+#: BSP tree: a split's crossing within this many machine epsilons (of an end point's
+#: largest coordinate, in every coordinate) of one of its edge's end points is that end
+#: point, in both parts (exactff.halfspace.split_polygon, Builder::split): an exact
+#: split of a polygon that nearly lies in the plane would otherwise leave edges an ulp
+#: long, whose planes through the point the compiled core cannot orient (such a piece
+#: has no shadow, and what it covers is charged to the pieces behind it). The compiled
+#: build charges the end point's distance from the crossing to its vertex bound.
+BSP_SPLIT_SNAP_EPS = 16.0
 
 #: The z-buffers' depth-tie test evaluates ``n . (X - c)`` for a hit point ``X = t d``
 #: in the receiver's local frame, not the input coordinates: on top of the band, it
@@ -580,6 +590,13 @@ SVBSP_FILTER_ROUNDOFFS = 4.0
 #: double is within this many long double unit roundoffs (LDBL_EPSILON each) of its
 #: permanent of its exact value; beyond, its sign is taken from it, else computed exactly.
 EXACT_FILTER_ROUNDOFFS = 32.0
+#: Compiled core (constants.h): what a row's shadows leave uncovered (the part of a
+#: non-convex image outside its kernel, a sliver with no shadow: Core::leave_out) is
+#: charged to every receiving value while the row's total stays within this share of
+#: the relative tolerance: a hundredth of the tolerance at VALUE_FLOOR (1e-16 at the
+#: default 1e-12), so that it never decides whether a value meets the tolerance; larger
+#: parts are charged only to the later visible pieces whose cones meet theirs.
+SVBSP_LEAK_BUDGET_SHARE = 1e-4
 #: Compiled core (constants.h): the point must lie outside a subtree's bounding box by
 #: this share of the box's and the point's coordinates' magnitudes (plus SVBSP_BOX_FLOOR)
 #: for the box's conic hull from it to be a pointed cone (the culling test).

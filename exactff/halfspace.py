@@ -103,11 +103,15 @@ def clip_halfspace(V, counts, h):
     return np.take_along_axis(out, order[:, :, None], axis=1), new_counts
 
 
-def split_polygon(P, sign, s):
+def split_polygon(P, sign, s, crossing=None, snap=None):
     """Split polygon P by a plane: ``sign`` (-1, 0, +1) and ``s`` (signed values) per
     vertex; returns ``(front, back)``, each None when fewer than 3 vertices are left.
     Vertices on the plane (sign 0) go to both; a crossing is interpolated from its
-    edge's front end point, so that an edge shared by two polygons splits identically.
+    edge's front end point, so that an edge shared by two polygons splits identically,
+    or taken from ``crossing(a, b)`` (front and back end points' indices) where that
+    returns one (the BSP tree's exact crossings). With ``snap``, a crossing within
+    ``snap`` times the double roundoff of an end point's largest coordinate (in every
+    coordinate) of that end point is that end point, in both parts: no edge an ulp long.
 
     Examples
     --------
@@ -127,12 +131,51 @@ def split_polygon(P, sign, s):
         if sign[i] * sign[j] < 0:
             # from the front end point, so that a shared edge splits identically
             a, b = (i, j) if sign[i] > 0 else (j, i)
-            X = P[a] + (s[a] / (s[a] - s[b])) * (P[b] - P[a])
-            front.append(X)
-            back.append(X)
+            X = None if crossing is None else crossing(a, b)
+            if X is None:
+                X = P[a] + (s[a] / (s[a] - s[b])) * (P[b] - P[a])
+            near = _snapped(X, P[i], P[j], snap)
+            if near is None:
+                front.append(X)
+                back.append(X)
+            elif near == 0:
+                # the crossing is vertex i: it ends the part it is on and starts the other
+                (back if sign[i] > 0 else front).append(P[i])
+            else:
+                (front if sign[i] > 0 else back).append(P[j])
+    if snap is not None:
+        # a vertex equal to the one before it (two crossings snapped to one end point)
+        front, back = _without_repeats(front), _without_repeats(back)
     f = np.array(front) if len(front) >= 3 else None
     b = np.array(back) if len(back) >= 3 else None
     return f, b
+
+
+def _without_repeats(ring):
+    """The ring without a vertex equal to the one before it (the first, where the last
+    equals it), as the compiled build drops them."""
+    out = []
+    for v in ring:
+        if not (out and np.array_equal(out[-1], v)):
+            out.append(v)
+    if len(out) > 1 and np.array_equal(out[0], out[-1]):
+        out = out[1:]
+    return out
+
+
+def _snapped(X, A, B, snap):
+    """0 or 1 where crossing X lies within ``snap`` roundoffs of end point A or B (every
+    coordinate, of the point's largest), else None (as the compiled build's split)."""
+    if snap is None:
+        return None
+    for which, E in ((0, A), (1, B)):
+        if np.all(np.abs(X - E) <= snap * _EPS_DOUBLE * np.abs(E).max()):
+            return which
+    return None
+
+
+#: the double precision machine epsilon (2 roundoffs): the snap of split_polygon
+_EPS_DOUBLE = float(np.finfo(float).eps)
 
 
 def clip_above_horizon(Q, zero=0.0):

@@ -125,6 +125,40 @@ def _near_coplanar(A, B):
     return False
 
 
+def _within_band(scene, a, b):
+    """Whether every vertex of polygon ``a`` lies within the near-coplanar band of polygon
+    ``b``'s plane as the scene stores it (``n . x = d``, the floats taken as exact): the
+    engines' rule (``exactff.predicates.coplanar_band``: 64 units of rounding ``u`` of
+    ``|n| . |x| + |d|``), restated in rationals; False where a vertex lies beyond it by
+    more than 4 ``u`` of those magnitudes, else None where one lies within 4 ``u`` of the
+    band's edge (the engines test it in floating point)."""
+    n = _rational(scene.normals[b])
+    d = Fraction(float(scene.plane_offsets[b]))
+    u = Fraction(1, 2 ** 53)
+    edge = False
+    for v in scene.polygons[a]:
+        x = _rational(v)
+        off = abs(_dot(n, x) - d)
+        mag = sum(abs(c * y) for c, y in zip(n, x)) + abs(d)
+        if off > 68 * u * mag:
+            return False
+        edge |= off > 60 * u * mag
+    return None if edge else True
+
+
+def _coplanar_by_rule(scene, j, target):
+    """The engines' depth tie: True where each polygon lies within the other's band
+    (a tie whichever plane the BSP tree splits by); False where neither does (the exact
+    geometry orders them); None otherwise (one within the other's band only, or at a
+    band's edge: the engines' BSP tree decides by which plane it splits with)."""
+    a, b = _within_band(scene, j, target), _within_band(scene, target, j)
+    if a is None or b is None:
+        return None
+    if a and b:
+        return True
+    return False if not (a or b) else None
+
+
 def _convex(poly2):
     turns = set()
     for k in range(len(poly2)):
@@ -240,11 +274,14 @@ def visible_pieces(scene, point, target, exclude=()):
         g = [depth(v) for v in V]
         if all(x <= 0 for x in g):
             continue                     # behind the point
-        if _near_coplanar(V, T):
-            return None                  # the engines' convention: a depth tie
-        if all(x > far for x in g):
+        tie = _coplanar_by_rule(scene, j, target)
+        if tie is None:
+            return None                  # the engines' tree decides: undecided
+        if tie and not _in_front_on_a_tie(scene, P, j, target):
+            continue                     # a depth tie it loses: it hides nothing
+        if not tie and all(x > far for x in g):
             continue                     # beyond the target
-        if not all(0 < x < near for x in g):
+        if not tie and not all(0 < x < near for x in g):
             # it reaches the target's range: clip it in 3-D, both planes exact
             plane = _plane(V)
             if not planar or plane is None:

@@ -415,25 +415,33 @@ def test_flush_faces(case):
     # rounding over the sine of the angle (a bound of 4e-4 on these scenes, 1.4e15 on a
     # house); from the splitter's own plane in quadruple precision each is within an ulp
     # (7e-15 over 300 drawn scenes). Every value the exact construction decides holds
-    # against it within the compiled bound (over 200 drawn scenes it decided 348 of 600
-    # values, and the Python engine, whose crossings are rounded in double and whose
-    # bound leaves them out, missed 6 of them: FLUSH_PYTHON_MISS). The construction
-    # leaves pairs within 256 ulps of coplanar undecided, where the engines' band decides
-    # (per vertex in the BSP builds: 6 of the 252 undecided values part by more than
-    # the target, an open question of issue 48), so no engine agreement is asked there.
+    # against it within the compiled bound. The construction follows the rule of
+    # docs/explanation/conventions.md (coplanar pairs are depth ties, any other pair is
+    # ordered by its exact geometry): over 150 drawn scenes it decided 437 of 450 values
+    # (the rest: one face within the other's band but not the other way round, where the
+    # BSP tree's choice of splitter decides, or a vertex at a band's edge). Before the
+    # builds followed the rule (they took a vertex in the band as on the plane whatever
+    # the pair), 39 of 591 decided values were off, by up to 2 %.
+    # The Python engine (the oracle) follows the same rule; its bound leaves its own
+    # crossings' rounding out (docs/explanation/robustness.md), so it is held to the
+    # accuracy target: over 400 drawn scenes it decided 1,193 values, the compiled
+    # core held all within its bound and the Python engine all within 2.7e-16.
     scene, p, n = case
     F, E = COMPILED.point_form_factors(scene, p, n, error=True)
+    G, H = PYTHON.point_form_factors(scene, p, n, error=True)
     assert np.all(F >= 0) and np.all(E <= OCC_ATOL), E
     for j in range(len(scene)):
         U = visible_form_factor(scene, p, n, j)
         if U is not None:
             assert abs(F[j] - U) <= E[j], (j, F[j], float(U), E[j])
+            assert abs(G[j] - U) <= H[j] + OCC_ATOL, (j, G[j], float(U), H[j])
 
 
-# A flush pair hypothesis found where the Python engine's double crossings miss: a
+# A flush pair hypothesis found where the Python engine's double crossings missed: a
 # triangle 1.7e-9 of its size off a rotated triangle's plane, crossing it. The
 # construction gives 0.0631155693781842 for the base; the compiled core 0.06311556937818426
-# (bound 5.5e-17), the Python engine 0.06311557582738951 (6.4e-9 off, bound 6.8e-15).
+# (bound 5.5e-17); the Python engine gave 0.06311557582738951 (6.4e-9 off, bound 6.8e-15)
+# until its build took each crossing exactly (bsp._ExactPoints), as the compiled one does.
 FLUSH_PYTHON_MISS = (
     [[[1.3660254037844388, 0.0, -0.3660254037844386],
       [0.6160254037844388, -0.8660254037844387, 0.9330127018922193],
@@ -447,12 +455,13 @@ FLUSH_PYTHON_MISS = (
     [0.0, 0.0, 0.0], [0.8660254037844387, 0.0, 0.5000000000000001])
 
 
-def test_flush_pair_the_python_engine_misses():
+def test_flush_pair_both_engines_hold():
     polys, p, n = FLUSH_PYTHON_MISS
     scene = ef.Scene.from_polygons([np.array(P) for P in polys])
     p, n = np.array(p), np.array(n)
     F, E = COMPILED.point_form_factors(scene, p, n, error=True)
     G, H = PYTHON.point_form_factors(scene, p, n, error=True)
-    U = visible_form_factor(scene, p, n, 0)
-    assert U is not None and abs(F[0] - U) <= E[0] <= 1e-16
-    assert abs(G[0] - U) > 1e3 * H[0]      # the oracle's known miss (its crossings)
+    for j in range(len(scene)):
+        U = visible_form_factor(scene, p, n, j)
+        assert U is not None and abs(F[j] - U) <= E[j] <= 1e-16
+        assert abs(G[j] - U) <= H[j]

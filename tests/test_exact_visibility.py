@@ -138,7 +138,7 @@ def test_undecided_where_the_construction_does_not_apply():
     assert visible_form_factor(ef.Scene([L]), P, N, 0) is None
 
 
-def test_undecided_where_the_engines_conventions_decide():
+def test_the_engines_conventions_decided_or_left_undecided():
     # found by drawn scenes (occluded_scenes), from the origin looking up. A vertical
     # triangle whose plane passes 0.4 ulp from the point: the engines see it edge-on
     # (no image), its exact image is a sliver of F = 6.5e-20
@@ -154,8 +154,10 @@ def test_undecided_where_the_engines_conventions_decide():
     assert visible_form_factor(scene, p, n, 0) is None
     assert visible_form_factor(ef.Scene([big]), p, n, 0) > 0
     # a triangle and a smaller one on its plane, each rounded its own way after the
-    # rotation: in the engines' near-coplanar band, a depth tie (the first in front);
-    # exactly, the smaller one is wholly in front within the cone over it
+    # rotation: each within the other's near-coplanar band, so a depth tie by the rule of
+    # docs/explanation/conventions.md (the first in input order in front), which the
+    # construction now decides as the engines do: the outer one whole, the inner hidden
+    # (exactly, the smaller one would be wholly in front within the cone over it)
     outer = np.array([[2.0, 0.0, 0.7679491924311226], [0.5000000000000002, 1.7320508075688774,
                       3.3660254037844384], [0.49999999999999956, -1.7320508075688767,
                       3.3660254037844393]])
@@ -163,8 +165,13 @@ def test_undecided_where_the_engines_conventions_decide():
                       2.933012701892219], [0.7499999999999998, -0.8660254037844384,
                       2.9330127018922196]])
     pair = ef.Scene([outer, inner])
+    alone = visible_form_factor(ef.Scene([outer]), p, n, 0, two_sided=True)
+    assert visible_form_factor(pair, p, n, 0, two_sided=True) == alone > 0
+    assert visible_form_factor(pair, p, n, 1, two_sided=True) == 0
+    # and one lying off the other's band by far more than its own: the exact geometry
+    lifted = ef.Scene([outer, inner + 1e-9 * np.cross(outer[1] - outer[0], outer[2] - outer[0])])
     for j in (0, 1):
-        assert visible_form_factor(pair, p, n, j, two_sided=True) is None
+        assert visible_form_factor(lifted, p, n, j, two_sided=True) is not None
     # both decided without the other
     assert visible_form_factor(ef.Scene([inner]), p, n, 0, two_sided=True) > 0
 

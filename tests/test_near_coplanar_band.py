@@ -138,18 +138,35 @@ def test_monte_carlo_value_within_its_sampling_error(offset):
 
 def test_tilted_rafter_of_the_ifc_house_monte_carlo_within_its_sampling_error():
     """The issue's own rafter: its vertices +3.6e-14, -3.5e-13 and -3.5e-13 off the
-    slab's plane (the first within the band, the others beyond). The BSP tree puts it
-    wholly below the slab (in front for the points below); the z-buffers, deciding the
-    tie pair by pair by the same rule, see it too. The Monte Carlo estimate lies within
-    5 standard errors sqrt(F (1 - F) / N) of the exact value (point by point, half of
-    the rafter was a tie: 0.064 against 0.136; before, all of it: 0)."""
+    slab's plane (the first within the band, the others beyond): not coplanar with the
+    slab by the rule, so ordered by its exact geometry. It crosses the slab's plane: the
+    corner at +3.6e-14, cut off where its two edges cross the plane, lies above the slab
+    and is hidden from the points below (issue 48: the BSP tree used to take that vertex
+    as on the plane and put the rafter wholly below, 0.5 % of its value). Its value is
+    the rafter's unoccluded one less the corner's (both closed forms, the corner's
+    crossings in rationals); the Monte Carlo estimate lies within 5 standard errors
+    sqrt(F (1 - F) / N) of the exact value (point by point, half of the rafter was a tie:
+    0.064 against 0.136; before, all of it: 0)."""
+    from fractions import Fraction
+
     slab = _rect(20.0, 30.0, 20.0, 30.0, Z)
     rafter = np.array([[23.0, 21.0, Z + 3.6e-14], [23.0, 29.0, Z - 3.5e-13],
                        [27.0, 29.0, Z - 3.5e-13]])
     scene = ef.Scene.from_polygons([slab, rafter])
+    # the corner above the slab's plane z = Z, exactly (the slab's vertices are on it)
+    top = [tuple(Fraction(float(c)) for c in v) for v in rafter]
+    zz = Fraction(Z)
+
+    def crossing(a, b):
+        t = (a[2] - zz) / (a[2] - b[2])
+        return [float(x + t * (y - x)) for x, y in zip(a, b)]
+
+    corner = np.array([rafter[0], crossing(top[0], top[1]), crossing(top[0], top[2])])
     mc = MonteCarlo(samples=100_000, seed=5)
     for p in POINTS:
         F = ef.form_factors(scene, p, UP)
-        assert abs(F[1] - ef.point_polygon_form_factor(p, UP, rafter)) <= 1e-12
+        hidden = ef.point_polygon_form_factor(p, UP, corner)
+        assert hidden > 1e-4 * F[1]
+        assert abs(F[1] - (ef.point_polygon_form_factor(p, UP, rafter) - hidden)) <= 1e-12
         Fm = mc.point_form_factors(scene, p, UP)
         assert np.all(np.abs(Fm - F) <= 5 * np.sqrt(F * (1 - F) / mc.n) + 1e-12), (F, Fm)

@@ -5,6 +5,7 @@ decided against the polygon's Newell plane. Closed scenes stay closed: shared ve
 are not moved, so rows still sum to 1."""
 
 import numpy as np
+import pytest
 
 import exactff as ef
 from exactff.testing import assert_form_factors_close
@@ -43,8 +44,9 @@ def test_rows_of_a_box_with_a_bent_wall_sum_to_one():
 def test_compiled_core_alone_on_a_box_with_a_bent_wall():
     # the compiled core without its fallback (tolerance None): a bent quad seen from its
     # neighbour's centroid has a non-convex image, whose shadow as the intersection of
-    # its edges' half-spaces hid 0.74 % of row 21 behind it (bound 1e-17); it is now
-    # left out and its area charged to the band. Closed rows sum to 1 within their bounds
+    # its edges' half-spaces was taken as the image and hid 0.74 % of row 21 behind it
+    # (bound 1e-17); that intersection is the image's kernel, and the part of the image
+    # it leaves out is charged to the bounds. Closed rows sum to 1 within their bounds
     scene = box_with_a_bent_wall()
     bent = [i for i, P in enumerate(scene.polygons) if np.any(P[:, 0] > 1.0)]
     for i in [0, 13] + bent:
@@ -63,3 +65,27 @@ def test_bent_quad_is_its_boundary_ring():
     engine = ef.form_factors(scene, p, n)[j]        # nothing hides the wall from p
     for value in (kernel, engine):
         assert_form_factors_close(value, ref, rtol=1e-12, atol=1e-13)
+
+
+@pytest.mark.parametrize("height", [3e-8, 1e-8])
+def test_bent_quad_seen_from_near_its_plane_hides_within_the_bound(height):
+    # A quad bent by 1e-7 (a corner raised), seen from 1e-8..3e-8 above its first
+    # triangle's plane, between that plane and its Newell plane: its image is not
+    # convex, so the intersection of its edges' half-spaces (the compiled core's shadow)
+    # is the image's kernel, smaller than the image by a slab about 1e-7 wide; the wall
+    # behind shows through it by about 2e-10 (measured against the Python engine, which
+    # clips with the image itself). The core charges that slab to the wall's bound
+    # (beyond * perimeter / 2 pi): without the charge the wall's bound was 6e-17. The
+    # quad's own value is its boundary ring's (40 digits).
+    bent = np.array([[0, 1, 0], [1, 1, 0], [1, 2, 1e-7], [0, 2, 0]], float)
+    wall = np.array([[-3, 4, -3], [3, 4, -3], [3, 4, 3], [-3, 4, 3]], float)
+    scene = ef.Scene.from_polygons([bent, wall])
+    p, n = np.array([0.5, 0.0, height]), np.array([0.0, 1.0, 0.0])
+    F, E = ef.Exact(engine="compiled", tolerance=None).point_form_factors(scene, p, n,
+                                                                          error=True)
+    G, H = ef.Exact(engine="python").point_form_factors(scene, p, n, error=True)
+    ring = float(boundary_form_factor(p, n, bent, dps=40))
+    assert abs(F[0] - ring) <= E[0] and abs(G[0] - ring) <= 1e-15
+    assert abs(F[1] - G[1]) <= E[1] + H[1]
+    assert abs(F[1] - G[1]) > 1e-11        # the wall does show through the kernel
+    assert E[1] < 1e-8

@@ -576,16 +576,14 @@ def _inside_rows(scene, k):
 
 
 #: closed surfaces: file -> rows (the k-th point _inside_rows gives); the box files are
-#: closed by their missing front wall and seen from points in the room. A row whose
-#: compiled bound is above the accuracy target is marked (issue 48; figures measured)
-ISSUE_48 = "issue 48: the compiled core's bound on real files"
+#: closed by their missing front wall and seen from points in the room
 CLOSED_ROWS = [
     ("idler_riser.STL", 0),
     ("idler_riser.STL", 1),   # its compiled bound was 0.32 before the exact crossings
     ("ADIS16480.STL", 0),
-    pytest.param("quadknot.obj", 0, marks=pytest.mark.xfail(
-        strict=False, reason=ISSUE_48 + ": engines part on polygon 850, compiled 0 +- 2.0e-19,"
-        " Python 5.7e-19 +- 1.3e-34; the exact construction does not decide")),
+    # the engines parted on polygon 850 (compiled 0 +- 2.0e-19, Python 5.7e-19 +- 1.3e-34)
+    # until both builds ordered near-coplanar faces by one rule
+    ("quadknot.obj", 0),
     ("quadknot.obj", 1),
     ("CornellBox-Sphere.obj", 0), ("CornellBox-Sphere.obj", 1),
     ("CornellBox-Water.obj", 0),

@@ -259,3 +259,34 @@ def test_area_event_lines_hold_each_line_once():
     # (copies are equal to the bit: their ends are computed alike)
     canon = {tuple((s if tuple(s[0]) <= tuple(s[1]) else s[::-1]).ravel()) for s in lines}
     assert len(canon) == len(lines)
+
+
+def test_bsp_crossing_on_an_edge_at_a_subnormal_height():
+    # hypothesis (enclosures): a unit box whose floor is at z = 2.2e-311 and two copies of
+    # a cube in its corner. A split of the wall x = 0 along the floor edge gave a
+    # crossing whose subnormal z kept fewer digits than its neighbours', so it lay off
+    # the edge's box by 1e-323; taken as a crossing beyond its edge, it was moved to an
+    # end point half a metre away and charged that: a bound of 1.97 on a value of 0.355.
+    # The row sums to 1 and each value holds against the Python engine (both bounds
+    # within the accuracy target).
+    z = 2.225073858507e-311
+    box = [[[0, 0, z], [1, 0, z], [1, 1, z], [0, 1, z]],
+           [[0, 0, 1], [0, 1, 1], [1, 1, 1], [1, 0, 1]],
+           [[0, 0, z], [0, 0, 1], [1, 0, 1], [1, 0, z]],
+           [[0, 1, z], [1, 1, z], [1, 1, 1], [0, 1, 1]],
+           [[0, 0, z], [0, 1, z], [0, 1, 1], [0, 0, 1]],
+           [[1, 0, z], [1, 0, 1], [1, 1, 1], [1, 1, z]]]
+    cube = [[[.5, 1, .5], [1, 1, .5], [1, .5, .5], [.5, .5, .5]],
+            [[1, .5, 1], [1, 1, 1], [.5, 1, 1], [.5, .5, 1]],
+            [[1, .5, .5], [1, .5, 1], [.5, .5, 1], [.5, .5, .5]],
+            [[.5, 1, 1], [1, 1, 1], [1, 1, .5], [.5, 1, .5]],
+            [[.5, .5, 1], [.5, 1, 1], [.5, 1, .5], [.5, .5, .5]],
+            [[1, 1, .5], [1, 1, 1], [1, .5, 1], [1, .5, .5]]]
+    scene = ef.Scene.from_polygons([np.array(P, float) for P in box + cube + cube])
+    p, n = np.full(3, 0.0625), np.array([0.0, 0.0, 1.0])
+    F, E = ef.Exact(engine="compiled", tolerance=None).point_form_factors(scene, p, n,
+                                                                          error=True)
+    G, H = ef.Exact(engine="python").point_form_factors(scene, p, n, error=True)
+    assert E.max() <= 1e-11 and H.max() <= 1e-11
+    assert np.all(np.abs(F - G) <= E + H)
+    assert abs(F.sum() - 1) <= 1e-12

@@ -136,7 +136,7 @@ def _fake_core(monkeypatch, F0, E0, band0):
     real = compiled.compiled_core
 
     class Core:
-        def row(self, *args):
+        def row(self, **options):
             m = 2
             F, E, band = np.zeros(m), np.zeros(m), np.zeros(m)
             F[0], E[0], band[0] = F0, E0, band0

@@ -24,6 +24,7 @@ CONSTANTS = [
     ("EQ3_FACTOR_ULPS", "double"),
     ("SVBSP_BOX_MARGIN", "long double"),
     ("SVBSP_BOX_FLOOR", "long double"),
+    ("SVBSP_LEAK_BUDGET_SHARE", "double"),
     ("BSP_QUAD_TRUST", "double"),
 ]
 

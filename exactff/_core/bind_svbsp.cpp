@@ -57,6 +57,10 @@ py::tuple row(const exactff::Core& core, Array<double> point, Array<double> norm
     d["exact_tests"] = st.exact_tests;
     d["quad_pieces"] = st.quad_pieces;
     d["unattributed_bound"] = static_cast<double>(st.unattributed);
+    d["shadows_left_out"] = st.slivers[0] + st.slivers[1] + st.slivers[2] + st.slivers[3];
+    d["kernel_shadows"] = st.kernels;
+    d["omitted_sides"] = st.omitted_sides;
+    d["leaks"] = static_cast<int64_t>(st.leaks.size());
     d["working_bytes"] = st.working_bytes;
     return py::make_tuple(as_array(r.F), as_array(r.E), as_array(r.B), as_array(r.G), d);
 }
@@ -64,7 +68,7 @@ py::tuple row(const exactff::Core& core, Array<double> point, Array<double> norm
 py::tuple build_bsp_arrays(Array<double> V, Array<int64_t> start, Array<double> normals,
                            Array<double> offsets, int64_t candidates, int64_t sample,
                            int64_t axis_min, double axis_imbalance, double band_ulps,
-                           uint64_t seed) {
+                           double snap, uint64_t seed) {
     int64_t n = int64_t(start.size()) - 1;
     if (n < 0 || normals.size() != 3 * n || offsets.size() != n ||
         V.size() != 3 * start.data()[n])
@@ -76,7 +80,7 @@ py::tuple build_bsp_arrays(Array<double> V, Array<int64_t> start, Array<double> 
         py::gil_scoped_release release;
         b = exactff::build_bsp(V.data(), start.data(), n, normals.data(), offsets.data(),
                                size_t(candidates), size_t(sample), size_t(axis_min),
-                               axis_imbalance, band_ulps, seed);
+                               axis_imbalance, band_ulps, snap, seed);
     }
     py::array_t<double> nn({py::ssize_t(b.node_d.size()), py::ssize_t(3)});
     std::copy(b.node_n.begin(), b.node_n.end(), nn.mutable_data());
@@ -106,7 +110,8 @@ PYBIND11_MODULE(_svbsp, m) {
         .def_property_readonly("unit_roundoff", &exactff::Core::unit_roundoff);
     m.def("build_bsp_arrays", &build_bsp_arrays, py::arg("V"), py::arg("start"),
           py::arg("normals"), py::arg("offsets"), py::arg("candidates"), py::arg("sample"),
-          py::arg("axis_min"), py::arg("axis_imbalance"), py::arg("band_ulps"), py::arg("seed"),
+          py::arg("axis_min"), py::arg("axis_imbalance"), py::arg("band_ulps"), py::arg("snap"),
+          py::arg("seed"),
           "The scene's BSP tree as arrays (exactff.visibility.bsp.build_bsp, "
           "engine='compiled')");
 }

@@ -44,6 +44,8 @@ using Q = Quad;
 const LD Q_ROUNDOFF = static_cast<LD>(QUAD_EPS);
 inline Q q_fabs(Q x) { return x < 0 ? -x : x; }
 
+constexpr double DBL_EPSILON_ = std::numeric_limits<double>::epsilon();
+
 // a plane N . x = d with N and d exact (expansions of the input's doubles)
 struct ExactSplitPlane {
     Exp N[3];
@@ -118,7 +120,7 @@ struct Builder {
     const double* src_offsets;   // (n,)
     int64_t n_src;
     size_t candidates, sample, axis_min;
-    double axis_imbalance, band_ulps;
+    double axis_imbalance, band_ulps, snap;
     Stream pool_rng, sample_rng;
 
     // fragments: vertices concatenated (x, y, z), their starts, their source polygons
@@ -135,6 +137,8 @@ struct Builder {
     // input vertex it starts from, >= 0) or a splitting plane (-1 - its index in
     // split_planes): the exact crossings are taken from it, not from the vertices
     std::vector<int64_t> carrier;
+    // per vertex, the input vertex it is (-1: a crossing)
+    std::vector<int64_t> input_id;
     // every plane a split has cut along (a polygon's, or an axis plane), and its exact
     // form where there is one (a polygon planar only within tolerance has none)
     std::vector<SplitPlane> split_planes;
@@ -145,6 +149,7 @@ struct Builder {
     const int64_t* input_start;
     std::vector<int64_t> input_owner;  // per input vertex, its polygon
     int64_t exact_crossings = 0;
+    int64_t outside_crossings = 0;  // exact crossings beyond their edge (Builder::split)
     // per source polygon, the plane its splits cut along (SplitPlane: through three of
     // its vertices, in quadruple precision)
     std::vector<SplitPlane> planes;
@@ -157,16 +162,17 @@ struct Builder {
 
     Builder(const double* V, const int64_t* start, int64_t n, const double* normals,
             const double* offsets, size_t candidates_, size_t sample_, size_t axis_min_,
-            double axis_imbalance_, double band_ulps_, uint64_t seed)
+            double axis_imbalance_, double band_ulps_, double snap_, uint64_t seed)
         : src_normals(normals), src_offsets(offsets), n_src(n), candidates(candidates_),
           sample(sample_), axis_min(axis_min_), axis_imbalance(axis_imbalance_),
-          band_ulps(band_ulps_), pool_rng(seed * 2 + 1), sample_rng(seed * 2 + 2) {
+          band_ulps(band_ulps_), snap(snap_), pool_rng(seed * 2 + 1), sample_rng(seed * 2 + 2) {
         verts.assign(V, V + 3 * start[n]);
         vert_err.assign(size_t(start[n]), 0.0);
         verts_q.assign(V, V + 3 * start[n]);
         vert_err_q.assign(size_t(start[n]), 0.0);
         carrier.resize(size_t(start[n]));
         std::iota(carrier.begin(), carrier.end(), int64_t(0));
+        input_id = carrier;
         input_V = V;
         input_start = start;
         input_owner.resize(size_t(start[n]));
@@ -452,24 +458,88 @@ struct Builder {
         return s > 0 ? 1 : -1;
     }
 
-    // whether fragment f has vertices in front (bit 1) and behind (bit 2) of a plane
-    int classify(int64_t f, const double* n, double d) const {
-        int has = 0;
+    // whether every vertex of input polygon a lies within the near-coplanar band of
+    // input polygon b's plane (exactff.predicates.coplanar_pairs)
+    bool within_band(int64_t a, int64_t b) const {
         double s;
-        for (size_t i = 0, k = count(f); i < k; ++i) {
-            int sg = side(vertex(f, i), n, d, s);
-            if (sg > 0) has |= 1;
-            else if (sg < 0) has |= 2;
+        for (int64_t i = input_start[a]; i < input_start[a + 1]; ++i)
+            if (side(input_V + 3 * i, src_normals + 3 * b, src_offsets[b], s) != 0) return false;
+        return true;
+    }
+
+    // the rule of docs/explanation/conventions.md: two polygons are coplanar (a depth
+    // tie) when every vertex of one lies within the band of the other's plane
+    bool coplanar_pair(int64_t a, int64_t b) const {
+        return a == b || within_band(a, b) || within_band(b, a);
+    }
+
+    // the exact side of fragment f's vertex i of the plane a node cuts along (`src`'s,
+    // or the axis plane x_axis = c): from its quadruple-precision point where that
+    // decides, else exactly for an input vertex; a crossing within its own rounding of
+    // the plane (a few 1e-33 of its size) lies on it
+    int exact_side(int64_t f, size_t i, int64_t src, int axis, double c) {
+        const Q* x = vertex_q(f, i);
+        const int64_t id = input_id[size_t(frag_start[f]) + i];
+        const LD eq = vertex_error_q(f, i);
+        if (src < 0) {
+            if (id >= 0) {
+                const double v = input_V[3 * id + axis];
+                return v > c ? 1 : (v < c ? -1 : 0);
+            }
+            const Q v = x[axis] - Q(c);
+            if (LD(q_fabs(v)) <= eq + 2 * Q_ROUNDOFF * (LD(q_fabs(x[axis])) + std::fabs(LD(c))))
+                return 0;
+            return v > 0 ? 1 : -1;
+        }
+        const int64_t k = polygon_plane_index(src);
+        LD err;
+        const Q v = plane_value(split_planes[size_t(k)], x, err);
+        const LD bound = err + eq * split_planes[size_t(k)].norm;
+        if (LD(q_fabs(v)) > bound) return v > 0 ? 1 : -1;
+        if (id < 0) return 0;
+        const Exp e = exact_value(split_exact[size_t(k)], input_V + 3 * id);
+        return e.empty() ? 0 : (e.back() > 0 ? 1 : -1);
+    }
+
+    // the sides of fragment f's vertices for the plane n . x = d a node cuts along
+    // (polygon `src`'s, or the axis plane x_axis = d with src = -1), by the rule of
+    // docs/explanation/conventions.md: beyond the near-coplanar band, the sign; within
+    // it, 0 (in the plane) where the fragment's polygon is coplanar with `src`, else the
+    // exact side (a polygon flush with another to 1e-13 but not coplanar with it is
+    // ordered by its exact geometry, and split exactly where it crosses the plane)
+    int sides(int64_t f, const double* n, double d, int64_t src, int axis, std::vector<int>& sg) {
+        const size_t k = count(f);
+        sg.resize(k);
+        double s;
+        bool zero = false;
+        for (size_t i = 0; i < k; ++i) {
+            sg[i] = side(vertex(f, i), n, d, s);
+            zero |= sg[i] == 0;
+        }
+        if (zero && !(src >= 0 && coplanar_pair(frag_source[f], src))) {
+            for (size_t i = 0; i < k; ++i)
+                if (sg[i] == 0) sg[i] = exact_side(f, i, src, axis, d);
+        }
+        int has = 0;
+        for (size_t i = 0; i < k; ++i) {
+            if (sg[i] > 0) has |= 1;
+            else if (sg[i] < 0) has |= 2;
         }
         return has;
     }
 
+    // whether fragment f has vertices in front (bit 1) and behind (bit 2) of a plane
+    int classify(int64_t f, const double* n, double d, int64_t src, int axis) {
+        return sides(f, n, d, src, axis, scratch_sides);
+    }
+    std::vector<int> scratch_sides;
+
     // score 5 splits + |front - back| - 2 coplanar over fragments `frags`; imbalance too
-    void score(const std::vector<int64_t>& frags, const double* n, double d, int64_t& sc,
-               int64_t& imbalance) const {
+    void score(const std::vector<int64_t>& frags, const double* n, double d, int64_t src,
+               int axis, int64_t& sc, int64_t& imbalance) {
         int64_t nsplit = 0, nfront = 0, nback = 0, ncop = 0;
         for (int64_t f : frags) {
-            int has = classify(f, n, d);
+            int has = classify(f, n, d, src, axis);
             if (has == 3) ++nsplit;
             else if (has == 1) ++nfront;
             else if (has == 2) ++nback;
@@ -485,22 +555,23 @@ struct Builder {
     // (Builder::crossing); where that is not within BSP_QUAD_TRUST of an ulp (a chain of
     // grazing splits, or one steeper than 1e12), exactly from what the edge lies on
     // (Builder::exact_crossing). Every vertex records what its outgoing edge lies on.
-    void split(int64_t f, const double* n, double d, int64_t cut, int64_t& f_front,
-               int64_t& f_back) {
+    void split(int64_t f, const double* n, double d, int64_t src, int axis, int64_t cut,
+               int64_t& f_front, int64_t& f_back) {
         // a copy: exact_crossing may register the fragment's own plane (split_planes grows)
         const SplitPlane plane = split_planes[size_t(cut)];
         size_t k = count(f);
-        std::vector<int> sg(k);
-        std::vector<double> s(k);
+        std::vector<int> sg;
         std::vector<double> fv, bv, fe, be, fqe, bqe;
         std::vector<Q> fq, bq;
         std::vector<int64_t> fc, bc;
         const int64_t source = frag_source[f];
         const int64_t along = -1 - cut;
-        for (size_t i = 0; i < k; ++i) sg[i] = side(vertex(f, i), n, d, s[i]);
+        sides(f, n, d, src, axis, sg);
+        std::vector<int64_t> fid, bid;
         auto keep = [&](std::vector<double>& pv, std::vector<double>& pe, std::vector<Q>& pq,
                         std::vector<double>& pqe, std::vector<int64_t>& pc, const double* X,
                         double e, const Q* Xq, double eq, int64_t on) {
+            (&pv == &fv ? fid : bid).push_back(-1);
             pv.insert(pv.end(), X, X + 3);
             pe.push_back(e);
             pq.insert(pq.end(), Xq, Xq + 3);
@@ -512,12 +583,17 @@ struct Builder {
             const int64_t on = carrier[size_t(frag_start[f]) + i];
             // the outgoing edge of vertex i in the front piece: its own edge where that
             // edge stays in front (or reaches a crossing from in front), else the cut
-            if (sg[i] >= 0)
+            const int64_t id = input_id[size_t(frag_start[f]) + i];
+            if (sg[i] >= 0) {
                 keep(fv, fe, fq, fqe, fc, vertex(f, i), vertex_error(f, i), vertex_q(f, i),
                      vertex_error_q(f, i), (sg[j] >= 0 || sg[i] > 0) ? on : along);
-            if (sg[i] <= 0)
+                fid.back() = id;
+            }
+            if (sg[i] <= 0) {
                 keep(bv, be, bq, bqe, bc, vertex(f, i), vertex_error(f, i), vertex_q(f, i),
                      vertex_error_q(f, i), (sg[j] <= 0 || sg[i] < 0) ? on : along);
+                bid.back() = id;
+            }
             if (sg[i] * sg[j] < 0) {
                 // from the front end point, so that a shared edge splits identically
                 size_t a = sg[i] > 0 ? i : j, b = sg[i] > 0 ? j : i;
@@ -526,8 +602,14 @@ struct Builder {
                 double e = crossing(vertex_q(f, a), vertex_q(f, b), plane, vertex_error_q(f, a),
                                     vertex_error_q(f, b), X, Xq, &eq);
                 LD size = 0;
-                for (int c = 0; c < 3; ++c) size = std::max(size, LD(q_fabs(Xq[c])));
-                if (!(eq <= BSP_QUAD_TRUST * UNIT_ROUNDOFF * double(size)) &&
+                // the quadruple point rounds to the double the exact one does only where
+                // its bound does not straddle a rounding boundary
+                bool ambiguous = false;
+                for (int c = 0; c < 3; ++c) {
+                    size = std::max(size, LD(q_fabs(Xq[c])));
+                    ambiguous |= double(Xq[c] - Q(eq)) != double(Xq[c] + Q(eq));
+                }
+                if ((ambiguous || !(eq <= BSP_QUAD_TRUST * UNIT_ROUNDOFF * double(size))) &&
                     exact_crossing(on, source, cut, Xq)) {
                     // exact, rounded to quadruple precision (three roundoffs of the
                     // quotient and the terms' sum), then to double
@@ -540,17 +622,128 @@ struct Builder {
                     eq = double(8 * std::sqrt(LD(3)) * Q_ROUNDOFF * size);
                     e = double(1.01L * (LD(eq) + std::sqrt(off)));
                 }
-                // the crossing leaves the front piece along the cut, and the back piece
-                // along its own edge; or the other way round
-                keep(fv, fe, fq, fqe, fc, X, e, Xq, eq, sg[i] > 0 ? along : on);
-                keep(bv, be, bq, bqe, bc, X, e, Xq, eq, sg[i] < 0 ? along : on);
+                // a crossing within `snap` roundoffs of an end point is that end point
+                // (as exactff.halfspace.split_polygon): no edge an ulp long, which the
+                // core could not orient; the end point's copy stands for the crossing,
+                // within their distance and the crossing's bound
+                int near = -1;
+                // the crossing must lie on the edge: one beyond its ends (by more than
+                // their errors) is the crossing of the carrier line, nearly parallel to
+                // the plane, that the rounded ends straddle while the true ones do not
+                // (both within their roundings of the plane). The edge then does not
+                // cross: it touches the plane at the end nearer to it, which stands for
+                // the crossing within its own error and its distance from the plane
+                bool outside = false;
+                double slack = 0;
+                {
+                    const double* A = vertex(f, a);
+                    const double* B = vertex(f, b);
+                    // their errors, the crossing's own and a few roundoffs of their
+                    // magnitudes (a subnormal coordinate keeps fewer digits)
+                    double amax = 0;
+                    for (int c = 0; c < 3; ++c)
+                        amax = std::max({amax, std::fabs(A[c]), std::fabs(B[c])});
+                    slack = vertex_error(f, a) + vertex_error(f, b) + e + 4 * DBL_EPSILON_ * amax;
+                    for (int c = 0; c < 3; ++c)
+                        outside |= !(X[c] >= std::min(A[c], B[c]) - slack &&
+                                     X[c] <= std::max(A[c], B[c]) + slack);
+                }
+                LD off_plane = 0, off_plane_q = 0;
+                if (outside) {
+                    LD ea, eb;
+                    const LD va = LD(q_fabs(plane_value(plane, vertex_q(f, i), ea)));
+                    const LD vb = LD(q_fabs(plane_value(plane, vertex_q(f, j), eb)));
+                    const LD norm = LD(plane.norm);
+                    const int nearer = va <= vb ? 0 : 1;
+                    off_plane = ((nearer == 0 ? va + ea : vb + eb) / norm) * (1 + 1e-15L);
+                    off_plane_q = off_plane;
+                    // only where that end lies within its roundings of the plane; else
+                    // the crossing is off the edge's box by its own rounding only
+                    if (off_plane <= 16 * LD(slack)) {
+                        near = nearer;
+                        ++outside_crossings;
+                    } else {
+                        outside = false;
+                    }
+                }
+                for (int w = 0; w < 2 && near < 0; ++w) {
+                    const double* E = vertex(f, w == 0 ? i : j);
+                    const double amax =
+                        std::max({std::fabs(E[0]), std::fabs(E[1]), std::fabs(E[2])});
+                    bool close = true;
+                    for (int c = 0; c < 3; ++c)
+                        close &= std::fabs(X[c] - E[c]) <= snap * DBL_EPSILON_ * amax;
+                    if (close) near = w;
+                }
+                if (near < 0) {
+                    // the crossing leaves the front piece along the cut, and the back
+                    // piece along its own edge; or the other way round
+                    keep(fv, fe, fq, fqe, fc, X, e, Xq, eq, sg[i] > 0 ? along : on);
+                    keep(bv, be, bq, bqe, bc, X, e, Xq, eq, sg[i] < 0 ? along : on);
+                    continue;
+                }
+                const size_t w = near == 0 ? i : j;
+                const double* E = vertex(f, w);
+                const Q* Eq = vertex_q(f, w);
+                LD d2 = 0, dq2 = 0;
+                for (int c = 0; c < 3; ++c) {
+                    const LD r = LD(X[c]) - LD(E[c]);
+                    d2 += r * r;
+                    const LD rq = LD(Xq[c] - Eq[c]);
+                    dq2 += rq * rq;
+                }
+                const double ec = outside ? double(1.01L * (off_plane + LD(vertex_error(f, w))))
+                                          : double(1.01L * (std::sqrt(d2) + LD(e)));
+                const double eqc =
+                    outside ? double(1.01L * (off_plane_q + LD(vertex_error_q(f, w))))
+                            : double(1.01L * (std::sqrt(dq2) + LD(eq)));
+                const bool front_side = near == 0 ? sg[i] < 0 : sg[i] > 0;
+                if (front_side) {
+                    keep(fv, fe, fq, fqe, fc, E, ec, Eq, eqc, near == 0 ? on : along);
+                    fid.back() = input_id[size_t(frag_start[f]) + w];
+                } else {
+                    keep(bv, be, bq, bqe, bc, E, ec, Eq, eqc, near == 0 ? on : along);
+                    bid.back() = input_id[size_t(frag_start[f]) + w];
+                }
             }
         }
         ++splits;
-        auto add = [&](const std::vector<double>& pv, const std::vector<double>& pe,
-                       const std::vector<Q>& pq, const std::vector<double>& pqe,
-                       const std::vector<int64_t>& pc) -> int64_t {
+        auto add = [&](std::vector<double>& pv, std::vector<double>& pe, std::vector<Q>& pq,
+                       std::vector<double>& pqe, std::vector<int64_t>& pc,
+                       std::vector<int64_t>& pid) -> int64_t {
+            // a vertex equal to the one before it (two crossings snapped to one end
+            // point) is dropped: the edge from the one before takes its carrier
+            for (size_t r = pe.size(); r-- > 1 && pe.size() > 1;) {
+                const size_t a = r, b = (r + 1) % pe.size();
+                (void)b;
+                if (pv[3 * a] == pv[3 * (a - 1)] && pv[3 * a + 1] == pv[3 * (a - 1) + 1] &&
+                    pv[3 * a + 2] == pv[3 * (a - 1) + 2]) {
+                    pe[a - 1] = std::max(pe[a - 1], pe[a]);
+                    pqe[a - 1] = std::max(pqe[a - 1], pqe[a]);
+                    pc[a - 1] = pc[a];
+                    pv.erase(pv.begin() + 3 * a, pv.begin() + 3 * a + 3);
+                    pq.erase(pq.begin() + 3 * a, pq.begin() + 3 * a + 3);
+                    pe.erase(pe.begin() + a);
+                    pqe.erase(pqe.begin() + a);
+                    pc.erase(pc.begin() + a);
+                    pid.erase(pid.begin() + a);
+                }
+            }
+            if (pe.size() > 1 && pv[0] == pv[3 * (pe.size() - 1)] &&
+                pv[1] == pv[3 * (pe.size() - 1) + 1] && pv[2] == pv[3 * (pe.size() - 1) + 2]) {
+                const size_t a = pe.size() - 1;   // the last equals the first: drop the first
+                pe[a] = std::max(pe[a], pe[0]);
+                pqe[a] = std::max(pqe[a], pqe[0]);
+                pc[a] = pc[0];
+                pv.erase(pv.begin(), pv.begin() + 3);
+                pq.erase(pq.begin(), pq.begin() + 3);
+                pe.erase(pe.begin());
+                pqe.erase(pqe.begin());
+                pc.erase(pc.begin());
+                pid.erase(pid.begin());
+            }
             if (pv.size() < 9) return -1;
+            input_id.insert(input_id.end(), pid.begin(), pid.end());
             verts.insert(verts.end(), pv.begin(), pv.end());
             vert_err.insert(vert_err.end(), pe.begin(), pe.end());
             verts_q.insert(verts_q.end(), pq.begin(), pq.end());
@@ -560,8 +753,8 @@ struct Builder {
             frag_source.push_back(source);
             return int64_t(frag_source.size()) - 1;
         };
-        f_front = add(fv, fe, fq, fqe, fc);
-        f_back = add(bv, be, bq, bqe, bc);
+        f_front = add(fv, fe, fq, fqe, fc, fid);
+        f_back = add(bv, be, bq, bqe, bc, bid);
     }
 
     struct Item {
@@ -627,7 +820,8 @@ struct Builder {
             size_t j = 0;
             for (size_t c = 0; c < pool.size(); ++c) {
                 int64_t s = frag_source[pool[c]], sc, imb;
-                score(*on, src_normals + 3 * s, src_offsets[s], sc, imb);
+                score(*on, src_normals + 3 * s, src_offsets[s], s, -1, sc, imb);
+
                 if (c == 0 || sc < best) {
                     best = sc;
                     best_imbalance = imb;
@@ -668,7 +862,7 @@ struct Builder {
                 double na[3] = {0, 0, 0};
                 na[axis] = 1.0;
                 int64_t a_score, a_imb;
-                score(*on, na, med, a_score, a_imb);
+                score(*on, na, med, -1, axis, a_score, a_imb);
                 if (a_score < best) {
                     std::copy(na, na + 3, n);
                     d = med;
@@ -681,8 +875,9 @@ struct Builder {
             int64_t cut = -1;   // the split plane, registered at the node's first split
             // in the plane (or the splitter's own pieces), wholly in front, behind, split
             std::vector<int64_t> in_plane, to_front, to_back, front_parts, back_parts;
+            const int64_t cut_src = axis_chosen >= 0 ? -1 : src;
             for (int64_t f : ids) {
-                int has = classify(f, n, d);
+                int has = classify(f, n, d, cut_src, axis_chosen);
                 if (has == 0 || (own_plane && frag_source[f] == src)) {
                     in_plane.push_back(f);
                 } else if (has == 1) {
@@ -694,7 +889,7 @@ struct Builder {
                     if (cut < 0)
                         cut = axis_chosen >= 0 ? axis_plane_index(axis_chosen, d)
                                                : polygon_plane_index(src);
-                    split(f, n, d, cut, ff, fb);
+                    split(f, n, d, cut_src, axis_chosen, cut, ff, fb);
                     if (ff >= 0) front_parts.push_back(ff);
                     if (fb >= 0) back_parts.push_back(fb);
                 }
@@ -713,9 +908,9 @@ struct Builder {
 
 BspArrays build_bsp(const double* V, const int64_t* start, int64_t n, const double* normals,
                     const double* offsets, size_t candidates, size_t sample, size_t axis_min,
-                    double axis_imbalance, double band_ulps, uint64_t seed) {
+                    double axis_imbalance, double band_ulps, double snap, uint64_t seed) {
     Builder b(V, start, n, normals, offsets, candidates, sample, axis_min, axis_imbalance,
-              band_ulps, seed);
+              band_ulps, snap, seed);
     BspArrays out;
     out.here_start.push_back(0);
     out.live_start.push_back(0);

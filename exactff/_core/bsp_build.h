@@ -30,10 +30,11 @@ struct BspArrays {
 // their planes (normals (3 n), offsets (n)): up to `candidates` planes scored at a node,
 // on a sample of `sample` fragments; a node of at least axis_min fragments left more
 // unbalanced than axis_imbalance also tries its median plane; band_ulps the
-// near-coplanar band; seed the random streams'.
+// near-coplanar band; a crossing within `snap` machine epsilons of an edge's end is that
+// end; seed the random streams'.
 BspArrays build_bsp(const double* V, const int64_t* start, int64_t n, const double* normals,
                     const double* offsets, size_t candidates, size_t sample, size_t axis_min,
-                    double axis_imbalance, double band_ulps, uint64_t seed);
+                    double axis_imbalance, double band_ulps, double snap, uint64_t seed);
 
 }  // namespace exactff
 

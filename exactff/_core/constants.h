@@ -12,6 +12,7 @@ constexpr double EXACT_FILTER_ROUNDOFFS = 32.0;
 constexpr double EQ3_FACTOR_ULPS = 64.0;
 constexpr long double SVBSP_BOX_MARGIN = 1e-09L;
 constexpr long double SVBSP_BOX_FLOOR = 1e-300L;
+constexpr double SVBSP_LEAK_BUDGET_SHARE = 0.0001;
 constexpr double BSP_QUAD_TRUST = 0.001;
 
 }  // namespace exactff

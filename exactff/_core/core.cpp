@@ -71,6 +71,7 @@ RowResult Core::row(const double* pp, const double* pn, const int8_t* ns, const 
     out.G.assign(n_sources_, 0);
     st.crossing.assign(static_cast<size_t>(n_sources_), 0);
     st.rtol = rtol;
+    st.leak_budget = SVBSP_LEAK_BUDGET_SHARE * (rtol > 0 ? rtol : 1e-12);
     st.normal = pn;
     st.eq3 = eq3;
     if (eq3) {

@@ -121,6 +121,13 @@ class PointCache {
     size_t used_ = 0;
 };
 
+// a part of the hemisphere a shadow leaves uncovered: within `radius` of direction c,
+// worth at most `charge` of any piece behind it
+struct Leak {
+    V3 c;
+    R radius, charge;
+};
+
 struct RowStats {
     // exact tests of input points against planes through p already decided this row
     // (the same mesh vertex and edge recur in every fragment that shares them)
@@ -129,7 +136,18 @@ struct RowStats {
     // an edge two visible pieces of one polygon share cancels (the two pieces' sums
     // carry it with opposite signs); the rest is charged at the end of the row
     std::unordered_map<EdgeKey, EdgeCharge, EdgeKeyHash> edges;
-    R unattributed = 0;  // value of visible slivers whose shadows were left out
+    // what the shadows leave uncovered (Core::leave_out) and their omitted sides may
+    // hide, charged to every receiving polygon
+    R unattributed = 0;
+    // shadows left out: < 3 vertices, a side the piece straddles, a kernel worth more
+    // than the piece, < 3 sides
+    int64_t slivers[4] = {0, 0, 0, 0};
+    int64_t kernels = 0;        // non-convex images whose kernel is their shadow
+    int64_t omitted_sides = 0;  // shadows with a short side left out
+    // uncovered parts worth more than the row's budget for unattributed charges
+    // (Core::leave_out), and that budget
+    std::vector<Leak> leaks;
+    R leak_budget = 0;
     R rtol = 0;          // pieces whose bound exceeds this times their value are
                          // integrated again in quadruple precision (0: never)
     const double* normal = nullptr;  // the receiver normal as given
@@ -205,9 +223,12 @@ class Core {
                     const Vertex& u, RowStats& st) const;
     bool exactly_on_input(const ExactPlane& Q, const double* p, const double* x) const;
     static V3 input_plane(const double* p, const double* a, const double* b);
-    void insert_shadow(const Piece& q, int64_t f, const double* pp, int plane, bool positive,
+    bool insert_shadow(const Piece& q, int64_t f, const double* pp, int plane, bool positive,
                        std::vector<Plane>& sv, std::vector<ExactPlane>& xp, RowStats& st,
-                       R* unattributed, R piece_bound) const;
+                       R piece_bound) const;
+    void leave_out(const Piece& q, R charge, int why, RowStats& st) const;
+    Leak cone(const Piece& q) const;
+    R leaked(const Piece& q, R worth, const RowStats& st) const;
     // pieces.cpp
     V3 between(const Vertex& a, const Vertex& b, int64_t f, R* scale) const;
     static bool lex_less(const V3& x, const V3& y);

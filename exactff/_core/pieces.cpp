@@ -237,8 +237,13 @@ void Core::process(int64_t f, const double* pp, const V3& p, const V3& n,
                 E[src] += bnd;
                 charge_edges(w.q, src, E, st, refined ? &qerrs : nullptr);
             }
-            insert_shadow(w.q, f, pp, w.plane, w.positive, sv, xp, st, &st.unattributed,
-                          val + bnd);
+            if (receives) B[src] += leaked(w.q, val + bnd, st);
+            // a piece whose shadow is left out is an image folded or flat along a side
+            // (seen from within the band of a plane it is not planar in): its own value
+            // is charged it too, as the band's slivers are
+            if (!insert_shadow(w.q, f, pp, w.plane, w.positive, sv, xp, st, val + bnd) &&
+                receives)
+                B[src] += val + bnd;
             continue;
         }
         const Plane P = sv[node];

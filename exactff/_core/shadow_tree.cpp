@@ -216,9 +216,11 @@ V3 Core::input_plane(const double* p, const double* a, const double* b) {
 // replace the free leaf reached by (plane, branch) with the piece's shadow volume:
 // for each edge, the plane it lies on (its input edge's plane through p, or the
 // plane it was cut along), oriented to hold the piece
-void Core::insert_shadow(const Piece& q, int64_t f, const double* pp, int plane, bool positive,
-                         std::vector<Plane>& sv, std::vector<ExactPlane>& xp, RowStats& st,
-                         R* unattributed, R piece_bound) const {
+// (false: the shadow is left out)
+bool Core::insert_shadow(const Piece& q, int64_t f, const double* pp, int plane,
+                         bool positive, std::vector<Plane>& sv, std::vector<ExactPlane>& xp,
+                         RowStats& st, R piece_bound) const {
+    constexpr R PI = 3.14159265358979323846264338327950288L;
     const size_t m = q.size();
     V3 c{0, 0, 0};
     for (const Vertex& u : q) {
@@ -227,74 +229,143 @@ void Core::insert_shadow(const Piece& q, int64_t f, const double* pp, int plane,
         c.z += u.v.z / u.length;
     }
     const R cl = norm(c);
-    std::vector<Plane> chain;
-    size_t sides = 0;  // the piece's edges that bound its shadow, cut ones included
-    bool degenerate = m < 3;
-    for (size_t i = 0; i < m && !degenerate; ++i) {
-        const Vertex& a = q[i];
+    // per edge: its plane through p, oriented towards the piece (0: through p, not
+    // a side; 2: the piece straddles it, no orientation), and how far beyond it the
+    // piece's farthest vertex lies (radians)
+    struct Side {
         V3 mm;
-        R err;
-        int exact;
+        R ml, err, beyond;
+        int exact, orient;
+        int state;  // 0 none (through p), 1 oriented, 2 straddled
+        bool on_cut, omit;
+    };
+    std::vector<Side> e(m);
+    if (m < 3) {
+        leave_out(q, piece_bound, 0, st);
+        return false;
+    }
+    for (size_t i = 0; i < m; ++i) {
+        const Vertex& a = q[i];
+        Side& s = e[i];
         if (a.edge >= 0) {
             const int64_t ia = a.edge;
             const int64_t ib = start_[f] + (ia - start_[f] + 1) % count_[f];
-            mm = input_plane(pp, &V_[3 * ia], &V_[3 * ib]);
+            s.mm = input_plane(pp, &V_[3 * ia], &V_[3 * ib]);
             // its rounding; the input points' own errors (BSP crossings) apart
             const R tilt = input_tilt(ia, ib, pp);
-            err = 8 * K_.eps;
-            exact = static_cast<int>(xp.size());
+            s.err = 8 * K_.eps;
+            s.exact = static_cast<int>(xp.size());
             xp.push_back({0, {V_[3 * ia], V_[3 * ia + 1], V_[3 * ia + 2]},
-                          {V_[3 * ib], V_[3 * ib + 1], V_[3 * ib + 2]}, mm, err,
+                          {V_[3 * ib], V_[3 * ib + 1], V_[3 * ib + 2]}, s.mm, s.err,
                           uid_[ia], uid_[ib], tilt});
         } else {
-            exact = static_cast<int>(-1 - a.edge);
-            mm = xp[exact].m;
-            err = xp[exact].err;
+            s.exact = static_cast<int>(-1 - a.edge);
+            s.mm = xp[s.exact].m;
+            s.err = xp[s.exact].err;
         }
-        const bool on_cut = a.edge < 0;
-        const R ml = norm(mm);
-        if (!(ml > 0)) continue;  // an input edge through p (seen end-on exactly)
-        int orient = 1;
-        const R dc = dot(mm, c);
-        // the piece must lie clearly on one side: else it is a sliver along this
-        // plane, whose shadow is left out (its area goes to every value's bound)
-        if (!(std::fabs(dc) > (16 * K_.eps + err) * ml * cl)) {
-            degenerate = true;
-            break;
+        s.on_cut = a.edge < 0;
+        s.omit = false;
+        s.beyond = 0;
+        s.orient = 1;
+        s.ml = norm(s.mm);
+        if (!(s.ml > 0)) {  // an input edge through p (seen end-on exactly)
+            s.state = 0;
+            continue;
         }
+        const R dc = dot(s.mm, c);
+        // the piece must lie clearly on one side
+        if (!(std::fabs(dc) > (16 * K_.eps + s.err) * s.ml * cl)) {
+            s.state = 2;
+            continue;
+        }
+        s.state = 1;
         if (dc < 0) {
-            mm = {-mm.x, -mm.y, -mm.z};
-            orient = -1;
+            s.mm = {-s.mm.x, -s.mm.y, -s.mm.z};
+            s.orient = -1;
         }
-        // and every vertex on that side, up to the plane's and its own errors: the
-        // shadow is the intersection of the edges' half-spaces only where the image
-        // is convex, which a polygon planar only within the validation tolerance,
-        // seen from nearly in its plane, need not be (a bent quad seen from its
-        // neighbour's centroid hid 0.7 % of the hemisphere behind it); such an image
-        // is a sliver too: its shadow is left out
-        for (size_t k = 0; k < m && !degenerate; ++k) {
+        // and every vertex on that side, up to the plane's and its own errors
+        for (size_t k = 0; k < m; ++k) {
             if (k == i || k == (i + 1) % m) continue;
             const Vertex& u = q[k];
-            if (dot(mm, u.v) < -(16 * K_.eps + err + u.err) * ml * u.length)
-                degenerate = true;
+            const R tol = 16 * K_.eps + s.err + u.err;
+            const R dk = dot(s.mm, u.v);
+            if (dk < -tol * s.ml * u.length)
+                s.beyond = std::max(s.beyond, -dk / (s.ml * u.length) + tol);
         }
-        if (degenerate) break;
+    }
+    // The shadow is the intersection of the sides' half-spaces. Where the image is
+    // convex, that is the image. Where it is not (a polygon planar only within the
+    // validation tolerance seen from nearly in its plane; an input edge shorter than
+    // its vertices' roundings, whose direction they decide), it is the image's
+    // kernel, less than the image: the part left out lies in the piece on the wrong
+    // side of a plane, within `beyond` of it and across the piece's extent (at most
+    // half its perimeter), so its projected area is at most beyond * perimeter / 2
+    // / pi (projected area <= area on the sphere); a later piece behind it may show
+    // through by that much. A short side whose two neighbours turn by less than
+    // about 154 degrees together is left out instead where that costs less: the
+    // shadow then holds the
+    // triangle the two neighbours' planes close beyond it, of apex height at most
+    // l tan(theta / 2) / 2 over its arc l (theta the angle of their normals), so
+    // area l^2 tan(theta / 2) / 4, which may hide that much of a later piece
+    R perimeter = 0;
+    std::vector<R> arcs(m);
+    for (size_t k = 0; k < m; ++k) {
+        arcs[k] = arc(q[k], q[(k + 1) % m]) + q[k].err + q[(k + 1) % m].err;
+        perimeter += arcs[k];
+    }
+    R kernel_charge = 0, omit_charge = 0;
+    for (size_t i = 0; i < m; ++i) {
+        Side& s = e[i];
+        if (s.on_cut || !(s.state == 2 || s.beyond > 0)) continue;
+        const Side& prev = e[(i + m - 1) % m];
+        const Side& next = e[(i + 1) % m];
+        R omit = INFINITY;
+        if (prev.state == 1 && next.state == 1 && !prev.omit && !next.omit) {
+            const R cosine = dot(prev.mm, next.mm) / (prev.ml * next.ml);
+            if (cosine > -0.9L) {   // theta below about 154 degrees: a bounded triangle
+                const R theta = std::acos(std::min(cosine, R(1))) +
+                                16 * K_.eps + prev.err + next.err;
+                omit = arcs[i] * arcs[i] * std::tan(theta / 2) / 4 / PI * (1 + 1e-6L);
+            }
+        }
+        const R keep = s.state == 2 ? INFINITY : s.beyond * perimeter / 2 / PI;
+        if (omit <= keep) {
+            s.omit = true;
+            omit_charge += omit;
+        } else {
+            kernel_charge += keep;
+        }
+    }
+    size_t sides = 0;  // the piece's edges that bound its shadow, cut ones included
+    std::vector<Plane> chain;
+    bool straddled = false;
+    for (size_t i = 0; i < m; ++i) {
+        const Side& s = e[i];
+        if (s.state == 0 || s.omit) continue;
+        if (s.state == 2) straddled = true;
         ++sides;
         // an edge along a plane the piece was cut by: that plane is on the path to
         // the leaf, whose whole cell already lies on the piece's side of it, so the
         // shadow needs no plane there
-        if (!on_cut) {
-            chain.push_back({mm, ml, err, OUT, OUT, exact, orient});
+        if (!s.on_cut && s.state == 1) {
+            chain.push_back({s.mm, s.ml, s.err, OUT, OUT, s.exact, s.orient});
             set_double(chain.back());
         }
     }
-    if (degenerate || sides < 3) {
-        *unattributed += piece_bound;
-        return;
+    // a sliver (a side it straddles, fewer than three sides) or a kernel that leaves
+    // out more than the piece is worth: no shadow at all
+    if (straddled || sides < 3 || kernel_charge + omit_charge > piece_bound) {
+        leave_out(q, piece_bound, straddled ? 1 : (sides < 3 ? 3 : 2), st);
+        return false;
     }
+    leave_out(q, kernel_charge, -1, st);
+    // what the omitted sides' triangles may hide is not attributed to a piece
+    st.unattributed += omit_charge;
+    st.omitted_sides += omit_charge > 0;
+    st.kernels += kernel_charge > 0;
     if (chain.empty()) {  // the piece fills its leaf's cell: the cell is covered
         (positive ? sv[plane].pos : sv[plane].neg) = IN;
-        return;
+        return true;
     }
     const int base = static_cast<int>(sv.size());
     for (size_t i = 0; i < chain.size(); ++i) {
@@ -304,6 +375,58 @@ void Core::insert_shadow(const Piece& q, int64_t f, const double* pp, int plane,
     }
     (positive ? sv[plane].pos : sv[plane].neg) = base;
     st.shadow_planes += static_cast<int64_t>(chain.size());
+    return true;
+}
+
+// a part of the hemisphere that a piece covers but its shadow does not (all of a
+// sliver's, a kernel's remainder), worth at most `charge`: a later visible piece
+// that may overlap it may show through by as much, and no more than itself. Small
+// charges go to every receiving polygon (up to the row's budget); the others are
+// kept with the cone that holds them (Core::leaked)
+void Core::leave_out(const Piece& q, R charge, int why, RowStats& st) const {
+    if (why >= 0) ++st.slivers[why];
+    if (!(charge > 0)) return;
+    if (st.unattributed + charge <= st.leak_budget) {
+        st.unattributed += charge;
+        return;
+    }
+    st.leaks.push_back(cone(q));
+    st.leaks.back().charge = charge;
+}
+
+// a cone about the piece's mean direction that holds its image (radians, with its
+// vertices' errors and a margin for the arcs' rounding)
+Leak Core::cone(const Piece& q) const {
+    V3 c{0, 0, 0};
+    for (const Vertex& u : q) {
+        c.x += u.v.x / u.length;
+        c.y += u.v.y / u.length;
+        c.z += u.v.z / u.length;
+    }
+    Leak k{c, 0, 0};
+    const R cl = norm(c);
+    if (!(cl > 1e-6L)) {  // about opposite directions: the whole sphere
+        k.radius = 4;
+        return k;
+    }
+    k.c = {c.x / cl, c.y / cl, c.z / cl};
+    for (const Vertex& u : q)
+        k.radius = std::max(k.radius, std::atan2(norm(cross(k.c, u.v)), dot(k.c, u.v)) + u.err);
+    k.radius += 64 * K_.eps;
+    return k;
+}
+
+// what the row's kept leaks may have shown of visible piece q, worth val + bnd: the
+// charges of those whose cones meet its cone, at most the piece itself
+R Core::leaked(const Piece& q, R worth, const RowStats& st) const {
+    if (st.leaks.empty()) return 0;
+    const Leak k = cone(q);
+    R sum = 0;
+    for (const Leak& l : st.leaks)
+        if (k.radius >= 4 || l.radius >= 4 ||
+            std::atan2(norm(cross(k.c, l.c)), dot(k.c, l.c)) <= k.radius + l.radius + 64 * K_.eps)
+            sum += l.charge;
+    return std::min(sum, worth);
 }
 
 }  // namespace exactff

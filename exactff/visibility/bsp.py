@@ -1,11 +1,13 @@
 """BSP tree (autopartition) of a scene, and its front-to-back traversal from a point."""
 
+from fractions import Fraction
+
 import numpy as np
 import shapely
 
 from .. import _tolerances as tol
 from ..halfspace import split_polygon
-from ..predicates import coplanar_band_sides, sides_of_point, tie_priority
+from ..predicates import coplanar_band_sides, coplanar_pairs, sides_of_point, tie_priority
 from ..prepared import prepared
 from ..rings import padded_buckets
 
@@ -97,6 +99,132 @@ class BSPTree:
 
 
 
+def _split_plane(scene, s, cache):
+    """The plane polygon ``s`` splits along, exactly (as the compiled build's
+    ``SplitPlane``): for an exactly planar polygon (every triangle) its own plane, as
+    ``(N, c)`` with ``N . x = c`` through three of its vertices; for one planar only
+    within the validation tolerance its plane ``(n, d)`` as the scene stores it."""
+    if s not in cache:
+        P = [tuple(Fraction(float(c)) for c in v) for v in scene.polygons[s]]
+        V = scene.polygons[s]
+        b = int(np.argmax(((V - V[0]) ** 2).sum(axis=1)))
+        c = int(np.argmax((np.cross(V[b] - V[0], V - V[0]) ** 2).sum(axis=1)))
+        u = [x - y for x, y in zip(P[b], P[0])]
+        w = [x - y for x, y in zip(P[c], P[0])]
+        N = (u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2], u[0] * w[1] - u[1] * w[0])
+        off = sum(x * y for x, y in zip(N, P[0]))
+        if N != (0, 0, 0) and all(sum(x * y for x, y in zip(N, v)) == off for v in P):
+            if sum(x * float(y) for x, y in zip(N, scene.normals[s])) < 0:
+                N, off = tuple(-x for x in N), -off
+            cache[s] = (N, off)
+        else:
+            cache[s] = (tuple(Fraction(float(x)) for x in scene.normals[s]),
+                        Fraction(float(scene.plane_offsets[s])))
+    return cache[s]
+
+
+def _exact_value(plane, x):
+    """``N . x - c`` for a plane of :func:`_split_plane` and a point of rationals."""
+    N, c = plane
+    return sum(a * b for a, b in zip(N, x)) - c
+
+
+class _ExactPoints:
+    """The exact points the build's vertices stand for: an input vertex is its floats;
+    a crossing, recorded at the split that made it (its edge's end points and the plane),
+    is the exact crossing of the exact edge with the exact plane, computed in rationals
+    when asked for (the side of a vertex within the near-coplanar band, a crossing of an
+    ill-conditioned edge), as the compiled build keeps its crossings in quadruple
+    precision or exactly. Keyed by the rounded point (two crossings that round alike
+    stand for one point, as a shared edge splits identically)."""
+
+    def __init__(self):
+        self.defined, self.known = {}, {}
+
+    def record(self, X, A, B, plane):
+        self.defined.setdefault(tuple(X.tolist()), (tuple(A.tolist()), tuple(B.tolist()), plane))
+
+    def point(self, key):
+        if key in self.known:
+            return self.known[key]
+        if key not in self.defined:
+            value = tuple(Fraction(c) for c in key)
+        else:
+            A, B, plane = self.defined[key]
+            value = self.crossing(self.point(A), self.point(B), plane)
+        self.known[key] = value
+        return value
+
+    @staticmethod
+    def crossing(A, B, plane):
+        oa, ob = _exact_value(plane, A), _exact_value(plane, B)
+        return tuple((oa * y - ob * x) / (oa - ob) for x, y in zip(A, B))
+
+
+def _rule_sides(scene, sign, V, vertex_source, planes, cache, exact):
+    """The sides of vertices ``V`` (their fragments' source polygons ``vertex_source``)
+    for node planes (columns of ``sign``, the near-coplanar band's: 0 within it), by the
+    rule of docs/explanation/conventions.md: a vertex within the band lies in the plane
+    where its polygon is coplanar with the plane's (every vertex of one within the
+    other's band, :func:`exactff.predicates.coplanar_pairs`); else the exact side of the
+    point it stands for (``exact``, :class:`_ExactPoints`) of the plane it is split
+    along (:func:`_split_plane`; an axis plane ``("axis", k, c)``). ``planes``: per
+    column, a source polygon or an axis plane. Changes ``sign`` in place (as the
+    compiled build, ``Builder::sides``)."""
+    for col, plane in enumerate(planes):
+        rows = np.flatnonzero(sign[:, col] == 0)
+        if not len(rows):
+            continue
+        if isinstance(plane, tuple):
+            P = _axis_plane(plane[1], plane[2])
+        else:
+            src = vertex_source[rows]
+            pairs, inverse = np.unique(src, return_inverse=True)
+            coplanar = coplanar_pairs(scene.vertices, scene.offsets, scene.normals,
+                                      scene.plane_offsets, pairs, np.full(len(pairs), plane))
+            coplanar |= pairs == plane
+            rows = rows[~coplanar[inverse]]
+            P = _split_plane(scene, int(plane), cache)
+        for r in rows.tolist():
+            value = _exact_value(P, exact.point(tuple(V[r].tolist())))
+            sign[r, col] = (value > 0) - (value < 0)
+    return sign
+
+
+def _axis_plane(axis, c):
+    """The axis plane ``x_axis = c`` as an exact plane of :func:`_split_plane`."""
+    return tuple(Fraction(int(i == axis)) for i in range(3)), Fraction(float(c))
+
+
+def _crossings(plane, P, exact):
+    """A crossing function for :func:`exactff.halfspace.split_polygon` along the exact
+    plane ``plane`` (:func:`_split_plane`): the exact crossing of the points the edge's
+    ends stand for (``exact``, :class:`_ExactPoints`), rounded once to the nearest
+    double, and recorded. The compiled build rounds the same point (from quadruple
+    precision where that rounds it unambiguously, else exactly): the two builds place
+    every crossing alike, which the exact sides of later planes need (a vertex an ulp
+    off a plane is on one side of it)."""
+
+    def crossing(a, b):
+        X = np.array([float(c) for c in exact.crossing(
+            exact.point(tuple(P[a].tolist())), exact.point(tuple(P[b].tolist())), plane)])
+        exact.record(X, P[a], P[b], plane)
+        return X
+
+    return crossing
+
+
+def _vertex_means(V, starts, counts):
+    """Each fragment's mean vertex, its sum taken vertex by vertex from 0 as the compiled
+    build takes it (``np.add.reduceat`` sums in another order: the axis planes' medians
+    would differ by an ulp, and a vertex on one build's plane be off the other's)."""
+    total = np.zeros((len(counts), 3))
+    for j in range(int(counts.max(initial=0))):
+        live = counts > j
+        total[live] += V[starts[:-1][live] + j]
+    return total / counts[:, None]
+
+
 def _plane_scores(sign, starts):
     """Per plane (column of ``sign``): which fragments (runs of ``starts``) have
     vertices in front and behind, and the score ``5 splits + |front - back| - 2
@@ -118,10 +246,13 @@ def build_bsp(scene, *, candidates=8, seed=0, engine="python"):
     ``BSP_SCORE_SAMPLE`` fragments scores them on a random sample of that many, and one
     left badly unbalanced (``BSP_AXIS_IMBALANCE``) also tries a plane through the median
     of its fragments' vertex means along their widest axis. Sides are taken with the
-    near-coplanar band (:func:`exactff.predicates.coplanar_band`). Fragments keep their
+    near-coplanar band (:func:`exactff.predicates.coplanar_band`) where a fragment's
+    polygon is coplanar with the plane's by the rule of docs/explanation/conventions.md,
+    else exactly (a fragment flush with the plane but not coplanar with its polygon is
+    split where it crosses it); crossings are exact, rounded once. Fragments keep their
     source polygon.
 
-    ``engine="compiled"`` builds the same partition in compiled code (``_bsp_build.cpp``,
+    ``engine="compiled"`` builds the same partition in compiled code (``_core/bsp_build.cpp``,
     without the GIL; the compiled visibility core's tree): only its random draws differ,
     so that with every candidate tried (``candidates`` at least the scene's size) and a
     scene of at most ``BSP_SCORE_SAMPLE`` polygons the two trees are the same.
@@ -170,6 +301,7 @@ def build_bsp(scene, *, candidates=8, seed=0, engine="python"):
     # operations, only the fragments it splits go through Python
     counts0 = np.array([len(P) for P in fragments])
     stack = [(np.arange(n_frag), np.concatenate(fragments), counts0, -1, 0)]
+    exact_planes, exact_points = {}, _ExactPoints()
     while stack:
         ids, V, counts, parent, child = stack.pop()
         node = len(nodes_d)
@@ -203,6 +335,10 @@ def build_bsp(scene, *, candidates=8, seed=0, engine="python"):
         # every candidate plane at once
         Nc, Dc = normals_src[source[pool]], offsets_src[source[pool]]
         sign_c, s_c = coplanar_band_sides(Vs, Nc, Dc)
+        vsrc = np.repeat(source[ids], counts)
+        vsrc_s = vsrc if ms == m else vsrc[scored[owner]]
+        _rule_sides(scene, sign_c, Vs, vsrc_s, source[pool].tolist(), exact_planes,
+                    exact_points)
         score, imbalance, pos_c, neg_c = _plane_scores(sign_c, starts_s)
         j = int(np.argmin(score))        # the first of equal scores
         c, n, d = pool[j], Nc[j], Dc[j]
@@ -212,16 +348,21 @@ def build_bsp(scene, *, candidates=8, seed=0, engine="python"):
             # tessellation has every other facet on one side of each facet, and the
             # tree becomes a chain as deep as the object has facets): also try a plane
             # through the median of the fragments' vertex means along their widest axis
-            cen = np.add.reduceat(V, starts[:-1], axis=0) / counts[:, None]
+            cen = _vertex_means(V, starts, counts)
             axis = int(np.argmax(np.ptp(cen, axis=0)))
             na, da = np.eye(3)[axis:axis + 1], np.array([np.median(cen[:, axis])])
-            a_score, _, _, _ = _plane_scores(coplanar_band_sides(Vs, na, da)[0], starts_s)
+            a_sign = _rule_sides(scene, coplanar_band_sides(Vs, na, da)[0], Vs, vsrc_s,
+                                 [("axis", axis, float(da[0]))], exact_planes, exact_points)
+            a_score, _, _, _ = _plane_scores(a_sign, starts_s)
             if a_score[0] < score[j]:
                 c, n, d = None, na[0], da[0]
                 chosen = None
+                axis_plane = ("axis", axis, float(da[0]))
         if chosen is None:
             # the chosen plane against every fragment (scored on a sample, or the axis)
             sign, s = coplanar_band_sides(V, n[None], np.array([d]))
+            _rule_sides(scene, sign, V, vsrc, [source[c] if c is not None else axis_plane],
+                        exact_planes, exact_points)
             _, _, has_pos, has_neg = _plane_scores(sign, starts)
             chosen = sign[:, 0], s[:, 0], has_pos[:, 0], has_neg[:, 0]
         sign, s, has_pos, has_neg = chosen
@@ -238,9 +379,13 @@ def build_bsp(scene, *, candidates=8, seed=0, engine="python"):
         cut = has_pos & has_neg & ~here
         node_frags.append(ids[here].tolist())
         parts = {1: [], -1: []}
+        split_plane = (_split_plane(scene, int(source[c]), exact_planes) if c is not None
+                       else _axis_plane(int(np.argmax(n)), d))
         for k in np.flatnonzero(cut).tolist():
             a, b = starts[k], starts[k + 1]
-            f, bk = split_polygon(V[a:b], sign[a:b], s[a:b])
+            f, bk = split_polygon(V[a:b], sign[a:b], s[a:b],
+                                  _crossings(split_plane, V[a:b], exact_points),
+                                  snap=tol.BSP_SPLIT_SNAP_EPS)
             splits += 1
             for part, side in ((f, 1), (bk, -1)):
                 if part is not None:
@@ -277,9 +422,11 @@ def _build_bsp_compiled(scene, candidates, seed):
         raise ValueError(f"seed must be a non-negative integer, got {seed!r}")
     # the scene's polygons, concatenated (scene.offsets: polygon i's vertices start)
     (normals, offsets, front, back, here_start, here, Vf, frag_start, source, whole,
-     splits, Ef) = build_bsp_arrays(scene.vertices, scene.offsets, scene.normals, scene.plane_offsets, int(candidates),
-                                tol.BSP_SCORE_SAMPLE, tol.BSP_AXIS_CANDIDATE_MIN,
-                                tol.BSP_AXIS_IMBALANCE, tol.BSP_COPLANAR_ULPS, int(seed))
+     splits, Ef) = build_bsp_arrays(
+        V=scene.vertices, start=scene.offsets, normals=scene.normals,
+        offsets=scene.plane_offsets, candidates=int(candidates), sample=tol.BSP_SCORE_SAMPLE,
+        axis_min=tol.BSP_AXIS_CANDIDATE_MIN, axis_imbalance=tol.BSP_AXIS_IMBALANCE,
+        band_ulps=tol.BSP_COPLANAR_ULPS, snap=tol.BSP_SPLIT_SNAP_EPS, seed=int(seed))
     flat, bounds = here.tolist(), here_start.tolist()
     node_frags = [flat[a:b] for a, b in zip(bounds[:-1], bounds[1:])]
     fragments = np.split(Vf, frag_start[1:-1]) if len(source) else []
@@ -380,13 +527,15 @@ def coplanar_overlaps(scene, tree=None):
         keep = [a for a in range(3) if a != int(np.argmax(np.abs(n)))]
         polys = np.array([shapely.Polygon(tree.fragments[f][:, keep]) for f in here])
         polys = shapely.make_valid(polys)
-        area = shapely.area(polys)
         a, b = shapely.STRtree(polys).query(polys, predicate="intersects")
         sel = a < b
         a, b = a[sel], b[sel]
         shared = shapely.area(shapely.intersection(polys[a], polys[b]))
-        overlap = shared > tol.OVERLAP_RTOL * np.minimum(area[a], area[b])
         src = tree.source[here]
+        # more than OVERLAP_RTOL of the smaller polygon's area (its fragment's may be a
+        # sliver an exact split left along a plane it nearly lies in)
+        overlap = shared > tol.OVERLAP_RTOL * np.minimum(scene.areas[src[a]],
+                                                         scene.areas[src[b]])
         orient = np.sign(scene.normals[src] @ n)
         for i, j in zip(a[overlap], b[overlap]):
             si, sj = int(src[i]), int(src[j])

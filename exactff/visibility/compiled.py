@@ -281,8 +281,13 @@ def compiled_form_factors(scene, point, normal, *, two_sided=False, stats=None,
         was classified at), ``near_tests`` (vertices within a plane's rounding band),
         ``exact_tests`` (exact tests of an input point decided, not found in the row's
         cache), ``quad_pieces`` (integrated again in
-        quadruple precision), ``unattributed_bound`` (visible slivers whose shadows were
-        left out), ``working_bytes`` (the row's own containers at their largest: its
+        quadruple precision), ``shadows_left_out`` (visible slivers, whose shadows are
+        left out), ``kernel_shadows`` (pieces whose image is not convex to a roundoff:
+        their kernel is their shadow), ``omitted_sides`` (shadows without a side too
+        short to orient), ``unattributed_bound`` (what those shadows leave uncovered or
+        cover beyond their pieces, charged to every value) and ``leaks`` (uncovered
+        parts too large for that, charged only to the visible pieces whose cones meet
+        theirs), ``working_bytes`` (the row's own containers at their largest: its
         shadow tree, exact planes, work list, edge charges and cache, beyond the
         n-long results), ``max_error_estimate``, ``max_band_bound`` and
         ``max_crossing_bound`` (the part of the bounds the BSP's rounded crossings make,
