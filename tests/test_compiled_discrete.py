@@ -1,6 +1,7 @@
 """The compiled z-buffer of the discrete methods against its numpy oracle (issue 55):
-the hemicube, the cubic tetrahedron and the single plane (every method that
-rasterises planar faces, ``exactff.methods._raster.rasterise_face``).
+the hemicube, the cubic tetrahedron and the single plane (planar faces,
+``exactff.methods._raster.rasterise_face``), the polar plane (``rasterise_polar``) and
+discrete PPBH (the disk's ellipse arcs, ``rasterise_disk``).
 
 The compiled backend (``exactff.methods._zbuffer``) scan-converts and depth-tests as
 the numpy rasteriser does, cell for cell: the same scanlines, the same crossings from
@@ -35,10 +36,17 @@ COMPILED = {
     "plane-uniform": lambda **k: ef.SinglePlane(resolution=41, cells="uniform", **k),
     "plane-refined": lambda **k: ef.SinglePlane(resolution=40, cells="uniform_refined",
                                                 refine=3, **k),
+    "polar-20x48": lambda **k: ef.PolarPlane(rings=20, sectors=48, **k),
+    "polar-31x7": lambda **k: ef.PolarPlane(rings=31, sectors=7, **k),
+    "ppbh-17": lambda **k: ef.DiscretePPBH(resolution=17, **k),
+    "ppbh-64": lambda **k: ef.DiscretePPBH(resolution=64, **k),
+    "ppbh-101": lambda **k: ef.DiscretePPBH(resolution=101, **k),
 }
 SMALL = [lambda **k: ef.Hemicube(resolution=32, **k),
          lambda **k: ef.CubicTetrahedron(resolution=30, **k),
-         lambda **k: ef.SinglePlane(resolution=30, cells="uniform_refined", **k)]
+         lambda **k: ef.SinglePlane(resolution=30, cells="uniform_refined", **k),
+         lambda **k: ef.PolarPlane(rings=20, sectors=40, **k),
+         lambda **k: ef.DiscretePPBH(resolution=45, **k)]
 
 
 def assert_backends_identical(make, scene, point, normal):
@@ -73,7 +81,8 @@ def test_compiled_cells_identical_to_numpy(method, scene_name):
         assert_backends_identical(COMPILED[method], scene, p, n)
 
 
-@pytest.mark.parametrize("method", ["hemicube-64", "tetra-52", "plane-refined"])
+@pytest.mark.parametrize("method", ["hemicube-64", "tetra-52", "plane-refined", "polar-20x48",
+                                    "ppbh-64"])
 @pytest.mark.parametrize("scene_name", ["walls_low", "walls_high", "light_on_ceiling"])
 def test_compiled_cells_identical_to_numpy_on_ties_from_the_floor(method, scene_name):
     # the rows of test_ties.py: from the floors, through zero-thickness walls (back to
@@ -84,11 +93,12 @@ def test_compiled_cells_identical_to_numpy_on_ties_from_the_floor(method, scene_
     for i in floors:
         hit = assert_backends_identical(COMPILED[method], scene, scene.centroids[i],
                                         scene.normals[i])
-        if method.startswith("hemicube"):
+        if method.startswith(("hemicube", "ppbh")):
             assert np.all(hit >= 0)     # closed: every cell shows a polygon
 
 
-@pytest.mark.parametrize("method", ["hemicube-64", "tetra-52", "plane-refined"])
+@pytest.mark.parametrize("method", ["hemicube-64", "tetra-52", "plane-refined", "polar-20x48",
+                                    "ppbh-64"])
 @pytest.mark.parametrize("scene_name", ["office", "building", "light_on_ceiling"])
 def test_compiled_cells_identical_to_numpy_in_small_chunks(method, scene_name, monkeypatch):
     # chunks of a few scanlines and a few hundred candidates: the depth buffer merges
@@ -198,7 +208,8 @@ def test_compiled_chart_clip_identical_to_numpy_in_random_scenes(case):
     assert_chart_clips_identical(*case)
 
 
-@pytest.mark.parametrize("method", ["hemicube-64", "tetra-52", "plane-refined"])
+@pytest.mark.parametrize("method", ["hemicube-64", "tetra-52", "plane-refined", "polar-20x48",
+                                    "ppbh-64"])
 def test_compiled_rows_equal_numpy_rows(method):
     # through the public interface: the rows are equal to the last bit
     scene = ef.scenes.office()
@@ -206,6 +217,50 @@ def test_compiled_rows_equal_numpy_rows(method):
         F1 = ef.form_factors(scene, p, n, method=COMPILED[method]())
         F0 = ef.form_factors(scene, p, n, method=COMPILED[method](backend="numpy"))
         assert np.array_equal(F1, F0)
+
+
+def assert_face_clips_identical(scene, p, n):
+    """The compiled face clipper gives FaceClip's live polygons, counts and face
+    coordinates, bit for bit, for the cubic tetrahedron's faces and the planes."""
+    from exactff.methods import _zbuffer
+    from exactff.methods._raster import face_clipper, plane_clipper
+    from exactff.methods._sampling import ZBufferRow
+    from exactff.methods.cubic_tetrahedron import cubic_tetrahedron_frame
+
+    p, n = as_receiver(p, n)
+    a1, a2, a3 = cubic_tetrahedron_frame()
+    tetra = [[-1.0, 0.0, 1.0], [0.0, -1.0, 1.0], [1.0, 1.0, 1.0]]
+    clips = [face_clipper([a2, a3, a1], tetra), face_clipper([a3, a1, a2], tetra),
+             plane_clipper(4.0), plane_clipper(10.0)]
+    for clip in clips:
+        for _, V, counts in ZBufferRow(scene, p, n).local:
+            live, UV, cl = clip(V, counts)
+            live_c, UV_c, cl_c = _zbuffer.face_clip(V, counts, clip.R, clip.planes, clip.scale,
+                                                    tol.CLIP_MEET_ULPS)
+            assert np.array_equal(live_c, live) and np.array_equal(cl_c, cl)
+            assert UV_c.shape == UV.shape
+            assert np.array_equal(UV_c, UV, equal_nan=True)
+
+
+@pytest.mark.parametrize("scene_name", ["office", "building", "cornell"])
+def test_compiled_face_clip_identical_to_numpy(scene_name):
+    scene = SCENES[scene_name]()
+    for p, n in _rows(scene, 4, seed=2):
+        assert_face_clips_identical(scene, p, n)
+
+
+@given(strategies.occluded_scenes() | strategies.enclosures() | strategies.flush_faces())
+@settings(max_examples=examples(40), deadline=None)
+def test_compiled_face_clip_identical_to_numpy_in_random_scenes(case):
+    assert_face_clips_identical(*case)
+
+
+def test_face_clip_rejects_planes_it_cannot_test_exactly():
+    # a plane with other entries would make h . W depend on the order of the products
+    from exactff.methods._raster import face_clipper
+
+    with pytest.raises(ValueError, match="entries must be 0, 1 or -1"):
+        face_clipper(np.eye(3), [[0.5, 0.0, 1.0]])
 
 
 @pytest.mark.parametrize("method", sorted(COMPILED))

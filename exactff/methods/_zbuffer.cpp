@@ -244,6 +244,130 @@ class ZBuffer {
         return out;
     }
 
+    // The same for one bucket of polygons (local frame) clipped by a face's frustum
+    // first, as exactff.methods._raster.FaceClip does (clip_face below): R (3, 3) the
+    // face's frame (rows), planes (P, 3) the frustum in that frame (entries 0 and +-1),
+    // scale the face coordinates' factor.
+    void clipped_face(py::array_t<double, py::array::c_style | py::array::forcecast> V,
+                      py::array_t<i64, py::array::c_style | py::array::forcecast> counts,
+                      py::array_t<i64, py::array::c_style | py::array::forcecast> g_ids,
+                      py::array_t<double, py::array::c_style | py::array::forcecast> R,
+                      py::array_t<double, py::array::c_style | py::array::forcecast> planes,
+                      double scale,
+                      py::array_t<double, py::array::c_style | py::array::forcecast> uc,
+                      py::array_t<double, py::array::c_style | py::array::forcecast> vc,
+                      py::array_t<i64, py::array::c_style | py::array::forcecast> table,
+                      py::array best_t, py::array best, i64 pair_chunk, i64 depth_chunk) {
+        const i64 M = check_face_bucket(V, counts, R, planes);
+        check_ids(g_ids, M);
+        const i64 nu = uc.shape(0), nv = vc.shape(0);
+        if (table.ndim() != 2 || table.shape(0) != nu || table.shape(1) != nv)
+            throw std::invalid_argument("table must have shape (len(uc), len(vc))");
+        check_buffer(best_t, best);
+        double* bt = static_cast<double*>(best_t.mutable_data());
+        i64* bs = static_cast<i64*>(best.mutable_data());
+        py::gil_scoped_release release;
+        Clipped c;
+        clip_face(V.data(), M, V.shape(1), counts.data(), R.data(), planes.data(),
+                  planes.shape(0), scale, clip_meet_ulps_, c);
+        scan(c.UV.data(), static_cast<i64>(c.live.size()), c.K, c.cl.data(), g_ids.data(),
+             c.live.data(), uc.data(), nu, vc.data(), nv, table.data(), bt, bs, pair_chunk,
+             depth_chunk);
+    }
+
+    // exactff.methods._raster.FaceClip of one bucket, compiled: (live, UV, cl)
+    static py::tuple face_clip(py::array_t<double, py::array::c_style | py::array::forcecast> V,
+                               py::array_t<i64, py::array::c_style | py::array::forcecast> counts,
+                               py::array_t<double, py::array::c_style | py::array::forcecast> R,
+                               py::array_t<double, py::array::c_style | py::array::forcecast> planes,
+                               double scale, double clip_meet_ulps) {
+        const i64 M = check_face_bucket(V, counts, R, planes);
+        Clipped c;
+        {
+            py::gil_scoped_release release;
+            clip_face(V.data(), M, V.shape(1), counts.data(), R.data(), planes.data(),
+                      planes.shape(0), scale, clip_meet_ulps, c);
+        }
+        return clipped_tuple(c);
+    }
+
+    // The polar plane (exactff.methods._raster.rasterise_polar): one bucket clipped as
+    // clipped_face does, scanned along every sector's ray within each image's angular
+    // extent; radii (rings,) and the sectors' cos and sin (S,): the cell of ring i and
+    // sector k is i S + k.
+    void polar(py::array_t<double, py::array::c_style | py::array::forcecast> V,
+               py::array_t<i64, py::array::c_style | py::array::forcecast> counts,
+               py::array_t<i64, py::array::c_style | py::array::forcecast> g_ids,
+               py::array_t<double, py::array::c_style | py::array::forcecast> R,
+               py::array_t<double, py::array::c_style | py::array::forcecast> planes,
+               double scale,
+               py::array_t<double, py::array::c_style | py::array::forcecast> radii,
+               py::array_t<double, py::array::c_style | py::array::forcecast> cosv,
+               py::array_t<double, py::array::c_style | py::array::forcecast> sinv,
+               py::array best_t, py::array best, i64 pair_chunk, i64 depth_chunk) {
+        const i64 M = check_face_bucket(V, counts, R, planes);
+        check_ids(g_ids, M);
+        const i64 S = cosv.shape(0), nr = radii.shape(0);
+        if (sinv.shape(0) != S || S < 1) throw std::invalid_argument("cos and sin: one per sector");
+        if (nr * S != n_cells_) throw std::invalid_argument("rings x sectors must be the cells");
+        check_buffer(best_t, best);
+        double* bt = static_cast<double*>(best_t.mutable_data());
+        i64* bs = static_cast<i64*>(best.mutable_data());
+        py::gil_scoped_release release;
+        Clipped c;
+        clip_face(V.data(), M, V.shape(1), counts.data(), R.data(), planes.data(),
+                  planes.shape(0), scale, clip_meet_ulps_, c);
+        scan_polar(c, g_ids.data(), radii.data(), nr, cosv.data(), sinv.data(), S, bt, bs,
+                   pair_chunk, depth_chunk);
+    }
+
+    // Discrete PPBH (exactff.methods._raster.rasterise_disk): the bucket's indices of
+    // the polygons that, clipped to the horizon, pass within near_rel (relative) of the
+    // point; the rasteriser casts their rays one by one, before the disk's scan.
+    static py::array_t<i64> disk_near(py::array_t<double, py::array::c_style | py::array::forcecast> V,
+                                      py::array_t<i64, py::array::c_style | py::array::forcecast> counts,
+                                      double clip_meet_ulps, double near_rel) {
+        const i64 M = check_vertices(V, counts);
+        Horizon h;
+        {
+            py::gil_scoped_release release;
+            clip_horizon(V.data(), M, V.shape(1), counts.data(), clip_meet_ulps, near_rel, h);
+        }
+        std::vector<i64> out;
+        for (size_t k = 0; k < h.live.size(); ++k)
+            if (h.near[k]) out.push_back(h.live[k]);
+        py::array_t<i64> a(static_cast<i64>(out.size()));
+        std::copy(out.begin(), out.end(), a.mutable_data());
+        return a;
+    }
+
+    // The disk's scan of one bucket (local frame), the polygons disk_near names left
+    // out: scanlines at xc along the local y, spans along x over yc (the coordinates
+    // swapped, as rasterise_disk has them); table (len(xc), len(yc)) the layout's cell
+    // of each grid cell (-1: outside the disk).
+    void disk(py::array_t<double, py::array::c_style | py::array::forcecast> V,
+              py::array_t<i64, py::array::c_style | py::array::forcecast> counts,
+              py::array_t<i64, py::array::c_style | py::array::forcecast> g_ids,
+              py::array_t<double, py::array::c_style | py::array::forcecast> xc,
+              py::array_t<double, py::array::c_style | py::array::forcecast> yc,
+              py::array_t<i64, py::array::c_style | py::array::forcecast> table,
+              py::array best_t, py::array best, i64 pair_chunk, i64 depth_chunk,
+              double near_rel) {
+        const i64 M = check_vertices(V, counts);
+        check_ids(g_ids, M);
+        const i64 nx = xc.shape(0), ny = yc.shape(0);
+        if (table.ndim() != 2 || table.shape(0) != nx || table.shape(1) != ny)
+            throw std::invalid_argument("table must have shape (len(xc), len(yc))");
+        check_buffer(best_t, best);
+        double* bt = static_cast<double*>(best_t.mutable_data());
+        i64* bs = static_cast<i64*>(best.mutable_data());
+        py::gil_scoped_release release;
+        Horizon h;
+        clip_horizon(V.data(), M, V.shape(1), counts.data(), clip_meet_ulps_, near_rel, h);
+        scan_disk(h, g_ids.data(), xc.data(), nx, yc.data(), ny, table.data(), bt, bs,
+                  pair_chunk, depth_chunk);
+    }
+
   private:
     // scan conversion of M polygons UV (M, K, 2) with counts c, live indices
     // src[pos[m]] (pos null: src[m]), into the depth buffer
@@ -564,6 +688,418 @@ class ZBuffer {
             }
         }
     }
+    // ---- the faces' frustum clipper (exactff.methods._raster.FaceClip), the polar
+    // plane's rays and the disk's ellipse arcs ----
+
+    static i64 check_vertices(const py::array_t<double, py::array::c_style | py::array::forcecast>& V,
+                              const py::array_t<i64, py::array::c_style | py::array::forcecast>& counts) {
+        if (V.ndim() != 3 || V.shape(2) != 3)
+            throw std::invalid_argument("V must have shape (M, K, 3)");
+        const i64 M = V.shape(0);
+        if (counts.ndim() != 1 || counts.shape(0) != M)
+            throw std::invalid_argument("counts must have shape (M,)");
+        for (i64 m = 0; m < M; ++m)
+            if (counts.data()[m] > V.shape(1) || counts.data()[m] < 0)
+                throw std::invalid_argument("counts out of range");
+        return M;
+    }
+
+    static i64 check_face_bucket(const py::array_t<double, py::array::c_style | py::array::forcecast>& V,
+                                 const py::array_t<i64, py::array::c_style | py::array::forcecast>& counts,
+                                 const py::array_t<double, py::array::c_style | py::array::forcecast>& R,
+                                 const py::array_t<double, py::array::c_style | py::array::forcecast>& planes) {
+        const i64 M = check_vertices(V, counts);
+        if (R.ndim() != 2 || R.shape(0) != 3 || R.shape(1) != 3)
+            throw std::invalid_argument("R must have shape (3, 3)");
+        if (planes.ndim() != 2 || planes.shape(1) != 3)
+            throw std::invalid_argument("planes must have shape (P, 3)");
+        for (i64 k = 0; k < planes.size(); ++k) {
+            const double h = planes.data()[k];
+            if (h != 0.0 && h != 1.0 && h != -1.0)
+                throw std::invalid_argument("planes' entries must be 0, 1 or -1");
+        }
+        return M;
+    }
+
+    void check_ids(const py::array_t<i64, py::array::c_style | py::array::forcecast>& g_ids,
+                   i64 M) const {
+        if (g_ids.ndim() != 1 || g_ids.shape(0) != M)
+            throw std::invalid_argument("g_ids must have shape (M,)");
+        for (i64 m = 0; m < M; ++m)
+            if (g_ids.data()[m] < 0 || g_ids.data()[m] >= n_live_)
+                throw std::invalid_argument("g_ids out of range");
+    }
+
+    static py::tuple clipped_tuple(const Clipped& c) {
+        const i64 L = static_cast<i64>(c.live.size());
+        py::array_t<i64> live(L), cl(L);
+        py::array_t<double> UV({L, c.K, static_cast<i64>(2)});
+        std::copy(c.live.begin(), c.live.end(), live.mutable_data());
+        std::copy(c.cl.begin(), c.cl.end(), cl.mutable_data());
+        std::copy(c.UV.begin(), c.UV.end(), UV.mutable_data());
+        return py::make_tuple(live, UV, cl);
+    }
+
+    // FaceClip: the vertices in the face's frame W = R x (each row's products added
+    // first to second, then the third, as the numpy code writes it); the polygons that
+    // reach the frustum (no plane with every vertex on or behind it) clipped plane by
+    // plane (clip_halfspace: the planes' entries 0 and +-1 make h . W exact); the live
+    // ones padded by their last vertex and projected, u = (scale W_0) / W_2,
+    // v = (scale W_1) / W_2.
+    static void clip_face(const double* V, i64 M, i64 K, const i64* counts, const double* R,
+                          const double* planes, i64 n_planes, double scale, double meet_ulps,
+                          Clipped& out) {
+        std::vector<double> W(static_cast<size_t>(M * K * 3));
+        for (i64 q = 0; q < M * K; ++q) {
+            const double* x = V + 3 * q;
+            for (int i = 0; i < 3; ++i)
+                W[3 * q + i] = (x[0] * R[3 * i] + x[1] * R[3 * i + 1]) + x[2] * R[3 * i + 2];
+        }
+        std::vector<i64> reach;
+        for (i64 m = 0; m < M; ++m) {
+            const i64 n = counts[m];
+            bool outside = false;
+            for (i64 j = 0; j < n_planes && !outside; ++j) {
+                bool all_out = true;
+                for (i64 k = 0; k < n; ++k)
+                    if (!(hdot(planes + 3 * j, W.data() + 3 * (m * K + k)) <= 0)) all_out = false;
+                outside = all_out;
+            }
+            if (!outside && n >= 3) reach.push_back(m);
+        }
+        const i64 S = static_cast<i64>(reach.size());
+        std::vector<double> Vc(static_cast<size_t>(S * K * 3));
+        std::vector<i64> cc(static_cast<size_t>(S));
+        for (i64 i = 0; i < S; ++i) {
+            std::copy(W.data() + reach[i] * K * 3, W.data() + (reach[i] + 1) * K * 3,
+                      Vc.data() + i * K * 3);
+            cc[i] = counts[reach[i]];
+        }
+        i64 Kc = K;
+        std::vector<double> next;
+        std::vector<i64> ncount;
+        for (i64 j = 0; j < n_planes; ++j) {
+            bool any = false;
+            for (const i64 n : cc) any = any || n >= 3;
+            if (!any) break;
+            for (i64& n : cc) if (n < 3) n = 0;
+            i64 Kn;
+            clip_halfspace(Vc, S, Kc, cc, planes + 3 * j, meet_ulps, next, Kn, ncount);
+            Vc.swap(next);
+            cc.swap(ncount);
+            Kc = Kn;
+        }
+        out.live.clear();
+        out.cl.clear();
+        out.UV.clear();
+        out.K = Kc;
+        for (i64 i = 0; i < S; ++i) {
+            const i64 n = cc[i];
+            if (n < 3) continue;
+            out.live.push_back(reach[i]);
+            out.cl.push_back(n);
+            for (i64 k = 0; k < Kc; ++k) {
+                const double* x = Vc.data() + 3 * (i * Kc + (k < n ? k : n - 1));
+                out.UV.push_back((scale * x[0]) / x[2]);
+                out.UV.push_back((scale * x[1]) / x[2]);
+            }
+        }
+    }
+
+    // the spans [X_1, X_2), [X_3, X_4), ... (X sorted, at most `slots` of them) as runs
+    // of centres c (first centre at or above each end), each cell given to emit(col)
+    template <class Emit>
+    static void spans(const std::vector<double>& X, size_t slots, const double* c, i64 n,
+                      Emit&& emit) {
+        const size_t npairs = std::min(X.size() / 2, slots);
+        for (size_t k = 0; k < npairs; ++k) {
+            const i64 ia = std::lower_bound(c, c + n, X[2 * k]) - c;
+            const i64 ib = std::lower_bound(c, c + n, X[2 * k + 1]) - c;
+            for (i64 col = ia; col < ib; ++col) emit(col);
+        }
+    }
+
+    // numpy's floor modulo of floats (np.remainder; the divisor positive)
+    static inline double py_mod(double a, double b) {
+        double m = std::fmod(a, b);
+        if (m != 0.0) {
+            if (m < 0.0) m += b;
+        } else {
+            m = 0.0;
+        }
+        return m;
+    }
+
+    // rasterise_polar on the clipped images c (live bucket indices into src)
+    void scan_polar(const Clipped& c, const i64* src, const double* radii, i64 nr,
+                    const double* cs, const double* sn, i64 S, double* bt, i64* bs,
+                    i64 pair_chunk, i64 depth_chunk) {
+        const double PI = 3.141592653589793, TWO_PI = 2.0 * PI;
+        const double step = TWO_PI / static_cast<double>(S);
+        const i64 L = static_cast<i64>(c.live.size()), K = c.K;
+        const i64 chunk = std::max<i64>(1, pair_chunk / std::max<i64>(K, 1));
+        i64 pairs_in_chunk = 0;
+        std::vector<double> A(static_cast<size_t>(2 * K)), B(static_cast<size_t>(2 * K));
+        std::vector<double> X;
+        X.reserve(static_cast<size_t>(K + 1));
+        sc_ = &scratch(n_cells_);
+        for (i64 m = 0; m < L; ++m) {
+            const double* P = c.UV.data() + m * K * 2;
+            const i64 n = c.cl[m];
+            const i64 sm = src[c.live[m]];
+            // every edge from its lower end point (y, then x)
+            double lo0 = INF, lo1 = INF, hi0 = -INF, hi1 = -INF;
+            bool nan = false;
+            for (i64 e = 0; e < K; ++e) {
+                const double* a = P + 2 * e;
+                const double* b = e < n - 1 ? P + 2 * (e + 1) : P;
+                if (e >= n) b = a;
+                const bool swap = (b[1] < a[1]) || (b[1] == a[1] && b[0] < a[0]);
+                if (swap) std::swap(a, b);
+                A[2 * e] = a[0]; A[2 * e + 1] = a[1];
+                B[2 * e] = b[0]; B[2 * e + 1] = b[1];
+                if (std::isnan(P[2 * e]) || std::isnan(P[2 * e + 1])) nan = true;
+                lo0 = std::min(lo0, P[2 * e]); hi0 = std::max(hi0, P[2 * e]);
+                lo1 = std::min(lo1, P[2 * e + 1]); hi1 = std::max(hi1, P[2 * e + 1]);
+            }
+            if (nan) continue;
+            // the sectors within the image's angular extent (all when its box holds
+            // the centre), one sector of margin on either side
+            i64 k0, k1;
+            if (lo0 <= 0 && hi0 >= 0 && lo1 <= 0 && hi1 >= 0) {
+                k0 = 0;
+                k1 = S - 1;
+            } else {
+                const double mid = std::atan2((lo1 + hi1) / 2, (lo0 + hi0) / 2);
+                const double cx[4] = {lo0, lo0, hi0, hi0}, cy[4] = {lo1, hi1, hi1, lo1};
+                double omin = INF, omax = -INF;
+                for (int q = 0; q < 4; ++q) {
+                    const double off = py_mod(std::atan2(cy[q], cx[q]) - mid + PI, TWO_PI) - PI;
+                    omin = std::min(omin, off);
+                    omax = std::max(omax, off);
+                }
+                k0 = static_cast<i64>(std::ceil((mid + omin) / step - 0.5)) - 1;
+                k1 = static_cast<i64>(std::floor((mid + omax) / step - 0.5)) + 1;
+                k1 = std::min(k1, k0 + S - 1);
+            }
+            for (i64 kk = k0; kk <= k1; ++kk) {
+                const i64 k = ((kk % S) + S) % S;
+                const double cx = cs[k], sy = sn[k];
+                X.clear();
+                size_t crossings = 0;
+                for (i64 e = 0; e < n; ++e) {
+                    const double* a = A.data() + 2 * e;
+                    const double* b = B.data() + 2 * e;
+                    // the edge's crossing with the ray (cos phi, sin phi) rho, rho > 0
+                    const double sa = cx * a[1] - sy * a[0];
+                    const double sb = cx * b[1] - sy * b[0];
+                    if ((sa > 0) == (sb > 0)) continue;
+                    const double t = sa / (sa - sb);
+                    const double xx = a[0] + t * (b[0] - a[0]);
+                    const double yy = a[1] + t * (b[1] - a[1]);
+                    const double rho = cx * xx + sy * yy;
+                    if (!(rho > 0)) continue;
+                    X.push_back(rho);
+                    ++crossings;
+                }
+                // an odd count: the centre is inside, the first span starts at 0
+                if (crossings % 2 == 1) X.push_back(-INF);
+                std::sort(X.begin(), X.end());
+                spans(X, static_cast<size_t>((K + 1) / 2), radii, nr,
+                      [&](i64 ring) { add(ring * S + k, sm, bt, bs, depth_chunk); });
+                if (++pairs_in_chunk == chunk) {
+                    flush(bt, bs);
+                    pairs_in_chunk = 0;
+                }
+            }
+        }
+        flush(bt, bs);
+    }
+
+    // the disk's polygons: clipped to the horizon (x and y swapped), whether each
+    // passes near the point, and per monotone piece of its arcs what the crossings need
+    struct Horizon {
+        std::vector<i64> live;        // bucket indices of the clipped polygons left
+        std::vector<char> near;       // passes within near_rel of the point
+        std::vector<i64> cc;          // their vertex counts
+        std::vector<double> Vc;       // (live, K, 3), padded by the last vertex
+        i64 K = 0;
+    };
+
+    static inline double dot_seq(const double* a, const double* b) {
+        return (a[0] * b[0] + a[1] * b[1]) + a[2] * b[2];
+    }
+
+    // numpy's maximum and minimum (a NaN propagates)
+    static inline double np_max(double a, double b) {
+        return (std::isnan(a) || std::isnan(b)) ? std::numeric_limits<double>::quiet_NaN()
+                                                 : std::max(a, b);
+    }
+    static inline double np_min(double a, double b) {
+        return (std::isnan(a) || std::isnan(b)) ? std::numeric_limits<double>::quiet_NaN()
+                                                 : std::min(a, b);
+    }
+    static inline double np_sign(double x) {
+        return x > 0 ? 1.0 : x < 0 ? -1.0 : x == 0 ? 0.0 : std::numeric_limits<double>::quiet_NaN();
+    }
+
+    static void clip_horizon(const double* V, i64 M, i64 K, const i64* counts, double meet_ulps,
+                             double near_rel, Horizon& h) {
+        std::vector<double> Vs(static_cast<size_t>(M * K * 3));
+        for (i64 q = 0; q < M * K; ++q) {
+            Vs[3 * q] = V[3 * q + 1];
+            Vs[3 * q + 1] = V[3 * q];
+            Vs[3 * q + 2] = V[3 * q + 2];
+        }
+        std::vector<i64> cnt(counts, counts + M), nc;
+        std::vector<double> out;
+        const double ez[3] = {0.0, 0.0, 1.0};
+        i64 Kn;
+        clip_halfspace(Vs, M, K, cnt, ez, meet_ulps, out, Kn, nc);
+        h.K = Kn;
+        h.live.clear(); h.near.clear(); h.cc.clear(); h.Vc.clear();
+        for (i64 m = 0; m < M; ++m) {
+            const i64 n = nc[m];
+            if (n < 3) continue;
+            const double* P = out.data() + m * Kn * 3;
+            // _passes_near_origin: an edge's closest point to the origin within
+            // near_rel of its longer end point's distance
+            bool near = false;
+            for (i64 e = 0; e < n && !near; ++e) {
+                const double* a = P + 3 * e;
+                const double* b = P + 3 * ((e + 1) % n);
+                const double d[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+                const double dd = dot_seq(d, d);
+                double s = -dot_seq(a, d) / dd;
+                s = std::isnan(s) ? 0.0 : std::min(std::max(s, 0.0), 1.0);
+                const double q[3] = {a[0] + s * d[0], a[1] + s * d[1], a[2] + s * d[2]};
+                const double closest = std::sqrt(dot_seq(q, q));
+                const double scale = np_max(std::sqrt(dot_seq(a, a)), std::sqrt(dot_seq(b, b)));
+                near = closest <= near_rel * scale;
+            }
+            h.live.push_back(m);
+            h.near.push_back(near ? 1 : 0);
+            h.cc.push_back(n);
+            for (i64 k = 0; k < Kn; ++k) {
+                const double* x = P + 3 * (k < n ? k : n - 1);
+                h.Vc.insert(h.Vc.end(), x, x + 3);
+            }
+        }
+    }
+
+    // rasterise_disk's scan of the polygons h holds that are not near the point
+    void scan_disk(const Horizon& h, const i64* src, const double* xc, i64 nx, const double* yc,
+                   i64 ny, const i64* tab, double* bt, i64* bs, i64 pair_chunk,
+                   i64 depth_chunk) {
+        const i64 K = h.K, K2 = 2 * K;
+        const i64 chunk = std::max<i64>(1, pair_chunk / std::max<i64>(K2, 1));
+        i64 pairs_in_chunk = 0;
+        // per monotone piece: its parameter interval, its end points' y, and the
+        // edge's a, d = b - a, a.a, d.d, a.d
+        std::vector<double> S0(K2), S1(K2), Y0(K2), Y1(K2), ax(K2), ay(K2), dx(K2), dy(K2),
+            a2(K2), v2(K2), av(K2);
+        std::vector<char> ok(K2);
+        std::vector<double> ya(K), X;
+        X.reserve(static_cast<size_t>(K2));
+        sc_ = &scratch(n_cells_);
+        for (size_t li = 0; li < h.live.size(); ++li) {
+            if (h.near[li]) continue;
+            const double* P = h.Vc.data() + li * K * 3;
+            const i64 n = h.cc[li];
+            const i64 sm = src[h.live[li]];
+            // each vertex's y on the disk
+            for (i64 e = 0; e < K; ++e) {
+                const double* a = P + 3 * e;
+                ya[e] = a[1] / std::sqrt(dot_seq(a, a));
+            }
+            for (i64 e = 0; e < K; ++e) {
+                const bool slot = e < n;
+                const i64 nxt = (e + 1) % n;
+                const double* A = P + 3 * e;
+                const double* B = slot ? P + 3 * nxt : A;
+                double yv = ya[e], yb = slot ? ya[nxt] : ya[e];
+                // every edge from its lower end point (y, then x, then z)
+                const bool swap = (yb < yv) || (yb == yv && (B[0] < A[0] || (B[0] == A[0] && B[2] < A[2])));
+                if (swap) {
+                    std::swap(A, B);
+                    std::swap(yv, yb);
+                }
+                const double d[3] = {B[0] - A[0], B[1] - A[1], B[2] - A[2]};
+                const double ad = dot_seq(A, d), aa = dot_seq(A, A), ddd = dot_seq(d, d);
+                // the arc's extreme in y: d/ds y(s) = 0 is linear in s
+                double s_ext = (A[1] * ad - d[1] * aa) / (d[1] * ad - A[1] * ddd);
+                const bool inner = s_ext > 0 && s_ext < 1 && slot;
+                double y_ext = yb;
+                if (inner) {
+                    const double q[3] = {A[0] + s_ext * d[0], A[1] + s_ext * d[1], A[2] + s_ext * d[2]};
+                    y_ext = q[1] / std::sqrt(dot_seq(q, q));
+                } else {
+                    s_ext = 1.0;
+                }
+                // monotone pieces: [0, s_ext] from yv to y_ext, [s_ext, 1] from y_ext to yb
+                S0[e] = 0.0; S1[e] = s_ext; Y0[e] = yv; Y1[e] = y_ext; ok[e] = slot;
+                S0[K + e] = s_ext; S1[K + e] = 1.0; Y0[K + e] = y_ext; Y1[K + e] = yb;
+                ok[K + e] = inner;
+                for (const i64 j : {e, K + e}) {
+                    ax[j] = A[0]; ay[j] = A[1]; dx[j] = d[0]; dy[j] = d[1];
+                    a2[j] = aa; v2[j] = ddd; av[j] = ad;
+                }
+            }
+            double lo = INF, hi = -INF;
+            bool lo_nan = false, hi_nan = false;
+            for (i64 j = 0; j < K2; ++j) {
+                if (!ok[j]) continue;
+                const double mn = np_min(Y0[j], Y1[j]), mx = np_max(Y0[j], Y1[j]);
+                if (std::isnan(mn)) lo_nan = true; else lo = std::min(lo, mn);
+                if (std::isnan(mx)) hi_nan = true; else hi = std::max(hi, mx);
+            }
+            // the scanlines within [lo, hi] (numpy's searchsorted puts NaN last)
+            const i64 j0 = lo_nan ? nx : std::lower_bound(xc, xc + nx, lo) - xc;
+            const i64 j1 = hi_nan ? nx : std::upper_bound(xc, xc + nx, hi) - xc;
+            for (i64 r = j0; r < j1; ++r) {
+                const double y = xc[r];
+                X.clear();
+                for (i64 j = 0; j < K2; ++j) {
+                    if (!ok[j] || ((Y0[j] > y) == (Y1[j] > y))) continue;
+                    // the crossing: (a_y + s d_y)^2 = y^2 |a + s d|^2, a quadratic in s
+                    const double yy = y * y;
+                    const double q2 = dy[j] * dy[j] - yy * v2[j];
+                    const double q1 = 2.0 * (ay[j] * dy[j] - yy * av[j]);
+                    const double q0 = ay[j] * ay[j] - yy * a2[j];
+                    const double disc = std::sqrt(np_max(q1 * q1 - 4.0 * q2 * q0, 0.0));
+                    // the two roots, in the cancellation-free forms; q2 = 0: one root
+                    const double big = -0.5 * (q1 + std::copysign(disc, q1));
+                    const double cand[3] = {big / q2, q0 / big, -q0 / q1};
+                    const double s0 = S0[j], s1 = S1[j];
+                    // the root on the piece and on the row's side, the nearest the piece
+                    double best_s = 0.5 * (s0 + s1), best_d = INF;
+                    for (const double cd : cand) {
+                        const bool side = np_sign(ay[j] + cd * dy[j]) == np_sign(y) || y == 0;
+                        double dist = np_max(np_max(s0 - cd, cd - s1), 0.0);
+                        dist = (std::isfinite(cd) ? dist : INF) + (side ? 0.0 : 1.0);
+                        if (dist < best_d) {
+                            best_s = cd;
+                            best_d = dist;
+                        }
+                    }
+                    const double s = np_min(np_max(best_s, s0), s1);
+                    const double x = (ax[j] + s * dx[j]) / std::sqrt(a2[j] + s * (2.0 * av[j] + s * v2[j]));
+                    if (!std::isnan(x)) X.push_back(x);
+                }
+                std::sort(X.begin(), X.end());
+                spans(X, static_cast<size_t>(K), yc, ny, [&](i64 col) {
+                    const i64 cell = tab[r * ny + col];
+                    if (cell >= 0) add(cell, sm, bt, bs, depth_chunk);
+                });
+                if (++pairs_in_chunk == chunk) {
+                    flush(bt, bs);
+                    pairs_in_chunk = 0;
+                }
+            }
+        }
+        flush(bt, bs);
+    }
+
     void check_buffer(const py::array& best_t, const py::array& best) const {
         if (!best_t.dtype().is(py::dtype::of<double>()) || !best.dtype().is(py::dtype::of<i64>()))
             throw std::invalid_argument("best_t and best must be float64 and int64");
@@ -749,7 +1285,26 @@ PYBIND11_MODULE(_zbuffer, m) {
              py::arg("g_ids"), py::arg("planes"), py::arg("eu"), py::arg("ev"), py::arg("ew"),
              py::arg("side"), py::arg("uc"), py::arg("vc"), py::arg("table"),
              py::arg("best_t"), py::arg("best"), py::arg("pair_chunk"), py::arg("depth_chunk"))
+        .def("clipped_face", &ZBuffer::clipped_face, py::arg("V"), py::arg("counts"),
+             py::arg("g_ids"), py::arg("R"), py::arg("planes"), py::arg("scale"),
+             py::arg("uc"), py::arg("vc"), py::arg("table"), py::arg("best_t"),
+             py::arg("best"), py::arg("pair_chunk"), py::arg("depth_chunk"))
+        .def("polar", &ZBuffer::polar, py::arg("V"), py::arg("counts"), py::arg("g_ids"),
+             py::arg("R"), py::arg("planes"), py::arg("scale"), py::arg("radii"),
+             py::arg("cos"), py::arg("sin"), py::arg("best_t"), py::arg("best"),
+             py::arg("pair_chunk"), py::arg("depth_chunk"))
+        .def("disk", &ZBuffer::disk, py::arg("V"), py::arg("counts"), py::arg("g_ids"),
+             py::arg("xc"), py::arg("yc"), py::arg("table"), py::arg("best_t"),
+             py::arg("best"), py::arg("pair_chunk"), py::arg("depth_chunk"),
+             py::arg("near_rel"))
         .def("coplanar", &ZBuffer::coplanar_many, py::arg("a"), py::arg("b"));
+    m.def("face_clip", &ZBuffer::face_clip, py::arg("V"), py::arg("counts"), py::arg("R"),
+          py::arg("planes"), py::arg("scale"), py::arg("clip_meet_ulps"),
+          "exactff.methods._raster.FaceClip of one bucket, compiled: (live, UV, cl).");
+    m.def("disk_near", &ZBuffer::disk_near, py::arg("V"), py::arg("counts"),
+          py::arg("clip_meet_ulps"), py::arg("near_rel"),
+          "The bucket's polygons that, clipped to the horizon, pass near the point "
+          "(rasterise_disk casts their rays one by one).");
     m.def("chart_clip", &ZBuffer::chart_clip, py::arg("V"), py::arg("counts"), py::arg("planes"),
           py::arg("eu"), py::arg("ev"), py::arg("ew"), py::arg("side"),
           py::arg("clip_meet_ulps"), py::arg("chart_edge_ulps"),

@@ -97,17 +97,18 @@ class CubicTetrahedron(SampledMethod):
         keep = (1.0 + v + w > 0).ravel()
         n_face = int(keep.sum())
         a1, a2, a3 = cubic_tetrahedron_frame()
-        up = np.array([0.0, 0.0, 1.0])
         z = ZBufferRow(scene, point, normal)
         best_t = np.full(len(L), np.inf)
         best = np.full(len(L), -1, dtype=np.int64)
         zb = compiled_zbuffer(z, L) if self.backend == "compiled" else None
         # the faces x' = 1, y' = 1, z' = 1 in the layout's order, each with the plane
-        # axes of its grid (v, w); the frustum: u, v <= 1 and above the base
+        # axes of its grid (v, w); the frustum in the face's frame (u, v, w): u, v <= w
+        # and above the base (u + v + w > 0: the normal is (a1 + a2 + a3) / sqrt 3)
+        planes = [[-1.0, 0.0, 1.0], [0.0, -1.0, 1.0], [1.0, 1.0, 1.0]]
         for k, (ew, eu, ev) in enumerate(((a1, a2, a3), (a2, a3, a1), (a3, a1, a2))):
             index_of = np.full(r * r, -1)
             index_of[keep] = k * n_face + np.arange(n_face)
-            clip = face_clipper(eu, ev, ew, [ew - eu, ew - ev, up])
+            clip = face_clipper([eu, ev, ew], planes)
             rasterise_face(z, None, c, c, lambda i, j, m=index_of: m[i * r + j],
                            L.directions, best_t, best, clip=clip, zbuffer=zb)
         return z.hits(best)

@@ -2,7 +2,7 @@
 
 import numpy as np
 
-from ._raster import rasterise_disk
+from ._raster import check_backend, compiled_zbuffer, rasterise_disk
 from ._sampling import CellLayout, SampledMethod, ZBufferRow, resolution_from
 
 __all__ = ["DiscretePPBH"]
@@ -33,6 +33,10 @@ class DiscretePPBH(SampledMethod):
         scan-converted on the disk's grid, one depth buffer
         (:func:`exactff.methods._raster.rasterise_disk`). False: the shared sampling
         core (the test oracle).
+    backend : {"compiled", "numpy"}, default "compiled"
+        Where the native rasterisation runs: the compiled z-buffer
+        (``exactff.methods._zbuffer``, C++ without the GIL) or the vectorised numpy
+        code, its test oracle; the two give the same polygon in every cell.
 
     Examples
     --------
@@ -48,9 +52,10 @@ class DiscretePPBH(SampledMethod):
 
     name = "ppbh"
 
-    def __init__(self, resolution=None, *, samples=None, native=True):
+    def __init__(self, resolution=None, *, samples=None, native=True, backend="compiled"):
         self.resolution = resolution_from(resolution, samples, np.pi / 4)
         self.native = bool(native)
+        self.backend = check_backend(backend)
         self._layout = None
 
     def build_layout(self):
@@ -72,10 +77,14 @@ class DiscretePPBH(SampledMethod):
         index_of[(x * x + y * y < 1.0).ravel()] = np.arange(len(L))
         z = ZBufferRow(scene, point, normal)
         best_t = np.full(len(L), np.inf)
-        best = np.full(len(L), -1)
-        rasterise_disk(z, c, c, lambda i, j: index_of[i * r + j], L.directions, best_t, best)
+        best = np.full(len(L), -1, dtype=np.int64)
+        zb = compiled_zbuffer(z, L) if self.backend == "compiled" else None
+        rasterise_disk(z, c, c, lambda i, j: index_of[i * r + j], L.directions, best_t, best,
+                       zbuffer=zb)
         return z.hits(best)
 
     def __repr__(self):
         extra = "" if self.native else ", native=False"
+        if self.backend != "compiled":
+            extra += f", backend={self.backend!r}"
         return f"DiscretePPBH(resolution={self.resolution}{extra})"

@@ -2,7 +2,7 @@
 
 import numpy as np
 
-from ._raster import check_backend, compiled_zbuffer, face_clipper, rasterise_face
+from ._raster import check_backend, compiled_zbuffer, plane_clipper, rasterise_face
 from ._sampling import (CellLayout, SampledMethod, ZBufferRow, check_resolution,
                         resolution_from)
 
@@ -150,10 +150,8 @@ class SinglePlane(SampledMethod):
         return CellLayout(np.column_stack([x, y, np.ones_like(x)]), w, covered)
 
     def native_hits(self, scene, point, normal):
-        E = self.extent
         L = self.layout()
-        X, Y, Z = np.eye(3)
-        clip = face_clipper(X, Y, Z, [E * Z - X, E * Z + X, E * Z - Y, E * Z + Y])
+        clip = plane_clipper(self.extent)
         z = ZBufferRow(scene, point, normal)
         best_t = np.full(len(L), np.inf)
         best = np.full(len(L), -1, dtype=np.int64)
