@@ -33,7 +33,7 @@ from ._sampling import PAIR_CHUNK, resolve_depths
 from ._zbuffer import ZBuffer, disk_near
 
 __all__ = ["rasterise_face", "rasterise_disk", "rasterise_polar", "face_clipper",
-           "plane_clipper", "FaceClip", "DEPTH_CHUNK", "compiled_zbuffer", "BACKENDS",
+           "plane_clipper", "FaceClip", "cell_table", "DEPTH_CHUNK", "compiled_zbuffer", "BACKENDS",
            "check_backend"]
 
 #: Where the native rasterisers scan-convert and depth-test: "compiled" (the C++
@@ -59,10 +59,20 @@ def compiled_zbuffer(z, layout):
                    tol.CHART_EDGE_ULPS)
 
 
-def _cell_table(cell_of, nu, nv):
-    """``cell_of`` over the whole grid: an int64 array of shape (nu, nv)."""
+def cell_table(cell_of, nu, nv):
+    """``cell_of`` over the whole grid: an int64 array of shape (nu, nv), which the
+    rasterisers take in its place (a method builds it once)."""
+    if isinstance(cell_of, np.ndarray):
+        return cell_of
     return np.ascontiguousarray(np.broadcast_to(
         cell_of(np.arange(nu)[:, None], np.arange(nv)[None, :]), (nu, nv)), dtype=np.int64)
+
+
+def _cell_function(cell_of):
+    """``cell_of(i, j)`` from a function or a :func:`cell_table`."""
+    if isinstance(cell_of, np.ndarray):
+        return lambda i, j: cell_of[i, j]
+    return cell_of
 
 
 def _first_at_or_above(centres, x):
@@ -193,9 +203,10 @@ def rasterise_face(z, chart, uc, vc, cell_of, D, best_t, best, clip=None, zbuffe
         is not given.
     uc, vc : ndarray
         Cell centres along u and v, increasing.
-    cell_of : callable
+    cell_of : callable or ndarray
         ``cell_of(i, j)`` -> the index in the layout of the cell at ``(uc[i], vc[j])``
-        (consecutive along j), -1 for a grid cell the layout does not have.
+        (consecutive along j), -1 for a grid cell the layout does not have; or its
+        :func:`cell_table`.
     D : ndarray of shape (C, 3)
         The layout's cell directions (for the depths).
     best_t, best : ndarray of shape (C,)
@@ -208,9 +219,10 @@ def rasterise_face(z, chart, uc, vc, cell_of, D, best_t, best, clip=None, zbuffe
         depth test in C++, cell for cell as here; default the numpy code below.
     """
     if zbuffer is not None:
-        table = _cell_table(cell_of, len(uc), len(vc))
+        table = cell_table(cell_of, len(uc), len(vc))
         if clip is None:
             planes = np.array(chart_planes(chart))
+    cell_of = _cell_function(cell_of)
     for g_ids, V, counts in z.local:
         if zbuffer is not None and clip is None:
             # the chart's clipping (chart_clip, bit for bit) compiled too
@@ -316,15 +328,17 @@ def rasterise_disk(z, xc, yc, cell_of, D, best_t, best, zbuffer=None):
     z : ZBufferRow
     xc, yc : ndarray
         Cell centres along x and y of the square grid on the disk.
-    cell_of : callable
+    cell_of : callable or ndarray
         ``cell_of(i, j)`` -> the index in the layout of the cell at ``(xc[i], yc[j])``
-        (consecutive along j), -1 for a grid cell outside the disk.
+        (consecutive along j), -1 for a grid cell outside the disk; or its
+        :func:`cell_table`.
     D, best_t, best, zbuffer : as :func:`rasterise_face` (the compiled disk: the same
         clipping, arcs, crossings, spans and depth rule).
     """
     ez = np.array([0.0, 0.0, 1.0])
     if zbuffer is not None:
-        table = _cell_table(cell_of, len(xc), len(yc))
+        table = cell_table(cell_of, len(xc), len(yc))
+    cell_of = _cell_function(cell_of)
     for g_ids, V, counts in z.local:
         if zbuffer is not None:
             # the polygons through the point to rounding first, ray by ray, as below;

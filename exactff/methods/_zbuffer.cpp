@@ -56,21 +56,40 @@ inline double absdot3(const double* a, const double* b) {
            + std::fabs(a[1]) * std::fabs(b[1]);
 }
 
-// the depth buffer's per-cell scratch within a chunk
+// the depth buffer's per-cell scratch within a chunk (the nearest depth apart: the
+// candidates touch it, the other fields only the chunk's resolution)
 struct CellScratch {
-    double t_min = INF;                                  // the nearest depth
-    std::int64_t near = -1;                              // a polygon at that depth
+    std::int64_t near = -1;                              // a polygon at the nearest depth
     std::int64_t p_min = std::numeric_limits<std::int64_t>::max();   // the lowest priority tied
     std::int64_t pick = -1;                              // its polygon
 };
 
 // one scratch per thread, grown as needed and reset cell by cell after every chunk
-// (a row's buffer of 200,000 cells is not allocated and cleared again row by row)
-std::vector<CellScratch>& scratch(std::int64_t n_cells) {
-    thread_local std::vector<CellScratch> sc;
-    if (static_cast<std::int64_t>(sc.size()) < n_cells) sc.resize(static_cast<size_t>(n_cells));
+// (a row's buffer of 200,000 cells is not allocated and cleared again row by row):
+// the fields above, the nearest depth per cell (INF: no candidate yet), and room for
+// the list of the cells the chunk touched
+struct Scratch {
+    std::vector<CellScratch> cell;
+    std::vector<double> t_min;
+    std::vector<std::int64_t> touched;
+};
+
+Scratch& scratch(std::int64_t n_cells) {
+    thread_local Scratch sc;
+    if (static_cast<std::int64_t>(sc.cell.size()) < n_cells) {
+        sc.cell.resize(static_cast<size_t>(n_cells));
+        sc.t_min.resize(static_cast<size_t>(n_cells), INF);
+        // (one more: a candidate writes its cell before counting it)
+        sc.touched.resize(static_cast<size_t>(n_cells) + 1);
+    }
     return sc;
 }
+
+// a candidate (cell, live polygon) of the current chunk: its depth and n . d
+struct Candidate {
+    std::int64_t cell, s;
+    double t, den;
+};
 
 class ZBuffer {
   public:
@@ -205,7 +224,7 @@ class ZBuffer {
         double* bt = static_cast<double*>(best_t.mutable_data());
         i64* bs = static_cast<i64*>(best.mutable_data());
         py::gil_scoped_release release;
-        sc_ = &scratch(n_cells_);
+        use_scratch();
         for (i64 k = 0; k < n; ++k) add(c[k], s[k], bt, bs, depth_chunk);
         flush(bt, bs);
     }
@@ -379,7 +398,7 @@ class ZBuffer {
         i64 pairs_in_chunk = 0;
         std::vector<double> X;
         X.reserve(static_cast<size_t>(K));
-        sc_ = &scratch(n_cells_);
+        use_scratch();
         for (i64 m = 0; m < M; ++m) {
             const double* P = uv + m * K * 2;
             const i64 n = c[m];
@@ -842,7 +861,7 @@ class ZBuffer {
         std::vector<double> A(static_cast<size_t>(2 * K)), B(static_cast<size_t>(2 * K));
         std::vector<double> X;
         X.reserve(static_cast<size_t>(K + 1));
-        sc_ = &scratch(n_cells_);
+        use_scratch();
         for (i64 m = 0; m < L; ++m) {
             const double* P = c.UV.data() + m * K * 2;
             const i64 n = c.cl[m];
@@ -1001,7 +1020,7 @@ class ZBuffer {
         std::vector<char> ok(K2);
         std::vector<double> ya(K), X;
         X.reserve(static_cast<size_t>(K2));
-        sc_ = &scratch(n_cells_);
+        use_scratch();
         for (size_t li = 0; li < h.live.size(); ++li) {
             if (h.near[li]) continue;
             const double* P = h.Vc.data() + li * K * 3;
@@ -1147,6 +1166,17 @@ class ZBuffer {
         return r;
     }
 
+    // this thread's scratch for a call (the buffer's cells), the chunk's candidates
+    void use_scratch() {
+        Scratch& sc = scratch(n_cells_);
+        sc_ = sc.cell.data();
+        t_min_ = sc.t_min.data();
+        touched_ = sc.touched.data();
+        n_touched_ = 0;
+        cand_.clear();
+        in_chunk_ = 0;
+    }
+
     // resolve_depths on the buffered candidates
     // one candidate (cell, live polygon) of the current chunk: its depth, the cell's
     // nearest depth so far; a ray along its polygon's plane hits nothing
@@ -1154,13 +1184,12 @@ class ZBuffer {
         const double den = dot3(nl_p_ + 3 * s, D_p_ + 3 * cell);
         const double t = dl_p_[s] / den;
         if (std::isfinite(t)) {
-            CellScratch& c = (*sc_)[cell];
-            if (c.t_min == INF) touched_.push_back(cell);
-            if (t < c.t_min) c.t_min = t;
-            cells_.push_back(cell);
-            srcs_.push_back(s);
-            cand_t_.push_back(t);
-            cand_den_.push_back(den);
+            // (without branches on the depths: they do not predict)
+            double& tm = t_min_[cell];
+            touched_[n_touched_] = cell;
+            n_touched_ += tm == INF;
+            tm = t < tm ? t : tm;
+            cand_.push_back(Candidate{cell, s, t, den});
         }
         // the numpy code's chunks count every candidate, hit or not
         if (++in_chunk_ == depth_chunk) flush(best_t, best);
@@ -1169,20 +1198,22 @@ class ZBuffer {
     // resolve_depths on the chunk's candidates, merged into the buffer
     void flush(double* best_t, i64* best) {
         in_chunk_ = 0;
-        const size_t n = cells_.size();
+        const size_t n = cand_.size();
         if (n == 0) return;
         const double* Dn = Dnorm_.data();
         const double* dl = dl_.data();
         const double* band = band_.data();
         const i64* prio = prio_.data();
-        std::vector<CellScratch>& sc = *sc_;
+        CellScratch* sc = sc_;
+        const double* tmin = t_min_;
+        const Candidate* cd = cand_.data();
         // one of the polygons at the nearest depth (the last, as numpy's assignment),
         // and of the polygons there the one of lowest priority (priorities are
         // distinct per polygon; a polygon is a candidate of a cell once in a chunk)
         for (size_t k = 0; k < n; ++k) {
-            CellScratch& c = sc[cells_[k]];
-            if (cand_t_[k] == c.t_min) {
-                const i64 s = srcs_[k];
+            if (cd[k].t == tmin[cd[k].cell]) {
+                CellScratch& c = sc[cd[k].cell];
+                const i64 s = cd[k].s;
                 c.near = s;
                 if (prio[s] < c.p_min) {
                     c.p_min = prio[s];
@@ -1194,25 +1225,27 @@ class ZBuffer {
         // coplanar with the polygon there
         const double slack_ulps = tie_slack_ulps_;
         for (size_t k = 0; k < n; ++k) {
-            CellScratch& c = sc[cells_[k]];
-            if (cand_t_[k] == c.t_min) continue;
-            const i64 cell = cells_[k], s = srcs_[k];
-            const double t_near = c.t_min;
+            const i64 cell = cd[k].cell, s = cd[k].s;
+            const double t_near = tmin[cell];
+            if (cd[k].t == t_near) continue;
             const double slack = 4.0 * (band[s] + EPS * (slack_ulps * std::fabs(t_near) * Dn[cell]
                                                          + std::fabs(dl[s])));
-            if (std::fabs(t_near - cand_t_[k]) * std::fabs(cand_den_[k]) <= slack &&
-                coplanar(c.near, s) && prio[s] < c.p_min) {
-                c.p_min = prio[s];
-                c.pick = s;
+            if (std::fabs(t_near - cd[k].t) * std::fabs(cd[k].den) <= slack) {
+                CellScratch& c = sc[cell];
+                if (coplanar(c.near, s) && prio[s] < c.p_min) {
+                    c.p_min = prio[s];
+                    c.pick = s;
+                }
             }
         }
         // merge with the cells' best so far: the nearer wins unless the other is
         // coplanar with it and of lower priority
-        for (const i64 cell : touched_) {
+        for (i64 q = 0; q < n_touched_; ++q) {
+            const i64 cell = touched_[q];
             CellScratch& c = sc[cell];
             const i64 s = c.pick;
             if (s >= 0) {
-                const double t = c.t_min;
+                const double t = tmin[cell];
                 const i64 old = best[cell];
                 const bool has_old = old >= 0;
                 const bool new_nearer = t < best_t[cell];
@@ -1227,12 +1260,10 @@ class ZBuffer {
                 if (take) best[cell] = s;
             }
             c = CellScratch();
+            t_min_[cell] = INF;
         }
-        cells_.clear();
-        srcs_.clear();
-        cand_t_.clear();
-        cand_den_.clear();
-        touched_.clear();
+        cand_.clear();
+        n_touched_ = 0;
     }
 
     py::array_t<double, py::array::c_style | py::array::forcecast> D_, Dnorm_, nl_, dl_, band_;
@@ -1244,11 +1275,13 @@ class ZBuffer {
     double coplanar_ulps_, tie_slack_ulps_, clip_meet_ulps_, chart_edge_ulps_;
     i64 n_cells_ = 0, n_live_ = 0;
     // candidates of the current chunk
-    std::vector<i64> cells_, srcs_;
-    std::vector<double> cand_t_, cand_den_;
-    std::vector<i64> touched_;
+    std::vector<Candidate> cand_;
     i64 in_chunk_ = 0;                       // candidates in the chunk, hit or not
-    std::vector<CellScratch>* sc_ = nullptr;  // this thread's per-cell scratch
+    // this thread's per-cell scratch (use_scratch), the cells the chunk touched
+    CellScratch* sc_ = nullptr;
+    double* t_min_ = nullptr;
+    i64* touched_ = nullptr;
+    i64 n_touched_ = 0;
     const double *D_p_ = nullptr, *nl_p_ = nullptr, *dl_p_ = nullptr;
     std::unordered_map<std::uint64_t, bool> cache_;
     std::uint64_t last_key_ = ~std::uint64_t(0);

@@ -68,19 +68,27 @@ class DiscretePPBH(SampledMethod):
         D = np.column_stack([x, y, np.sqrt(1.0 - x * x - y * y)])
         return CellLayout(D, np.full(len(x), 1.0 / len(x)), 1.0)
 
+    def _grid(self):
+        """The grid's centres and the layout's cell of each grid cell (-1: outside the
+        disk), built once."""
+        if getattr(self, "_grid_cache", None) is None:
+            r = self.resolution
+            c = -1.0 + (np.arange(r) + 0.5) * (2.0 / r)
+            x, y = np.meshgrid(c, c, indexing="ij")
+            index_of = np.full(r * r, -1, dtype=np.int64)
+            inside = (x * x + y * y < 1.0).ravel()
+            index_of[inside] = np.arange(int(inside.sum()))
+            self._grid_cache = c, index_of.reshape(r, r)
+        return self._grid_cache
+
     def native_hits(self, scene, point, normal):
-        r = self.resolution
         L = self.layout()
-        c = -1.0 + (np.arange(r) + 0.5) * (2.0 / r)
-        x, y = np.meshgrid(c, c, indexing="ij")
-        index_of = np.full(r * r, -1)
-        index_of[(x * x + y * y < 1.0).ravel()] = np.arange(len(L))
+        c, table = self._grid()
         z = ZBufferRow(scene, point, normal)
         best_t = np.full(len(L), np.inf)
         best = np.full(len(L), -1, dtype=np.int64)
         zb = compiled_zbuffer(z, L) if self.backend == "compiled" else None
-        rasterise_disk(z, c, c, lambda i, j: index_of[i * r + j], L.directions, best_t, best,
-                       zbuffer=zb)
+        rasterise_disk(z, c, c, table, L.directions, best_t, best, zbuffer=zb)
         return z.hits(best)
 
     def __repr__(self):
