@@ -289,3 +289,117 @@ def test_zbuffer_rejects_a_buffer_it_cannot_write():
     with pytest.raises(ValueError, match="src out of range"):
         zb.face(UV, np.array([3]), np.array([10 ** 6]), *args[3:], np.full(len(L), np.inf),
                 np.full(len(L), -1, dtype=np.int64), 10, 10)
+
+
+# ---- Monte Carlo: the shared core's rays through the compiled z-buffer ----
+
+def assert_rays_identical(scene, point, normal, seed=0, samples=4000):
+    """The compiled shared core against its numpy code: bit for bit with the charts'
+    exact frustums (margin 0, what the compiled one clips to), and the same hits as
+    the numpy code's widened frustums (CHART_MARGIN: only a ray within rounding of a
+    chart's edge and of a polygon's edge there could differ)."""
+    from exactff.methods._sampling import nearest_polygons
+
+    p, n = as_receiver(point, normal)
+    D, _ = ef.MonteCarlo(samples, seed=seed).directions_for(p)
+    compiled = nearest_polygons(scene, p, n, D, backend="compiled")
+    exact_frustum = nearest_polygons(scene, p, n, D, margin=0.0)
+    widened = nearest_polygons(scene, p, n, D)
+    assert np.array_equal(compiled, exact_frustum)
+    assert np.array_equal(compiled, widened)
+    return compiled
+
+
+@pytest.mark.parametrize("scene_name", sorted(SCENES))
+def test_compiled_rays_identical_to_numpy(scene_name):
+    scene = SCENES[scene_name]()
+    for p, n in _rows(scene, 3, seed=4):
+        assert_rays_identical(scene, p, n)
+
+
+@pytest.mark.parametrize("scene_name", ["walls_low", "walls_high", "light_on_ceiling"])
+def test_compiled_rays_identical_to_numpy_on_ties_from_the_floor(scene_name):
+    scene = SCENES[scene_name]()
+    floors = [i for i, g in enumerate(scene.groups) if g == "floor"] or [
+        scene.names.index("floor")]
+    for i in floors:
+        hit = assert_rays_identical(scene, scene.centroids[i], scene.normals[i])
+        assert np.all(hit >= 0)
+
+
+@pytest.mark.parametrize("scene_name", ["office", "building", "light_on_ceiling"])
+def test_compiled_rays_identical_to_numpy_in_small_chunks(scene_name, monkeypatch):
+    import exactff.methods._sampling as sampling
+
+    monkeypatch.setattr(sampling, "PAIR_CHUNK", 300)
+    scene = SCENES[scene_name]()
+    for p, n in _rows(scene, 2, seed=5):
+        assert_rays_identical(scene, p, n)
+
+
+def test_compiled_rays_identical_to_numpy_through_cell_layouts():
+    # grid layouts (cells on shared edges and chart edges), not random rays
+    from exactff.methods._sampling import _chart_of, nearest_polygons
+
+    scene = aligned_box()
+    for m in (ef.Hemicube(resolution=16), ef.DiscretePPBH(resolution=40),
+              ef.CubicTetrahedron(resolution=20)):
+        D = m.layout().directions
+        for point in [(0.0, 0.0, 0.0), (0.125, -0.25, 0.0)]:
+            p, n = as_receiver(point, [0.0, 0.0, 1.0])
+            compiled = nearest_polygons(scene, p, n, D, backend="compiled")
+            assert np.array_equal(compiled, nearest_polygons(scene, p, n, D, margin=0.0))
+            # closed: every cell shows a polygon, but cells exactly on a chart's edge
+            # (discrete PPBH's diagonal |x| = |y|: u = 1), which an image clipped to
+            # the exact frustum has on its boundary; the numpy code widens the
+            # frustums for them (random rays are not there)
+            _, u, v = _chart_of(D)
+            on_edge = (np.abs(u) == 1.0) | (np.abs(v) == 1.0) | (v == 0.0)
+            assert np.all(compiled[~on_edge] >= 0)
+            if isinstance(m, ef.Hemicube):
+                assert not on_edge.any()
+
+
+def test_compiled_rays_leave_long_polygons_to_numpy():
+    # a 300-gon (wider than LONG_POLYGON): the numpy code tests it with shapely, and
+    # the compiled backend hands that bucket back to it, in order
+    room = ef.scenes.furnished_box(2, [((0.1, 0.1, 0.0), (0.3, 0.35, 0.6))])
+    t = 2 * np.pi * np.arange(300) / 300
+    disc = np.column_stack([0.3 * np.cos(t), 0.3 * np.sin(t), 0.06 * np.cos(t)]) + [0.5, 0.45, 0.5]
+    scene = ef.Scene.from_polygons(list(room.polygons) + [disc])
+    seen = 0
+    for i in (0, 9, 14):
+        hit = assert_rays_identical(scene, room.centroids[i], room.normals[i])
+        seen += np.sum(hit == len(room))
+    assert seen > 100    # the disc is hit
+
+
+@given(strategies.enclosures() | strategies.occluded_scenes() | strategies.flush_faces())
+@settings(max_examples=examples(40), deadline=None)
+def test_compiled_rays_identical_to_numpy_in_random_scenes(case):
+    assert_rays_identical(*case, samples=1500)
+
+
+def test_monte_carlo_rows_equal_numpy_rows():
+    scene = ef.scenes.office()
+    for p, n in _rows(scene, 2, seed=6):
+        F1 = ef.form_factors(scene, p, n, method=ef.MonteCarlo(20000, seed=3))
+        F0 = ef.form_factors(scene, p, n, method=ef.MonteCarlo(20000, seed=3, backend="numpy"))
+        assert np.array_equal(F1, F0)
+    S1 = ef.sphere_form_factors(scene, scene.centroids[:3], method=ef.MonteCarlo(8000))
+    S0 = ef.sphere_form_factors(scene, scene.centroids[:3],
+                                method=ef.MonteCarlo(8000, backend="numpy"))
+    assert np.array_equal(S1, S0)
+
+
+def test_monte_carlo_backend_option_checked_and_in_repr():
+    assert "backend" not in repr(ef.MonteCarlo(10))
+    assert "backend='numpy'" in repr(ef.MonteCarlo(10, backend="numpy"))
+    with pytest.raises(ValueError, match="backend"):
+        ef.MonteCarlo(10, backend="cuda")
+    from exactff.methods._sampling import nearest_polygons
+
+    scene = ef.scenes.cornell_box()
+    with pytest.raises(ValueError, match="margin"):
+        nearest_polygons(scene, scene.centroids[0], scene.normals[0], np.array([[0, 0, 1.0]]),
+                         backend="compiled", margin=1e-6)

@@ -29,8 +29,8 @@ import numpy as np
 from .. import _tolerances as tol
 from ..halfspace import clip_halfspace
 from ..visibility.charts import chart_clip, chart_planes
-from ._sampling import PAIR_CHUNK, resolve_depths
-from ._zbuffer import ZBuffer, disk_near
+from ._sampling import PAIR_CHUNK, resolve_depths, zbuffer_of
+from ._zbuffer import disk_near
 
 __all__ = ["rasterise_face", "rasterise_disk", "rasterise_polar", "face_clipper",
            "plane_clipper", "FaceClip", "cell_table", "DEPTH_CHUNK", "compiled_zbuffer", "BACKENDS",
@@ -52,11 +52,7 @@ def compiled_zbuffer(z, layout):
     """The compiled z-buffer (``exactff.methods._zbuffer.ZBuffer``) of one row: the
     layout's cell directions and the live polygons' depth data of ``z``
     (:class:`ZBufferRow`), with the scene's planes for the coplanar rule."""
-    s = z.scene
-    return ZBuffer(layout.directions, layout.direction_norms, z.nl, z.dl, z.band, z.prio,
-                   s.vertices, s.offsets, s.normals, s.plane_offsets, z.ids,
-                   tol.BSP_COPLANAR_ULPS, tol.ZBUFFER_ROUNDING_ULPS + 1.0, tol.CLIP_MEET_ULPS,
-                   tol.CHART_EDGE_ULPS)
+    return zbuffer_of(z, layout.directions, layout.direction_norms)
 
 
 def cell_table(cell_of, nu, nv):

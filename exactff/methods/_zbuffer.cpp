@@ -387,6 +387,59 @@ class ZBuffer {
                   pair_chunk, depth_chunk);
     }
 
+    // The shared sampling core's z-buffer of one chart and bucket
+    // (exactff.methods._sampling._zbuffer_chart) for any directions (Monte Carlo's
+    // rays): the bucket clipped to the chart's exact frustum (chart_face's clipping),
+    // each image's bounding box over the chart's grid of buckets of directions
+    // (cells (n,) the directions' indices, cu, cv their chart coordinates, nb and
+    // v_lo the grid, order and starts its CSR lists), the crossing number over the
+    // image's edges, the depth buffer in chunks of pair_chunk (polygon, direction)
+    // pairs. False (and nothing done) where the clipped images are wider than
+    // long_polygon vertices: the numpy code tests those with shapely.
+    bool chart_rays(py::array_t<double, py::array::c_style | py::array::forcecast> V,
+                    py::array_t<i64, py::array::c_style | py::array::forcecast> counts,
+                    py::array_t<i64, py::array::c_style | py::array::forcecast> g_ids,
+                    py::array_t<double, py::array::c_style | py::array::forcecast> planes,
+                    py::array_t<double, py::array::c_style | py::array::forcecast> eu,
+                    py::array_t<double, py::array::c_style | py::array::forcecast> ev,
+                    py::array_t<double, py::array::c_style | py::array::forcecast> ew,
+                    bool side,
+                    py::array_t<i64, py::array::c_style | py::array::forcecast> cells,
+                    py::array_t<double, py::array::c_style | py::array::forcecast> cu,
+                    py::array_t<double, py::array::c_style | py::array::forcecast> cv,
+                    i64 nb, double v_lo,
+                    py::array_t<i64, py::array::c_style | py::array::forcecast> order,
+                    py::array_t<i64, py::array::c_style | py::array::forcecast> starts,
+                    py::array best_t, py::array best, i64 pair_chunk, i64 long_polygon) {
+        const i64 M = check_bucket(V, counts, planes, eu, ev, ew);
+        check_ids(g_ids, M);
+        const i64 n = cells.shape(0);
+        if (cu.shape(0) != n || cv.shape(0) != n || order.shape(0) != n)
+            throw std::invalid_argument("cells, cu, cv, order: one per direction");
+        if (nb < 1 || starts.shape(0) != nb * nb + 1)
+            throw std::invalid_argument("starts must have nb * nb + 1 entries");
+        for (i64 k = 0; k < n; ++k)
+            if (cells.data()[k] < 0 || cells.data()[k] >= n_cells_ || order.data()[k] < 0 ||
+                order.data()[k] >= n)
+                throw std::invalid_argument("cells or order out of range");
+        for (i64 k = 0; k <= nb * nb; ++k)
+            if (starts.data()[k] < 0 || starts.data()[k] > n ||
+                (k > 0 && starts.data()[k] < starts.data()[k - 1]))
+                throw std::invalid_argument("starts must be non-decreasing within [0, n]");
+        check_buffer(best_t, best);
+        double* bt = static_cast<double*>(best_t.mutable_data());
+        i64* bs = static_cast<i64*>(best.mutable_data());
+        py::gil_scoped_release release;
+        Clipped c;
+        clip_chart(V.data(), M, V.shape(1), counts.data(), planes.data(), eu.data(), ev.data(),
+                   ew.data(), side, clip_meet_ulps_, chart_edge_ulps_, c);
+        if (c.live.empty()) return true;
+        if (c.K > long_polygon) return false;
+        scan_rays(c, g_ids.data(), cells.data(), cu.data(), cv.data(), nb, v_lo, order.data(),
+                  starts.data(), bt, bs, pair_chunk);
+        return true;
+    }
+
   private:
     // scan conversion of M polygons UV (M, K, 2) with counts c, live indices
     // src[pos[m]] (pos null: src[m]), into the depth buffer
@@ -1119,6 +1172,83 @@ class ZBuffer {
         flush(bt, bs);
     }
 
+    // _zbuffer_chart on the clipped images c
+    void scan_rays(const Clipped& c, const i64* src, const i64* cells, const double* cu,
+                   const double* cv, i64 nb, double v_lo, const i64* order, const i64* starts,
+                   double* bt, i64* bs, i64 pair_chunk) {
+        const i64 L = static_cast<i64>(c.live.size()), K = c.K;
+        const double fnb = static_cast<double>(nb);
+        // (polygon, bucket) pairs: the buckets under each image's bounding box
+        std::vector<double> box(static_cast<size_t>(4 * L));
+        std::vector<i64> pb_poly, pb_b, cum;
+        auto bucket = [&](double x) {
+            // numpy's astype(int) truncates; then clipped to the grid
+            const i64 b = static_cast<i64>(x);
+            return std::min(std::max<i64>(b, 0), nb - 1);
+        };
+        i64 total = 0;
+        for (i64 m = 0; m < L; ++m) {
+            const double* P = c.UV.data() + m * K * 2;
+            double lo0 = INF, lo1 = INF, hi0 = -INF, hi1 = -INF;
+            for (i64 e = 0; e < K; ++e) {
+                lo0 = np_min(lo0, P[2 * e]); hi0 = np_max(hi0, P[2 * e]);
+                lo1 = np_min(lo1, P[2 * e + 1]); hi1 = np_max(hi1, P[2 * e + 1]);
+            }
+            box[4 * m] = lo0; box[4 * m + 1] = lo1; box[4 * m + 2] = hi0; box[4 * m + 3] = hi1;
+            const i64 bx0 = bucket((lo0 + 1.0) * 0.5 * fnb), bx1 = bucket((hi0 + 1.0) * 0.5 * fnb);
+            const i64 by0 = bucket((lo1 - v_lo) / (1.0 - v_lo) * fnb);
+            const i64 by1 = bucket((hi1 - v_lo) / (1.0 - v_lo) * fnb);
+            const i64 nby = by1 - by0 + 1, nbk = (bx1 - bx0 + 1) * nby;
+            for (i64 k = 0; k < nbk; ++k) {
+                const i64 b = (bx0 + k / nby) * nb + by0 + k % nby;
+                pb_poly.push_back(m);
+                pb_b.push_back(b);
+                total += starts[b + 1] - starts[b];
+                cum.push_back(total);
+            }
+        }
+        // chunks of about pair_chunk (polygon, direction) pairs, as the numpy code cuts
+        // them: bounds = [0] + searchsorted(cum, range(pair_chunk, total, pair_chunk),
+        // "right") + [pairs]
+        const i64 n_pairs = static_cast<i64>(pb_b.size());
+        std::vector<i64> bounds{0};
+        for (i64 x = pair_chunk; x < total; x += pair_chunk)
+            bounds.push_back(std::upper_bound(cum.begin(), cum.end(), x) - cum.begin());
+        bounds.push_back(n_pairs);
+        use_scratch();
+        const i64 no_chunk = std::numeric_limits<i64>::max();
+        for (size_t q = 0; q + 1 < bounds.size(); ++q) {
+            for (i64 p = bounds[q]; p < bounds[q + 1]; ++p) {
+                const i64 m = pb_poly[p], b = pb_b[p];
+                const double* P = c.UV.data() + m * K * 2;
+                const double* bx = box.data() + 4 * m;
+                const i64 sm = src[c.live[m]];
+                const i64 ncl = c.cl[m];
+                for (i64 j = starts[b]; j < starts[b + 1]; ++j) {
+                    const i64 cl = order[j];
+                    const double uu = cu[cl], vv = cv[cl];
+                    if (!(uu >= bx[0] && uu <= bx[2] && vv >= bx[1] && vv <= bx[3])) continue;
+                    // the crossing number over the edges, each from its lower end
+                    // point (the padding's zero-length edges cross nothing: the
+                    // polygon's own edges, the last one closing it)
+                    bool inside = false;
+                    for (i64 e = 0; e < ncl; ++e) {
+                        const double* a = P + 2 * e;
+                        const double* d = P + 2 * (e + 1 < ncl ? e + 1 : 0);
+                        const bool straddles = (a[1] > vv) != (d[1] > vv);
+                        if (!straddles) continue;
+                        if (a[1] > d[1]) std::swap(a, d);
+                        const double ux = a[0] + (vv - a[1]) * (d[0] - a[0]) / (d[1] - a[1]);
+                        if (uu < ux) inside = !inside;
+                    }
+                    if (inside) add(cells[cl], sm, bt, bs, no_chunk);
+                }
+            }
+            // resolve_depths once per chunk
+            flush(bt, bs);
+        }
+    }
+
     void check_buffer(const py::array& best_t, const py::array& best) const {
         if (!best_t.dtype().is(py::dtype::of<double>()) || !best.dtype().is(py::dtype::of<i64>()))
             throw std::invalid_argument("best_t and best must be float64 and int64");
@@ -1330,6 +1460,11 @@ PYBIND11_MODULE(_zbuffer, m) {
              py::arg("xc"), py::arg("yc"), py::arg("table"), py::arg("best_t"),
              py::arg("best"), py::arg("pair_chunk"), py::arg("depth_chunk"),
              py::arg("near_rel"))
+        .def("chart_rays", &ZBuffer::chart_rays, py::arg("V"), py::arg("counts"),
+             py::arg("g_ids"), py::arg("planes"), py::arg("eu"), py::arg("ev"), py::arg("ew"),
+             py::arg("side"), py::arg("cells"), py::arg("cu"), py::arg("cv"), py::arg("nb"),
+             py::arg("v_lo"), py::arg("order"), py::arg("starts"), py::arg("best_t"),
+             py::arg("best"), py::arg("pair_chunk"), py::arg("long_polygon"))
         .def("coplanar", &ZBuffer::coplanar_many, py::arg("a"), py::arg("b"));
     m.def("face_clip", &ZBuffer::face_clip, py::arg("V"), py::arg("counts"), py::arg("R"),
           py::arg("planes"), py::arg("scale"), py::arg("clip_meet_ulps"),
