@@ -403,3 +403,19 @@ def test_monte_carlo_backend_option_checked_and_in_repr():
     with pytest.raises(ValueError, match="margin"):
         nearest_polygons(scene, scene.centroids[0], scene.normals[0], np.array([[0, 0, 1.0]]),
                          backend="compiled", margin=1e-6)
+
+
+@pytest.mark.parametrize("offset", [1e-11, -1e-11, 3e-10])
+def test_compiled_disk_casts_polygons_through_the_point_as_numpy_does(offset):
+    # the point on the floor, a hair off a wall's plane at its foot: the wall's bottom
+    # edge passes within RASTER_NEAR_ORIGIN of the point, and both backends cast its
+    # rays one by one before the disk's scan
+    from exactff.methods._raster import _passes_near_origin
+    from exactff.methods._sampling import ZBufferRow
+
+    scene = ef.scenes.subdivided_box(2)
+    p, n = as_receiver([offset, 0.3, 0.0], [0.0, 0.0, 1.0])
+    z = ZBufferRow(scene, p, n)
+    assert any(_passes_near_origin(V, c).any() for _, V, c in z.local)   # the premise
+    for r in (17, 45):
+        assert_backends_identical(lambda **k: ef.DiscretePPBH(resolution=r, **k), scene, p, n)

@@ -30,7 +30,6 @@ from .. import _tolerances as tol
 from ..halfspace import clip_halfspace
 from ..visibility.charts import chart_clip, chart_planes
 from ._sampling import PAIR_CHUNK, resolve_depths, zbuffer_of
-from ._zbuffer import disk_near
 
 __all__ = ["rasterise_face", "rasterise_disk", "rasterise_polar", "face_clipper",
            "plane_clipper", "FaceClip", "cell_table", "DEPTH_CHUNK", "compiled_zbuffer", "BACKENDS",
@@ -337,12 +336,15 @@ def rasterise_disk(z, xc, yc, cell_of, D, best_t, best, zbuffer=None):
     cell_of = _cell_function(cell_of)
     for g_ids, V, counts in z.local:
         if zbuffer is not None:
-            # the polygons through the point to rounding first, ray by ray, as below;
-            # then the others' arcs scan-converted in C++
-            for k in disk_near(V, counts, tol.CLIP_MEET_ULPS, tol.RASTER_NEAR_ORIGIN):
-                _cast_rays(z, int(g_ids[k]), V[k, :counts[k]], D, best_t, best)
-            zbuffer.disk(V, counts, g_ids, xc, yc, table, best_t, best, PAIR_CHUNK,
-                         DEPTH_CHUNK, tol.RASTER_NEAR_ORIGIN)
+            # the arcs scan-converted in C++; if polygons pass through the point to
+            # rounding, those first, ray by ray, as below, then the others' arcs
+            near = zbuffer.disk(V, counts, g_ids, xc, yc, table, best_t, best, PAIR_CHUNK,
+                                DEPTH_CHUNK, tol.RASTER_NEAR_ORIGIN)
+            if len(near):
+                for k in near:
+                    _cast_rays(z, int(g_ids[k]), V[k, :counts[k]], D, best_t, best)
+                zbuffer.disk(V, counts, g_ids, xc, yc, table, best_t, best, PAIR_CHUNK,
+                             DEPTH_CHUNK, tol.RASTER_NEAR_ORIGIN, after_near=True)
             continue
         V0 = V
         # scanlines x = const, spans along y (the layout's fast axis): swap x and y

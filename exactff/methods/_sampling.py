@@ -30,7 +30,7 @@ from ..rings import padded_buckets
 from ..scene import as_scene
 from ..visibility.charts import CHARTS, chart_clip, chart_planes
 from ._base import FormFactorMethod
-from ._zbuffer import ZBuffer
+from ._zbuffer import ZBuffer, row_sums
 
 __all__ = ["CellLayout", "SampledMethod", "ZBufferRow", "nearest_polygons", "zbuffer_of",
            "resolve_depths",
@@ -150,6 +150,9 @@ class ZBufferRow:
         ``dl / (nl . d)``.
     scene : Scene
         The scene (its planes decide the coplanar ties).
+    side : ndarray of int
+        Per scene polygon, the side of its plane the point is on (+1 in front, -1
+        behind, 0 in its band: edge-on), as the row's receivers need it.
     band, prio : ndarray
         Depth-tie band (the near-coplanar band of each polygon's plane,
         :func:`exactff.predicates.polygon_coplanar_bands`, the BSP tree's, plus the
@@ -197,6 +200,7 @@ class ZBufferRow:
                      + tol.ZBUFFER_ROUNDING_ULPS * tol.EPS * np.linalg.norm(rel, axis=1))
         self.prio = tie_priority(side)[ids]
         self.scene = scene
+        self.side = side
 
     def coplanar(self, i, j):
         """Whether live polygons ``i[k]`` and ``j[k]`` are coplanar (the BSP's rule)."""
@@ -502,6 +506,12 @@ class SampledMethod(FormFactorMethod):
     def native_hits(self, scene, point, normal):
         """The polygon shown in each cell by the method's own rasterisation (methods
         with ``native=True``); the shared core is the oracle it is tested against."""
+        z, best = self.native_buffer(scene, point, normal)
+        return z.hits(best)
+
+    def native_buffer(self, scene, point, normal):
+        """The row's :class:`ZBufferRow` and the live polygon shown in each cell (-1:
+        none), by the method's own rasterisation."""
         raise NotImplementedError
 
     def directions_for(self, point):
@@ -513,6 +523,18 @@ class SampledMethod(FormFactorMethod):
         as_scene(scene)
         point, normal = as_receiver(point, normal)
         D, w = self.directions_for(point)
+        if getattr(self, "native", False) and getattr(self, "backend", None) == "compiled":
+            # the weights' sum per polygon shown and receiving in C++ (np.bincount's
+            # sums, in the same order)
+            z, best = self.native_buffer(scene, point, normal)
+            receives = z.side > 0
+            if two_sided:
+                receives |= z.side < 0
+            F, hit = row_sums(best, z.ids, receives, w, len(scene))
+            if stats is not None:
+                stats["cells"] = len(w)
+                stats["cells_hit"] = hit
+            return F
         if getattr(self, "native", False):
             hit = self.native_hits(scene, point, normal)
         else:

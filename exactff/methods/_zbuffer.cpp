@@ -87,8 +87,8 @@ Scratch& scratch(std::int64_t n_cells) {
 
 // a candidate (cell, live polygon) of the current chunk: its depth and n . d
 struct Candidate {
-    std::int64_t cell, s;
     double t, den;
+    std::int32_t cell, s;    // (24 bytes: the chunk's candidates are the buffer's traffic)
 };
 
 class ZBuffer {
@@ -121,6 +121,8 @@ class ZBuffer {
             throw std::invalid_argument("D must have shape (C, 3)");
         n_cells_ = D.shape(0);
         n_live_ = dl.shape(0);
+        if (n_cells_ >= (i64(1) << 31) || n_live_ >= (i64(1) << 31))
+            throw std::invalid_argument("at most 2**31 - 1 cells and live polygons");
         D_p_ = D_.data();
         nl_p_ = nl_.data();
         dl_p_ = dl_.data();
@@ -340,38 +342,21 @@ class ZBuffer {
                    pair_chunk, depth_chunk);
     }
 
-    // Discrete PPBH (exactff.methods._raster.rasterise_disk): the bucket's indices of
-    // the polygons that, clipped to the horizon, pass within near_rel (relative) of the
-    // point; the rasteriser casts their rays one by one, before the disk's scan.
-    static py::array_t<i64> disk_near(py::array_t<double, py::array::c_style | py::array::forcecast> V,
-                                      py::array_t<i64, py::array::c_style | py::array::forcecast> counts,
-                                      double clip_meet_ulps, double near_rel) {
-        const i64 M = check_vertices(V, counts);
-        Horizon h;
-        {
-            py::gil_scoped_release release;
-            clip_horizon(V.data(), M, V.shape(1), counts.data(), clip_meet_ulps, near_rel, h);
-        }
-        std::vector<i64> out;
-        for (size_t k = 0; k < h.live.size(); ++k)
-            if (h.near[k]) out.push_back(h.live[k]);
-        py::array_t<i64> a(static_cast<i64>(out.size()));
-        std::copy(out.begin(), out.end(), a.mutable_data());
-        return a;
-    }
-
-    // The disk's scan of one bucket (local frame), the polygons disk_near names left
-    // out: scanlines at xc along the local y, spans along x over yc (the coordinates
+    // Discrete PPBH (exactff.methods._raster.rasterise_disk): the disk's scan of one
+    // bucket (local frame), the polygons that, clipped to the horizon, pass within
+    // near_rel (relative) of the point left out: scanlines at xc along the local y, spans along x over yc (the coordinates
     // swapped, as rasterise_disk has them); table (len(xc), len(yc)) the layout's cell
-    // of each grid cell (-1: outside the disk).
-    void disk(py::array_t<double, py::array::c_style | py::array::forcecast> V,
+    // of each grid cell (-1: outside the disk). Returns the bucket's indices of the
+    // polygons near the point; when there are some, it scans only if after_near (the
+    // rasteriser casts their rays one by one first, then calls again).
+    py::array_t<i64> disk(py::array_t<double, py::array::c_style | py::array::forcecast> V,
               py::array_t<i64, py::array::c_style | py::array::forcecast> counts,
               py::array_t<i64, py::array::c_style | py::array::forcecast> g_ids,
               py::array_t<double, py::array::c_style | py::array::forcecast> xc,
               py::array_t<double, py::array::c_style | py::array::forcecast> yc,
               py::array_t<i64, py::array::c_style | py::array::forcecast> table,
               py::array best_t, py::array best, i64 pair_chunk, i64 depth_chunk,
-              double near_rel) {
+              double near_rel, bool after_near) {
         const i64 M = check_vertices(V, counts);
         check_ids(g_ids, M);
         const i64 nx = xc.shape(0), ny = yc.shape(0);
@@ -380,11 +365,20 @@ class ZBuffer {
         check_buffer(best_t, best);
         double* bt = static_cast<double*>(best_t.mutable_data());
         i64* bs = static_cast<i64*>(best.mutable_data());
-        py::gil_scoped_release release;
-        Horizon h;
-        clip_horizon(V.data(), M, V.shape(1), counts.data(), clip_meet_ulps_, near_rel, h);
-        scan_disk(h, g_ids.data(), xc.data(), nx, yc.data(), ny, table.data(), bt, bs,
-                  pair_chunk, depth_chunk);
+        std::vector<i64> near;
+        {
+            py::gil_scoped_release release;
+            Horizon h;
+            clip_horizon(V.data(), M, V.shape(1), counts.data(), clip_meet_ulps_, near_rel, h);
+            for (size_t k = 0; k < h.live.size(); ++k)
+                if (h.near[k]) near.push_back(h.live[k]);
+            if (near.empty() || after_near)
+                scan_disk(h, g_ids.data(), xc.data(), nx, yc.data(), ny, table.data(), bt, bs,
+                          pair_chunk, depth_chunk);
+        }
+        py::array_t<i64> out(static_cast<i64>(near.size()));
+        std::copy(near.begin(), near.end(), out.mutable_data());
+        return out;
     }
 
     // The shared sampling core's z-buffer of one chart and bucket
@@ -1319,7 +1313,8 @@ class ZBuffer {
             touched_[n_touched_] = cell;
             n_touched_ += tm == INF;
             tm = t < tm ? t : tm;
-            cand_.push_back(Candidate{cell, s, t, den});
+            cand_.push_back(Candidate{t, den, static_cast<std::int32_t>(cell),
+                                      static_cast<std::int32_t>(s)});
         }
         // the numpy code's chunks count every candidate, hit or not
         if (++in_chunk_ == depth_chunk) flush(best_t, best);
@@ -1420,6 +1415,46 @@ class ZBuffer {
 
 }  // namespace
 
+namespace {
+
+// A row from its depth buffer: F[j] = the sum of the weights of the cells showing
+// polygon j (best: live indices, ids: their scene indices), where j receives, added
+// cell by cell in the cells' order (np.bincount's sums); and the number of cells that
+// show a polygon.
+py::tuple row_sums(py::array_t<i64, py::array::c_style | py::array::forcecast> best,
+                   py::array_t<i64, py::array::c_style | py::array::forcecast> ids,
+                   py::array_t<bool, py::array::c_style | py::array::forcecast> receives,
+                   py::array_t<double, py::array::c_style | py::array::forcecast> weights,
+                   i64 n) {
+    const i64 C = best.shape(0), L = ids.shape(0);
+    if (weights.shape(0) != C) throw std::invalid_argument("best and weights differ in length");
+    if (receives.shape(0) != n) throw std::invalid_argument("receives must have shape (n,)");
+    for (i64 k = 0; k < L; ++k)
+        if (ids.data()[k] < 0 || ids.data()[k] >= n) throw std::invalid_argument("ids out of range");
+    for (i64 c = 0; c < C; ++c)
+        if (best.data()[c] >= L) throw std::invalid_argument("best out of range");
+    py::array_t<double> F(n);
+    double* f = F.mutable_data();
+    i64 hit = 0;
+    {
+        py::gil_scoped_release release;
+        std::fill(f, f + n, 0.0);
+        const i64* b = best.data();
+        const i64* id = ids.data();
+        const bool* r = receives.data();
+        const double* w = weights.data();
+        for (i64 c = 0; c < C; ++c) {
+            if (b[c] < 0) continue;
+            ++hit;
+            const i64 j = id[b[c]];
+            if (r[j]) f[j] += w[c];
+        }
+    }
+    return py::make_tuple(F, hit);
+}
+
+}  // namespace
+
 PYBIND11_MODULE(_zbuffer, m) {
     m.doc() = "The compiled z-buffer of the discrete methods: scan conversion and depth test.";
     py::class_<ZBuffer>(m, "ZBuffer")
@@ -1459,7 +1494,7 @@ PYBIND11_MODULE(_zbuffer, m) {
         .def("disk", &ZBuffer::disk, py::arg("V"), py::arg("counts"), py::arg("g_ids"),
              py::arg("xc"), py::arg("yc"), py::arg("table"), py::arg("best_t"),
              py::arg("best"), py::arg("pair_chunk"), py::arg("depth_chunk"),
-             py::arg("near_rel"))
+             py::arg("near_rel"), py::arg("after_near") = false)
         .def("chart_rays", &ZBuffer::chart_rays, py::arg("V"), py::arg("counts"),
              py::arg("g_ids"), py::arg("planes"), py::arg("eu"), py::arg("ev"), py::arg("ew"),
              py::arg("side"), py::arg("cells"), py::arg("cu"), py::arg("cv"), py::arg("nb"),
@@ -1469,10 +1504,9 @@ PYBIND11_MODULE(_zbuffer, m) {
     m.def("face_clip", &ZBuffer::face_clip, py::arg("V"), py::arg("counts"), py::arg("R"),
           py::arg("planes"), py::arg("scale"), py::arg("clip_meet_ulps"),
           "exactff.methods._raster.FaceClip of one bucket, compiled: (live, UV, cl).");
-    m.def("disk_near", &ZBuffer::disk_near, py::arg("V"), py::arg("counts"),
-          py::arg("clip_meet_ulps"), py::arg("near_rel"),
-          "The bucket's polygons that, clipped to the horizon, pass near the point "
-          "(rasterise_disk casts their rays one by one).");
+    m.def("row_sums", &row_sums, py::arg("best"), py::arg("ids"), py::arg("receives"),
+          py::arg("weights"), py::arg("n"),
+          "A row from its depth buffer: (F, cells that show a polygon); np.bincount's sums.");
     m.def("chart_clip", &ZBuffer::chart_clip, py::arg("V"), py::arg("counts"), py::arg("planes"),
           py::arg("eu"), py::arg("ev"), py::arg("ew"), py::arg("side"),
           py::arg("clip_meet_ulps"), py::arg("chart_edge_ulps"),

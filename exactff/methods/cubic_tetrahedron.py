@@ -112,7 +112,7 @@ class CubicTetrahedron(SampledMethod):
             self._face_cache = c, faces
         return self._face_cache
 
-    def native_hits(self, scene, point, normal):
+    def native_buffer(self, scene, point, normal):
         L = self.layout()
         c, faces = self._faces()
         z = ZBufferRow(scene, point, normal)
@@ -122,7 +122,7 @@ class CubicTetrahedron(SampledMethod):
         for clip, table in faces:
             rasterise_face(z, None, c, c, table, L.directions, best_t, best, clip=clip,
                            zbuffer=zb)
-        return z.hits(best)
+        return z, best
 
     def __repr__(self):
         extra = "" if self.native else ", native=False"

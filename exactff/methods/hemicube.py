@@ -95,7 +95,7 @@ class Hemicube(SampledMethod):
             self._face_cache = faces
         return self._face_cache
 
-    def native_hits(self, scene, point, normal):
+    def native_buffer(self, scene, point, normal):
         L = self.layout()
         z = ZBufferRow(scene, point, normal)
         best_t = np.full(len(L), np.inf)
@@ -103,7 +103,7 @@ class Hemicube(SampledMethod):
         zb = compiled_zbuffer(z, L) if self.backend == "compiled" else None
         for chart, uc, vc, table in self._faces():
             rasterise_face(z, chart, uc, vc, table, L.directions, best_t, best, zbuffer=zb)
-        return z.hits(best)
+        return z, best
 
     def __repr__(self):
         extra = "" if self.native else ", native=False"

@@ -80,7 +80,7 @@ class PolarPlane(SampledMethod):
         phi = (np.arange(self.sectors) + 0.5) * (2.0 * np.pi / self.sectors)
         return rm, phi, FE
 
-    def native_hits(self, scene, point, normal):
+    def native_buffer(self, scene, point, normal):
         L = self.layout()
         rm, phi, _ = self._polar_grid()
         z = ZBufferRow(scene, point, normal)
@@ -90,7 +90,7 @@ class PolarPlane(SampledMethod):
         S = self.sectors
         rasterise_polar(z, rm, phi, lambda i, k: i * S + k, L.directions, best_t, best,
                         plane_clipper(self.extent), zbuffer=zb)
-        return z.hits(best)
+        return z, best
 
     def build_layout(self):
         rm, phi, FE = self._polar_grid()

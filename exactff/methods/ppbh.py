@@ -81,7 +81,7 @@ class DiscretePPBH(SampledMethod):
             self._grid_cache = c, index_of.reshape(r, r)
         return self._grid_cache
 
-    def native_hits(self, scene, point, normal):
+    def native_buffer(self, scene, point, normal):
         L = self.layout()
         c, table = self._grid()
         z = ZBufferRow(scene, point, normal)
@@ -89,7 +89,7 @@ class DiscretePPBH(SampledMethod):
         best = np.full(len(L), -1, dtype=np.int64)
         zb = compiled_zbuffer(z, L) if self.backend == "compiled" else None
         rasterise_disk(z, c, c, table, L.directions, best_t, best, zbuffer=zb)
-        return z.hits(best)
+        return z, best
 
     def __repr__(self):
         extra = "" if self.native else ", native=False"

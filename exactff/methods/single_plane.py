@@ -149,7 +149,7 @@ class SinglePlane(SampledMethod):
         x, y, w, _ = self._cells()
         return CellLayout(np.column_stack([x, y, np.ones_like(x)]), w, covered)
 
-    def native_hits(self, scene, point, normal):
+    def native_buffer(self, scene, point, normal):
         L = self.layout()
         clip = plane_clipper(self.extent)
         z = ZBufferRow(scene, point, normal)
@@ -161,7 +161,7 @@ class SinglePlane(SampledMethod):
         for xs, ys, table in self._grids():
             rasterise_face(z, None, xs, ys, table, L.directions, best_t, best, clip=clip,
                            zbuffer=zb)
-        return z.hits(best)
+        return z, best
 
     def _grids(self):
         """Per grid of :meth:`_cells`: its rows' and columns' centres and the layout's
