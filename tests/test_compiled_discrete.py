@@ -23,30 +23,12 @@ from exactff import _tolerances as tol
 from exactff.checks import as_receiver
 from exactff.testing import strategies
 
-from common import examples
+from common import discrete_methods, examples, small_discrete_methods
 
-#: the methods with a compiled backend, and their resolutions
-COMPILED = {
-    "hemicube-16": lambda **k: ef.Hemicube(resolution=16, **k),
-    "hemicube-64": lambda **k: ef.Hemicube(resolution=64, **k),
-    "hemicube-130": lambda **k: ef.Hemicube(resolution=130, **k),
-    "tetra-15": lambda **k: ef.CubicTetrahedron(resolution=15, **k),
-    "tetra-52": lambda **k: ef.CubicTetrahedron(resolution=52, **k),
-    "plane-equal_ff": lambda **k: ef.SinglePlane(resolution=48, **k),
-    "plane-uniform": lambda **k: ef.SinglePlane(resolution=41, cells="uniform", **k),
-    "plane-refined": lambda **k: ef.SinglePlane(resolution=40, cells="uniform_refined",
-                                                refine=3, **k),
-    "polar-20x48": lambda **k: ef.PolarPlane(rings=20, sectors=48, **k),
-    "polar-31x7": lambda **k: ef.PolarPlane(rings=31, sectors=7, **k),
-    "ppbh-17": lambda **k: ef.DiscretePPBH(resolution=17, **k),
-    "ppbh-64": lambda **k: ef.DiscretePPBH(resolution=64, **k),
-    "ppbh-101": lambda **k: ef.DiscretePPBH(resolution=101, **k),
-}
-SMALL = [lambda **k: ef.Hemicube(resolution=32, **k),
-         lambda **k: ef.CubicTetrahedron(resolution=30, **k),
-         lambda **k: ef.SinglePlane(resolution=30, cells="uniform_refined", **k),
-         lambda **k: ef.PolarPlane(rings=20, sectors=40, **k),
-         lambda **k: ef.DiscretePPBH(resolution=45, **k)]
+#: the methods with a compiled rasteriser, and their resolutions (those of the native
+#: tests)
+COMPILED = discrete_methods()
+SMALL = list(small_discrete_methods().values())
 
 
 def assert_backends_identical(make, scene, point, normal):
@@ -173,39 +155,57 @@ def test_compiled_cells_identical_to_numpy_on_flush_faces_in_small_chunks(case):
             assert_backends_identical(make, scene, p, n)
 
 
-def assert_chart_clips_identical(scene, p, n):
-    """The compiled chart clipper gives chart_clip's live polygons, counts and chart
-    coordinates, bit for bit, for every chart and bucket of the row."""
+def clip_pairs():
+    """(numpy clipper, compiled clipper) pairs, each ``clip(V, counts) -> (live, UV,
+    cl)``: the five charts (chart_clip, margin 0), the cubic tetrahedron's faces and
+    the single and polar planes (FaceClip)."""
     from exactff.methods import _zbuffer
-    from exactff.methods._sampling import ZBufferRow
+    from exactff.methods._raster import face_clipper, plane_clipper
+    from exactff.methods.cubic_tetrahedron import cubic_tetrahedron_frame
     from exactff.visibility.charts import CHARTS, chart_clip, chart_planes
 
+    pairs = [(lambda V, c, ch=ch: chart_clip(V, c, ch),
+              lambda V, c, ch=ch: _zbuffer.chart_clip(V, c, np.array(chart_planes(ch)), *ch,
+                                                      tol.CLIP_MEET_ULPS, tol.CHART_EDGE_ULPS))
+             for ch in CHARTS]
+    a1, a2, a3 = cubic_tetrahedron_frame()
+    tetra = [[-1.0, 0.0, 1.0], [0.0, -1.0, 1.0], [1.0, 1.0, 1.0]]
+    for clip in (face_clipper([a2, a3, a1], tetra), face_clipper([a3, a1, a2], tetra),
+                 plane_clipper(4.0), plane_clipper(10.0)):
+        pairs.append((clip, lambda V, c, f=clip: _zbuffer.face_clip(V, c, f.R, f.planes, f.scale,
+                                                                    tol.CLIP_MEET_ULPS)))
+    return pairs
+
+
+def assert_clips_identical(scene, p, n):
+    """Each compiled clipper gives its numpy clipper's live polygons, counts and
+    coordinates, bit for bit, for every bucket of the row."""
+    from exactff.methods._sampling import ZBufferRow
+
     p, n = as_receiver(p, n)
-    for chart in CHARTS:
+    for numpy_clip, compiled_clip in clip_pairs():
         for _, V, counts in ZBufferRow(scene, p, n).local:
-            live, UV, cl = chart_clip(V, counts, chart)
-            live_c, UV_c, cl_c = _zbuffer.chart_clip(V, counts, np.array(chart_planes(chart)),
-                                                     *chart, tol.CLIP_MEET_ULPS,
-                                                     tol.CHART_EDGE_ULPS)
+            live, UV, cl = numpy_clip(V, counts)
+            live_c, UV_c, cl_c = compiled_clip(V, counts)
             assert np.array_equal(live_c, live) and np.array_equal(cl_c, cl)
             assert UV_c.shape == UV.shape
             assert np.array_equal(UV_c, UV, equal_nan=True)
 
 
 @pytest.mark.parametrize("scene_name", ["office", "building", "cornell"])
-def test_compiled_chart_clip_identical_to_numpy(scene_name):
+def test_compiled_clips_identical_to_numpy(scene_name):
     scene = SCENES[scene_name]()
     for p, n in _rows(scene, 4, seed=2):
-        assert_chart_clips_identical(scene, p, n)
+        assert_clips_identical(scene, p, n)
         # from the polygon's centroid itself: the point on its plane
         i = int(np.argmin(np.linalg.norm(scene.centroids - p, axis=1)))
-        assert_chart_clips_identical(scene, scene.centroids[i], scene.normals[i])
+        assert_clips_identical(scene, scene.centroids[i], scene.normals[i])
 
 
 @given(strategies.occluded_scenes() | strategies.enclosures() | strategies.flush_faces())
 @settings(max_examples=examples(40), deadline=None)
-def test_compiled_chart_clip_identical_to_numpy_in_random_scenes(case):
-    assert_chart_clips_identical(*case)
+def test_compiled_clips_identical_to_numpy_in_random_scenes(case):
+    assert_clips_identical(*case)
 
 
 @pytest.mark.parametrize("method", ["hemicube-64", "tetra-52", "plane-refined", "polar-20x48",
@@ -217,42 +217,6 @@ def test_compiled_rows_equal_numpy_rows(method):
         F1 = ef.form_factors(scene, p, n, method=COMPILED[method]())
         F0 = ef.form_factors(scene, p, n, method=COMPILED[method](backend="numpy"))
         assert np.array_equal(F1, F0)
-
-
-def assert_face_clips_identical(scene, p, n):
-    """The compiled face clipper gives FaceClip's live polygons, counts and face
-    coordinates, bit for bit, for the cubic tetrahedron's faces and the planes."""
-    from exactff.methods import _zbuffer
-    from exactff.methods._raster import face_clipper, plane_clipper
-    from exactff.methods._sampling import ZBufferRow
-    from exactff.methods.cubic_tetrahedron import cubic_tetrahedron_frame
-
-    p, n = as_receiver(p, n)
-    a1, a2, a3 = cubic_tetrahedron_frame()
-    tetra = [[-1.0, 0.0, 1.0], [0.0, -1.0, 1.0], [1.0, 1.0, 1.0]]
-    clips = [face_clipper([a2, a3, a1], tetra), face_clipper([a3, a1, a2], tetra),
-             plane_clipper(4.0), plane_clipper(10.0)]
-    for clip in clips:
-        for _, V, counts in ZBufferRow(scene, p, n).local:
-            live, UV, cl = clip(V, counts)
-            live_c, UV_c, cl_c = _zbuffer.face_clip(V, counts, clip.R, clip.planes, clip.scale,
-                                                    tol.CLIP_MEET_ULPS)
-            assert np.array_equal(live_c, live) and np.array_equal(cl_c, cl)
-            assert UV_c.shape == UV.shape
-            assert np.array_equal(UV_c, UV, equal_nan=True)
-
-
-@pytest.mark.parametrize("scene_name", ["office", "building", "cornell"])
-def test_compiled_face_clip_identical_to_numpy(scene_name):
-    scene = SCENES[scene_name]()
-    for p, n in _rows(scene, 4, seed=2):
-        assert_face_clips_identical(scene, p, n)
-
-
-@given(strategies.occluded_scenes() | strategies.enclosures() | strategies.flush_faces())
-@settings(max_examples=examples(40), deadline=None)
-def test_compiled_face_clip_identical_to_numpy_in_random_scenes(case):
-    assert_face_clips_identical(*case)
 
 
 def test_face_clip_rejects_planes_it_cannot_test_exactly():

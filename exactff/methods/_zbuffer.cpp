@@ -42,6 +42,11 @@ namespace py = pybind11;
 namespace {
 
 using i64 = std::int64_t;
+// the arrays the functions take: C-ordered, converted from any dtype (except the depth
+// buffer, which must be written in place)
+using Doubles = py::array_t<double, py::array::c_style | py::array::forcecast>;
+using Ints = py::array_t<i64, py::array::c_style | py::array::forcecast>;
+using Bools = py::array_t<bool, py::array::c_style | py::array::forcecast>;
 constexpr double INF = std::numeric_limits<double>::infinity();
 // unit roundoff (exactff._tolerances.EPS)
 constexpr double EPS = 1.1102230246251565e-16;
@@ -100,17 +105,17 @@ class ZBuffer {
     // coplanar_ulps: exactff._tolerances.BSP_COPLANAR_ULPS; tie_slack_ulps:
     // ZBUFFER_ROUNDING_ULPS + 1; clip_meet_ulps, chart_edge_ulps: CLIP_MEET_ULPS and
     // CHART_EDGE_ULPS (the chart clipper's).
-    ZBuffer(py::array_t<double, py::array::c_style | py::array::forcecast> D,
-            py::array_t<double, py::array::c_style | py::array::forcecast> Dnorm,
-            py::array_t<double, py::array::c_style | py::array::forcecast> nl,
-            py::array_t<double, py::array::c_style | py::array::forcecast> dl,
-            py::array_t<double, py::array::c_style | py::array::forcecast> band,
-            py::array_t<i64, py::array::c_style | py::array::forcecast> prio,
-            py::array_t<double, py::array::c_style | py::array::forcecast> V,
-            py::array_t<i64, py::array::c_style | py::array::forcecast> offsets,
-            py::array_t<double, py::array::c_style | py::array::forcecast> N,
-            py::array_t<double, py::array::c_style | py::array::forcecast> Dp,
-            py::array_t<i64, py::array::c_style | py::array::forcecast> ids,
+    ZBuffer(Doubles D,
+            Doubles Dnorm,
+            Doubles nl,
+            Doubles dl,
+            Doubles band,
+            Ints prio,
+            Doubles V,
+            Ints offsets,
+            Doubles N,
+            Doubles Dp,
+            Ints ids,
             double coplanar_ulps, double tie_slack_ulps, double clip_meet_ulps,
             double chart_edge_ulps)
         : D_(D), Dnorm_(Dnorm), nl_(nl), dl_(dl), band_(band), prio_(prio), V_(V),
@@ -141,12 +146,12 @@ class ZBuffer {
     // along UV[..., 0] at centres uc, spans along UV[..., 1] over centres vc;
     // cl (M,) vertex counts; src (M,) live indices; table (len(uc), len(vc)) the
     // layout's cell of each grid cell (-1: none).
-    void face(py::array_t<double, py::array::c_style | py::array::forcecast> UV,
-              py::array_t<i64, py::array::c_style | py::array::forcecast> cl,
-              py::array_t<i64, py::array::c_style | py::array::forcecast> src,
-              py::array_t<double, py::array::c_style | py::array::forcecast> uc,
-              py::array_t<double, py::array::c_style | py::array::forcecast> vc,
-              py::array_t<i64, py::array::c_style | py::array::forcecast> table,
+    void face(Doubles UV,
+              Ints cl,
+              Ints src,
+              Doubles uc,
+              Doubles vc,
+              Ints table,
               py::array best_t, py::array best, i64 pair_chunk,
               i64 depth_chunk) {
         if (UV.ndim() != 3 || UV.shape(2) != 2)
@@ -179,17 +184,17 @@ class ZBuffer {
     // first, as exactff.visibility.charts.chart_clip does (clip_chart below): V (M, K,
     // 3) padded vertices, counts (M,), g_ids (M,) their live indices, the chart's
     // frustum planes (4, 3) and axes.
-    void chart_face(py::array_t<double, py::array::c_style | py::array::forcecast> V,
-                    py::array_t<i64, py::array::c_style | py::array::forcecast> counts,
-                    py::array_t<i64, py::array::c_style | py::array::forcecast> g_ids,
-                    py::array_t<double, py::array::c_style | py::array::forcecast> planes,
-                    py::array_t<double, py::array::c_style | py::array::forcecast> eu,
-                    py::array_t<double, py::array::c_style | py::array::forcecast> ev,
-                    py::array_t<double, py::array::c_style | py::array::forcecast> ew,
+    void chart_face(Doubles V,
+                    Ints counts,
+                    Ints g_ids,
+                    Doubles planes,
+                    Doubles eu,
+                    Doubles ev,
+                    Doubles ew,
                     bool side,
-                    py::array_t<double, py::array::c_style | py::array::forcecast> uc,
-                    py::array_t<double, py::array::c_style | py::array::forcecast> vc,
-                    py::array_t<i64, py::array::c_style | py::array::forcecast> table,
+                    Doubles uc,
+                    Doubles vc,
+                    Ints table,
                     py::array best_t, py::array best, i64 pair_chunk, i64 depth_chunk) {
         const i64 M = check_bucket(V, counts, planes, eu, ev, ew);
         if (g_ids.shape(0) != M) throw std::invalid_argument("g_ids must have shape (M,)");
@@ -212,8 +217,8 @@ class ZBuffer {
     }
 
     // Depth-test candidate (cell, live polygon) pairs, in chunks of depth_chunk.
-    void candidates(py::array_t<i64, py::array::c_style | py::array::forcecast> cell,
-                    py::array_t<i64, py::array::c_style | py::array::forcecast> src,
+    void candidates(Ints cell,
+                    Ints src,
                     py::array best_t, py::array best, i64 depth_chunk) {
         check_buffer(best_t, best);
         const i64 n = cell.shape(0);
@@ -232,12 +237,12 @@ class ZBuffer {
     }
 
     // exactff.visibility.charts.chart_clip (margin 0) of one bucket: (live, UV, cl)
-    static py::tuple chart_clip(py::array_t<double, py::array::c_style | py::array::forcecast> V,
-                                py::array_t<i64, py::array::c_style | py::array::forcecast> counts,
-                                py::array_t<double, py::array::c_style | py::array::forcecast> planes,
-                                py::array_t<double, py::array::c_style | py::array::forcecast> eu,
-                                py::array_t<double, py::array::c_style | py::array::forcecast> ev,
-                                py::array_t<double, py::array::c_style | py::array::forcecast> ew,
+    static py::tuple chart_clip(Doubles V,
+                                Ints counts,
+                                Doubles planes,
+                                Doubles eu,
+                                Doubles ev,
+                                Doubles ew,
                                 bool side, double clip_meet_ulps, double chart_edge_ulps) {
         const i64 M = check_bucket(V, counts, planes, eu, ev, ew);
         Clipped c;
@@ -256,8 +261,8 @@ class ZBuffer {
     }
 
     // whether live polygons a[k] and b[k] are coplanar (the BSP tree's rule)
-    py::array_t<bool> coplanar_many(py::array_t<i64, py::array::c_style | py::array::forcecast> a,
-                                    py::array_t<i64, py::array::c_style | py::array::forcecast> b) {
+    py::array_t<bool> coplanar_many(Ints a,
+                                    Ints b) {
         const i64 n = a.shape(0);
         py::array_t<bool> out(n);
         bool* o = out.mutable_data();
@@ -269,15 +274,15 @@ class ZBuffer {
     // first, as exactff.methods._raster.FaceClip does (clip_face below): R (3, 3) the
     // face's frame (rows), planes (P, 3) the frustum in that frame (entries 0 and +-1),
     // scale the face coordinates' factor.
-    void clipped_face(py::array_t<double, py::array::c_style | py::array::forcecast> V,
-                      py::array_t<i64, py::array::c_style | py::array::forcecast> counts,
-                      py::array_t<i64, py::array::c_style | py::array::forcecast> g_ids,
-                      py::array_t<double, py::array::c_style | py::array::forcecast> R,
-                      py::array_t<double, py::array::c_style | py::array::forcecast> planes,
+    void clipped_face(Doubles V,
+                      Ints counts,
+                      Ints g_ids,
+                      Doubles R,
+                      Doubles planes,
                       double scale,
-                      py::array_t<double, py::array::c_style | py::array::forcecast> uc,
-                      py::array_t<double, py::array::c_style | py::array::forcecast> vc,
-                      py::array_t<i64, py::array::c_style | py::array::forcecast> table,
+                      Doubles uc,
+                      Doubles vc,
+                      Ints table,
                       py::array best_t, py::array best, i64 pair_chunk, i64 depth_chunk) {
         const i64 M = check_face_bucket(V, counts, R, planes);
         check_ids(g_ids, M);
@@ -297,10 +302,10 @@ class ZBuffer {
     }
 
     // exactff.methods._raster.FaceClip of one bucket, compiled: (live, UV, cl)
-    static py::tuple face_clip(py::array_t<double, py::array::c_style | py::array::forcecast> V,
-                               py::array_t<i64, py::array::c_style | py::array::forcecast> counts,
-                               py::array_t<double, py::array::c_style | py::array::forcecast> R,
-                               py::array_t<double, py::array::c_style | py::array::forcecast> planes,
+    static py::tuple face_clip(Doubles V,
+                               Ints counts,
+                               Doubles R,
+                               Doubles planes,
                                double scale, double clip_meet_ulps) {
         const i64 M = check_face_bucket(V, counts, R, planes);
         Clipped c;
@@ -316,15 +321,15 @@ class ZBuffer {
     // clipped_face does, scanned along every sector's ray within each image's angular
     // extent; radii (rings,) and the sectors' cos and sin (S,): the cell of ring i and
     // sector k is i S + k.
-    void polar(py::array_t<double, py::array::c_style | py::array::forcecast> V,
-               py::array_t<i64, py::array::c_style | py::array::forcecast> counts,
-               py::array_t<i64, py::array::c_style | py::array::forcecast> g_ids,
-               py::array_t<double, py::array::c_style | py::array::forcecast> R,
-               py::array_t<double, py::array::c_style | py::array::forcecast> planes,
+    void polar(Doubles V,
+               Ints counts,
+               Ints g_ids,
+               Doubles R,
+               Doubles planes,
                double scale,
-               py::array_t<double, py::array::c_style | py::array::forcecast> radii,
-               py::array_t<double, py::array::c_style | py::array::forcecast> cosv,
-               py::array_t<double, py::array::c_style | py::array::forcecast> sinv,
+               Doubles radii,
+               Doubles cosv,
+               Doubles sinv,
                py::array best_t, py::array best, i64 pair_chunk, i64 depth_chunk) {
         const i64 M = check_face_bucket(V, counts, R, planes);
         check_ids(g_ids, M);
@@ -349,12 +354,12 @@ class ZBuffer {
     // of each grid cell (-1: outside the disk). Returns the bucket's indices of the
     // polygons near the point; when there are some, it scans only if after_near (the
     // rasteriser casts their rays one by one first, then calls again).
-    py::array_t<i64> disk(py::array_t<double, py::array::c_style | py::array::forcecast> V,
-              py::array_t<i64, py::array::c_style | py::array::forcecast> counts,
-              py::array_t<i64, py::array::c_style | py::array::forcecast> g_ids,
-              py::array_t<double, py::array::c_style | py::array::forcecast> xc,
-              py::array_t<double, py::array::c_style | py::array::forcecast> yc,
-              py::array_t<i64, py::array::c_style | py::array::forcecast> table,
+    py::array_t<i64> disk(Doubles V,
+              Ints counts,
+              Ints g_ids,
+              Doubles xc,
+              Doubles yc,
+              Ints table,
               py::array best_t, py::array best, i64 pair_chunk, i64 depth_chunk,
               double near_rel, bool after_near) {
         const i64 M = check_vertices(V, counts);
@@ -390,20 +395,20 @@ class ZBuffer {
     // image's edges, the depth buffer in chunks of pair_chunk (polygon, direction)
     // pairs. False (and nothing done) where the clipped images are wider than
     // long_polygon vertices: the numpy code tests those with shapely.
-    bool chart_rays(py::array_t<double, py::array::c_style | py::array::forcecast> V,
-                    py::array_t<i64, py::array::c_style | py::array::forcecast> counts,
-                    py::array_t<i64, py::array::c_style | py::array::forcecast> g_ids,
-                    py::array_t<double, py::array::c_style | py::array::forcecast> planes,
-                    py::array_t<double, py::array::c_style | py::array::forcecast> eu,
-                    py::array_t<double, py::array::c_style | py::array::forcecast> ev,
-                    py::array_t<double, py::array::c_style | py::array::forcecast> ew,
+    bool chart_rays(Doubles V,
+                    Ints counts,
+                    Ints g_ids,
+                    Doubles planes,
+                    Doubles eu,
+                    Doubles ev,
+                    Doubles ew,
                     bool side,
-                    py::array_t<i64, py::array::c_style | py::array::forcecast> cells,
-                    py::array_t<double, py::array::c_style | py::array::forcecast> cu,
-                    py::array_t<double, py::array::c_style | py::array::forcecast> cv,
+                    Ints cells,
+                    Doubles cu,
+                    Doubles cv,
                     i64 nb, double v_lo,
-                    py::array_t<i64, py::array::c_style | py::array::forcecast> order,
-                    py::array_t<i64, py::array::c_style | py::array::forcecast> starts,
+                    Ints order,
+                    Ints starts,
                     py::array best_t, py::array best, i64 pair_chunk, i64 long_polygon) {
         const i64 M = check_bucket(V, counts, planes, eu, ev, ew);
         check_ids(g_ids, M);
@@ -505,12 +510,12 @@ class ZBuffer {
         i64 K = 0;
     };
 
-    static i64 check_bucket(const py::array_t<double, py::array::c_style | py::array::forcecast>& V,
-                            const py::array_t<i64, py::array::c_style | py::array::forcecast>& counts,
-                            const py::array_t<double, py::array::c_style | py::array::forcecast>& planes,
-                            const py::array_t<double, py::array::c_style | py::array::forcecast>& eu,
-                            const py::array_t<double, py::array::c_style | py::array::forcecast>& ev,
-                            const py::array_t<double, py::array::c_style | py::array::forcecast>& ew) {
+    static i64 check_bucket(const Doubles& V,
+                            const Ints& counts,
+                            const Doubles& planes,
+                            const Doubles& eu,
+                            const Doubles& ev,
+                            const Doubles& ew) {
         if (V.ndim() != 3 || V.shape(2) != 3)
             throw std::invalid_argument("V must have shape (M, K, 3)");
         const i64 M = V.shape(0);
@@ -757,8 +762,8 @@ class ZBuffer {
     // ---- the faces' frustum clipper (exactff.methods._raster.FaceClip), the polar
     // plane's rays and the disk's ellipse arcs ----
 
-    static i64 check_vertices(const py::array_t<double, py::array::c_style | py::array::forcecast>& V,
-                              const py::array_t<i64, py::array::c_style | py::array::forcecast>& counts) {
+    static i64 check_vertices(const Doubles& V,
+                              const Ints& counts) {
         if (V.ndim() != 3 || V.shape(2) != 3)
             throw std::invalid_argument("V must have shape (M, K, 3)");
         const i64 M = V.shape(0);
@@ -770,10 +775,10 @@ class ZBuffer {
         return M;
     }
 
-    static i64 check_face_bucket(const py::array_t<double, py::array::c_style | py::array::forcecast>& V,
-                                 const py::array_t<i64, py::array::c_style | py::array::forcecast>& counts,
-                                 const py::array_t<double, py::array::c_style | py::array::forcecast>& R,
-                                 const py::array_t<double, py::array::c_style | py::array::forcecast>& planes) {
+    static i64 check_face_bucket(const Doubles& V,
+                                 const Ints& counts,
+                                 const Doubles& R,
+                                 const Doubles& planes) {
         const i64 M = check_vertices(V, counts);
         if (R.ndim() != 2 || R.shape(0) != 3 || R.shape(1) != 3)
             throw std::invalid_argument("R must have shape (3, 3)");
@@ -787,7 +792,7 @@ class ZBuffer {
         return M;
     }
 
-    void check_ids(const py::array_t<i64, py::array::c_style | py::array::forcecast>& g_ids,
+    void check_ids(const Ints& g_ids,
                    i64 M) const {
         if (g_ids.ndim() != 1 || g_ids.shape(0) != M)
             throw std::invalid_argument("g_ids must have shape (M,)");
@@ -1391,12 +1396,12 @@ class ZBuffer {
         n_touched_ = 0;
     }
 
-    py::array_t<double, py::array::c_style | py::array::forcecast> D_, Dnorm_, nl_, dl_, band_;
-    py::array_t<i64, py::array::c_style | py::array::forcecast> prio_;
-    py::array_t<double, py::array::c_style | py::array::forcecast> V_;
-    py::array_t<i64, py::array::c_style | py::array::forcecast> offsets_;
-    py::array_t<double, py::array::c_style | py::array::forcecast> N_, Dp_;
-    py::array_t<i64, py::array::c_style | py::array::forcecast> ids_;
+    Doubles D_, Dnorm_, nl_, dl_, band_;
+    Ints prio_;
+    Doubles V_;
+    Ints offsets_;
+    Doubles N_, Dp_;
+    Ints ids_;
     double coplanar_ulps_, tie_slack_ulps_, clip_meet_ulps_, chart_edge_ulps_;
     i64 n_cells_ = 0, n_live_ = 0;
     // candidates of the current chunk
@@ -1421,10 +1426,10 @@ namespace {
 // polygon j (best: live indices, ids: their scene indices), where j receives, added
 // cell by cell in the cells' order (np.bincount's sums); and the number of cells that
 // show a polygon.
-py::tuple row_sums(py::array_t<i64, py::array::c_style | py::array::forcecast> best,
-                   py::array_t<i64, py::array::c_style | py::array::forcecast> ids,
-                   py::array_t<bool, py::array::c_style | py::array::forcecast> receives,
-                   py::array_t<double, py::array::c_style | py::array::forcecast> weights,
+py::tuple row_sums(Ints best,
+                   Ints ids,
+                   Bools receives,
+                   Doubles weights,
                    i64 n) {
     const i64 C = best.shape(0), L = ids.shape(0);
     if (weights.shape(0) != C) throw std::invalid_argument("best and weights differ in length");
@@ -1458,17 +1463,17 @@ py::tuple row_sums(py::array_t<i64, py::array::c_style | py::array::forcecast> b
 PYBIND11_MODULE(_zbuffer, m) {
     m.doc() = "The compiled z-buffer of the discrete methods: scan conversion and depth test.";
     py::class_<ZBuffer>(m, "ZBuffer")
-        .def(py::init<py::array_t<double, py::array::c_style | py::array::forcecast>,
-                      py::array_t<double, py::array::c_style | py::array::forcecast>,
-                      py::array_t<double, py::array::c_style | py::array::forcecast>,
-                      py::array_t<double, py::array::c_style | py::array::forcecast>,
-                      py::array_t<double, py::array::c_style | py::array::forcecast>,
-                      py::array_t<i64, py::array::c_style | py::array::forcecast>,
-                      py::array_t<double, py::array::c_style | py::array::forcecast>,
-                      py::array_t<i64, py::array::c_style | py::array::forcecast>,
-                      py::array_t<double, py::array::c_style | py::array::forcecast>,
-                      py::array_t<double, py::array::c_style | py::array::forcecast>,
-                      py::array_t<i64, py::array::c_style | py::array::forcecast>, double,
+        .def(py::init<Doubles,
+                      Doubles,
+                      Doubles,
+                      Doubles,
+                      Doubles,
+                      Ints,
+                      Doubles,
+                      Ints,
+                      Doubles,
+                      Doubles,
+                      Ints, double,
                       double, double, double>(),
              py::arg("D"), py::arg("Dnorm"), py::arg("nl"), py::arg("dl"), py::arg("band"),
              py::arg("prio"), py::arg("V"), py::arg("offsets"), py::arg("N"), py::arg("Dp"),
