@@ -1,6 +1,7 @@
 """The compiled z-buffer of the discrete methods against the numpy one (issue 55).
 
 Usage: python benchmarks/bench_compiled_discrete.py [--rows 8] [--resolution 256]
+       python benchmarks/bench_compiled_discrete.py --sweep [--rows 8] [--cloister-rows 3]
 
 On the office (``ef.scenes.office()``, 4,424 polygons), the same rows: the hemicube's
 row time with the numpy rasteriser (``backend="numpy"``, the oracle) and with the
@@ -12,6 +13,12 @@ exact method's row time with the exact / hemicube ratio before (numpy) and after
 (compiled). Then every discrete method at 65,536 samples (the study's middle column),
 numpy against compiled, with whether the rows are equal to the last bit. One run;
 medians over the rows.
+
+``--sweep``: the study's time axis in CPU time (``exactff compare`` times wall clock,
+which a shared machine inflates unevenly): every discrete method (compiled) at the
+study's sample counts on the office and the cloister, the methods interleaved row by
+row (so that a change of load falls on all of them), median CPU ms per row; with
+PPBH's time over the hemicube's and the polar plane's, and the exact row's time.
 """
 
 import argparse
@@ -59,11 +66,53 @@ def clip_time(scene, p, n):
     return out
 
 
+METHODS = ("ppbh", "hemicube", "cubic_tetrahedron", "single_plane", "polar_plane",
+           "monte_carlo")
+SAMPLES = (1024, 4096, 16384, 65536, 262144, 1048576)
+
+
+def sweep(name, scene, rows):
+    """CPU ms per row of every method and sample count, interleaved row by row."""
+    methods = {(m, s): ef.methods.resolve(m, samples=s) for s in SAMPLES for m in METHODS}
+    exact = ef.Exact()
+    t = {k: [] for k in methods}
+    t_exact = []
+    for k, m in methods.items():                   # layouts, tables, scene caches
+        m.point_form_factors(scene, scene.centroids[rows[0]], scene.normals[rows[0]])
+    exact.point_form_factors(scene, scene.centroids[rows[0]], scene.normals[rows[0]])
+    for i in rows:
+        p, n = scene.centroids[i], scene.normals[i]
+        for k, m in methods.items():
+            c = time.process_time()
+            m.point_form_factors(scene, p, n)
+            t[k].append(time.process_time() - c)
+        c = time.process_time()
+        exact.point_form_factors(scene, p, n)
+        t_exact.append(time.process_time() - c)
+    med = {k: 1e3 * float(np.median(v)) for k, v in t.items()}
+    print(f"\n{name}: {len(scene)} polygons, rows {list(map(int, rows))}; exact row "
+          f"{1e3 * float(np.median(t_exact)):.1f} ms CPU")
+    print("| samples | " + " | ".join(METHODS) + " | ppbh / hemicube | ppbh / polar_plane |")
+    print("|---" * (len(METHODS) + 3) + "|")
+    for s in SAMPLES:
+        print(f"| {s} | " + " | ".join(f"{med[(m, s)]:.1f}" for m in METHODS)
+              + f" | {med[('ppbh', s)] / med[('hemicube', s)]:.2f}"
+              f" | {med[('ppbh', s)] / med[('polar_plane', s)]:.2f} |")
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--rows", type=int, default=8)
+    ap.add_argument("--cloister-rows", type=int, default=3)
     ap.add_argument("--resolution", type=int, default=256)
+    ap.add_argument("--sweep", action="store_true")
     args = ap.parse_args()
+    if args.sweep:
+        print(machine())
+        for name, scene, k in (("office", ef.scenes.office(), args.rows),
+                               ("cloister", ef.scenes.cloister(), args.cloister_rows)):
+            sweep(name, scene, np.random.default_rng(5).choice(len(scene), k, replace=False))
+        return
     scene = ef.scenes.office()
     rows = np.random.default_rng(5).choice(len(scene), args.rows, replace=False).tolist()
     r = args.resolution
@@ -111,6 +160,32 @@ def main():
           f"(CPU {med(re, 1) / med(rn, 1):.2f}) | {med(re, 0) / med(rc, 0):.2f} "
           f"(CPU {med(re, 1) / med(rc, 1):.2f}) |")
     other_methods(scene, rows)
+    cloister = ef.scenes.cloister()
+    exact_over_hemicube(cloister, np.random.default_rng(5).choice(len(cloister),
+                                                                  args.cloister_rows,
+                                                                  replace=False), r)
+
+
+def exact_over_hemicube(scene, rows, r):
+    """Exact / hemicube-r on ``scene`` in CPU time, the three interleaved row by row:
+    the exact row, the hemicube with the numpy rasteriser and with the compiled one."""
+    methods = {"exact": ef.Exact(), "numpy": ef.Hemicube(resolution=r, backend="numpy"),
+               "compiled": ef.Hemicube(resolution=r)}
+    t = {k: [] for k in methods}
+    for m in methods.values():
+        m.point_form_factors(scene, scene.centroids[rows[0]], scene.normals[rows[0]])
+    for i in rows:
+        for k, m in methods.items():
+            c = time.process_time()
+            m.point_form_factors(scene, scene.centroids[i], scene.normals[i])
+            t[k].append(time.process_time() - c)
+    med = {k: 1e3 * float(np.median(v)) for k, v in t.items()}
+    print(f"\n{len(scene)} polygons, rows {list(map(int, rows))}, CPU ms per row (median):")
+    print("| exact | hemicube numpy | hemicube compiled | exact / hemicube numpy "
+          "| exact / hemicube compiled |")
+    print("|---|---|---|---|---|")
+    print(f"| {med['exact']:.1f} | {med['numpy']:.1f} | {med['compiled']:.1f} | "
+          f"{med['exact'] / med['numpy']:.2f} | {med['exact'] / med['compiled']:.2f} |")
 
 
 def row_parts(m, scene, p, n):
