@@ -35,6 +35,7 @@
 #include <stdexcept>
 #include <string>
 #include <unordered_map>
+#include <utility>
 #include <vector>
 
 namespace py = pybind11;
@@ -105,17 +106,8 @@ class ZBuffer {
     // coplanar_ulps: exactff._tolerances.BSP_COPLANAR_ULPS; tie_slack_ulps:
     // ZBUFFER_ROUNDING_ULPS + 1; clip_meet_ulps, chart_edge_ulps: CLIP_MEET_ULPS and
     // CHART_EDGE_ULPS (the chart clipper's).
-    ZBuffer(Doubles D,
-            Doubles Dnorm,
-            Doubles nl,
-            Doubles dl,
-            Doubles band,
-            Ints prio,
-            Doubles V,
-            Ints offsets,
-            Doubles N,
-            Doubles Dp,
-            Ints ids,
+    ZBuffer(Doubles D, Doubles Dnorm, Doubles nl, Doubles dl, Doubles band, Ints prio,
+            Doubles V, Ints offsets, Doubles N, Doubles Dp, Ints ids,
             double coplanar_ulps, double tie_slack_ulps, double clip_meet_ulps,
             double chart_edge_ulps)
         : D_(D), Dnorm_(Dnorm), nl_(nl), dl_(dl), band_(band), prio_(prio), V_(V),
@@ -146,22 +138,15 @@ class ZBuffer {
     // along UV[..., 0] at centres uc, spans along UV[..., 1] over centres vc;
     // cl (M,) vertex counts; src (M,) live indices; table (len(uc), len(vc)) the
     // layout's cell of each grid cell (-1: none).
-    void face(Doubles UV,
-              Ints cl,
-              Ints src,
-              Doubles uc,
-              Doubles vc,
-              Ints table,
-              py::array best_t, py::array best, i64 pair_chunk,
-              i64 depth_chunk) {
+    void face(Doubles UV, Ints cl, Ints src, Doubles uc, Doubles vc, Ints table,
+              py::array best_t, py::array best, i64 pair_chunk, i64 depth_chunk) {
         if (UV.ndim() != 3 || UV.shape(2) != 2)
             throw std::invalid_argument("UV must have shape (M, K, 2)");
         const i64 M = UV.shape(0), K = UV.shape(1);
         if (cl.shape(0) != M || src.shape(0) != M)
             throw std::invalid_argument("cl and src must have shape (M,)");
         const i64 nu = uc.shape(0), nv = vc.shape(0);
-        if (table.ndim() != 2 || table.shape(0) != nu || table.shape(1) != nv)
-            throw std::invalid_argument("table must have shape (len(uc), len(vc))");
+        check_table(table, nu, nv);
         check_buffer(best_t, best);
         const double* uv = UV.data();
         const i64* c = cl.data();
@@ -184,23 +169,13 @@ class ZBuffer {
     // first, as exactff.visibility.charts.chart_clip does (clip_chart below): V (M, K,
     // 3) padded vertices, counts (M,), g_ids (M,) their live indices, the chart's
     // frustum planes (4, 3) and axes.
-    void chart_face(Doubles V,
-                    Ints counts,
-                    Ints g_ids,
-                    Doubles planes,
-                    Doubles eu,
-                    Doubles ev,
-                    Doubles ew,
-                    bool side,
-                    Doubles uc,
-                    Doubles vc,
-                    Ints table,
+    void chart_face(Doubles V, Ints counts, Ints g_ids, Doubles planes, Doubles eu, Doubles ev,
+                    Doubles ew, bool side, Doubles uc, Doubles vc, Ints table,
                     py::array best_t, py::array best, i64 pair_chunk, i64 depth_chunk) {
         const i64 M = check_bucket(V, counts, planes, eu, ev, ew);
         if (g_ids.shape(0) != M) throw std::invalid_argument("g_ids must have shape (M,)");
         const i64 nu = uc.shape(0), nv = vc.shape(0);
-        if (table.ndim() != 2 || table.shape(0) != nu || table.shape(1) != nv)
-            throw std::invalid_argument("table must have shape (len(uc), len(vc))");
+        check_table(table, nu, nv);
         check_buffer(best_t, best);
         for (i64 m = 0; m < M; ++m)
             if (g_ids.data()[m] < 0 || g_ids.data()[m] >= n_live_)
@@ -217,9 +192,7 @@ class ZBuffer {
     }
 
     // Depth-test candidate (cell, live polygon) pairs, in chunks of depth_chunk.
-    void candidates(Ints cell,
-                    Ints src,
-                    py::array best_t, py::array best, i64 depth_chunk) {
+    void candidates(Ints cell, Ints src, py::array best_t, py::array best, i64 depth_chunk) {
         check_buffer(best_t, best);
         const i64 n = cell.shape(0);
         if (src.shape(0) != n) throw std::invalid_argument("cell and src differ in length");
@@ -237,11 +210,7 @@ class ZBuffer {
     }
 
     // exactff.visibility.charts.chart_clip (margin 0) of one bucket: (live, UV, cl)
-    static py::tuple chart_clip(Doubles V,
-                                Ints counts,
-                                Doubles planes,
-                                Doubles eu,
-                                Doubles ev,
+    static py::tuple chart_clip(Doubles V, Ints counts, Doubles planes, Doubles eu, Doubles ev,
                                 Doubles ew,
                                 bool side, double clip_meet_ulps, double chart_edge_ulps) {
         const i64 M = check_bucket(V, counts, planes, eu, ev, ew);
@@ -251,18 +220,11 @@ class ZBuffer {
             clip_chart(V.data(), M, V.shape(1), counts.data(), planes.data(), eu.data(),
                        ev.data(), ew.data(), side, clip_meet_ulps, chart_edge_ulps, c);
         }
-        const i64 L = static_cast<i64>(c.live.size());
-        py::array_t<i64> live(L), cl(L);
-        py::array_t<double> UV({L, c.K, static_cast<i64>(2)});
-        std::copy(c.live.begin(), c.live.end(), live.mutable_data());
-        std::copy(c.cl.begin(), c.cl.end(), cl.mutable_data());
-        std::copy(c.UV.begin(), c.UV.end(), UV.mutable_data());
-        return py::make_tuple(live, UV, cl);
+        return clipped_tuple(c);
     }
 
     // whether live polygons a[k] and b[k] are coplanar (the BSP tree's rule)
-    py::array_t<bool> coplanar_many(Ints a,
-                                    Ints b) {
+    py::array_t<bool> coplanar_many(Ints a, Ints b) {
         const i64 n = a.shape(0);
         py::array_t<bool> out(n);
         bool* o = out.mutable_data();
@@ -274,24 +236,14 @@ class ZBuffer {
     // first, as exactff.methods._raster.FaceClip does (clip_face below): R (3, 3) the
     // face's frame (rows), planes (P, 3) the frustum in that frame (entries 0 and +-1),
     // scale the face coordinates' factor.
-    void clipped_face(Doubles V,
-                      Ints counts,
-                      Ints g_ids,
-                      Doubles R,
-                      Doubles planes,
-                      double scale,
-                      Doubles uc,
-                      Doubles vc,
-                      Ints table,
+    void clipped_face(Doubles V, Ints counts, Ints g_ids, Doubles R, Doubles planes,
+                      double scale, Doubles uc, Doubles vc, Ints table,
                       py::array best_t, py::array best, i64 pair_chunk, i64 depth_chunk) {
         const i64 M = check_face_bucket(V, counts, R, planes);
         check_ids(g_ids, M);
         const i64 nu = uc.shape(0), nv = vc.shape(0);
-        if (table.ndim() != 2 || table.shape(0) != nu || table.shape(1) != nv)
-            throw std::invalid_argument("table must have shape (len(uc), len(vc))");
-        check_buffer(best_t, best);
-        double* bt = static_cast<double*>(best_t.mutable_data());
-        i64* bs = static_cast<i64*>(best.mutable_data());
+        check_table(table, nu, nv);
+        const auto [bt, bs] = writable(best_t, best);
         py::gil_scoped_release release;
         Clipped c;
         clip_face(V.data(), M, V.shape(1), counts.data(), R.data(), planes.data(),
@@ -302,10 +254,7 @@ class ZBuffer {
     }
 
     // exactff.methods._raster.FaceClip of one bucket, compiled: (live, UV, cl)
-    static py::tuple face_clip(Doubles V,
-                               Ints counts,
-                               Doubles R,
-                               Doubles planes,
+    static py::tuple face_clip(Doubles V, Ints counts, Doubles R, Doubles planes,
                                double scale, double clip_meet_ulps) {
         const i64 M = check_face_bucket(V, counts, R, planes);
         Clipped c;
@@ -321,24 +270,15 @@ class ZBuffer {
     // clipped_face does, scanned along every sector's ray within each image's angular
     // extent; radii (rings,) and the sectors' cos and sin (S,): the cell of ring i and
     // sector k is i S + k.
-    void polar(Doubles V,
-               Ints counts,
-               Ints g_ids,
-               Doubles R,
-               Doubles planes,
-               double scale,
-               Doubles radii,
-               Doubles cosv,
-               Doubles sinv,
+    void polar(Doubles V, Ints counts, Ints g_ids, Doubles R, Doubles planes, double scale,
+               Doubles radii, Doubles cosv, Doubles sinv,
                py::array best_t, py::array best, i64 pair_chunk, i64 depth_chunk) {
         const i64 M = check_face_bucket(V, counts, R, planes);
         check_ids(g_ids, M);
         const i64 S = cosv.shape(0), nr = radii.shape(0);
         if (sinv.shape(0) != S || S < 1) throw std::invalid_argument("cos and sin: one per sector");
         if (nr * S != n_cells_) throw std::invalid_argument("rings x sectors must be the cells");
-        check_buffer(best_t, best);
-        double* bt = static_cast<double*>(best_t.mutable_data());
-        i64* bs = static_cast<i64*>(best.mutable_data());
+        const auto [bt, bs] = writable(best_t, best);
         py::gil_scoped_release release;
         Clipped c;
         clip_face(V.data(), M, V.shape(1), counts.data(), R.data(), planes.data(),
@@ -349,27 +289,20 @@ class ZBuffer {
 
     // Discrete PPBH (exactff.methods._raster.rasterise_disk): the disk's scan of one
     // bucket (local frame), the polygons that, clipped to the horizon, pass within
-    // near_rel (relative) of the point left out: scanlines at xc along the local y, spans along x over yc (the coordinates
-    // swapped, as rasterise_disk has them); table (len(xc), len(yc)) the layout's cell
-    // of each grid cell (-1: outside the disk). Returns the bucket's indices of the
-    // polygons near the point; when there are some, it scans only if after_near (the
-    // rasteriser casts their rays one by one first, then calls again).
-    py::array_t<i64> disk(Doubles V,
-              Ints counts,
-              Ints g_ids,
-              Doubles xc,
-              Doubles yc,
-              Ints table,
-              py::array best_t, py::array best, i64 pair_chunk, i64 depth_chunk,
-              double near_rel, bool after_near) {
+    // near_rel (relative) of the point left out: scanlines at xc along the local y,
+    // spans along x over yc (the coordinates swapped, as rasterise_disk has them);
+    // table (len(xc), len(yc)) the layout's cell of each grid cell (-1: outside the
+    // disk). Returns the bucket's indices of the polygons near the point; when there
+    // are some, it scans only if after_near (the rasteriser casts their rays one by
+    // one first, then calls again).
+    py::array_t<i64> disk(Doubles V, Ints counts, Ints g_ids, Doubles xc, Doubles yc,
+                          Ints table, py::array best_t, py::array best, i64 pair_chunk,
+                          i64 depth_chunk, double near_rel, bool after_near) {
         const i64 M = check_vertices(V, counts);
         check_ids(g_ids, M);
         const i64 nx = xc.shape(0), ny = yc.shape(0);
-        if (table.ndim() != 2 || table.shape(0) != nx || table.shape(1) != ny)
-            throw std::invalid_argument("table must have shape (len(xc), len(yc))");
-        check_buffer(best_t, best);
-        double* bt = static_cast<double*>(best_t.mutable_data());
-        i64* bs = static_cast<i64*>(best.mutable_data());
+        check_table(table, nx, ny);
+        const auto [bt, bs] = writable(best_t, best);
         std::vector<i64> near;
         {
             py::gil_scoped_release release;
@@ -395,20 +328,9 @@ class ZBuffer {
     // image's edges, the depth buffer in chunks of pair_chunk (polygon, direction)
     // pairs. False (and nothing done) where the clipped images are wider than
     // long_polygon vertices: the numpy code tests those with shapely.
-    bool chart_rays(Doubles V,
-                    Ints counts,
-                    Ints g_ids,
-                    Doubles planes,
-                    Doubles eu,
-                    Doubles ev,
-                    Doubles ew,
-                    bool side,
-                    Ints cells,
-                    Doubles cu,
-                    Doubles cv,
-                    i64 nb, double v_lo,
-                    Ints order,
-                    Ints starts,
+    bool chart_rays(Doubles V, Ints counts, Ints g_ids, Doubles planes, Doubles eu, Doubles ev,
+                    Doubles ew, bool side, Ints cells, Doubles cu, Doubles cv,
+                    i64 nb, double v_lo, Ints order, Ints starts,
                     py::array best_t, py::array best, i64 pair_chunk, i64 long_polygon) {
         const i64 M = check_bucket(V, counts, planes, eu, ev, ew);
         check_ids(g_ids, M);
@@ -425,9 +347,7 @@ class ZBuffer {
             if (starts.data()[k] < 0 || starts.data()[k] > n ||
                 (k > 0 && starts.data()[k] < starts.data()[k - 1]))
                 throw std::invalid_argument("starts must be non-decreasing within [0, n]");
-        check_buffer(best_t, best);
-        double* bt = static_cast<double*>(best_t.mutable_data());
-        i64* bs = static_cast<i64*>(best.mutable_data());
+        const auto [bt, bs] = writable(best_t, best);
         py::gil_scoped_release release;
         Clipped c;
         clip_chart(V.data(), M, V.shape(1), counts.data(), planes.data(), eu.data(), ev.data(),
@@ -601,6 +521,27 @@ class ZBuffer {
                       out.data() + m * Kn * 3);
     }
 
+    // S polygons Vc (S, Kc, 3) with counts cc clipped plane after plane (planes
+    // (n_planes, 3)), as chart_clip and FaceClip loop: each time the polygons with
+    // fewer than 3 vertices left given count 0, and no more planes once none has 3;
+    // Kc becomes the last clip's width
+    static void clip_planes(std::vector<double>& Vc, i64 S, i64& Kc, std::vector<i64>& cc,
+                            const double* planes, i64 n_planes, double meet_ulps) {
+        std::vector<double> next;
+        std::vector<i64> ncount;
+        for (i64 j = 0; j < n_planes; ++j) {
+            bool any = false;
+            for (const i64 n : cc) any = any || n >= 3;
+            if (!any) break;
+            for (i64& n : cc) if (n < 3) n = 0;
+            i64 Kn;
+            clip_halfspace(Vc, S, Kc, cc, planes + 3 * j, meet_ulps, next, Kn, ncount);
+            Vc.swap(next);
+            cc.swap(ncount);
+            Kc = Kn;
+        }
+    }
+
     // np.spacing(|x|): the gap to the next double (NaN for inf and NaN)
     static inline double spacing_abs(double x) {
         x = std::fabs(x);
@@ -678,19 +619,7 @@ class ZBuffer {
             cc[i] = counts[straddle[i]];
         }
         i64 Kc = K;
-        std::vector<double> next;
-        std::vector<i64> ncount;
-        for (int j = 0; j < 4; ++j) {
-            bool any = false;
-            for (const i64 n : cc) any = any || n >= 3;
-            if (!any) break;
-            for (i64& n : cc) if (n < 3) n = 0;
-            i64 Kn;
-            clip_halfspace(Vc, S, Kc, cc, planes + 3 * j, meet_ulps, next, Kn, ncount);
-            Vc.swap(next);
-            cc.swap(ncount);
-            Kc = Kn;
-        }
+        clip_planes(Vc, S, Kc, cc, planes, 4, meet_ulps);
         const i64 Kr = std::max(K, Kc);
         // the live ones, padded by their last vertex, projected into the chart
         out.live.clear();
@@ -847,19 +776,7 @@ class ZBuffer {
             cc[i] = counts[reach[i]];
         }
         i64 Kc = K;
-        std::vector<double> next;
-        std::vector<i64> ncount;
-        for (i64 j = 0; j < n_planes; ++j) {
-            bool any = false;
-            for (const i64 n : cc) any = any || n >= 3;
-            if (!any) break;
-            for (i64& n : cc) if (n < 3) n = 0;
-            i64 Kn;
-            clip_halfspace(Vc, S, Kc, cc, planes + 3 * j, meet_ulps, next, Kn, ncount);
-            Vc.swap(next);
-            cc.swap(ncount);
-            Kc = Kn;
-        }
+        clip_planes(Vc, S, Kc, cc, planes, n_planes, meet_ulps);
         out.live.clear();
         out.cl.clear();
         out.UV.clear();
@@ -1090,7 +1007,8 @@ class ZBuffer {
                 const double* B = slot ? P + 3 * nxt : A;
                 double yv = ya[e], yb = slot ? ya[nxt] : ya[e];
                 // every edge from its lower end point (y, then x, then z)
-                const bool swap = (yb < yv) || (yb == yv && (B[0] < A[0] || (B[0] == A[0] && B[2] < A[2])));
+                const bool swap = (yb < yv) ||
+                                  (yb == yv && (B[0] < A[0] || (B[0] == A[0] && B[2] < A[2])));
                 if (swap) {
                     std::swap(A, B);
                     std::swap(yv, yb);
@@ -1102,7 +1020,8 @@ class ZBuffer {
                 const bool inner = s_ext > 0 && s_ext < 1 && slot;
                 double y_ext = yb;
                 if (inner) {
-                    const double q[3] = {A[0] + s_ext * d[0], A[1] + s_ext * d[1], A[2] + s_ext * d[2]};
+                    const double q[3] = {A[0] + s_ext * d[0], A[1] + s_ext * d[1],
+                                         A[2] + s_ext * d[2]};
                     y_ext = q[1] / std::sqrt(dot_seq(q, q));
                 } else {
                     s_ext = 1.0;
@@ -1154,7 +1073,8 @@ class ZBuffer {
                         }
                     }
                     const double s = np_min(np_max(best_s, s0), s1);
-                    const double x = (ax[j] + s * dx[j]) / std::sqrt(a2[j] + s * (2.0 * av[j] + s * v2[j]));
+                    const double x = (ax[j] + s * dx[j]) /
+                                     std::sqrt(a2[j] + s * (2.0 * av[j] + s * v2[j]));
                     if (!std::isnan(x)) X.push_back(x);
                 }
                 std::sort(X.begin(), X.end());
@@ -1246,6 +1166,19 @@ class ZBuffer {
             // resolve_depths once per chunk
             flush(bt, bs);
         }
+    }
+
+    // the depth buffer, checked, as pointers (the depths, the polygons shown)
+    std::pair<double*, i64*> writable(py::array& best_t, py::array& best) const {
+        check_buffer(best_t, best);
+        return {static_cast<double*>(best_t.mutable_data()), static_cast<i64*>(best.mutable_data())};
+    }
+
+    // the layout's cell of each grid cell: one row per scanline, one column per centre
+    static void check_table(const Ints& table, i64 rows, i64 cols) {
+        if (table.ndim() != 2 || table.shape(0) != rows || table.shape(1) != cols)
+            throw std::invalid_argument("table must have shape (scanlines, centres): (" +
+                                        std::to_string(rows) + ", " + std::to_string(cols) + ")");
     }
 
     void check_buffer(const py::array& best_t, const py::array& best) const {
@@ -1426,16 +1359,13 @@ namespace {
 // polygon j (best: live indices, ids: their scene indices), where j receives, added
 // cell by cell in the cells' order (np.bincount's sums); and the number of cells that
 // show a polygon.
-py::tuple row_sums(Ints best,
-                   Ints ids,
-                   Bools receives,
-                   Doubles weights,
-                   i64 n) {
+py::tuple row_sums(Ints best, Ints ids, Bools receives, Doubles weights, i64 n) {
     const i64 C = best.shape(0), L = ids.shape(0);
     if (weights.shape(0) != C) throw std::invalid_argument("best and weights differ in length");
     if (receives.shape(0) != n) throw std::invalid_argument("receives must have shape (n,)");
     for (i64 k = 0; k < L; ++k)
-        if (ids.data()[k] < 0 || ids.data()[k] >= n) throw std::invalid_argument("ids out of range");
+        if (ids.data()[k] < 0 || ids.data()[k] >= n)
+            throw std::invalid_argument("ids out of range");
     for (i64 c = 0; c < C; ++c)
         if (best.data()[c] >= L) throw std::invalid_argument("best out of range");
     py::array_t<double> F(n);
