@@ -383,3 +383,18 @@ def test_compiled_disk_casts_polygons_through_the_point_as_numpy_does(offset):
     assert any(_passes_near_origin(V, c).any() for _, V, c in z.local)   # the premise
     for r in (17, 45):
         assert_backends_identical(lambda **k: ef.DiscretePPBH(resolution=r, **k), scene, p, n)
+
+
+def test_compiled_rows_on_two_threads_equal_rows_one_by_one():
+    # the compiled z-buffers run without the GIL, each thread with its own scratch:
+    # rows computed on two threads at once are the rows computed one by one
+    from concurrent.futures import ThreadPoolExecutor
+
+    scene = ef.scenes.office()
+    rows = list(_rows(scene, 6, seed=7))
+    for m in (ef.DiscretePPBH(resolution=64), ef.PolarPlane(rings=20, sectors=48),
+              ef.CubicTetrahedron(resolution=30), ef.MonteCarlo(4000)):
+        one = [m.point_form_factors(scene, p, n) for p, n in rows]
+        with ThreadPoolExecutor(2) as pool:
+            two = list(pool.map(lambda pn: m.point_form_factors(scene, *pn), rows))
+        assert all(np.array_equal(a, b) for a, b in zip(one, two))
