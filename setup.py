@@ -48,6 +48,6 @@ setup(
                  # no contraction into fused multiply-adds: the z-buffer mirrors the numpy
                  # rasteriser's expressions bit for bit (it moves into _core/ later)
                  Pybind11Extension("exactff.methods._zbuffer", ["exactff/methods/_zbuffer.cpp"],
-                                   cxx_std=17, extra_compile_args=["-O2", "-ffp-contract=off"])],
+                                   cxx_std=17, extra_compile_args=["-O3", "-ffp-contract=off"])],
     cmdclass={"build_ext": build_ext},
 )

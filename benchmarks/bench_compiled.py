@@ -3,7 +3,8 @@
 Usage: python benchmarks/bench_compiled.py [--rows 4] [--cloister-rows 3]
 
 For seeded rows of the procedural office (4,424 polygons) and cloister (80,461): ms per
-row of ``Hemicube(resolution=256)`` (the in-run baseline), of the compiled core alone
+row of ``Hemicube(resolution=256)`` (the in-run baseline: its compiled z-buffer, and
+its numpy rasteriser, ``backend="numpy"``, the baseline before issue 55), of the compiled core alone
 (``tolerance=None``: no fallback), of ``Exact(engine="compiled")`` at the default
 tolerance (falls back to the Python engine where a bound misses it) and of the Python
 engine; the set-up (BSP tree, then the core's convex pieces and boxes); and rows per
@@ -34,6 +35,7 @@ def main():
     a = ap.parse_args()
     print(machine())
     methods = {"hemicube-256": ef.Hemicube(resolution=256),
+               "hemicube-256 numpy": ef.Hemicube(resolution=256, backend="numpy"),
                "core alone": ef.Exact(engine="compiled", tolerance=None),
                "compiled": ef.Exact(engine="compiled"),
                "python": ef.Exact(engine="python")}
@@ -45,8 +47,9 @@ def main():
               f"included) {t_core:.2f} s; the Python engine's BSP {t_bsp:.2f} s")
         rows = np.random.default_rng(0).choice(len(scene), k, replace=False)
         print("| row | " + " | ".join(f"{m} ms" for m in methods)
-              + " | core / hemicube | compiled / hemicube | fallback |")
-        print("|---" * (len(methods) + 4) + "|")
+              + " | core / hemicube | compiled / hemicube | compiled / hemicube numpy"
+              " | fallback |")
+        print("|---" * (len(methods) + 5) + "|")
         for i in rows:
             p, n = scene.centroids[i], scene.normals[i]
             t, st = {}, {}
@@ -56,6 +59,7 @@ def main():
             print(f"| {i} | " + " | ".join(f"{1e3 * t[m]:.1f}" for m in methods)
                   + f" | {t['core alone'] / t['hemicube-256']:.2f}"
                   f" | {t['compiled'] / t['hemicube-256']:.2f}"
+                  f" | {t['compiled'] / t['hemicube-256 numpy']:.2f}"
                   f" | {'yes' if st['path'] != 'compiled' else 'no'} |")
         core = methods["core alone"]
         work = [int(i) for i in rows] * 2

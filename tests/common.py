@@ -156,3 +156,39 @@ def load_real_file(name, tmp_dir, **options):
     import exactff as ef
 
     return ef.load_scene(real_file_path(name, tmp_dir), **options)
+
+
+def discrete_methods():
+    """The discrete methods that rasterise natively, at the resolutions the native and
+    compiled z-buffer tests use (odd, even, coarse and fine), by name: factories that
+    take the method's options (``native=``, ``backend=``)."""
+    import exactff as ef
+
+    return {
+        "hemicube-16": lambda **k: ef.Hemicube(resolution=16, **k),
+        "hemicube-64": lambda **k: ef.Hemicube(resolution=64, **k),
+        "hemicube-130": lambda **k: ef.Hemicube(resolution=130, **k),
+        "ppbh-17": lambda **k: ef.DiscretePPBH(resolution=17, **k),
+        "ppbh-64": lambda **k: ef.DiscretePPBH(resolution=64, **k),
+        "ppbh-101": lambda **k: ef.DiscretePPBH(resolution=101, **k),
+        "tetra-15": lambda **k: ef.CubicTetrahedron(resolution=15, **k),
+        "tetra-52": lambda **k: ef.CubicTetrahedron(resolution=52, **k),
+        "plane-equal_ff": lambda **k: ef.SinglePlane(resolution=48, **k),
+        "plane-uniform": lambda **k: ef.SinglePlane(resolution=41, cells="uniform", **k),
+        "plane-refined": lambda **k: ef.SinglePlane(resolution=40, cells="uniform_refined",
+                                                    refine=3, **k),
+        "polar-20x48": lambda **k: ef.PolarPlane(rings=20, sectors=48, **k),
+        "polar-31x7": lambda **k: ef.PolarPlane(rings=31, sectors=7, **k),
+    }
+
+
+def small_discrete_methods():
+    """One small configuration of each natively rasterising method (property tests),
+    by kind: factories that take the method's options."""
+    import exactff as ef
+
+    return {"hemicube": lambda **k: ef.Hemicube(resolution=32, **k),
+            "ppbh": lambda **k: ef.DiscretePPBH(resolution=45, **k),
+            "tetra": lambda **k: ef.CubicTetrahedron(resolution=30, **k),
+            "plane": lambda **k: ef.SinglePlane(resolution=30, cells="uniform_refined", **k),
+            "polar": lambda **k: ef.PolarPlane(rings=20, sectors=40, **k)}

@@ -1,6 +1,7 @@
 """The compiled z-buffer of the discrete methods against its numpy oracle (issue 55):
-the hemicube, the cubic tetrahedron and the single plane (every method that
-rasterises planar faces, ``exactff.methods._raster.rasterise_face``).
+the hemicube, the cubic tetrahedron and the single plane (planar faces,
+``exactff.methods._raster.rasterise_face``), the polar plane (``rasterise_polar``) and
+discrete PPBH (the disk's ellipse arcs, ``rasterise_disk``).
 
 The compiled backend (``exactff.methods._zbuffer``) scan-converts and depth-tests as
 the numpy rasteriser does, cell for cell: the same scanlines, the same crossings from
@@ -22,23 +23,12 @@ from exactff import _tolerances as tol
 from exactff.checks import as_receiver
 from exactff.testing import strategies
 
-from common import examples
+from common import discrete_methods, examples, small_discrete_methods
 
-#: the methods with a compiled backend, and their resolutions
-COMPILED = {
-    "hemicube-16": lambda **k: ef.Hemicube(resolution=16, **k),
-    "hemicube-64": lambda **k: ef.Hemicube(resolution=64, **k),
-    "hemicube-130": lambda **k: ef.Hemicube(resolution=130, **k),
-    "tetra-15": lambda **k: ef.CubicTetrahedron(resolution=15, **k),
-    "tetra-52": lambda **k: ef.CubicTetrahedron(resolution=52, **k),
-    "plane-equal_ff": lambda **k: ef.SinglePlane(resolution=48, **k),
-    "plane-uniform": lambda **k: ef.SinglePlane(resolution=41, cells="uniform", **k),
-    "plane-refined": lambda **k: ef.SinglePlane(resolution=40, cells="uniform_refined",
-                                                refine=3, **k),
-}
-SMALL = [lambda **k: ef.Hemicube(resolution=32, **k),
-         lambda **k: ef.CubicTetrahedron(resolution=30, **k),
-         lambda **k: ef.SinglePlane(resolution=30, cells="uniform_refined", **k)]
+#: the methods with a compiled rasteriser, and their resolutions (those of the native
+#: tests)
+COMPILED = discrete_methods()
+SMALL = list(small_discrete_methods().values())
 
 
 def assert_backends_identical(make, scene, point, normal):
@@ -73,7 +63,8 @@ def test_compiled_cells_identical_to_numpy(method, scene_name):
         assert_backends_identical(COMPILED[method], scene, p, n)
 
 
-@pytest.mark.parametrize("method", ["hemicube-64", "tetra-52", "plane-refined"])
+@pytest.mark.parametrize("method", ["hemicube-64", "tetra-52", "plane-refined", "polar-20x48",
+                                    "ppbh-64"])
 @pytest.mark.parametrize("scene_name", ["walls_low", "walls_high", "light_on_ceiling"])
 def test_compiled_cells_identical_to_numpy_on_ties_from_the_floor(method, scene_name):
     # the rows of test_ties.py: from the floors, through zero-thickness walls (back to
@@ -84,11 +75,12 @@ def test_compiled_cells_identical_to_numpy_on_ties_from_the_floor(method, scene_
     for i in floors:
         hit = assert_backends_identical(COMPILED[method], scene, scene.centroids[i],
                                         scene.normals[i])
-        if method.startswith("hemicube"):
+        if method.startswith(("hemicube", "ppbh")):
             assert np.all(hit >= 0)     # closed: every cell shows a polygon
 
 
-@pytest.mark.parametrize("method", ["hemicube-64", "tetra-52", "plane-refined"])
+@pytest.mark.parametrize("method", ["hemicube-64", "tetra-52", "plane-refined", "polar-20x48",
+                                    "ppbh-64"])
 @pytest.mark.parametrize("scene_name", ["office", "building", "light_on_ceiling"])
 def test_compiled_cells_identical_to_numpy_in_small_chunks(method, scene_name, monkeypatch):
     # chunks of a few scanlines and a few hundred candidates: the depth buffer merges
@@ -163,42 +155,61 @@ def test_compiled_cells_identical_to_numpy_on_flush_faces_in_small_chunks(case):
             assert_backends_identical(make, scene, p, n)
 
 
-def assert_chart_clips_identical(scene, p, n):
-    """The compiled chart clipper gives chart_clip's live polygons, counts and chart
-    coordinates, bit for bit, for every chart and bucket of the row."""
+def clip_pairs():
+    """(numpy clipper, compiled clipper) pairs, each ``clip(V, counts) -> (live, UV,
+    cl)``: the five charts (chart_clip, margin 0), the cubic tetrahedron's faces and
+    the single and polar planes (FaceClip)."""
     from exactff.methods import _zbuffer
-    from exactff.methods._sampling import ZBufferRow
+    from exactff.methods._raster import face_clipper, plane_clipper
+    from exactff.methods.cubic_tetrahedron import cubic_tetrahedron_frame
     from exactff.visibility.charts import CHARTS, chart_clip, chart_planes
 
+    pairs = [(lambda V, c, ch=ch: chart_clip(V, c, ch),
+              lambda V, c, ch=ch: _zbuffer.chart_clip(V, c, np.array(chart_planes(ch)), *ch,
+                                                      tol.CLIP_MEET_ULPS, tol.CHART_EDGE_ULPS))
+             for ch in CHARTS]
+    a1, a2, a3 = cubic_tetrahedron_frame()
+    tetra = [[-1.0, 0.0, 1.0], [0.0, -1.0, 1.0], [1.0, 1.0, 1.0]]
+    for clip in (face_clipper([a2, a3, a1], tetra), face_clipper([a3, a1, a2], tetra),
+                 plane_clipper(4.0), plane_clipper(10.0)):
+        pairs.append((clip, lambda V, c, f=clip: _zbuffer.face_clip(V, c, f.R, f.planes, f.scale,
+                                                                    tol.CLIP_MEET_ULPS)))
+    return pairs
+
+
+def assert_clips_identical(scene, p, n):
+    """Each compiled clipper gives its numpy clipper's live polygons, counts and
+    coordinates, bit for bit, for every bucket of the row."""
+    from exactff.methods._sampling import ZBufferRow
+
     p, n = as_receiver(p, n)
-    for chart in CHARTS:
+    for numpy_clip, compiled_clip in clip_pairs():
         for _, V, counts in ZBufferRow(scene, p, n).local:
-            live, UV, cl = chart_clip(V, counts, chart)
-            live_c, UV_c, cl_c = _zbuffer.chart_clip(V, counts, np.array(chart_planes(chart)),
-                                                     *chart, tol.CLIP_MEET_ULPS,
-                                                     tol.CHART_EDGE_ULPS)
+            live, UV, cl = numpy_clip(V, counts)
+            live_c, UV_c, cl_c = compiled_clip(V, counts)
             assert np.array_equal(live_c, live) and np.array_equal(cl_c, cl)
             assert UV_c.shape == UV.shape
             assert np.array_equal(UV_c, UV, equal_nan=True)
 
 
 @pytest.mark.parametrize("scene_name", ["office", "building", "cornell"])
-def test_compiled_chart_clip_identical_to_numpy(scene_name):
+def test_compiled_clips_identical_to_numpy(scene_name):
     scene = SCENES[scene_name]()
     for p, n in _rows(scene, 4, seed=2):
-        assert_chart_clips_identical(scene, p, n)
+        assert_clips_identical(scene, p, n)
         # from the polygon's centroid itself: the point on its plane
         i = int(np.argmin(np.linalg.norm(scene.centroids - p, axis=1)))
-        assert_chart_clips_identical(scene, scene.centroids[i], scene.normals[i])
+        assert_clips_identical(scene, scene.centroids[i], scene.normals[i])
 
 
 @given(strategies.occluded_scenes() | strategies.enclosures() | strategies.flush_faces())
 @settings(max_examples=examples(40), deadline=None)
-def test_compiled_chart_clip_identical_to_numpy_in_random_scenes(case):
-    assert_chart_clips_identical(*case)
+def test_compiled_clips_identical_to_numpy_in_random_scenes(case):
+    assert_clips_identical(*case)
 
 
-@pytest.mark.parametrize("method", ["hemicube-64", "tetra-52", "plane-refined"])
+@pytest.mark.parametrize("method", ["hemicube-64", "tetra-52", "plane-refined", "polar-20x48",
+                                    "ppbh-64"])
 def test_compiled_rows_equal_numpy_rows(method):
     # through the public interface: the rows are equal to the last bit
     scene = ef.scenes.office()
@@ -206,6 +217,14 @@ def test_compiled_rows_equal_numpy_rows(method):
         F1 = ef.form_factors(scene, p, n, method=COMPILED[method]())
         F0 = ef.form_factors(scene, p, n, method=COMPILED[method](backend="numpy"))
         assert np.array_equal(F1, F0)
+
+
+def test_face_clip_rejects_planes_it_cannot_test_exactly():
+    # a plane with other entries would make h . W depend on the order of the products
+    from exactff.methods._raster import face_clipper
+
+    with pytest.raises(ValueError, match="entries must be 0, 1 or -1"):
+        face_clipper(np.eye(3), [[0.5, 0.0, 1.0]])
 
 
 @pytest.mark.parametrize("method", sorted(COMPILED))
@@ -234,3 +253,148 @@ def test_zbuffer_rejects_a_buffer_it_cannot_write():
     with pytest.raises(ValueError, match="src out of range"):
         zb.face(UV, np.array([3]), np.array([10 ** 6]), *args[3:], np.full(len(L), np.inf),
                 np.full(len(L), -1, dtype=np.int64), 10, 10)
+
+
+# ---- Monte Carlo: the shared core's rays through the compiled z-buffer ----
+
+def assert_rays_identical(scene, point, normal, seed=0, samples=4000):
+    """The compiled shared core against its numpy code: bit for bit with the charts'
+    exact frustums (margin 0, what the compiled one clips to), and the same hits as
+    the numpy code's widened frustums (CHART_MARGIN: only a ray within rounding of a
+    chart's edge and of a polygon's edge there could differ)."""
+    from exactff.methods._sampling import nearest_polygons
+
+    p, n = as_receiver(point, normal)
+    D, _ = ef.MonteCarlo(samples, seed=seed).directions_for(p)
+    compiled = nearest_polygons(scene, p, n, D, backend="compiled")
+    exact_frustum = nearest_polygons(scene, p, n, D, margin=0.0)
+    widened = nearest_polygons(scene, p, n, D)
+    assert np.array_equal(compiled, exact_frustum)
+    assert np.array_equal(compiled, widened)
+    return compiled
+
+
+@pytest.mark.parametrize("scene_name", sorted(SCENES))
+def test_compiled_rays_identical_to_numpy(scene_name):
+    scene = SCENES[scene_name]()
+    for p, n in _rows(scene, 3, seed=4):
+        assert_rays_identical(scene, p, n)
+
+
+@pytest.mark.parametrize("scene_name", ["walls_low", "walls_high", "light_on_ceiling"])
+def test_compiled_rays_identical_to_numpy_on_ties_from_the_floor(scene_name):
+    scene = SCENES[scene_name]()
+    floors = [i for i, g in enumerate(scene.groups) if g == "floor"] or [
+        scene.names.index("floor")]
+    for i in floors:
+        hit = assert_rays_identical(scene, scene.centroids[i], scene.normals[i])
+        assert np.all(hit >= 0)
+
+
+@pytest.mark.parametrize("scene_name", ["office", "building", "light_on_ceiling"])
+def test_compiled_rays_identical_to_numpy_in_small_chunks(scene_name, monkeypatch):
+    import exactff.methods._sampling as sampling
+
+    monkeypatch.setattr(sampling, "PAIR_CHUNK", 300)
+    scene = SCENES[scene_name]()
+    for p, n in _rows(scene, 2, seed=5):
+        assert_rays_identical(scene, p, n)
+
+
+def test_compiled_rays_identical_to_numpy_through_cell_layouts():
+    # grid layouts (cells on shared edges and chart edges), not random rays
+    from exactff.methods._sampling import _chart_of, nearest_polygons
+
+    scene = aligned_box()
+    for m in (ef.Hemicube(resolution=16), ef.DiscretePPBH(resolution=40),
+              ef.CubicTetrahedron(resolution=20)):
+        D = m.layout().directions
+        for point in [(0.0, 0.0, 0.0), (0.125, -0.25, 0.0)]:
+            p, n = as_receiver(point, [0.0, 0.0, 1.0])
+            compiled = nearest_polygons(scene, p, n, D, backend="compiled")
+            assert np.array_equal(compiled, nearest_polygons(scene, p, n, D, margin=0.0))
+            # closed: every cell shows a polygon, but cells exactly on a chart's edge
+            # (discrete PPBH's diagonal |x| = |y|: u = 1), which an image clipped to
+            # the exact frustum has on its boundary; the numpy code widens the
+            # frustums for them (random rays are not there)
+            _, u, v = _chart_of(D)
+            on_edge = (np.abs(u) == 1.0) | (np.abs(v) == 1.0) | (v == 0.0)
+            assert np.all(compiled[~on_edge] >= 0)
+            if isinstance(m, ef.Hemicube):
+                assert not on_edge.any()
+
+
+def test_compiled_rays_leave_long_polygons_to_numpy():
+    # a 300-gon (wider than LONG_POLYGON): the numpy code tests it with shapely, and
+    # the compiled backend hands that bucket back to it, in order
+    room = ef.scenes.furnished_box(2, [((0.1, 0.1, 0.0), (0.3, 0.35, 0.6))])
+    t = 2 * np.pi * np.arange(300) / 300
+    disc = np.column_stack([0.3 * np.cos(t), 0.3 * np.sin(t), 0.06 * np.cos(t)]) + [0.5, 0.45, 0.5]
+    scene = ef.Scene.from_polygons(list(room.polygons) + [disc])
+    seen = 0
+    for i in (0, 9, 14):
+        hit = assert_rays_identical(scene, room.centroids[i], room.normals[i])
+        seen += np.sum(hit == len(room))
+    assert seen > 100    # the disc is hit
+
+
+@given(strategies.enclosures() | strategies.occluded_scenes() | strategies.flush_faces())
+@settings(max_examples=examples(40), deadline=None)
+def test_compiled_rays_identical_to_numpy_in_random_scenes(case):
+    assert_rays_identical(*case, samples=1500)
+
+
+def test_monte_carlo_rows_equal_numpy_rows():
+    scene = ef.scenes.office()
+    for p, n in _rows(scene, 2, seed=6):
+        F1 = ef.form_factors(scene, p, n, method=ef.MonteCarlo(20000, seed=3))
+        F0 = ef.form_factors(scene, p, n, method=ef.MonteCarlo(20000, seed=3, backend="numpy"))
+        assert np.array_equal(F1, F0)
+    S1 = ef.sphere_form_factors(scene, scene.centroids[:3], method=ef.MonteCarlo(8000))
+    S0 = ef.sphere_form_factors(scene, scene.centroids[:3],
+                                method=ef.MonteCarlo(8000, backend="numpy"))
+    assert np.array_equal(S1, S0)
+
+
+def test_monte_carlo_backend_option_checked_and_in_repr():
+    assert "backend" not in repr(ef.MonteCarlo(10))
+    assert "backend='numpy'" in repr(ef.MonteCarlo(10, backend="numpy"))
+    with pytest.raises(ValueError, match="backend"):
+        ef.MonteCarlo(10, backend="cuda")
+    from exactff.methods._sampling import nearest_polygons
+
+    scene = ef.scenes.cornell_box()
+    with pytest.raises(ValueError, match="margin"):
+        nearest_polygons(scene, scene.centroids[0], scene.normals[0], np.array([[0, 0, 1.0]]),
+                         backend="compiled", margin=1e-6)
+
+
+@pytest.mark.parametrize("offset", [1e-11, -1e-11, 3e-10])
+def test_compiled_disk_casts_polygons_through_the_point_as_numpy_does(offset):
+    # the point on the floor, a hair off a wall's plane at its foot: the wall's bottom
+    # edge passes within RASTER_NEAR_ORIGIN of the point, and both backends cast its
+    # rays one by one before the disk's scan
+    from exactff.methods._raster import _passes_near_origin
+    from exactff.methods._sampling import ZBufferRow
+
+    scene = ef.scenes.subdivided_box(2)
+    p, n = as_receiver([offset, 0.3, 0.0], [0.0, 0.0, 1.0])
+    z = ZBufferRow(scene, p, n)
+    assert any(_passes_near_origin(V, c).any() for _, V, c in z.local)   # the premise
+    for r in (17, 45):
+        assert_backends_identical(lambda **k: ef.DiscretePPBH(resolution=r, **k), scene, p, n)
+
+
+def test_compiled_rows_on_two_threads_equal_rows_one_by_one():
+    # the compiled z-buffers run without the GIL, each thread with its own scratch:
+    # rows computed on two threads at once are the rows computed one by one
+    from concurrent.futures import ThreadPoolExecutor
+
+    scene = ef.scenes.office()
+    rows = list(_rows(scene, 6, seed=7))
+    for m in (ef.DiscretePPBH(resolution=64), ef.PolarPlane(rings=20, sectors=48),
+              ef.CubicTetrahedron(resolution=30), ef.MonteCarlo(4000)):
+        one = [m.point_form_factors(scene, p, n) for p, n in rows]
+        with ThreadPoolExecutor(2) as pool:
+            two = list(pool.map(lambda pn: m.point_form_factors(scene, *pn), rows))
+        assert all(np.array_equal(a, b) for a, b in zip(one, two))

@@ -17,30 +17,12 @@ from exactff.checks import as_receiver
 from exactff.methods._sampling import nearest_polygons
 from exactff.testing import strategies
 
-from common import examples
+from common import discrete_methods, examples, small_discrete_methods
 
-NATIVE = {
-    "hemicube-16": lambda **k: ef.Hemicube(resolution=16, **k),
-    "hemicube-64": lambda **k: ef.Hemicube(resolution=64, **k),
-    "hemicube-130": lambda **k: ef.Hemicube(resolution=130, **k),
-    "ppbh-17": lambda **k: ef.DiscretePPBH(resolution=17, **k),
-    "ppbh-64": lambda **k: ef.DiscretePPBH(resolution=64, **k),
-    "ppbh-101": lambda **k: ef.DiscretePPBH(resolution=101, **k),
-    "tetra-15": lambda **k: ef.CubicTetrahedron(resolution=15, **k),
-    "tetra-52": lambda **k: ef.CubicTetrahedron(resolution=52, **k),
-    "plane-equal_ff": lambda **k: ef.SinglePlane(resolution=48, **k),
-    "plane-uniform": lambda **k: ef.SinglePlane(resolution=41, cells="uniform", **k),
-    "plane-refined": lambda **k: ef.SinglePlane(resolution=40, cells="uniform_refined",
-                                                refine=3, **k),
-    "polar-20x48": lambda **k: ef.PolarPlane(rings=20, sectors=48, **k),
-    "polar-31x7": lambda **k: ef.PolarPlane(rings=31, sectors=7, **k),
-}
+NATIVE = discrete_methods()
 #: methods whose cells cover the whole hemisphere (a closed room fills every cell)
 WHOLE = ("hemicube", "ppbh", "tetra")
-SMALL = {"hemicube": lambda: ef.Hemicube(resolution=32), "ppbh": lambda: ef.DiscretePPBH(resolution=45),
-         "tetra": lambda: ef.CubicTetrahedron(resolution=30),
-         "plane": lambda: ef.SinglePlane(resolution=30, cells="uniform_refined"),
-         "polar": lambda: ef.PolarPlane(rings=20, sectors=40)}
+SMALL = small_discrete_methods()
 
 #: a cell on a polygon's edge: its direction within this angle of the edge's plane
 ON_EDGE = 1e-12

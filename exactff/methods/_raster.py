@@ -17,9 +17,10 @@ in exactly one). The depth test is the shared depth buffer
   to the horizon and projected once; every edge's image is an ellipse arc (Eq. 2),
   split at its extreme in y (monotone-span splitting, as for Eq. 3, here across rows)
   so that each piece crosses a row at most once; the crossing solves a quadratic.
+- :func:`rasterise_polar`: the polar plane's grid, scanned along each sector's ray.
 
-:func:`rasterise_face` has a compiled backend (:func:`compiled_zbuffer`,
-``exactff/methods/_zbuffer.cpp``): the same clipping of a chart, scanlines, spans,
+Each has a compiled backend (:func:`compiled_zbuffer`, ``exactff/methods/_zbuffer.cpp``):
+the same clipping (a chart's, a :class:`FaceClip`'s, the horizon's), scanlines, spans,
 chunks and depth rule in C++, cell for cell (the numpy code here is its oracle).
 """
 
@@ -28,11 +29,11 @@ import numpy as np
 from .. import _tolerances as tol
 from ..halfspace import clip_halfspace
 from ..visibility.charts import chart_clip, chart_planes
-from ._sampling import PAIR_CHUNK, resolve_depths
-from ._zbuffer import ZBuffer
+from ._sampling import PAIR_CHUNK, resolve_depths, zbuffer_of
 
-__all__ = ["rasterise_face", "rasterise_disk", "rasterise_polar", "face_clipper", "DEPTH_CHUNK",
-           "compiled_zbuffer", "BACKENDS", "check_backend"]
+__all__ = ["rasterise_face", "rasterise_disk", "rasterise_polar", "face_clipper",
+           "plane_clipper", "FaceClip", "cell_table", "DEPTH_CHUNK", "compiled_zbuffer", "BACKENDS",
+           "check_backend"]
 
 #: Where the native rasterisers scan-convert and depth-test: "compiled" (the C++
 #: z-buffer, exactff.methods._zbuffer) or "numpy" (vectorised numpy; its oracle)
@@ -50,11 +51,23 @@ def compiled_zbuffer(z, layout):
     """The compiled z-buffer (``exactff.methods._zbuffer.ZBuffer``) of one row: the
     layout's cell directions and the live polygons' depth data of ``z``
     (:class:`ZBufferRow`), with the scene's planes for the coplanar rule."""
-    s = z.scene
-    return ZBuffer(layout.directions, layout.direction_norms, z.nl, z.dl, z.band, z.prio,
-                   s.vertices, s.offsets, s.normals, s.plane_offsets, z.ids,
-                   tol.BSP_COPLANAR_ULPS, tol.ZBUFFER_ROUNDING_ULPS + 1.0, tol.CLIP_MEET_ULPS,
-                   tol.CHART_EDGE_ULPS)
+    return zbuffer_of(z, layout.directions, layout.direction_norms)
+
+
+def cell_table(cell_of, nu, nv):
+    """``cell_of`` over the whole grid: an int64 array of shape (nu, nv), which the
+    rasterisers take in its place (a method builds it once)."""
+    if isinstance(cell_of, np.ndarray):
+        return cell_of
+    return np.ascontiguousarray(np.broadcast_to(
+        cell_of(np.arange(nu)[:, None], np.arange(nv)[None, :]), (nu, nv)), dtype=np.int64)
+
+
+def _cell_function(cell_of):
+    """``cell_of(i, j)`` from a function or a :func:`cell_table`."""
+    if isinstance(cell_of, np.ndarray):
+        return lambda i, j: cell_of[i, j]
+    return cell_of
 
 
 def _first_at_or_above(centres, x):
@@ -110,35 +123,68 @@ def _chunks(n_pairs, width):
     return [(s, min(s + step, n_pairs)) for s in range(0, n_pairs, step)]
 
 
-def face_clipper(eu, ev, ew, planes):
-    """A clip function for :func:`rasterise_face`: polygons (local frame) clipped to the
-    half-spaces ``h . x > 0`` of ``planes`` (through the point) and projected onto the
-    plane ``w = 1`` with axes ``e_u``, ``e_v``; the same contract as
-    :func:`exactff.visibility.charts.chart_clip`."""
-    eu, ev, ew = (np.asarray(e, dtype=float) for e in (eu, ev, ew))
-    planes = [np.asarray(h, dtype=float) for h in planes]
+def _frame_dot(V, r):
+    """``V . r`` over the last axis, the products added first to second, then the
+    third: the order the compiled clipper uses (a matrix product may fuse them)."""
+    return (V[..., 0] * r[0] + V[..., 1] * r[1]) + V[..., 2] * r[2]
 
-    def clip(V, counts):
-        slot = np.arange(V.shape[1])[None, :] < counts[:, None]
-        S = V @ np.array(planes).T
+
+class FaceClip:
+    """A planar face's frustum clipping and projection for :func:`rasterise_face` and
+    :func:`rasterise_polar`, with the contract of
+    :func:`exactff.visibility.charts.chart_clip`: ``clip(V, counts) -> (live, UV, cl)``.
+
+    The polygons (local frame) are taken into the face's frame ``W = R x`` (rows of
+    ``R``; each product added in a fixed order, so that the compiled clipper,
+    ``exactff.methods._zbuffer.face_clip``, gives the same bits), clipped there to the
+    half-spaces ``h . W > 0`` of ``planes`` (entries 0 and +-1: the side tests are
+    exact), and projected: ``u = (scale W_0) / W_2``, ``v = (scale W_1) / W_2``.
+    """
+
+    def __init__(self, R, planes, scale=1.0):
+        self.R = np.ascontiguousarray(R, dtype=float)
+        self.planes = np.ascontiguousarray(planes, dtype=float)
+        self.scale = float(scale)
+        if self.R.shape != (3, 3) or self.planes.ndim != 2 or self.planes.shape[1] != 3:
+            raise ValueError("R must have shape (3, 3) and planes (P, 3)")
+        if not np.all(np.isin(self.planes, (-1.0, 0.0, 1.0))):
+            raise ValueError(f"planes' entries must be 0, 1 or -1, got {self.planes!r}")
+
+    def __call__(self, V, counts):
+        W = np.stack([_frame_dot(V, r) for r in self.R], axis=-1)
+        slot = np.arange(W.shape[1])[None, :] < counts[:, None]
+        S = np.stack([_frame_dot(W, h) for h in self.planes], axis=-1)
         reach = np.flatnonzero(~np.any(np.all((S <= 0) | ~slot[:, :, None], axis=1), axis=1)
                                & (counts >= 3))
-        Vc, cc = V[reach], counts[reach]
-        for h in planes:
+        Wc, cc = W[reach], counts[reach]
+        for h in self.planes:
             if not np.any(cc >= 3):
                 break
-            Vc, cc = clip_halfspace(Vc, np.where(cc >= 3, cc, 0), h)
+            Wc, cc = clip_halfspace(Wc, np.where(cc >= 3, cc, 0), h)
         ok = np.flatnonzero(cc >= 3)
-        Vc, cc = Vc[ok], cc[ok]
-        K = Vc.shape[1]
-        last = np.take_along_axis(Vc, np.maximum(cc - 1, 0)[:, None, None].repeat(3, axis=2),
+        Wc, cc = Wc[ok], cc[ok]
+        K = Wc.shape[1]
+        last = np.take_along_axis(Wc, np.maximum(cc - 1, 0)[:, None, None].repeat(3, axis=2),
                                   axis=1)
-        Vc = np.where((np.arange(K)[None, :] < cc[:, None])[:, :, None], Vc, last)
-        w = Vc @ ew
-        UV = np.stack([(Vc @ eu) / w, (Vc @ ev) / w], axis=-1)
+        Wc = np.where((np.arange(K)[None, :] < cc[:, None])[:, :, None], Wc, last)
+        UV = np.stack([(self.scale * Wc[:, :, 0]) / Wc[:, :, 2],
+                       (self.scale * Wc[:, :, 1]) / Wc[:, :, 2]], axis=-1)
         return reach[ok], UV, cc
 
-    return clip
+
+def face_clipper(R, planes, scale=1.0):
+    """A :class:`FaceClip`: the face's frame ``R`` (rows), its frustum's planes in that
+    frame (entries 0 and +-1), and the scale of its coordinates."""
+    return FaceClip(R, planes, scale)
+
+
+def plane_clipper(extent):
+    """The frustum of the plane ``z = 1`` over ``[-E, E]^2`` (the single and polar
+    planes): in the frame ``(x, y, E z)`` the planes ``E z -+ x > 0``, ``E z -+ y > 0``
+    have entries 0 and +-1; coordinates ``u = (E x) / (E z)``."""
+    E = float(extent)
+    return FaceClip(np.diag([1.0, 1.0, E]),
+                    [[-1.0, 0.0, 1.0], [1.0, 0.0, 1.0], [0.0, -1.0, 1.0], [0.0, 1.0, 1.0]], E)
 
 
 def rasterise_face(z, chart, uc, vc, cell_of, D, best_t, best, clip=None, zbuffer=None):
@@ -152,9 +198,10 @@ def rasterise_face(z, chart, uc, vc, cell_of, D, best_t, best, clip=None, zbuffe
         is not given.
     uc, vc : ndarray
         Cell centres along u and v, increasing.
-    cell_of : callable
+    cell_of : callable or ndarray
         ``cell_of(i, j)`` -> the index in the layout of the cell at ``(uc[i], vc[j])``
-        (consecutive along j), -1 for a grid cell the layout does not have.
+        (consecutive along j), -1 for a grid cell the layout does not have; or its
+        :func:`cell_table`.
     D : ndarray of shape (C, 3)
         The layout's cell directions (for the depths).
     best_t, best : ndarray of shape (C,)
@@ -167,16 +214,20 @@ def rasterise_face(z, chart, uc, vc, cell_of, D, best_t, best, clip=None, zbuffe
         depth test in C++, cell for cell as here; default the numpy code below.
     """
     if zbuffer is not None:
-        table = np.ascontiguousarray(np.broadcast_to(
-            cell_of(np.arange(len(uc))[:, None], np.arange(len(vc))[None, :]),
-            (len(uc), len(vc))), dtype=np.int64)
+        table = cell_table(cell_of, len(uc), len(vc))
         if clip is None:
             planes = np.array(chart_planes(chart))
+    cell_of = _cell_function(cell_of)
     for g_ids, V, counts in z.local:
         if zbuffer is not None and clip is None:
             # the chart's clipping (chart_clip, bit for bit) compiled too
             zbuffer.chart_face(V, counts, g_ids, planes, *chart, uc, vc, table, best_t, best,
                                PAIR_CHUNK, DEPTH_CHUNK)
+            continue
+        if zbuffer is not None and isinstance(clip, FaceClip):
+            # the face's clipping (FaceClip, bit for bit) compiled too
+            zbuffer.clipped_face(V, counts, g_ids, clip.R, clip.planes, clip.scale, uc, vc,
+                                 table, best_t, best, PAIR_CHUNK, DEPTH_CHUNK)
             continue
         live, UV, cl = chart_clip(V, counts, chart) if clip is None else clip(V, counts)
         if len(live) == 0:
@@ -259,7 +310,7 @@ def _arc_y(a, d, s):
     return q[..., 1] / np.sqrt((q * q).sum(-1))
 
 
-def rasterise_disk(z, xc, yc, cell_of, D, best_t, best):
+def rasterise_disk(z, xc, yc, cell_of, D, best_t, best, zbuffer=None):
     """Scan-convert every live polygon's image on the base of the hemisphere.
 
     Each polygon is clipped to the horizon and its edges taken as great-circle arcs
@@ -272,13 +323,29 @@ def rasterise_disk(z, xc, yc, cell_of, D, best_t, best):
     z : ZBufferRow
     xc, yc : ndarray
         Cell centres along x and y of the square grid on the disk.
-    cell_of : callable
+    cell_of : callable or ndarray
         ``cell_of(i, j)`` -> the index in the layout of the cell at ``(xc[i], yc[j])``
-        (consecutive along j), -1 for a grid cell outside the disk.
-    D, best_t, best : as :func:`rasterise_face`.
+        (consecutive along j), -1 for a grid cell outside the disk; or its
+        :func:`cell_table`.
+    D, best_t, best, zbuffer : as :func:`rasterise_face` (the compiled disk: the same
+        clipping, arcs, crossings, spans and depth rule).
     """
     ez = np.array([0.0, 0.0, 1.0])
+    if zbuffer is not None:
+        table = cell_table(cell_of, len(xc), len(yc))
+    cell_of = _cell_function(cell_of)
     for g_ids, V, counts in z.local:
+        if zbuffer is not None:
+            # the arcs scan-converted in C++; if polygons pass through the point to
+            # rounding, those first, ray by ray, as below, then the others' arcs
+            near = zbuffer.disk(V, counts, g_ids, xc, yc, table, best_t, best, PAIR_CHUNK,
+                                DEPTH_CHUNK, tol.RASTER_NEAR_ORIGIN)
+            if len(near):
+                for k in near:
+                    _cast_rays(z, int(g_ids[k]), V[k, :counts[k]], D, best_t, best)
+                zbuffer.disk(V, counts, g_ids, xc, yc, table, best_t, best, PAIR_CHUNK,
+                             DEPTH_CHUNK, tol.RASTER_NEAR_ORIGIN, after_near=True)
+            continue
         V0 = V
         # scanlines x = const, spans along y (the layout's fast axis): swap x and y
         V = V[:, :, [1, 0, 2]]
@@ -381,7 +448,7 @@ def rasterise_disk(z, xc, yc, cell_of, D, best_t, best):
             _depth_test(z, cell[keep], g_ids[live[P[pair[keep]]]], D, best_t, best)
 
 
-def rasterise_polar(z, radii, angles, cell_of, D, best_t, best, clip):
+def rasterise_polar(z, radii, angles, cell_of, D, best_t, best, clip, zbuffer=None):
     """Scan-convert every live polygon on a plane's polar grid (the polar plane).
 
     The polygon's image on the plane (straight edges, clipped by ``clip``) is scanned
@@ -400,13 +467,21 @@ def rasterise_polar(z, radii, angles, cell_of, D, best_t, best, clip):
     cell_of : callable
         ``cell_of(ring, sector)`` -> the cell's index in the layout.
     D, best_t, best : as :func:`rasterise_face`.
-    clip : callable
-        The plane's frustum clipping and projection (:func:`face_clipper`).
+    clip : FaceClip
+        The plane's frustum clipping and projection (:func:`plane_clipper`).
+    zbuffer : exactff.methods._zbuffer.ZBuffer, optional
+        The compiled z-buffer (:func:`compiled_zbuffer`): the same clipping, sectors,
+        crossings, spans and depth rule in C++; ``cell_of(ring, sector)`` must then be
+        ``ring * len(angles) + sector``.
     """
     S = len(angles)
     step = 2.0 * np.pi / S
     cos, sin = np.cos(angles), np.sin(angles)
     for g_ids, V, counts in z.local:
+        if zbuffer is not None:
+            zbuffer.polar(V, counts, g_ids, clip.R, clip.planes, clip.scale, radii, cos, sin,
+                          best_t, best, PAIR_CHUNK, DEPTH_CHUNK)
+            continue
         live, UV, cl = clip(V, counts)
         if len(live) == 0:
             continue

@@ -28,10 +28,12 @@ from ..predicates import coplanar_pairs, plane_sides, polygon_coplanar_bands, ti
 from ..prepared import prepared
 from ..rings import padded_buckets
 from ..scene import as_scene
-from ..visibility.charts import CHARTS, chart_clip
+from ..visibility.charts import CHARTS, chart_clip, chart_planes
 from ._base import FormFactorMethod
+from ._zbuffer import ZBuffer, row_sums
 
-__all__ = ["CellLayout", "SampledMethod", "ZBufferRow", "nearest_polygons", "resolve_depths",
+__all__ = ["CellLayout", "SampledMethod", "ZBufferRow", "nearest_polygons", "zbuffer_of",
+           "resolve_depths",
            "samples_to_resolution", "PAIR_CHUNK", "check_resolution", "resolution_from"]
 
 #: candidate (polygon, cell) pairs examined at once; bounds the memory of a row
@@ -102,19 +104,22 @@ def check_resolution(value, name="resolution", even=False):
 
 
 def _chart_of(D):
-    """Chart index and chart coordinates (u, v) of each direction."""
+    """Chart index and chart coordinates (u, v) of each direction.
+
+    The charts' axes are coordinate axes (``e_w`` possibly negated), so ``D . e`` is
+    one component of D, its sign set: u = (D . e_u) / (D . e_w) picks components
+    (the values a matrix product with the axes gives, bit for bit)."""
     ax, ay, az = np.abs(D[:, 0]), np.abs(D[:, 1]), D[:, 2]
     top = az >= np.maximum(ax, ay)
     xside = ~top & (ax >= ay)
     chart = np.where(top, 0, np.where(xside, np.where(D[:, 0] > 0, 1, 2),
                                       np.where(D[:, 1] > 0, 3, 4)))
-    u = np.empty(len(D))
-    v = np.empty(len(D))
-    for ci, (eu, ev, ew, _) in enumerate(CHARTS):
-        m = chart == ci
-        w = D[m] @ ew
-        u[m] = (D[m] @ eu) / w
-        v[m] = (D[m] @ ev) / w
+    axis = np.array([[int(np.argmax(np.abs(e))) for e in ch[:3]] for ch in CHARTS])
+    sign_w = np.array([ch[2][axis[ci, 2]] for ci, ch in enumerate(CHARTS)])
+    rows = np.arange(len(D))
+    w = D[rows, axis[chart, 2]] * sign_w[chart]
+    u = D[rows, axis[chart, 0]] / w
+    v = D[rows, axis[chart, 1]] / w
     return chart, u, v
 
 
@@ -145,6 +150,9 @@ class ZBufferRow:
         ``dl / (nl . d)``.
     scene : Scene
         The scene (its planes decide the coplanar ties).
+    side : ndarray of int
+        Per scene polygon, the side of its plane the point is on (+1 in front, -1
+        behind, 0 in its band: edge-on), as the row's receivers need it.
     band, prio : ndarray
         Depth-tie band (the near-coplanar band of each polygon's plane,
         :func:`exactff.predicates.polygon_coplanar_bands`, the BSP tree's, plus the
@@ -192,6 +200,7 @@ class ZBufferRow:
                      + tol.ZBUFFER_ROUNDING_ULPS * tol.EPS * np.linalg.norm(rel, axis=1))
         self.prio = tie_priority(side)[ids]
         self.scene = scene
+        self.side = side
 
     def coplanar(self, i, j):
         """Whether live polygons ``i[k]`` and ``j[k]`` are coplanar (the BSP's rule)."""
@@ -206,7 +215,7 @@ class ZBufferRow:
         return np.where(best >= 0, self.ids[np.maximum(best, 0)], -1)
 
 
-def nearest_polygons(scene, point, normal, directions):
+def nearest_polygons(scene, point, normal, directions, *, backend="numpy", margin=None):
     """Index of the nearest polygon along each direction from ``point`` (-1 for none).
 
     Parameters
@@ -217,30 +226,79 @@ def nearest_polygons(scene, point, normal, directions):
         Unit receiver normal.
     directions : ndarray of shape (C, 3)
         Directions in the local frame of the point (z along the normal), z > 0.
+    backend : {"numpy", "compiled"}, default "numpy"
+        "compiled": each chart's clipping, crossing numbers and depth buffer in C++
+        (``exactff.methods._zbuffer``), the polygons clipped to the charts' exact
+        frustums; bit for bit the numpy code with ``margin=0`` (images wider than
+        ``LONG_POLYGON`` vertices go to the numpy code).
+    margin : float, optional
+        The charts' frustums widened by this much (default ``CHART_MARGIN`` for the
+        numpy backend; the compiled one clips to the exact frustum, 0).
 
     Returns
     -------
     ndarray of shape (C,), int
         Polygons seen edge-on or wholly below the horizon are never returned.
     """
+    if backend not in ("numpy", "compiled"):
+        raise ValueError(f"backend must be 'numpy' or 'compiled', got {backend!r}")
+    if margin is None:
+        margin = tol.CHART_MARGIN if backend == "numpy" else 0.0
+    elif backend == "compiled" and margin != 0.0:
+        raise ValueError(f"the compiled backend clips to the exact frustum (margin 0), "
+                         f"got margin={margin!r}")
     z = ZBufferRow(scene, point, normal)
     local, nl, dl, band, prio = z.local, z.nl, z.dl, z.band, z.prio
-    D = np.asarray(directions, dtype=float)
+    D = np.ascontiguousarray(directions, dtype=float)
     chart, u, v = _chart_of(D)
-    best_t = np.full(len(D), np.inf)
-    best = np.full(len(D), -1)
+    charts = []
     for ci, ch in enumerate(CHARTS):
         cells = np.flatnonzero(chart == ci)
-        if len(cells) == 0:
-            continue
-        grid = _cell_grid(u[cells], v[cells], ch[3])
+        if len(cells):
+            charts.append((ch, cells, _cell_grid(u[cells], v[cells], ch[3])))
+    if backend == "compiled" and len(z.ids):
+        # the directions renumbered chart by chart and bucket by bucket (the grid's
+        # order), so that the compiled depth buffer reads them in the order it tests
+        # them; the depth test does not see the numbering
+        perm = np.concatenate([cells[grid[2]] for _, cells, grid in charts])
+        slot = np.empty(len(D), dtype=np.int64)
+        slot[perm] = np.arange(len(D))
+        Dp = np.ascontiguousarray(D[perm])
+        best_t = np.full(len(D), np.inf)
+        best = np.full(len(D), -1, dtype=np.int64)
+        zb = zbuffer_of(z, Dp, np.linalg.norm(Dp, axis=1))
+        for ch, cells, grid in charts:
+            planes = np.array(chart_planes(ch))
+            cu, cv, ids = u[cells], v[cells], slot[cells]
+            for g_ids, V, counts in local:
+                if not zb.chart_rays(V, counts, g_ids, planes, *ch, ids, cu, cv, grid[0],
+                                     grid[1], grid[2], grid[3], best_t, best, PAIR_CHUNK,
+                                     tol.LONG_POLYGON):
+                    live_c, UV, cl = chart_clip(V, counts, ch, margin=margin)
+                    _zbuffer_chart(ids, cu, cv, grid, g_ids[live_c], UV, cl, Dp, nl, dl,
+                                   band, prio, best_t, best, coplanar=z.coplanar)
+        return z.hits(best[slot])
+    best_t = np.full(len(D), np.inf)
+    best = np.full(len(D), -1, dtype=np.int64)
+    for ch, cells, grid in charts:
         for g_ids, V, counts in local:
-            live_c, UV, cl = chart_clip(V, counts, ch, margin=tol.CHART_MARGIN)
+            live_c, UV, cl = chart_clip(V, counts, ch, margin=margin)
             if len(live_c) == 0:
                 continue
             _zbuffer_chart(cells, u[cells], v[cells], grid, g_ids[live_c], UV, cl, D, nl,
                            dl, band, prio, best_t, best, coplanar=z.coplanar)
     return z.hits(best)
+
+
+def zbuffer_of(z, D, norms):
+    """The compiled z-buffer (``exactff.methods._zbuffer.ZBuffer``) of one row:
+    directions ``D`` (C, 3) and their norms (numpy's, for the depth-tie slack), the
+    live polygons' depth data of ``z`` (:class:`ZBufferRow`), the scene's planes for
+    the coplanar rule."""
+    s = z.scene
+    return ZBuffer(D, norms, z.nl, z.dl, z.band, z.prio, s.vertices, s.offsets, s.normals,
+                   s.plane_offsets, z.ids, tol.BSP_COPLANAR_ULPS,
+                   tol.ZBUFFER_ROUNDING_ULPS + 1.0, tol.CLIP_MEET_ULPS, tol.CHART_EDGE_ULPS)
 
 
 def _hit_rounding(t, D):
@@ -265,7 +323,9 @@ def _cell_grid(cu, cv, side):
     bx = np.clip(((cu + 1.0) * 0.5 * nb).astype(int), 0, nb - 1)
     by = np.clip(((cv - v_lo) / (1.0 - v_lo) * nb).astype(int), 0, nb - 1)
     bucket = bx * nb + by
-    order = np.argsort(bucket, kind="stable")
+    # (a stable sort is unique; of small integers numpy sorts them by radix)
+    order = np.argsort(bucket.astype(np.int16 if nb * nb < 2 ** 15 else np.int64),
+                       kind="stable")
     starts = np.searchsorted(bucket[order], np.arange(nb * nb + 1))
     return nb, v_lo, order, starts
 
@@ -425,6 +485,10 @@ def resolve_depths(cell, src, D, nl, dl, band, prio, best_t, best, coplanar=None
 class SampledMethod(FormFactorMethod):
     """A discrete method defined by its cell layout (built once per instance)."""
 
+    #: the backend of the shared core (:func:`nearest_polygons`) for the method's rows
+    #: when it does not rasterise natively: numpy, the oracle of the native z-buffers
+    rays_backend = "numpy"
+
     def layout(self):
         """The method's :class:`CellLayout` in the local frame (cached)."""
         if getattr(self, "_layout", None) is None:
@@ -442,6 +506,12 @@ class SampledMethod(FormFactorMethod):
     def native_hits(self, scene, point, normal):
         """The polygon shown in each cell by the method's own rasterisation (methods
         with ``native=True``); the shared core is the oracle it is tested against."""
+        z, best = self.native_buffer(scene, point, normal)
+        return z.hits(best)
+
+    def native_buffer(self, scene, point, normal):
+        """The row's :class:`ZBufferRow` and the live polygon shown in each cell (-1:
+        none), by the method's own rasterisation."""
         raise NotImplementedError
 
     def directions_for(self, point):
@@ -453,10 +523,22 @@ class SampledMethod(FormFactorMethod):
         as_scene(scene)
         point, normal = as_receiver(point, normal)
         D, w = self.directions_for(point)
+        if getattr(self, "native", False) and getattr(self, "backend", None) == "compiled":
+            # the weights' sum per polygon shown and receiving in C++ (np.bincount's
+            # sums, in the same order)
+            z, best = self.native_buffer(scene, point, normal)
+            receives = z.side > 0
+            if two_sided:
+                receives |= z.side < 0
+            F, hit = row_sums(best, z.ids, receives, w, len(scene))
+            if stats is not None:
+                stats["cells"] = len(w)
+                stats["cells_hit"] = hit
+            return F
         if getattr(self, "native", False):
             hit = self.native_hits(scene, point, normal)
         else:
-            hit = nearest_polygons(scene, point, normal, D)
+            hit = nearest_polygons(scene, point, normal, D, backend=self.rays_backend)
         flat = flat_polygons(scene)
         side, _ = plane_sides(flat, np.asarray(point, dtype=float), exact=False)
         receives = side > 0

@@ -35,6 +35,7 @@
 #include <stdexcept>
 #include <string>
 #include <unordered_map>
+#include <utility>
 #include <vector>
 
 namespace py = pybind11;
@@ -42,6 +43,11 @@ namespace py = pybind11;
 namespace {
 
 using i64 = std::int64_t;
+// the arrays the functions take: C-ordered, converted from any dtype (except the depth
+// buffer, which must be written in place)
+using Doubles = py::array_t<double, py::array::c_style | py::array::forcecast>;
+using Ints = py::array_t<i64, py::array::c_style | py::array::forcecast>;
+using Bools = py::array_t<bool, py::array::c_style | py::array::forcecast>;
 constexpr double INF = std::numeric_limits<double>::infinity();
 // unit roundoff (exactff._tolerances.EPS)
 constexpr double EPS = 1.1102230246251565e-16;
@@ -56,21 +62,40 @@ inline double absdot3(const double* a, const double* b) {
            + std::fabs(a[1]) * std::fabs(b[1]);
 }
 
-// the depth buffer's per-cell scratch within a chunk
+// the depth buffer's per-cell scratch within a chunk (the nearest depth apart: the
+// candidates touch it, the other fields only the chunk's resolution)
 struct CellScratch {
-    double t_min = INF;                                  // the nearest depth
-    std::int64_t near = -1;                              // a polygon at that depth
+    std::int64_t near = -1;                              // a polygon at the nearest depth
     std::int64_t p_min = std::numeric_limits<std::int64_t>::max();   // the lowest priority tied
     std::int64_t pick = -1;                              // its polygon
 };
 
 // one scratch per thread, grown as needed and reset cell by cell after every chunk
-// (a row's buffer of 200,000 cells is not allocated and cleared again row by row)
-std::vector<CellScratch>& scratch(std::int64_t n_cells) {
-    thread_local std::vector<CellScratch> sc;
-    if (static_cast<std::int64_t>(sc.size()) < n_cells) sc.resize(static_cast<size_t>(n_cells));
+// (a row's buffer of 200,000 cells is not allocated and cleared again row by row):
+// the fields above, the nearest depth per cell (INF: no candidate yet), and room for
+// the list of the cells the chunk touched
+struct Scratch {
+    std::vector<CellScratch> cell;
+    std::vector<double> t_min;
+    std::vector<std::int64_t> touched;
+};
+
+Scratch& scratch(std::int64_t n_cells) {
+    thread_local Scratch sc;
+    if (static_cast<std::int64_t>(sc.cell.size()) < n_cells) {
+        sc.cell.resize(static_cast<size_t>(n_cells));
+        sc.t_min.resize(static_cast<size_t>(n_cells), INF);
+        // (one more: a candidate writes its cell before counting it)
+        sc.touched.resize(static_cast<size_t>(n_cells) + 1);
+    }
     return sc;
 }
+
+// a candidate (cell, live polygon) of the current chunk: its depth and n . d
+struct Candidate {
+    double t, den;
+    std::int32_t cell, s;    // (24 bytes: the chunk's candidates are the buffer's traffic)
+};
 
 class ZBuffer {
   public:
@@ -81,17 +106,8 @@ class ZBuffer {
     // coplanar_ulps: exactff._tolerances.BSP_COPLANAR_ULPS; tie_slack_ulps:
     // ZBUFFER_ROUNDING_ULPS + 1; clip_meet_ulps, chart_edge_ulps: CLIP_MEET_ULPS and
     // CHART_EDGE_ULPS (the chart clipper's).
-    ZBuffer(py::array_t<double, py::array::c_style | py::array::forcecast> D,
-            py::array_t<double, py::array::c_style | py::array::forcecast> Dnorm,
-            py::array_t<double, py::array::c_style | py::array::forcecast> nl,
-            py::array_t<double, py::array::c_style | py::array::forcecast> dl,
-            py::array_t<double, py::array::c_style | py::array::forcecast> band,
-            py::array_t<i64, py::array::c_style | py::array::forcecast> prio,
-            py::array_t<double, py::array::c_style | py::array::forcecast> V,
-            py::array_t<i64, py::array::c_style | py::array::forcecast> offsets,
-            py::array_t<double, py::array::c_style | py::array::forcecast> N,
-            py::array_t<double, py::array::c_style | py::array::forcecast> Dp,
-            py::array_t<i64, py::array::c_style | py::array::forcecast> ids,
+    ZBuffer(Doubles D, Doubles Dnorm, Doubles nl, Doubles dl, Doubles band, Ints prio,
+            Doubles V, Ints offsets, Doubles N, Doubles Dp, Ints ids,
             double coplanar_ulps, double tie_slack_ulps, double clip_meet_ulps,
             double chart_edge_ulps)
         : D_(D), Dnorm_(Dnorm), nl_(nl), dl_(dl), band_(band), prio_(prio), V_(V),
@@ -102,6 +118,8 @@ class ZBuffer {
             throw std::invalid_argument("D must have shape (C, 3)");
         n_cells_ = D.shape(0);
         n_live_ = dl.shape(0);
+        if (n_cells_ >= (i64(1) << 31) || n_live_ >= (i64(1) << 31))
+            throw std::invalid_argument("at most 2**31 - 1 cells and live polygons");
         D_p_ = D_.data();
         nl_p_ = nl_.data();
         dl_p_ = dl_.data();
@@ -120,22 +138,15 @@ class ZBuffer {
     // along UV[..., 0] at centres uc, spans along UV[..., 1] over centres vc;
     // cl (M,) vertex counts; src (M,) live indices; table (len(uc), len(vc)) the
     // layout's cell of each grid cell (-1: none).
-    void face(py::array_t<double, py::array::c_style | py::array::forcecast> UV,
-              py::array_t<i64, py::array::c_style | py::array::forcecast> cl,
-              py::array_t<i64, py::array::c_style | py::array::forcecast> src,
-              py::array_t<double, py::array::c_style | py::array::forcecast> uc,
-              py::array_t<double, py::array::c_style | py::array::forcecast> vc,
-              py::array_t<i64, py::array::c_style | py::array::forcecast> table,
-              py::array best_t, py::array best, i64 pair_chunk,
-              i64 depth_chunk) {
+    void face(Doubles UV, Ints cl, Ints src, Doubles uc, Doubles vc, Ints table,
+              py::array best_t, py::array best, i64 pair_chunk, i64 depth_chunk) {
         if (UV.ndim() != 3 || UV.shape(2) != 2)
             throw std::invalid_argument("UV must have shape (M, K, 2)");
         const i64 M = UV.shape(0), K = UV.shape(1);
         if (cl.shape(0) != M || src.shape(0) != M)
             throw std::invalid_argument("cl and src must have shape (M,)");
         const i64 nu = uc.shape(0), nv = vc.shape(0);
-        if (table.ndim() != 2 || table.shape(0) != nu || table.shape(1) != nv)
-            throw std::invalid_argument("table must have shape (len(uc), len(vc))");
+        check_table(table, nu, nv);
         check_buffer(best_t, best);
         const double* uv = UV.data();
         const i64* c = cl.data();
@@ -158,23 +169,13 @@ class ZBuffer {
     // first, as exactff.visibility.charts.chart_clip does (clip_chart below): V (M, K,
     // 3) padded vertices, counts (M,), g_ids (M,) their live indices, the chart's
     // frustum planes (4, 3) and axes.
-    void chart_face(py::array_t<double, py::array::c_style | py::array::forcecast> V,
-                    py::array_t<i64, py::array::c_style | py::array::forcecast> counts,
-                    py::array_t<i64, py::array::c_style | py::array::forcecast> g_ids,
-                    py::array_t<double, py::array::c_style | py::array::forcecast> planes,
-                    py::array_t<double, py::array::c_style | py::array::forcecast> eu,
-                    py::array_t<double, py::array::c_style | py::array::forcecast> ev,
-                    py::array_t<double, py::array::c_style | py::array::forcecast> ew,
-                    bool side,
-                    py::array_t<double, py::array::c_style | py::array::forcecast> uc,
-                    py::array_t<double, py::array::c_style | py::array::forcecast> vc,
-                    py::array_t<i64, py::array::c_style | py::array::forcecast> table,
+    void chart_face(Doubles V, Ints counts, Ints g_ids, Doubles planes, Doubles eu, Doubles ev,
+                    Doubles ew, bool side, Doubles uc, Doubles vc, Ints table,
                     py::array best_t, py::array best, i64 pair_chunk, i64 depth_chunk) {
         const i64 M = check_bucket(V, counts, planes, eu, ev, ew);
         if (g_ids.shape(0) != M) throw std::invalid_argument("g_ids must have shape (M,)");
         const i64 nu = uc.shape(0), nv = vc.shape(0);
-        if (table.ndim() != 2 || table.shape(0) != nu || table.shape(1) != nv)
-            throw std::invalid_argument("table must have shape (len(uc), len(vc))");
+        check_table(table, nu, nv);
         check_buffer(best_t, best);
         for (i64 m = 0; m < M; ++m)
             if (g_ids.data()[m] < 0 || g_ids.data()[m] >= n_live_)
@@ -191,9 +192,7 @@ class ZBuffer {
     }
 
     // Depth-test candidate (cell, live polygon) pairs, in chunks of depth_chunk.
-    void candidates(py::array_t<i64, py::array::c_style | py::array::forcecast> cell,
-                    py::array_t<i64, py::array::c_style | py::array::forcecast> src,
-                    py::array best_t, py::array best, i64 depth_chunk) {
+    void candidates(Ints cell, Ints src, py::array best_t, py::array best, i64 depth_chunk) {
         check_buffer(best_t, best);
         const i64 n = cell.shape(0);
         if (src.shape(0) != n) throw std::invalid_argument("cell and src differ in length");
@@ -205,18 +204,14 @@ class ZBuffer {
         double* bt = static_cast<double*>(best_t.mutable_data());
         i64* bs = static_cast<i64*>(best.mutable_data());
         py::gil_scoped_release release;
-        sc_ = &scratch(n_cells_);
+        use_scratch();
         for (i64 k = 0; k < n; ++k) add(c[k], s[k], bt, bs, depth_chunk);
         flush(bt, bs);
     }
 
     // exactff.visibility.charts.chart_clip (margin 0) of one bucket: (live, UV, cl)
-    static py::tuple chart_clip(py::array_t<double, py::array::c_style | py::array::forcecast> V,
-                                py::array_t<i64, py::array::c_style | py::array::forcecast> counts,
-                                py::array_t<double, py::array::c_style | py::array::forcecast> planes,
-                                py::array_t<double, py::array::c_style | py::array::forcecast> eu,
-                                py::array_t<double, py::array::c_style | py::array::forcecast> ev,
-                                py::array_t<double, py::array::c_style | py::array::forcecast> ew,
+    static py::tuple chart_clip(Doubles V, Ints counts, Doubles planes, Doubles eu, Doubles ev,
+                                Doubles ew,
                                 bool side, double clip_meet_ulps, double chart_edge_ulps) {
         const i64 M = check_bucket(V, counts, planes, eu, ev, ew);
         Clipped c;
@@ -225,23 +220,143 @@ class ZBuffer {
             clip_chart(V.data(), M, V.shape(1), counts.data(), planes.data(), eu.data(),
                        ev.data(), ew.data(), side, clip_meet_ulps, chart_edge_ulps, c);
         }
-        const i64 L = static_cast<i64>(c.live.size());
-        py::array_t<i64> live(L), cl(L);
-        py::array_t<double> UV({L, c.K, static_cast<i64>(2)});
-        std::copy(c.live.begin(), c.live.end(), live.mutable_data());
-        std::copy(c.cl.begin(), c.cl.end(), cl.mutable_data());
-        std::copy(c.UV.begin(), c.UV.end(), UV.mutable_data());
-        return py::make_tuple(live, UV, cl);
+        return clipped_tuple(c);
     }
 
     // whether live polygons a[k] and b[k] are coplanar (the BSP tree's rule)
-    py::array_t<bool> coplanar_many(py::array_t<i64, py::array::c_style | py::array::forcecast> a,
-                                    py::array_t<i64, py::array::c_style | py::array::forcecast> b) {
+    py::array_t<bool> coplanar_many(Ints a, Ints b) {
         const i64 n = a.shape(0);
         py::array_t<bool> out(n);
         bool* o = out.mutable_data();
         for (i64 k = 0; k < n; ++k) o[k] = coplanar(a.data()[k], b.data()[k]);
         return out;
+    }
+
+    // The same for one bucket of polygons (local frame) clipped by a face's frustum
+    // first, as exactff.methods._raster.FaceClip does (clip_face below): R (3, 3) the
+    // face's frame (rows), planes (P, 3) the frustum in that frame (entries 0 and +-1),
+    // scale the face coordinates' factor.
+    void clipped_face(Doubles V, Ints counts, Ints g_ids, Doubles R, Doubles planes,
+                      double scale, Doubles uc, Doubles vc, Ints table,
+                      py::array best_t, py::array best, i64 pair_chunk, i64 depth_chunk) {
+        const i64 M = check_face_bucket(V, counts, R, planes);
+        check_ids(g_ids, M);
+        const i64 nu = uc.shape(0), nv = vc.shape(0);
+        check_table(table, nu, nv);
+        const auto [bt, bs] = writable(best_t, best);
+        py::gil_scoped_release release;
+        Clipped c;
+        clip_face(V.data(), M, V.shape(1), counts.data(), R.data(), planes.data(),
+                  planes.shape(0), scale, clip_meet_ulps_, c);
+        scan(c.UV.data(), static_cast<i64>(c.live.size()), c.K, c.cl.data(), g_ids.data(),
+             c.live.data(), uc.data(), nu, vc.data(), nv, table.data(), bt, bs, pair_chunk,
+             depth_chunk);
+    }
+
+    // exactff.methods._raster.FaceClip of one bucket, compiled: (live, UV, cl)
+    static py::tuple face_clip(Doubles V, Ints counts, Doubles R, Doubles planes,
+                               double scale, double clip_meet_ulps) {
+        const i64 M = check_face_bucket(V, counts, R, planes);
+        Clipped c;
+        {
+            py::gil_scoped_release release;
+            clip_face(V.data(), M, V.shape(1), counts.data(), R.data(), planes.data(),
+                      planes.shape(0), scale, clip_meet_ulps, c);
+        }
+        return clipped_tuple(c);
+    }
+
+    // The polar plane (exactff.methods._raster.rasterise_polar): one bucket clipped as
+    // clipped_face does, scanned along every sector's ray within each image's angular
+    // extent; radii (rings,) and the sectors' cos and sin (S,): the cell of ring i and
+    // sector k is i S + k.
+    void polar(Doubles V, Ints counts, Ints g_ids, Doubles R, Doubles planes, double scale,
+               Doubles radii, Doubles cosv, Doubles sinv,
+               py::array best_t, py::array best, i64 pair_chunk, i64 depth_chunk) {
+        const i64 M = check_face_bucket(V, counts, R, planes);
+        check_ids(g_ids, M);
+        const i64 S = cosv.shape(0), nr = radii.shape(0);
+        if (sinv.shape(0) != S || S < 1) throw std::invalid_argument("cos and sin: one per sector");
+        if (nr * S != n_cells_) throw std::invalid_argument("rings x sectors must be the cells");
+        const auto [bt, bs] = writable(best_t, best);
+        py::gil_scoped_release release;
+        Clipped c;
+        clip_face(V.data(), M, V.shape(1), counts.data(), R.data(), planes.data(),
+                  planes.shape(0), scale, clip_meet_ulps_, c);
+        scan_polar(c, g_ids.data(), radii.data(), nr, cosv.data(), sinv.data(), S, bt, bs,
+                   pair_chunk, depth_chunk);
+    }
+
+    // Discrete PPBH (exactff.methods._raster.rasterise_disk): the disk's scan of one
+    // bucket (local frame), the polygons that, clipped to the horizon, pass within
+    // near_rel (relative) of the point left out: scanlines at xc along the local y,
+    // spans along x over yc (the coordinates swapped, as rasterise_disk has them);
+    // table (len(xc), len(yc)) the layout's cell of each grid cell (-1: outside the
+    // disk). Returns the bucket's indices of the polygons near the point; when there
+    // are some, it scans only if after_near (the rasteriser casts their rays one by
+    // one first, then calls again).
+    py::array_t<i64> disk(Doubles V, Ints counts, Ints g_ids, Doubles xc, Doubles yc,
+                          Ints table, py::array best_t, py::array best, i64 pair_chunk,
+                          i64 depth_chunk, double near_rel, bool after_near) {
+        const i64 M = check_vertices(V, counts);
+        check_ids(g_ids, M);
+        const i64 nx = xc.shape(0), ny = yc.shape(0);
+        check_table(table, nx, ny);
+        const auto [bt, bs] = writable(best_t, best);
+        std::vector<i64> near;
+        {
+            py::gil_scoped_release release;
+            Horizon h;
+            clip_horizon(V.data(), M, V.shape(1), counts.data(), clip_meet_ulps_, near_rel, h);
+            for (size_t k = 0; k < h.live.size(); ++k)
+                if (h.near[k]) near.push_back(h.live[k]);
+            if (near.empty() || after_near)
+                scan_disk(h, g_ids.data(), xc.data(), nx, yc.data(), ny, table.data(), bt, bs,
+                          pair_chunk, depth_chunk);
+        }
+        py::array_t<i64> out(static_cast<i64>(near.size()));
+        std::copy(near.begin(), near.end(), out.mutable_data());
+        return out;
+    }
+
+    // The shared sampling core's z-buffer of one chart and bucket
+    // (exactff.methods._sampling._zbuffer_chart) for any directions (Monte Carlo's
+    // rays): the bucket clipped to the chart's exact frustum (chart_face's clipping),
+    // each image's bounding box over the chart's grid of buckets of directions
+    // (cells (n,) the directions' indices, cu, cv their chart coordinates, nb and
+    // v_lo the grid, order and starts its CSR lists), the crossing number over the
+    // image's edges, the depth buffer in chunks of pair_chunk (polygon, direction)
+    // pairs. False (and nothing done) where the clipped images are wider than
+    // long_polygon vertices: the numpy code tests those with shapely.
+    bool chart_rays(Doubles V, Ints counts, Ints g_ids, Doubles planes, Doubles eu, Doubles ev,
+                    Doubles ew, bool side, Ints cells, Doubles cu, Doubles cv,
+                    i64 nb, double v_lo, Ints order, Ints starts,
+                    py::array best_t, py::array best, i64 pair_chunk, i64 long_polygon) {
+        const i64 M = check_bucket(V, counts, planes, eu, ev, ew);
+        check_ids(g_ids, M);
+        const i64 n = cells.shape(0);
+        if (cu.shape(0) != n || cv.shape(0) != n || order.shape(0) != n)
+            throw std::invalid_argument("cells, cu, cv, order: one per direction");
+        if (nb < 1 || starts.shape(0) != nb * nb + 1)
+            throw std::invalid_argument("starts must have nb * nb + 1 entries");
+        for (i64 k = 0; k < n; ++k)
+            if (cells.data()[k] < 0 || cells.data()[k] >= n_cells_ || order.data()[k] < 0 ||
+                order.data()[k] >= n)
+                throw std::invalid_argument("cells or order out of range");
+        for (i64 k = 0; k <= nb * nb; ++k)
+            if (starts.data()[k] < 0 || starts.data()[k] > n ||
+                (k > 0 && starts.data()[k] < starts.data()[k - 1]))
+                throw std::invalid_argument("starts must be non-decreasing within [0, n]");
+        const auto [bt, bs] = writable(best_t, best);
+        py::gil_scoped_release release;
+        Clipped c;
+        clip_chart(V.data(), M, V.shape(1), counts.data(), planes.data(), eu.data(), ev.data(),
+                   ew.data(), side, clip_meet_ulps_, chart_edge_ulps_, c);
+        if (c.live.empty()) return true;
+        if (c.K > long_polygon) return false;
+        scan_rays(c, g_ids.data(), cells.data(), cu.data(), cv.data(), nb, v_lo, order.data(),
+                  starts.data(), bt, bs, pair_chunk);
+        return true;
     }
 
   private:
@@ -255,7 +370,7 @@ class ZBuffer {
         i64 pairs_in_chunk = 0;
         std::vector<double> X;
         X.reserve(static_cast<size_t>(K));
-        sc_ = &scratch(n_cells_);
+        use_scratch();
         for (i64 m = 0; m < M; ++m) {
             const double* P = uv + m * K * 2;
             const i64 n = c[m];
@@ -315,12 +430,12 @@ class ZBuffer {
         i64 K = 0;
     };
 
-    static i64 check_bucket(const py::array_t<double, py::array::c_style | py::array::forcecast>& V,
-                            const py::array_t<i64, py::array::c_style | py::array::forcecast>& counts,
-                            const py::array_t<double, py::array::c_style | py::array::forcecast>& planes,
-                            const py::array_t<double, py::array::c_style | py::array::forcecast>& eu,
-                            const py::array_t<double, py::array::c_style | py::array::forcecast>& ev,
-                            const py::array_t<double, py::array::c_style | py::array::forcecast>& ew) {
+    static i64 check_bucket(const Doubles& V,
+                            const Ints& counts,
+                            const Doubles& planes,
+                            const Doubles& eu,
+                            const Doubles& ev,
+                            const Doubles& ew) {
         if (V.ndim() != 3 || V.shape(2) != 3)
             throw std::invalid_argument("V must have shape (M, K, 3)");
         const i64 M = V.shape(0);
@@ -406,6 +521,27 @@ class ZBuffer {
                       out.data() + m * Kn * 3);
     }
 
+    // S polygons Vc (S, Kc, 3) with counts cc clipped plane after plane (planes
+    // (n_planes, 3)), as chart_clip and FaceClip loop: each time the polygons with
+    // fewer than 3 vertices left given count 0, and no more planes once none has 3;
+    // Kc becomes the last clip's width
+    static void clip_planes(std::vector<double>& Vc, i64 S, i64& Kc, std::vector<i64>& cc,
+                            const double* planes, i64 n_planes, double meet_ulps) {
+        std::vector<double> next;
+        std::vector<i64> ncount;
+        for (i64 j = 0; j < n_planes; ++j) {
+            bool any = false;
+            for (const i64 n : cc) any = any || n >= 3;
+            if (!any) break;
+            for (i64& n : cc) if (n < 3) n = 0;
+            i64 Kn;
+            clip_halfspace(Vc, S, Kc, cc, planes + 3 * j, meet_ulps, next, Kn, ncount);
+            Vc.swap(next);
+            cc.swap(ncount);
+            Kc = Kn;
+        }
+    }
+
     // np.spacing(|x|): the gap to the next double (NaN for inf and NaN)
     static inline double spacing_abs(double x) {
         x = std::fabs(x);
@@ -483,19 +619,7 @@ class ZBuffer {
             cc[i] = counts[straddle[i]];
         }
         i64 Kc = K;
-        std::vector<double> next;
-        std::vector<i64> ncount;
-        for (int j = 0; j < 4; ++j) {
-            bool any = false;
-            for (const i64 n : cc) any = any || n >= 3;
-            if (!any) break;
-            for (i64& n : cc) if (n < 3) n = 0;
-            i64 Kn;
-            clip_halfspace(Vc, S, Kc, cc, planes + 3 * j, meet_ulps, next, Kn, ncount);
-            Vc.swap(next);
-            cc.swap(ncount);
-            Kc = Kn;
-        }
+        clip_planes(Vc, S, Kc, cc, planes, 4, meet_ulps);
         const i64 Kr = std::max(K, Kc);
         // the live ones, padded by their last vertex, projected into the chart
         out.live.clear();
@@ -564,6 +688,499 @@ class ZBuffer {
             }
         }
     }
+    // ---- the faces' frustum clipper (exactff.methods._raster.FaceClip), the polar
+    // plane's rays and the disk's ellipse arcs ----
+
+    static i64 check_vertices(const Doubles& V,
+                              const Ints& counts) {
+        if (V.ndim() != 3 || V.shape(2) != 3)
+            throw std::invalid_argument("V must have shape (M, K, 3)");
+        const i64 M = V.shape(0);
+        if (counts.ndim() != 1 || counts.shape(0) != M)
+            throw std::invalid_argument("counts must have shape (M,)");
+        for (i64 m = 0; m < M; ++m)
+            if (counts.data()[m] > V.shape(1) || counts.data()[m] < 0)
+                throw std::invalid_argument("counts out of range");
+        return M;
+    }
+
+    static i64 check_face_bucket(const Doubles& V,
+                                 const Ints& counts,
+                                 const Doubles& R,
+                                 const Doubles& planes) {
+        const i64 M = check_vertices(V, counts);
+        if (R.ndim() != 2 || R.shape(0) != 3 || R.shape(1) != 3)
+            throw std::invalid_argument("R must have shape (3, 3)");
+        if (planes.ndim() != 2 || planes.shape(1) != 3)
+            throw std::invalid_argument("planes must have shape (P, 3)");
+        for (i64 k = 0; k < planes.size(); ++k) {
+            const double h = planes.data()[k];
+            if (h != 0.0 && h != 1.0 && h != -1.0)
+                throw std::invalid_argument("planes' entries must be 0, 1 or -1");
+        }
+        return M;
+    }
+
+    void check_ids(const Ints& g_ids,
+                   i64 M) const {
+        if (g_ids.ndim() != 1 || g_ids.shape(0) != M)
+            throw std::invalid_argument("g_ids must have shape (M,)");
+        for (i64 m = 0; m < M; ++m)
+            if (g_ids.data()[m] < 0 || g_ids.data()[m] >= n_live_)
+                throw std::invalid_argument("g_ids out of range");
+    }
+
+    static py::tuple clipped_tuple(const Clipped& c) {
+        const i64 L = static_cast<i64>(c.live.size());
+        py::array_t<i64> live(L), cl(L);
+        py::array_t<double> UV({L, c.K, static_cast<i64>(2)});
+        std::copy(c.live.begin(), c.live.end(), live.mutable_data());
+        std::copy(c.cl.begin(), c.cl.end(), cl.mutable_data());
+        std::copy(c.UV.begin(), c.UV.end(), UV.mutable_data());
+        return py::make_tuple(live, UV, cl);
+    }
+
+    // FaceClip: the vertices in the face's frame W = R x (each row's products added
+    // first to second, then the third, as the numpy code writes it); the polygons that
+    // reach the frustum (no plane with every vertex on or behind it) clipped plane by
+    // plane (clip_halfspace: the planes' entries 0 and +-1 make h . W exact); the live
+    // ones padded by their last vertex and projected, u = (scale W_0) / W_2,
+    // v = (scale W_1) / W_2.
+    static void clip_face(const double* V, i64 M, i64 K, const i64* counts, const double* R,
+                          const double* planes, i64 n_planes, double scale, double meet_ulps,
+                          Clipped& out) {
+        std::vector<double> W(static_cast<size_t>(M * K * 3));
+        for (i64 q = 0; q < M * K; ++q) {
+            const double* x = V + 3 * q;
+            for (int i = 0; i < 3; ++i)
+                W[3 * q + i] = (x[0] * R[3 * i] + x[1] * R[3 * i + 1]) + x[2] * R[3 * i + 2];
+        }
+        std::vector<i64> reach;
+        for (i64 m = 0; m < M; ++m) {
+            const i64 n = counts[m];
+            bool outside = false;
+            for (i64 j = 0; j < n_planes && !outside; ++j) {
+                bool all_out = true;
+                for (i64 k = 0; k < n; ++k)
+                    if (!(hdot(planes + 3 * j, W.data() + 3 * (m * K + k)) <= 0)) all_out = false;
+                outside = all_out;
+            }
+            if (!outside && n >= 3) reach.push_back(m);
+        }
+        const i64 S = static_cast<i64>(reach.size());
+        std::vector<double> Vc(static_cast<size_t>(S * K * 3));
+        std::vector<i64> cc(static_cast<size_t>(S));
+        for (i64 i = 0; i < S; ++i) {
+            std::copy(W.data() + reach[i] * K * 3, W.data() + (reach[i] + 1) * K * 3,
+                      Vc.data() + i * K * 3);
+            cc[i] = counts[reach[i]];
+        }
+        i64 Kc = K;
+        clip_planes(Vc, S, Kc, cc, planes, n_planes, meet_ulps);
+        out.live.clear();
+        out.cl.clear();
+        out.UV.clear();
+        out.K = Kc;
+        for (i64 i = 0; i < S; ++i) {
+            const i64 n = cc[i];
+            if (n < 3) continue;
+            out.live.push_back(reach[i]);
+            out.cl.push_back(n);
+            for (i64 k = 0; k < Kc; ++k) {
+                const double* x = Vc.data() + 3 * (i * Kc + (k < n ? k : n - 1));
+                out.UV.push_back((scale * x[0]) / x[2]);
+                out.UV.push_back((scale * x[1]) / x[2]);
+            }
+        }
+    }
+
+    // the spans [X_1, X_2), [X_3, X_4), ... (X sorted, at most `slots` of them) as runs
+    // of centres c (first centre at or above each end), each cell given to emit(col)
+    template <class Emit>
+    static void spans(const std::vector<double>& X, size_t slots, const double* c, i64 n,
+                      Emit&& emit) {
+        const size_t npairs = std::min(X.size() / 2, slots);
+        for (size_t k = 0; k < npairs; ++k) {
+            const i64 ia = std::lower_bound(c, c + n, X[2 * k]) - c;
+            const i64 ib = std::lower_bound(c, c + n, X[2 * k + 1]) - c;
+            for (i64 col = ia; col < ib; ++col) emit(col);
+        }
+    }
+
+    // numpy's floor modulo of floats (np.remainder; the divisor positive)
+    static inline double py_mod(double a, double b) {
+        double m = std::fmod(a, b);
+        if (m != 0.0) {
+            if (m < 0.0) m += b;
+        } else {
+            m = 0.0;
+        }
+        return m;
+    }
+
+    // rasterise_polar on the clipped images c (live bucket indices into src)
+    void scan_polar(const Clipped& c, const i64* src, const double* radii, i64 nr,
+                    const double* cs, const double* sn, i64 S, double* bt, i64* bs,
+                    i64 pair_chunk, i64 depth_chunk) {
+        const double PI = 3.141592653589793, TWO_PI = 2.0 * PI;
+        const double step = TWO_PI / static_cast<double>(S);
+        const i64 L = static_cast<i64>(c.live.size()), K = c.K;
+        const i64 chunk = std::max<i64>(1, pair_chunk / std::max<i64>(K, 1));
+        i64 pairs_in_chunk = 0;
+        std::vector<double> A(static_cast<size_t>(2 * K)), B(static_cast<size_t>(2 * K));
+        std::vector<double> X;
+        X.reserve(static_cast<size_t>(K + 1));
+        use_scratch();
+        for (i64 m = 0; m < L; ++m) {
+            const double* P = c.UV.data() + m * K * 2;
+            const i64 n = c.cl[m];
+            const i64 sm = src[c.live[m]];
+            // every edge from its lower end point (y, then x)
+            double lo0 = INF, lo1 = INF, hi0 = -INF, hi1 = -INF;
+            bool nan = false;
+            for (i64 e = 0; e < K; ++e) {
+                const double* a = P + 2 * e;
+                const double* b = e < n - 1 ? P + 2 * (e + 1) : P;
+                if (e >= n) b = a;
+                const bool swap = (b[1] < a[1]) || (b[1] == a[1] && b[0] < a[0]);
+                if (swap) std::swap(a, b);
+                A[2 * e] = a[0]; A[2 * e + 1] = a[1];
+                B[2 * e] = b[0]; B[2 * e + 1] = b[1];
+                if (std::isnan(P[2 * e]) || std::isnan(P[2 * e + 1])) nan = true;
+                lo0 = std::min(lo0, P[2 * e]); hi0 = std::max(hi0, P[2 * e]);
+                lo1 = std::min(lo1, P[2 * e + 1]); hi1 = std::max(hi1, P[2 * e + 1]);
+            }
+            if (nan) continue;
+            // the sectors within the image's angular extent (all when its box holds
+            // the centre), one sector of margin on either side
+            i64 k0, k1;
+            if (lo0 <= 0 && hi0 >= 0 && lo1 <= 0 && hi1 >= 0) {
+                k0 = 0;
+                k1 = S - 1;
+            } else {
+                const double mid = std::atan2((lo1 + hi1) / 2, (lo0 + hi0) / 2);
+                const double cx[4] = {lo0, lo0, hi0, hi0}, cy[4] = {lo1, hi1, hi1, lo1};
+                double omin = INF, omax = -INF;
+                for (int q = 0; q < 4; ++q) {
+                    const double off = py_mod(std::atan2(cy[q], cx[q]) - mid + PI, TWO_PI) - PI;
+                    omin = std::min(omin, off);
+                    omax = std::max(omax, off);
+                }
+                k0 = static_cast<i64>(std::ceil((mid + omin) / step - 0.5)) - 1;
+                k1 = static_cast<i64>(std::floor((mid + omax) / step - 0.5)) + 1;
+                k1 = std::min(k1, k0 + S - 1);
+            }
+            for (i64 kk = k0; kk <= k1; ++kk) {
+                const i64 k = ((kk % S) + S) % S;
+                const double cx = cs[k], sy = sn[k];
+                X.clear();
+                size_t crossings = 0;
+                for (i64 e = 0; e < n; ++e) {
+                    const double* a = A.data() + 2 * e;
+                    const double* b = B.data() + 2 * e;
+                    // the edge's crossing with the ray (cos phi, sin phi) rho, rho > 0
+                    const double sa = cx * a[1] - sy * a[0];
+                    const double sb = cx * b[1] - sy * b[0];
+                    if ((sa > 0) == (sb > 0)) continue;
+                    const double t = sa / (sa - sb);
+                    const double xx = a[0] + t * (b[0] - a[0]);
+                    const double yy = a[1] + t * (b[1] - a[1]);
+                    const double rho = cx * xx + sy * yy;
+                    if (!(rho > 0)) continue;
+                    X.push_back(rho);
+                    ++crossings;
+                }
+                // an odd count: the centre is inside, the first span starts at 0
+                if (crossings % 2 == 1) X.push_back(-INF);
+                std::sort(X.begin(), X.end());
+                spans(X, static_cast<size_t>((K + 1) / 2), radii, nr,
+                      [&](i64 ring) { add(ring * S + k, sm, bt, bs, depth_chunk); });
+                if (++pairs_in_chunk == chunk) {
+                    flush(bt, bs);
+                    pairs_in_chunk = 0;
+                }
+            }
+        }
+        flush(bt, bs);
+    }
+
+    // the disk's polygons: clipped to the horizon (x and y swapped), whether each
+    // passes near the point, and per monotone piece of its arcs what the crossings need
+    struct Horizon {
+        std::vector<i64> live;        // bucket indices of the clipped polygons left
+        std::vector<char> near;       // passes within near_rel of the point
+        std::vector<i64> cc;          // their vertex counts
+        std::vector<double> Vc;       // (live, K, 3), padded by the last vertex
+        i64 K = 0;
+    };
+
+    static inline double dot_seq(const double* a, const double* b) {
+        return (a[0] * b[0] + a[1] * b[1]) + a[2] * b[2];
+    }
+
+    // numpy's maximum and minimum (a NaN propagates)
+    static inline double np_max(double a, double b) {
+        return (std::isnan(a) || std::isnan(b)) ? std::numeric_limits<double>::quiet_NaN()
+                                                 : std::max(a, b);
+    }
+    static inline double np_min(double a, double b) {
+        return (std::isnan(a) || std::isnan(b)) ? std::numeric_limits<double>::quiet_NaN()
+                                                 : std::min(a, b);
+    }
+    static inline double np_sign(double x) {
+        return x > 0 ? 1.0 : x < 0 ? -1.0 : x == 0 ? 0.0 : std::numeric_limits<double>::quiet_NaN();
+    }
+
+    static void clip_horizon(const double* V, i64 M, i64 K, const i64* counts, double meet_ulps,
+                             double near_rel, Horizon& h) {
+        std::vector<double> Vs(static_cast<size_t>(M * K * 3));
+        for (i64 q = 0; q < M * K; ++q) {
+            Vs[3 * q] = V[3 * q + 1];
+            Vs[3 * q + 1] = V[3 * q];
+            Vs[3 * q + 2] = V[3 * q + 2];
+        }
+        std::vector<i64> cnt(counts, counts + M), nc;
+        std::vector<double> out;
+        const double ez[3] = {0.0, 0.0, 1.0};
+        i64 Kn;
+        clip_halfspace(Vs, M, K, cnt, ez, meet_ulps, out, Kn, nc);
+        h.K = Kn;
+        h.live.clear(); h.near.clear(); h.cc.clear(); h.Vc.clear();
+        for (i64 m = 0; m < M; ++m) {
+            const i64 n = nc[m];
+            if (n < 3) continue;
+            const double* P = out.data() + m * Kn * 3;
+            // _passes_near_origin: an edge's closest point to the origin within
+            // near_rel of its longer end point's distance
+            bool near = false;
+            for (i64 e = 0; e < n && !near; ++e) {
+                const double* a = P + 3 * e;
+                const double* b = P + 3 * ((e + 1) % n);
+                const double d[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+                const double dd = dot_seq(d, d);
+                double s = -dot_seq(a, d) / dd;
+                s = std::isnan(s) ? 0.0 : std::min(std::max(s, 0.0), 1.0);
+                const double q[3] = {a[0] + s * d[0], a[1] + s * d[1], a[2] + s * d[2]};
+                const double closest = std::sqrt(dot_seq(q, q));
+                const double scale = np_max(std::sqrt(dot_seq(a, a)), std::sqrt(dot_seq(b, b)));
+                near = closest <= near_rel * scale;
+            }
+            h.live.push_back(m);
+            h.near.push_back(near ? 1 : 0);
+            h.cc.push_back(n);
+            for (i64 k = 0; k < Kn; ++k) {
+                const double* x = P + 3 * (k < n ? k : n - 1);
+                h.Vc.insert(h.Vc.end(), x, x + 3);
+            }
+        }
+    }
+
+    // rasterise_disk's scan of the polygons h holds that are not near the point
+    void scan_disk(const Horizon& h, const i64* src, const double* xc, i64 nx, const double* yc,
+                   i64 ny, const i64* tab, double* bt, i64* bs, i64 pair_chunk,
+                   i64 depth_chunk) {
+        const i64 K = h.K, K2 = 2 * K;
+        const i64 chunk = std::max<i64>(1, pair_chunk / std::max<i64>(K2, 1));
+        i64 pairs_in_chunk = 0;
+        // per monotone piece: its parameter interval, its end points' y, and the
+        // edge's a, d = b - a, a.a, d.d, a.d
+        std::vector<double> S0(K2), S1(K2), Y0(K2), Y1(K2), ax(K2), ay(K2), dx(K2), dy(K2),
+            a2(K2), v2(K2), av(K2);
+        std::vector<char> ok(K2);
+        std::vector<double> ya(K), X;
+        X.reserve(static_cast<size_t>(K2));
+        use_scratch();
+        for (size_t li = 0; li < h.live.size(); ++li) {
+            if (h.near[li]) continue;
+            const double* P = h.Vc.data() + li * K * 3;
+            const i64 n = h.cc[li];
+            const i64 sm = src[h.live[li]];
+            // each vertex's y on the disk
+            for (i64 e = 0; e < K; ++e) {
+                const double* a = P + 3 * e;
+                ya[e] = a[1] / std::sqrt(dot_seq(a, a));
+            }
+            for (i64 e = 0; e < K; ++e) {
+                const bool slot = e < n;
+                const i64 nxt = (e + 1) % n;
+                const double* A = P + 3 * e;
+                const double* B = slot ? P + 3 * nxt : A;
+                double yv = ya[e], yb = slot ? ya[nxt] : ya[e];
+                // every edge from its lower end point (y, then x, then z)
+                const bool swap = (yb < yv) ||
+                                  (yb == yv && (B[0] < A[0] || (B[0] == A[0] && B[2] < A[2])));
+                if (swap) {
+                    std::swap(A, B);
+                    std::swap(yv, yb);
+                }
+                const double d[3] = {B[0] - A[0], B[1] - A[1], B[2] - A[2]};
+                const double ad = dot_seq(A, d), aa = dot_seq(A, A), ddd = dot_seq(d, d);
+                // the arc's extreme in y: d/ds y(s) = 0 is linear in s
+                double s_ext = (A[1] * ad - d[1] * aa) / (d[1] * ad - A[1] * ddd);
+                const bool inner = s_ext > 0 && s_ext < 1 && slot;
+                double y_ext = yb;
+                if (inner) {
+                    const double q[3] = {A[0] + s_ext * d[0], A[1] + s_ext * d[1],
+                                         A[2] + s_ext * d[2]};
+                    y_ext = q[1] / std::sqrt(dot_seq(q, q));
+                } else {
+                    s_ext = 1.0;
+                }
+                // monotone pieces: [0, s_ext] from yv to y_ext, [s_ext, 1] from y_ext to yb
+                S0[e] = 0.0; S1[e] = s_ext; Y0[e] = yv; Y1[e] = y_ext; ok[e] = slot;
+                S0[K + e] = s_ext; S1[K + e] = 1.0; Y0[K + e] = y_ext; Y1[K + e] = yb;
+                ok[K + e] = inner;
+                for (const i64 j : {e, K + e}) {
+                    ax[j] = A[0]; ay[j] = A[1]; dx[j] = d[0]; dy[j] = d[1];
+                    a2[j] = aa; v2[j] = ddd; av[j] = ad;
+                }
+            }
+            double lo = INF, hi = -INF;
+            bool lo_nan = false, hi_nan = false;
+            for (i64 j = 0; j < K2; ++j) {
+                if (!ok[j]) continue;
+                const double mn = np_min(Y0[j], Y1[j]), mx = np_max(Y0[j], Y1[j]);
+                if (std::isnan(mn)) lo_nan = true; else lo = std::min(lo, mn);
+                if (std::isnan(mx)) hi_nan = true; else hi = std::max(hi, mx);
+            }
+            // the scanlines within [lo, hi] (numpy's searchsorted puts NaN last)
+            const i64 j0 = lo_nan ? nx : std::lower_bound(xc, xc + nx, lo) - xc;
+            const i64 j1 = hi_nan ? nx : std::upper_bound(xc, xc + nx, hi) - xc;
+            for (i64 r = j0; r < j1; ++r) {
+                const double y = xc[r];
+                X.clear();
+                for (i64 j = 0; j < K2; ++j) {
+                    if (!ok[j] || ((Y0[j] > y) == (Y1[j] > y))) continue;
+                    // the crossing: (a_y + s d_y)^2 = y^2 |a + s d|^2, a quadratic in s
+                    const double yy = y * y;
+                    const double q2 = dy[j] * dy[j] - yy * v2[j];
+                    const double q1 = 2.0 * (ay[j] * dy[j] - yy * av[j]);
+                    const double q0 = ay[j] * ay[j] - yy * a2[j];
+                    const double disc = std::sqrt(np_max(q1 * q1 - 4.0 * q2 * q0, 0.0));
+                    // the two roots, in the cancellation-free forms; q2 = 0: one root
+                    const double big = -0.5 * (q1 + std::copysign(disc, q1));
+                    const double cand[3] = {big / q2, q0 / big, -q0 / q1};
+                    const double s0 = S0[j], s1 = S1[j];
+                    // the root on the piece and on the row's side, the nearest the piece
+                    double best_s = 0.5 * (s0 + s1), best_d = INF;
+                    for (const double cd : cand) {
+                        const bool side = np_sign(ay[j] + cd * dy[j]) == np_sign(y) || y == 0;
+                        double dist = np_max(np_max(s0 - cd, cd - s1), 0.0);
+                        dist = (std::isfinite(cd) ? dist : INF) + (side ? 0.0 : 1.0);
+                        if (dist < best_d) {
+                            best_s = cd;
+                            best_d = dist;
+                        }
+                    }
+                    const double s = np_min(np_max(best_s, s0), s1);
+                    const double x = (ax[j] + s * dx[j]) /
+                                     std::sqrt(a2[j] + s * (2.0 * av[j] + s * v2[j]));
+                    if (!std::isnan(x)) X.push_back(x);
+                }
+                std::sort(X.begin(), X.end());
+                spans(X, static_cast<size_t>(K), yc, ny, [&](i64 col) {
+                    const i64 cell = tab[r * ny + col];
+                    if (cell >= 0) add(cell, sm, bt, bs, depth_chunk);
+                });
+                if (++pairs_in_chunk == chunk) {
+                    flush(bt, bs);
+                    pairs_in_chunk = 0;
+                }
+            }
+        }
+        flush(bt, bs);
+    }
+
+    // _zbuffer_chart on the clipped images c
+    void scan_rays(const Clipped& c, const i64* src, const i64* cells, const double* cu,
+                   const double* cv, i64 nb, double v_lo, const i64* order, const i64* starts,
+                   double* bt, i64* bs, i64 pair_chunk) {
+        const i64 L = static_cast<i64>(c.live.size()), K = c.K;
+        const double fnb = static_cast<double>(nb);
+        // (polygon, bucket) pairs: the buckets under each image's bounding box
+        std::vector<double> box(static_cast<size_t>(4 * L));
+        std::vector<i64> pb_poly, pb_b, cum;
+        auto bucket = [&](double x) {
+            // numpy's astype(int) truncates; then clipped to the grid
+            const i64 b = static_cast<i64>(x);
+            return std::min(std::max<i64>(b, 0), nb - 1);
+        };
+        i64 total = 0;
+        for (i64 m = 0; m < L; ++m) {
+            const double* P = c.UV.data() + m * K * 2;
+            double lo0 = INF, lo1 = INF, hi0 = -INF, hi1 = -INF;
+            for (i64 e = 0; e < K; ++e) {
+                lo0 = np_min(lo0, P[2 * e]); hi0 = np_max(hi0, P[2 * e]);
+                lo1 = np_min(lo1, P[2 * e + 1]); hi1 = np_max(hi1, P[2 * e + 1]);
+            }
+            box[4 * m] = lo0; box[4 * m + 1] = lo1; box[4 * m + 2] = hi0; box[4 * m + 3] = hi1;
+            const i64 bx0 = bucket((lo0 + 1.0) * 0.5 * fnb), bx1 = bucket((hi0 + 1.0) * 0.5 * fnb);
+            const i64 by0 = bucket((lo1 - v_lo) / (1.0 - v_lo) * fnb);
+            const i64 by1 = bucket((hi1 - v_lo) / (1.0 - v_lo) * fnb);
+            const i64 nby = by1 - by0 + 1, nbk = (bx1 - bx0 + 1) * nby;
+            for (i64 k = 0; k < nbk; ++k) {
+                const i64 b = (bx0 + k / nby) * nb + by0 + k % nby;
+                pb_poly.push_back(m);
+                pb_b.push_back(b);
+                total += starts[b + 1] - starts[b];
+                cum.push_back(total);
+            }
+        }
+        // chunks of about pair_chunk (polygon, direction) pairs, as the numpy code cuts
+        // them: bounds = [0] + searchsorted(cum, range(pair_chunk, total, pair_chunk),
+        // "right") + [pairs]
+        const i64 n_pairs = static_cast<i64>(pb_b.size());
+        std::vector<i64> bounds{0};
+        for (i64 x = pair_chunk; x < total; x += pair_chunk)
+            bounds.push_back(std::upper_bound(cum.begin(), cum.end(), x) - cum.begin());
+        bounds.push_back(n_pairs);
+        use_scratch();
+        const i64 no_chunk = std::numeric_limits<i64>::max();
+        for (size_t q = 0; q + 1 < bounds.size(); ++q) {
+            for (i64 p = bounds[q]; p < bounds[q + 1]; ++p) {
+                const i64 m = pb_poly[p], b = pb_b[p];
+                const double* P = c.UV.data() + m * K * 2;
+                const double* bx = box.data() + 4 * m;
+                const i64 sm = src[c.live[m]];
+                const i64 ncl = c.cl[m];
+                for (i64 j = starts[b]; j < starts[b + 1]; ++j) {
+                    const i64 cl = order[j];
+                    const double uu = cu[cl], vv = cv[cl];
+                    if (!(uu >= bx[0] && uu <= bx[2] && vv >= bx[1] && vv <= bx[3])) continue;
+                    // the crossing number over the edges, each from its lower end
+                    // point (the padding's zero-length edges cross nothing: the
+                    // polygon's own edges, the last one closing it)
+                    bool inside = false;
+                    for (i64 e = 0; e < ncl; ++e) {
+                        const double* a = P + 2 * e;
+                        const double* d = P + 2 * (e + 1 < ncl ? e + 1 : 0);
+                        const bool straddles = (a[1] > vv) != (d[1] > vv);
+                        if (!straddles) continue;
+                        if (a[1] > d[1]) std::swap(a, d);
+                        const double ux = a[0] + (vv - a[1]) * (d[0] - a[0]) / (d[1] - a[1]);
+                        if (uu < ux) inside = !inside;
+                    }
+                    if (inside) add(cells[cl], sm, bt, bs, no_chunk);
+                }
+            }
+            // resolve_depths once per chunk
+            flush(bt, bs);
+        }
+    }
+
+    // the depth buffer, checked, as pointers (the depths, the polygons shown)
+    std::pair<double*, i64*> writable(py::array& best_t, py::array& best) const {
+        check_buffer(best_t, best);
+        return {static_cast<double*>(best_t.mutable_data()), static_cast<i64*>(best.mutable_data())};
+    }
+
+    // the layout's cell of each grid cell: one row per scanline, one column per centre
+    static void check_table(const Ints& table, i64 rows, i64 cols) {
+        if (table.ndim() != 2 || table.shape(0) != rows || table.shape(1) != cols)
+            throw std::invalid_argument("table must have shape (scanlines, centres): (" +
+                                        std::to_string(rows) + ", " + std::to_string(cols) + ")");
+    }
+
     void check_buffer(const py::array& best_t, const py::array& best) const {
         if (!best_t.dtype().is(py::dtype::of<double>()) || !best.dtype().is(py::dtype::of<i64>()))
             throw std::invalid_argument("best_t and best must be float64 and int64");
@@ -611,6 +1228,17 @@ class ZBuffer {
         return r;
     }
 
+    // this thread's scratch for a call (the buffer's cells), the chunk's candidates
+    void use_scratch() {
+        Scratch& sc = scratch(n_cells_);
+        sc_ = sc.cell.data();
+        t_min_ = sc.t_min.data();
+        touched_ = sc.touched.data();
+        n_touched_ = 0;
+        cand_.clear();
+        in_chunk_ = 0;
+    }
+
     // resolve_depths on the buffered candidates
     // one candidate (cell, live polygon) of the current chunk: its depth, the cell's
     // nearest depth so far; a ray along its polygon's plane hits nothing
@@ -618,13 +1246,13 @@ class ZBuffer {
         const double den = dot3(nl_p_ + 3 * s, D_p_ + 3 * cell);
         const double t = dl_p_[s] / den;
         if (std::isfinite(t)) {
-            CellScratch& c = (*sc_)[cell];
-            if (c.t_min == INF) touched_.push_back(cell);
-            if (t < c.t_min) c.t_min = t;
-            cells_.push_back(cell);
-            srcs_.push_back(s);
-            cand_t_.push_back(t);
-            cand_den_.push_back(den);
+            // (without branches on the depths: they do not predict)
+            double& tm = t_min_[cell];
+            touched_[n_touched_] = cell;
+            n_touched_ += tm == INF;
+            tm = t < tm ? t : tm;
+            cand_.push_back(Candidate{t, den, static_cast<std::int32_t>(cell),
+                                      static_cast<std::int32_t>(s)});
         }
         // the numpy code's chunks count every candidate, hit or not
         if (++in_chunk_ == depth_chunk) flush(best_t, best);
@@ -633,20 +1261,22 @@ class ZBuffer {
     // resolve_depths on the chunk's candidates, merged into the buffer
     void flush(double* best_t, i64* best) {
         in_chunk_ = 0;
-        const size_t n = cells_.size();
+        const size_t n = cand_.size();
         if (n == 0) return;
         const double* Dn = Dnorm_.data();
         const double* dl = dl_.data();
         const double* band = band_.data();
         const i64* prio = prio_.data();
-        std::vector<CellScratch>& sc = *sc_;
+        CellScratch* sc = sc_;
+        const double* tmin = t_min_;
+        const Candidate* cd = cand_.data();
         // one of the polygons at the nearest depth (the last, as numpy's assignment),
         // and of the polygons there the one of lowest priority (priorities are
         // distinct per polygon; a polygon is a candidate of a cell once in a chunk)
         for (size_t k = 0; k < n; ++k) {
-            CellScratch& c = sc[cells_[k]];
-            if (cand_t_[k] == c.t_min) {
-                const i64 s = srcs_[k];
+            if (cd[k].t == tmin[cd[k].cell]) {
+                CellScratch& c = sc[cd[k].cell];
+                const i64 s = cd[k].s;
                 c.near = s;
                 if (prio[s] < c.p_min) {
                     c.p_min = prio[s];
@@ -658,25 +1288,27 @@ class ZBuffer {
         // coplanar with the polygon there
         const double slack_ulps = tie_slack_ulps_;
         for (size_t k = 0; k < n; ++k) {
-            CellScratch& c = sc[cells_[k]];
-            if (cand_t_[k] == c.t_min) continue;
-            const i64 cell = cells_[k], s = srcs_[k];
-            const double t_near = c.t_min;
+            const i64 cell = cd[k].cell, s = cd[k].s;
+            const double t_near = tmin[cell];
+            if (cd[k].t == t_near) continue;
             const double slack = 4.0 * (band[s] + EPS * (slack_ulps * std::fabs(t_near) * Dn[cell]
                                                          + std::fabs(dl[s])));
-            if (std::fabs(t_near - cand_t_[k]) * std::fabs(cand_den_[k]) <= slack &&
-                coplanar(c.near, s) && prio[s] < c.p_min) {
-                c.p_min = prio[s];
-                c.pick = s;
+            if (std::fabs(t_near - cd[k].t) * std::fabs(cd[k].den) <= slack) {
+                CellScratch& c = sc[cell];
+                if (coplanar(c.near, s) && prio[s] < c.p_min) {
+                    c.p_min = prio[s];
+                    c.pick = s;
+                }
             }
         }
         // merge with the cells' best so far: the nearer wins unless the other is
         // coplanar with it and of lower priority
-        for (const i64 cell : touched_) {
+        for (i64 q = 0; q < n_touched_; ++q) {
+            const i64 cell = touched_[q];
             CellScratch& c = sc[cell];
             const i64 s = c.pick;
             if (s >= 0) {
-                const double t = c.t_min;
+                const double t = tmin[cell];
                 const i64 old = best[cell];
                 const bool has_old = old >= 0;
                 const bool new_nearer = t < best_t[cell];
@@ -691,28 +1323,28 @@ class ZBuffer {
                 if (take) best[cell] = s;
             }
             c = CellScratch();
+            t_min_[cell] = INF;
         }
-        cells_.clear();
-        srcs_.clear();
-        cand_t_.clear();
-        cand_den_.clear();
-        touched_.clear();
+        cand_.clear();
+        n_touched_ = 0;
     }
 
-    py::array_t<double, py::array::c_style | py::array::forcecast> D_, Dnorm_, nl_, dl_, band_;
-    py::array_t<i64, py::array::c_style | py::array::forcecast> prio_;
-    py::array_t<double, py::array::c_style | py::array::forcecast> V_;
-    py::array_t<i64, py::array::c_style | py::array::forcecast> offsets_;
-    py::array_t<double, py::array::c_style | py::array::forcecast> N_, Dp_;
-    py::array_t<i64, py::array::c_style | py::array::forcecast> ids_;
+    Doubles D_, Dnorm_, nl_, dl_, band_;
+    Ints prio_;
+    Doubles V_;
+    Ints offsets_;
+    Doubles N_, Dp_;
+    Ints ids_;
     double coplanar_ulps_, tie_slack_ulps_, clip_meet_ulps_, chart_edge_ulps_;
     i64 n_cells_ = 0, n_live_ = 0;
     // candidates of the current chunk
-    std::vector<i64> cells_, srcs_;
-    std::vector<double> cand_t_, cand_den_;
-    std::vector<i64> touched_;
+    std::vector<Candidate> cand_;
     i64 in_chunk_ = 0;                       // candidates in the chunk, hit or not
-    std::vector<CellScratch>* sc_ = nullptr;  // this thread's per-cell scratch
+    // this thread's per-cell scratch (use_scratch), the cells the chunk touched
+    CellScratch* sc_ = nullptr;
+    double* t_min_ = nullptr;
+    i64* touched_ = nullptr;
+    i64 n_touched_ = 0;
     const double *D_p_ = nullptr, *nl_p_ = nullptr, *dl_p_ = nullptr;
     std::unordered_map<std::uint64_t, bool> cache_;
     std::uint64_t last_key_ = ~std::uint64_t(0);
@@ -721,20 +1353,57 @@ class ZBuffer {
 
 }  // namespace
 
+namespace {
+
+// A row from its depth buffer: F[j] = the sum of the weights of the cells showing
+// polygon j (best: live indices, ids: their scene indices), where j receives, added
+// cell by cell in the cells' order (np.bincount's sums); and the number of cells that
+// show a polygon.
+py::tuple row_sums(Ints best, Ints ids, Bools receives, Doubles weights, i64 n) {
+    const i64 C = best.shape(0), L = ids.shape(0);
+    if (weights.shape(0) != C) throw std::invalid_argument("best and weights differ in length");
+    if (receives.shape(0) != n) throw std::invalid_argument("receives must have shape (n,)");
+    for (i64 k = 0; k < L; ++k)
+        if (ids.data()[k] < 0 || ids.data()[k] >= n)
+            throw std::invalid_argument("ids out of range");
+    for (i64 c = 0; c < C; ++c)
+        if (best.data()[c] >= L) throw std::invalid_argument("best out of range");
+    py::array_t<double> F(n);
+    double* f = F.mutable_data();
+    i64 hit = 0;
+    {
+        py::gil_scoped_release release;
+        std::fill(f, f + n, 0.0);
+        const i64* b = best.data();
+        const i64* id = ids.data();
+        const bool* r = receives.data();
+        const double* w = weights.data();
+        for (i64 c = 0; c < C; ++c) {
+            if (b[c] < 0) continue;
+            ++hit;
+            const i64 j = id[b[c]];
+            if (r[j]) f[j] += w[c];
+        }
+    }
+    return py::make_tuple(F, hit);
+}
+
+}  // namespace
+
 PYBIND11_MODULE(_zbuffer, m) {
     m.doc() = "The compiled z-buffer of the discrete methods: scan conversion and depth test.";
     py::class_<ZBuffer>(m, "ZBuffer")
-        .def(py::init<py::array_t<double, py::array::c_style | py::array::forcecast>,
-                      py::array_t<double, py::array::c_style | py::array::forcecast>,
-                      py::array_t<double, py::array::c_style | py::array::forcecast>,
-                      py::array_t<double, py::array::c_style | py::array::forcecast>,
-                      py::array_t<double, py::array::c_style | py::array::forcecast>,
-                      py::array_t<i64, py::array::c_style | py::array::forcecast>,
-                      py::array_t<double, py::array::c_style | py::array::forcecast>,
-                      py::array_t<i64, py::array::c_style | py::array::forcecast>,
-                      py::array_t<double, py::array::c_style | py::array::forcecast>,
-                      py::array_t<double, py::array::c_style | py::array::forcecast>,
-                      py::array_t<i64, py::array::c_style | py::array::forcecast>, double,
+        .def(py::init<Doubles,
+                      Doubles,
+                      Doubles,
+                      Doubles,
+                      Doubles,
+                      Ints,
+                      Doubles,
+                      Ints,
+                      Doubles,
+                      Doubles,
+                      Ints, double,
                       double, double, double>(),
              py::arg("D"), py::arg("Dnorm"), py::arg("nl"), py::arg("dl"), py::arg("band"),
              py::arg("prio"), py::arg("V"), py::arg("offsets"), py::arg("N"), py::arg("Dp"),
@@ -749,7 +1418,30 @@ PYBIND11_MODULE(_zbuffer, m) {
              py::arg("g_ids"), py::arg("planes"), py::arg("eu"), py::arg("ev"), py::arg("ew"),
              py::arg("side"), py::arg("uc"), py::arg("vc"), py::arg("table"),
              py::arg("best_t"), py::arg("best"), py::arg("pair_chunk"), py::arg("depth_chunk"))
+        .def("clipped_face", &ZBuffer::clipped_face, py::arg("V"), py::arg("counts"),
+             py::arg("g_ids"), py::arg("R"), py::arg("planes"), py::arg("scale"),
+             py::arg("uc"), py::arg("vc"), py::arg("table"), py::arg("best_t"),
+             py::arg("best"), py::arg("pair_chunk"), py::arg("depth_chunk"))
+        .def("polar", &ZBuffer::polar, py::arg("V"), py::arg("counts"), py::arg("g_ids"),
+             py::arg("R"), py::arg("planes"), py::arg("scale"), py::arg("radii"),
+             py::arg("cos"), py::arg("sin"), py::arg("best_t"), py::arg("best"),
+             py::arg("pair_chunk"), py::arg("depth_chunk"))
+        .def("disk", &ZBuffer::disk, py::arg("V"), py::arg("counts"), py::arg("g_ids"),
+             py::arg("xc"), py::arg("yc"), py::arg("table"), py::arg("best_t"),
+             py::arg("best"), py::arg("pair_chunk"), py::arg("depth_chunk"),
+             py::arg("near_rel"), py::arg("after_near") = false)
+        .def("chart_rays", &ZBuffer::chart_rays, py::arg("V"), py::arg("counts"),
+             py::arg("g_ids"), py::arg("planes"), py::arg("eu"), py::arg("ev"), py::arg("ew"),
+             py::arg("side"), py::arg("cells"), py::arg("cu"), py::arg("cv"), py::arg("nb"),
+             py::arg("v_lo"), py::arg("order"), py::arg("starts"), py::arg("best_t"),
+             py::arg("best"), py::arg("pair_chunk"), py::arg("long_polygon"))
         .def("coplanar", &ZBuffer::coplanar_many, py::arg("a"), py::arg("b"));
+    m.def("face_clip", &ZBuffer::face_clip, py::arg("V"), py::arg("counts"), py::arg("R"),
+          py::arg("planes"), py::arg("scale"), py::arg("clip_meet_ulps"),
+          "exactff.methods._raster.FaceClip of one bucket, compiled: (live, UV, cl).");
+    m.def("row_sums", &row_sums, py::arg("best"), py::arg("ids"), py::arg("receives"),
+          py::arg("weights"), py::arg("n"),
+          "A row from its depth buffer: (F, cells that show a polygon); np.bincount's sums.");
     m.def("chart_clip", &ZBuffer::chart_clip, py::arg("V"), py::arg("counts"), py::arg("planes"),
           py::arg("eu"), py::arg("ev"), py::arg("ew"), py::arg("side"),
           py::arg("clip_meet_ulps"), py::arg("chart_edge_ulps"),

@@ -89,28 +89,40 @@ class CubicTetrahedron(SampledMethod):
             dirs.append(cube @ A)
         return CellLayout(np.vstack(dirs), np.tile(wt, 3), 1.0)
 
-    def native_hits(self, scene, point, normal):
-        r = self.resolution
+    def _faces(self):
+        """The grid's centres and, per face, its clipper and the layout's cell of each
+        grid cell (-1: below the base), built once."""
+        if getattr(self, "_face_cache", None) is None:
+            r = self.resolution
+            c = -2.0 + (np.arange(r) + 0.5) * (3.0 / r)
+            v, w = np.meshgrid(c, c, indexing="ij")
+            keep = (1.0 + v + w > 0).ravel()
+            n_face = int(keep.sum())
+            a1, a2, a3 = cubic_tetrahedron_frame()
+            # the faces x' = 1, y' = 1, z' = 1 in the layout's order, each with the
+            # plane axes of its grid (v, w); the frustum in the face's frame (u, v, w):
+            # u, v <= w and above the base (u + v + w > 0: the normal is
+            # (a1 + a2 + a3) / sqrt 3)
+            planes = [[-1.0, 0.0, 1.0], [0.0, -1.0, 1.0], [1.0, 1.0, 1.0]]
+            faces = []
+            for k, (ew, eu, ev) in enumerate(((a1, a2, a3), (a2, a3, a1), (a3, a1, a2))):
+                index_of = np.full(r * r, -1, dtype=np.int64)
+                index_of[keep] = k * n_face + np.arange(n_face)
+                faces.append((face_clipper([eu, ev, ew], planes), index_of.reshape(r, r)))
+            self._face_cache = c, faces
+        return self._face_cache
+
+    def native_buffer(self, scene, point, normal):
         L = self.layout()
-        c = -2.0 + (np.arange(r) + 0.5) * (3.0 / r)
-        v, w = np.meshgrid(c, c, indexing="ij")
-        keep = (1.0 + v + w > 0).ravel()
-        n_face = int(keep.sum())
-        a1, a2, a3 = cubic_tetrahedron_frame()
-        up = np.array([0.0, 0.0, 1.0])
+        c, faces = self._faces()
         z = ZBufferRow(scene, point, normal)
         best_t = np.full(len(L), np.inf)
         best = np.full(len(L), -1, dtype=np.int64)
         zb = compiled_zbuffer(z, L) if self.backend == "compiled" else None
-        # the faces x' = 1, y' = 1, z' = 1 in the layout's order, each with the plane
-        # axes of its grid (v, w); the frustum: u, v <= 1 and above the base
-        for k, (ew, eu, ev) in enumerate(((a1, a2, a3), (a2, a3, a1), (a3, a1, a2))):
-            index_of = np.full(r * r, -1)
-            index_of[keep] = k * n_face + np.arange(n_face)
-            clip = face_clipper(eu, ev, ew, [ew - eu, ew - ev, up])
-            rasterise_face(z, None, c, c, lambda i, j, m=index_of: m[i * r + j],
-                           L.directions, best_t, best, clip=clip, zbuffer=zb)
-        return z.hits(best)
+        for clip, table in faces:
+            rasterise_face(z, None, c, c, table, L.directions, best_t, best, clip=clip,
+                           zbuffer=zb)
+        return z, best
 
     def __repr__(self):
         extra = "" if self.native else ", native=False"

@@ -79,24 +79,31 @@ class Hemicube(SampledMethod):
             wts.append(side_w)
         return CellLayout(np.vstack(dirs), np.concatenate(wts), 1.0)
 
-    def native_hits(self, scene, point, normal):
-        r = self.resolution
+    def _faces(self):
+        """Per face (the top, then the four half side faces, in the layout's order;
+        the faces are the engine's charts): its chart, its rows' and columns' centres
+        and the layout's cell of each grid cell, built once."""
+        if getattr(self, "_face_cache", None) is None:
+            r = self.resolution
+            c, _ = _grid(r, -1.0, 1.0)
+            cz, _ = _grid(r // 2, 0.0, 1.0)
+            faces = [(CHARTS[0], c, c, np.arange(r * r, dtype=np.int64).reshape(r, r))]
+            for k in range(4):
+                off = r * r + k * r * (r // 2)
+                faces.append((CHARTS[1 + k], c, cz,
+                              off + np.arange(r * (r // 2), dtype=np.int64).reshape(r, r // 2)))
+            self._face_cache = faces
+        return self._face_cache
+
+    def native_buffer(self, scene, point, normal):
         L = self.layout()
-        c, _ = _grid(r, -1.0, 1.0)
-        cz, _ = _grid(r // 2, 0.0, 1.0)
         z = ZBufferRow(scene, point, normal)
         best_t = np.full(len(L), np.inf)
         best = np.full(len(L), -1, dtype=np.int64)
         zb = compiled_zbuffer(z, L) if self.backend == "compiled" else None
-        # the top face (r x r cells), then the four half side faces (r x r/2 each), in
-        # the layout's order; the faces are the engine's charts
-        rasterise_face(z, CHARTS[0], c, c, lambda i, j: i * r + j, L.directions,
-                       best_t, best, zbuffer=zb)
-        for k in range(4):
-            off = r * r + k * r * (r // 2)
-            rasterise_face(z, CHARTS[1 + k], c, cz, lambda i, j, off=off: off + i * (r // 2) + j,
-                           L.directions, best_t, best, zbuffer=zb)
-        return z.hits(best)
+        for chart, uc, vc, table in self._faces():
+            rasterise_face(z, chart, uc, vc, table, L.directions, best_t, best, zbuffer=zb)
+        return z, best
 
     def __repr__(self):
         extra = "" if self.native else ", native=False"

@@ -35,6 +35,15 @@ class MonteCarlo(SampledMethod):
     samples : int, default 65,536
         Rays per row.
     seed : int, default 0
+    backend : {"compiled", "numpy"}, default "compiled"
+        Where the rays are cast: the shared core's compiled z-buffer
+        (:func:`exactff.methods._sampling.nearest_polygons` with ``backend="compiled"``:
+        each chart's clipping, crossing numbers and depth buffer in C++, without the
+        GIL) or its numpy code, the oracle. The numpy code widens the charts' frustums
+        by ``CHART_MARGIN``, the compiled one clips to the exact frustums: the same
+        polygon for every ray but one within rounding of a chart's edge and of a
+        polygon's edge there (none in the tests; with margin 0 the numpy code gives
+        the compiled hits bit for bit).
 
     Examples
     --------
@@ -48,18 +57,25 @@ class MonteCarlo(SampledMethod):
 
     name = "monte_carlo"
 
-    def __init__(self, samples=65536, *, seed=0):
+    def __init__(self, samples=65536, *, seed=0, backend="compiled"):
         if not (isinstance(samples, (int, np.integer)) and samples > 0):
             raise ValueError(f"samples must be a positive integer, got {samples!r}")
         if not isinstance(seed, (int, np.integer)):
             raise ValueError(f"seed must be an integer, got {seed!r}")
+        if backend not in ("compiled", "numpy"):
+            raise ValueError(f"backend must be one of ['compiled', 'numpy'], got {backend!r}")
         self.n = int(samples)
         self.seed = int(seed)
+        self.backend = backend
         self._layout = None
 
     @property
     def samples(self):
         return self.n
+
+    @property
+    def rays_backend(self):
+        return self.backend
 
     def build_layout(self):
         return self._rays(np.random.default_rng(self.seed))
@@ -117,7 +133,8 @@ class MonteCarlo(SampledMethod):
             k = np.flatnonzero(D[:, 2] * sign > 0)
             if len(k):
                 L = np.column_stack([D[k, 0], D[k, 1], np.abs(D[k, 2])])
-                hit[k] = nearest_polygons(scene, p, np.array([0.0, 0.0, sign]), L)
+                hit[k] = nearest_polygons(scene, p, np.array([0.0, 0.0, sign]), L,
+                                          backend=self.backend)
         side, _ = plane_sides(flat_polygons(scene), p, exact=False)
         receives = (side > 0) | (bool(two_sided) & (side < 0))
         ok = hit >= 0
@@ -134,6 +151,7 @@ class MonteCarlo(SampledMethod):
         return F, np.sqrt(F * (1.0 - F) / self.n)
 
     def __repr__(self):
-        return f"MonteCarlo(samples={self.n}, seed={self.seed})"
+        extra = "" if self.backend == "compiled" else f", backend={self.backend!r}"
+        return f"MonteCarlo(samples={self.n}, seed={self.seed}{extra})"
 
 

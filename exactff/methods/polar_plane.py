@@ -2,7 +2,7 @@
 
 import numpy as np
 
-from ._raster import face_clipper, rasterise_polar
+from ._raster import check_backend, compiled_zbuffer, plane_clipper, rasterise_polar
 from ._sampling import CellLayout, SampledMethod, ZBufferRow, check_resolution
 
 __all__ = ["PolarPlane"]
@@ -37,6 +37,10 @@ class PolarPlane(SampledMethod):
         frustum and scanned along every sector's ray within its angular extent
         (:func:`exactff.methods._raster.rasterise_polar`). False: the shared sampling
         core (the test oracle).
+    backend : {"compiled", "numpy"}, default "compiled"
+        Where the native rasterisation runs: the compiled z-buffer
+        (``exactff.methods._zbuffer``, C++ without the GIL) or the vectorised numpy
+        code, its test oracle; the two give the same polygon in every cell.
 
     Examples
     --------
@@ -49,7 +53,8 @@ class PolarPlane(SampledMethod):
 
     name = "polar_plane"
 
-    def __init__(self, rings=None, sectors=None, *, samples=None, extent=10.0, native=True):
+    def __init__(self, rings=None, sectors=None, *, samples=None, extent=10.0, native=True,
+                 backend="compiled"):
         if not (np.isfinite(extent) and extent > 0):
             raise ValueError(f"extent must be a positive finite number, got {extent!r}")
         if rings is None or sectors is None:
@@ -62,6 +67,7 @@ class PolarPlane(SampledMethod):
         self.sectors = check_resolution(sectors, "sectors")
         self.extent = float(extent)
         self.native = bool(native)
+        self.backend = check_backend(backend)
         self._layout = None
 
     def _polar_grid(self):
@@ -74,18 +80,17 @@ class PolarPlane(SampledMethod):
         phi = (np.arange(self.sectors) + 0.5) * (2.0 * np.pi / self.sectors)
         return rm, phi, FE
 
-    def native_hits(self, scene, point, normal):
-        E = self.extent
+    def native_buffer(self, scene, point, normal):
         L = self.layout()
         rm, phi, _ = self._polar_grid()
-        X, Y, Z = np.eye(3)
-        clip = face_clipper(X, Y, Z, [E * Z - X, E * Z + X, E * Z - Y, E * Z + Y])
         z = ZBufferRow(scene, point, normal)
         best_t = np.full(len(L), np.inf)
-        best = np.full(len(L), -1)
+        best = np.full(len(L), -1, dtype=np.int64)
+        zb = compiled_zbuffer(z, L) if self.backend == "compiled" else None
         S = self.sectors
-        rasterise_polar(z, rm, phi, lambda i, k: i * S + k, L.directions, best_t, best, clip)
-        return z.hits(best)
+        rasterise_polar(z, rm, phi, lambda i, k: i * S + k, L.directions, best_t, best,
+                        plane_clipper(self.extent), zbuffer=zb)
+        return z, best
 
     def build_layout(self):
         rm, phi, FE = self._polar_grid()
@@ -95,5 +100,7 @@ class PolarPlane(SampledMethod):
 
     def __repr__(self):
         extra = "" if self.native else ", native=False"
+        if self.backend != "compiled":
+            extra += f", backend={self.backend!r}"
         return (f"PolarPlane(rings={self.rings}, sectors={self.sectors}, extent={self.extent}"
                 f"{extra})")

@@ -2,7 +2,7 @@
 
 import numpy as np
 
-from ._raster import rasterise_disk
+from ._raster import check_backend, compiled_zbuffer, rasterise_disk
 from ._sampling import CellLayout, SampledMethod, ZBufferRow, resolution_from
 
 __all__ = ["DiscretePPBH"]
@@ -33,6 +33,10 @@ class DiscretePPBH(SampledMethod):
         scan-converted on the disk's grid, one depth buffer
         (:func:`exactff.methods._raster.rasterise_disk`). False: the shared sampling
         core (the test oracle).
+    backend : {"compiled", "numpy"}, default "compiled"
+        Where the native rasterisation runs: the compiled z-buffer
+        (``exactff.methods._zbuffer``, C++ without the GIL) or the vectorised numpy
+        code, its test oracle; the two give the same polygon in every cell.
 
     Examples
     --------
@@ -48,9 +52,10 @@ class DiscretePPBH(SampledMethod):
 
     name = "ppbh"
 
-    def __init__(self, resolution=None, *, samples=None, native=True):
+    def __init__(self, resolution=None, *, samples=None, native=True, backend="compiled"):
         self.resolution = resolution_from(resolution, samples, np.pi / 4)
         self.native = bool(native)
+        self.backend = check_backend(backend)
         self._layout = None
 
     def build_layout(self):
@@ -63,19 +68,31 @@ class DiscretePPBH(SampledMethod):
         D = np.column_stack([x, y, np.sqrt(1.0 - x * x - y * y)])
         return CellLayout(D, np.full(len(x), 1.0 / len(x)), 1.0)
 
-    def native_hits(self, scene, point, normal):
-        r = self.resolution
+    def _grid(self):
+        """The grid's centres and the layout's cell of each grid cell (-1: outside the
+        disk), built once."""
+        if getattr(self, "_grid_cache", None) is None:
+            r = self.resolution
+            c = -1.0 + (np.arange(r) + 0.5) * (2.0 / r)
+            x, y = np.meshgrid(c, c, indexing="ij")
+            index_of = np.full(r * r, -1, dtype=np.int64)
+            inside = (x * x + y * y < 1.0).ravel()
+            index_of[inside] = np.arange(int(inside.sum()))
+            self._grid_cache = c, index_of.reshape(r, r)
+        return self._grid_cache
+
+    def native_buffer(self, scene, point, normal):
         L = self.layout()
-        c = -1.0 + (np.arange(r) + 0.5) * (2.0 / r)
-        x, y = np.meshgrid(c, c, indexing="ij")
-        index_of = np.full(r * r, -1)
-        index_of[(x * x + y * y < 1.0).ravel()] = np.arange(len(L))
+        c, table = self._grid()
         z = ZBufferRow(scene, point, normal)
         best_t = np.full(len(L), np.inf)
-        best = np.full(len(L), -1)
-        rasterise_disk(z, c, c, lambda i, j: index_of[i * r + j], L.directions, best_t, best)
-        return z.hits(best)
+        best = np.full(len(L), -1, dtype=np.int64)
+        zb = compiled_zbuffer(z, L) if self.backend == "compiled" else None
+        rasterise_disk(z, c, c, table, L.directions, best_t, best, zbuffer=zb)
+        return z, best
 
     def __repr__(self):
         extra = "" if self.native else ", native=False"
+        if self.backend != "compiled":
+            extra += f", backend={self.backend!r}"
         return f"DiscretePPBH(resolution={self.resolution}{extra})"

@@ -2,7 +2,7 @@
 
 import numpy as np
 
-from ._raster import check_backend, compiled_zbuffer, face_clipper, rasterise_face
+from ._raster import check_backend, compiled_zbuffer, plane_clipper, rasterise_face
 from ._sampling import (CellLayout, SampledMethod, ZBufferRow, check_resolution,
                         resolution_from)
 
@@ -149,24 +149,32 @@ class SinglePlane(SampledMethod):
         x, y, w, _ = self._cells()
         return CellLayout(np.column_stack([x, y, np.ones_like(x)]), w, covered)
 
-    def native_hits(self, scene, point, normal):
-        E = self.extent
+    def native_buffer(self, scene, point, normal):
         L = self.layout()
-        X, Y, Z = np.eye(3)
-        clip = face_clipper(X, Y, Z, [E * Z - X, E * Z + X, E * Z - Y, E * Z + Y])
+        clip = plane_clipper(self.extent)
         z = ZBufferRow(scene, point, normal)
         best_t = np.full(len(L), np.inf)
         best = np.full(len(L), -1, dtype=np.int64)
         zb = compiled_zbuffer(z, L) if self.backend == "compiled" else None
         # each grid of cell centres (the plane's, or the coarse and the fine ones of
         # the refined variant), scan-converted on its own rows and columns
-        for x, y, index in self._cells()[3]:
-            xs, ys = np.unique(x), np.unique(y)
-            m = np.full(len(xs) * len(ys), -1)
-            m[np.searchsorted(xs, x) * len(ys) + np.searchsorted(ys, y)] = index
-            rasterise_face(z, None, xs, ys, lambda i, j, m=m, n=len(ys): m[i * n + j],
-                           L.directions, best_t, best, clip=clip, zbuffer=zb)
-        return z.hits(best)
+        for xs, ys, table in self._grids():
+            rasterise_face(z, None, xs, ys, table, L.directions, best_t, best, clip=clip,
+                           zbuffer=zb)
+        return z, best
+
+    def _grids(self):
+        """Per grid of :meth:`_cells`: its rows' and columns' centres and the layout's
+        cell of each grid cell (-1: none), built once."""
+        if getattr(self, "_grid_cache", None) is None:
+            grids = []
+            for x, y, index in self._cells()[3]:
+                xs, ys = np.unique(x), np.unique(y)
+                m = np.full(len(xs) * len(ys), -1, dtype=np.int64)
+                m[np.searchsorted(xs, x) * len(ys) + np.searchsorted(ys, y)] = index
+                grids.append((xs, ys, m.reshape(len(xs), len(ys))))
+            self._grid_cache = grids
+        return self._grid_cache
 
     def __repr__(self):
         extra = "" if self.native else ", native=False"
