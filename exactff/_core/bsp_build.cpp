@@ -698,6 +698,9 @@ struct Builder {
                     outside ? double(1.01L * (off_plane_q + LD(vertex_error_q(f, w))))
                             : double(1.01L * (std::sqrt(dq2) + LD(eq)));
                 const bool front_side = near == 0 ? sg[i] < 0 : sg[i] > 0;
+                // the crossing at i itself: in i's own piece the edge from i now runs
+                // along the cut (it went to the crossing along the edge)
+                if (near == 0) (sg[i] > 0 ? fc : bc).back() = along;
                 if (front_side) {
                     keep(fv, fe, fq, fqe, fc, E, ec, Eq, eqc, near == 0 ? on : along);
                     fid.back() = input_id[size_t(frag_start[f]) + w];
