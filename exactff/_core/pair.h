@@ -1,0 +1,50 @@
+// One occluded pair of an area row, compiled (the area code's per-pair path,
+// exactff/area/, docs/explanation/area-form-factors.md): the vertex-edge visibility
+// events of the pair cut to segments of the emitter's plane (pair.cpp, event_lines).
+
+#ifndef EXACTFF_CORE_PAIR_H
+#define EXACTFF_CORE_PAIR_H
+
+#include <cstdint>
+#include <vector>
+
+namespace exactff {
+
+// Arguments of event_lines. S: the pair's polygons, the receiver's part first and then
+// the blockers, their vertices concatenated in W (N, 3) with start (n + 1,) the offset of
+// each; solid (n,) the convex solid of each for the pair (-1: none; empty: no solids);
+// nP (3,) and dP the emitter's plane n . x = dP; frame (3, 3) the emitter's receiving frame
+// (rows: two axes of its plane and its normal); c (3,) the centre and radius the radius
+// of the disk (in P's plane) the lines are kept in; nQ, q0 (3,) the receiver's plane,
+// RQ (2, 3) its axes, Q2 (q, 2) the receiver's part in that frame about q0 (the region
+// the lines of sight of a blocker-blocker event must meet); shortcuts: cull the
+// blocker-blocker events whose lines of sight miss Q2 and the vertex-edge pairs within one
+// solid; ray_parallel (AREA_RAY_PARALLEL) and event_parallel (AREA_EVENT_PARALLEL): a ray
+// or a plane that close to parallel to P's plane has no image there.
+struct EventArgs {
+    const double* W;
+    const std::int64_t* start;
+    std::int64_t n;
+    const std::int64_t* solid;   // null: no solids
+    const double *nP, *frame, *c;
+    double dP, radius;
+    const double *nQ, *q0, *RQ, *Q2;
+    std::int64_t n_q2;
+    bool shortcuts;
+    double ray_parallel, event_parallel;
+};
+
+// The segments (m, 2, 2) in the frame's first two axes about c, each with its ends in
+// lexicographic order and the list sorted and without copies (as numpy's unique of the
+// rows), and what was culled: blocker-blocker vertex-edge rows whose lines of sight miss
+// the receiver (culled_events) and vertex-edge rows within one solid (solid_events).
+struct EventResult {
+    std::vector<double> segments;
+    long long culled_events = 0, solid_events = 0;
+};
+
+EventResult event_lines(const EventArgs& args);
+
+}  // namespace exactff
+
+#endif
