@@ -1,9 +1,9 @@
 """Build of the compiled code: the library exactff/_core/ (headers and sources, one concept
-per file; docs/explanation/layout.md) as three Python extension modules, the visibility
+per file; docs/explanation/layout.md) as four Python extension modules, the visibility
 core and the BSP build (exactff.visibility._svbsp), the area code's hidden regions
-(exactff.area._hidden) and the unoccluded rows' sector sums (exactff.kernel._sector); and
-the discrete methods' z-buffer (exactff.methods._zbuffer). The rest of the project's
-metadata is in pyproject.toml."""
+(exactff.area._hidden), an occluded pair's events (exactff.area._pair) and the
+unoccluded rows' sector sums (exactff.kernel._sector); and the discrete methods' z-buffer
+(exactff.methods._zbuffer). The rest of the project's metadata is in pyproject.toml."""
 
 import os
 import platform

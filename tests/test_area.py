@@ -427,7 +427,7 @@ def test_hidden_part_skipping_back_faces_against_the_engine(which):
     solid = _closed_solids(solids, np.array(B), (scene.normals[[i, j]],
                                                  scene.plane_offsets[[i, j]]))
     assert np.all(solid >= 0)
-    inner = np.array([solids[2][g].mean(axis=0) for g in solid])
+    inner = np.array([solids.centres[g] for g in solid])
     blockers = [np.asarray(scene.polygons[k], float) for k in B]
     nP = scene.normals[i]
     a, b = np.random.default_rng(7).random((2, 300))
@@ -985,7 +985,7 @@ def test_convex_solids_are_the_closed_convex_groups_of_faces():
                                       convex_solids as _convex_solids)
 
     # the Cornell box: each block (five faces, open at the floor) is a group
-    label, _, _ = _convex_solids(ef.scenes.cornell_box(closed=True))
+    label = _convex_solids(ef.scenes.cornell_box(closed=True)).label
     assert len(set(label[10:15])) == len(set(label[15:20])) == 1
     assert -1 < label[10] != label[15] > -1
     # a zigzag of three quads (the middle one's plane between the others) is none, nor

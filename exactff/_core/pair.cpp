@@ -16,6 +16,7 @@
 #include <cmath>
 #include <vector>
 
+#include "expansion.h"
 #include "pair.h"
 #include "vec.h"
 
@@ -28,37 +29,50 @@ D3 at(const double* p) { return {p[0], p[1], p[2]}; }
 D3 add(const D3& a, const D3& b) { return {a.x + b.x, a.y + b.y, a.z + b.z}; }
 D3 scale(double s, const D3& a) { return {s * a.x, s * a.y, s * a.z}; }
 
-// the distance from p to the segment (a, b) in the plane
-double point_segment(double px, double py, double ax, double ay, double bx, double by) {
-    const double dx = bx - ax, dy = by - ay, l2 = dx * dx + dy * dy;
-    double t = l2 > 0 ? ((px - ax) * dx + (py - ay) * dy) / l2 : 0.0;
-    t = std::min(1.0, std::max(0.0, t));
-    const double ex = ax + t * dx - px, ey = ay + t * dy - py;
-    return std::sqrt(ex * ex + ey * ey);
+// the sign of det(b - a, c - a), the side of c of the line through a and b: a double
+// filter (Shewchuk's bound for orient2d), else exactly (expansion.h)
+int orient2(double ax, double ay, double bx, double by, double cx, double cy) {
+    const double l = (bx - ax) * (cy - ay), r = (by - ay) * (cx - ax), det = l - r;
+    const double bound = 3.3306690738754716e-16 * (std::fabs(l) + std::fabs(r));
+    if (det > bound || -det > bound) return det > 0 ? 1 : -1;
+    const Expansion e = add(mul(diff(bx, ax), diff(cy, ay)), neg(mul(diff(by, ay), diff(cx, ax))));
+    return sign(e);
 }
 
-// whether the segment (a, b) meets the polygon Q2 (closed, possibly not convex), or comes
-// within slack of it: an end inside, or a crossing or near approach of an edge (kept
-// where in doubt: an event kept in excess only adds a cut)
+// whether p (on the line through a and b) lies in the closed segment (a, b)
+bool within(double ax, double ay, double bx, double by, double px, double py) {
+    return std::min(ax, bx) <= px && px <= std::max(ax, bx) && std::min(ay, by) <= py &&
+           py <= std::max(ay, by);
+}
+
+// whether the closed segments (a, b) and (p, q) meet
+bool segments_meet(double ax, double ay, double bx, double by, double px, double py, double qx,
+                   double qy) {
+    const int o1 = orient2(ax, ay, bx, by, px, py), o2 = orient2(ax, ay, bx, by, qx, qy);
+    const int o3 = orient2(px, py, qx, qy, ax, ay), o4 = orient2(px, py, qx, qy, bx, by);
+    if (o1 * o2 < 0 && o3 * o4 < 0) return true;
+    return (o1 == 0 && within(ax, ay, bx, by, px, py)) ||
+           (o2 == 0 && within(ax, ay, bx, by, qx, qy)) ||
+           (o3 == 0 && within(px, py, qx, qy, ax, ay)) ||
+           (o4 == 0 && within(px, py, qx, qy, bx, by));
+}
+
+// whether the segment (a, b) meets the polygon Q2 (closed, simple, possibly not convex),
+// decided exactly on the doubles (as GEOS's intersects): it crosses or touches an edge,
+// or a lies inside (the winding number about a, Sunday's rule)
 bool segment_meets(const double* Q2, std::int64_t q, double ax, double ay, double bx,
-                   double by, double slack) {
-    bool inside = false;   // a's crossing number
+                   double by) {
+    int wn = 0;
     for (std::int64_t i = 0, j = q - 1; i < q; j = i++) {
         const double xi = Q2[2 * i], yi = Q2[2 * i + 1], xj = Q2[2 * j], yj = Q2[2 * j + 1];
-        if ((yi > ay) != (yj > ay) && ax < (xj - xi) * (ay - yi) / (yj - yi) + xi)
-            inside = !inside;
-        // the edge (j, i) against (a, b): a proper crossing, or within slack
-        const double o1 = (bx - ax) * (yj - ay) - (by - ay) * (xj - ax);
-        const double o2 = (bx - ax) * (yi - ay) - (by - ay) * (xi - ax);
-        const double o3 = (xi - xj) * (ay - yj) - (yi - yj) * (ax - xj);
-        const double o4 = (xi - xj) * (by - yj) - (yi - yj) * (bx - xj);
-        if (((o1 > 0) != (o2 > 0)) && ((o3 > 0) != (o4 > 0))) return true;
-        if (std::min({point_segment(ax, ay, xj, yj, xi, yi), point_segment(bx, by, xj, yj, xi, yi),
-                      point_segment(xj, yj, ax, ay, bx, by),
-                      point_segment(xi, yi, ax, ay, bx, by)}) <= slack)
-            return true;
+        if (segments_meet(ax, ay, bx, by, xj, yj, xi, yi)) return true;
+        if (yj <= ay) {
+            if (yi > ay && orient2(xj, yj, xi, yi, ax, ay) > 0) ++wn;
+        } else if (yi <= ay && orient2(xj, yj, xi, yi, ax, ay) < 0) {
+            --wn;
+        }
     }
-    return inside;
+    return wn != 0;
 }
 
 // x solving the rows A x = r (3 x 3) by Gaussian elimination with partial pivoting
@@ -99,11 +113,6 @@ EventResult event_lines(const EventArgs& a) {
     const D3 nP = at(a.nP), nQ = at(a.nQ), q0 = at(a.q0), c = at(a.c);
     const D3 t1 = at(a.RQ), t2 = at(a.RQ + 3);
     const double* W = a.W;
-    // the receiver's size in its frame: the slack of the lines of sight's test
-    double extent = 0;
-    for (std::int64_t i = 0; i < a.n_q2; ++i)
-        extent = std::max({extent, std::fabs(a.Q2[2 * i]), std::fabs(a.Q2[2 * i + 1])});
-    const double slack = 1e-12 * extent;
     std::vector<Event> ev;
     for (std::int64_t pa = 0; pa < n; ++pa) {
         // the polygon's own plane, through its first vertex
@@ -140,7 +149,7 @@ EventResult event_lines(const EventArgs& a) {
                             const D3 ia = sub(add(v, scale(h / d0, u0)), q0);
                             const D3 ib = sub(add(v, scale(h / d1, u1)), q0);
                             if (!segment_meets(a.Q2, a.n_q2, dot(ia, t1), dot(ia, t2),
-                                               dot(ib, t1), dot(ib, t2), slack)) {
+                                               dot(ib, t1), dot(ib, t2))) {
                                 ++out.culled_events;
                                 continue;
                             }

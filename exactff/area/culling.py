@@ -4,6 +4,8 @@ scene's convex solids (between whose faces there is no visibility event), and th
 coplanar polygons that cover part of a receiver by the tie rule.
 """
 
+from typing import NamedTuple
+
 import numpy as np
 import shapely
 from scipy.sparse import coo_matrix
@@ -17,7 +19,7 @@ from ..rings import padded
 from .closed_form import front_parts
 from .rules import triangle_areas
 
-__all__ = ["padded_polygons", "front_pairs", "hull_blockers", "pair_blockers", "shaft",
+__all__ = ["ConvexSolids", "padded_polygons", "front_pairs", "hull_blockers", "pair_blockers", "shaft",
            "convex_solids", "closed_solids", "tie_covers", "uncovered"]
 
 
@@ -158,14 +160,30 @@ def shaft(padded, i, J, boxes, nP, p0, near, st):
     return np.split(k, np.cumsum(left)[:-1])
 
 
+class ConvexSolids(NamedTuple):
+    """A scene's convex solids (:func:`convex_solids`), computed once per scene."""
+
+    #: The group of each polygon (-1: none, or alone).
+    label: np.ndarray
+    #: Per group: the ends of its edges that only one member has (m, 2, 3).
+    open_edges: dict
+    #: Per group: its vertices, each once (v, 3).
+    vertices: dict
+    #: Per group: its members (polygon indices), in order.
+    members: dict
+    #: Per group: the mean of its vertices, a point inside its hull.
+    centres: dict
+
+
 def convex_solids(scene):
     """The scene's polygons grouped into convex solids: connected by shared edges (equal
     coordinates), no edge shared by more than two of them, and every vertex of the group
     on or behind each member's plane or on or in front of it (the coplanar band of
     :func:`~exactff.predicates.coplanar_band_sides`): each member on the boundary of the
-    group's convex hull. Returns ``(label, open_edges, vertices)``: the group of each
-    polygon (-1: none, or alone), and per group the ends of its edges that only one
-    member has, shape (m, 2, 3), and its vertices. A group whose open edges all lie in a
+    group's convex hull. Returns a :class:`ConvexSolids`: the group of each polygon
+    (-1: none, or alone), and per group the ends of its edges that only one member has,
+    shape (m, 2, 3), its vertices, its members and the mean of its vertices (a point
+    inside its hull), each stored once for the scene. A group whose open edges all lie in a
     plane that supports it (the emitter's or the receiver's, :func:`closed_solids`) is
     the boundary of its hull less a face in that plane."""
     polys = [np.asarray(p, dtype=float) for p in scene.polygons]
@@ -192,7 +210,7 @@ def convex_solids(scene):
     for k, fs in faces_of.items():
         if len(fs) == 1:
             edges_of.setdefault(int(label[fs[0]]), []).append(k)
-    open_edges, vertices = {}, {}
+    open_edges, vertices, members_ = {}, {}, {}
     for g in np.flatnonzero(size > 1):
         members = np.array(members_of[int(g)])
         if int(g) in bad:
@@ -203,8 +221,10 @@ def convex_solids(scene):
             continue                                     # a member's plane cuts the group
         open_edges[int(g)] = np.array(edges_of.get(int(g), []), dtype=float).reshape(-1, 2, 3)
         vertices[int(g)] = V
+        members_[int(g)] = members
     label = np.where(np.isin(label, list(open_edges)), label, -1)
-    return label, open_edges, vertices
+    return ConvexSolids(label, open_edges, vertices, members_,
+                        {g: V.mean(axis=0) for g, V in vertices.items()})
 
 
 def closed_solids(solids, blockers, planes):
@@ -223,7 +243,7 @@ def closed_solids(solids, blockers, planes):
     image, whose outline changes only where x crosses a member's plane: a vertex-edge
     event between two members is no event. The emitter and the receiver may be members
     (their faces lie in the planes)."""
-    label, open_edges, vertices = solids
+    label, open_edges, vertices = solids.label, solids.open_edges, solids.vertices
     ids = label[blockers]
     out = np.full(len(blockers), -1)
     N, D = planes

@@ -9,10 +9,42 @@ import numpy as np
 import shapely
 
 from .. import _tolerances as tol
-from ..geometry import cross, plane_frame
+from ..geometry import cross, plane_frame, rotate
 from ..rings import successors
+from ._pair import event_lines as _compiled_event_lines
 
 __all__ = ["event_lines", "cut_cells"]
+
+
+def _dot(a, b):
+    """``a . b`` over the last axis (of length 3), elementwise: ``(a0 b0 + a1 b1) + a2
+    b2``, the rounding of ``_core/vec.h``'s dot for every row (a matrix product may
+    fuse or reorder; the compiled events are tested against these to the bit)."""
+    return a[..., 0] * b[..., 0] + a[..., 1] * b[..., 1] + a[..., 2] * b[..., 2]
+
+
+def _solve3(A, r):
+    """x with ``A x = r`` for each system, A (l, 3, 3) and r (l, 3), by Gaussian
+    elimination with partial pivoting (the first largest pivot), the operations of
+    ``_core/pair.cpp``'s solve3 in the same order."""
+    A, r = np.array(A, dtype=float), np.array(r, dtype=float)
+    rows = np.arange(len(A))
+    for k in range(3):
+        p = k + np.argmax(np.abs(A[:, k:, k]), axis=1)
+        Ak, Ap, rk, rp = A[rows, k].copy(), A[rows, p].copy(), r[rows, k].copy(), r[rows, p].copy()
+        A[rows, k], A[rows, p], r[rows, k], r[rows, p] = Ap, Ak, rp, rk
+        for i in range(k + 1, 3):
+            f = A[:, i, k] / A[:, k, k]
+            for j in range(k, 3):
+                A[:, i, j] -= f * A[:, k, j]
+            r[:, i] -= f * r[:, k]
+    x = np.empty_like(r)
+    for k in (2, 1, 0):
+        s_ = r[:, k].copy()
+        for j in range(k + 1, 3):
+            s_ -= A[:, k, j] * x[:, j]
+        x[:, k] = s_ / A[:, k, k]
+    return x
 
 
 def _vertex_edge_rows(pa, pb, k, start, W, nxt, shortcuts, nQ, q0, RQ, seen, st):
@@ -33,13 +65,14 @@ def _vertex_edge_rows(pa, pb, k, start, W, nxt, shortcuts, nQ, q0, RQ, seen, st)
     if shortcuts:
         # between two blockers, the lines through v and the points of the edge meet Qc's
         # plane along the edge's central image from v: does it cross Qc? (unbounded: kept)
-        d0, d1 = (e0 - v) @ nQ, (e1 - v) @ nQ
+        d0, d1 = _dot(e0 - v, nQ), _dot(e1 - v, nQ)
         bounded = keep & (ra > 0) & (pb[row_pair] > 0) & (d0 * d1 > 0)
         if bounded.any():
-            vb, h = v[bounded], (q0 - v[bounded]) @ nQ
+            vb, h = v[bounded], _dot(q0 - v[bounded], nQ)
             ia = vb + (h / d0[bounded])[:, None] * (e0[bounded] - vb) - q0
             ib = vb + (h / d1[bounded])[:, None] * (e1[bounded] - vb) - q0
-            segs = shapely.linestrings(np.stack([ia @ RQ[:2].T, ib @ RQ[:2].T], axis=1))
+            segs = shapely.linestrings(np.stack([rotate(ia, RQ)[:, :2], rotate(ib, RQ)[:, :2]],
+                                                axis=1))
             miss = ~shapely.intersects(seen, segs)
             if st is not None:
                 st.culled_events += int(miss.sum())
@@ -47,7 +80,8 @@ def _vertex_edge_rows(pa, pb, k, start, W, nxt, shortcuts, nQ, q0, RQ, seen, st)
     return v[keep], e0[keep], e1[keep], m[keep], ra[keep]
 
 
-def event_lines(S, nP, dP, R, c, radius, Qc, shortcuts=True, st=None, solid=None):
+def event_lines(S, nP, dP, R, c, radius, Qc, shortcuts=True, st=None, solid=None,
+                compiled=True):
     """The segments of P's plane (in its 2-D frame ``R`` about ``c``) across which the
     integrand may lose smoothness: for a vertex ``v`` of one polygon of S and an edge of
     another, the image of the edge through ``v`` on P's plane (the points from which
@@ -65,7 +99,42 @@ def event_lines(S, nP, dP, R, c, radius, Qc, shortcuts=True, st=None, solid=None
     changes only there. Without ``shortcuts`` every blocker-blocker event is kept; the
     ones culled are counted in ``st.culled_events``, the vertex-edge pairs of one solid
     in ``st.solid_events`` (``st``: an :class:`~exactff.area.row.AreaStats`,
-    optional)."""
+    optional).
+
+    ``compiled`` (default): computed by :mod:`exactff.area._pair` (``_core/pair.cpp``);
+    else by numpy and GEOS, the reference the compiled path is tested against
+    (``tests/test_area_pair_compiled.py``: the same segments to rounding). Returns an
+    array (m, 2, 2) of the segments, each once, in lexicographic order.
+
+    Examples
+    --------
+    A unit square one above the emitter's plane and a blocker square between: the
+    blocker's vertex-edge events with the receiver, and both planes' lines (the
+    receiver's plane is parallel to the emitter's: none).
+
+    >>> from exactff.geometry import receiver_frame
+    >>> Q = np.array([[0, 0, 2], [0, 1, 2], [1, 1, 2], [1, 0, 2]], float)
+    >>> K = np.array([[.4, .4, 1], [.6, .4, 1], [.6, .6, 1], [.4, .6, 1]], float)
+    >>> nP, c = np.array([0, 0, 1.0]), np.array([.5, .5, 0])
+    >>> lines = event_lines([Q, K], nP, 0.0, receiver_frame(nP), c, 1.0, Q)
+    >>> lines.shape[1:], bool(np.allclose(lines, event_lines([Q, K], nP, 0.0,
+    ...     receiver_frame(nP), c, 1.0, Q, compiled=False), atol=1e-15))
+    ((2, 2), True)
+    """
+    if compiled:
+        nQ, q0, RQ, Q2 = plane_frame(Qc)
+        W = np.concatenate([np.asarray(A, dtype=float) for A in S])
+        start = np.concatenate([[0], np.cumsum([len(A) for A in S])])
+        sol = (np.zeros(0, dtype=np.int64) if solid is None or not shortcuts
+               else np.asarray(solid, dtype=np.int64))
+        segments, culled, same = _compiled_event_lines(
+            W=W, start=start, solid=sol, nP=nP, dP=float(dP), frame=R, c=c,
+            radius=float(radius), nQ=nQ, q0=q0, RQ=RQ[:2], Q2=Q2, shortcuts=shortcuts,
+            ray_parallel=tol.AREA_RAY_PARALLEL, event_parallel=tol.AREA_EVENT_PARALLEL)
+        if st is not None:
+            st.culled_events += culled
+            st.solid_events += same
+        return segments
     nQ, q0, RQ, Q2 = plane_frame(Qc)
     seen = shapely.Polygon(Q2)
     shapely.prepare(seen)
@@ -97,13 +166,13 @@ def event_lines(S, nP, dP, R, c, radius, Qc, shortcuts=True, st=None, solid=None
                          np.zeros((0, 3)) if t < 4 else np.zeros(0, dtype=int)) for t in range(5))
     # where the lines from v through the edge's ends meet P's plane (not spanned:
     # parallel, or the image passes through infinity: the whole chord)
-    den0, den1 = (e0 - v) @ nP, (e1 - v) @ nP
-    ok = ((np.abs(den0) >= tol.AREA_RAY_PARALLEL * np.linalg.norm(e0 - v, axis=1))
-          & (np.abs(den1) >= tol.AREA_RAY_PARALLEL * np.linalg.norm(e1 - v, axis=1))
+    den0, den1 = _dot(e0 - v, nP), _dot(e1 - v, nP)
+    ok = ((np.abs(den0) >= tol.AREA_RAY_PARALLEL * np.sqrt(_dot(e0 - v, e0 - v)))
+          & (np.abs(den1) >= tol.AREA_RAY_PARALLEL * np.sqrt(_dot(e1 - v, e1 - v)))
           & (den0 * den1 > 0))
     with np.errstate(divide="ignore", invalid="ignore"):
-        x0 = v + ((dP - v @ nP) / den0)[:, None] * (e0 - v)
-        x1 = v + ((dP - v @ nP) / den1)[:, None] * (e1 - v)
+        x0 = v + ((dP - _dot(v, nP)) / den0)[:, None] * (e0 - v)
+        x1 = v + ((dP - _dot(v, nP)) / den1)[:, None] * (e1 - v)
     # each polygon's own plane, through its first vertex, before its vertex-edge events
     first = W[start[:-1]]
     planes = cross(W[start[:-1] + 1] - first, W[start[:-1] + 2] - first)
@@ -122,33 +191,32 @@ def event_lines(S, nP, dP, R, c, radius, Qc, shortcuts=True, st=None, solid=None
     first = m[np.arange(len(m)), np.argmax(m != 0, axis=1)]
     m = np.where((first > 0)[:, None], m, -m)          # one line for either orientation
     d = cross(nP, m)
-    dn = np.linalg.norm(d, axis=1)
-    live = dn >= tol.AREA_EVENT_PARALLEL * np.linalg.norm(m, axis=1)
+    dn = np.sqrt(_dot(d, d))
+    live = dn >= tol.AREA_EVENT_PARALLEL * np.sqrt(_dot(m, m))
     m, v, span, spanned, d = m[live], v[live], span[live], spanned[live], d[live] / dn[live, None]
     A = np.stack([np.broadcast_to(nP, m.shape), m, d], axis=1)
-    rhs = np.stack([np.full(len(m), dP), np.einsum("lx,lx->l", m, v), d @ c], axis=1)
-    x0 = np.linalg.solve(A, rhs[:, :, None])[:, :, 0]
-    h2 = radius * radius - np.einsum("lx,lx->l", x0 - c, x0 - c)
+    rhs = np.stack([np.full(len(m), dP), _dot(m, v), _dot(d, c)], axis=1)
+    x0 = _solve3(A, rhs)
+    h2 = radius * radius - _dot(x0 - c, x0 - c)
     live = h2 > 0
     x0, d, span, spanned, half = x0[live], d[live], span[live], spanned[live], np.sqrt(h2[live])
     ends = np.stack([x0 - half[:, None] * d, x0 + half[:, None] * d], axis=1)
     # the span's ends where they lie on the chord (as computed: segments that meet there
     # join exactly), else the chord's ends
-    t = np.einsum("lex,lx->le", span - x0[:, None], d)
+    t = _dot(span - x0[:, None], d[:, None])
     swap = t[:, 1] < t[:, 0]
     t = np.where(swap[:, None], t[:, ::-1], t)
     span = np.where(swap[:, None, None], span[:, ::-1], span)
     inside = ~spanned | ((t[:, 0] < half) & (t[:, 1] > -half))
     use = spanned[:, None] & (np.stack([t[:, 0] > -half, t[:, 1] < half], axis=1))
     ends = np.where(use[:, :, None], span, ends)[inside]
-    E2 = (ends - c) @ R[:2].T
+    E2 = rotate(ends - c, R)[..., :2]
     # one copy of each segment: the plane through a vertex and an edge is the same for
     # every pair of polygons sharing them (a vertex of k faces against an edge of two
     # gives up to 2k copies), and GEOS nodes a copy at the cost of a distinct line; the ends
     # are computed alike for each copy, so the copies are equal to the bit
     swap = (E2[:, 0, 0] > E2[:, 1, 0]) | ((E2[:, 0, 0] == E2[:, 1, 0]) & (E2[:, 0, 1] > E2[:, 1, 1]))
-    E2 = np.unique(np.where(swap[:, None, None], E2[:, ::-1], E2) + 0.0, axis=0)
-    return [(p0, p1) for p0, p1 in E2]
+    return np.unique(np.where(swap[:, None, None], E2[:, ::-1], E2) + 0.0, axis=0)
 
 
 def cut_cells(Pc, nP, lines, R, c, grid=None, lengthen=True):

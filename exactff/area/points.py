@@ -7,8 +7,7 @@ import numpy as np
 
 from .. import _tolerances as tol
 from ..geometry import receiver_frame
-from ..kernel import clipped_sector_sums
-from ..rings import owners, successors
+from ..kernel._sector import row_sums
 
 __all__ = ["point_values"]
 
@@ -43,15 +42,17 @@ def point_values(X, nP, Qs):
     """
     R = receiver_frame(nP)
     nX, m = len(X), len(Qs)
-    ks = np.array([len(Q) for Q in Qs])
-    # polygon (j, p): receiver j seen from point p, numbered j * nX + p; its vertices'
-    # offsets from its first vertex are the same for every point
-    A0 = ((np.array([Q[0] for Q in Qs])[:, None, :] - X[None]) @ R.T).reshape(-1, 3)
-    E = np.concatenate([np.tile((Q - Q[0]) @ R.T, (nX, 1)) for Q in Qs])
-    lens = np.repeat(ks, nX)
-    offsets = np.concatenate([[0], np.cumsum(lens)])
-    owner, nxt = owners(offsets), successors(offsets)
-    S, mags, errs = clipped_sector_sums(A0, E, nxt, owner, m * nX, rounded_offsets=True)
+    # polygon (j, p): receiver j seen from point p, numbered j * nX + p, its sector sum
+    # in offset form (compiled, _core/sector_sums.h: kernel/sector.py's
+    # clipped_sector_sums with the offsets' rounding, the same arithmetic)
+    V = np.concatenate([np.asarray(Q, dtype=float) for Q in Qs])
+    offsets = np.concatenate([[0], np.cumsum([len(Q) for Q in Qs])]).astype(np.int64)
+    ids = np.repeat(np.arange(m, dtype=np.int64), nX)
+    rows = np.tile(np.arange(nX, dtype=np.int64), m)
+    frames = np.broadcast_to(R, (nX, 3, 3))
+    S, mags, errs, _ = row_sums(V=V, offsets=offsets, ids=ids, rows=rows,
+                                P=np.asarray(X, dtype=float), frames=frames, eps=tol.EPS,
+                                ulps=tol.OFFSET_ROUNDING_ULPS, c2eps=tol.C2 * tol.EPS)
     # the sector sums' own error model (C1 is calibrated for the unit roundoff 2**-53)
     return (np.abs(S).reshape(m, nX) / (2.0 * np.pi),
             ((tol.C1 * tol.EPS * mags + errs) / (2.0 * np.pi)).reshape(m, nX))

@@ -267,11 +267,13 @@ def area_row(scene, i, atol, *, rtol=None, shortcuts=True, stats=None):
                 inner = np.full((len(solid), 3), np.nan)
                 kept = set(B) | {i, jj}
                 N, D = scene.normals, scene.plane_offsets
+                # (each solid's members and centre stored once for the scene:
+                # ConvexSolids; no scan of the scene per pair)
                 for g in set(solid[solid >= 0].tolist()):
                     if all(k in kept or (polys[k] @ N[i] - D[i]).max() <= 0
                            or (polys[k] @ N[jj] - D[jj]).max() <= 0
-                           for k in np.flatnonzero(solids[0] == g).tolist()):
-                        inner[solid == g] = solids[2][g].mean(axis=0)
+                           for k in solids.members[g].tolist()):
+                        inner[solid == g] = solids.centres[g]
             occluded.append(((j, Pc, Qc), B, solid, inner))
             continue
         if len(polys) > 2 and shortcuts:

@@ -1,0 +1,104 @@
+"""An occluded pair's compiled path (exactff/_core/pair.cpp, module exactff.area._pair)
+against the numpy and GEOS reference it replaces: the visibility events of every
+occluded pair of View3D's files, the same segments to the bit and the same events culled;
+and the events of a blocker between two squares against the lines derived by hand."""
+
+import os
+
+import numpy as np
+import pytest
+
+import exactff as ef
+from exactff import _tolerances as tol
+from exactff.area import adaptive
+from exactff.area._pair import event_lines as compiled_event_lines
+from exactff.area.events import event_lines
+from exactff.area.row import AreaStats, area_row
+from exactff.geometry import plane_frame, receiver_frame
+
+DATA = os.path.join(os.path.dirname(__file__), "data", "view3d")
+GUNTER2 = "/work/shared/scenes/view3d/gunter2.vs3"
+
+
+def _events_of_every_pair(monkeypatch, scene, rows, shortcuts=True):
+    """For every occluded pair of the rows, the events both ways (the pair's integral
+    itself skipped: its unoccluded value stands in): a list of (numpy, compiled, their
+    counters, the disk's radius)."""
+    seen = []
+
+    def lines_only(S, Pc, Qc, nP, atol, area_P, whole, shortcuts, st, solid=None, inner=None):
+        # the event lines' arguments as the pair's integral forms them
+        R, c = receiver_frame(nP), Pc.mean(axis=0)
+        dP = float(nP @ Pc[0])
+        radius = (1.0 + tol.AREA_HIDDEN_PAD) * float(np.linalg.norm(Pc - c, axis=1).max())
+        a, b = AreaStats(), AreaStats()
+        ref = event_lines(S, nP, dP, R, c, radius, Qc, shortcuts, a, solid, compiled=False)
+        got = event_lines(S, nP, dP, R, c, radius, Qc, shortcuts, b, solid)
+        seen.append((ref, got, (a.culled_events, a.solid_events),
+                     (b.culled_events, b.solid_events)))
+        return whole[0], whole[1], 0
+
+    monkeypatch.setattr(adaptive, "_hidden_integral", lines_only)
+    for r in rows:
+        area_row(scene, r, 1e-6, shortcuts=shortcuts)
+    return seen
+
+
+@pytest.mark.parametrize("name, rows, shortcuts", [
+    ("test4.vs3", None, True), ("facet.vs3", None, True), ("l_room_f3.vs3", None, True),
+    ("l_room_f3a.vs3", None, True), ("gunter1.vs3", None, True),
+    ("gunter1.vs3", [0, 5, 17], False), ("gunter2.vs3", [0, 150, 397], True)])
+def test_compiled_events_are_the_reference_to_the_bit(monkeypatch, name, rows, shortcuts):
+    path = GUNTER2 if name == "gunter2.vs3" else os.path.join(DATA, name)
+    if not os.path.exists(path):
+        pytest.skip(f"{path} not here")
+    scene = ef.read_vs3(path)
+    seen = _events_of_every_pair(monkeypatch, scene, range(len(scene)) if rows is None else rows,
+                                 shortcuts)
+    assert len(seen) > 5
+    for ref, got, counts_ref, counts_got in seen:
+        assert got.shape == ref.shape and np.array_equal(got, ref)
+        assert counts_got == counts_ref
+    # the shortcuts culled events somewhere (the comparison covers the culling test)
+    if shortcuts and name in ("l_room_f3a.vs3", "gunter1.vs3"):
+        assert sum(c[0] for _, _, c, _ in seen) > 0
+
+
+def test_events_of_a_blocker_between_two_squares():
+    # a unit square Q at height 2 over the emitter's plane z = 0 and a square blocker K
+    # [.4, .6]^2 at height 1: the image through a vertex v of K of Q's edge at e is 2 v - e
+    # on z = 0, the image through a vertex of Q of K's edge 2 e - v; the lines are
+    # x = -0.2, 0.2, 0.8, 1.2 and the same in y (both planes are parallel to z = 0: no
+    # line of their own)
+    Q = np.array([[0, 0, 2], [0, 1, 2], [1, 1, 2], [1, 0, 2]], float)
+    K = np.array([[.4, .4, 1], [.6, .4, 1], [.6, .6, 1], [.4, .6, 1]], float)
+    nP, c = np.array([0, 0, 1.0]), np.array([.5, .5, 0])
+    R = receiver_frame(nP)
+    lines = event_lines([Q, K], nP, 0.0, R, c, 2.0, Q)
+    ends = c + lines @ R[:2]                                      # (m, 2, 3), z = 0
+    on = {("x", round(float(x), 12)) for s in ends if abs(s[0, 0] - s[1, 0]) < 1e-15
+          for x in [s[0, 0]]}
+    on |= {("y", round(float(y), 12)) for s in ends if abs(s[0, 1] - s[1, 1]) < 1e-15
+           for y in [s[0, 1]]}
+    expect = {(a, v) for a in "xy" for v in (-0.2, 0.2, 0.8, 1.2)}
+    assert on == expect
+    # every segment on one of those lines and within the disk
+    assert all(abs(s[0, 0] - s[1, 0]) < 1e-15 or abs(s[0, 1] - s[1, 1]) < 1e-15 for s in ends)
+    assert np.all(np.linalg.norm(lines, axis=2) <= 2.0 * (1 + 1e-15))
+    assert np.array_equal(lines, event_lines([Q, K], nP, 0.0, R, c, 2.0, Q, compiled=False))
+
+
+def test_compiled_events_check_their_arrays():
+    Q = np.array([[0, 0, 2], [0, 1, 2], [1, 1, 2], [1, 0, 2]], float)
+    nQ, q0, RQ, Q2 = plane_frame(Q)
+    ok = dict(W=Q, start=np.array([0, 4]), solid=np.zeros(0, np.int64), nP=[0, 0, 1.0],
+              dP=0.0, frame=np.eye(3), c=[0, 0, 0.0], radius=1.0, nQ=nQ, q0=q0, RQ=RQ[:2],
+              Q2=Q2, shortcuts=True, ray_parallel=tol.AREA_RAY_PARALLEL,
+              event_parallel=tol.AREA_EVENT_PARALLEL)
+    assert compiled_event_lines(**ok)[0].shape[1:] == (2, 2)
+    with pytest.raises(ValueError, match="wrong shapes"):
+        compiled_event_lines(**{**ok, "nP": [0, 1.0]})
+    with pytest.raises(ValueError, match="wrong shapes"):
+        compiled_event_lines(**{**ok, "solid": np.zeros(3, np.int64)})
+    with pytest.raises(IndexError, match="start"):
+        compiled_event_lines(**{**ok, "start": np.array([0, 5])})
