@@ -24,6 +24,12 @@ Usage: python benchmarks/bench_area.py [--cube-k 8]
    1e-6 and 1e-9 (process and wall time, the rows' and reciprocity's invariants).
    ``--skip-slow`` leaves out gunter1 at 1e-9; ``--only-view3d`` runs this part
    alone.
+5. ``--pair-path`` alone: the occluded pairs' compiled path against the numpy and GEOS
+   reference it replaces, in one run at tolerance 1e-6 (test4, facet, gunter1; process
+   time): the events compiled (``exactff/_core/pair.cpp``) or by numpy
+   (``event_lines(compiled=False)``); then gunter1's wall time on 1 and 2 threads
+   (``executor=ThreadPoolExecutor``: the GIL released in the compiled calls) and in 2
+   processes (``jobs=2``), best of ``--repeat``.
 """
 
 import argparse
@@ -123,9 +129,14 @@ def main():
     ap.add_argument("--only-view3d", action="store_true",
                     help="only the View3D examples and the cube against pyviewfactor")
     ap.add_argument("--skip-slow", action="store_true", help="leave out gunter1 at 1e-9")
+    ap.add_argument("--pair-path", action="store_true",
+                    help="only the occluded pairs' compiled path against its reference")
+    ap.add_argument("--repeat", type=int, default=2, help="runs of each --pair-path timing")
     args = ap.parse_args()
     print(machine())
     print()
+    if args.pair_path:
+        return pair_path(args)
     if args.only_cube:
         return cube_matrix(args)
     if args.only_view3d:
@@ -180,6 +191,56 @@ VIEW3D_EXAMPLES = (
 #: pyviewfactor 1.1's unoccluded matrix of ``subdivided_box(16)`` with 2 threads,
 #: measured 2026-12-01 (s), shown where pyviewfactor is not importable.
 PYVIEWFACTOR_K16 = "13.7-16.7 s"
+
+
+def pair_path(args):
+    """Part 5: the occluded pairs' compiled path against the numpy reference, and threads."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    from exactff.area import adaptive, events
+
+    compiled = events.event_lines
+
+    def by_numpy(*a, **k):
+        return compiled(*a, **k, compiled=False)
+
+    print("| example | events | process s | points | max estimate |")
+    print("|---|---|---|---|---|")
+    out = {}
+    for name in ("test4.vs3", "facet.vs3", "gunter1.vs3"):
+        scene = ef.read_vs3(os.path.join(DATA, name))
+        for label, fn in (("numpy + GEOS", by_numpy), ("compiled", compiled)):
+            adaptive.event_lines = fn
+            best = np.inf
+            for _ in range(args.repeat):
+                st = {}
+                t0 = time.process_time()
+                F, E = ef.area_form_factors(scene, tolerance=1e-6, error=True, stats=st)
+                best = min(best, time.process_time() - t0)
+            out[name, label] = F
+            print(f"| {name} | {label} | {best:.3f} | {st['point_values']:,} | {E.max():.1e} |",
+                  flush=True)
+        adaptive.event_lines = compiled
+        assert np.array_equal(out[name, "numpy + GEOS"], out[name, "compiled"])
+    print()
+    print("gunter1 at 1e-6, wall time (best of %d):" % args.repeat)
+    print()
+    print("| how | wall s | speed-up |")
+    print("|---|---|---|")
+    scene = ef.read_vs3(os.path.join(DATA, "gunter1.vs3"))
+    base = None
+    for how in ("1 thread", "2 threads", "2 processes"):
+        best = np.inf
+        for _ in range(args.repeat):
+            t0 = time.perf_counter()
+            if how == "2 processes":
+                ef.area_form_factors(scene, tolerance=1e-6, jobs=2)
+            else:
+                with ThreadPoolExecutor(int(how[0])) as pool:
+                    ef.area_form_factors(scene, tolerance=1e-6, executor=pool)
+            best = min(best, time.perf_counter() - t0)
+        base = base or best
+        print(f"| {how} | {best:.3f} | {base / best:.2f} |", flush=True)
 
 
 def view3d_table(args):

@@ -55,6 +55,7 @@ __all__ = [
     "AREA_IMAGE_ULPS",
     "AREA_IMAGE_RTOL",
     "AREA_IMAGE_PRECISE_RTOL",
+    "AREA_IMAGE_PRECISE_SHARE",
     "AREA_IMAGE_BUDGET_SHARE",
     "AREA_SLIVER_ULPS",
     "AREA_MAX_PIECES",
@@ -403,6 +404,15 @@ AREA_IMAGE_RTOL = 1e-9
 #: again in long double at a point whose images their rounding can move by more than
 #: this share of the receiver's size (2.4 times faster in doubles on View3D's facet).
 AREA_IMAGE_PRECISE_RTOL = 1e-13
+
+#: Area form factors, hidden parts: again in long double (AREA_IMAGE_PRECISE_RTOL) only
+#: where what the doubles' rounding moves of the point's value (the estimate's term for
+#: it, which then holds the doubles' figure) is more than this share of the caller's
+#: budget for it (``atol`` of ``hidden_values``, AREA_IMAGE_BUDGET_SHARE of the pair's):
+#: the rules integrate the estimates, so at most this share of that budget a rule. On
+#: gunter1 at 1e-6, 58 % of the points went to long double by AREA_IMAGE_PRECISE_RTOL
+#: alone, each costing both passes.
+AREA_IMAGE_PRECISE_SHARE = 0.01
 
 #: Area form factors, occluded pairs: the share of the tolerance that a point value's
 #: estimate may hold for its images' rounding before the point goes to the engine (the

@@ -501,7 +501,7 @@ def test_compiled_sector_sums_of_the_hidden_pieces_against_the_kernel(tilt):
     out = area.hidden_pieces(X, corners, q0, nQ, RQ[:2], V, counts, NK, group, 1e-12, 1e-12,
                              8.0, 4.0,
                              20000, 1e-13, extent, parts, part_counts, R, 10.0, 10.0,
-                             2.0 ** -53, True)
+                             2.0 ** -53, True, precise_atol=-1.0)
     xy, start, ring_point, H, rnd = out[0], out[1], out[2], out[9], out[10]
     owner, first = owners(start), start[:-1]
     E = ((xy - xy[first[owner]]) @ RQ[:2]) @ R.T
@@ -568,8 +568,8 @@ def _lose_images(monkeypatch, area, which=None, length=None):
     through infinity; with ``length``, report that as every point's pieces' perimeter."""
     build = area.hidden_pieces
 
-    def lose(*args):
-        out = list(build(*args))
+    def lose(*args, **kwargs):
+        out = list(build(*args, **kwargs))
         lost = out[3].copy()
         lost[slice(None) if which is None else which] = True
         out[3] = lost

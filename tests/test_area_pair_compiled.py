@@ -102,3 +102,34 @@ def test_compiled_events_check_their_arrays():
         compiled_event_lines(**{**ok, "solid": np.zeros(3, np.int64)})
     with pytest.raises(IndexError, match="start"):
         compiled_event_lines(**{**ok, "start": np.array([0, 5])})
+
+
+def test_hidden_parts_kept_in_doubles_within_the_estimates(monkeypatch):
+    # a point whose images the doubles' rounding can move by more than
+    # AREA_IMAGE_PRECISE_RTOL is computed again in long double only where that moves more
+    # of its value than AREA_IMAGE_PRECISE_SHARE of the budget: the hidden parts of
+    # gunter1's row 17 at 1e-6 (every call, all their points) both ways, within the two
+    # estimates of each other, and the doubles' estimates within the budget's share more
+    from exactff.area import hidden
+
+    calls, values = [], hidden.hidden_values
+
+    def record(X, nP, Qc, blockers, st=None, atol=0.0, setup=None, *a, **k):
+        calls.append((X, nP, Qc, blockers, atol, setup))
+        return values(X, nP, Qc, blockers, st, atol, setup, *a, **k)
+
+    monkeypatch.setattr(adaptive, "hidden_values", record)
+    ef.area_form_factors(ef.read_vs3(os.path.join(DATA, "gunter1.vs3")), rows=[17],
+                         tolerance=1e-6)
+    monkeypatch.undo()
+    assert len(calls) > 5
+    changed = 0
+    for X, nP, Qc, blockers, atol, setup in calls:
+        H, EH = values(X, nP, Qc, blockers, None, atol, setup)
+        with monkeypatch.context() as m:
+            m.setattr(tol, "AREA_IMAGE_PRECISE_SHARE", -1.0)       # always again
+            H1, EH1 = values(X, nP, Qc, blockers, None, atol, setup)
+        assert np.all(np.abs(H - H1) <= EH + EH1)
+        assert np.all(EH <= EH1 + tol.AREA_IMAGE_PRECISE_SHARE * atol * (1 + 1e-9))
+        changed += int(np.count_nonzero(H != H1))
+    assert changed > 1000          # the doubles stood for many points

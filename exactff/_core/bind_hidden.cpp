@@ -20,7 +20,7 @@ py::tuple hidden_pieces(Array<double> X, Array<double> corners, Array<double> q0
                         double back_face, double edge_on, double vertex_ulps, double sliver_ulps,
                         long long max_pieces, double precise_rtol, double extent,
                         Array<double> parts, Array<long long> part_counts, Array<double> frame,
-                        double c1, double c2, double eps, bool rings) {
+                        double c1, double c2, double eps, bool rings, double precise_atol) {
     if (X.ndim() != 2 || corners.ndim() != 2 || blockers.ndim() != 3 || parts.ndim() != 3 ||
         q0.size() != 3 || nQ.size() != 3 || RQ.size() != 6 || frame.size() != 9)
         throw std::invalid_argument("hidden_pieces: arrays of the wrong shapes");
@@ -44,6 +44,7 @@ py::tuple hidden_pieces(Array<double> X, Array<double> corners, Array<double> q0
     a.sliver_ulps = sliver_ulps;
     a.max_pieces = max_pieces;
     a.precise_rtol = precise_rtol;
+    a.precise_atol = precise_atol;
     a.extent = extent;
     a.parts = parts.data();
     a.n_parts = parts.shape(0);
@@ -77,5 +78,6 @@ PYBIND11_MODULE(_hidden, m) {
           py::arg("normals"), py::arg("groups"), py::arg("back_face"), py::arg("edge_on"),
           py::arg("vertex_ulps"), py::arg("sliver_ulps"), py::arg("max_pieces"),
           py::arg("precise_rtol"), py::arg("extent"), py::arg("parts"), py::arg("part_counts"),
-          py::arg("frame"), py::arg("c1"), py::arg("c2"), py::arg("eps"), py::arg("rings"));
+          py::arg("frame"), py::arg("c1"), py::arg("c2"), py::arg("eps"), py::arg("rings"),
+          py::arg("precise_atol"));
 }

@@ -494,7 +494,8 @@ HiddenResult hidden_pieces(const HiddenArgs& args) {
     const double *q0 = args.q0, *nQ = args.nQ, *RQ = args.RQ;
     const double back_face = args.back_face, edge_on = args.edge_on,
                  vertex_ulps = args.vertex_ulps, sliver_ulps = args.sliver_ulps,
-                 precise_rtol = args.precise_rtol, extent = args.extent, c1 = args.c1,
+                 precise_rtol = args.precise_rtol, precise_atol = args.precise_atol,
+                 extent = args.extent, c1 = args.c1,
                  c2 = args.c2, eps = args.eps;
     const long long max_pieces = args.max_pieces;
     const bool rings = args.rings;
@@ -571,8 +572,32 @@ HiddenResult hidden_pieces(const HiddenArgs& args) {
             // in doubles first; in long double where an image is not finite or the
             // vertices' rounding can move it by more than precise_rtol of its extent
             region_at(in, p, region, fast);
-            if (!region.ok || region.moved > precise_rtol * std::max(region.reach, extent))
-                region_at(in, p, region, precise);
+            bool again = !region.ok || region.moved > precise_rtol * std::max(region.reach, extent);
+            if (again && region.ok && precise_atol >= 0 && !region.pieces.empty()) {
+                // what the doubles' rounding moves of the value, the estimate's term
+                // moved * length * h / (pi r^3) (r: the distance from p to the region's
+                // box): within precise_atol, the doubles' pieces stand
+                double len = 0.0;
+                Box bb = region.slivers.box;
+                for (const Piece& F : region.pieces)
+                    for (size_t k = 0, m = F.size(); k < m; ++k) {
+                        const P2& u = F.v[k];
+                        const P2& v = F.v[(k + 1) % m];
+                        len += std::hypot(v.x - u.x, v.y - u.y);
+                        bb.x0 = std::min(bb.x0, u.x);
+                        bb.y0 = std::min(bb.y0, u.y);
+                        bb.x1 = std::max(bb.x1, u.x);
+                        bb.y1 = std::max(bb.y1, u.y);
+                    }
+                const Vec3<double> f = sub(p, in.origin);
+                const double h = dot(f, in.nq), fx = dot(f, in.ax), fy = dot(f, in.ay);
+                const double dx = std::max(0.0, std::max(bb.x0 - fx, fx - bb.x1));
+                const double dy = std::max(0.0, std::max(bb.y0 - fy, fy - bb.y1));
+                const double r = std::sqrt(h * h + dx * dx + dy * dy);
+                const double bound = r > 0 && h > 0 ? h / (3.141592653589793 * r * r * r) : 0.0;
+                again = !(region.moved * len * bound <= precise_atol);
+            }
+            if (again) region_at(in, p, region, precise);
             reach[i] = region.reach;
             moved[i] = region.moved;
             back_faces += region.back_faces;

@@ -23,7 +23,9 @@ namespace exactff {
 // reach (twice its area) is dropped and counted; max_pieces: a point with more pieces
 // is reported lost; precise_rtol, extent: a point is computed again in long double
 // where an image is not finite or the vertices' rounding can move its images by more
-// than precise_rtol of the larger of their reach and extent (Q's size); parts (p, k', 2)
+// than precise_rtol of the larger of their reach and extent (Q's size), unless what that
+// moves of the value (moved * length * h / (pi r^3), the caller's estimate's term) is
+// within precise_atol (negative: always again); parts (p, k', 2)
 // padded convex parts of Q in the plane's frame with counts (p,), none where the base
 // is Q itself; frame (3, 3) the receiving frame of the points (rows: two axes of the
 // emitter's plane and its normal); c1, c2, eps the sector sums' error model; rings: also
@@ -51,7 +53,7 @@ struct HiddenArgs {
     const long long* groups;
     double back_face, edge_on, vertex_ulps, sliver_ulps;
     long long max_pieces;
-    double precise_rtol, extent;
+    double precise_rtol, precise_atol, extent;
     const double* parts;
     std::int64_t n_parts, part_stride;
     const long long* part_counts;

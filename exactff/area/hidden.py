@@ -136,7 +136,8 @@ def hidden_values(X, nP, Qc, blockers, st=None, atol=0.0, setup=None, shortcuts=
     boundaries by the splits' rounding (a few units of the largest coordinate per
     line) and by the clipped vertices' own rounding as the projection magnifies it
     (``moved``; the 3-D work is in doubles, and again in long double at a point where
-    that is more than ``AREA_IMAGE_PRECISE_RTOL`` of Qc's size), through the kernel's
+    that is more than ``AREA_IMAGE_PRECISE_RTOL`` of Qc's size and moves more of the
+    value than ``AREA_IMAGE_PRECISE_SHARE`` of ``atol``), through the kernel's
     largest value over the region's bounding box, ``h / (pi r^3)``. Where a point's
     images do not stay finite, or that rounding can move them by more than
     ``AREA_IMAGE_RTOL`` of Qc's size (a crossing or a blocker's vertex at the point, to
@@ -196,7 +197,7 @@ def hidden_values(X, nP, Qc, blockers, st=None, atol=0.0, setup=None, shortcuts=
         tol.AREA_EDGE_ON_RTOL * size,
         tol.AREA_IMAGE_ULPS, tol.AREA_SLIVER_ULPS, tol.AREA_MAX_PIECES,
         tol.AREA_IMAGE_PRECISE_RTOL, extent, parts, part_counts, receiver_frame(nP),
-        tol.C1, tol.C2, tol.EPS, False)
+        tol.C1, tol.C2, tol.EPS, False, precise_atol=tol.AREA_IMAGE_PRECISE_SHARE * atol)
     if st is not None and back:
         st.back_faces += int(back)
     # the clipping's rounding: each piece's boundary within delta of the exact one (a
