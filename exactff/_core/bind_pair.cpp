@@ -57,6 +57,24 @@ py::tuple event_lines(Array<double> W, Array<std::int64_t> start, Array<std::int
                           r.culled_events, r.solid_events);
 }
 
+py::tuple cut_cells(Array<double> P2, Array<double> segments, double step, double merge,
+                    double sliver) {
+    if (P2.ndim() != 2 || P2.shape(1) != 2 || P2.shape(0) < 3 ||
+        (segments.size() != 0 && (segments.ndim() != 3 || segments.shape(1) != 2 ||
+                                  segments.shape(2) != 2)))
+        throw std::invalid_argument("cut_cells: P2 (k >= 3, 2), segments (m, 2, 2) expected");
+    const std::int64_t m = segments.size() / 4;
+    exactff::CellResult r;
+    {
+        py::gil_scoped_release release;
+        r = exactff::cut_cells(P2.data(), P2.shape(0), segments.data(), m, step, merge, sliver);
+    }
+    py::array_t<double> tri = as_array(r.triangles);
+    return py::make_tuple(tri.reshape({py::ssize_t(r.triangles.size() / 6), py::ssize_t(3),
+                                       py::ssize_t(2)}),
+                          as_array(r.areas), r.ok);
+}
+
 }  // namespace
 
 PYBIND11_MODULE(_pair, m) {
@@ -67,4 +85,8 @@ PYBIND11_MODULE(_pair, m) {
           py::arg("ray_parallel"), py::arg("event_parallel"),
           "event_lines(...) -> (segments (m, 2, 2), culled_events, solid_events): the pair's "
           "vertex-edge events as segments of the emitter's plane (pair.h)");
+    m.def("cut_cells", &cut_cells, py::arg("P2"), py::arg("segments"), py::arg("step"),
+          py::arg("merge"), py::arg("sliver"),
+          "cut_cells(P2, segments, step, merge, sliver) -> (triangles (t, 3, 2), areas, ok): the "
+          "emitter cut along the event lines (pair.h)");
 }

@@ -219,4 +219,273 @@ EventResult event_lines(const EventArgs& a) {
     return out;
 }
 
+// The emitter cut along the event lines (the reference: area/events.py's cut_cells with
+// GEOS). Each line is cut to P (convex: the parameters where it is inside every edge's
+// half-plane), an end within step of P's boundary moved onto it; the lines and P's edges
+// are noded at their crossings (nodes within merge of each other are one), dangles
+// (nodes of one edge) removed until none is left, and the faces traced by turning at
+// each node to the next edge clockwise; each face of positive area above sliver is
+// clipped into triangles by ears (its straight-angle vertices dropped first).
+namespace {
+
+struct Pt {
+    double x, y;
+};
+
+double cross2(const Pt& o, const Pt& a, const Pt& b) {
+    return (a.x - o.x) * (b.y - o.y) - (a.y - o.y) * (b.x - o.x);
+}
+
+// the ears of a simple polygon (counter-clockwise): false where no ear is found
+bool ear_clip(std::vector<Pt> v, double flat, std::vector<double>& out) {
+    // straight angles (collinear vertices) dropped: a triangle of no area is no cell
+    for (bool again = true; again && v.size() > 3;) {
+        again = false;
+        for (size_t i = 0; i < v.size() && v.size() > 3; ++i) {
+            const Pt& a = v[(i + v.size() - 1) % v.size()];
+            const Pt& b = v[(i + 1) % v.size()];
+            if (std::fabs(cross2(a, v[i], b)) <= flat) {
+                v.erase(v.begin() + static_cast<std::ptrdiff_t>(i));
+                again = true;
+            }
+        }
+    }
+    while (v.size() > 3) {
+        const size_t n = v.size();
+        bool found = false;
+        for (size_t i = 0; i < n; ++i) {
+            const Pt& a = v[(i + n - 1) % n];
+            const Pt& b = v[i];
+            const Pt& c = v[(i + 1) % n];
+            if (cross2(a, b, c) <= flat) continue;          // reflex or flat
+            bool empty = true;
+            for (size_t j = 0; j < n && empty; ++j) {
+                if (j == i || j == (i + 1) % n || j == (i + n - 1) % n) continue;
+                const Pt& p = v[j];
+                if (cross2(a, b, p) >= 0 && cross2(b, c, p) >= 0 && cross2(c, a, p) >= 0)
+                    empty = false;
+            }
+            if (!empty) continue;
+            out.insert(out.end(), {a.x, a.y, b.x, b.y, c.x, c.y});
+            v.erase(v.begin() + static_cast<std::ptrdiff_t>(i));
+            found = true;
+            break;
+        }
+        if (!found) return false;
+    }
+    if (v.size() == 3 && cross2(v[0], v[1], v[2]) > 0)
+        out.insert(out.end(), {v[0].x, v[0].y, v[1].x, v[1].y, v[2].x, v[2].y});
+    return true;
+}
+
+}  // namespace
+
+CellResult cut_cells(const double* P2, std::int64_t k, const double* S, std::int64_t m,
+                     double step, double merge, double sliver) {
+    CellResult res;
+    std::vector<Pt> P(static_cast<size_t>(k));
+    for (std::int64_t i = 0; i < k; ++i) P[i] = {P2[2 * i], P2[2 * i + 1]};
+    const size_t K = P.size();
+    double area = 0;
+    for (size_t i = 0; i < K; ++i) area += cross2({0, 0}, P[i], P[(i + 1) % K]);
+    area *= 0.5;
+    for (size_t i = 0; i < K; ++i)
+        if (cross2(P[i], P[(i + 1) % K], P[(i + 2) % K]) < 0 || !(area > 0)) {
+            res.ok = false;                 // not convex: GEOS cuts it
+            return res;
+        }
+    // the edges to node: P's, then each line's part inside P
+    std::vector<std::array<Pt, 2>> E;
+    for (size_t i = 0; i < K; ++i) E.push_back({P[i], P[(i + 1) % K]});
+    for (std::int64_t s = 0; s < m; ++s) {
+        const Pt a{S[4 * s], S[4 * s + 1]}, b{S[4 * s + 2], S[4 * s + 3]};
+        const double dx = b.x - a.x, dy = b.y - a.y;
+        // the line a + t (b - a) inside every edge's half-plane: t in [lo, hi] (the
+        // whole line's crossings with the boundary in [LO, HI])
+        double lo = 0, hi = 1, LO = -INFINITY, HI = INFINITY;
+        bool in = true;
+        for (size_t i = 0; i < K && in; ++i) {
+            const Pt& p = P[i];
+            const Pt& q = P[(i + 1) % K];
+            const double f = cross2(p, q, a);            // > 0: a inside this edge
+            const double g = (q.x - p.x) * dy - (q.y - p.y) * dx;   // its rate along t
+            if (g == 0) {
+                if (f < 0) in = false;
+                continue;
+            }
+            const double t = -f / g;
+            if (g > 0) LO = std::max(LO, t), lo = std::max(lo, t);
+            else HI = std::min(HI, t), hi = std::min(hi, t);
+        }
+        if (!in || !(lo < hi)) continue;
+        const double len = std::sqrt(dx * dx + dy * dy);
+        if (!(len > 0)) continue;
+        // an end within step of the boundary moved onto it
+        if ((lo - LO) * len <= step) lo = LO;
+        if ((HI - hi) * len <= step) hi = HI;
+        E.push_back({Pt{a.x + lo * dx, a.y + lo * dy}, Pt{a.x + hi * dx, a.y + hi * dy}});
+    }
+    // the nodes: every edge's ends and crossings, within merge of each other one
+    std::vector<Pt> N;
+    const auto node = [&](const Pt& p) {
+        for (size_t i = 0; i < N.size(); ++i)
+            if (std::fabs(N[i].x - p.x) <= merge && std::fabs(N[i].y - p.y) <= merge) return i;
+        N.push_back(p);
+        return N.size() - 1;
+    };
+    std::vector<std::vector<std::pair<double, size_t>>> on(E.size());
+    for (size_t e = 0; e < E.size(); ++e) {
+        on[e].push_back({0.0, node(E[e][0])});
+        on[e].push_back({1.0, node(E[e][1])});
+    }
+    for (size_t e = 0; e < E.size(); ++e)
+        for (size_t f = e + 1; f < E.size(); ++f) {
+            const Pt &a = E[e][0], &b = E[e][1], &c = E[f][0], &d = E[f][1];
+            const double rx = b.x - a.x, ry = b.y - a.y, sx = d.x - c.x, sy = d.y - c.y;
+            const double den = rx * sy - ry * sx;
+            const double le = std::sqrt(rx * rx + ry * ry), lf = std::sqrt(sx * sx + sy * sy);
+            // an end of one on the other (within merge: a T-junction) is a node of both
+            for (int w = 0; w < 2; ++w) {
+                const Pt& p = E[f][w];
+                const double t = ((p.x - a.x) * rx + (p.y - a.y) * ry) / (le * le);
+                if (t > 0 && t < 1 && std::fabs(cross2(a, b, p)) / le <= merge)
+                    on[e].push_back({t, node(p)});
+                const Pt& q = E[e][w];
+                const double u = ((q.x - c.x) * sx + (q.y - c.y) * sy) / (lf * lf);
+                if (u > 0 && u < 1 && std::fabs(cross2(c, d, q)) / lf <= merge)
+                    on[f].push_back({u, node(q)});
+            }
+            if (!(std::fabs(den) > 1e-12 * le * lf)) continue;      // (nearly) parallel
+            const double qx = c.x - a.x, qy = c.y - a.y;
+            double t = (qx * sy - qy * sx) / den, u = (qx * ry - qy * rx) / den;
+            const double te = merge / le, tf = merge / lf;
+            if (t < -te || t > 1 + te || u < -tf || u > 1 + tf) continue;
+            t = std::min(1.0, std::max(0.0, t));
+            u = std::min(1.0, std::max(0.0, u));
+            const size_t id = node({a.x + t * rx, a.y + t * ry});
+            on[e].push_back({t, id});
+            on[f].push_back({u, id});
+        }
+    // the graph's edges: consecutive nodes along each edge, each once
+    std::vector<std::pair<size_t, size_t>> G;
+    for (auto& L : on) {
+        std::sort(L.begin(), L.end());
+        for (size_t i = 0; i + 1 < L.size(); ++i) {
+            size_t u = L[i].second, v = L[i + 1].second;
+            if (u == v) continue;
+            G.push_back({std::min(u, v), std::max(u, v)});
+        }
+    }
+    std::sort(G.begin(), G.end());
+    G.erase(std::unique(G.begin(), G.end()), G.end());
+    // dangles removed until none is left
+    std::vector<int> degree(N.size(), 0);
+    for (const auto& g : G) ++degree[g.first], ++degree[g.second];
+    std::vector<unsigned char> live(G.size(), 1);
+    for (bool again = true; again;) {
+        again = false;
+        for (size_t i = 0; i < G.size(); ++i)
+            if (live[i] && (degree[G[i].first] == 1 || degree[G[i].second] == 1)) {
+                live[i] = 0;
+                --degree[G[i].first];
+                --degree[G[i].second];
+                again = true;
+            }
+    }
+    // the graph connected (else a cell would have a hole: GEOS cuts it)
+    std::vector<size_t> root(N.size());
+    for (size_t i = 0; i < N.size(); ++i) root[i] = i;
+    const auto find = [&](size_t i) {
+        while (root[i] != i) i = root[i] = root[root[i]];
+        return i;
+    };
+    for (size_t i = 0; i < G.size(); ++i)
+        if (live[i]) root[find(G[i].first)] = find(G[i].second);
+    size_t comps = 0;
+    for (size_t i = 0; i < N.size(); ++i)
+        if (degree[i] > 0 && find(i) == i) ++comps;
+    if (comps != 1) {
+        res.ok = false;
+        return res;
+    }
+    // half-edges around each node by angle
+    std::vector<std::vector<std::pair<double, size_t>>> out(N.size());
+    for (size_t i = 0; i < G.size(); ++i) {
+        if (!live[i]) continue;
+        const size_t u = G[i].first, v = G[i].second;
+        out[u].push_back({std::atan2(N[v].y - N[u].y, N[v].x - N[u].x), v});
+        out[v].push_back({std::atan2(N[u].y - N[v].y, N[u].x - N[v].x), u});
+    }
+    for (auto& o : out) std::sort(o.begin(), o.end());
+    std::vector<std::vector<unsigned char>> used(N.size());
+    for (size_t i = 0; i < N.size(); ++i) used[i].assign(out[i].size(), 0);
+    const auto index = [&](size_t u, size_t v) {
+        for (size_t j = 0; j < out[u].size(); ++j)
+            if (out[u][j].second == v) return j;
+        return out[u].size();
+    };
+    const double flat = 1e-14 * area;
+    int outer = 0;
+    double outer_area = 0, inner_area = 0;
+    for (size_t s = 0; s < N.size(); ++s)
+        for (size_t j0 = 0; j0 < out[s].size(); ++j0) {
+            if (used[s][j0]) continue;
+            // the face to the left of s -> t: at each node, the next edge clockwise
+            // from the way back
+            std::vector<Pt> face;
+            size_t u = s, j = j0;
+            bool closed = false;
+            for (size_t guard = 0; guard <= 4 * G.size() + 4; ++guard) {
+                used[u][j] = 1;
+                face.push_back(N[u]);
+                const size_t v = out[u][j].second;
+                const size_t back = index(v, u);
+                const size_t nj = (back + out[v].size() - 1) % out[v].size();
+                u = v;
+                j = nj;
+                if (u == s && j == j0) {
+                    closed = true;
+                    break;
+                }
+                if (used[u][j]) break;
+            }
+            if (!closed) {
+                res.ok = false;
+                return res;
+            }
+            double a = 0;
+            for (size_t i = 0; i < face.size(); ++i)
+                a += cross2({0, 0}, face[i], face[(i + 1) % face.size()]);
+            a *= 0.5;
+            if (a < -sliver) {                            // the outer face
+                ++outer;
+                outer_area -= a;
+                continue;
+            }
+            inner_area += a;
+            if (!(a > sliver)) continue;                  // a sliver
+            res.areas.push_back(a);
+            const size_t before = res.triangles.size();
+            if (!ear_clip(face, flat, res.triangles)) {
+                res.ok = false;
+                return res;
+            }
+            double t = 0;
+            for (size_t i = before; i < res.triangles.size(); i += 6)
+                t += 0.5 * cross2({res.triangles[i], res.triangles[i + 1]},
+                                  {res.triangles[i + 2], res.triangles[i + 3]},
+                                  {res.triangles[i + 4], res.triangles[i + 5]});
+            if (!(std::fabs(t - a) <= 1e-12 * area)) {      // the ears are not the face
+                res.ok = false;
+                return res;
+            }
+        }
+    // a planar arrangement: one outer face, P's boundary, and the cells tile P (else
+    // edges crossed without a node, as where merged nodes moved an edge across another)
+    if (outer != 1 || !(std::fabs(outer_area - area) <= 1e-12 * area) ||
+        !(std::fabs(inner_area - area) <= 1e-12 * area))
+        res.ok = false;
+    return res;
+}
+
 }  // namespace exactff

@@ -1,6 +1,7 @@
 // One occluded pair of an area row, compiled (the area code's per-pair path,
 // exactff/area/, docs/explanation/area-form-factors.md): the vertex-edge visibility
-// events of the pair cut to segments of the emitter's plane (pair.cpp, event_lines).
+// events of the pair cut to segments of the emitter's plane (pair.cpp, event_lines), and
+// the emitter cut along them into cells (cut_cells).
 
 #ifndef EXACTFF_CORE_PAIR_H
 #define EXACTFF_CORE_PAIR_H
@@ -44,6 +45,24 @@ struct EventResult {
 };
 
 EventResult event_lines(const EventArgs& args);
+
+// The emitter cut along the event lines as a 2-D arrangement (no GEOS): P2 (k, 2) the
+// emitter's part, convex and counter-clockwise, in the events' frame; segments (m, 2, 2)
+// the event lines; step: a cut line's end within step of P's boundary is moved onto it
+// (the crossing of its line with the boundary), the rest of P's boundary is left as is;
+// merge: nodes closer than this are one; sliver: cells of at most this area are dropped.
+// Returns the cells' triangles (t, 3, 2), counter-clockwise, the cells' areas, and
+// ok: false where the
+// arrangement is not one this builds (P not convex, a cell with a hole, a face no ear
+// clips), for the caller to cut P another way.
+struct CellResult {
+    std::vector<double> triangles;
+    std::vector<double> areas;
+    bool ok = true;
+};
+
+CellResult cut_cells(const double* P2, std::int64_t k, const double* segments, std::int64_t m,
+                     double step, double merge, double sliver);
 
 }  // namespace exactff
 

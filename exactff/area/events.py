@@ -11,6 +11,7 @@ import shapely
 from .. import _tolerances as tol
 from ..geometry import cross, plane_frame, rotate
 from ..rings import successors
+from ._pair import cut_cells as _compiled_cut_cells
 from ._pair import event_lines as _compiled_event_lines
 
 __all__ = ["event_lines", "cut_cells"]
@@ -219,7 +220,7 @@ def event_lines(S, nP, dP, R, c, radius, Qc, shortcuts=True, st=None, solid=None
     return np.unique(np.where(swap[:, None, None], E2[:, ::-1], E2) + 0.0, axis=0)
 
 
-def cut_cells(Pc, nP, lines, R, c, grid=None, lengthen=True):
+def cut_cells(Pc, nP, lines, R, c, grid=None, lengthen=True, compiled=True):
     """P (clipped) cut along the event lines, as triangles (t, 3, 3) in the world (the
     lines are cut to P first, so every cell lies in P; with ``grid``, the noding snaps
     the vertices to a grid of that size, and the cells lie in P to that size).
@@ -229,8 +230,31 @@ def cut_cells(Pc, nP, lines, R, c, grid=None, lengthen=True):
     dangle, dropped. (GEOS rounds a line's crossing with the boundary, which may leave
     the end a few ulps inside: a dangle that polygonizing drops, and the cell it should
     have cut left whole, with a kink of the hidden part across it; pinned in
-    tests/test_area_view3d.py: a line through a corner of the emitter.)"""
-    poly = shapely.Polygon((Pc - c) @ R[:2].T)
+    tests/test_area_view3d.py: a line through a corner of the emitter.)
+
+    ``compiled`` (default), without ``grid`` and with ``lengthen``: the arrangement of
+    the lines in P is built by :mod:`exactff.area._pair` (``_core/pair.cpp``: the lines
+    cut to P, an end within the lengthening of P's boundary moved onto it, noded at
+    their crossings and T-junctions, crossings within ``AREA_HULL_RTOL`` of P's size
+    one node, dangles removed, the faces traced and clipped into ears) where it builds
+    one: P convex, one connected arrangement (no cell with a hole), the cells tiling P
+    to 1e-12 of its area; else GEOS, as without ``compiled``. The cells are GEOS's up
+    to slivers and a few cells the compiled noding cuts further
+    (``tests/test_area_pair_compiled.py``)."""
+    P2 = (Pc - c) @ R[:2].T
+    if compiled and grid is None and lengthen:
+        # the arrangement compiled (_core/pair.cpp), where it builds one: P convex, no
+        # cell with a hole, every face clipped into ears; else GEOS below
+        A2 = 0.5 * float(np.sum(P2[:, 0] * np.roll(P2[:, 1], -1) - np.roll(P2[:, 0], -1) * P2[:, 1]))
+        ring = P2 if A2 > 0 else P2[::-1]
+        size = float(np.ptp(P2, axis=0).max())
+        tris, _, ok = _compiled_cut_cells(
+            P2=np.ascontiguousarray(ring), segments=np.asarray(lines, dtype=float).reshape(-1, 2, 2),
+            step=tol.AREA_CUT_EXTEND_RTOL * np.sqrt(abs(A2)), merge=tol.AREA_HULL_RTOL * size,
+            sliver=tol.AREA_SLIVER_CELL * abs(A2))
+        if ok:
+            return c + tris @ R[:2]
+    poly = shapely.Polygon(P2)
     cut = (shapely.intersection(shapely.linestrings(np.asarray(lines, dtype=float)), poly)
            if len(lines) else np.empty(0, dtype=object))
     pieces = shapely.get_parts(shapely.get_parts(cut[~shapely.is_empty(cut)]))
