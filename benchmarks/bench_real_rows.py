@@ -21,7 +21,8 @@ in one run:
   with ``F > 0`` or a bound ``> 0``, and the share of them that meets it;
 - ``worst bound``: the largest bound over ``max(|F|, VALUE_FLOOR)``;
 - ``exact / hemicube``: the median and largest ratio of a row's time to
-  ``Hemicube(256)``'s on the same row (its numpy rasteriser, one call each), and the
+  ``Hemicube(256)``'s on the same row (its compiled z-buffer, the default; and, in
+  brackets, the median against its numpy rasteriser, the old baseline), and the
   slowest exact row; ``< 50 seen``: the largest ratio over the rows that see fewer than
   50 polygons (``F > 0``);
 - ``KiB / piece``: the row's own working memory (``stats["working_bytes"]``: its shadow
@@ -74,12 +75,14 @@ def measure(path, rows, engines):
     scene = load(path)
     exact = ef.Exact()
     hemicube = ef.methods.Hemicube(resolution=256)
+    hemicube_numpy = ef.methods.Hemicube(resolution=256, backend="numpy")
     c, n = scene.centroids, scene.normals
     exact.point_form_factors(scene, c[rows[0]], n[rows[0]])       # the set-up, untimed
     hemicube.point_form_factors(scene, c[rows[0]], n[rows[0]])
+    hemicube_numpy.point_form_factors(scene, c[rows[0]], n[rows[0]])
     out = {"rows": len(rows), "raised": 0, "python": 0, "values": 0, "misses": 0,
            "worst": 0.0, "ratios": [], "slowest": 0.0, "gap": 0.0, "beyond": 0, "notes": [],
-           "few": 0.0, "kib": 0.0}
+           "few": 0.0, "kib": 0.0, "numpy_ratios": []}
     for r in rows:
         st = {}
         t = time.perf_counter()
@@ -93,6 +96,9 @@ def measure(path, rows, engines):
         hemicube.point_form_factors(scene, c[r], n[r])
         t_hc = time.perf_counter() - t
         out["ratios"].append(t_exact / t_hc)
+        t = time.perf_counter()
+        hemicube_numpy.point_form_factors(scene, c[r], n[r])
+        out["numpy_ratios"].append(t_exact / (time.perf_counter() - t))
         out["slowest"] = max(out["slowest"], t_exact)
         if str(st.get("path", "")).endswith("python"):
             out["python"] += 1
@@ -137,7 +143,7 @@ def main():
     print(machine())
     print(f"exactff {ef.__version__}; rows per file: {args.rows} seeded + the README's flush rows")
     head = ("| file | polygons | rows | raised | python rows | values | bounds over 1e-12 (share met) "
-            "| worst bound / max(F, floor) | exact / hemicube-256, median (max) | < 50 seen "
+            "| worst bound / max(F, floor) | exact / hemicube-256, median (max) [numpy] | < 50 seen "
             "| slowest row (s) | KiB / piece |")
     if args.engines:
         head += " engines: worst gap / (Ec + Ep), values beyond |"
@@ -151,7 +157,8 @@ def main():
         share = 1 - o["misses"] / max(o["values"], 1)
         line = (f"| {name} | {size:,} | {o['rows']} | {o['raised']} | {o['python']} | "
                 f"{o['values']:,} | {o['misses']} ({share:.4%}) | {o['worst']:.2g} | "
-                f"{np.median(o['ratios']):.2f} ({max(o['ratios']):.2f}) | {o['few']:.2f} | "
+                f"{np.median(o['ratios']):.2f} ({max(o['ratios']):.2f}) "
+                f"[{np.median(o['numpy_ratios']):.2f}] | {o['few']:.2f} | "
                 f"{o['slowest']:.2f} | {o['kib']:.2f} |")
         if args.engines:
             line += f" {o['gap']:.2g}, {o['beyond']} |"
