@@ -62,7 +62,7 @@ Core::Core(std::vector<double> vertices, std::vector<int64_t> start, std::vector
 
 RowResult Core::row(const double* pp, const double* pn, const int8_t* ns, const int8_t* ss,
                     bool two_sided, bool cull, int64_t box_budget, int64_t tiles, double rtol,
-                    bool eq3) const {
+                    bool eq3, bool sphere) const {
     RowResult out;
     RowStats& st = out.stats;
     out.F.assign(n_sources_, 0);
@@ -70,11 +70,13 @@ RowResult Core::row(const double* pp, const double* pn, const int8_t* ns, const 
     out.B.assign(n_sources_, 0);
     out.G.assign(n_sources_, 0);
     st.crossing.assign(static_cast<size_t>(n_sources_), 0);
-    st.rtol = rtol;
+    // the sphere's pieces have no second tier (their measure has no quadruple form)
+    st.rtol = sphere ? 0 : rtol;
     st.leak_budget = SVBSP_LEAK_BUDGET_SHARE * (rtol > 0 ? rtol : 1e-12);
     st.normal = pn;
-    st.eq3 = eq3;
-    if (eq3) {
+    st.eq3 = eq3 && !sphere;
+    st.sphere = sphere;
+    if (st.eq3) {
         // Eq. 3's frame: e1 = n x (the axis n is least along), e2 = n x e1
         const R nl = std::sqrt(static_cast<R>(pn[0]) * pn[0] + static_cast<R>(pn[1]) * pn[1] +
                                static_cast<R>(pn[2]) * pn[2]);

@@ -155,6 +155,9 @@ struct RowStats {
     // (e1, e2, n) (Core::integrate)
     bool eq3 = false;
     V3 e1{0, 0, 0}, e2{0, 0, 0};
+    // the whole sphere of directions (both sides of the horizon free, no culling behind
+    // it), each visible piece measured by its solid angle over pi (Core::integrate_solid)
+    bool sphere = false;
     int64_t quad_pieces = 0;
     int64_t fragments = 0, visible = 0, hidden = 0, splits = 0, subtrees_culled = 0,
             fragments_culled = 0, box_tests = 0, shadow_planes = 0,
@@ -191,7 +194,7 @@ class Core {
     // and each polygon's (+1 front, -1 back, 0 on)
     RowResult row(const double* point, const double* normal, const int8_t* node_side,
                   const int8_t* source_side, bool two_sided, bool cull, int64_t box_budget,
-                  int64_t tiles, double rtol, bool eq3) const;
+                  int64_t tiles, double rtol, bool eq3, bool sphere = false) const;
     int64_t n_sources() const { return n_sources_; }
     int64_t nodes() const { return static_cast<int64_t>(front_.size()); }
     int64_t pieces() const { return static_cast<int64_t>(start_.size()); }
@@ -257,6 +260,7 @@ class Core {
                    const RowStats* eq3 = nullptr) const;
     void integrate_quad(const std::vector<std::array<Quad, 3>>& v, const double* pn, R* value,
                         R* bound, bool eq3 = false) const;
+    void integrate_solid(const Piece& q, int64_t f, R* value, R* bound) const;
 };
 
 }  // namespace exactff

@@ -187,4 +187,56 @@ void Core::integrate_quad(const std::vector<std::array<Quad, 3>>& v, const doubl
              K_.eps * *value;
 }
 
+// the solid angle of one convex piece, over pi (the unit of the cosine-weighted values,
+// so that the vertices' and the band's charges, areas on the unit sphere over pi, carry
+// over): Van Oosterom and Strackee's triangle formula over the fan from its first
+// vertex, as exactff.kernel.solid_angle_sums (the Python engine's measure):
+// tan(Omega / 2) = N / D with N = a . (b x c) in offset form, a0 . (e_b x e_c) (the
+// offsets of Core::integrate, accurate for pieces small next to their distance), and
+// D = |a||b||c| + (a.b)|c| + (a.c)|b| + (b.c)|a|; each triangle's rounding from C1
+// roundoffs of the magnitudes of N's products and of 4 |a||b||c| through the atan2,
+// the sum's from C1 roundoffs of its terms (sector.h's sum_rounding). A convex piece
+// within one side of a plane through p: its triangles' angles share one sign.
+void Core::integrate_solid(const Piece& q, int64_t f, R* value, R* bound) const {
+    const R pi = 3.14159265358979323846264338327950288L;
+    const size_t m = q.size();
+    R S = 0, mag = 0, errs = 0;
+    if (m < 3) {
+        *value = 0;
+        *bound = 0;
+        return;
+    }
+    const V3 a = q[0].v;
+    const R la = q[0].length;
+    R unused;
+    V3 eb = between(q[0], q[1], f, &unused);
+    for (size_t i = 1; i + 1 < m; ++i) {
+        const Vertex& B = q[i];
+        const Vertex& C = q[i + 1];
+        const V3 ec = between(q[0], C, f, &unused);
+        const R p0 = eb.y * ec.z, p1 = eb.z * ec.y, p2 = eb.z * ec.x, p3 = eb.x * ec.z,
+                p4 = eb.x * ec.y, p5 = eb.y * ec.x;
+        const R N = a.x * (p0 - p1) + a.y * (p2 - p3) + a.z * (p4 - p5);
+        const R TN = std::fabs(a.x) * (std::fabs(p0) + std::fabs(p1)) +
+                     std::fabs(a.y) * (std::fabs(p2) + std::fabs(p3)) +
+                     std::fabs(a.z) * (std::fabs(p4) + std::fabs(p5));
+        const R lb = B.length, lc = C.length;
+        const R D = la * lb * lc + dot(a, B.v) * lc + dot(a, C.v) * lb + dot(B.v, C.v) * la;
+        const R TD = 4 * la * lb * lc;
+        const R theta = std::atan2(N, D);
+        const R eN = K_.c1 * K_.eps * TN, eD = K_.c1 * K_.eps * TD;
+        const R r2 = N * N + D * D;
+        // a perturbation too large for the first order: the angle's whole range
+        const R dtheta = r2 > 0 ? std::min((std::fabs(D) * eN + std::fabs(N) * eD) / r2, pi) : 0;
+        S += 2 * theta;
+        mag += std::fabs(2 * theta);
+        errs += 2 * dtheta + 4 * K_.eps * std::fabs(theta);
+        eb = ec;
+    }
+    *value = std::fabs(S) / pi;
+    // the sum of m - 2 terms: within m - 3 roundoffs of their magnitudes
+    *bound = sum_rounding(std::max(K_.c1, static_cast<R>(m)) * K_.eps, mag, errs) / pi +
+             K_.eps * *value;
+}
+
 }  // namespace exactff

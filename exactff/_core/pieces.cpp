@@ -89,6 +89,11 @@ void Core::run(const double* pp, const double* pn, const int8_t* node_side,
     set_double(sv.back());
     xp.push_back({1, {pn[0], pn[1], pn[2]}, {0, 0, 0}, n, 2 * K_.eps, -1, -1});
     if (tiles > 0) sv[0].pos = tile_tree(pn, tiles, sv, xp);
+    if (st.sphere) {  // below the horizon free too, cut into cells about -n
+        sv[0].neg = OUT;
+        const double below[3] = {-pn[0], -pn[1], -pn[2]};
+        if (tiles > 0) sv[0].neg = tile_tree(below, tiles, sv, xp);
+    }
     if (nodes() == 0) return;
     struct Item {
         int64_t node;
@@ -117,7 +122,7 @@ void Core::run(const double* pp, const double* pn, const int8_t* node_side,
         }
         if (cull && size_[k] >= 4) {
             ++st.box_tests;
-            if (box_behind(k, pp, pn) || box_hidden(sv, k, p, budget)) {
+            if ((!st.sphere && box_behind(k, pp, pn)) || box_hidden(sv, k, p, budget)) {
                 ++st.subtrees_culled;
                 st.fragments_culled += size_[k];
                 continue;
@@ -213,7 +218,10 @@ void Core::process(int64_t f, const double* pp, const V3& p, const V3& n,
         if (node == OUT) {
             ++st.visible;
             R val, bnd;
-            integrate(w.q, f, n, &val, &bnd, st.eq3 ? &st : nullptr);
+            if (st.sphere)
+                integrate_solid(w.q, f, &val, &bnd);
+            else
+                integrate(w.q, f, n, &val, &bnd, st.eq3 ? &st : nullptr);
             bool refined = false;
             if (receives && st.rtol > 0) {
                 // the second tier where the sums' rounding or the vertices' errors

@@ -11,7 +11,8 @@ from ..kernel import flat_polygons, mp_solid_angle, offset_error, solid_angle_su
 from ..predicates import engine_sides
 from ..scene import as_scene
 from ..visibility import (compiled_form_factor_rows, compiled_form_factors,
-                          is_convex_enclosure, visible_form_factors, visible_solid_angles)
+                          compiled_solid_angles, is_convex_enclosure, visible_form_factors,
+                          visible_solid_angles)
 from ._base import FormFactorMethod
 
 __all__ = ["Exact", "INTEGRATORS", "ENGINES", "hemisphere_solid_angles",
@@ -154,8 +155,10 @@ class Exact(FormFactorMethod):
         ``point``, over 4 pi (see :func:`exactff.sphere_form_factors`).
 
         Unoccluded (a convex enclosure seen from inside, with shortcuts): whole
-        polygons (:func:`unoccluded_solid_angles`). Otherwise the sphere is measured as
-        two hemispheres about ``SPHERE_AXES`` by :func:`hemisphere_solid_angles`."""
+        polygons (:func:`unoccluded_solid_angles`). Otherwise, with the compiled engine,
+        the whole sphere in one row of the compiled core
+        (:func:`exactff.visibility.compiled_solid_angles`); with the Python engine, two
+        hemispheres about ``SPHERE_AXES`` by :func:`hemisphere_solid_angles`."""
         as_scene(scene)
         p = as_point(point)
         if p.shape != (3,):
@@ -167,6 +170,9 @@ class Exact(FormFactorMethod):
             st["path"] = "unoccluded"
             W, E = unoccluded_solid_angles(scene, p, side, two_sided=two_sided,
                                            tolerance=self.tolerance)
+        elif self.engine == "compiled":
+            W, E = compiled_solid_angles(scene, p, two_sided=two_sided, stats=st,
+                                         shortcuts=self.shortcuts)
         else:
             st["path"] = "hemispheres"
             W, E = np.zeros(len(scene)), np.zeros(len(scene))
@@ -206,9 +212,11 @@ def hemisphere_solid_angles(scene, point, normal, *, two_sided=True, engine="com
     two_sided : bool, default True
         Both faces of a polygon receive (every polygon occludes either way).
     engine : {"compiled", "python"}, default "compiled"
-        The engine that computes the row. The compiled core has no solid-angle
-        measure: both names are served by the Python engine
-        (:func:`exactff.visibility.visible_solid_angles`).
+        Checked, and served by the Python engine
+        (:func:`exactff.visibility.visible_solid_angles`) either way: the compiled
+        core measures the whole sphere in one row instead
+        (:func:`exactff.visibility.compiled_solid_angles`), which
+        :meth:`Exact.point_sphere_factors` uses.
     shortcuts : bool, default True
     stats : dict, optional
 

@@ -28,7 +28,11 @@ from .bsp import build_bsp
 from .engine import is_convex_enclosure, visible_form_factors
 
 __all__ = ["compiled_core", "compiled_form_factors", "compiled_form_factor_rows",
-           "convex_pieces"]
+           "compiled_solid_angles", "convex_pieces", "SPHERE_HORIZON"]
+
+#: The plane the compiled core's spherical rows cut the sphere at (through the point,
+#: this normal): any does; pieces across it are cut in two.
+SPHERE_HORIZON = np.array([0.0, 0.0, 1.0])
 
 
 def convex_pieces(polygon, normal):
@@ -392,6 +396,75 @@ def compiled_form_factors(scene, point, normal, *, two_sided=False, stats=None,
     st["max_error_estimate"] = float(E.max(initial=0.0))
     st["max_band_bound"] = float(band.max(initial=0.0))
     return (F, E) if error else F
+
+
+def compiled_solid_angles(scene, point, *, two_sided=True, stats=None, shortcuts=True):
+    """Visible solid angles with occlusion from one point to every polygon of a scene,
+    over the whole sphere, by the compiled core, and their error bounds.
+
+    One row of the core in its sphere mode: the shadow tree's root (the plane through
+    the point normal to :data:`SPHERE_HORIZON`) leaves both of its sides free, each cut
+    into cells as a plane row's upper hemisphere is, so that one front-to-back walk of
+    the BSP tree covers every direction; each visible piece is measured by its solid
+    angle (Van Oosterom and Strackee's fan, as :func:`exactff.kernel.solid_angle_sums`)
+    instead of its cosine-weighted one. Subtrees behind the horizon are not culled (the
+    sphere has no behind); covered ones are. The Python engine's two hemispheres
+    (:func:`exactff.visibility.visible_solid_angles`) are its oracle.
+
+    Parameters
+    ----------
+    scene : Scene
+    point : ndarray of shape (3,)
+    two_sided : bool, default True
+        Both faces of a polygon receive (every polygon occludes either way).
+    stats : dict, optional
+        Filled with the core's counters (as :func:`compiled_form_factors`), ``path``
+        (``"compiled sphere"``) and ``max_error_estimate``.
+    shortcuts : bool, default True
+        False disables the culling of covered subtrees (results do not depend on it).
+
+    Returns
+    -------
+    (ndarray of shape (len(scene),), ndarray of shape (len(scene),))
+        Solid angles in steradians (their sum at most 4 pi) and bounds on their errors:
+        the fans' rounding, the vertices' directions' errors times their edges' arc
+        lengths, the band's slivers and the BSP's rounded crossings (as for
+        :func:`compiled_form_factors`, whose bounds are areas on the unit sphere too).
+        No value is refined: the core has no quadruple-precision solid angle.
+
+    Examples
+    --------
+    From inside a closed box the whole sphere is seen, a sixth of it through each face
+    from the centre:
+
+    >>> import exactff as ef
+    >>> box = ef.scenes.subdivided_box(2)
+    >>> W, E = compiled_solid_angles(box, np.array([0.5, 0.5, 0.5]))
+    >>> bool(abs(W.sum() - 4 * np.pi) < 1e-13), bool(E.max() < 1e-14)
+    (True, True)
+    """
+    st = stats if stats is not None else {}
+    p = np.asarray(point, dtype=float)
+    flat = flat_polygons(scene)
+    side, _ = engine_sides(flat, p)
+    tree, core = compiled_core(scene)
+    node_side = sides_of_point(tree.normals, tree.offsets, p).astype(np.int8)
+    F, E, band, crossing, counters = core.row(p, SPHERE_HORIZON, node_side,
+                                              side.astype(np.int8), bool(two_sided),
+                                              bool(shortcuts), tol.SVBSP_BOX_BUDGET,
+                                              _shadow_tiles(len(scene)), 0.0, False,
+                                              sphere=True)
+    check_finite(F, E)
+    check_finite(band)
+    check_finite(crossing)
+    # the core's unit is the solid angle over pi (the cosine-weighted rows' unit)
+    W = F * math.pi
+    # (and the products' rounding)
+    E = (E + band + crossing) * (math.pi * (1 + 4 * tol.EPS)) + 2 * tol.EPS * W
+    st.update(counters)
+    st["path"] = "compiled sphere"
+    st["max_error_estimate"] = float(E.max(initial=0.0))
+    return W, E
 
 
 def compiled_form_factor_rows(scene, points, normals, *, two_sided=False, shortcuts=True,
