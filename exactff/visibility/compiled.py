@@ -449,11 +449,10 @@ def compiled_solid_angles(scene, point, *, two_sided=True, stats=None, shortcuts
     side, _ = engine_sides(flat, p)
     tree, core = compiled_core(scene)
     node_side = sides_of_point(tree.normals, tree.offsets, p).astype(np.int8)
-    F, E, band, crossing, counters = core.row(p, SPHERE_HORIZON, node_side,
-                                              side.astype(np.int8), bool(two_sided),
-                                              bool(shortcuts), tol.SVBSP_BOX_BUDGET,
-                                              _shadow_tiles(len(scene)), 0.0, False,
-                                              sphere=True)
+    F, E, band, crossing, counters = core.row(
+        point=p, normal=SPHERE_HORIZON, node_side=node_side, source_side=side.astype(np.int8),
+        two_sided=bool(two_sided), cull=bool(shortcuts), box_budget=tol.SVBSP_BOX_BUDGET,
+        tiles=_shadow_tiles(len(scene)), rtol=0.0, eq3=False, sphere=True)
     check_finite(F, E)
     check_finite(band)
     check_finite(crossing)
