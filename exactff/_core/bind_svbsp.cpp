@@ -56,6 +56,7 @@ py::tuple row(const exactff::Core& core, Array<double> point, Array<double> norm
     d["near_tests"] = st.near_tests;
     d["exact_tests"] = st.exact_tests;
     d["quad_pieces"] = st.quad_pieces;
+    d["pieces_held"] = st.pieces_held;
     d["unattributed_bound"] = static_cast<double>(st.unattributed);
     d["shadows_left_out"] = st.slivers[0] + st.slivers[1] + st.slivers[2] + st.slivers[3];
     d["kernel_shadows"] = st.kernels;

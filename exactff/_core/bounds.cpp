@@ -58,7 +58,8 @@ R Core::input_tilt(int64_t ia, int64_t ib, const double* pp) const {
 // (the computation's part: the one returned and added to E; the input's own errors'
 // part, arc length times the larger of the ends' gerr over pi, goes to st.crossing)
 R Core::charge_edges(const Piece& q, int64_t src, std::vector<R>& E, RowStats& st,
-                     const std::vector<R>* refined, bool record) const {
+                     const std::vector<R>* refined, bool record,
+                     std::vector<std::pair<EdgeKey, R>>* keyed) const {
     const R pi = 3.14159265358979323846264338327950288L;
     const size_t m = q.size();
     R total = 0;
@@ -86,10 +87,10 @@ R Core::charge_edges(const Piece& q, int64_t src, std::vector<R>& E, RowStats& s
             geo = h > 0 ? length * turn_bound(moved / h) / pi : length;
         }
         total += charge;
-        if (!record) continue;
+        if (!record && keyed == nullptr) continue;
         if (a.id >= 0 && b.id >= 0 && a.gerr == 0 && b.gerr == 0) {
             // an input edge of the scene's: on its polygon's boundary
-            E[src] += charge;
+            if (record) E[src] += charge;
             continue;
         }
         // a cut edge, or one a BSP split made (two fragments of one polygon share
@@ -98,6 +99,10 @@ R Core::charge_edges(const Piece& q, int64_t src, std::vector<R>& E, RowStats& s
         const Vertex* hi = &b;
         if (lex_less(hi->v, lo->v)) std::swap(lo, hi);
         EdgeKey k{{lo->v.x, lo->v.y, lo->v.z, hi->v.x, hi->v.y, hi->v.z}};
+        if (!record) {
+            keyed->push_back({k, charge});
+            continue;
+        }
         auto it = st.edges.find(k);
         const bool r = refined != nullptr;
         if (it == st.edges.end()) {

@@ -35,6 +35,7 @@
 #include <cstdint>
 #include <cstring>
 #include <unordered_map>
+#include <utility>
 #include <vector>
 
 #include "precision.h"
@@ -159,6 +160,15 @@ struct RowStats {
     // it), each visible piece measured by its solid angle over pi (Core::integrate_solid)
     bool sphere = false;
     int64_t quad_pieces = 0;
+    // with rtol > 0, the pieces whose own bound exceeds rtol times their value, held
+    // until the row's end, where the second tier is decided per polygon (Core::settle)
+    struct Held {
+        Piece q;
+        int64_t f;
+        R val, bnd;
+    };
+    std::vector<Held> held_pieces;
+    int64_t pieces_held = 0, held_bytes = 0;  // pieces so held, and their memory
     int64_t fragments = 0, visible = 0, hidden = 0, splits = 0, subtrees_culled = 0,
             fragments_culled = 0, box_tests = 0, shadow_planes = 0,
             node_visits = 0,   // shadow-tree nodes a piece was classified at
@@ -249,8 +259,10 @@ class Core {
     static R turn_bound(R ratio);
     R input_error(int64_t i, R length) const;
     R input_tilt(int64_t ia, int64_t ib, const double* pp) const;
+    // (without `record`, `keyed` receives the edges it would key, with their charges)
     R charge_edges(const Piece& q, int64_t src, std::vector<R>& E, RowStats& st,
-                   const std::vector<R>* refined = nullptr, bool record = true) const;
+                   const std::vector<R>* refined = nullptr, bool record = true,
+                   std::vector<std::pair<EdgeKey, R>>* keyed = nullptr) const;
     void quad_plane(int64_t code, int64_t f, const double* pp, const std::vector<ExactPlane>& xp,
                     Quad m[3], Quad* cond) const;
     void refine(const Piece& q, int64_t f, const double* pp, const std::vector<ExactPlane>& xp,
@@ -261,6 +273,8 @@ class Core {
     void integrate_quad(const std::vector<std::array<Quad, 3>>& v, const double* pn, R* value,
                         R* bound, bool eq3 = false) const;
     void integrate_solid(const Piece& q, int64_t f, R* value, R* bound) const;
+    void settle(const double* pp, const std::vector<ExactPlane>& xp, std::vector<R>& F,
+                std::vector<R>& E, RowStats& st) const;
 };
 
 }  // namespace exactff

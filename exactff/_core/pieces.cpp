@@ -9,6 +9,8 @@
 #include <cmath>
 #include <functional>
 #include <limits>
+#include <unordered_map>
+#include <utility>
 #include <vector>
 
 #include "constants.h"
@@ -134,6 +136,7 @@ void Core::run(const double* pp, const double* pn, const int8_t* node_side,
         stack.push_back({k, true});
         if (nearc >= 0) stack.push_back({nearc, false});
     }
+    settle(pp, xp, F, E, st);
     for (const auto& [key, e] : st.edges)
         if (e.count == 1) {
             E[e.src] += e.charge;
@@ -149,7 +152,7 @@ void Core::run(const double* pp, const double* pn, const int8_t* node_side,
         static_cast<size_t>(st.held_peak) * sizeof(Vertex) +
         st.edges.bucket_count() * sizeof(void*) +
         st.edges.size() * (sizeof(EdgeKey) + sizeof(EdgeCharge) + 2 * sizeof(void*)) +
-        st.on_plane.bytes());
+        st.on_plane.bytes() + st.held_bytes);
     // a visible sliver whose shadow was left out may wrongly show any later piece
     // behind it: its area goes to every receiving polygon's band bound
     if (st.unattributed > 0)
@@ -196,8 +199,6 @@ void Core::process(int64_t f, const double* pp, const V3& p, const V3& n,
     std::vector<int> sg;
     std::vector<R> d;
     std::vector<Vertex> cut;
-    std::vector<std::array<Quad, 3>> qdirs;  // Core::refine's, for integrate_quad
-    std::vector<R> qerrs;
     while (!work.empty()) {
         W w = std::move(work.back());
         work.pop_back();
@@ -222,28 +223,19 @@ void Core::process(int64_t f, const double* pp, const V3& p, const V3& n,
                 integrate_solid(w.q, f, &val, &bnd);
             else
                 integrate(w.q, f, n, &val, &bnd, st.eq3 ? &st : nullptr);
-            bool refined = false;
+            bool held = false;
             if (receives && st.rtol > 0) {
                 // the second tier where the sums' rounding or the vertices' errors
-                // exceed the tolerance times the value
+                // exceed the tolerance times the value: decided at the row's end for the
+                // piece's polygon as a whole (Core::settle), so that slivers whose bounds
+                // are negligible next to their polygon's value stay in long double
                 const R charges = charge_edges(w.q, src, E, st, nullptr, false);
-                if (bnd + charges > st.rtol * val) {
-                    refine(w.q, f, pp, xp, qdirs, qerrs);
-                    R qv, qb;
-                    integrate_quad(qdirs, st.normal, &qv, &qb, st.eq3);
-                    ++st.quad_pieces;
-                    const R qcharges = charge_edges(w.q, src, E, st, &qerrs, false);
-                    if (qb + qcharges < bnd + charges) {
-                        val = qv;
-                        bnd = qb;
-                        refined = true;
-                    }
-                }
+                held = bnd + charges > st.rtol * val;
             }
-            if (receives) {
+            if (receives && !held) {
                 F[src] += val;
                 E[src] += bnd;
-                charge_edges(w.q, src, E, st, refined ? &qerrs : nullptr);
+                charge_edges(w.q, src, E, st);
             }
             if (receives) B[src] += leaked(w.q, val + bnd, st);
             // a piece whose shadow is left out is an image folded or flat along a side
@@ -252,6 +244,10 @@ void Core::process(int64_t f, const double* pp, const V3& p, const V3& n,
             if (!insert_shadow(w.q, f, pp, w.plane, w.positive, sv, xp, st, val + bnd) &&
                 receives)
                 B[src] += val + bnd;
+            if (held) {
+                ++st.pieces_held;
+                st.held_pieces.push_back({std::move(w.q), f, val, bnd});
+            }
             continue;
         }
         const Plane P = sv[node];
@@ -391,6 +387,119 @@ void Core::process(int64_t f, const double* pp, const V3& p, const V3& n,
         work.push_back({part(1), node, true});
         st.held += static_cast<int64_t>(work.back().q.size());
     }
+}
+
+}  // namespace exactff
+
+namespace exactff {
+
+// the pieces Core::process held (their bound above rtol times their value), per
+// polygon: where the polygon's bound with all of them as integrated in long double is
+// within rtol times its value, they stay so; else each is refined and integrated in
+// quadruple precision (Core::refine, Core::integrate_quad), the better of the two kept,
+// a piece at a time as before. That bound is the row's so far (E, and the edge charges
+// still pending, RowStats::edges with one piece), plus the held pieces' own bounds and
+// edge charges, less the charges of the edges two pieces of the polygon share (which
+// Core::charge_edges cancels: exactly two pieces, one polygon, neither refined)
+void Core::settle(const double* pp, const std::vector<ExactPlane>& xp, std::vector<R>& F,
+                  std::vector<R>& E, RowStats& st) const {
+    if (st.held_pieces.empty()) return;
+    st.held_bytes = static_cast<int64_t>(st.held_pieces.capacity() * sizeof(RowStats::Held));
+    for (const auto& h : st.held_pieces)
+        st.held_bytes += static_cast<int64_t>(h.q.capacity() * sizeof(Vertex));
+    std::vector<R> total(F.begin(), F.end()), keep(E.begin(), E.end());
+    for (const auto& [key, e] : st.edges)
+        if (e.count == 1) keep[static_cast<size_t>(e.src)] += e.charge;
+    struct Met {
+        int64_t src;  // -1: pieces of two polygons
+        int count;
+        R charge;
+    };
+    std::unordered_map<EdgeKey, Met, EdgeKeyHash> met;
+    std::vector<std::pair<EdgeKey, R>> keyed;
+    for (const auto& h : st.held_pieces) {
+        const size_t src = static_cast<size_t>(source_[h.f]);
+        total[src] += h.val;
+        keyed.clear();
+        keep[src] += h.bnd + charge_edges(h.q, source_[h.f], E, st, nullptr, false, &keyed);
+        for (const auto& [k, c] : keyed) {
+            auto [it, fresh] = met.try_emplace(k, Met{source_[h.f], 0, 0});
+            it->second.count += 1;
+            it->second.charge += c;
+            if (it->second.src != source_[h.f]) it->second.src = -1;
+        }
+    }
+    for (const auto& [k, o] : met) {
+        if (o.src < 0) continue;
+        const auto it = st.edges.find(k);
+        if (it == st.edges.end()) {
+            if (o.count == 2) keep[static_cast<size_t>(o.src)] -= o.charge;
+        } else if (o.count == 1 && it->second.count == 1 && it->second.src == o.src &&
+                   !it->second.refined) {
+            keep[static_cast<size_t>(o.src)] -= o.charge + it->second.charge;
+        }
+    }
+    std::vector<int64_t> count(F.size(), 0);
+    for (const auto& h : st.held_pieces) ++count[static_cast<size_t>(source_[h.f])];
+    std::vector<std::array<Quad, 3>> qdirs;
+    std::vector<R> qerrs, lerrs;
+    Piece r;
+    const V3 n{st.normal[0], st.normal[1], st.normal[2]};
+    const R nl = norm(n);
+    const V3 un{n.x / nl, n.y / nl, n.z / nl};
+    for (auto& h : st.held_pieces) {
+        const int64_t src = source_[h.f];
+        const size_t s = static_cast<size_t>(src);
+        R val = h.val, bnd = h.bnd;
+        const std::vector<R>* placed = nullptr;  // the vertices' bounds charged, if refined
+        // (the subtractions above within a few roundoffs of the sums: 64 kept)
+        if (!(keep[s] * (1 + 64 * K_.eps) <= st.rtol * total[s])) {
+            const R charges = charge_edges(h.q, src, E, st, nullptr, false);
+            refine(h.q, h.f, pp, xp, qdirs, qerrs);
+            // first the refined directions rounded to long double, summed in long double
+            // (Core::integrate, with offsets from the directions, each within 4 roundoffs
+            // of the larger length: that much more on each vertex's bound): enough where
+            // the vertices' errors, not the sum's rounding, made the bound, as on slivers
+            // cut between nearly parallel planes; kept where within the piece's share of
+            // its polygon's tolerance, else the sum in quadruple precision
+            r = h.q;
+            lerrs.resize(r.size());
+            for (size_t i = 0; i < r.size(); ++i) {
+                if (r[i].id < 0) {
+                    r[i].v = {static_cast<R>(qdirs[i][0]), static_cast<R>(qdirs[i][1]),
+                              static_cast<R>(qdirs[i][2])};
+                    r[i].length = norm(r[i].v);
+                    r[i].on_edge = -1;
+                }
+            }
+            for (size_t i = 0; i < r.size(); ++i)
+                lerrs[i] = qerrs[i] + 4 * K_.eps * (2 + r[0].length / r[i].length);
+            R lv, lb;
+            integrate(r, h.f, un, &lv, &lb, st.eq3 ? &st : nullptr);
+            const R lcharges = charge_edges(h.q, src, E, st, &lerrs, false);
+            if (lb + lcharges < bnd + charges &&
+                lb + lcharges <= st.rtol * total[s] / (2 * static_cast<R>(count[s]))) {
+                val = lv;
+                bnd = lb;
+                placed = &lerrs;
+            } else {
+                R qv, qb;
+                integrate_quad(qdirs, st.normal, &qv, &qb, st.eq3);
+                ++st.quad_pieces;
+                const R qcharges = charge_edges(h.q, src, E, st, &qerrs, false);
+                if (qb + qcharges < bnd + charges) {
+                    val = qv;
+                    bnd = qb;
+                    placed = &qerrs;
+                }
+            }
+        }
+        F[src] += val;
+        E[src] += bnd;
+        charge_edges(h.q, src, E, st, placed);
+    }
+
+    st.held_pieces.clear();
 }
 
 }  // namespace exactff
