@@ -81,6 +81,8 @@ __all__ = [
     "SVBSP_BOX_FLOOR",
     "SVBSP_LEAK_BUDGET_SHARE",
     "BSP_QUAD_TRUST",
+    "LONG_SHADOW_EDGES",
+    "LONG_SHADOW_LEAF",
     "CONVEX_TURN_ULPS",
     "EQ3_FACTOR_ULPS",
     "SVBSP_TILES",
@@ -616,6 +618,14 @@ SVBSP_BOX_FLOOR = 1e-300
 #: where its bound is within this share of a double roundoff of its coordinates (the
 #: rounding to double then dominates); beyond, it is computed exactly.
 BSP_QUAD_TRUST = 1e-3
+#: Compiled core (constants.h): a visible piece whose shadow takes more than this many of
+#: its edges' planes gets them as a balanced tree of chords (Core::long_shadow), parts of
+#: at most ``LONG_SHADOW_LEAF`` edges each, instead of one chain: a piece behind it then
+#: visits about log2(edges / leaf) + leaf planes instead of every edge's, and the pieces
+#: around it are cut across its edges instead of along their nearly parallel planes (the
+#: office with a 5,000-vertex table top, ``benchmarks/bench_long_polygon.py``).
+LONG_SHADOW_EDGES = 32
+LONG_SHADOW_LEAF = 8
 #: A ring is convex where every corner turns the normal's way or is collinear within
 #: this many ulps of its edges' cross product (``exactff.visibility.compiled._convex_rings``).
 CONVEX_TURN_ULPS = 8.0

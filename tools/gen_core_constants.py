@@ -26,6 +26,8 @@ CONSTANTS = [
     ("SVBSP_BOX_FLOOR", "long double"),
     ("SVBSP_LEAK_BUDGET_SHARE", "double"),
     ("BSP_QUAD_TRUST", "double"),
+    ("LONG_SHADOW_EDGES", "size_t"),
+    ("LONG_SHADOW_LEAF", "size_t"),
 ]
 
 
@@ -44,11 +46,14 @@ def header_text():
              "#ifndef EXACTFF_CORE_CONSTANTS_H",
              "#define EXACTFF_CORE_CONSTANTS_H",
              "",
+             "#include <cstddef>",
+             "",
              "namespace exactff {",
              ""]
     for name, ctype in CONSTANTS:
-        value = float(getattr(tol, name))
-        literal = repr(value) + ("L" if ctype == "long double" else "")
+        value = getattr(tol, name)
+        literal = (str(int(value)) if ctype == "size_t" else
+                   repr(float(value)) + ("L" if ctype == "long double" else ""))
         lines.append(f"constexpr {ctype} {name} = {literal};")
     lines += ["", "}  // namespace exactff", "", "#endif", ""]
     return "\n".join(lines)

@@ -59,7 +59,7 @@ R Core::input_tilt(int64_t ia, int64_t ib, const double* pp) const {
 // part, arc length times the larger of the ends' gerr over pi, goes to st.crossing)
 R Core::charge_edges(const Piece& q, int64_t src, std::vector<R>& E, RowStats& st,
                      const std::vector<R>* refined, bool record,
-                     std::vector<std::pair<EdgeKey, R>>* keyed) const {
+                     std::vector<std::pair<EdgeKey, R>>* keyed, std::vector<R>* arcs) const {
     const R pi = 3.14159265358979323846264338327950288L;
     const size_t m = q.size();
     R total = 0;
@@ -73,7 +73,9 @@ R Core::charge_edges(const Piece& q, int64_t src, std::vector<R>& E, RowStats& s
             if (a.edge >= 0 && u.id < 0 && u.on_edge == a.edge) return u.err_line;
             return u.err;
         };
-        const R length = arc(a, b);
+        // (the arcs of a piece charged more than once are computed once: `arcs`)
+        if (arcs != nullptr && arcs->size() < m) arcs->push_back(arc(a, b));
+        const R length = arcs != nullptr ? (*arcs)[i] : arc(a, b);
         const R charge = length * std::max(off(a, i), off(b, (i + 1) % m)) / pi;
         // the input's own errors: the edge's points move by at most the ends' world
         // errors, and lie at least h (p's distance from the edge's line) from p, so

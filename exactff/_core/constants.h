@@ -5,6 +5,8 @@
 #ifndef EXACTFF_CORE_CONSTANTS_H
 #define EXACTFF_CORE_CONSTANTS_H
 
+#include <cstddef>
+
 namespace exactff {
 
 constexpr double SVBSP_FILTER_ROUNDOFFS = 4.0;
@@ -14,6 +16,8 @@ constexpr long double SVBSP_BOX_MARGIN = 1e-09L;
 constexpr long double SVBSP_BOX_FLOOR = 1e-300L;
 constexpr double SVBSP_LEAK_BUDGET_SHARE = 0.0001;
 constexpr double BSP_QUAD_TRUST = 0.001;
+constexpr size_t LONG_SHADOW_EDGES = 32;
+constexpr size_t LONG_SHADOW_LEAF = 8;
 
 }  // namespace exactff
 

@@ -166,6 +166,7 @@ struct RowStats {
         Piece q;
         int64_t f;
         R val, bnd;
+        std::vector<R> arcs;  // its edges' arc lengths (Core::charge_edges)
     };
     std::vector<Held> held_pieces;
     int64_t pieces_held = 0, held_bytes = 0;  // pieces so held, and their memory
@@ -242,6 +243,9 @@ class Core {
     void leave_out(const Piece& q, R charge, int why, RowStats& st) const;
     Leak cone(const Piece& q) const;
     R leaked(const Piece& q, R worth, const RowStats& st) const;
+    int long_shadow(const Piece& q, const double* pp, const std::vector<Plane>& chain,
+                    const std::vector<size_t>& chain_edge, std::vector<Plane>& sv,
+                    std::vector<ExactPlane>& xp, RowStats& st) const;
     // pieces.cpp
     V3 between(const Vertex& a, const Vertex& b, int64_t f, R* scale) const;
     static bool lex_less(const V3& x, const V3& y);
@@ -259,10 +263,12 @@ class Core {
     static R turn_bound(R ratio);
     R input_error(int64_t i, R length) const;
     R input_tilt(int64_t ia, int64_t ib, const double* pp) const;
-    // (without `record`, `keyed` receives the edges it would key, with their charges)
+    // (without `record`, `keyed` receives the edges it would key, with their charges;
+    // `arcs`, the edges' arc lengths: computed into it where it is short, else read)
     R charge_edges(const Piece& q, int64_t src, std::vector<R>& E, RowStats& st,
                    const std::vector<R>* refined = nullptr, bool record = true,
-                   std::vector<std::pair<EdgeKey, R>>* keyed = nullptr) const;
+                   std::vector<std::pair<EdgeKey, R>>* keyed = nullptr,
+                   std::vector<R>* arcs = nullptr) const;
     void quad_plane(int64_t code, int64_t f, const double* pp, const std::vector<ExactPlane>& xp,
                     Quad m[3], Quad* cond) const;
     void refine(const Piece& q, int64_t f, const double* pp, const std::vector<ExactPlane>& xp,

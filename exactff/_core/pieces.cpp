@@ -197,7 +197,7 @@ void Core::process(int64_t f, const double* pp, const V3& p, const V3& n,
     bool first = true;
     // each step's signs, distances and crossings (reused: no allocation per step)
     std::vector<int> sg;
-    std::vector<R> d;
+    std::vector<R> d, arcs;
     std::vector<Vertex> cut;
     while (!work.empty()) {
         W w = std::move(work.back());
@@ -224,18 +224,19 @@ void Core::process(int64_t f, const double* pp, const V3& p, const V3& n,
             else
                 integrate(w.q, f, n, &val, &bnd, st.eq3 ? &st : nullptr);
             bool held = false;
+            arcs.clear();
             if (receives && st.rtol > 0) {
                 // the second tier where the sums' rounding or the vertices' errors
                 // exceed the tolerance times the value: decided at the row's end for the
                 // piece's polygon as a whole (Core::settle), so that slivers whose bounds
                 // are negligible next to their polygon's value stay in long double
-                const R charges = charge_edges(w.q, src, E, st, nullptr, false);
+                const R charges = charge_edges(w.q, src, E, st, nullptr, false, nullptr, &arcs);
                 held = bnd + charges > st.rtol * val;
             }
             if (receives && !held) {
                 F[src] += val;
                 E[src] += bnd;
-                charge_edges(w.q, src, E, st);
+                charge_edges(w.q, src, E, st, nullptr, true, nullptr, &arcs);
             }
             if (receives) B[src] += leaked(w.q, val + bnd, st);
             // a piece whose shadow is left out is an image folded or flat along a side
@@ -246,7 +247,7 @@ void Core::process(int64_t f, const double* pp, const V3& p, const V3& n,
                 B[src] += val + bnd;
             if (held) {
                 ++st.pieces_held;
-                st.held_pieces.push_back({std::move(w.q), f, val, bnd});
+                st.held_pieces.push_back({std::move(w.q), f, val, bnd, arcs});
             }
             continue;
         }
@@ -417,11 +418,12 @@ void Core::settle(const double* pp, const std::vector<ExactPlane>& xp, std::vect
     };
     std::unordered_map<EdgeKey, Met, EdgeKeyHash> met;
     std::vector<std::pair<EdgeKey, R>> keyed;
-    for (const auto& h : st.held_pieces) {
+    for (auto& h : st.held_pieces) {
         const size_t src = static_cast<size_t>(source_[h.f]);
         total[src] += h.val;
         keyed.clear();
-        keep[src] += h.bnd + charge_edges(h.q, source_[h.f], E, st, nullptr, false, &keyed);
+        keep[src] += h.bnd + charge_edges(h.q, source_[h.f], E, st, nullptr, false, &keyed,
+                                          &h.arcs);
         for (const auto& [k, c] : keyed) {
             auto [it, fresh] = met.try_emplace(k, Met{source_[h.f], 0, 0});
             it->second.count += 1;
@@ -454,7 +456,7 @@ void Core::settle(const double* pp, const std::vector<ExactPlane>& xp, std::vect
         const std::vector<R>* placed = nullptr;  // the vertices' bounds charged, if refined
         // (the subtractions above within a few roundoffs of the sums: 64 kept)
         if (!(keep[s] * (1 + 64 * K_.eps) <= st.rtol * total[s])) {
-            const R charges = charge_edges(h.q, src, E, st, nullptr, false);
+            const R charges = charge_edges(h.q, src, E, st, nullptr, false, nullptr, &h.arcs);
             refine(h.q, h.f, pp, xp, qdirs, qerrs);
             // first the refined directions rounded to long double, summed in long double
             // (Core::integrate, with offsets from the directions, each within 4 roundoffs
@@ -476,7 +478,7 @@ void Core::settle(const double* pp, const std::vector<ExactPlane>& xp, std::vect
                 lerrs[i] = qerrs[i] + 4 * K_.eps * (2 + r[0].length / r[i].length);
             R lv, lb;
             integrate(r, h.f, un, &lv, &lb, st.eq3 ? &st : nullptr);
-            const R lcharges = charge_edges(h.q, src, E, st, &lerrs, false);
+            const R lcharges = charge_edges(h.q, src, E, st, &lerrs, false, nullptr, &h.arcs);
             if (lb + lcharges < bnd + charges &&
                 lb + lcharges <= st.rtol * total[s] / (2 * static_cast<R>(count[s]))) {
                 val = lv;
@@ -486,7 +488,7 @@ void Core::settle(const double* pp, const std::vector<ExactPlane>& xp, std::vect
                 R qv, qb;
                 integrate_quad(qdirs, st.normal, &qv, &qb, st.eq3);
                 ++st.quad_pieces;
-                const R qcharges = charge_edges(h.q, src, E, st, &qerrs, false);
+                const R qcharges = charge_edges(h.q, src, E, st, &qerrs, false, nullptr, &h.arcs);
                 if (qb + qcharges < bnd + charges) {
                     val = qv;
                     bnd = qb;
@@ -496,7 +498,7 @@ void Core::settle(const double* pp, const std::vector<ExactPlane>& xp, std::vect
         }
         F[src] += val;
         E[src] += bnd;
-        charge_edges(h.q, src, E, st, placed);
+        charge_edges(h.q, src, E, st, placed, true, nullptr, &h.arcs);
     }
 
     st.held_pieces.clear();

@@ -11,6 +11,7 @@
 #include <limits>
 #include <vector>
 
+#include "constants.h"
 #include "core.h"
 
 namespace exactff {
@@ -338,6 +339,7 @@ bool Core::insert_shadow(const Piece& q, int64_t f, const double* pp, int plane,
     }
     size_t sides = 0;  // the piece's edges that bound its shadow, cut ones included
     std::vector<Plane> chain;
+    std::vector<size_t> chain_edge;  // the piece's edge each plane of the chain is
     bool straddled = false;
     for (size_t i = 0; i < m; ++i) {
         const Side& s = e[i];
@@ -350,6 +352,7 @@ bool Core::insert_shadow(const Piece& q, int64_t f, const double* pp, int plane,
         if (!s.on_cut && s.state == 1) {
             chain.push_back({s.mm, s.ml, s.err, OUT, OUT, s.exact, s.orient});
             set_double(chain.back());
+            chain_edge.push_back(i);
         }
     }
     // a sliver (a side it straddles, fewer than three sides) or a kernel that leaves
@@ -365,6 +368,12 @@ bool Core::insert_shadow(const Piece& q, int64_t f, const double* pp, int plane,
     st.kernels += kernel_charge > 0;
     if (chain.empty()) {  // the piece fills its leaf's cell: the cell is covered
         (positive ? sv[plane].pos : sv[plane].neg) = IN;
+        return true;
+    }
+    // a long piece whose image is convex (no side left out, no kernel): a tree of chords
+    if (chain.size() > LONG_SHADOW_EDGES && kernel_charge == 0 && omit_charge == 0) {
+        const int root = long_shadow(q, pp, chain, chain_edge, sv, xp, st);
+        (positive ? sv[plane].pos : sv[plane].neg) = root;
         return true;
     }
     const int base = static_cast<int>(sv.size());
@@ -427,6 +436,117 @@ R Core::leaked(const Piece& q, R worth, const RowStats& st) const {
             std::atan2(norm(cross(k.c, l.c)), dot(k.c, l.c)) <= k.radius + l.radius + 64 * K_.eps)
             sum += l.charge;
     return std::min(sum, worth);
+}
+
+
+// the shadow of a convex piece with many edges (more than LONG_SHADOW_EDGES in its
+// chain): a chain of its edges' planes costs every piece behind it a visit per edge,
+// and cuts the pieces around it along the edges' planes, nearly parallel near each
+// other (slivers with ill-conditioned crossings). Instead the piece is split by chords,
+// planes through p and two of its input vertices, into convex parts of at most
+// LONG_SHADOW_LEAF edges, in a balanced tree: the first chord from a vertex to one
+// halfway round, each next from the middle of a part's rim to the vertex halfway round
+// the piece from it (nearly through the piece's middle, so that it cuts what lies
+// around the piece nearly across its edges). A part is the piece's intersection with
+// the sides of the chords on its path, a closed convex polygon whose other edges are
+// its rim's: its cone is those half-spaces, the chords on the path and the chain of its
+// rim's planes (cut edges' planes are on the path already), and the parts cover the
+// piece. A chord is kept only where every vertex of the part's rim is clearly on the
+// side of its own half (as insert_shadow asks of a chain's planes), else that part gets
+// the chain of its rim's planes.
+int Core::long_shadow(const Piece& q, const double* pp, const std::vector<Plane>& chain,
+                      const std::vector<size_t>& chain_edge, std::vector<Plane>& sv,
+                      std::vector<ExactPlane>& xp, RowStats& st) const {
+    const size_t m = q.size();
+    std::vector<int> plane_of(m, -1);  // the chain's plane of each edge of the piece
+    for (size_t k = 0; k < chain.size(); ++k) plane_of[chain_edge[k]] = static_cast<int>(k);
+    // the chain of the planes of the piece's edges [a, b) (positions along the rim, mod m)
+    auto rim_chain = [&](size_t a, size_t b) {
+        int first = IN, prev = -1;
+        for (size_t k = a; k < b; ++k) {
+            const int e = plane_of[k % m];
+            if (e < 0) continue;
+            const int node = static_cast<int>(sv.size());
+            sv.push_back(chain[static_cast<size_t>(e)]);
+            sv.back().pos = IN;
+            sv.back().neg = OUT;
+            if (prev >= 0) sv[static_cast<size_t>(prev)].pos = node;
+            else first = node;
+            prev = node;
+            ++st.shadow_planes;
+        }
+        return first;
+    };
+    // an input vertex of the piece at a position near `want` within (lo, hi), or m
+    auto input_near = [&](size_t want, size_t lo, size_t hi) {
+        for (size_t d = 0; d <= hi - lo; ++d)
+            for (size_t c : {want - d, want + d})
+                if (c > lo && c < hi && q[c % m].id >= 0) return c;
+        return m;
+    };
+    // the chord through the input vertices at positions e0 and e1, oriented so that the
+    // rim's vertices at [a, mid] lie on its positive side and those at [mid, b] on its
+    // negative side (the chord's own ends apart), each clearly (beyond the band that
+    // insert_shadow asks of a chain's planes); -1 where they do not
+    auto chord = [&](size_t e0, size_t e1, size_t a, size_t mid, size_t b) {
+        const int64_t i0 = q[e0 % m].id, i1 = q[e1 % m].id;
+        V3 mm = input_plane(pp, &V_[3 * i0], &V_[3 * i1]);
+        const R ml = norm(mm);
+        const R err = 8 * K_.eps;
+        if (!(ml > 0)) return -1;
+        int orient = 0;
+        for (size_t k = a; k <= b; ++k) {
+            if (k % m == e0 % m || k % m == e1 % m) continue;
+            const Vertex& u = q[k % m];
+            const R dk = dot(mm, u.v);
+            const R w = (16 * K_.eps + err + u.err) * ml * u.length;
+            const int s = dk > w ? 1 : (dk < -w ? -1 : 0);
+            const int want = k < mid ? 1 : -1;
+            if (s == 0 || (orient != 0 && s * want != orient)) return -1;
+            orient = s * want;
+        }
+        if (orient == 0) return -1;
+        const int exact = static_cast<int>(xp.size());
+        xp.push_back({0, {V_[3 * i0], V_[3 * i0 + 1], V_[3 * i0 + 2]},
+                      {V_[3 * i1], V_[3 * i1 + 1], V_[3 * i1 + 2]}, mm, err, uid_[i0],
+                      uid_[i1], input_tilt(i0, i1, pp)});
+        if (orient < 0) mm = {-mm.x, -mm.y, -mm.z};
+        const int node = static_cast<int>(sv.size());
+        sv.push_back({mm, ml, err, OUT, OUT, exact, orient});
+        set_double(sv.back());
+        ++st.shadow_planes;
+        return node;
+    };
+    std::function<int(size_t, size_t)> part = [&](size_t a, size_t b) -> int {
+        if (b - a <= LONG_SHADOW_LEAF) return rim_chain(a, b);
+        const size_t mid = input_near(a + (b - a) / 2, a, b);
+        // the far end: an input vertex about halfway round from mid, off [a, b]
+        size_t opp = m;
+        for (size_t d = 0; d < m / 2 && opp == m; ++d)
+            for (size_t c : {mid + m / 2 - d, mid + m / 2 + d})
+                if (c > b && c < a + m && q[c % m].id >= 0) {
+                    opp = c;
+                    break;
+                }
+        const int node = mid < m + a && opp < m + m ? chord(mid, opp, a, mid, b) : -1;
+        if (node < 0) return rim_chain(a, b);
+        const int pos = part(a, mid);
+        sv[static_cast<size_t>(node)].pos = pos;
+        const int neg = part(mid, b);
+        sv[static_cast<size_t>(node)].neg = neg;
+        return node;
+    };
+    // the first chord: from an input vertex to one about halfway round
+    size_t s0 = 0;
+    while (s0 < m && q[s0].id < 0) ++s0;
+    const size_t half = s0 < m ? input_near(s0 + m / 2, s0, s0 + m) : m;
+    const int root = half < s0 + m ? chord(s0, half, s0, half, s0 + m) : -1;
+    if (root < 0) return rim_chain(0, m);
+    const int pos = part(s0, half);
+    sv[static_cast<size_t>(root)].pos = pos;
+    const int neg = part(half, s0 + m);
+    sv[static_cast<size_t>(root)].neg = neg;
+    return root;
 }
 
 }  // namespace exactff
