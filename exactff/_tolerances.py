@@ -625,7 +625,7 @@ BSP_QUAD_TRUST = 1e-3
 #: around it are cut across its edges instead of along their nearly parallel planes (the
 #: office with a 5,000-vertex table top, ``benchmarks/bench_long_polygon.py``).
 LONG_SHADOW_EDGES = 32
-LONG_SHADOW_LEAF = 8
+LONG_SHADOW_LEAF = 16
 #: A ring is convex where every corner turns the normal's way or is collinear within
 #: this many ulps of its edges' cross product (``exactff.visibility.compiled._convex_rings``).
 CONVEX_TURN_ULPS = 8.0

@@ -17,7 +17,7 @@ constexpr long double SVBSP_BOX_FLOOR = 1e-300L;
 constexpr double SVBSP_LEAK_BUDGET_SHARE = 0.0001;
 constexpr double BSP_QUAD_TRUST = 0.001;
 constexpr size_t LONG_SHADOW_EDGES = 32;
-constexpr size_t LONG_SHADOW_LEAF = 8;
+constexpr size_t LONG_SHADOW_LEAF = 16;
 
 }  // namespace exactff
 

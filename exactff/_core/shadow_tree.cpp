@@ -477,12 +477,13 @@ int Core::long_shadow(const Piece& q, const double* pp, const std::vector<Plane>
         }
         return first;
     };
-    // an input vertex of the piece at a position near `want` within (lo, hi), or m
+    // an input vertex of the piece at a position near `want` within (lo, hi), or none
+    const size_t none = static_cast<size_t>(-1);
     auto input_near = [&](size_t want, size_t lo, size_t hi) {
         for (size_t d = 0; d <= hi - lo; ++d)
             for (size_t c : {want - d, want + d})
                 if (c > lo && c < hi && q[c % m].id >= 0) return c;
-        return m;
+        return none;
     };
     // the chord through the input vertices at positions e0 and e1, oriented so that the
     // rim's vertices at [a, mid] lie on its positive side and those at [mid, b] on its
@@ -520,15 +521,16 @@ int Core::long_shadow(const Piece& q, const double* pp, const std::vector<Plane>
     std::function<int(size_t, size_t)> part = [&](size_t a, size_t b) -> int {
         if (b - a <= LONG_SHADOW_LEAF) return rim_chain(a, b);
         const size_t mid = input_near(a + (b - a) / 2, a, b);
+        if (mid == none) return rim_chain(a, b);
         // the far end: an input vertex about halfway round from mid, off [a, b]
-        size_t opp = m;
-        for (size_t d = 0; d < m / 2 && opp == m; ++d)
+        size_t opp = none;
+        for (size_t d = 0; d < m / 2 && opp == none; ++d)
             for (size_t c : {mid + m / 2 - d, mid + m / 2 + d})
                 if (c > b && c < a + m && q[c % m].id >= 0) {
                     opp = c;
                     break;
                 }
-        const int node = mid < m + a && opp < m + m ? chord(mid, opp, a, mid, b) : -1;
+        const int node = opp != none ? chord(mid, opp, a, mid, b) : -1;
         if (node < 0) return rim_chain(a, b);
         const int pos = part(a, mid);
         sv[static_cast<size_t>(node)].pos = pos;
@@ -539,8 +541,8 @@ int Core::long_shadow(const Piece& q, const double* pp, const std::vector<Plane>
     // the first chord: from an input vertex to one about halfway round
     size_t s0 = 0;
     while (s0 < m && q[s0].id < 0) ++s0;
-    const size_t half = s0 < m ? input_near(s0 + m / 2, s0, s0 + m) : m;
-    const int root = half < s0 + m ? chord(s0, half, s0, half, s0 + m) : -1;
+    const size_t half = s0 < m ? input_near(s0 + m / 2, s0, s0 + m) : none;
+    const int root = half != none ? chord(s0, half, s0, half, s0 + m) : -1;
     if (root < 0) return rim_chain(0, m);
     const int pos = part(s0, half);
     sv[static_cast<size_t>(root)].pos = pos;
