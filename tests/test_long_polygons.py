@@ -100,3 +100,30 @@ def test_refinement_of_a_long_polygon_does_not_depend_on_its_candidate_search(mo
             F0, E0 = method.point_form_factors(long_, p, nrm, error=True)
         np.testing.assert_array_equal(F, F0)
         np.testing.assert_array_equal(E, E0)
+
+
+def test_long_polygon_shadow_is_a_tree_of_chords(scenes):
+    # the disc's shadow as a chain of its 1,500 edges' planes cost every piece behind it a
+    # visit per edge (the office with a 5,000-vertex table: 10x the rows without it); as a
+    # balanced tree of chords (Core::long_shadow) about log2(edges / leaf) + leaf
+    room, long_, _ = scenes
+    k = len(long_.polygons[-1])
+    for i in (9, 20):   # a wall and the ceiling: the floor and the box behind the disc
+        base, st = {}, {}
+        ef.Exact().point_form_factors(room, room.centroids[i], room.normals[i], stats=base)
+        ef.Exact().point_form_factors(long_, room.centroids[i], room.normals[i], stats=st)
+        assert st["hidden_pieces"] > base["hidden_pieces"]   # the disc hides things
+        assert st["node_visits"] <= 4 * base["node_visits"] + 2 * k, (st, base)
+
+
+def test_long_polygon_sphere_row_equals_its_fan(scenes):
+    # the compiled sphere mode: the disc's shadow (a tree of chords) on both sides of the
+    # core's horizon, against the fan's 1,500 triangles (each a short chain)
+    room, long_, cut = scenes
+    n = len(room)
+    for p in ([0.5, 0.45, 0.8], [0.7, 0.2, 0.3]):
+        S, E = ef.sphere_form_factors(long_, p, error=True)
+        T, H = ef.sphere_form_factors(cut, p, error=True)
+        assert_form_factors_close(S[:n], T[:n], rtol=0, atol=1e-14)
+        assert abs(S[n] - T[n:].sum()) <= 1e-14
+        assert S[n] > 1e-2 and abs(S.sum() - 1) <= 1e-13
