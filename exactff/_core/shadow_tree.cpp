@@ -284,10 +284,20 @@ bool Core::insert_shadow(const Piece& q, int64_t f, const double* pp, int plane,
             s.mm = {-s.mm.x, -s.mm.y, -s.mm.z};
             s.orient = -1;
         }
-        // and every vertex on that side, up to the plane's and its own errors
+        // and every vertex on that side, up to the plane's and its own errors (a vertex
+        // clearly inside by the classification's double filter, Core::process, needs no
+        // long double test: a piece of m vertices costs m^2 of them)
+        const double md[3] = {static_cast<double>(s.mm.x), static_cast<double>(s.mm.y),
+                              static_cast<double>(s.mm.z)};
+        const double mld = static_cast<double>(s.ml);
+        const size_t next = (i + 1) % m;
         for (size_t k = 0; k < m; ++k) {
-            if (k == i || k == (i + 1) % m) continue;
+            if (k == i || k == next) continue;
             const Vertex& u = q[k];
+            const double dd = md[0] * u.vd[0] + md[1] * u.vd[1] + md[2] * u.vd[2];
+            if (dd > SVBSP_FILTER_ROUNDOFFS * DBL_EPSILON * (mld * u.lengthd) *
+                         (1 + 8 * DBL_EPSILON))
+                continue;
             const R tol = 16 * K_.eps + s.err + u.err;
             const R dk = dot(s.mm, u.v);
             if (dk < -tol * s.ml * u.length)
