@@ -49,8 +49,9 @@ def sphere_form_factors(scene: Scene, points: ArrayLike, *,
     tolerance : float, optional
         The exact method's relative accuracy (default: :class:`Exact`'s, 1e-12):
         unoccluded values whose bound exceeds it are evaluated again in mpmath.
-        Occluded values are not refined; their bounds say what the clipper's
-        double-precision vertices allow (about 1e-14 of the chart's unit per vertex).
+        Occluded values are not refined; their bounds say what the engine's vertices
+        allow (the compiled core's long double, about 1e-17 a value on the office; the
+        Python engine's clipper, about 1e-14 of the chart's unit per vertex).
     **options
         Passed to the method's constructor when ``method`` is a name
         (``samples=``, ``seed=`` for Monte Carlo; ``engine=``, ``shortcuts=`` for
@@ -68,12 +69,14 @@ def sphere_form_factors(scene: Scene, points: ArrayLike, *,
 
     Notes
     -----
-    The exact method measures the sphere as two hemispheres (about +z and -z) with the
-    visibility engine of :func:`form_factors` (a BSP order, the area-sorting clipper in
-    five gnomonic charts per hemisphere), and each visible piece by its solid angle:
-    lifted from its chart, a piece is a planar polygon, measured by Van Oosterom and
-    Strackee's triangle formula over a fan (:mod:`exactff.kernel.solid_angle`). In a
-    convex room seen from inside nothing is hidden, and whole polygons are measured.
+    The exact method measures the whole sphere in one row of the compiled core
+    (:func:`exactff.visibility.compiled_solid_angles`: the BSP order and the shadow tree
+    of :func:`form_factors`, free on both sides of its root plane), or, with
+    ``engine="python"``, as two hemispheres (about +z and -z) through the Python
+    engine's clipper (five gnomonic charts per hemisphere); either way each visible
+    piece is measured by its solid angle, Van Oosterom and Strackee's triangle formula
+    over a fan (:mod:`exactff.kernel.solid_angle`). In a convex room seen from inside
+    nothing is hidden, and whole polygons are measured.
     A polygon whose plane holds the point (seen edge-on) gets 0. Conventions:
     ``docs/explanation/conventions.md``; mean radiant temperature from these factors:
     ``docs/how-to/mean-radiant-temperature.md``.
