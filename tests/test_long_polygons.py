@@ -3,11 +3,15 @@ equal to the same polygon cut into a fan of pieces."""
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 import exactff as ef
 from exactff.geometry import polygon_diameter
 from exactff.rings import padded_buckets
 from exactff.testing import assert_form_factors_close
+
+from common import examples
 
 
 def disc(k, centre=(0.5, 0.45, 0.5), radius=0.3, tilt=0.2):
@@ -127,3 +131,31 @@ def test_long_polygon_sphere_row_equals_its_fan(scenes):
         assert_form_factors_close(S[:n], T[:n], rtol=0, atol=1e-14)
         assert abs(S[n] - T[n:].sum()) <= 1e-14
         assert S[n] > 1e-2 and abs(S.sum() - 1) <= 1e-13
+
+
+@settings(max_examples=examples(10), deadline=None)
+@given(k=st.integers(40, 300), seed=st.integers(0, 2 ** 32 - 1))
+def test_irregular_long_polygon_equals_its_fan(k, seed):
+    # an irregular convex k-gon (random angles on a tilted ellipse: chords that do not
+    # meet in one point, parts of unequal size) over the furnished room's floor, from
+    # points above, below and beside it: the tree of chords against the fan's chains
+    rng = np.random.default_rng(seed)
+    t = np.sort(rng.uniform(0, 2 * np.pi, k))
+    t = t[np.diff(np.append(t, t[0] + 2 * np.pi)) > 1e-3]   # distinct vertices
+    a, b = rng.uniform(0.15, 0.4), rng.uniform(0.1, 0.3)
+    c = np.array([0.5, 0.45, rng.uniform(0.3, 0.7)])
+    P = np.column_stack([a * np.cos(t), b * np.sin(t), 0.3 * a * np.cos(t)]) + c
+    room = ef.scenes.furnished_box(2, [((0.1, 0.1, 0.0), (0.3, 0.35, 0.2))])
+    long_ = ef.Scene.from_polygons(list(room.polygons) + [P])
+    cut = ef.Scene.from_polygons(list(room.polygons) + fan(P, c))
+    n = len(room)
+    for i in (9, 20):
+        p, nrm = room.centroids[i], room.normals[i]
+        F = ef.form_factors(long_, p, nrm)
+        G = ef.form_factors(cut, p, nrm)
+        assert_form_factors_close(F[:n], G[:n], rtol=0, atol=1e-14)
+        assert abs(F[n] - G[n:].sum()) <= 1e-14
+    p = np.array([rng.uniform(0.35, 0.65), rng.uniform(0.35, 0.55), 0.95])
+    S, T = ef.sphere_form_factors(long_, p), ef.sphere_form_factors(cut, p)
+    assert_form_factors_close(S[:n], T[:n], rtol=0, atol=1e-14)
+    assert abs(S[n] - T[n:].sum()) <= 1e-14
