@@ -241,6 +241,15 @@ bool Core::insert_shadow(const Piece& q, int64_t f, const double* pp, int plane,
         bool on_cut, omit;
     };
     std::vector<Side> e(m);
+    // the vertices' double directions and lengths, contiguous (the filter below reads
+    // them m times each)
+    std::vector<double> X(m), Y(m), Z(m), L(m);
+    for (size_t k = 0; k < m; ++k) {
+        X[k] = q[k].vd[0];
+        Y[k] = q[k].vd[1];
+        Z[k] = q[k].vd[2];
+        L[k] = q[k].lengthd;
+    }
     if (m < 3) {
         leave_out(q, piece_bound, 0, st);
         return false;
@@ -290,14 +299,12 @@ bool Core::insert_shadow(const Piece& q, int64_t f, const double* pp, int plane,
         const double md[3] = {static_cast<double>(s.mm.x), static_cast<double>(s.mm.y),
                               static_cast<double>(s.mm.z)};
         const double mld = static_cast<double>(s.ml);
+        const double inside = SVBSP_FILTER_ROUNDOFFS * DBL_EPSILON * mld * (1 + 8 * DBL_EPSILON);
         const size_t next = (i + 1) % m;
         for (size_t k = 0; k < m; ++k) {
             if (k == i || k == next) continue;
+            if (md[0] * X[k] + md[1] * Y[k] + md[2] * Z[k] > inside * L[k]) continue;
             const Vertex& u = q[k];
-            const double dd = md[0] * u.vd[0] + md[1] * u.vd[1] + md[2] * u.vd[2];
-            if (dd > SVBSP_FILTER_ROUNDOFFS * DBL_EPSILON * (mld * u.lengthd) *
-                         (1 + 8 * DBL_EPSILON))
-                continue;
             const R tol = 16 * K_.eps + s.err + u.err;
             const R dk = dot(s.mm, u.v);
             if (dk < -tol * s.ml * u.length)
