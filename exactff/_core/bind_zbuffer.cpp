@@ -44,13 +44,7 @@ i64 check_vertices(const Doubles& V, const Ints& counts) {
 
 i64 check_bucket(const Doubles& V, const Ints& counts, const Doubles& planes, const Doubles& eu,
                  const Doubles& ev, const Doubles& ew) {
-    if (V.ndim() != 3 || V.shape(2) != 3)
-        throw std::invalid_argument("V must have shape (M, K, 3)");
-    const i64 M = V.shape(0);
-    if (counts.shape(0) != M) throw std::invalid_argument("counts must have shape (M,)");
-    for (i64 m = 0; m < M; ++m)
-        if (counts.data()[m] > V.shape(1) || counts.data()[m] < 0)
-            throw std::invalid_argument("counts out of range");
+    const i64 M = check_vertices(V, counts);
     if (planes.ndim() != 2 || planes.shape(0) != 4 || planes.shape(1) != 3)
         throw std::invalid_argument("planes must have shape (4, 3)");
     if (eu.size() != 3 || ev.size() != 3 || ew.size() != 3)
@@ -136,13 +130,9 @@ class PyZBuffer {
     void chart_face(Doubles V, Ints counts, Ints g_ids, Doubles planes, Doubles eu, Doubles ev,
                     Doubles ew, bool side, Doubles uc, Doubles vc, Ints table,
                     py::array best_t, py::array best, i64 pair_chunk, i64 depth_chunk) {
-        const i64 M = check_bucket(V, counts, planes, eu, ev, ew);
-        if (g_ids.shape(0) != M) throw std::invalid_argument("g_ids must have shape (M,)");
+        check_ids(g_ids, check_bucket(V, counts, planes, eu, ev, ew));
         const Grid g = grid(uc, vc, table);
         const Buffer buf = writable(best_t, best);
-        for (i64 m = 0; m < M; ++m)
-            if (g_ids.data()[m] < 0 || g_ids.data()[m] >= n_live_)
-                throw std::invalid_argument("g_ids out of range");
         py::gil_scoped_release release;
         zb_.chart_face(bucket_of(V, counts, g_ids.data()), chart_of(planes, eu, ev, ew, side), g, buf,
                        Chunks{pair_chunk, depth_chunk});
