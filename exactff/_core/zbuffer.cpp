@@ -191,6 +191,8 @@ static void merge_close(std::vector<double>& x, double ulps) {
     }
 }
 
+// ---- what the scans share ----
+
 // the spans [X_1, X_2), [X_3, X_4), ... (X sorted, at most `slots` of them) as runs
 // of centres c (first centre at or above each end), each cell given to emit(col)
 template <class Emit>
@@ -215,6 +217,7 @@ static inline double py_mod(double a, double b) {
     return m;
 }
 
+// a . b added in order, (x0 y0 + x1 y1) + x2 y2 (the disk's numpy expressions)
 static inline double dot_seq(const double* a, const double* b) {
     return (a[0] * b[0] + a[1] * b[1]) + a[2] * b[2];
 }
@@ -232,6 +235,11 @@ static inline double np_sign(double x) {
     return x > 0 ? 1.0 : x < 0 ? -1.0 : x == 0 ? 0.0 : std::numeric_limits<double>::quiet_NaN();
 }
 
+// ---- the clippers of a bucket ----
+
+// chart_clip (margin 0): the polygons that reach the chart's frustum, those straddling it
+// clipped plane by plane, projected into the chart, snapped onto its edges and merged
+// along them
 static void clip_to_chart(const double* V, i64 M, i64 K, const i64* counts,
                        const double* planes, const double* eu, const double* ev,
                        const double* ew, bool side, double meet_ulps, double edge_ulps,
