@@ -134,8 +134,8 @@ class PyZBuffer {
         const Grid g = grid(uc, vc, table);
         const Buffer buf = writable(best_t, best);
         py::gil_scoped_release release;
-        zb_.chart_face(bucket_of(V, counts, g_ids.data()), chart_of(planes, eu, ev, ew, side), g, buf,
-                       Chunks{pair_chunk, depth_chunk});
+        zb_.chart_face(bucket_of(V, counts, g_ids.data()), chart_of(planes, eu, ev, ew, side), g,
+                       buf, Chunks{pair_chunk, depth_chunk});
     }
 
     void candidates(Ints cell, Ints src, py::array best_t, py::array best, i64 depth_chunk) {
@@ -187,8 +187,8 @@ class PyZBuffer {
         std::vector<i64> near;
         {
             py::gil_scoped_release release;
-            near = zb_.disk(bucket_of(V, counts, g_ids.data()), g, buf, Chunks{pair_chunk, depth_chunk},
-                            near_rel, after_near);
+            near = zb_.disk(bucket_of(V, counts, g_ids.data()), g, buf,
+                            Chunks{pair_chunk, depth_chunk}, near_rel, after_near);
         }
         return exactff::bind::as_array(near);
     }
@@ -214,9 +214,10 @@ class PyZBuffer {
                 throw std::invalid_argument("starts must be non-decreasing within [0, n]");
         const Buffer buf = writable(best_t, best);
         py::gil_scoped_release release;
-        return zb_.chart_rays(bucket_of(V, counts, g_ids.data()), chart_of(planes, eu, ev, ew, side),
-                              cells.data(), cu.data(), cv.data(), nb, v_lo, order.data(),
-                              starts.data(), buf, pair_chunk, long_polygon);
+        return zb_.chart_rays(bucket_of(V, counts, g_ids.data()),
+                              chart_of(planes, eu, ev, ew, side), cells.data(), cu.data(),
+                              cv.data(), nb, v_lo, order.data(), starts.data(), buf, pair_chunk,
+                              long_polygon);
     }
 
     // whether live polygons a[k] and b[k] are coplanar (the BSP tree's rule)

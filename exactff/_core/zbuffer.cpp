@@ -241,9 +241,9 @@ static inline double np_sign(double x) {
 // clipped plane by plane, projected into the chart, snapped onto its edges and merged
 // along them
 static void clip_to_chart(const double* V, i64 M, i64 K, const i64* counts,
-                       const double* planes, const double* eu, const double* ev,
-                       const double* ew, bool side, double meet_ulps, double edge_ulps,
-                       Clipped& out) {
+                          const double* planes, const double* eu, const double* ev,
+                          const double* ew, bool side, double meet_ulps, double edge_ulps,
+                          Clipped& out) {
     // which polygons reach the frustum, which lie wholly inside it
     std::vector<i64> reach, straddle;
     std::vector<char> inside_all;
@@ -353,8 +353,8 @@ static void clip_to_chart(const double* V, i64 M, i64 K, const i64* counts,
 // ones padded by their last vertex and projected, u = (scale W_0) / W_2,
 // v = (scale W_1) / W_2.
 static void clip_to_face(const double* V, i64 M, i64 K, const i64* counts, const double* R,
-                      const double* planes, i64 n_planes, double scale, double meet_ulps,
-                      Clipped& out) {
+                         const double* planes, i64 n_planes, double scale, double meet_ulps,
+                         Clipped& out) {
     std::vector<double> W(static_cast<size_t>(M * K * 3));
     for (i64 q = 0; q < M * K; ++q) {
         const double* x = V + 3 * q;
@@ -565,7 +565,8 @@ bool ZBuffer::within(i64 p, i64 q) const {
 // exactff.predicates.coplanar_pairs for live polygons (cached per pair)
 bool ZBuffer::coplanar(i64 a, i64 b) {
     const i64 lo = std::min(a, b), hi = std::max(a, b);
-    const std::uint64_t key = (static_cast<std::uint64_t>(lo) << 32) | static_cast<std::uint64_t>(hi);
+    const std::uint64_t key =
+        (static_cast<std::uint64_t>(lo) << 32) | static_cast<std::uint64_t>(hi);
     // neighbouring cells mostly ask about the same pair
     if (key == last_key_) return last_value_;
     auto it = cache_.find(key);
@@ -675,8 +676,8 @@ void ZBuffer::flush(double* best_t, i64* best) {
 // scan conversion of M polygons UV (M, K, 2) with counts c, live indices
 // src[pos[m]] (pos null: src[m]), into the depth buffer
 void ZBuffer::scan(const double* uv, i64 M, i64 K, const i64* c, const i64* src, const i64* pos,
-          const double* u, i64 nu, const double* v, i64 nv, const i64* tab, double* bt,
-          i64* bs, i64 pair_chunk, i64 depth_chunk) {
+                   const double* u, i64 nu, const double* v, i64 nv, const i64* tab, double* bt,
+                   i64* bs, i64 pair_chunk, i64 depth_chunk) {
     // the numpy code's chunks: (polygon, scanline) pairs by PAIR_CHUNK // K
     const i64 step = std::max<i64>(1, pair_chunk / std::max<i64>(K, 1));
     i64 pairs_in_chunk = 0;
@@ -734,8 +735,8 @@ void ZBuffer::scan(const double* uv, i64 M, i64 K, const i64* c, const i64* src,
 
 // rasterise_polar on the clipped images c (live bucket indices into src)
 void ZBuffer::scan_polar(const Clipped& c, const i64* src, const double* radii, i64 nr,
-                const double* cs, const double* sn, i64 S, double* bt, i64* bs,
-                i64 pair_chunk, i64 depth_chunk) {
+                         const double* cs, const double* sn, i64 S, double* bt, i64* bs,
+                         i64 pair_chunk, i64 depth_chunk) {
     const double PI = 3.141592653589793, TWO_PI = 2.0 * PI;
     const double step = TWO_PI / static_cast<double>(S);
     const i64 L = static_cast<i64>(c.live.size()), K = c.K;
@@ -819,9 +820,9 @@ void ZBuffer::scan_polar(const Clipped& c, const i64* src, const double* radii, 
 }
 
 // rasterise_disk's scan of the polygons h holds that are not near the point
-void ZBuffer::scan_disk(const Horizon& h, const i64* src, const double* xc, i64 nx, const double* yc,
-               i64 ny, const i64* tab, double* bt, i64* bs, i64 pair_chunk,
-               i64 depth_chunk) {
+void ZBuffer::scan_disk(const Horizon& h, const i64* src, const double* xc, i64 nx,
+                        const double* yc, i64 ny, const i64* tab, double* bt, i64* bs,
+                        i64 pair_chunk, i64 depth_chunk) {
     const i64 K = h.K, K2 = 2 * K;
     const i64 chunk = std::max<i64>(1, pair_chunk / std::max<i64>(K2, 1));
     i64 pairs_in_chunk = 0;
@@ -936,8 +937,8 @@ void ZBuffer::scan_disk(const Horizon& h, const i64* src, const double* xc, i64 
 
 // _zbuffer_chart on the clipped images c
 void ZBuffer::scan_rays(const Clipped& c, const i64* src, const i64* cells, const double* cu,
-               const double* cv, i64 nb, double v_lo, const i64* order, const i64* starts,
-               double* bt, i64* bs, i64 pair_chunk) {
+                        const double* cv, i64 nb, double v_lo, const i64* order, const i64* starts,
+                        double* bt, i64* bs, i64 pair_chunk) {
     const i64 L = static_cast<i64>(c.live.size()), K = c.K;
     const double fnb = static_cast<double>(nb);
     // (polygon, bucket) pairs: the buckets under each image's bounding box
