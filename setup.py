@@ -1,7 +1,7 @@
 """Build of the compiled code: the library exactff/_core/ (headers and sources, one concept
 per file; docs/explanation/layout.md) as four Python extension modules, the visibility
 core and the BSP build (exactff.visibility._svbsp), the area code's hidden regions
-(exactff.area._hidden), an occluded pair's events (exactff.area._pair) and the
+(exactff.area._hidden), an occluded pair's events and cells (exactff.area._pair) and the
 unoccluded rows' sector sums (exactff.kernel._sector); and the discrete methods' z-buffer
 (exactff.methods._zbuffer). The rest of the project's metadata is in pyproject.toml."""
 
@@ -26,8 +26,9 @@ def core(*names):
 # compare), and the rows are as fast (docs/explanation/layout.md has the figures).
 # -ffp-contract=off: no contraction of a * b + c into a fused multiply-add, which rounds
 # once instead of twice: the sector sums mirror kernel/sector.py's numpy expression by
-# expression (tests/test_unoccluded_compiled.py compares them bit for bit), and the
-# library's error bounds count a rounding per operation. (x86-64's baseline has no FMA
+# expression (tests/test_unoccluded_compiled.py compares them bit for bit), the z-buffer
+# mirrors the numpy rasteriser's (tests/test_compiled_discrete.py compares every cell),
+# and the library's error bounds count a rounding per operation. (x86-64's baseline has no FMA
 # instruction, so there it changes nothing; on aarch64 it keeps the same values.)
 CORE_FLAGS = ["-O3", "-fno-math-errno", "-ffp-contract=off"]
 # the quadruple-precision tier uses GCC's libquadmath on x86 (long double is already
@@ -47,9 +48,8 @@ setup(
                                    depends=HEADERS, cxx_std=17, extra_compile_args=CORE_FLAGS),
                  Pybind11Extension("exactff.kernel._sector", core("bind_sector.cpp"),
                                    depends=HEADERS, cxx_std=17, extra_compile_args=CORE_FLAGS),
-                 # no contraction into fused multiply-adds: the z-buffer mirrors the numpy
-                 # rasteriser's expressions bit for bit (it moves into _core/ later)
-                 Pybind11Extension("exactff.methods._zbuffer", ["exactff/methods/_zbuffer.cpp"],
-                                   cxx_std=17, extra_compile_args=["-O3", "-ffp-contract=off"])],
+                 Pybind11Extension("exactff.methods._zbuffer",
+                                   core("bind_zbuffer.cpp", "zbuffer.cpp"),
+                                   depends=HEADERS, cxx_std=17, extra_compile_args=CORE_FLAGS)],
     cmdclass={"build_ext": build_ext},
 )

@@ -1,7 +1,7 @@
 """Write exactff/_core/constants.h from exactff/_tolerances.py.
 
-The compiled core's fixed numeric constants (filters' roundoffs, the culling box's
-margin, the BSP build's quadruple-precision trust) are named and explained in
+The compiled core's fixed numeric constants (the unit roundoff of doubles, filters'
+roundoffs, the culling box's margin, the BSP build's quadruple-precision trust) are named and explained in
 ``exactff/_tolerances.py``, the one place for the library's constants; this script
 writes them as C++ constants. tests/test_layout.py fails when the header and
 ``_tolerances.py`` disagree (run this script to regenerate it).
@@ -19,6 +19,7 @@ HEADER = os.path.join(HERE, "..", "exactff", "_core", "constants.h")
 #: (name in _tolerances.py and in C++, C++ type): long double constants are written with
 #: the L suffix, so that the decimal is read in long double as the literal was before
 CONSTANTS = [
+    ("EPS", "double"),
     ("SVBSP_FILTER_ROUNDOFFS", "double"),
     ("EXACT_FILTER_ROUNDOFFS", "double"),
     ("EQ3_FACTOR_ULPS", "double"),

@@ -9,6 +9,7 @@
 
 namespace exactff {
 
+constexpr double EPS = 1.1102230246251565e-16;
 constexpr double SVBSP_FILTER_ROUNDOFFS = 4.0;
 constexpr double EXACT_FILTER_ROUNDOFFS = 32.0;
 constexpr double EQ3_FACTOR_ULPS = 64.0;

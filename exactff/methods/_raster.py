@@ -19,7 +19,7 @@ in exactly one). The depth test is the shared depth buffer
   so that each piece crosses a row at most once; the crossing solves a quadratic.
 - :func:`rasterise_polar`: the polar plane's grid, scanned along each sector's ray.
 
-Each has a compiled backend (:func:`compiled_zbuffer`, ``exactff/methods/_zbuffer.cpp``):
+Each has a compiled backend (:func:`compiled_zbuffer`, ``exactff/_core/zbuffer.cpp``):
 the same clipping (a chart's, a :class:`FaceClip`'s, the horizon's), scanlines, spans,
 chunks and depth rule in C++, cell for cell (the numpy code here is its oracle).
 """
