@@ -241,6 +241,7 @@ class Core {
                        std::vector<Plane>& sv, std::vector<ExactPlane>& xp, RowStats& st,
                        R piece_bound) const;
     void leave_out(const Piece& q, R charge, int why, RowStats& st) const;
+    static V3 direction_sum(const Piece& q);
     Leak cone(const Piece& q) const;
     R leaked(const Piece& q, R worth, const RowStats& st) const;
     int long_shadow(const Piece& q, const double* pp, const std::vector<Plane>& chain,

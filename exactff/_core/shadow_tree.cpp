@@ -223,12 +223,7 @@ bool Core::insert_shadow(const Piece& q, int64_t f, const double* pp, int plane,
                          RowStats& st, R piece_bound) const {
     constexpr R PI = 3.14159265358979323846264338327950288L;
     const size_t m = q.size();
-    V3 c{0, 0, 0};
-    for (const Vertex& u : q) {
-        c.x += u.v.x / u.length;
-        c.y += u.v.y / u.length;
-        c.z += u.v.z / u.length;
-    }
+    const V3 c = direction_sum(q);
     const R cl = norm(c);
     // per edge: its plane through p, oriented towards the piece (0: through p, not
     // a side; 2: the piece straddles it, no orientation), and how far beyond it the
@@ -325,9 +320,13 @@ bool Core::insert_shadow(const Piece& q, int64_t f, const double* pp, int plane,
     // triangle the two neighbours' planes close beyond it, of apex height at most
     // l tan(theta / 2) / 2 over its arc l (theta the angle of their normals), so
     // area l^2 tan(theta / 2) / 4, which may hide that much of a later piece
+    // (the arcs only where a side is straddled or has a vertex beyond it: a convex
+    // image, nearly every piece, needs none)
+    bool concave = false;
+    for (const Side& s : e) concave |= !s.on_cut && (s.state == 2 || s.beyond > 0);
     R perimeter = 0;
-    std::vector<R> arcs(m);
-    for (size_t k = 0; k < m; ++k) {
+    std::vector<R> arcs(concave ? m : 0);
+    for (size_t k = 0; concave && k < m; ++k) {
         arcs[k] = arc(q[k], q[(k + 1) % m]) + q[k].err + q[(k + 1) % m].err;
         perimeter += arcs[k];
     }
@@ -422,13 +421,19 @@ void Core::leave_out(const Piece& q, R charge, int why, RowStats& st) const {
 
 // a cone about the piece's mean direction that holds its image (radians, with its
 // vertices' errors and a margin for the arcs' rounding)
-Leak Core::cone(const Piece& q) const {
+// the sum of a piece's unit vertex directions (its mean direction, unnormalised)
+V3 Core::direction_sum(const Piece& q) {
     V3 c{0, 0, 0};
     for (const Vertex& u : q) {
         c.x += u.v.x / u.length;
         c.y += u.v.y / u.length;
         c.z += u.v.z / u.length;
     }
+    return c;
+}
+
+Leak Core::cone(const Piece& q) const {
+    const V3 c = direction_sum(q);
     Leak k{c, 0, 0};
     const R cl = norm(c);
     if (!(cl > 1e-6L)) {  // about opposite directions: the whole sphere
