@@ -465,3 +465,51 @@ def test_flush_pair_both_engines_hold():
         U = visible_form_factor(scene, p, n, j)
         assert U is not None and abs(F[j] - U) <= E[j] <= 1e-16
         assert abs(G[j] - U) <= H[j]
+
+def test_fragments_in_cells_proven_covered_are_hidden_and_only_they():
+    # a wall with a window over a floor of small tiles: the tiles behind the wall are
+    # skipped once the cells of the cube map about the point they lie in are proven
+    # covered (Core::cell_covered), without being cut along the wall's shadows; the
+    # tiles seen through the window must still be found (a proof that marked a cell
+    # with a free leaf in it, or a footprint that missed a cell, would skip them)
+    wall = [rect_xy(-2, 2, 0.2, 2, 1.0), rect_xy(-2, 2, -2, -0.2, 1.0),
+            rect_xy(-2, -0.3, -0.2, 0.2, 1.0), rect_xy(0.3, 2, -0.2, 0.2, 1.0)]
+    # two layers of tiles, the second behind the first in the cells the first proves
+    edges = np.linspace(-2, 2, 41)
+    tiles = [rect_xy(x0, x1, y0, y1, z) for z in (2.0, 3.0)
+             for x0, x1 in zip(edges[:-1], edges[1:]) for y0, y1 in zip(edges[:-1], edges[1:])]
+    scene = ef.Scene.from_polygons(wall + tiles)
+    p, n = np.array([0.01, 0.02, 0.0]), np.array([0, 0, 1.0])
+    st = assert_engines_agree(scene, p, n)
+    assert st["fragments_covered"] > 100, st
+    F = COMPILED.point_form_factors(scene, p, n)
+    # through the window (|x| < 0.3, |y| < 0.2 at z = 1: |x| < 0.6, |y| < 0.4 at z = 2,
+    # about the point) the first layer's tiles show, every other tile is hidden
+    c = scene.centroids[len(wall):]
+    front = c[:, 2] == 2.0
+    through = front & (np.abs(c[:, 0] - 0.01) < 0.55) & (np.abs(c[:, 1] - 0.02) < 0.35)
+    assert np.all(F[len(wall):][through] > 0)
+    far = (np.abs(c[:, 0]) > 0.8) | (np.abs(c[:, 1]) > 0.6) | ~front
+    assert np.all(F[len(wall):][far] == 0)
+
+
+def test_a_cell_partly_free_is_not_proven_covered():
+    # a square near the point hides a small tile T behind it, near its image's edge: T's
+    # cells of the cube map (gnomonic u = x / z in [0.47, 0.495], cells of width 1 / 32
+    # from -1 + 0.0123456789) include one, [0.4811, 0.5123], that the square covers only
+    # below u = 0.5. Tiles behind in that cell, seen past the square's edge, must show:
+    # T2 wholly in it, T3 across it and the covered cell before it
+    square = rect_xy(-0.5, 0.5, -0.5, 0.5, 1.0)
+    T = rect_xy(0.94, 0.99, 0.2, 0.24, 2.0)
+    T2 = rect_xy(1.506, 1.53, 0.33, 0.39, 3.0)
+    T3 = rect_xy(1.41, 1.59, 0.24, 0.3, 3.0)
+    scene = ef.Scene.from_polygons([square, T, T2, T3])
+    p, n = np.zeros(3), np.array([0, 0, 1.0])
+    st = assert_engines_agree(scene, p, n)
+    assert st["cover_cells"] > 0, st
+    F = COMPILED.point_form_factors(scene, p, n)
+    assert F[1] == 0 and F[2] > 0 and F[3] > 0
+    # T2 whole, T3 from u = 0.5 on (x = 1.5 at z = 3): unoccluded closed forms
+    assert F[2] == pytest.approx(unoccluded_form_factor(scene, p, n, 2), rel=1e-12)
+    part = ef.Scene.from_polygons([rect_xy(1.5, 1.59, 0.24, 0.3, 3.0)])
+    assert F[3] == pytest.approx(unoccluded_form_factor(part, p, n, 0), rel=1e-12)

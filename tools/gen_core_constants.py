@@ -29,6 +29,10 @@ CONSTANTS = [
     ("BSP_QUAD_TRUST", "double"),
     ("LONG_SHADOW_EDGES", "size_t"),
     ("LONG_SHADOW_LEAF", "size_t"),
+    ("SVBSP_COVER_GRID", "int"),
+    ("SVBSP_COVER_MAX_CELLS", "int"),
+    ("SVBSP_COVER_BUDGET", "int"),
+    ("SVBSP_COVER_OFFSET", "double"),
 ]
 
 
@@ -53,7 +57,7 @@ def header_text():
              ""]
     for name, ctype in CONSTANTS:
         value = getattr(tol, name)
-        literal = (str(int(value)) if ctype == "size_t" else
+        literal = (str(int(value)) if ctype in ("size_t", "int") else
                    repr(float(value)) + ("L" if ctype == "long double" else ""))
         lines.append(f"constexpr {ctype} {name} = {literal};")
     lines += ["", "}  // namespace exactff", "", "#endif", ""]

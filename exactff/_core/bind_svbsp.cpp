@@ -61,6 +61,13 @@ py::tuple row(const exactff::Core& core, Array<double> point, Array<double> norm
     d["shadows_left_out"] = st.slivers[0] + st.slivers[1] + st.slivers[2] + st.slivers[3];
     d["kernel_shadows"] = st.kernels;
     d["omitted_sides"] = st.omitted_sides;
+    d["collapsed"] = st.collapsed;
+    d["cover_proofs"] = st.cover_proofs;
+    d["cover_cells"] = st.cover_cells;
+    d["cover_visits"] = st.cover_visits;
+    d["fragments_covered"] = st.fragments_covered;
+    d["subtrees_covered"] = st.subtrees_covered;
+    d["covered"] = st.covered;
     d["leaks"] = static_cast<int64_t>(st.leaks.size());
     d["working_bytes"] = st.working_bytes;
     return py::make_tuple(as_array(r.F), as_array(r.E), as_array(r.B), as_array(r.G), d);

@@ -19,6 +19,10 @@ constexpr double SVBSP_LEAK_BUDGET_SHARE = 0.0001;
 constexpr double BSP_QUAD_TRUST = 0.001;
 constexpr size_t LONG_SHADOW_EDGES = 32;
 constexpr size_t LONG_SHADOW_LEAF = 16;
+constexpr int SVBSP_COVER_GRID = 64;
+constexpr int SVBSP_COVER_MAX_CELLS = 16;
+constexpr int SVBSP_COVER_BUDGET = 2048;
+constexpr double SVBSP_COVER_OFFSET = 0.0123456789;
 
 }  // namespace exactff
 

@@ -143,6 +143,15 @@ struct RowStats {
     // shadows left out: < 3 vertices, a side the piece straddles, a kernel worth more
     // than the piece, < 3 sides
     int64_t slivers[4] = {0, 0, 0, 0};
+    // the cube map of directions about p (Core::footprint): per cell, whether it is
+    // proven covered (Core::cell_covered), and the shadow tree's size when a proof last
+    // failed (it is tried again only once the tree has grown)
+    std::vector<uint8_t> cover;
+    std::vector<int32_t> cover_tried;
+    int64_t cover_proofs = 0, cover_cells = 0, cover_visits = 0, fragments_covered = 0,
+            subtrees_covered = 0;
+    int64_t collapsed = 0;      // shadow-tree nodes whose two sides were both covered
+    bool covered = false;       // every direction the row sees covered: the walk stops
     int64_t kernels = 0;        // non-convex images whose kernel is their shadow
     int64_t omitted_sides = 0;  // shadows with a short side left out
     // uncovered parts worth more than the row's budget for unattributed charges
@@ -189,6 +198,35 @@ struct RowResult {
     RowStats stats;
 };
 
+// a corner of a piece in the filter's work list: a vertex (an index into the
+// fragment's vertices and crossings) and the edge to the next corner (Vertex::edge)
+struct Corner {
+    int32_t v;
+    int64_t edge;
+};
+
+// the filter's work list (Core::process): the fragment's vertices and the crossings
+// made so far, the pieces waiting (each a run of corners on one stack, with the link,
+// plane and branch, it arrived by) and each step's scratch, reused by every fragment
+struct Filter {
+    struct Item {
+        size_t begin, count;
+        int plane;
+        bool positive;
+    };
+    std::vector<Vertex> pool;
+    std::vector<Corner> corners, cur;
+    std::vector<Item> items;
+    std::vector<int> sg;
+    std::vector<R> d, arcs;
+    std::vector<int32_t> cut;
+    size_t bytes() const {
+        return pool.capacity() * sizeof(Vertex) +
+               (corners.capacity() + cur.capacity()) * sizeof(Corner) +
+               items.capacity() * sizeof(Item);
+    }
+};
+
 class Core {
   public:
     // the fragments' vertices (3 V doubles) and their errors (V), each fragment's start,
@@ -222,6 +260,18 @@ class Core {
     std::vector<int64_t> size_;
     Constants K_;
     // culling.cpp
+    struct Footprint {
+        int face, i0, i1, j0, j1;  // cells [i0, i1] x [j0, j1] of one face
+    };
+    static bool footprint(const double (*dirs)[3], const double* margin, size_t n,
+                          Footprint* out);
+    bool fragment_footprint(int64_t f, const double* pp, Footprint* out) const;
+    bool box_footprint(int64_t k, const double* pp, Footprint* out) const;
+    static bool all_covered(const Footprint& fp, const RowStats& st);
+    bool cell_covered(const std::vector<Plane>& sv, const std::vector<ExactPlane>& xp,
+                      int face, int i, int j, RowStats& st) const;
+    void prove_cells(const Footprint& fp, const std::vector<Plane>& sv,
+                     const std::vector<ExactPlane>& xp, RowStats& st) const;
     void build_boxes();
     bool box_behind(int64_t k, const double* pp, const double* pn) const;
     bool box_hidden(const std::vector<Plane>& sv, int64_t k, const V3& p,
@@ -231,6 +281,7 @@ class Core {
     int tile_tree(const double* pn, int64_t tiles, std::vector<Plane>& sv,
                   std::vector<ExactPlane>& xp) const;
     static Expansion exact_value(const ExactPlane& X, const double* p, const double* x);
+    static bool same_plane(const ExactPlane& P, const ExactPlane& Q);
     bool point_on_plane(const ExactPlane& Q, const double* p, const double* x, int64_t ux,
                         RowStats& st) const;
     bool exactly_on(std::vector<ExactPlane>& xp, int k, const double* p, int64_t f,
@@ -240,6 +291,8 @@ class Core {
     bool insert_shadow(const Piece& q, int64_t f, const double* pp, int plane, bool positive,
                        std::vector<Plane>& sv, std::vector<ExactPlane>& xp, RowStats& st,
                        R piece_bound) const;
+    static void attach(std::vector<Plane>& sv, int plane, bool positive, int child,
+                       size_t first, RowStats& st);
     void leave_out(const Piece& q, R charge, int why, RowStats& st) const;
     static V3 direction_sum(const Piece& q);
     Leak cone(const Piece& q) const;
@@ -255,10 +308,9 @@ class Core {
              const int8_t* source_side, bool two_sided, bool cull, int64_t budget,
              int64_t tiles, std::vector<R>& F, std::vector<R>& E, std::vector<R>& B,
              RowStats& st) const;
-    template <class W>
     void process(int64_t f, const double* pp, const V3& p, const V3& n,
                  const int8_t* source_side, bool two_sided, std::vector<Plane>& sv,
-                 std::vector<ExactPlane>& xp, std::vector<W>& work, std::vector<R>& F,
+                 std::vector<ExactPlane>& xp, Filter& work, std::vector<R>& F,
                  std::vector<R>& E, std::vector<R>& B, RowStats& st) const;
     // bounds.cpp
     static R turn_bound(R ratio);

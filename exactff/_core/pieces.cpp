@@ -30,7 +30,10 @@ namespace exactff {
 // relative to.
 V3 Core::between(const Vertex& a, const Vertex& b, int64_t f, R* scale) const {
     if (a.id >= 0 && b.id >= 0) {
-        V3 e{b.w.x - a.w.x, b.w.y - a.w.y, b.w.z - a.w.z};
+        const double* wa = &V_[3 * a.id];
+        const double* wb = &V_[3 * b.id];
+        V3 e{static_cast<R>(wb[0]) - wa[0], static_cast<R>(wb[1]) - wa[1],
+             static_cast<R>(wb[2]) - wa[2]};
         *scale = norm(e);
         return e;
     }
@@ -96,34 +99,48 @@ void Core::run(const double* pp, const double* pn, const int8_t* node_side,
         const double below[3] = {-pn[0], -pn[1], -pn[2]};
         if (tiles > 0) sv[0].neg = tile_tree(below, tiles, sv, xp);
     }
+    // the tiles' parents (Core::attach)
+    for (size_t k = 0; k < sv.size(); ++k)
+        for (int c : {sv[k].pos, sv[k].neg})
+            if (c >= 0) sv[static_cast<size_t>(c)].parent = static_cast<int>(k);
     if (nodes() == 0) return;
     struct Item {
         int64_t node;
         bool emit;
     };
     std::vector<Item> stack{{0, false}};
-    // work list of the filter: a piece and the link (plane, branch) it arrived by
-    struct Work {
-        Piece q;
-        int plane;
-        bool positive;
-    };
-    std::vector<Work> work;
-    Piece q0, qp, qn;
-    while (!stack.empty()) {
+    Filter work;  // the filter's work list, reused by every fragment
+    while (!stack.empty() && !st.covered) {
         Item it = stack.back();
         stack.pop_back();
         const int64_t k = it.node;
         const bool near_front = node_side[k] >= 0;
         if (it.emit) {
             const auto& list = near_front ? here_front_ : here_behind_;
-            for (int64_t j = here_start_[k]; j < here_start_[k + 1]; ++j)
-                process(list[j], pp, p, n, source_side, two_sided, sv, xp, work, F, E,
-                        B, st);
+            for (int64_t j = here_start_[k]; j < here_start_[k + 1]; ++j) {
+                const int64_t f = list[j];
+                // a fragment in cells proven covered is hidden (Core::cell_covered)
+                Footprint fp;
+                const bool mapped = cull && fragment_footprint(f, pp, &fp);
+                if (mapped && all_covered(fp, st)) {
+                    ++st.fragments_covered;
+                    continue;
+                }
+                const int64_t vis0 = st.visible, hid0 = st.hidden;
+                process(f, pp, p, n, source_side, two_sided, sv, xp, work, F, E, B, st);
+                if (mapped && st.visible == vis0 && st.hidden > hid0) prove_cells(fp, sv, xp, st);
+            }
             continue;
         }
         if (cull && size_[k] >= 4) {
             ++st.box_tests;
+            Footprint fp;
+            if (box_footprint(k, pp, &fp) && all_covered(fp, st)) {
+                ++st.subtrees_covered;
+                ++st.subtrees_culled;
+                st.fragments_culled += size_[k];
+                continue;
+            }
             if ((!st.sphere && box_behind(k, pp, pn)) || box_hidden(sv, k, p, budget)) {
                 ++st.subtrees_culled;
                 st.fragments_culled += size_[k];
@@ -148,8 +165,7 @@ void Core::run(const double* pp, const double* pn, const int8_t* node_side,
     // capacities are their peaks)
     st.working_bytes = static_cast<int64_t>(
         sv.capacity() * sizeof(Plane) + xp.capacity() * sizeof(ExactPlane) +
-        stack.capacity() * sizeof(Item) + work.capacity() * sizeof(Work) +
-        static_cast<size_t>(st.held_peak) * sizeof(Vertex) +
+        stack.capacity() * sizeof(Item) + work.bytes() +
         st.edges.bucket_count() * sizeof(void*) +
         st.edges.size() * (sizeof(EdgeKey) + sizeof(EdgeCharge) + 2 * sizeof(void*)) +
         st.on_plane.bytes() + st.held_bytes);
@@ -161,18 +177,24 @@ void Core::run(const double* pp, const double* pn, const int8_t* node_side,
                 B[i] += st.unattributed;
 }
 
-template <class W>
 void Core::process(int64_t f, const double* pp, const V3& p, const V3& n,
                    const int8_t* source_side, bool two_sided, std::vector<Plane>& sv,
-                   std::vector<ExactPlane>& xp, std::vector<W>& work, std::vector<R>& F,
+                   std::vector<ExactPlane>& xp, Filter& work, std::vector<R>& F,
                    std::vector<R>& E, std::vector<R>& B, RowStats& st) const {
     const int64_t src = source_[f];
     const int s = source_side[src];
     if (s == 0) return;  // seen edge-on: no image, hides nothing
     ++st.fragments;
     const bool receives = s > 0 || two_sided;
-    Piece q;
-    q.reserve(count_[f]);
+    // the fragment's vertices, then the crossings its pieces make; a piece is a run of
+    // (vertex, edge to the next) on the work list's stack of corners, so that cutting
+    // a piece copies no vertex
+    std::vector<Vertex>& pool = work.pool;
+    std::vector<Corner>& corners = work.corners;
+    std::vector<Filter::Item>& items = work.items;
+    pool.clear();
+    corners.clear();
+    items.clear();
     for (int64_t i = start_[f]; i < start_[f] + count_[f]; ++i) {
         V3 w{V_[3 * i], V_[3 * i + 1], V_[3 * i + 2]};
         V3 v{w.x - p.x, w.y - p.y, w.z - p.z};
@@ -186,25 +208,30 @@ void Core::process(int64_t f, const double* pp, const V3& p, const V3& n,
             exact = exact && (vk - hi == lo);
         }
         const R length = norm(v);
-        q.push_back({w, v, length, exact ? static_cast<R>(0) : 2 * K_.eps, i, -1, -1, i});
-        q.back().gerr = input_error(i, length);
-        set_double(q.back());
+        pool.push_back({v, length, exact ? static_cast<R>(0) : 2 * K_.eps, i, -1, -1, i});
+        pool.back().gerr = input_error(i, length);
+        set_double(pool.back());
+        corners.push_back({static_cast<int32_t>(pool.size() - 1), i});
     }
-    work.clear();
-    work.push_back({std::move(q), 0, true});
-    st.held = static_cast<int64_t>(work.back().q.size());
+    items.push_back({0, corners.size(), 0, true});
+    st.held = static_cast<int64_t>(corners.size());
     // the first step enters the root from a virtual link
     bool first = true;
-    // each step's signs, distances and crossings (reused: no allocation per step)
-    std::vector<int> sg;
-    std::vector<R> d, arcs;
-    std::vector<Vertex> cut;
-    while (!work.empty()) {
-        W w = std::move(work.back());
-        work.pop_back();
+    // each step's corners, signs, distances and crossings (reused: no allocation per step)
+    std::vector<Corner>& cur = work.cur;
+    std::vector<int>& sg = work.sg;
+    std::vector<R>& d = work.d;
+    std::vector<R>& arcs = work.arcs;
+    std::vector<int32_t>& cut = work.cut;
+    while (!items.empty()) {
+        const Filter::Item w = items.back();
+        items.pop_back();
+        // the top item's corners are the stack's last: taken off it
+        cur.assign(corners.begin() + static_cast<std::ptrdiff_t>(w.begin), corners.end());
+        corners.resize(w.begin);
         // vertices held by the work list (with this piece): for the row's peak
         st.held_peak = std::max(st.held_peak, st.held);
-        st.held -= static_cast<int64_t>(w.q.size());
+        st.held -= static_cast<int64_t>(cur.size());
         int node;
         if (first) {
             node = 0;
@@ -218,11 +245,16 @@ void Core::process(int64_t f, const double* pp, const V3& p, const V3& n,
         }
         if (node == OUT) {
             ++st.visible;
+            Piece q(cur.size());
+            for (size_t i = 0; i < cur.size(); ++i) {
+                q[i] = pool[static_cast<size_t>(cur[i].v)];
+                q[i].edge = cur[i].edge;
+            }
             R val, bnd;
             if (st.sphere)
-                integrate_solid(w.q, f, &val, &bnd);
+                integrate_solid(q, f, &val, &bnd);
             else
-                integrate(w.q, f, n, &val, &bnd, st.eq3 ? &st : nullptr);
+                integrate(q, f, n, &val, &bnd, st.eq3 ? &st : nullptr);
             bool held = false;
             arcs.clear();
             if (receives && st.rtol > 0) {
@@ -230,29 +262,29 @@ void Core::process(int64_t f, const double* pp, const V3& p, const V3& n,
                 // exceed the tolerance times the value: decided at the row's end for the
                 // piece's polygon as a whole (Core::settle), so that slivers whose bounds
                 // are negligible next to their polygon's value stay in long double
-                const R charges = charge_edges(w.q, src, E, st, nullptr, false, nullptr, &arcs);
+                const R charges = charge_edges(q, src, E, st, nullptr, false, nullptr, &arcs);
                 held = bnd + charges > st.rtol * val;
             }
             if (receives && !held) {
                 F[src] += val;
                 E[src] += bnd;
-                charge_edges(w.q, src, E, st, nullptr, true, nullptr, &arcs);
+                charge_edges(q, src, E, st, nullptr, true, nullptr, &arcs);
             }
-            if (receives) B[src] += leaked(w.q, val + bnd, st);
+            if (receives) B[src] += leaked(q, val + bnd, st);
             // a piece whose shadow is left out is an image folded or flat along a side
             // (seen from within the band of a plane it is not planar in): its own value
             // is charged it too, as the band's slivers are
-            if (!insert_shadow(w.q, f, pp, w.plane, w.positive, sv, xp, st, val + bnd) &&
-                receives)
+            if (!insert_shadow(q, f, pp, w.plane, w.positive, sv, xp, st, val + bnd) && receives)
                 B[src] += val + bnd;
             if (held) {
                 ++st.pieces_held;
-                st.held_pieces.push_back({std::move(w.q), f, val, bnd, arcs});
+                st.held_pieces.push_back({std::move(q), f, val, bnd, arcs});
             }
             continue;
         }
         const Plane P = sv[node];
-        const size_t m = w.q.size();
+        const size_t m = cur.size();
+        auto at = [&](size_t i) -> const Vertex& { return pool[static_cast<size_t>(cur[i].v)]; };
         ++st.node_visits;
         sg.resize(m);
         d.resize(m);
@@ -263,7 +295,7 @@ void Core::process(int64_t f, const double* pp, const V3& p, const V3& n,
             // goes with the others); one within that band plus the plane's and its
             // own errors may lie on the other side of the true plane by up to them:
             // the sliver along its two edges is charged to the piece
-            const Vertex& u = w.q[i];
+            const Vertex& u = at(i);
             // the filter: P.m . u.v in double, off its long double value by at most
             // 6 double roundoffs of |m| |v| (the roundings to double, the products
             // and sums); a vertex clearly beyond the widest band is decided by it
@@ -289,7 +321,7 @@ void Core::process(int64_t f, const double* pp, const V3& p, const V3& n,
             if (!(std::fabs(d[i]) <= width * scale)) continue;
             ++st.near_tests;
             if (!exactly_on(xp, P.exact, pp, f, u, st)) {
-                R adjacent = arc(w.q[(i + m - 1) % m], u) + arc(u, w.q[(i + 1) % m]);
+                R adjacent = arc(at((i + m - 1) % m), u) + arc(u, at((i + 1) % m));
                 if (receives)
                     B[src] += adjacent * width / 3.14159265358979323846264338327950288L;
                 // the sliver, on whichever side it truly is, also hides or uncovers
@@ -299,28 +331,24 @@ void Core::process(int64_t f, const double* pp, const V3& p, const V3& n,
                 sv[node].slack = std::max(sv[node].slack, K_.band + P.err + u.err);
             }
         }
-        if (!neg) {  // in front (or in the plane: either side)
-            work.push_back({std::move(w.q), node, true});
-            st.held += static_cast<int64_t>(work.back().q.size());
-            continue;
-        }
-        if (!pos) {
-            work.push_back({std::move(w.q), node, false});
-            st.held += static_cast<int64_t>(work.back().q.size());
+        if (!neg || !pos) {  // on one side (or in the plane: either side)
+            items.push_back({corners.size(), m, node, !neg});
+            corners.insert(corners.end(), cur.begin(), cur.end());
+            st.held += static_cast<int64_t>(m);
             continue;
         }
         ++st.splits;
         for (size_t i = 0; i < m; ++i)
-            if (std::isnan(d[i])) d[i] = dot(P.m, w.q[i].v);
-        cut.resize(m);
+            if (std::isnan(d[i])) d[i] = dot(P.m, at(i).v);
+        cut.assign(m, -1);
         for (size_t i = 0; i < m; ++i) {
             const size_t j = (i + 1) % m;
             if ((sg[i] > 0 && sg[j] < 0) || (sg[i] < 0 && sg[j] > 0)) {
                 // the crossing computed from the edge's ends in a fixed order, so
                 // that the piece across the edge gets the same point bit for bit
-                const bool swap = lex_less(w.q[j].v, w.q[i].v);
-                const Vertex& x = swap ? w.q[j] : w.q[i];
-                const Vertex& y = swap ? w.q[i] : w.q[j];
+                const bool swap = lex_less(at(j).v, at(i).v);
+                const Vertex& x = swap ? at(j) : at(i);
+                const Vertex& y = swap ? at(i) : at(j);
                 const R dx = swap ? d[j] : d[i], dy = swap ? d[i] : d[j];
                 R t = dx / (dx - dy);
                 V3 v{x.v.x + t * (y.v.x - x.v.x), x.v.y + t * (y.v.y - x.v.y),
@@ -331,18 +359,18 @@ void Core::process(int64_t f, const double* pp, const V3& p, const V3& n,
                 R err = P.err + P.slack +
                         K_.split * K_.eps * ((1 - t) * x.length + t * y.length + l) / l +
                         std::max(x.err * x.length, y.err * y.length) / l;
-                cut[i] = {V3{0, 0, 0}, v, l, err, -1, -1, -1, -1};
-                set_double(cut[i]);
+                Vertex c{v, l, err, -1, -1, -1, -1};
+                set_double(c);
                 // off the true plane by its tilt; off the true edge's by its ends'
                 // world errors over its distance (as the computation's, above)
-                cut[i].gerr = xp[static_cast<size_t>(P.exact)].tilt +
-                              std::max(x.gerr * x.length, y.gerr * y.length) / l;
+                c.gerr = xp[static_cast<size_t>(P.exact)].tilt +
+                         std::max(x.gerr * x.length, y.gerr * y.length) / l;
                 // the parameter along the input edge the piece's edge i -> j lies on
-                const Vertex& xi = w.q[i];
-                const Vertex& yj = w.q[j];
+                const Vertex& xi = at(i);
+                const Vertex& yj = at(j);
                 const R ti = swap ? 1 - t : t;
-                if (xi.edge >= 0) {  // on an input edge: exactly known
-                    const int64_t ia = xi.edge;
+                if (cur[i].edge >= 0) {  // on an input edge: exactly known
+                    const int64_t ia = cur[i].edge;
                     const int64_t ib = start_[f] + (ia - start_[f] + 1) % count_[f];
                     R tx = -1, ty = -1;  // the ends' parameters along it
                     if (xi.id == ia) tx = 0;
@@ -350,43 +378,37 @@ void Core::process(int64_t f, const double* pp, const V3& p, const V3& n,
                     if (yj.id == ib) ty = 1;
                     else if (yj.on_edge == ia) ty = yj.t;
                     if (tx >= 0 && ty >= 0) {
-                        cut[i].on_edge = ia;
-                        cut[i].on_plane = P.exact;
-                        cut[i].t = tx + ti * (ty - tx);
+                        c.on_edge = ia;
+                        c.on_plane = P.exact;
+                        c.t = tx + ti * (ty - tx);
                         // off the edge's line: the interpolation's rounding, and its
                         // ends' own distances from it
                         auto off = [&](const Vertex& u) {
                             return u.id >= 0 ? u.err : u.err_line;
                         };
-                        cut[i].err_line =
+                        c.err_line =
                             4 * K_.eps + std::max(off(xi) * xi.length, off(yj) * yj.length) / l;
                     }
                 }
+                cut[i] = static_cast<int32_t>(pool.size());
+                pool.push_back(c);  // (x, y, xi, yj are not used past this point)
             }
         }
         // the two parts, each vertex with the edge to its successor: the input edge
         // it was on, or the cut along this plane
         const int64_t cut_edge = -1 - static_cast<int64_t>(P.exact);
-        auto part = [&](int sigma) {
-            Piece out;
+        for (int sigma : {-1, 1}) {
+            const size_t begin = corners.size();
             for (size_t i = 0; i < m; ++i) {
                 const size_t j = (i + 1) % m;
                 const int si = sigma * sg[i], sj = sigma * sg[j];
-                if (si >= 0) {
-                    out.push_back(w.q[i]);
-                    if (si == 0 && sj < 0) out.back().edge = cut_edge;
-                }
-                if ((si > 0 && sj < 0) || (si < 0 && sj > 0)) {
-                    out.push_back(cut[i]);
-                    out.back().edge = si > 0 ? cut_edge : w.q[i].edge;
-                }
+                if (si >= 0) corners.push_back({cur[i].v, si == 0 && sj < 0 ? cut_edge : cur[i].edge});
+                if ((si > 0 && sj < 0) || (si < 0 && sj > 0))
+                    corners.push_back({cut[i], si > 0 ? cut_edge : cur[i].edge});
             }
-            return out;
-        };
-        work.push_back({part(-1), node, false});
-        st.held += static_cast<int64_t>(work.back().q.size());
-        work.push_back({part(1), node, true});
-        st.held += static_cast<int64_t>(work.back().q.size());
+            items.push_back({begin, corners.size() - begin, node, sigma > 0});
+            st.held += static_cast<int64_t>(corners.size() - begin);
+        }
     }
 }
 

@@ -84,6 +84,14 @@ int Core::tile_tree(const double* pn, int64_t tiles, std::vector<Plane>& sv,
     return build(xs, 0, tiles, cells);
 }
 
+// whether two exact planes are one by construction: the same kind, through p and the
+// same two input points (in either order), or the same normal
+bool Core::same_plane(const ExactPlane& P, const ExactPlane& Q) {
+    return P.kind == Q.kind &&
+           ((same_point(P.a, Q.a) && (Q.kind == 1 || same_point(P.b, Q.b))) ||
+            (Q.kind == 0 && same_point(P.a, Q.b) && same_point(P.b, Q.a)));
+}
+
 // an exact plane's value at a point of the input
 Expansion Core::exact_value(const ExactPlane& X, const double* p, const double* x) {
     return X.kind == 0 ? orient_exact(p, X.a, X.b, x) : dot_exact(X.a, p, x);
@@ -112,14 +120,9 @@ bool Core::exactly_on(std::vector<ExactPlane>& xp, int k, const double* p, int64
     if (u.id >= 0) return point_on_plane(Q, p, &V_[3 * u.id], uid_[u.id], st);
     if (u.on_edge < 0) return false;
     if (u.on_plane == k) return true;
-    {   // the plane it was cut by, instantiated again (the same input edge's plane
-        // from another piece's shadow, or the same normal): on it
-        const ExactPlane& P0 = xp[u.on_plane];
-        if (P0.kind == Q.kind &&
-            ((same_point(P0.a, Q.a) && (Q.kind == 1 || same_point(P0.b, Q.b))) ||
-             (Q.kind == 0 && same_point(P0.a, Q.b) && same_point(P0.b, Q.a))))
-            return true;
-    }
+    // the plane it was cut by, instantiated again (the same input edge's plane from
+    // another piece's shadow, or the same normal): on it
+    if (same_plane(xp[u.on_plane], Q)) return true;
     const int64_t ia = u.on_edge;
     const int64_t ib = start_[f] + (ia - start_[f] + 1) % count_[f];
     const ExactPlane& P = xp[u.on_plane];
@@ -382,14 +385,15 @@ bool Core::insert_shadow(const Piece& q, int64_t f, const double* pp, int plane,
     st.unattributed += omit_charge;
     st.omitted_sides += omit_charge > 0;
     st.kernels += kernel_charge > 0;
+    const size_t first = sv.size();
     if (chain.empty()) {  // the piece fills its leaf's cell: the cell is covered
-        (positive ? sv[plane].pos : sv[plane].neg) = IN;
+        attach(sv, plane, positive, IN, first, st);
         return true;
     }
     // a long piece whose image is convex (no side left out, no kernel): a tree of chords
     if (chain.size() > LONG_SHADOW_EDGES && kernel_charge == 0 && omit_charge == 0) {
         const int root = long_shadow(q, pp, chain, chain_edge, sv, xp, st);
-        (positive ? sv[plane].pos : sv[plane].neg) = root;
+        attach(sv, plane, positive, root, first, st);
         return true;
     }
     const int base = static_cast<int>(sv.size());
@@ -398,9 +402,36 @@ bool Core::insert_shadow(const Piece& q, int64_t f, const double* pp, int plane,
         chain[i].neg = OUT;
         sv.push_back(chain[i]);
     }
-    (positive ? sv[plane].pos : sv[plane].neg) = base;
+    attach(sv, plane, positive, base, first, st);
     st.shadow_planes += static_cast<int64_t>(chain.size());
     return true;
+}
+
+// hang `child` (a node, IN or OUT) on the side `positive` of node `plane`, where the
+// nodes from `first` on are new (their parents set from their links). A node whose
+// two sides are then both covered is covered itself (its region is the union of
+// theirs): it becomes a covered leaf of its parent, and so on up, so that later
+// pieces behind it are hidden at the first node whose region is wholly covered
+// instead of being cut along every shadow inside it. Where the root goes, every
+// direction the row sees is covered (RowStats::covered)
+void Core::attach(std::vector<Plane>& sv, int plane, bool positive, int child, size_t first,
+                  RowStats& st) {
+    (positive ? sv[plane].pos : sv[plane].neg) = child;
+    for (size_t k = first; k < sv.size(); ++k)
+        for (int c : {sv[k].pos, sv[k].neg})
+            if (c >= 0) sv[static_cast<size_t>(c)].parent = static_cast<int>(k);
+    if (child >= 0) sv[static_cast<size_t>(child)].parent = plane;
+    if (child != IN) return;
+    for (int node = plane; sv[node].pos == IN && sv[node].neg == IN;) {
+        ++st.collapsed;
+        const int up = sv[node].parent;
+        if (up < 0) {
+            st.covered = true;
+            return;
+        }
+        (sv[up].pos == node ? sv[up].pos : sv[up].neg) = IN;
+        node = up;
+    }
 }
 
 // a part of the hemisphere that a piece covers but its shadow does not (all of a

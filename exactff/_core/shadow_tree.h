@@ -20,9 +20,9 @@ constexpr int OUT = -1;  // a free leaf of the shadow tree
 constexpr int IN = -2;   // a covered leaf
 
 struct Vertex {
-    V3 w;       // position in the world: input vertices only (a computed vertex's
-                // differences come from its anchor or its direction, see between())
-    V3 v;       // w - p: its direction from p (not normalised)
+    V3 v;       // its direction from p (not normalised): an input vertex's position less
+                // p (a computed vertex's differences come from its anchor or its
+                // direction, see Core::between)
     R length;   // |v|
     R err;      // bound on the error of its direction, radians
     int64_t id; // index of an input vertex (its coordinates exact), or -1: computed
@@ -62,6 +62,7 @@ struct Plane {  // m . x = 0 through p; positive side first
                   // next to it is uncertain by that much for every later piece
     double md[3] = {0, 0, 0};  // m and mnorm rounded to double, for the filter
     double mnormd = 0;
+    int parent = -1;  // the node whose child this one is (-1: the root)
 };
 
 inline void set_double(Plane& P) {

@@ -291,7 +291,13 @@ def compiled_form_factors(scene, point, normal, *, two_sided=False, stats=None,
         short to orient), ``unattributed_bound`` (what those shadows leave uncovered or
         cover beyond their pieces, charged to every value) and ``leaks`` (uncovered
         parts too large for that, charged only to the visible pieces whose cones meet
-        theirs), ``working_bytes`` (the row's own containers at their largest: its
+        theirs), ``collapsed`` (shadow-tree nodes merged into a covered leaf, their
+        two sides covered) and ``covered`` (every direction the row sees covered: the
+        walk stopped), ``fragments_covered`` and ``subtrees_covered`` (fragments and
+        subtrees skipped because their directions lie in cells of the cube map about the
+        point proven covered), ``cover_proofs``, ``cover_cells`` and ``cover_visits``
+        (the proofs tried, the cells proven, the shadow-tree visits they took),
+        ``working_bytes`` (the row's own containers at their largest: its
         shadow tree, exact planes, work list, edge charges and cache, beyond the
         n-long results), ``max_error_estimate``, ``max_band_bound`` and
         ``max_crossing_bound`` (the part of the bounds the BSP's rounded crossings make,
