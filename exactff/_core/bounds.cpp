@@ -105,16 +105,16 @@ R Core::charge_edges(const Piece& q, int64_t src, std::vector<R>& E, RowStats& s
             keyed->push_back({k, charge});
             continue;
         }
-        auto it = st.edges.find(k);
+        EdgeCharge* it = st.edges.find(k);
         const bool r = refined != nullptr;
-        if (it == st.edges.end()) {
+        if (it == nullptr) {
             st.edges.emplace(k, EdgeCharge{src, charge, 1, r, geo});
-        } else if (it->second.src == src && it->second.count == 1) {
+        } else if (it->src == src && it->count == 1) {
             // shared by two visible pieces of src: moving it moves area from one to
             // the other, if both place it alike; one refined and one not do not:
             // the coarser placement's charge stays
-            it->second.count = 2;
-            if (it->second.refined != r) E[src] += std::max(charge, it->second.charge);
+            it->count = 2;
+            if (it->refined != r) E[src] += std::max(charge, it->charge);
         } else {
             E[src] += charge;
             st.crossing[static_cast<size_t>(src)] += geo;

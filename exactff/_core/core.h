@@ -31,10 +31,10 @@
 #ifndef EXACTFF_CORE_CORE_H
 #define EXACTFF_CORE_CORE_H
 
+#include <algorithm>
 #include <array>
 #include <cstdint>
 #include <cstring>
-#include <unordered_map>
 #include <utility>
 #include <vector>
 
@@ -62,9 +62,74 @@ struct EdgeKeyHash {
             std::memcpy(&bits, &d, sizeof bits);
             h = (h ^ bits) * 1099511628211ull;
         }
-        return h;
+        h ^= h >> 29;  // the low bits index the tables: every bit mixed into them
+        h *= 0xBF58476D1CE4E5B9ull;
+        return h ^ (h >> 32);
     }
 };
+// a table by EdgeKey (the row's edge charges, Core::charge_edges; the held pieces'
+// edges, Core::settle): open addressing on the keys' hashes (linear probing, a
+// power-of-two capacity at most half full), the entries in one vector in the order
+// they came, so that a lookup allocates nothing and the row's sums over them follow
+// one fixed order
+template <class T>
+class KeyTable {
+  public:
+    struct Entry {
+        EdgeKey key;
+        T value;
+    };
+    // the value under k, or nullptr
+    T* find(const EdgeKey& k) {
+        if (slots_.empty()) return nullptr;
+        const uint64_t h = EdgeKeyHash()(k);
+        for (size_t i = h & (slots_.size() - 1);; i = (i + 1) & (slots_.size() - 1)) {
+            const Slot& s = slots_[i];
+            if (s.generation != generation_) return nullptr;
+            if (s.hash == h && entries_[s.index].key == k) return &entries_[s.index].value;
+        }
+    }
+    // empty, its capacity kept (the slots of earlier generations read as empty)
+    void clear() {
+        entries_.clear();
+        if (++generation_ == 0) {  // wrapped: the old marks could read as current
+            std::fill(slots_.begin(), slots_.end(), Slot{0, 0, 0});
+            generation_ = 1;
+        }
+    }
+    // the value under k, inserted as `fresh` if absent
+    T& emplace(const EdgeKey& k, const T& fresh) {
+        if (T* v = find(k)) return *v;
+        if (2 * (entries_.size() + 1) > slots_.size()) grow();
+        place(EdgeKeyHash()(k), static_cast<uint32_t>(entries_.size()));
+        entries_.push_back({k, fresh});
+        return entries_.back().value;
+    }
+    const std::vector<Entry>& entries() const { return entries_; }
+    // what its entries take, with their slots (at most half full)
+    size_t bytes() const { return entries_.size() * (sizeof(Entry) + 2 * sizeof(Slot)); }
+
+  private:
+    struct Slot {
+        uint64_t hash;
+        uint32_t index;
+        uint32_t generation;  // the slot is taken in the current generation only
+    };
+    void place(uint64_t h, uint32_t index) {
+        size_t i = h & (slots_.size() - 1);
+        while (slots_[i].generation == generation_) i = (i + 1) & (slots_.size() - 1);
+        slots_[i] = {h, index, generation_};
+    }
+    void grow() {
+        slots_.assign(slots_.empty() ? 1 << 10 : 2 * slots_.size(), Slot{0, 0, 0});
+        for (size_t j = 0; j < entries_.size(); ++j)
+            place(EdgeKeyHash()(entries_[j].key), static_cast<uint32_t>(j));
+    }
+    std::vector<Slot> slots_;
+    std::vector<Entry> entries_;
+    uint32_t generation_ = 1;
+};
+
 struct EdgeCharge {
     int64_t src;
     R charge;
@@ -83,24 +148,33 @@ class PointCache {
         if (keys_.empty()) return -1;
         for (size_t i = slot(a, b, x);; i = (i + 1) & (keys_.size() - 1)) {
             const Key& k = keys_[i];
-            if (k.x == EMPTY) return -1;
+            if (k.generation != generation_) return -1;
             if (k.a == a && k.b == b && k.x == x) return k.on;
         }
     }
-    size_t bytes() const { return keys_.capacity() * sizeof(Key); }
+    // what its tests take (the slots at most half full)
+    size_t bytes() const { return 2 * used_ * sizeof(Key); }
     void insert(int64_t a, int64_t b, int64_t x, bool on) {
         if (2 * (used_ + 1) > keys_.size()) grow();
         size_t i = slot(a, b, x);
-        while (keys_[i].x != EMPTY) i = (i + 1) & (keys_.size() - 1);
-        keys_[i] = {a, b, x, on ? 1 : 0};
+        while (keys_[i].generation == generation_) i = (i + 1) & (keys_.size() - 1);
+        keys_[i] = {a, b, x, on ? 1 : 0, generation_};
         ++used_;
+    }
+    // empty, its capacity kept (the keys of earlier generations read as empty)
+    void clear() {
+        used_ = 0;
+        if (++generation_ == 0) {
+            std::fill(keys_.begin(), keys_.end(), Key{0, 0, 0, 0, 0});
+            generation_ = 1;
+        }
     }
 
   private:
-    static constexpr int64_t EMPTY = INT64_MIN;
     struct Key {
         int64_t a, b, x;
-        int on;
+        int32_t on;
+        uint32_t generation;  // taken in the current generation only
     };
     size_t slot(int64_t a, int64_t b, int64_t x) const {
         uint64_t h = static_cast<uint64_t>(a) * 0x9E3779B97F4A7C15ull;
@@ -113,13 +187,14 @@ class PointCache {
     }
     void grow() {
         std::vector<Key> old = std::move(keys_);
-        keys_.assign(old.empty() ? 1 << 12 : 2 * old.size(), Key{0, 0, EMPTY, 0});
+        keys_.assign(old.empty() ? 1 << 12 : 2 * old.size(), Key{0, 0, 0, 0, 0});
         used_ = 0;
         for (const Key& k : old)
-            if (k.x != EMPTY) insert(k.a, k.b, k.x, k.on != 0);
+            if (k.generation == generation_) insert(k.a, k.b, k.x, k.on != 0);
     }
     std::vector<Key> keys_;
     size_t used_ = 0;
+    uint32_t generation_ = 1;
 };
 
 // a part of the hemisphere a shadow leaves uncovered: within `radius` of direction c,
@@ -136,7 +211,7 @@ struct RowStats {
     // the vertex-error charges of visible pieces' edges with a computed end, by edge:
     // an edge two visible pieces of one polygon share cancels (the two pieces' sums
     // carry it with opposite signs); the rest is charged at the end of the row
-    std::unordered_map<EdgeKey, EdgeCharge, EdgeKeyHash> edges;
+    KeyTable<EdgeCharge> edges;
     // what the shadows leave uncovered (Core::leave_out) and their omitted sides may
     // hide, charged to every receiving polygon
     R unattributed = 0;
@@ -220,11 +295,17 @@ struct Filter {
     std::vector<int> sg;
     std::vector<R> d, arcs;
     std::vector<int32_t> cut;
-    size_t bytes() const {
-        return pool.capacity() * sizeof(Vertex) +
-               (corners.capacity() + cur.capacity()) * sizeof(Corner) +
-               items.capacity() * sizeof(Item);
-    }
+    size_t pool_peak = 0;  // the most vertices one fragment's pieces took this row
+};
+
+// the containers of a row that grow with it (Core::run): its shadow tree, exact planes,
+// the filter's work list and its tables, kept per thread from row to row
+struct RowScratch {
+    std::vector<Plane> sv;
+    std::vector<ExactPlane> xp;
+    Filter work;
+    KeyTable<EdgeCharge> edges;
+    PointCache on_plane;
 };
 
 class Core {

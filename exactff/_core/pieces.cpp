@@ -9,7 +9,6 @@
 #include <cmath>
 #include <functional>
 #include <limits>
-#include <unordered_map>
 #include <utility>
 #include <vector>
 
@@ -85,10 +84,28 @@ void Core::run(const double* pp, const double* pn, const int8_t* node_side,
     V3 n{pn[0], pn[1], pn[2]};
     R nl = norm(n);
     n = {n.x / nl, n.y / nl, n.z / nl};
-    std::vector<Plane> sv;
-    sv.reserve(1024);
-    std::vector<ExactPlane> xp;
-    xp.reserve(1024);
+    // the containers a row grows are kept per thread from row to row with their
+    // capacities (cleared here), so that a row does not fault in fresh pages for them
+    thread_local RowScratch scratch;
+    std::vector<Plane>& sv = scratch.sv;
+    std::vector<ExactPlane>& xp = scratch.xp;
+    Filter& work = scratch.work;  // the filter's work list, reused by every fragment
+    sv.clear();
+    xp.clear();
+    work.pool_peak = 0;
+    std::swap(st.edges, scratch.edges);
+    std::swap(st.on_plane, scratch.on_plane);
+    st.edges.clear();
+    st.on_plane.clear();
+    // (given back when the row is done, whichever way it leaves)
+    struct GiveBack {
+        RowStats& st;
+        RowScratch& scratch;
+        ~GiveBack() {
+            std::swap(st.edges, scratch.edges);
+            std::swap(st.on_plane, scratch.on_plane);
+        }
+    } give_back{st, scratch};
     // the root: the horizon, covered below
     sv.push_back({n, 1, 2 * K_.eps, OUT, IN, 0, 1});
     set_double(sv.back());
@@ -109,7 +126,6 @@ void Core::run(const double* pp, const double* pn, const int8_t* node_side,
         bool emit;
     };
     std::vector<Item> stack{{0, false}};
-    Filter work;  // the filter's work list, reused by every fragment
     while (!stack.empty() && !st.covered) {
         Item it = stack.back();
         stack.pop_back();
@@ -154,7 +170,7 @@ void Core::run(const double* pp, const double* pn, const int8_t* node_side,
         if (nearc >= 0) stack.push_back({nearc, false});
     }
     settle(pp, xp, F, E, st);
-    for (const auto& [key, e] : st.edges)
+    for (const auto& [key, e] : st.edges.entries())
         if (e.count == 1) {
             E[e.src] += e.charge;
             st.crossing[static_cast<size_t>(e.src)] += e.geo;
@@ -164,10 +180,10 @@ void Core::run(const double* pp, const double* pn, const int8_t* node_side,
     // charges and the exact tests' cache (containers only grow during a row, so their
     // capacities are their peaks)
     st.working_bytes = static_cast<int64_t>(
-        sv.capacity() * sizeof(Plane) + xp.capacity() * sizeof(ExactPlane) +
-        stack.capacity() * sizeof(Item) + work.bytes() +
-        st.edges.bucket_count() * sizeof(void*) +
-        st.edges.size() * (sizeof(EdgeKey) + sizeof(EdgeCharge) + 2 * sizeof(void*)) +
+        sv.size() * sizeof(Plane) + xp.size() * sizeof(ExactPlane) +
+        stack.capacity() * sizeof(Item) + work.pool_peak * sizeof(Vertex) +
+        static_cast<size_t>(st.held_peak) * sizeof(Corner) +
+        st.edges.bytes() +
         st.on_plane.bytes() + st.held_bytes);
     // a visible sliver whose shadow was left out may wrongly show any later piece
     // behind it: its area goes to every receiving polygon's band bound
@@ -410,6 +426,7 @@ void Core::process(int64_t f, const double* pp, const V3& p, const V3& n,
             st.held += static_cast<int64_t>(corners.size() - begin);
         }
     }
+    work.pool_peak = std::max(work.pool_peak, pool.size());
 }
 
 }  // namespace exactff
@@ -431,14 +448,14 @@ void Core::settle(const double* pp, const std::vector<ExactPlane>& xp, std::vect
     for (const auto& h : st.held_pieces)
         st.held_bytes += static_cast<int64_t>(h.q.capacity() * sizeof(Vertex));
     std::vector<R> total(F.begin(), F.end()), keep(E.begin(), E.end());
-    for (const auto& [key, e] : st.edges)
+    for (const auto& [key, e] : st.edges.entries())
         if (e.count == 1) keep[static_cast<size_t>(e.src)] += e.charge;
     struct Met {
         int64_t src;  // -1: pieces of two polygons
         int count;
         R charge;
     };
-    std::unordered_map<EdgeKey, Met, EdgeKeyHash> met;
+    KeyTable<Met> met;
     std::vector<std::pair<EdgeKey, R>> keyed;
     for (auto& h : st.held_pieces) {
         const size_t src = static_cast<size_t>(source_[h.f]);
@@ -447,20 +464,19 @@ void Core::settle(const double* pp, const std::vector<ExactPlane>& xp, std::vect
         keep[src] += h.bnd + charge_edges(h.q, source_[h.f], E, st, nullptr, false, &keyed,
                                           &h.arcs);
         for (const auto& [k, c] : keyed) {
-            auto [it, fresh] = met.try_emplace(k, Met{source_[h.f], 0, 0});
-            it->second.count += 1;
-            it->second.charge += c;
-            if (it->second.src != source_[h.f]) it->second.src = -1;
+            Met& o = met.emplace(k, Met{source_[h.f], 0, 0});
+            o.count += 1;
+            o.charge += c;
+            if (o.src != source_[h.f]) o.src = -1;
         }
     }
-    for (const auto& [k, o] : met) {
+    for (const auto& [k, o] : met.entries()) {
         if (o.src < 0) continue;
-        const auto it = st.edges.find(k);
-        if (it == st.edges.end()) {
+        const EdgeCharge* it = st.edges.find(k);
+        if (it == nullptr) {
             if (o.count == 2) keep[static_cast<size_t>(o.src)] -= o.charge;
-        } else if (o.count == 1 && it->second.count == 1 && it->second.src == o.src &&
-                   !it->second.refined) {
-            keep[static_cast<size_t>(o.src)] -= o.charge + it->second.charge;
+        } else if (o.count == 1 && it->count == 1 && it->src == o.src && !it->refined) {
+            keep[static_cast<size_t>(o.src)] -= o.charge + it->charge;
         }
     }
     std::vector<int64_t> count(F.size(), 0);
