@@ -290,6 +290,7 @@ struct Filter {
         bool positive;
     };
     std::vector<Vertex> pool;
+    Piece piece;  // a visible piece, its corners' vertices with their edges
     std::vector<Corner> corners, cur;
     std::vector<Item> items;
     std::vector<int> sg;

@@ -261,7 +261,8 @@ void Core::process(int64_t f, const double* pp, const V3& p, const V3& n,
         }
         if (node == OUT) {
             ++st.visible;
-            Piece q(cur.size());
+            Piece& q = work.piece;
+            q.resize(cur.size());
             for (size_t i = 0; i < cur.size(); ++i) {
                 q[i] = pool[static_cast<size_t>(cur[i].v)];
                 q[i].edge = cur[i].edge;
@@ -294,7 +295,7 @@ void Core::process(int64_t f, const double* pp, const V3& p, const V3& n,
                 B[src] += val + bnd;
             if (held) {
                 ++st.pieces_held;
-                st.held_pieces.push_back({std::move(q), f, val, bnd, arcs});
+                st.held_pieces.push_back({q, f, val, bnd, arcs});
             }
             continue;
         }

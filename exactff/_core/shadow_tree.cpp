@@ -238,10 +238,16 @@ bool Core::insert_shadow(const Piece& q, int64_t f, const double* pp, int plane,
         int state;  // 0 none (through p), 1 oriented, 2 straddled
         bool on_cut, omit;
     };
-    std::vector<Side> e(m);
+    // (the scratch is kept per thread: no allocation per piece)
+    thread_local std::vector<Side> e;
+    e.assign(m, Side{});
     // the vertices' double directions and lengths, contiguous (the filter below reads
     // them m times each)
-    std::vector<double> X(m), Y(m), Z(m), L(m);
+    thread_local std::vector<double> X, Y, Z, L;
+    X.resize(m);
+    Y.resize(m);
+    Z.resize(m);
+    L.resize(m);
     for (size_t k = 0; k < m; ++k) {
         X[k] = q[k].vd[0];
         Y[k] = q[k].vd[1];
@@ -328,7 +334,8 @@ bool Core::insert_shadow(const Piece& q, int64_t f, const double* pp, int plane,
     bool concave = false;
     for (const Side& s : e) concave |= !s.on_cut && (s.state == 2 || s.beyond > 0);
     R perimeter = 0;
-    std::vector<R> arcs(concave ? m : 0);
+    thread_local std::vector<R> arcs;
+    arcs.assign(concave ? m : 0, 0);
     for (size_t k = 0; concave && k < m; ++k) {
         arcs[k] = arc(q[k], q[(k + 1) % m]) + q[k].err + q[(k + 1) % m].err;
         perimeter += arcs[k];
@@ -357,8 +364,10 @@ bool Core::insert_shadow(const Piece& q, int64_t f, const double* pp, int plane,
         }
     }
     size_t sides = 0;  // the piece's edges that bound its shadow, cut ones included
-    std::vector<Plane> chain;
-    std::vector<size_t> chain_edge;  // the piece's edge each plane of the chain is
+    thread_local std::vector<Plane> chain;
+    thread_local std::vector<size_t> chain_edge;  // the piece's edge each plane of the chain is
+    chain.clear();
+    chain_edge.clear();
     bool straddled = false;
     for (size_t i = 0; i < m; ++i) {
         const Side& s = e[i];
