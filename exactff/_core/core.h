@@ -22,7 +22,8 @@
 // they miss it.
 //
 // Where each part lives: core.cpp (the constructor and the row's set-up and results),
-// culling.cpp (the subtrees' boxes and the hierarchical culling), shadow_tree.cpp (the
+// culling.cpp (the subtrees' boxes, the hierarchical culling and the cube map of cells
+// proven covered), shadow_tree.cpp (the
 // shadow tree's operations and exact tests), pieces.cpp (the piece loop: the front-to-back
 // walk and each fragment's filtering), integrate.cpp (a visible piece's sector sum, long
 // double and quadruple precision), bounds.cpp (the vertices' error charges and the

@@ -1,6 +1,8 @@
 // The visibility core's hierarchical occlusion culling: the bounding box of every BSP
 // subtree, and the tests that skip a subtree wholly behind the point's tangent plane or
-// wholly inside the covered region (its box's conic hull filtered down the shadow tree).
+// wholly inside the covered region (its box's conic hull filtered down the shadow tree),
+// and the cube map of directions whose cells are proven covered (a fragment or a box in
+// such cells is skipped).
 
 #include <algorithm>
 #include <array>
