@@ -674,8 +674,8 @@ void ZBuffer::flush(double* best_t, i64* best) {
 }
 
 // scan conversion of M polygons UV (M, K, 2) with counts c, live indices
-// src[pos[m]] (pos null: src[m]), into the depth buffer
-void ZBuffer::scan(const double* uv, i64 M, i64 K, const i64* c, const i64* src, const i64* pos,
+// src[pos[m]] (pos null: src[m]), into the depth buffer, candidate by candidate
+void ZBuffer::scan_cells(const double* uv, i64 M, i64 K, const i64* c, const i64* src, const i64* pos,
                    const double* u, i64 nu, const double* v, i64 nv, const i64* tab, double* bt,
                    i64* bs, i64 pair_chunk, i64 depth_chunk) {
     // the numpy code's chunks: (polygon, scanline) pairs by PAIR_CHUNK // K
@@ -731,6 +731,284 @@ void ZBuffer::scan(const double* uv, i64 M, i64 K, const i64* c, const i64* src,
         }
     }
     flush(bt, bs);
+}
+
+// ---- a face's scan, scanline by scanline ----
+
+namespace {
+
+// one grid row of a face's table: the columns [lo, hi) hold its cells (-1 outside);
+// `simple` when the cell there is base + col (one run of the layout's cells), else its
+// prefix counts of cells, pre (nv + 1,)
+struct GridRow {
+    bool seen = false, simple = true;
+    i64 lo = 0, hi = 0, base = 0;
+    std::vector<std::int32_t> pre;
+};
+
+// the row's layout, its cells checked against the buffer's
+void analyse_row(const i64* t, i64 nv, i64 n_cells, GridRow& g) {
+    g.seen = true;
+    i64 lo = nv, hi = 0;
+    for (i64 col = 0; col < nv; ++col) {
+        if (t[col] >= n_cells) throw std::invalid_argument("table's cells out of range");
+        if (t[col] >= 0) {
+            lo = std::min(lo, col);
+            hi = col + 1;
+        }
+    }
+    if (lo >= hi) {
+        g.lo = g.hi = g.base = 0;
+        return;
+    }
+    g.lo = lo;
+    g.hi = hi;
+    g.base = t[lo] - lo;
+    for (i64 col = lo; col < hi && g.simple; ++col) g.simple = t[col] == g.base + col;
+    if (!g.simple) {
+        g.pre.assign(static_cast<size_t>(nv + 1), 0);
+        for (i64 col = 0; col < nv; ++col) g.pre[col + 1] = g.pre[col] + (t[col] >= 0);
+    }
+}
+
+}  // namespace
+
+void ZBuffer::scan(const double* uv, i64 M, i64 K, const i64* c, const i64* src, const i64* pos,
+                   const double* u, i64 nu, const double* v, i64 nv, const i64* tab, double* bt,
+                   i64* bs, i64 pair_chunk, i64 depth_chunk) {
+    if (nu >= (i64(1) << 31) || nv >= (i64(1) << 31)) {
+        scan_cells(uv, M, K, c, src, pos, u, nu, v, nv, tab, bt, bs, pair_chunk, depth_chunk);
+        return;
+    }
+    // the numpy code's chunks: (polygon, scanline) pairs by PAIR_CHUNK // K, and
+    // DEPTH_CHUNK candidates (cells of the table, whatever their depth); scan_cells
+    // flushes at both
+    const i64 step = std::max<i64>(1, pair_chunk / std::max<i64>(K, 1));
+    const i64 dchunk = depth_chunk > 0 ? depth_chunk : std::numeric_limits<i64>::max();
+    std::vector<GridRow> rows(static_cast<size_t>(nu));
+    std::vector<Run> runs;
+    std::vector<size_t> ends;          // chunk k: runs[ends[k - 1], ends[k])
+    i64 pairs_in_chunk = 0, in_chunk = 0;
+    auto end_chunk = [&]() {
+        if (runs.size() > (ends.empty() ? 0 : ends.back())) ends.push_back(runs.size());
+        in_chunk = 0;
+    };
+    // the cells of columns [a, b) of row r as runs, cut where a chunk is full
+    auto emit = [&](i64 r, i64 a, i64 b, i64 s) {
+        GridRow& g = rows[r];
+        if (g.simple) {
+            a = std::max(a, g.lo);
+            b = std::min(b, g.hi);
+            while (a < b) {
+                const i64 take = std::min(b - a, dchunk - in_chunk);
+                runs.push_back(Run{static_cast<std::int32_t>(r), static_cast<std::int32_t>(a),
+                                   static_cast<std::int32_t>(a + take),
+                                   static_cast<std::int32_t>(s)});
+                a += take;
+                in_chunk += take;
+                if (in_chunk == dchunk) end_chunk();
+            }
+            return;
+        }
+        const std::int32_t* pre = g.pre.data();
+        while (a < b && pre[b] > pre[a]) {
+            const i64 n = pre[b] - pre[a], room = dchunk - in_chunk;
+            // the chunk full after the room-th cell: the column past it
+            const i64 x = n <= room ? b
+                                    : std::upper_bound(pre + a, pre + b + 1, pre[a] + room - 1) -
+                                          pre;
+            runs.push_back(Run{static_cast<std::int32_t>(r), static_cast<std::int32_t>(a),
+                               static_cast<std::int32_t>(x), static_cast<std::int32_t>(s)});
+            in_chunk += pre[x] - pre[a];
+            a = x;
+            if (in_chunk == dchunk) end_chunk();
+        }
+    };
+    std::vector<double> X;
+    X.reserve(static_cast<size_t>(K));
+    for (i64 m = 0; m < M; ++m) {
+        const double* P = uv + m * K * 2;
+        const i64 n = c[m];
+        const i64 sm = src[pos ? pos[m] : m];
+        // the scanlines whose centre lies in [min y, max y] (none if a coordinate
+        // is NaN, as numpy's min and searchsorted have it)
+        double lo = INF, hi = -INF;
+        bool nan = false;
+        for (i64 e = 0; e < K; ++e) {
+            const double y = P[2 * e];
+            if (std::isnan(y)) nan = true;
+            lo = std::min(lo, y);
+            hi = std::max(hi, y);
+        }
+        if (nan) continue;
+        const i64 j0 = std::lower_bound(u, u + nu, lo) - u;
+        const i64 j1 = std::upper_bound(u, u + nu, hi) - u;
+        for (i64 r = j0; r < j1; ++r) {
+            const double y = u[r];
+            X.clear();
+            for (i64 e = 0; e < n; ++e) {
+                const double* a = P + 2 * e;
+                const double* b = P + 2 * ((e + 1) % n);
+                if ((a[0] > y) == (b[0] > y)) continue;
+                // from the lower end point, whichever way the edge runs
+                if (a[0] > b[0]) std::swap(a, b);
+                const double x = a[1] + (y - a[0]) * (b[1] - a[1]) / (b[0] - a[0]);
+                if (!std::isnan(x)) X.push_back(x);
+            }
+            std::sort(X.begin(), X.end());
+            const size_t npairs = std::min<size_t>(X.size() / 2, static_cast<size_t>(K / 2));
+            if (npairs && !rows[r].seen) analyse_row(tab + r * nv, nv, row_.n_cells, rows[r]);
+            for (size_t k = 0; k < npairs; ++k) {
+                const i64 ia = std::lower_bound(v, v + nv, X[2 * k]) - v;
+                const i64 ib = std::lower_bound(v, v + nv, X[2 * k + 1]) - v;
+                if (ia < ib) emit(r, ia, ib, sm);
+            }
+            if (++pairs_in_chunk == step) {
+                end_chunk();
+                pairs_in_chunk = 0;
+            }
+        }
+    }
+    end_chunk();
+    if (runs.empty()) return;
+    // every grid cell its own layout cell (over the rows scanned), so that a chunk's
+    // scanlines are resolved one by one; else candidate by candidate
+    {
+        std::vector<std::pair<i64, i64>> iv;
+        bool general = false;
+        for (const GridRow& g : rows) {
+            if (!g.seen) continue;
+            general = general || !g.simple;
+            if (g.hi > g.lo) iv.emplace_back(g.base + g.lo, g.base + g.hi);
+        }
+        bool distinct = true;
+        if (!general) {
+            std::sort(iv.begin(), iv.end());
+            for (size_t k = 1; k < iv.size() && distinct; ++k)
+                distinct = iv[k].first >= iv[k - 1].second;
+        } else {
+            std::vector<char> mark(static_cast<size_t>(row_.n_cells), 0);
+            for (i64 r = 0; r < nu && distinct; ++r) {
+                if (!rows[r].seen) continue;
+                for (i64 col = 0; col < nv && distinct; ++col) {
+                    const i64 cell = tab[r * nv + col];
+                    if (cell < 0) continue;
+                    distinct = !mark[cell];
+                    mark[cell] = 1;
+                }
+            }
+        }
+        if (!distinct) {
+            scan_cells(uv, M, K, c, src, pos, u, nu, v, nv, tab, bt, bs, pair_chunk,
+                       depth_chunk);
+            return;
+        }
+    }
+    // chunk by chunk, scanline by scanline (the runs of a scanline in the chunk's order)
+    std::vector<std::int32_t> head(static_cast<size_t>(nu) + 1), fill(static_cast<size_t>(nu)),
+        order(runs.size());
+    std::vector<RowCell> L(static_cast<size_t>(nv));
+    std::vector<RowCandidate> cand;
+    std::vector<std::int32_t> touched;
+    touched.reserve(static_cast<size_t>(nv));
+    size_t s0 = 0;
+    for (const size_t s1 : ends) {
+        std::fill(head.begin(), head.end(), 0);
+        for (size_t q = s0; q < s1; ++q) ++head[runs[q].r + 1];
+        for (i64 r = 0; r < nu; ++r) head[r + 1] += head[r];
+        std::copy(head.begin(), head.end() - 1, fill.begin());
+        for (size_t q = s0; q < s1; ++q) order[fill[runs[q].r]++] = static_cast<std::int32_t>(q);
+        for (i64 r = 0; r < nu; ++r) {
+            if (head[r] < head[r + 1])
+                resolve_row(runs.data(), order.data() + head[r], head[r + 1] - head[r],
+                            rows[r].simple, rows[r].base, tab + r * nv, L.data(), cand,
+                            touched, bt, bs);
+        }
+        s0 = s1;
+    }
+}
+
+// resolve_depths on one scanline's candidates of a chunk, merged into the buffer: the
+// rule of flush, cell for cell (the scanline's cells are no other scanline's)
+void ZBuffer::resolve_row(const Run* runs, const std::int32_t* idx, i64 n_runs, bool simple,
+                          i64 base, const i64* trow, RowCell* L,
+                          std::vector<RowCandidate>& cand, std::vector<std::int32_t>& touched,
+                          double* best_t, i64* best) {
+    const double* D = row_.D;
+    const double* nl = row_.nl;
+    const double* dl = row_.dl;
+    cand.clear();
+    touched.clear();
+    // the candidates' depths, the nearest per cell
+    for (i64 k = 0; k < n_runs; ++k) {
+        const Run& q = runs[idx[k]];
+        const std::int32_t s = q.s;
+        const double* n = nl + 3 * s;
+        const double d = dl[s];
+        for (std::int32_t col = q.a; col < q.b; ++col) {
+            const i64 cell = simple ? base + col : trow[col];
+            if (cell < 0) continue;
+            const double den = dot3(n, D + 3 * cell);
+            const double t = d / den;
+            if (!std::isfinite(t)) continue;
+            double& tm = L[col].t_min;
+            if (tm == INF) touched.push_back(col);
+            tm = t < tm ? t : tm;
+            cand.push_back(RowCandidate{t, den, col, s});
+        }
+    }
+    const double* Dn = row_.Dnorm;
+    const double* band = row_.band;
+    const i64* prio = row_.prio;
+    // one of the polygons at the nearest depth (the last), and of those the one of
+    // lowest priority
+    for (const RowCandidate& q : cand) {
+        RowCell& c = L[q.col];
+        if (q.t == c.t_min) {
+            c.near = q.s;
+            if (prio[q.s] < c.p_min) {
+                c.p_min = prio[q.s];
+                c.pick = q.s;
+            }
+        }
+    }
+    // ties: within four times the tie test's band of the nearest depth, and coplanar
+    // with the polygon there
+    const double slack_ulps = row_.tie_slack_ulps;
+    for (const RowCandidate& q : cand) {
+        RowCell& c = L[q.col];
+        const double t_near = c.t_min;
+        if (q.t == t_near) continue;
+        const i64 cell = simple ? base + q.col : trow[q.col];
+        const double slack = 4.0 * (band[q.s] + EPS * (slack_ulps * std::fabs(t_near) * Dn[cell]
+                                                       + std::fabs(dl[q.s])));
+        if (std::fabs(t_near - q.t) * std::fabs(q.den) <= slack) {
+            if (coplanar(c.near, q.s) && prio[q.s] < c.p_min) {
+                c.p_min = prio[q.s];
+                c.pick = q.s;
+            }
+        }
+    }
+    // merged with the cells' best so far, as flush merges
+    for (const std::int32_t col : touched) {
+        RowCell& c = L[col];
+        const i64 s = c.pick;
+        if (s >= 0) {
+            const i64 cell = simple ? base + col : trow[col];
+            const double t = c.t_min;
+            const i64 old = best[cell];
+            bool take;
+            if (old < 0)
+                take = true;
+            else if (t < best_t[cell])
+                take = prio[s] < prio[old] || !coplanar(old, s);
+            else
+                take = prio[s] < prio[old] && coplanar(s, old);
+            if (t < best_t[cell]) best_t[cell] = t;
+            if (take) best[cell] = s;
+        }
+        c = RowCell();
+    }
 }
 
 // rasterise_polar on the clipped images c (live bucket indices into src)

@@ -31,6 +31,7 @@
 #ifndef EXACTFF_CORE_ZBUFFER_H
 #define EXACTFF_CORE_ZBUFFER_H
 
+#include <cmath>
 #include <cstdint>
 #include <unordered_map>
 #include <vector>
@@ -152,6 +153,24 @@ struct Candidate {
     std::int32_t cell, s;    // (24 bytes: the chunk's candidates are the buffer's traffic)
 };
 
+// a face's span within one chunk: grid row r, columns [a, b), live polygon s
+struct Run {
+    std::int32_t r, a, b, s;
+};
+
+// a scanline's cell within a chunk (scan's resolution row by row): CellScratch's
+// fields and the nearest depth
+struct RowCell {
+    double t_min = INFINITY;
+    i64 near = -1, p_min = INT64_MAX, pick = -1;
+};
+
+// a candidate of a scanline: its depth, n . d, its column and polygon
+struct RowCandidate {
+    double t, den;
+    std::int32_t col, s;
+};
+
 // One row's z-buffer: scan conversion of the buckets and the depth test into a Buffer.
 class ZBuffer {
   public:
@@ -189,9 +208,22 @@ class ZBuffer {
     bool coplanar(i64 a, i64 b);
 
   private:
+    // a face's scan conversion: the spans of every (polygon, scanline) pair cut into the
+    // numpy code's chunks, each chunk resolved scanline by scanline (scan_rows; the
+    // cells of a scanline are its own when the table gives every grid cell its own
+    // layout cell), else as scan_cells does
     void scan(const double* uv, i64 M, i64 K, const i64* c, const i64* src, const i64* pos,
               const double* u, i64 nu, const double* v, i64 nv, const i64* tab, double* bt,
               i64* bs, i64 pair_chunk, i64 depth_chunk);
+    // one scanline's runs of a chunk (runs[idx[k]]), resolved as flush does; the grid
+    // row's cells base + col (simple) or trow[col]; L (nv,) and touched left cleared
+    void resolve_row(const Run* runs, const std::int32_t* idx, i64 n_runs, bool simple,
+                     i64 base, const i64* trow, RowCell* L, std::vector<RowCandidate>& cand,
+                     std::vector<std::int32_t>& touched, double* best_t, i64* best);
+    // the same, candidate by candidate into the row's whole buffer (add, flush)
+    void scan_cells(const double* uv, i64 M, i64 K, const i64* c, const i64* src,
+                    const i64* pos, const double* u, i64 nu, const double* v, i64 nv,
+                    const i64* tab, double* bt, i64* bs, i64 pair_chunk, i64 depth_chunk);
     void scan_polar(const Clipped& c, const i64* src, const double* radii, i64 nr,
                     const double* cs, const double* sn, i64 S, double* bt, i64* bs,
                     i64 pair_chunk, i64 depth_chunk);
