@@ -771,6 +771,58 @@ void analyse_row(const i64* t, i64 nv, i64 n_cells, GridRow& g) {
     }
 }
 
+// increasing centres c (n,) and std::lower_bound / upper_bound over them, started from
+// the guess of evenly spaced centres and moved to the exact index (a binary search
+// where the guess is far off)
+struct Centres {
+    const double* c;
+    i64 n;
+    double c0 = 0.0, inv_h = 0.0;
+
+    Centres(const double* c_, i64 n_) : c(c_), n(n_) {
+        if (n > 1 && c[n - 1] > c[0]) {
+            c0 = c[0];
+            inv_h = static_cast<double>(n - 1) / (c[n - 1] - c[0]);
+        }
+    }
+
+    i64 guess(double x) const {
+        const double g = (x - c0) * inv_h;
+        if (!(g > 0)) return 0;                 // (NaN too)
+        return g >= static_cast<double>(n) ? n : static_cast<i64>(g);
+    }
+
+    // the first index with c[i] >= x
+    i64 lower(double x) const {
+        i64 i = guess(x);
+        for (int step = 0; step < 4; ++step) {
+            if (i > 0 && !(c[i - 1] < x)) {
+                --i;
+            } else if (i < n && c[i] < x) {
+                ++i;
+            } else {
+                return i;
+            }
+        }
+        return std::lower_bound(c, c + n, x) - c;
+    }
+
+    // the first index with c[i] > x
+    i64 upper(double x) const {
+        i64 i = guess(x);
+        for (int step = 0; step < 4; ++step) {
+            if (i > 0 && x < c[i - 1]) {
+                --i;
+            } else if (i < n && !(x < c[i])) {
+                ++i;
+            } else {
+                return i;
+            }
+        }
+        return std::upper_bound(c, c + n, x) - c;
+    }
+};
+
 }  // namespace
 
 void ZBuffer::scan(const double* uv, i64 M, i64 K, const i64* c, const i64* src, const i64* pos,
@@ -824,8 +876,12 @@ void ZBuffer::scan(const double* uv, i64 M, i64 K, const i64* c, const i64* src,
             if (in_chunk == dchunk) end_chunk();
         }
     };
+    // per polygon: its edges from their lower end points (a, b), each edge's scanlines
+    // (those it straddles: a_y <= y < b_y), and every scanline's crossings
+    std::vector<double> E(static_cast<size_t>(4 * std::max<i64>(K, 1)));
     std::vector<double> X;
-    X.reserve(static_cast<size_t>(K));
+    std::vector<std::int32_t> nx;
+    const Centres cu(u, nu), cv(v, nv);
     for (i64 m = 0; m < M; ++m) {
         const double* P = uv + m * K * 2;
         const i64 n = c[m];
@@ -841,26 +897,36 @@ void ZBuffer::scan(const double* uv, i64 M, i64 K, const i64* c, const i64* src,
             hi = std::max(hi, y);
         }
         if (nan) continue;
-        const i64 j0 = std::lower_bound(u, u + nu, lo) - u;
-        const i64 j1 = std::upper_bound(u, u + nu, hi) - u;
-        for (i64 r = j0; r < j1; ++r) {
-            const double y = u[r];
-            X.clear();
-            for (i64 e = 0; e < n; ++e) {
-                const double* a = P + 2 * e;
-                const double* b = P + 2 * ((e + 1) % n);
-                if ((a[0] > y) == (b[0] > y)) continue;
-                // from the lower end point, whichever way the edge runs
-                if (a[0] > b[0]) std::swap(a, b);
+        const i64 j0 = cu.lower(lo), j1 = cu.upper(hi);
+        if (j0 >= j1) continue;
+        const i64 nr = j1 - j0;
+        X.resize(static_cast<size_t>(nr * std::max<i64>(n, 1)));
+        nx.assign(static_cast<size_t>(nr), 0);
+        for (i64 e = 0; e < n; ++e) {
+            const double* a = P + 2 * e;
+            const double* b = P + 2 * (e + 1 < n ? e + 1 : 0);
+            if (a[0] == b[0]) continue;                 // crosses no scanline
+            // from the lower end point, whichever way the edge runs
+            if (a[0] > b[0]) std::swap(a, b);
+            const i64 r0 = std::max(cu.lower(a[0]), j0), r1 = std::min(cu.lower(b[0]), j1);
+            for (i64 r = r0; r < r1; ++r) {
+                const double y = u[r];
                 const double x = a[1] + (y - a[0]) * (b[1] - a[1]) / (b[0] - a[0]);
-                if (!std::isnan(x)) X.push_back(x);
+                if (!std::isnan(x)) X[(r - j0) * n + nx[r - j0]++] = x;
             }
-            std::sort(X.begin(), X.end());
-            const size_t npairs = std::min<size_t>(X.size() / 2, static_cast<size_t>(K / 2));
+        }
+        for (i64 r = j0; r < j1; ++r) {
+            double* x = X.data() + (r - j0) * n;
+            const i64 cnt = nx[r - j0];
+            if (cnt == 2) {
+                if (x[1] < x[0]) std::swap(x[0], x[1]);
+            } else {
+                std::sort(x, x + cnt);
+            }
+            const i64 npairs = std::min<i64>(cnt / 2, K / 2);
             if (npairs && !rows[r].seen) analyse_row(tab + r * nv, nv, row_.n_cells, rows[r]);
-            for (size_t k = 0; k < npairs; ++k) {
-                const i64 ia = std::lower_bound(v, v + nv, X[2 * k]) - v;
-                const i64 ib = std::lower_bound(v, v + nv, X[2 * k + 1]) - v;
+            for (i64 k = 0; k < npairs; ++k) {
+                const i64 ia = cv.lower(x[2 * k]), ib = cv.lower(x[2 * k + 1]);
                 if (ia < ib) emit(r, ia, ib, sm);
             }
             if (++pairs_in_chunk == step) {
