@@ -471,6 +471,111 @@ i64 row_sums(const i64* best, i64 C, const i64* ids, const bool* receives,
     return hit;
 }
 
+// ---- Monte Carlo's directions and their charts ----
+
+void direction_norms(const double* D, i64 n, double* norms) {
+    for (i64 k = 0; k < n; ++k) {
+        const double* d = D + 3 * k;
+        norms[k] = std::sqrt((d[0] * d[0] + d[1] * d[1]) + d[2] * d[2]);
+    }
+}
+
+void cosine_directions(const double* q1, const double* q2, i64 n, double* D, double* norms) {
+    const double two_pi = 2.0 * 3.141592653589793;
+    for (i64 k = 0; k < n; ++k) {
+        const double r = std::sqrt(q1[k]), a = two_pi * q2[k];
+        const double x = r * std::cos(a), y = r * std::sin(a);
+        const double zz = (1.0 - x * x) - y * y;
+        double z = std::sqrt(zz > 0.0 ? zz : 0.0);
+        if (z == 0.0) z = 1e-300;        // a ray exactly on the horizon: kept above it
+        const double len = std::sqrt((x * x + y * y) + z * z);
+        D[3 * k] = x / len;
+        D[3 * k + 1] = y / len;
+        D[3 * k + 2] = z / len;
+    }
+    direction_norms(D, n, norms);
+}
+
+void ray_charts(const double* D, i64 n, const i64* axis, const double* sign_w, double margin,
+                std::vector<RayChart>& charts, i64* slot) {
+    // _chart_of: the top chart where z >= max(|x|, |y|), else the side of the larger
+    // horizontal component; u = d_u / w, v = d_v / w with w = +-d_w
+    std::vector<std::int8_t> chart(static_cast<size_t>(n));
+    std::vector<double> uv(static_cast<size_t>(2 * n));
+    i64 count[5] = {0, 0, 0, 0, 0};
+    for (i64 k = 0; k < n; ++k) {
+        const double* d = D + 3 * k;
+        const double ax = std::fabs(d[0]), ay = std::fabs(d[1]), az = d[2];
+        int c;
+        if (az >= np_max(ax, ay))
+            c = 0;
+        else if (ax >= ay)
+            c = d[0] > 0 ? 1 : 2;
+        else
+            c = d[1] > 0 ? 3 : 4;
+        chart[k] = static_cast<std::int8_t>(c);
+        const double w = d[axis[3 * c + 2]] * sign_w[c];
+        uv[2 * k] = d[axis[3 * c]] / w;
+        uv[2 * k + 1] = d[axis[3 * c + 1]] / w;
+        ++count[c];
+    }
+    // _cell_grid per chart: nb x nb buckets over [-1, 1] x [v_lo, 1]; the charts' buckets
+    // numbered one after the other, the directions sorted by them (a stable counting
+    // sort: numpy's stable argsort)
+    charts.clear();
+    i64 first[6] = {0, 0, 0, 0, 0, 0}, offset = 0;
+    std::vector<i64> chart_at(5, -1);
+    for (int c = 0; c < 5; ++c) {
+        first[c + 1] = first[c];
+        if (count[c] == 0) continue;
+        RayChart rc;
+        rc.chart = c;
+        rc.offset = offset;
+        rc.count = count[c];
+        rc.v_lo = c != 0 ? -margin : -1.0 - margin;
+        rc.nb = std::max<i64>(1, static_cast<i64>(std::sqrt(static_cast<double>(count[c]) / 16.0)));
+        first[c + 1] += rc.nb * rc.nb;
+        offset += count[c];
+        chart_at[c] = static_cast<i64>(charts.size());
+        charts.push_back(std::move(rc));
+    }
+    std::vector<std::int32_t> bucket(static_cast<size_t>(n));
+    std::vector<i64> start(static_cast<size_t>(first[5] + 1), 0);
+    for (i64 k = 0; k < n; ++k) {
+        const int c = chart[k];
+        const RayChart& rc = charts[chart_at[c]];
+        const i64 nb = rc.nb;
+        const double fnb = static_cast<double>(nb);
+        // numpy's astype(int) truncates; then clipped to the grid
+        const i64 bx = std::min(std::max<i64>(static_cast<i64>((uv[2 * k] + 1.0) * 0.5 * fnb), 0),
+                                nb - 1);
+        const i64 by = std::min(std::max<i64>(static_cast<i64>((uv[2 * k + 1] - rc.v_lo) /
+                                                               (1.0 - rc.v_lo) * fnb),
+                                              0),
+                                nb - 1);
+        const i64 b = first[c] + bx * nb + by;
+        bucket[k] = static_cast<std::int32_t>(b);
+        ++start[b + 1];
+    }
+    for (i64 b = 0; b < first[5]; ++b) start[b + 1] += start[b];
+    for (RayChart& rc : charts) {
+        const i64 f = first[rc.chart], nbb = rc.nb * rc.nb;
+        rc.starts.resize(static_cast<size_t>(nbb + 1));
+        for (i64 b = 0; b <= nbb; ++b) rc.starts[b] = start[f + b] - rc.offset;
+        rc.cu.resize(static_cast<size_t>(rc.count));
+        rc.cv.resize(static_cast<size_t>(rc.count));
+    }
+    // (the charts' buckets follow each other as their directions do: start is the
+    // renumbering)
+    for (i64 k = 0; k < n; ++k) {
+        const i64 at = start[bucket[k]]++;
+        slot[k] = at;
+        RayChart& rc = charts[chart_at[chart[k]]];
+        rc.cu[at - rc.offset] = uv[2 * k];
+        rc.cv[at - rc.offset] = uv[2 * k + 1];
+    }
+}
+
 // ---- the row's z-buffer: the entry points ----
 
 void ZBuffer::face(const double* UV, i64 M, i64 K, const i64* cl, const i64* src,

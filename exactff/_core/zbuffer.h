@@ -139,6 +139,33 @@ void clip_face(const Bucket& b, const Face& f, double meet_ulps, Clipped& out);
 i64 row_sums(const i64* best, i64 C, const i64* ids, const bool* receives,
              const double* weights, i64 n, double* F);
 
+// Monte Carlo's cosine-weighted directions (exactff.methods.monte_carlo): from uniform
+// samples q1, q2 (n,) in [0, 1), the points (r cos a, r sin a) of the unit disk,
+// r = sqrt q1, a = (2 pi) q2, lifted to the hemisphere, z = sqrt(max((1 - x x) - y y, 0))
+// (1e-300 where 0), and normalised as CellLayout does, D / |D|; D (n, 3) and the norms
+// of the normalised directions (n,), both np.linalg.norm's sqrt((x x + y y) + z z)
+void cosine_directions(const double* q1, const double* q2, i64 n, double* D, double* norms);
+
+// |d| of each direction as np.linalg.norm(D, axis=1) has it: sqrt((x x + y y) + z z)
+void direction_norms(const double* D, i64 n, double* norms);
+
+// One chart's directions for chart_rays (exactff.methods._sampling._chart_of and
+// _cell_grid): the directions, renumbered chart by chart and bucket by bucket, at
+// [offset, offset + count); their chart coordinates cu, cv in that order; the grid of
+// nb x nb buckets over [-1, 1] x [v_lo, 1] and its CSR starts (nb nb + 1,)
+struct RayChart {
+    i64 chart = 0, offset = 0, count = 0, nb = 1;
+    double v_lo = 0.0;
+    std::vector<double> cu, cv;
+    std::vector<i64> starts;
+};
+
+// The directions D (n, 3) sorted into the charts (_chart_of: axis (5, 3) the axes'
+// components, sign_w (5,) the sign of e_w) and bucketed (_cell_grid, its margin
+// `margin`): per non-empty chart a RayChart, and slot (n,), each direction's new index
+void ray_charts(const double* D, i64 n, const i64* axis, const double* sign_w, double margin,
+                std::vector<RayChart>& charts, i64* slot);
+
 // the depth buffer's per-cell scratch within a chunk (the nearest depth apart: the
 // candidates touch it, the other fields only the chunk's resolution)
 struct CellScratch {
