@@ -1089,31 +1089,11 @@ void ZBuffer::scan(const double* uv, i64 M, i64 K, const i64* c, const i64* src,
         for (i64 r = 0; r < nu; ++r) head[r + 1] += head[r];
         std::copy(head.begin(), head.end() - 1, fill.begin());
         for (size_t q = s0; q < s1; ++q) order[fill[runs[q].r]++] = static_cast<std::int32_t>(q);
-        i64 next = 0;
-        auto prefetch_row = [&](i64 r) {
-            // the scanline's directions and buffer cells on their way to the cache
-            // while the one before is resolved (a row's cells are contiguous there)
-            const GridRow& g = rows[r];
-            if (!g.simple || g.hi <= g.lo) return;
-            const char* d0 = reinterpret_cast<const char*>(row_.D + 3 * (g.base + g.lo));
-            const char* d1 = reinterpret_cast<const char*>(row_.D + 3 * (g.base + g.hi));
-            for (const char* q = d0; q < d1; q += 64) __builtin_prefetch(q);
-            const char* t0 = reinterpret_cast<const char*>(bt + g.base + g.lo);
-            const char* t1 = reinterpret_cast<const char*>(bt + g.base + g.hi);
-            for (const char* q = t0; q < t1; q += 64) __builtin_prefetch(q, 1);
-            const char* b0 = reinterpret_cast<const char*>(bs + g.base + g.lo);
-            const char* b1 = reinterpret_cast<const char*>(bs + g.base + g.hi);
-            for (const char* q = b0; q < b1; q += 64) __builtin_prefetch(q, 1);
-        };
-        while (next < nu && head[next] == head[next + 1]) ++next;
-        if (next < nu) prefetch_row(next);
-        while (next < nu) {
-            const i64 r = next;
-            for (++next; next < nu && head[next] == head[next + 1];) ++next;
-            if (next < nu) prefetch_row(next);
-            resolve_row(runs.data(), order.data() + head[r], head[r + 1] - head[r],
-                        rows[r].simple, rows[r].base, tab + r * nv, L.data(), cand, touched,
-                        bt, bs);
+        for (i64 r = 0; r < nu; ++r) {
+            if (head[r] < head[r + 1])
+                resolve_row(runs.data(), order.data() + head[r], head[r + 1] - head[r],
+                            rows[r].simple, rows[r].base, tab + r * nv, L.data(), cand,
+                            touched, bt, bs);
         }
         s0 = s1;
     }
