@@ -293,6 +293,18 @@ def test_compiled_cells_identical_to_numpy_on_tables_sharing_cells(fold, scene_n
         assert (out[1] >= 0).sum() > r * r // 4        # the face shows polygons
 
 
+def test_row_sums_reject_cells_beyond_the_live_polygons():
+    # a cell showing live polygon L (of L) would read past ids: an error, not a row
+    from exactff.methods._zbuffer import row_sums
+
+    ids = np.array([2, 0, 1])
+    receives = np.ones(3, dtype=bool)
+    F, hit = row_sums(np.array([0, -1, 2, 2]), ids, receives, np.full(4, 0.25), 3)
+    assert F.tolist() == [0.0, 0.5, 0.25] and hit == 3        # np.bincount's sums
+    with pytest.raises(ValueError, match="best out of range"):
+        row_sums(np.array([0, -1, 3, 2]), ids, receives, np.full(4, 0.25), 3)
+
+
 def test_compiled_scan_rejects_tables_beyond_the_buffer():
     from exactff.methods._sampling import ZBufferRow
 
@@ -305,6 +317,38 @@ def test_compiled_scan_rejects_tables_beyond_the_buffer():
         raster.rasterise_face(z, chart, uc, vc, table + len(L), L.directions,
                               np.full(len(L), np.inf), np.full(len(L), -1, dtype=np.int64),
                               zbuffer=raster.compiled_zbuffer(z, L))
+
+
+@pytest.mark.parametrize("scene_name", ["office", "cornell", "walls_low"])
+def test_compiled_row_setup_is_the_numpy_one(scene_name):
+    # ZBufferRow's live polygons (compiled live_local) against the numpy expressions
+    # they replaced: to_local of every padded vertex, alive (not edge-on) with a vertex
+    # above the horizon; the same polygons and the same local vertices, bit for bit
+    from exactff.geometry import receiver_frame, to_local
+    from exactff.kernel import flat_polygons
+    from exactff.methods._sampling import ZBufferRow, _polygon_buckets
+    from exactff.predicates import plane_sides
+
+    scene = SCENES[scene_name]()
+    rng = np.random.default_rng(13)
+    for p, n in list(_rows(scene, 3, seed=3)) + [(scene.centroids[0], rng.normal(size=3))]:
+        p, n = as_receiver(p, n / np.linalg.norm(n))
+        z = ZBufferRow(scene, p, n)
+        side, _ = plane_sides(flat_polygons(scene), p, exact=False)
+        R = receiver_frame(n)
+        want_V, want_ids = [], []
+        for b_ids, Vb, cb in _polygon_buckets(scene):
+            V = to_local(Vb, p, R)
+            slot = np.arange(V.shape[1])[None, :] < cb[:, None]
+            live = (side[b_ids] != 0) & (np.where(slot, V[:, :, 2], -np.inf).max(axis=1) > 0)
+            if live.any():
+                want_V.append(V[live])
+                want_ids.append(b_ids[live])
+        assert 0 < len(z.ids) < len(scene) or scene_name != "office"
+        assert np.array_equal(z.ids, np.concatenate(want_ids))
+        assert len(z.local) == len(want_V)
+        for (g, V, counts), W in zip(z.local, want_V):
+            assert np.array_equal(V, W)
 
 
 # ---- Monte Carlo: the shared core's rays through the compiled z-buffer ----

@@ -325,16 +325,33 @@ py::tuple row_sums(Ints best, Ints ids, Bools receives, Doubles weights, i64 n) 
     for (i64 k = 0; k < L; ++k)
         if (ids.data()[k] < 0 || ids.data()[k] >= n)
             throw std::invalid_argument("ids out of range");
-    for (i64 c = 0; c < C; ++c)
-        if (best.data()[c] >= L) throw std::invalid_argument("best out of range");
     py::array_t<double> F(n);
     i64 hit;
     {
         py::gil_scoped_release release;
-        hit = exactff::zbuffer::row_sums(best.data(), C, ids.data(), receives.data(),
+        hit = exactff::zbuffer::row_sums(best.data(), C, ids.data(), L, receives.data(),
                                          weights.data(), n, F.mutable_data());
     }
+    if (hit < 0) throw std::invalid_argument("best out of range");
     return py::make_tuple(F, hit);
+}
+
+py::tuple live_local(Doubles V, Ints counts, Bools alive, Doubles p, Doubles R) {
+    const i64 M = check_vertices(V, counts), K = V.shape(1);
+    if (alive.ndim() != 1 || alive.shape(0) != M)
+        throw std::invalid_argument("alive must have shape (M,)");
+    if (p.size() != 3 || R.ndim() != 2 || R.shape(0) != 3 || R.shape(1) != 3)
+        throw std::invalid_argument("p must have shape (3,) and R (3, 3)");
+    std::vector<i64> live;
+    std::vector<double> local;
+    {
+        py::gil_scoped_release release;
+        exactff::zbuffer::live_local(V.data(), M, K, counts.data(), alive.data(), p.data(),
+                                     R.data(), live, local);
+    }
+    py::array_t<double> out({static_cast<i64>(live.size()), K, static_cast<i64>(3)});
+    std::copy(local.begin(), local.end(), out.mutable_data());
+    return py::make_tuple(exactff::bind::as_array(live), out);
 }
 
 // the directions (n, 3), checked
@@ -440,6 +457,9 @@ PYBIND11_MODULE(_zbuffer, m) {
     m.def("face_clip", &face_clip, py::arg("V"), py::arg("counts"), py::arg("R"),
           py::arg("planes"), py::arg("scale"), py::arg("clip_meet_ulps"),
           "exactff.methods._raster.FaceClip of one bucket, compiled: (live, UV, cl).");
+    m.def("live_local", &live_local, py::arg("V"), py::arg("counts"), py::arg("alive"),
+          py::arg("p"), py::arg("R"),
+          "ZBufferRow's live polygons of a bucket: (bucket indices, local vertices).");
     m.def("cosine_directions", &cosine_directions, py::arg("q1"), py::arg("q2"),
           "Monte Carlo's cosine-weighted unit directions from uniform samples: (D, norms).");
     m.def("direction_norms", &direction_norms, py::arg("D"),

@@ -458,17 +458,43 @@ void clip_face(const Bucket& b, const Face& f, double meet_ulps, Clipped& out) {
     clip_to_face(b.V, b.M, b.K, b.counts, f.R, f.planes, f.n_planes, f.scale, meet_ulps, out);
 }
 
-i64 row_sums(const i64* best, i64 C, const i64* ids, const bool* receives,
+i64 row_sums(const i64* best, i64 C, const i64* ids, i64 L, const bool* receives,
              const double* weights, i64 n, double* F) {
     i64 hit = 0;
     std::fill(F, F + n, 0.0);
     for (i64 c = 0; c < C; ++c) {
         if (best[c] < 0) continue;
+        if (best[c] >= L) return -1;
         ++hit;
         const i64 j = ids[best[c]];
         if (receives[j]) F[j] += weights[c];
     }
     return hit;
+}
+
+// ---- a row's live polygons ----
+
+void live_local(const double* V, i64 M, i64 K, const i64* counts, const bool* alive,
+                const double* p, const double* R, std::vector<i64>& live,
+                std::vector<double>& local) {
+    live.clear();
+    local.clear();
+    std::vector<double> W(static_cast<size_t>(3 * K));
+    for (i64 m = 0; m < M; ++m) {
+        if (!alive[m]) continue;
+        const double* P = V + m * K * 3;
+        for (i64 e = 0; e < K; ++e) {
+            const double x = P[3 * e] - p[0], y = P[3 * e + 1] - p[1], z = P[3 * e + 2] - p[2];
+            for (int k = 0; k < 3; ++k)
+                W[3 * e + k] = (x * R[3 * k] + y * R[3 * k + 1]) + z * R[3 * k + 2];
+        }
+        // the largest z of the polygon's vertices (numpy's max: a NaN propagates)
+        double top = -INF;
+        for (i64 e = 0; e < counts[m]; ++e) top = np_max(top, W[3 * e + 2]);
+        if (!(top > 0)) continue;
+        live.push_back(m);
+        local.insert(local.end(), W.begin(), W.end());
+    }
 }
 
 // ---- Monte Carlo's directions and their charts ----

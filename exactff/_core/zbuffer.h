@@ -133,11 +133,22 @@ void clip_chart(const Bucket& b, const Chart& ch, double meet_ulps, double edge_
 void clip_face(const Bucket& b, const Face& f, double meet_ulps, Clipped& out);
 
 // A row from its depth buffer: F[j] (n,) = the sum of the weights (C,) of the cells
-// showing polygon j (best (C,): live indices, ids: their scene indices), where j
-// receives, added cell by cell in the cells' order (np.bincount's sums); returns the
-// number of cells that show a polygon.
-i64 row_sums(const i64* best, i64 C, const i64* ids, const bool* receives,
+// showing polygon j (best (C,): live indices below L, -1 none; ids (L,): their scene
+// indices), where j receives, added cell by cell in the cells' order (np.bincount's
+// sums); returns the number of cells that show a polygon, or -1 (F unfinished) where
+// a cell's entry is L or more.
+i64 row_sums(const i64* best, i64 C, const i64* ids, i64 L, const bool* receives,
              const double* weights, i64 n, double* F);
+
+// ZBufferRow's live polygons of one bucket (exactff.methods._sampling): the vertices
+// V (M, K, 3), padded, in the point's local frame, (x - p) R^T with each row's
+// products added first to second, then the third (exactff.geometry.rotate); the
+// polygons alive (not edge-on) with a vertex above the horizon (the largest local z
+// of its counts[m] vertices > 0, none if one is NaN): their bucket indices and local
+// vertices (live, K, 3)
+void live_local(const double* V, i64 M, i64 K, const i64* counts, const bool* alive,
+                const double* p, const double* R, std::vector<i64>& live,
+                std::vector<double>& local);
 
 // Monte Carlo's cosine-weighted directions (exactff.methods.monte_carlo): from uniform
 // samples q1, q2 (n,) in [0, 1), the points (r cos a, r sin a) of the unit disk,

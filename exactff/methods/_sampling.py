@@ -21,7 +21,7 @@ import numpy as np
 import shapely
 
 from .. import _tolerances as tol
-from ..geometry import receiver_frame, to_local
+from ..geometry import receiver_frame
 from ..checks import as_receiver
 from ..kernel import flat_polygons
 from ..predicates import coplanar_pairs, plane_sides, polygon_coplanar_bands, tie_priority
@@ -30,7 +30,7 @@ from ..rings import padded_buckets
 from ..scene import as_scene
 from ..visibility.charts import CHARTS, chart_clip, chart_planes
 from ._base import FormFactorMethod
-from ._zbuffer import ZBuffer, ray_charts, row_sums
+from ._zbuffer import ZBuffer, live_local, ray_charts, row_sums
 
 __all__ = ["CellLayout", "SampledMethod", "ZBufferRow", "nearest_polygons", "zbuffer_of",
            "resolve_depths",
@@ -198,12 +198,12 @@ class ZBufferRow:
         local, ids = [], []
         start = 0
         for b_ids, Vb, cb in _polygon_buckets(scene):
-            V = to_local(Vb, p, R)
-            slot = np.arange(V.shape[1])[None, :] < cb[:, None]
-            live = (side[b_ids] != 0) & (np.where(slot, V[:, :, 2], -np.inf).max(axis=1) > 0)
-            if live.any():
-                n_live = int(live.sum())
-                local.append((start + np.arange(n_live), V[live], cb[live]))
+            # not edge-on, a vertex above the horizon; the vertices in the local frame
+            # (compiled: to_local's expression, bit for bit)
+            live, V = live_local(Vb, cb, side[b_ids] != 0, p, R)
+            if len(live):
+                n_live = len(live)
+                local.append((start + np.arange(n_live), V, cb[live]))
                 ids.append(b_ids[live])
                 start += n_live
         self.local = local
