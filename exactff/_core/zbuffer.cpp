@@ -1134,8 +1134,14 @@ void ZBuffer::resolve_row(const Run* runs, const std::int32_t* idx, i64 n_runs, 
     const double* D = row_.D;
     const double* nl = row_.nl;
     const double* dl = row_.dl;
-    cand.clear();
-    touched.clear();
+    // (room for every cell of the runs, written in place)
+    size_t room = 0;
+    for (i64 k = 0; k < n_runs; ++k) room += runs[idx[k]].b - runs[idx[k]].a;
+    if (cand.size() < room) cand.resize(room);
+    if (touched.size() < room + 1) touched.resize(room + 1);
+    RowCandidate* cp = cand.data();
+    std::int32_t* tp = touched.data();
+    size_t nc = 0, nt = 0;
     // the candidates' depths, the nearest per cell
     for (i64 k = 0; k < n_runs; ++k) {
         const Run& q = runs[idx[k]];
@@ -1149,9 +1155,11 @@ void ZBuffer::resolve_row(const Run* runs, const std::int32_t* idx, i64 n_runs, 
             const double t = d / den;
             if (!std::isfinite(t)) continue;
             double& tm = L[col].t_min;
-            if (tm == INF) touched.push_back(col);
+            // (the cell listed when first touched, without a branch)
+            tp[nt] = col;
+            nt += tm == INF;
             tm = t < tm ? t : tm;
-            cand.push_back(RowCandidate{t, den, col, s});
+            cp[nc++] = RowCandidate{t, den, col, s};
         }
     }
     const double* Dn = row_.Dnorm;
@@ -1159,7 +1167,8 @@ void ZBuffer::resolve_row(const Run* runs, const std::int32_t* idx, i64 n_runs, 
     const i64* prio = row_.prio;
     // one of the polygons at the nearest depth (the last), and of those the one of
     // lowest priority
-    for (const RowCandidate& q : cand) {
+    for (size_t k = 0; k < nc; ++k) {
+        const RowCandidate& q = cp[k];
         RowCell& c = L[q.col];
         if (q.t == c.t_min) {
             c.near = q.s;
@@ -1172,7 +1181,8 @@ void ZBuffer::resolve_row(const Run* runs, const std::int32_t* idx, i64 n_runs, 
     // ties: within four times the tie test's band of the nearest depth, and coplanar
     // with the polygon there
     const double slack_ulps = row_.tie_slack_ulps;
-    for (const RowCandidate& q : cand) {
+    for (size_t k = 0; k < nc; ++k) {
+        const RowCandidate& q = cp[k];
         RowCell& c = L[q.col];
         const double t_near = c.t_min;
         if (q.t == t_near) continue;
@@ -1187,7 +1197,8 @@ void ZBuffer::resolve_row(const Run* runs, const std::int32_t* idx, i64 n_runs, 
         }
     }
     // merged with the cells' best so far, as flush merges
-    for (const std::int32_t col : touched) {
+    for (size_t k = 0; k < nt; ++k) {
+        const std::int32_t col = tp[k];
         RowCell& c = L[col];
         const i64 s = c.pick;
         if (s >= 0) {
