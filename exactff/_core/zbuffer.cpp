@@ -462,13 +462,24 @@ i64 row_sums(const i64* best, i64 C, const i64* ids, i64 L, const bool* receives
              const double* weights, i64 n, double* F) {
     i64 hit = 0;
     std::fill(F, F + n, 0.0);
+    // F[j] kept in a register over a run of cells showing j (the same additions in the
+    // same order; neighbouring cells mostly show the same polygon)
+    i64 cur = -1;
+    double acc = 0.0;
     for (i64 c = 0; c < C; ++c) {
         if (best[c] < 0) continue;
         if (best[c] >= L) return -1;
         ++hit;
         const i64 j = ids[best[c]];
-        if (receives[j]) F[j] += weights[c];
+        if (!receives[j]) continue;
+        if (j != cur) {
+            if (cur >= 0) F[cur] = acc;
+            cur = j;
+            acc = F[j];
+        }
+        acc += weights[c];
     }
+    if (cur >= 0) F[cur] = acc;
     return hit;
 }
 
