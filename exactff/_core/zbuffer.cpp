@@ -815,66 +815,6 @@ void ZBuffer::flush(double* best_t, i64* best) {
     n_touched_ = 0;
 }
 
-// scan conversion of M polygons UV (M, K, 2) with counts c, live indices
-// src[pos[m]] (pos null: src[m]), into the depth buffer, candidate by candidate
-void ZBuffer::scan_cells(const double* uv, i64 M, i64 K, const i64* c, const i64* src, const i64* pos,
-                   const double* u, i64 nu, const double* v, i64 nv, const i64* tab, double* bt,
-                   i64* bs, i64 pair_chunk, i64 depth_chunk) {
-    // the numpy code's chunks: (polygon, scanline) pairs by PAIR_CHUNK // K
-    const i64 step = std::max<i64>(1, pair_chunk / std::max<i64>(K, 1));
-    i64 pairs_in_chunk = 0;
-    std::vector<double> X;
-    X.reserve(static_cast<size_t>(K));
-    use_scratch();
-    for (i64 m = 0; m < M; ++m) {
-        const double* P = uv + m * K * 2;
-        const i64 n = c[m];
-        const i64 sm = src[pos ? pos[m] : m];
-        // the scanlines whose centre lies in [min y, max y] (none if a coordinate
-        // is NaN, as numpy's min and searchsorted have it)
-        double lo = INF, hi = -INF;
-        bool nan = false;
-        for (i64 e = 0; e < K; ++e) {
-            const double y = P[2 * e];
-            if (std::isnan(y)) nan = true;
-            lo = std::min(lo, y);
-            hi = std::max(hi, y);
-        }
-        if (nan) continue;
-        const i64 j0 = std::lower_bound(u, u + nu, lo) - u;
-        const i64 j1 = std::upper_bound(u, u + nu, hi) - u;
-        for (i64 r = j0; r < j1; ++r) {
-            const double y = u[r];
-            X.clear();
-            for (i64 e = 0; e < n; ++e) {
-                const double* a = P + 2 * e;
-                const double* b = P + 2 * ((e + 1) % n);
-                if ((a[0] > y) == (b[0] > y)) continue;
-                // from the lower end point, whichever way the edge runs
-                if (a[0] > b[0]) std::swap(a, b);
-                const double x = a[1] + (y - a[0]) * (b[1] - a[1]) / (b[0] - a[0]);
-                if (!std::isnan(x)) X.push_back(x);
-            }
-            std::sort(X.begin(), X.end());
-            const size_t npairs = std::min<size_t>(X.size() / 2, static_cast<size_t>(K / 2));
-            for (size_t k = 0; k < npairs; ++k) {
-                const i64 ia = std::lower_bound(v, v + nv, X[2 * k]) - v;
-                const i64 ib = std::lower_bound(v, v + nv, X[2 * k + 1]) - v;
-                for (i64 col = ia; col < ib; ++col) {
-                    const i64 cell = tab[r * nv + col];
-                    if (cell < 0) continue;
-                    add(cell, sm, bt, bs, depth_chunk);
-                }
-            }
-            if (++pairs_in_chunk == step) {
-                flush(bt, bs);
-                pairs_in_chunk = 0;
-            }
-        }
-    }
-    flush(bt, bs);
-}
-
 // ---- a face's scan, scanline by scanline ----
 
 namespace {
@@ -967,29 +907,40 @@ struct Centres {
 
 }  // namespace
 
-void ZBuffer::scan(const double* uv, i64 M, i64 K, const i64* c, const i64* src, const i64* pos,
-                   const double* u, i64 nu, const double* v, i64 nv, const i64* tab, double* bt,
-                   i64* bs, i64 pair_chunk, i64 depth_chunk) {
-    if (nu >= (i64(1) << 31) || nv >= (i64(1) << 31)) {
-        scan_cells(uv, M, K, c, src, pos, u, nu, v, nv, tab, bt, bs, pair_chunk, depth_chunk);
-        return;
-    }
-    // the numpy code's chunks: (polygon, scanline) pairs by PAIR_CHUNK // K, and
-    // DEPTH_CHUNK candidates (cells of the table, whatever their depth); scan_cells
-    // flushes at both
-    const i64 step = std::max<i64>(1, pair_chunk / std::max<i64>(K, 1));
-    const i64 dchunk = depth_chunk > 0 ? depth_chunk : std::numeric_limits<i64>::max();
-    std::vector<GridRow> rows(static_cast<size_t>(nu));
+// The spans of a scan (a face's, or the disk's) as runs, cut into the numpy code's
+// chunks: (polygon, scanline) pairs by `step`, and `dchunk` candidates (cells of the
+// table, whatever their depth), where the numpy code resolves its candidates
+struct SpanChunks {
+    i64 nu, nv;
+    const i64* tab;
+    i64 n_cells, step, dchunk;
+    std::vector<GridRow> rows;
     std::vector<Run> runs;
     std::vector<size_t> ends;          // chunk k: runs[ends[k - 1], ends[k])
     i64 pairs_in_chunk = 0, in_chunk = 0;
-    auto end_chunk = [&]() {
+
+    SpanChunks(i64 nu_, i64 nv_, const i64* tab_, i64 n_cells_, i64 step_, i64 depth_chunk)
+        : nu(nu_), nv(nv_), tab(tab_), n_cells(n_cells_), step(step_),
+          dchunk(depth_chunk > 0 ? depth_chunk : std::numeric_limits<i64>::max()),
+          rows(static_cast<size_t>(nu_)) {}
+
+    void end_chunk() {
         if (runs.size() > (ends.empty() ? 0 : ends.back())) ends.push_back(runs.size());
         in_chunk = 0;
-    };
+    }
+
+    // after each (polygon, scanline) pair
+    void end_pair() {
+        if (++pairs_in_chunk == step) {
+            end_chunk();
+            pairs_in_chunk = 0;
+        }
+    }
+
     // the cells of columns [a, b) of row r as runs, cut where a chunk is full
-    auto emit = [&](i64 r, i64 a, i64 b, i64 s) {
+    void emit(i64 r, i64 a, i64 b, i64 s) {
         GridRow& g = rows[r];
+        if (!g.seen) analyse_row(tab + r * nv, nv, n_cells, g);
         if (g.simple) {
             a = std::max(a, g.lo);
             b = std::min(b, g.hi);
@@ -1017,10 +968,89 @@ void ZBuffer::scan(const double* uv, i64 M, i64 K, const i64* c, const i64* src,
             a = x;
             if (in_chunk == dchunk) end_chunk();
         }
-    };
+    }
+
+    // every grid cell of the rows scanned its own layout cell, so that a chunk's
+    // scanlines can be resolved one by one
+    bool distinct() const {
+        std::vector<std::pair<i64, i64>> iv;
+        bool general = false;
+        for (const GridRow& g : rows) {
+            if (!g.seen) continue;
+            general = general || !g.simple;
+            if (g.hi > g.lo) iv.emplace_back(g.base + g.lo, g.base + g.hi);
+        }
+        if (!general) {
+            std::sort(iv.begin(), iv.end());
+            for (size_t k = 1; k < iv.size(); ++k)
+                if (iv[k].first < iv[k - 1].second) return false;
+            return true;
+        }
+        std::vector<char> mark(static_cast<size_t>(n_cells), 0);
+        for (i64 r = 0; r < nu; ++r) {
+            if (!rows[r].seen) continue;
+            for (i64 col = 0; col < nv; ++col) {
+                const i64 cell = tab[r * nv + col];
+                if (cell < 0) continue;
+                if (mark[cell]) return false;
+                mark[cell] = 1;
+            }
+        }
+        return true;
+    }
+};
+
+// chunk by chunk, scanline by scanline (the runs of a scanline in the chunk's order);
+// where grid cells share a layout cell, the runs' cells candidate by candidate into
+// the whole buffer (add, flush at the chunks' ends: add's own flush falls on them)
+void ZBuffer::resolve_chunks(const SpanChunks& sc, double* bt, i64* bs, i64 depth_chunk) {
+    const i64 nu = sc.nu, nv = sc.nv;
+    const std::vector<Run>& runs = sc.runs;
+    if (runs.empty()) return;
+    if (!sc.distinct()) {
+        use_scratch();
+        size_t q = 0;
+        for (const size_t s1 : sc.ends) {
+            for (; q < s1; ++q) {
+                const i64* trow = sc.tab + runs[q].r * nv;
+                for (std::int32_t col = runs[q].a; col < runs[q].b; ++col)
+                    if (trow[col] >= 0) add(trow[col], runs[q].s, bt, bs, depth_chunk);
+            }
+            flush(bt, bs);
+        }
+        return;
+    }
+    std::vector<std::int32_t> head(static_cast<size_t>(nu) + 1), fill(static_cast<size_t>(nu)),
+        order(runs.size());
+    std::vector<RowCell> L(static_cast<size_t>(nv));
+    std::vector<RowCandidate> cand;
+    std::vector<std::int32_t> touched;
+    size_t s0 = 0;
+    for (const size_t s1 : sc.ends) {
+        std::fill(head.begin(), head.end(), 0);
+        for (size_t q = s0; q < s1; ++q) ++head[runs[q].r + 1];
+        for (i64 r = 0; r < nu; ++r) head[r + 1] += head[r];
+        std::copy(head.begin(), head.end() - 1, fill.begin());
+        for (size_t q = s0; q < s1; ++q) order[fill[runs[q].r]++] = static_cast<std::int32_t>(q);
+        for (i64 r = 0; r < nu; ++r) {
+            if (head[r] < head[r + 1])
+                resolve_row(runs.data(), order.data() + head[r], head[r + 1] - head[r],
+                            sc.rows[r].simple, sc.rows[r].base, sc.tab + r * nv, L.data(), cand,
+                            touched, bt, bs);
+        }
+        s0 = s1;
+    }
+}
+
+void ZBuffer::scan(const double* uv, i64 M, i64 K, const i64* c, const i64* src, const i64* pos,
+                   const double* u, i64 nu, const double* v, i64 nv, const i64* tab, double* bt,
+                   i64* bs, i64 pair_chunk, i64 depth_chunk) {
+    if (nu >= (i64(1) << 31) || nv >= (i64(1) << 31))
+        throw std::invalid_argument("at most 2**31 - 1 scanlines and centres");
+    SpanChunks sc(nu, nv, tab, row_.n_cells, std::max<i64>(1, pair_chunk / std::max<i64>(K, 1)),
+                  depth_chunk);
     // per polygon: its edges from their lower end points (a, b), each edge's scanlines
     // (those it straddles: a_y <= y < b_y), and every scanline's crossings
-    std::vector<double> E(static_cast<size_t>(4 * std::max<i64>(K, 1)));
     std::vector<double> X;
     std::vector<std::int32_t> nx;
     const Centres cu(u, nu), cv(v, nv);
@@ -1066,74 +1096,15 @@ void ZBuffer::scan(const double* uv, i64 M, i64 K, const i64* c, const i64* src,
                 std::sort(x, x + cnt);
             }
             const i64 npairs = std::min<i64>(cnt / 2, K / 2);
-            if (npairs && !rows[r].seen) analyse_row(tab + r * nv, nv, row_.n_cells, rows[r]);
             for (i64 k = 0; k < npairs; ++k) {
                 const i64 ia = cv.lower(x[2 * k]), ib = cv.lower(x[2 * k + 1]);
-                if (ia < ib) emit(r, ia, ib, sm);
+                if (ia < ib) sc.emit(r, ia, ib, sm);
             }
-            if (++pairs_in_chunk == step) {
-                end_chunk();
-                pairs_in_chunk = 0;
-            }
+            sc.end_pair();
         }
     }
-    end_chunk();
-    if (runs.empty()) return;
-    // every grid cell its own layout cell (over the rows scanned), so that a chunk's
-    // scanlines are resolved one by one; else candidate by candidate
-    {
-        std::vector<std::pair<i64, i64>> iv;
-        bool general = false;
-        for (const GridRow& g : rows) {
-            if (!g.seen) continue;
-            general = general || !g.simple;
-            if (g.hi > g.lo) iv.emplace_back(g.base + g.lo, g.base + g.hi);
-        }
-        bool distinct = true;
-        if (!general) {
-            std::sort(iv.begin(), iv.end());
-            for (size_t k = 1; k < iv.size() && distinct; ++k)
-                distinct = iv[k].first >= iv[k - 1].second;
-        } else {
-            std::vector<char> mark(static_cast<size_t>(row_.n_cells), 0);
-            for (i64 r = 0; r < nu && distinct; ++r) {
-                if (!rows[r].seen) continue;
-                for (i64 col = 0; col < nv && distinct; ++col) {
-                    const i64 cell = tab[r * nv + col];
-                    if (cell < 0) continue;
-                    distinct = !mark[cell];
-                    mark[cell] = 1;
-                }
-            }
-        }
-        if (!distinct) {
-            scan_cells(uv, M, K, c, src, pos, u, nu, v, nv, tab, bt, bs, pair_chunk,
-                       depth_chunk);
-            return;
-        }
-    }
-    // chunk by chunk, scanline by scanline (the runs of a scanline in the chunk's order)
-    std::vector<std::int32_t> head(static_cast<size_t>(nu) + 1), fill(static_cast<size_t>(nu)),
-        order(runs.size());
-    std::vector<RowCell> L(static_cast<size_t>(nv));
-    std::vector<RowCandidate> cand;
-    std::vector<std::int32_t> touched;
-    touched.reserve(static_cast<size_t>(nv));
-    size_t s0 = 0;
-    for (const size_t s1 : ends) {
-        std::fill(head.begin(), head.end(), 0);
-        for (size_t q = s0; q < s1; ++q) ++head[runs[q].r + 1];
-        for (i64 r = 0; r < nu; ++r) head[r + 1] += head[r];
-        std::copy(head.begin(), head.end() - 1, fill.begin());
-        for (size_t q = s0; q < s1; ++q) order[fill[runs[q].r]++] = static_cast<std::int32_t>(q);
-        for (i64 r = 0; r < nu; ++r) {
-            if (head[r] < head[r + 1])
-                resolve_row(runs.data(), order.data() + head[r], head[r + 1] - head[r],
-                            rows[r].simple, rows[r].base, tab + r * nv, L.data(), cand,
-                            touched, bt, bs);
-        }
-        s0 = s1;
-    }
+    sc.end_chunk();
+    resolve_chunks(sc, bt, bs, depth_chunk);
 }
 
 // resolve_depths on one scanline's candidates of a chunk, merged into the buffer: the
@@ -1321,8 +1292,10 @@ void ZBuffer::scan_disk(const Horizon& h, const i64* src, const double* xc, i64 
                         const double* yc, i64 ny, const i64* tab, double* bt, i64* bs,
                         i64 pair_chunk, i64 depth_chunk) {
     const i64 K = h.K, K2 = 2 * K;
-    const i64 chunk = std::max<i64>(1, pair_chunk / std::max<i64>(K2, 1));
-    i64 pairs_in_chunk = 0;
+    if (nx >= (i64(1) << 31) || ny >= (i64(1) << 31))
+        throw std::invalid_argument("at most 2**31 - 1 scanlines and centres");
+    SpanChunks sc(nx, ny, tab, row_.n_cells, std::max<i64>(1, pair_chunk / std::max<i64>(K2, 1)),
+                  depth_chunk);
     // per monotone piece: its parameter interval, its end points' y, and the
     // edge's a, d = b - a, a.a, d.d, a.d
     std::vector<double> S0(K2), S1(K2), Y0(K2), Y1(K2), ax(K2), ay(K2), dx(K2), dy(K2),
@@ -1330,7 +1303,6 @@ void ZBuffer::scan_disk(const Horizon& h, const i64* src, const double* xc, i64 
     std::vector<char> ok(K2);
     std::vector<double> ya(K), X;
     X.reserve(static_cast<size_t>(K2));
-    use_scratch();
     for (size_t li = 0; li < h.live.size(); ++li) {
         if (h.near[li]) continue;
         const double* P = h.Vc.data() + li * K * 3;
@@ -1419,17 +1391,17 @@ void ZBuffer::scan_disk(const Horizon& h, const i64* src, const double* xc, i64 
                 if (!std::isnan(x)) X.push_back(x);
             }
             std::sort(X.begin(), X.end());
-            spans(X, static_cast<size_t>(K), yc, ny, [&](i64 col) {
-                const i64 cell = tab[r * ny + col];
-                if (cell >= 0) add(cell, sm, bt, bs, depth_chunk);
-            });
-            if (++pairs_in_chunk == chunk) {
-                flush(bt, bs);
-                pairs_in_chunk = 0;
+            const size_t npairs = std::min(X.size() / 2, static_cast<size_t>(K));
+            for (size_t k = 0; k < npairs; ++k) {
+                const i64 ia = std::lower_bound(yc, yc + ny, X[2 * k]) - yc;
+                const i64 ib = std::lower_bound(yc, yc + ny, X[2 * k + 1]) - yc;
+                if (ia < ib) sc.emit(r, ia, ib, sm);
             }
+            sc.end_pair();
         }
     }
-    flush(bt, bs);
+    sc.end_chunk();
+    resolve_chunks(sc, bt, bs, depth_chunk);
 }
 
 // _zbuffer_chart on the clipped images c

@@ -209,6 +209,9 @@ struct RowCandidate {
     std::int32_t col, s;
 };
 
+// a scan's spans cut into chunks (zbuffer.cpp)
+struct SpanChunks;
+
 // One row's z-buffer: scan conversion of the buckets and the depth test into a Buffer.
 class ZBuffer {
   public:
@@ -247,9 +250,7 @@ class ZBuffer {
 
   private:
     // a face's scan conversion: the spans of every (polygon, scanline) pair cut into the
-    // numpy code's chunks, each chunk resolved scanline by scanline (scan_rows; the
-    // cells of a scanline are its own when the table gives every grid cell its own
-    // layout cell), else as scan_cells does
+    // numpy code's chunks (SpanChunks), resolved by resolve_chunks
     void scan(const double* uv, i64 M, i64 K, const i64* c, const i64* src, const i64* pos,
               const double* u, i64 nu, const double* v, i64 nv, const i64* tab, double* bt,
               i64* bs, i64 pair_chunk, i64 depth_chunk);
@@ -258,10 +259,9 @@ class ZBuffer {
     void resolve_row(const Run* runs, const std::int32_t* idx, i64 n_runs, bool simple,
                      i64 base, const i64* trow, RowCell* L, std::vector<RowCandidate>& cand,
                      std::vector<std::int32_t>& touched, double* best_t, i64* best);
-    // the same, candidate by candidate into the row's whole buffer (add, flush)
-    void scan_cells(const double* uv, i64 M, i64 K, const i64* c, const i64* src,
-                    const i64* pos, const double* u, i64 nu, const double* v, i64 nv,
-                    const i64* tab, double* bt, i64* bs, i64 pair_chunk, i64 depth_chunk);
+    // the chunks of sc, each scanline by scanline (resolve_row), or, where grid cells
+    // share a layout cell, candidate by candidate (add, flush)
+    void resolve_chunks(const SpanChunks& sc, double* best_t, i64* best, i64 depth_chunk);
     void scan_polar(const Clipped& c, const i64* src, const double* radii, i64 nr,
                     const double* cs, const double* sn, i64 S, double* bt, i64* bs,
                     i64 pair_chunk, i64 depth_chunk);
