@@ -255,7 +255,170 @@ def test_zbuffer_rejects_a_buffer_it_cannot_write():
                 np.full(len(L), -1, dtype=np.int64), 10, 10)
 
 
+@pytest.mark.parametrize("fold", ["within_rows", "across_rows"])
+@pytest.mark.parametrize("scene_name", ["walls_low", "box"])
+def test_compiled_cells_identical_to_numpy_on_tables_sharing_cells(fold, scene_name):
+    # a table that gives one layout cell to two grid cells (within a scanline, or in two
+    # scanlines): the compiled scan cannot resolve such a chunk scanline by scanline
+    # and resolves it candidate by candidate, as the numpy code does (scanline by
+    # scanline, the shared cells of the walls' and the box's tiles differ)
+    from exactff.methods._sampling import ZBufferRow
+
+    scene = SCENES[scene_name]()
+    m = ef.Hemicube(resolution=32)
+    L = m.layout()
+    chart, uc, vc, table = m._faces()[0]
+    r = len(uc)
+    if fold == "within_rows":
+        table = table[:, np.minimum(np.arange(r), r - 1 - np.arange(r))]
+    else:
+        table = table[np.arange(r) // 2 * 2]
+    table = np.ascontiguousarray(table)
+    assert len(np.unique(table)) < table.size       # the premise: cells shared
+    rows = list(_rows(scene, 3, seed=2))
+    if scene_name == "walls_low":
+        rows += [(scene.centroids[i], scene.normals[i])
+                 for i, g in enumerate(scene.groups) if g == "floor"]
+    for p, n in rows:
+        p, n = as_receiver(p, n)
+        z = ZBufferRow(scene, p, n)
+        out = []
+        for zb in (raster.compiled_zbuffer(z, L), None):
+            best_t = np.full(len(L), np.inf)
+            best = np.full(len(L), -1, dtype=np.int64)
+            raster.rasterise_face(z, chart, uc, vc, table, L.directions, best_t, best,
+                                  zbuffer=zb)
+            out.append(best)
+        assert np.array_equal(out[0], out[1])
+        assert (out[1] >= 0).sum() > r * r // 4        # the face shows polygons
+
+
+def test_row_sums_reject_cells_beyond_the_live_polygons():
+    # a cell showing live polygon L (of L) would read past ids: an error, not a row
+    from exactff.methods._zbuffer import row_sums
+
+    ids = np.array([2, 0, 1])
+    receives = np.ones(3, dtype=bool)
+    F, hit = row_sums(np.array([0, -1, 2, 2]), ids, receives, np.full(4, 0.25), 3)
+    assert F.tolist() == [0.0, 0.5, 0.25] and hit == 3        # np.bincount's sums
+    with pytest.raises(ValueError, match="best out of range"):
+        row_sums(np.array([0, -1, 3, 2]), ids, receives, np.full(4, 0.25), 3)
+
+
+def test_compiled_scan_rejects_tables_beyond_the_buffer():
+    from exactff.methods._sampling import ZBufferRow
+
+    scene = ef.scenes.cornell_box()
+    m = ef.Hemicube(resolution=8)
+    L = m.layout()
+    chart, uc, vc, table = m._faces()[0]
+    z = ZBufferRow(scene, scene.centroids[0], scene.normals[0])
+    with pytest.raises(ValueError, match="table's cells out of range"):
+        raster.rasterise_face(z, chart, uc, vc, table + len(L), L.directions,
+                              np.full(len(L), np.inf), np.full(len(L), -1, dtype=np.int64),
+                              zbuffer=raster.compiled_zbuffer(z, L))
+
+
+@pytest.mark.parametrize("scene_name", ["office", "cornell", "walls_low"])
+def test_compiled_row_setup_is_the_numpy_one(scene_name):
+    # ZBufferRow's live polygons (compiled live_local) against the numpy expressions
+    # they replaced: to_local of every padded vertex, alive (not edge-on) with a vertex
+    # above the horizon; the same polygons and the same local vertices, bit for bit
+    from exactff.geometry import receiver_frame, to_local
+    from exactff.kernel import flat_polygons
+    from exactff.methods._sampling import ZBufferRow, _polygon_buckets
+    from exactff.predicates import plane_sides
+
+    scene = SCENES[scene_name]()
+    rng = np.random.default_rng(13)
+    for p, n in list(_rows(scene, 3, seed=3)) + [(scene.centroids[0], rng.normal(size=3))]:
+        p, n = as_receiver(p, n / np.linalg.norm(n))
+        z = ZBufferRow(scene, p, n)
+        side, _ = plane_sides(flat_polygons(scene), p, exact=False)
+        R = receiver_frame(n)
+        want_V, want_ids = [], []
+        for b_ids, Vb, cb in _polygon_buckets(scene):
+            V = to_local(Vb, p, R)
+            slot = np.arange(V.shape[1])[None, :] < cb[:, None]
+            live = (side[b_ids] != 0) & (np.where(slot, V[:, :, 2], -np.inf).max(axis=1) > 0)
+            if live.any():
+                want_V.append(V[live])
+                want_ids.append(b_ids[live])
+        assert 0 < len(z.ids) < len(scene) or scene_name != "office"
+        assert np.array_equal(z.ids, np.concatenate(want_ids))
+        assert len(z.local) == len(want_V)
+        for (g, V, counts), W in zip(z.local, want_V):
+            assert np.array_equal(V, W)
+
+
 # ---- Monte Carlo: the shared core's rays through the compiled z-buffer ----
+
+def test_compiled_ray_directions_are_the_numpy_expressions():
+    # cosine_directions against the numpy expressions it replaced (the disk's points
+    # lifted, normalised as CellLayout normalises): bit for bit where numpy's cos and
+    # sin are libm's (as here), within an ulp of each coordinate anyway
+    import math
+
+    from exactff.methods._sampling import CellLayout
+    from exactff.methods._zbuffer import cosine_directions
+
+    rng = np.random.default_rng(11)
+    q1, q2 = rng.random(50000), rng.random(50000)
+    q1[:3] = [0.0, 1.0 - 2.0 ** -53, 0.25]        # the centre, the rim, a quarter
+    r, a = np.sqrt(q1), 2.0 * np.pi * q2
+    x, y = r * np.cos(a), r * np.sin(a)
+    D = np.column_stack([x, y, np.sqrt(np.maximum(1.0 - x * x - y * y, 0.0))])
+    D[D[:, 2] == 0, 2] = 1e-300
+    L = CellLayout(D, np.ones(len(D)), 1.0)
+    got, norms = cosine_directions(q1, q2)
+    assert np.all(np.abs(got - L.directions) <= np.spacing(np.abs(L.directions)))
+    assert np.all(got[:, 2] > 0)
+    libm = all(np.cos(t) == math.cos(t) and np.sin(t) == math.sin(t) for t in a[:2000])
+    if libm:
+        assert np.array_equal(got, L.directions)
+    assert np.array_equal(norms, np.linalg.norm(got, axis=1))
+
+
+def test_compiled_direction_norms_are_numpys():
+    # the depth-tie slack's norms: np.linalg.norm's sum, (x x + y y) + z z, on
+    # directions of any length
+    from exactff.methods._zbuffer import direction_norms
+
+    rng = np.random.default_rng(12)
+    D = rng.standard_normal((100000, 3)) * 10.0 ** rng.uniform(-3, 3, (100000, 3))
+    assert np.array_equal(direction_norms(D), np.linalg.norm(D, axis=1))
+
+
+@pytest.mark.parametrize("samples", [1, 50, 4000, 65536])
+def test_compiled_ray_charts_are_the_numpy_grid(samples):
+    # ray_charts against _chart_of and _cell_grid: the same charts, buckets, order (a
+    # stable sort) and renumbering, so that chart_rays sees the candidates of the
+    # numpy code in its order
+    from exactff.methods._sampling import (_CHART_AXIS, _CHART_SIGN_W, _cell_grid,
+                                           _chart_of)
+    from exactff.methods._zbuffer import ray_charts
+    from exactff.visibility.charts import CHARTS
+
+    D, _ = ef.MonteCarlo(samples, seed=7).directions_for(np.zeros(3))
+    if samples == 4000:
+        D = ef.Hemicube(resolution=36).layout().directions     # on the charts' edges
+    Dp, norms, slot, charts = ray_charts(D, _CHART_AXIS, _CHART_SIGN_W, tol.CHART_MARGIN)
+    chart, u, v = _chart_of(D)
+    perm = []
+    for ci, ids, cu, cv, nb, v_lo, order, starts in charts:
+        cells = np.flatnonzero(chart == ci)
+        g = _cell_grid(u[cells], v[cells], CHARTS[ci][3])
+        assert (nb, v_lo) == g[:2] and np.array_equal(starts, g[3])
+        assert np.array_equal(cu, u[cells][g[2]]) and np.array_equal(cv, v[cells][g[2]])
+        assert np.array_equal(ids, len(np.concatenate(perm or [[]])) + np.arange(len(cells)))
+        assert np.array_equal(order, np.arange(len(cells)))
+        perm.append(cells[g[2]])
+    perm = np.concatenate(perm)
+    assert [c[0] for c in charts] == [ci for ci in range(5) if (chart == ci).any()]
+    assert np.array_equal(slot[perm], np.arange(len(D)))
+    assert np.array_equal(Dp, D[perm])
+    assert np.array_equal(norms, np.linalg.norm(Dp, axis=1))
+
 
 def assert_rays_identical(scene, point, normal, seed=0, samples=4000):
     """The compiled shared core against its numpy code: bit for bit with the charts'

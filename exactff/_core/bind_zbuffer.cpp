@@ -325,16 +325,95 @@ py::tuple row_sums(Ints best, Ints ids, Bools receives, Doubles weights, i64 n) 
     for (i64 k = 0; k < L; ++k)
         if (ids.data()[k] < 0 || ids.data()[k] >= n)
             throw std::invalid_argument("ids out of range");
-    for (i64 c = 0; c < C; ++c)
-        if (best.data()[c] >= L) throw std::invalid_argument("best out of range");
     py::array_t<double> F(n);
     i64 hit;
     {
         py::gil_scoped_release release;
-        hit = exactff::zbuffer::row_sums(best.data(), C, ids.data(), receives.data(),
+        hit = exactff::zbuffer::row_sums(best.data(), C, ids.data(), L, receives.data(),
                                          weights.data(), n, F.mutable_data());
     }
+    if (hit < 0) throw std::invalid_argument("best out of range");
     return py::make_tuple(F, hit);
+}
+
+py::tuple live_local(Doubles V, Ints counts, Bools alive, Doubles p, Doubles R) {
+    const i64 M = check_vertices(V, counts), K = V.shape(1);
+    if (alive.ndim() != 1 || alive.shape(0) != M)
+        throw std::invalid_argument("alive must have shape (M,)");
+    if (p.size() != 3 || R.ndim() != 2 || R.shape(0) != 3 || R.shape(1) != 3)
+        throw std::invalid_argument("p must have shape (3,) and R (3, 3)");
+    std::vector<i64> live;
+    std::vector<double> local;
+    {
+        py::gil_scoped_release release;
+        exactff::zbuffer::live_local(V.data(), M, K, counts.data(), alive.data(), p.data(),
+                                     R.data(), live, local);
+    }
+    py::array_t<double> out({static_cast<i64>(live.size()), K, static_cast<i64>(3)});
+    std::copy(local.begin(), local.end(), out.mutable_data());
+    return py::make_tuple(exactff::bind::as_array(live), out);
+}
+
+// the directions (n, 3), checked
+i64 check_directions(const Doubles& D) {
+    if (D.ndim() != 2 || D.shape(1) != 3) throw std::invalid_argument("D must have shape (n, 3)");
+    return D.shape(0);
+}
+
+py::tuple cosine_directions(Doubles q1, Doubles q2) {
+    const i64 n = q1.size();
+    if (q1.ndim() != 1 || q2.ndim() != 1 || q2.size() != n)
+        throw std::invalid_argument("q1 and q2 must have shape (n,)");
+    py::array_t<double> D({n, static_cast<i64>(3)}), norms(n);
+    {
+        py::gil_scoped_release release;
+        exactff::zbuffer::cosine_directions(q1.data(), q2.data(), n, D.mutable_data(),
+                                            norms.mutable_data());
+    }
+    return py::make_tuple(D, norms);
+}
+
+py::array_t<double> direction_norms(Doubles D) {
+    const i64 n = check_directions(D);
+    py::array_t<double> norms(n);
+    exactff::zbuffer::direction_norms(D.data(), n, norms.mutable_data());
+    return norms;
+}
+
+// (Dp, norms, slot, charts): the directions renumbered (Dp[slot] = D), the norms of Dp,
+// and per non-empty chart (chart, ids, cu, cv, nb, v_lo, order, starts) as chart_rays
+// takes them (ids: the chart's directions' indices into Dp, order: the identity)
+py::tuple ray_charts(Doubles D, Ints axis, Doubles sign_w, double margin) {
+    const i64 n = check_directions(D);
+    if (axis.ndim() != 2 || axis.shape(0) != 5 || axis.shape(1) != 3 || sign_w.size() != 5)
+        throw std::invalid_argument("axis must have shape (5, 3) and sign_w (5,)");
+    for (i64 k = 0; k < 15; ++k)
+        if (axis.data()[k] < 0 || axis.data()[k] > 2)
+            throw std::invalid_argument("axis: components 0, 1 or 2");
+    std::vector<exactff::zbuffer::RayChart> charts;
+    py::array_t<i64> slot(n);
+    py::array_t<double> Dp({n, static_cast<i64>(3)}), norms(n);
+    {
+        py::gil_scoped_release release;
+        i64* sl = slot.mutable_data();
+        exactff::zbuffer::ray_charts(D.data(), n, axis.data(), sign_w.data(), margin, charts, sl);
+        double* P = Dp.mutable_data();
+        for (i64 k = 0; k < n; ++k)
+            for (int i = 0; i < 3; ++i) P[3 * sl[k] + i] = D.data()[3 * k + i];
+        exactff::zbuffer::direction_norms(P, n, norms.mutable_data());
+    }
+    py::list out;
+    for (const auto& rc : charts) {
+        py::array_t<i64> ids(rc.count), order(rc.count);
+        for (i64 k = 0; k < rc.count; ++k) {
+            ids.mutable_data()[k] = rc.offset + k;
+            order.mutable_data()[k] = k;
+        }
+        out.append(py::make_tuple(rc.chart, ids, exactff::bind::as_array(rc.cu),
+                                  exactff::bind::as_array(rc.cv), rc.nb, rc.v_lo, order,
+                                  exactff::bind::as_array(rc.starts)));
+    }
+    return py::make_tuple(Dp, norms, slot, out);
 }
 
 }  // namespace
@@ -378,6 +457,16 @@ PYBIND11_MODULE(_zbuffer, m) {
     m.def("face_clip", &face_clip, py::arg("V"), py::arg("counts"), py::arg("R"),
           py::arg("planes"), py::arg("scale"), py::arg("clip_meet_ulps"),
           "exactff.methods._raster.FaceClip of one bucket, compiled: (live, UV, cl).");
+    m.def("live_local", &live_local, py::arg("V"), py::arg("counts"), py::arg("alive"),
+          py::arg("p"), py::arg("R"),
+          "ZBufferRow's live polygons of a bucket: (bucket indices, local vertices).");
+    m.def("cosine_directions", &cosine_directions, py::arg("q1"), py::arg("q2"),
+          "Monte Carlo's cosine-weighted unit directions from uniform samples: (D, norms).");
+    m.def("direction_norms", &direction_norms, py::arg("D"),
+          "|d| per direction, as np.linalg.norm(D, axis=1): sqrt((x x + y y) + z z).");
+    m.def("ray_charts", &ray_charts, py::arg("D"), py::arg("axis"), py::arg("sign_w"),
+          py::arg("margin"),
+          "Directions sorted into the charts and bucketed: (Dp, norms, slot, charts).");
     m.def("row_sums", &row_sums, py::arg("best"), py::arg("ids"), py::arg("receives"),
           py::arg("weights"), py::arg("n"),
           "A row from its depth buffer: (F, cells that show a polygon); np.bincount's sums.");

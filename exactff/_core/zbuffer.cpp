@@ -458,17 +458,159 @@ void clip_face(const Bucket& b, const Face& f, double meet_ulps, Clipped& out) {
     clip_to_face(b.V, b.M, b.K, b.counts, f.R, f.planes, f.n_planes, f.scale, meet_ulps, out);
 }
 
-i64 row_sums(const i64* best, i64 C, const i64* ids, const bool* receives,
+i64 row_sums(const i64* best, i64 C, const i64* ids, i64 L, const bool* receives,
              const double* weights, i64 n, double* F) {
     i64 hit = 0;
     std::fill(F, F + n, 0.0);
+    // F[j] kept in a register over a run of cells showing j (the same additions in the
+    // same order; neighbouring cells mostly show the same polygon)
+    i64 cur = -1;
+    double acc = 0.0;
     for (i64 c = 0; c < C; ++c) {
         if (best[c] < 0) continue;
+        if (best[c] >= L) return -1;
         ++hit;
         const i64 j = ids[best[c]];
-        if (receives[j]) F[j] += weights[c];
+        if (!receives[j]) continue;
+        if (j != cur) {
+            if (cur >= 0) F[cur] = acc;
+            cur = j;
+            acc = F[j];
+        }
+        acc += weights[c];
     }
+    if (cur >= 0) F[cur] = acc;
     return hit;
+}
+
+// ---- a row's live polygons ----
+
+void live_local(const double* V, i64 M, i64 K, const i64* counts, const bool* alive,
+                const double* p, const double* R, std::vector<i64>& live,
+                std::vector<double>& local) {
+    live.clear();
+    local.clear();
+    std::vector<double> W(static_cast<size_t>(3 * K));
+    for (i64 m = 0; m < M; ++m) {
+        if (!alive[m]) continue;
+        const double* P = V + m * K * 3;
+        for (i64 e = 0; e < K; ++e) {
+            const double x = P[3 * e] - p[0], y = P[3 * e + 1] - p[1], z = P[3 * e + 2] - p[2];
+            for (int k = 0; k < 3; ++k)
+                W[3 * e + k] = (x * R[3 * k] + y * R[3 * k + 1]) + z * R[3 * k + 2];
+        }
+        // the largest z of the polygon's vertices (numpy's max: a NaN propagates)
+        double top = -INF;
+        for (i64 e = 0; e < counts[m]; ++e) top = np_max(top, W[3 * e + 2]);
+        if (!(top > 0)) continue;
+        live.push_back(m);
+        local.insert(local.end(), W.begin(), W.end());
+    }
+}
+
+// ---- Monte Carlo's directions and their charts ----
+
+void direction_norms(const double* D, i64 n, double* norms) {
+    for (i64 k = 0; k < n; ++k) {
+        const double* d = D + 3 * k;
+        norms[k] = std::sqrt((d[0] * d[0] + d[1] * d[1]) + d[2] * d[2]);
+    }
+}
+
+void cosine_directions(const double* q1, const double* q2, i64 n, double* D, double* norms) {
+    const double two_pi = 2.0 * 3.141592653589793;
+    for (i64 k = 0; k < n; ++k) {
+        const double r = std::sqrt(q1[k]), a = two_pi * q2[k];
+        const double x = r * std::cos(a), y = r * std::sin(a);
+        const double zz = (1.0 - x * x) - y * y;
+        double z = std::sqrt(zz > 0.0 ? zz : 0.0);
+        if (z == 0.0) z = 1e-300;        // a ray exactly on the horizon: kept above it
+        const double len = std::sqrt((x * x + y * y) + z * z);
+        D[3 * k] = x / len;
+        D[3 * k + 1] = y / len;
+        D[3 * k + 2] = z / len;
+    }
+    direction_norms(D, n, norms);
+}
+
+void ray_charts(const double* D, i64 n, const i64* axis, const double* sign_w, double margin,
+                std::vector<RayChart>& charts, i64* slot) {
+    // _chart_of: the top chart where z >= max(|x|, |y|), else the side of the larger
+    // horizontal component; u = d_u / w, v = d_v / w with w = +-d_w
+    std::vector<std::int8_t> chart(static_cast<size_t>(n));
+    std::vector<double> uv(static_cast<size_t>(2 * n));
+    i64 count[5] = {0, 0, 0, 0, 0};
+    for (i64 k = 0; k < n; ++k) {
+        const double* d = D + 3 * k;
+        const double ax = std::fabs(d[0]), ay = std::fabs(d[1]), az = d[2];
+        int c;
+        if (az >= np_max(ax, ay))
+            c = 0;
+        else if (ax >= ay)
+            c = d[0] > 0 ? 1 : 2;
+        else
+            c = d[1] > 0 ? 3 : 4;
+        chart[k] = static_cast<std::int8_t>(c);
+        const double w = d[axis[3 * c + 2]] * sign_w[c];
+        uv[2 * k] = d[axis[3 * c]] / w;
+        uv[2 * k + 1] = d[axis[3 * c + 1]] / w;
+        ++count[c];
+    }
+    // _cell_grid per chart: nb x nb buckets over [-1, 1] x [v_lo, 1]; the charts' buckets
+    // numbered one after the other, the directions sorted by them (a stable counting
+    // sort: numpy's stable argsort)
+    charts.clear();
+    i64 first[6] = {0, 0, 0, 0, 0, 0}, offset = 0;
+    std::vector<i64> chart_at(5, -1);
+    for (int c = 0; c < 5; ++c) {
+        first[c + 1] = first[c];
+        if (count[c] == 0) continue;
+        RayChart rc;
+        rc.chart = c;
+        rc.offset = offset;
+        rc.count = count[c];
+        rc.v_lo = c != 0 ? -margin : -1.0 - margin;
+        rc.nb = std::max<i64>(1, static_cast<i64>(std::sqrt(static_cast<double>(count[c]) / 16.0)));
+        first[c + 1] += rc.nb * rc.nb;
+        offset += count[c];
+        chart_at[c] = static_cast<i64>(charts.size());
+        charts.push_back(std::move(rc));
+    }
+    std::vector<std::int32_t> bucket(static_cast<size_t>(n));
+    std::vector<i64> start(static_cast<size_t>(first[5] + 1), 0);
+    for (i64 k = 0; k < n; ++k) {
+        const int c = chart[k];
+        const RayChart& rc = charts[chart_at[c]];
+        const i64 nb = rc.nb;
+        const double fnb = static_cast<double>(nb);
+        // numpy's astype(int) truncates; then clipped to the grid
+        const i64 bx = std::min(std::max<i64>(static_cast<i64>((uv[2 * k] + 1.0) * 0.5 * fnb), 0),
+                                nb - 1);
+        const i64 by = std::min(std::max<i64>(static_cast<i64>((uv[2 * k + 1] - rc.v_lo) /
+                                                               (1.0 - rc.v_lo) * fnb),
+                                              0),
+                                nb - 1);
+        const i64 b = first[c] + bx * nb + by;
+        bucket[k] = static_cast<std::int32_t>(b);
+        ++start[b + 1];
+    }
+    for (i64 b = 0; b < first[5]; ++b) start[b + 1] += start[b];
+    for (RayChart& rc : charts) {
+        const i64 f = first[rc.chart], nbb = rc.nb * rc.nb;
+        rc.starts.resize(static_cast<size_t>(nbb + 1));
+        for (i64 b = 0; b <= nbb; ++b) rc.starts[b] = start[f + b] - rc.offset;
+        rc.cu.resize(static_cast<size_t>(rc.count));
+        rc.cv.resize(static_cast<size_t>(rc.count));
+    }
+    // (the charts' buckets follow each other as their directions do: start is the
+    // renumbering)
+    for (i64 k = 0; k < n; ++k) {
+        const i64 at = start[bucket[k]]++;
+        slot[k] = at;
+        RayChart& rc = charts[chart_at[chart[k]]];
+        rc.cu[at - rc.offset] = uv[2 * k];
+        rc.cv[at - rc.offset] = uv[2 * k + 1];
+    }
 }
 
 // ---- the row's z-buffer: the entry points ----
@@ -673,17 +815,245 @@ void ZBuffer::flush(double* best_t, i64* best) {
     n_touched_ = 0;
 }
 
-// scan conversion of M polygons UV (M, K, 2) with counts c, live indices
-// src[pos[m]] (pos null: src[m]), into the depth buffer
+// ---- a face's scan, scanline by scanline ----
+
+namespace {
+
+// one grid row of a face's table: the columns [lo, hi) hold its cells (-1 outside);
+// `simple` when the cell there is base + col (one run of the layout's cells), else its
+// prefix counts of cells, pre (nv + 1,)
+struct GridRow {
+    bool seen = false, simple = true;
+    i64 lo = 0, hi = 0, base = 0;
+    std::vector<std::int32_t> pre;
+};
+
+// the row's layout, its cells checked against the buffer's
+void analyse_row(const i64* t, i64 nv, i64 n_cells, GridRow& g) {
+    g.seen = true;
+    i64 lo = nv, hi = 0;
+    for (i64 col = 0; col < nv; ++col) {
+        if (t[col] >= n_cells) throw std::invalid_argument("table's cells out of range");
+        if (t[col] >= 0) {
+            lo = std::min(lo, col);
+            hi = col + 1;
+        }
+    }
+    if (lo >= hi) {
+        g.lo = g.hi = g.base = 0;
+        return;
+    }
+    g.lo = lo;
+    g.hi = hi;
+    g.base = t[lo] - lo;
+    for (i64 col = lo; col < hi && g.simple; ++col) g.simple = t[col] == g.base + col;
+    if (!g.simple) {
+        g.pre.assign(static_cast<size_t>(nv + 1), 0);
+        for (i64 col = 0; col < nv; ++col) g.pre[col + 1] = g.pre[col] + (t[col] >= 0);
+    }
+}
+
+// increasing centres c (n,) and std::lower_bound / upper_bound over them, started from
+// the guess of evenly spaced centres and moved to the exact index (a binary search
+// where the guess is far off)
+struct Centres {
+    const double* c;
+    i64 n;
+    double c0 = 0.0, inv_h = 0.0;
+
+    Centres(const double* c_, i64 n_) : c(c_), n(n_) {
+        if (n > 1 && c[n - 1] > c[0]) {
+            c0 = c[0];
+            inv_h = static_cast<double>(n - 1) / (c[n - 1] - c[0]);
+        }
+    }
+
+    i64 guess(double x) const {
+        const double g = (x - c0) * inv_h;
+        if (!(g > 0)) return 0;                 // (NaN too)
+        return g >= static_cast<double>(n) ? n : static_cast<i64>(g);
+    }
+
+    // the first index with c[i] >= x
+    i64 lower(double x) const {
+        i64 i = guess(x);
+        for (int step = 0; step < 4; ++step) {
+            if (i > 0 && !(c[i - 1] < x)) {
+                --i;
+            } else if (i < n && c[i] < x) {
+                ++i;
+            } else {
+                return i;
+            }
+        }
+        return std::lower_bound(c, c + n, x) - c;
+    }
+
+    // the first index with c[i] > x
+    i64 upper(double x) const {
+        i64 i = guess(x);
+        for (int step = 0; step < 4; ++step) {
+            if (i > 0 && x < c[i - 1]) {
+                --i;
+            } else if (i < n && !(x < c[i])) {
+                ++i;
+            } else {
+                return i;
+            }
+        }
+        return std::upper_bound(c, c + n, x) - c;
+    }
+};
+
+}  // namespace
+
+// The spans of a scan (a face's, or the disk's) as runs, cut into the numpy code's
+// chunks: (polygon, scanline) pairs by `step`, and `dchunk` candidates (cells of the
+// table, whatever their depth), where the numpy code resolves its candidates
+struct SpanChunks {
+    i64 nu, nv;
+    const i64* tab;
+    i64 n_cells, step, dchunk;
+    std::vector<GridRow> rows;
+    std::vector<Run> runs;
+    std::vector<size_t> ends;          // chunk k: runs[ends[k - 1], ends[k])
+    i64 pairs_in_chunk = 0, in_chunk = 0;
+
+    SpanChunks(i64 nu_, i64 nv_, const i64* tab_, i64 n_cells_, i64 step_, i64 depth_chunk)
+        : nu(nu_), nv(nv_), tab(tab_), n_cells(n_cells_), step(step_),
+          dchunk(depth_chunk > 0 ? depth_chunk : std::numeric_limits<i64>::max()),
+          rows(static_cast<size_t>(nu_)) {}
+
+    void end_chunk() {
+        if (runs.size() > (ends.empty() ? 0 : ends.back())) ends.push_back(runs.size());
+        in_chunk = 0;
+    }
+
+    // after each (polygon, scanline) pair
+    void end_pair() {
+        if (++pairs_in_chunk == step) {
+            end_chunk();
+            pairs_in_chunk = 0;
+        }
+    }
+
+    // the cells of columns [a, b) of row r as runs, cut where a chunk is full
+    void emit(i64 r, i64 a, i64 b, i64 s) {
+        GridRow& g = rows[r];
+        if (!g.seen) analyse_row(tab + r * nv, nv, n_cells, g);
+        if (g.simple) {
+            a = std::max(a, g.lo);
+            b = std::min(b, g.hi);
+            while (a < b) {
+                const i64 take = std::min(b - a, dchunk - in_chunk);
+                runs.push_back(Run{static_cast<std::int32_t>(r), static_cast<std::int32_t>(a),
+                                   static_cast<std::int32_t>(a + take),
+                                   static_cast<std::int32_t>(s)});
+                a += take;
+                in_chunk += take;
+                if (in_chunk == dchunk) end_chunk();
+            }
+            return;
+        }
+        const std::int32_t* pre = g.pre.data();
+        while (a < b && pre[b] > pre[a]) {
+            const i64 n = pre[b] - pre[a], room = dchunk - in_chunk;
+            // the chunk full after the room-th cell: the column past it
+            const i64 x = n <= room ? b
+                                    : std::upper_bound(pre + a, pre + b + 1, pre[a] + room - 1) -
+                                          pre;
+            runs.push_back(Run{static_cast<std::int32_t>(r), static_cast<std::int32_t>(a),
+                               static_cast<std::int32_t>(x), static_cast<std::int32_t>(s)});
+            in_chunk += pre[x] - pre[a];
+            a = x;
+            if (in_chunk == dchunk) end_chunk();
+        }
+    }
+
+    // every grid cell of the rows scanned its own layout cell, so that a chunk's
+    // scanlines can be resolved one by one
+    bool distinct() const {
+        std::vector<std::pair<i64, i64>> iv;
+        bool general = false;
+        for (const GridRow& g : rows) {
+            if (!g.seen) continue;
+            general = general || !g.simple;
+            if (g.hi > g.lo) iv.emplace_back(g.base + g.lo, g.base + g.hi);
+        }
+        if (!general) {
+            std::sort(iv.begin(), iv.end());
+            for (size_t k = 1; k < iv.size(); ++k)
+                if (iv[k].first < iv[k - 1].second) return false;
+            return true;
+        }
+        std::vector<char> mark(static_cast<size_t>(n_cells), 0);
+        for (i64 r = 0; r < nu; ++r) {
+            if (!rows[r].seen) continue;
+            for (i64 col = 0; col < nv; ++col) {
+                const i64 cell = tab[r * nv + col];
+                if (cell < 0) continue;
+                if (mark[cell]) return false;
+                mark[cell] = 1;
+            }
+        }
+        return true;
+    }
+};
+
+// chunk by chunk, scanline by scanline (the runs of a scanline in the chunk's order);
+// where grid cells share a layout cell, the runs' cells candidate by candidate into
+// the whole buffer (add, flush at the chunks' ends: add's own flush falls on them)
+void ZBuffer::resolve_chunks(const SpanChunks& sc, double* bt, i64* bs, i64 depth_chunk) {
+    const i64 nu = sc.nu, nv = sc.nv;
+    const std::vector<Run>& runs = sc.runs;
+    if (runs.empty()) return;
+    if (!sc.distinct()) {
+        use_scratch();
+        size_t q = 0;
+        for (const size_t s1 : sc.ends) {
+            for (; q < s1; ++q) {
+                const i64* trow = sc.tab + runs[q].r * nv;
+                for (std::int32_t col = runs[q].a; col < runs[q].b; ++col)
+                    if (trow[col] >= 0) add(trow[col], runs[q].s, bt, bs, depth_chunk);
+            }
+            flush(bt, bs);
+        }
+        return;
+    }
+    std::vector<std::int32_t> head(static_cast<size_t>(nu) + 1), fill(static_cast<size_t>(nu)),
+        order(runs.size());
+    std::vector<RowCell> L(static_cast<size_t>(nv));
+    std::vector<RowCandidate> cand;
+    std::vector<std::int32_t> touched;
+    size_t s0 = 0;
+    for (const size_t s1 : sc.ends) {
+        std::fill(head.begin(), head.end(), 0);
+        for (size_t q = s0; q < s1; ++q) ++head[runs[q].r + 1];
+        for (i64 r = 0; r < nu; ++r) head[r + 1] += head[r];
+        std::copy(head.begin(), head.end() - 1, fill.begin());
+        for (size_t q = s0; q < s1; ++q) order[fill[runs[q].r]++] = static_cast<std::int32_t>(q);
+        for (i64 r = 0; r < nu; ++r) {
+            if (head[r] < head[r + 1])
+                resolve_row(runs.data(), order.data() + head[r], head[r + 1] - head[r],
+                            sc.rows[r].simple, sc.rows[r].base, sc.tab + r * nv, L.data(), cand,
+                            touched, bt, bs);
+        }
+        s0 = s1;
+    }
+}
+
 void ZBuffer::scan(const double* uv, i64 M, i64 K, const i64* c, const i64* src, const i64* pos,
                    const double* u, i64 nu, const double* v, i64 nv, const i64* tab, double* bt,
                    i64* bs, i64 pair_chunk, i64 depth_chunk) {
-    // the numpy code's chunks: (polygon, scanline) pairs by PAIR_CHUNK // K
-    const i64 step = std::max<i64>(1, pair_chunk / std::max<i64>(K, 1));
-    i64 pairs_in_chunk = 0;
+    if (nu >= (i64(1) << 31) || nv >= (i64(1) << 31))
+        throw std::invalid_argument("at most 2**31 - 1 scanlines and centres");
+    SpanChunks sc(nu, nv, tab, row_.n_cells, std::max<i64>(1, pair_chunk / std::max<i64>(K, 1)),
+                  depth_chunk);
+    // per polygon: its edges from their lower end points (a, b), each edge's scanlines
+    // (those it straddles: a_y <= y < b_y), and every scanline's crossings
     std::vector<double> X;
-    X.reserve(static_cast<size_t>(K));
-    use_scratch();
+    std::vector<std::int32_t> nx;
+    const Centres cu(u, nu), cv(v, nv);
     for (i64 m = 0; m < M; ++m) {
         const double* P = uv + m * K * 2;
         const i64 n = c[m];
@@ -699,38 +1069,136 @@ void ZBuffer::scan(const double* uv, i64 M, i64 K, const i64* c, const i64* src,
             hi = std::max(hi, y);
         }
         if (nan) continue;
-        const i64 j0 = std::lower_bound(u, u + nu, lo) - u;
-        const i64 j1 = std::upper_bound(u, u + nu, hi) - u;
-        for (i64 r = j0; r < j1; ++r) {
-            const double y = u[r];
-            X.clear();
-            for (i64 e = 0; e < n; ++e) {
-                const double* a = P + 2 * e;
-                const double* b = P + 2 * ((e + 1) % n);
-                if ((a[0] > y) == (b[0] > y)) continue;
-                // from the lower end point, whichever way the edge runs
-                if (a[0] > b[0]) std::swap(a, b);
+        const i64 j0 = cu.lower(lo), j1 = cu.upper(hi);
+        if (j0 >= j1) continue;
+        const i64 nr = j1 - j0;
+        X.resize(static_cast<size_t>(nr * std::max<i64>(n, 1)));
+        nx.assign(static_cast<size_t>(nr), 0);
+        for (i64 e = 0; e < n; ++e) {
+            const double* a = P + 2 * e;
+            const double* b = P + 2 * (e + 1 < n ? e + 1 : 0);
+            if (a[0] == b[0]) continue;                 // crosses no scanline
+            // from the lower end point, whichever way the edge runs
+            if (a[0] > b[0]) std::swap(a, b);
+            const i64 r0 = std::max(cu.lower(a[0]), j0), r1 = std::min(cu.lower(b[0]), j1);
+            for (i64 r = r0; r < r1; ++r) {
+                const double y = u[r];
                 const double x = a[1] + (y - a[0]) * (b[1] - a[1]) / (b[0] - a[0]);
-                if (!std::isnan(x)) X.push_back(x);
+                if (!std::isnan(x)) X[(r - j0) * n + nx[r - j0]++] = x;
             }
-            std::sort(X.begin(), X.end());
-            const size_t npairs = std::min<size_t>(X.size() / 2, static_cast<size_t>(K / 2));
-            for (size_t k = 0; k < npairs; ++k) {
-                const i64 ia = std::lower_bound(v, v + nv, X[2 * k]) - v;
-                const i64 ib = std::lower_bound(v, v + nv, X[2 * k + 1]) - v;
-                for (i64 col = ia; col < ib; ++col) {
-                    const i64 cell = tab[r * nv + col];
-                    if (cell < 0) continue;
-                    add(cell, sm, bt, bs, depth_chunk);
-                }
+        }
+        for (i64 r = j0; r < j1; ++r) {
+            double* x = X.data() + (r - j0) * n;
+            const i64 cnt = nx[r - j0];
+            if (cnt == 2) {
+                if (x[1] < x[0]) std::swap(x[0], x[1]);
+            } else {
+                std::sort(x, x + cnt);
             }
-            if (++pairs_in_chunk == step) {
-                flush(bt, bs);
-                pairs_in_chunk = 0;
+            const i64 npairs = std::min<i64>(cnt / 2, K / 2);
+            for (i64 k = 0; k < npairs; ++k) {
+                const i64 ia = cv.lower(x[2 * k]), ib = cv.lower(x[2 * k + 1]);
+                if (ia < ib) sc.emit(r, ia, ib, sm);
+            }
+            sc.end_pair();
+        }
+    }
+    sc.end_chunk();
+    resolve_chunks(sc, bt, bs, depth_chunk);
+}
+
+// resolve_depths on one scanline's candidates of a chunk, merged into the buffer: the
+// rule of flush, cell for cell (the scanline's cells are no other scanline's)
+void ZBuffer::resolve_row(const Run* runs, const std::int32_t* idx, i64 n_runs, bool simple,
+                          i64 base, const i64* trow, RowCell* L,
+                          std::vector<RowCandidate>& cand, std::vector<std::int32_t>& touched,
+                          double* best_t, i64* best) {
+    const double* D = row_.D;
+    const double* nl = row_.nl;
+    const double* dl = row_.dl;
+    // (room for every cell of the runs, written in place)
+    size_t room = 0;
+    for (i64 k = 0; k < n_runs; ++k) room += runs[idx[k]].b - runs[idx[k]].a;
+    if (cand.size() < room) cand.resize(room);
+    if (touched.size() < room + 1) touched.resize(room + 1);
+    RowCandidate* cp = cand.data();
+    std::int32_t* tp = touched.data();
+    size_t nc = 0, nt = 0;
+    // the candidates' depths, the nearest per cell
+    for (i64 k = 0; k < n_runs; ++k) {
+        const Run& q = runs[idx[k]];
+        const std::int32_t s = q.s;
+        const double* n = nl + 3 * s;
+        const double d = dl[s];
+        for (std::int32_t col = q.a; col < q.b; ++col) {
+            const i64 cell = simple ? base + col : trow[col];
+            if (cell < 0) continue;
+            const double den = dot3(n, D + 3 * cell);
+            const double t = d / den;
+            if (!std::isfinite(t)) continue;
+            double& tm = L[col].t_min;
+            // (the cell listed when first touched, without a branch)
+            tp[nt] = col;
+            nt += tm == INF;
+            tm = t < tm ? t : tm;
+            cp[nc++] = RowCandidate{t, den, col, s};
+        }
+    }
+    const double* Dn = row_.Dnorm;
+    const double* band = row_.band;
+    const i64* prio = row_.prio;
+    // one of the polygons at the nearest depth (the last), and of those the one of
+    // lowest priority
+    for (size_t k = 0; k < nc; ++k) {
+        const RowCandidate& q = cp[k];
+        RowCell& c = L[q.col];
+        if (q.t == c.t_min) {
+            c.near = q.s;
+            if (prio[q.s] < c.p_min) {
+                c.p_min = prio[q.s];
+                c.pick = q.s;
             }
         }
     }
-    flush(bt, bs);
+    // ties: within four times the tie test's band of the nearest depth, and coplanar
+    // with the polygon there
+    const double slack_ulps = row_.tie_slack_ulps;
+    for (size_t k = 0; k < nc; ++k) {
+        const RowCandidate& q = cp[k];
+        RowCell& c = L[q.col];
+        const double t_near = c.t_min;
+        if (q.t == t_near) continue;
+        const i64 cell = simple ? base + q.col : trow[q.col];
+        const double slack = 4.0 * (band[q.s] + EPS * (slack_ulps * std::fabs(t_near) * Dn[cell]
+                                                       + std::fabs(dl[q.s])));
+        if (std::fabs(t_near - q.t) * std::fabs(q.den) <= slack) {
+            if (coplanar(c.near, q.s) && prio[q.s] < c.p_min) {
+                c.p_min = prio[q.s];
+                c.pick = q.s;
+            }
+        }
+    }
+    // merged with the cells' best so far, as flush merges
+    for (size_t k = 0; k < nt; ++k) {
+        const std::int32_t col = tp[k];
+        RowCell& c = L[col];
+        const i64 s = c.pick;
+        if (s >= 0) {
+            const i64 cell = simple ? base + col : trow[col];
+            const double t = c.t_min;
+            const i64 old = best[cell];
+            bool take;
+            if (old < 0)
+                take = true;
+            else if (t < best_t[cell])
+                take = prio[s] < prio[old] || !coplanar(old, s);
+            else
+                take = prio[s] < prio[old] && coplanar(s, old);
+            if (t < best_t[cell]) best_t[cell] = t;
+            if (take) best[cell] = s;
+        }
+        c = RowCell();
+    }
 }
 
 // rasterise_polar on the clipped images c (live bucket indices into src)
@@ -824,8 +1292,10 @@ void ZBuffer::scan_disk(const Horizon& h, const i64* src, const double* xc, i64 
                         const double* yc, i64 ny, const i64* tab, double* bt, i64* bs,
                         i64 pair_chunk, i64 depth_chunk) {
     const i64 K = h.K, K2 = 2 * K;
-    const i64 chunk = std::max<i64>(1, pair_chunk / std::max<i64>(K2, 1));
-    i64 pairs_in_chunk = 0;
+    if (nx >= (i64(1) << 31) || ny >= (i64(1) << 31))
+        throw std::invalid_argument("at most 2**31 - 1 scanlines and centres");
+    SpanChunks sc(nx, ny, tab, row_.n_cells, std::max<i64>(1, pair_chunk / std::max<i64>(K2, 1)),
+                  depth_chunk);
     // per monotone piece: its parameter interval, its end points' y, and the
     // edge's a, d = b - a, a.a, d.d, a.d
     std::vector<double> S0(K2), S1(K2), Y0(K2), Y1(K2), ax(K2), ay(K2), dx(K2), dy(K2),
@@ -833,7 +1303,6 @@ void ZBuffer::scan_disk(const Horizon& h, const i64* src, const double* xc, i64 
     std::vector<char> ok(K2);
     std::vector<double> ya(K), X;
     X.reserve(static_cast<size_t>(K2));
-    use_scratch();
     for (size_t li = 0; li < h.live.size(); ++li) {
         if (h.near[li]) continue;
         const double* P = h.Vc.data() + li * K * 3;
@@ -922,17 +1391,17 @@ void ZBuffer::scan_disk(const Horizon& h, const i64* src, const double* xc, i64 
                 if (!std::isnan(x)) X.push_back(x);
             }
             std::sort(X.begin(), X.end());
-            spans(X, static_cast<size_t>(K), yc, ny, [&](i64 col) {
-                const i64 cell = tab[r * ny + col];
-                if (cell >= 0) add(cell, sm, bt, bs, depth_chunk);
-            });
-            if (++pairs_in_chunk == chunk) {
-                flush(bt, bs);
-                pairs_in_chunk = 0;
+            const size_t npairs = std::min(X.size() / 2, static_cast<size_t>(K));
+            for (size_t k = 0; k < npairs; ++k) {
+                const i64 ia = std::lower_bound(yc, yc + ny, X[2 * k]) - yc;
+                const i64 ib = std::lower_bound(yc, yc + ny, X[2 * k + 1]) - yc;
+                if (ia < ib) sc.emit(r, ia, ib, sm);
             }
+            sc.end_pair();
         }
     }
-    flush(bt, bs);
+    sc.end_chunk();
+    resolve_chunks(sc, bt, bs, depth_chunk);
 }
 
 // _zbuffer_chart on the clipped images c

@@ -31,6 +31,7 @@
 #ifndef EXACTFF_CORE_ZBUFFER_H
 #define EXACTFF_CORE_ZBUFFER_H
 
+#include <cmath>
 #include <cstdint>
 #include <unordered_map>
 #include <vector>
@@ -132,11 +133,49 @@ void clip_chart(const Bucket& b, const Chart& ch, double meet_ulps, double edge_
 void clip_face(const Bucket& b, const Face& f, double meet_ulps, Clipped& out);
 
 // A row from its depth buffer: F[j] (n,) = the sum of the weights (C,) of the cells
-// showing polygon j (best (C,): live indices, ids: their scene indices), where j
-// receives, added cell by cell in the cells' order (np.bincount's sums); returns the
-// number of cells that show a polygon.
-i64 row_sums(const i64* best, i64 C, const i64* ids, const bool* receives,
+// showing polygon j (best (C,): live indices below L, -1 none; ids (L,): their scene
+// indices), where j receives, added cell by cell in the cells' order (np.bincount's
+// sums); returns the number of cells that show a polygon, or -1 (F unfinished) where
+// a cell's entry is L or more.
+i64 row_sums(const i64* best, i64 C, const i64* ids, i64 L, const bool* receives,
              const double* weights, i64 n, double* F);
+
+// ZBufferRow's live polygons of one bucket (exactff.methods._sampling): the vertices
+// V (M, K, 3), padded, in the point's local frame, (x - p) R^T with each row's
+// products added first to second, then the third (exactff.geometry.rotate); the
+// polygons alive (not edge-on) with a vertex above the horizon (the largest local z
+// of its counts[m] vertices > 0, none if one is NaN): their bucket indices and local
+// vertices (live, K, 3)
+void live_local(const double* V, i64 M, i64 K, const i64* counts, const bool* alive,
+                const double* p, const double* R, std::vector<i64>& live,
+                std::vector<double>& local);
+
+// Monte Carlo's cosine-weighted directions (exactff.methods.monte_carlo): from uniform
+// samples q1, q2 (n,) in [0, 1), the points (r cos a, r sin a) of the unit disk,
+// r = sqrt q1, a = (2 pi) q2, lifted to the hemisphere, z = sqrt(max((1 - x x) - y y, 0))
+// (1e-300 where 0), and normalised as CellLayout does, D / |D|; D (n, 3) and the norms
+// of the normalised directions (n,), both np.linalg.norm's sqrt((x x + y y) + z z)
+void cosine_directions(const double* q1, const double* q2, i64 n, double* D, double* norms);
+
+// |d| of each direction as np.linalg.norm(D, axis=1) has it: sqrt((x x + y y) + z z)
+void direction_norms(const double* D, i64 n, double* norms);
+
+// One chart's directions for chart_rays (exactff.methods._sampling._chart_of and
+// _cell_grid): the directions, renumbered chart by chart and bucket by bucket, at
+// [offset, offset + count); their chart coordinates cu, cv in that order; the grid of
+// nb x nb buckets over [-1, 1] x [v_lo, 1] and its CSR starts (nb nb + 1,)
+struct RayChart {
+    i64 chart = 0, offset = 0, count = 0, nb = 1;
+    double v_lo = 0.0;
+    std::vector<double> cu, cv;
+    std::vector<i64> starts;
+};
+
+// The directions D (n, 3) sorted into the charts (_chart_of: axis (5, 3) the axes'
+// components, sign_w (5,) the sign of e_w) and bucketed (_cell_grid, its margin
+// `margin`): per non-empty chart a RayChart, and slot (n,), each direction's new index
+void ray_charts(const double* D, i64 n, const i64* axis, const double* sign_w, double margin,
+                std::vector<RayChart>& charts, i64* slot);
 
 // the depth buffer's per-cell scratch within a chunk (the nearest depth apart: the
 // candidates touch it, the other fields only the chunk's resolution)
@@ -151,6 +190,27 @@ struct Candidate {
     double t, den;
     std::int32_t cell, s;    // (24 bytes: the chunk's candidates are the buffer's traffic)
 };
+
+// a face's span within one chunk: grid row r, columns [a, b), live polygon s
+struct Run {
+    std::int32_t r, a, b, s;
+};
+
+// a scanline's cell within a chunk (scan's resolution row by row): CellScratch's
+// fields and the nearest depth
+struct RowCell {
+    double t_min = INFINITY;
+    i64 near = -1, p_min = INT64_MAX, pick = -1;
+};
+
+// a candidate of a scanline: its depth, n . d, its column and polygon
+struct RowCandidate {
+    double t, den;
+    std::int32_t col, s;
+};
+
+// a scan's spans cut into chunks (zbuffer.cpp)
+struct SpanChunks;
 
 // One row's z-buffer: scan conversion of the buckets and the depth test into a Buffer.
 class ZBuffer {
@@ -189,9 +249,19 @@ class ZBuffer {
     bool coplanar(i64 a, i64 b);
 
   private:
+    // a face's scan conversion: the spans of every (polygon, scanline) pair cut into the
+    // numpy code's chunks (SpanChunks), resolved by resolve_chunks
     void scan(const double* uv, i64 M, i64 K, const i64* c, const i64* src, const i64* pos,
               const double* u, i64 nu, const double* v, i64 nv, const i64* tab, double* bt,
               i64* bs, i64 pair_chunk, i64 depth_chunk);
+    // one scanline's runs of a chunk (runs[idx[k]]), resolved as flush does; the grid
+    // row's cells base + col (simple) or trow[col]; L (nv,) and touched left cleared
+    void resolve_row(const Run* runs, const std::int32_t* idx, i64 n_runs, bool simple,
+                     i64 base, const i64* trow, RowCell* L, std::vector<RowCandidate>& cand,
+                     std::vector<std::int32_t>& touched, double* best_t, i64* best);
+    // the chunks of sc, each scanline by scanline (resolve_row), or, where grid cells
+    // share a layout cell, candidate by candidate (add, flush)
+    void resolve_chunks(const SpanChunks& sc, double* best_t, i64* best, i64 depth_chunk);
     void scan_polar(const Clipped& c, const i64* src, const double* radii, i64 nr,
                     const double* cs, const double* sn, i64 S, double* bt, i64* bs,
                     i64 pair_chunk, i64 depth_chunk);

@@ -21,7 +21,7 @@ import numpy as np
 import shapely
 
 from .. import _tolerances as tol
-from ..geometry import receiver_frame, to_local
+from ..geometry import receiver_frame
 from ..checks import as_receiver
 from ..kernel import flat_polygons
 from ..predicates import coplanar_pairs, plane_sides, polygon_coplanar_bands, tie_priority
@@ -30,7 +30,7 @@ from ..rings import padded_buckets
 from ..scene import as_scene
 from ..visibility.charts import CHARTS, chart_clip, chart_planes
 from ._base import FormFactorMethod
-from ._zbuffer import ZBuffer, row_sums
+from ._zbuffer import ZBuffer, live_local, ray_charts, row_sums
 
 __all__ = ["CellLayout", "SampledMethod", "ZBufferRow", "nearest_polygons", "zbuffer_of",
            "resolve_depths",
@@ -53,11 +53,26 @@ class CellLayout:
         Delta form factor of each cell.
     covered : float
         Exact form factor of the region the cells cover (1 for the whole hemisphere).
+
+    Parameters
+    ----------
+    directions, weights, covered
+        As the attributes; the directions of any length (normalised here, ``D / |D|``).
+    norms : ndarray of shape (C,), optional
+        Given: the directions are normalised already (as here) and these are their
+        norms as :attr:`direction_norms` computes them (Monte Carlo's compiled rays,
+        ``exactff.methods._zbuffer.cosine_directions``); both taken as they are.
     """
 
-    def __init__(self, directions, weights, covered):
+    def __init__(self, directions, weights, covered, norms=None):
         D = np.asarray(directions, dtype=float)
-        self.directions = D / np.linalg.norm(D, axis=1, keepdims=True)
+        if norms is None:
+            self.directions = D / np.linalg.norm(D, axis=1, keepdims=True)
+        else:
+            # directions normalised already (``D / |D|``, as above) and their norms
+            # (as direction_norms computes them)
+            self.directions = D
+            self._norms = np.asarray(norms, dtype=float)
         self.weights = np.asarray(weights, dtype=float)
         self.covered = float(covered)
 
@@ -103,6 +118,12 @@ def check_resolution(value, name="resolution", even=False):
     return int(value)
 
 
+#: the charts' axes as components of a direction (5, 3): e_u, e_v, e_w; and the sign
+#: of e_w (5,)
+_CHART_AXIS = np.array([[int(np.argmax(np.abs(e))) for e in ch[:3]] for ch in CHARTS])
+_CHART_SIGN_W = np.array([ch[2][_CHART_AXIS[ci, 2]] for ci, ch in enumerate(CHARTS)])
+
+
 def _chart_of(D):
     """Chart index and chart coordinates (u, v) of each direction.
 
@@ -114,8 +135,7 @@ def _chart_of(D):
     xside = ~top & (ax >= ay)
     chart = np.where(top, 0, np.where(xside, np.where(D[:, 0] > 0, 1, 2),
                                       np.where(D[:, 1] > 0, 3, 4)))
-    axis = np.array([[int(np.argmax(np.abs(e))) for e in ch[:3]] for ch in CHARTS])
-    sign_w = np.array([ch[2][axis[ci, 2]] for ci, ch in enumerate(CHARTS)])
+    axis, sign_w = _CHART_AXIS, _CHART_SIGN_W
     rows = np.arange(len(D))
     w = D[rows, axis[chart, 2]] * sign_w[chart]
     u = D[rows, axis[chart, 0]] / w
@@ -178,12 +198,12 @@ class ZBufferRow:
         local, ids = [], []
         start = 0
         for b_ids, Vb, cb in _polygon_buckets(scene):
-            V = to_local(Vb, p, R)
-            slot = np.arange(V.shape[1])[None, :] < cb[:, None]
-            live = (side[b_ids] != 0) & (np.where(slot, V[:, :, 2], -np.inf).max(axis=1) > 0)
-            if live.any():
-                n_live = int(live.sum())
-                local.append((start + np.arange(n_live), V[live], cb[live]))
+            # not edge-on, a vertex above the horizon; the vertices in the local frame
+            # (compiled: to_local's expression, bit for bit)
+            live, V = live_local(Vb, cb, side[b_ids] != 0, p, R)
+            if len(live):
+                n_live = len(live)
+                local.append((start + np.arange(n_live), V, cb[live]))
                 ids.append(b_ids[live])
                 start += n_live
         self.local = local
@@ -250,26 +270,19 @@ def nearest_polygons(scene, point, normal, directions, *, backend="numpy", margi
     z = ZBufferRow(scene, point, normal)
     local, nl, dl, band, prio = z.local, z.nl, z.dl, z.band, z.prio
     D = np.ascontiguousarray(directions, dtype=float)
-    chart, u, v = _chart_of(D)
-    charts = []
-    for ci, ch in enumerate(CHARTS):
-        cells = np.flatnonzero(chart == ci)
-        if len(cells):
-            charts.append((ch, cells, _cell_grid(u[cells], v[cells], ch[3])))
     if backend == "compiled" and len(z.ids):
-        # the directions renumbered chart by chart and bucket by bucket (the grid's
-        # order), so that the compiled depth buffer reads them in the order it tests
-        # them; the depth test does not see the numbering
-        perm = np.concatenate([cells[grid[2]] for _, cells, grid in charts])
-        slot = np.empty(len(D), dtype=np.int64)
-        slot[perm] = np.arange(len(D))
-        Dp = np.ascontiguousarray(D[perm])
+        # the directions sorted into the charts and bucketed as _chart_of and
+        # _cell_grid do (compiled, bit for bit), renumbered chart by chart and bucket
+        # by bucket (the grid's order), so that the compiled depth buffer reads them in
+        # the order it tests them; the depth test does not see the numbering
+        Dp, norms, slot, charts = ray_charts(D, _CHART_AXIS, _CHART_SIGN_W, tol.CHART_MARGIN)
         best_t = np.full(len(D), np.inf)
         best = np.full(len(D), -1, dtype=np.int64)
-        zb = zbuffer_of(z, Dp, np.linalg.norm(Dp, axis=1))
-        for ch, cells, grid in charts:
+        zb = zbuffer_of(z, Dp, norms)
+        for ci, ids, cu, cv, nb, v_lo, order, starts in charts:
+            ch = CHARTS[ci]
             planes = np.array(chart_planes(ch))
-            cu, cv, ids = u[cells], v[cells], slot[cells]
+            grid = (nb, v_lo, order, starts)
             for g_ids, V, counts in local:
                 if not zb.chart_rays(V, counts, g_ids, planes, *ch, ids, cu, cv, grid[0],
                                      grid[1], grid[2], grid[3], best_t, best, PAIR_CHUNK,
@@ -278,6 +291,12 @@ def nearest_polygons(scene, point, normal, directions, *, backend="numpy", margi
                     _zbuffer_chart(ids, cu, cv, grid, g_ids[live_c], UV, cl, Dp, nl, dl,
                                    band, prio, best_t, best, coplanar=z.coplanar)
         return z.hits(best[slot])
+    chart, u, v = _chart_of(D)
+    charts = []
+    for ci, ch in enumerate(CHARTS):
+        cells = np.flatnonzero(chart == ci)
+        if len(cells):
+            charts.append((ch, cells, _cell_grid(u[cells], v[cells], ch[3])))
     best_t = np.full(len(D), np.inf)
     best = np.full(len(D), -1, dtype=np.int64)
     for ch, cells, grid in charts:

@@ -10,6 +10,7 @@ from ..kernel import flat_polygons
 from ..predicates import plane_sides
 from ..scene import as_scene
 from ._sampling import CellLayout, SampledMethod, nearest_polygons
+from ._zbuffer import cosine_directions
 
 __all__ = ["MonteCarlo"]
 
@@ -81,12 +82,13 @@ class MonteCarlo(SampledMethod):
         return self._rays(np.random.default_rng(self.seed))
 
     def _rays(self, rng):
-        r = np.sqrt(rng.random(self.n))
-        a = 2.0 * np.pi * rng.random(self.n)
-        x, y = r * np.cos(a), r * np.sin(a)
-        D = np.column_stack([x, y, np.sqrt(np.maximum(1.0 - x * x - y * y, 0.0))])
-        D[D[:, 2] == 0, 2] = 1e-300  # a ray exactly on the horizon: keep it above
-        return CellLayout(D, np.full(self.n, 1.0 / self.n), 1.0)
+        # uniform points (r cos a, r sin a) of the unit disk, r = sqrt(q1), a = 2 pi q2,
+        # lifted to the hemisphere and normalised (compiled: _zbuffer.cosine_directions,
+        # the numpy expressions in their order; a ray on the horizon kept above it)
+        q1 = rng.random(self.n)
+        q2 = rng.random(self.n)
+        D, norms = cosine_directions(q1, q2)
+        return CellLayout(D, np.full(self.n, 1.0 / self.n), 1.0, norms=norms)
 
     def directions_for(self, point):
         L = self._rays(self._generator(point, b""))
