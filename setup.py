@@ -44,7 +44,7 @@ setup(
                                    extra_link_args=QUADMATH),
                  Pybind11Extension("exactff.area._hidden", core("bind_hidden.cpp", "hidden.cpp"),
                                    depends=HEADERS, cxx_std=17, extra_compile_args=CORE_FLAGS),
-                 Pybind11Extension("exactff.area._pair", core("bind_pair.cpp", "pair.cpp"),
+                 Pybind11Extension("exactff.area._pair", core("bind_pair.cpp", "pair.cpp", "levels.cpp", "hidden.cpp"),
                                    depends=HEADERS, cxx_std=17, extra_compile_args=CORE_FLAGS),
                  Pybind11Extension("exactff.kernel._sector", core("bind_sector.cpp"),
                                    depends=HEADERS, cxx_std=17, extra_compile_args=CORE_FLAGS),

@@ -118,6 +118,9 @@ def test_hidden_parts_kept_in_doubles_within_the_estimates(monkeypatch):
         calls.append((X, nP, Qc, blockers, atol, setup))
         return values(X, nP, Qc, blockers, st, atol, setup, *a, **k)
 
+    # the levels by numpy, which call hidden_values (the compiled ones do its
+    # work inside: test_compiled_levels_against_numpy)
+    monkeypatch.setattr(adaptive, "COMPILED_LEVELS", False)
     monkeypatch.setattr(adaptive, "hidden_values", record)
     ef.area_form_factors(ef.read_vs3(os.path.join(DATA, "gunter1.vs3")), rows=[17],
                          tolerance=1e-6)
@@ -259,3 +262,67 @@ def test_compiled_cells_of_a_square():
     L = np.array([[0, 0], [2, 0], [2, 1], [1, 1], [1, 2], [0, 2]], float)
     assert not compiled_cut_cells(P2=L, segments=np.zeros((0, 2, 2)), step=1e-9, merge=1e-12,
                                   sliver=1e-14)[2]
+
+
+def _level_calls(monkeypatch, scene, rows, tolerance):
+    """Every call of the adaptive levels that the rows make (by numpy), with copies of
+    its arguments: (args, acc) for :func:`exactff.area.adaptive._levels`."""
+    calls, levels = [], adaptive._adaptive_levels
+
+    def record(*args):
+        acc = args[-1]
+        calls.append((tuple(a.copy() if isinstance(a, np.ndarray) else a for a in args[:-1]),
+                      {k: list(v) for k, v in acc.items()}))
+        return levels(*args)
+
+    monkeypatch.setattr(adaptive, "COMPILED_LEVELS", False)
+    monkeypatch.setattr(adaptive, "_adaptive_levels", record)
+    ef.area_form_factors(scene, rows=rows, tolerance=tolerance)
+    monkeypatch.undo()
+    return calls
+
+
+@pytest.mark.parametrize("name, rows, tolerance", [("test4.vs3", None, 1e-9),
+                                                   ("facet.vs3", None, 1e-9),
+                                                   ("gunter1.vs3", [8, 17], 1e-6)])
+def test_compiled_levels_against_numpy(monkeypatch, name, rows, tolerance):
+    # every call of the adaptive levels (_core/levels.cpp) that the rows make, compiled
+    # and by numpy (adaptive._adaptive_levels, the reference) from the same triangles:
+    # the same triangles accepted in the same order, at the same level, rung and corner,
+    # the same slivers and points, and the rules' sums equal to rounding (the nodes' sums
+    # are taken in another order), far within the nodes' estimates
+    calls = _level_calls(monkeypatch, ef.read_vs3(os.path.join(DATA, name)), rows, tolerance)
+    assert len(calls) > 10
+    for args, acc in calls:
+        got, ref = ({k: list(v) for k, v in acc.items()} for _ in range(2))
+        monkeypatch.setattr(adaptive, "COMPILED_LEVELS", True)
+        monkeypatch.setattr(adaptive, "_adaptive_levels", None)      # no fallback taken
+        r_got = adaptive._levels(*args, got)
+        monkeypatch.undo()
+        r_ref = adaptive._adaptive_levels(*args, ref)
+        assert not len(r_got[0]) and not len(r_ref[0])
+        assert r_got[4] == pytest.approx(r_ref[4], rel=1e-12, abs=1e-300)   # slivers
+        assert r_got[5] == r_ref[5]                                        # points
+        got, ref = ({k: np.concatenate(v) if v else np.zeros(0) for k, v in a.items()}
+                    for a in (got, ref))
+        for k in ("T", "depth", "rung", "corner", "checked"):
+            assert np.array_equal(got[k], ref[k]), k
+        scale = np.abs(ref["rnd"]) + np.abs(ref["rndU"]) + 1e-300
+        for k in ("hi", "lo", "diff", "hiU", "loU"):
+            assert np.all(np.abs(got[k] - ref[k]) <= 1e-12 * np.abs(ref[k]) + 1e-3 * scale), k
+        for k in ("rnd", "rndU"):
+            assert np.allclose(got[k], ref[k], rtol=1e-12, atol=0), k
+
+
+def test_compiled_levels_matrix_against_numpy(monkeypatch):
+    # test4's full matrix at 1e-9 both ways: the same points, values within 1e-13 of each
+    # other (and so within the estimates), estimates alike
+    scene = ef.read_vs3(os.path.join(DATA, "test4.vs3"))
+    out = []
+    for compiled in (True, False):
+        monkeypatch.setattr(adaptive, "COMPILED_LEVELS", compiled)
+        st = {}
+        out.append(ef.area_form_factors(scene, tolerance=1e-9, error=True, stats=st) + (st,))
+    (F, E, st), (G, EG, sg) = out
+    assert st == sg and st["point_values"] > 10_000
+    assert np.all(np.abs(F - G) <= 1e-13) and np.allclose(E, EG, rtol=1e-9, atol=1e-16)
