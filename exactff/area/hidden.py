@@ -17,7 +17,7 @@ from ..halfspace import clip_front
 from ..methods import Exact
 from ..rings import padded
 from ..scene import Scene
-from ..visibility import convex_pieces
+from ..visibility import convex_pieces, convex_rings
 from ._hidden import hidden_pieces
 from .points import point_values
 
@@ -90,11 +90,17 @@ def hidden_setup(Qc, blockers, solid=None, inner=None):
         Qparts = [(Qp - q0) @ RQ.T for Qp in convex_pieces(np.asarray(Qc, float), nQ)]
         parts, part_counts = padded(Qparts)
         parts = parts[:, :, :2]
-    pieces = [[Kp for Kp in convex_pieces(K, unit_normal(K))] for K in Kc]
+    # the blockers' convex pieces: a convex one (all tested at once) is its own piece,
+    # with its own unit normal
+    normals = [unit_normal(K) for K in Kc]
+    convex = convex_rings(np.concatenate(Kc), np.cumsum([0] + [len(K) for K in Kc]),
+                          np.array(normals))
+    pieces = [[K] if ok else convex_pieces(K, n) for K, n, ok in zip(Kc, normals, convex)]
     owner = np.repeat(kept, [len(p) for p in pieces])
+    NK = np.array([n if ok else unit_normal(Kp)
+                   for p, n, ok in zip(pieces, normals, convex) for Kp in p])
     pieces = [Kp for p in pieces for Kp in p]
     V, counts = padded(pieces)
-    NK = np.array([unit_normal(K) for K in pieces])
     group = np.full(len(pieces), -1, dtype=np.int64)
     if solid is not None:
         # outward: the inner point behind the plane
