@@ -326,3 +326,79 @@ def test_compiled_levels_matrix_against_numpy(monkeypatch):
     (F, E, st), (G, EG, sg) = out
     assert st == sg and st["point_values"] > 10_000
     assert np.all(np.abs(F - G) <= 1e-13) and np.allclose(E, EG, rtol=1e-9, atol=1e-16)
+
+
+@pytest.mark.parametrize("name, rows", [("gunter1.vs3", range(0, 25, 3)), ("test4.vs3", None),
+                                        ("facet.vs3", None), ("cornell", [0, 1, 10, 16]),
+                                        ("furnished", [0, 5, 29]), ("inward", [0, 1])])
+def test_compiled_hidden_setup_against_numpy(monkeypatch, name, rows):
+    # every hidden parts' set-up that the rows make (at 1e-6), compiled
+    # (_core/hidden_setup.cpp) and by numpy (hidden_setup(compiled=False), the reference):
+    # None alike; else the same blockers kept, vertex counts and solids, the vertices
+    # (clipped to Qc's plane: numpy's matrix products may fuse a multiply-add) within a
+    # few units of rounding of the scene's size, the normals and the box alike
+    from exactff.area import hidden
+
+    # (furnished: a room of 24 squares facing in with a cube inside; inward: a closed box
+    # facing in between two squares facing each other, a convex solid whose members'
+    # normals the set-up turns outward)
+    floor = [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]]
+    scene = (ef.scenes.cornell_box(closed=True) if name == "cornell" else
+             ef.scenes.furnished_box(2, [((.3, .3, .2), (.6, .7, .5))]) if name == "furnished"
+             else ef.Scene.from_polygons([floor, [[x, y, 3] for x, y, _ in floor[::-1]]]
+                                         + ef.scenes.box_polygons((.3, .3, 1), (.7, .6, 2)))
+             if name == "inward" else ef.read_vs3(os.path.join(DATA, name)))
+    calls, setup = [], hidden.hidden_setup
+
+    def record(*a, **k):
+        calls.append((a, k))
+        return setup(*a, **k)
+
+    monkeypatch.setattr(adaptive, "hidden_setup", record)
+    ef.area_form_factors(scene, rows=rows, tolerance=1e-6)
+    monkeypatch.undo()
+    assert len(calls) > 5
+    size = float(np.ptp(scene.vertices, axis=0).max())
+    near = 8 * tol.EPS * float(np.abs(scene.vertices).max())
+    solids = 0
+    for a, k in calls:
+        A, B = setup(*a, **k), setup(*a, **k, compiled=False)
+        assert (A is None) == (B is None)
+        if A is None:
+            continue
+        assert A.parts.shape[0] == 0 == B.parts.shape[0] and np.array_equal(A.corners, B.corners)
+        assert np.array_equal(A.counts, B.counts) and np.array_equal(A.group, B.group)
+        assert A.V.shape == B.V.shape and np.abs(A.V - B.V).max() <= near
+        assert all(np.abs(x - y).max() <= near for x, y in zip(A.Kc, B.Kc))
+        assert len(A.Kc) == len(B.Kc)
+        for f in ("nQ", "q0", "RQ", "NK"):
+            assert np.allclose(getattr(A, f), getattr(B, f), rtol=0, atol=1e-14), f
+        assert np.abs(A.lo - B.lo).max() <= near and np.abs(A.hi - B.hi).max() <= near
+        assert A.extent == pytest.approx(B.extent, rel=1e-14, abs=near / size)
+        solids += int((A.group >= 0).sum())
+    if name in ("cornell", "furnished", "inward"):
+        assert solids > 0                  # the blocks' faces as members of their solids
+
+
+def test_compiled_hidden_setup_declines_what_it_does_not_build():
+    # a receiver not strictly convex (a vertex on an edge's line), or a blocker not
+    # convex (an L), is declined (status 2) and built by numpy; nothing in front: None
+    from exactff.area import hidden
+    from exactff.area._pair import hidden_setup as compiled
+
+    names = ("EPS", "CONVEX_TURN_ULPS", "CLIP_MEET_ULPS", "AREA_STRICT_TURN", "AREA_HULL_RTOL")
+    t = {k: getattr(tol, k) for k in names} | {"NORMAL_FLOOR": 1e-292}
+    Q = np.array([[0, 0, 1], [0, 1, 1], [1, 1, 1], [1, 0, 1]], float)        # facing down
+    Qline = np.array([[0, 0, 1], [0, 1, 1], [1, 1, 1], [1, 0.5, 1], [1, 0, 1]], float)
+    K = np.array([[.2, .2, .5], [.8, .2, .5], [.8, .8, .5], [.2, .8, .5]])
+    L = np.array([[.2, .2, .5], [.8, .2, .5], [.8, .4, .5], [.4, .4, .5], [.4, .8, .5],
+                  [.2, .8, .5]])
+    none = (np.zeros(0, dtype=np.int64), np.zeros((0, 3)))
+    for R, B, status in ((Q, K, 0), (Qline, K, 2), (Q, L, 2), (Q, K + [0, 0, 1], 1)):
+        r = compiled(R, B, np.array([0, len(B)]), *none, t)
+        assert r[0] == status
+        want = hidden.hidden_setup(R, [B], compiled=False)
+        got = hidden.hidden_setup(R, [B])
+        assert (got is None) == (want is None) == (status == 1)
+        if want is not None:
+            assert len(got.Kc) == len(want.Kc) and np.array_equal(got.V, want.V)

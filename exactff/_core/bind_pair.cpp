@@ -6,6 +6,7 @@
 
 #include "bind_arrays.h"
 #include "hidden.h"
+#include "hidden_setup.h"
 #include "levels.h"
 #include "pair.h"
 
@@ -194,6 +195,50 @@ py::tuple adaptive_levels(Array<double> T, Array<long long> depth, Array<long lo
                           r.back_faces);
 }
 
+py::tuple hidden_setup(Array<double> Qc, Array<double> W, Array<std::int64_t> start,
+                       Array<std::int64_t> solid, Array<double> inner, py::dict tol) {
+    const std::int64_t n = start.size() - 1;
+    if (Qc.ndim() != 2 || Qc.shape(1) != 3 || Qc.shape(0) < 3 || W.ndim() != 2 ||
+        W.shape(1) != 3 || n < 0 || (solid.size() != 0 && solid.size() != n) ||
+        inner.size() != 3 * solid.size())
+        throw std::invalid_argument("hidden_setup: arrays of the wrong shapes");
+    const std::int64_t* s = start.data();
+    for (std::int64_t k = 0; k < n; ++k)
+        if (s[k] < 0 || s[k + 1] - s[k] < 3 || s[k + 1] > W.shape(0))
+            throw std::out_of_range("hidden_setup: start out of range or a polygon of < 3 "
+                                    "vertices");
+    exactff::SetupArgs a;
+    a.Qc = Qc.data();
+    a.n_q = Qc.shape(0);
+    a.W = W.data();
+    a.start = s;
+    a.n = n;
+    a.solid = solid.size() ? solid.data() : nullptr;
+    a.inner = solid.size() ? inner.data() : nullptr;
+    const auto num = [&](const char* k) { return tol[k].cast<double>(); };
+    a.eps = num("EPS");
+    a.convex_ulps = num("CONVEX_TURN_ULPS");
+    a.meet_ulps = num("CLIP_MEET_ULPS");
+    a.normal_floor = num("NORMAL_FLOOR");
+    a.strict_turn = num("AREA_STRICT_TURN");
+    a.hull_rtol = num("AREA_HULL_RTOL");
+    exactff::SetupResult r;
+    {
+        py::gil_scoped_release release;
+        r = exactff::hidden_setup(a);
+    }
+    if (r.status) return py::make_tuple(r.status);
+    const auto vec = [](const double* p, py::ssize_t k) {
+        return as_array(std::vector<double>(p, p + k));
+    };
+    py::array_t<double> V = as_array(r.V);
+    return py::make_tuple(0, vec(r.nQ, 3), vec(r.q0, 3), vec(r.RQ, 9).reshape({3, 3}),
+                          V.reshape({py::ssize_t(r.counts.size()), py::ssize_t(r.stride),
+                                     py::ssize_t(3)}),
+                          as_array(r.counts), as_array(r.NK, 3), as_array(r.group),
+                          as_array(r.kept), vec(r.lo, 3), vec(r.hi, 3), r.extent);
+}
+
 }  // namespace
 
 PYBIND11_MODULE(_pair, m) {
@@ -218,4 +263,9 @@ PYBIND11_MODULE(_pair, m) {
           "adaptive_levels(...) -> (True, T, depth, rung, corner, hi, lo, diff, rnd, hiU, "
           "loU, rndU, slivers, points, back_faces) or (False,): the adaptive levels of an "
           "occluded pair's hidden part (levels.h)");
+    m.def("hidden_setup", &hidden_setup, py::arg("Qc"), py::arg("W"), py::arg("start"),
+          py::arg("solid"), py::arg("inner"), py::arg("tol"),
+          "hidden_setup(Qc, W, start, solid, inner, tol) -> (0, nQ, q0, RQ, V, counts, NK, "
+          "group, kept, lo, hi, extent), (1,): no blocker in front, or (2,): declined "
+          "(hidden_setup.h)");
 }
