@@ -27,8 +27,8 @@ Usage: python benchmarks/bench_area.py [--cube-k 8]
 6. ``--goals`` alone (issue 49's speed goals, at tolerance 1e-6): process time of the
    full matrix of gunter1, of the 106-surface box (:func:`box_106`: a 3 x 4 x 5 room of
    unit squares with two unit cubes inside) and of gunter2
-   (``/work/shared/scenes/view3d/gunter2.vs3``; ``--gunter2-rows N``: only every
-   (398 // N)-th row, the matrix's time extrapolated from theirs and said so), against
+   (``/work/shared/scenes/view3d/gunter2.vs3``; ``--gunter2-rows 0,19,...``: only those
+   rows, each timed, the matrix's time extrapolated from their mean and said so), against
    View3D 4.0's times of issue 49 (0.009, 0.044 and 0.52 s) with the goals (30x, 20x,
    20x); then gunter1's wall time on 1 and 2 threads (``executor=ThreadPoolExecutor``),
    best of ``--repeat``, against the goal of 1.7x.
@@ -142,8 +142,9 @@ def main():
                     help="only the occluded pairs' compiled path against its reference")
     ap.add_argument("--repeat", type=int, default=2, help="runs of each --pair-path timing")
     ap.add_argument("--goals", action="store_true", help="only issue 49's speed goals")
-    ap.add_argument("--gunter2-rows", type=int, default=0,
-                    help="--goals: rows of gunter2 timed (0: the whole matrix)")
+    ap.add_argument("--gunter2-rows", default="",
+                    help="--goals: rows of gunter2 timed, comma-separated (none: the whole "
+                         "matrix)")
     args = ap.parse_args()
     print(machine())
     print()
@@ -305,10 +306,19 @@ def goals(args):
         n = len(scene)
         rows = None
         if name == "gunter2" and args.gunter2_rows:
-            rows = list(range(0, n, max(1, n // args.gunter2_rows)))
-        st = {}
+            rows = [int(r) for r in args.gunter2_rows.split(",")]
+        st, each = {}, []
         t0 = time.process_time()
-        F, E = ef.area_form_factors(scene, rows=rows, tolerance=1e-6, error=True, stats=st)
+        if rows is None:
+            F, E = ef.area_form_factors(scene, tolerance=1e-6, error=True, stats=st)
+        else:
+            FE = []
+            for r in rows:
+                t1 = time.process_time()
+                FE.append(ef.area_form_factors(scene, rows=[r], tolerance=1e-6, error=True,
+                                               stats=st))
+                each.append(f"{r}: {time.process_time() - t1:.2f} s")
+            F, E = np.vstack([f for f, _ in FE]), np.vstack([e for _, e in FE])
         dt = time.process_time() - t0
         full = dt if rows is None else dt * n / len(rows)
         dev = np.abs(F.sum(axis=1) - 1)
@@ -316,6 +326,32 @@ def goals(args):
         timed_rows = "all" if rows is None else f"{len(rows)} (extrapolated)"
         print(f"| {name} | {n} | {timed_rows} | {full:.3f} | {v3d} | {full / v3d:.0f} | {goal} "
               f"| {st['point_values']:,} | {E.max():.1e} | {dev.max():.1e} {within} |",
+              flush=True)
+        if each:
+            print(f"|   ({name}'s rows: {', '.join(each)}) |||||||||| ")
+    print()
+    print("The pair path's compiled levels and set-up against their numpy reference "
+          "(adaptive.COMPILED_LEVELS, hidden_setup(compiled=False)), same run:")
+    print()
+    print("| scene | numpy levels and set-up s | compiled s | ratio | points (both) | "
+          "largest abs difference | within the estimates |")
+    print("|---|---|---|---|---|---|---|")
+    import functools
+
+    from exactff.area import adaptive, hidden
+    for name in ("gunter1", "106-surface box"):
+        out = []
+        for compiled in (False, True):
+            adaptive.COMPILED_LEVELS = compiled
+            adaptive.hidden_setup = functools.partial(hidden.hidden_setup, compiled=compiled)
+            st = {}
+            t0 = time.process_time()
+            F, E = ef.area_form_factors(scenes[name], tolerance=1e-6, error=True, stats=st)
+            out.append((time.process_time() - t0, F, E, st["point_values"]))
+        adaptive.COMPILED_LEVELS, adaptive.hidden_setup = True, hidden.hidden_setup
+        (t0_, F0, E0, p0), (t1_, F1, E1, p1) = out
+        print(f"| {name} | {t0_:.3f} | {t1_:.3f} | {t0_ / t1_:.2f} | {p0:,} / {p1:,} "
+              f"| {np.abs(F0 - F1).max():.1e} | {bool(np.all(np.abs(F0 - F1) <= E0 + E1))} |",
               flush=True)
     print()
     print("gunter1 at 1e-6, wall time (best of %d):" % args.repeat)
