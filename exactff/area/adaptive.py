@@ -3,7 +3,9 @@ is its unoccluded value (closed form) less the integral of the hidden part, take
 the cells between visibility events by pairs of triangle rules, a triangle refined (the
 higher pair, then cut in four) while its rules differ by more than its share of the
 absolute tolerance ``atol``, and the rules' differences checked against the unoccluded
-point values' integral, known exactly (docs/explanation/area-form-factors.md).
+point values' integral, known exactly (docs/explanation/area-form-factors.md). The
+levels run compiled (:mod:`exactff.area._pair`, ``_core/levels.cpp``, the GIL released);
+:func:`_adaptive_levels` is their numpy reference and takes the pairs they decline.
 """
 
 import numpy as np
