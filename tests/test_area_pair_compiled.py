@@ -1,7 +1,9 @@
 """An occluded pair's compiled path (exactff/_core/pair.cpp, module exactff.area._pair)
 against the numpy and GEOS reference it replaces: the visibility events of every
 occluded pair of View3D's files, the same segments to the bit and the same events culled;
-and the events of a blocker between two squares against the lines derived by hand."""
+and the events of a blocker between two squares against the lines derived by hand; the
+adaptive levels (levels.cpp) and the hidden parts' set-up (hidden_setup.cpp) against
+their numpy reference, call by call."""
 
 import os
 
@@ -402,3 +404,34 @@ def test_compiled_hidden_setup_declines_what_it_does_not_build():
         assert (got is None) == (want is None) == (status == 1)
         if want is not None:
             assert len(got.Kc) == len(want.Kc) and np.array_equal(got.V, want.V)
+
+
+
+def test_compiled_levels_give_pairs_with_lost_points_to_numpy(monkeypatch):
+    # a point with more pieces than AREA_MAX_PIECES is lost (here every point with any:
+    # 0 allowed): the compiled levels decline the pair and numpy's levels send its
+    # points to the bound 0 <= hidden <= U or the engine; the row both ways alike, the
+    # same points, engine calls and bounded points, and near the reference value
+    from test_area import OCCLUDED_REFERENCES, _square
+
+    plate, ref = OCCLUDED_REFERENCES[0]
+    scene = ef.Scene.from_polygons([_square(0, True), _square(2, False), plate])
+    out, declined, levels = [], [], adaptive._compiled_adaptive_levels
+
+    def record(*a, **k):
+        r = levels(*a, **k)
+        declined.append(not r[0])
+        return r
+
+    monkeypatch.setattr(adaptive, "_compiled_adaptive_levels", record)
+    monkeypatch.setattr(tol, "AREA_MAX_PIECES", 0)
+    for compiled in (True, False):
+        monkeypatch.setattr(adaptive, "COMPILED_LEVELS", compiled)
+        st = {}
+        out.append(ef.area_form_factors(scene, rows=[0], tolerance=1e-6, error=True, stats=st)
+                   + (st,))
+    (F, E, st), (G, EG, sg) = out
+    assert declined and all(declined)
+    assert st == sg and st["engine_fallback_points"] + st["bounded_points"] > 0
+    assert np.array_equal(F, G) and np.array_equal(E, EG)
+    assert abs(F[0, 1] - ref) <= E[0, 1] + 1e-13
