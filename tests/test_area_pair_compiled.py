@@ -435,3 +435,26 @@ def test_compiled_levels_give_pairs_with_lost_points_to_numpy(monkeypatch):
     assert st == sg and st["engine_fallback_points"] + st["bounded_points"] > 0
     assert np.array_equal(F, G) and np.array_equal(E, EG)
     assert abs(F[0, 1] - ref) <= E[0, 1] + 1e-13
+
+
+def test_compiled_corner_first_against_numpy(monkeypatch):
+    # every call of the cells' corner test that test4, l_room_f3a and gunter1 make at
+    # 1e-6, compiled and by numpy (_corner_first(compiled=False), the reference): the
+    # same triangles, turned alike, the same corners; some cut in four (two corners)
+    calls, corner_first = [], adaptive._corner_first
+
+    def record(*a, **k):
+        calls.append((a, k))
+        return corner_first(*a, **k)
+
+    monkeypatch.setattr(adaptive, "_corner_first", record)
+    for name in ("test4.vs3", "l_room_f3a.vs3", "gunter1.vs3"):
+        ef.area_form_factors(ef.read_vs3(os.path.join(DATA, name)), tolerance=1e-6)
+    monkeypatch.undo()
+    corners = cut = 0
+    for a, k in calls:
+        (T, c), (T0, c0) = corner_first(*a, **k), corner_first(*a, **k, compiled=False)
+        assert np.array_equal(T, T0) and np.array_equal(c, c0)
+        corners += int(c.sum())
+        cut += len(T) > len(a[0])
+    assert corners > 1000 and cut > 0

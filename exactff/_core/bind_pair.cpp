@@ -195,6 +195,24 @@ py::tuple adaptive_levels(Array<double> T, Array<long long> depth, Array<long lo
                           r.back_faces);
 }
 
+py::tuple corner_first(Array<double> T, Array<double> Vb, Array<double> n, double dP,
+                       double reach, double hull_rtol) {
+    if (T.size() % 9 || (Vb.size() && (Vb.ndim() != 2 || Vb.shape(1) != 3)) || n.size() != 3)
+        throw std::invalid_argument("corner_first: T (t, 3, 3), Vb (m, 3), n (3,) expected");
+    std::vector<double> tri = exactff::bind::to_vector(T);
+    std::vector<unsigned char> corner;
+    {
+        py::gil_scoped_release release;
+        exactff::corner_first(tri, Vb.data(), Vb.size() / 3, n.data(), dP, reach, hull_rtol,
+                              corner);
+    }
+    py::array_t<bool> c(py::ssize_t(corner.size()));
+    std::copy(corner.begin(), corner.end(), c.mutable_data());
+    py::array_t<double> out = as_array(tri);
+    return py::make_tuple(out.reshape({py::ssize_t(tri.size() / 9), py::ssize_t(3), py::ssize_t(3)}),
+                          c);
+}
+
 py::tuple hidden_setup(Array<double> Qc, Array<double> W, Array<std::int64_t> start,
                        Array<std::int64_t> solid, Array<double> inner, py::dict tol) {
     const std::int64_t n = start.size() - 1;
@@ -263,6 +281,10 @@ PYBIND11_MODULE(_pair, m) {
           "adaptive_levels(...) -> (True, T, depth, rung, corner, hi, lo, diff, rnd, hiU, "
           "loU, rndU, slivers, points, back_faces) or (False,): the adaptive levels of an "
           "occluded pair's hidden part (levels.h)");
+    m.def("corner_first", &corner_first, py::arg("T"), py::arg("Vb"), py::arg("n"), py::arg("dP"),
+          py::arg("reach"), py::arg("hull_rtol"),
+          "corner_first(T, Vb, n, dP, reach, hull_rtol) -> (T, corner): the cells' triangles, "
+          "each with first a vertex a blocker touches (levels.h)");
     m.def("hidden_setup", &hidden_setup, py::arg("Qc"), py::arg("W"), py::arg("start"),
           py::arg("solid"), py::arg("inner"), py::arg("tol"),
           "hidden_setup(Qc, W, start, solid, inner, tol) -> (0, nQ, q0, RQ, V, counts, NK, "

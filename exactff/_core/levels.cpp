@@ -333,4 +333,95 @@ LevelResult adaptive_levels(const LevelArgs& a) {
     return out;
 }
 
+namespace {
+
+// a triangle's size: the largest of its coordinates' ranges
+double tri_size(const double* v) {
+    double s = 0;
+    for (int x = 0; x < 3; ++x)
+        s = std::max(s, std::max({v[x], v[3 + x], v[6 + x]}) - std::min({v[x], v[3 + x], v[6 + x]}));
+    return s;
+}
+
+// per vertex of the triangle v: the first of Vb's vertices (kept ones, in order) that
+// touches it, or -1
+void touching(const double* v, const std::vector<const double*>& Vb,
+              const std::vector<double>& off, double reach, double hull_rtol, long long* first) {
+    const double near = hull_rtol * tri_size(v);
+    const double within = std::max(near, reach);
+    for (int k = 0; k < 3; ++k) {
+        first[k] = -1;
+        for (size_t b = 0; b < Vb.size(); ++b) {
+            if (!(off[b] <= near)) continue;
+            const double dx = v[3 * k] - Vb[b][0], dy = v[3 * k + 1] - Vb[b][1],
+                         dz = v[3 * k + 2] - Vb[b][2];
+            if (std::sqrt(dx * dx + dy * dy + dz * dz) <= within) {
+                first[k] = static_cast<long long>(b);
+                break;
+            }
+        }
+    }
+}
+
+}  // namespace
+
+void corner_first(std::vector<double>& T, const double* Vb, std::int64_t m, const double* n,
+                  double dP, double reach, double hull_rtol, std::vector<unsigned char>& corner) {
+    const size_t t = T.size() / 9;
+    corner.assign(t, 0);
+    if (!t || !m) return;
+    // only the blocker vertices that may be on the plane for some triangle, in order
+    double size = 0;
+    for (size_t k = 0; k < t; ++k) size = std::max(size, tri_size(&T[9 * k]));
+    std::vector<const double*> keep;
+    std::vector<double> off;
+    for (std::int64_t b = 0; b < m; ++b) {
+        const double* p = Vb + 3 * b;
+        const double o = std::abs(p[0] * n[0] + p[1] * n[1] + p[2] * n[2] - dP);
+        if (o <= hull_rtol * size) {
+            keep.push_back(p);
+            off.push_back(o);
+        }
+    }
+    if (keep.empty()) return;
+    // a triangle with several such vertices cut in four (rules.py, quarter), after the rest
+    std::vector<double> T2, cut;
+    long long first[3];
+    for (size_t k = 0; k < t; ++k) {
+        const double* v = &T[9 * k];
+        touching(v, keep, off, reach, hull_rtol, first);
+        const int hits = (first[0] >= 0) + (first[1] >= 0) + (first[2] >= 0);
+        (hits > 1 ? cut : T2).insert((hits > 1 ? cut : T2).end(), v, v + 9);
+    }
+    for (size_t k = 0; k < cut.size() / 9; ++k) {
+        const double* v = &cut[9 * k];
+        double mid[3][3];   // ab, bc, ca
+        for (int x = 0; x < 3; ++x) {
+            mid[0][x] = (v[x] + v[3 + x]) / 2;
+            mid[1][x] = (v[3 + x] + v[6 + x]) / 2;
+            mid[2][x] = (v[6 + x] + v[x]) / 2;
+        }
+        const double* quads[4][3] = {{v, mid[0], mid[2]}, {mid[0], v + 3, mid[1]},
+                                     {mid[2], mid[1], v + 6}, {mid[0], mid[1], mid[2]}};
+        for (int q = 0; q < 4; ++q)
+            for (int c = 0; c < 3; ++c) T2.insert(T2.end(), quads[q][c], quads[q][c] + 3);
+    }
+    // the vertex touched by the earliest blocker vertex first
+    const size_t t2 = T2.size() / 9;
+    corner.assign(t2, 0);
+    for (size_t k = 0; k < t2; ++k) {
+        double* v = &T2[9 * k];
+        touching(v, keep, off, reach, hull_rtol, first);
+        int shift = -1;
+        for (int j = 0; j < 3; ++j)
+            if (first[j] >= 0 && (shift < 0 || first[j] < first[shift])) shift = j;
+        if (shift < 0) continue;
+        corner[k] = 1;
+        double w[9];
+        for (int j = 0; j < 3; ++j) std::copy(v + 3 * ((j + shift) % 3), v + 3 * ((j + shift) % 3) + 3, w + 3 * j);
+        std::copy(w, w + 9, v);
+    }
+    T.swap(T2);
+}
+
 }  // namespace exactff

@@ -77,6 +77,15 @@ struct LevelResult {
 
 LevelResult adaptive_levels(const LevelArgs& args);
 
+// The cells' triangles T (t, 3, 3) each with first a vertex where a blocker's vertex (Vb
+// (m, 3)) touches the emitter's plane n . x = dP (adaptive.py's _corner_first, the
+// reference): a vertex within hull_rtol of the triangle's size of Vb's vertex, or within
+// reach of it, with that vertex within hull_rtol of the size of the plane; a triangle
+// with two or three such vertices cut in four first (after the others, in order). Returns
+// the triangles and per triangle whether its first vertex is such a corner.
+void corner_first(std::vector<double>& T, const double* Vb, std::int64_t m, const double* n,
+                  double dP, double reach, double hull_rtol, std::vector<unsigned char>& corner);
+
 }  // namespace exactff
 
 #endif

@@ -15,6 +15,7 @@ from .. import _tolerances as tol
 from ..errors import NumericalError, misses_tolerance
 from ..geometry import area_vector, cross, receiver_frame
 from ._pair import adaptive_levels as _compiled_adaptive_levels
+from ._pair import corner_first as _compiled_corner_first
 from .closed_form import unoccluded_pairs
 from .events import cut_cells, event_lines
 from .hidden import hidden_setup, hidden_values
@@ -42,7 +43,7 @@ def _triangle_unoccluded(T, nP, Qc):
     return area_Q * f, area_Q * e
 
 
-def _corner_first(T, blockers, nP, dP, reach=0.0):
+def _corner_first(T, blockers, nP, dP, reach=0.0, compiled=True):
     """The triangles T (t, 3, 3), each with first a vertex where a blocker's vertex
     touches the emitter's plane, if it has one (within ``AREA_HULL_RTOL`` of the
     triangle's size of the plane, and of that vertex or within ``reach`` of it: the
@@ -53,7 +54,11 @@ def _corner_first(T, blockers, nP, dP, reach=0.0):
     functions of that direction alone without cutting towards the point. A triangle with
     two or three such vertices is first cut in four at its edges' midpoints (so that
     each of its corner quarters has one): returns as many triangles or more, and per
-    triangle whether its first vertex is such a corner."""
+    triangle whether its first vertex is such a corner. ``compiled`` (default): by
+    :mod:`exactff.area._pair` (``_core/levels.cpp``), else here, the reference."""
+    if compiled:
+        Vb = np.vstack(blockers) if len(blockers) else np.zeros((0, 3))
+        return _compiled_corner_first(T, Vb, nP, float(dP), float(reach), tol.AREA_HULL_RTOL)
     none = np.zeros(len(T), dtype=bool)
     if not len(T) or not blockers:
         return T, none
