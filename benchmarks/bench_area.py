@@ -24,6 +24,14 @@ Usage: python benchmarks/bench_area.py [--cube-k 8]
    1e-6 and 1e-9 (process and wall time, the rows' and reciprocity's invariants).
    ``--skip-slow`` leaves out gunter1 at 1e-9; ``--only-view3d`` runs this part
    alone.
+6. ``--goals`` alone (issue 49's speed goals, at tolerance 1e-6): process time of the
+   full matrix of gunter1, of the 106-surface box (:func:`box_106`: a 3 x 4 x 5 room of
+   unit squares with two unit cubes inside) and of gunter2
+   (``/work/shared/scenes/view3d/gunter2.vs3``; ``--gunter2-rows 0,19,...``: only those
+   rows, each timed, the matrix's time extrapolated from their mean and said so), against
+   View3D 4.0's times of issue 49 (0.009, 0.044 and 0.52 s) with the goals (30x, 20x,
+   20x); then gunter1's wall time on 1 and 2 threads (``executor=ThreadPoolExecutor``),
+   best of ``--repeat``, against the goal of 1.7x.
 5. ``--pair-path`` alone: the occluded pairs' compiled path against the numpy and GEOS
    reference it replaces, in one run at tolerance 1e-6 (test4, facet, gunter1; process
    time): the events compiled (``exactff/_core/pair.cpp``) or by numpy
@@ -133,11 +141,17 @@ def main():
     ap.add_argument("--pair-path", action="store_true",
                     help="only the occluded pairs' compiled path against its reference")
     ap.add_argument("--repeat", type=int, default=2, help="runs of each --pair-path timing")
+    ap.add_argument("--goals", action="store_true", help="only issue 49's speed goals")
+    ap.add_argument("--gunter2-rows", default="",
+                    help="--goals: rows of gunter2 timed, comma-separated (none: the whole "
+                         "matrix)")
     args = ap.parse_args()
     print(machine())
     print()
     if args.pair_path:
         return pair_path(args)
+    if args.goals:
+        return goals(args)
     if args.only_cube:
         return cube_matrix(args)
     if args.only_view3d:
@@ -251,6 +265,109 @@ def pair_path(args):
             best = min(best, time.perf_counter() - t0)
         base = base or best
         print(f"| {how} | {best:.3f} | {base / best:.2f} |", flush=True)
+
+
+def box_106():
+    """Issue 49's 106-surface box: a room of 3 x 4 x 5 (x, y, z) cut into 94 unit squares
+    facing in, with two unit cubes inside (12 faces facing out), floating: one at
+    (0.5, 0.5, 0.5)-(1.5, 1.5, 1.5), one at (1.4, 2.2, 2.8)-(2.4, 3.2, 3.8)."""
+    room = []
+    for F in ef.scenes.box_polygons((0, 0, 0), (3, 4, 5), 1, facing="in"):
+        u, v = F[1] - F[0], F[3] - F[0]
+        nu, nv = int(round(np.linalg.norm(u))), int(round(np.linalg.norm(v)))
+        for a in range(nu):
+            for b in range(nv):
+                room.append(np.array([F[0] + (a + i) / nu * u + (b + j) / nv * v
+                                      for i, j in ((0, 0), (1, 0), (1, 1), (0, 1))]))
+    cubes = (ef.scenes.box_polygons((0.5, 0.5, 0.5), (1.5, 1.5, 1.5), 1, facing="out")
+             + ef.scenes.box_polygons((1.4, 2.2, 2.8), (2.4, 3.2, 3.8), 1, facing="out"))
+    return ef.Scene.from_polygons(room + cubes)
+
+
+#: View3D 4.0's times of issue 49's table (s, gcc -O2, 2026-12-05) and the goals' ratios.
+GOALS = (("gunter1", 0.009, 30), ("106-surface box", 0.044, 20), ("gunter2", 0.52, 20))
+
+
+def goals(args):
+    """Part 6: issue 49's speed goals at 1e-6."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    print("Issue 49's goals at tolerance 1e-6 (process time, one run; View3D: issue 49's "
+          "figures):")
+    print()
+    print("| scene | surfaces | rows timed | exactff s (full matrix) | View3D s | ratio | goal "
+          "| points | max estimate | worst abs(row sum - 1) within estimates |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
+    g1 = ef.read_vs3(os.path.join(DATA, "gunter1.vs3"))
+    scenes = {"gunter1": g1, "106-surface box": box_106(),
+              "gunter2": ef.read_vs3("/work/shared/scenes/view3d/gunter2.vs3")}
+    for name, v3d, goal in GOALS:
+        scene = scenes[name]
+        n = len(scene)
+        rows = None
+        if name == "gunter2" and args.gunter2_rows:
+            rows = [int(r) for r in args.gunter2_rows.split(",")]
+        st, each = {}, []
+        t0 = time.process_time()
+        if rows is None:
+            F, E = ef.area_form_factors(scene, tolerance=1e-6, error=True, stats=st)
+        else:
+            FE = []
+            for r in rows:
+                t1 = time.process_time()
+                FE.append(ef.area_form_factors(scene, rows=[r], tolerance=1e-6, error=True,
+                                               stats=st))
+                each.append(f"{r}: {time.process_time() - t1:.2f} s")
+            F, E = np.vstack([f for f, _ in FE]), np.vstack([e for _, e in FE])
+        dt = time.process_time() - t0
+        full = dt if rows is None else dt * n / len(rows)
+        dev = np.abs(F.sum(axis=1) - 1)
+        within = bool(np.all(dev <= E.sum(axis=1) + 1e-13))
+        timed_rows = "all" if rows is None else f"{len(rows)} (extrapolated)"
+        print(f"| {name} | {n} | {timed_rows} | {full:.3f} | {v3d} | {full / v3d:.0f} | {goal} "
+              f"| {st['point_values']:,} | {E.max():.1e} | {dev.max():.1e} {within} |",
+              flush=True)
+        if each:
+            print(f"|   ({name}'s rows: {', '.join(each)}) |||||||||| ")
+    print()
+    print("The pair path's compiled levels and set-up against their numpy reference "
+          "(adaptive.COMPILED_LEVELS, hidden_setup(compiled=False)), same run:")
+    print()
+    print("| scene | numpy levels and set-up s | compiled s | ratio | points (both) | "
+          "largest abs difference | within the estimates |")
+    print("|---|---|---|---|---|---|---|")
+    import functools
+
+    from exactff.area import adaptive, hidden
+    for name in ("gunter1", "106-surface box"):
+        out = []
+        for compiled in (False, True):
+            adaptive.COMPILED_LEVELS = compiled
+            adaptive.hidden_setup = functools.partial(hidden.hidden_setup, compiled=compiled)
+            st = {}
+            t0 = time.process_time()
+            F, E = ef.area_form_factors(scenes[name], tolerance=1e-6, error=True, stats=st)
+            out.append((time.process_time() - t0, F, E, st["point_values"]))
+        adaptive.COMPILED_LEVELS, adaptive.hidden_setup = True, hidden.hidden_setup
+        (t0_, F0, E0, p0), (t1_, F1, E1, p1) = out
+        print(f"| {name} | {t0_:.3f} | {t1_:.3f} | {t0_ / t1_:.2f} | {p0:,} / {p1:,} "
+              f"| {np.abs(F0 - F1).max():.1e} | {bool(np.all(np.abs(F0 - F1) <= E0 + E1))} |",
+              flush=True)
+    print()
+    print("gunter1 at 1e-6, wall time (best of %d):" % args.repeat)
+    print()
+    print("| threads | wall s | speed-up | goal |")
+    print("|---|---|---|---|")
+    base = None
+    for k in (1, 2):
+        best = np.inf
+        for _ in range(args.repeat):
+            t0 = time.perf_counter()
+            with ThreadPoolExecutor(k) as pool:
+                ef.area_form_factors(g1, tolerance=1e-6, executor=pool)
+            best = min(best, time.perf_counter() - t0)
+        base = base or best
+        print(f"| {k} | {best:.3f} | {base / best:.2f} | {'-' if k == 1 else 1.7} |", flush=True)
 
 
 def view3d_table(args):

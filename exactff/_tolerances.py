@@ -644,7 +644,7 @@ SVBSP_COVER_MAX_CELLS = 16
 SVBSP_COVER_BUDGET = 2048
 SVBSP_COVER_OFFSET = 0.0123456789
 #: A ring is convex where every corner turns the normal's way or is collinear within
-#: this many ulps of its edges' cross product (``exactff.visibility.compiled._convex_rings``).
+#: this many ulps of its edges' cross product (``exactff.visibility.compiled.convex_rings``).
 CONVEX_TURN_ULPS = 8.0
 #: Compiled core: planes per axis of the grid the upper hemisphere is cut into before
 #: any shadow (``(tiles + 1)^2`` cells, each growing its own shadows), at least this

@@ -14,10 +14,11 @@ import numpy as np
 from . import _tolerances as tol
 from .geometry import cross
 
-__all__ = ["clip_halfspace", "split_polygon", "clip_above_horizon", "clip_front"]
+__all__ = ["clip_halfspace", "split_polygon", "clip_above_horizon", "clip_front", "NORMAL_FLOOR"]
 
-# far above the subnormals: a meet of planes whose products stay normal numbers
-_NORMAL_FLOOR = float(np.finfo(float).tiny) / tol.EPS
+#: Far above the subnormals: a meet of planes whose products stay normal numbers
+#: (clip_halfspace; the compiled set-up of the area pairs reads it too).
+NORMAL_FLOOR = float(np.finfo(float).tiny) / tol.EPS
 
 
 def clip_halfspace(V, counts, h):
@@ -89,7 +90,7 @@ def clip_halfspace(V, counts, h):
             use = ((np.abs(meet - x).sum(axis=1) <= tol.CLIP_MEET_ULPS * tol.EPS * (la + le) * cond)
                    & (cond * tol.CLIP_MEET_ULPS * tol.EPS < 1.0)
                    & (np.abs(m).sum(axis=1) > tol.CLIP_MEET_ULPS * tol.EPS * la * le)
-                   & (np.abs(d) > _NORMAL_FLOOR) & (la * le > _NORMAL_FLOOR))
+                   & (np.abs(d) > NORMAL_FLOOR) & (la * le > NORMAL_FLOOR))
         X[pm[use], pk[use]] = meet[use] + 0.0                 # + 0: no signed zeros
     out = np.empty((M, 2 * K, 3))
     out[:, 0::2] = V

@@ -468,6 +468,9 @@ def test_back_faces_kept_where_a_member_of_the_solid_was_culled(monkeypatch):
         calls.append((nP, Qc, blockers, setup))
         return hidden(X, nP, Qc, blockers, st, atol, setup, shortcuts, weights, bound_atol)
 
+    # the levels by numpy, which call hidden_values (the compiled ones do its
+    # work inside: test_compiled_levels_against_numpy)
+    monkeypatch.setattr(adaptive, "COMPILED_LEVELS", False)
     monkeypatch.setattr(adaptive, "hidden_values", record)
     ef.area_form_factors(scene, rows=[0], tolerance=1e-7, error=True)
     monkeypatch.setattr(adaptive, "hidden_values", hidden)
@@ -565,7 +568,12 @@ def test_hidden_part_against_the_engine_on_drawn_scenes(case):
 def _lose_images(monkeypatch, area, which=None, length=None):
     """Make the compiled hidden regions report the images of some points (``which``,
     indices into each call's points; all by default) as lost, the way it reports images
-    through infinity; with ``length``, report that as every point's pieces' perimeter."""
+    through infinity; with ``length``, report that as every point's pieces' perimeter.
+    The levels by numpy, whose hidden_values calls it (the compiled levels call the
+    compiled hidden pieces directly, and give a pair with a lost point to numpy)."""
+    from exactff.area import adaptive
+
+    monkeypatch.setattr(adaptive, "COMPILED_LEVELS", False)
     build = area.hidden_pieces
 
     def lose(*args, **kwargs):
@@ -721,6 +729,9 @@ def hidden_parts_against_the_engine(monkeypatch, scene, rows=None, seed=0):
         calls.append((X, nP, Qc, blockers, setup))
         return hidden(X, nP, Qc, blockers, st, atol, setup, shortcuts, weights, bound_atol)
 
+    # the levels by numpy, which call hidden_values (the compiled ones do its
+    # work inside: test_compiled_levels_against_numpy)
+    monkeypatch.setattr(adaptive, "COMPILED_LEVELS", False)
     monkeypatch.setattr(adaptive, "hidden_values", record)
     ef.area_form_factors(scene, rows=rows, tolerance=1e-6, error=True)
     monkeypatch.setattr(adaptive, "hidden_values", hidden)

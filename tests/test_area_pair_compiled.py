@@ -1,7 +1,9 @@
 """An occluded pair's compiled path (exactff/_core/pair.cpp, module exactff.area._pair)
 against the numpy and GEOS reference it replaces: the visibility events of every
 occluded pair of View3D's files, the same segments to the bit and the same events culled;
-and the events of a blocker between two squares against the lines derived by hand."""
+and the events of a blocker between two squares against the lines derived by hand; the
+adaptive levels (levels.cpp) and the hidden parts' set-up (hidden_setup.cpp) against
+their numpy reference, call by call."""
 
 import os
 
@@ -118,6 +120,9 @@ def test_hidden_parts_kept_in_doubles_within_the_estimates(monkeypatch):
         calls.append((X, nP, Qc, blockers, atol, setup))
         return values(X, nP, Qc, blockers, st, atol, setup, *a, **k)
 
+    # the levels by numpy, which call hidden_values (the compiled ones do its
+    # work inside: test_compiled_levels_against_numpy)
+    monkeypatch.setattr(adaptive, "COMPILED_LEVELS", False)
     monkeypatch.setattr(adaptive, "hidden_values", record)
     ef.area_form_factors(ef.read_vs3(os.path.join(DATA, "gunter1.vs3")), rows=[17],
                          tolerance=1e-6)
@@ -259,3 +264,197 @@ def test_compiled_cells_of_a_square():
     L = np.array([[0, 0], [2, 0], [2, 1], [1, 1], [1, 2], [0, 2]], float)
     assert not compiled_cut_cells(P2=L, segments=np.zeros((0, 2, 2)), step=1e-9, merge=1e-12,
                                   sliver=1e-14)[2]
+
+
+def _level_calls(monkeypatch, scene, rows, tolerance):
+    """Every call of the adaptive levels that the rows make (by numpy), with copies of
+    its arguments: (args, acc) for :func:`exactff.area.adaptive._levels`."""
+    calls, levels = [], adaptive._adaptive_levels
+
+    def record(*args):
+        acc = args[-1]
+        calls.append((tuple(a.copy() if isinstance(a, np.ndarray) else a for a in args[:-1]),
+                      {k: list(v) for k, v in acc.items()}))
+        return levels(*args)
+
+    monkeypatch.setattr(adaptive, "COMPILED_LEVELS", False)
+    monkeypatch.setattr(adaptive, "_adaptive_levels", record)
+    ef.area_form_factors(scene, rows=rows, tolerance=tolerance)
+    monkeypatch.undo()
+    return calls
+
+
+@pytest.mark.parametrize("name, rows, tolerance", [("test4.vs3", None, 1e-9),
+                                                   ("facet.vs3", None, 1e-9),
+                                                   ("gunter1.vs3", [8, 17], 1e-6)])
+def test_compiled_levels_against_numpy(monkeypatch, name, rows, tolerance):
+    # every call of the adaptive levels (_core/levels.cpp) that the rows make, compiled
+    # and by numpy (adaptive._adaptive_levels, the reference) from the same triangles:
+    # the same triangles accepted in the same order, at the same level, rung and corner,
+    # the same slivers and points, and the rules' sums equal to rounding (the nodes' sums
+    # are taken in another order), far within the nodes' estimates
+    calls = _level_calls(monkeypatch, ef.read_vs3(os.path.join(DATA, name)), rows, tolerance)
+    assert len(calls) > 10
+    for args, acc in calls:
+        got, ref = ({k: list(v) for k, v in acc.items()} for _ in range(2))
+        monkeypatch.setattr(adaptive, "COMPILED_LEVELS", True)
+        monkeypatch.setattr(adaptive, "_adaptive_levels", None)      # no fallback taken
+        r_got = adaptive._levels(*args, got)
+        monkeypatch.undo()
+        r_ref = adaptive._adaptive_levels(*args, ref)
+        assert not len(r_got[0]) and not len(r_ref[0])
+        assert r_got[4] == pytest.approx(r_ref[4], rel=1e-12, abs=1e-300)   # slivers
+        assert r_got[5] == r_ref[5]                                        # points
+        got, ref = ({k: np.concatenate(v) if v else np.zeros(0) for k, v in a.items()}
+                    for a in (got, ref))
+        for k in ("T", "depth", "rung", "corner", "checked"):
+            assert np.array_equal(got[k], ref[k]), k
+        scale = np.abs(ref["rnd"]) + np.abs(ref["rndU"]) + 1e-300
+        for k in ("hi", "lo", "diff", "hiU", "loU"):
+            assert np.all(np.abs(got[k] - ref[k]) <= 1e-12 * np.abs(ref[k]) + 1e-3 * scale), k
+        for k in ("rnd", "rndU"):
+            assert np.allclose(got[k], ref[k], rtol=1e-12, atol=0), k
+
+
+def test_compiled_levels_matrix_against_numpy(monkeypatch):
+    # test4's full matrix at 1e-9 both ways: the same points, values within 1e-13 of each
+    # other (and so within the estimates), estimates alike
+    scene = ef.read_vs3(os.path.join(DATA, "test4.vs3"))
+    out = []
+    for compiled in (True, False):
+        monkeypatch.setattr(adaptive, "COMPILED_LEVELS", compiled)
+        st = {}
+        out.append(ef.area_form_factors(scene, tolerance=1e-9, error=True, stats=st) + (st,))
+    (F, E, st), (G, EG, sg) = out
+    assert st == sg and st["point_values"] > 10_000
+    assert np.all(np.abs(F - G) <= 1e-13) and np.allclose(E, EG, rtol=1e-9, atol=1e-16)
+
+
+@pytest.mark.parametrize("name, rows", [("gunter1.vs3", range(0, 25, 3)), ("test4.vs3", None),
+                                        ("facet.vs3", None), ("cornell", [0, 1, 10, 16]),
+                                        ("furnished", [0, 5, 29]), ("inward", [0, 1])])
+def test_compiled_hidden_setup_against_numpy(monkeypatch, name, rows):
+    # every hidden parts' set-up that the rows make (at 1e-6), compiled
+    # (_core/hidden_setup.cpp) and by numpy (hidden_setup(compiled=False), the reference):
+    # None alike; else the same blockers kept, vertex counts and solids, the vertices
+    # (clipped to Qc's plane: numpy's matrix products may fuse a multiply-add) within a
+    # few units of rounding of the scene's size, the normals and the box alike
+    from exactff.area import hidden
+
+    # (furnished: a room of 24 squares facing in with a cube inside; inward: a closed box
+    # facing in between two squares facing each other, a convex solid whose members'
+    # normals the set-up turns outward)
+    floor = [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]]
+    scene = (ef.scenes.cornell_box(closed=True) if name == "cornell" else
+             ef.scenes.furnished_box(2, [((.3, .3, .2), (.6, .7, .5))]) if name == "furnished"
+             else ef.Scene.from_polygons([floor, [[x, y, 3] for x, y, _ in floor[::-1]]]
+                                         + ef.scenes.box_polygons((.3, .3, 1), (.7, .6, 2)))
+             if name == "inward" else ef.read_vs3(os.path.join(DATA, name)))
+    calls, setup = [], hidden.hidden_setup
+
+    def record(*a, **k):
+        calls.append((a, k))
+        return setup(*a, **k)
+
+    monkeypatch.setattr(adaptive, "hidden_setup", record)
+    ef.area_form_factors(scene, rows=rows, tolerance=1e-6)
+    monkeypatch.undo()
+    assert len(calls) > 5
+    size = float(np.ptp(scene.vertices, axis=0).max())
+    near = 8 * tol.EPS * float(np.abs(scene.vertices).max())
+    solids = 0
+    for a, k in calls:
+        A, B = setup(*a, **k), setup(*a, **k, compiled=False)
+        assert (A is None) == (B is None)
+        if A is None:
+            continue
+        assert A.parts.shape[0] == 0 == B.parts.shape[0] and np.array_equal(A.corners, B.corners)
+        assert np.array_equal(A.counts, B.counts) and np.array_equal(A.group, B.group)
+        assert A.V.shape == B.V.shape and np.abs(A.V - B.V).max() <= near
+        assert all(np.abs(x - y).max() <= near for x, y in zip(A.Kc, B.Kc))
+        assert len(A.Kc) == len(B.Kc)
+        for f in ("nQ", "q0", "RQ", "NK"):
+            assert np.allclose(getattr(A, f), getattr(B, f), rtol=0, atol=1e-14), f
+        assert np.abs(A.lo - B.lo).max() <= near and np.abs(A.hi - B.hi).max() <= near
+        assert A.extent == pytest.approx(B.extent, rel=1e-14, abs=near / size)
+        solids += int((A.group >= 0).sum())
+    if name in ("cornell", "furnished", "inward"):
+        assert solids > 0                  # the blocks' faces as members of their solids
+
+
+def test_compiled_hidden_setup_declines_what_it_does_not_build():
+    # a receiver not strictly convex (a vertex on an edge's line), or a blocker not
+    # convex (an L), is declined (status 2) and built by numpy; nothing in front: None
+    from exactff.area import hidden
+    from exactff.area._pair import hidden_setup as compiled
+
+    names = ("EPS", "CONVEX_TURN_ULPS", "CLIP_MEET_ULPS", "AREA_STRICT_TURN", "AREA_HULL_RTOL")
+    t = {k: getattr(tol, k) for k in names} | {"NORMAL_FLOOR": 1e-292}
+    Q = np.array([[0, 0, 1], [0, 1, 1], [1, 1, 1], [1, 0, 1]], float)        # facing down
+    Qline = np.array([[0, 0, 1], [0, 1, 1], [1, 1, 1], [1, 0.5, 1], [1, 0, 1]], float)
+    K = np.array([[.2, .2, .5], [.8, .2, .5], [.8, .8, .5], [.2, .8, .5]])
+    L = np.array([[.2, .2, .5], [.8, .2, .5], [.8, .4, .5], [.4, .4, .5], [.4, .8, .5],
+                  [.2, .8, .5]])
+    none = (np.zeros(0, dtype=np.int64), np.zeros((0, 3)))
+    for R, B, status in ((Q, K, 0), (Qline, K, 2), (Q, L, 2), (Q, K + [0, 0, 1], 1)):
+        r = compiled(R, B, np.array([0, len(B)]), *none, t)
+        assert r[0] == status
+        want = hidden.hidden_setup(R, [B], compiled=False)
+        got = hidden.hidden_setup(R, [B])
+        assert (got is None) == (want is None) == (status == 1)
+        if want is not None:
+            assert len(got.Kc) == len(want.Kc) and np.array_equal(got.V, want.V)
+
+
+
+def test_compiled_levels_give_pairs_with_lost_points_to_numpy(monkeypatch):
+    # a point with more pieces than AREA_MAX_PIECES is lost (here every point with any:
+    # 0 allowed): the compiled levels decline the pair and numpy's levels send its
+    # points to the bound 0 <= hidden <= U or the engine; the row both ways alike, the
+    # same points, engine calls and bounded points, and near the reference value
+    from test_area import OCCLUDED_REFERENCES, _square
+
+    plate, ref = OCCLUDED_REFERENCES[0]
+    scene = ef.Scene.from_polygons([_square(0, True), _square(2, False), plate])
+    out, declined, levels = [], [], adaptive._compiled_adaptive_levels
+
+    def record(*a, **k):
+        r = levels(*a, **k)
+        declined.append(not r[0])
+        return r
+
+    monkeypatch.setattr(adaptive, "_compiled_adaptive_levels", record)
+    monkeypatch.setattr(tol, "AREA_MAX_PIECES", 0)
+    for compiled in (True, False):
+        monkeypatch.setattr(adaptive, "COMPILED_LEVELS", compiled)
+        st = {}
+        out.append(ef.area_form_factors(scene, rows=[0], tolerance=1e-6, error=True, stats=st)
+                   + (st,))
+    (F, E, st), (G, EG, sg) = out
+    assert declined and all(declined)
+    assert st == sg and st["engine_fallback_points"] + st["bounded_points"] > 0
+    assert np.array_equal(F, G) and np.array_equal(E, EG)
+    assert abs(F[0, 1] - ref) <= E[0, 1] + 1e-13
+
+
+def test_compiled_corner_first_against_numpy(monkeypatch):
+    # every call of the cells' corner test that test4, l_room_f3a and gunter1 make at
+    # 1e-6, compiled and by numpy (_corner_first(compiled=False), the reference): the
+    # same triangles, turned alike, the same corners; some cut in four (two corners)
+    calls, corner_first = [], adaptive._corner_first
+
+    def record(*a, **k):
+        calls.append((a, k))
+        return corner_first(*a, **k)
+
+    monkeypatch.setattr(adaptive, "_corner_first", record)
+    for name in ("test4.vs3", "l_room_f3a.vs3", "gunter1.vs3"):
+        ef.area_form_factors(ef.read_vs3(os.path.join(DATA, name)), tolerance=1e-6)
+    monkeypatch.undo()
+    corners = cut = 0
+    for a, k in calls:
+        (T, c), (T0, c0) = corner_first(*a, **k), corner_first(*a, **k, compiled=False)
+        assert np.array_equal(T, T0) and np.array_equal(c, c0)
+        corners += int(c.sum())
+        cut += len(T) > len(a[0])
+    assert corners > 1000 and cut > 0

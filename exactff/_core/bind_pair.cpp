@@ -5,6 +5,9 @@
 #include <stdexcept>
 
 #include "bind_arrays.h"
+#include "hidden.h"
+#include "hidden_setup.h"
+#include "levels.h"
 #include "pair.h"
 
 namespace py = pybind11;
@@ -75,6 +78,185 @@ py::tuple cut_cells(Array<double> P2, Array<double> segments, double step, doubl
                           as_array(r.areas), r.ok);
 }
 
+exactff::TriangleRule as_rule(py::handle r) {
+    // a collapsed rule as (nodes, weights) on [-1, 1]; a symmetric one as (B (m, 3), w (m,))
+    auto t = r.cast<py::tuple>();
+    Array<double> x = t[0].cast<Array<double>>(), w = t[1].cast<Array<double>>();
+    exactff::TriangleRule out;
+    out.collapsed = x.ndim() == 1;
+    out.x = exactff::bind::to_vector(x);
+    out.w = exactff::bind::to_vector(w);
+    if ((out.collapsed && out.x.size() != out.w.size()) ||
+        (!out.collapsed && out.x.size() != 3 * out.w.size()))
+        throw std::invalid_argument("adaptive_levels: a rule of the wrong shape");
+    return out;
+}
+
+py::tuple adaptive_levels(Array<double> T, Array<long long> depth, Array<long long> rung,
+                          Array<bool> corner, Array<double> nP, Array<double> frame,
+                          double area_P, double total_area, double atol, double rules_err,
+                          long long start, py::sequence rules, bool symmetric, Array<double> Qc,
+                          Array<double> corners, Array<double> q0, Array<double> nQ,
+                          Array<double> RQ, Array<double> blockers, Array<long long> counts,
+                          Array<double> normals, Array<long long> groups, double extent,
+                          Array<double> parts, Array<long long> part_counts, Array<double> lo,
+                          Array<double> hi, py::dict tol) {
+    const std::int64_t t = T.size() / 9;
+    if (T.size() != 9 * t || depth.size() != t || rung.size() != t || corner.size() != t ||
+        nP.size() != 3 || frame.size() != 9 || Qc.ndim() != 2 || Qc.shape(1) != 3 ||
+        Qc.shape(0) < 3 || corners.ndim() != 2 || corners.shape(1) != 3 || q0.size() != 3 ||
+        nQ.size() != 3 || RQ.size() < 6 || blockers.ndim() != 3 || blockers.shape(2) != 3 ||
+        counts.size() != blockers.shape(0) || normals.size() != 3 * blockers.shape(0) ||
+        groups.size() != blockers.shape(0) || parts.ndim() != 3 ||
+        part_counts.size() != parts.shape(0) || lo.size() != 3 || hi.size() != 3 ||
+        py::len(rules) != 7)
+        throw std::invalid_argument("adaptive_levels: arrays of the wrong shapes");
+    for (std::int64_t k = 0; k < t; ++k)
+        if (rung.data()[k] != 0 && rung.data()[k] != 1)
+            throw std::invalid_argument("adaptive_levels: a rung not 0 or 1");
+    std::vector<exactff::TriangleRule> rule(7);
+    for (size_t k = 0; k < 7; ++k) rule[k] = as_rule(rules[k]);
+    exactff::LevelArgs a;
+    a.T = exactff::bind::to_vector(T);
+    a.depth = exactff::bind::to_vector(depth);
+    a.rung = exactff::bind::to_vector(rung);
+    a.corner.assign(corner.data(), corner.data() + t);
+    a.nP = nP.data();
+    a.frame = frame.data();
+    a.area_P = area_P;
+    a.total_area = total_area;
+    a.atol = atol;
+    a.rules_err = rules_err;
+    a.start = start;
+    for (size_t k = 0; k < 7; ++k) a.rules[k] = &rule[k];
+    a.symmetric = symmetric;
+    a.Qc = Qc.data();
+    a.n_q = Qc.shape(0);
+    exactff::HiddenArgs& h = a.hidden;
+    h.corners = corners.data();
+    h.n_corners = corners.shape(0);
+    h.q0 = q0.data();
+    h.nQ = nQ.data();
+    h.RQ = RQ.data();
+    h.blockers = blockers.data();
+    h.n_blockers = blockers.shape(0);
+    h.blocker_stride = blockers.shape(1);
+    h.counts = counts.data();
+    h.normals = normals.data();
+    h.groups = groups.data();
+    h.parts = parts.data();
+    h.n_parts = parts.shape(0);
+    h.part_stride = parts.shape(1);
+    h.part_counts = part_counts.data();
+    h.frame = frame.data();
+    h.extent = extent;
+    const auto num = [&](const char* k) { return tol[k].cast<double>(); };
+    h.vertex_ulps = num("AREA_IMAGE_ULPS");
+    h.sliver_ulps = num("AREA_SLIVER_ULPS");
+    h.max_pieces = tol["AREA_MAX_PIECES"].cast<long long>();
+    h.precise_rtol = num("AREA_IMAGE_PRECISE_RTOL");
+    h.c1 = num("C1");
+    h.c2 = num("C2");
+    h.eps = num("EPS");
+    a.lo = lo.data();
+    a.hi = hi.data();
+    long long lines = 1 + corners.shape(0);
+    for (std::int64_t k = 0; k < counts.size(); ++k) lines += counts.data()[k];
+    for (std::int64_t k = 0; k < part_counts.size(); ++k) lines += part_counts.data()[k];
+    a.lines = static_cast<double>(lines);
+    a.sliver_share = num("AREA_SLIVER_SHARE");
+    a.budget_share = num("AREA_IMAGE_BUDGET_SHARE");
+    a.back_face_rtol = num("AREA_BACK_FACE_RTOL");
+    a.edge_on_rtol = num("AREA_EDGE_ON_RTOL");
+    a.precise_share = num("AREA_IMAGE_PRECISE_SHARE");
+    a.boolean_ulps = num("AREA_BOOLEAN_ULPS");
+    a.image_rtol = num("AREA_IMAGE_RTOL");
+    a.eps = num("EPS");
+    a.c1 = num("C1");
+    a.c2 = num("C2");
+    a.offset_ulps = num("OFFSET_ROUNDING_ULPS");
+    a.max_depth = tol["AREA_MAX_DEPTH"].cast<long long>();
+    a.points_per_call = tol["AREA_POINTS_PER_CALL"].cast<long long>();
+    if (a.points_per_call < 1) throw std::invalid_argument("adaptive_levels: points_per_call < 1");
+    exactff::LevelResult r;
+    {
+        py::gil_scoped_release release;
+        r = exactff::adaptive_levels(a);
+    }
+    if (!r.ok) return py::make_tuple(false);
+    py::array_t<bool> cn(py::ssize_t(r.corner.size()));
+    std::copy(r.corner.begin(), r.corner.end(), cn.mutable_data());
+    py::array_t<double> tri = as_array(r.T);
+    return py::make_tuple(true, tri.reshape({py::ssize_t(r.T.size() / 9), py::ssize_t(3),
+                                             py::ssize_t(3)}),
+                          as_array(r.depth), as_array(r.rung), cn, as_array(r.hi),
+                          as_array(r.lo), as_array(r.diff), as_array(r.rnd), as_array(r.hiU),
+                          as_array(r.loU), as_array(r.rndU), r.slivers, r.points,
+                          r.back_faces);
+}
+
+py::tuple corner_first(Array<double> T, Array<double> Vb, Array<double> n, double dP,
+                       double reach, double hull_rtol) {
+    if (T.size() % 9 || (Vb.size() && (Vb.ndim() != 2 || Vb.shape(1) != 3)) || n.size() != 3)
+        throw std::invalid_argument("corner_first: T (t, 3, 3), Vb (m, 3), n (3,) expected");
+    std::vector<double> tri = exactff::bind::to_vector(T);
+    std::vector<unsigned char> corner;
+    {
+        py::gil_scoped_release release;
+        exactff::corner_first(tri, Vb.data(), Vb.size() / 3, n.data(), dP, reach, hull_rtol,
+                              corner);
+    }
+    py::array_t<bool> c(py::ssize_t(corner.size()));
+    std::copy(corner.begin(), corner.end(), c.mutable_data());
+    py::array_t<double> out = as_array(tri);
+    return py::make_tuple(out.reshape({py::ssize_t(tri.size() / 9), py::ssize_t(3), py::ssize_t(3)}),
+                          c);
+}
+
+py::tuple hidden_setup(Array<double> Qc, Array<double> W, Array<std::int64_t> start,
+                       Array<std::int64_t> solid, Array<double> inner, py::dict tol) {
+    const std::int64_t n = start.size() - 1;
+    if (Qc.ndim() != 2 || Qc.shape(1) != 3 || Qc.shape(0) < 3 || W.ndim() != 2 ||
+        W.shape(1) != 3 || n < 0 || (solid.size() != 0 && solid.size() != n) ||
+        inner.size() != 3 * solid.size())
+        throw std::invalid_argument("hidden_setup: arrays of the wrong shapes");
+    const std::int64_t* s = start.data();
+    for (std::int64_t k = 0; k < n; ++k)
+        if (s[k] < 0 || s[k + 1] - s[k] < 3 || s[k + 1] > W.shape(0))
+            throw std::out_of_range("hidden_setup: start out of range or a polygon of < 3 "
+                                    "vertices");
+    exactff::SetupArgs a;
+    a.Qc = Qc.data();
+    a.n_q = Qc.shape(0);
+    a.W = W.data();
+    a.start = s;
+    a.n = n;
+    a.solid = solid.size() ? solid.data() : nullptr;
+    a.inner = solid.size() ? inner.data() : nullptr;
+    const auto num = [&](const char* k) { return tol[k].cast<double>(); };
+    a.eps = num("EPS");
+    a.convex_ulps = num("CONVEX_TURN_ULPS");
+    a.meet_ulps = num("CLIP_MEET_ULPS");
+    a.normal_floor = num("NORMAL_FLOOR");
+    a.strict_turn = num("AREA_STRICT_TURN");
+    a.hull_rtol = num("AREA_HULL_RTOL");
+    exactff::SetupResult r;
+    {
+        py::gil_scoped_release release;
+        r = exactff::hidden_setup(a);
+    }
+    if (r.status) return py::make_tuple(r.status);
+    const auto vec = [](const double* p, py::ssize_t k) {
+        return as_array(std::vector<double>(p, p + k));
+    };
+    py::array_t<double> V = as_array(r.V);
+    return py::make_tuple(0, vec(r.nQ, 3), vec(r.q0, 3), vec(r.RQ, 9).reshape({3, 3}),
+                          V.reshape({py::ssize_t(r.counts.size()), py::ssize_t(r.stride),
+                                     py::ssize_t(3)}),
+                          as_array(r.counts), as_array(r.NK, 3), as_array(r.group),
+                          as_array(r.kept), vec(r.lo, 3), vec(r.hi, 3), r.extent);
+}
+
 }  // namespace
 
 PYBIND11_MODULE(_pair, m) {
@@ -89,4 +271,23 @@ PYBIND11_MODULE(_pair, m) {
           py::arg("merge"), py::arg("sliver"),
           "cut_cells(P2, segments, step, merge, sliver) -> (triangles (t, 3, 2), areas, ok): the "
           "emitter cut along the event lines (pair.h)");
+    m.def("adaptive_levels", &adaptive_levels, py::arg("T"), py::arg("depth"), py::arg("rung"),
+          py::arg("corner"), py::arg("nP"), py::arg("frame"), py::arg("area_P"),
+          py::arg("total_area"), py::arg("atol"), py::arg("rules_err"), py::arg("start"),
+          py::arg("rules"), py::arg("symmetric"), py::arg("Qc"), py::arg("corners"),
+          py::arg("q0"), py::arg("nQ"), py::arg("RQ"), py::arg("blockers"), py::arg("counts"),
+          py::arg("normals"), py::arg("groups"), py::arg("extent"), py::arg("parts"),
+          py::arg("part_counts"), py::arg("lo"), py::arg("hi"), py::arg("tol"),
+          "adaptive_levels(...) -> (True, T, depth, rung, corner, hi, lo, diff, rnd, hiU, "
+          "loU, rndU, slivers, points, back_faces) or (False,): the adaptive levels of an "
+          "occluded pair's hidden part (levels.h)");
+    m.def("corner_first", &corner_first, py::arg("T"), py::arg("Vb"), py::arg("n"), py::arg("dP"),
+          py::arg("reach"), py::arg("hull_rtol"),
+          "corner_first(T, Vb, n, dP, reach, hull_rtol) -> (T, corner): the cells' triangles, "
+          "each with first a vertex a blocker touches (levels.h)");
+    m.def("hidden_setup", &hidden_setup, py::arg("Qc"), py::arg("W"), py::arg("start"),
+          py::arg("solid"), py::arg("inner"), py::arg("tol"),
+          "hidden_setup(Qc, W, start, solid, inner, tol) -> (0, nQ, q0, RQ, V, counts, NK, "
+          "group, kept, lo, hi, extent), (1,): no blocker in front, or (2,): declined "
+          "(hidden_setup.h)");
 }

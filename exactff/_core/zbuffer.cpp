@@ -71,7 +71,7 @@ static inline double sum_abs3(double a, double b, double c) {
 static void clip_halfspace(const std::vector<double>& V, i64 M, i64 K,
                            const std::vector<i64>& counts, const double* h, const double C,
                            std::vector<double>& out, i64& Kn, std::vector<i64>& nc) {
-    const double floor_ = std::numeric_limits<double>::min() / EPS;   // _NORMAL_FLOOR
+    const double floor_ = std::numeric_limits<double>::min() / EPS;   // NORMAL_FLOOR
     const double hsum = sum_abs3(h[0], h[1], h[2]);
     std::vector<double> tmp(static_cast<size_t>(M * 2 * K * 3));
     std::vector<double> s(static_cast<size_t>(K));

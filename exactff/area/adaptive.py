@@ -3,7 +3,9 @@ is its unoccluded value (closed form) less the integral of the hidden part, take
 the cells between visibility events by pairs of triangle rules, a triangle refined (the
 higher pair, then cut in four) while its rules differ by more than its share of the
 absolute tolerance ``atol``, and the rules' differences checked against the unoccluded
-point values' integral, known exactly (docs/explanation/area-form-factors.md).
+point values' integral, known exactly (docs/explanation/area-form-factors.md). The
+levels run compiled (:mod:`exactff.area._pair`, ``_core/levels.cpp``, the GIL released);
+:func:`_adaptive_levels` is their numpy reference and takes the pairs they decline.
 """
 
 import numpy as np
@@ -12,13 +14,16 @@ import shapely
 from .. import _tolerances as tol
 from ..errors import NumericalError, misses_tolerance
 from ..geometry import area_vector, cross, receiver_frame
+from ._pair import adaptive_levels as _compiled_adaptive_levels
+from ._pair import corner_first as _compiled_corner_first
 from .closed_form import unoccluded_pairs
 from .events import cut_cells, event_lines
 from .hidden import hidden_setup, hidden_values
 from .points import point_values
-from .rules import CORNER_MIDDLE_RULE, quarter, rule_pair, triangle_areas, triangle_rule
+from .rules import (RULE_PAIRS, CORNER_MIDDLE_RULE, SYMMETRIC_RULES, quarter, rule_pair,
+                    triangle_areas, triangle_rule)
 
-__all__ = ["occluded_pair"]
+__all__ = ["COMPILED_LEVELS", "occluded_pair"]
 
 
 def _triangle_unoccluded(T, nP, Qc):
@@ -38,7 +43,7 @@ def _triangle_unoccluded(T, nP, Qc):
     return area_Q * f, area_Q * e
 
 
-def _corner_first(T, blockers, nP, dP, reach=0.0):
+def _corner_first(T, blockers, nP, dP, reach=0.0, compiled=True):
     """The triangles T (t, 3, 3), each with first a vertex where a blocker's vertex
     touches the emitter's plane, if it has one (within ``AREA_HULL_RTOL`` of the
     triangle's size of the plane, and of that vertex or within ``reach`` of it: the
@@ -49,7 +54,11 @@ def _corner_first(T, blockers, nP, dP, reach=0.0):
     functions of that direction alone without cutting towards the point. A triangle with
     two or three such vertices is first cut in four at its edges' midpoints (so that
     each of its corner quarters has one): returns as many triangles or more, and per
-    triangle whether its first vertex is such a corner."""
+    triangle whether its first vertex is such a corner. ``compiled`` (default): by
+    :mod:`exactff.area._pair` (``_core/levels.cpp``), else here, the reference."""
+    if compiled:
+        Vb = np.vstack(blockers) if len(blockers) else np.zeros((0, 3))
+        return _compiled_corner_first(T, Vb, nP, float(dP), float(reach), tol.AREA_HULL_RTOL)
     none = np.zeros(len(T), dtype=bool)
     if not len(T) or not blockers:
         return T, none
@@ -184,7 +193,7 @@ def _hidden_integral(S, Pc, Qc, nP, atol, area_P, whole, shortcuts, st, solid=No
     acc = {k: [] for k in ("T", "depth", "rung", "corner", "hi", "diff", "rnd", "hiU", "loU",
                            "lo", "rndU", "checked")}
     while True:
-        T, depth, rung, corner, sl, pts = _adaptive_levels(
+        T, depth, rung, corner, sl, pts = _levels(
             T, depth, rung, corner, nP, Qc, S, st, setup, atol, area_P, total_area,
             start, shortcuts, bound_atol, acc)
         slivers += sl
@@ -231,6 +240,55 @@ def _hidden_integral(S, Pc, Qc, nP, atol, area_P, whole, shortcuts, st, solid=No
     value = whole[0] - hidden
     err += max(area_Pc - total_area, 0.0) / area_P      # cells dropped or lost
     return value, err + whole[1], points
+
+
+#: The compiled levels' rules, in levels.h's order: the symmetric pair (degrees 4 and 8),
+#: the collapsed pairs of rung 0 and rung 1, and the third rule at a corner.
+_LEVEL_RULES = (SYMMETRIC_RULES[tol.AREA_SYMMETRIC_DEGREES[0]],
+                SYMMETRIC_RULES[tol.AREA_SYMMETRIC_DEGREES[1]],
+                *RULE_PAIRS[0], *RULE_PAIRS[1], CORNER_MIDDLE_RULE)
+#: The tolerances the compiled levels read, by name (read at each call).
+_LEVEL_TOLERANCES = (
+    "AREA_IMAGE_ULPS", "AREA_SLIVER_ULPS", "AREA_MAX_PIECES", "AREA_IMAGE_PRECISE_RTOL", "C1",
+    "C2", "EPS", "AREA_SLIVER_SHARE", "AREA_IMAGE_BUDGET_SHARE", "AREA_BACK_FACE_RTOL",
+    "AREA_EDGE_ON_RTOL", "AREA_IMAGE_PRECISE_SHARE", "AREA_BOOLEAN_ULPS", "AREA_IMAGE_RTOL",
+    "OFFSET_ROUNDING_ULPS", "AREA_MAX_DEPTH", "AREA_POINTS_PER_CALL")
+#: False: the levels by numpy (:func:`_adaptive_levels`), the reference the compiled
+#: ones are tested against (tests/test_area_pair_compiled.py).
+COMPILED_LEVELS = True
+
+
+def _levels(T, depth, rung, corner, nP, Qc, S, st, setup, atol, area_P, total_area, start,
+            shortcuts, bound_atol, acc):
+    """:func:`_adaptive_levels`, compiled (``_core/levels.cpp``, the GIL released) where
+    it can be: a set-up of blockers in front of Qc, and no point lost nor below 0 beyond
+    its estimate on the way (the bound and the engine are the reference's); else, and
+    without :data:`COMPILED_LEVELS`, the reference itself, from the same triangles.
+    Returns the same."""
+    if COMPILED_LEVELS and setup is not None and len(T):
+        symmetric = atol >= tol.AREA_LOW_RULES_TOLERANCE
+        rules_err = float(sum(float(d.sum()) for d in acc["diff"]))
+        r = _compiled_adaptive_levels(
+            T, depth.astype(np.int64), rung.astype(np.int64), corner.astype(bool), nP,
+            receiver_frame(nP), area_P, total_area, atol, rules_err, start, _LEVEL_RULES,
+            symmetric, Qc, setup.corners, setup.q0, setup.nQ, setup.RQ, setup.V,
+            setup.counts, setup.NK, setup.group, setup.extent, setup.parts,
+            setup.part_counts, setup.lo, setup.hi,
+            {k: getattr(tol, k) for k in _LEVEL_TOLERANCES})
+        if r[0]:
+            (Ta, da, ra, ca, hi, lo, diff, rnd, hiU, loU, rndU, slivers, points,
+             back) = r[1:]
+            if st is not None and back:
+                st.back_faces += int(back)
+            for k, v in (("T", Ta), ("depth", da), ("rung", ra), ("corner", ca), ("hi", hi),
+                         ("lo", lo), ("diff", diff), ("rnd", rnd), ("hiU", hiU),
+                         ("loU", loU), ("rndU", rndU),
+                         ("checked", np.zeros(len(hi), dtype=bool))):
+                acc[k].append(v)
+            empty = np.zeros(0, dtype=int)
+            return np.zeros((0, 3, 3)), empty, empty, np.zeros(0, dtype=bool), slivers, points
+    return _adaptive_levels(T, depth, rung, corner, nP, Qc, S, st, setup, atol, area_P,
+                            total_area, start, shortcuts, bound_atol, acc)
 
 
 def _refined(T, depth, rung, corner, start):

@@ -13,12 +13,13 @@ import numpy as np
 from .. import _tolerances as tol
 from ..errors import nonnegative
 from ..geometry import plane_frame, receiver_frame, unit_normal
-from ..halfspace import clip_front
+from ..halfspace import NORMAL_FLOOR, clip_front
 from ..methods import Exact
 from ..rings import padded
 from ..scene import Scene
-from ..visibility import convex_pieces
+from ..visibility import convex_pieces, convex_rings
 from ._hidden import hidden_pieces
+from ._pair import hidden_setup as _compiled_hidden_setup
 from .points import point_values
 
 __all__ = ["HiddenSetup", "hidden_setup", "hidden_values", "hidden_values_by_engine"]
@@ -55,7 +56,7 @@ class HiddenSetup(NamedTuple):
     extent: float
 
 
-def hidden_setup(Qc, blockers, solid=None, inner=None):
+def hidden_setup(Qc, blockers, solid=None, inner=None, compiled=True):
     """The :class:`HiddenSetup` of a receiver Qc and its blockers (once per pair): Qc's
     frame, the blockers' parts in front of its plane as convex pieces with their unit
     normals and convex solids, the pyramid's base (Qc where it is strictly convex, else
@@ -69,7 +70,31 @@ def hidden_setup(Qc, blockers, solid=None, inner=None):
     normals, and from a point outside the hull those it sees from behind are skipped
     (their images lie in those of the members it sees from the front). A member whose
     plane passes within ``AREA_HULL_RTOL`` of the hull's size of the inner point leaves
-    its solid as a whole (which side is out is not certain)."""
+    its solid as a whole (which side is out is not certain).
+
+    ``compiled`` (default): built by :mod:`exactff.area._pair` (``_core/hidden_setup.cpp``)
+    where Qc is strictly convex and every blocker's part in front is convex (one piece
+    each); else, and without ``compiled``, here, the reference it is tested against
+    (``tests/test_area_pair_compiled.py``)."""
+    if compiled:
+        W = np.concatenate([np.asarray(K, dtype=float) for K in blockers])
+        start = np.concatenate([[0], np.cumsum([len(K) for K in blockers])])
+        with_solids = solid is not None and inner is not None
+        r = _compiled_hidden_setup(
+            np.asarray(Qc, dtype=float), W, start,
+            np.asarray(solid if with_solids else [], dtype=np.int64),
+            np.asarray(inner if with_solids else np.zeros((0, 3)), dtype=float).reshape(-1, 3),
+            {k: getattr(tol, k) for k in ("EPS", "CONVEX_TURN_ULPS", "CLIP_MEET_ULPS",
+                                          "AREA_STRICT_TURN", "AREA_HULL_RTOL")}
+            | {"NORMAL_FLOOR": NORMAL_FLOOR})
+        if r[0] == 1:
+            return None
+        if r[0] == 0:
+            _, nQ, q0, RQ, V, counts, NK, group, _, lo, hi, extent = r
+            return HiddenSetup(nQ, q0, RQ, [V[k, :c] for k, c in enumerate(counts)],
+                               np.asarray(Qc, dtype=float), np.zeros((0, 3, 2)),
+                               np.zeros(0, dtype=np.int64), V, counts, NK, group, lo, hi,
+                               extent)
     nQ, q0, RQ, Q2 = plane_frame(Qc)
     clipped = [clip_front(np.asarray(K), nQ, q0) for K in blockers]
     kept = [k for k, K in enumerate(clipped) if K is not None]
@@ -90,11 +115,17 @@ def hidden_setup(Qc, blockers, solid=None, inner=None):
         Qparts = [(Qp - q0) @ RQ.T for Qp in convex_pieces(np.asarray(Qc, float), nQ)]
         parts, part_counts = padded(Qparts)
         parts = parts[:, :, :2]
-    pieces = [[Kp for Kp in convex_pieces(K, unit_normal(K))] for K in Kc]
+    # the blockers' convex pieces: a convex one (all tested at once) is its own piece,
+    # with its own unit normal
+    normals = [unit_normal(K) for K in Kc]
+    convex = convex_rings(np.concatenate(Kc), np.cumsum([0] + [len(K) for K in Kc]),
+                          np.array(normals))
+    pieces = [[K] if ok else convex_pieces(K, n) for K, n, ok in zip(Kc, normals, convex)]
     owner = np.repeat(kept, [len(p) for p in pieces])
+    NK = np.array([n if ok else unit_normal(Kp)
+                   for p, n, ok in zip(pieces, normals, convex) for Kp in p])
     pieces = [Kp for p in pieces for Kp in p]
     V, counts = padded(pieces)
-    NK = np.array([unit_normal(K) for K in pieces])
     group = np.full(len(pieces), -1, dtype=np.int64)
     if solid is not None:
         # outward: the inner point behind the plane

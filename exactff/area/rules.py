@@ -11,7 +11,7 @@ from .. import _tolerances as tol
 from ..geometry import cross, receiver_frame
 
 __all__ = ["triangle_rule", "symmetric_triangle_rule", "SYMMETRIC_RULES", "GAUSS_RULE",
-           "GAUSS_LOW_RULE", "CORNER_MIDDLE_RULE", "rule_pair", "quarter",
+           "GAUSS_LOW_RULE", "CORNER_MIDDLE_RULE", "RULE_PAIRS", "rule_pair", "quarter",
            "triangle_areas", "triangulate"]
 
 #: Gauss-Legendre nodes and weights on [-1, 1]: the far-field rule's pair (12 and 8
@@ -21,8 +21,8 @@ GAUSS_LOW_RULE = roots_legendre(tol.AREA_GAUSS_LOW_ORDER)
 CORNER_MIDDLE_RULE = roots_legendre(tol.AREA_CORNER_MIDDLE_ORDER)
 
 #: The adaptive rules' collapsed pairs, lower then higher: rung 0 and rung 1.
-_RULE_PAIRS = tuple(tuple(roots_legendre(k) for k in orders) for orders in
-                    (tol.AREA_RULE_ORDERS_MANY_CELLS, tol.AREA_RULE_ORDERS))
+RULE_PAIRS = tuple(tuple(roots_legendre(k) for k in orders) for orders in
+                   (tol.AREA_RULE_ORDERS_MANY_CELLS, tol.AREA_RULE_ORDERS))
 
 
 def triangle_rule(tri, rule=GAUSS_RULE):
@@ -145,7 +145,7 @@ def rule_pair(T, rung, corner, atol):
     on the check against the closed form alone."""
     if rung == 0 and not corner and atol >= tol.AREA_LOW_RULES_TOLERANCE:
         return tuple(symmetric_triangle_rule(T, d) for d in tol.AREA_SYMMETRIC_DEGREES)
-    return tuple(triangle_rule(T, rule) for rule in _RULE_PAIRS[rung])
+    return tuple(triangle_rule(T, rule) for rule in RULE_PAIRS[rung])
 
 
 def quarter(T):

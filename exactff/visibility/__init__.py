@@ -10,7 +10,7 @@ reported in ``stats`` and tested to be neutral.
 """
 
 from .compiled import (compiled_core, compiled_form_factor_rows, compiled_form_factors,
-                       compiled_solid_angles, convex_pieces)
+                       compiled_solid_angles, convex_pieces, convex_rings)
 from .bsp import BSPTree, build_bsp, coplanar_overlaps, front_to_back, scene_bsp
 from .coplanar import plane_overlaps
 from .engine import (is_convex_enclosure, visible_form_factors, visible_graph,
@@ -19,4 +19,4 @@ from .engine import (is_convex_enclosure, visible_form_factors, visible_graph,
 __all__ = ["visible_form_factors", "visible_solid_angles", "visible_graph", "is_convex_enclosure", "scene_bsp", "build_bsp",
            "front_to_back", "coplanar_overlaps", "plane_overlaps", "BSPTree",
            "compiled_form_factors", "compiled_form_factor_rows", "compiled_core",
-           "compiled_solid_angles", "convex_pieces"]
+           "compiled_solid_angles", "convex_pieces", "convex_rings"]

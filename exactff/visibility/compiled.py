@@ -28,7 +28,7 @@ from .bsp import build_bsp
 from .engine import is_convex_enclosure, visible_form_factors
 
 __all__ = ["compiled_core", "compiled_form_factors", "compiled_form_factor_rows",
-           "compiled_solid_angles", "convex_pieces", "SPHERE_HORIZON"]
+           "compiled_solid_angles", "convex_pieces", "convex_rings", "SPHERE_HORIZON"]
 
 #: The plane the compiled core's spherical rows cut the sphere at (through the point,
 #: this normal): any does; pieces across it are cut in two.
@@ -63,7 +63,7 @@ def convex_pieces(polygon, normal):
     1
     """
     P = np.asarray(polygon, dtype=float)
-    if _convex_rings(P, np.array([0, len(P)]), np.asarray(normal, dtype=float)[None])[0]:
+    if convex_rings(P, np.array([0, len(P)]), np.asarray(normal, dtype=float)[None])[0]:
         return [P]
     axis = int(np.argmax(np.abs(normal)))
     keep = [a for a in range(3) if a != axis]
@@ -105,7 +105,7 @@ def compiled_core(scene):
     return prepared(scene).get("compiled_core", _build_core)
 
 
-def _convex_rings(V, offsets, normals):
+def convex_rings(V, offsets, normals):
     """Which rings are convex (collinear vertices allowed), all at once: the test of
     :func:`convex_pieces` over concatenated rings.
 
@@ -125,7 +125,7 @@ def _convex_rings(V, offsets, normals):
     Examples
     --------
     >>> L = np.array([[0, 0, 0], [2, 0, 0], [2, 1, 0], [1, 1, 0], [1, 2, 0], [0, 2, 0.]])
-    >>> _convex_rings(np.vstack([L, L[:4]]), np.array([0, 6, 10]), np.array([[0, 0, 1.0]] * 2)).tolist()
+    >>> convex_rings(np.vstack([L, L[:4]]), np.array([0, 6, 10]), np.array([[0, 0, 1.0]] * 2)).tolist()
     [False, True]
     """
     nxt = successors(offsets)
@@ -153,7 +153,7 @@ def _build_core(scene):
     frag_normals = scene.normals[tree.source]
     counts = np.array([len(P) for P in tree.fragments], dtype=np.int64)
     offsets = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
-    convex = (_convex_rings(np.concatenate(tree.fragments), offsets, frag_normals)
+    convex = (convex_rings(np.concatenate(tree.fragments), offsets, frag_normals)
               if len(counts) else np.zeros(0, bool))
     pieces, errors, n_pieces = [], [], np.ones(len(counts), dtype=np.int64)
     fragment_errors = (tree.vertex_errors if tree.vertex_errors is not None
