@@ -125,15 +125,16 @@ def _near_coplanar(A, B):
     return False
 
 
-def _within_band(scene, a, b):
+def _within_band(scene, a, b, offsets):
     """Whether every vertex of polygon ``a`` lies within the near-coplanar band of polygon
     ``b``'s plane as the scene stores it (``n . x = d``, the floats taken as exact): the
     engines' rule (``exactff.predicates.coplanar_band``: 64 units of rounding ``u`` of
     ``|n| . |x| + |d|``), restated in rationals; False where a vertex lies beyond it by
     more than 4 ``u`` of those magnitudes, else None where one lies within 4 ``u`` of the
-    band's edge (the engines test it in floating point)."""
+    band's edge (the engines test it in floating point). ``offsets``: the scene's
+    ``plane_offsets`` (computed once per row)."""
     n = _rational(scene.normals[b])
-    d = Fraction(float(scene.plane_offsets[b]))
+    d = Fraction(float(offsets[b]))
     u = Fraction(1, 2 ** 53)
     edge = False
     for v in scene.polygons[a]:
@@ -146,12 +147,12 @@ def _within_band(scene, a, b):
     return None if edge else True
 
 
-def _coplanar_by_rule(scene, j, target):
+def _coplanar_by_rule(scene, j, target, offsets):
     """The engines' depth tie: True where each polygon lies within the other's band
     (a tie whichever plane the BSP tree splits by); False where neither does (the exact
     geometry orders them); None otherwise (one within the other's band only, or at a
     band's edge: the engines' BSP tree decides by which plane it splits with)."""
-    a, b = _within_band(scene, j, target), _within_band(scene, target, j)
+    a, b = _within_band(scene, j, target, offsets), _within_band(scene, target, j, offsets)
     if a is None or b is None:
         return None
     if a and b:
@@ -172,6 +173,22 @@ def _convex(poly2):
 def _left_of(a, b):
     """The linear function >= 0 on the left of the directed line ``a -> b``."""
     return lambda v: (b[0] - a[0]) * (v[1] - a[1]) - (b[1] - a[1]) * (v[0] - a[0])
+
+
+def _separated(A, B):
+    """Whether convex polygons ``A`` and ``B`` (2-D, counter-clockwise) share no interior
+    point: their bounding boxes meet in no area, or an edge of one has the other wholly
+    on its closed outer side (the separating axis theorem; exact)."""
+    for k in range(2):
+        if (max(v[k] for v in A) <= min(v[k] for v in B)
+                or max(v[k] for v in B) <= min(v[k] for v in A)):
+            return True
+    for X, Y in ((A, B), (B, A)):
+        for k in range(len(X)):
+            left = _left_of(X[k], X[(k + 1) % len(X)])
+            if all(left(v) <= 0 for v in Y):
+                return True
+    return False
 
 
 def _target_frame(T, P):
@@ -267,6 +284,7 @@ def visible_pieces(scene, point, target, exclude=()):
     # the cone from the point over the target: one half-space per edge
     cone = _cone(P, T)
     pieces = [target2]
+    offsets = scene.plane_offsets
     for j, polygon in enumerate(scene.polygons):
         if j == target or j in exclude or not pieces:
             continue
@@ -274,7 +292,7 @@ def visible_pieces(scene, point, target, exclude=()):
         g = [depth(v) for v in V]
         if all(x <= 0 for x in g):
             continue                     # behind the point
-        tie = _coplanar_by_rule(scene, j, target)
+        tie = _coplanar_by_rule(scene, j, target, offsets)
         if tie is None:
             return None                  # the engines' tree decides: undecided
         if tie and not _in_front_on_a_tie(scene, P, j, target):
@@ -312,9 +330,14 @@ def visible_pieces(scene, point, target, exclude=()):
             return None
         if a < 0:
             shadow = shadow[::-1]
-        # subtract the convex shadow: for each piece, its parts outside each edge
+        # subtract the convex shadow: for each piece, its parts outside each edge; a
+        # piece the shadow does not overlap stays whole (cutting it along the shadow's
+        # edges would leave the same area in more pieces, of larger rationals)
         remaining = []
         for piece in pieces:
+            if _separated(piece, shadow):
+                remaining.append(piece)
+                continue
             rest = piece
             for k in range(len(shadow)):
                 left = _left_of(shadow[k], shadow[(k + 1) % len(shadow)])

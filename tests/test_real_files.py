@@ -621,7 +621,9 @@ def test_real_closed_rows_sum_to_one_and_engines_agree(name, k, tmp_path):
 #: (after 5.5 s; a railing's compiled bound 0.22), 21905 and 9025 (after 10 and 8.6 s),
 #: 36801 (bound 0.57 on the floor slab under the walls); 15025 and 47609 face walls and
 #: windows flush back-to-back to 3e-14, where the engines parted beyond their bounds
-#: (the Python engine's rows on these scenes take a minute each: one in the default tier)
+#: (one in the default tier: the Python engine's BSP build takes 21 s on Duplex, 31 s on
+#: SampleHouse4, 86 s on tested_sample_project; the slow rows pass in 0.7-4 min, except
+#: 47609: its 11 parted polygons take the rational reference about 50 s each)
 BUILDING_ROWS = [("ifc-Duplex_A.obj", 1009),
                  pytest.param("ifc-Duplex_A.obj", 15025, marks=pytest.mark.slow),
                  pytest.param("ifc-SampleHouse4.obj", 21905, marks=pytest.mark.slow),

@@ -1,5 +1,6 @@
 """BSP tree (autopartition) of a scene, and its front-to-back traversal from a point."""
 
+import math
 from fractions import Fraction
 
 import numpy as np
@@ -7,7 +8,8 @@ import shapely
 
 from .. import _tolerances as tol
 from ..halfspace import split_polygon
-from ..predicates import coplanar_band_sides, coplanar_pairs, sides_of_point, tie_priority
+from ..predicates import (coplanar_band_sides, coplanar_pairs, gamma, sides_of_point,
+                          tie_priority)
 from ..prepared import prepared
 from ..rings import padded_buckets
 
@@ -123,71 +125,192 @@ def _split_plane(scene, s, cache):
     return cache[s]
 
 
-def _exact_value(plane, x):
-    """``N . x - c`` for a plane of :func:`_split_plane` and a point of rationals."""
+def _integer_plane(plane):
+    """A plane of :func:`_split_plane` as integers ``(M, e)``: ``M . x = e`` is
+    ``N . x = c`` times a positive power of two (its coefficients are dyadic, sums of
+    products of doubles)."""
     N, c = plane
-    return sum(a * b for a, b in zip(N, x)) - c
+    D = max(f.denominator for f in (*N, c))
+    return [f.numerator * (D // f.denominator) for f in N], c.numerator * (D // c.denominator)
+
+
+def _homogeneous_value(plane, X):
+    """``M . x - e w`` for an integer plane ``(M, e)`` (:func:`_integer_plane`) and a
+    point in homogeneous integers ``(x, w)`` (the point ``x / w``): ``w`` times the
+    plane's value there, up to the plane's positive factor."""
+    (M, e), (x, w) = plane, X
+    return M[0] * x[0] + M[1] * x[1] + M[2] * x[2] - e * w
 
 
 class _ExactPoints:
     """The exact points the build's vertices stand for: an input vertex is its floats;
     a crossing, recorded at the split that made it (its edge's end points and the plane),
-    is the exact crossing of the exact edge with the exact plane, computed in rationals
-    when asked for (the side of a vertex within the near-coplanar band, a crossing of an
-    ill-conditioned edge), as the compiled build keeps its crossings in quadruple
+    is the exact crossing of the exact edge with the exact plane, computed when asked
+    for (the side of a vertex within the near-coplanar band, a crossing of an edge
+    between crossings), as the compiled build keeps its crossings in quadruple
     precision or exactly. Keyed by the rounded point (two crossings that round alike
-    stand for one point, as a shared edge splits identically)."""
+    stand for one point, as a shared edge splits identically). A key stands for the
+    point it stood for when first asked about (an input vertex then stays one: the set
+    ``inputs``).
+
+    The points are rationals in homogeneous integers ``(x, w)``, the point ``x / w``:
+    an input vertex's doubles over one power of two, a crossing's from its ends' without
+    a common divisor taken out (rationals' greatest common divisors cost more than they
+    save here); the planes are integer planes (:func:`_integer_plane`)."""
 
     def __init__(self):
-        self.defined, self.known = {}, {}
+        self.defined, self.known, self.inputs = {}, {}, set()
 
     def record(self, X, A, B, plane):
         self.defined.setdefault(tuple(X.tolist()), (tuple(A.tolist()), tuple(B.tolist()), plane))
 
+    def is_input(self, key):
+        """Whether ``key`` stands for its own floats (an input vertex, or a point first
+        asked about before any crossing rounded to it)."""
+        if key in self.inputs:
+            return True
+        if key in self.known or key in self.defined:
+            return False
+        self.inputs.add(key)
+        return True
+
     def point(self, key):
+        """The exact point ``key`` stands for, in homogeneous integers ``(x, w)``."""
         if key in self.known:
             return self.known[key]
-        if key not in self.defined:
-            value = tuple(Fraction(c) for c in key)
+        if self.is_input(key):
+            ratios = [c.as_integer_ratio() for c in key]
+            w = max(q for _, q in ratios)
+            value = [a * (w // q) for a, q in ratios], w
         else:
             A, B, plane = self.defined[key]
             value = self.crossing(self.point(A), self.point(B), plane)
         self.known[key] = value
         return value
 
+    def side(self, plane, key):
+        """The exact side (-1, 0, +1) of the point ``key`` stands for of an integer
+        plane."""
+        X = self.point(key)
+        value = _homogeneous_value(plane, X)     # w > 0: the side's sign
+        return (value > 0) - (value < 0)
+
     @staticmethod
     def crossing(A, B, plane):
-        oa, ob = _exact_value(plane, A), _exact_value(plane, B)
-        return tuple((oa * y - ob * x) / (oa - ob) for x, y in zip(A, B))
+        """The crossing ``(o_A B - o_B A) / (o_A - o_B)`` (``o``: the plane's values) of
+        the segment between homogeneous points ``A = a / u``, ``B = b / v`` (``u, v >
+        0``) with an integer plane: ``(O_A b - O_B a) / (O_A v - O_B u)``,
+        ``O = M . x - e w``, its signs taken so that the divisor is positive."""
+        oa, ob = _homogeneous_value(plane, A), _homogeneous_value(plane, B)
+        if oa * B[1] - ob * A[1] < 0:
+            oa, ob = -oa, -ob                    # w > 0 (a zero coordinate rounds to +0)
+        x, w = [oa * y - ob * x for x, y in zip(A[0], B[0])], oa * B[1] - ob * A[1]
+        g = math.gcd(*x, w)         # in lowest terms: a crossing of crossings stays small
+        return [c // g for c in x], w // g
+
+    @staticmethod
+    def rounded(X):
+        """A homogeneous point rounded to the nearest doubles (an integer division is
+        correctly rounded, as ``float`` of the rational)."""
+        x, w = X
+        return np.array([c / w for c in x])
 
 
-def _rule_sides(scene, sign, V, vertex_source, planes, cache, exact):
+class _RuleCache:
+    """What the Python build's exact sides (:func:`_rule_sides`) reuse from node to node:
+    the exact split planes (``planes``, :func:`_split_plane`) and their nearest doubles,
+    the exact points (``points``, :class:`_ExactPoints`), the coplanar verdicts of
+    (source polygon, plane polygon) pairs and the exact sides of (plane, point) pairs
+    already decided, and the scene's plane offsets (computed once)."""
+
+    def __init__(self, scene):
+        self.planes, self.points = {}, _ExactPoints()
+        self.rounded, self.integers, self.coplanar, self.signs = {}, {}, {}, {}
+        self.plane_offsets = scene.plane_offsets
+
+    def integer_plane(self, key, plane):
+        """``plane`` (:func:`_split_plane`) as integers (:func:`_integer_plane`)."""
+        if key not in self.integers:
+            self.integers[key] = _integer_plane(plane)
+        return self.integers[key]
+
+    def rounded_plane(self, key, plane):
+        """``plane`` (:func:`_split_plane`) rounded to doubles ``(n, d)``, or None where a
+        coefficient overflows or falls below the normal range (no float filter then)."""
+        if key not in self.rounded:
+            try:
+                n = np.array([float(x) for x in plane[0]])
+                d = float(plane[1])
+            except OverflowError:
+                n = None
+            tiny = np.finfo(float).tiny
+            ok = (n is not None and np.all(np.isfinite(n)) and np.isfinite(d)
+                  and not np.any((n != 0) & (np.abs(n) < tiny)) and not 0 < abs(d) < tiny)
+            self.rounded[key] = (n, d) if ok else None
+        return self.rounded[key]
+
+
+def _rule_sides(scene, sign, V, vertex_source, planes, cache):
     """The sides of vertices ``V`` (their fragments' source polygons ``vertex_source``)
     for node planes (columns of ``sign``, the near-coplanar band's: 0 within it), by the
     rule of docs/explanation/conventions.md: a vertex within the band lies in the plane
     where its polygon is coplanar with the plane's (every vertex of one within the
     other's band, :func:`exactff.predicates.coplanar_pairs`); else the exact side of the
-    point it stands for (``exact``, :class:`_ExactPoints`) of the plane it is split
-    along (:func:`_split_plane`; an axis plane ``("axis", k, c)``). ``planes``: per
-    column, a source polygon or an axis plane. Changes ``sign`` in place (as the
-    compiled build, ``Builder::sides``)."""
-    for col, plane in enumerate(planes):
-        rows = np.flatnonzero(sign[:, col] == 0)
-        if not len(rows):
-            continue
+    point it stands for (:class:`_ExactPoints`) of the plane it is split along
+    (:func:`_split_plane`; an axis plane ``("axis", k, c)``). ``planes``: per column, a
+    source polygon or an axis plane; ``cache``: the build's :class:`_RuleCache`. Changes
+    ``sign`` in place (as the compiled build, ``Builder::sides``).
+
+    The exact side of an input vertex is the sign of ``N . x - c`` computed in doubles
+    where it exceeds that computation's error bound (the plane rounded to doubles and
+    four roundings, ``gamma(8) (|n| . |x| + |d|)`` of the rounded plane: a float
+    filter), else exactly (:meth:`_ExactPoints.side`), once per plane and point."""
+    columns = [(col, plane, np.flatnonzero(sign[:, col] == 0))
+               for col, plane in enumerate(planes)]
+    columns = [(col, plane, rows) for col, plane, rows in columns if len(rows)]
+    # the coplanar verdicts not yet known, every column's at once
+    need = {}
+    for col, plane, rows in columns:
+        if not isinstance(plane, tuple):
+            for src in np.unique(vertex_source[rows]).tolist():
+                if (src, plane) not in cache.coplanar:
+                    need[src, plane] = True
+    if need:
+        a, b = np.array(list(need), dtype=np.int64).T
+        verdict = coplanar_pairs(scene.vertices, scene.offsets, scene.normals,
+                                 cache.plane_offsets, a, b) | (a == b)
+        cache.coplanar.update(zip(need, verdict.tolist()))
+    points, known = cache.points, cache.signs
+    for col, plane, rows in columns:
         if isinstance(plane, tuple):
             P = _axis_plane(plane[1], plane[2])
         else:
-            src = vertex_source[rows]
-            pairs, inverse = np.unique(src, return_inverse=True)
-            coplanar = coplanar_pairs(scene.vertices, scene.offsets, scene.normals,
-                                      scene.plane_offsets, pairs, np.full(len(pairs), plane))
-            coplanar |= pairs == plane
-            rows = rows[~coplanar[inverse]]
-            P = _split_plane(scene, int(plane), cache)
-        for r in rows.tolist():
-            value = _exact_value(P, exact.point(tuple(V[r].tolist())))
-            sign[r, col] = (value > 0) - (value < 0)
+            coplanar = np.array([cache.coplanar[src, plane]
+                                 for src in vertex_source[rows].tolist()], dtype=bool)
+            rows = rows[~coplanar]
+            if not len(rows):
+                continue
+            P = _split_plane(scene, int(plane), cache.planes)
+        rounded = cache.rounded_plane(plane, P)
+        X = V[rows]
+        if rounded is None:
+            sure = np.zeros(len(rows), dtype=bool)
+            value = sure
+        else:
+            n, d = rounded
+            value = X @ n - d
+            sure = np.abs(value) > gamma(8) * (np.abs(X) @ np.abs(n) + abs(d))
+        integer = cache.integer_plane(plane, P)
+        for r, x, filtered, v in zip(rows.tolist(), X.tolist(), sure.tolist(),
+                                     value.tolist()):
+            key = tuple(x)
+            if filtered and points.is_input(key):
+                sign[r, col] = 1 if v > 0 else -1
+                continue
+            side = known.get((plane, key))
+            if side is None:
+                side = known[plane, key] = points.side(integer, key)
+            sign[r, col] = side
     return sign
 
 
@@ -205,10 +328,12 @@ def _crossings(plane, P, exact):
     every crossing alike, which the exact sides of later planes need (a vertex an ulp
     off a plane is on one side of it)."""
 
+    integer = _integer_plane(plane)
+
     def crossing(a, b):
-        X = np.array([float(c) for c in exact.crossing(
-            exact.point(tuple(P[a].tolist())), exact.point(tuple(P[b].tolist())), plane)])
-        exact.record(X, P[a], P[b], plane)
+        X = exact.rounded(exact.crossing(exact.point(tuple(P[a].tolist())),
+                                         exact.point(tuple(P[b].tolist())), integer))
+        exact.record(X, P[a], P[b], integer)
         return X
 
     return crossing
@@ -301,7 +426,7 @@ def build_bsp(scene, *, candidates=8, seed=0, engine="python"):
     # operations, only the fragments it splits go through Python
     counts0 = np.array([len(P) for P in fragments])
     stack = [(np.arange(n_frag), np.concatenate(fragments), counts0, -1, 0)]
-    exact_planes, exact_points = {}, _ExactPoints()
+    rules = _RuleCache(scene)
     while stack:
         ids, V, counts, parent, child = stack.pop()
         node = len(nodes_d)
@@ -337,8 +462,7 @@ def build_bsp(scene, *, candidates=8, seed=0, engine="python"):
         sign_c, s_c = coplanar_band_sides(Vs, Nc, Dc)
         vsrc = np.repeat(source[ids], counts)
         vsrc_s = vsrc if ms == m else vsrc[scored[owner]]
-        _rule_sides(scene, sign_c, Vs, vsrc_s, source[pool].tolist(), exact_planes,
-                    exact_points)
+        _rule_sides(scene, sign_c, Vs, vsrc_s, source[pool].tolist(), rules)
         score, imbalance, pos_c, neg_c = _plane_scores(sign_c, starts_s)
         j = int(np.argmin(score))        # the first of equal scores
         c, n, d = pool[j], Nc[j], Dc[j]
@@ -352,7 +476,7 @@ def build_bsp(scene, *, candidates=8, seed=0, engine="python"):
             axis = int(np.argmax(np.ptp(cen, axis=0)))
             na, da = np.eye(3)[axis:axis + 1], np.array([np.median(cen[:, axis])])
             a_sign = _rule_sides(scene, coplanar_band_sides(Vs, na, da)[0], Vs, vsrc_s,
-                                 [("axis", axis, float(da[0]))], exact_planes, exact_points)
+                                 [("axis", axis, float(da[0]))], rules)
             a_score, _, _, _ = _plane_scores(a_sign, starts_s)
             if a_score[0] < score[j]:
                 c, n, d = None, na[0], da[0]
@@ -362,7 +486,7 @@ def build_bsp(scene, *, candidates=8, seed=0, engine="python"):
             # the chosen plane against every fragment (scored on a sample, or the axis)
             sign, s = coplanar_band_sides(V, n[None], np.array([d]))
             _rule_sides(scene, sign, V, vsrc, [source[c] if c is not None else axis_plane],
-                        exact_planes, exact_points)
+                        rules)
             _, _, has_pos, has_neg = _plane_scores(sign, starts)
             chosen = sign[:, 0], s[:, 0], has_pos[:, 0], has_neg[:, 0]
         sign, s, has_pos, has_neg = chosen
@@ -379,12 +503,12 @@ def build_bsp(scene, *, candidates=8, seed=0, engine="python"):
         cut = has_pos & has_neg & ~here
         node_frags.append(ids[here].tolist())
         parts = {1: [], -1: []}
-        split_plane = (_split_plane(scene, int(source[c]), exact_planes) if c is not None
+        split_plane = (_split_plane(scene, int(source[c]), rules.planes) if c is not None
                        else _axis_plane(int(np.argmax(n)), d))
         for k in np.flatnonzero(cut).tolist():
             a, b = starts[k], starts[k + 1]
             f, bk = split_polygon(V[a:b], sign[a:b], s[a:b],
-                                  _crossings(split_plane, V[a:b], exact_points),
+                                  _crossings(split_plane, V[a:b], rules.points),
                                   snap=tol.BSP_SPLIT_SNAP_EPS)
             splits += 1
             for part, side in ((f, 1), (bk, -1)):
