@@ -286,7 +286,7 @@ struct Corner {
 // plane and branch, it arrived by) and each step's scratch, reused by every fragment
 struct Filter {
     struct Item {
-        size_t begin, count;
+        size_t begin;  // its corners run from here to the next item's (or the end)
         int plane;
         bool positive;
     };
@@ -374,6 +374,7 @@ class Core {
     bool insert_shadow(const Piece& q, int64_t f, const double* pp, int plane, bool positive,
                        std::vector<Plane>& sv, std::vector<ExactPlane>& xp, RowStats& st,
                        R piece_bound) const;
+    static void adopt(std::vector<Plane>& sv, size_t first);
     static void attach(std::vector<Plane>& sv, int plane, bool positive, int child,
                        size_t first, RowStats& st);
     void leave_out(const Piece& q, R charge, int why, RowStats& st) const;
@@ -385,6 +386,7 @@ class Core {
                     std::vector<ExactPlane>& xp, RowStats& st) const;
     // pieces.cpp
     V3 between(const Vertex& a, const Vertex& b, int64_t f, R* scale) const;
+    Vertex crossing(const Plane& P, const Vertex& x, const Vertex& y, R dx, R dy, R* t) const;
     static bool lex_less(const V3& x, const V3& y);
     static R arc(const Vertex& a, const Vertex& b);
     void run(const double* pp, const double* pn, const int8_t* node_side,

@@ -300,8 +300,7 @@ bool Core::cell_covered(const std::vector<Plane>& sv, const std::vector<ExactPla
             if (pos || neg) work.push_back({std::move(w.q), pos ? P.pos : P.neg});
             continue;
         }
-        // cut along the plane: the crossings within the split's rounding and their
-        // ends' errors (Core::process); a vertex on the plane goes with both parts
+        // cut along the plane (Core::crossing); a vertex on the plane goes with both parts
         Piece parts[2];
         for (size_t k = 0; k < m; ++k) {
             const size_t l = (k + 1) % m;
@@ -310,14 +309,9 @@ bool Core::cell_covered(const std::vector<Plane>& sv, const std::vector<ExactPla
             if (sg[k] * sg[l] >= 0) continue;
             const Vertex& x = w.q[k];
             const Vertex& y = w.q[l];
-            const R t = dist[k] / (dist[k] - dist[l]);
-            const V3 v{x.v.x + t * (y.v.x - x.v.x), x.v.y + t * (y.v.y - x.v.y),
-                       x.v.z + t * (y.v.z - x.v.z)};
-            const R len = norm(v);
-            const R err = P.err + P.slack +
-                          K_.split * K_.eps * ((1 - t) * x.length + t * y.length + len) / len +
-                          std::max(x.err * x.length, y.err * y.length) / len;
-            const Vertex cut{v, len, err, -1, -1, P.exact, -1};
+            R t;
+            Vertex cut = crossing(P, x, y, dist[k], dist[l], &t);
+            cut.on_plane = P.exact;
             parts[0].push_back(cut);
             parts[1].push_back(cut);
         }

@@ -65,6 +65,23 @@ V3 Core::between(const Vertex& a, const Vertex& b, int64_t f, R* scale) const {
     return {b.v.x - a.v.x, b.v.y - a.v.y, b.v.z - a.v.z};
 }
 
+// where edge x -> y crosses plane P, x and y at distances dx and dy from it (of
+// opposite signs): the new vertex (computed: no input id), within K.split ulps of its
+// ends' interpolated distance (and its own), plus its ends' and the plane's errors
+// carried over; `t` receives its parameter from x
+Vertex Core::crossing(const Plane& P, const Vertex& x, const Vertex& y, R dx, R dy, R* t) const {
+    *t = dx / (dx - dy);
+    const V3 v{x.v.x + *t * (y.v.x - x.v.x), x.v.y + *t * (y.v.y - x.v.y),
+               x.v.z + *t * (y.v.z - x.v.z)};
+    const R l = norm(v);
+    const R err = P.err + P.slack +
+                  K_.split * K_.eps * ((1 - *t) * x.length + *t * y.length + l) / l +
+                  std::max(x.err * x.length, y.err * y.length) / l;
+    Vertex c{v, l, err, -1, -1, -1, -1};
+    set_double(c);
+    return c;
+}
+
 bool Core::lex_less(const V3& x, const V3& y) {
     if (x.x != y.x) return x.x < y.x;
     if (x.y != y.y) return x.y < y.y;
@@ -116,10 +133,7 @@ void Core::run(const double* pp, const double* pn, const int8_t* node_side,
         const double below[3] = {-pn[0], -pn[1], -pn[2]};
         if (tiles > 0) sv[0].neg = tile_tree(below, tiles, sv, xp);
     }
-    // the tiles' parents (Core::attach)
-    for (size_t k = 0; k < sv.size(); ++k)
-        for (int c : {sv[k].pos, sv[k].neg})
-            if (c >= 0) sv[static_cast<size_t>(c)].parent = static_cast<int>(k);
+    adopt(sv, 0);  // the tiles' parents (Core::attach)
     if (nodes() == 0) return;
     struct Item {
         int64_t node;
@@ -229,7 +243,7 @@ void Core::process(int64_t f, const double* pp, const V3& p, const V3& n,
         set_double(pool.back());
         corners.push_back({static_cast<int32_t>(pool.size() - 1), i});
     }
-    items.push_back({0, corners.size(), 0, true});
+    items.push_back({0, 0, true});
     st.held = static_cast<int64_t>(corners.size());
     // the first step enters the root from a virtual link
     bool first = true;
@@ -349,7 +363,7 @@ void Core::process(int64_t f, const double* pp, const V3& p, const V3& n,
             }
         }
         if (!neg || !pos) {  // on one side (or in the plane: either side)
-            items.push_back({corners.size(), m, node, !neg});
+            items.push_back({corners.size(), node, !neg});
             corners.insert(corners.end(), cur.begin(), cur.end());
             st.held += static_cast<int64_t>(m);
             continue;
@@ -367,17 +381,9 @@ void Core::process(int64_t f, const double* pp, const V3& p, const V3& n,
                 const Vertex& x = swap ? at(j) : at(i);
                 const Vertex& y = swap ? at(i) : at(j);
                 const R dx = swap ? d[j] : d[i], dy = swap ? d[i] : d[j];
-                R t = dx / (dx - dy);
-                V3 v{x.v.x + t * (y.v.x - x.v.x), x.v.y + t * (y.v.y - x.v.y),
-                     x.v.z + t * (y.v.z - x.v.z)};
-                R l = norm(v);
-                // the new vertex: within K.split ulps of its ends' interpolated distance
-                // (and its own), plus its ends' and the plane's errors carried over
-                R err = P.err + P.slack +
-                        K_.split * K_.eps * ((1 - t) * x.length + t * y.length + l) / l +
-                        std::max(x.err * x.length, y.err * y.length) / l;
-                Vertex c{v, l, err, -1, -1, -1, -1};
-                set_double(c);
+                R t;
+                Vertex c = crossing(P, x, y, dx, dy, &t);
+                const R l = c.length;
                 // off the true plane by its tilt; off the true edge's by its ends'
                 // world errors over its distance (as the computation's, above)
                 c.gerr = xp[static_cast<size_t>(P.exact)].tilt +
@@ -423,7 +429,7 @@ void Core::process(int64_t f, const double* pp, const V3& p, const V3& n,
                 if ((si > 0 && sj < 0) || (si < 0 && sj > 0))
                     corners.push_back({cut[i], si > 0 ? cut_edge : cur[i].edge});
             }
-            items.push_back({begin, corners.size() - begin, node, sigma > 0});
+            items.push_back({begin, node, sigma > 0});
             st.held += static_cast<int64_t>(corners.size() - begin);
         }
     }

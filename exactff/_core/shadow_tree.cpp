@@ -416,6 +416,13 @@ bool Core::insert_shadow(const Piece& q, int64_t f, const double* pp, int plane,
     return true;
 }
 
+// the parents of the children of nodes `first` on (their links)
+void Core::adopt(std::vector<Plane>& sv, size_t first) {
+    for (size_t k = first; k < sv.size(); ++k)
+        for (int c : {sv[k].pos, sv[k].neg})
+            if (c >= 0) sv[static_cast<size_t>(c)].parent = static_cast<int>(k);
+}
+
 // hang `child` (a node, IN or OUT) on the side `positive` of node `plane`, where the
 // nodes from `first` on are new (their parents set from their links). A node whose
 // two sides are then both covered is covered itself (its region is the union of
@@ -426,9 +433,7 @@ bool Core::insert_shadow(const Piece& q, int64_t f, const double* pp, int plane,
 void Core::attach(std::vector<Plane>& sv, int plane, bool positive, int child, size_t first,
                   RowStats& st) {
     (positive ? sv[plane].pos : sv[plane].neg) = child;
-    for (size_t k = first; k < sv.size(); ++k)
-        for (int c : {sv[k].pos, sv[k].neg})
-            if (c >= 0) sv[static_cast<size_t>(c)].parent = static_cast<int>(k);
+    adopt(sv, first);
     if (child >= 0) sv[static_cast<size_t>(child)].parent = plane;
     if (child != IN) return;
     for (int node = plane; sv[node].pos == IN && sv[node].neg == IN;) {
