@@ -493,6 +493,44 @@ def test_fragments_in_cells_proven_covered_are_hidden_and_only_they():
     assert np.all(F[len(wall):][far] == 0)
 
 
+def test_sides_a_mesh_shares_are_one_node():
+    # a wall of triangles (two a square, a window of four squares left out) over a floor
+    # of tiles: the second triangle at each shared edge finds that edge's plane on the
+    # path to its leaf, with its cell on its side, and adds no node for it
+    # (Core::drop_repeated_sides). The shadow must stay the wall's: tiles show through
+    # the window and nowhere else (a side dropped where the plane on the path is another
+    # edge's, or the cell is on the far side, would open or close the shadow there)
+    edges = np.linspace(-2, 2, 9)
+    wall = []
+    for i, (x0, x1) in enumerate(zip(edges[:-1], edges[1:])):
+        for j, (y0, y1) in enumerate(zip(edges[:-1], edges[1:])):
+            if i in (3, 4) and j in (3, 4):
+                continue  # the window, |x| < 0.5 and |y| < 0.5
+            a, b, c, d = [x0, y0, 1.0], [x0, y1, 1.0], [x1, y1, 1.0], [x1, y0, 1.0]
+            wall += [np.array([a, b, c]), np.array([a, c, d])]
+    floor = np.linspace(-3, 3, 25)
+    tiles = [rect_xy(x0, x1, y0, y1, 2.0) for x0, x1 in zip(floor[:-1], floor[1:])
+             for y0, y1 in zip(floor[:-1], floor[1:])]
+    scene = ef.Scene.from_polygons(wall + tiles)
+    p, n = np.array([0.01, 0.02, 0.0]), np.array([0, 0, 1.0])
+    st = assert_engines_agree(scene, p, n)
+    assert st["repeated_sides"] > 50, st
+    F = COMPILED.point_form_factors(scene, p, n)
+    # the wall whole; behind it, tiles within the window's image (|x|, |y| < 1 about
+    # the point at z = 2) show, the others are hidden
+    assert np.sum(F[:len(wall)] > 0) == len(wall)
+    c = scene.centroids[len(wall):]
+    inside = (np.abs(c[:, 0] - 0.01) < 0.85) & (np.abs(c[:, 1] - 0.02) < 0.85)
+    outside = (np.abs(c[:, 0]) > 1.2) | (np.abs(c[:, 1]) > 1.2)
+    assert np.all(F[len(wall):][inside] > 0)
+    assert np.all(F[len(wall):][outside] == 0)
+    # behind the window, the tiles' sum is the unoccluded square the window's image cuts
+    # from the floor (z = 2: x = 2 w - 0.01, y = 2 w - 0.02 for |w| < 0.5 at z = 1)
+    square = ef.Scene.from_polygons([rect_xy(-1.01, 0.99, -1.02, 0.98, 2.0)])
+    seen = unoccluded_form_factor(square, p, n, 0)
+    assert F[len(wall):].sum() == pytest.approx(seen, rel=1e-12)
+
+
 def test_a_cell_partly_free_is_not_proven_covered():
     # a square near the point hides a small tile T behind it, near its image's edge: T's
     # cells of the cube map (gnomonic u = x / z in [0.47, 0.495], cells of width 1 / 32

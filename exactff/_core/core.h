@@ -227,6 +227,8 @@ struct RowStats {
     int64_t cover_proofs = 0, cover_cells = 0, cover_visits = 0, fragments_covered = 0,
             subtrees_covered = 0;
     int64_t collapsed = 0;      // shadow-tree nodes whose two sides were both covered
+    int64_t repeated_sides = 0;  // shadows' sides along a plane on their leaf's path
+                                 // (Core::drop_repeated_sides)
     bool covered = false;       // every direction the row sees covered: the walk stops
     int64_t kernels = 0;        // non-convex images whose kernel is their shadow
     int64_t omitted_sides = 0;  // shadows with a short side left out
@@ -374,6 +376,9 @@ class Core {
     bool insert_shadow(const Piece& q, int64_t f, const double* pp, int plane, bool positive,
                        std::vector<Plane>& sv, std::vector<ExactPlane>& xp, RowStats& st,
                        R piece_bound) const;
+    static void drop_repeated_sides(int plane, bool positive, const std::vector<Plane>& sv,
+                                    const std::vector<ExactPlane>& xp, std::vector<Plane>& chain,
+                                    std::vector<size_t>& chain_edge, RowStats& st);
     static void adopt(std::vector<Plane>& sv, size_t first);
     static void attach(std::vector<Plane>& sv, int plane, bool positive, int child,
                        size_t first, RowStats& st);

@@ -394,6 +394,7 @@ bool Core::insert_shadow(const Piece& q, int64_t f, const double* pp, int plane,
     st.unattributed += omit_charge;
     st.omitted_sides += omit_charge > 0;
     st.kernels += kernel_charge > 0;
+    drop_repeated_sides(plane, positive, sv, xp, chain, chain_edge, st);
     const size_t first = sv.size();
     if (chain.empty()) {  // the piece fills its leaf's cell: the cell is covered
         attach(sv, plane, positive, IN, first, st);
@@ -414,6 +415,40 @@ bool Core::insert_shadow(const Piece& q, int64_t f, const double* pp, int plane,
     attach(sv, plane, positive, base, first, st);
     st.shadow_planes += static_cast<int64_t>(chain.size());
     return true;
+}
+
+// drop from a shadow's chain the sides along a plane already on the path to its leaf
+// (reached by side `positive` of node `plane`) with the leaf on the piece's side of it:
+// the edge two adjacent polygons of a mesh share, the second's piece filtered into a
+// cell the first's shadow bounds there. The side is the same exact plane through p and
+// the same two input points, and the cell lies wholly on its piece's side, so the node
+// would send every later piece the way its ancestor already did (its sign at each vertex
+// is the ancestor's, up to the roundings of the two planes' normals, within the band
+// whose slivers the ancestor charges): the cell's shadow is the same without it
+void Core::drop_repeated_sides(int plane, bool positive, const std::vector<Plane>& sv,
+                               const std::vector<ExactPlane>& xp, std::vector<Plane>& chain,
+                               std::vector<size_t>& chain_edge, RowStats& st) {
+    if (chain.empty()) return;
+    bool branch = positive;
+    for (int node = plane, below = -1; node >= 0; below = node, node = sv[node].parent) {
+        if (below >= 0) branch = sv[node].pos == below;
+        const ExactPlane& Y = xp[static_cast<size_t>(sv[node].exact)];
+        if (Y.kind != 0) continue;
+        for (size_t i = 0; i < chain.size(); ++i) {
+            const ExactPlane& X = xp[static_cast<size_t>(chain[i].exact)];
+            if (X.kind != 0) continue;
+            const bool same = X.ua == Y.ua && X.ub == Y.ub;
+            if (!same && !(X.ua == Y.ub && X.ub == Y.ua)) continue;
+            // the leaf's side of the ancestor, and the piece's side, against X's normal
+            const int leaf = (branch ? 1 : -1) * sv[node].orient * (same ? 1 : -1);
+            if (leaf != chain[i].orient) continue;
+            chain.erase(chain.begin() + static_cast<std::ptrdiff_t>(i));
+            chain_edge.erase(chain_edge.begin() + static_cast<std::ptrdiff_t>(i));
+            ++st.repeated_sides;
+            if (chain.empty()) return;
+            break;
+        }
+    }
 }
 
 // the parents of the children of nodes `first` on (their links)
