@@ -209,6 +209,9 @@ struct RowStats {
     // exact tests of input points against planes through p already decided this row
     // (the same mesh vertex and edge recur in every fragment that shares them)
     PointCache on_plane;
+    // exact tests of a crossing (an input edge's with an exact plane) against another
+    // exact plane already decided this row, by the three's identities (Core::exactly_on)
+    PointCache on_crossing;
     // the vertex-error charges of visible pieces' edges with a computed end, by edge:
     // an edge two visible pieces of one polygon share cancels (the two pieces' sums
     // carry it with opposite signs); the rest is charged at the end of the row
@@ -309,7 +312,7 @@ struct RowScratch {
     std::vector<ExactPlane> xp;
     Filter work;
     KeyTable<EdgeCharge> edges;
-    PointCache on_plane;
+    PointCache on_plane, on_crossing;
 };
 
 class Core {
@@ -372,6 +375,8 @@ class Core {
     bool exactly_on(std::vector<ExactPlane>& xp, int k, const double* p, int64_t f,
                     const Vertex& u, RowStats& st) const;
     bool exactly_on_input(const ExactPlane& Q, const double* p, const double* x) const;
+    bool crossing_on(const ExactPlane& P, const ExactPlane& Q, const double* p, int64_t ia,
+                     int64_t ib) const;
     static V3 input_plane(const double* p, const double* a, const double* b);
     bool insert_shadow(const Piece& q, int64_t f, const double* pp, int plane, bool positive,
                        std::vector<Plane>& sv, std::vector<ExactPlane>& xp, RowStats& st,

@@ -112,8 +112,10 @@ void Core::run(const double* pp, const double* pn, const int8_t* node_side,
     work.pool_peak = 0;
     std::swap(st.edges, scratch.edges);
     std::swap(st.on_plane, scratch.on_plane);
+    std::swap(st.on_crossing, scratch.on_crossing);
     st.edges.clear();
     st.on_plane.clear();
+    st.on_crossing.clear();
     // (given back when the row is done, whichever way it leaves)
     struct GiveBack {
         RowStats& st;
@@ -121,6 +123,7 @@ void Core::run(const double* pp, const double* pn, const int8_t* node_side,
         ~GiveBack() {
             std::swap(st.edges, scratch.edges);
             std::swap(st.on_plane, scratch.on_plane);
+            std::swap(st.on_crossing, scratch.on_crossing);
         }
     } give_back{st, scratch};
     // the root: the horizon, covered below
@@ -198,7 +201,7 @@ void Core::run(const double* pp, const double* pn, const int8_t* node_side,
         stack.capacity() * sizeof(Item) + work.pool_peak * sizeof(Vertex) +
         static_cast<size_t>(st.held_peak) * sizeof(Corner) +
         st.edges.bytes() +
-        st.on_plane.bytes() + st.held_bytes);
+        st.on_plane.bytes() + st.on_crossing.bytes() + st.held_bytes);
     // a visible sliver whose shadow was left out may wrongly show any later piece
     // behind it: its area goes to every receiving polygon's band bound
     if (st.unattributed > 0)

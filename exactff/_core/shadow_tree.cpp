@@ -101,6 +101,7 @@ Expansion Core::exact_value(const ExactPlane& X, const double* p, const double* 
 // mesh vertex and edge recur in every fragment that shares them)
 bool Core::point_on_plane(const ExactPlane& Q, const double* p, const double* x, int64_t ux,
                           RowStats& st) const {
+    if (ux == Q.ua || ux == Q.ub) return true;  // a point that defines it (kind 0)
     const int64_t a = std::min(Q.ua, Q.ub), b = std::max(Q.ua, Q.ub);
     const int known = st.on_plane.find(a, b, ux);
     if (known >= 0) return known != 0;
@@ -166,6 +167,32 @@ bool Core::exactly_on(std::vector<ExactPlane>& xp, int k, const double* p, int64
          point_on_plane(Q, p, P.b, P.ub, st))) {
         return true;
     }
+    // the same crossing against the same plane recurs in every fragment that shares the
+    // edge (a mesh's): decided once a row, by the identities of P, Q and the edge (each
+    // pair of ids packed into one key where they fit 32 bits, as they do below 2^31
+    // input points and exact planes)
+    auto pair_key = [](int64_t x, int64_t y, int64_t* key) {
+        const int64_t lo = std::min(x, y) + (int64_t{1} << 31), hi = std::max(x, y) + (int64_t{1} << 31);
+        if (lo < 0 || hi >= (int64_t{1} << 32)) return false;
+        *key = static_cast<int64_t>((static_cast<uint64_t>(lo) << 32) | static_cast<uint64_t>(hi));
+        return true;
+    };
+    int64_t kp, kq, ke;
+    const bool keyed = pair_key(P.ua, P.ub, &kp) && pair_key(Q.ua, Q.ub, &kq) &&
+                       pair_key(uid_[ia], uid_[ib], &ke);
+    if (keyed) {
+        const int known = st.on_crossing.find(kp, kq, ke);
+        if (known >= 0) return known != 0;
+    }
+    const bool on = crossing_on(P, Q, p, ia, ib);
+    if (keyed) st.on_crossing.insert(kp, kq, ke, on);
+    return on;
+}
+
+// whether the crossing of input edge ia -> ib with exact plane P lies on exact plane Q:
+// the sign of Q(a) P(b) - P(a) Q(b), filtered in long double, else exact
+bool Core::crossing_on(const ExactPlane& P, const ExactPlane& Q, const double* p, int64_t ia,
+                       int64_t ib) const {
     {   // the filter: Q(a) P(b) - P(a) Q(b) in long double, with its error bound
         R qa, eqa, qb, eqb, pa, epa, pb, epb;
         filtered(Q.kind, p, Q.a, Q.b, &V_[3 * ia], &qa, &eqa);
