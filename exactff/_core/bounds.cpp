@@ -74,26 +74,26 @@ R Core::charge_edges(const Piece& q, int64_t src, std::vector<R>& E, RowStats& s
             return u.err;
         };
         // (the arcs of a piece charged more than once are computed once: `arcs`)
-        if (arcs != nullptr && arcs->size() < m) arcs->push_back(arc(a, b));
-        const R length = arcs != nullptr ? (*arcs)[i] : arc(a, b);
+        if (arcs != nullptr && arcs->size() < m) arcs->push_back(arc_bound(a, b));
+        const R length = arcs != nullptr ? (*arcs)[i] : arc_bound(a, b);
         const R charge = length * std::max(off(a, i), off(b, (i + 1) % m)) / pi;
-        // the input's own errors: the edge's points move by at most the ends' world
-        // errors, and lie at least h (p's distance from the edge's line) from p, so
-        // their directions turn by at most turn_bound(moved / h)
-        R geo = 0;
-        if (a.gerr > 0 || b.gerr > 0) {
-            const V3 d{b.v.x - a.v.x, b.v.y - a.v.y, b.v.z - a.v.z};
-            const R dl = norm(d);
-            const R h = dl > 0 ? norm(cross(a.v, b.v)) / dl : std::min(a.length, b.length);
-            const R moved = std::max(a.gerr * a.length, b.gerr * b.length);
-            geo = h > 0 ? length * turn_bound(moved / h) / pi : length;
-        }
         total += charge;
         if (!record && keyed == nullptr) continue;
         if (a.id >= 0 && b.id >= 0 && a.gerr == 0 && b.gerr == 0) {
             // an input edge of the scene's: on its polygon's boundary
             if (record) E[src] += charge;
             continue;
+        }
+        // the input's own errors: the edge's points move by at most the ends' world
+        // errors, and lie at least h (p's distance from the edge's line) from p, so
+        // their directions turn by at most turn_bound(moved / h)
+        R geo = 0;
+        if (record && (a.gerr > 0 || b.gerr > 0)) {
+            const V3 d{b.v.x - a.v.x, b.v.y - a.v.y, b.v.z - a.v.z};
+            const R dl = norm(d);
+            const R h = dl > 0 ? norm(cross(a.v, b.v)) / dl : std::min(a.length, b.length);
+            const R moved = std::max(a.gerr * a.length, b.gerr * b.length);
+            geo = h > 0 ? length * turn_bound(moved / h) / pi : length;
         }
         // a cut edge, or one a BSP split made (two fragments of one polygon share
         // it): keyed by its ends, in a fixed order

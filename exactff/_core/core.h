@@ -399,6 +399,7 @@ class Core {
     Vertex crossing(const Plane& P, const Vertex& x, const Vertex& y, R dx, R dy, R* t) const;
     static bool lex_less(const V3& x, const V3& y);
     static R arc(const Vertex& a, const Vertex& b);
+    static R arc_bound(const Vertex& a, const Vertex& b);
     void run(const double* pp, const double* pn, const int8_t* node_side,
              const int8_t* source_side, bool two_sided, bool cull, int64_t budget,
              int64_t tiles, std::vector<R>& F, std::vector<R>& E, std::vector<R>& B,

@@ -93,6 +93,22 @@ R Core::arc(const Vertex& a, const Vertex& b) {
     return std::atan2(norm(cross(a.v, b.v)), dot(a.v, b.v));
 }
 
+// an upper bound on the arc between two directions, from their doubles (for the
+// charges, which need a bound, not the arc): rounding a direction to double turns it
+// by at most sqrt(3) u (u = 2^-53), and atan2 of the doubles' cross and dot products
+// is off the doubles' arc by a few roundoffs of it plus a few u (their absolute
+// rounding, relative to |a| |b|): 16 u of each covers both with room
+R Core::arc_bound(const Vertex& a, const Vertex& b) {
+    const double* x = a.vd;
+    const double* y = b.vd;
+    const double cx = x[1] * y[2] - x[2] * y[1], cy = x[2] * y[0] - x[0] * y[2],
+                 cz = x[0] * y[1] - x[1] * y[0];
+    const double theta = std::atan2(std::sqrt(cx * cx + cy * cy + cz * cz),
+                                    x[0] * y[0] + x[1] * y[1] + x[2] * y[2]);
+    constexpr double u = DBL_EPSILON / 2;
+    return static_cast<R>(theta) * (1 + 16 * u) + 16 * u;
+}
+
 void Core::run(const double* pp, const double* pn, const int8_t* node_side,
                const int8_t* source_side, bool two_sided, bool cull, int64_t budget,
                int64_t tiles, std::vector<R>& F, std::vector<R>& E, std::vector<R>& B,
@@ -265,12 +281,17 @@ void Core::process(int64_t f, const double* pp, const V3& p, const V3& n,
         // vertices held by the work list (with this piece): for the row's peak
         st.held_peak = std::max(st.held_peak, st.held);
         st.held -= static_cast<int64_t>(cur.size());
+        // the piece goes down from the link it came by; where a node sends it whole to
+        // one side, it goes on from there at once (no copy back onto the work list)
+        int plane = w.plane;
+        bool positive = w.positive;
+      descend:
         int node;
         if (first) {
             node = 0;
             first = false;
         } else {
-            node = w.positive ? sv[w.plane].pos : sv[w.plane].neg;
+            node = positive ? sv[plane].pos : sv[plane].neg;
         }
         if (node == IN) {
             ++st.hidden;
@@ -308,7 +329,7 @@ void Core::process(int64_t f, const double* pp, const V3& p, const V3& n,
             // a piece whose shadow is left out is an image folded or flat along a side
             // (seen from within the band of a plane it is not planar in): its own value
             // is charged it too, as the band's slivers are
-            if (!insert_shadow(q, f, pp, w.plane, w.positive, sv, xp, st, val + bnd) && receives)
+            if (!insert_shadow(q, f, pp, plane, positive, sv, xp, st, val + bnd) && receives)
                 B[src] += val + bnd;
             if (held) {
                 ++st.pieces_held;
@@ -366,10 +387,9 @@ void Core::process(int64_t f, const double* pp, const V3& p, const V3& n,
             }
         }
         if (!neg || !pos) {  // on one side (or in the plane: either side)
-            items.push_back({corners.size(), node, !neg});
-            corners.insert(corners.end(), cur.begin(), cur.end());
-            st.held += static_cast<int64_t>(m);
-            continue;
+            plane = node;
+            positive = !neg;
+            goto descend;
         }
         ++st.splits;
         for (size_t i = 0; i < m; ++i)
