@@ -90,6 +90,7 @@ bool Core::box_hidden(const std::vector<Plane>& sv, int64_t k, const V3& p,
              (i & 2 ? hi_[3 * k + 1] : lo_[3 * k + 1]) - p.y,
              (i & 4 ? hi_[3 * k + 2] : lo_[3 * k + 2]) - p.z};
         c[i] = {v, norm(v), 4 * K_.eps, -1, -1, -1, -1};
+        set_double(c[i]);
     }
     // p must be outside the box (with a margin): the hull is then a pointed cone
     bool inside = true;
@@ -100,7 +101,8 @@ bool Core::box_hidden(const std::vector<Plane>& sv, int64_t k, const V3& p,
         if (pa < lo_[3 * k + a] - margin || pa > hi_[3 * k + a] + margin) inside = false;
     }
     if (inside) return false;
-    std::vector<int> stack{0};
+    thread_local std::vector<int> stack;  // (kept per thread: no allocation per box)
+    stack.assign(1, 0);
     int64_t visits = 0;
     while (!stack.empty()) {
         int node = stack.back();
@@ -109,7 +111,19 @@ bool Core::box_hidden(const std::vector<Plane>& sv, int64_t k, const V3& p,
         if (node == OUT || ++visits > budget) return false;
         const Plane& P = sv[node];
         bool pos = false, neg = false;
+        const double width = static_cast<double>(K_.band + P.err);
         for (int i = 0; i < 8; ++i) {
+            // a corner clearly beyond Core::side's band by the double filter of
+            // Core::process (its dot product off the long double one by at most
+            // SVBSP_FILTER_ROUNDOFFS roundoffs of |m| |v|) is on that side; else its side
+            // in long double, 0 where unsure (both sides then)
+            const double dd = P.md[0] * c[i].vd[0] + P.md[1] * c[i].vd[1] + P.md[2] * c[i].vd[2];
+            if (std::fabs(dd) > (width + c[i].errd + SVBSP_FILTER_ROUNDOFFS * DBL_EPSILON) *
+                                    (P.mnormd * c[i].lengthd) * (1 + 8 * DBL_EPSILON)) {
+                pos |= dd > 0;
+                neg |= dd < 0;
+                continue;
+            }
             R d;
             int s = side(P, c[i], K_, &d);
             if (s >= 0) pos = true;
