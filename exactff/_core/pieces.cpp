@@ -337,7 +337,9 @@ void Core::process(int64_t f, const double* pp, const V3& p, const V3& n,
             }
             continue;
         }
-        const Plane P = sv[node];
+        // (the plane as this piece meets it: its slack grows only once the piece is past)
+        const Plane& P = sv[node];
+        R slack = P.slack;
         const size_t m = cur.size();
         auto at = [&](size_t i) -> const Vertex& { return pool[static_cast<size_t>(cur[i].v)]; };
         ++st.node_visits;
@@ -383,10 +385,11 @@ void Core::process(int64_t f, const double* pp, const V3& p, const V3& n,
                 // what lies behind it near this plane: every later piece classified
                 // or cut here is charged it too (the plane's slack; not fed back into
                 // the slack itself, so that it does not grow hit by hit)
-                sv[node].slack = std::max(sv[node].slack, K_.band + P.err + u.err);
+                slack = std::max(slack, K_.band + P.err + u.err);
             }
         }
-        if (!neg || !pos) {  // on one side (or in the plane: either side)
+        if (!neg || !pos) {
+            sv[node].slack = slack;  // on one side (or in the plane: either side)
             plane = node;
             positive = !neg;
             goto descend;
@@ -455,6 +458,7 @@ void Core::process(int64_t f, const double* pp, const V3& p, const V3& n,
             items.push_back({begin, node, sigma > 0});
             st.held += static_cast<int64_t>(corners.size() - begin);
         }
+        sv[node].slack = slack;
     }
     work.pool_peak = std::max(work.pool_peak, pool.size());
 }
