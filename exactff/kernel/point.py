@@ -108,8 +108,8 @@ def unoccluded_rows(flat, P, N, side, band, *, two_sided=False, tolerance=None, 
     >>> box = ef.scenes.subdivided_box(2)
     >>> flat = flat_polygons(box)
     >>> P, N = np.array([[0.5, 0.5, 0.0], [0.0, 0.5, 0.5]]), np.eye(3)[[2, 0]]
-    >>> side, band = zip(*(engine_sides(flat, p) for p in P))
-    >>> F, E = unoccluded_rows(flat, P, N, np.array(side), np.array(band), tolerance=1e-12)
+    >>> side, band = engine_sides(flat, P)
+    >>> F, E = unoccluded_rows(flat, P, N, side, band, tolerance=1e-12)
     >>> bool(np.abs(F.sum(axis=1) - 1).max() < 1e-14), bool(E.max() < 1e-14)
     (True, True)
     """
@@ -122,7 +122,7 @@ def unoccluded_rows(flat, P, N, side, band, *, two_sided=False, tolerance=None, 
     # the sector sums of every live pair in one compiled pass (exactff/_core/sector_sums.h:
     # clipped_sector_sums with rounded offsets, the same arithmetic); polygons wholly
     # below a row's horizon have nothing to integrate
-    frames = np.array([receiver_frame(n) for n in N])
+    frames = receiver_frame(N)
     S, mags, errs, above = row_sums(flat.V, flat.offsets, ids, rows, P, frames, tol.EPS,
                                     tol.OFFSET_ROUNDING_ULPS, tol.C2 * tol.EPS)
     if not above.all():

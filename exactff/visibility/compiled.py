@@ -503,14 +503,16 @@ def compiled_form_factor_rows(scene, points, normals, *, two_sided=False, shortc
     N = np.asarray(normals, dtype=float).reshape(-1, 3)
     out = np.zeros((len(P), len(scene)))
     flat = flat_polygons(scene)
-    sides = [engine_sides(flat, p) for p in P]
     convex = shortcuts and is_convex_enclosure(scene)
-    together = [r for r, (side, _) in enumerate(sides) if convex and np.all(side >= 0)]
+    together = []
+    if convex:
+        # the sides of every receiver at once (each row's as for its point alone)
+        side, band = engine_sides(flat, P)
+        together = np.flatnonzero(np.all(side >= 0, axis=1)).tolist()
     if together:
         out[together] = unoccluded_rows(
-            flat, P[together], N[together], np.array([sides[r][0] for r in together]),
-            np.array([sides[r][1] for r in together]), two_sided=two_sided,
-            tolerance=tolerance)[0]
+            flat, P[together], N[together], side[together], band[together],
+            two_sided=two_sided, tolerance=tolerance)[0]
     for r in sorted(set(range(len(P))) - set(together)):
         out[r] = compiled_form_factors(scene, P[r], N[r], two_sided=two_sided,
                                        shortcuts=shortcuts, tolerance=tolerance)
