@@ -99,18 +99,7 @@ def tie_priority(facing, index=None):
 
 def plane_distances(flat, p):
     """Signed distances of ``p`` from each polygon's plane (> 0: in front), and the
-    tolerance below which their float value cannot decide the side. ``p`` of shape (3,),
-    or (R, 3) for many points: distances (R, len(flat.normals)) and tolerances (R, 1),
-    each row that of its point alone (the same arithmetic)."""
-    if np.ndim(p) == 2:
-        # (the sum of the three products in the order einsum takes them for one point)
-        N, C = flat.normals, flat.centroids
-        d = N[:, 0] * (C[:, 0] - p[:, 0, None])
-        d += N[:, 1] * (C[:, 1] - p[:, 1, None])
-        d += N[:, 2] * (C[:, 2] - p[:, 2, None])
-        np.negative(d, out=d)
-        scale = np.abs(p).max(axis=1, keepdims=True) + flat.vmax
-        return d, PLANE_SIDE_ULPS * EPS * scale
+    tolerance below which their float value cannot decide the side."""
     rel = flat.centroids - p
     d = -np.einsum("ij,ij->i", flat.normals, rel)
     scale = np.abs(p).max() + flat.vmax
@@ -361,57 +350,21 @@ def engine_sides(flat, p):
     input is taken as exact: a unit square at 1e8 seen from 1e-7 below it (7 ulps)
     has F = 1 - 4e-14 (pinned: test_point_within_rounding_of_a_far_plane_is_decided_exactly).
 
-    ``p`` of shape (R, 3): the sides of many points at once (what a matrix's rows of a
-    convex enclosure need), each row as for its point alone, in blocks of about
-    ``_SIDES_BLOCK`` point-polygon pairs.
-
     Returns
     -------
-    (ndarray of int8, ndarray of bool), each of shape (len(flat.normals),), or
-    (R, len(flat.normals)) for R points
-
-    Examples
-    --------
-    The centres of a closed box's floor and ceiling: in front of every face but the
-    one they lie on (seen edge-on, in the band):
-
-    >>> import exactff as ef
-    >>> from exactff.kernel import flat_polygons
-    >>> flat = flat_polygons(ef.scenes.subdivided_box(1))
-    >>> side, band = engine_sides(flat, np.array([[0.5, 0.5, 0.0], [0.5, 0.5, 1.0]]))
-    >>> side.tolist(), band.sum(axis=1).tolist()
-    ([[0, 1, 1, 1, 1, 1], [1, 0, 1, 1, 1, 1]], [1, 1])
+    (ndarray of int8, ndarray of bool), each of shape (len(flat.normals),)
     """
-    P = np.asarray(p, dtype=float)
-    if P.ndim == 1:
-        side, band = engine_sides(flat, P[None])
-        return side[0], band[0]
-    m = len(flat.normals)
-    side = np.empty((len(P), m), dtype=np.int8)
-    band = np.empty((len(P), m), dtype=bool)
-    step = max(1, _SIDES_BLOCK // max(m, 1))
-    for r0 in range(0, len(P), step):
-        B = P[r0:r0 + step]
-        d, dtol = plane_distances(flat, B)
-        s = np.sign(d).astype(np.int8)
-        b = np.abs(d) <= dtol
-        s[b] = 0                                  # 0 in the band
-        rows, ids = np.nonzero(b)
-        if len(ids):
-            nrm, c, q = np.abs(flat.normals[ids]), flat.centroids[ids], B[rows]
-            on_plane = np.abs(d[rows, ids]) <= EPS * (
-                ON_PLANE_ULPS * (np.einsum("ij,ij->i", nrm, np.abs(q))
-                                 + np.einsum("ij,ij->i", nrm, np.abs(c)))
-                + PLANE_SIDE_ULPS * np.linalg.norm(c - q, axis=1))
-            for r, i in zip(rows[~on_plane].tolist(), ids[~on_plane].tolist()):
-                s[r, i] = exact_side(flat.V[flat.offsets[i]:flat.offsets[i + 1]], B[r])
-        side[r0:r0 + step], band[r0:r0 + step] = s, b
+    d, dtol = plane_distances(flat, p)
+    side, band = plane_sides(flat, p, exact=False, distances=(d, dtol))   # 0 in the band
+    ids = np.flatnonzero(band)
+    if len(ids):
+        nrm, c = np.abs(flat.normals[ids]), flat.centroids[ids]
+        on_plane = np.abs(d[ids]) <= EPS * (
+            ON_PLANE_ULPS * (nrm @ np.abs(p) + np.einsum("ij,ij->i", nrm, np.abs(c)))
+            + PLANE_SIDE_ULPS * np.linalg.norm(c - p, axis=1))
+        for i in ids[~on_plane]:
+            side[i] = exact_side(flat.V[flat.offsets[i]:flat.offsets[i + 1]], p)
     return side, band
-
-
-#: point-polygon pairs whose distances :func:`engine_sides` computes at once (a block of
-#: rows: 3 doubles a pair of scratch)
-_SIDES_BLOCK = 1 << 16
 
 
 def collinear(P):
