@@ -174,23 +174,36 @@ def receiver_frame(normal: ArrayLike, dtype=float) -> np.ndarray:
 
     Parameters
     ----------
-    normal : array_like of shape (3,)
+    normal : array_like of shape (3,), or (R, 3) for many normals
         Normal (scaled to unit length here).
     dtype : numpy float type, default float
         Working precision (``numpy.longdouble`` for the second escalation tier).
 
     Returns
     -------
-    ndarray of shape (3, 3)
-        Rows t1, t2, n; a rotation (determinant +1).
+    ndarray of shape (3, 3), or (R, 3, 3)
+        Rows t1, t2, n; a rotation (determinant +1). Many normals' frames are each
+        normal's own, the same arithmetic.
 
     Examples
     --------
     >>> R = receiver_frame([0.0, 0.0, 1.0])
     >>> bool(np.allclose(R, np.eye(3)))
     True
+    >>> receiver_frame([[0.0, 0.0, 1.0], [0.0, 0.0, -2.0]])[:, 2].tolist()
+    [[0.0, 0.0, 1.0], [0.0, 0.0, -1.0]]
     """
     nv = np.asarray(normal).astype(dtype)
+    if nv.ndim == 2:
+        u = nv / np.sqrt(np.sum(nv * nv, axis=1, keepdims=True))
+        x, y, z = u[:, 0], u[:, 1], u[:, 2]
+        one = nv.dtype.type(1)
+        sign = np.where(z >= 0, one, -one)
+        a = -one / (sign + z)
+        b = x * y * a
+        return np.stack([np.stack([one + sign * x * x * a, sign * b, -sign * x], axis=1),
+                         np.stack([b, sign + y * y * a, -y], axis=1),
+                         np.stack([x, y, z], axis=1)], axis=1)
     x, y, z = nv / np.sqrt(np.sum(nv * nv))
     one = nv.dtype.type(1)
     sign = one if z >= 0 else -one

@@ -159,3 +159,29 @@ def test_irregular_long_polygon_equals_its_fan(k, seed):
     S, T = ef.sphere_form_factors(long_, p), ef.sphere_form_factors(cut, p)
     assert_form_factors_close(S[:n], T[:n], rtol=0, atol=1e-14)
     assert abs(S[n] - T[n:].sum()) <= 1e-14
+
+
+@pytest.mark.parametrize("lift", [1e-6, 1e-5])
+def test_long_polygon_not_convex_to_a_roundoff_keeps_its_kernel(lift):
+    # a long piece's image is taken as convex without its m^2 vertex tests only where an
+    # O(m) certificate proves it (shadow_tree.cpp, convex_image). A 200-gon disc whose
+    # every other vertex is raised by 1e-8 (planar within the validation tolerance), seen
+    # from a wall point just above its plane, has a zigzag image: its shadow must be its
+    # kernel, charged to the bounds (a missing charge left the room's values 4.6e-8
+    # beyond them). Reference: the same disc as a fan of triangles (pieces of three
+    # vertices, never certified).
+    room = ef.scenes.furnished_box(2, [((0.1, 0.1, 0.0), (0.3, 0.35, 0.2))])
+    n, k, delta = len(room), 200, 1e-8
+    t = 2 * np.pi * np.arange(k) / k
+    P = np.column_stack([0.5 + 0.3 * np.cos(t), 0.45 + 0.3 * np.sin(t),
+                         0.5 + delta * (np.arange(k) % 2)])
+    long_ = ef.Scene.from_polygons(list(room.polygons) + [P])
+    cut = ef.Scene.from_polygons(list(room.polygons) + fan(P, [0.5, 0.45, 0.5 + delta / 2]))
+    p, nrm = np.array([1e-3, 0.45, 0.5 + lift]), np.array([1.0, 0.0, 0.0])
+    st = {}
+    F, E = ef.Exact().point_form_factors(long_, p, nrm, stats=st, error=True)
+    G, H = ef.Exact().point_form_factors(cut, p, nrm, error=True)
+    assert st["kernel_shadows"] >= 1
+    assert np.all(np.abs(F[:n] - G[:n]) <= E[:n] + H[:n])
+    assert abs(F[n] - G[n:].sum()) <= E[n] + H[n:].sum() + 1e-15
+    assert np.abs(F[:n] - G[:n]).max() > 1e-10   # the rows do differ: the bounds are tested

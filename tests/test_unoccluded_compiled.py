@@ -175,3 +175,43 @@ def test_point_rows_refuse_bad_receivers():
         Exact().point_rows(box, box.centroids, np.zeros((6, 3)))
     with pytest.raises(ValueError, match="point"):
         Exact().point_rows(box, np.full((6, 3), np.nan), box.normals)
+
+
+def test_sides_of_many_points_are_each_points_own():
+    # a matrix's rows of a convex enclosure take the sides of all their points at once
+    # (engine_sides_rows, compiled: exactff/_core/sides.h): each row must be what
+    # engine_sides (numpy) gives for its point alone, and every side it decides (non-zero)
+    # the exact one (rational arithmetic). A rotated box: its centroids lie off their
+    # planes by rounding; points pushed 2e-15 along the normals (or against them) lie in
+    # the band (3.5e-15 here) and off the plane (7e-16), where the exact tests decide;
+    # 1e-13, beyond the band
+    from exactff.kernel import engine_sides_rows
+    from exactff.predicates import engine_sides, exact_side
+    box = ef.scenes.subdivided_box(3)
+    R = np.linalg.qr(np.random.default_rng(5).normal(size=(3, 3)))[0]
+    scene = ef.Scene.from_polygons([np.asarray(P) @ R.T for P in box.polygons])
+    flat = flat_polygons(scene)
+    sign = (-1.0) ** np.arange(len(scene))[:, None]     # in front, behind, in front...
+    P = np.concatenate([scene.centroids, scene.centroids + 2e-15 * sign * scene.normals,
+                        scene.centroids[:5] + 1e-13 * scene.normals[:5]])
+    side, band = engine_sides_rows(flat, P)
+    assert side.shape == band.shape == (len(P), len(scene)) and side.dtype == np.int8
+    for r, p in enumerate(P):
+        one_side, one_band = engine_sides(flat, p)
+        assert np.array_equal(side[r], one_side) and np.array_equal(band[r], one_band), r
+    rows, ids = np.nonzero(side != 0)
+    for r, i in zip(rows, ids):
+        assert side[r, i] == exact_side(scene.polygons[i], P[r]), (r, i)
+    assert band.sum() > len(P) and np.any(band & (side != 0))   # the band was tested
+    # every centroid row sees its own polygon edge-on
+    assert np.all(side[np.arange(len(scene)), np.arange(len(scene))] == 0)
+    # and on the office, from its centroids and points off them, the same as one by one
+    office = ef.scenes.office()
+    flat = flat_polygons(office)
+    Q = office.centroids[::150].copy()
+    Q[::2] += 2e-15 * office.normals[::150][::2]
+    Q[1::2] += np.random.default_rng(2).normal(size=Q[1::2].shape) * 0.1
+    side, band = engine_sides_rows(flat, Q)
+    for r, p in enumerate(Q):
+        one_side, one_band = engine_sides(flat, p)
+        assert np.array_equal(side[r], one_side) and np.array_equal(band[r], one_band), r

@@ -16,6 +16,84 @@
 
 namespace exactff {
 
+namespace {
+
+// the pseudo-angle of (x, y) about the origin: in [0, 4), increasing with atan2(y, x)
+// taken in [0, 2 pi) (a quarter turn a unit), one division
+inline double pseudo_angle(double x, double y) {
+    if (y >= 0) return x >= 0 ? y / (x + y) : 1 + (-x) / (y - x);
+    return x < 0 ? 2 + (-y) / (-x - y) : 3 + x / (x - y);
+}
+
+// Whether the image of piece q (sides e, each plane oriented to hold the direction sum
+// c, cl = |c|) is certainly a convex spherical polygon, in O(m): then every vertex lies
+// on the inner side of every side's plane (what insert_shadow otherwise tests pair by
+// pair). Sufficient, each decided beyond the same error bounds as that test:
+// - every side oriented (state 1: c clearly on its inner side);
+// - every vertex in the open hemisphere about c: the central projection from the
+//   centre onto the plane tangent at c/|c| then maps the image to a planar polygon,
+//   the sides' great circles to lines, and keeps every side of every plane;
+// - every side runs the same way about c (its plane's normal along a x b, a and b its
+//   ends, for every side, or against it for every side), by more than its ends' errors;
+// - the turn at every vertex is strictly convex: the vertex after a side lies clearly
+//   on its inner side;
+// - the sides wind once about c: their angles about c, summed (as pseudo-angles, each
+//   in (0, 2) for a side under a half turn), make one turn (4), not two (8 or more).
+// In the projection: a polygon going the same way about an inner point, once, whose
+// every turn is convex, is convex, and holds that point (docs/explanation/visibility.md).
+// False proves nothing (the caller then tests every pair).
+template <typename SideT>
+bool convex_image(const Piece& q, const std::vector<SideT>& e, const V3& c, R cl, R eps) {
+    const size_t m = q.size();
+    int sense = 0;
+    for (size_t i = 0; i < m; ++i) {
+        const SideT& s = e[i];
+        if (s.state != 1) return false;
+        const Vertex& a = q[i];
+        const Vertex& b = q[(i + 1) % m];
+        const Vertex& w = q[(i + 2) % m];
+        if (!(dot(c, a.v) > (16 * eps + a.err) * cl * a.length)) return false;
+        const V3 ab = cross(a.v, b.v);
+        const R abl = norm(ab);
+        if (!(abl > 4 * (16 * eps + a.err + b.err) * a.length * b.length)) return false;
+        const R along = dot(s.mm, ab);
+        const int way = along > R(0.5) * s.ml * abl ? 1 : along < -R(0.5) * s.ml * abl ? -1 : 0;
+        if (way == 0 || (sense != 0 && way != sense)) return false;
+        sense = way;
+        if (!(dot(s.mm, w.v) > (16 * eps + s.err + w.err) * s.ml * w.length)) return false;
+    }
+    // a frame (e1, e2) of the plane normal to c, and the turn the sides make about c
+    const double cd[3] = {static_cast<double>(c.x), static_cast<double>(c.y),
+                          static_cast<double>(c.z)};
+    int k = 0;
+    for (int j = 1; j < 3; ++j)
+        if (std::fabs(cd[j]) < std::fabs(cd[k])) k = j;
+    double ax[3] = {0, 0, 0};
+    ax[k] = 1;
+    const double e1[3] = {ax[1] * cd[2] - ax[2] * cd[1], ax[2] * cd[0] - ax[0] * cd[2],
+                          ax[0] * cd[1] - ax[1] * cd[0]};
+    const double e2[3] = {cd[1] * e1[2] - cd[2] * e1[1], cd[2] * e1[0] - cd[0] * e1[2],
+                          cd[0] * e1[1] - cd[1] * e1[0]};
+    auto angle = [&](const Vertex& u) {
+        return pseudo_angle(e1[0] * u.vd[0] + e1[1] * u.vd[1] + e1[2] * u.vd[2],
+                            e2[0] * u.vd[0] + e2[1] * u.vd[1] + e2[2] * u.vd[2]);
+    };
+    // (e1, e2, c) is right-handed: a side along a x b turns positively about c
+    double turn = 0;
+    const double first = angle(q[0]);
+    double prev = first;
+    for (size_t i = 1; i <= m; ++i) {
+        const double next = i == m ? first : angle(q[i]);
+        double d = sense > 0 ? next - prev : prev - next;
+        if (d < 0) d += 4;
+        turn += d;
+        prev = next;
+    }
+    return turn < 6;
+}
+
+}  // namespace
+
 // side of a direction against a plane, conservatively: +1, -1, or 0 where the
 // sign is not sure (within the rounding of d and the plane's and vertex's errors)
 int Core::side(const Plane& P, const Vertex& x, const Constants& K, R* d_out) {
@@ -324,9 +402,17 @@ bool Core::insert_shadow(const Piece& q, int64_t f, const double* pp, int plane,
             s.mm = {-s.mm.x, -s.mm.y, -s.mm.z};
             s.orient = -1;
         }
-        // and every vertex on that side, up to the plane's and its own errors (a vertex
-        // clearly inside by the classification's double filter, Core::process, needs no
-        // long double test: a piece of m vertices costs m^2 of them)
+    }
+    // and every vertex on each oriented side, up to the plane's and its own errors: how
+    // far beyond it the farthest lies (a vertex clearly inside by the classification's
+    // double filter, Core::process, needs no long double test). A piece of m vertices
+    // costs m^2 of these tests; a long piece whose image is certainly convex
+    // (convex_image, O(m)) has every vertex inside every side and needs none. (A side
+    // along a cut, whose `beyond` nothing reads, is not tested.)
+    const bool convex = m > LONG_SHADOW_EDGES && convex_image(q, e, c, cl, K_.eps);
+    for (size_t i = 0; !convex && i < m; ++i) {
+        Side& s = e[i];
+        if (s.state != 1 || s.on_cut) continue;
         const double md[3] = {static_cast<double>(s.mm.x), static_cast<double>(s.mm.y),
                               static_cast<double>(s.mm.z)};
         const double mld = static_cast<double>(s.ml);

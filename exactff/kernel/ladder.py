@@ -26,7 +26,7 @@ def extended_values(flat, ids, rows, P, N, d0, two_sided):
     (normals ``N[rows[k]]``) in long double arithmetic: the sector sums with rounded
     offsets from the float input, in one compiled pass (``exactff/_core/sector_sums.h``,
     :func:`exactff.kernel.sector.clipped_sector_sums`'s arithmetic)."""
-    frames = np.array([receiver_frame(n, dtype=np.longdouble) for n in N])
+    frames = receiver_frame(N, dtype=np.longdouble)
     S, mags, errs, _ = row_sums_extended(
         flat.V, flat.offsets, np.asarray(ids, dtype=np.int64),
         np.asarray(rows, dtype=np.int64), P, frames, tol.LONGDOUBLE_EPS,

@@ -18,14 +18,15 @@ from ..checks import as_normal, as_point, check_sides, check_tolerance
 from ..errors import check_finite, misses_tolerance, tolerance_missed
 from ..geometry import area_vector, receiver_frame
 from ..halfspace import clip_above_horizon
-from ..predicates import plane_sides, polygon_side
+from ..predicates import exact_side, plane_sides, polygon_side
 from ..scene import Scene, validate_polygon
 from .flat import flat_polygons
 from .ladder import extended_values, mp_form_factor
+from ._sector import engine_sides as _engine_sides
 from ._sector import row_sums
 from .sector import sector_values
 
-__all__ = ["unoccluded_row", "unoccluded_rows", "point_polygon_form_factors", "sector_form_factor",
+__all__ = ["unoccluded_row", "unoccluded_rows", "engine_sides_rows", "point_polygon_form_factors", "sector_form_factor",
            "point_polygon_form_factor", "local_clipped"]
 
 
@@ -104,52 +105,53 @@ def unoccluded_rows(flat, P, N, side, band, *, two_sided=False, tolerance=None, 
     From the centres of the floor and of a wall of a closed box, each row sums to 1:
 
     >>> import exactff as ef
-    >>> from exactff.predicates import engine_sides
     >>> box = ef.scenes.subdivided_box(2)
     >>> flat = flat_polygons(box)
     >>> P, N = np.array([[0.5, 0.5, 0.0], [0.0, 0.5, 0.5]]), np.eye(3)[[2, 0]]
-    >>> side, band = zip(*(engine_sides(flat, p) for p in P))
-    >>> F, E = unoccluded_rows(flat, P, N, np.array(side), np.array(band), tolerance=1e-12)
+    >>> side, band = engine_sides_rows(flat, P)
+    >>> F, E = unoccluded_rows(flat, P, N, side, band, tolerance=1e-12)
     >>> bool(np.abs(F.sum(axis=1) - 1).max() < 1e-14), bool(E.max() < 1e-14)
     (True, True)
     """
     F = np.zeros(side.shape)
     err = np.zeros(side.shape)
-    live = (side != 0) if two_sided else (side > 0)
-    rows, ids = np.nonzero(live)
-    if not len(ids):
+    # the pairs by their positions in the (R, N) arrays (flat indices: one gather or
+    # scatter each, not a pair of index arrays)
+    Ff, ef_, side_f, band_f = F.reshape(-1), err.reshape(-1), side.reshape(-1), band.reshape(-1)
+    at = np.flatnonzero(side_f != 0) if two_sided else np.flatnonzero(side_f > 0)
+    if not len(at):
         return F, err
+    rows, ids = np.divmod(at, side.shape[1])
     # the sector sums of every live pair in one compiled pass (exactff/_core/sector_sums.h:
     # clipped_sector_sums with rounded offsets, the same arithmetic); polygons wholly
     # below a row's horizon have nothing to integrate
-    frames = np.array([receiver_frame(n) for n in N])
+    frames = receiver_frame(N)
     S, mags, errs, above = row_sums(flat.V, flat.offsets, ids, rows, P, frames, tol.EPS,
                                     tol.OFFSET_ROUNDING_ULPS, tol.C2 * tol.EPS)
     if not above.all():
-        rows, ids, S, mags, errs = (a[above] for a in (rows, ids, S, mags, errs))
+        at, rows, ids, S, mags, errs = (a[above] for a in (at, rows, ids, S, mags, errs))
     if not len(ids):
         return F, err
-    in_band = band[rows, ids]
-    F[rows, ids], err[rows, ids] = sector_values(S, mags, errs, -side[rows, ids].astype(float),
-                                                 two_sided, unchecked=in_band)
+    in_band = band_f[at]
+    d0 = -side_f[at].astype(float)
+    Fv, Ev = sector_values(S, mags, errs, d0, two_sided, unchecked=in_band)
     # p within rounding of the polygon's plane (its side decided exactly): the double
     # value can be anything; only the high-precision tier can give it
-    err[rows[in_band], ids[in_band]] = np.inf
+    Ev[in_band] = np.inf
+    missing = np.zeros(0, dtype=np.int64)   # pairs (positions in at) left to mpmath
     if tolerance is not None:
-        flagged = np.flatnonzero(err[rows, ids] > tolerance * F[rows, ids])
-        fr, fi = rows[flagged], ids[flagged]
-        in_extended = np.flatnonzero(~band[fr, fi])   # positions in flagged
-        er, ei = fr[in_extended], fi[in_extended]
-        if len(ei) and tol.LONGDOUBLE_EPS < tol.EPS / 100:
+        missing = np.flatnonzero(Ev > tolerance * Fv)
+        ext = missing[~in_band[missing]]
+        if len(ext) and tol.LONGDOUBLE_EPS < tol.EPS / 100:
             # second tier: the same sums in extended precision (x87 80-bit long double
             # where the platform has it), from the original float input
-            Fl, el = extended_values(flat, ei, er, P, N, -side[er, ei].astype(float),
-                                     two_sided)
+            Fl, el = extended_values(flat, ids[ext], rows[ext], P, N, d0[ext], two_sided)
             good = el <= tolerance * Fl
-            F[er[good], ei[good]], err[er[good], ei[good]] = Fl[good], el[good]
-            settled = np.zeros(len(fi), dtype=bool)
-            settled[in_extended[good]] = True
-            fr, fi = fr[~settled], fi[~settled]
+            Fv[ext[good]], Ev[ext[good]] = Fl[good], el[good]
+            missing = np.setdiff1d(missing, ext[good], assume_unique=True)
+    Ff[at], ef_[at] = Fv, Ev
+    if tolerance is not None:
+        fr, fi = rows[missing], ids[missing]
         # last tier (docs/explanation/robustness.md): mpmath at the digits the value needs
         for r, i in zip(fr.tolist(), fi.tolist()):
             Q = flat.V[flat.offsets[i]:flat.offsets[i + 1]]
@@ -168,6 +170,41 @@ def unoccluded_rows(flat, P, N, side, band, *, two_sided=False, tolerance=None, 
     # (a NaN is not "missed" above: it is refused here, on every tier's way out)
     check_finite(F, err)
     return F, err
+
+
+def engine_sides_rows(flat, P):
+    """The sides of many points for every polygon, each row what
+    :func:`exactff.predicates.engine_sides` gives for its point alone (the same
+    arithmetic, compiled: ``exactff/_core/sides.h``; the exact tests in the band, where
+    the point is not in the plane to a rounding, here as there): what a matrix's rows of
+    a convex enclosure need at once.
+
+    Parameters
+    ----------
+    flat : FlatPolygons
+    P : ndarray of shape (R, 3)
+
+    Returns
+    -------
+    (ndarray of int8, ndarray of bool), each of shape (R, len(flat.normals))
+
+    Examples
+    --------
+    The centres of a closed box's floor and ceiling: in front of every face but the
+    one they lie on (seen edge-on, in the band):
+
+    >>> import exactff as ef
+    >>> flat = flat_polygons(ef.scenes.subdivided_box(1))
+    >>> side, band = engine_sides_rows(flat, np.array([[0.5, 0.5, 0.0], [0.5, 0.5, 1.0]]))
+    >>> side.tolist(), band.sum(axis=1).tolist()
+    ([[0, 1, 1, 1, 1, 1], [1, 0, 1, 1, 1, 1]], [1, 1])
+    """
+    P = np.ascontiguousarray(P, dtype=float).reshape(-1, 3)
+    side, band, undecided = _engine_sides(flat.normals, flat.centroids, flat.vmax, P, tol.EPS,
+                                          tol.ON_PLANE_ULPS, tol.PLANE_SIDE_ULPS)
+    for r, i in zip(*(a.tolist() for a in np.nonzero(undecided))):
+        side[r, i] = exact_side(flat.V[flat.offsets[i]:flat.offsets[i + 1]], P[r])
+    return side, band
 
 
 def point_polygon_form_factors(point: ArrayLike, normal: ArrayLike, polygons, *,

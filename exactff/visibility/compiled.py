@@ -19,7 +19,7 @@ import shapely
 from .. import _tolerances as tol
 from ..errors import NumericalError, check_finite, misses_tolerance
 from ..geometry import cross
-from ..kernel import flat_polygons, unoccluded_row, unoccluded_rows
+from ..kernel import engine_sides_rows, flat_polygons, unoccluded_row, unoccluded_rows
 from ..predicates import engine_sides, sides_of_point
 from ..rings import owners, successors
 from ..prepared import prepared
@@ -505,14 +505,19 @@ def compiled_form_factor_rows(scene, points, normals, *, two_sided=False, shortc
     N = np.asarray(normals, dtype=float).reshape(-1, 3)
     out = np.zeros((len(P), len(scene)))
     flat = flat_polygons(scene)
-    sides = [engine_sides(flat, p) for p in P]
     convex = shortcuts and is_convex_enclosure(scene)
-    together = [r for r, (side, _) in enumerate(sides) if convex and np.all(side >= 0)]
+    together = []
+    if convex:
+        # the sides of every receiver at once (each row's as for its point alone)
+        side, band = engine_sides_rows(flat, P)
+        together = np.flatnonzero(np.all(side >= 0, axis=1)).tolist()
+    if len(together) == len(P):
+        return unoccluded_rows(flat, P, N, side, band, two_sided=two_sided,
+                               tolerance=tolerance)[0]
     if together:
         out[together] = unoccluded_rows(
-            flat, P[together], N[together], np.array([sides[r][0] for r in together]),
-            np.array([sides[r][1] for r in together]), two_sided=two_sided,
-            tolerance=tolerance)[0]
+            flat, P[together], N[together], side[together], band[together],
+            two_sided=two_sided, tolerance=tolerance)[0]
     for r in sorted(set(range(len(P))) - set(together)):
         out[r] = compiled_form_factors(scene, P[r], N[r], two_sided=two_sided,
                                        shortcuts=shortcuts, tolerance=tolerance)
