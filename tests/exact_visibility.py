@@ -366,6 +366,68 @@ class _Filters:
         return out
 
 
+def _seen_whole_skips(scene, P, T, m, height, slab, cone_planes):
+    """Per polygon, whether :func:`seen_whole` may pass it by without rationals: every
+    vertex certainly off the near-coplanar band of the target's plane and the target's
+    vertices certainly off its plane's (``_near_coplanar`` says False), and every vertex
+    certainly outside one half-space of the pyramid (nothing of it is left after the
+    clip). Float filters with the bounds of :class:`_Filters`; False where any is not
+    certain (the caller decides in rationals)."""
+    V = np.asarray(scene.vertices, dtype=float)
+    start = np.asarray(scene.offsets)
+    counts = np.diff(start)
+    per = lambda a, how: how.reduceat(a, start[:-1]) if len(a) else a
+    Pf = np.array([_float(c) for c in P])
+    W = V - Pf
+    Wa = np.abs(W)
+    # the pyramid: depth < 0, depth > far, or outside a side of the cone, for every vertex
+    mf = np.array([_float(c) for c in m])
+    x = (1.0 if height > 0 else -1.0) * (W @ mf)
+    B = 8 * _U * (Wa @ np.abs(mf)) * (1 + 1e-10) + 1e-300
+    t_far = _float(abs(height) + slab)
+    outside = per(x + B < 0, np.logical_and) | per(
+        x - B > t_far + 2 * _U * abs(t_far), np.logical_and)
+    for w, sign in cone_planes:
+        wf = np.array([_float(c) for c in w])
+        val = sign * (W @ wf)
+        Bw = 8 * _U * (Wa @ np.abs(wf)) * (1 + 1e-10) + 1e-300
+        outside |= per(val + Bw < 0, np.logical_and)
+    # _near_coplanar(V, T): V's vertices against the target's plane (Newell's, exact,
+    # rounded), off = |m . (v - T0)| against 256 u (|m| . |v| + |m . T0|)
+    mt = _newell(T)
+    if mt is None:
+        return np.zeros(len(counts), dtype=bool)
+    mtf = np.array([_float(c) for c in mt])
+    T0 = np.array([_float(c) for c in T[0]])
+    w = V - T0
+    off = np.abs(w @ mtf) - 8 * _U * (np.abs(w) @ np.abs(mtf)) * (1 + 1e-10)
+    size = np.abs(V) @ np.abs(mtf) + abs(float(T0 @ mtf)) + np.abs(T0) @ np.abs(mtf)
+    clear = per(off > 300 * _U * size, np.logical_and)
+    # and the target's vertices against V's plane (a triangle's: (b - a) x (c - a),
+    # its rounding bounded per component as in _Filters)
+    tri = counts == 3
+    clear &= tri
+    k = np.flatnonzero(clear)
+    if len(k):
+        a, b, c = (V[start[k] + i] for i in range(3))
+        d1, d2 = b - a, c - a
+        mv = np.cross(d1, d2)
+        Bm = 16 * _U * np.max(_abs_cross(np.abs(d1), np.abs(d2)), axis=1)
+        Tf = np.array([[_float(c) for c in v] for v in T])
+        ok = np.ones(len(k), dtype=bool)
+        for t in Tf:
+            wt = t - a
+            o = (np.abs(np.einsum("ij,ij->i", mv, wt))
+                 - 8 * _U * np.einsum("ij,ij->i", np.abs(mv), np.abs(wt)) * (1 + 1e-10)
+                 - Bm * np.abs(wt).sum(1))
+            sz = (np.abs(mv) @ np.abs(t) + np.abs(np.einsum("ij,ij->i", mv, a))
+                  + np.einsum("ij,ij->i", np.abs(mv), np.abs(a)) + Bm * (np.abs(t).sum()
+                                                                          + np.abs(a).sum(1)))
+            ok &= o > 300 * _U * sz
+        clear[k] = ok
+    return clear & outside
+
+
 def _abs_cross(a, b):
     """The permanent-like bound of a cross product: |a_y b_z| + |a_z b_y|, ..."""
     a, b = np.abs(a), np.abs(b)
@@ -606,8 +668,10 @@ def seen_whole(scene, point, target):
     H = _hull(image, keep)
     far = 1 + slab / abs(height)
     halves = [lambda v: depth(v), lambda v: far - depth(v)] + _cone(P, H)
+    # the polygons a float filter shows nowhere near the target's plane nor the pyramid
+    skip = _seen_whole_skips(scene, P, T, m, height, slab, _cone_planes(P, H))
     for j, polygon in enumerate(scene.polygons):
-        if j == target:
+        if j == target or skip[j]:
             continue
         V = [_rational(v) for v in polygon]
         if _near_coplanar(V, T):
