@@ -36,7 +36,7 @@ __all__ = [
     "BSP_AXIS_IMBALANCE",
     "CHART_VERTEX_ERROR",
     "REFINE_MATCH",
-    "REFINE_SURE",
+    "REFINE_AMBIGUOUS",
     "REFINE_QUERY",
     "REFINE_CHART_REACH",
     "REFINE_PARALLEL",
@@ -329,9 +329,12 @@ CHART_VERTEX_ERROR = 2.0 ** -47
 #: within this of it; the least residual wins.
 REFINE_MATCH = 1e-10
 
-#: Below this residual an edge of a piece's own fragment (or a seam) is taken without
-#: searching the images in front.
-REFINE_SURE = 2.0 ** -44
+#: A candidate plane within this residual of both end points of a piece's edge may be
+#: the one the edge stands for: the clipper's vertices are within CHART_VERTEX_ERROR of
+#: their places, and a unit direction or a double plane's normal rounds by a few ulps
+#: more (twice the vertex error). Where another plane than the label is that close, the
+#: region between the two arcs is charged to the refined value (Refiner._ambiguity).
+REFINE_AMBIGUOUS = 2.0 * CHART_VERTEX_ERROR
 
 #: Chart distance of the search for images whose boundary passes through an edge.
 REFINE_QUERY = 1e-11

@@ -25,6 +25,7 @@ import math
 from fractions import Fraction
 
 import mpmath
+import numpy as np
 
 
 def _rational(v):
@@ -223,16 +224,216 @@ def _point_and_target(scene, point, target):
     return P, T, _target_frame(T, P)
 
 
+def _cone_planes(P, V):
+    """The planes of the cone from ``P`` over the convex polygon ``V``: per side its
+    normal ``w`` (through ``P``) and the sign ``s`` with ``s w . (v - P) >= 0`` on the
+    side of V's centroid."""
+    centroid = tuple(sum(c) / len(V) for c in zip(*V))
+    planes = []
+    for k in range(len(V)):
+        w = _cross(_sub(V[k], P), _sub(V[(k + 1) % len(V)], P))
+        planes.append((w, 1 if _dot(w, _sub(centroid, P)) > 0 else -1))
+    return planes
+
+
 def _cone(P, V):
     """The cone from ``P`` over the convex polygon ``V``: one linear function a side,
     >= 0 on the side of V's centroid."""
-    centroid = tuple(sum(c) / len(V) for c in zip(*V))
-    cone = []
-    for k in range(len(V)):
-        w = _cross(_sub(V[k], P), _sub(V[(k + 1) % len(V)], P))
-        s = 1 if _dot(w, _sub(centroid, P)) > 0 else -1
-        cone.append(lambda v, w=w, s=s: s * _dot(w, _sub(v, P)))
-    return cone
+    return [lambda v, w=w, s=s: s * _dot(w, _sub(v, P)) for w, s in _cone_planes(P, V)]
+
+
+#: The unit roundoff of doubles: the float filters below bound their rounding by
+#: multiples of it.
+_U = 2.0 ** -53
+
+
+def _float(x):
+    """A rational rounded to the nearest double (relative error at most _U)."""
+    return float(x)
+
+
+class _Filters:
+    """Float filters for the exact decisions of :func:`visible_pieces`, every polygon at
+    once: each decides a predicate in doubles only where a bound on that computation's
+    rounding shows the exact answer (the sign is certain), as the Python BSP build's
+    float filter does for sides (``exactff.visibility.bsp._rule_sides``); elsewhere it
+    says None and the caller decides in rationals. The decisions are the exact ones:
+    the reference's results do not change, only its time.
+
+    Bounds (``u = 2**-53``; each input double exact, each rational rounded once to the
+    nearest double, relative error ``u``): a difference ``v - P`` of doubles has
+    relative error ``u`` per coordinate, a dot product of three such terms with a
+    rounded normal ``m`` is off by at most ``(2u + gamma_3) sum |m_i| |w_i| < 8u sum
+    |m_i| |w_i|`` (with a margin); the plane test ``n . x - d`` of doubles by at most
+    ``gamma_4 (|n| . |x| + |d|)``; a 3x3 determinant of rounded differences by at most
+    ``16u`` times its permanent (Shewchuk's ``orient3d`` bound is ``7.8u`` for exact
+    differences, and the differences' rounding adds ``3u`` to first order)."""
+
+    def __init__(self, scene, P, T, m, height, slab, cone_w, target, offsets):
+        V = np.asarray(scene.vertices, dtype=float)
+        start = np.asarray(scene.offsets)
+        self.start = start
+        counts = np.diff(start)
+        owner = np.repeat(np.arange(len(counts)), counts)
+        Pf = np.array([_float(c) for c in P])
+        W = V - Pf
+        Wa = np.abs(W)
+        # depth: sigma (m . (v - P)) against 0, H - slab (near) and H + slab (far)
+        mf = np.array([_float(c) for c in m])
+        sf = W @ mf
+        Bs = 8 * _U * (Wa @ np.abs(mf)) * (1 + 1e-10) + 1e-300
+        sigma = 1.0 if height > 0 else -1.0
+        x = sigma * sf
+        H = abs(height)
+        t_near, t_far = _float(H - slab), _float(H + slab)
+        lt0 = x + Bs < 0                      # depth < 0, sure
+        gt0 = x - Bs > 0                      # depth > 0, sure
+        above_far = x - Bs > t_far + 2 * _U * abs(t_far)
+        below_far = x + Bs < t_far - 2 * _U * abs(t_far)
+        below_near = x + Bs < t_near - 2 * _U * abs(t_near)
+        above_near = x - Bs > t_near + 2 * _U * abs(t_near)
+        per = lambda a, how: how.reduceat(a, start[:-1]) if len(a) else a
+        self.behind = per(lt0, np.logical_and)           # all depths <= 0 (sure)
+        self.not_behind = per(gt0, np.logical_or)        # some depth > 0 (sure)
+        self.beyond = per(above_far, np.logical_and)     # all depths > far
+        self.not_beyond = per(below_far, np.logical_or)
+        self.in_front = per(gt0 & below_near, np.logical_and)      # all in (0, near)
+        self.reaches = per(lt0 | above_near, np.logical_or)        # some outside it
+        # the near-coplanar band: polygon j's vertices against the target's plane ...
+        n = np.asarray(scene.normals, dtype=float)
+        d = np.asarray(offsets, dtype=float)
+        off = np.abs(V @ n[target] - d[target])
+        mag = np.abs(V) @ np.abs(n[target]) + abs(d[target])
+        self.j_in_target = self._band(per(off > 74 * _U * mag, np.logical_or),
+                                      per(off < 54 * _U * mag, np.logical_and))
+        # ... and the target's vertices against polygon j's plane
+        Tf = np.asarray(scene.polygons[target], dtype=float)
+        off = np.abs(n @ Tf.T - d[:, None])
+        mag = np.abs(n) @ np.abs(Tf).T + np.abs(d)[:, None]
+        self.target_in_j = self._band((off > 74 * _U * mag).any(axis=1),
+                                      (off < 54 * _U * mag).all(axis=1))
+        # outside the cone over the target: every vertex strictly outside one side
+        out = np.zeros(len(counts), dtype=bool)
+        for w, sign in cone_w:
+            wf = np.array([_float(c) for c in w])
+            val = sign * (W @ wf)
+            B = 8 * _U * (Wa @ np.abs(wf)) * (1 + 1e-10) + 1e-300
+            out |= per(val + B < 0, np.logical_and)
+        self.outside_cone = out
+        # triangles: the plane through the point (an image of no area) and the
+        # engines' edge-on convention (_near_edge_on), decided in floats where certain
+        tri = counts == 3
+        self.triangle = tri
+        self.flat_image = np.full(len(counts), None, dtype=object)
+        self.edge_on = np.full(len(counts), None, dtype=object)
+        k = np.flatnonzero(tri)
+        if len(k):
+            a, b, c = (V[start[k] + i] for i in range(3))
+            A, Bv, C = a - Pf, b - Pf, c - Pf
+            det = np.einsum("ij,ij->i", A, np.cross(Bv, C))
+            perm = np.einsum("ij,ij->i", np.abs(A), _abs_cross(Bv, C))
+            sure = np.abs(det) > 16 * _U * perm * (1 + 1e-10)
+            self.flat_image[k[sure]] = False
+            # _near_edge_on: |m . (P - c)| / |m| against 256 u (|P| + |c| + |c - P|), m
+            # the Newell normal ((b - a) x (c - a) for a triangle), c the centroid;
+            # decided where the two sides differ by a factor of 2 beyond the bounds
+            d1, d2 = b - a, c - a
+            mt = np.cross(d1, d2)
+            Bm = 16 * _U * np.max(_abs_cross(np.abs(d1), np.abs(d2)), axis=1)
+            g = (a + b + c) / 3
+            w = Pf - g
+            Bw = 8 * _U * (np.abs(Pf) + np.abs(a) + np.abs(b) + np.abs(c)).max(axis=1)
+            st = np.einsum("ij,ij->i", mt, w)
+            Bst = (8 * _U * np.einsum("ij,ij->i", np.abs(mt), np.abs(w))
+                   + Bm * np.abs(w).sum(1) + np.abs(mt).sum(1) * Bw
+                   + 3 * Bm * Bw)
+            nm = np.linalg.norm(mt, axis=1)
+            lo_m, hi_m = nm - 2 * Bm, nm + 2 * Bm
+            size = lambda X: np.linalg.norm(X, axis=1)
+            tau = 256 * _U * (size(np.broadcast_to(Pf, g.shape)) + size(g) + size(g - Pf))
+            slack = 1 + 1e-6
+            with np.errstate(divide="ignore", invalid="ignore"):
+                far = (lo_m > 0) & ((np.abs(st) - Bst) / hi_m > 2 * tau * slack)
+                near = (lo_m > 0) & ((np.abs(st) + Bst) / lo_m < 0.5 * tau / slack)
+            self.edge_on[k[far]] = False
+            self.edge_on[k[near]] = True
+
+    @staticmethod
+    def _band(beyond, within):
+        out = np.full(len(beyond), None, dtype=object)
+        out[within] = True
+        out[beyond] = False
+        return out
+
+
+def _seen_whole_skips(scene, P, T, m, height, slab, cone_planes):
+    """Per polygon, whether :func:`seen_whole` may pass it by without rationals: every
+    vertex certainly off the near-coplanar band of the target's plane and the target's
+    vertices certainly off its plane's (``_near_coplanar`` says False), and every vertex
+    certainly outside one half-space of the pyramid (nothing of it is left after the
+    clip). Float filters with the bounds of :class:`_Filters`; False where any is not
+    certain (the caller decides in rationals)."""
+    V = np.asarray(scene.vertices, dtype=float)
+    start = np.asarray(scene.offsets)
+    counts = np.diff(start)
+    per = lambda a, how: how.reduceat(a, start[:-1]) if len(a) else a
+    Pf = np.array([_float(c) for c in P])
+    W = V - Pf
+    Wa = np.abs(W)
+    # the pyramid: depth < 0, depth > far, or outside a side of the cone, for every vertex
+    mf = np.array([_float(c) for c in m])
+    x = (1.0 if height > 0 else -1.0) * (W @ mf)
+    B = 8 * _U * (Wa @ np.abs(mf)) * (1 + 1e-10) + 1e-300
+    t_far = _float(abs(height) + slab)
+    outside = per(x + B < 0, np.logical_and) | per(
+        x - B > t_far + 2 * _U * abs(t_far), np.logical_and)
+    for w, sign in cone_planes:
+        wf = np.array([_float(c) for c in w])
+        val = sign * (W @ wf)
+        Bw = 8 * _U * (Wa @ np.abs(wf)) * (1 + 1e-10) + 1e-300
+        outside |= per(val + Bw < 0, np.logical_and)
+    # _near_coplanar(V, T): V's vertices against the target's plane (Newell's, exact,
+    # rounded), off = |m . (v - T0)| against 256 u (|m| . |v| + |m . T0|)
+    mt = _newell(T)
+    if mt is None:
+        return np.zeros(len(counts), dtype=bool)
+    mtf = np.array([_float(c) for c in mt])
+    T0 = np.array([_float(c) for c in T[0]])
+    w = V - T0
+    off = np.abs(w @ mtf) - 8 * _U * (np.abs(w) @ np.abs(mtf)) * (1 + 1e-10)
+    size = np.abs(V) @ np.abs(mtf) + abs(float(T0 @ mtf)) + np.abs(T0) @ np.abs(mtf)
+    clear = per(off > 300 * _U * size, np.logical_and)
+    # and the target's vertices against V's plane (a triangle's: (b - a) x (c - a),
+    # its rounding bounded per component as in _Filters)
+    tri = counts == 3
+    clear &= tri
+    k = np.flatnonzero(clear)
+    if len(k):
+        a, b, c = (V[start[k] + i] for i in range(3))
+        d1, d2 = b - a, c - a
+        mv = np.cross(d1, d2)
+        Bm = 16 * _U * np.max(_abs_cross(np.abs(d1), np.abs(d2)), axis=1)
+        Tf = np.array([[_float(c) for c in v] for v in T])
+        ok = np.ones(len(k), dtype=bool)
+        for t in Tf:
+            wt = t - a
+            o = (np.abs(np.einsum("ij,ij->i", mv, wt))
+                 - 8 * _U * np.einsum("ij,ij->i", np.abs(mv), np.abs(wt)) * (1 + 1e-10)
+                 - Bm * np.abs(wt).sum(1))
+            sz = (np.abs(mv) @ np.abs(t) + np.abs(np.einsum("ij,ij->i", mv, a))
+                  + np.einsum("ij,ij->i", np.abs(mv), np.abs(a)) + Bm * (np.abs(t).sum()
+                                                                          + np.abs(a).sum(1)))
+            ok &= o > 300 * _U * sz
+        clear[k] = ok
+    return clear & outside
+
+
+def _abs_cross(a, b):
+    """The permanent-like bound of a cross product: |a_y b_z| + |a_z b_y|, ..."""
+    a, b = np.abs(a), np.abs(b)
+    return np.stack([a[:, 1] * b[:, 2] + a[:, 2] * b[:, 1],
+                     a[:, 2] * b[:, 0] + a[:, 0] * b[:, 2],
+                     a[:, 0] * b[:, 1] + a[:, 1] * b[:, 0]], axis=1)
 
 
 def visible_pieces(scene, point, target, exclude=()):
@@ -282,17 +483,40 @@ def visible_pieces(scene, point, target, exclude=()):
     near, far = 1 - slab / abs(height), 1 + slab / abs(height)
     planar = slab == 0
     # the cone from the point over the target: one half-space per edge
+    cone_planes = _cone_planes(P, T)
     cone = _cone(P, T)
     pieces = [target2]
     offsets = scene.plane_offsets
+    # every exact decision below first asked of a float filter (None: not certain)
+    sure = _Filters(scene, P, T, m, height, slab, cone_planes, target, offsets)
     for j, polygon in enumerate(scene.polygons):
         if j == target or j in exclude or not pieces:
             continue
+        if sure.behind[j]:
+            continue                     # behind the point (every depth < 0)
+        a, b = sure.j_in_target[j], sure.target_in_j[j]
+        if a is None or b is None:
+            tie = _coplanar_by_rule(scene, j, target, offsets)
+        else:
+            tie = True if a and b else (False if not (a or b) else None)
+        if sure.not_behind[j] and tie is False:
+            if sure.beyond[j]:
+                continue                 # beyond the target
+            if sure.in_front[j] and sure.triangle[j] and sure.flat_image[j] is False:
+                # wholly between the point and the target, its image a triangle of
+                # area: it hides its image; outside the cone it hides nothing here,
+                # unless the engines' edge-on convention leaves the row undecided
+                edge_on = sure.edge_on[j]
+                if edge_on is None:
+                    edge_on = _near_edge_on([_rational(v) for v in polygon], P)
+                if edge_on:
+                    return None
+                if sure.outside_cone[j]:
+                    continue             # its image is separated from every piece
         V = [_rational(v) for v in polygon]
         g = [depth(v) for v in V]
         if all(x <= 0 for x in g):
             continue                     # behind the point
-        tie = _coplanar_by_rule(scene, j, target, offsets)
         if tie is None:
             return None                  # the engines' tree decides: undecided
         if tie and not _in_front_on_a_tie(scene, P, j, target):
@@ -444,8 +668,10 @@ def seen_whole(scene, point, target):
     H = _hull(image, keep)
     far = 1 + slab / abs(height)
     halves = [lambda v: depth(v), lambda v: far - depth(v)] + _cone(P, H)
+    # the polygons a float filter shows nowhere near the target's plane nor the pyramid
+    skip = _seen_whole_skips(scene, P, T, m, height, slab, _cone_planes(P, H))
     for j, polygon in enumerate(scene.polygons):
-        if j == target:
+        if j == target or skip[j]:
             continue
         V = [_rational(v) for v in polygon]
         if _near_coplanar(V, T):

@@ -622,8 +622,9 @@ def test_real_closed_rows_sum_to_one_and_engines_agree(name, k, tmp_path):
 #: 36801 (bound 0.57 on the floor slab under the walls); 15025 and 47609 face walls and
 #: windows flush back-to-back to 3e-14, where the engines parted beyond their bounds
 #: (one in the default tier: the Python engine's BSP build takes 21 s on Duplex, 31 s on
-#: SampleHouse4, 86 s on tested_sample_project; the slow rows pass in 0.7-4 min, except
-#: 47609: its 11 parted polygons take the rational reference about 50 s each)
+#: SampleHouse4, 86 s on tested_sample_project; the slow rows pass in 0.7-4 min; on
+#: 47609 the rational reference took about 50 s for each of its 11 undecided polygons
+#: until its float filters, 1.5 s)
 BUILDING_ROWS = [("ifc-Duplex_A.obj", 1009),
                  pytest.param("ifc-Duplex_A.obj", 15025, marks=pytest.mark.slow),
                  pytest.param("ifc-SampleHouse4.obj", 21905, marks=pytest.mark.slow),

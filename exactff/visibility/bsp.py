@@ -43,8 +43,8 @@ class BSPTree:
     vertex_errors : list of ndarray of shape (K,), or None
         Per fragment vertex, a bound on its distance from the exact point it stands for:
         0 for an input vertex, the rounding of a split's crossing (and of the splitting
-        plane) for the others. The compiled build's; None for the Python build, whose
-        engine leaves the crossings' rounding out of its bounds.
+        plane, or the snap to an end point) for the others. Both builds give them (the
+        Python engine charges them to its values: ``engine._crossing_charges``).
     """
 
     def __init__(self, normals, offsets, front, back, node_fragments, fragments, source, splits,
@@ -319,24 +319,42 @@ def _axis_plane(axis, c):
     return tuple(Fraction(int(i == axis)) for i in range(3)), Fraction(float(c))
 
 
-def _crossings(plane, P, exact):
+def _crossings(plane, P, exact, errors):
     """A crossing function for :func:`exactff.halfspace.split_polygon` along the exact
     plane ``plane`` (:func:`_split_plane`): the exact crossing of the points the edge's
     ends stand for (``exact``, :class:`_ExactPoints`), rounded once to the nearest
     double, and recorded. The compiled build rounds the same point (from quadruple
     precision where that rounds it unambiguously, else exactly): the two builds place
     every crossing alike, which the exact sides of later planes need (a vertex an ulp
-    off a plane is on one side of it)."""
+    off a plane is on one side of it).
+
+    ``errors`` (a dict, rounded point -> bound) gets each crossing's distance from the
+    exact point it stands for: the rounding, ``|X - X*| <= u |X|`` (``u = 2**-53``, each
+    coordinate within half an ulp), or, where the split snaps it to an end point ``E``
+    (``BSP_SPLIT_SNAP_EPS``, as :func:`exactff.halfspace.split_polygon` decides), ``|E -
+    X| + u |X|`` at ``E``. Keyed by the point, over the whole tree: a vertex that rounds
+    alike elsewhere is charged there too (conservative)."""
 
     integer = _integer_plane(plane)
+    reach = tol.BSP_SPLIT_SNAP_EPS * float(np.finfo(float).eps)
 
     def crossing(a, b):
         X = exact.rounded(exact.crossing(exact.point(tuple(P[a].tolist())),
                                          exact.point(tuple(P[b].tolist())), integer))
         exact.record(X, P[a], P[b], integer)
+        # its distance from the exact point (a margin of 4 roundings for this sum)
+        rounding = _UNIT_ROUNDOFF * float(np.linalg.norm(X))
+        at = [(tuple(E.tolist()), float(np.linalg.norm(X - E)) + rounding)
+              for E in (P[a], P[b]) if np.all(np.abs(X - E) <= reach * np.abs(E).max())]
+        for key, bound in at or [(tuple(X.tolist()), rounding)]:
+            errors[key] = max(errors.get(key, 0.0), bound * (1 + 4 * _UNIT_ROUNDOFF))
         return X
 
     return crossing
+
+
+#: the unit roundoff of doubles (half the machine epsilon)
+_UNIT_ROUNDOFF = 2.0 ** -53
 
 
 def _vertex_means(V, starts, counts):
@@ -427,6 +445,7 @@ def build_bsp(scene, *, candidates=8, seed=0, engine="python"):
     counts0 = np.array([len(P) for P in fragments])
     stack = [(np.arange(n_frag), np.concatenate(fragments), counts0, -1, 0)]
     rules = _RuleCache(scene)
+    errors = {}                 # the crossings' distances from their exact points
     while stack:
         ids, V, counts, parent, child = stack.pop()
         node = len(nodes_d)
@@ -508,7 +527,7 @@ def build_bsp(scene, *, candidates=8, seed=0, engine="python"):
         for k in np.flatnonzero(cut).tolist():
             a, b = starts[k], starts[k + 1]
             f, bk = split_polygon(V[a:b], sign[a:b], s[a:b],
-                                  _crossings(split_plane, V[a:b], rules.points),
+                                  _crossings(split_plane, V[a:b], rules.points, errors),
                                   snap=tol.BSP_SPLIT_SNAP_EPS)
             splits += 1
             for part, side in ((f, 1), (bk, -1)):
@@ -534,9 +553,13 @@ def build_bsp(scene, *, candidates=8, seed=0, engine="python"):
     live = [i for here in node_frags for i in here]
     new_id = {old: new for new, old in enumerate(live)}
     node_frags = [[new_id[i] for i in here] for here in node_frags]
+    kept = [fragments[i] for i in live]
+    vertex_errors = [np.array([errors.get(v, 0.0) for v in map(tuple, P.tolist())])
+                     for P in kept] if errors else [np.zeros(len(P)) for P in kept]
     return BSPTree(np.array(nodes_n), np.array(nodes_d), np.array(front), np.array(back),
-                   node_frags, [fragments[i] for i in live], source[np.array(live, dtype=int)],
-                   splits, normals_src, whole=np.array(live, dtype=int) < len(scene))
+                   node_frags, kept, source[np.array(live, dtype=int)],
+                   splits, normals_src, whole=np.array(live, dtype=int) < len(scene),
+                   vertex_errors=vertex_errors)
 
 
 def _build_bsp_compiled(scene, candidates, seed):

@@ -19,7 +19,7 @@ from ..kernel import eq3_form_factor, flat_polygons, unoccluded_row
 from ..predicates import coplanar_band_sides, engine_sides
 from ..prepared import prepared
 from .bsp import coplanar_overlaps, front_to_back, scene_bsp
-from .charts import CHARTS
+from .charts import CHARTS, chart_clip
 from .clipper import visible_pieces
 from .pieces import pieces_form_factors, pieces_solid_angles
 from .refine import Refiner
@@ -141,6 +141,7 @@ def visible_form_factors(scene, point, normal, *, two_sided=False, stats=None,
     refiner = Refiner(scene, tree, order, p, normal, kept, world, charts)
     Ff, ef_ = pieces_form_factors(pieces, len(order), tolerance=tolerance, owner=src,
                                   integrator=integrator, refiner=refiner, stats=st)
+    ef_ = ef_ + _crossing_charges(tree, order, p, normal, charts, st)
     F, E = _per_polygon(src, Ff, ef_, len(scene), "form factor", stats)
     if not error:
         _require_tolerance(F, E, tolerance, integrator, st)
@@ -198,6 +199,89 @@ def visible_solid_angles(scene, point, normal, *, two_sided=False, stats=None,
     pieces = visible_pieces(kept, receives, stats=st, shortcuts=shortcuts)
     Wf, Ef = pieces_solid_angles(pieces, len(order))
     return _per_polygon(src, Wf, Ef, len(scene), "solid angle", stats)
+
+
+def _crossing_charges(tree, order, p, normal, charts, st):
+    """Per fragment of the row (clipper positions), a bound on what the BSP's rounded
+    crossings can move in its value: the pieces are cut from the fragments as built,
+    whose vertices made by a split stand within ``tree.vertex_errors`` of the exact
+    points (rounded once, or snapped to an end point), while the value is that of the
+    exact geometry.
+
+    Moving a fragment's vertex ``V`` by at most ``r`` changes the fragment by the two
+    triangles ``(V-, V, V')`` and ``(V, V+, V')`` (``V-``, ``V+`` its neighbours, ``|V'
+    - V| <= r``): 3-D area at most ``r (|V - V-| + |V+ - V|) / 2``, at least ``d - r``
+    from the point (``d``: its distance from the two edges), whose image on the base
+    disk is at most the area over ``pi (d - r)^2`` in form factor units (``cos cos /
+    (pi r^2)`` with both cosines at most 1). That measure is charged to the fragment and
+    to every fragment behind it whose image (in any chart) meets the image of the two
+    edges ``V- V V+`` (of the triangle's outline where the chart clips it) widened by
+    three times the angle ``r / (d - r)`` (a chart's coordinates move by at most 3 per
+    radian): what the moved edges may uncover or hide. The charges are summed in ``stats["crossing_bound"]`` (the largest)."""
+    charge = np.zeros(len(order))
+    errors = tree.vertex_errors
+    st["crossing_bound"] = 0.0
+    if errors is None:
+        return charge
+    pos, prv, cur, nxt, r = [], [], [], [], []
+    for k, f in enumerate(order.tolist()):
+        e = errors[f]
+        if not e.any():
+            continue
+        P = tree.fragments[f]
+        j = np.flatnonzero(e > 0)
+        pos.append(np.full(len(j), k))
+        prv.append(P[j - 1])
+        cur.append(P[j])
+        nxt.append(P[(j + 1) % len(P)])
+        r.append(e[j])
+    if not pos:
+        return charge
+    pos, A, V, B, r = (np.concatenate(x) for x in (pos, prv, cur, nxt, r))
+    o = np.asarray(p, dtype=float)
+
+    def distance(X, Y):
+        # from the point to the segment X-Y
+        d = Y - X
+        dd = (d * d).sum(1)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            t = np.clip(np.where(dd > 0, ((o - X) * d).sum(1) / dd, 0.0), 0.0, 1.0)
+        return np.linalg.norm(X + t[:, None] * d - o, axis=1)
+
+    # a margin of 1e-12 relative for the rounding of the distances and lengths
+    near = np.minimum(distance(A, V), distance(V, B)) * (1 - 1e-12) - r
+    area = 0.5 * r * (np.linalg.norm(V - A, axis=1) + np.linalg.norm(B - V, axis=1))
+    with np.errstate(divide="ignore"):
+        c = np.where(near > 0, area * (1 + 1e-12) / (np.pi * np.maximum(near, 0.0) ** 2),
+                     np.inf)
+        widen = np.where(near > 0, 3.0 * r / np.maximum(near, 0.0), np.inf)
+    np.add.at(charge, pos, c)
+    # the fragments behind whose images meet the triangle's image
+    R = receiver_frame(normal)
+    T = to_local(np.stack([A, V, B], axis=1), o, R)
+    pairs = []
+    for ci, chart in enumerate(CHARTS):
+        if ci >= len(charts) or len(charts[ci][0]) == 0:
+            continue
+        idx, images, _ = charts[ci]
+        live, UV, cl = chart_clip(T, np.full(len(T), 3), chart)
+        if len(live) == 0:
+            continue
+        # each triangle's clipped outline (padded by its last vertex), closed by its first
+        outline = shapely.linestrings(np.concatenate([UV, UV[:, :1]], axis=1))
+        grown = shapely.buffer(outline, np.minimum(widen[live], 1e3))
+        whole = cl == 3          # unclipped: the two edges at V only, not V- to V+
+        if whole.any():
+            grown[whole] = shapely.buffer(shapely.linestrings(UV[whole, :3]),
+                                          np.minimum(widen[live[whole]], 1e3))
+        a, b = shapely.STRtree(images).query(grown, predicate="intersects")
+        behind = idx[b] > pos[live[a]]
+        pairs.append(np.stack([live[a][behind], idx[b][behind]], axis=1))
+    if pairs:
+        pairs = np.unique(np.concatenate(pairs), axis=0)
+        np.add.at(charge, pairs[:, 1], c[pairs[:, 0]])
+    st["crossing_bound"] = float(charge.max(initial=0.0))
+    return charge
 
 
 def _per_polygon(src, Vf, Ef, n, what, stats):

@@ -209,10 +209,20 @@ class Refiner:
 
         Returns
         -------
-        (ndarray of int, ndarray of shape (V, 3), ndarray)
+        (ndarray of int, ndarray of shape (V, 3), ndarray, (ndarray, ndarray))
             Per edge (from vertex i to ``nxt[i]``): its label (>= 0: a row of the
             fragment edge table; < 0: ``-1 - s`` for the static plane ``s``), the static
-            planes as local vectors, and the edge's residual (inf: no plane found).
+            planes as local vectors, the edge's residual (inf: no plane found); and the
+            candidates within ``REFINE_AMBIGUOUS`` of both its end points (edge, label
+            pairs, the label's own among them): the planes the clipper's edge may stand
+            for, given its vertices' accuracy.
+
+        Every edge is searched among its own fragment's edges, the seams and the edges
+        of the images in front whose boundary passes through its midpoint (images
+        behind cannot bound a visible piece), and takes the least residual: an edge of
+        the fragment's own polygon within 2e-14 of an occluder's (a mullion flush with a
+        curtain wall's plate) was taken before the occluder's was looked at, and the
+        refined value moved by the width between them (1.2e-15 beyond its bound).
         """
         eu, ev, ew, _ = chart
         D = _unit(coords[:, :1] * eu + coords[:, 1:2] * ev + ew)
@@ -221,6 +231,7 @@ class Refiner:
         best = np.full(nv, np.inf)
         label = np.full(nv, -1, dtype=np.int64)
         statics = []
+        alt_e, alt_l = [np.zeros(0, dtype=np.int64)], [np.zeros(0, dtype=np.int64)]
         # seams and chart edges: the grid lines u = c and v = c nearest to the edge's
         # first end point (plane e_u - c e_w or e_v - c e_w; v = 0 is the horizon)
         _, _, n_tiles = self.charts[ci]
@@ -237,6 +248,9 @@ class Refiner:
             better = r < best
             best[better] = r[better]
             label[better] = -1 - (len(statics) + j[better])
+            near = np.flatnonzero(r <= tol.REFINE_AMBIGUOUS)
+            alt_e.append(near)
+            alt_l.append(-1 - (len(statics) + j[near]))
             statics.extend(Ms)
         statics = np.array(statics)
         offset, count, planes = self._edge_table()
@@ -278,16 +292,19 @@ class Refiner:
                 better = r1 < best[e1]
                 best[e1[better]] = r1[better]
                 label[e1[better]] = g1[better]
+                near = res <= tol.REFINE_AMBIGUOUS
+                alt_e.append(e[near])
+                alt_l.append(g[near])
 
         consider(np.arange(nv), frag)
-        # the rest: edges of the images whose boundary passes through the edge
-        rest = np.flatnonzero(best > tol.REFINE_SURE)
-        if len(rest):
-            q, t = self._boundaries_near(ci, 0.5 * (coords[rest] + coords[nxt[rest]]))
-            if len(q):
-                consider(rest[q], self.charts[ci][0][t])
+        # every edge: the edges of the images in front whose boundary passes through it
+        every = np.arange(nv)
+        q, t = self._boundaries_near(ci, 0.5 * (coords + coords[nxt]))
+        front = self.charts[ci][0][t] < frag[q]
+        if front.any():
+            consider(every[q[front]], self.charts[ci][0][t[front]])
         best[best > tol.REFINE_MATCH] = np.inf
-        return label, statics, best
+        return label, statics, best, (np.concatenate(alt_e), np.concatenate(alt_l))
 
     # -- planes from the input --------------------------------------------------------
     def segments(self, rows):
@@ -443,7 +460,7 @@ class Refiner:
             mpmath tier).
         """
         eu, ev, ew, _ = chart
-        label, statics, res = self.match(ci, chart, coords, nxt, frag)
+        label, statics, res, alts = self.match(ci, chart, coords, nxt, frag)
         ok_ring = np.ones(n_rings, dtype=bool)
         ok_ring[ring_of[~np.isfinite(res)]] = False
         val = np.zeros(n_rings, dtype=_LD)
@@ -493,6 +510,22 @@ class Refiner:
                          * (np.nan_to_num(sin[v]) + tol.REFINE_VERTEX_ULPS * tol.LONGDOUBLE_EPS))
             cut = np.bincount(ring_of[v], weights=tri, minlength=n_rings) / np.pi
         same = same | parallel
+        # a refined vertex must stand where the clipper's does, within what the clipper's
+        # accuracy allows (an input point: REFINE_MATCH; two planes' intersection: their
+        # ambiguity over the sine of their angle): where it does not, the labels do not
+        # describe the clipper's ring (a sliver whose closing edge rounded to nothing took
+        # its neighbour's label, and the shared input point of the two long edges became
+        # the far vertex too: the ring collapsed to 0 with a bound of 1e-19, 4.8e-16 off),
+        # and the ring keeps the clipper's value and estimate
+        moved = np.linalg.norm(X.astype(float) - Du, axis=1)
+        reach = tol.REFINE_MATCH + np.where(
+            has_point, 0.0, 2.0 * tol.REFINE_AMBIGUOUS / np.maximum(np.nan_to_num(sin), 1e-300))
+        astray = use & ~same & ~(moved <= reach)
+        if astray.any():
+            ok_ring[ring_of[astray]] = False
+            use = ok_ring[ring_of]
+        cut = cut + self._ambiguity(label, res, alts, statics, M, Du, nxt, prev, sin, same,
+                                    use, ring_of, n_rings)
         labels = (label, statics, point, same, cut)
         keep = use & ~same
         # compress: the kept vertices of each ring, in order
@@ -504,7 +537,7 @@ class Refiner:
         r = ring_of[kv]
         if len(kv) == 0:
             val[ok_ring] = 0.0
-            est[ok_ring] = 0.0
+            est[ok_ring] = cut[ok_ring]
             return val, est, ok_ring, labels
         rings = np.flatnonzero(good)
         ridx = np.searchsorted(rings, r)
@@ -531,8 +564,68 @@ class Refiner:
             + 4 * tol.LONGDOUBLE_EPS * v.astype(float) + cut[rings]
         val[rings], est[rings] = v, e
         deg = ok_ring & ~good
-        val[deg], est[deg] = 0.0, 0.0
+        val[deg], est[deg] = 0.0, cut[deg]
         return val, est, ok_ring, labels
+
+    def _ambiguity(self, label, res, alts, statics, M, Du, nxt, prev, sin, same, use,
+                   ring_of, n_rings):
+        """Per ring, a bound on what its labels' choice can move (form factor units):
+        the clipper's vertices are within ``CHART_VERTEX_ERROR`` of their places, so the
+        plane an edge truly lies on is among the candidates within ``REFINE_AMBIGUOUS``
+        of both its end points (:meth:`match`); where another candidate than the label
+        is there (not the same input segment), the true edge may be that plane's arc.
+
+        The region between the label's arc and another plane's arc over an edge of arc
+        length ``phi`` (chord ``c``) whose end points are within ``h`` of the other
+        plane (``h``: the larger of the two planes' separations at the clipper's end
+        points, ``|(m' - s m) . d|`` for unit normals ``m, m'`` with ``s`` the sign of
+        ``m . m'``) lies within ``h / cos(phi / 2)`` of the arc (the separation of two
+        great circles is a sine of the arc length, largest between the ends at most by
+        that factor), and its ends run along the neighbouring edges, at most ``h / sin
+        theta`` beyond the vertex where the turn is ``theta``: its area is at most
+        ``h / cos(phi / 2) (phi + h / sin theta_a + h / sin theta_b)``, and its image on
+        the base disk at most that (the projection's density is at most 1), over pi in
+        form factor units. A label with a residual above ``REFINE_AMBIGUOUS`` (no
+        candidate stands for the clipper's edge within its accuracy) is charged as if
+        its plane were ``h`` = its residual plus ``CHART_VERTEX_ERROR`` away."""
+        e_alt, l_alt = alts
+        keep = use[e_alt] & (l_alt != label[e_alt])
+        e_alt, l_alt = e_alt[keep], l_alt[keep]
+        # the same input segment as the label: the same plane
+        fr = np.flatnonzero((l_alt >= 0) & (label[e_alt] >= 0))
+        if len(fr):
+            A1, B1 = self.segments(l_alt[fr])
+            A0, B0 = self.segments(label[e_alt[fr]])
+            eq = lambda X, Y: np.all(X == Y, axis=1)
+            one = (eq(A0, A1) & eq(B0, B1)) | (eq(A0, B1) & eq(B0, A1))
+            drop = np.zeros(len(e_alt), dtype=bool)
+            drop[fr[one]] = True
+            e_alt, l_alt = e_alt[~drop], l_alt[~drop]
+        h = np.zeros(len(label))
+        if len(e_alt):
+            Ma, _ = self.local_planes_ld(l_alt, statics)
+            Ma = (Ma / np.sqrt((Ma * Ma).sum(1))[:, None]).astype(float)
+            Ml = M[e_alt]
+            Ml = (Ml / np.sqrt((Ml * Ml).sum(1))[:, None]).astype(float)
+            s = np.where((Ma * Ml).sum(1) < 0, -1.0, 1.0)
+            Dm = Ma - s[:, None] * Ml
+            sep = np.maximum(np.abs((Dm * Du[e_alt]).sum(1)),
+                             np.abs((Dm * Du[nxt[e_alt]]).sum(1)))
+            np.maximum.at(h, e_alt, np.nan_to_num(sep, nan=np.inf))
+        far = use & np.isfinite(res) & (res > tol.REFINE_AMBIGUOUS)
+        h[far] = np.maximum(h[far], res[far] + tol.CHART_VERTEX_ERROR)
+        e = np.flatnonzero(use & (h > 0))
+        if not len(e):
+            return np.zeros(n_rings)
+        c = np.linalg.norm(Du[nxt[e]] - Du[e], axis=1)
+        phi = 2.0 * np.arcsin(np.minimum(0.5 * c, 1.0))
+        # the turns at the edge's end points (none where the vertex is dropped: the
+        # next edge is on the same great circle and carries its own candidates)
+        turn = lambda v: np.where(same[v], 0.0, 1.0 / np.maximum(np.nan_to_num(sin[v]),
+                                                                 tol.REFINE_PARALLEL))
+        he = h[e] / np.cos(0.5 * phi)
+        area = he * (phi + h[e] * (turn(e) + turn(nxt[e])))
+        return np.bincount(ring_of[e], weights=area, minlength=n_rings) / np.pi
 
     def refine_mp(self, chart, coords, label, statics, point, drop, cut, tolerance,
                   integrator="sector"):
