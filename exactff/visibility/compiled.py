@@ -367,8 +367,8 @@ def compiled_form_factors(scene, point, normal, *, two_sided=False, stats=None,
         # the rounding and geometry of the pieces, after the core's second tier (above),
         # by the Python engine's own criterion; the band's slivers (below) no engine
         # here narrows; nor the BSP crossings' rounding (`crossing`: the Python engine's
-        # crossings are rounded too, and its bound leaves them out), which is held to
-        # the accuracy target of occluded values
+        # crossings are rounded too, and it holds its own charge for them to the same
+        # target), which is held to the accuracy target of occluded values
         missed = np.flatnonzero(misses_tolerance(F, E, tolerance) |
                                 (crossing > tol.OCCLUDED_ATOL))
         if len(missed):
@@ -388,9 +388,9 @@ def compiled_form_factors(scene, point, normal, *, two_sided=False, stats=None,
                 F[missed], E[missed] = G[missed], H[missed]
                 st["python_polygons"] = int(len(missed))
                 st["path"] = "compiled, python for some polygons"
-                # the Python engine's bound leaves its own crossings' rounding out: the
-                # compiled tree's measure of it stands in (the same geometry, split by
-                # another tree)
+                # the compiled tree's measure of the crossings' rounding added too (the
+                # Python engine charges its own tree's: the same geometry split by another
+                # tree; both kept, the larger sum still a bound)
                 E = E + band + crossing
                 st["max_error_estimate"] = float(E.max(initial=0.0))
                 still = missed[misses_tolerance(F[missed], H[missed], tolerance)]

@@ -141,10 +141,22 @@ def visible_form_factors(scene, point, normal, *, two_sided=False, stats=None,
     refiner = Refiner(scene, tree, order, p, normal, kept, world, charts)
     Ff, ef_ = pieces_form_factors(pieces, len(order), tolerance=tolerance, owner=src,
                                   integrator=integrator, refiner=refiner, stats=st)
-    ef_ = ef_ + _crossing_charges(tree, order, p, normal, charts, st)
-    F, E = _per_polygon(src, Ff, ef_, len(scene), "form factor", stats)
+    crossing = _crossing_charges(tree, order, p, normal, charts, st)
+    F, E = _per_polygon(src, Ff, ef_ + crossing, len(scene), "form factor", stats)
     if not error:
-        _require_tolerance(F, E, tolerance, integrator, st)
+        # the pieces' rounding and geometry against the tolerance; what the BSP's rounded
+        # crossings may move against the accuracy target of occluded values, as in the
+        # compiled core (compiled_form_factors): no tolerance narrows the input's own
+        # rounding
+        moved = np.bincount(src, weights=crossing, minlength=len(scene))
+        _require_tolerance(F, np.bincount(src, weights=ef_, minlength=len(scene)), tolerance,
+                           integrator, st)
+        if tolerance is not None and np.any(moved > tol.OCCLUDED_ATOL):
+            i = int(np.argmax(moved))
+            raise tolerance_missed(f"polygon {i}", F[i], E[i], tolerance,
+                                   f"({moved[i]:.3g} of the estimate from the BSP's rounded "
+                                   f"crossings, above the accuracy target "
+                                   f"{tol.OCCLUDED_ATOL:g})", "")
     return (F, E) if error else F
 
 
