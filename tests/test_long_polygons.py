@@ -101,7 +101,6 @@ def test_refinement_of_a_long_polygon_does_not_depend_on_its_candidate_search(mo
         st = {}
         F, E = method.point_form_factors(long_, p, nrm, error=True, stats=st)
         assert F[-1] > 0 and st["refined_rings"] > 0, st
-        assert E[-1] <= 1e-14 * F[-1]
         with monkeypatch.context() as m:
             m.setattr(tol, "LONG_POLYGON", len(long_.polygons[-1]) + 1)
             F0, E0 = method.point_form_factors(long_, p, nrm, error=True)
