@@ -183,7 +183,7 @@ def test_emitter_cut_on_a_grid_where_geos_fails_to_cut_it(monkeypatch, failures)
     assert st.cell_fallbacks == 0
     # the compiled arrangement declines (as where P is not convex): GEOS cuts first
     monkeypatch.setattr(events, "_compiled_cut_cells",
-                        lambda **k: (np.zeros((0, 3, 2)), np.zeros(0), False))
+                        lambda **k: (np.zeros((0, 3, 2)), np.zeros(0), 0, False))
     polygonize, calls = shapely.polygonize, []
 
     def fail(*args, **kwargs):

@@ -75,7 +75,7 @@ py::tuple cut_cells(Array<double> P2, Array<double> segments, double step, doubl
     py::array_t<double> tri = as_array(r.triangles);
     return py::make_tuple(tri.reshape({py::ssize_t(r.triangles.size() / 6), py::ssize_t(3),
                                        py::ssize_t(2)}),
-                          as_array(r.areas), r.ok);
+                          as_array(r.areas), r.lines, r.ok);
 }
 
 exactff::TriangleRule as_rule(py::handle r) {
@@ -269,8 +269,8 @@ PYBIND11_MODULE(_pair, m) {
           "vertex-edge events as segments of the emitter's plane (pair.h)");
     m.def("cut_cells", &cut_cells, py::arg("P2"), py::arg("segments"), py::arg("step"),
           py::arg("merge"), py::arg("sliver"),
-          "cut_cells(P2, segments, step, merge, sliver) -> (triangles (t, 3, 2), areas, ok): the "
-          "emitter cut along the event lines (pair.h)");
+          "cut_cells(P2, segments, step, merge, sliver) -> (triangles (t, 3, 2), areas, lines, ok): "
+          "the emitter cut along the event lines, collinear ones joined (pair.h)");
     m.def("adaptive_levels", &adaptive_levels, py::arg("T"), py::arg("depth"), py::arg("rung"),
           py::arg("corner"), py::arg("nP"), py::arg("frame"), py::arg("area_P"),
           py::arg("total_area"), py::arg("atol"), py::arg("rules_err"), py::arg("start"),
