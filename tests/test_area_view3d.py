@@ -270,7 +270,7 @@ def test_gunter1_points_given_the_bound_against_the_engine(monkeypatch):
         assert len(bounded) == count
         # the bound 0 <= hidden <= U holds at them (the engine's value, within its
         # estimate, lies in [0, U]: any value there would pass, so the weights decide)
-        pick = rng.choice(bounded, size=8, replace=False)
+        pick = rng.choice(bounded, size=min(8, len(bounded)), replace=False)
         G, EG = hidden_values_by_engine(X[pick], nP, Qc, blockers)
         assert np.all(np.abs(H[pick] - G) <= EH[pick] + EG)
         spent[pair] = spent.get(pair, 0.0) + float(np.dot(weights[bounded], EH[bounded]))
@@ -283,7 +283,10 @@ def test_gunter1_points_given_the_bound_against_the_engine(monkeypatch):
     fine = {}
     G, EG = ef.area_form_factors(_read("gunter1.vs3"), rows=[17], tolerance=1e-11, error=True,
                                  stats=fine)
-    assert not fine["bounded_points"] and fine["engine_fallback_points"] == st["bounded_points"]
+    # (the same points: with the blocker that covered the point before tried first, a
+    # few of them, 8 of 1,096, fit the smaller budget at 1e-11 too)
+    assert fine["engine_fallback_points"] + fine["bounded_points"] == st["bounded_points"]
+    assert fine["bounded_points"] <= 0.01 * st["bounded_points"], fine["bounded_points"]
     assert np.all(EG <= 1e-11) and np.all(np.abs(F - G) <= E + EG)
 
 

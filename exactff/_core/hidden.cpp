@@ -253,7 +253,23 @@ struct Work {
     Piece img, in, outside, cut;
     std::vector<Piece> incoming, next, images;
     std::vector<std::pair<double, size_t>> order;
+    size_t last_cover = 0;                     // the blocker that covered the base last
 };
+
+// Over a base other than Q, the region's pieces cut by Q's convex parts.
+template <typename R>
+void over_parts(const Inputs& in, Region& out, Work<R>& w) {
+    if (in.Qparts.empty()) return;
+    w.next.clear();
+    for (const Piece& F : out.pieces) {
+        const Box bf = box_of(F);
+        for (size_t q = 0; q < in.Qparts.size(); ++q)
+            if (!boxes_apart(bf, in.Qbox[q]) &&
+                intersect(F, in.Qparts[q], w.cut, w.in, w.outside, out.slivers))
+                w.next.push_back(w.cut);
+    }
+    out.pieces.swap(w.next);
+}
 
 // The hidden region of Q from the point p, in precision R.
 template <typename R>
@@ -292,7 +308,12 @@ void region_at(const Inputs& in, const Vec3<double>& pd, Region& out, Work<R>& w
             w.off_hull[static_cast<size_t>(in.group[b])] = 1;
     Poly3<R>& W = w.W;
     size_t images = 0;
-    for (size_t b = 0; b < in.K.size(); ++b) {
+    // the blocker whose image covered the base at the point before first (neighbouring
+    // points are mostly hidden by the same one: a wall between the emitter and the
+    // receiver), then the others in order
+    const size_t nk = in.K.size(), first = w.last_cover < nk ? w.last_cover : 0;
+    for (size_t t = 0; t < nk; ++t) {
+        const size_t b = t == 0 ? first : (t <= first ? t - 1 : t);
         // the offsets, each rounded once (within vertex_error of its length)
         W.clear();
         Vec3<R> g{0, 0, 0};
@@ -362,6 +383,23 @@ void region_at(const Inputs& in, const Vec3<double>& pd, Region& out, Work<R>& w
             img.l.push_back({static_cast<double>(dot(ax, m)), static_cast<double>(dot(ay, m)),
                              static_cast<double>(-dot(foot, m))});
         }
+        // an image that covers the base alone (its area within the slivers' rounding of
+        // the base's) is the region: the other blockers hide nothing more, and what is
+        // left of the base uncovered is counted with the slivers (in the estimate)
+        const double min_area = in.sliver_ulps * DBL_EPSILON * out.reach * out.reach;
+        const double left2 = in.base_area2 - std::fabs(twice_area(img.v));
+        if (in.base_area2 > 0 && img.size() >= 3 && left2 <= 2.0 * min_area) {
+            out.slivers.min_area = min_area;
+            out.slivers.dropped += 0.5 * std::max(left2, 0.0);
+            const Box& bb = in.base_box;
+            Box& sb = out.slivers.box;
+            sb = {std::min(sb.x0, bb.x0), std::min(sb.y0, bb.y0), std::max(sb.x1, bb.x1),
+                  std::max(sb.y1, bb.y1)};
+            out.pieces.push_back(std::move(img));
+            w.last_cover = b;
+            over_parts(in, out, w);
+            return;
+        }
     }
     // the images united, the largest first (a smaller one inside a piece already there
     // adds nothing at the cost of its splits, where one taken before a larger one would
@@ -414,18 +452,7 @@ void region_at(const Inputs& in, const Vec3<double>& pd, Region& out, Work<R>& w
             break;
         }
     }
-    // over a base other than Q, the pieces cut by Q's convex parts
-    if (!in.Qparts.empty()) {
-        w.next.clear();
-        for (const Piece& F : out.pieces) {
-            const Box bf = box_of(F);
-            for (size_t q = 0; q < in.Qparts.size(); ++q)
-                if (!boxes_apart(bf, in.Qbox[q]) &&
-                    intersect(F, in.Qparts[q], w.cut, w.in, w.outside, out.slivers))
-                    w.next.push_back(w.cut);
-        }
-        out.pieces.swap(w.next);
-    }
+    over_parts(in, out, w);
 }
 
 // Eq. 3's sector sum of one piece seen from x, with its rounding estimate: the port to
