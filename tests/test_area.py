@@ -403,6 +403,31 @@ def test_hidden_part_against_the_engine(case):
     assert np.all(EU <= 1e-13 + 1e-12 * U), (EU / U).max()
 
 
+@pytest.mark.parametrize("case", ["facing", "far", "touching", "corner"])
+def test_unoccluded_bound_holds_at_points_of_the_emitter(case):
+    # the bound the slivers' estimate takes for the hidden part (at most the unoccluded
+    # point value): A_Q / (pi d^2) with d the distance between the bounding boxes, and
+    # 1; against the point values (the kernel) at random points and the corners of P,
+    # and not far above the largest of them where the receiver is far
+    from exactff.area.adaptive import _unoccluded_bound
+    from exactff.area.points import point_values as _point_values
+
+    P = np.array(_square(0, True), float)
+    Q = {"facing": np.array(_square(0.5, False), float) + [0.3, 0.2, 0],
+         "far": 0.2 * np.array(_square(0, False), float) + [0.4, 0.4, 6.0],
+         "touching": np.array([[0, 0, 0], [0, 0, 1], [1, 0, 1], [1, 0, 0]], float),
+         # over P's corner only, close: P's corner sees about a quarter of it
+         "corner": np.array(_square(0.05, False), float) + [0.9, 0.9, 0]}[case]
+    nP = np.array([0, 0, 1.0])
+    a, b = np.random.default_rng(7).random((2, 400))
+    X = np.vstack([P, P[0] + np.outer(a, P[1] - P[0]) + np.outer(b, P[3] - P[0])])
+    U, EU = (v[0] for v in _point_values(X, nP, [Q]))
+    bound = _unoccluded_bound(P, Q)
+    assert np.all(U - EU <= bound) and bound <= 1.0
+    if case == "far":
+        assert bound <= 1.2 * U.max(), (bound, U.max())
+
+
 @pytest.mark.parametrize("cover", ["whole", "all but a strip", "none"])
 def test_hidden_part_of_many_blockers_against_the_engine(cover):
     # many overlapping plates between two unit squares (the images are united largest
