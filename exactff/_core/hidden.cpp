@@ -2,8 +2,9 @@
 // form factors (exactff/area/occluded.py, _hidden_values): each blocker (convex, in front
 // of Q's plane) is clipped to the pyramid from x over a convex base in Q's plane,
 // projected from x onto that plane, and the images are united as disjoint convex pieces
-// (each new image less the pieces already there, by half-plane splits), then cut by the
-// convex parts of Q where the base is not Q itself.
+// (each new image less the pieces already there, by half-plane splits, the largest image
+// first, until the pieces cover the base), then cut by the convex parts of Q where the
+// base is not Q itself.
 //
 // Every edge of a piece carries the line it lies on, taken from the 3-D geometry and not
 // from its two (rounded) ends: the trace on Q's plane of the plane through x and a
