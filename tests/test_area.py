@@ -403,6 +403,68 @@ def test_hidden_part_against_the_engine(case):
     assert np.all(EU <= 1e-13 + 1e-12 * U), (EU / U).max()
 
 
+@pytest.mark.parametrize("case", ["facing", "far", "touching", "corner"])
+def test_unoccluded_bound_holds_at_points_of_the_emitter(case):
+    # the bound the slivers' estimate takes for the hidden part (at most the unoccluded
+    # point value): A_Q / (pi d^2) with d the distance between the bounding boxes, and
+    # 1; against the point values (the kernel) at random points and the corners of P,
+    # and not far above the largest of them where the receiver is far
+    from exactff.area.adaptive import _unoccluded_bound
+    from exactff.area.points import point_values as _point_values
+
+    P = np.array(_square(0, True), float)
+    Q = {"facing": np.array(_square(0.5, False), float) + [0.3, 0.2, 0],
+         "far": 0.2 * np.array(_square(0, False), float) + [0.4, 0.4, 6.0],
+         "touching": np.array([[0, 0, 0], [0, 0, 1], [1, 0, 1], [1, 0, 0]], float),
+         # over P's corner only, close: P's corner sees about a quarter of it
+         "corner": np.array(_square(0.05, False), float) + [0.9, 0.9, 0]}[case]
+    nP = np.array([0, 0, 1.0])
+    a, b = np.random.default_rng(7).random((2, 400))
+    X = np.vstack([P, P[0] + np.outer(a, P[1] - P[0]) + np.outer(b, P[3] - P[0])])
+    U, EU = (v[0] for v in _point_values(X, nP, [Q]))
+    bound = _unoccluded_bound(P, Q)
+    assert np.all(U - EU <= bound) and bound <= 1.0
+    if case == "far":
+        assert bound <= 1.2 * U.max(), (bound, U.max())
+
+
+@pytest.mark.parametrize("cover", ["whole", "all but a strip", "none"])
+def test_hidden_part_of_many_blockers_against_the_engine(cover):
+    # many overlapping plates between two unit squares (the images are united largest
+    # first, and once they cover the pyramid's base the rest is not added: View3D's
+    # gunter2, row 95, 894 -> 20 us a point), and a large plate given last that hides
+    # the whole receiver, all of it but a strip 1e-3 wide, or is left out: the hidden
+    # part at random points of the emitter against the engine, within the estimates;
+    # where the plate hides it all, the hidden part is the unoccluded value
+    from exactff.area.hidden import hidden_values as _hidden_values
+    from exactff.area.points import point_values as _point_values
+
+    rng = np.random.default_rng(49)
+    P, Q = np.array(_square(0, True), float), np.array(_square(3, False), float)
+    B = []
+    for _ in range(14):
+        (x0, y0), (w, h), z = rng.uniform(-0.3, 0.9, 2), rng.uniform(0.1, 0.6, 2), rng.uniform(0.5, 2.5)
+        B.append(np.array([[x0, y0, z], [x0 + w, y0, z], [x0 + w, y0 + h, z], [x0, y0 + h, z]]))
+    if cover != "none":
+        # (its shadow from x on Q: 2 right - x; from x = 0, a strip 1e-3 wide is left)
+        right = 6.0 if cover == "whole" else 0.5 - 0.5e-3
+        B.append(np.array([[-5, -5, 1.5], [right, -5, 1.5], [right, 6, 1.5], [-5, 6, 1.5]], float))
+    nP = np.array([0, 0, 1.0])
+    a, b = rng.random((2, 60))
+    X = P[0] + np.outer(a, P[1] - P[0]) + np.outer(b, P[3] - P[0])
+    H, EH = _hidden_values(X, nP, Q, B)
+    F, E = ef.form_factors(ef.Scene.from_polygons([Q] + B), X, nP, error=True)
+    U, EU = (v[0] for v in _point_values(X, nP, [Q]))
+    assert np.all(np.abs(H - (U - F[:, 0])) <= EH + EU + E[:, 0] + 1e-16)
+    assert np.all(EH <= 1e-11), EH.max()
+    if cover == "whole":
+        assert np.all(F[:, 0] == 0) and np.all(np.abs(H - U) <= EH + EU)
+    else:
+        # some points see part of Q, and (with the large plate) some see none of it,
+        # the plates united covering the base
+        assert F[:, 0].max() > 0.01 and (cover == "none" or np.any(F[:, 0] == 0))
+
+
 @pytest.mark.parametrize("which", ["cornell", "sliced"])
 def test_hidden_part_skipping_back_faces_against_the_engine(which):
     # members of a convex solid seen from behind left out of the hidden region: the

@@ -183,7 +183,7 @@ def test_emitter_cut_on_a_grid_where_geos_fails_to_cut_it(monkeypatch, failures)
     assert st.cell_fallbacks == 0
     # the compiled arrangement declines (as where P is not convex): GEOS cuts first
     monkeypatch.setattr(events, "_compiled_cut_cells",
-                        lambda **k: (np.zeros((0, 3, 2)), np.zeros(0), False))
+                        lambda **k: (np.zeros((0, 3, 2)), np.zeros(0), 0, False))
     polygonize, calls = shapely.polygonize, []
 
     def fail(*args, **kwargs):
@@ -270,7 +270,7 @@ def test_gunter1_points_given_the_bound_against_the_engine(monkeypatch):
         assert len(bounded) == count
         # the bound 0 <= hidden <= U holds at them (the engine's value, within its
         # estimate, lies in [0, U]: any value there would pass, so the weights decide)
-        pick = rng.choice(bounded, size=8, replace=False)
+        pick = rng.choice(bounded, size=min(8, len(bounded)), replace=False)
         G, EG = hidden_values_by_engine(X[pick], nP, Qc, blockers)
         assert np.all(np.abs(H[pick] - G) <= EH[pick] + EG)
         spent[pair] = spent.get(pair, 0.0) + float(np.dot(weights[bounded], EH[bounded]))
@@ -283,7 +283,10 @@ def test_gunter1_points_given_the_bound_against_the_engine(monkeypatch):
     fine = {}
     G, EG = ef.area_form_factors(_read("gunter1.vs3"), rows=[17], tolerance=1e-11, error=True,
                                  stats=fine)
-    assert not fine["bounded_points"] and fine["engine_fallback_points"] == st["bounded_points"]
+    # (the same points: with the blocker that covered the point before tried first, a
+    # few of them, 8 of 1,096, fit the smaller budget at 1e-11 too)
+    assert fine["engine_fallback_points"] + fine["bounded_points"] == st["bounded_points"]
+    assert fine["bounded_points"] <= 0.01 * st["bounded_points"], fine["bounded_points"]
     assert np.all(EG <= 1e-11) and np.all(np.abs(F - G) <= E + EG)
 
 
@@ -394,4 +397,36 @@ def test_gunter2_row_0_is_complete_and_sums_to_one():
     # million point values): every value and estimate as required, and the enclosure's
     # sum, which exactff never uses
     F, E = ef.area_form_factors(_gunter2(), rows=[0], tolerance=1e-6, error=True)
+    _row_is_complete(F[0], E[0], 1e-6)
+
+
+@pytest.mark.slow
+def test_gunter2_strip_to_the_far_wall_is_0_within_its_estimate():
+    # gunter2's row 38 raised std::bad_alloc: the strip under the saw-tooth roof to the
+    # wall 3 (x = 0, y in [140, 330]) behind 151 blockers has 32,000 event segments,
+    # 14,177 in the emitter, on 1,586 lines; the arrangement of every copy took 8 GB.
+    # Joined, 18,175 cells. The engine (independent of the area code: BSP tree and
+    # clipper) sees none of the wall from 256 random points of the strip, so the value
+    # is 0 to within what those points can show; exactff's value is within its estimate
+    # of 0
+    scene = _gunter2()
+    sub, B = _pair_scene(scene, 38, 3)
+    assert len(B) > 140
+    F, E = ef.area_form_factors(sub, rows=[0], tolerance=1e-6, error=True)
+    assert 0.0 <= F[0, 1] <= E[0, 1] <= 1e-6, (F[0, 1], E[0, 1])
+    P = np.asarray(scene.polygons[38])
+    a, b = np.random.default_rng(38).random((2, 256))
+    X = P[0] + np.outer(a, P[1] - P[0]) + np.outer(b, P[3] - P[0])
+    G, EG = ef.form_factors(scene, X, scene.normals[38], error=True)
+    assert np.all(G[:, 3] == 0.0) and ef.polygon_form_factor(P, scene.polygons[3]) > 2e-3
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("row", [95, 152])
+def test_gunter2_rows_that_took_minutes_are_complete_and_sum_to_one(row):
+    # rows 95 and 152 took 111 s and over 60 s (pairs of 51 to 135 blockers whose images,
+    # united in input order, fragmented into many pieces: 400 to 900 us a point); with
+    # the images united largest first and the union stopped once it covers the base, 9
+    # and 6 s. Every value and estimate as required, and the enclosure's sum
+    F, E = ef.area_form_factors(_gunter2(), rows=[row], tolerance=1e-6, error=True)
     _row_is_complete(F[0], E[0], 1e-6)

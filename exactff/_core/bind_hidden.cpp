@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "bind_arrays.h"
+#include "bind_hidden_args.h"
 #include "hidden.h"
 
 namespace py = pybind11;
@@ -21,23 +22,14 @@ py::tuple hidden_pieces(Array<double> X, Array<double> corners, Array<double> q0
                         long long max_pieces, double precise_rtol, double extent,
                         Array<double> parts, Array<long long> part_counts, Array<double> frame,
                         double c1, double c2, double eps, bool rings, double precise_atol) {
-    if (X.ndim() != 2 || corners.ndim() != 2 || blockers.ndim() != 3 || parts.ndim() != 3 ||
-        q0.size() != 3 || nQ.size() != 3 || RQ.size() != 6 || frame.size() != 9)
+    if (X.ndim() != 2 || X.shape(1) != 3)
         throw std::invalid_argument("hidden_pieces: arrays of the wrong shapes");
     exactff::HiddenArgs a;
     a.X = X.data();
     a.n = X.shape(0);
-    a.corners = corners.data();
-    a.n_corners = corners.shape(0);
-    a.q0 = q0.data();
-    a.nQ = nQ.data();
-    a.RQ = RQ.data();
-    a.blockers = blockers.data();
-    a.n_blockers = blockers.shape(0);
-    a.blocker_stride = blockers.shape(1);
-    a.counts = counts.data();
-    a.normals = normals.data();
-    a.groups = groups.data();
+    exactff::bind::set_hidden_geometry(a, "hidden_pieces", corners, q0, nQ, RQ, blockers,
+                                       counts, normals, groups, parts, part_counts, frame,
+                                       extent);
     a.back_face = back_face;
     a.edge_on = edge_on;
     a.vertex_ulps = vertex_ulps;
@@ -45,12 +37,6 @@ py::tuple hidden_pieces(Array<double> X, Array<double> corners, Array<double> q0
     a.max_pieces = max_pieces;
     a.precise_rtol = precise_rtol;
     a.precise_atol = precise_atol;
-    a.extent = extent;
-    a.parts = parts.data();
-    a.n_parts = parts.shape(0);
-    a.part_stride = parts.shape(1);
-    a.part_counts = part_counts.data();
-    a.frame = frame.data();
     a.c1 = c1;
     a.c2 = c2;
     a.eps = eps;

@@ -5,6 +5,7 @@
 #include <stdexcept>
 
 #include "bind_arrays.h"
+#include "bind_hidden_args.h"
 #include "hidden.h"
 #include "hidden_setup.h"
 #include "levels.h"
@@ -75,7 +76,7 @@ py::tuple cut_cells(Array<double> P2, Array<double> segments, double step, doubl
     py::array_t<double> tri = as_array(r.triangles);
     return py::make_tuple(tri.reshape({py::ssize_t(r.triangles.size() / 6), py::ssize_t(3),
                                        py::ssize_t(2)}),
-                          as_array(r.areas), r.ok);
+                          as_array(r.areas), r.lines, r.ok);
 }
 
 exactff::TriangleRule as_rule(py::handle r) {
@@ -104,12 +105,7 @@ py::tuple adaptive_levels(Array<double> T, Array<long long> depth, Array<long lo
     const std::int64_t t = T.size() / 9;
     if (T.size() != 9 * t || depth.size() != t || rung.size() != t || corner.size() != t ||
         nP.size() != 3 || frame.size() != 9 || Qc.ndim() != 2 || Qc.shape(1) != 3 ||
-        Qc.shape(0) < 3 || corners.ndim() != 2 || corners.shape(1) != 3 || q0.size() != 3 ||
-        nQ.size() != 3 || RQ.size() < 6 || blockers.ndim() != 3 || blockers.shape(2) != 3 ||
-        counts.size() != blockers.shape(0) || normals.size() != 3 * blockers.shape(0) ||
-        groups.size() != blockers.shape(0) || parts.ndim() != 3 ||
-        part_counts.size() != parts.shape(0) || lo.size() != 3 || hi.size() != 3 ||
-        py::len(rules) != 7)
+        Qc.shape(0) < 3 || lo.size() != 3 || hi.size() != 3 || py::len(rules) != 7)
         throw std::invalid_argument("adaptive_levels: arrays of the wrong shapes");
     for (std::int64_t k = 0; k < t; ++k)
         if (rung.data()[k] != 0 && rung.data()[k] != 1)
@@ -133,23 +129,9 @@ py::tuple adaptive_levels(Array<double> T, Array<long long> depth, Array<long lo
     a.Qc = Qc.data();
     a.n_q = Qc.shape(0);
     exactff::HiddenArgs& h = a.hidden;
-    h.corners = corners.data();
-    h.n_corners = corners.shape(0);
-    h.q0 = q0.data();
-    h.nQ = nQ.data();
-    h.RQ = RQ.data();
-    h.blockers = blockers.data();
-    h.n_blockers = blockers.shape(0);
-    h.blocker_stride = blockers.shape(1);
-    h.counts = counts.data();
-    h.normals = normals.data();
-    h.groups = groups.data();
-    h.parts = parts.data();
-    h.n_parts = parts.shape(0);
-    h.part_stride = parts.shape(1);
-    h.part_counts = part_counts.data();
-    h.frame = frame.data();
-    h.extent = extent;
+    exactff::bind::set_hidden_geometry(h, "adaptive_levels", corners, q0, nQ, RQ, blockers,
+                                       counts, normals, groups, parts, part_counts, frame,
+                                       extent);
     const auto num = [&](const char* k) { return tol[k].cast<double>(); };
     h.vertex_ulps = num("AREA_IMAGE_ULPS");
     h.sliver_ulps = num("AREA_SLIVER_ULPS");
@@ -269,8 +251,8 @@ PYBIND11_MODULE(_pair, m) {
           "vertex-edge events as segments of the emitter's plane (pair.h)");
     m.def("cut_cells", &cut_cells, py::arg("P2"), py::arg("segments"), py::arg("step"),
           py::arg("merge"), py::arg("sliver"),
-          "cut_cells(P2, segments, step, merge, sliver) -> (triangles (t, 3, 2), areas, ok): the "
-          "emitter cut along the event lines (pair.h)");
+          "cut_cells(P2, segments, step, merge, sliver) -> (triangles (t, 3, 2), areas, lines, ok): "
+          "the emitter cut along the event lines, collinear ones joined (pair.h)");
     m.def("adaptive_levels", &adaptive_levels, py::arg("T"), py::arg("depth"), py::arg("rung"),
           py::arg("corner"), py::arg("nP"), py::arg("frame"), py::arg("area_P"),
           py::arg("total_area"), py::arg("atol"), py::arg("rules_err"), py::arg("start"),

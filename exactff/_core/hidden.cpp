@@ -2,8 +2,9 @@
 // form factors (exactff/area/occluded.py, _hidden_values): each blocker (convex, in front
 // of Q's plane) is clipped to the pyramid from x over a convex base in Q's plane,
 // projected from x onto that plane, and the images are united as disjoint convex pieces
-// (each new image less the pieces already there, by half-plane splits), then cut by the
-// convex parts of Q where the base is not Q itself.
+// (each new image less the pieces already there, by half-plane splits, the largest image
+// first, until the pieces cover the base), then cut by the convex parts of Q where the
+// base is not Q itself.
 //
 // Every edge of a piece carries the line it lies on, taken from the 3-D geometry and not
 // from its two (rounded) ends: the trace on Q's plane of the plane through x and a
@@ -225,6 +226,9 @@ struct Inputs {
     std::vector<long long> group;              // each one's convex solid, -1: none
     long long groups = 0;                      // 1 + the largest solid's label
     double back_face = 0.0;                    // a distance beyond which p is off a plane
+    std::vector<P2> base2;                     // the base in Q's plane frame
+    Box base_box{0, 0, 0, 0};
+    double base_area2 = 0.0;                   // twice its area
     std::vector<Piece> Qparts;                 // Q's convex parts (none over Q itself)
     std::vector<Box> Qbox;
     Vec3<double> origin, nq, ax, ay;
@@ -248,8 +252,25 @@ struct Work {
     std::vector<unsigned char> off_hull;       // per solid: p is outside its hull
     Poly3<R> W, T;
     Piece img, in, outside, cut;
-    std::vector<Piece> incoming, next;
+    std::vector<Piece> incoming, next, images;
+    std::vector<std::pair<double, size_t>> order;
+    size_t last_cover = 0;                     // the blocker that covered the base last
 };
+
+// Over a base other than Q, the region's pieces cut by Q's convex parts.
+template <typename R>
+void over_parts(const Inputs& in, Region& out, Work<R>& w) {
+    if (in.Qparts.empty()) return;
+    w.next.clear();
+    for (const Piece& F : out.pieces) {
+        const Box bf = box_of(F);
+        for (size_t q = 0; q < in.Qparts.size(); ++q)
+            if (!boxes_apart(bf, in.Qbox[q]) &&
+                intersect(F, in.Qparts[q], w.cut, w.in, w.outside, out.slivers))
+                w.next.push_back(w.cut);
+    }
+    out.pieces.swap(w.next);
+}
 
 // The hidden region of Q from the point p, in precision R.
 template <typename R>
@@ -287,7 +308,13 @@ void region_at(const Inputs& in, const Vec3<double>& pd, Region& out, Work<R>& w
         if (in.group[b] >= 0 && dot(sub(in.K[b][0], pd), in.KN[b]) < -in.back_face)
             w.off_hull[static_cast<size_t>(in.group[b])] = 1;
     Poly3<R>& W = w.W;
-    for (size_t b = 0; b < in.K.size(); ++b) {
+    size_t images = 0;
+    // the blocker whose image covered the base at the point before first (neighbouring
+    // points are mostly hidden by the same one: a wall between the emitter and the
+    // receiver), then the others in order
+    const size_t nk = in.K.size(), first = w.last_cover < nk ? w.last_cover : 0;
+    for (size_t t = 0; t < nk; ++t) {
+        const size_t b = t == 0 ? first : (t <= first ? t - 1 : t);
         // the offsets, each rounded once (within vertex_error of its length)
         W.clear();
         Vec3<R> g{0, 0, 0};
@@ -334,7 +361,8 @@ void region_at(const Inputs& in, const Vec3<double>& pd, Region& out, Work<R>& w
         if (W.v.size() < 3) continue;
         // central projection from p onto Q's plane, in the plane's frame; each edge's
         // plane m traced on it: (ax . m) u + (ay . m) v + (q0 - p) . m
-        Piece& img = w.img;
+        if (w.images.size() <= images) w.images.resize(images + 1);
+        Piece& img = w.images[images++];
         img.clear();
         for (size_t k = 0; k < W.v.size(); ++k) {
             const Vec3<R>& v = W.v[k];
@@ -356,42 +384,76 @@ void region_at(const Inputs& in, const Vec3<double>& pd, Region& out, Work<R>& w
             img.l.push_back({static_cast<double>(dot(ax, m)), static_cast<double>(dot(ay, m)),
                              static_cast<double>(-dot(foot, m))});
         }
-        out.slivers.min_area = in.sliver_ulps * DBL_EPSILON * out.reach * out.reach;
+        // an image that covers the base alone (its area within the slivers' rounding of
+        // the base's) is the region: the other blockers hide nothing more, and what is
+        // left of the base uncovered is counted with the slivers (in the estimate)
+        const double min_area = in.sliver_ulps * DBL_EPSILON * out.reach * out.reach;
+        const double left2 = in.base_area2 - std::fabs(twice_area(img.v));
+        if (in.base_area2 > 0 && img.size() >= 3 && left2 <= 2.0 * min_area) {
+            out.slivers.min_area = min_area;
+            out.slivers.dropped += 0.5 * std::max(left2, 0.0);
+            const Box& bb = in.base_box;
+            Box& sb = out.slivers.box;
+            sb = {std::min(sb.x0, bb.x0), std::min(sb.y0, bb.y0), std::max(sb.x1, bb.x1),
+                  std::max(sb.y1, bb.y1)};
+            out.pieces.push_back(std::move(img));
+            w.last_cover = b;
+            over_parts(in, out, w);
+            return;
+        }
+    }
+    // the images united, the largest first (a smaller one inside a piece already there
+    // adds nothing at the cost of its splits, where one taken before a larger one would
+    // cut the larger into pieces around it), each less every piece already there, as
+    // disjoint convex pieces; once the pieces cover the base (their area within the
+    // slivers' rounding of it, a piece's each), the rest hides nothing more, and what
+    // is left of the base uncovered is counted with the slivers (in the estimate)
+    out.slivers.min_area = in.sliver_ulps * DBL_EPSILON * out.reach * out.reach;
+    w.order.clear();
+    for (size_t k = 0; k < images; ++k)
+        if (w.images[k].size() >= 3)
+            w.order.push_back({-std::fabs(twice_area(w.images[k].v)), k});
+    std::sort(w.order.begin(), w.order.end());
+    double covered2 = 0.0;
+    for (const auto& [neg_area, k] : w.order) {
+        Piece& img = w.images[k];
         if (!out.slivers.keep(img)) continue;
-        // the image less every piece already there, as disjoint convex pieces
-        w.incoming.assign(1, img);
+        w.incoming.clear();
+        w.incoming.push_back(std::move(img));
         const size_t have = out.pieces.size();
         for (size_t e = 0; e < have && !w.incoming.empty(); ++e) {
             const Piece& E = out.pieces[e];
             const Box be = box_of(E);
             w.next.clear();
-            for (const Piece& F : w.incoming) {
+            for (Piece& F : w.incoming) {
                 if (boxes_apart(box_of(F), be) || separated_by(E, F) || separated_by(F, E))
-                    w.next.push_back(F);
+                    w.next.push_back(std::move(F));
                 else
                     difference(F, E, w.next, w.in, w.outside, out.slivers);
             }
             w.incoming.swap(w.next);
         }
-        for (Piece& F : w.incoming) out.pieces.push_back(std::move(F));
+        for (Piece& F : w.incoming) {
+            covered2 += std::fabs(twice_area(F.v));
+            out.pieces.push_back(std::move(F));
+        }
         // a point whose pieces grow past max_pieces goes to the engine instead
         if (out.pieces.size() > in.max_pieces) {
             out.ok = false;
             return;
         }
-    }
-    // over a base other than Q, the pieces cut by Q's convex parts
-    if (!in.Qparts.empty()) {
-        w.next.clear();
-        for (const Piece& F : out.pieces) {
-            const Box bf = box_of(F);
-            for (size_t q = 0; q < in.Qparts.size(); ++q)
-                if (!boxes_apart(bf, in.Qbox[q]) &&
-                    intersect(F, in.Qparts[q], w.cut, w.in, w.outside, out.slivers))
-                    w.next.push_back(w.cut);
+        const double left2 = in.base_area2 - covered2;
+        if (in.base_area2 > 0 &&
+            left2 <= out.slivers.min_area * static_cast<double>(1 + out.pieces.size())) {
+            out.slivers.dropped += 0.5 * std::max(left2, 0.0);
+            const Box& b = in.base_box;
+            Box& sb = out.slivers.box;
+            sb = {std::min(sb.x0, b.x0), std::min(sb.y0, b.y0), std::max(sb.x1, b.x1),
+                  std::max(sb.y1, b.y1)};
+            break;
         }
-        out.pieces.swap(w.next);
     }
+    over_parts(in, out, w);
 }
 
 // Eq. 3's sector sum of one piece seen from x, with its rounding estimate: the port to
@@ -515,6 +577,18 @@ HiddenResult hidden_pieces(const HiddenArgs& args) {
         in.base.push_back({cr(a, 0), cr(a, 1), cr(a, 2)});
         in.base_centroid = {in.base_centroid.x + cr(a, 0) / nc, in.base_centroid.y + cr(a, 1) / nc,
                             in.base_centroid.z + cr(a, 2) / nc};
+    }
+    // the base in Q's plane frame about q0, and twice its area (the region's pieces cover
+    // at most that)
+    for (const Vec3<double>& b : in.base) {
+        const Vec3<double> f = sub(b, in.origin);
+        in.base2.push_back({dot(f, in.ax), dot(f, in.ay)});
+    }
+    if (nc >= 3) {
+        Piece B;
+        B.v = in.base2;
+        in.base_box = box_of(B);
+        in.base_area2 = std::fabs(twice_area(in.base2));
     }
     in.K.resize(nb);
     for (std::ptrdiff_t b = 0; b < nb; ++b) {

@@ -51,13 +51,17 @@ EventResult event_lines(const EventArgs& args);
 // the event lines; step: a cut line's end within step of P's boundary is moved onto it
 // (the crossing of its line with the boundary), the rest of P's boundary is left as is;
 // merge: nodes closer than this are one; sliver: cells of at most this area are dropped.
-// Returns the cells' triangles (t, 3, 2), counter-clockwise, the cells' areas, and
-// ok: false where the
+// Collinear lines are joined first (their union along the line, as one line: within merge
+// of each other's line and overlapping), so that the noding's cost is that of the lines
+// themselves, not of their copies. Returns the cells' triangles (t, 3, 2),
+// counter-clockwise, the cells' areas, the number of lines noded (P's edges and the
+// joined lines inside P), and ok: false where the
 // arrangement is not one this builds (P not convex, a cell with a hole, a face no ear
 // clips), for the caller to cut P another way.
 struct CellResult {
     std::vector<double> triangles;
     std::vector<double> areas;
+    long long lines = 0;
     bool ok = true;
 };
 

@@ -235,11 +235,29 @@ def _hidden_integral(S, Pc, Qc, nP, atol, area_P, whole, shortcuts, st, solid=No
         T, depth, rung, corner = _refined(Ta[again], a_depth[again], a_rung[again],
                                           cat["corner"][again].astype(bool), start)
     cat = {k: np.concatenate(v) if v else np.zeros(0) for k, v in acc.items()}
-    hidden = 0.5 * slivers / area_P + float(cat["hi"].sum())
-    err = 0.5 * slivers / area_P + float((cat["diff"] + cat["rnd"]).sum())
+    # the slivers not evaluated: the hidden part is between 0 and the unoccluded point
+    # value, at most A_Q / (pi d^2) for d the distance between P's and Qc's bounding
+    # boxes (cos cos <= 1), and at most 1; so its integral over them is half that bound
+    # times their area, within as much (on View3D's gunter2, row 38, a pair of 472,008
+    # cells left 3.3e-6 of the emitter in slivers: an estimate of 1.66e-6 at 1, above
+    # the tolerance of 1e-6)
+    half = 0.5 * _unoccluded_bound(Pc, Qc) * slivers / area_P
+    hidden = half + float(cat["hi"].sum())
+    err = half + float((cat["diff"] + cat["rnd"]).sum())
     value = whole[0] - hidden
     err += max(area_Pc - total_area, 0.0) / area_P      # cells dropped or lost
     return value, err + whole[1], points
+
+
+def _unoccluded_bound(Pc, Qc):
+    """An upper bound on the point form factor F(x -> Qc) at every point x of Pc: 1, and
+    ``A_Q / (pi d^2)`` with d the distance between the two polygons' bounding boxes (the
+    kernel ``cos cos / (pi r^2)`` is at most ``1 / (pi d^2)`` there)."""
+    gap = np.maximum(0.0, np.maximum(Pc.min(axis=0) - Qc.max(axis=0),
+                                     Qc.min(axis=0) - Pc.max(axis=0)))
+    d2 = float(gap @ gap)
+    area_Q = float(np.linalg.norm(area_vector(Qc)))
+    return 1.0 if not d2 > 0 else min(1.0, area_Q / (np.pi * d2))
 
 
 #: The compiled levels' rules, in levels.h's order: the symmetric pair (degrees 4 and 8),

@@ -248,7 +248,7 @@ def cut_cells(Pc, nP, lines, R, c, grid=None, lengthen=True, compiled=True):
         A2 = 0.5 * float(np.sum(P2[:, 0] * np.roll(P2[:, 1], -1) - np.roll(P2[:, 0], -1) * P2[:, 1]))
         ring = P2 if A2 > 0 else P2[::-1]
         size = float(np.ptp(P2, axis=0).max())
-        tris, _, ok = _compiled_cut_cells(
+        tris, _, _, ok = _compiled_cut_cells(
             P2=np.ascontiguousarray(ring), segments=np.asarray(lines, dtype=float).reshape(-1, 2, 2),
             step=tol.AREA_CUT_EXTEND_RTOL * np.sqrt(abs(A2)), merge=tol.AREA_HULL_RTOL * size,
             sliver=tol.AREA_SLIVER_CELL * abs(A2))

@@ -156,8 +156,9 @@ def hidden_values(X, nP, Qc, blockers, st=None, atol=0.0, setup=None, shortcuts=
     to the front of that plane, cut into convex pieces and clipped to the pyramid from x
     over Qc where Qc is strictly convex (else over a rectangle around it), is projected
     from x onto the plane (a projective map: its image stays convex, within the
-    pyramid's base); each image less the images before it is added as disjoint convex
-    pieces by half-plane splits alone, along the lines the edges lie on (traced from the
+    pyramid's base); each image (the largest first, until they cover the base) less the
+    images before it is added as disjoint convex pieces by half-plane splits alone,
+    along the lines the edges lie on (traced from the
     planes through x, not from the rounded vertices), which over a rectangle are then
     cut by Qc's convex parts; the pieces are integrated by the sector sums (Eq. 3's
     kernel) from x. A point on Qc's plane sees nothing of it (0), nor does a blocker
