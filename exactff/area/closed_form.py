@@ -297,6 +297,16 @@ def unoccluded_pairs(P, Qs, shortcuts=True, rtol=None, atol=0.0, parts=None, cou
     AP = area_vector(P)
     area_P = float(np.linalg.norm(AP))
     nP = AP / area_P
+    # the emitter's area rounded (geometry.area_vector, a Newell sum about its first
+    # vertex): a cross product's component x1 y2 - x2 y1 of rounded differences is off
+    # by at most 4 u (|x1 y2| + |x2 y1|) (the differences, the products, the
+    # subtraction), the partial sums by K u of those magnitudes T, the norm by 3 u of
+    # the area: a relative error of (K + 4) u T / 2A + 3 u, which every value divided by
+    # it carries (T / 2A is about 1 / sin of a thin triangle's angle)
+    D = P - P[0]
+    a, b = np.abs(D[1:-1]), np.abs(D[2:])
+    T = float(np.sum(a[:, [1, 2, 0]] * b[:, [2, 0, 1]] + a[:, [2, 0, 1]] * b[:, [1, 2, 0]]))
+    area_rel = (len(P) + 4) * tol.EPS * 0.5 * T / area_P + 3 * tol.EPS
     if parts is None:
         # the receivers' area vectors, (1/2) sum v_k x v_{k+1} about each first vertex
         V, offsets, nxt = _rings(Qs)
@@ -379,9 +389,9 @@ def unoccluded_pairs(P, Qs, shortcuts=True, rtol=None, atol=0.0, parts=None, cou
         if counts is not None:
             counts.escalated_pairs += 1
             counts.escalated_edge_pairs += n_esc
-    # the emitter's area (a Newell sum) and the last division round the value by a few
-    # units more, on every path
-    est += tol.AREA_CLOSED_ULPS * tol.EPS * np.abs(values)
+    # the emitter's area (above) and the last divisions (2 u) round the value further,
+    # on every path
+    est += (area_rel + 2 * tol.EPS) * np.abs(values)
     check_finite(values, est, "area form factor")
     return nonnegative(values, est), est
 
