@@ -8,6 +8,9 @@
 #include <pybind11/pybind11.h>
 
 #include <algorithm>
+#include <cstdint>
+#include <stdexcept>
+#include <string>
 #include <vector>
 
 namespace exactff {
@@ -23,6 +26,17 @@ using Array = py::array_t<T, py::array::c_style | py::array::forcecast>;
 template <typename T>
 std::vector<T> to_vector(const Array<T>& a) {
     return std::vector<T>(a.data(), a.data() + a.size());
+}
+
+// ragged polygons' starts (n + 1 offsets into `vertices` rows), checked: each polygon
+// within them and of at least 3 vertices, else std::out_of_range naming `who`
+inline void check_polygon_starts(const Array<std::int64_t>& start, py::ssize_t vertices,
+                                 const char* who) {
+    const std::int64_t* s = start.data();
+    for (py::ssize_t k = 0; k + 1 < start.size(); ++k)
+        if (s[k] < 0 || s[k + 1] - s[k] < 3 || s[k + 1] > vertices)
+            throw std::out_of_range(std::string(who) +
+                                    ": start out of range or a polygon of < 3 vertices");
 }
 
 // a result as a numpy array: 1-D, or with `columns` columns

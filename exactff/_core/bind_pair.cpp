@@ -14,6 +14,7 @@
 namespace py = pybind11;
 using exactff::bind::Array;
 using exactff::bind::as_array;
+using exactff::bind::check_polygon_starts;
 
 namespace {
 
@@ -27,11 +28,8 @@ py::tuple event_lines(Array<double> W, Array<std::int64_t> start, Array<std::int
         c.size() != 3 || nQ.size() != 3 || q0.size() != 3 || RQ.size() != 6 ||
         Q2.ndim() != 2 || Q2.shape(1) != 2 || (solid.size() != 0 && solid.size() != n))
         throw std::invalid_argument("event_lines: arrays of the wrong shapes");
+    check_polygon_starts(start, W.shape(0), "event_lines");
     const std::int64_t* s = start.data();
-    for (std::int64_t k = 0; k < n; ++k)
-        if (s[k] < 0 || s[k + 1] - s[k] < 3 || s[k + 1] > W.shape(0))
-            throw std::out_of_range("event_lines: start out of range or a polygon of < 3 "
-                                    "vertices");
     exactff::EventArgs a;
     a.W = W.data();
     a.start = s;
@@ -202,11 +200,8 @@ py::tuple hidden_setup(Array<double> Qc, Array<double> W, Array<std::int64_t> st
         W.shape(1) != 3 || n < 0 || (solid.size() != 0 && solid.size() != n) ||
         inner.size() != 3 * solid.size())
         throw std::invalid_argument("hidden_setup: arrays of the wrong shapes");
+    check_polygon_starts(start, W.shape(0), "hidden_setup");
     const std::int64_t* s = start.data();
-    for (std::int64_t k = 0; k < n; ++k)
-        if (s[k] < 0 || s[k + 1] - s[k] < 3 || s[k + 1] > W.shape(0))
-            throw std::out_of_range("hidden_setup: start out of range or a polygon of < 3 "
-                                    "vertices");
     exactff::SetupArgs a;
     a.Qc = Qc.data();
     a.n_q = Qc.shape(0);

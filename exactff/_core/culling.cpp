@@ -113,15 +113,11 @@ bool Core::box_hidden(const std::vector<Plane>& sv, int64_t k, const V3& p,
         bool pos = false, neg = false;
         const double width = static_cast<double>(K_.band + P.err);
         for (int i = 0; i < 8; ++i) {
-            // a corner clearly beyond Core::side's band by the double filter of
-            // Core::process (its dot product off the long double one by at most
-            // SVBSP_FILTER_ROUNDOFFS roundoffs of |m| |v|) is on that side; else its side
-            // in long double, 0 where unsure (both sides then)
-            const double dd = P.md[0] * c[i].vd[0] + P.md[1] * c[i].vd[1] + P.md[2] * c[i].vd[2];
-            if (std::fabs(dd) > (width + c[i].errd + SVBSP_FILTER_ROUNDOFFS * DBL_EPSILON) *
-                                    (P.mnormd * c[i].lengthd) * (1 + 8 * DBL_EPSILON)) {
-                pos |= dd > 0;
-                neg |= dd < 0;
+            // a corner clearly beyond Core::side's band by the double filter is on that
+            // side; else its side in long double, 0 where unsure (both sides then)
+            if (const int s = filtered_side(P, c[i], width)) {
+                pos |= s > 0;
+                neg |= s < 0;
                 continue;
             }
             R d;

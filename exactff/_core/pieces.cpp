@@ -353,21 +353,14 @@ void Core::process(int64_t f, const double* pp, const V3& p, const V3& n,
             // own errors may lie on the other side of the true plane by up to them:
             // the sliver along its two edges is charged to the piece
             const Vertex& u = at(i);
-            // the filter: P.m . u.v in double, off its long double value by at most
-            // 6 double roundoffs of |m| |v| (the roundings to double, the products
-            // and sums); a vertex clearly beyond the widest band is decided by it
+            // a vertex clearly beyond the widest band is decided by the double filter
             // (its long double distance is then computed only if the piece is cut)
-            {
-                const double dd = P.md[0] * u.vd[0] + P.md[1] * u.vd[1] + P.md[2] * u.vd[2];
-                const double widthd = plane_width + u.errd;
-                if (std::fabs(dd) > (widthd + SVBSP_FILTER_ROUNDOFFS * DBL_EPSILON) *
-                                        (P.mnormd * u.lengthd) * (1 + 8 * DBL_EPSILON)) {
-                    sg[i] = dd > 0 ? 1 : -1;
-                    pos |= dd > 0;
-                    neg |= dd < 0;
-                    d[i] = NAN;
-                    continue;
-                }
+            if (const int s = filtered_side(P, u, plane_width)) {
+                sg[i] = s;
+                pos |= s > 0;
+                neg |= s < 0;
+                d[i] = NAN;
+                continue;
             }
             d[i] = dot(P.m, u.v);
             const R scale = P.mnorm * u.length;

@@ -8,9 +8,12 @@
 #ifndef EXACTFF_CORE_SHADOW_TREE_H
 #define EXACTFF_CORE_SHADOW_TREE_H
 
+#include <cfloat>
+#include <cmath>
 #include <cstdint>
 #include <vector>
 
+#include "constants.h"
 #include "precision.h"
 #include "vec.h"
 
@@ -70,6 +73,19 @@ inline void set_double(Plane& P) {
     P.md[1] = static_cast<double>(P.m.y);
     P.md[2] = static_cast<double>(P.m.z);
     P.mnormd = static_cast<double>(P.mnorm);
+}
+
+// the double filter of a direction against a plane: P.m . u.v in double is off its long
+// double value by at most SVBSP_FILTER_ROUNDOFFS double roundoffs of |m| |v| (the
+// roundings to double, the products and sums), so a direction beyond `width` (radians,
+// the plane's band and errors) plus its own error by more than that is on the side of
+// its sign: +1 or -1, else 0 (its long double distance decides)
+inline int filtered_side(const Plane& P, const Vertex& u, double width) {
+    const double dd = P.md[0] * u.vd[0] + P.md[1] * u.vd[1] + P.md[2] * u.vd[2];
+    if (std::fabs(dd) > (width + u.errd + SVBSP_FILTER_ROUNDOFFS * DBL_EPSILON) *
+                            (P.mnormd * u.lengthd) * (1 + 8 * DBL_EPSILON))
+        return dd > 0 ? 1 : -1;
+    return 0;
 }
 
 struct Constants {
