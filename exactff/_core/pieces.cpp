@@ -12,7 +12,6 @@
 #include <utility>
 #include <vector>
 
-#include "constants.h"
 #include "core.h"
 
 namespace exactff {
