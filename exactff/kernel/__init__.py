@@ -18,7 +18,7 @@ from .flat import FlatPolygons, flat_polygons
 from .ladder import mp_form_factor
 from .point import (engine_sides_rows, point_polygon_form_factor, point_polygon_form_factors,
                     sector_form_factor, unoccluded_row, unoccluded_rows)
-from .sector import TWO_PI, clipped_sector_sums, sector_values
+from .sector import TWO_PI, TWO_PI_LONG, clipped_sector_sums, sector_values
 from .solid_angle import mp_solid_angle, offset_error, polygon_solid_angles, solid_angle_sums
 
 __all__ = ["mp_form_factor", "point_polygon_form_factor", "point_polygon_form_factors",
@@ -26,5 +26,5 @@ __all__ = ["mp_form_factor", "point_polygon_form_factor", "point_polygon_form_fa
            "eq3_ring_sums", "mp_eq3_sum", "arc_x_extremes", "unoccluded_row", "unoccluded_rows",
            "engine_sides_rows",
            "clipped_sector_sums", "sector_values",
-           "FlatPolygons", "flat_polygons", "TWO_PI", "solid_angle_sums",
+           "FlatPolygons", "flat_polygons", "TWO_PI", "TWO_PI_LONG", "solid_angle_sums",
            "polygon_solid_angles", "offset_error", "mp_solid_angle"]

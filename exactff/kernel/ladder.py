@@ -32,7 +32,10 @@ def extended_values(flat, ids, rows, P, N, d0, two_sided):
         np.asarray(rows, dtype=np.int64), P, frames, tol.LONGDOUBLE_EPS,
         tol.OFFSET_ROUNDING_ULPS, tol.C2 * tol.LONGDOUBLE_EPS)
     F, err = sector_values(S, mags, errs, d0, two_sided, eps=tol.LONGDOUBLE_EPS)
-    return F.astype(float), err.astype(float)
+    # returned in double: the value's rounding to double (u F) joins the long double
+    # estimate, which alone can be far below it
+    Fd = F.astype(float)
+    return Fd, err.astype(float) * (1 + 2 * tol.EPS) + tol.EPS * Fd
 
 
 def mp_converge(evaluate, tolerance, dps=30):

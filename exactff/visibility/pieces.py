@@ -7,7 +7,7 @@ import numpy as np
 import shapely
 
 from .. import _tolerances as tol
-from ..kernel import TWO_PI, clipped_sector_sums, eq3_ring_sums, solid_angle_sums
+from ..kernel import TWO_PI, TWO_PI_LONG, clipped_sector_sums, eq3_ring_sums, solid_angle_sums
 from ..rings import polygon_parts, repack, shapely_rings
 from .charts import CHARTS, lift
 
@@ -22,8 +22,9 @@ def rings_long_double(D, start, count):
     Dl = D[idx].astype(np.longdouble)
     A0 = Dl[first]
     S, mags, errs = clipped_sector_sums(A0, Dl - A0[owner], nxt, owner, len(start), eps=u)
-    val = (np.abs(S) / (2 * np.pi)).astype(float)
-    return val, ((tol.C1 * u * mags + errs) / (2 * np.pi)).astype(float)
+    val = (np.abs(S) / TWO_PI_LONG).astype(float)
+    # the estimate in long double, and the value's rounding to double (u val)
+    return val, ((tol.C1 * u * mags + errs) / TWO_PI_LONG).astype(float) + tol.EPS * val
 
 
 def pieces_form_factors(pieces, m, tolerance=None, owner=None, integrator="sector",

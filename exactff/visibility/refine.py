@@ -39,7 +39,7 @@ import shapely
 
 from .. import _tolerances as tol
 from ..geometry import mp_receiver_frame, receiver_frame
-from ..kernel import clipped_sector_sums, eq3_ring_sums
+from ..kernel import TWO_PI_LONG, clipped_sector_sums, eq3_ring_sums
 from ..kernel.eq3 import mp_eq3_sum
 from ..kernel.flat import flat_polygons
 from ..kernel.ladder import mp_converge, mp_sector_sum
@@ -548,7 +548,7 @@ class Refiner:
         ring_sums = eq3_ring_sums if integrator == "eq3" else clipped_sector_sums
         S, mags, errs = ring_sums(A0, Xk - A0[ridx], nx2, ridx, len(rings),
                                   eps=tol.LONGDOUBLE_EPS)
-        v = np.abs(S) / (2 * np.pi)                 # long double: summed per piece
+        v = np.abs(S) / TWO_PI_LONG                 # long double: summed per piece
         # the vertices' geometry: each refined edge (the arc through its two computed
         # end points) is off its input plane by its end points' residuals (measured),
         # their evaluation and the plane's own rounding; the area between the two arcs
@@ -560,7 +560,7 @@ class Refiner:
         seg = np.linalg.norm(Xf[nx2] - Xf, axis=1)
         g = 0.5 * seg * (res + tol.REFINE_VERTEX_ULPS * tol.LONGDOUBLE_EPS * (1.0 + cond[kv]))
         geom = np.bincount(ridx, weights=g, minlength=len(rings)) / np.pi
-        e = ((tol.C1 * tol.LONGDOUBLE_EPS * mags + errs) / (2 * np.pi)).astype(float) + geom \
+        e = ((tol.C1 * tol.LONGDOUBLE_EPS * mags + errs) / TWO_PI_LONG).astype(float) + geom \
             + 4 * tol.LONGDOUBLE_EPS * v.astype(float) + cut[rings]
         val[rings], est[rings] = v, e
         deg = ok_ring & ~good
