@@ -541,6 +541,13 @@ def test_sides_a_mesh_shares_are_one_node():
         assert np.all(F[len(wall):][outside] == 0)
         assert F[len(wall):].sum() == pytest.approx(seen, rel=1e-12)
     assert repeated[0] > 50 and abs(repeated[1] - repeated[0]) <= 0.05 * repeated[0], repeated
+    # without the shortcuts every side is a node (the core's cull flag): none left out,
+    # the same values within both bounds
+    st = {}
+    F0, E0 = ef.Exact(shortcuts=False).point_form_factors(scene, p, n, error=True, stats=st)
+    F1, E1 = COMPILED.point_form_factors(scene, p, n, error=True)
+    assert st["repeated_sides"] == 0 and st["shadow_planes"] > 0
+    assert np.all(np.abs(F0 - F1) <= E0 + E1)
 
 
 def test_a_cell_partly_free_is_not_proven_covered():

@@ -75,6 +75,7 @@ RowResult Core::row(const double* pp, const double* pn, const int8_t* ns, const 
     st.leak_budget = SVBSP_LEAK_BUDGET_SHARE * (rtol > 0 ? rtol : 1e-12);
     st.normal = pn;
     st.eq3 = eq3 && !sphere;
+    st.cull = cull;
     st.sphere = sphere;
     if (st.eq3) {
         // Eq. 3's frame: e1 = n x (the axis n is least along), e2 = n x e1

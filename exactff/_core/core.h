@@ -233,6 +233,8 @@ struct RowStats {
     int64_t repeated_sides = 0;  // shadows' sides along a plane on their leaf's path
                                  // (Core::drop_repeated_sides)
     bool covered = false;       // every direction the row sees covered: the walk stops
+    bool cull = true;           // the shortcuts (Exact(shortcuts=...)); here, whether the
+                                // repeated sides are left out (Core::drop_repeated_sides)
     int64_t kernels = 0;        // non-convex images whose kernel is their shadow
     int64_t omitted_sides = 0;  // shadows with a short side left out
     // uncovered parts worth more than the row's budget for unattributed charges

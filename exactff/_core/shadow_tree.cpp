@@ -507,7 +507,7 @@ bool Core::insert_shadow(const Piece& q, int64_t f, const double* pp, int plane,
     st.unattributed += omit_charge;
     st.omitted_sides += omit_charge > 0;
     st.kernels += kernel_charge > 0;
-    drop_repeated_sides(plane, positive, sv, xp, chain, chain_edge, st);
+    if (st.cull) drop_repeated_sides(plane, positive, sv, xp, chain, chain_edge, st);
     const size_t first = sv.size();
     if (chain.empty()) {  // the piece fills its leaf's cell: the cell is covered
         attach(sv, plane, positive, IN, first, st);

@@ -295,7 +295,8 @@ def compiled_form_factors(scene, point, normal, *, two_sided=False, stats=None,
         two sides covered) and ``covered`` (every direction the row sees covered: the
         walk stopped), ``repeated_sides`` (shadows' sides left out because the same
         plane, through the same two input points, is already on the path to their
-        leaf: the edges adjacent polygons share), ``fragments_covered`` and ``subtrees_covered`` (fragments and
+        leaf: the edges adjacent polygons share; 0 without the shortcuts),
+        ``fragments_covered`` and ``subtrees_covered`` (fragments and
         subtrees skipped because their directions lie in cells of the cube map about the
         point proven covered), ``cover_proofs``, ``cover_cells`` and ``cover_visits``
         (the proofs tried, the cells proven, the shadow-tree visits they took),
