@@ -447,6 +447,33 @@ def test_python_engine_charges_its_rounded_crossings():
     assert _python_within_its_bound(scene, np.array(p), np.array(n)) == 3
 
 
+def test_python_sphere_rows_charge_the_rounded_crossings():
+    # the Python engine's spherical rows had no term for the BSP's rounded crossings
+    # (its form factors have had one, engine._crossing_charges): the closed Cornell
+    # box's floor is split at x = 326.076 (fragments 13 and 21). Taking a split vertex of
+    # fragment 13 (326.076, 0, 0) as uncertain by r = 1 (in a box of 550), the row's bound must cover the
+    # row computed with that vertex moved by r
+    from exactff.visibility.bsp import scene_bsp
+
+    scene = ef.scenes.cornell_box(closed=True)
+    tree, buckets = scene_bsp(scene)   # (this scene's own: cached on it)
+    f, k, r = 13, 1, 1.0
+    assert tree.source[f] == 20 and tree.vertex_errors[f][k] > 0
+    tree.vertex_errors[f][k] = r
+    p = np.array([278.0, 274.0, 280.0])
+    method = ef.Exact(engine="python")
+    S0, E0 = method.point_sphere_factors(scene, p, error=True)
+    # the same vertex moved by r away from the split line (-x: a gap opens between the halves; across it, fragment 21 would hide the overlap), in the tree and its bucket
+    tree.fragments[f][k, 0] -= r
+    for ids, Vb, cb in buckets:
+        if f in ids:
+            Vb[list(ids).index(f), k, 0] -= r
+    S1, E1 = method.point_sphere_factors(scene, p, error=True)
+    moved_by = np.abs(S1 - S0)
+    assert moved_by[20] > 1e-5                      # the move is seen
+    assert np.all(moved_by <= E0 + E1), (moved_by[20], E0[20])
+
+
 @settings(max_examples=examples(30))
 @given(case=flush_faces())
 def test_python_engine_within_its_bound_on_flush_faces(case):

@@ -189,7 +189,8 @@ def visible_solid_angles(scene, point, normal, *, two_sided=False, stats=None,
     (ndarray of shape (len(scene),), ndarray of shape (len(scene),))
         Solid angles in steradians (at most 2 pi in all) and a bound on each one's
         error: the rounding of its pieces' fans plus their vertices' (the clipper's,
-        not refined), given the clipper's topology.
+        not refined), given the clipper's topology, and what the BSP's rounded
+        crossings can move (as for the form factors: ``stats["crossing_bound"]``).
 
     Examples
     --------
@@ -208,14 +209,17 @@ def visible_solid_angles(scene, point, normal, *, two_sided=False, stats=None,
     st["path"] = "clipper"
     tree, order, src, kept, world, receives = _row_fragments(scene, p, normal, side, two_sided,
                                                              shortcuts, st)
-    pieces = visible_pieces(kept, receives, stats=st, shortcuts=shortcuts)
+    charts = []
+    pieces = visible_pieces(kept, receives, stats=st, shortcuts=shortcuts, charts=charts)
     Wf, Ef = pieces_solid_angles(pieces, len(order))
-    return _per_polygon(src, Wf, Ef, len(scene), "solid angle", stats)
+    crossing = _crossing_charges(tree, order, p, normal, charts, st, solid_angle=True)
+    return _per_polygon(src, Wf, Ef + crossing, len(scene), "solid angle", stats)
 
 
-def _crossing_charges(tree, order, p, normal, charts, st):
+def _crossing_charges(tree, order, p, normal, charts, st, solid_angle=False):
     """Per fragment of the row (clipper positions), a bound on what the BSP's rounded
-    crossings can move in its value: the pieces are cut from the fragments as built,
+    crossings can move in its value (its form factor, or with ``solid_angle`` its solid
+    angle in steradians): the pieces are cut from the fragments as built,
     whose vertices made by a split stand within ``tree.vertex_errors`` of the exact
     points (rounded once, or snapped to an end point), while the value is that of the
     exact geometry.
@@ -225,7 +229,8 @@ def _crossing_charges(tree, order, p, normal, charts, st):
     - V| <= r``): 3-D area at most ``r (|V - V-| + |V+ - V|) / 2``, at least ``d - r``
     from the point (``d``: its distance from the two edges), whose image on the base
     disk is at most the area over ``pi (d - r)^2`` in form factor units (``cos cos /
-    (pi r^2)`` with both cosines at most 1). That measure is charged to the fragment and
+    (pi r^2)`` with both cosines at most 1), and its solid angle at most the area over
+    ``(d - r)^2``. That measure is charged to the fragment and
     to every fragment behind it whose image (in any chart) meets the image of the two
     edges ``V- V V+`` (of the triangle's outline where the chart clips it) widened by
     three times the angle ``r / (d - r)`` (a chart's coordinates move by at most 3 per
@@ -264,7 +269,8 @@ def _crossing_charges(tree, order, p, normal, charts, st):
     near = np.minimum(distance(A, V), distance(V, B)) * (1 - 1e-12) - r
     area = 0.5 * r * (np.linalg.norm(V - A, axis=1) + np.linalg.norm(B - V, axis=1))
     with np.errstate(divide="ignore"):
-        c = np.where(near > 0, area * (1 + 1e-12) / (np.pi * np.maximum(near, 0.0) ** 2),
+        per = 1.0 if solid_angle else np.pi   # the measure's kernel: cos / r^2, or cos cos / pi r^2
+        c = np.where(near > 0, area * (1 + 1e-12) / (per * np.maximum(near, 0.0) ** 2),
                      np.inf)
         widen = np.where(near > 0, 3.0 * r / np.maximum(near, 0.0), np.inf)
     np.add.at(charge, pos, c)
