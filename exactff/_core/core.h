@@ -308,7 +308,10 @@ struct Filter {
 };
 
 // the containers of a row that grow with it (Core::run): its shadow tree, exact planes,
-// the filter's work list and its tables, kept per thread from row to row
+// the filter's work list and its tables, kept per thread from row to row. One per
+// thread, so a row is not re-entrant: Core::run must not be called again on the same
+// thread while a row runs (nothing in a row calls back into Python or into another row;
+// rows on different threads, as jobs= runs them, each have their own)
 struct RowScratch {
     std::vector<Plane> sv;
     std::vector<ExactPlane> xp;
