@@ -94,6 +94,16 @@ R Core::charge_edges(const Piece& q, int64_t src, std::vector<R>& E, RowStats& s
             const R h = dl > 0 ? norm(cross(a.v, b.v)) / dl : std::min(a.length, b.length);
             const R moved = std::max(a.gerr * a.length, b.gerr * b.length);
             geo = h > 0 ? length * turn_bound(moved / h) / pi : length;
+            // the same sweep with each point's own displacement: the point at t along
+            // the edge moves by at most (1 - t) ea + t eb (the ends' world errors), and
+            // (1 - t) / |x(t)| = sin(L - th) / (|a| sin L) at angle th from a (L the
+            // edge's arc; the sine rule), so the swept area is at most
+            // (ea / |a| + eb / |b|) tan(L / 2) = (a.gerr + b.gerr) tan(L / 2); for
+            // L <= pi / 2 each point turns by at most a.gerr + b.gerr, within the first
+            // order of turn_bound where that is at most 0.1
+            const R turn = a.gerr + b.gerr;
+            if (length <= pi / 2 && turn <= static_cast<R>(0.1))
+                geo = std::min(geo, static_cast<R>(1.01) * turn * std::tan(length / 2) / pi);
         }
         // a cut edge, or one a BSP split made (two fragments of one polygon share
         // it): keyed by its ends, in a fixed order
