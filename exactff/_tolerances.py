@@ -72,6 +72,7 @@ __all__ = [
     "C1",
     "SVBSP_BAND",
     "COMPILED_FALLBACK_MAX_POLYGONS",
+    "SHAFT_MARGIN",
     "OCCLUDED_ATOL",
     "SVBSP_SPLIT_ULPS",
     "SVBSP_BOX_BUDGET",
@@ -589,9 +590,16 @@ OCCLUDED_ATOL = 1e-11
 #: Compiled core: the largest scene whose compiled values that miss the tolerance are
 #: recomputed by the Python engine (per polygon: its row, of which only those values
 #: are kept; ``stats["python_polygons"]``). Its rows cost 5 to 20 times the compiled
-#: core's and grow with the scene, so that on a larger scene such a value raises at once
-#: (or is returned with its bound, ``error=True``) instead of after a minute.
+#: core's and grow with the scene, so on a larger scene each such value is recomputed
+#: by the Python engine on its shaft instead (the polygons that may hide part of it,
+#: ``stats["shaft_polygons"]``), where the shaft holds at most this many polygons; a
+#: value still unsettled raises at once (or is returned with its bound, ``error=True``).
 COMPILED_FALLBACK_MAX_POLYGONS = 5_000
+#: Compiled core, a value settled on its shaft: polygons within this much (relative to
+#: the scene's largest coordinate, plus 1) of the convex hull of the point and the
+#: polygon are kept in the shaft, so that the hull's own rounding drops none that
+#: reaches into it.
+SHAFT_MARGIN = 1e-9
 #: Compiled core: the rounding of a vertex split off an edge, in long double roundoffs
 #: per unit of the edge's ends' distance from the point over the new vertex's (the
 #: parameter's quotient and the three-term interpolation, with a margin).

@@ -4,8 +4,10 @@ from __future__ import annotations
 
 import numpy as np
 from numpy.typing import ArrayLike
+from scipy.spatial import ConvexHull, QhullError
 
 __all__ = [
+    "hull_blockers",
     "to_local",
     "rotate",
     "area_vector",
@@ -302,3 +304,50 @@ def plane_frame(Q: ArrayLike):
     nQ = unit_normal(Q)
     RQ = receiver_frame(nQ)
     return nQ, Q[0], RQ, (Q - Q[0]) @ RQ[:2].T
+
+
+def hull_blockers(V, cand, Pc, Qc, near, flat=()):
+    """The candidates reaching into the interior of the convex hull of two point sets.
+
+    A polygon on or outside one face of the hull hides nothing of positive measure
+    between the two sets (the lines of sight from Pc to Qc lie in the hull); the test
+    takes each candidate's vertices against each face, as they are (no hull of the
+    polygon), so it keeps every polygon the hull's faces do not separate.
+
+    Parameters
+    ----------
+    V : ndarray of shape (n, k, 3)
+        Polygons padded to k vertices (a short one repeats a vertex).
+    cand : array_like of int
+        Indices into V of the candidates.
+    Pc, Qc : ndarray of shape (a, 3) and (b, 3)
+        The two point sets (a point and a polygon, two polygons).
+    near : float
+        How far beyond a face a polygon's vertices must all lie for it to be dropped:
+        0 for the exact separation, negative to keep polygons within ``-near`` of the
+        hull.
+    flat : default ()
+        What to return where the points span no solid hull (a flat pair).
+
+    Returns
+    -------
+    list of int
+        The candidates kept, or ``flat``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> sq = np.array([[[0, 0, 1], [1, 0, 1], [1, 1, 1], [0, 1, 1]],      # between
+    ...                [[0, 0, 5], [1, 0, 5], [1, 1, 5], [0, 1, 5]]], float)  # beyond
+    >>> ground = np.array([[-1, -1, 2], [2, -1, 2], [2, 2, 2], [-1, 2, 2]], float)
+    >>> hull_blockers(sq, [0, 1], np.zeros((1, 3)), ground, 0.0)
+    [0]
+    """
+    if len(cand) == 0:
+        return []
+    try:
+        H = ConvexHull(np.vstack([Pc, Qc])).equations      # a . x + b <= 0 inside
+    except QhullError:
+        return [] if flat == () else flat
+    outside = np.all(V[cand] @ H[:, :3].T + H[:, 3] >= -near, axis=1)      # (c, faces)
+    return [int(k) for k in np.asarray(cand)[~outside.any(axis=1)]]

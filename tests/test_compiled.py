@@ -344,19 +344,25 @@ def test_a_missed_tolerance_falls_back_to_the_python_engine_per_polygon():
 
 
 def test_a_missed_tolerance_on_a_large_scene_raises_at_once(monkeypatch):
-    # above COMPILED_FALLBACK_MAX_POLYGONS there is no second engine: the row raises
-    # naming the polygon before any Python engine is called, or returns its bounds
+    # above COMPILED_FALLBACK_MAX_POLYGONS the Python engine never takes the whole
+    # scene: only each missed value's shaft, of at most that many polygons; a value it
+    # does not settle either (1e-30 is out of reach) raises naming the polygon, or is
+    # returned with its bound
     import exactff.visibility.compiled as compiled
     from exactff import _tolerances
 
     scene = ef.scenes.cornell_box(closed=True)
     p, n = scene.centroids[1], scene.normals[1]
     monkeypatch.setattr(_tolerances, "COMPILED_FALLBACK_MAX_POLYGONS", 5)
+    engine = compiled.visible_form_factors
+    sizes = []
 
-    def no_python(*args, **kwargs):
-        raise AssertionError("the Python engine was called")
+    def shafts_only(sub, *args, **kwargs):
+        sizes.append(len(sub))
+        assert len(sub) <= 5 < len(scene), "the Python engine took more than a shaft"
+        return engine(sub, *args, **kwargs)
 
-    monkeypatch.setattr(compiled, "visible_form_factors", no_python)
+    monkeypatch.setattr(compiled, "visible_form_factors", shafts_only)
     with pytest.raises(ef.NumericalError, match=r"polygon \d+: .* in the compiled core"):
         compiled_form_factors(scene, p, n, tolerance=1e-30)
     st = {}
@@ -364,6 +370,45 @@ def test_a_missed_tolerance_on_a_large_scene_raises_at_once(monkeypatch):
     Fc, Ec = compiled_form_factors(scene, p, n, error=True)
     assert np.all(np.abs(F - Fc) <= E + Ec) and np.all(np.isfinite(E))
     assert st["compiled_missed"] > 0 and "python_polygons" not in st
+    assert st["shaft_polygons"] == 0 and sizes
+
+
+def test_a_value_the_core_leaves_unsettled_is_settled_on_its_shaft(monkeypatch):
+    # a large scene's value whose compiled bound misses (here: its rounded crossings'
+    # part set above the accuracy target of occluded values) is recomputed by the Python
+    # engine on its shaft, the polygons reaching into the hull of the point and it: the
+    # closed Cornell box from inside, the floor seen past the two blocks. The value must
+    # agree with the whole scene's Python engine and with the core's own within the
+    # bounds, from a sub-scene smaller than the scene (a shaft without the blocks, or
+    # with every polygon dropped, gives the unoccluded wall: planted, caught below)
+    import exactff.visibility.compiled as compiled
+    from exactff import _tolerances
+
+    scene = ef.scenes.cornell_box(closed=True)
+    p, n = scene.centroids[20], scene.normals[20]    # the front wall's centre, facing in
+    wall = 6                                         # the back wall, past the blocks
+    Fc, Ec = compiled_form_factors(scene, p, n, error=True)
+    monkeypatch.setattr(_tolerances, "COMPILED_FALLBACK_MAX_POLYGONS", len(scene) - 1)
+    tree, core = compiled.compiled_core(scene)
+
+    class Unsettled:
+        def row(self, **kwargs):
+            F, E, band, crossing, counters = core.row(**kwargs)
+            crossing = crossing.copy()
+            crossing[wall] = 1.0
+            return F, E, band, crossing, counters
+
+    monkeypatch.setattr(compiled, "compiled_core", lambda s, *a: (tree, Unsettled()))
+    st = {}
+    F, E = compiled_form_factors(scene, p, n, tolerance=1e-12, stats=st, error=True)
+    assert st["path"] == "compiled, shaft for some polygons" and st["shaft_polygons"] == 1
+    assert 1 < st["shaft_sizes"][0] < len(scene)
+    Fp, Ep = ef.Exact(engine="python").point_form_factors(scene, p, n, error=True)
+    assert abs(F[wall] - Fp[wall]) <= E[wall] + Ep[wall]
+    assert abs(F[wall] - Fc[wall]) <= E[wall] + Ec[wall]
+    assert E[wall] <= 1e-12 * max(F[wall], 0.01)
+    # the blocks hide part of the wall: without them it would be larger
+    assert F[wall] < ef.point_polygon_form_factor(p, n, scene.polygons[wall]) - 1e-3
 
 
 def test_rows_in_threads_give_the_same_values():

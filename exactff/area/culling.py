@@ -10,10 +10,9 @@ import numpy as np
 import shapely
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
-from scipy.spatial import ConvexHull, QhullError
 
 from .. import _tolerances as tol
-from ..geometry import cross, plane_frame
+from ..geometry import cross, hull_blockers, plane_frame
 from ..predicates import coplanar_band_sides, coplanar_pairs
 from ..rings import padded
 from .closed_form import front_parts
@@ -31,20 +30,6 @@ def padded_polygons(polys):
     W = V - V[:, :1]
     A = 0.5 * cross(W, np.roll(W, -1, axis=1)).sum(axis=1)
     return V, V.min(axis=1), V.max(axis=1), A / np.linalg.norm(A, axis=1)[:, None]
-
-
-def hull_blockers(V, cand, Pc, Qc, near):
-    """The candidates (indices into V) reaching into the interior of the convex hull of
-    Pc and Qc: a polygon on or outside one face of the hull hides nothing of positive
-    measure (the exact test; no hull, as for a flat pair: none)."""
-    if len(cand) == 0:
-        return []
-    try:
-        H = ConvexHull(np.vstack([Pc, Qc])).equations      # a . x + b <= 0 inside
-    except QhullError:
-        return []
-    outside = np.all(V[cand] @ H[:, :3].T + H[:, 3] >= -near, axis=1)      # (c, faces)
-    return [int(k) for k in np.asarray(cand)[~outside.any(axis=1)]]
 
 
 def pair_blockers(padded, i, j, Pc, Qc, scale, shortcuts=True):

@@ -18,10 +18,10 @@ import shapely
 
 from .. import _tolerances as tol
 from ..errors import NumericalError, check_finite, misses_tolerance
-from ..geometry import cross
+from ..geometry import cross, hull_blockers
 from ..kernel import engine_sides_rows, flat_polygons, unoccluded_row, unoccluded_rows
 from ..predicates import engine_sides, sides_of_point
-from ..rings import owners, successors
+from ..rings import owners, padded, successors
 from ..prepared import prepared
 from ._svbsp import Core
 from .bsp import build_bsp
@@ -189,11 +189,49 @@ def _build_core(scene):
     return tree, core
 
 
+def _settle_in_shaft(scene, p, normal, j, *, two_sided, shortcuts, tolerance, integrator,
+                     stats):
+    """Polygon ``j``'s value and bound from ``p`` by the Python engine, on the polygons
+    that may hide part of it: those reaching into the convex hull of ``p`` and ``j``
+    (the lines of sight from p to j; :func:`exactff.geometry.hull_blockers`, keeping
+    every polygon within ``SHAFT_MARGIN`` of the scene's size of it), with ``j``, in the
+    scene's order (the tie rule of coplanar faces follows it). The engine's BSP of that
+    sub-scene splits along other lines than the scene's, and only where those polygons
+    meet. Returns ``(F, E)`` where they meet the tolerance (E within it, the rounded
+    crossings' part within the accuracy target of occluded values), else None: no
+    hull (p within rounding of j's plane), more than ``COMPILED_FALLBACK_MAX_POLYGONS``
+    polygons in the shaft, or a value the engine does not settle either.
+    ``stats["shaft_sizes"]`` collects the sub-scenes' sizes."""
+    V, counts = prepared(scene).get("padded", lambda s: padded(s.polygons))
+    Q = V[j, :counts[j]]
+    ends = np.vstack([p[None], Q])
+    margin = tol.SHAFT_MARGIN * (1.0 + np.abs(V).max())
+    lo, hi = ends.min(axis=0) - margin, ends.max(axis=0) + margin
+    box = np.all((V.max(axis=1) >= lo) & (V.min(axis=1) <= hi), axis=1)
+    box[j] = False
+    blockers = hull_blockers(V, np.flatnonzero(box), p[None], Q, -margin, flat=None)
+    if blockers is None or len(blockers) + 1 > tol.COMPILED_FALLBACK_MAX_POLYGONS:
+        return None
+    keep = np.sort(np.array(blockers + [j], dtype=np.int64))
+    stats.setdefault("shaft_sizes", []).append(len(keep))
+    sub = type(scene).from_polygons([scene.polygons[k] for k in keep.tolist()])
+    at = int(np.searchsorted(keep, j))
+    sub_st = {"polygon_crossing": None}      # (asks the engine for each polygon's part)
+    G, H = visible_form_factors(sub, p, normal, two_sided=two_sided, stats=sub_st,
+                                shortcuts=shortcuts, tolerance=tolerance, error=True,
+                                integrator=integrator)
+    moved = 0.0 if sub_st["polygon_crossing"] is None else sub_st["polygon_crossing"][at]
+    if misses_tolerance(G[at], H[at] - moved, tolerance) or moved > tol.OCCLUDED_ATOL:
+        return None
+    return float(G[at]), float(H[at])
+
+
 def _missed_message(j, F, E, crossing, tolerance, count, python=False):
     """The error of a row whose value ``j`` (one of ``count``) missed the tolerance."""
     j = int(j)
     where = ("after the Python engine's refinement" if python else
-             "in the compiled core (no second engine for a scene of this size)")
+             "in the compiled core (nor by the Python engine on the polygons that may hide "
+             "part of it, where they are few enough)")
     part = ("" if python or not crossing[j] > tol.OCCLUDED_ATOL else
             f"; {crossing[j]:.3g} of it from the BSP's rounded crossings")
     return (f"polygon {j}: the form factor {F[j]!r} misses the tolerance {tolerance:g} "
@@ -364,6 +402,7 @@ def compiled_form_factors(scene, point, normal, *, two_sided=False, stats=None,
     check_finite(band)
     check_finite(crossing)
     st["max_crossing_bound"] = float(crossing.max(initial=0.0))
+    path = "compiled"
     if tolerance is not None:
         # the rounding and geometry of the pieces, after the core's second tier (above),
         # by the Python engine's own criterion; the band's slivers (below) no engine
@@ -376,8 +415,25 @@ def compiled_form_factors(scene, point, normal, *, two_sided=False, stats=None,
             st.update(counters)
             st["compiled_missed"] = int(len(missed))
             if len(scene) > tol.COMPILED_FALLBACK_MAX_POLYGONS:
-                # no second engine at this size: say so now, or return the bounds
-                if not error:
+                # the Python engine, polygon by polygon, on the polygons that may hide
+                # part of it (its shaft): the values it settles replace the core's
+                settled = []
+                F, E, band, crossing = F.copy(), E.copy(), band.copy(), crossing.copy()
+                for j in missed.tolist():
+                    got = _settle_in_shaft(scene, p, normal, j, two_sided=two_sided,
+                                           shortcuts=shortcuts, tolerance=tolerance,
+                                           integrator=integrator, stats=st)
+                    if got is not None:
+                        # its bound is the Python engine's whole bound (its own band and
+                        # crossings included)
+                        F[j], E[j], band[j], crossing[j] = got[0], got[1], 0.0, 0.0
+                        settled.append(j)
+                st["shaft_polygons"] = len(settled)
+                st["max_crossing_bound"] = float(crossing.max(initial=0.0))
+                missed = np.setdiff1d(missed, settled)
+                if len(settled):
+                    path = "compiled, shaft for some polygons"
+                if len(missed) and not error:
                     raise NumericalError(_missed_message(missed[0], F, E, crossing, tolerance,
                                                          len(missed)))
             else:
@@ -400,7 +456,7 @@ def compiled_form_factors(scene, point, normal, *, two_sided=False, stats=None,
                                                          len(still), python=True))
                 return (F, E) if error else F
     st.update(counters)
-    st["path"] = "compiled"
+    st["path"] = path
     E = E + band + crossing
     st["max_error_estimate"] = float(E.max(initial=0.0))
     st["max_band_bound"] = float(band.max(initial=0.0))

@@ -143,6 +143,10 @@ def visible_form_factors(scene, point, normal, *, two_sided=False, stats=None,
                                   integrator=integrator, refiner=refiner, stats=st)
     crossing = _crossing_charges(tree, order, p, normal, charts, st)
     F, E = _per_polygon(src, Ff, ef_ + crossing, len(scene), "form factor", stats)
+    if "polygon_crossing" in st:
+        # asked for (the compiled core's shaft, visibility.compiled._settle_in_shaft):
+        # each polygon's part of its bound from the rounded crossings
+        st["polygon_crossing"] = np.bincount(src, weights=crossing, minlength=len(scene))
     if not error:
         # the pieces' rounding and geometry against the tolerance; what the BSP's rounded
         # crossings may move against the accuracy target of occluded values, as in the
