@@ -63,7 +63,6 @@ __all__ = [
     "AREA_EDGE_ON_RTOL",
     "AREA_SHAFT_ENTRIES_PER_CALL",
     "AREA_WHOLE_TOLERANCE_SHARE",
-    "AREA_LI2_AXIS",
     "AREA_CLOSED_THIN",
     "DOUBLE_TINY",
     "AREA_STRICT_TURN",
@@ -456,16 +455,9 @@ AREA_BACK_FACE_RTOL = 1e-12
 AREA_STRICT_TURN = 1e-6
 
 #: The closed form's skew edge pairs: a triangle of the parallelogram thinner than this
-#: share of its size (``exactff.area.edge_integrals._skew_edge_integrals``) is of no area (its
+#: share of its size (``exactff/_core/closed_form.cpp``) is of no area (its
 #: terms would only underflow).
 AREA_CLOSED_THIN = 1e-100
-
-#: The closed form's dilogarithm near the real axis (``exactff.area.edge_integrals._li2``): within
-#: this of it (and left of 1/2) Li2 is the real ``spence`` plus its first-order term,
-#: as scipy's complex ``spence`` is wrong there near x = -0.268 (measured: an imaginary
-#: part of 0.028 for 7.5e-17; on 23,000 points of the disk and near the axis the other
-#: misses were up to 9.6e-13, all within 1e-12 of the axis).
-AREA_LI2_AXIS = 1e-8
 
 #: Area form factors: the share of a pair's tolerance the unoccluded value of an
 #: occluded pair may take (its closed form falls back to the far rule or mpmath only

@@ -11,7 +11,8 @@ over the edges ``p_i(s) = a_i + s e_i`` of P and ``q_j(t) = b_j + t e_j`` of Q, 
 counter-clockwise seen from its front. Both integrals are in closed form
 (:func:`~exactff.area.edge_integrals.edge_log_integrals`: elementary for parallel edges,
 dilogarithms for skew ones), evaluated for all edge pairs of one emitter and many
-receivers at once (:func:`unoccluded_pairs`), each pair scaled by a power of 2 near its
+receivers in one compiled call with the GIL released
+(:func:`~exactff.area.edge_integrals.edge_pair_sums`; :func:`unoccluded_pairs`), each pair scaled by a power of 2 near its
 centroids' distance (the scale's ``ln L`` drops out: ``(sum e_i) . (sum e_j) = 0``). The
 error estimate is the rounding of the terms' magnitudes (``AREA_CLOSED_ULPS``).
 
@@ -41,7 +42,7 @@ from ..halfspace import clip_front
 from ..rings import padded, successors
 from ..scene import validate_polygon
 from .contour_rule import contour_tanh_sinh
-from .edge_integrals import edge_log_integrals, mp_edge_log_integral
+from .edge_integrals import edge_pair_sums, mp_edge_log_integral
 from .far_field import emitter_nodes, far_values, is_far
 
 __all__ = ["polygon_form_factor", "unoccluded_pair", "unoccluded_pairs", "front_parts",
@@ -236,8 +237,8 @@ def unoccluded_pairs(P, Qs, shortcuts=True, rtol=None, atol=0.0, parts=None, cou
 
     Each polygon is clipped here to the front of the other's plane (one-sided, as
     :func:`unoccluded_pair`); pass them whole. The edge pairs of all receivers are
-    evaluated together (:func:`~exactff.area.edge_integrals.edge_log_integrals`, the
-    closed form of the Mitalas-Stephenson contour integral). A receiver whose estimate misses
+    evaluated together (:func:`~exactff.area.edge_integrals.edge_pair_sums`, the
+    closed form of the Mitalas-Stephenson contour integral, compiled). A receiver whose estimate misses
     ``rtol * max(F, AREA_CLOSED_FLOOR)`` is taken, with ``shortcuts`` and when it is far
     (:func:`~exactff.area.far_field.is_far`), by the far-field rule if that estimate is
     the smaller, then (with
@@ -328,26 +329,11 @@ def unoccluded_pairs(P, Qs, shortcuts=True, rtol=None, atol=0.0, parts=None, cou
     Pl, Ql = [Pcs[j] for j in live], [Qcs[j] for j in live]
     VP, po, nextP = _rings(Pl)
     VQ, qo, nextQ = _rings(Ql)
-    # every edge pair of each receiver: owner, P's edge ip, Q's edge iq
-    kP, kQ = np.diff(po), np.diff(qo)
-    per_pair = kP * kQ
-    owner = np.repeat(np.arange(len(live)), per_pair)
-    r = np.arange(int(per_pair.sum())) - np.repeat(np.cumsum(per_pair) - per_pair, per_pair)
-    ip = po[:-1][owner] + r // kQ[owner]
-    iq = qo[:-1][owner] + r % kQ[owner]
-    inv = (1.0 / L)[owner][:, None]
-    e, f = (VP[nextP] - VP)[ip] * inv, (VQ[nextQ] - VQ)[iq] * inv
-    ef = np.einsum("ij,ij->i", e, f)
-    keep = ef != 0                          # perpendicular edges: no term
-    owner, ip, iq, e, f, ef = owner[keep], ip[keep], iq[keep], e[keep], f[keep], ef[keep]
-    w = (VP[ip] - VQ[iq]) * inv[keep]
-    J, M = edge_log_integrals(w, e, np.zeros_like(w), f)
-    # A_P F = (1 / 2 pi) sum (e . f) J, in the scaled units; its rounding
+    # A_P F = (1 / 2 pi) sum (e . f) J over every edge pair, in the scaled units, and its
+    # rounding (compiled, the GIL released): per pair, and per edge pair kept
     area_s = area_P / L ** 2
-    scale = (2.0 * np.pi * area_s)[owner]
-    c = tol.AREA_CLOSED_ULPS * tol.EPS * np.abs(ef) * M / scale
-    v = np.bincount(owner, ef * J / scale, minlength=len(live))
-    ev = np.bincount(owner, c, minlength=len(live))
+    v, ev, owner, ip, iq, ef, J, c = edge_pair_sums(VP, po, VQ, qo, 1.0 / L,
+                                                    2.0 * np.pi * area_s)
     live = np.array(live)
     values[live], est[live] = v, ev
     # the error allowed per value: atol, or the share rtol of the value if larger
