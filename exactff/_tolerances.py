@@ -61,7 +61,7 @@ __all__ = [
     "AREA_MAX_PIECES",
     "AREA_POINTS_PER_CALL",
     "AREA_EDGE_ON_RTOL",
-    "AREA_SHAFT_ENTRIES_PER_CALL",
+    "AREA_HULL_MAX_POINTS",
     "AREA_WHOLE_TOLERANCE_SHARE",
     "AREA_CLOSED_THIN",
     "DOUBLE_TINY",
@@ -464,9 +464,11 @@ AREA_CLOSED_THIN = 1e-100
 #: beyond it); the hidden part's adaptive rules have the rest.
 AREA_WHOLE_TOLERANCE_SHARE = 0.1
 
-#: Area form factors: shaft culling tests a batch of a row's pairs against every polygon
-#: at once, about this many pair-polygon entries a batch (memory, not accuracy).
-AREA_SHAFT_ENTRIES_PER_CALL = 2_000_000
+#: Area form factors: the hull test of a pair's blockers (``exactff/_core/row_culling.cpp``)
+#: takes the hull's faces as the planes through three of the pair's vertices that have
+#: them all on one side, O(v^4) in its v vertices: beyond this many, no hull test (every
+#: polygon the shaft leaves is a blocker, hiding nothing where it is outside the hull).
+AREA_HULL_MAX_POINTS = 48
 
 #: Area form factors: cuts of an emitter's edge (for the contour integral's outer rule)
 #: closer than this (as a share of the edge) to each other or to its ends are dropped.

@@ -39,7 +39,7 @@ from .. import _tolerances as tol
 from ..errors import check_finite, nonnegative
 from ..geometry import area_vector, cross
 from ..halfspace import clip_front
-from ..rings import padded, successors
+from ..rings import concatenated, padded, successors
 from ..scene import validate_polygon
 from .contour_rule import contour_tanh_sinh
 from .edge_integrals import edge_pair_sums, mp_edge_log_integral
@@ -128,8 +128,7 @@ def polygon_form_factor(P: ArrayLike, Q: ArrayLike, error: bool = False):
 
 def _rings(polys):
     """Concatenated vertices (V, 3), offsets, and each vertex's successor's index."""
-    V = np.concatenate(polys)
-    offsets = np.concatenate([[0], np.cumsum([len(p) for p in polys])])
+    V, offsets = concatenated(polys)
     return V, offsets, successors(offsets)
 
 
