@@ -287,7 +287,11 @@ def area_row(scene, i, atol, *, rtol=None, shortcuts=True, stats=None):
                                               (float(w), float(we)),
                                               shortcuts, st, rtol, solid, inner)
         st.point_values += points
-        fx[j] = nonnegative(fx[j], ex[j])
+    if occluded:
+        # the occluded values clamped at 0 within their estimates, together
+        done = np.zeros(len(fx), dtype=bool)
+        done[[j for (j, _, _), _, _, _ in occluded]] = True
+        fx[:] = nonnegative(fx, ex, unchecked=~done, item="receiver")
     if unoccluded:
         js, fx[js], ex[js] = _unoccluded_values(receivers, i, unoccluded, shortcuts, st,
                                                 atol_all, rtol)
