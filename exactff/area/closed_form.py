@@ -12,9 +12,10 @@ counter-clockwise seen from its front. Both integrals are in closed form
 (:func:`~exactff.area.edge_integrals.edge_log_integrals`: elementary for parallel edges,
 dilogarithms for skew ones), evaluated for all edge pairs of one emitter and many
 receivers in one compiled call with the GIL released
-(:func:`~exactff.area.edge_integrals.edge_pair_sums`; :func:`unoccluded_pairs`), each pair scaled by a power of 2 near its
-centroids' distance (the scale's ``ln L`` drops out: ``(sum e_i) . (sum e_j) = 0``). The
-error estimate is the rounding of the terms' magnitudes (``AREA_CLOSED_ULPS``).
+(:func:`~exactff.area.edge_integrals.edge_pair_sums`; :func:`unoccluded_pairs`), each
+pair scaled by a power of 2 near its centroids' distance (the scale's ``ln L`` drops out:
+``(sum e_i) . (sum e_j) = 0``). The error estimate is the rounding of the terms'
+magnitudes (``AREA_CLOSED_ULPS``).
 
 The contour terms cancel as (distance / size)^2 when the polygons are far apart, and for
 thin polygons: where the estimate misses its target (``AREA_CLOSED_RTOL``, or an area
@@ -237,8 +238,8 @@ def unoccluded_pairs(P, Qs, shortcuts=True, rtol=None, atol=0.0, parts=None, cou
     Each polygon is clipped here to the front of the other's plane (one-sided, as
     :func:`unoccluded_pair`); pass them whole. The edge pairs of all receivers are
     evaluated together (:func:`~exactff.area.edge_integrals.edge_pair_sums`, the
-    closed form of the Mitalas-Stephenson contour integral, compiled). A receiver whose estimate misses
-    ``rtol * max(F, AREA_CLOSED_FLOOR)`` is taken, with ``shortcuts`` and when it is far
+    closed form of the Mitalas-Stephenson contour integral, compiled). A receiver whose
+    estimate misses ``rtol * max(F, AREA_CLOSED_FLOOR)`` is taken, with ``shortcuts`` and when it is far
     (:func:`~exactff.area.far_field.is_far`), by the far-field rule if that estimate is
     the smaller, then (with
     ``atol``) by the tanh-sinh contour rule

@@ -20,8 +20,8 @@ from ._row_culling import row_blockers as _compiled_row_blockers
 from .closed_form import front_parts
 from .rules import triangle_areas
 
-__all__ = ["ConvexSolids", "padded_polygons", "front_pairs", "hull_blockers", "pair_blockers", "shaft",
-           "row_blockers",
+__all__ = ["ConvexSolids", "padded_polygons", "front_pairs", "hull_blockers", "pair_blockers",
+           "shaft", "row_blockers",
            "convex_solids", "closed_solids", "tie_covers", "uncovered"]
 
 
@@ -201,7 +201,8 @@ def row_blockers(padded, i, J, parts, nP, p0, near, st):
     Two unit squares facing each other 1 apart, a plate between them and one beside:
 
     >>> from exactff.area.row import AreaStats
-    >>> sq = lambda z, up: np.array([[0, 0, z], [1, 0, z], [1, 1, z], [0, 1, z]][::1 if up else -1], float)
+    >>> sq = lambda z, up: np.array([[0, 0, z], [1, 0, z], [1, 1, z], [0, 1, z]][::1 if up else -1],
+    ...                             float)
     >>> polys = [sq(0, True), sq(1, False), sq(0.5, True) * [0.5, 0.5, 1] + [0.25, 0.25, 0],
     ...          sq(0.5, True) + [3, 0, 0]]
     >>> pad = padded_polygons(polys)
