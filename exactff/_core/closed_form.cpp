@@ -46,6 +46,10 @@ void skew(const V& a, const V& e, const V& b, const V& f, const ClosedFormConsta
         const V& A = corners[i];
         const V D = sub(corners[(i + 1) % 4], A);
         const double L = std::sqrt(dot(D, D));
+        // a side of no length (e or f lost to rounding next to w): its triangle has no
+        // area (and the other sides' magnitudes, of |w| |e| or |w| |f|, cover what it
+        // lost)
+        if (!(L > 0)) continue;
         const V u = over(D, L);
         const double tA = dot(A, u);
         const double tB = tA + L;

@@ -39,7 +39,7 @@ from numpy.typing import ArrayLike
 from .. import _tolerances as tol
 from ..errors import check_finite, nonnegative
 from ..geometry import area_vector, cross
-from ..halfspace import clip_front
+from ..halfspace import clip_fronts
 from ..rings import concatenated, padded, successors
 from ..scene import validate_polygon
 from .contour_rule import contour_tanh_sinh
@@ -138,7 +138,8 @@ def front_parts(P, nP, Qs, nQs, dP, dQ):
     and reach Q's front), decided from signed distances the caller computed for all
     pairs at once: a polygon whose distances are all >= 0 and one > 0 is whole, one with
     none > 0 has nothing in front, and only one with distances of both signs is clipped
-    (:func:`clip_front`, with the same distances: one decision, however they round).
+    (:func:`~exactff.halfspace.clip_fronts`, all of them together; the decision is
+    taken from the distances given: one decision, however they round).
 
     Parameters
     ----------
@@ -173,10 +174,18 @@ def front_parts(P, nP, Qs, nQs, dP, dQ):
     """
     none = (dP.max(axis=1) <= 0) | (dQ.max(axis=1) <= 0)
     whole_P, whole_Q = dP.min(axis=1) >= 0, dQ.min(axis=1) >= 0
-    Pcs = [None if none[j] else P if whole_P[j] else clip_front(P, nQs[j], Q[0], dP[j])
-           for j, Q in enumerate(Qs)]
-    Qcs = [None if none[j] else Q if whole_Q[j] else clip_front(Q, nP, P[0], dQ[j, :len(Q)])
-           for j, Q in enumerate(Qs)]
+    # the straddling parts clipped together, P against each receiver's plane and each
+    # receiver against P's (clip_fronts: one clip_halfspace call each)
+    cut_P = np.flatnonzero(~none & ~whole_P)
+    cut_Q = np.flatnonzero(~none & ~whole_Q)
+    parts_P = dict(zip(cut_P.tolist(), clip_fronts(
+        [P] * len(cut_P), nQs[cut_P], np.array([Qs[j][0] for j in cut_P]).reshape(-1, 3))))
+    parts_Q = dict(zip(cut_Q.tolist(), clip_fronts(
+        [Qs[j] for j in cut_Q], np.broadcast_to(nP, (len(cut_Q), 3)),
+        np.broadcast_to(P[0], (len(cut_Q), 3)))))
+    none, whole_P, whole_Q = none.tolist(), whole_P.tolist(), whole_Q.tolist()
+    Pcs = [None if none[j] else P if whole_P[j] else parts_P[j] for j in range(len(Qs))]
+    Qcs = [None if none[j] else Q if whole_Q[j] else parts_Q[j] for j, Q in enumerate(Qs)]
     return Pcs, Qcs
 
 
