@@ -1,9 +1,10 @@
 """Build of the compiled code: the library exactff/_core/ (headers and sources, one concept
-per file; docs/explanation/layout.md) as four Python extension modules, the visibility
+per file; docs/explanation/layout.md) as Python extension modules, the visibility
 core and the BSP build (exactff.visibility._svbsp), the area code's hidden regions
-(exactff.area._hidden), an occluded pair's events and cells (exactff.area._pair) and the
-unoccluded rows' sector sums (exactff.kernel._sector); and the discrete methods' z-buffer
-(exactff.methods._zbuffer). The rest of the project's metadata is in pyproject.toml."""
+(exactff.area._hidden), an occluded pair's events and cells (exactff.area._pair), the
+unoccluded area pairs in closed form (exactff.area._closed), an area row's blockers
+(exactff.area._row_culling) and the unoccluded rows' sector sums
+(exactff.kernel._sector); and the discrete methods' z-buffer (exactff.methods._zbuffer). The rest of the project's metadata is in pyproject.toml."""
 
 import os
 import platform
@@ -46,6 +47,11 @@ setup(
                                    depends=HEADERS, cxx_std=17, extra_compile_args=CORE_FLAGS),
                  Pybind11Extension("exactff.area._pair", core("bind_pair.cpp", "pair.cpp", "levels.cpp", "hidden.cpp",
                                         "hidden_setup.cpp"),
+                                   depends=HEADERS, cxx_std=17, extra_compile_args=CORE_FLAGS),
+                 Pybind11Extension("exactff.area._closed", core("bind_closed.cpp", "closed_form.cpp"),
+                                   depends=HEADERS, cxx_std=17, extra_compile_args=CORE_FLAGS),
+                 Pybind11Extension("exactff.area._row_culling",
+                                   core("bind_row_culling.cpp", "row_culling.cpp"),
                                    depends=HEADERS, cxx_std=17, extra_compile_args=CORE_FLAGS),
                  Pybind11Extension("exactff.kernel._sector", core("bind_sector.cpp"),
                                    depends=HEADERS, cxx_std=17, extra_compile_args=CORE_FLAGS),

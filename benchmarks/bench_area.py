@@ -32,6 +32,15 @@ Usage: python benchmarks/bench_area.py [--cube-k 8]
    View3D 4.0's times of issue 49 (0.009, 0.044 and 0.52 s) with the goals (30x, 20x,
    20x); then gunter1's wall time on 1 and 2 threads (``executor=ThreadPoolExecutor``),
    best of ``--repeat``, against the goal of 1.7x.
+7. ``--threads`` alone (issue 49's thread goal, at tolerance 1e-6): gunter1's full matrix
+   (and the 106-surface box's with ``--threads-box``) on 1 and 2 threads
+   (``executor=ThreadPoolExecutor``), alternating, ``--repeat`` rounds: each run's wall
+   and process time (all threads), the best walls' ratio against the goal of 1.7x, and the
+   load average before and after (the machine is shared: a process time near its wall
+   time on 2 threads means one core was all it got); then one serial run with every
+   compiled call of the area code timed (thread time): the share of the matrix's time
+   with the GIL released, which bounds what 2 threads can gain (at most
+   ``total / max(total / 2, held)``).
 5. ``--pair-path`` alone: the occluded pairs' compiled path against the numpy and GEOS
    reference it replaces, in one run at tolerance 1e-6 (test4, facet, gunter1; process
    time): the events compiled (``exactff/_core/pair.cpp``) or by numpy
@@ -142,6 +151,9 @@ def main():
                     help="only the occluded pairs' compiled path against its reference")
     ap.add_argument("--repeat", type=int, default=2, help="runs of each --pair-path timing")
     ap.add_argument("--goals", action="store_true", help="only issue 49's speed goals")
+    ap.add_argument("--threads", action="store_true", help="only issue 49's thread goal")
+    ap.add_argument("--threads-box", action="store_true",
+                    help="--threads: the 106-surface box too")
     ap.add_argument("--gunter2-rows", default="",
                     help="--goals: rows of gunter2 timed, comma-separated (none: the whole "
                          "matrix)")
@@ -152,6 +164,8 @@ def main():
         return pair_path(args)
     if args.goals:
         return goals(args)
+    if args.threads:
+        return threads(args)
     if args.only_cube:
         return cube_matrix(args)
     if args.only_view3d:
@@ -368,6 +382,83 @@ def goals(args):
             best = min(best, time.perf_counter() - t0)
         base = base or best
         print(f"| {k} | {best:.3f} | {base / best:.2f} | {'-' if k == 1 else 1.7} |", flush=True)
+
+
+def gil_share(scene, tolerance=1e-6):
+    """One serial run of ``scene``'s area matrix with every compiled call of the area
+    code (the ``_compiled_*`` names its modules import) timed in thread time: (the run's
+    thread time, the time in the compiled calls, {call: time})."""
+    import functools
+    import importlib
+
+    spent = {}
+
+    def timed_call(f, label):
+        @functools.wraps(f)
+        def g(*a, **k):
+            t = time.thread_time()
+            try:
+                return f(*a, **k)
+            finally:
+                spent[label] = spent.get(label, 0.0) + time.thread_time() - t
+        return g
+
+    patched = []
+    for name in ("events", "hidden", "adaptive", "edge_integrals", "culling", "closed_form"):
+        mod = importlib.import_module(f"exactff.area.{name}")
+        for attr in dir(mod):
+            if attr.startswith("_compiled_"):
+                patched.append((mod, attr, getattr(mod, attr)))
+                setattr(mod, attr, timed_call(getattr(mod, attr), attr[len("_compiled_"):]))
+    try:
+        t = time.thread_time()
+        ef.area_form_factors(scene, tolerance=tolerance)
+        total = time.thread_time() - t
+    finally:
+        for mod, attr, f in patched:
+            setattr(mod, attr, f)
+    return total, sum(spent.values()), spent
+
+
+def threads(args):
+    """Part 7: gunter1 (and the 106-surface box) on 1 and 2 threads at 1e-6."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    scenes = [("gunter1", ef.read_vs3(os.path.join(DATA, "gunter1.vs3")))]
+    if args.threads_box:
+        scenes.append(("106-surface box", box_106()))
+    print(f"load average before: {os.getloadavg()[0]:.2f}")
+    print()
+    print("| scene | threads | runs: wall / process s | best wall s | speed-up | goal |")
+    print("|---|---|---|---|---|---|")
+    for name, scene in scenes:
+        ef.area_form_factors(scene, rows=[0], tolerance=1e-6)        # imports, prepared
+        runs = {1: [], 2: []}
+        for _ in range(args.repeat):
+            for k in (1, 2):
+                c0, t0 = time.process_time(), time.perf_counter()
+                with ThreadPoolExecutor(k) as pool:
+                    ef.area_form_factors(scene, tolerance=1e-6, executor=pool)
+                runs[k].append((time.perf_counter() - t0, time.process_time() - c0))
+        best = {k: min(w for w, _ in runs[k]) for k in runs}
+        for k in (1, 2):
+            each = ", ".join(f"{w:.3f} / {c:.3f}" for w, c in runs[k])
+            print(f"| {name} | {k} | {each} | {best[k]:.3f} | {best[1] / best[k]:.2f} "
+                  f"| {'-' if k == 1 else 1.7} |", flush=True)
+    print()
+    print(f"load average after: {os.getloadavg()[0]:.2f}")
+    print()
+    print("The GIL over one serial run (thread time; the compiled calls release it):")
+    print()
+    print("| scene | total s | compiled s (GIL released) | held s | held share | "
+          "2-thread bound | largest compiled calls |")
+    print("|---|---|---|---|---|---|---|")
+    for name, scene in scenes:
+        total, free, spent = gil_share(scene)
+        held = total - free
+        top = ", ".join(f"{k} {v:.3f}" for k, v in sorted(spent.items(), key=lambda x: -x[1])[:4])
+        print(f"| {name} | {total:.3f} | {free:.3f} | {held:.3f} | {held / total:.0%} "
+              f"| {total / max(total / 2, held):.2f} | {top} |", flush=True)
 
 
 def view3d_table(args):

@@ -61,9 +61,8 @@ __all__ = [
     "AREA_MAX_PIECES",
     "AREA_POINTS_PER_CALL",
     "AREA_EDGE_ON_RTOL",
-    "AREA_SHAFT_ENTRIES_PER_CALL",
+    "AREA_HULL_MAX_POINTS",
     "AREA_WHOLE_TOLERANCE_SHARE",
-    "AREA_LI2_AXIS",
     "AREA_CLOSED_THIN",
     "DOUBLE_TINY",
     "AREA_STRICT_TURN",
@@ -457,25 +456,20 @@ AREA_BACK_FACE_RTOL = 1e-12
 AREA_STRICT_TURN = 1e-6
 
 #: The closed form's skew edge pairs: a triangle of the parallelogram thinner than this
-#: share of its size (``exactff.area.edge_integrals._skew_edge_integrals``) is of no area (its
+#: share of its size (``exactff/_core/closed_form.cpp``) is of no area (its
 #: terms would only underflow).
 AREA_CLOSED_THIN = 1e-100
-
-#: The closed form's dilogarithm near the real axis (``exactff.area.edge_integrals._li2``): within
-#: this of it (and left of 1/2) Li2 is the real ``spence`` plus its first-order term,
-#: as scipy's complex ``spence`` is wrong there near x = -0.268 (measured: an imaginary
-#: part of 0.028 for 7.5e-17; on 23,000 points of the disk and near the axis the other
-#: misses were up to 9.6e-13, all within 1e-12 of the axis).
-AREA_LI2_AXIS = 1e-8
 
 #: Area form factors: the share of a pair's tolerance the unoccluded value of an
 #: occluded pair may take (its closed form falls back to the far rule or mpmath only
 #: beyond it); the hidden part's adaptive rules have the rest.
 AREA_WHOLE_TOLERANCE_SHARE = 0.1
 
-#: Area form factors: shaft culling tests a batch of a row's pairs against every polygon
-#: at once, about this many pair-polygon entries a batch (memory, not accuracy).
-AREA_SHAFT_ENTRIES_PER_CALL = 2_000_000
+#: Area form factors: the hull test of a pair's blockers (``exactff/_core/row_culling.cpp``)
+#: takes the hull's faces as the planes through three of the pair's vertices that have
+#: them all on one side, O(v^4) in its v vertices: beyond this many, no hull test (every
+#: polygon the shaft leaves is a blocker, hiding nothing where it is outside the hull).
+AREA_HULL_MAX_POINTS = 48
 
 #: Area form factors: cuts of an emitter's edge (for the contour integral's outer rule)
 #: closer than this (as a share of the edge) to each other or to its ends are dropped.

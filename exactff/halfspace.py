@@ -6,15 +6,18 @@ frusta, the area code's fronts), one polygon split in two by a plane
 (:func:`split_polygon`: the BSP tree), and horizon clipping in the receiver's frame
 (:func:`clip_above_horizon`, in floats or mpmath numbers: ``z > 0`` kept, crossings put
 exactly on ``z = 0``), and one polygon's part in front of a plane through a point
-(:func:`clip_front`: the area code's one-sided pairs). Every module clips through these.
+(:func:`clip_front`: the area code's one-sided pairs; :func:`clip_fronts` for many at
+once). Every module clips through these.
 """
 
 import numpy as np
 
 from . import _tolerances as tol
 from .geometry import cross
+from .rings import padded
 
-__all__ = ["clip_halfspace", "split_polygon", "clip_above_horizon", "clip_front", "NORMAL_FLOOR"]
+__all__ = ["clip_halfspace", "split_polygon", "clip_above_horizon", "clip_front",
+           "clip_fronts", "NORMAL_FLOOR"]
 
 #: Far above the subnormals: a meet of planes whose products stay normal numbers
 #: (clip_halfspace; the compiled set-up of the area pairs reads it too).
@@ -213,6 +216,47 @@ def clip_above_horizon(Q, zero=0.0):
     return out
 
 
+def _front_part(C, c):
+    """A clipped ring (about c) moved back by c, without the repeat a cut through a vertex
+    leaves (no edge of zero length); None with fewer than 3 vertices."""
+    C = C + c
+    C = C[np.any(C != np.roll(C, 1, axis=0), axis=1)]
+    return C if len(C) >= 3 else None
+
+
+def clip_fronts(polys, normals, points):
+    """The parts of many polygons in front of their planes, ``n_m . (x - c_m) > 0``, in
+    one :func:`clip_halfspace` call: :func:`clip_front` of each, for polygons the caller
+    has found to straddle their planes (no whole or empty shortcut here).
+
+    Parameters
+    ----------
+    polys : sequence of ndarray of shape (K_m, 3)
+    normals, points : ndarray of shape (M, 3)
+        Each polygon's plane: its normal and a point of it.
+
+    Returns
+    -------
+    list of ndarray or None
+        Each polygon's part (None where fewer than 3 vertices are left).
+
+    Examples
+    --------
+    >>> P = np.array([[-1, 0, 0], [1, 0, 0], [1, 1, 0], [-1, 1, 0]], float)
+    >>> [C.tolist() for C in clip_fronts([P, P], np.array([[1.0, 0, 0], [0, -1.0, 0]]),
+    ...                                  np.array([[0.0, 0, 0], [0, 0.5, 0]]))]
+    ... # doctest: +NORMALIZE_WHITESPACE
+    [[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0]],
+     [[-1.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 0.5, 0.0], [-1.0, 0.5, 0.0]]]
+    """
+    if not len(polys):
+        return []
+    points = np.asarray(points, dtype=float)
+    V, counts = padded([np.asarray(P, dtype=float) - c for P, c in zip(polys, points)])
+    W, k = clip_halfspace(V, counts, np.asarray(normals, dtype=float))
+    return [_front_part(W[m, :k[m]], points[m]) for m in range(len(k))]
+
+
 def clip_front(P, n, c, d=None):
     """The part of polygon P (K, 3) with ``n . (x - c) > 0`` (None when nothing is
     left): :func:`clip_halfspace` about the point c. ``d``: the distances
@@ -235,7 +279,4 @@ def clip_front(P, n, c, d=None):
     if np.all(d <= 0):
         return None
     V, k = clip_halfspace((P - c)[None], np.array([len(P)]), n)
-    C = V[0, :k[0]] + c
-    # a cut through a vertex repeats it: no edge of zero length
-    C = C[np.any(C != np.roll(C, 1, axis=0), axis=1)]
-    return C if len(C) >= 3 else None
+    return _front_part(V[0, :k[0]], c)

@@ -2,7 +2,8 @@
 shapely's ``_ragged_array``.
 
 A set of ``R`` rings is one vertex array and ``offsets`` of shape (R + 1,): ring ``r``
-owns vertices ``offsets[r]:offsets[r + 1]``. From that follow each vertex's ring
+owns vertices ``offsets[r]:offsets[r + 1]``. Rings are stored so by
+:func:`concatenated`. From that follow each vertex's ring
 (:func:`owners`), its successor in the ring (:func:`successors`), a selection of rings
 packed again (:func:`repack`), the padded arrays some kernels prefer
 (:func:`padded`, :func:`padded_buckets`) and the polygons and rings of shapely
@@ -12,8 +13,22 @@ geometries (:func:`polygon_parts`, :func:`shapely_rings`). Every module reads ri
 import numpy as np
 import shapely
 
-__all__ = ["owners", "successors", "repack", "padded", "padded_buckets", "polygon_parts",
-           "shapely_rings"]
+__all__ = ["concatenated", "owners", "successors", "repack", "padded", "padded_buckets",
+           "polygon_parts", "shapely_rings"]
+
+
+def concatenated(rings):
+    """Rings (a sequence of arrays (K_r, 3)) as one vertex array and their offsets
+    (int64, shape (R + 1,)).
+
+    Examples
+    --------
+    >>> V, offsets = concatenated([np.zeros((3, 3)), np.ones((4, 3))])
+    >>> V.shape, offsets.tolist()
+    ((7, 3), [0, 3, 7])
+    """
+    return (np.concatenate(rings),
+            np.concatenate([[0], np.cumsum([len(r) for r in rings])]).astype(np.int64))
 
 
 def owners(offsets):

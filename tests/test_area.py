@@ -1185,10 +1185,14 @@ def test_contour_and_far_rule_raise_on_a_negative_beyond_the_estimate(monkeypatc
     from exactff.area import closed_form, contour_rule, far_field
 
     P, Q = parallel_pair(1, 1, 1)
-    # the closed form's edge integrals negated (the sum then comes out -F)
-    closed = closed_form.edge_log_integrals
-    monkeypatch.setattr(closed_form, "edge_log_integrals",
-                        lambda a, e, b, f: (-closed(a, e, b, f)[0], closed(a, e, b, f)[1]))
+    # the closed form's edge integrals negated (the sums then come out -F)
+    sums = closed_form.edge_pair_sums
+
+    def negated(*args):
+        v, ev, owner, ip, iq, ef_, J, c = sums(*args)
+        return -v, ev, owner, ip, iq, ef_, -J, c
+
+    monkeypatch.setattr(closed_form, "edge_pair_sums", negated)
     with pytest.raises(ef.NumericalError, match="below 0 beyond"):
         closed_form.unoccluded_pair(P, Q)
     monkeypatch.undo()

@@ -94,15 +94,24 @@ def _check_shaft(scene):
         boxes = np.array([(Pc.min(0), Pc.max(0), Qc.min(0), Qc.max(0)) for _, Pc, Qc in pairs])
         st_ = AreaStats()
         cands = culling.shaft(padded, i, J, boxes, nP, P[0], near, st_)
-        for (j, Pc, Qc), c in zip(pairs, cands):
+        # the rows' compiled shaft and hull test (the hull's faces as planes through three
+        # vertices): the same counts as their numpy and qhull reference, and the same
+        # blockers but where a face's plane is decided otherwise (qhull merges a sliver
+        # face of nearly coincident vertices): what it leaves out is checked below
+        st_c = AreaStats()
+        compiled = culling.row_blockers(padded, i, J, [(Pc, Qc) for _, Pc, Qc in pairs], nP,
+                                        P[0], near, st_c)
+        assert st_c == st_, (i, st_c, st_)
+        for (j, Pc, Qc), c, b in zip(pairs, cands, compiled):
             shaft = set(culling.hull_blockers(padded[0], c, Pc, Qc, near))
             hull = set(culling.pair_blockers(padded, i, j, Pc, Qc, scale))
             assert shaft <= hull, (i, j, shaft, hull)
-            # what the shaft left out and the hull test kept hides nothing: the hidden
-            # part of Qc by it alone is 0 (within its estimate) at points of Pc
+            # what the shaft (or the compiled hull test) left out and the hull test kept
+            # hides nothing: the hidden part of Qc by it alone is 0 (within its estimate)
+            # at points of Pc
             c0 = Pc.mean(axis=0)
             X = np.vstack([c0, c0 + 0.5 * (Pc - c0), c0 + 0.9 * (Pc - c0)])
-            for k in hull - shaft:
+            for k in hull - (shaft & set(b.tolist())):
                 H, EH = hidden_values(X, nP, Qc, [polys[k]])
                 assert np.all(H <= EH + 1e-15), (i, j, k, H.max())
                 checked += 1
@@ -133,17 +142,45 @@ def test_shaft_check_reaches_a_blocker_the_shaft_leaves_out():
     assert _check_shaft(scene) > 0
 
 
-def test_shaft_in_batches_gives_the_same_row(monkeypatch):
-    # the pairs tested against the polygons in batches of one pair (memory cap) or all at
-    # once: the same blockers, so the same values and estimates bit for bit
-    scene = ef.read_vs3(os.path.join(os.path.dirname(__file__), "data", "view3d", "facet.vs3"))
-    whole = ef.area_form_factors(scene, rows=[0, 5], tolerance=1e-6, error=True)
-    monkeypatch.setattr(ef._tolerances, "AREA_SHAFT_ENTRIES_PER_CALL", 1)
-    st_ = {}
-    batched = ef.area_form_factors(scene, rows=[0, 5], tolerance=1e-6, error=True, stats=st_)
-    assert st_["shaft_culled_blockers"] > 0
-    for a, b in zip(whole, batched):
-        assert np.array_equal(a, b)
+def test_compiled_blockers_are_the_reference_on_view3d_files():
+    # every row of View3D's examples: the compiled shaft and hull test keep the same
+    # blockers as the numpy shaft and qhull's hull, pair by pair
+    checked = 0
+    for name in ("test4.vs3", "facet.vs3", "gunter1.vs3", "l_room_f3a.vs3"):
+        scene = ef.read_vs3(os.path.join(os.path.dirname(__file__), "data", "view3d", name))
+        polys = [np.asarray(p, float) for p in scene.polygons]
+        padded = culling.padded_polygons(polys)
+        near = ef._tolerances.AREA_HULL_RTOL * float(np.ptp(scene.vertices, axis=0).max())
+        for i, P in enumerate(polys):
+            nP = unit_normal(P)
+            pairs = culling.front_pairs(polys, i, nP, padded)
+            if not pairs:
+                continue
+            J = np.array([j for j, _, _ in pairs])
+            boxes = np.array([(Pc.min(0), Pc.max(0), Qc.min(0), Qc.max(0)) for _, Pc, Qc in pairs])
+            st_r, st_c = AreaStats(), AreaStats()
+            cands = culling.shaft(padded, i, J, boxes, nP, P[0], near, st_r)
+            compiled = culling.row_blockers(padded, i, J, [(Pc, Qc) for _, Pc, Qc in pairs], nP,
+                                            P[0], near, st_c)
+            assert st_c == st_r, (name, i)
+            for (j, Pc, Qc), c, b in zip(pairs, cands, compiled):
+                assert b.tolist() == culling.hull_blockers(padded[0], c, Pc, Qc, near), (name, i, j)
+                checked += len(b)
+    assert checked > 500
+
+
+def test_compiled_hull_test_keeps_every_candidate_of_a_pair_beyond_its_point_limit(monkeypatch):
+    # a pair of more vertices than AREA_HULL_MAX_POINTS has no hull test: every polygon the
+    # shaft leaves is kept (more work, the same values)
+    scene = ef.read_vs3(os.path.join(os.path.dirname(__file__), "data", "view3d", "gunter1.vs3"))
+    st0, st_ = {}, {}
+    f, e = ef.area_form_factors(scene, rows=[3], tolerance=1e-6, error=True, stats=st0)
+    monkeypatch.setattr(ef._tolerances, "AREA_HULL_MAX_POINTS", 3)
+    g, d = ef.area_form_factors(scene, rows=[3], tolerance=1e-6, error=True, stats=st_)
+    # (hull_culled_blockers counts what the shaft and the hull test left out together)
+    assert st_["hull_culled_blockers"] < st0["hull_culled_blockers"]
+    assert st_["shaft_culled_blockers"] == st0["shaft_culled_blockers"]
+    assert np.all(np.abs(f - g) <= e + d)
 
 
 def test_shaft_planes_of_tiny_box_offsets_keep_their_blockers():

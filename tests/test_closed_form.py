@@ -526,7 +526,7 @@ def test_dilogarithm_near_the_real_axis_vs_mpmath():
     # hexagon facing a triangle 1 above came out 2.3e-4 off with an estimate of 1e-15
     import mpmath as mp
 
-    from exactff.area.edge_integrals import _li2
+    from exactff.area._closed import li2 as _li2
 
     a = -0.2679491924311228
     x = np.array([a + 8.41410012693027e-17j, a - 1e-14j, a + 1e-9j, -0.99 + 1e-12j,

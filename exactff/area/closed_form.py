@@ -11,9 +11,11 @@ over the edges ``p_i(s) = a_i + s e_i`` of P and ``q_j(t) = b_j + t e_j`` of Q, 
 counter-clockwise seen from its front. Both integrals are in closed form
 (:func:`~exactff.area.edge_integrals.edge_log_integrals`: elementary for parallel edges,
 dilogarithms for skew ones), evaluated for all edge pairs of one emitter and many
-receivers at once (:func:`unoccluded_pairs`), each pair scaled by a power of 2 near its
-centroids' distance (the scale's ``ln L`` drops out: ``(sum e_i) . (sum e_j) = 0``). The
-error estimate is the rounding of the terms' magnitudes (``AREA_CLOSED_ULPS``).
+receivers in one compiled call with the GIL released
+(:func:`~exactff.area.edge_integrals.edge_pair_sums`; :func:`unoccluded_pairs`), each
+pair scaled by a power of 2 near its centroids' distance (the scale's ``ln L`` drops out:
+``(sum e_i) . (sum e_j) = 0``). The error estimate is the rounding of the terms'
+magnitudes (``AREA_CLOSED_ULPS``).
 
 The contour terms cancel as (distance / size)^2 when the polygons are far apart, and for
 thin polygons: where the estimate misses its target (``AREA_CLOSED_RTOL``, or an area
@@ -37,11 +39,11 @@ from numpy.typing import ArrayLike
 from .. import _tolerances as tol
 from ..errors import check_finite, nonnegative
 from ..geometry import area_vector, cross
-from ..halfspace import clip_front
-from ..rings import padded, successors
+from ..halfspace import clip_fronts
+from ..rings import concatenated, padded, successors
 from ..scene import validate_polygon
 from .contour_rule import contour_tanh_sinh
-from .edge_integrals import edge_log_integrals, mp_edge_log_integral
+from .edge_integrals import edge_pair_sums, mp_edge_log_integral
 from .far_field import emitter_nodes, far_values, is_far
 
 __all__ = ["polygon_form_factor", "unoccluded_pair", "unoccluded_pairs", "front_parts",
@@ -127,8 +129,7 @@ def polygon_form_factor(P: ArrayLike, Q: ArrayLike, error: bool = False):
 
 def _rings(polys):
     """Concatenated vertices (V, 3), offsets, and each vertex's successor's index."""
-    V = np.concatenate(polys)
-    offsets = np.concatenate([[0], np.cumsum([len(p) for p in polys])])
+    V, offsets = concatenated(polys)
     return V, offsets, successors(offsets)
 
 
@@ -137,7 +138,8 @@ def front_parts(P, nP, Qs, nQs, dP, dQ):
     and reach Q's front), decided from signed distances the caller computed for all
     pairs at once: a polygon whose distances are all >= 0 and one > 0 is whole, one with
     none > 0 has nothing in front, and only one with distances of both signs is clipped
-    (:func:`clip_front`, with the same distances: one decision, however they round).
+    (:func:`~exactff.halfspace.clip_fronts`, all of them together; the decision is
+    taken from the distances given: one decision, however they round).
 
     Parameters
     ----------
@@ -172,10 +174,18 @@ def front_parts(P, nP, Qs, nQs, dP, dQ):
     """
     none = (dP.max(axis=1) <= 0) | (dQ.max(axis=1) <= 0)
     whole_P, whole_Q = dP.min(axis=1) >= 0, dQ.min(axis=1) >= 0
-    Pcs = [None if none[j] else P if whole_P[j] else clip_front(P, nQs[j], Q[0], dP[j])
-           for j, Q in enumerate(Qs)]
-    Qcs = [None if none[j] else Q if whole_Q[j] else clip_front(Q, nP, P[0], dQ[j, :len(Q)])
-           for j, Q in enumerate(Qs)]
+    # the straddling parts clipped together, P against each receiver's plane and each
+    # receiver against P's (clip_fronts: one clip_halfspace call each)
+    cut_P = np.flatnonzero(~none & ~whole_P)
+    cut_Q = np.flatnonzero(~none & ~whole_Q)
+    parts_P = dict(zip(cut_P.tolist(), clip_fronts(
+        [P] * len(cut_P), nQs[cut_P], np.array([Qs[j][0] for j in cut_P]).reshape(-1, 3))))
+    parts_Q = dict(zip(cut_Q.tolist(), clip_fronts(
+        [Qs[j] for j in cut_Q], np.broadcast_to(nP, (len(cut_Q), 3)),
+        np.broadcast_to(P[0], (len(cut_Q), 3)))))
+    none, whole_P, whole_Q = none.tolist(), whole_P.tolist(), whole_Q.tolist()
+    Pcs = [None if none[j] else P if whole_P[j] else parts_P[j] for j in range(len(Qs))]
+    Qcs = [None if none[j] else Q if whole_Q[j] else parts_Q[j] for j, Q in enumerate(Qs)]
     return Pcs, Qcs
 
 
@@ -236,9 +246,9 @@ def unoccluded_pairs(P, Qs, shortcuts=True, rtol=None, atol=0.0, parts=None, cou
 
     Each polygon is clipped here to the front of the other's plane (one-sided, as
     :func:`unoccluded_pair`); pass them whole. The edge pairs of all receivers are
-    evaluated together (:func:`~exactff.area.edge_integrals.edge_log_integrals`, the
-    closed form of the Mitalas-Stephenson contour integral). A receiver whose estimate misses
-    ``rtol * max(F, AREA_CLOSED_FLOOR)`` is taken, with ``shortcuts`` and when it is far
+    evaluated together (:func:`~exactff.area.edge_integrals.edge_pair_sums`, the
+    closed form of the Mitalas-Stephenson contour integral, compiled). A receiver whose
+    estimate misses ``rtol * max(F, AREA_CLOSED_FLOOR)`` is taken, with ``shortcuts`` and when it is far
     (:func:`~exactff.area.far_field.is_far`), by the far-field rule if that estimate is
     the smaller, then (with
     ``atol``) by the tanh-sinh contour rule
@@ -328,26 +338,11 @@ def unoccluded_pairs(P, Qs, shortcuts=True, rtol=None, atol=0.0, parts=None, cou
     Pl, Ql = [Pcs[j] for j in live], [Qcs[j] for j in live]
     VP, po, nextP = _rings(Pl)
     VQ, qo, nextQ = _rings(Ql)
-    # every edge pair of each receiver: owner, P's edge ip, Q's edge iq
-    kP, kQ = np.diff(po), np.diff(qo)
-    per_pair = kP * kQ
-    owner = np.repeat(np.arange(len(live)), per_pair)
-    r = np.arange(int(per_pair.sum())) - np.repeat(np.cumsum(per_pair) - per_pair, per_pair)
-    ip = po[:-1][owner] + r // kQ[owner]
-    iq = qo[:-1][owner] + r % kQ[owner]
-    inv = (1.0 / L)[owner][:, None]
-    e, f = (VP[nextP] - VP)[ip] * inv, (VQ[nextQ] - VQ)[iq] * inv
-    ef = np.einsum("ij,ij->i", e, f)
-    keep = ef != 0                          # perpendicular edges: no term
-    owner, ip, iq, e, f, ef = owner[keep], ip[keep], iq[keep], e[keep], f[keep], ef[keep]
-    w = (VP[ip] - VQ[iq]) * inv[keep]
-    J, M = edge_log_integrals(w, e, np.zeros_like(w), f)
-    # A_P F = (1 / 2 pi) sum (e . f) J, in the scaled units; its rounding
+    # A_P F = (1 / 2 pi) sum (e . f) J over every edge pair, in the scaled units, and its
+    # rounding (compiled, the GIL released): per pair, and per edge pair kept
     area_s = area_P / L ** 2
-    scale = (2.0 * np.pi * area_s)[owner]
-    c = tol.AREA_CLOSED_ULPS * tol.EPS * np.abs(ef) * M / scale
-    v = np.bincount(owner, ef * J / scale, minlength=len(live))
-    ev = np.bincount(owner, c, minlength=len(live))
+    v, ev, owner, ip, iq, ef, J, c = edge_pair_sums(VP, po, VQ, qo, 1.0 / L,
+                                                    2.0 * np.pi * area_s)
     live = np.array(live)
     values[live], est[live] = v, ev
     # the error allowed per value: atol, or the share rtol of the value if larger

@@ -14,11 +14,13 @@ from scipy.sparse.csgraph import connected_components
 from .. import _tolerances as tol
 from ..geometry import cross, hull_blockers, plane_frame
 from ..predicates import coplanar_band_sides, coplanar_pairs
-from ..rings import padded
+from ..rings import concatenated, padded
+from ._row_culling import row_blockers as _compiled_row_blockers
 from .closed_form import front_parts
 from .rules import triangle_areas
 
-__all__ = ["ConvexSolids", "padded_polygons", "front_pairs", "hull_blockers", "pair_blockers", "shaft",
+__all__ = ["ConvexSolids", "padded_polygons", "front_pairs", "hull_blockers", "pair_blockers",
+           "shaft", "row_blockers",
            "convex_solids", "closed_solids", "tie_covers", "uncovered"]
 
 
@@ -63,7 +65,8 @@ def shaft(padded, i, J, boxes, nP, p0, near, st):
     beyond the other along one axis and the other along a second (each is a supporting
     plane of both boxes, so the shaft holds the convex hull of the pair: a polygon it
     rejects lies outside that hull, to ``near / 2``, and hides nothing). What survives
-    goes to the hull test (:func:`hull_blockers`).
+    goes to the hull test (:func:`hull_blockers`). Rows take both compiled
+    (:func:`row_blockers`); this is their reference (tests/test_area_shaft.py).
 
     Parameters
     ----------
@@ -143,6 +146,67 @@ def shaft(padded, i, J, boxes, nP, p0, near, st):
     st.shaft_culled_blockers += int(boxed.sum() - left.sum())
     st.shaft_unoccluded_pairs += int(np.count_nonzero((boxed > 0) & (left == 0)))
     return np.split(k, np.cumsum(left)[:-1])
+
+
+def row_blockers(padded, i, J, parts, nP, p0, near, st):
+    """The blockers of each pair (i, J[a]) of a row: :func:`shaft` and then
+    :func:`hull_blockers` on what it leaves, in one compiled call with the GIL released
+    (``exactff/_core/row_culling.cpp``; those two are its reference). The hull's faces
+    are the planes through three of the pair's vertices with all of them on one side (a
+    face whose plane its rounding does not fix to a tenth of ``near`` is left out, which
+    only keeps more blockers); a pair of more than ``AREA_HULL_MAX_POINTS`` vertices
+    keeps every polygon the shaft leaves.
+
+    Parameters
+    ----------
+    padded : tuple
+        :func:`padded_polygons` of the scene.
+    i : int
+        The emitter.
+    J : ndarray of shape (m,)
+        The receivers.
+    parts : sequence of (ndarray, ndarray)
+        Per pair, the clipped emitter and the clipped receiver (:func:`front_pairs`).
+    nP, p0 : ndarray of shape (3,)
+        P's unit normal and a point of its plane.
+    near : float
+        The hull test's distance (``AREA_HULL_RTOL`` of the scene's size).
+    st : AreaStats
+        Counts ``shaft_culled_blockers`` and ``shaft_unoccluded_pairs`` as :func:`shaft`.
+
+    Returns
+    -------
+    list of ndarray
+        Per pair, its blockers (polygon indices, increasing).
+
+    Examples
+    --------
+    Two unit squares facing each other 1 apart, a plate between them and one beside:
+
+    >>> from exactff.area.row import AreaStats
+    >>> sq = lambda z, up: np.array([[0, 0, z], [1, 0, z], [1, 1, z], [0, 1, z]][::1 if up else -1],
+    ...                             float)
+    >>> polys = [sq(0, True), sq(1, False), sq(0.5, True) * [0.5, 0.5, 1] + [0.25, 0.25, 0],
+    ...          sq(0.5, True) + [3, 0, 0]]
+    >>> pad = padded_polygons(polys)
+    >>> (j, Pc, Qc), = [t for t in front_pairs(polys, 0, pad[3][0], pad) if t[0] == 1]
+    >>> row_blockers(pad, 0, np.array([j]), [(Pc, Qc)], pad[3][0], polys[0][0], 1e-12, AreaStats())
+    [array([2])]
+    """
+    V, lo_k, hi_k, N = padded
+    J = np.asarray(J, dtype=np.int64)
+    if len(J) == 0:
+        return []
+    VP, po = concatenated([Pc for Pc, _ in parts])
+    VQ, qo = concatenated([Qc for _, Qc in parts])
+    boxes = np.array([(Pc.min(axis=0), Pc.max(axis=0), Qc.min(axis=0), Qc.max(axis=0))
+                      for Pc, Qc in parts])
+    blockers, start, boxed, left = _compiled_row_blockers(
+        V, lo_k, hi_k, N, int(i), np.asarray(nP, dtype=float), np.asarray(p0, dtype=float), J,
+        boxes, VP, po, VQ, qo, float(near), tol.EPS, tol.AREA_HULL_MAX_POINTS)
+    st.shaft_culled_blockers += int(boxed.sum() - left.sum())
+    st.shaft_unoccluded_pairs += int(np.count_nonzero((boxed > 0) & (left == 0)))
+    return np.split(blockers, start[1:-1])
 
 
 class ConvexSolids(NamedTuple):

@@ -1,17 +1,19 @@
 """The edge-pair integral of the contour form of Eq. 1,
 ``J = int_0^1 int_0^1 ln |a + s e - b - t f| ds dt``, in closed form: for skew edges by
 dilogarithms, for parallel ones by elementary functions; in floats for many pairs at once
-with the magnitude of its terms (its rounding scale), and in mpmath for one pair.
+with the magnitude of its terms (its rounding scale), compiled
+(``exactff/_core/closed_form.cpp``, the GIL released), and in mpmath for one pair (the
+escalation, and the tests' oracle).
 """
 
 import mpmath as mp
 import numpy as np
-from scipy.special import spence, xlogy
 
 from .. import _tolerances as tol
-from ..geometry import cross
+from ._closed import edge_log_integrals as _compiled_edge_log_integrals
+from ._closed import row_pairs as _compiled_row_pairs
 
-__all__ = ["edge_log_integrals", "mp_edge_log_integral"]
+__all__ = ["edge_log_integrals", "edge_pair_sums", "mp_edge_log_integral"]
 
 # Skew (non-parallel) edges. With n = (e x f) / |e x f|, the difference of the two points
 # splits into a constant part d n across (d = (a - b) . n, the lines' distance) and the
@@ -44,142 +46,10 @@ __all__ = ["edge_log_integrals", "mp_edge_log_integral"]
 # w the offset of a from b along the direction.
 
 
-def _li2(x):
-    """The dilogarithm ``Li2(x)`` of complex ``x`` in the closed unit disk, by scipy's
-    ``spence`` (``Li2(x) = spence(1 - x)``), except within ``AREA_LI2_AXIS`` of the
-    real axis left of 1/2. There scipy's complex ``spence`` is wrong near
-    ``x = -(2 - sqrt 3)``: at ``x = -0.2679491924311228 - 8.4e-17 i`` it returned an
-    imaginary part of 0.028 for 7.5e-17. So the value there is the real ``spence`` plus
-    the first-order term ``i Im(x) Li2'(Re x)``, with ``Li2'(a) = -ln(1 - a) / a``. The
-    second-order term is below ``AREA_LI2_AXIS^2``.
-
-    Examples
-    --------
-    >>> z = np.array([-0.2679491924311228 - 8.41410012693027e-17j, 0.5 + 0.5j])
-    >>> np.round(_li2(z), 12).tolist()
-    [(-0.251862018609-0j), (0.45398526915+0.643767332889j)]
-    """
-    x = np.asarray(x, dtype=complex)
-    out = spence(1.0 - x)
-    a, b = x.real, x.imag
-    axis = (np.abs(b) <= tol.AREA_LI2_AXIS) & (a <= 0.5)
-    if np.any(axis):
-        aa, bb = a[axis], b[axis]
-        with np.errstate(divide="ignore", invalid="ignore"):
-            slope = np.where(aa != 0, -np.log1p(-aa) / np.where(aa != 0, aa, 1.0), 1.0)
-        out[axis] = spence(1.0 - aa) + 1j * bb * slope
-    return out
-
-
-def _skew_edge_integrals(a, e, b, f):
-    """J and the sum of its terms' magnitudes (its rounding scale) for skew edges.
-
-    Parameters
-    ----------
-    a, e, b, f : ndarray of shape (N, 3)
-        The edges ``a + s e`` and ``b + t f``, ``e x f`` nonzero.
-
-    Returns
-    -------
-    (ndarray of shape (N,), ndarray of shape (N,))
-    """
-    c = cross(e, f)
-    cn = np.sqrt(np.einsum("ij,ij->i", c, c))
-    n = c / cn[:, None]
-    w = a - b
-    d = np.einsum("ij,ij->i", w, n)
-    wp = w - d[:, None] * n                         # the parallelogram's corner, in plane
-    d2 = d * d
-    V = (wp, wp + e, wp + e - f, wp - f)
-    S, M = np.zeros(len(a)), np.zeros(len(a))
-    with np.errstate(divide="ignore", invalid="ignore"):
-        for k in range(4):
-            A, D = V[k], V[(k + 1) % 4] - V[k]
-            L = np.sqrt(np.einsum("ij,ij->i", D, D))
-            u = D / L[:, None]
-            tA = np.einsum("ij,ij->i", A, u)
-            tB = tA + L
-            hs = np.einsum("ij,ij->i", cross(A, u), n)     # signed: the triangle's side
-            absA = np.sqrt(np.einsum("ij,ij->i", A, A))
-            # a triangle thinner than AREA_CLOSED_THIN of its size is of no area (its
-            # terms, below that share of the magnitudes counted, would only underflow)
-            h = np.where(np.abs(hs) > tol.AREA_CLOSED_THIN * (absA + L), np.abs(hs), 0.0)
-            m2 = h * h + d2
-            m = np.sqrt(m2)
-            mh = m + h
-            q = np.where(mh > 0, np.abs(d) / np.where(mh > 0, mh, 1.0), 0.0)   # sqrt(rho)
-            lq = np.where(q > 0, np.log(np.where(q > 0, q, 1.0)), 0.0)
-            # h and t carry the rounding of the corner A (of its size, not of h's): the
-            # elementary part's magnitude is taken with h + |A| + L for h
-            H = h + absA + L
-            tri, mag = -h * L, H * L
-            for t, sgn in ((tB, 1.0), (tA, -1.0)):
-                # Phi(t): the elementary part
-                # (a logarithm's rounding is absolute: t ln(...) is off by |t| ulps)
-                lg = np.log(np.where(t * t + m2 > 0, t * t + m2, 1.0))
-                p1, p2 = t * lg, 2.0 * m * np.arctan2(t, m)
-                tri = tri + sgn * h * (p1 - 2.0 * t + p2)
-                mag = mag + H * (np.abs(t) * (np.abs(lg) + 4.0) + np.abs(p2) + 2.0 * m)
-                # K(phi): the dilogarithms, e^{2 i phi} = ((h^2 - t^2) + 2 i h t) / (h^2 + t^2),
-                # with h and t scaled by the larger (h^2 + t^2 in [1, 2]: never under- or
-                # overflows); only where h > 0 (where h = 0 the triangle is dropped below)
-                live = h > 0
-                sc = np.maximum(h, np.abs(t))
-                sc = np.where(sc > 0, sc, 1.0)
-                hn, tn = h / sc, t / sc
-                z = ((hn * hn - tn * tn) + 2j * hn * tn) / (hn * hn + tn * tn)
-                phi = np.arctan2(t, h)
-                k1 = -2.0 * phi * lq
-                k2 = -_li2(-(q * q) * z).imag                   # -Im Li2(-rho e^{2 i phi})
-                k3 = _li2(-z).imag                              # Im Li2(-e^{2 i phi})
-                kk = np.where(live, k1 + k2 + k3, 0.0)
-                tri = tri + sgn * d2 * kk
-                # the dilogarithms' rounding: of their values, and of their arguments
-                # times the derivative, ln |1 - w| / |w|, near w = 1 logarithmic
-                # (|1 + z| = 0: the logarithm of the smallest normal number)
-                dl = (np.abs(np.log(np.maximum(np.abs(1.0 + (q * q) * z), tol.DOUBLE_TINY)))
-                      + np.abs(np.log(np.maximum(np.abs(1.0 + z), tol.DOUBLE_TINY))))
-                km = 2.0 * np.abs(phi) * (np.abs(lq) + 2.0) + np.abs(k2) + np.abs(k3) + dl + 4.0
-                mag = mag + d2 * np.where(live, km, 0.0)
-            # an edge through the origin (h = 0) bounds a triangle of no area
-            tri = np.where(h > 0, tri, 0.0)
-            S += np.sign(hs) * tri
-            M += mag
-    # the parallelogram w + s e - t f is traversed clockwise about n
-    return -0.25 * S / cn, 0.25 * M / cn
-
-
-def _parallel_edge_integrals(a, e, b, f):
-    """J and the sum of its terms' magnitudes for parallel edges (``e x f = 0``).
-
-    Parameters and returns as :func:`_skew_edge_integrals`.
-    """
-    X = np.sqrt(np.einsum("ij,ij->i", e, e))
-    u = e / X[:, None]
-    Y = np.einsum("ij,ij->i", f, u)                 # sigma |f|
-    w = a - b
-    z0 = np.einsum("ij,ij->i", w, u)
-    perp = w - z0[:, None] * u
-    delta = np.sqrt(np.einsum("ij,ij->i", perp, perp))
-    dd = delta * delta
-    J, M = np.zeros(len(a)), np.zeros(len(a))
-    with np.errstate(divide="ignore", invalid="ignore"):
-        for z, sgn in ((z0 + X, 1.0), (z0, -1.0), (z0 + X - Y, -1.0), (z0 - Y, 1.0)):
-            zz = z * z
-            g1 = 0.25 * xlogy(zz - dd, zz + dd)
-            g3 = np.where(delta > 0, delta * z * np.arctan2(z, delta), 0.0)
-            J += sgn * (g1 - 0.75 * zz + g3)
-            # a logarithm's rounding is absolute: (z^2 - delta^2) ln(...) is off by
-            # |z^2 - delta^2| ulps
-            lg = np.log(np.where(zz + dd > 0, zz + dd, 1.0))
-            M += 0.25 * np.abs(zz - dd) * (np.abs(lg) + 4.0) + zz + np.abs(g3) + dd
-    XY = np.abs(X * Y)
-    return J / (X * Y), M / XY
-
-
 def edge_log_integrals(a, e, b, f):
     """``J = int_0^1 int_0^1 ln |a + s e - b - t f| ds dt`` for many edge pairs at once, in
-    closed form (see the notes above), and the sum of its terms' magnitudes.
+    closed form (see the notes above; compiled, ``exactff/_core/closed_form.cpp``, with
+    the dilogarithm of ``dilog.h``), and the sum of its terms' magnitudes.
 
     Parameters
     ----------
@@ -191,16 +61,61 @@ def edge_log_integrals(a, e, b, f):
     (ndarray of shape (N,), ndarray of shape (N,))
         J, and the magnitudes whose rounding bounds its error (the caller's
         ``AREA_CLOSED_ULPS`` units of EPS of them; at least ``|J|``).
+
+    Examples
+    --------
+    Two unit edges along x and y whose midpoints are 1 apart in z (the double integral
+    by mpmath.quad: 0.07507018996444746):
+
+    >>> x, y = np.array([[1.0, 0, 0]]), np.array([[0, 1.0, 0]])
+    >>> J, M = edge_log_integrals(-0.5 * x, x, [[0, -0.5, 1.0]], y)
+    >>> round(float(J[0]), 14), bool(abs(J[0] - 0.07507018996444746) <= 4 * 2**-53 * M[0])
+    (0.07507018996445, True)
     """
-    c = cross(e, f)
-    par = np.einsum("ij,ij->i", c, c) == 0     # (a cross product below 1e-154 is 0)
-    J, M = np.empty(len(a)), np.empty(len(a))
-    if np.any(par):
-        J[par], M[par] = _parallel_edge_integrals(a[par], e[par], b[par], f[par])
-    if not np.all(par):
-        s = ~par
-        J[s], M[s] = _skew_edge_integrals(a[s], e[s], b[s], f[s])
-    return J, np.maximum(M, np.abs(J))
+    a, e, b, f = (np.ascontiguousarray(x, dtype=float).reshape(-1, 3) for x in (a, e, b, f))
+    return _compiled_edge_log_integrals(a, e, b, f, tol.AREA_CLOSED_THIN, tol.DOUBLE_TINY)
+
+
+def edge_pair_sums(VP, po, VQ, qo, inv, scale):
+    """A row's pairs summed in closed form, ``A_P F = (1 / 2 pi) sum (e . f) J`` over every
+    edge pair, and each sum's rounding (``AREA_CLOSED_ULPS`` units of EPS of its terms'
+    magnitudes), in one compiled call with the GIL released
+    (``exactff/_core/closed_form.cpp``; :func:`edge_log_integrals` per edge pair).
+
+    Parameters
+    ----------
+    VP, VQ : ndarray of shape (N, 3) and (N', 3)
+        The pairs' emitter parts and receiver parts, concatenated rings.
+    po, qo : ndarray of shape (m + 1,)
+        Their offsets: pair p is ``VP[po[p]:po[p + 1]]`` and ``VQ[qo[p]:qo[p + 1]]``.
+    inv : ndarray of shape (m,)
+        Each pair's scale 1 / L (a power of 2): the edges are taken times it.
+    scale : ndarray of shape (m,)
+        Each pair's divisor, ``2 pi A_P / L^2``.
+
+    Returns
+    -------
+    tuple
+        ``(values, estimates)`` of shape (m,), and per edge pair kept (``e . f`` not 0,
+        P's edges outer, Q's inner): ``owner`` (its pair), ``ip`` and ``iq`` (its edges'
+        first vertices, rows of VP and VQ), ``ef`` (the scaled ``e . f``), ``J`` and ``c``
+        (its rounding, ``AREA_CLOSED_ULPS EPS |e . f| M / scale``).
+
+    Examples
+    --------
+    Unit squares facing each other 1 apart (Howell's C-11: 0.19982489570):
+
+    >>> P = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], float)
+    >>> Q = P[::-1] + [0, 0, 1]
+    >>> out = edge_pair_sums(P, [0, 4], Q, [0, 4], [1.0], [2 * np.pi])
+    >>> round(float(out[0][0]), 11), len(out[2])
+    (0.1998248957, 8)
+    """
+    as_float = lambda x: np.ascontiguousarray(x, dtype=float)      # noqa: E731
+    as_int = lambda x: np.ascontiguousarray(x, dtype=np.int64)      # noqa: E731
+    return _compiled_row_pairs(as_float(VP), as_int(po), as_float(VQ), as_int(qo), as_float(inv),
+                             as_float(scale), tol.AREA_CLOSED_THIN, tol.DOUBLE_TINY,
+                             tol.AREA_CLOSED_ULPS, tol.EPS)
 
 
 def mp_edge_log_integral(a, e, b, f):

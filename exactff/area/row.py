@@ -20,8 +20,8 @@ from ..prepared import prepared
 from ..visibility import is_convex_enclosure
 from .adaptive import occluded_pair
 from .closed_form import ClosedFormCounts, unoccluded_pairs
-from .culling import (closed_solids, convex_solids, front_pairs, hull_blockers,
-                      padded_polygons, shaft, tie_covers, uncovered)
+from .culling import (closed_solids, convex_solids, front_pairs, padded_polygons,
+                      row_blockers, tie_covers, uncovered)
 
 __all__ = ["AreaStats", "area_row"]
 
@@ -138,8 +138,8 @@ def area_row(scene, i, atol, *, rtol=None, shortcuts=True, stats=None):
 
     The pairs of the row are decided together: the receivers in front of P (and P in
     front of them, :func:`~exactff.area.culling.front_pairs`), then each pair's blockers
-    by shaft culling (:func:`~exactff.area.culling.shaft`, all pairs and polygons at
-    once) and the hull test on what survives (:func:`~exactff.area.culling.hull_blockers`);
+    by shaft culling and the hull test on what survives, all pairs and polygons in one
+    compiled call (:func:`~exactff.area.culling.row_blockers`);
     occluded pairs are integrated one by one (:func:`~exactff.area.adaptive.occluded_pair`),
     after their unoccluded values are taken together, and the unoccluded pairs together
     at the end.
@@ -184,7 +184,6 @@ def area_row(scene, i, atol, *, rtol=None, shortcuts=True, stats=None):
     st = AreaStats()
     polys = [np.asarray(p, dtype=float) for p in scene.polygons]
     padded = padded_polygons(polys)
-    V = padded[0]
     P = polys[i]
     scale = float(np.ptp(scene.vertices, axis=0).max()) or 1.0
     near = tol.AREA_HULL_RTOL * scale
@@ -235,20 +234,16 @@ def area_row(scene, i, atol, *, rtol=None, shortcuts=True, stats=None):
                                                 atol_all, rtol)
         return result()
     if shortcuts:
-        J = owner[[j for j, _, _ in pairs]]
-        boxes = np.array([(Pc.min(axis=0), Pc.max(axis=0), Qc.min(axis=0), Qc.max(axis=0))
-                          for _, Pc, Qc in pairs])
-        # the pairs in batches: each batch tests its pairs against every polygon
-        per = max(1, tol.AREA_SHAFT_ENTRIES_PER_CALL // len(polys))
-        cands = [c for s in range(0, len(J), per)
-                 for c in shaft(padded, i, J[s:s + per], boxes[s:s + per], nP, P[0], near, st)]
-    if shortcuts:
+        # every pair's blockers: shaft culling, then the hull test (compiled, the GIL
+        # released)
+        blockers = row_blockers(padded, i, owner[[j for j, _, _ in pairs]],
+                                [(Pc, Qc) for _, Pc, Qc in pairs], nP, P[0], near, st)
         solids = prepared(scene).get("area_convex_solids", convex_solids)
     unoccluded = []               # (j, Pc, Qc): computed together at the end
     occluded = []                 # ((j, Pc, Qc), blockers, solid, inner): one by one
     for a, (j, Pc, Qc) in enumerate(pairs):
         if shortcuts:
-            B = hull_blockers(V, cands[a], Pc, Qc, near)
+            B = blockers[a].tolist()
             st.hull_culled_blockers += len(polys) - 2 - len(B)
         else:
             B = [k for k in range(len(polys)) if k not in (i, owner[j])]
@@ -292,7 +287,11 @@ def area_row(scene, i, atol, *, rtol=None, shortcuts=True, stats=None):
                                               (float(w), float(we)),
                                               shortcuts, st, rtol, solid, inner)
         st.point_values += points
-        fx[j] = nonnegative(fx[j], ex[j])
+    if occluded:
+        # the occluded values clamped at 0 within their estimates, together
+        done = np.zeros(len(fx), dtype=bool)
+        done[[j for (j, _, _), _, _, _ in occluded]] = True
+        fx[:] = nonnegative(fx, ex, unchecked=~done, item="receiver")
     if unoccluded:
         js, fx[js], ex[js] = _unoccluded_values(receivers, i, unoccluded, shortcuts, st,
                                                 atol_all, rtol)
