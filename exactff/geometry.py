@@ -312,7 +312,10 @@ def hull_blockers(V, cand, Pc, Qc, near, flat=()):
     A polygon on or outside one face of the hull hides nothing of positive measure
     between the two sets (the lines of sight from Pc to Qc lie in the hull); the test
     takes each candidate's vertices against each face, as they are (no hull of the
-    polygon), so it keeps every polygon the hull's faces do not separate.
+    polygon), so it keeps every polygon the hull's faces do not separate. The hull is
+    qhull's. Area rows take the same test compiled
+    (:func:`exactff.area.culling.row_blockers`), with this as its reference; the point
+    engine's shafts take it as it is (:mod:`exactff.visibility.compiled`).
 
     Parameters
     ----------
