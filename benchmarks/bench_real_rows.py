@@ -2,7 +2,7 @@
 bounded, at hemicube speed.
 
 Usage: python benchmarks/bench_real_rows.py [FILE ...] [--rows 8] [--engines]
-       [--extra FILE:ROW ...]
+       [--extra FILE:ROW ...] [--uniform K]
 
 Files: by default the real files beside the clone (``../shared/scenes/real``: the three
 IFC building models and the others), each loaded with ``degenerate="drop"`` (and
@@ -32,6 +32,13 @@ in one run:
   worst gap ``|Fc - Fp| / (Ec + Ep)`` (values where the two bounds do not cover the gap
   are counted: the rational reference, ``tests/exact_visibility.py``, decides those in
   the tests).
+
+``--uniform K`` instead draws ``K`` rows per file uniformly over all its polygons
+(``default_rng(1)``; small polygons included, whose centroids lie close to many split
+lines) and prints, per file: the rows whose default call raised, split by cause (the
+BSP's rounded crossings, or the bound of the pieces), the rows with values settled on
+their shafts (``stats["shaft_polygons"]``), the largest crossings' part of a bound, and
+the median and slowest row.
 """
 
 import argparse
@@ -129,18 +136,61 @@ def measure(path, rows, engines):
     return len(scene), out
 
 
+def uniform(path, k):
+    """``k`` uniformly drawn default rows of one file: raised (by cause), settled on
+    shafts, the largest crossings' part, the times."""
+    scene = load(path)
+    rows = np.random.default_rng(1).choice(len(scene), min(k, len(scene)), replace=False)
+    exact = ef.Exact()
+    c, n = scene.centroids, scene.normals
+    exact.point_form_factors(scene, c[rows[0]], n[rows[0]])       # the set-up, untimed
+    out = {"crossing": 0, "bound": 0, "shaft": 0, "worst": 0.0, "times": [], "notes": []}
+    for r in rows.tolist():
+        st = {}
+        t = time.perf_counter()
+        try:
+            exact.point_form_factors(scene, c[r], n[r], stats=st)
+        except NumericalError as e:
+            out["crossing" if "rounded crossings" in str(e) else "bound"] += 1
+            out["notes"].append(f"row {r} raised: {str(e)[:150]}")
+        out["times"].append(time.perf_counter() - t)
+        out["shaft"] += bool(st.get("shaft_polygons"))
+        out["worst"] = max(out["worst"], st.get("max_crossing_bound", 0.0))
+    return len(scene), len(rows), out
+
+
+def main_uniform(files, k):
+    print(f"exactff {ef.__version__}; {k} rows per file drawn uniformly (default_rng(1))")
+    print("| file | polygons | rows | raised: crossings | raised: bound | rows settled on "
+          "shafts | largest crossings' part | median row (s) | slowest row (s) |")
+    print("|---" * 9 + "|")
+    notes = []
+    for path in files:
+        size, rows, o = uniform(path, k)
+        print(f"| {os.path.basename(path)} | {size:,} | {rows} | {o['crossing']} | "
+              f"{o['bound']} | {o['shaft']} | {o['worst']:.3g} | "
+              f"{np.median(o['times']):.3f} | {max(o['times']):.2f} |", flush=True)
+        notes += [f"{os.path.basename(path)}: {t}" for t in o["notes"]]
+    for t in notes:
+        print("-", t)
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("files", nargs="*", help="scene files (default: the real files beside the clone)")
     ap.add_argument("--rows", type=int, default=8, help="seeded rows per file")
     ap.add_argument("--engines", action="store_true",
                     help="also compare with the Python engine (slow)")
+    ap.add_argument("--uniform", type=int, default=0, metavar="K",
+                    help="instead, K rows per file drawn uniformly: which raise, and why")
     args = ap.parse_args()
     files = args.files or [os.path.join(REAL, f) for f in DEFAULT_FILES
                            if os.path.exists(os.path.join(REAL, f))]
     if not files:
         sys.exit(f"no scene files given and none found in {REAL}")
     print(machine())
+    if args.uniform:
+        return main_uniform(files, args.uniform)
     print(f"exactff {ef.__version__}; rows per file: {args.rows} seeded + the README's flush rows")
     head = ("| file | polygons | rows | raised | python rows | values | bounds over 1e-12 (share met) "
             "| worst bound / max(F, floor) | exact / hemicube-256, median (max) [numpy] | < 50 seen "

@@ -586,8 +586,9 @@ OCCLUDED_ATOL = 1e-11
 #: are kept; ``stats["python_polygons"]``). Its rows cost 5 to 20 times the compiled
 #: core's and grow with the scene, so on a larger scene each such value is recomputed
 #: by the Python engine on its shaft instead (the polygons that may hide part of it,
-#: ``stats["shaft_polygons"]``), where the shaft holds at most this many polygons; a
-#: value still unsettled raises at once (or is returned with its bound, ``error=True``).
+#: ``stats["shaft_polygons"]``), where the row's shafts hold at most this many polygons
+#: in all (about 30 s); a value still unsettled raises at once (or is returned with its
+#: bound, ``error=True``).
 COMPILED_FALLBACK_MAX_POLYGONS = 5_000
 #: Compiled core, a value settled on its shaft: polygons within this much (relative to
 #: the scene's largest coordinate, plus 1) of the convex hull of the point and the

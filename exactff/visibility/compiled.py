@@ -189,19 +189,13 @@ def _build_core(scene):
     return tree, core
 
 
-def _settle_in_shaft(scene, p, normal, j, *, two_sided, shortcuts, tolerance, integrator,
-                     stats):
-    """Polygon ``j``'s value and bound from ``p`` by the Python engine, on the polygons
-    that may hide part of it: those reaching into the convex hull of ``p`` and ``j``
-    (the lines of sight from p to j; :func:`exactff.geometry.hull_blockers`, keeping
-    every polygon within ``SHAFT_MARGIN`` of the scene's size of it), with ``j``, in the
-    scene's order (the tie rule of coplanar faces follows it). The engine's BSP of that
-    sub-scene splits along other lines than the scene's, and only where those polygons
-    meet. Returns ``(F, E)`` where they meet the tolerance (E within it, the rounded
-    crossings' part within the accuracy target of occluded values), else None: no
-    hull (p within rounding of j's plane), more than ``COMPILED_FALLBACK_MAX_POLYGONS``
-    polygons in the shaft, or a value the engine does not settle either.
-    ``stats["shaft_sizes"]`` collects the sub-scenes' sizes."""
+def _shaft(scene, p, j):
+    """The polygons that may hide part of polygon ``j`` from ``p``, with ``j``, as sorted
+    indices (the scene's order, which the tie rule of coplanar faces follows): those
+    reaching into the convex hull of ``p`` and ``j``, the lines of sight from p to j
+    (:func:`exactff.geometry.hull_blockers`, keeping every polygon within
+    ``SHAFT_MARGIN`` of the scene's size of it); None where p and j span no solid hull
+    (p within rounding of j's plane)."""
     V, counts = prepared(scene).get("padded", lambda s: padded(s.polygons))
     Q = V[j, :counts[j]]
     ends = np.vstack([p[None], Q])
@@ -210,20 +204,36 @@ def _settle_in_shaft(scene, p, normal, j, *, two_sided, shortcuts, tolerance, in
     box = np.all((V.max(axis=1) >= lo) & (V.min(axis=1) <= hi), axis=1)
     box[j] = False
     blockers = hull_blockers(V, np.flatnonzero(box), p[None], Q, -margin, flat=None)
-    if blockers is None or len(blockers) + 1 > tol.COMPILED_FALLBACK_MAX_POLYGONS:
-        return None
-    keep = np.sort(np.array(blockers + [j], dtype=np.int64))
-    stats.setdefault("shaft_sizes", []).append(len(keep))
-    sub = type(scene).from_polygons([scene.polygons[k] for k in keep.tolist()])
-    at = int(np.searchsorted(keep, j))
-    sub_st = {"polygon_crossing": None}      # (asks the engine for each polygon's part)
-    G, H = visible_form_factors(sub, p, normal, two_sided=two_sided, stats=sub_st,
-                                shortcuts=shortcuts, tolerance=tolerance, error=True,
-                                integrator=integrator)
-    moved = 0.0 if sub_st["polygon_crossing"] is None else sub_st["polygon_crossing"][at]
-    if misses_tolerance(G[at], H[at] - moved, tolerance) or moved > tol.OCCLUDED_ATOL:
-        return None
-    return float(G[at]), float(H[at])
+    return None if blockers is None else np.sort(np.array(blockers + [j], dtype=np.int64))
+
+
+def _settle_in_shafts(scene, p, normal, missed, *, two_sided, shortcuts, tolerance,
+                      integrator, stats):
+    """The values of polygons ``missed`` from ``p`` by the Python engine, each on its
+    shaft (:func:`_shaft`): the sub-scene's BSP splits along other lines than the
+    scene's, and only where its polygons meet. Only where every missed value has a
+    shaft and their sizes add up to at most ``COMPILED_FALLBACK_MAX_POLYGONS`` (about
+    one whole Python row of a scene that size; else none is tried: the row raises at
+    once). Returns ``{j: (F, E)}`` for the values settled: E within the tolerance, its
+    rounded crossings' part within the accuracy target of occluded values.
+    ``stats["shaft_sizes"]`` collects the sizes."""
+    shafts = {j: _shaft(scene, p, j) for j in missed}
+    if any(k is None for k in shafts.values()) or (
+            sum(len(k) for k in shafts.values()) > tol.COMPILED_FALLBACK_MAX_POLYGONS):
+        return {}
+    settled = {}
+    for j, keep in shafts.items():
+        stats.setdefault("shaft_sizes", []).append(len(keep))
+        sub = type(scene).from_polygons([scene.polygons[k] for k in keep.tolist()])
+        at = int(np.searchsorted(keep, j))
+        sub_st = {"polygon_crossing": None}      # (asks the engine for each polygon's part)
+        G, H = visible_form_factors(sub, p, normal, two_sided=two_sided, stats=sub_st,
+                                    shortcuts=shortcuts, tolerance=tolerance, error=True,
+                                    integrator=integrator)
+        moved = 0.0 if sub_st["polygon_crossing"] is None else sub_st["polygon_crossing"][at]
+        if not (misses_tolerance(G[at], H[at] - moved, tolerance) or moved > tol.OCCLUDED_ATOL):
+            settled[j] = float(G[at]), float(H[at])
+    return settled
 
 
 def _missed_message(j, F, E, crossing, tolerance, count, python=False):
@@ -417,20 +427,18 @@ def compiled_form_factors(scene, point, normal, *, two_sided=False, stats=None,
             if len(scene) > tol.COMPILED_FALLBACK_MAX_POLYGONS:
                 # the Python engine, polygon by polygon, on the polygons that may hide
                 # part of it (its shaft): the values it settles replace the core's
-                settled = []
+                settled = _settle_in_shafts(scene, p, normal, missed.tolist(),
+                                            two_sided=two_sided, shortcuts=shortcuts,
+                                            tolerance=tolerance, integrator=integrator,
+                                            stats=st)
                 F, E, band, crossing = F.copy(), E.copy(), band.copy(), crossing.copy()
-                for j in missed.tolist():
-                    got = _settle_in_shaft(scene, p, normal, j, two_sided=two_sided,
-                                           shortcuts=shortcuts, tolerance=tolerance,
-                                           integrator=integrator, stats=st)
-                    if got is not None:
-                        # its bound is the Python engine's whole bound (its own band and
-                        # crossings included)
-                        F[j], E[j], band[j], crossing[j] = got[0], got[1], 0.0, 0.0
-                        settled.append(j)
+                for j, (value, bound) in settled.items():
+                    # its bound is the Python engine's whole bound (its own band and
+                    # crossings included)
+                    F[j], E[j], band[j], crossing[j] = value, bound, 0.0, 0.0
                 st["shaft_polygons"] = len(settled)
                 st["max_crossing_bound"] = float(crossing.max(initial=0.0))
-                missed = np.setdiff1d(missed, settled)
+                missed = np.setdiff1d(missed, list(settled))
                 if len(settled):
                     path = "compiled, shaft for some polygons"
                 if len(missed) and not error:
