@@ -15,6 +15,7 @@ from ..errors import nonnegative
 from ..geometry import plane_frame, receiver_frame, unit_normal
 from ..halfspace import NORMAL_FLOOR, clip_front
 from ..methods import Exact
+from ..predicates import coplanar_band_sides
 from ..rings import padded
 from ..scene import Scene
 from ..visibility import convex_pieces, convex_rings
@@ -75,7 +76,24 @@ def hidden_setup(Qc, blockers, solid=None, inner=None, compiled=True):
     ``compiled`` (default): built by :mod:`exactff.area._pair` (``_core/hidden_setup.cpp``)
     where Qc is strictly convex and every blocker's part in front is convex (one piece
     each); else, and without ``compiled``, here, the reference it is tested against
-    (``tests/test_area_pair_compiled.py``)."""
+    (``tests/test_area_pair_compiled.py``).
+
+    A blocker in Qc's plane (every vertex within the near-coplanar band of it,
+    :func:`exactff.predicates.coplanar_band_sides`: coplanar by the conventions' rule)
+    hides nothing here, whichever way it faces: an overlap of coplanar faces is the
+    tie rule's, which the row applies (:func:`~exactff.area.culling.tie_covers`), as
+    the point engine does. Its part "in front" would be its rounding's."""
+    nQ0, q00 = plane_frame(Qc)[:2]
+    off = np.array([[float(nQ0 @ q00)]])
+    flat = [k for k, K in enumerate(blockers)
+            if np.all(coplanar_band_sides(np.asarray(K, dtype=float), nQ0[None], off[0])[0] == 0)]
+    if flat:
+        keep = [k for k in range(len(blockers)) if k not in set(flat)]
+        if not keep:
+            return None
+        blockers = [blockers[k] for k in keep]
+        if solid is not None:
+            solid = np.asarray(solid)[keep]    # (inner is per solid, not per blocker)
     if compiled:
         W = np.concatenate([np.asarray(K, dtype=float) for K in blockers])
         start = np.concatenate([[0], np.cumsum([len(K) for K in blockers])])
