@@ -196,15 +196,24 @@ def _shaft(scene, p, j):
     (:func:`exactff.geometry.hull_blockers`, keeping every polygon within
     ``SHAFT_MARGIN`` of the scene's size of it); None where p and j span no solid hull
     (p within rounding of j's plane)."""
-    V, counts = prepared(scene).get("padded", lambda s: padded(s.polygons))
-    Q = V[j, :counts[j]]
+    flat = flat_polygons(scene)
+    # the polygons' boxes (once per scene; the scene is not padded as a whole: one long
+    # polygon would pad every other to its length)
+    lo_k, hi_k = prepared(scene).get("boxes", lambda s: (
+        np.minimum.reduceat(flat.V, flat.offsets[:-1]),
+        np.maximum.reduceat(flat.V, flat.offsets[:-1])))
+    Q = flat.V[flat.offsets[j]:flat.offsets[j + 1]]
     ends = np.vstack([p[None], Q])
-    margin = tol.SHAFT_MARGIN * (1.0 + np.abs(V).max())
+    margin = tol.SHAFT_MARGIN * (1.0 + float(flat.vmax.max()))
     lo, hi = ends.min(axis=0) - margin, ends.max(axis=0) + margin
-    box = np.all((V.max(axis=1) >= lo) & (V.min(axis=1) <= hi), axis=1)
+    box = np.all((hi_k >= lo) & (lo_k <= hi), axis=1)
     box[j] = False
-    blockers = hull_blockers(V, np.flatnonzero(box), p[None], Q, -margin, flat=None)
-    return None if blockers is None else np.sort(np.array(blockers + [j], dtype=np.int64))
+    cand = np.flatnonzero(box)
+    if len(cand) == 0:
+        return np.array([j], dtype=np.int64)
+    V, _ = padded([flat.V[flat.offsets[k]:flat.offsets[k + 1]] for k in cand.tolist()])
+    kept = hull_blockers(V, np.arange(len(cand)), p[None], Q, -margin, flat=None)
+    return None if kept is None else np.sort(np.append(cand[kept], j).astype(np.int64))
 
 
 def _settle_in_shafts(scene, p, normal, missed, *, two_sided, shortcuts, tolerance,
