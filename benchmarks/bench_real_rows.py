@@ -161,7 +161,7 @@ def uniform(path, k):
 
 def main_uniform(files, k):
     print(f"exactff {ef.__version__}; {k} rows per file drawn uniformly (default_rng(1))")
-    print("| file | polygons | rows | raised: crossings | raised: bound | rows settled on "
+    print("| file | polygons | rows | raised: crossings | raised: bound | rows with values settled on "
           "shafts | largest crossings' part | median row (s) | slowest row (s) |")
     print("|---" * 9 + "|")
     notes = []
