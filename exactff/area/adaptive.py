@@ -17,10 +17,12 @@ from ..geometry import area_vector, cross, receiver_frame
 from ._pair import adaptive_levels as _compiled_adaptive_levels
 from ._pair import corner_first as _compiled_corner_first
 from .closed_form import unoccluded_pairs
-from .events import cut_cells, event_lines
+from .events import cut_cells, distinct_lines, event_lines
 from .hidden import hidden_setup, hidden_values
 from .points import point_values
-from .rules import (RULE_PAIRS, CORNER_MIDDLE_RULE, SYMMETRIC_RULES, quarter, rule_pair,
+from .umbra import in_umbra, outside_umbras, umbras
+from .rules import (GAUSS_LOW_RULE, GAUSS_RULE, RULE_PAIRS, CORNER_MIDDLE_RULE, SYMMETRIC_RULES,
+                    quarter, rule_pair,
                     triangle_areas, triangle_rule)
 
 __all__ = ["COMPILED_LEVELS", "occluded_pair"]
@@ -41,6 +43,30 @@ def _triangle_unoccluded(T, nP, Qc):
                             parts=[(Qc, t) for t in T])
     area_Q = float(np.linalg.norm(area_vector(Qc)))
     return area_Q * f, area_Q * e
+
+
+def _umbra_unoccluded(T, nP, Qc, share):
+    """``int_T F(x -> Qc) dA_x`` for triangles T (t, 3, 3) of an umbra (where the hidden
+    part is the unoccluded value) and its estimate: the closed form
+    (:func:`_triangle_unoccluded`), and where its estimate misses ``share`` (t,) (its
+    terms cancel: a triangle with an edge of rounding's length) the 12- and 8-point
+    collapsed Gauss rules of the far-field rule on the point values, their difference
+    and the nodes' estimates the estimate. Returns the values, the estimates, and per
+    triangle whether it is within its share."""
+    U, E = _triangle_unoccluded(T, nP, Qc)
+    miss = np.flatnonzero(~(E <= share))
+    if len(miss):
+        (Xh, Wh), (Xl, Wl) = (triangle_rule(T[miss], r) for r in (GAUSS_RULE, GAUSS_LOW_RULE))
+        V, EV = (v[0] for v in point_values(np.concatenate([Xh.reshape(-1, 3),
+                                                             Xl.reshape(-1, 3)]), nP, [Qc]))
+        n = Xh.shape[0] * Xh.shape[1]
+        hi = (Wh * V[:n].reshape(Wh.shape)).sum(axis=1)
+        lo = (Wl * V[n:].reshape(Wl.shape)).sum(axis=1)
+        err = (np.abs(hi - lo) + (Wh * EV[:n].reshape(Wh.shape)).sum(axis=1)
+               + (Wl * EV[n:].reshape(Wl.shape)).sum(axis=1))
+        better = err < E[miss]
+        U[miss[better]], E[miss[better]] = hi[better], err[better]
+    return U, E, E <= share
 
 
 def _corner_first(T, blockers, nP, dP, reach=0.0, compiled=True):
@@ -142,6 +168,25 @@ def _hidden_integral(S, Pc, Qc, nP, atol, area_P, whole, shortcuts, st, solid=No
     dP = float(nP @ Pc[0])
     radius = (1.0 + tol.AREA_HIDDEN_PAD) * float(np.linalg.norm(Pc - c, axis=1).max())
     lines = event_lines(S, nP, dP, R, c, radius, Qc, shortcuts, st, solid)
+    # the umbras: regions from every point of which one blocker hides all of Qc (the
+    # hidden part there is the unoccluded point value: no event inside changes it), the
+    # event lines cut away from them and their edges cut along instead
+    regions = []
+    if shortcuts and len(lines) > tol.AREA_UMBRA_MIN_LINES:
+        regions = umbras(Pc, Qc, S[1:], R, c)
+        if regions:
+            lines = np.concatenate([outside_umbras(lines, regions)] + [
+                np.stack([r, np.roll(r, -1, axis=0)], axis=1) for r, _ in regions])
+    # the arrangement's cost and cells grow with the square of its distinct lines: too
+    # many raise (the row names the pair)
+    many = distinct_lines(lines, 2.0 * radius, (Pc - c) @ R[:2].T)
+    if many > tol.AREA_MAX_EVENT_LINES:
+        raise NumericalError(
+            f"its visibility events lie on {many} distinct lines, more than "
+            f"AREA_MAX_EVENT_LINES = {tol.AREA_MAX_EVENT_LINES} (the emitter would be cut "
+            f"into up to {many * many // 2:,} cells): split the emitter or the blockers "
+            f"into smaller polygons, use the point engine (form_factor_matrix), or raise "
+            f"exactff._tolerances.AREA_MAX_EVENT_LINES where memory allows")
     # the emitter cut along the events: in floating point with the lines lengthened
     # across its boundary, else as cut, else noded on a grid of AREA_HULL_RTOL of P's
     # size (the cuts move by that much), each way with and without lengthening; the
@@ -174,8 +219,48 @@ def _hidden_integral(S, Pc, Qc, nP, atol, area_P, whole, shortcuts, st, solid=No
     # still that point for the collapsed rule (else no vertex of the cell is, and the
     # rules' differences there shrink only as the triangles do: pinned in
     # tests/test_regressions.py)
+    # the cells in an umbra (every corner within AREA_UMBRA_SHRINK of P's size of one:
+    # proven there) take the unoccluded closed form for their hidden part, A_Q F(Q -> T)
+    # by reciprocity; the rest, and all of them where its estimate is more than a share
+    # of atol, go to the rules
+    umbra_U = umbra_E = umbra_area = strip_slivers = 0.0
+    if regions:
+        uv = (cells - c) @ R[:2].T
+        eps = tol.AREA_UMBRA_SHRINK * float(np.ptp(uv.reshape(-1, 2), axis=0).max())
+        inside = in_umbra(uv, regions, eps)[0].all(axis=1)
+        # (triangles of no area, of the ears' straight angles, stay with the rules as
+        # slivers: the closed form's estimate of one is its terms' rounding)
+        flat = triangle_areas(cells) <= tol.AREA_SLIVER_CELL * area_Pc
+        inside &= ~flat
+        cells_all = cells
+        if inside.any():
+            at = np.flatnonzero(inside)
+            # each triangle's estimate within its share (by area) of that of atol
+            exU, exE, ok = _umbra_unoccluded(
+                cells[at], nP, Qc,
+                tol.AREA_UMBRA_CLOSED_SHARE * atol * area_P / area_Pc * triangle_areas(cells[at]))
+            inside[at[~ok]] = False
+            umbra_U, umbra_E = float(exU[ok].sum()) / area_P, float(exE[ok].sum()) / area_P
+            umbra_area = float(triangle_areas(cells[inside]).sum())
+            cells = cells[~inside]
+            if st is not None and ok.any():
+                st.umbra_pairs += 1
+                st.umbra_cells += int(ok.sum())
+        # the strips between the umbras as proven and P's boundary or the regions as
+        # computed (AREA_UMBRA_SHRINK wide: where a blocker shares an edge with P, its
+        # nodes would lie at that edge, where the blocker is seen edge-on) are slivers:
+        # the hidden part between 0 and its bound, where that costs at most a share of atol
+        strip = ~inside & ~flat & in_umbra(uv, regions, 4.0 * eps)[0].all(axis=1)
+        strip_area = float(triangle_areas(cells_all[strip]).sum()) if strip.any() else 0.0
+        if strip.any() and (0.5 * _unoccluded_bound(Pc, Qc) * strip_area / area_P
+                            <= tol.AREA_UMBRA_CLOSED_SHARE * atol):
+            cells = cells_all[~inside & ~strip]
+            strip_slivers = strip_area
+    # the value is then the unoccluded one over the rest of P less the rest's hidden part
+    whole = (whole[0] - umbra_U, whole[1] + umbra_E)
     T, corner = _corner_first(cells, S[1:], nP, dP,
                               2.0 * tol.AREA_CUT_EXTEND_RTOL * np.sqrt(area_Pc))
+    area_Pc -= umbra_area + strip_slivers
     depth = np.zeros(len(T), dtype=int)
     # many cells (small ones) start with the low pair of rules, few with the high pair
     # (and so do the triangles they are cut into); at a coarse target, all start low
@@ -186,7 +271,7 @@ def _hidden_integral(S, Pc, Qc, nP, atol, area_P, whole, shortcuts, st, solid=No
     # what the bound 0 <= hidden <= unoccluded may cost the pair (hidden_values)
     bound_atol = [tol.AREA_IMAGE_BUDGET_SHARE * atol]
     total_area = float(triangle_areas(T).sum())
-    slivers = points = 0
+    slivers, points = strip_slivers, 0
     # the triangles accepted: vertices, level, rung; per unit area of P, the high rule's
     # integral of the hidden part H, the rules' difference on H, the point values'
     # estimates, and the same two rules' integrals of U (the unoccluded point values)
