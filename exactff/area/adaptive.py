@@ -13,60 +13,17 @@ import shapely
 
 from .. import _tolerances as tol
 from ..errors import NumericalError, misses_tolerance
-from ..geometry import area_vector, cross, receiver_frame
+from ..geometry import area_vector, cross, polygon_area, receiver_frame
 from ._pair import adaptive_levels as _compiled_adaptive_levels
 from ._pair import corner_first as _compiled_corner_first
-from .closed_form import unoccluded_pairs
 from .events import cut_cells, distinct_lines, event_lines
 from .hidden import hidden_setup, hidden_values
 from .points import point_values
-from .umbra import in_umbra, outside_umbras, umbras
-from .rules import (GAUSS_LOW_RULE, GAUSS_RULE, RULE_PAIRS, CORNER_MIDDLE_RULE, SYMMETRIC_RULES,
-                    quarter, rule_pair,
+from .umbra import outside_umbras, triangle_unoccluded, umbra_cells, umbra_edges, umbras
+from .rules import (RULE_PAIRS, CORNER_MIDDLE_RULE, SYMMETRIC_RULES, quarter, rule_pair,
                     triangle_areas, triangle_rule)
 
 __all__ = ["COMPILED_LEVELS", "occluded_pair"]
-
-
-def _triangle_unoccluded(T, nP, Qc):
-    """``int_T F(x -> Qc) dA_x`` for each triangle T (t, 3, 3) in the plane of normal nP,
-    unoccluded (Qc wholly in front of that plane, each T in front of Qc's), and its
-    rounding estimate: by reciprocity ``A_Qc F(Qc -> T)``, the closed form
-    (:func:`~exactff.area.closed_form.unoccluded_pairs`, no fallback: where its terms cancel
-    the estimate says so)."""
-    if not len(T):
-        return np.zeros(0), np.zeros(0)
-    # counter-clockwise seen from nP's side
-    flip = np.einsum("tx,x->t", cross(T[:, 1] - T[:, 0], T[:, 2] - T[:, 0]), nP) < 0
-    T = np.where(flip[:, None, None], T[:, ::-1], T)
-    f, e = unoccluded_pairs(Qc, list(T), shortcuts=False, atol=np.inf,
-                            parts=[(Qc, t) for t in T])
-    area_Q = float(np.linalg.norm(area_vector(Qc)))
-    return area_Q * f, area_Q * e
-
-
-def _umbra_unoccluded(T, nP, Qc, share):
-    """``int_T F(x -> Qc) dA_x`` for triangles T (t, 3, 3) of an umbra (where the hidden
-    part is the unoccluded value) and its estimate: the closed form
-    (:func:`_triangle_unoccluded`), and where its estimate misses ``share`` (t,) (its
-    terms cancel: a triangle with an edge of rounding's length) the 12- and 8-point
-    collapsed Gauss rules of the far-field rule on the point values, their difference
-    and the nodes' estimates the estimate. Returns the values, the estimates, and per
-    triangle whether it is within its share."""
-    U, E = _triangle_unoccluded(T, nP, Qc)
-    miss = np.flatnonzero(~(E <= share))
-    if len(miss):
-        (Xh, Wh), (Xl, Wl) = (triangle_rule(T[miss], r) for r in (GAUSS_RULE, GAUSS_LOW_RULE))
-        V, EV = (v[0] for v in point_values(np.concatenate([Xh.reshape(-1, 3),
-                                                             Xl.reshape(-1, 3)]), nP, [Qc]))
-        n = Xh.shape[0] * Xh.shape[1]
-        hi = (Wh * V[:n].reshape(Wh.shape)).sum(axis=1)
-        lo = (Wl * V[n:].reshape(Wl.shape)).sum(axis=1)
-        err = (np.abs(hi - lo) + (Wh * EV[:n].reshape(Wh.shape)).sum(axis=1)
-               + (Wl * EV[n:].reshape(Wl.shape)).sum(axis=1))
-        better = err < E[miss]
-        U[miss[better]], E[miss[better]] = hi[better], err[better]
-    return U, E, E <= share
 
 
 def _corner_first(T, blockers, nP, dP, reach=0.0, compiled=True):
@@ -174,9 +131,20 @@ def _hidden_integral(S, Pc, Qc, nP, atol, area_P, whole, shortcuts, st, solid=No
     regions = []
     if shortcuts and len(lines) > tol.AREA_UMBRA_MIN_LINES:
         regions = umbras(Pc, Qc, S[1:], R, c)
+        # one region holding all of P but strips along its boundary (the proof's
+        # margin): the pair's value is that of the strips, between 0 and their area
+        # times the point values' bound
+        area_Pc = float(np.linalg.norm(area_vector(Pc)))
+        left = area_Pc - max((polygon_area(c + r @ R[:2]) for r, _ in regions), default=0.0)
+        half = 0.5 * _unoccluded_bound(Pc, Qc) * max(left, 0.0) / area_P
+        if regions and half <= tol.AREA_UMBRA_CLOSED_SHARE * atol:
+            if st is not None:
+                st.umbra_pairs += 1
+            return half, half, 0
         if regions:
-            lines = np.concatenate([outside_umbras(lines, regions)] + [
-                np.stack([r, np.roll(r, -1, axis=0)], axis=1) for r, _ in regions])
+            P2 = (Pc - c) @ R[:2].T
+            lines = np.concatenate([outside_umbras(lines, regions), umbra_edges(
+                regions, P2, tol.AREA_HULL_RTOL * float(np.ptp(P2, axis=0).max()))])
     # the arrangement's cost and cells grow with the square of its distinct lines: too
     # many raise (the row names the pair)
     many = distinct_lines(lines, 2.0 * radius, (Pc - c) @ R[:2].T)
@@ -219,43 +187,15 @@ def _hidden_integral(S, Pc, Qc, nP, atol, area_P, whole, shortcuts, st, solid=No
     # still that point for the collapsed rule (else no vertex of the cell is, and the
     # rules' differences there shrink only as the triangles do: pinned in
     # tests/test_regressions.py)
-    # the cells in an umbra (every corner within AREA_UMBRA_SHRINK of P's size of one:
-    # proven there) take the unoccluded closed form for their hidden part, A_Q F(Q -> T)
-    # by reciprocity; the rest, and all of them where its estimate is more than a share
-    # of atol, go to the rules
+    # the cells in an umbra take the unoccluded value for their hidden part, the strips
+    # along them the bound (umbra_cells)
     umbra_U = umbra_E = umbra_area = strip_slivers = 0.0
     if regions:
-        uv = (cells - c) @ R[:2].T
-        eps = tol.AREA_UMBRA_SHRINK * float(np.ptp(uv.reshape(-1, 2), axis=0).max())
-        inside = in_umbra(uv, regions, eps)[0].all(axis=1)
-        # (triangles of no area, of the ears' straight angles, stay with the rules as
-        # slivers: the closed form's estimate of one is its terms' rounding)
-        flat = triangle_areas(cells) <= tol.AREA_SLIVER_CELL * area_Pc
-        inside &= ~flat
-        cells_all = cells
-        if inside.any():
-            at = np.flatnonzero(inside)
-            # each triangle's estimate within its share (by area) of that of atol
-            exU, exE, ok = _umbra_unoccluded(
-                cells[at], nP, Qc,
-                tol.AREA_UMBRA_CLOSED_SHARE * atol * area_P / area_Pc * triangle_areas(cells[at]))
-            inside[at[~ok]] = False
-            umbra_U, umbra_E = float(exU[ok].sum()) / area_P, float(exE[ok].sum()) / area_P
-            umbra_area = float(triangle_areas(cells[inside]).sum())
-            cells = cells[~inside]
-            if st is not None and ok.any():
-                st.umbra_pairs += 1
-                st.umbra_cells += int(ok.sum())
-        # the strips between the umbras as proven and P's boundary or the regions as
-        # computed (AREA_UMBRA_SHRINK wide: where a blocker shares an edge with P, its
-        # nodes would lie at that edge, where the blocker is seen edge-on) are slivers:
-        # the hidden part between 0 and its bound, where that costs at most a share of atol
-        strip = ~inside & ~flat & in_umbra(uv, regions, 4.0 * eps)[0].all(axis=1)
-        strip_area = float(triangle_areas(cells_all[strip]).sum()) if strip.any() else 0.0
-        if strip.any() and (0.5 * _unoccluded_bound(Pc, Qc) * strip_area / area_P
-                            <= tol.AREA_UMBRA_CLOSED_SHARE * atol):
-            cells = cells_all[~inside & ~strip]
-            strip_slivers = strip_area
+        cells, umbra_U, umbra_E, umbra_area, strip_slivers, n_umbra = umbra_cells(
+            cells, regions, R, c, nP, Qc, area_P, area_Pc, atol, _unoccluded_bound(Pc, Qc))
+        if st is not None and n_umbra:
+            st.umbra_pairs += 1
+            st.umbra_cells += n_umbra
     # the value is then the unoccluded one over the rest of P less the rest's hidden part
     whole = (whole[0] - umbra_U, whole[1] + umbra_E)
     T, corner = _corner_first(cells, S[1:], nP, dP,
@@ -298,7 +238,7 @@ def _hidden_integral(S, Pc, Qc, nP, atol, area_P, whole, shortcuts, st, solid=No
         if missed_U <= 0 or not len(todo):
             break
         Ta = np.concatenate(acc["T"])
-        exU, exE = _triangle_unoccluded(Ta[todo], nP, Qc)
+        exU, exE = triangle_unoccluded(Ta[todo], nP, Qc)
         shown = (np.abs(cat["hiU"][todo] - exU / area_P) - dF[todo] - cat["rndU"][todo]
                  - exE / area_P)
         cat["diff"][todo] = np.maximum(cat["diff"][todo], shown)

@@ -17,8 +17,13 @@ import numpy as np
 
 from .. import _tolerances as tol
 from ..geometry import area_vector, cross
+from ..rings import padded
+from .closed_form import unoccluded_pairs
+from .points import point_values
+from .rules import GAUSS_LOW_RULE, GAUSS_RULE, triangle_areas, triangle_rule
 
-__all__ = ["merged_blockers", "sees_through", "umbras", "outside_umbras", "in_umbra"]
+__all__ = ["merged_blockers", "sees_through", "umbras", "outside_umbras", "in_umbra", "umbra_edges",
+           "triangle_unoccluded", "umbra_cells"]
 
 
 def _blocker_frame(K):
@@ -257,17 +262,28 @@ def umbras(Pc, Qc, blockers, R, c, limit=None):
     samples = np.concatenate([P2, [mid], 0.5 * (P2 + mid), 0.5 * (P2 + np.roll(P2, -1, 0))])
     X = c + samples @ R[:2]
     found = []
-    for K in merged_blockers(blockers):
+    # a blocker whose plane has the receiver's vertices on both sides, or every sample
+    # of P on the receiver's side, hides it from no sample (all blockers at once)
+    merged = merged_blockers(blockers)
+    if not merged:
+        return []
+    Ks, counts = padded(merged)
+    normals = np.array([area_vector(K) for K in merged])
+    offsets = np.einsum("kx,kx->k", normals, Ks[:, 0])
+    sq = Qc @ normals.T - offsets                             # (q, k)
+    sx = X @ normals.T - offsets                              # (s, k)
+    apart = (((sq > 0).all(axis=0) & (sx < 0).any(axis=0))
+             | ((sq < 0).all(axis=0) & (sx > 0).any(axis=0)))
+    for K in (merged[k] for k in np.flatnonzero(apart)):
         if not sees_through(X, Qc, K).any():
             continue
         H = _image_half_planes(K, Qc, R, c)
         if not H:
             continue
         # the region shrunk by 2 eps (returned) and by eps (proven, P grown by eps)
-        region, proven = P2, P2
+        region = P2
         for a, b in H:
             region = _clip(region, a, b - 2 * eps)
-            proven = _clip(proven, a, b - eps)
         if _area2(region) < tol.AREA_UMBRA_MIN_SHARE * area:
             continue
         grown = P2
@@ -287,7 +303,33 @@ def umbras(Pc, Qc, blockers, R, c, limit=None):
             r[2] = -float(r[:2] @ p)
         found.append((_area2(region), region, rows))
     found.sort(key=lambda f: -f[0])
-    return [(r, h) for _, r, h in found[:limit]]
+    kept = []
+    for _, r, h in found:
+        # a region within one kept already adds nothing
+        if not any(in_umbra(r, [k], eps)[0].all() for k in kept):
+            kept.append((r, h))
+    return kept[:limit]
+
+
+def umbra_edges(regions, P2, near):
+    """The lines of the regions' edges to cut the emitter P2 (k, 2) along, as segments
+    (m, 2, 2) across all of P2 (a region inside P whose edges ended at its corners would
+    leave the arrangement in two pieces, a cell with a hole), less those on P2's boundary
+    (both ends within ``near`` of one of its edges' lines: P's edges are cut along
+    already) and those of no length."""
+    E = np.concatenate([np.stack([r, np.roll(r, -1, axis=0)], axis=1) for r, _ in regions])
+    d = E[:, 1] - E[:, 0]
+    length = np.linalg.norm(d, axis=1)
+    E, d, length = E[length > near], d[length > near], length[length > near]
+    on = np.zeros(len(E), dtype=bool)
+    for p, q in zip(P2, np.roll(P2, -1, axis=0)):
+        n = np.array([-(q - p)[1], (q - p)[0]]) / np.linalg.norm(q - p)
+        on |= (np.abs((E - p) @ n) <= near).all(axis=1)
+    E, d, length = E[~on], d[~on], length[~on]
+    # each edge lengthened both ways by P's diameter (cut_cells cuts it to P)
+    reach = 2.0 * float(np.ptp(P2, axis=0).max())
+    u = d / length[:, None] * reach
+    return np.stack([E[:, 0] - u, E[:, 1] + u], axis=1)
 
 
 def in_umbra(U2, regions, slack):
@@ -327,3 +369,78 @@ def outside_umbras(lines, regions):
         keep.append(np.stack([a[after] + hi[after, None] * d[after], S[after, 1]], axis=1))
         S = np.concatenate(keep)
     return S
+
+
+def triangle_unoccluded(T, nP, Qc):
+    """``int_T F(x -> Qc) dA_x`` for each triangle T (t, 3, 3) in the plane of normal nP,
+    unoccluded (Qc wholly in front of that plane, each T in front of Qc's), and its
+    rounding estimate: by reciprocity ``A_Qc F(Qc -> T)``, the closed form
+    (:func:`~exactff.area.closed_form.unoccluded_pairs`, no fallback: where its terms cancel
+    the estimate says so)."""
+    if not len(T):
+        return np.zeros(0), np.zeros(0)
+    # counter-clockwise seen from nP's side
+    flip = np.einsum("tx,x->t", cross(T[:, 1] - T[:, 0], T[:, 2] - T[:, 0]), nP) < 0
+    T = np.where(flip[:, None, None], T[:, ::-1], T)
+    f, e = unoccluded_pairs(Qc, list(T), shortcuts=False, atol=np.inf,
+                            parts=[(Qc, t) for t in T])
+    area_Q = float(np.linalg.norm(area_vector(Qc)))
+    return area_Q * f, area_Q * e
+
+
+def _umbra_unoccluded(T, nP, Qc, share):
+    """``int_T F(x -> Qc) dA_x`` for triangles T (t, 3, 3) of an umbra (where the hidden
+    part is the unoccluded value) and its estimate: the closed form
+    (:func:`triangle_unoccluded`), and where its estimate misses ``share`` (t,) (its
+    terms cancel: a triangle with an edge of rounding's length) the 12- and 8-point
+    collapsed Gauss rules of the far-field rule on the point values, their difference
+    and the nodes' estimates the estimate. Returns the values, the estimates, and per
+    triangle whether it is within its share."""
+    U, E = triangle_unoccluded(T, nP, Qc)
+    miss = np.flatnonzero(~(E <= share))
+    if len(miss):
+        (Xh, Wh), (Xl, Wl) = (triangle_rule(T[miss], r) for r in (GAUSS_RULE, GAUSS_LOW_RULE))
+        V, EV = (v[0] for v in point_values(np.concatenate([Xh.reshape(-1, 3),
+                                                             Xl.reshape(-1, 3)]), nP, [Qc]))
+        n = Xh.shape[0] * Xh.shape[1]
+        hi = (Wh * V[:n].reshape(Wh.shape)).sum(axis=1)
+        lo = (Wl * V[n:].reshape(Wl.shape)).sum(axis=1)
+        err = (np.abs(hi - lo) + (Wh * EV[:n].reshape(Wh.shape)).sum(axis=1)
+               + (Wl * EV[n:].reshape(Wl.shape)).sum(axis=1))
+        better = err < E[miss]
+        U[miss[better]], E[miss[better]] = hi[better], err[better]
+    return U, E, E <= share
+
+
+def umbra_cells(cells, regions, R, c, nP, Qc, area_P, area_Pc, atol, bound):
+    """The cells (t, 3, 3) of an emitter cut along the umbras' edges as well as its
+    events, sorted: those in an umbra (every corner within ``AREA_UMBRA_SHRINK`` of its
+    size of one region, where the proof holds) take the unoccluded value for their
+    hidden part (:func:`_umbra_unoccluded`, each within its share by area of
+    ``AREA_UMBRA_CLOSED_SHARE`` of ``atol``, else left to the rules); the strips between
+    the regions and P's boundary or the regions as computed (AREA_UMBRA_SHRINK wide:
+    where a blocker shares an edge with P, the rules' nodes would lie at that edge, where
+    the blocker is seen edge-on) are slivers, their hidden part between 0 and ``bound``
+    (the unoccluded point values' bound), where that costs at most that share of
+    ``atol``. Triangles of no area (the ears' straight angles) stay with the rules.
+    Returns the cells left to the rules, the umbra's part per unit area of P (``area_P``)
+    and its estimate, the umbra's area, the strips' area, and the umbra's triangles."""
+    uv = (cells - c) @ R[:2].T
+    eps = tol.AREA_UMBRA_SHRINK * float(np.ptp(uv.reshape(-1, 2), axis=0).max())
+    flat = triangle_areas(cells) <= tol.AREA_SLIVER_CELL * area_Pc
+    inside = in_umbra(uv, regions, eps)[0].all(axis=1) & ~flat
+    U = E = area = strip_area = 0.0
+    n = 0
+    if inside.any():
+        at = np.flatnonzero(inside)
+        share = tol.AREA_UMBRA_CLOSED_SHARE * atol * area_P / area_Pc * triangle_areas(cells[at])
+        exU, exE, ok = _umbra_unoccluded(cells[at], nP, Qc, share)
+        inside[at[~ok]] = False
+        U, E = float(exU[ok].sum()) / area_P, float(exE[ok].sum()) / area_P
+        area, n = float(triangle_areas(cells[inside]).sum()), int(ok.sum())
+    strip = ~inside & ~flat & in_umbra(uv, regions, 4.0 * eps)[0].all(axis=1)
+    if strip.any():
+        strip_area = float(triangle_areas(cells[strip]).sum())
+        if not 0.5 * bound * strip_area / area_P <= tol.AREA_UMBRA_CLOSED_SHARE * atol:
+            strip[:], strip_area = False, 0.0
+    return cells[~inside & ~strip], U, E, area, strip_area, n
