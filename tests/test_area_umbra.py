@@ -54,6 +54,10 @@ def test_sees_through_never_claims_a_segment_that_misses():
         Q, K = _random_case(rng)
         X = np.column_stack([rng.uniform(-3, 3, (40, 2)), np.zeros(40)])
         X[:, 2] = rng.choice([0.0, 3.9, 4.5], 40)              # some beyond K or Q
+        # and some just above or below the receiver (K's plane crossed behind x or q)
+        near = Q.mean(axis=0) + rng.uniform(-0.3, 0.3, (20, 3)) * [1, 1, 0]
+        near[:, 2] = rng.choice([3.95, 6.0], 20)
+        X = np.concatenate([X, near])
         ok = sees_through(X, Q, K)
         g = rng.random((30, 2))
         samples = np.concatenate([Q, Q[0] + g[:, :1] * (Q[1] - Q[0]) + g[:, 1:] * (Q[3] - Q[0])])
@@ -61,18 +65,29 @@ def test_sees_through_never_claims_a_segment_that_misses():
             assert all(_hits(x, q, K) for q in samples)
         passed += int(ok.sum())
     assert passed > 40
+    # a point above the receiver, over a blocker under both: the line through them
+    # crosses K's plane beyond q, which is no crossing of the segment
+    Q = np.array([[0, 0, 4], [1, 0, 4], [1, 1, 4], [0, 1, 4]], float)
+    K = np.array([[-5, -5, 1], [6, -5, 1], [6, 6, 1], [-5, 6, 1]], float)
+    assert sees_through(np.array([[.5, .5, 0.0], [.5, .5, 6.0], [.5, .5, 3.9]]), Q,
+                        K).tolist() == [True, False, False]
 
 
 def test_umbras_are_hidden_everywhere_near_them():
     """Every point within AREA_UMBRA_SHRINK of P's size of a returned region (sampled,
     its corners moved out by that much included) sees the receiver wholly hidden, by
-    brute force; and regions are found. Planted: umbras without the proof of its corners
-    (the region as computed, not shrunk, and the K-plane half-plane left out): points
-    on the wrong side of a tilted blocker returned, caught."""
+    brute force; and regions are found. Blockers are tilted steeply half the time, so that
+    their plane crosses P's. Planted: the K-plane half-plane left out of the central
+    images and the corners not proven: points on the wrong side of a tilted blocker
+    returned, caught; the half-plane left out alone: the proof drops those regions (fewer
+    found, none wrong)."""
     rng = np.random.default_rng(7)
     found = 0
-    for _ in range(30):
+    for trial in range(40):
         Q, K = _random_case(rng)
+        if trial % 2:
+            # steep, through P's plane: points of P in the pyramid between q and K
+            K[:, 2] = -1.0 + 3.5 * (K[:, 0] - K[:, 0].min()) / np.ptp(K[:, 0])
         P = np.array([[-2, -2, 0], [2, -2, 0], [2, 2, 0], [-2, 2, 0]], float)
         R, c = receiver_frame(np.array([0, 0, 1.0])), P.mean(axis=0)
         regions = umbras(P, Q, [K], R, c)
@@ -106,6 +121,9 @@ def test_merged_blockers_join_coplanar_pieces_only_where_convex():
     assert sum(shapely.Polygon(K[:, :2]).area for K in L) == pytest.approx(3.0)
     assert len(merged_blockers([A, A + [1, 0, 1e-6]])) == 2
     assert len(merged_blockers([A, A + [1, 1, 0]])) == 2
+    # a quad on A's right edge reaching below and above it: the union has a reflex corner
+    B = np.array([[1, 0, 0], [2, -1, 0], [2, 2, 0], [1, 1, 0]], float)
+    assert len(merged_blockers([A, B])) == 2
 
 
 def test_outside_umbras_keeps_the_parts_outside():

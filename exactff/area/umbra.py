@@ -45,8 +45,8 @@ def _blocker_frame(K):
 
 def _merge_two(A, B, nK):
     """A and B (coplanar, normal nK) joined along an edge they share (the same two
-    vertices, bit for bit, run the other way), where the union is strictly convex once
-    its straight vertices are dropped; else None."""
+    vertices, bit for bit, run the other way), its straight vertices dropped; None where
+    they share no edge."""
     ends = {(a.tobytes(), b.tobytes()): i for i, (a, b) in enumerate(zip(A, np.roll(A, -1, 0)))}
     for j, (a, b) in enumerate(zip(B, np.roll(B, -1, 0))):
         i = ends.get((b.tobytes(), a.tobytes()))
@@ -57,10 +57,8 @@ def _merge_two(A, B, nK):
         e = np.roll(ring, -1, 0) - ring
         turn = cross(np.roll(e, 1, 0), e) @ nK
         size = np.linalg.norm(np.roll(e, 1, 0), axis=1) * np.linalg.norm(e, axis=1)
-        straight = np.abs(turn) <= tol.AREA_HULL_RTOL * size
-        if ((turn > 0) | straight).all() and (~straight).sum() >= 3:
-            return ring[~straight]
-        return None
+        # straight vertices dropped (convexity: the caller's _blocker_frame)
+        return ring[~(np.abs(turn) <= tol.AREA_HULL_RTOL * size)]
     return None
 
 
