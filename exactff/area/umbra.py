@@ -243,9 +243,8 @@ def umbras(Pc, Qc, blockers, R, c, limit=None):
     >>> Q = P[::-1] + [0, 0, 2]
     >>> K = np.array([[-2, -2, 1], [3, -2, 1], [3, 3, 1], [-2, 3, 1]], float)
     >>> R, c = receiver_frame(np.array([0, 0, 1.0])), P.mean(axis=0)
-    >>> [round(abs(float(np.cross(r[1] - r[0], r[2] - r[0]))), 6)
-    ...  for r, _ in umbras(P, Q, [K], R, c)]
-    [1.0]
+    >>> [np.ptp(r, axis=0).round(6).tolist() for r, _ in umbras(P, Q, [K], R, c)]
+    [[1.0, 1.0]]
     """
     limit = tol.AREA_UMBRA_LIMIT if limit is None else limit
     blockers = [np.asarray(K, dtype=float) for K in blockers]
