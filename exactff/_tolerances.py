@@ -577,7 +577,9 @@ AREA_CUT_EXTEND_RTOL = 1e-9
 AREA_CELL_COVER_RTOL = 1e-12
 
 #: Area form factors: the umbras (exactff.area.umbra) of an occluded pair whose events
-#: give more than AREA_UMBRA_MIN_LINES lines: the regions of the emitter from which one
+#: give more than AREA_UMBRA_MIN_LINES segments (their set-up, 1-30 ms a pair, costs
+#: more than it saves below that: gunter2's rows 95 and 300, pairs of 64 to 1,000
+#: segments 2.03 s without and 2.62 s with, of 1,000 to 3,000 6.34 and 5.65 s): the regions of the emitter from which one
 #: blocker hides the whole receiver, where the event lines are cut away and the cells
 #: integrated in closed form (on View3D's gunter2, row 38, column 23: 472,008 cells and
 #: 10.2 million points before). A point passes the test where every segment to the
@@ -586,7 +588,7 @@ AREA_CELL_COVER_RTOL = 1e-12
 #: region is shrunk by AREA_UMBRA_SHRINK of the emitter's size and proven on the region
 #: within that much of it, so that a cell noded within rounding of it is in; regions
 #: below AREA_UMBRA_MIN_SHARE of the emitter are not used, nor more than AREA_UMBRA_LIMIT.
-AREA_UMBRA_MIN_LINES = 64
+AREA_UMBRA_MIN_LINES = 1000
 AREA_UMBRA_MARGIN = 1e-11
 AREA_UMBRA_SHRINK = 1e-9
 AREA_UMBRA_MIN_SHARE = 1e-3
