@@ -41,6 +41,12 @@ Usage: python benchmarks/bench_area.py [--cube-k 8]
    compiled call of the area code timed (thread time): the share of the matrix's time
    with the GIL released, which bounds what 2 threads can gain (at most
    ``total / max(total / 2, held)``).
+8. ``--umbras ROWS`` alone (issue 49, the pairs a wall hides almost wholly): gunter2's
+   rows (comma-separated) at tolerance 1e-6 without and with the umbras
+   (``exactff.area.umbra``; off: ``AREA_UMBRA_MIN_LINES`` beyond any pair), in one run:
+   process time, point values, umbra cells, the row's sum less 1 against its
+   estimates, and the largest difference of a value between the two runs against the
+   sum of their estimates; ``--umbra-pairs 38:23,38:3`` the same for single pairs.
 5. ``--pair-path`` alone: the occluded pairs' compiled path against the numpy and GEOS
    reference it replaces, in one run at tolerance 1e-6 (test4, facet, gunter1; process
    time): the events compiled (``exactff/_core/pair.cpp``) or by numpy
@@ -157,6 +163,9 @@ def main():
     ap.add_argument("--gunter2-rows", default="",
                     help="--goals: rows of gunter2 timed, comma-separated (none: the whole "
                          "matrix)")
+    ap.add_argument("--umbras", default="", help="only gunter2's rows (comma-separated) "
+                    "without and with the umbras")
+    ap.add_argument("--umbra-pairs", default="", help="with --umbras: pairs i:j timed alone")
     args = ap.parse_args()
     print(machine())
     print()
@@ -166,6 +175,8 @@ def main():
         return goals(args)
     if args.threads:
         return threads(args)
+    if args.umbras or args.umbra_pairs:
+        return umbra_rows(args)
     if args.only_cube:
         return cube_matrix(args)
     if args.only_view3d:
@@ -279,6 +290,66 @@ def pair_path(args):
             best = min(best, time.perf_counter() - t0)
         base = base or best
         print(f"| {how} | {best:.3f} | {base / best:.2f} |", flush=True)
+
+
+def umbra_rows(args):
+    """gunter2's rows and pairs at tolerance 1e-6 without and with the umbras."""
+    from exactff import _tolerances as tolerances
+    from exactff.area import AreaStats, area_row
+    from exactff.area import adaptive
+    scene = ef.read_vs3("/work/shared/scenes/view3d/gunter2.vs3")
+    on = tolerances.AREA_UMBRA_MIN_LINES
+
+    def run(i, umbra):
+        tolerances.AREA_UMBRA_MIN_LINES = on if umbra else 2 ** 62
+        st = AreaStats()
+        t0 = time.process_time()
+        f, e = area_row(scene, i, 1e-6, stats=st)
+        return f, e, time.process_time() - t0, st
+
+    if args.umbras:
+        print("| gunter2 row | s without | s with | ratio | points without | points with "
+              "| umbra cells | sum - 1 (est.) with | largest difference / estimates |")
+        print("|---|---|---|---|---|---|---|---|---|")
+        for i in (int(r) for r in args.umbras.split(",")):
+            f0, e0, t0, s0 = run(i, False)
+            f1, e1, t1, s1 = run(i, True)
+            worst = float(np.max(np.abs(f1 - f0) / np.maximum(e0 + e1, 1e-300)))
+            print(f"| {i} | {t0:.2f} | {t1:.2f} | {t0 / t1:.2f}x | {s0.point_values:,} "
+                  f"| {s1.point_values:,} | {s1.umbra_cells} | {f1.sum() - 1:.1e} "
+                  f"({e1.sum():.1e}) | {worst:.2f} |")
+    if args.umbra_pairs:
+        # a pair alone: its row's blockers and unoccluded value, captured from the row
+        captured = {}
+        pairs = [tuple(int(x) for x in p.split(":")) for p in args.umbra_pairs.split(",")]
+        original = adaptive.occluded_pair
+        import exactff.area.row as row_module
+
+        def capture(S, Pc, Qc, *a, **k):
+            captured[S[0].tobytes()] = (S, Pc, Qc, a, k)
+            return 0.0, 0.0, 0
+        row_module.occluded_pair = capture
+        try:
+            for i in sorted({i for i, _ in pairs}):
+                area_row(scene, i, 1e-6)
+        finally:
+            row_module.occluded_pair = original
+        print("| gunter2 pair | s without | s with | points without | points with "
+              "| umbra cells | value with (est.) | difference / estimates |")
+        print("|---|---|---|---|---|---|---|---|")
+        for i, j in pairs:
+            S, Pc, Qc, a, k = captured[np.asarray(scene.polygons[j], float).tobytes()]
+            out = []
+            for umbra in (False, True):
+                tolerances.AREA_UMBRA_MIN_LINES = on if umbra else 2 ** 62
+                st = AreaStats()
+                t0 = time.process_time()
+                v, e, pts = original(S, Pc, Qc, *a[:5], st, *a[6:], **k)
+                out.append((v, e, pts, time.process_time() - t0, st.umbra_cells))
+            (v0, e0, p0, t0, _), (v1, e1, p1, t1, u1) = out
+            print(f"| ({i}, {j}) | {t0:.2f} | {t1:.2f} | {p0:,} | {p1:,} | {u1} "
+                  f"| {v1:.3e} ({e1:.1e}) | {abs(v1 - v0) / (e0 + e1):.2f} |")
+    tolerances.AREA_UMBRA_MIN_LINES = on
 
 
 def box_106():

@@ -119,6 +119,14 @@ __all__ = [
     "AREA_BACK_FACE_RTOL",
     "AREA_CUT_EXTEND_RTOL",
     "AREA_CELL_COVER_RTOL",
+    "AREA_UMBRA_MIN_LINES",
+    "AREA_UMBRA_MARGIN",
+    "AREA_UMBRA_SHRINK",
+    "AREA_UMBRA_MIN_SHARE",
+    "AREA_UMBRA_LIMIT",
+    "AREA_UMBRA_CLOSED_SHARE",
+    "AREA_MAX_EVENT_LINES",
+    "AREA_EVENT_LINE_KEY",
     "AREA_MAX_DEPTH",
     "AREA_RULE_CHECK_SHARE",
     "AREA_CORNER_MIDDLE_ORDER",
@@ -562,6 +570,35 @@ AREA_CUT_EXTEND_RTOL = 1e-9
 #: ... and the emitter's cells must cover it to this share of its area, else it is cut
 #: again another way (as cut, then on a grid: the cells that cover most are kept).
 AREA_CELL_COVER_RTOL = 1e-12
+
+#: Area form factors: the umbras (exactff.area.umbra) of an occluded pair whose events
+#: give more than AREA_UMBRA_MIN_LINES segments (their set-up, 1-30 ms a pair, costs
+#: more than it saves below that: gunter2's rows 95 and 300, pairs of 64 to 1,000
+#: segments 2.03 s without and 2.62 s with, of 1,000 to 3,000 6.34 and 5.65 s): the regions of the emitter from which one
+#: blocker hides the whole receiver, where the event lines are cut away and the cells
+#: integrated in closed form (on View3D's gunter2, row 38, column 23: 472,008 cells and
+#: 10.2 million points before). A point passes the test where every segment to the
+#: receiver's vertices meets the blocker AREA_UMBRA_MARGIN of the coordinates' size
+#: inside (some 1e5 units of rounding of each term; the grazing factor on top); each
+#: region is shrunk by AREA_UMBRA_SHRINK of the emitter's size and proven on the region
+#: within that much of it, so that a cell noded within rounding of it is in; regions
+#: below AREA_UMBRA_MIN_SHARE of the emitter are not used, nor more than AREA_UMBRA_LIMIT.
+AREA_UMBRA_MIN_LINES = 1000
+AREA_UMBRA_MARGIN = 1e-11
+AREA_UMBRA_SHRINK = 1e-9
+AREA_UMBRA_MIN_SHARE = 1e-3
+AREA_UMBRA_LIMIT = 8
+#: ... and their cells take the closed form where its estimate (summed over them) is
+#: within this share of the pair's tolerance, else the rules as before.
+AREA_UMBRA_CLOSED_SHARE = 0.1
+#: Area form factors: an occluded pair whose events lie on more distinct lines than this
+#: (after the umbras; exactff.area.events.distinct_lines, angle and offset rounded to
+#: AREA_EVENT_LINE_KEY) raises NumericalError instead of noding them: the arrangement's
+#: time and its cells grow with the square of its lines (up to 50 million crossings
+#: here, some gigabytes of cells and rule nodes). The most on View3D's gunter2: 3,804
+#: meeting the emitter (row 38, column 23: 22,549 segments, 472,008 cells).
+AREA_MAX_EVENT_LINES = 10_000
+AREA_EVENT_LINE_KEY = 1e-9
 
 #: Area form factors: receivers per call of the vectorised point values (bounds the
 #: temporaries: about 2e5 edge terms per call).

@@ -708,6 +708,10 @@ def area_form_factors(scene, rows=None, *, tolerance=1e-9, error=False, executor
         computed where GEOS failed or a point's images did not stay finite),
         ``bounded_points`` (such points of little weight given the bound
         ``0 <= hidden <= unoccluded`` instead of the engine's value),
+        ``umbra_pairs`` and ``umbra_cells`` (pairs with umbras, regions of the emitter
+        from which one blocker hides the whole receiver: their event lines cut away and
+        their cells taken by the closed form, ``exactff.area.umbra``; and those cells'
+        triangles),
         ``cell_fallbacks`` (emitters cut along their visibility events another way,
         where GEOS failed or the cells did not cover the emitter: the lines not
         lengthened across its boundary, or noded on a grid of 1e-12 of its size),

@@ -13,34 +13,17 @@ import shapely
 
 from .. import _tolerances as tol
 from ..errors import NumericalError, misses_tolerance
-from ..geometry import area_vector, cross, receiver_frame
+from ..geometry import area_vector, cross, polygon_area, receiver_frame
 from ._pair import adaptive_levels as _compiled_adaptive_levels
 from ._pair import corner_first as _compiled_corner_first
-from .closed_form import unoccluded_pairs
-from .events import cut_cells, event_lines
+from .events import cut_cells, distinct_lines, event_lines
 from .hidden import hidden_setup, hidden_values
 from .points import point_values
+from .umbra import outside_umbras, triangle_unoccluded, umbra_cells, umbra_edges, umbras
 from .rules import (RULE_PAIRS, CORNER_MIDDLE_RULE, SYMMETRIC_RULES, quarter, rule_pair,
                     triangle_areas, triangle_rule)
 
 __all__ = ["COMPILED_LEVELS", "occluded_pair"]
-
-
-def _triangle_unoccluded(T, nP, Qc):
-    """``int_T F(x -> Qc) dA_x`` for each triangle T (t, 3, 3) in the plane of normal nP,
-    unoccluded (Qc wholly in front of that plane, each T in front of Qc's), and its
-    rounding estimate: by reciprocity ``A_Qc F(Qc -> T)``, the closed form
-    (:func:`~exactff.area.closed_form.unoccluded_pairs`, no fallback: where its terms cancel
-    the estimate says so)."""
-    if not len(T):
-        return np.zeros(0), np.zeros(0)
-    # counter-clockwise seen from nP's side
-    flip = np.einsum("tx,x->t", cross(T[:, 1] - T[:, 0], T[:, 2] - T[:, 0]), nP) < 0
-    T = np.where(flip[:, None, None], T[:, ::-1], T)
-    f, e = unoccluded_pairs(Qc, list(T), shortcuts=False, atol=np.inf,
-                            parts=[(Qc, t) for t in T])
-    area_Q = float(np.linalg.norm(area_vector(Qc)))
-    return area_Q * f, area_Q * e
 
 
 def _corner_first(T, blockers, nP, dP, reach=0.0, compiled=True):
@@ -142,6 +125,36 @@ def _hidden_integral(S, Pc, Qc, nP, atol, area_P, whole, shortcuts, st, solid=No
     dP = float(nP @ Pc[0])
     radius = (1.0 + tol.AREA_HIDDEN_PAD) * float(np.linalg.norm(Pc - c, axis=1).max())
     lines = event_lines(S, nP, dP, R, c, radius, Qc, shortcuts, st, solid)
+    # the umbras: regions from every point of which one blocker hides all of Qc (the
+    # hidden part there is the unoccluded point value: no event inside changes it), the
+    # event lines cut away from them and their edges cut along instead
+    regions = []
+    if shortcuts and len(lines) > tol.AREA_UMBRA_MIN_LINES:
+        regions = umbras(Pc, Qc, S[1:], R, c)
+        # one region holding all of P but strips along its boundary (the proof's
+        # margin): the pair's value is that of the strips, between 0 and their area
+        # times the point values' bound
+        area_Pc = float(np.linalg.norm(area_vector(Pc)))
+        left = area_Pc - max((polygon_area(c + r @ R[:2]) for r, _ in regions), default=0.0)
+        half = 0.5 * _unoccluded_bound(Pc, Qc) * max(left, 0.0) / area_P
+        if regions and half <= tol.AREA_UMBRA_CLOSED_SHARE * atol:
+            if st is not None:
+                st.umbra_pairs += 1
+            return half, half, 0
+        if regions:
+            P2 = (Pc - c) @ R[:2].T
+            lines = np.concatenate([outside_umbras(lines, regions), umbra_edges(
+                regions, P2, tol.AREA_HULL_RTOL * float(np.ptp(P2, axis=0).max()))])
+    # the arrangement's cost and cells grow with the square of its distinct lines: too
+    # many raise (the row names the pair)
+    many = distinct_lines(lines, 2.0 * radius, (Pc - c) @ R[:2].T)
+    if many > tol.AREA_MAX_EVENT_LINES:
+        raise NumericalError(
+            f"its visibility events lie on {many} distinct lines, more than "
+            f"AREA_MAX_EVENT_LINES = {tol.AREA_MAX_EVENT_LINES} (the emitter would be cut "
+            f"into up to {many * many // 2:,} cells): split the emitter or the blockers "
+            f"into smaller polygons, use the point engine (form_factor_matrix), or raise "
+            f"exactff._tolerances.AREA_MAX_EVENT_LINES where memory allows")
     # the emitter cut along the events: in floating point with the lines lengthened
     # across its boundary, else as cut, else noded on a grid of AREA_HULL_RTOL of P's
     # size (the cuts move by that much), each way with and without lengthening; the
@@ -174,8 +187,20 @@ def _hidden_integral(S, Pc, Qc, nP, atol, area_P, whole, shortcuts, st, solid=No
     # still that point for the collapsed rule (else no vertex of the cell is, and the
     # rules' differences there shrink only as the triangles do: pinned in
     # tests/test_regressions.py)
+    # the cells in an umbra take the unoccluded value for their hidden part, the strips
+    # along them the bound (umbra_cells)
+    umbra_U = umbra_E = umbra_area = strip_slivers = 0.0
+    if regions:
+        cells, umbra_U, umbra_E, umbra_area, strip_slivers, n_umbra = umbra_cells(
+            cells, regions, R, c, nP, Qc, area_P, area_Pc, atol, _unoccluded_bound(Pc, Qc))
+        if st is not None and n_umbra:
+            st.umbra_pairs += 1
+            st.umbra_cells += n_umbra
+    # the value is then the unoccluded one over the rest of P less the rest's hidden part
+    whole = (whole[0] - umbra_U, whole[1] + umbra_E)
     T, corner = _corner_first(cells, S[1:], nP, dP,
                               2.0 * tol.AREA_CUT_EXTEND_RTOL * np.sqrt(area_Pc))
+    area_Pc -= umbra_area + strip_slivers
     depth = np.zeros(len(T), dtype=int)
     # many cells (small ones) start with the low pair of rules, few with the high pair
     # (and so do the triangles they are cut into); at a coarse target, all start low
@@ -186,7 +211,7 @@ def _hidden_integral(S, Pc, Qc, nP, atol, area_P, whole, shortcuts, st, solid=No
     # what the bound 0 <= hidden <= unoccluded may cost the pair (hidden_values)
     bound_atol = [tol.AREA_IMAGE_BUDGET_SHARE * atol]
     total_area = float(triangle_areas(T).sum())
-    slivers = points = 0
+    slivers, points = strip_slivers, 0
     # the triangles accepted: vertices, level, rung; per unit area of P, the high rule's
     # integral of the hidden part H, the rules' difference on H, the point values'
     # estimates, and the same two rules' integrals of U (the unoccluded point values)
@@ -213,7 +238,7 @@ def _hidden_integral(S, Pc, Qc, nP, atol, area_P, whole, shortcuts, st, solid=No
         if missed_U <= 0 or not len(todo):
             break
         Ta = np.concatenate(acc["T"])
-        exU, exE = _triangle_unoccluded(Ta[todo], nP, Qc)
+        exU, exE = triangle_unoccluded(Ta[todo], nP, Qc)
         shown = (np.abs(cat["hiU"][todo] - exU / area_P) - dF[todo] - cat["rndU"][todo]
                  - exE / area_P)
         cat["diff"][todo] = np.maximum(cat["diff"][todo], shown)

@@ -14,7 +14,7 @@ from ..rings import successors
 from ._pair import cut_cells as _compiled_cut_cells
 from ._pair import event_lines as _compiled_event_lines
 
-__all__ = ["event_lines", "cut_cells"]
+__all__ = ["event_lines", "cut_cells", "distinct_lines"]
 
 
 def _dot(a, b):
@@ -282,3 +282,31 @@ def cut_cells(Pc, nP, lines, R, c, grid=None, lengthen=True, compiled=True):
     tris = shapely.get_parts(shapely.constrained_delaunay_triangles(faces))
     uv = shapely.get_coordinates(shapely.get_exterior_ring(tris)).reshape(-1, 4, 2)[:, :3]
     return c + uv @ R[:2]
+
+
+def distinct_lines(lines, size, P2=None):
+    """How many distinct lines the segments ``lines`` (m, 2, 2) that meet the polygon P2
+    (k, 2; default: all of them) lie on, each line taken
+    as its direction (an angle in [0, pi)) and its offset from the origin, both rounded
+    to ``AREA_EVENT_LINE_KEY`` (of ``size`` for the offset): about the lines the compiled
+    arrangement nodes after joining collinear ones (``_core/pair.cpp``, merge_collinear),
+    whose cost and cells grow with their square.
+
+    Examples
+    --------
+    Two segments on the x axis and one across it:
+
+    >>> distinct_lines(np.array([[[0, 0], [1, 0]], [[2, 0], [3, 0]], [[0, 0], [0, 1]]], float), 3.0)
+    2
+    """
+    S = np.asarray(lines, dtype=float).reshape(-1, 2, 2)
+    if P2 is not None and len(S):
+        S = S[shapely.intersects(shapely.linestrings(S), shapely.Polygon(P2))]
+    d = S[:, 1] - S[:, 0]
+    length = np.hypot(d[:, 0], d[:, 1])
+    S, d, length = S[length > 0], d[length > 0], length[length > 0]
+    angle = np.mod(np.arctan2(d[:, 1], d[:, 0]), np.pi)
+    offset = S[:, 0, 0] * np.sin(angle) - S[:, 0, 1] * np.cos(angle)
+    key = np.stack([np.round(angle / tol.AREA_EVENT_LINE_KEY),
+                    np.round(offset / (tol.AREA_EVENT_LINE_KEY * size))], axis=1)
+    return int(len(np.unique(key, axis=0)))

@@ -14,7 +14,7 @@ from dataclasses import asdict, dataclass, fields
 import numpy as np
 
 from .. import _tolerances as tol
-from ..errors import nonnegative
+from ..errors import NumericalError, nonnegative
 from ..geometry import area_vector
 from ..prepared import prepared
 from ..visibility import is_convex_enclosure
@@ -61,6 +61,10 @@ class AreaStats:
     engine_fallbacks, engine_fallback_points : int
         Calls whose hidden parts the engine computed at some points (where a point's
         images did not stay finite or could not be trusted), and those points.
+    umbra_pairs, umbra_cells : int
+        Pairs with umbras (regions of the emitter from which one blocker hides the whole
+        receiver, :func:`~exactff.area.umbra.umbras`: their event lines cut away, their
+        cells taken by the closed form), and those cells' triangles.
     cell_fallbacks : int
         Pairs whose emitter was cut along the events another way (GEOS failed, or the
         cells did not cover it: the lines as cut, or on a fine grid).
@@ -94,6 +98,8 @@ class AreaStats:
     bounded_points: int = 0
     engine_fallbacks: int = 0
     engine_fallback_points: int = 0
+    umbra_pairs: int = 0
+    umbra_cells: int = 0
     cell_fallbacks: int = 0
     occluded_pairs: int = 0
     point_values: int = 0
@@ -282,10 +288,13 @@ def area_row(scene, i, atol, *, rtol=None, shortcuts=True, stats=None):
             tol.AREA_WHOLE_TOLERANCE_SHARE * atol_all, None)
     for ((j, Pc, Qc), B, solid, inner), w, we in zip(occluded, whole if occluded else [],
                                                     whole_err if occluded else []):
-        fx[j], ex[j], points = occluded_pair([receivers[j]] + [polys[k] for k in B], Pc, Qc,
-                                             nP, atol * share[j], area_P,
-                                              (float(w), float(we)),
-                                              shortcuts, st, rtol, solid, inner)
+        try:
+            fx[j], ex[j], points = occluded_pair([receivers[j]] + [polys[k] for k in B], Pc,
+                                                 Qc, nP, atol * share[j], area_P,
+                                                 (float(w), float(we)),
+                                                 shortcuts, st, rtol, solid, inner)
+        except NumericalError as exc:
+            raise NumericalError(f"area form factor ({i}, {owner[j]}): {exc}") from exc
         st.point_values += points
     if occluded:
         # the occluded values clamped at 0 within their estimates, together
