@@ -181,6 +181,8 @@ def main():
     ap.add_argument("--rows", type=int, default=8, help="seeded rows per file")
     ap.add_argument("--engines", action="store_true",
                     help="also compare with the Python engine (slow)")
+    ap.add_argument("--extra", nargs="*", default=[], metavar="FILE:ROW",
+                    help="more rows: the file's base name and a 0-based polygon index")
     ap.add_argument("--uniform", type=int, default=0, metavar="K",
                     help="instead, K rows per file drawn uniformly: which raise, and why")
     args = ap.parse_args()
@@ -199,10 +201,17 @@ def main():
         head += " engines: worst gap / (Ec + Ep), values beyond |"
     print(head)
     print("|---" * (head.count("|") - 1) + "|")
+    extra = {}
+    for item in args.extra:
+        name, sep, row = item.rpartition(":")
+        if not sep or not row.isdigit():
+            sys.exit(f"--extra: expected FILE:ROW, got {item!r}")
+        extra.setdefault(name, []).append(int(row))
     notes = []
     for path in files:
         name = os.path.basename(path)
-        scene_rows = seeded_rows(load(path), args.rows) + README_ROWS.get(name, [])
+        scene_rows = (seeded_rows(load(path), args.rows) + README_ROWS.get(name, []) +
+                      extra.get(name, []))
         size, o = measure(path, scene_rows, args.engines)
         share = 1 - o["misses"] / max(o["values"], 1)
         line = (f"| {name} | {size:,} | {o['rows']} | {o['raised']} | {o['python']} | "
