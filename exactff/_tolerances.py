@@ -71,6 +71,7 @@ __all__ = [
     "C1",
     "SVBSP_BAND",
     "COMPILED_FALLBACK_MAX_POLYGONS",
+    "BSP_COMPILED_MIN_MAGNITUDE",
     "SHAFT_MARGIN",
     "OCCLUDED_ATOL",
     "SVBSP_SPLIT_ULPS",
@@ -289,6 +290,11 @@ BATCH_VALIDATION_PAIRS = 2 ** 19
 #: tree (1,115 nodes, 1,700 splits); a sample of 1,024 gave 0.56 s and a tree of 1,153
 #: nodes and 1,749 splits.
 BSP_SCORE_SAMPLE = 4096
+#: The compiled BSP build's exact tests are expansions of doubles, exact while no product
+#: of up to six coordinate differences underflows (each difference at least the smaller
+#: coordinate's ulp): a scene with a nonzero coordinate below this in magnitude is built
+#: by the Python build instead (integers: exact at any magnitude).
+BSP_COMPILED_MIN_MAGNITUDE = 1e-30
 
 #: BSP nodes with more fragments than this also try a plane through the median of the
 #: fragments' vertex means along their widest axis (not a tolerance: a cost threshold).

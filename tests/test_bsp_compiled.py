@@ -118,6 +118,30 @@ def test_compiled_build_of_enclosures_is_a_partition(case):
                build_bsp(scene, candidates=EVERY_CANDIDATE, engine="compiled"))
 
 
+def test_compiled_build_with_a_subnormal_coordinate_is_a_partition():
+    # found by CI: an enclosure (a box 0.1 wide whose floor lies at z = 2.2e-309, a
+    # subnormal) holding a cube given twice. The compiled build's expansions are exact
+    # only while no product underflows; it put a fragment on the wrong side of a node.
+    # Such a scene is now built by the Python build (BSP_COMPILED_MIN_MAGNITUDE)
+    z = 2.225073858507203e-309
+    box = [[[0, 0, z], [.1, 0, z], [.1, .1, z], [0, .1, z]],
+           [[0, 0, .1], [0, .1, .1], [.1, .1, .1], [.1, 0, .1]],
+           [[0, 0, z], [0, 0, .1], [.1, 0, .1], [.1, 0, z]],
+           [[0, .1, z], [.1, .1, z], [.1, .1, .1], [0, .1, .1]],
+           [[0, 0, z], [0, .1, z], [0, .1, .1], [0, 0, .1]],
+           [[.1, 0, z], [.1, 0, .1], [.1, .1, .1], [.1, .1, z]]]
+    cube = [[[.05, .1, .05], [.1, .1, .05], [.1, .05, .05], [.05, .05, .05]],
+            [[.1, .05, .1], [.1, .1, .1], [.05, .1, .1], [.05, .05, .1]],
+            [[.1, .05, .05], [.1, .05, .1], [.05, .05, .1], [.05, .05, .05]],
+            [[.05, .1, .1], [.1, .1, .1], [.1, .1, .05], [.05, .1, .05]],
+            [[.05, .05, .1], [.05, .1, .1], [.05, .1, .05], [.05, .05, .05]],
+            [[.1, .1, .05], [.1, .1, .1], [.1, .05, .1], [.1, .05, .05]]]
+    scene = ef.Scene.from_polygons([np.array(P, float) for P in box + cube + cube])
+    _check_partition(scene, build_bsp(scene, engine="compiled"))
+    _same_tree(build_bsp(scene, candidates=EVERY_CANDIDATE),
+               build_bsp(scene, candidates=EVERY_CANDIDATE, engine="compiled"))
+
+
 def test_build_bsp_names_bad_options():
     scene = ef.scenes.subdivided_box(1)
     with pytest.raises(ValueError, match="engine"):

@@ -398,7 +398,12 @@ def build_bsp(scene, *, candidates=8, seed=0, engine="python"):
     ``engine="compiled"`` builds the same partition in compiled code (``_core/bsp_build.cpp``,
     without the GIL; the compiled visibility core's tree): only its random draws differ,
     so that with every candidate tried (``candidates`` at least the scene's size) and a
-    scene of at most ``BSP_SCORE_SAMPLE`` polygons the two trees are the same.
+    scene of at most ``BSP_SCORE_SAMPLE`` polygons the two trees are the same. Its exact
+    tests are expansions of doubles, exact only while no product underflows: a scene
+    with a nonzero coordinate below ``BSP_COMPILED_MIN_MAGNITUDE`` in magnitude (a
+    subnormal next to 0.1, say) is built by the Python build, whose integers are exact
+    at any magnitude (a drawn enclosure with a coordinate of 2.2e-309 came out with a
+    fragment on the wrong side of a node).
 
     Parameters
     ----------
@@ -428,7 +433,9 @@ def build_bsp(scene, *, candidates=8, seed=0, engine="python"):
         raise ValueError(f"engine must be 'python' or 'compiled', got {engine!r}")
     if not isinstance(candidates, (int, np.integer)) or candidates < 1:
         raise ValueError(f"candidates must be a positive integer, got {candidates!r}")
-    if engine == "compiled":
+    V = scene.vertices
+    tiny = np.any((V != 0) & (np.abs(V) < tol.BSP_COMPILED_MIN_MAGNITUDE))
+    if engine == "compiled" and not tiny:
         return _build_bsp_compiled(scene, candidates, seed)
     rng = np.random.default_rng(seed)
     sampler = np.random.default_rng([seed, 1])    # its own stream: the same candidates
