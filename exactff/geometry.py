@@ -306,7 +306,7 @@ def plane_frame(Q: ArrayLike):
     return nQ, Q[0], RQ, (Q - Q[0]) @ RQ[:2].T
 
 
-def hull_blockers(V, cand, Pc, Qc, near, flat=()):
+def hull_blockers(V, cand, Pc, Qc, near, *, none_if_flat=False):
     """The candidates reaching into the interior of the convex hull of two point sets.
 
     A polygon on or outside one face of the hull hides nothing of positive measure
@@ -329,13 +329,13 @@ def hull_blockers(V, cand, Pc, Qc, near, flat=()):
         How far beyond a face a polygon's vertices must all lie for it to be dropped:
         0 for the exact separation, negative to keep polygons within ``-near`` of the
         hull.
-    flat : default ()
-        What to return where the points span no solid hull (a flat pair).
+    none_if_flat : bool, default False
+        Where the points span no solid hull (a flat pair): None instead of no candidate.
 
     Returns
     -------
     list of int
-        The candidates kept, or ``flat``.
+        The candidates kept (None for a flat pair with ``none_if_flat``).
 
     Examples
     --------
@@ -351,6 +351,6 @@ def hull_blockers(V, cand, Pc, Qc, near, flat=()):
     try:
         H = ConvexHull(np.vstack([Pc, Qc])).equations      # a . x + b <= 0 inside
     except QhullError:
-        return [] if flat == () else flat
+        return None if none_if_flat else []
     outside = np.all(V[cand] @ H[:, :3].T + H[:, 3] >= -near, axis=1)      # (c, faces)
     return [int(k) for k in np.asarray(cand)[~outside.any(axis=1)]]

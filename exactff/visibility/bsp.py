@@ -433,9 +433,8 @@ def build_bsp(scene, *, candidates=8, seed=0, engine="python"):
         raise ValueError(f"engine must be 'python' or 'compiled', got {engine!r}")
     if not isinstance(candidates, (int, np.integer)) or candidates < 1:
         raise ValueError(f"candidates must be a positive integer, got {candidates!r}")
-    V = scene.vertices
-    tiny = np.any((V != 0) & (np.abs(V) < tol.BSP_COMPILED_MIN_MAGNITUDE))
-    if engine == "compiled" and not tiny:
+    if engine == "compiled" and not np.any(
+            (scene.vertices != 0) & (np.abs(scene.vertices) < tol.BSP_COMPILED_MIN_MAGNITUDE)):
         return _build_bsp_compiled(scene, candidates, seed)
     rng = np.random.default_rng(seed)
     sampler = np.random.default_rng([seed, 1])    # its own stream: the same candidates

@@ -212,7 +212,7 @@ def _shaft(scene, p, j):
     if len(cand) == 0:
         return np.array([j], dtype=np.int64)
     V, _ = padded([flat.V[flat.offsets[k]:flat.offsets[k + 1]] for k in cand.tolist()])
-    kept = hull_blockers(V, np.arange(len(cand)), p[None], Q, -margin, flat=None)
+    kept = hull_blockers(V, np.arange(len(cand)), p[None], Q, -margin, none_if_flat=True)
     return None if kept is None else np.sort(np.append(cand[kept], j).astype(np.int64))
 
 
