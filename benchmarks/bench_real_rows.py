@@ -143,7 +143,8 @@ def uniform(path, k):
     rows = np.random.default_rng(1).choice(len(scene), min(k, len(scene)), replace=False)
     exact = ef.Exact()
     c, n = scene.centroids, scene.normals
-    exact.point_form_factors(scene, c[rows[0]], n[rows[0]])       # the set-up, untimed
+    # the set-up, untimed (error=True: the row is drawn again below, where it may raise)
+    exact.point_form_factors(scene, c[rows[0]], n[rows[0]], error=True)
     out = {"crossing": 0, "bound": 0, "shaft": 0, "worst": 0.0, "times": [], "notes": []}
     for r in rows.tolist():
         st = {}

@@ -13,7 +13,8 @@ from ..predicates import (coplanar_band_sides, coplanar_pairs, gamma, sides_of_p
 from ..prepared import prepared
 from ..rings import padded_buckets
 
-__all__ = ["BSPTree", "build_bsp", "scene_bsp", "front_to_back", "coplanar_overlaps"]
+__all__ = ["BSPTree", "build_bsp", "scene_bsp", "front_to_back", "node_sides", "node_thickness",
+           "coplanar_overlaps"]
 
 
 class BSPTree:
@@ -51,6 +52,7 @@ class BSPTree:
                  source_normals, whole=None, vertex_errors=None):
         self.normals = normals
         self.vertex_errors = vertex_errors
+        self._thickness = None      # node_thickness, once asked
         self.whole = (np.ones(len(fragments), dtype=bool) if whole is None
                       else np.asarray(whole, dtype=bool))
         self.offsets = offsets
@@ -599,14 +601,75 @@ def _build_bsp_buckets(scene):
     return tree, padded_buckets(tree.fragments)
 
 
+def node_thickness(tree):
+    """Per node, how far its own fragments' vertices lie from its plane at most, with
+    the rounding of that distance: the polygons coplanar with the node's by the band's
+    rule (:func:`exactff.predicates.coplanar_band`) lie in the node on either side of
+    its plane. Computed once per tree (cached on it).
+
+    Returns
+    -------
+    ndarray of shape (len(tree),)
+    """
+    if tree._thickness is not None:
+        return tree._thickness
+    sizes = np.array([len(here) for here in tree.node_fragments], dtype=np.int64)
+    flat = np.fromiter((f for here in tree.node_fragments for f in here), dtype=np.int64,
+                       count=int(sizes.sum()))
+    thickness = np.zeros(len(tree))
+    if len(flat):
+        counts = np.array([len(tree.fragments[f]) for f in flat.tolist()], dtype=np.int64)
+        V = np.concatenate([tree.fragments[f] for f in flat.tolist()])
+        node = np.repeat(np.repeat(np.arange(len(tree)), sizes), counts)
+        N, D = tree.normals[node], tree.offsets[node]
+        off = np.abs(np.einsum("ij,ij->i", N, V) - D)
+        off += gamma(4) * (np.einsum("ij,ij->i", np.abs(N), np.abs(V)) + np.abs(D))
+        np.maximum.at(thickness, node, off)
+    tree._thickness = thickness
+    return thickness
+
+
+def node_sides(tree, point):
+    """Per node of the tree, the side of ``point`` and the order of the node's visit.
+
+    The side is decided exactly (:func:`exactff.predicates.sides_of_point`): +1 in
+    front, -1 behind, 0 on the plane. Where the point lies within the node's thickness
+    (:func:`node_thickness`), the side is doubled (+2, -2; and 0): the node's own
+    fragments lie on both sides of the point's distance, so a fragment of the node may
+    stand between the point and the near subtree (a face flush with the point's own
+    surface, facing it from 1e-14 away, covers the hemisphere), and the node's
+    fragments are visited before both subtrees. Their order then errs only on the
+    slivers of the near subtree within the node's thickness; the usual order (near
+    subtree, node, far subtree) would put the whole near subtree in front of them.
+
+    Parameters
+    ----------
+    tree : BSPTree
+    point : array_like of shape (3,)
+
+    Returns
+    -------
+    ndarray of int8, shape (len(tree),)
+        -2, -1, 0, +1 or +2; the near subtree is the front one where it is >= 0.
+    """
+    p = np.asarray(point, dtype=float)
+    side = sides_of_point(tree.normals, tree.offsets, p).astype(np.int8)
+    off = np.abs(tree.normals @ p - tree.offsets)
+    within = off <= node_thickness(tree) + gamma(4) * (np.abs(tree.normals) @ np.abs(p)
+                                                       + np.abs(tree.offsets))
+    side[within] *= 2
+    return side
+
+
 def front_to_back(tree, point):
     """Fragment indices in front-to-back order as seen from ``point``.
 
     At each node the side holding the point is visited first, then the node's own
     fragments (coplanar: those facing the point first, then input order), then the far
-    side. The side is decided exactly
-    (:func:`exactff.predicates.side_of_plane`); a point on a node's plane sees the
-    node's fragments edge-on and either order is correct.
+    side; where the point lies within the node's thickness (on its plane, or as close
+    to it as a fragment of the node: :func:`node_sides`), the node's own fragments
+    first, then the two sides. The side is decided exactly
+    (:func:`exactff.predicates.side_of_plane`).
 
     Parameters
     ----------
@@ -617,8 +680,7 @@ def front_to_back(tree, point):
     -------
     list of int
     """
-    p = np.asarray(point, dtype=float)
-    side = sides_of_point(tree.normals, tree.offsets, p)
+    side = node_sides(tree, point)
     order = []
     stack = [(0, False)]
     front, back = tree.front, tree.back
@@ -632,11 +694,15 @@ def front_to_back(tree, point):
             near, far = front[node], back[node]
         else:
             near, far = back[node], front[node]
+        first = side[node] % 2 == 0        # within the node's thickness
         if far >= 0:
             stack.append((far, False))
-        stack.append((node, True))
+        if not first:
+            stack.append((node, True))
         if near >= 0:
             stack.append((near, False))
+        if first:
+            stack.append((node, True))
     return order
 
 

@@ -20,11 +20,11 @@ from .. import _tolerances as tol
 from ..errors import NumericalError, check_finite, misses_tolerance
 from ..geometry import cross, hull_blockers
 from ..kernel import engine_sides_rows, flat_polygons, unoccluded_row, unoccluded_rows
-from ..predicates import engine_sides, sides_of_point
+from ..predicates import engine_sides
 from ..rings import owners, padded, successors
 from ..prepared import prepared
 from ._svbsp import Core
-from .bsp import build_bsp
+from .bsp import build_bsp, node_sides
 from .engine import is_convex_enclosure, visible_form_factors
 
 __all__ = ["compiled_core", "compiled_form_factors", "compiled_form_factor_rows",
@@ -194,8 +194,10 @@ def _shaft(scene, p, j):
     indices (the scene's order, which the tie rule of coplanar faces follows): those
     reaching into the convex hull of ``p`` and ``j``, the lines of sight from p to j
     (:func:`exactff.geometry.hull_blockers`, keeping every polygon within
-    ``SHAFT_MARGIN`` of the scene's size of it); None where p and j span no solid hull
-    (p within rounding of j's plane)."""
+    ``SHAFT_MARGIN`` of the scene's size of it). Where p lies within rounding of j's
+    plane (p and j span no solid hull), the hull of j and the two points that margin
+    off p along j's normal, which holds the same lines of sight; None only where that
+    hull is flat too."""
     flat = flat_polygons(scene)
     # the polygons' boxes (once per scene; the scene is not padded as a whole: one long
     # polygon would pad every other to its length)
@@ -203,16 +205,20 @@ def _shaft(scene, p, j):
         np.minimum.reduceat(flat.V, flat.offsets[:-1]),
         np.maximum.reduceat(flat.V, flat.offsets[:-1])))
     Q = flat.V[flat.offsets[j]:flat.offsets[j + 1]]
-    ends = np.vstack([p[None], Q])
     margin = tol.SHAFT_MARGIN * (1.0 + float(flat.vmax.max()))
-    lo, hi = ends.min(axis=0) - margin, ends.max(axis=0) + margin
+    # the points the lines of sight start from: p, or p and p +- margin n_j
+    starts = p[None]
+    lo, hi = np.minimum(p, Q.min(axis=0)) - 2 * margin, np.maximum(p, Q.max(axis=0)) + 2 * margin
     box = np.all((hi_k >= lo) & (lo_k <= hi), axis=1)
     box[j] = False
     cand = np.flatnonzero(box)
     if len(cand) == 0:
         return np.array([j], dtype=np.int64)
     V, _ = padded([flat.V[flat.offsets[k]:flat.offsets[k + 1]] for k in cand.tolist()])
-    kept = hull_blockers(V, np.arange(len(cand)), p[None], Q, -margin, none_if_flat=True)
+    kept = hull_blockers(V, np.arange(len(cand)), starts, Q, -margin, none_if_flat=True)
+    if kept is None:
+        starts = p[None] + np.array([[margin], [-margin]]) * flat.normals[j]
+        kept = hull_blockers(V, np.arange(len(cand)), starts, Q, -margin, none_if_flat=True)
     return None if kept is None else np.sort(np.append(cand[kept], j).astype(np.int64))
 
 
@@ -411,7 +417,7 @@ def compiled_form_factors(scene, point, normal, *, two_sided=False, stats=None,
         return unoccluded_row(flat, p, normal, two_sided=two_sided, tolerance=tolerance,
                               sides=(side, band), return_error=error, strict=not error)
     tree, core = compiled_core(scene)
-    node_side = sides_of_point(tree.normals, tree.offsets, p).astype(np.int8)
+    node_side = node_sides(tree, p)
     F, E, band, crossing, counters = core.row(
         point=p, normal=np.asarray(normal, dtype=float), node_side=node_side,
         source_side=side.astype(np.int8), two_sided=bool(two_sided), cull=bool(shortcuts),
@@ -530,7 +536,7 @@ def compiled_solid_angles(scene, point, *, two_sided=True, stats=None, shortcuts
     flat = flat_polygons(scene)
     side, _ = engine_sides(flat, p)
     tree, core = compiled_core(scene)
-    node_side = sides_of_point(tree.normals, tree.offsets, p).astype(np.int8)
+    node_side = node_sides(tree, p)
     F, E, band, crossing, counters = core.row(
         point=p, normal=SPHERE_HORIZON, node_side=node_side, source_side=side.astype(np.int8),
         two_sided=bool(two_sided), cull=bool(shortcuts), box_budget=tol.SVBSP_BOX_BUDGET,
