@@ -408,6 +408,32 @@ def test_a_value_the_core_leaves_unsettled_is_settled_on_its_shaft(monkeypatch):
     assert F[wall] < ef.point_polygon_form_factor(p, n, scene.polygons[wall]) - 1e-3
 
 
+def test_shaft_of_a_polygon_within_rounding_of_the_point_plane():
+    # a floor tile j in the point's own plane (to rounding: 2 ulps above it) spans no
+    # solid hull with the point; its lines of sight graze the floor. The shaft starts
+    # them from the point +- the margin along j's normal instead (it returned None,
+    # and the row raised): a wall standing across the floor between the point and the
+    # tile may hide part of it and is kept; one behind the point, and one beside the
+    # tile's lines of sight, are not
+    from exactff.geometry import hull_blockers
+    from exactff.visibility.compiled import _shaft
+
+    y0 = 3.0
+    up = y0 + 2 * np.spacing(y0)
+    floor = lambda x0, x1, y, z0, z1: np.array([[x0, y, z0], [x0, y, z1], [x1, y, z1],
+                                                [x1, y, z0]])
+    across = lambda x, z0, z1: np.array([[x, y0 - 1, z0], [x, y0 + 1, z0], [x, y0 + 1, z1],
+                                         [x, y0 - 1, z1]])
+    scene = ef.Scene.from_polygons([floor(-1, 1, y0, -1, 1), floor(3, 4, up, -1, 1),
+                                    across(2, -2, 2), across(-2, -2, 2), across(3.5, 5, 6)])
+    p, j = np.array([0.0, y0, 0.0]), 1
+    Q = scene.polygons[j]
+    assert hull_blockers(np.array([scene.polygons[2]]), [0], p[None], Q, 0.0,
+                         none_if_flat=True) is None       # (no solid hull from p alone)
+    keep = _shaft(scene, p, j)
+    assert keep is not None and {1, 2} <= set(keep.tolist()) and not {3, 4} & set(keep.tolist())
+
+
 def test_rows_in_threads_give_the_same_values():
     from concurrent.futures import ThreadPoolExecutor
     scene = ef.scenes.office(300)
