@@ -74,6 +74,7 @@ __all__ = [
     "BSP_COMPILED_MIN_MAGNITUDE",
     "SHAFT_MARGIN",
     "OCCLUDED_ATOL",
+    "BOUND_CAP_FROM",
     "SVBSP_SPLIT_ULPS",
     "SVBSP_BOX_BUDGET",
     "SVBSP_FILTER_ROUNDOFFS",
@@ -624,6 +625,11 @@ SVBSP_BAND = 16 * LONGDOUBLE_EPS
 #: Python engine): no precision tier narrows that part, and the Python engine's crossings
 #: are rounded as well.
 OCCLUDED_ATOL = 1e-11
+
+#: A compiled row's bound above its value and above this is capped by what the value
+#: could be off by at all (between 0 and the unoccluded value:
+#: ``exactff.visibility.compiled._capped_by_unoccluded``); below it, none is computed.
+BOUND_CAP_FROM = 1e-6
 #: Compiled core: the largest scene whose compiled values that miss the tolerance are
 #: recomputed by the Python engine (per polygon: its row, of which only those values
 #: are kept; ``stats["python_polygons"]``). Its rows cost 5 to 20 times the compiled

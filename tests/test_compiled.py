@@ -434,6 +434,39 @@ def test_shaft_of_a_polygon_within_rounding_of_the_point_plane():
     assert keep is not None and {1, 2} <= set(keep.tolist()) and not {3, 4} & set(keep.tolist())
 
 
+def test_a_bound_that_says_nothing_is_capped_by_the_unoccluded_value(monkeypatch):
+    # a bound above its value (the band's slivers reached 1e7 on a value of 3e-6 in
+    # SampleHouse4) is capped by what the value could be off by at all: the exact value
+    # lies between 0 and the polygon's unoccluded value. Planted here: the back wall's
+    # band part set to 1e7 (the blocks hide part of it), a small light's to 0.5
+    import exactff.visibility.compiled as compiled
+
+    scene = ef.scenes.cornell_box(closed=True)
+    p, n = scene.centroids[20], scene.normals[20]
+    tree, core = compiled.compiled_core(scene)
+    Fc, Ec = compiled_form_factors(scene, p, n, error=True)
+    wall = 6
+    light = int(np.argmin(np.where(Fc > 0, Fc, np.inf)))
+    assert Fc[light] < 0.5
+
+    class Blown:
+        def row(self, **kwargs):
+            F, E, band, crossing, counters = core.row(**kwargs)
+            band = band.copy()
+            band[wall], band[light] = 1e7, 0.5
+            return F, E, band, crossing, counters
+
+    monkeypatch.setattr(compiled, "compiled_core", lambda s, *a: (tree, Blown()))
+    F, E = compiled_form_factors(scene, p, n, error=True)
+    U = ef.point_polygon_form_factors(p, n, [scene.polygons[wall], scene.polygons[light]])
+    assert F[wall] == Fc[wall] and Fc[wall] < U[0] - 1e-3
+    assert E[wall] == pytest.approx(max(F[wall], U[0] - F[wall]), rel=1e-12)
+    assert E[light] == pytest.approx(max(F[light], U[1] - F[light]), abs=1e-15)
+    Fp, Ep = ef.Exact(engine="python").point_form_factors(scene, p, n, error=True)
+    assert np.all(np.abs(F - Fp) <= E + Ep)
+    np.testing.assert_array_equal(np.delete(E, [wall, light]), np.delete(Ec, [wall, light]))
+
+
 def test_rows_in_threads_give_the_same_values():
     from concurrent.futures import ThreadPoolExecutor
     scene = ef.scenes.office(300)
