@@ -30,6 +30,7 @@ __all__ = [
     "BSP_SCORE_SAMPLE",
     "BSP_AXIS_CANDIDATE_MIN",
     "CHART_EDGE_ULPS",
+    "CHART_EXACT_CLIP_RTOL",
     "MP_MAX_DPS",
     "MP_VALUE_FLOOR",
     "VALUE_FLOOR",
@@ -306,6 +307,12 @@ BSP_AXIS_CANDIDATE_MIN = 512
 #: the projection; left there, two images meeting on the edge had vertices 1e-15 apart,
 #: which GEOS's overlays and predicates got wrong.
 CHART_EDGE_ULPS = 8
+
+#: A polygon whose plane passes within this much of its size of the point is clipped to
+#: the charts' frustums in rational arithmetic (exactff.visibility.charts.
+#: exact_chart_clip): in floating point, the crossings near the point carry rounding of
+#: the polygon's size, which there is a large share of the image.
+CHART_EXACT_CLIP_RTOL = 2.0 ** -30
 
 
 #: mpmath's precision limit (decimal digits) in the last escalation tier: a value that

@@ -5,13 +5,16 @@ straight-line clipping there gives the exact topology of the visible graph. Shar
 the exact engine and the discrete methods.
 """
 
+from fractions import Fraction
+
 import numpy as np
 import shapely
 
 from .. import _tolerances as tol
 from ..halfspace import clip_halfspace
 
-__all__ = ["CHARTS", "chart_planes", "chart_clip", "chart_polygons", "chart_rect", "lift", "merge_close"]
+__all__ = ["CHARTS", "chart_planes", "chart_clip", "chart_polygons", "chart_rect", "lift", "merge_close",
+           "planes_near_point", "exact_chart_clip"]
 
 _X, _Y, _Z = np.eye(3)
 
@@ -123,6 +126,77 @@ def chart_clip(V, counts, chart, margin=0.0):
     return live, UV, cl
 
 
+def planes_near_point(V, counts):
+    """Which polygons (local frame of the point, padded) lie in planes that pass within
+    ``CHART_EXACT_CLIP_RTOL`` of their size of the point (the origin), by Newell's
+    normal: their clips to a chart's frustum are ill-conditioned in floating point
+    (:func:`exact_chart_clip`)."""
+    K = V.shape[1]
+    slot = np.arange(K)[None, :] < counts[:, None]
+    nxt = (np.arange(K)[None, :] + 1) % counts[:, None]
+    W = np.take_along_axis(V, nxt[:, :, None].repeat(3, axis=2), axis=1)
+    N = np.where(slot[:, :, None], np.cross(V - V[:, :1], W - V[:, :1]), 0.0).sum(axis=1)
+    height = np.abs(np.einsum("mj,mj->m", N, V[:, 0]))
+    size = np.abs(V).max(axis=(1, 2))
+    return height <= tol.CHART_EXACT_CLIP_RTOL * size * np.linalg.norm(N, axis=1)
+
+
+def exact_chart_clip(P, chart):
+    """A polygon's image in a chart, clipped to its frustum in rational arithmetic from
+    its (local) float vertices and rounded once: for a polygon whose plane passes within
+    rounding of the point (:func:`planes_near_point`). Clipped in floating point, the
+    frustum's edges meet such a plane a few ulps from the point, between computed
+    crossings whose rounding is of the polygon's size: a face 8 ulps of 3 m in front of
+    the point covers the whole top chart, and its float clip was a square with corners
+    10 % off, through which what lay behind showed (0.003 of the hemisphere).
+
+    Parameters
+    ----------
+    P : ndarray of shape (K, 3)
+        The polygon in the local frame of the point.
+    chart : one of CHARTS
+
+    Returns
+    -------
+    ndarray of shape (k, 2)
+        The clipped image's vertices in chart coordinates (k < 3: nothing in the chart).
+
+    Examples
+    --------
+    >>> sq = np.array([[-3, -3, 1e-15], [3, -3, 1e-15], [3, 3, 1e-15], [-3, 3, 1e-15]])
+    >>> exact_chart_clip(sq, CHARTS[0]).tolist()
+    [[1.0, -1.0], [1.0, 1.0], [-1.0, 1.0], [-1.0, -1.0]]
+    """
+    ring = [tuple(Fraction(float(x)) for x in v) for v in np.asarray(P)]
+    dot = lambda a, b: a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+    for h in chart_planes(chart):
+        h = tuple(Fraction(float(x)) for x in h)
+        out = []
+        for a, b in zip(ring, ring[1:] + ring[:1]):
+            sa, sb = dot(h, a), dot(h, b)
+            if sa >= 0:
+                out.append(a)
+            if (sa > 0 and sb < 0) or (sa < 0 and sb > 0):
+                t = sa / (sa - sb)
+                out.append(tuple(x + t * (y - x) for x, y in zip(a, b)))
+        ring = out
+        if len(ring) < 3:
+            return np.zeros((0, 2))
+    eu, ev, ew, _ = chart
+    eu, ev, ew = ([Fraction(float(x)) for x in e] for e in (eu, ev, ew))
+    uv = []
+    for x in ring:
+        w = dot(ew, x)
+        if w <= 0:          # the point itself (the apex): no direction, left out
+            continue
+        q = (float(dot(eu, x) / w), float(dot(ev, x) / w))
+        if not uv or q != uv[-1]:
+            uv.append(q)
+    if len(uv) > 1 and uv[0] == uv[-1]:
+        uv.pop()
+    return np.array(uv).reshape(-1, 2)
+
+
 def merge_close(x):
     """Values within ``CHART_EDGE_ULPS`` ulps of their neighbour (sorted) replaced by the
     first of their run: near-coincident points collapse to one, others stay."""
@@ -156,8 +230,13 @@ def chart_polygons(buckets, chart):
             continue
         mask = np.arange(UV.shape[1])[None, :] < cl[:, None]
         rings = shapely.linearrings(UV[mask], indices=np.repeat(np.arange(len(live)), cl))
+        images = shapely.polygons(rings)
+        # a plane through the point to rounding: the clip in rational arithmetic
+        for i in np.flatnonzero(planes_near_point(V[live], counts[live])).tolist():
+            uv = exact_chart_clip(V[live[i], :counts[live[i]]], chart)
+            images[i] = shapely.Polygon(uv) if len(uv) >= 3 else shapely.Polygon()
         idx.append(pos[live])
-        polys.append(shapely.polygons(rings))
+        polys.append(images)
     if not idx:
         return np.zeros(0, dtype=int), np.empty(0, object), np.zeros((0, 4)), 0
     idx, polys = np.concatenate(idx), np.concatenate(polys)
