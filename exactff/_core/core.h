@@ -333,8 +333,8 @@ class Core {
          double split, std::vector<double> vertex_errors);
 
     // one row from point (3,) with normal (3,), given each BSP node's side of the point
-    // (+1 front, -1 back, 0 on; doubled where the point lies within the node's
-    // thickness, whose own fragments then come first: exactff.visibility.bsp.node_sides)
+    // (+1 front, -1 back; even, 0 or +-2, where the node's own fragments come first:
+    // exactff.visibility.bsp.node_sides)
     // and each polygon's (+1 front, -1 back, 0 on)
     RowResult row(const double* point, const double* normal, const int8_t* node_side,
                   const int8_t* source_side, bool two_sided, bool cull, int64_t box_budget,

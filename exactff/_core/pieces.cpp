@@ -197,9 +197,9 @@ void Core::run(const double* pp, const double* pn, const int8_t* node_side,
         }
         int64_t nearc = near_front ? front_[k] : back_[k];
         int64_t farc = near_front ? back_[k] : front_[k];
-        // within the node's thickness (node_side 0 or +-2: exactff.visibility.bsp.
-        // node_sides), the node's own fragments first: one of them may stand between
-        // the point and the near subtree
+        // node_side 0 or +-2 (exactff.visibility.bsp.node_sides): one of the node's own
+        // fragments may stand between the point and the near subtree, so they come
+        // first
         const bool first = node_side[k] % 2 == 0;
         if (farc >= 0) stack.push_back({farc, false});
         if (!first) stack.push_back({k, true});

@@ -13,7 +13,7 @@ from ..predicates import (coplanar_band_sides, coplanar_pairs, gamma, sides_of_p
 from ..prepared import prepared
 from ..rings import padded_buckets
 
-__all__ = ["BSPTree", "build_bsp", "scene_bsp", "front_to_back", "node_sides", "node_thickness",
+__all__ = ["BSPTree", "build_bsp", "scene_bsp", "front_to_back", "node_sides", "node_first_charges",
            "coplanar_overlaps"]
 
 
@@ -46,13 +46,18 @@ class BSPTree:
         0 for an input vertex, the rounding of a split's crossing (and of the splitting
         plane, or the snap to an end point) for the others. Both builds give them (the
         Python engine charges them to its values: ``engine._crossing_charges``).
+    node_members : tuple of 4 ndarrays
+        The nodes' own fragments as flat arrays, node by node: each one's node, source
+        polygon, facing along the node's normal (+1, -1), and each node's start in them
+        (length M + 1).
     """
 
     def __init__(self, normals, offsets, front, back, node_fragments, fragments, source, splits,
                  source_normals, whole=None, vertex_errors=None):
         self.normals = normals
         self.vertex_errors = vertex_errors
-        self._thickness = None      # node_thickness, once asked
+        self._offsets_cache = None      # fragment_offsets, once asked
+        self._subtrees_cache = None     # subtree_fragments, once asked
         self.whole = (np.ones(len(fragments), dtype=bool) if whole is None
                       else np.asarray(whole, dtype=bool))
         self.offsets = offsets
@@ -69,6 +74,10 @@ class BSPTree:
         node = np.repeat(np.arange(len(sizes)), sizes)
         orient = np.sign(np.einsum("ij,ij->i", source_normals[self.source[flat]],
                                    normals[node])) if len(flat) else np.zeros(0)
+        # each node's fragments' sources and their facing along the node's normal, by
+        # node (node_sides reads them every row)
+        self.node_members = (node, self.source[flat], orient.astype(np.int8),
+                              np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64))
         bounds = np.concatenate([[0], np.cumsum(sizes)]).tolist()
         for facing, dest in ((orient, "node_fragments"), (-orient, "node_fragments_behind")):
             # tie_priority's order (facing away last, then source) within each node,
@@ -77,6 +86,76 @@ class BSPTree:
                                 node))
             ordered = flat[order].tolist()
             setattr(self, dest, [ordered[a:b] for a, b in zip(bounds[:-1], bounds[1:])])
+
+    def fragment_offsets(self):
+        """Per node, how far its own fragments reach off its plane on either side: the
+        largest signed offset ``n . v - d`` of their vertices less its rounding, and the
+        smallest plus it (the rounding of the float offset, ``gamma(4) (|n| . |v| + |d|)``,
+        and the vertex's own bound from a split, ``self.vertex_errors``). The polygons
+        coplanar with the node's by the band's rule
+        (:func:`exactff.predicates.coplanar_band`) lie in the node on either side of its
+        plane. Computed once (cached).
+
+        Returns
+        -------
+        (ndarray of shape (len(self),), ndarray of shape (len(self),))
+            ``hi`` and ``lo`` (-inf and +inf for a node without fragments): a vertex lies
+            surely beyond a point at offset ``o`` (with its own rounding ``r``) on the front
+            side where ``hi > o + r``, on the back side where ``lo < o - r``.
+        """
+        if self._offsets_cache is not None:
+            return self._offsets_cache
+        sizes = np.array([len(here) for here in self.node_fragments], dtype=np.int64)
+        flat = np.fromiter((f for here in self.node_fragments for f in here), dtype=np.int64,
+                           count=int(sizes.sum()))
+        hi, lo = np.full(len(self), -np.inf), np.full(len(self), np.inf)
+        if len(flat):
+            frags = flat.tolist()
+            counts = np.array([len(self.fragments[f]) for f in frags], dtype=np.int64)
+            V = np.concatenate([self.fragments[f] for f in frags])
+            node = np.repeat(np.repeat(np.arange(len(self)), sizes), counts)
+            N, D = self.normals[node], self.offsets[node]
+            off = np.einsum("ij,ij->i", N, V) - D
+            r = gamma(4) * (np.einsum("ij,ij->i", np.abs(N), np.abs(V)) + np.abs(D))
+            if self.vertex_errors is not None:
+                r = r + np.concatenate([self.vertex_errors[f] for f in frags]) * np.linalg.norm(N, axis=1)
+            np.maximum.at(hi, node, off - r)
+            np.minimum.at(lo, node, off + r)
+        self._offsets_cache = (hi, lo)
+        return hi, lo
+
+    def subtree_fragments(self):
+        """The tree's nodes in preorder (each subtree a run), its fragments by node in that
+        order, and the fragments' boxes; cached on the self. Returns ``(pre, end, by_pre,
+        start, lo, hi)``: node c's subtree holds the fragments
+        ``by_pre[start[pre[c]]:start[end[c]]]``."""
+        if self._subtrees_cache is not None:
+            return self._subtrees_cache
+        M = len(self)
+        pre, end = np.zeros(M, dtype=np.int64), np.zeros(M, dtype=np.int64)
+        order, stack = [], [(0, False)]
+        while stack:
+            k, done = stack.pop()
+            if done:
+                end[k] = len(order)
+                continue
+            pre[k] = len(order)
+            order.append(k)
+            stack.append((k, True))
+            for c in (self.back[k], self.front[k]):
+                if c >= 0:
+                    stack.append((int(c), False))
+        sizes = np.array([len(self.node_fragments[k]) for k in order], dtype=np.int64)
+        start = np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64)
+        by_pre = np.fromiter((f for k in order for f in self.node_fragments[k]), dtype=np.int64,
+                             count=int(sizes.sum()))
+        counts = np.array([len(P) for P in self.fragments], dtype=np.int64)
+        V = np.concatenate(self.fragments) if len(counts) else np.zeros((0, 3))
+        at = np.concatenate([[0], np.cumsum(counts)[:-1]]).astype(np.int64)
+        lo = np.minimum.reduceat(V, at) if len(counts) else np.zeros((0, 3))
+        hi = np.maximum.reduceat(V, at) if len(counts) else np.zeros((0, 3))
+        self._subtrees_cache = (pre, end, by_pre, start, lo, hi)
+        return self._subtrees_cache
 
     def __len__(self):
         return len(self.offsets)
@@ -601,86 +680,184 @@ def _build_bsp_buckets(scene):
     return tree, padded_buckets(tree.fragments)
 
 
-def node_thickness(tree):
-    """Per node, how far its own fragments' vertices lie from its plane at most, with
-    the rounding of that distance: the polygons coplanar with the node's by the band's
-    rule (:func:`exactff.predicates.coplanar_band`) lie in the node on either side of
-    its plane. Computed once per tree (cached on it).
-
-    Returns
-    -------
-    ndarray of shape (len(tree),)
-    """
-    if tree._thickness is not None:
-        return tree._thickness
-    sizes = np.array([len(here) for here in tree.node_fragments], dtype=np.int64)
-    flat = np.fromiter((f for here in tree.node_fragments for f in here), dtype=np.int64,
-                       count=int(sizes.sum()))
-    thickness = np.zeros(len(tree))
-    if len(flat):
-        counts = np.array([len(tree.fragments[f]) for f in flat.tolist()], dtype=np.int64)
-        V = np.concatenate([tree.fragments[f] for f in flat.tolist()])
-        node = np.repeat(np.repeat(np.arange(len(tree)), sizes), counts)
-        N, D = tree.normals[node], tree.offsets[node]
-        off = np.abs(np.einsum("ij,ij->i", N, V) - D)
-        off += gamma(4) * (np.einsum("ij,ij->i", np.abs(N), np.abs(V)) + np.abs(D))
-        np.maximum.at(thickness, node, off)
-    tree._thickness = thickness
-    return thickness
-
-
-def node_sides(tree, point):
+def node_sides(tree, point, sides=None):
     """Per node of the tree, the side of ``point`` and the order of the node's visit.
 
     The side is decided exactly (:func:`exactff.predicates.sides_of_point`): +1 in
-    front, -1 behind, 0 on the plane. Where the point lies within the node's thickness
-    (:func:`node_thickness`), the side is doubled (+2, -2; and 0): the node's own
-    fragments lie on both sides of the point's distance, so a fragment of the node may
-    stand between the point and the near subtree (a face flush with the point's own
-    surface, facing it from 1e-14 away, covers the hemisphere), and the node's
-    fragments are visited before both subtrees. Their order then errs only on the
-    slivers of the near subtree within the node's thickness; the usual order (near
-    subtree, node, far subtree) would put the whole near subtree in front of them.
+    front, -1 behind, 0 on the plane. It is doubled (+2, -2; 0 on the plane) where one
+    of the node's own fragments may stand between the point and the near subtree, so
+    that the node's fragments are visited before both subtrees: where the point lies
+    on the far side of that fragment's own plane from the near subtree (by the exact
+    side of the point for its polygon, ``sides``). The node holds the polygons coplanar
+    with its plane by the band's rule (:func:`exactff.predicates.coplanar_band`), on
+    either side of it: a face flush with the point's own surface, facing it from 1e-14
+    away, covers the hemisphere, and what lies behind it must not show. The near
+    subtree's polygons that reach into the slab between the point and those fragments
+    may then be misordered with them: what that can move is charged
+    (:func:`node_first_charges`). Elsewhere the usual order (near subtree, node, far
+    subtree) is exact but for the same slivers: a segment from the point into the near
+    subtree does not cross a fragment whose plane has both on one side. A point on the
+    plane of a node whose fragments all contain it (or without ``sides``) is given +1.
 
     Parameters
     ----------
     tree : BSPTree
     point : array_like of shape (3,)
+    sides : ndarray of shape (n,), int, optional
+        The exact side of the point for each of the scene's polygons, as the engines
+        take it (:func:`exactff.predicates.engine_sides`: 0 seen edge-on). None: no
+        node's fragments come first.
 
     Returns
     -------
     ndarray of int8, shape (len(tree),)
-        -2, -1, 0, +1 or +2; the near subtree is the front one where it is >= 0.
+        -2, -1, 0, +1 or +2: the near subtree is the front one where it is >= 0, and
+        the node's fragments come first where it is even.
+
+    Examples
+    --------
+    A floor, and a face 32 ulps above it facing down over the point: from a point on
+    the floor the face comes first; without the sides it would come after the floor's
+    front subtree (the wall, which it hides).
+
+    >>> import exactff as ef
+    >>> from exactff.kernel import flat_polygons
+    >>> from exactff.predicates import engine_sides
+    >>> t = 32 * np.spacing(1.0)
+    >>> floor = [[-1, 1, -1], [-1, 1, 1], [1, 1, 1], [1, 1, -1]]
+    >>> face = [[-1, 1 + t, -1], [1, 1 + t, -1], [1, 1 + t, 1], [-1, 1 + t, 1]]
+    >>> wall = [[-2, 1.5, -2], [2, 1.5, -2], [2, 1.5, 2], [-2, 1.5, 2]]
+    >>> scene = ef.Scene.from_polygons([floor, face, wall])
+    >>> tree, p = build_bsp(scene), np.array([0.0, 1.0, 0.0])
+    >>> side, _ = engine_sides(flat_polygons(scene), p)
+    >>> side.tolist(), node_sides(tree, p, side).tolist(), node_sides(tree, p).tolist()
+    ([0, 1, 1], [0, 1], [1, 1])
     """
     p = np.asarray(point, dtype=float)
     side = sides_of_point(tree.normals, tree.offsets, p).astype(np.int8)
-    off = np.abs(tree.normals @ p - tree.offsets)
-    within = off <= node_thickness(tree) + gamma(4) * (np.abs(tree.normals) @ np.abs(p)
-                                                       + np.abs(tree.offsets))
-    side[within] *= 2
-    return side
+    first = np.zeros(len(tree), dtype=bool)
+    node, src, orient, start = tree.node_members
+    if sides is not None and len(node):
+        # each fragment's polygon: which side of its own plane the point lies on, along
+        # the node's normal (+1: on the node's front side of it; 0: seen edge-on)
+        along = np.asarray(sides, dtype=np.int8)[src] * orient
+        has = lambda mask: np.bincount(node[mask], minlength=len(tree)) > 0
+        first = (((side > 0) & has(along < 0)) | ((side < 0) & has(along > 0))
+                 | ((side == 0) & has(along != 0)))
+    return np.where(first, 2 * side, np.where(side == 0, 1, side)).astype(np.int8)
 
 
-def front_to_back(tree, point):
+def node_first_charges(tree, point, code, receives):
+    """What visiting a node's fragments before its near subtree (:func:`node_sides`)
+    may misplace, per fragment: the directions whose first hit is a near-subtree
+    polygon inside the slab between the point and the node's fragments beyond it.
+
+    A ray at elevation a off the node's plane leaves that slab (width w, from the
+    point's offset to the farthest fragment beyond it) within w / sin(a); only a
+    polygon of the near subtree reaching into the slab, at distance at least d from
+    the point, can come first there, so only rays with sin(a) <= w / d can be
+    misordered: a band about a great circle of area at most 4 pi w / d on the unit
+    sphere (4 w / d in form-factor units, cosine-weighted over pi). That is charged to
+    the node's fragments and to those near-subtree fragments (their first hits are the
+    only ones that can change), taking each fragment's box for the polygon (its
+    distance a lower bound).
+
+    Parameters
+    ----------
+    tree : BSPTree
+    point : array_like of shape (3,)
+    code : ndarray of int8
+        :func:`node_sides` of the point.
+    receives : ndarray of shape (n,), bool
+        Which of the scene's polygons receive (the others' values are 0, whatever the
+        order).
+
+    Returns
+    -------
+    ndarray of shape (n,)
+        ``w / d`` per receiving polygon, the largest of its fragments' (at most 1; 0
+        where nothing can be misordered): times 4 for form factors, 4 pi for solid
+        angles.
+
+    Examples
+    --------
+    A floor, a face 32 ulps above it facing down, and a wall standing on the floor
+    1 mm from a point on it: the wall's foot may hide part of the face or not.
+
+    >>> import exactff as ef
+    >>> from exactff.kernel import flat_polygons
+    >>> from exactff.predicates import engine_sides
+    >>> t = 32 * np.spacing(1.0)
+    >>> floor = [[-1, 1, -1], [-1, 1, 1], [1, 1, 1], [1, 1, -1]]
+    >>> face = [[0.002, 1 + t, -1], [0.003, 1 + t, -1], [0.003, 1 + t, 1], [0.002, 1 + t, 1]]
+    >>> wall = [[0.001, 1, -2], [0.001, 2, -2], [0.001, 2, 2], [0.001, 1, 2]]
+    >>> scene = ef.Scene.from_polygons([floor, face, wall])
+    >>> tree, p = build_bsp(scene), np.array([0.0, 1.0, 0.0])
+    >>> side, _ = engine_sides(flat_polygons(scene), p)
+    >>> c = node_first_charges(tree, p, node_sides(tree, p, side), side != 0)
+    >>> bool(c[1] > 0 and c[2] > 0), bool(c.max() < 1e-10)
+    (True, True)
+    """
+    receives = np.asarray(receives, dtype=bool)
+    charge = np.zeros(len(receives))
+    nodes = np.flatnonzero(code % 2 == 0)
+    if len(nodes) == 0:
+        return charge
+    p = np.asarray(point, dtype=float)
+    pre, end, by_pre, start, lo_box, hi_box = tree.subtree_fragments()
+    hi, lo = tree.fragment_offsets()
+    for k in nodes.tolist():
+        n, d = tree.normals[k], tree.offsets[k]
+        o = float(n @ p - d)
+        r = gamma(4) * (float(np.abs(n) @ np.abs(p)) + abs(d))
+        # the slab between the point and the fragments beyond it, and its width
+        a, b = (min(o, lo[k]) - r, max(o, hi[k]) + r)
+        w = (hi[k] - o if code[k] > 0 else o - lo[k] if code[k] < 0 else max(hi[k], -lo[k])) + 2 * r
+        kids = [c for c in ((tree.front[k], tree.back[k]) if code[k] == 0 else
+                            (tree.front[k] if code[k] > 0 else tree.back[k],)) if c >= 0]
+        cand = np.concatenate([by_pre[start[pre[c]]:start[end[c]]] for c in kids]) if kids else []
+        cand = np.asarray(cand, dtype=np.int64)
+        if len(cand) == 0:
+            continue
+        # the candidates' boxes reaching into the slab, and their distances from p
+        centre, half = (lo_box[cand] + hi_box[cand]) / 2, (hi_box[cand] - lo_box[cand]) / 2
+        mid, spread = centre @ n - d, half @ np.abs(n)
+        reach = (mid + spread * (1 + 1e-12) >= a) & (mid - spread * (1 + 1e-12) <= b)
+        cand = cand[reach]
+        if len(cand) == 0:
+            continue
+        gap = np.maximum(np.maximum(lo_box[cand] - p, p - hi_box[cand]), 0.0)
+        dist = float(np.sqrt((gap * gap).sum(axis=1)).min()) * (1 - 1e-12)
+        share = 1.0 if dist <= 0 else min(1.0, w / dist)
+        hit = np.concatenate([tree.source[np.asarray(tree.node_fragments[k], dtype=np.int64)],
+                              tree.source[cand]])
+        charge[hit] = np.maximum(charge[hit], share)
+    return np.where(receives, charge, 0.0)
+
+
+def front_to_back(tree, point, sides=None):
     """Fragment indices in front-to-back order as seen from ``point``.
 
     At each node the side holding the point is visited first, then the node's own
     fragments (coplanar: those facing the point first, then input order), then the far
-    side; where the point lies within the node's thickness (on its plane, or as close
-    to it as a fragment of the node: :func:`node_sides`), the node's own fragments
-    first, then the two sides. The side is decided exactly
+    side; where one of the node's own fragments may stand between the point and the
+    near side (:func:`node_sides`, from ``sides``), the node's own fragments first,
+    then the two sides. The side is decided exactly
     (:func:`exactff.predicates.side_of_plane`).
 
     Parameters
     ----------
     tree : BSPTree
     point : array_like of shape (3,)
+    sides : ndarray of shape (n,), int, optional
+        The exact side of the point for each polygon, as the engines take it
+        (:func:`exactff.predicates.engine_sides`); None: the usual order at every node.
 
     Returns
     -------
     list of int
     """
-    side = node_sides(tree, point)
+    side = node_sides(tree, point, sides)
     order = []
     stack = [(0, False)]
     front, back = tree.front, tree.back

@@ -24,7 +24,7 @@ from ..predicates import engine_sides
 from ..rings import owners, padded, successors
 from ..prepared import prepared
 from ._svbsp import Core
-from .bsp import build_bsp, node_sides
+from .bsp import build_bsp, node_first_charges, node_sides
 from .engine import is_convex_enclosure, visible_form_factors
 
 __all__ = ["compiled_core", "compiled_form_factors", "compiled_form_factor_rows",
@@ -417,7 +417,7 @@ def compiled_form_factors(scene, point, normal, *, two_sided=False, stats=None,
         return unoccluded_row(flat, p, normal, two_sided=two_sided, tolerance=tolerance,
                               sides=(side, band), return_error=error, strict=not error)
     tree, core = compiled_core(scene)
-    node_side = node_sides(tree, p)
+    node_side = node_sides(tree, p, side)
     F, E, band, crossing, counters = core.row(
         point=p, normal=np.asarray(normal, dtype=float), node_side=node_side,
         source_side=side.astype(np.int8), two_sided=bool(two_sided), cull=bool(shortcuts),
@@ -426,6 +426,9 @@ def compiled_form_factors(scene, point, normal, *, two_sided=False, stats=None,
     check_finite(F, E)
     check_finite(band)
     check_finite(crossing)
+    # what visiting a node's fragments before its near subtree may misplace: with the
+    # band's slivers (a bound on the topology, not checked)
+    band = band + 4 * node_first_charges(tree, p, node_side, (side > 0) | (two_sided & (side != 0)))
     st["max_crossing_bound"] = float(crossing.max(initial=0.0))
     path = "compiled"
     if tolerance is not None:
@@ -557,7 +560,7 @@ def compiled_solid_angles(scene, point, *, two_sided=True, stats=None, shortcuts
     flat = flat_polygons(scene)
     side, _ = engine_sides(flat, p)
     tree, core = compiled_core(scene)
-    node_side = node_sides(tree, p)
+    node_side = node_sides(tree, p, side)
     F, E, band, crossing, counters = core.row(
         point=p, normal=SPHERE_HORIZON, node_side=node_side, source_side=side.astype(np.int8),
         two_sided=bool(two_sided), cull=bool(shortcuts), box_budget=tol.SVBSP_BOX_BUDGET,
@@ -565,6 +568,7 @@ def compiled_solid_angles(scene, point, *, two_sided=True, stats=None, shortcuts
     check_finite(F, E)
     check_finite(band)
     check_finite(crossing)
+    band = band + 4 * node_first_charges(tree, p, node_side, (side > 0) | (two_sided & (side != 0)))
     # the core's unit is the solid angle over pi (the cosine-weighted rows' unit)
     W = F * math.pi
     # (and the products' rounding)

@@ -18,7 +18,7 @@ from ..geometry import receiver_frame, to_local
 from ..kernel import eq3_form_factor, flat_polygons, unoccluded_row
 from ..predicates import coplanar_band_sides, engine_sides
 from ..prepared import prepared
-from .bsp import coplanar_overlaps, front_to_back, scene_bsp
+from .bsp import coplanar_overlaps, front_to_back, node_first_charges, node_sides, scene_bsp
 from .charts import CHARTS, chart_clip
 from .clipper import visible_pieces
 from .pieces import pieces_form_factors, pieces_solid_angles
@@ -161,6 +161,9 @@ def visible_form_factors(scene, point, normal, *, two_sided=False, stats=None,
                                    f"({moved[i]:.3g} of the estimate from the BSP's rounded "
                                    f"crossings, above the accuracy target "
                                    f"{tol.OCCLUDED_ATOL:g})", "")
+    # what visiting a node's fragments before its near subtree may misplace (a topology
+    # bound, as the compiled core's band: no precision narrows it, so it is not checked)
+    E = E + 4 * node_first_charges(tree, p, node_sides(tree, p, side), _receiving(side, two_sided))
     return (F, E) if error else F
 
 
@@ -217,7 +220,14 @@ def visible_solid_angles(scene, point, normal, *, two_sided=False, stats=None,
     pieces = visible_pieces(kept, receives, stats=st, shortcuts=shortcuts, charts=charts)
     Wf, Ef = pieces_solid_angles(pieces, len(order))
     crossing = _crossing_charges(tree, order, p, normal, charts, st, solid_angle=True)
-    return _per_polygon(src, Wf, Ef + crossing, len(scene), "solid angle", stats)
+    W, E = _per_polygon(src, Wf, Ef + crossing, len(scene), "solid angle", stats)
+    return W, E + 4 * np.pi * node_first_charges(tree, p, node_sides(tree, p, side),
+                                                 _receiving(side, two_sided))
+
+
+def _receiving(side, two_sided):
+    """Which polygons receive, by the row's sides (+1 front, -1 back, 0 edge-on)."""
+    return (side > 0) | (two_sided & (side != 0))
 
 
 def _crossing_charges(tree, order, p, normal, charts, st, solid_angle=False):
@@ -410,7 +420,7 @@ def _row_fragments(scene, p, normal, side, two_sided, shortcuts, st):
     local frame of the point and in the world, bucket by bucket; whether each
     receives. Returns ``(tree, order, src, kept, world, receives)``."""
     tree, buckets = scene_bsp(scene)
-    order = np.array(front_to_back(tree, p), dtype=int)
+    order = np.array(front_to_back(tree, p, side), dtype=int)
     position = np.empty(len(order), dtype=int)
     position[order] = np.arange(len(order))
     src = tree.source[order]
