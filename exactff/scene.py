@@ -400,6 +400,28 @@ class Scene:
         state["_metadata"] = _metadata_text(metadata)
         return _restore_scene(state)
 
+    def subset(self, indices) -> "Scene":
+        """The scene of some of these polygons, in the order given (shared, not
+        validated again: a scene built with a looser ``planarity_rtol`` stays valid),
+        with their names, groups and materials; no metadata.
+
+        Parameters
+        ----------
+        indices : array_like of int
+
+        Examples
+        --------
+        >>> s = Scene.from_polygons([[[0, 0, 0], [1, 0, 0], [0, 1, 0]],
+        ...                          [[0, 0, 1], [1, 0, 1], [0, 1, 1]]], names=["a", "b"])
+        >>> t = s.subset([1])
+        >>> len(t), t.names, t.polygons[0] is s.polygons[1]
+        (1, ('b',), True)
+        """
+        ids = [int(i) for i in np.asarray(indices, dtype=np.int64).ravel()]
+        return Scene(tuple(self.polygons[i] for i in ids),
+                     names=[self.names[i] for i in ids], groups=[self.groups[i] for i in ids],
+                     materials=[self.materials[i] for i in ids], _validated=True)
+
     def __len__(self):
         return len(self.polygons)
 

@@ -140,3 +140,18 @@ def test_area_vector_of_integer_polygons_is_the_exact_shoelace_area(xy):
         want = np.zeros(3)
         want[axes[2]] = twice / 2
         assert np.array_equal(area_vector(P), want)
+
+
+def test_subset_keeps_polygons_valid_under_the_scene_planarity():
+    # a quad 1e-4 of its size off planar, accepted with planarity_rtol=1e-3: the
+    # compiled rows' sub-scenes (shafts, the bounds' cap) are subsets of it, and
+    # validating them again with the default 1e-6 raised SceneError (found by review)
+    quad = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 1e-4], [0, 1, 0.0]])
+    tri = np.array([[0, 0, 1], [1, 0, 1], [0, 1, 1.0]])
+    scene = ef.Scene.from_polygons([tri, quad], names=["t", "q"], planarity_rtol=1e-3)
+    with pytest.raises(ef.SceneError, match="polygon 0"):
+        ef.Scene.from_polygons([quad])
+    sub = scene.subset([1, 0])
+    assert sub.names == ("q", "t") and sub.polygons[0] is scene.polygons[1]
+    np.testing.assert_array_equal(sub.normals, scene.normals[[1, 0]])
+    np.testing.assert_array_equal(sub.areas, scene.areas[[1, 0]])

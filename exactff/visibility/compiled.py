@@ -239,7 +239,7 @@ def _settle_in_shafts(scene, p, normal, missed, *, two_sided, shortcuts, toleran
     settled = {}
     for j, keep in shafts.items():
         stats.setdefault("shaft_sizes", []).append(len(keep))
-        sub = type(scene).from_polygons([scene.polygons[k] for k in keep.tolist()])
+        sub = scene.subset(keep)
         at = int(np.searchsorted(keep, j))
         sub_st = {"polygon_crossing": None}      # (asks the engine for each polygon's part)
         G, H = visible_form_factors(sub, p, normal, two_sided=two_sided, stats=sub_st,
@@ -474,7 +474,7 @@ def compiled_form_factors(scene, point, normal, *, two_sided=False, stats=None,
                 # the compiled tree's measure of the crossings' rounding added too (the
                 # Python engine charges its own tree's: the same geometry split by another
                 # tree; both kept, the larger sum still a bound)
-                E = E + band + crossing
+                E = _capped_by_unoccluded(scene, p, normal, F, E + band + crossing, two_sided)
                 st["max_error_estimate"] = float(E.max(initial=0.0))
                 still = missed[misses_tolerance(F[missed], H[missed], tolerance)]
                 if len(still) and not error:
@@ -500,7 +500,7 @@ def _capped_by_unoccluded(scene, p, normal, F, E, two_sided):
     big = np.flatnonzero((E > F) & (E > tol.BOUND_CAP_FROM))
     if len(big) == 0:
         return E
-    sub = flat_polygons(type(scene).from_polygons([scene.polygons[k] for k in big.tolist()]))
+    sub = flat_polygons(scene.subset(big))
     side, band = engine_sides(sub, p)
     U, eU = unoccluded_rows(sub, p[None], np.asarray(normal, dtype=float)[None], side[None],
                             band[None], two_sided=two_sided, tolerance=tol.DEFAULT_RTOL,
