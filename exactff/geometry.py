@@ -7,7 +7,7 @@ from numpy.typing import ArrayLike
 from scipy.spatial import ConvexHull, QhullError
 
 __all__ = [
-    "hull_blockers",
+    "hull_blockers", "point_polygon_distance",
     "to_local",
     "rotate",
     "area_vector",
@@ -304,6 +304,53 @@ def plane_frame(Q: ArrayLike):
     nQ = unit_normal(Q)
     RQ = receiver_frame(nQ)
     return nQ, Q[0], RQ, (Q - Q[0]) @ RQ[:2].T
+
+
+def point_polygon_distance(p: ArrayLike, polygon: ArrayLike) -> float:
+    """A lower bound on the distance from a point to a planar polygon (its closed
+    region), in float.
+
+    The distance to the plane where the point's projection lies in the polygon (by the
+    winding number of its projection on the coordinate plane the normal is most nearly
+    perpendicular to), else the least distance to an edge less 1e-12 of the polygon's
+    extent (a projection within rounding of the boundary may be taken as outside),
+    and at least the distance to the plane.
+
+    Parameters
+    ----------
+    p : array_like of shape (3,)
+    polygon : array_like of shape (K, 3)
+
+    Returns
+    -------
+    float
+
+    Examples
+    --------
+    >>> sq = [[0, 0, 0], [2, 0, 0], [2, 2, 0], [0, 2, 0]]
+    >>> point_polygon_distance([1, 1, 3], sq), point_polygon_distance([5, 1, 0], sq)
+    (3.0, 2.999999999998)
+    """
+    P = np.asarray(polygon, dtype=float)
+    x = np.asarray(p, dtype=float)
+    n = unit_normal(P)
+    height = float(n @ (x - P[0]))
+    axis = int(np.argmax(np.abs(n)))
+    keep = [a for a in range(3) if a != axis]
+    q, R = x[keep], P[:, keep]
+    S = np.roll(R, -1, axis=0)
+    # winding number of q about the projected ring
+    up = (R[:, 1] <= q[1]) & (S[:, 1] > q[1])
+    down = (R[:, 1] > q[1]) & (S[:, 1] <= q[1])
+    side = (S[:, 0] - R[:, 0]) * (q[1] - R[:, 1]) - (q[0] - R[:, 0]) * (S[:, 1] - R[:, 1])
+    if int(np.sum(up & (side > 0)) - np.sum(down & (side < 0))) != 0:
+        return abs(height)
+    E = np.roll(P, -1, axis=0) - P
+    t = np.clip(np.einsum("ij,ij->i", x - P, E) / np.maximum(np.einsum("ij,ij->i", E, E),
+                                                            np.finfo(float).tiny), 0.0, 1.0)
+    edges = float(np.linalg.norm(P + t[:, None] * E - x, axis=1).min())
+    extent = float(np.abs(P - P[0]).max())
+    return max(abs(height), edges - 1e-12 * extent)
 
 
 def hull_blockers(V, cand, Pc, Qc, near, *, none_if_flat=False):

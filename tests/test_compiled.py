@@ -8,7 +8,8 @@ from fractions import Fraction
 import numpy as np
 import pytest
 import shapely
-from hypothesis import given
+from hypothesis import assume, given
+from hypothesis import strategies as hst
 
 import exactff as ef
 from exactff.kernel import flat_polygons
@@ -478,6 +479,21 @@ def test_faces_behind_the_point_keep_the_usual_order():
     tree, _ = compiled_core(scene)
     side, _ = engine_sides(flat_polygons(scene), p)
     assert side.tolist() == [1, 1, 1] and set(node_sides(tree, p, side).tolist()) <= {1, -1}
+
+
+@given(hst.lists(hst.tuples(hst.floats(-3, 3), hst.floats(-3, 3)), min_size=3, max_size=8),
+       hst.floats(-3, 3), hst.floats(-3, 3), hst.floats(-2, 2))
+def test_point_polygon_distance_against_shapely(ring, x, y, h):
+    # the node-first charge's distance (exactff.geometry.point_polygon_distance) is a
+    # lower bound on the true distance, and close to it: a polygon in z = 0 (its convex
+    # hull, to be simple), a point at height h, against shapely's planar distance
+    from exactff.geometry import point_polygon_distance
+    hull = shapely.MultiPoint(ring).convex_hull
+    assume(hull.geom_type == "Polygon" and hull.area > 1e-6)
+    P = np.array([(a, b, 0.0) for a, b in np.asarray(hull.exterior.coords)[:-1]])
+    true = math.hypot(h, shapely.Point(x, y).distance(hull))
+    got = point_polygon_distance([x, y, h], P)
+    assert true - 1e-9 <= got <= true * (1 + 1e-12) + 1e-15
 
 
 def test_shaft_of_a_polygon_within_rounding_of_the_point_plane():

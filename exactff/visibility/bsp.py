@@ -7,6 +7,7 @@ import numpy as np
 import shapely
 
 from .. import _tolerances as tol
+from ..geometry import point_polygon_distance
 from ..halfspace import split_polygon
 from ..predicates import (coplanar_band_sides, coplanar_pairs, gamma, sides_of_point,
                           tie_priority)
@@ -759,8 +760,8 @@ def node_first_charges(tree, point, code, receives):
     misordered: a band about a great circle of area at most 4 pi w / d on the unit
     sphere (4 w / d in form-factor units, cosine-weighted over pi). That is charged to
     the node's fragments and to those near-subtree fragments (their first hits are the
-    only ones that can change), taking each fragment's box for the polygon (its
-    distance a lower bound).
+    only ones that can change), d the least distance from the point to those
+    fragments (:func:`exactff.geometry.point_polygon_distance`).
 
     Parameters
     ----------
@@ -827,7 +828,15 @@ def node_first_charges(tree, point, code, receives):
         if len(cand) == 0:
             continue
         gap = np.maximum(np.maximum(lo_box[cand] - p, p - hi_box[cand]), 0.0)
-        dist = float(np.sqrt((gap * gap).sum(axis=1)).min()) * (1 - 1e-12)
+        box_dist = np.sqrt((gap * gap).sum(axis=1))
+        # the nearest candidate itself (its box is only a lower bound: a long slanted
+        # polygon's box may hold the point), nearest boxes first
+        dist = np.inf
+        for i in np.argsort(box_dist, kind="stable").tolist():
+            if box_dist[i] >= dist:
+                break
+            dist = min(dist, point_polygon_distance(p, tree.fragments[int(cand[i])]))
+        dist *= 1 - 1e-12
         share = 1.0 if dist <= 0 else min(1.0, w / dist)
         hit = np.concatenate([tree.source[np.asarray(tree.node_fragments[k], dtype=np.int64)],
                               tree.source[cand]])

@@ -241,12 +241,17 @@ def _settle_in_shafts(scene, p, normal, missed, *, two_sided, shortcuts, toleran
         stats.setdefault("shaft_sizes", []).append(len(keep))
         sub = scene.subset(keep)
         at = int(np.searchsorted(keep, j))
-        sub_st = {"polygon_crossing": None}      # (asks the engine for each polygon's part)
+        # (asks the engine for each polygon's parts of its bound: the rounded crossings',
+        # and the node-first order's, which no precision narrows: unchecked, as the core's
+        # band)
+        sub_st = {"polygon_crossing": None, "polygon_misorder": None}
         G, H = visible_form_factors(sub, p, normal, two_sided=two_sided, stats=sub_st,
                                     shortcuts=shortcuts, tolerance=tolerance, error=True,
                                     integrator=integrator)
         moved = 0.0 if sub_st["polygon_crossing"] is None else sub_st["polygon_crossing"][at]
-        if not (misses_tolerance(G[at], H[at] - moved, tolerance) or moved > tol.OCCLUDED_ATOL):
+        order = 0.0 if sub_st["polygon_misorder"] is None else sub_st["polygon_misorder"][at]
+        if not (misses_tolerance(G[at], H[at] - moved - order, tolerance)
+                or moved > tol.OCCLUDED_ATOL):
             settled[j] = float(G[at]), float(H[at])
     return settled
 

@@ -163,7 +163,11 @@ def visible_form_factors(scene, point, normal, *, two_sided=False, stats=None,
                                    f"{tol.OCCLUDED_ATOL:g})", "")
     # what visiting a node's fragments before its near subtree may misplace (a topology
     # bound, as the compiled core's band: no precision narrows it, so it is not checked)
-    E = E + 4 * node_first_charges(tree, p, node_sides(tree, p, side), _receiving(side, two_sided))
+    misorder = 4 * node_first_charges(tree, p, node_sides(tree, p, side),
+                                      _receiving(side, two_sided))
+    if "polygon_misorder" in st:
+        st["polygon_misorder"] = misorder      # (asked for with polygon_crossing)
+    E = E + misorder
     return (F, E) if error else F
 
 
