@@ -89,10 +89,12 @@ class BSPTree:
             setattr(self, dest, [ordered[a:b] for a, b in zip(bounds[:-1], bounds[1:])])
 
     def fragment_offsets(self):
-        """Per node, how far its own fragments reach off its plane on either side: the
-        largest signed offset ``n . v - d`` of their vertices less its rounding, and the
-        smallest plus it (the rounding of the float offset, ``gamma(4) (|n| . |v| + |d|)``,
-        and the vertex's own bound from a split, ``self.vertex_errors``). The polygons
+        """Per node, how far its own fragments reach off its plane on either side.
+
+        The largest signed offset ``n @ v - d`` of their vertices less its rounding, and
+        the smallest plus it (the rounding of the float offset, ``gamma(4)`` times
+        ``|n| @ |v| + |d|``, and the vertex's own bound from a split,
+        ``self.vertex_errors``). The polygons
         coplanar with the node's by the band's rule
         (:func:`exactff.predicates.coplanar_band`) lie in the node on either side of its
         plane. Computed once (cached).
