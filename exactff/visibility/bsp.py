@@ -741,12 +741,24 @@ def node_sides(tree, point, sides=None):
     first = np.zeros(len(tree), dtype=bool)
     node, src, orient, start = tree.node_members
     if sides is not None and len(node):
-        # each fragment's polygon: which side of its own plane the point lies on, along
-        # the node's normal (+1: on the node's front side of it; 0: seen edge-on)
-        along = np.asarray(sides, dtype=np.int8)[src] * orient
-        has = lambda mask: np.bincount(node[mask], minlength=len(tree)) > 0
-        first = (((side > 0) & has(along < 0)) | ((side < 0) & has(along > 0))
-                 | ((side == 0) & has(along != 0)))
+        # only where the point lies within the node's fragments' offsets (beyond them
+        # all, the point is in front of every fragment's plane on its side)
+        hi, lo = tree.fragment_offsets()
+        o = tree.normals @ p - tree.offsets
+        r = 2 * gamma(4) * (np.abs(tree.normals) @ np.abs(p) + np.abs(tree.offsets))
+        near = np.flatnonzero((o >= lo - 2 * r) & (o <= hi + 2 * r))
+        if len(near):
+            # each fragment's polygon: which side of its own plane the point lies on,
+            # along the node's normal (+1: on the node's front side of it; 0: edge-on)
+            counts = start[near + 1] - start[near]
+            at = np.repeat(start[near] - np.cumsum(counts) + counts, counts) + np.arange(
+                int(counts.sum()))
+            along = np.asarray(sides, dtype=np.int8)[src[at]] * orient[at]
+            owner = np.repeat(np.arange(len(near)), counts)
+            has = lambda mask: np.bincount(owner[mask], minlength=len(near)) > 0
+            s = side[near]
+            first[near] = (((s > 0) & has(along < 0)) | ((s < 0) & has(along > 0))
+                           | ((s == 0) & has(along != 0)))
     return np.where(first, 2 * side, np.where(side == 0, 1, side)).astype(np.int8)
 
 
