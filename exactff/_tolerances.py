@@ -76,6 +76,7 @@ __all__ = [
     "SHAFT_MARGIN",
     "OCCLUDED_ATOL",
     "BOUND_CAP_FROM",
+    "FLOAT_DISTANCE_RTOL",
     "SVBSP_SPLIT_ULPS",
     "SVBSP_BOX_BUDGET",
     "SVBSP_FILTER_ROUNDOFFS",
@@ -637,6 +638,12 @@ OCCLUDED_ATOL = 1e-11
 #: could be off by at all (between 0 and the unoccluded value:
 #: ``exactff.visibility.compiled._capped_by_unoccluded``); below it, none is computed.
 BOUND_CAP_FROM = 1e-6
+
+#: A distance computed in float and used as a lower bound (the node-first order's
+#: charge, ``exactff.visibility.bsp.node_first_charges``, and
+#: ``exactff.geometry.point_polygon_distance``) is shrunk by this share of the
+#: magnitudes involved, far above its rounding.
+FLOAT_DISTANCE_RTOL = 1e-12
 #: Compiled core: the largest scene whose compiled values that miss the tolerance are
 #: recomputed by the Python engine (per polygon: its row, of which only those values
 #: are kept; ``stats["python_polygons"]``). Its rows cost 5 to 20 times the compiled

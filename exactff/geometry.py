@@ -6,6 +6,8 @@ import numpy as np
 from numpy.typing import ArrayLike
 from scipy.spatial import ConvexHull, QhullError
 
+from . import _tolerances as tol
+
 __all__ = [
     "hull_blockers", "point_polygon_distance",
     "to_local",
@@ -312,9 +314,9 @@ def point_polygon_distance(p: ArrayLike, polygon: ArrayLike) -> float:
 
     The distance to the plane where the point's projection lies in the polygon (by the
     winding number of its projection on the coordinate plane the normal is most nearly
-    perpendicular to), else the least distance to an edge less 1e-12 of the polygon's
-    extent (a projection within rounding of the boundary may be taken as outside),
-    and at least the distance to the plane.
+    perpendicular to), else the least distance to an edge less
+    ``FLOAT_DISTANCE_RTOL`` of the polygon's extent (a projection within rounding of
+    the boundary may be taken as outside), and at least the distance to the plane.
 
     Parameters
     ----------
@@ -350,7 +352,7 @@ def point_polygon_distance(p: ArrayLike, polygon: ArrayLike) -> float:
                                                             np.finfo(float).tiny), 0.0, 1.0)
     edges = float(np.linalg.norm(P + t[:, None] * E - x, axis=1).min())
     extent = float(np.abs(P - P[0]).max())
-    return max(abs(height), edges - 1e-12 * extent)
+    return max(abs(height), edges - tol.FLOAT_DISTANCE_RTOL * extent)
 
 
 def hull_blockers(V, cand, Pc, Qc, near, *, none_if_flat=False):

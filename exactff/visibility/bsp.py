@@ -837,7 +837,8 @@ def node_first_charges(tree, point, code, receives):
         # the candidates' boxes reaching into the slab, and their distances from p
         centre, half = (lo_box[cand] + hi_box[cand]) / 2, (hi_box[cand] - lo_box[cand]) / 2
         mid, spread = centre @ n - d, half @ np.abs(n)
-        reach = (mid + spread * (1 + 1e-12) >= a) & (mid - spread * (1 + 1e-12) <= b)
+        grow = 1 + tol.FLOAT_DISTANCE_RTOL
+        reach = (mid + spread * grow >= a) & (mid - spread * grow <= b)
         cand = cand[reach]
         if len(cand) == 0:
             continue
@@ -850,7 +851,7 @@ def node_first_charges(tree, point, code, receives):
             if box_dist[i] >= dist:
                 break
             dist = min(dist, point_polygon_distance(p, tree.fragments[int(cand[i])]))
-        dist *= 1 - 1e-12
+        dist *= 1 - tol.FLOAT_DISTANCE_RTOL
         share = 1.0 if dist <= 0 else min(1.0, w / dist)
         hit = np.concatenate([tree.source[np.asarray(tree.node_fragments[k], dtype=np.int64)],
                               tree.source[cand]])
