@@ -74,6 +74,7 @@ __all__ = [
     "COMPILED_FALLBACK_MAX_POLYGONS",
     "BSP_COMPILED_MIN_MAGNITUDE",
     "SHAFT_MARGIN",
+    "SHAFT_COMPILED_MAX_POLYGONS",
     "OCCLUDED_ATOL",
     "BOUND_CAP_FROM",
     "FLOAT_DISTANCE_RTOL",
@@ -648,16 +649,23 @@ FLOAT_DISTANCE_RTOL = 1e-12
 #: recomputed by the Python engine (per polygon: its row, of which only those values
 #: are kept; ``stats["python_polygons"]``). Its rows cost 5 to 20 times the compiled
 #: core's and grow with the scene, so on a larger scene each such value is recomputed
-#: by the Python engine on its shaft instead (the polygons that may hide part of it,
-#: ``stats["shaft_polygons"]``), where the row's shafts hold at most this many polygons
-#: in all (about 30 s); a value still unsettled raises at once (or is returned with its
-#: bound, ``error=True``).
+#: on its shaft instead (the polygons that may hide part of it,
+#: ``stats["shaft_polygons"]``): by the compiled core first, then by the Python engine
+#: where the shafts of the values still missing hold at most this many polygons in all
+#: (about 30 s); a value still unsettled raises at once (or is returned with its bound,
+#: ``error=True``).
 COMPILED_FALLBACK_MAX_POLYGONS = 5_000
 #: Compiled core, a value settled on its shaft: polygons within this much (relative to
 #: the scene's largest coordinate, plus 1) of the convex hull of the point and the
 #: polygon are kept in the shaft, so that the hull's own rounding drops none that
 #: reaches into it.
 SHAFT_MARGIN = 1e-9
+#: Compiled core, values settled on their shafts: the compiled core recomputes them
+#: there first (its own BSP tree of the shaft's polygons), where the row's shafts hold
+#: at most this many polygons in all (a compiled build and row each, about 0.1 s per
+#: 1,000 polygons; ``stats["shaft_compiled"]``); the Python engine then takes those
+#: still missing, within ``COMPILED_FALLBACK_MAX_POLYGONS``.
+SHAFT_COMPILED_MAX_POLYGONS = 50_000
 #: Compiled core: the rounding of a vertex split off an edge, in long double roundoffs
 #: per unit of the edge's ends' distance from the point over the new vertex's (the
 #: parameter's quotient and the three-term interpolation, with a margin).

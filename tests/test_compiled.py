@@ -351,14 +351,16 @@ def test_a_missed_tolerance_falls_back_to_the_python_engine_per_polygon():
 def test_a_missed_tolerance_on_a_large_scene_raises_at_once(monkeypatch):
     # above COMPILED_FALLBACK_MAX_POLYGONS the Python engine never takes the whole
     # scene, only the missed values' shafts, and those only where they hold at most
-    # that many polygons in all: here (1e-30, every value missed) they hold more, and
-    # the row raises at once naming the polygon, or is returned with its bounds
+    # that many polygons in all (the compiled core's shafts, SHAFT_COMPILED_MAX_POLYGONS,
+    # alike): here (1e-30, every value missed) they hold more, and the row raises at
+    # once naming the polygon, or is returned with its bounds
     import exactff.visibility.compiled as compiled
     from exactff import _tolerances
 
     scene = ef.scenes.cornell_box(closed=True)
     p, n = scene.centroids[1], scene.normals[1]
     monkeypatch.setattr(_tolerances, "COMPILED_FALLBACK_MAX_POLYGONS", len(scene) - 1)
+    monkeypatch.setattr(_tolerances, "SHAFT_COMPILED_MAX_POLYGONS", len(scene) - 1)
 
     def no_python(*args, **kwargs):
         raise AssertionError("the Python engine was called")
@@ -374,14 +376,17 @@ def test_a_missed_tolerance_on_a_large_scene_raises_at_once(monkeypatch):
     assert st["shaft_polygons"] == 0 and "shaft_sizes" not in st
 
 
-def test_a_value_the_core_leaves_unsettled_is_settled_on_its_shaft(monkeypatch):
+@pytest.mark.parametrize("core_settles", [True, False])
+def test_a_value_the_core_leaves_unsettled_is_settled_on_its_shaft(monkeypatch, core_settles):
     # a large scene's value whose compiled bound misses (here: its rounded crossings'
-    # part set above the accuracy target of occluded values) is recomputed by the Python
-    # engine on its shaft, the polygons reaching into the hull of the point and it: the
-    # closed Cornell box from inside, the floor seen past the two blocks. The value must
-    # agree with the whole scene's Python engine and with the core's own within the
-    # bounds, from a sub-scene smaller than the scene (a shaft without the blocks, or
-    # with every polygon dropped, gives the unoccluded wall: planted, caught below)
+    # part set above the accuracy target of occluded values) is recomputed on its shaft,
+    # the polygons reaching into the hull of the point and it: by the compiled core on
+    # the shaft's own tree, or where that misses too (planted in every tree), by the
+    # Python engine. The closed Cornell box from inside, the floor seen past the two
+    # blocks. The value must agree with the whole scene's Python engine and with the
+    # core's own within the bounds, from a sub-scene smaller than the scene (a shaft
+    # without the blocks, or with every polygon dropped, gives the unoccluded wall:
+    # planted, caught below)
     import exactff.visibility.compiled as compiled
     from exactff import _tolerances
 
@@ -390,19 +395,31 @@ def test_a_value_the_core_leaves_unsettled_is_settled_on_its_shaft(monkeypatch):
     wall = 6                                         # the back wall, past the blocks
     Fc, Ec = compiled_form_factors(scene, p, n, error=True)
     monkeypatch.setattr(_tolerances, "COMPILED_FALLBACK_MAX_POLYGONS", len(scene) - 1)
-    tree, core = compiled.compiled_core(scene)
+    built = compiled.compiled_core
 
     class Unsettled:
+        def __init__(self, core, at):
+            self.core, self.at = core, at
+
         def row(self, **kwargs):
-            F, E, band, crossing, counters = core.row(**kwargs)
+            F, E, band, crossing, counters = self.core.row(**kwargs)
             crossing = crossing.copy()
-            crossing[wall] = 1.0
+            crossing[self.at] = 1.0
             return F, E, band, crossing, counters
 
-    monkeypatch.setattr(compiled, "compiled_core", lambda s, *a: (tree, Unsettled()))
+    def planted(s, *a):
+        # the wall's value unsettled in the scene's tree (and in every shaft's)
+        tree, core = built(s, *a)
+        at = np.flatnonzero(np.all(np.isclose(s.centroids, scene.centroids[wall]), axis=1))
+        if s is not scene and (core_settles or len(at) == 0):
+            return tree, core
+        return tree, Unsettled(core, int(at[0]))
+
+    monkeypatch.setattr(compiled, "compiled_core", planted)
     st = {}
     F, E = compiled_form_factors(scene, p, n, tolerance=1e-12, stats=st, error=True)
     assert st["path"] == "compiled, shaft for some polygons" and st["shaft_polygons"] == 1
+    assert st["shaft_compiled"] == int(core_settles)
     assert 1 < st["shaft_sizes"][0] < len(scene)
     Fp, Ep = ef.Exact(engine="python").point_form_factors(scene, p, n, error=True)
     assert abs(F[wall] - Fp[wall]) <= E[wall] + Ep[wall]
@@ -479,6 +496,38 @@ def test_faces_behind_the_point_keep_the_usual_order():
     tree, _ = compiled_core(scene)
     side, _ = engine_sides(flat_polygons(scene), p)
     assert side.tolist() == [1, 1, 1] and set(node_sides(tree, p, side).tolist()) <= {1, -1}
+
+
+@pytest.mark.parametrize("Y", [10.37, 1000.0])
+@pytest.mark.parametrize("L", [1e-3, 1.0])
+def test_flush_face_beside_the_point_keeps_the_usual_order_and_its_charge(Y, L):
+    # a face B 32 ulps above the floor A, facing down, from 0.2 L to 0.5 L off the point
+    # on the floor (it does not cover the point), and a wall W standing on the floor at
+    # L behind it: B hides W's foot, the strip 2t to 5t high (every line of sight
+    # through B meets W there: t L / x for x in [0.2 L, 0.5 L]). B lies farther than
+    # twice the slab's width from the point, so the usual order stays (node_sides: the
+    # node first there lost 1.1e-3 of the hemisphere on SampleHouse4 row 18196), W is
+    # drawn first, and what that may misplace, rays within sin a <= w / d, is charged
+    # to B and W (node_first_charges with the sides). Both values, against their exact
+    # values in mpmath (B seen whole; W less the strip), hold within the bounds; without
+    # the charge B's 0 has a bound of 1e-18 against 1e-10
+    scene, t = _floor_face_wall(Y, 32, L, face_x=(0.2, 0.5))
+    p, n = np.array([0.0, Y, 0.0]), np.array([1.0, 0.0, 0.0])
+    fr = lambda P: [tuple(map(Fraction, v)) for v in P]
+    T = Fraction(t)
+    strip = [(Fraction(L), Fraction(Y) + k * T, Fraction(z)) for k, z in
+             ((2, -2), (2, 2), (5, 2), (5, -2))]
+    UB = float(polygon_form_factor_mp(p, n, fr(scene.polygons[1])))
+    UW = float(polygon_form_factor_mp(p, n, fr(scene.polygons[2])) -
+               polygon_form_factor_mp(p, n, strip))
+    assert UB > 0
+    tree, _ = compiled_core(scene)
+    side, _ = engine_sides(flat_polygons(scene), p)
+    code = node_sides(tree, p, side)
+    assert set(code.tolist()) <= {1, -1}
+    for engine in (ef.Exact(engine="compiled"), ef.Exact(engine="python"), COMPILED):
+        F, E = engine.point_form_factors(scene, p, n, error=True)
+        assert abs(F[1] - UB) <= E[1] and abs(F[2] - UW) <= E[2], (F, E, UB, UW)
 
 
 @given(hst.lists(hst.tuples(hst.floats(-3, 3), hst.floats(-3, 3)), min_size=3, max_size=8),

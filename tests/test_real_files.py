@@ -677,3 +677,27 @@ def test_building_model_rows_deliver_right_and_bounded(name, row):
     # and against the Python engine: each side's bound within the accuracy target, the
     # gap within the bounds, or decided by the rational construction where it can
     assert_engines_agree(scene, p, n, within_bounds=False)
+
+
+def test_coplanar_fan_beside_the_point_keeps_the_usual_order():
+    # SampleHouse4 row 18196: the point on a fan of thin coplanar triangles, its
+    # neighbours 1e-14 above it (facing away) and 8e-5 m off. Visiting their BSP node
+    # before its near subtree lost 1.1e-3 of the hemisphere in the compiled core (their
+    # shadows, nearly through the point): polygon 19669, grazing, 6.1e-6 against
+    # 1.17e-5 with a bound of 2.4e-11. Such fragments hide only a band about the
+    # horizon (sin a <= w / d), so the usual order stays there, that band charged. The
+    # values of 19669 and of the wall seen over most of the hemisphere, each against
+    # the Python engine on its shaft (the polygons that may hide part of it)
+    from exactff.visibility import compiled
+
+    scene = _building("ifc-SampleHouse4.obj")
+    r = 18196
+    p, n = scene.centroids[r], scene.normals[r]
+    F, E = ef.Exact(tolerance=None).point_form_factors(scene, p, n, error=True)
+    for j in (19669, 17256):
+        keep = compiled._shaft(scene, p, j)
+        at = int(np.searchsorted(keep, j))
+        Fp, Ep = ef.Exact(engine="python", tolerance=None).point_form_factors(
+            scene.subset(keep), p, n, error=True)
+        assert abs(F[j] - Fp[at]) <= E[j] + Ep[at], (j, F[j], Fp[at], E[j], Ep[at])
+        assert E[j] <= 1e-4 * F[j]     # (the band's charge: 4 w / d = 1.2e-10)

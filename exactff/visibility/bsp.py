@@ -79,6 +79,8 @@ class BSPTree:
         # node (node_sides reads them every row)
         self.node_members = (node, self.source[flat], orient.astype(np.int8),
                               np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64))
+        self.node_member_fragments = flat
+        self._misorder_cache = None     # _misordered_slabs, the last point asked
         bounds = np.concatenate([[0], np.cumsum(sizes)]).tolist()
         for facing, dest in ((orient, "node_fragments"), (-orient, "node_fragments_behind")):
             # tie_priority's order (facing away last, then source) within each node,
@@ -683,24 +685,97 @@ def _build_bsp_buckets(scene):
     return tree, padded_buckets(tree.fragments)
 
 
+def _nearest_fragment(p, tree, cand, lo_box, hi_box):
+    """A lower bound on the least distance from ``p`` to the fragments ``cand`` (their
+    boxes ``lo_box``, ``hi_box``): nearest boxes first, each fragment's own distance
+    (:func:`exactff.geometry.point_polygon_distance`; a box is only a lower bound: a long
+    slanted polygon's box may hold the point), shrunk by ``FLOAT_DISTANCE_RTOL``."""
+    gap = np.maximum(np.maximum(lo_box[cand] - p, p - hi_box[cand]), 0.0)
+    box_dist = np.sqrt((gap * gap).sum(axis=1))
+    dist = np.inf
+    for i in np.argsort(box_dist, kind="stable").tolist():
+        if box_dist[i] >= dist:
+            break
+        dist = min(dist, point_polygon_distance(p, tree.fragments[int(cand[i])]))
+    return dist * (1 - tol.FLOAT_DISTANCE_RTOL)
+
+
+def _misordered_slabs(tree, p, sides):
+    """The nodes where one of the node's own fragments may stand between ``p`` and the
+    near subtree (``p`` on the far side of that fragment's own plane from the near
+    subtree, by the exact sides ``sides``; :func:`node_sides`), with the slab's width
+    beyond ``p`` (to the farthest fragment, plus the offsets' rounding) and a lower
+    bound on the distance from ``p`` to those fragments. Returns ``(side, nodes, width,
+    distance, standing)``: the exact sides of ``p`` for every node's plane, and per node
+    listed the fragments standing there. The last point's result is kept on the tree
+    (:func:`node_sides` and :func:`node_first_charges` each ask for it per row)."""
+    sides = np.asarray(sides, dtype=np.int8)
+    key = (p.tobytes(), sides.tobytes())
+    if tree._misorder_cache is not None and tree._misorder_cache[0] == key:
+        return tree._misorder_cache[1]
+    side = sides_of_point(tree.normals, tree.offsets, p).astype(np.int8)
+    node, src, orient, start = tree.node_members
+    nodes, width, distance, standing = [], [], [], []
+    if len(node):
+        # only where the point lies within the node's fragments' offsets (beyond them
+        # all, the point is in front of every fragment's plane on its side)
+        hi, lo = tree.fragment_offsets()
+        o = tree.normals @ p - tree.offsets
+        r = 2 * gamma(4) * (np.abs(tree.normals) @ np.abs(p) + np.abs(tree.offsets))
+        near = np.flatnonzero((o >= lo - 2 * r) & (o <= hi + 2 * r))
+        if len(near):
+            # each fragment's polygon: which side of its own plane the point lies on,
+            # along the node's normal (+1: on the node's front side of it; 0: edge-on)
+            counts = start[near + 1] - start[near]
+            at = np.repeat(start[near] - np.cumsum(counts) + counts, counts) + np.arange(
+                int(counts.sum()))
+            along = np.asarray(sides, dtype=np.int8)[src[at]] * orient[at]
+            owner = np.repeat(np.arange(len(near)), counts)
+            s = side[near][owner]
+            stands = (((s > 0) & (along < 0)) | ((s < 0) & (along > 0))
+                      | ((s == 0) & (along != 0)))
+            if stands.any():
+                _, _, _, _, lo_box, hi_box = tree.subtree_fragments()
+                frag = tree.node_member_fragments[at[stands]]
+                for i in np.unique(owner[stands]).tolist():
+                    k = int(near[i])
+                    here = frag[owner[stands] == i]
+                    w = (hi[k] - o[k] if side[k] > 0 else o[k] - lo[k] if side[k] < 0
+                         else max(hi[k], -lo[k])) + 2 * r[k]
+                    nodes.append(k)
+                    width.append(max(w, 0.0))
+                    distance.append(_nearest_fragment(p, tree, here, lo_box, hi_box))
+                    standing.append(here)
+    out = (side, np.array(nodes, dtype=np.int64), np.array(width), np.array(distance),
+           standing)
+    tree._misorder_cache = (key, out)
+    return out
+
+
 def node_sides(tree, point, sides=None):
     """Per node of the tree, the side of ``point`` and the order of the node's visit.
 
     The side is decided exactly (:func:`exactff.predicates.sides_of_point`): +1 in
     front, -1 behind, 0 on the plane. It is doubled (+2, -2; 0 on the plane) where one
-    of the node's own fragments may stand between the point and the near subtree, so
-    that the node's fragments are visited before both subtrees: where the point lies
-    on the far side of that fragment's own plane from the near subtree (by the exact
-    side of the point for its polygon, ``sides``). The node holds the polygons coplanar
-    with its plane by the band's rule (:func:`exactff.predicates.coplanar_band`), on
-    either side of it: a face flush with the point's own surface, facing it from 1e-14
-    away, covers the hemisphere, and what lies behind it must not show. The near
-    subtree's polygons that reach into the slab between the point and those fragments
-    may then be misordered with them: what that can move is charged
-    (:func:`node_first_charges`). Elsewhere the usual order (near subtree, node, far
-    subtree) is exact but for the same slivers: a segment from the point into the near
-    subtree does not cross a fragment whose plane has both on one side. A point on the
-    plane of a node whose fragments all contain it (or without ``sides``) is given +1.
+    of the node's own fragments may stand between the point and the near subtree and
+    comes within twice the slab's width of the point, so that the node's fragments are
+    visited before both subtrees. A fragment may stand there where the point lies on
+    the far side of its own plane from the near subtree (by the exact side of the point
+    for its polygon, ``sides``). The node holds the polygons coplanar with its plane
+    by the band's rule (:func:`exactff.predicates.coplanar_band`), on either side of
+    it: a face flush with the point's own surface, facing it from 1e-14 away, covers
+    the hemisphere, and what lies behind it must not show. Neither order is exact
+    inside the slab (w wide) between the point and those fragments; each misorders
+    only rays within ``sin a <= w / d`` of the node's plane, d the distance to what it
+    puts too early: with the node first, the near subtree's polygons reaching into the
+    slab; in the usual order (near subtree, node, far subtree), the fragments standing
+    between. A fragment within 2 w of the point covers most of the hemisphere (d about
+    w); one farther off hides a band about the horizon only, whose shadow, nearly
+    through the point, the compiled core rounds least well: the usual order then
+    (SampleHouse4 row 18196: a fan of triangles 1e-14 above the point, 8e-5 m off, lost
+    1.1e-3 of the hemisphere visited first). What either order may move is charged
+    (:func:`node_first_charges`). A point on the plane of a node whose fragments all
+    contain it (or without ``sides``) is given +1.
 
     Parameters
     ----------
@@ -737,45 +812,35 @@ def node_sides(tree, point, sides=None):
     ([0, 1, 1], [0, 1], [1, 1])
     """
     p = np.asarray(point, dtype=float)
-    side = sides_of_point(tree.normals, tree.offsets, p).astype(np.int8)
+    if sides is None:
+        side = sides_of_point(tree.normals, tree.offsets, p).astype(np.int8)
+        return np.where(side == 0, 1, side).astype(np.int8)
+    side, nodes, width, distance, _ = _misordered_slabs(tree, p, sides)
     first = np.zeros(len(tree), dtype=bool)
-    node, src, orient, start = tree.node_members
-    if sides is not None and len(node):
-        # only where the point lies within the node's fragments' offsets (beyond them
-        # all, the point is in front of every fragment's plane on its side)
-        hi, lo = tree.fragment_offsets()
-        o = tree.normals @ p - tree.offsets
-        r = 2 * gamma(4) * (np.abs(tree.normals) @ np.abs(p) + np.abs(tree.offsets))
-        near = np.flatnonzero((o >= lo - 2 * r) & (o <= hi + 2 * r))
-        if len(near):
-            # each fragment's polygon: which side of its own plane the point lies on,
-            # along the node's normal (+1: on the node's front side of it; 0: edge-on)
-            counts = start[near + 1] - start[near]
-            at = np.repeat(start[near] - np.cumsum(counts) + counts, counts) + np.arange(
-                int(counts.sum()))
-            along = np.asarray(sides, dtype=np.int8)[src[at]] * orient[at]
-            owner = np.repeat(np.arange(len(near)), counts)
-            has = lambda mask: np.bincount(owner[mask], minlength=len(near)) > 0
-            s = side[near]
-            first[near] = (((s > 0) & has(along < 0)) | ((s < 0) & has(along > 0))
-                           | ((s == 0) & has(along != 0)))
+    first[nodes[distance <= 2 * width]] = True
     return np.where(first, 2 * side, np.where(side == 0, 1, side)).astype(np.int8)
 
 
-def node_first_charges(tree, point, code, receives):
-    """What visiting a node's fragments before its near subtree (:func:`node_sides`)
-    may misplace, per fragment: the directions whose first hit is a near-subtree
-    polygon inside the slab between the point and the node's fragments beyond it.
+def node_first_charges(tree, point, code, receives, sides=None):
+    """What the order of a node's visit (:func:`node_sides`) may misplace, per polygon.
 
-    A ray at elevation a off the node's plane leaves that slab (width w, from the
-    point's offset to the farthest fragment beyond it) within w / sin(a); only a
-    polygon of the near subtree reaching into the slab, at distance at least d from
-    the point, can come first there, so only rays with sin(a) <= w / d can be
-    misordered: a band about a great circle of area at most 4 pi w / d on the unit
-    sphere (4 w / d in form-factor units, cosine-weighted over pi). That is charged to
-    the node's fragments and to those near-subtree fragments (their first hits are the
-    only ones that can change), d the least distance from the point to those
+    Visiting a node's fragments before its near subtree misplaces only the directions
+    whose first hit is a near-subtree polygon inside the slab between the point and the
+    node's fragments beyond it. A ray at elevation a off the node's plane leaves that
+    slab (width w, from the point's offset to the farthest fragment beyond it) within
+    w / sin(a); only a polygon of the near subtree reaching into the slab, at distance
+    at least d from the point, can come first there, so only rays with sin(a) <= w / d
+    can be misordered: a band about a great circle of area at most 4 pi w / d on the
+    unit sphere (4 w / d in form-factor units, cosine-weighted over pi). That is charged
+    to the node's fragments and to those near-subtree fragments (their first hits are
+    the only ones that can change), d the least distance from the point to those
     fragments (:func:`exactff.geometry.point_polygon_distance`).
+
+    With ``sides``, the usual order at a node where fragments may stand between the
+    point and the near subtree but lie farther than twice the slab's width from it is
+    charged too: only rays with sin(a) <= w / d, d now the distance to those fragments,
+    can meet them first; charged to them and to the near-subtree fragments reaching
+    below that elevation (their boxes), which are drawn before them.
 
     Parameters
     ----------
@@ -786,6 +851,9 @@ def node_first_charges(tree, point, code, receives):
     receives : ndarray of shape (n,), bool
         Which of the scene's polygons receive (the others' values are 0, whatever the
         order).
+    sides : ndarray of shape (n,), int, optional
+        The sides :func:`node_sides` was given (None: the usual order's misorder is not
+        charged).
 
     Returns
     -------
@@ -809,18 +877,36 @@ def node_first_charges(tree, point, code, receives):
     >>> scene = ef.Scene.from_polygons([floor, face, wall])
     >>> tree, p = build_bsp(scene), np.array([0.0, 1.0, 0.0])
     >>> side, _ = engine_sides(flat_polygons(scene), p)
-    >>> c = node_first_charges(tree, p, node_sides(tree, p, side), side != 0)
+    >>> c = node_first_charges(tree, p, node_sides(tree, p, side), side != 0, side)
     >>> bool(c[1] > 0 and c[2] > 0), bool(c.max() < 1e-10)
     (True, True)
     """
     receives = np.asarray(receives, dtype=bool)
     charge = np.zeros(len(receives))
-    nodes = np.flatnonzero(code % 2 == 0)
-    if len(nodes) == 0:
-        return charge
     p = np.asarray(point, dtype=float)
+    usual = []
+    if sides is not None:
+        _, nodes, width, distance, standing = _misordered_slabs(tree, p, sides)
+        usual = [(int(k), w, d, frags) for k, w, d, frags in
+                 zip(nodes.tolist(), width.tolist(), distance.tolist(), standing)
+                 if code[k] % 2 != 0]
+    nodes = np.flatnonzero(code % 2 == 0)
+    if len(nodes) == 0 and not usual:
+        return charge
     pre, end, by_pre, start, lo_box, hi_box = tree.subtree_fragments()
     hi, lo = tree.fragment_offsets()
+    grow = 1 + tol.FLOAT_DISTANCE_RTOL
+
+    def near_subtree(k):
+        # the fragments of node k's near subtree(s), their offsets' middle and spread
+        kids = [c for c in ((tree.front[k], tree.back[k]) if code[k] == 0 else
+                            (tree.front[k] if code[k] > 0 else tree.back[k],)) if c >= 0]
+        cand = np.asarray(np.concatenate([by_pre[start[pre[c]]:start[end[c]]] for c in kids])
+                          if kids else [], dtype=np.int64)
+        n = tree.normals[k]
+        centre, half = (lo_box[cand] + hi_box[cand]) / 2, (hi_box[cand] - lo_box[cand]) / 2
+        return cand, centre @ n - tree.offsets[k], half @ np.abs(n)
+
     for k in nodes.tolist():
         n, d = tree.normals[k], tree.offsets[k]
         o = float(n @ p - d)
@@ -828,33 +914,27 @@ def node_first_charges(tree, point, code, receives):
         # the slab between the point and the fragments beyond it, and its width
         a, b = (min(o, lo[k]) - r, max(o, hi[k]) + r)
         w = (hi[k] - o if code[k] > 0 else o - lo[k] if code[k] < 0 else max(hi[k], -lo[k])) + 2 * r
-        kids = [c for c in ((tree.front[k], tree.back[k]) if code[k] == 0 else
-                            (tree.front[k] if code[k] > 0 else tree.back[k],)) if c >= 0]
-        cand = np.concatenate([by_pre[start[pre[c]]:start[end[c]]] for c in kids]) if kids else []
-        cand = np.asarray(cand, dtype=np.int64)
-        if len(cand) == 0:
-            continue
+        cand, mid, spread = near_subtree(k)
         # the candidates' boxes reaching into the slab, and their distances from p
-        centre, half = (lo_box[cand] + hi_box[cand]) / 2, (hi_box[cand] - lo_box[cand]) / 2
-        mid, spread = centre @ n - d, half @ np.abs(n)
-        grow = 1 + tol.FLOAT_DISTANCE_RTOL
-        reach = (mid + spread * grow >= a) & (mid - spread * grow <= b)
-        cand = cand[reach]
+        cand = cand[(mid + spread * grow >= a) & (mid - spread * grow <= b)]
         if len(cand) == 0:
             continue
-        gap = np.maximum(np.maximum(lo_box[cand] - p, p - hi_box[cand]), 0.0)
-        box_dist = np.sqrt((gap * gap).sum(axis=1))
-        # the nearest candidate itself (its box is only a lower bound: a long slanted
-        # polygon's box may hold the point), nearest boxes first
-        dist = np.inf
-        for i in np.argsort(box_dist, kind="stable").tolist():
-            if box_dist[i] >= dist:
-                break
-            dist = min(dist, point_polygon_distance(p, tree.fragments[int(cand[i])]))
-        dist *= 1 - tol.FLOAT_DISTANCE_RTOL
+        dist = _nearest_fragment(p, tree, cand, lo_box, hi_box)
         share = 1.0 if dist <= 0 else min(1.0, w / dist)
         hit = np.concatenate([tree.source[np.asarray(tree.node_fragments[k], dtype=np.int64)],
                               tree.source[cand]])
+        charge[hit] = np.maximum(charge[hit], share)
+    for k, w, dist, frags in usual:
+        # the usual order: the fragments standing between, and the near subtree's
+        # fragments reaching below elevation sin a = w / d (drawn before them)
+        share = 1.0 if dist <= 0 else min(1.0, w / dist)
+        o = float(tree.normals[k] @ p - tree.offsets[k])
+        cand, mid, spread = near_subtree(k)
+        far = np.linalg.norm(np.maximum(np.abs(lo_box[cand] - p), np.abs(hi_box[cand] - p)),
+                             axis=1)
+        rise = (mid - spread * grow - o) if code[k] > 0 else (o - mid - spread * grow)
+        cand = cand[rise <= (share * far + w) * grow]
+        hit = np.concatenate([tree.source[frags], tree.source[cand]])
         charge[hit] = np.maximum(charge[hit], share)
     return np.where(receives, charge, 0.0)
 

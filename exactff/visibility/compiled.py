@@ -222,23 +222,73 @@ def _shaft(scene, p, j):
     return None if kept is None else np.sort(np.append(cand[kept], j).astype(np.int64))
 
 
+def _core_row(scene, p, normal, side, *, two_sided, shortcuts, tolerance, integrator):
+    """The compiled core's row from ``p`` (``side``: the polygons' exact sides of it):
+    values, bounds (the pieces' rounding and geometry, after the quadruple-precision
+    tier where ``tolerance`` asks for it), the band's slivers with the node-first
+    order's charge (a bound on the topology), the BSP crossings' part, and counters."""
+    tree, core = compiled_core(scene)
+    node_side = node_sides(tree, p, side)
+    F, E, band, crossing, counters = core.row(
+        point=p, normal=np.asarray(normal, dtype=float), node_side=node_side,
+        source_side=side.astype(np.int8), two_sided=bool(two_sided), cull=bool(shortcuts),
+        box_budget=tol.SVBSP_BOX_BUDGET, tiles=_shadow_tiles(len(scene)),
+        rtol=0.0 if tolerance is None else float(tolerance), eq3=integrator == "eq3")
+    check_finite(F, E)
+    check_finite(band)
+    check_finite(crossing)
+    # what visiting a node's fragments before its near subtree may misplace: with the
+    # band's slivers (a bound on the topology, not checked)
+    band = band + 4 * node_first_charges(tree, p, node_side, (side > 0) | (two_sided & (side != 0)),
+                                      side)
+    return F, E, band, crossing, counters
+
+
+def _settled(F, E, crossing, tolerance):
+    """Whether values ``F`` with bounds ``E`` (the parts no precision narrows left out:
+    the band's slivers and the node-first order's) and BSP crossings' parts
+    ``crossing`` meet ``tolerance``, the crossings' part the accuracy target of
+    occluded values."""
+    return ~(misses_tolerance(F, E, tolerance) | (crossing > tol.OCCLUDED_ATOL))
+
+
 def _settle_in_shafts(scene, p, normal, missed, *, two_sided, shortcuts, tolerance,
                       integrator, stats):
-    """The values of polygons ``missed`` from ``p`` by the Python engine, each on its
-    shaft (:func:`_shaft`): the sub-scene's BSP splits along other lines than the
-    scene's, and only where its polygons meet. Only where every missed value has a
-    shaft and their sizes add up to at most ``COMPILED_FALLBACK_MAX_POLYGONS`` (about
-    one whole Python row of a scene that size; else none is tried: the row raises at
-    once). Returns ``{j: (F, E)}`` for the values settled: E within the tolerance, its
-    rounded crossings' part within the accuracy target of occluded values.
-    ``stats["shaft_sizes"]`` collects the sizes."""
+    """The values of polygons ``missed`` from ``p``, each recomputed on its shaft
+    (:func:`_shaft`, the polygons that may hide part of it: the same exact value), whose
+    BSP splits along other lines than the scene's, and only where its polygons meet:
+    first by the compiled core, where the row's shafts hold at most
+    ``SHAFT_COMPILED_MAX_POLYGONS`` polygons in all; then those still missing by the
+    Python engine, which refines and escalates, where theirs hold at most
+    ``COMPILED_FALLBACK_MAX_POLYGONS`` (about one whole Python row of a scene that
+    size). Returns ``{j: (F, E, T)}`` for the values settled, by the criterion of the
+    whole row (:func:`_settled`): E the checked bound with the crossings' part, T the
+    unchecked topology part (the compiled sub-row's band and node-first charge; 0 from
+    the Python engine, whose E holds its own). ``stats["shaft_sizes"]`` collects the sizes of the
+    shafts tried, ``stats["shaft_compiled"]`` counts the values the compiled core
+    settled there."""
     shafts = {j: _shaft(scene, p, j) for j in missed}
-    if any(k is None for k in shafts.values()) or (
-            sum(len(k) for k in shafts.values()) > tol.COMPILED_FALLBACK_MAX_POLYGONS):
+    if any(k is None for k in shafts.values()):
         return {}
-    settled = {}
-    for j, keep in shafts.items():
-        stats.setdefault("shaft_sizes", []).append(len(keep))
+    settled, sizes = {}, []
+    stats.setdefault("shaft_compiled", 0)
+    if sum(len(k) for k in shafts.values()) <= tol.SHAFT_COMPILED_MAX_POLYGONS:
+        for j, keep in shafts.items():
+            sizes.append(len(keep))
+            sub = scene.subset(keep)
+            at = int(np.searchsorted(keep, j))
+            side, _ = engine_sides(flat_polygons(sub), p)
+            G, H, topology, moved, _ = _core_row(
+                sub, p, normal, side, two_sided=two_sided, shortcuts=shortcuts,
+                tolerance=tolerance, integrator=integrator)
+            if _settled(G[at], H[at], moved[at], tolerance):
+                settled[j] = float(G[at]), float(H[at] + moved[at]), float(topology[at])
+                stats["shaft_compiled"] += 1
+    rest = {j: keep for j, keep in shafts.items() if j not in settled}
+    if sum(len(k) for k in rest.values()) > tol.COMPILED_FALLBACK_MAX_POLYGONS:
+        rest = {}
+    for j, keep in rest.items():
+        sizes.append(len(keep))
         sub = scene.subset(keep)
         at = int(np.searchsorted(keep, j))
         # (asks the engine for each polygon's parts of its bound: the rounded crossings',
@@ -250,9 +300,10 @@ def _settle_in_shafts(scene, p, normal, missed, *, two_sided, shortcuts, toleran
                                     integrator=integrator)
         moved = 0.0 if sub_st["polygon_crossing"] is None else sub_st["polygon_crossing"][at]
         order = 0.0 if sub_st["polygon_misorder"] is None else sub_st["polygon_misorder"][at]
-        if not (misses_tolerance(G[at], H[at] - moved - order, tolerance)
-                or moved > tol.OCCLUDED_ATOL):
-            settled[j] = float(G[at]), float(H[at])
+        if _settled(G[at], H[at] - moved - order, moved, tolerance):
+            settled[j] = float(G[at]), float(H[at]), 0.0
+    if sizes:
+        stats.setdefault("shaft_sizes", []).extend(sizes)
     return settled
 
 
@@ -421,19 +472,9 @@ def compiled_form_factors(scene, point, normal, *, two_sided=False, stats=None,
         st["path"] = "unoccluded"
         return unoccluded_row(flat, p, normal, two_sided=two_sided, tolerance=tolerance,
                               sides=(side, band), return_error=error, strict=not error)
-    tree, core = compiled_core(scene)
-    node_side = node_sides(tree, p, side)
-    F, E, band, crossing, counters = core.row(
-        point=p, normal=np.asarray(normal, dtype=float), node_side=node_side,
-        source_side=side.astype(np.int8), two_sided=bool(two_sided), cull=bool(shortcuts),
-        box_budget=tol.SVBSP_BOX_BUDGET, tiles=_shadow_tiles(len(scene)),
-        rtol=0.0 if tolerance is None else float(tolerance), eq3=integrator == "eq3")
-    check_finite(F, E)
-    check_finite(band)
-    check_finite(crossing)
-    # what visiting a node's fragments before its near subtree may misplace: with the
-    # band's slivers (a bound on the topology, not checked)
-    band = band + 4 * node_first_charges(tree, p, node_side, (side > 0) | (two_sided & (side != 0)))
+    F, E, band, crossing, counters = _core_row(
+        scene, p, normal, side, two_sided=two_sided, shortcuts=shortcuts,
+        tolerance=tolerance, integrator=integrator)
     st["max_crossing_bound"] = float(crossing.max(initial=0.0))
     path = "compiled"
     if tolerance is not None:
@@ -455,10 +496,10 @@ def compiled_form_factors(scene, point, normal, *, two_sided=False, stats=None,
                                             tolerance=tolerance, integrator=integrator,
                                             stats=st)
                 F, E, band, crossing = F.copy(), E.copy(), band.copy(), crossing.copy()
-                for j, (value, bound) in settled.items():
-                    # its bound is the Python engine's whole bound (its own band and
+                for j, (value, bound, topology) in settled.items():
+                    # its bound is the shaft's row's whole bound (its own band and
                     # crossings included)
-                    F[j], E[j], band[j], crossing[j] = value, bound, 0.0, 0.0
+                    F[j], E[j], band[j], crossing[j] = value, bound, topology, 0.0
                 st["shaft_polygons"] = len(settled)
                 st["max_crossing_bound"] = float(crossing.max(initial=0.0))
                 missed = np.setdiff1d(missed, list(settled))
@@ -573,7 +614,8 @@ def compiled_solid_angles(scene, point, *, two_sided=True, stats=None, shortcuts
     check_finite(F, E)
     check_finite(band)
     check_finite(crossing)
-    band = band + 4 * node_first_charges(tree, p, node_side, (side > 0) | (two_sided & (side != 0)))
+    band = band + 4 * node_first_charges(tree, p, node_side, (side > 0) | (two_sided & (side != 0)),
+                                      side)
     # the core's unit is the solid angle over pi (the cosine-weighted rows' unit)
     W = F * math.pi
     # (and the products' rounding)

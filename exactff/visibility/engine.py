@@ -164,7 +164,7 @@ def visible_form_factors(scene, point, normal, *, two_sided=False, stats=None,
     # what visiting a node's fragments before its near subtree may misplace (a topology
     # bound, as the compiled core's band: no precision narrows it, so it is not checked)
     misorder = 4 * node_first_charges(tree, p, node_sides(tree, p, side),
-                                      _receiving(side, two_sided))
+                                      _receiving(side, two_sided), side)
     if "polygon_misorder" in st:
         st["polygon_misorder"] = misorder      # (asked for with polygon_crossing)
     E = E + misorder
@@ -226,7 +226,7 @@ def visible_solid_angles(scene, point, normal, *, two_sided=False, stats=None,
     crossing = _crossing_charges(tree, order, p, normal, charts, st, solid_angle=True)
     W, E = _per_polygon(src, Wf, Ef + crossing, len(scene), "solid angle", stats)
     return W, E + 4 * np.pi * node_first_charges(tree, p, node_sides(tree, p, side),
-                                                 _receiving(side, two_sided))
+                                                 _receiving(side, two_sided), side)
 
 
 def _receiving(side, two_sided):
