@@ -316,7 +316,9 @@ def point_polygon_distance(p: ArrayLike, polygon: ArrayLike) -> float:
     winding number of its projection on the coordinate plane the normal is most nearly
     perpendicular to), else the least distance to an edge less
     ``FLOAT_DISTANCE_RTOL`` of the polygon's extent (a projection within rounding of
-    the boundary may be taken as outside), and at least the distance to the plane.
+    the boundary may be taken as outside), and at least the distance to the plane. A
+    polygon without area (its vertices on a line, as a BSP sliver's can round) is its
+    edges.
 
     Parameters
     ----------
@@ -332,10 +334,22 @@ def point_polygon_distance(p: ArrayLike, polygon: ArrayLike) -> float:
     >>> sq = [[0, 0, 0], [2, 0, 0], [2, 2, 0], [0, 2, 0]]
     >>> point_polygon_distance([1, 1, 3], sq), point_polygon_distance([5, 1, 0], sq)
     (3.0, 2.999999999998)
+    >>> point_polygon_distance([0, 3, 0], [[0, 0, 0], [1, 0, 0], [2, 0, 0]])
+    2.999999999998
     """
     P = np.asarray(polygon, dtype=float)
     x = np.asarray(p, dtype=float)
-    n = unit_normal(P)
+    E = np.roll(P, -1, axis=0) - P
+    t = np.clip(np.einsum("ij,ij->i", x - P, E) / np.maximum(np.einsum("ij,ij->i", E, E),
+                                                            np.finfo(float).tiny), 0.0, 1.0)
+    edges = float(np.linalg.norm(P + t[:, None] * E - x, axis=1).min())
+    extent = float(np.abs(P - P[0]).max())
+    A = area_vector(P)
+    size = float(np.linalg.norm(A))
+    if not size > 0:
+        # no area (a BSP sliver whose vertices rounded onto a line): its edges are all of it
+        return max(0.0, edges - tol.FLOAT_DISTANCE_RTOL * extent)
+    n = A / size
     height = float(n @ (x - P[0]))
     axis = int(np.argmax(np.abs(n)))
     keep = [a for a in range(3) if a != axis]
@@ -347,11 +361,6 @@ def point_polygon_distance(p: ArrayLike, polygon: ArrayLike) -> float:
     side = (S[:, 0] - R[:, 0]) * (q[1] - R[:, 1]) - (q[0] - R[:, 0]) * (S[:, 1] - R[:, 1])
     if int(np.sum(up & (side > 0)) - np.sum(down & (side < 0))) != 0:
         return abs(height)
-    E = np.roll(P, -1, axis=0) - P
-    t = np.clip(np.einsum("ij,ij->i", x - P, E) / np.maximum(np.einsum("ij,ij->i", E, E),
-                                                            np.finfo(float).tiny), 0.0, 1.0)
-    edges = float(np.linalg.norm(P + t[:, None] * E - x, axis=1).min())
-    extent = float(np.abs(P - P[0]).max())
     return max(abs(height), edges - tol.FLOAT_DISTANCE_RTOL * extent)
 
 

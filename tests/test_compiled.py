@@ -530,6 +530,20 @@ def test_flush_face_beside_the_point_keeps_the_usual_order_and_its_charge(Y, L):
         assert abs(F[1] - UB) <= E[1] and abs(F[2] - UW) <= E[2], (F, E, UB, UW)
 
 
+@given(hst.lists(hst.floats(-3, 3).map(lambda v: round(v, 6)), min_size=3, max_size=6),
+       hst.floats(-3, 3), hst.floats(-3, 3), hst.floats(-2, 2))
+def test_point_polygon_distance_of_a_polygon_without_area(xs, x, y, h):
+    # a BSP sliver whose vertices rounded onto a line has no normal: its distance is
+    # its edges' (a NaN was ignored by the node-first charge's minimum, which could
+    # then take a farther fragment's), against shapely's distance to the segment
+    from exactff.geometry import point_polygon_distance
+    P = np.array([[v, 0.5 * v, 0.0] for v in xs])
+    d = point_polygon_distance([x, y, h], P)
+    line = shapely.LineString(P[:, :2]) if np.ptp(xs) > 0 else shapely.Point(P[0, :2])
+    true = math.hypot(shapely.distance(shapely.Point(x, y), line), h)
+    assert np.isfinite(d) and d <= true and d >= true - 1e-9
+
+
 @given(hst.lists(hst.tuples(hst.floats(-3, 3), hst.floats(-3, 3)), min_size=3, max_size=8),
        hst.floats(-3, 3), hst.floats(-3, 3), hst.floats(-2, 2))
 def test_point_polygon_distance_against_shapely(ring, x, y, h):
