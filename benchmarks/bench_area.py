@@ -166,6 +166,10 @@ def main():
     ap.add_argument("--umbras", default="", help="only gunter2's rows (comma-separated) "
                     "without and with the umbras")
     ap.add_argument("--umbra-pairs", default="", help="with --umbras: pairs i:j timed alone")
+    ap.add_argument("--points", action="store_true",
+                    help="only the occluded pairs' points and values against tight references")
+    ap.add_argument("--ref-cache", default="",
+                    help="--points: a directory for the references (computed once)")
     args = ap.parse_args()
     print(machine())
     print()
@@ -177,6 +181,8 @@ def main():
         return threads(args)
     if args.umbras or args.umbra_pairs:
         return umbra_rows(args)
+    if args.points:
+        return points_table(args)
     if args.only_cube:
         return cube_matrix(args)
     if args.only_view3d:
@@ -371,6 +377,48 @@ def box_106():
 
 #: View3D 4.0's times of issue 49's table (s, gcc -O2, 2026-12-05) and the goals' ratios.
 GOALS = (("gunter1", 0.009, 30), ("106-surface box", 0.044, 20), ("gunter2", 0.52, 20))
+
+
+#: --points: the scenes, their tolerance and their references' (much tighter).
+POINTS_SCENES = (("test4", 1e-6, 1e-11), ("facet", 1e-6, 1e-11), ("gunter1", 1e-6, 1e-11),
+                 ("106-surface box", 1e-6, 1e-10))
+
+
+def points_table(args):
+    """Part 9: the occluded pairs' point values (hidden parts evaluated) and process time
+    of each scene's full matrix at 1e-6, and every value against a reference computed
+    at a much tighter tolerance (the same code, ``POINTS_SCENES``; cached in
+    ``--ref-cache`` where given): the worst ``|F - ref| / E`` (E the value's estimate)
+    and the largest and median ``E / tolerance`` of the occluded values."""
+    print("Occluded pairs' points at 1e-6, every value against a tighter reference:")
+    print()
+    print("| scene | process s | points | occluded values | worst abs(F - ref) / E "
+          "| its E | max E / tolerance | median E / tolerance (occluded) | reference "
+          "tolerance, its max E |")
+    print("|---|---|---|---|---|---|---|---|---|")
+    for name, tolerance, ref_tol in POINTS_SCENES:
+        scene = (box_106() if name == "106-surface box"
+                 else ef.read_vs3(os.path.join(DATA, name + ".vs3")))
+        cache = (os.path.join(args.ref_cache, f"{name.replace(' ', '_')}_{ref_tol:g}.npz")
+                 if args.ref_cache else "")
+        if cache and os.path.exists(cache):
+            with np.load(cache) as z:
+                R, RE = z["F"], z["E"]
+        else:
+            R, RE = ef.area_form_factors(scene, tolerance=ref_tol, error=True)
+            if cache:
+                np.savez(cache, F=R, E=RE)
+        st = {}
+        t0 = time.process_time()
+        F, E = ef.area_form_factors(scene, tolerance=tolerance, error=True, stats=st)
+        dt = time.process_time() - t0
+        ratio = np.abs(F - R) / np.maximum(E, 1e-300)
+        w = np.unravel_index(np.argmax(ratio), ratio.shape)
+        occ = E > 1e-12                 # the unoccluded values' estimates are rounding's
+        print(f"| {name} | {dt:.3f} | {st['point_values']:,} | {int(occ.sum())} "
+              f"| {ratio.max():.3f} | {E[w]:.1e} | {E.max() / tolerance:.3f} "
+              f"| {np.median(E[occ]) / tolerance:.2e} | {ref_tol:g}, {RE.max():.1e} |",
+              flush=True)
 
 
 def goals(args):
