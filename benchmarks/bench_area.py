@@ -47,6 +47,11 @@ Usage: python benchmarks/bench_area.py [--cube-k 8]
    process time, point values, umbra cells, the row's sum less 1 against its
    estimates, and the largest difference of a value between the two runs against the
    sum of their estimates; ``--umbra-pairs 38:23,38:3`` the same for single pairs.
+9. ``--points`` alone (issue 49, the adaptive levels' points): test4, facet, gunter1 and
+   the 106-surface box at each of ``--tolerances`` (default 1e-6): process time, the
+   point values (hidden parts evaluated), and every value against a reference at 1e-11
+   (the box 1e-10; ``--ref-cache DIR`` keeps them): the worst ``|F - ref| / E``, the
+   values beyond their estimates, the estimates against the tolerance.
 5. ``--pair-path`` alone: the occluded pairs' compiled path against the numpy and GEOS
    reference it replaces, in one run at tolerance 1e-6 (test4, facet, gunter1; process
    time): the events compiled (``exactff/_core/pair.cpp``) or by numpy
@@ -170,6 +175,8 @@ def main():
                     help="only the occluded pairs' points and values against tight references")
     ap.add_argument("--ref-cache", default="",
                     help="--points: a directory for the references (computed once)")
+    ap.add_argument("--tolerances", default="1e-6",
+                    help="--points: the tolerances, comma-separated")
     args = ap.parse_args()
     print(machine())
     print()
@@ -379,24 +386,25 @@ def box_106():
 GOALS = (("gunter1", 0.009, 30), ("106-surface box", 0.044, 20), ("gunter2", 0.52, 20))
 
 
-#: --points: the scenes, their tolerance and their references' (much tighter).
-POINTS_SCENES = (("test4", 1e-6, 1e-11), ("facet", 1e-6, 1e-11), ("gunter1", 1e-6, 1e-11),
-                 ("106-surface box", 1e-6, 1e-10))
+#: --points: the scenes and their references' tolerance (much tighter).
+POINTS_SCENES = (("test4", 1e-11), ("facet", 1e-11), ("gunter1", 1e-11),
+                 ("106-surface box", 1e-10))
 
 
 def points_table(args):
     """Part 9: the occluded pairs' point values (hidden parts evaluated) and process time
-    of each scene's full matrix at 1e-6, and every value against a reference computed
-    at a much tighter tolerance (the same code, ``POINTS_SCENES``; cached in
-    ``--ref-cache`` where given): the worst ``|F - ref| / E`` (E the value's estimate)
-    and the largest and median ``E / tolerance`` of the occluded values."""
-    print("Occluded pairs' points at 1e-6, every value against a tighter reference:")
+    of each scene's full matrix at each of ``--tolerances``, and every value against a
+    reference computed at a much tighter tolerance (the same code, ``POINTS_SCENES``;
+    cached in ``--ref-cache`` where given): the worst ``|F - ref| / E`` (E the value's
+    estimate), how many values exceed their estimate, and the largest and median ``E /
+    tolerance`` of the occluded values."""
+    print("Occluded pairs' points, every value against a tighter reference:")
     print()
-    print("| scene | process s | points | occluded values | worst abs(F - ref) / E "
-          "| its E | max E / tolerance | median E / tolerance (occluded) | reference "
-          "tolerance, its max E |")
-    print("|---|---|---|---|---|---|---|---|---|")
-    for name, tolerance, ref_tol in POINTS_SCENES:
+    print("| scene | tolerance | process s | points | occluded values | worst abs(F - ref) "
+          "/ E (pair) | values beyond E | max E / tolerance | median E / tolerance "
+          "(occluded) | reference tolerance, its max E |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
+    for name, ref_tol in POINTS_SCENES:
         scene = (box_106() if name == "106-surface box"
                  else ef.read_vs3(os.path.join(DATA, name + ".vs3")))
         cache = (os.path.join(args.ref_cache, f"{name.replace(' ', '_')}_{ref_tol:g}.npz")
@@ -408,17 +416,19 @@ def points_table(args):
             R, RE = ef.area_form_factors(scene, tolerance=ref_tol, error=True)
             if cache:
                 np.savez(cache, F=R, E=RE)
-        st = {}
-        t0 = time.process_time()
-        F, E = ef.area_form_factors(scene, tolerance=tolerance, error=True, stats=st)
-        dt = time.process_time() - t0
-        ratio = np.abs(F - R) / np.maximum(E, 1e-300)
-        w = np.unravel_index(np.argmax(ratio), ratio.shape)
-        occ = E > 1e-12                 # the unoccluded values' estimates are rounding's
-        print(f"| {name} | {dt:.3f} | {st['point_values']:,} | {int(occ.sum())} "
-              f"| {ratio.max():.3f} | {E[w]:.1e} | {E.max() / tolerance:.3f} "
-              f"| {np.median(E[occ]) / tolerance:.2e} | {ref_tol:g}, {RE.max():.1e} |",
-              flush=True)
+        for tolerance in (float(t) for t in args.tolerances.split(",")):
+            st = {}
+            t0 = time.process_time()
+            F, E = ef.area_form_factors(scene, tolerance=tolerance, error=True, stats=st)
+            dt = time.process_time() - t0
+            ratio = np.abs(F - R) / np.maximum(E, 1e-300)
+            w = np.unravel_index(np.argmax(ratio), ratio.shape)
+            occ = E > 1e-12             # the unoccluded values' estimates are rounding's
+            print(f"| {name} | {tolerance:g} | {dt:.3f} | {st['point_values']:,} "
+                  f"| {int(occ.sum())} | {ratio.max():.3f} ({w[0]}, {w[1]}) "
+                  f"| {int((ratio > 1).sum())} | {E.max() / tolerance:.3f} "
+                  f"| {np.median(E[occ]) / tolerance:.2e} | {ref_tol:g}, {RE.max():.1e} |",
+                  flush=True)
 
 
 def goals(args):
