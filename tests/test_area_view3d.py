@@ -375,7 +375,7 @@ def test_gunter2_floor_to_a_strip_the_wall_hides_is_0_within_its_estimate():
                                and w[:, 0].max() == 0.0 for w in walls)
     # the 3- and 5-point collapsed rules on half the floor differed by 7.2e-8 where the
     # 5-point rule was 2.15e-7 off, and the triangles were refined to their share by
-    # area; with the pair's budget (adaptive._budget_refined) the pair's estimate is
+    # area; with the pair's budget (rules.budget_refined) the pair's estimate is
     # the sum of the coarser triangles' differences, which holds the error
     st = {}
     F, E = ef.area_form_factors(sub, rows=[0], tolerance=1e-6, error=True, stats=st)

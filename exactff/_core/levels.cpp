@@ -146,7 +146,7 @@ struct Pool {
     size_t size() const { return diff.size(); }
 };
 
-// adaptive.py's _budget_refined: the pool's triangles to refine, largest difference
+// rules.py's budget_refined: the pool's triangles to refine, largest difference
 // first, until what is left fits the budget (in the pool's order)
 std::vector<size_t> budget_refined(const Pool& p, double before, double atol,
                                    double total_area, long long max_depth) {

@@ -5,7 +5,7 @@
 // estimate), the unoccluded point values there (sector_sums.h, points.py), the rules'
 // differences summed over the pair against half of the tolerance, and the triangles of
 // the largest differences refined while the sum exceeds it (a global budget,
-// adaptive.py's _budget_refined), until the rest is accepted. Where a point's hidden part
+// rules.py's budget_refined), until the rest is accepted. Where a point's hidden part
 // cannot be trusted (lost: hidden.py sends it to the bound or the engine) or a value is
 // below 0 beyond its estimate, nothing is returned but the status, and the caller takes
 // the whole call the reference's way.

@@ -21,8 +21,8 @@ from .events import cut_cells, distinct_lines, event_lines
 from .hidden import hidden_setup, hidden_values
 from .points import point_values
 from .umbra import outside_umbras, triangle_unoccluded, umbra_cells, umbra_edges, umbras
-from .rules import (RULE_PAIRS, CORNER_MIDDLE_RULE, SYMMETRIC_RULES, quarter, rule_pair,
-                    triangle_areas, triangle_rule)
+from .rules import (RULE_PAIRS, CORNER_MIDDLE_RULE, SYMMETRIC_RULES, budget_refined, quarter,
+                    refined, rule_pair, triangle_areas, triangle_rule)
 
 __all__ = ["COMPILED_LEVELS", "occluded_pair"]
 
@@ -84,7 +84,7 @@ def occluded_pair(S, Pc, Qc, nP, atol, area_P, whole, shortcuts=True, st=None,
     the cells of Pc between visibility events, each cell's triangles by two collapsed
     Gauss-Legendre rules (6 and 10 points a side), the triangles whose rules differ most
     cut in four while the differences' sum exceeds half of ``atol``
-    (:func:`_budget_refined`). Where the events cut Pc into more
+    (:func:`~exactff.area.rules.budget_refined`). Where the events cut Pc into more
     than ``AREA_MANY_CELLS`` triangles (small ones), or the target is at least
     ``AREA_LOW_RULES_TOLERANCE``, each starts with a lower pair (degrees 4 and 8: the
     symmetric rules of 6 and 16 points, or the collapsed ones of 3 and 5 points a side
@@ -259,7 +259,7 @@ def _hidden_integral(S, Pc, Qc, nP, atol, area_P, whole, shortcuts, st, solid=No
         if not again.any():
             break
         # the suspects start again: rung 0 takes the high pair, rung 1 is cut in four
-        T, depth, rung, corner = _refined(Ta[again], a_depth[again], a_rung[again],
+        T, depth, rung, corner = refined(Ta[again], a_depth[again], a_rung[again],
                                           cat["corner"][again].astype(bool), start)
     cat = {k: np.concatenate(v) if v else np.zeros(0) for k, v in acc.items()}
     # the slivers not evaluated: the hidden part is between 0 and the unoccluded point
@@ -336,51 +336,12 @@ def _levels(T, depth, rung, corner, nP, Qc, S, st, setup, atol, area_P, total_ar
                             total_area, start, shortcuts, bound_atol, acc)
 
 
-def _refined(T, depth, rung, corner, start):
-    """Triangles refined: at rung 0 the same triangle at rung 1; at rung 1
-    its four quarters (cut at its edges' midpoints; the first keeps a corner, the first
-    vertex) at the level below, on rung ``start``. Returns ``(T, depth, rung, corner)``."""
-    again, split = rung == 0, rung == 1
-    T = np.concatenate([T[again], quarter(T[split])])
-    depth = np.concatenate([depth[again], np.repeat(depth[split] + 1, 4)])
-    corner = np.concatenate([corner[again], np.stack(
-        [corner[split]] + [np.zeros(int(split.sum()), dtype=bool)] * 3, axis=1).ravel()])
-    rung = np.concatenate([np.ones(int(again.sum()), dtype=int),
-                           np.full(4 * int(split.sum()), start)])
-    return T, depth, rung, corner
-
-
-def _budget_refined(diff, area, depth, rung, before, atol, total_area):
-    """Which triangles of the pool (evaluated, not yet accepted) to refine so that the
-    pair's rules' differences fit half of ``atol``: the global error budget of adaptive
-    cubature (Genz & Malik 1980; QUADPACK's qag), largest difference first. ``before``:
-    the differences accepted before (an earlier call's triangles). A triangle at rung 1
-    on the last level (``AREA_MAX_DEPTH``) cannot be refined: its difference counts
-    against the budget, and the others share what is left, never less than their share
-    by area (``atol / 2`` of the cells' ``total_area``), so that one such triangle does
-    not send all the others to the last level. Sums are sequential (cumulative, in the
-    pool's order), as the compiled levels take them. Returns the indices refined (in the
-    pool's order)."""
-    target = 0.5 * atol
-    refinable = (rung == 0) | (depth < tol.AREA_MAX_DEPTH)
-    stuck = float(np.cumsum(diff[~refinable])[-1]) if (~refinable).any() else 0.0
-    mine = np.flatnonzero(refinable)
-    if not len(mine):
-        return mine
-    room = float(np.cumsum(area[mine])[-1])
-    budget = max(target - before - stuck, target * room / total_area)
-    # largest first (ties in the pool's order), while what is left exceeds the budget
-    order = mine[np.argsort(-diff[mine], kind="stable")]
-    left = float(np.cumsum(diff[mine])[-1]) - np.concatenate([[0.0], np.cumsum(diff[order])[:-1]])
-    return np.sort(order[left > budget])
-
-
 def _adaptive_levels(T, depth, rung, corner, nP, Qc, S, st, setup, atol, area_P,
                      total_area, start, shortcuts, bound_atol, acc):
     """:func:`_hidden_integral`'s adaptive rules: the triangles evaluated (their pairs
     of rules) and kept in a pool; while the pool's rules' differences with those accepted
     before exceed half of ``atol``, those with the largest differences are refined
-    (:func:`_budget_refined`) and their refinements evaluated and added; then the pool
+    (:func:`~exactff.area.rules.budget_refined`) and their refinements evaluated and added; then the pool
     is accepted, appended to ``acc`` (see there). Returns the (empty) triangles left, the
     slivers' area (not evaluated) and the points used."""
     slivers = points = 0
@@ -409,14 +370,14 @@ def _adaptive_levels(T, depth, rung, corner, nP, Qc, S, st, setup, atol, area_P,
             break
         # the refined: a triangle on the low pair takes the high pair, one on the high
         # pair is cut in four at its edges' midpoints (up to AREA_MAX_DEPTH)
-        sel = _budget_refined(cat["diff"], cat["area"], cat["depth"].astype(int),
+        sel = budget_refined(cat["diff"], cat["area"], cat["depth"].astype(int),
                               cat["rung"].astype(int), before, atol, total_area)
         if not len(sel):
             break
         keep = np.ones(len(cat["diff"]), dtype=bool)
         keep[sel] = False
         pool = {k: [v[keep]] for k, v in cat.items()}
-        T, depth, rung, corner = _refined(cat["T"][sel], cat["depth"][sel].astype(int),
+        T, depth, rung, corner = refined(cat["T"][sel], cat["depth"][sel].astype(int),
                                           cat["rung"][sel].astype(int),
                                           cat["corner"][sel].astype(bool), start)
     cat = {k: np.concatenate(v) if v else np.zeros(0) for k, v in pool.items()}
