@@ -119,6 +119,8 @@ __all__ = [
     "AREA_SYMMETRIC_DEGREES",
     "AREA_BACK_FACE_RTOL",
     "AREA_CUT_EXTEND_RTOL",
+    "AREA_CURVED_EVENT_SAMPLES",
+    "AREA_CURVED_EVENT_RTOL",
     "AREA_CELL_COVER_RTOL",
     "AREA_UMBRA_MIN_LINES",
     "AREA_UMBRA_MARGIN",
@@ -573,6 +575,16 @@ AREA_RULE_CHECK_SHARE = 0.1
 #: before the lines are noded, so that it crosses the boundary (as GEOS rounds it, a
 #: line through a corner ended 3e-15 inside: a dangle, dropped, and a cell left uncut).
 AREA_CUT_EXTEND_RTOL = 1e-9
+#: Area form factors: a curved visibility event (three skew edges: the images of two
+#: blockers' edges crossing on the receiver's edge, exactff.area.events.curved_event_lines)
+#: is looked for between the points of the receiver's edge where it may start or stop
+#: and this many steps along it (where it leaves the disk around the emitter) ...
+AREA_CURVED_EVENT_SAMPLES = 16
+#: ... and cut along as a polyline whose chords lie within this of the curve (relative to
+#: the emitter's size), or within the square root of the tolerance where that is less:
+#: the kink of the hidden part (a jump of its second derivative) then lies in a strip of
+#: that width along a cut, where it moves the rules' values by that width squared.
+AREA_CURVED_EVENT_RTOL = 1e-4
 #: ... and the emitter's cells must cover it to this share of its area, else it is cut
 #: again another way (as cut, then on a grid: the cells that cover most are kept).
 AREA_CELL_COVER_RTOL = 1e-12

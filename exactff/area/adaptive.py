@@ -17,7 +17,7 @@ from ..errors import NumericalError, misses_tolerance
 from ..geometry import area_vector, cross, polygon_area, receiver_frame
 from ._pair import adaptive_levels as _compiled_adaptive_levels
 from ._pair import corner_first as _compiled_corner_first
-from .events import cut_cells, distinct_lines, event_lines
+from .events import curved_event_lines, cut_cells, distinct_lines, event_lines
 from .hidden import hidden_setup, hidden_values
 from .points import point_values
 from .umbra import outside_umbras, triangle_unoccluded, umbra_cells, umbra_edges, umbras
@@ -127,6 +127,9 @@ def _hidden_integral(S, Pc, Qc, nP, atol, area_P, whole, shortcuts, st, solid=No
     dP = float(nP @ Pc[0])
     radius = (1.0 + tol.AREA_HIDDEN_PAD) * float(np.linalg.norm(Pc - c, axis=1).max())
     lines = event_lines(S, nP, dP, R, c, radius, Qc, shortcuts, st, solid)
+    # and the curved events (two blockers' edges seen crossing on Qc's edge), as chords
+    lines = np.concatenate([lines, curved_event_lines(
+        S, Qc, nP, dP, R, c, radius, atol, solid if shortcuts else None, st)])
     # the umbras: regions from every point of which one blocker hides all of Qc (the
     # hidden part there is the unoccluded point value: no event inside changes it), the
     # event lines cut away from them and their edges cut along instead

@@ -14,7 +14,7 @@ from ..rings import successors
 from ._pair import cut_cells as _compiled_cut_cells
 from ._pair import event_lines as _compiled_event_lines
 
-__all__ = ["event_lines", "cut_cells", "distinct_lines"]
+__all__ = ["event_lines", "curved_event_lines", "cut_cells", "distinct_lines"]
 
 
 def _dot(a, b):
@@ -218,6 +218,213 @@ def event_lines(S, nP, dP, R, c, radius, Qc, shortcuts=True, st=None, solid=None
     # are computed alike for each copy, so the copies are equal to the bit
     swap = (E2[:, 0, 0] > E2[:, 1, 0]) | ((E2[:, 0, 0] == E2[:, 1, 0]) & (E2[:, 0, 1] > E2[:, 1, 1]))
     return np.unique(np.where(swap[:, None, None], E2[:, ::-1], E2) + 0.0, axis=0)
+
+
+def _transversal(y, a0, da, b0, db, nP, dP):
+    """For points y (..., 3) and lines a0 + v da, b0 + v db: the line through y meeting
+    both (the two planes through y and each line meet in it), where it meets P's plane
+    ``nP . x = dP`` (x, NaN where parallel), and whether it meets both segments
+    (``0 <= v <= 1``) between x and y."""
+    d = cross(cross(a0 - y, da), cross(b0 - y, db))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = (dP - _dot(y, nP)) / _dot(d, nP)
+        x = y + t[..., None] * d
+        ok = np.isfinite(t)
+        for e0, de in ((a0, da), (b0, db)):
+            # the points of closest approach of y + u d and e0 + v de (they meet)
+            w = y - e0
+            A, B, C, D, E = _dot(d, d), _dot(d, de), _dot(de, de), _dot(d, w), _dot(de, w)
+            den = A * C - B * B
+            u, v = (B * E - C * D) / den, (A * E - B * D) / den
+            ok &= (v >= 0) & (v <= 1) & (u / t > 0) & (u / t < 1)
+    return x, ok
+
+
+def curved_event_lines(S, Qc, nP, dP, R, c, radius, atol=0.0, solid=None, st=None):
+    """The curved visibility events of P's plane as polylines: where, seen from x, the
+    images of two edges of different blockers cross on an edge of Qc (three mutually
+    skew edges: the lines meeting all three form a quadric, which meets P's plane in a
+    conic). Across such a curve the hidden part is continuous with its gradient, and
+    its second derivative jumps (the region's corner crosses Qc's edge: a triangle of
+    area ~ t^2 gained or lost), as across a vertex-edge event, but
+    :func:`event_lines` gives lines only; a triangle a curve crosses
+    holds a kink that two rules can agree on far closer than either is to the integral
+    (on the 106-surface box of issue 49, pair (59, 20), a cube's vertical edge and
+    another cube's top edge crossing on the ceiling square's edge: the degree-4 and
+    degree-8 rules 1.3e-8 off, 2.4e-10 apart).
+
+    Each curve is traced along Qc's edge, ``y = q0 + s (q1 - q0)``: the line through y
+    meeting both blocker edges meets P's plane at x(s). It is sampled at
+    ``AREA_CURVED_EVENT_SAMPLES`` steps of s; where it is an event (the line meets both
+    edges between x and y, and x lies within 4 ``radius`` of c) changes between two
+    steps, the end is found by bisection (there the line passes through an edge's end:
+    a vertex-edge event, and the polyline is lengthened across it by
+    ``AREA_CUT_EXTEND_RTOL`` of ``radius``, a dangle that the noding drops). Each
+    piece is then cut into chords within ``AREA_CURVED_EVENT_RTOL`` of ``radius``
+    (or ``sqrt(atol)`` of it, where less) of the curve (its midpoint's distance from
+    the chord, which falls as the square of the steps). Edges of one polygon, of one
+    convex solid (``solid``, as for :func:`event_lines`: their images united are the
+    solid's), sharing an end (the curve is then a vertex-edge line) or parallel (no
+    crossing of their images) make no curve. ``st.curved_events`` counts the curves
+    (``st``: an :class:`~exactff.area.row.AreaStats`, optional).
+
+    Returns the chords (m, 2, 2) in P's frame ``R`` about ``c``, as :func:`event_lines`.
+
+    Examples
+    --------
+    A ceiling square, a vertical edge (of a wall strip) and a horizontal one (of a
+    plate), mutually skew: the curve on the floor z = 0.
+
+    >>> from exactff.geometry import receiver_frame
+    >>> Q = np.array([[2, 2, 5], [2, 3, 5], [3, 3, 5], [3, 2, 5]], float)
+    >>> W = np.array([[.5, 1.5, .5], [.5, 1.5, 1.5], [.4, 1.6, 1.5], [.4, 1.6, .5]])
+    >>> K = np.array([[1.4, 2.2, 3.8], [2.4, 2.2, 3.8], [2.4, 2.1, 3.8], [1.4, 2.1, 3.8]])
+    >>> nP = np.array([1.0, 0, 0])
+    >>> C = curved_event_lines([Q, W, K], Q, nP, 0.0, receiver_frame(nP), np.zeros(3), 2.0)
+    >>> len(C) > 10
+    True
+    """
+    B = [np.asarray(A, dtype=float) for A in S[1:]]
+    Qc = np.asarray(Qc, dtype=float)
+    none = np.zeros((0, 2, 2))
+    if len(B) < 2:
+        return none
+    e0 = np.concatenate(B)
+    e1 = np.concatenate([np.roll(A, -1, axis=0) for A in B])
+    owner = np.repeat(np.arange(len(B)), [len(A) for A in B])
+    group = (np.asarray(solid)[1:][owner] if solid is not None
+             else np.full(len(owner), -1))
+    ia, ib = np.triu_indices(len(e0), 1)
+    de = e1 - e0
+    size = float(np.ptp(np.concatenate([e0, Qc]), axis=0).max())
+    near = tol.AREA_HULL_RTOL * size
+    ends = np.linalg.norm(np.stack([e0[ia] - e0[ib], e0[ia] - e1[ib], e1[ia] - e0[ib],
+                                    e1[ia] - e1[ib]]), axis=2).min(axis=0)
+    keep = ((owner[ia] != owner[ib]) & ~((group[ia] >= 0) & (group[ia] == group[ib]))
+            & (ends > near)
+            & (np.linalg.norm(cross(de[ia], de[ib]), axis=1)
+               > tol.AREA_EVENT_PARALLEL * np.linalg.norm(de[ia], axis=1)
+               * np.linalg.norm(de[ib], axis=1)))
+    ia, ib = ia[keep], ib[keep]
+    q0, dq = Qc, np.roll(Qc, -1, axis=0) - Qc
+    iq = np.repeat(np.arange(len(Qc)), len(ia))
+    ia, ib = np.tile(ia, len(Qc)), np.tile(ib, len(Qc))
+    if not len(iq):
+        return none
+    reach2 = (4.0 * radius) ** 2
+
+    def at(k, s):
+        """x(s), whether it is an event there (not counting the disk) and whether x lies
+        within 4 radius of c, for the triples k (each a row of s)."""
+        x, ok = _transversal(q0[iq[k]][:, None] + s[..., None] * dq[iq[k]][:, None],
+                             e0[ia[k]][:, None], de[ia[k]][:, None],
+                             e0[ib[k]][:, None], de[ib[k]][:, None], nP, dP)
+        with np.errstate(invalid="ignore"):
+            return x, ok, _dot(x - c, x - c) <= reach2
+
+    def breaks(k):
+        """The s where the curve of each triple k may start or stop being an event:
+        the line through y passes through an end of a blocker edge, or through the
+        point where the other edge meets P's plane, or is parallel to an edge or to
+        P's plane, or y is the point of Qc's edge nearest an edge's line."""
+        Q0, DQ = q0[iq[k]], dq[iq[k]]
+        A0, DA, B0, DB = e0[ia[k]], de[ia[k]], e0[ib[k]], de[ib[k]]
+        out = []
+        with np.errstate(divide="ignore", invalid="ignore"):
+            def through(p, l0, dl):
+                n = cross(p - l0, dl)
+                out.append(-_dot(Q0 - l0, n) / _dot(DQ, n))
+            for L0, DL, M0, DM in ((A0, DA, B0, DB), (B0, DB, A0, DA)):
+                through(L0, M0, DM)
+                through(L0 + DL, M0, DM)
+                through(L0 + ((dP - _dot(L0, nP)) / _dot(DL, nP))[:, None] * DL, M0, DM)
+                out.append(_dot(cross(M0 - Q0, DM), DL) / _dot(cross(DQ, DM), DL))
+                w = Q0 - L0
+                a_, b_, c_, d_, e_ = _dot(DQ, DQ), _dot(DQ, DL), _dot(DL, DL), _dot(DQ, w), _dot(DL, w)
+                out.append((b_ * e_ - c_ * d_) / (a_ * c_ - b_ * b_))
+            # the line through y parallel to P's plane: d(s) . nP = c0 + c1 s + c2 s^2
+            A0v, A1v, B0v, B1v = cross(A0 - Q0, DA), cross(DQ, DA), cross(B0 - Q0, DB), cross(DQ, DB)
+            c0 = _dot(cross(A0v, B0v), nP)
+            c1 = -_dot(cross(A0v, B1v) + cross(A1v, B0v), nP)
+            c2 = _dot(cross(A1v, B1v), nP)
+            root = np.sqrt(np.maximum(c1 * c1 - 4 * c2 * c0, 0.0))
+            out += [(-c1 - root) / (2 * c2), (-c1 + root) / (2 * c2), -c0 / c1]
+        return np.clip(np.nan_to_num(np.stack(out, axis=1), nan=0.0), 0.0, 1.0)
+
+    G = tol.AREA_CURVED_EVENT_SAMPLES
+    grid = np.linspace(0.0, 1.0, G + 1)
+    k_all = np.arange(len(iq))
+    # the triples in batches (the temporaries bounded)
+    per = max(1, tol.AREA_EVENT_ROWS_PER_CALL // (3 * G + 48))
+    pieces = []                  # (triple, s_lo, s_hi, lengthen lo, lengthen hi)
+    for k in np.array_split(k_all, max(1, len(k_all) // per)):
+        # between the breaks (and the steps of the grid) the curve is an event or not
+        # throughout, but for the disk
+        s = np.sort(np.concatenate([np.broadcast_to(grid, (len(k), G + 1)), breaks(k)],
+                                   axis=1), axis=1)
+        mid = 0.5 * (s[:, :-1] + s[:, 1:])
+        _, ok, inside = at(k, mid)
+        ok &= inside & (s[:, 1:] > s[:, :-1])
+        if not ok.any():
+            continue
+        t, j = np.nonzero(ok)
+        # an end shared with the next event interval is a node of the polyline; any
+        # other is lengthened across the line where the curve stops (or leaves the disk)
+        prev = np.zeros_like(ok)
+        prev[:, 1:] = ok[:, :-1]
+        after = np.zeros_like(ok)
+        after[:, :-1] = ok[:, 1:]
+        kk, lo, hi, m = k[t], s[t, j], s[t, j + 1], mid[t, j]
+        ext_lo, ext_hi = ~prev[t, j], ~after[t, j]
+        # an end outside the disk: the disk's edge by bisection from the midpoint
+        for end, ext in ((lo, ext_lo), (hi, ext_hi)):
+            _, _, inside = at(kk, end[:, None])
+            out = ~inside[:, 0]
+            if not out.any():
+                continue
+            good, bad = m[out], end[out]
+            for _ in range(30):
+                half = 0.5 * (good + bad)
+                _, _, h_in = at(kk[out], half[:, None])
+                good, bad = np.where(h_in[:, 0], half, good), np.where(h_in[:, 0], bad, half)
+            end[out] = good
+            ext[out] = False
+        pieces.append((kk, lo, hi, ext_lo, ext_hi))
+    if not pieces:
+        return none
+    k, lo, hi, ext_lo, ext_hi = (np.concatenate(v) for v in zip(*pieces))
+    # the chords: each piece cut in steps of s so that the midpoint's distance from its
+    # chord (which falls as the square of the step) is within the allowed deviation
+    dev_allowed = radius * min(tol.AREA_CURVED_EVENT_RTOL, float(np.sqrt(atol)) or np.inf)
+    X3 = at(k, np.stack([lo, 0.5 * (lo + hi), hi], axis=1))[0]
+    X2 = rotate(X3 - c, R)[..., :2]
+    chord = X2[:, 2] - X2[:, 0]
+    off = X2[:, 1] - X2[:, 0]
+    length = np.hypot(chord[:, 0], chord[:, 1])
+    with np.errstate(divide="ignore", invalid="ignore"):
+        dev = np.abs(chord[:, 0] * off[:, 1] - chord[:, 1] * off[:, 0]) / length
+    dev = np.nan_to_num(np.where(length > 0, dev, np.hypot(off[:, 0], off[:, 1])), nan=0.0)
+    steps = np.clip(np.ceil(np.sqrt(dev / dev_allowed)), 1, 4096).astype(int)
+    out = []
+    for n in np.unique(steps):
+        sel = steps == n
+        frac = np.arange(n + 1) / n
+        s = lo[sel, None] + (hi[sel] - lo[sel])[:, None] * frac[None, :]
+        s[:, 0], s[:, -1] = lo[sel], hi[sel]
+        Y = rotate(at(k[sel], s)[0] - c, R)[..., :2]
+        # an end where the curve stops being an event lengthened across that line
+        step = tol.AREA_CUT_EXTEND_RTOL * radius
+        for end, nxt, ext in ((0, 1, ext_lo[sel]), (-1, -2, ext_hi[sel])):
+            d = Y[:, end] - Y[:, nxt]
+            norm = np.hypot(d[:, 0], d[:, 1])
+            grow = ext & (norm > 0)
+            Y[grow, end] += step * d[grow] / norm[grow, None]
+        out.append(np.stack([Y[:, :-1], Y[:, 1:]], axis=2).reshape(-1, 2, 2))
+    segs = np.concatenate(out)
+    segs = segs[np.all(np.isfinite(segs), axis=(1, 2))]
+    if st is not None:
+        st.curved_events += len(np.unique(k))
+    return segs
 
 
 def cut_cells(Pc, nP, lines, R, c, grid=None, lengthen=True, compiled=True):

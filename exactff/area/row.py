@@ -52,6 +52,10 @@ class AreaStats:
         Blocker-blocker events not cut along because their lines of sight miss the
         receiver, and vertex-edge pairs of two faces of one convex solid, whose images
         united change only at the faces' planes.
+    curved_events : int
+        Pieces of curved events cut along (not a shortcut): where the images of two
+        blockers' edges cross on the receiver's edge
+        (:func:`~exactff.area.events.curved_event_lines`).
     back_faces : int
         Members of such a solid that a point sees from behind, skipped in its hidden
         region as the members it sees from the front cover their images (per point).
@@ -94,6 +98,7 @@ class AreaStats:
     escalated_pairs: int = 0
     culled_events: int = 0
     solid_events: int = 0
+    curved_events: int = 0
     back_faces: int = 0
     bounded_points: int = 0
     engine_fallbacks: int = 0
