@@ -584,7 +584,7 @@ AREA_CURVED_EVENT_SAMPLES = 16
 #: the emitter's size), or within the square root of the tolerance where that is less:
 #: the kink of the hidden part (a jump of its second derivative) then lies in a strip of
 #: that width along a cut, where it moves the rules' values by that width squared.
-AREA_CURVED_EVENT_RTOL = 1e-4
+AREA_CURVED_EVENT_RTOL = 1e-3
 #: ... and the emitter's cells must cover it to this share of its area, else it is cut
 #: again another way (as cut, then on a grid: the cells that cover most are kept).
 AREA_CELL_COVER_RTOL = 1e-12

@@ -141,7 +141,18 @@ EventResult event_lines(const EventArgs& a) {
                     const D3 u0 = sub(e0, v), u1 = sub(e1, v);
                     const D3 m = cross(u0, u1);
                     if (m.x == 0 && m.y == 0 && m.z == 0) continue;
-                    if (a.shortcuts && pa > 0 && pb > 0) {
+                    // an edge of pa at v in the plane (parallel to the edge, the two
+                    // lines coplanar): the event is the two edges' (their images
+                    // collinear), its lines of sight pass through every point of the
+                    // two, not through v alone, and it is never culled
+                    bool edge_event = false;
+                    for (const std::int64_t w : {a.start[pa] + (i + ka - 1) % ka,
+                                                 a.start[pa] + (i + 1) % ka}) {
+                        const D3 vw = sub(at(W + 3 * w), v);
+                        if (std::fabs(dot(m, vw)) <= a.event_parallel * norm(m) * norm(vw))
+                            edge_event = true;
+                    }
+                    if (a.shortcuts && pa > 0 && pb > 0 && !edge_event) {
                         // between two blockers, the lines through v and the points of the
                         // edge meet Q's plane along the edge's central image from v: an
                         // event only where that image meets the receiver (unbounded: kept)

@@ -64,10 +64,18 @@ def _vertex_edge_rows(pa, pb, k, start, W, nxt, shortcuts, nQ, q0, RQ, seen, st)
     m = cross(e0 - v, e1 - v)
     keep = np.any(m != 0, axis=1)
     if shortcuts:
+        # an edge of pa at v in the plane (parallel to the edge, the two lines coplanar):
+        # the event is the two edges' (their images collinear), its lines of sight pass
+        # through every point of the two, not through v alone: never culled
+        edge_event = np.zeros(len(v), dtype=bool)
+        for w in (start[ra] + (vi - start[ra] - 1) % k[ra], nxt[vi]):
+            vw = W[w] - v
+            edge_event |= (np.abs(_dot(m, vw)) <= tol.AREA_EVENT_PARALLEL * np.sqrt(_dot(m, m))
+                           * np.sqrt(_dot(vw, vw)))
         # between two blockers, the lines through v and the points of the edge meet Qc's
         # plane along the edge's central image from v: does it cross Qc? (unbounded: kept)
         d0, d1 = _dot(e0 - v, nQ), _dot(e1 - v, nQ)
-        bounded = keep & (ra > 0) & (pb[row_pair] > 0) & (d0 * d1 > 0)
+        bounded = keep & (ra > 0) & (pb[row_pair] > 0) & (d0 * d1 > 0) & ~edge_event
         if bounded.any():
             vb, h = v[bounded], _dot(q0 - v[bounded], nQ)
             ia = vb + (h / d0[bounded])[:, None] * (e0[bounded] - vb) - q0
@@ -240,6 +248,40 @@ def _transversal(y, a0, da, b0, db, nP, dP):
     return x, ok
 
 
+def _unhidden(X, Y, B, near):
+    """Per point pair, whether the open segment from X to Y (n, 3) crosses none of the
+    polygons B in its interior by more than ``near`` (then the two edges the line
+    touches may bound what is hidden there)."""
+    free = np.ones(len(X), dtype=bool)
+    for A in B:
+        n = cross(A[1] - A[0], A[2] - A[0])
+        for k in range(3, len(A)):
+            n = n + cross(A[k - 1] - A[0], A[k] - A[0])
+        n = n / np.linalg.norm(n)
+        hX, hY = _dot(X - A[0], n), _dot(Y - A[0], n)
+        hit = (hX * hY < 0) & (np.minimum(np.abs(hX), np.abs(hY)) > near)
+        if not hit.any():
+            continue
+        p = X[hit] + (hX[hit] / (hX[hit] - hY[hit]))[:, None] * (Y[hit] - X[hit])
+        keep = [a for a in range(3) if a != int(np.argmax(np.abs(n)))]
+        p2, A2 = p[:, keep], A[:, keep]
+        B2 = np.roll(A2, -1, axis=0)
+        # crossing number of a ray in +u, and the distance to the nearest edge
+        u, v = p2[:, None, 0], p2[:, None, 1]
+        spans = (A2[None, :, 1] > v) != (B2[None, :, 1] > v)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            at_u = A2[None, :, 0] + (v - A2[None, :, 1]) * (B2[None, :, 0] - A2[None, :, 0]) / (
+                B2[None, :, 1] - A2[None, :, 1])
+        inside = (spans & (at_u > u)).sum(axis=1) % 2 == 1
+        e = B2 - A2
+        w = p2[:, None, :] - A2[None]
+        t = np.clip((w * e[None]).sum(axis=2) / np.maximum((e * e).sum(axis=1), 1e-300), 0, 1)
+        dist = np.linalg.norm(w - t[..., None] * e[None], axis=2).min(axis=1)
+        idx = np.flatnonzero(hit)
+        free[idx[inside & (dist > near)]] = False
+    return free
+
+
 def curved_event_lines(S, Qc, nP, dP, R, c, radius, atol=0.0, solid=None, st=None):
     """The curved visibility events of P's plane as polylines: where, seen from x, the
     images of two edges of different blockers cross on an edge of Qc (three mutually
@@ -307,8 +349,26 @@ def curved_event_lines(S, Qc, nP, dP, R, c, radius, atol=0.0, solid=None, st=Non
                * np.linalg.norm(de[ib], axis=1)))
     ia, ib = ia[keep], ib[keep]
     q0, dq = Qc, np.roll(Qc, -1, axis=0) - Qc
-    iq = np.repeat(np.arange(len(Qc)), len(ia))
-    ia, ib = np.tile(ia, len(Qc)), np.tile(ib, len(Qc))
+    # per edge of Qc, the blocker edges that may meet a line from P to it: not wholly
+    # behind P's plane (within its disk), nor outside the wedge of the planes through
+    # the edge that support the disk's square around P (the lines from P to the edge
+    # lie in it)
+    Pr = c + radius * np.array([[1, 1], [1, -1], [-1, -1], [-1, 1]]) @ R[:2]
+    behind = np.maximum(_dot(e0, nP), _dot(e1, nP)) <= dP + near
+    N = cross(dq[:, None], Pr[None] - q0[:, None])                    # (q, 4, 3)
+    side = np.einsum("qcd,pd->qcp", N, Pr) - _dot(N, q0[:, None])[..., None]
+    m = near * np.linalg.norm(N, axis=2)
+    N = np.where(np.all(side <= m[..., None], axis=2)[..., None], -N, N)
+    support = np.all(side <= m[..., None], axis=2) | np.all(side >= -m[..., None], axis=2)
+    d0 = np.einsum("qcd,ed->qce", N, e0) - _dot(N, q0[:, None])[..., None]
+    d1 = np.einsum("qcd,ed->qce", N, e1) - _dot(N, q0[:, None])[..., None]
+    out = behind[None] | np.any(support[..., None] & (d0 < -m[..., None]) & (d1 < -m[..., None]),
+                                axis=1)                                # (q, edges)
+    triples = []
+    for q in range(len(Qc)):
+        sel = ~out[q, ia] & ~out[q, ib]
+        triples.append((np.full(int(sel.sum()), q), ia[sel], ib[sel]))
+    iq, ia, ib = (np.concatenate(v) for v in zip(*triples))
     if not len(iq):
         return none
     reach2 = (4.0 * radius) ** 2
@@ -405,25 +465,39 @@ def curved_event_lines(S, Qc, nP, dP, R, c, radius, atol=0.0, solid=None, st=Non
         dev = np.abs(chord[:, 0] * off[:, 1] - chord[:, 1] * off[:, 0]) / length
     dev = np.nan_to_num(np.where(length > 0, dev, np.hypot(off[:, 0], off[:, 1])), nan=0.0)
     steps = np.clip(np.ceil(np.sqrt(dev / dev_allowed)), 1, 4096).astype(int)
-    out = []
-    for n in np.unique(steps):
-        sel = steps == n
-        frac = np.arange(n + 1) / n
-        s = lo[sel, None] + (hi[sel] - lo[sel])[:, None] * frac[None, :]
-        s[:, 0], s[:, -1] = lo[sel], hi[sel]
-        Y = rotate(at(k[sel], s)[0] - c, R)[..., :2]
-        # an end where the curve stops being an event lengthened across that line
-        step = tol.AREA_CUT_EXTEND_RTOL * radius
-        for end, nxt, ext in ((0, 1, ext_lo[sel]), (-1, -2, ext_hi[sel])):
-            d = Y[:, end] - Y[:, nxt]
-            norm = np.hypot(d[:, 0], d[:, 1])
-            grow = ext & (norm > 0)
-            Y[grow, end] += step * d[grow] / norm[grow, None]
-        out.append(np.stack([Y[:, :-1], Y[:, 1:]], axis=2).reshape(-1, 2, 2))
-    segs = np.concatenate(out)
+    # every piece's points in one array: piece i has steps[i] + 1 of them, from first[i]
+    first = np.concatenate([[0], np.cumsum(steps + 1)[:-1]])
+    piece = np.repeat(np.arange(len(steps)), steps + 1)
+    j = np.arange(len(piece)) - first[piece]
+    s = lo[piece] + (hi[piece] - lo[piece]) * (j / steps[piece])
+    s = np.where(j == steps[piece], hi[piece], np.where(j == 0, lo[piece], s))
+    X = at(k[piece], s[:, None])[0][:, 0]
+    Y = rotate(X - c, R)[..., :2]
+    # the chords where the line of sight from x to y crosses no blocker (and within one
+    # chord of such a point, so that the curve goes on across the event where it is
+    # hidden): with a blocker between, the images' crossing is not on the hidden
+    # region's boundary
+    seen = _unhidden(X, q0[iq[k[piece]]] + s[:, None] * dq[iq[k[piece]]], B, near)
+    last = first + steps                     # each piece's last point
+    chord = np.ones(len(piece) - 1, dtype=bool)
+    chord[last[:-1]] = False                 # no chord from one piece to the next
+    seen_c = (seen[:-1] | seen[1:]) & chord
+    grow_c = seen_c.copy()
+    grow_c[1:] |= seen_c[:-1]
+    grow_c[:-1] |= seen_c[1:]
+    grow_c &= chord
+    # an end where the curve stops being an event lengthened across that line
+    step = tol.AREA_CUT_EXTEND_RTOL * radius
+    for end, nxt, ext in ((first, first + 1, ext_lo), (last, last - 1, ext_hi)):
+        d = Y[end] - Y[nxt]
+        norm = np.hypot(d[:, 0], d[:, 1])
+        grow = ext & (norm > 0)
+        Y[end[grow]] += step * d[grow] / norm[grow, None]
+    idx = np.flatnonzero(grow_c)
+    segs = np.stack([Y[idx], Y[idx + 1]], axis=1)
     segs = segs[np.all(np.isfinite(segs), axis=(1, 2))]
     if st is not None:
-        st.curved_events += len(np.unique(k))
+        st.curved_events += len(np.unique(k[piece[idx]]))
     return segs
 
 
