@@ -120,6 +120,7 @@ __all__ = [
     "AREA_BACK_FACE_RTOL",
     "AREA_CUT_EXTEND_RTOL",
     "AREA_CURVED_EVENT_SAMPLES",
+    "AREA_CURVED_EVENT_BISECTIONS",
     "AREA_CURVED_EVENT_RTOL",
     "AREA_CELL_COVER_RTOL",
     "AREA_UMBRA_MIN_LINES",
@@ -580,6 +581,9 @@ AREA_CUT_EXTEND_RTOL = 1e-9
 #: is looked for between the points of the receiver's edge where it may start or stop
 #: and this many steps along it (where it leaves the disk around the emitter) ...
 AREA_CURVED_EVENT_SAMPLES = 16
+#: ... (where it leaves that disk, by at most this many bisections, fewer once every end
+#: lies beyond twice the radius: only that it lies outside the emitter matters) ...
+AREA_CURVED_EVENT_BISECTIONS = 20
 #: ... and cut along as a polyline whose chords lie within this of the curve (relative to
 #: the emitter's size), or within the square root of the tolerance where that is less:
 #: the kink of the hidden part (a jump of its second derivative) then lies in a strip of

@@ -382,6 +382,15 @@ def curved_event_lines(S, Qc, nP, dP, R, c, radius, atol=0.0, solid=None, st=Non
         with np.errstate(invalid="ignore"):
             return x, ok, _dot(x - c, x - c) <= reach2
 
+    def far_at(k, s):
+        """The squared distance of x(s) from c (NaN where x is at infinity), for the
+        triples k (one s each)."""
+        y = q0[iq[k]] + s[:, None] * dq[iq[k]]
+        d = cross(cross(e0[ia[k]] - y, de[ia[k]]), cross(e0[ib[k]] - y, de[ib[k]]))
+        with np.errstate(divide="ignore", invalid="ignore"):
+            x = y + ((dP - _dot(y, nP)) / _dot(d, nP))[:, None] * d - c
+            return _dot(x, x)
+
     def breaks(k):
         """The s where the curve of each triple k may start or stop being an event:
         the line through y passes through an end of a blocker edge, or through the
@@ -436,19 +445,26 @@ def curved_event_lines(S, Qc, nP, dP, R, c, radius, atol=0.0, solid=None, st=Non
         after[:, :-1] = ok[:, 1:]
         kk, lo, hi, m = k[t], s[t, j], s[t, j + 1], mid[t, j]
         ext_lo, ext_hi = ~prev[t, j], ~after[t, j]
-        # an end outside the disk: the disk's edge by bisection from the midpoint
-        for end, ext in ((lo, ext_lo), (hi, ext_hi)):
-            _, _, inside = at(kk, end[:, None])
-            out = ~inside[:, 0]
-            if not out.any():
-                continue
-            good, bad = m[out], end[out]
-            for _ in range(30):
+        # an end outside the disk: the disk's edge by bisection from the midpoint (both
+        # ends of every piece at once; only x is needed)
+        ends = np.concatenate([lo, hi])
+        pk, pm = np.concatenate([kk, kk]), np.concatenate([m, m])
+        out = ~(far_at(pk, ends) <= reach2)
+        if out.any():
+            good, bad, ko = pm[out], ends[out], pk[out]
+            far = far_at(ko, good)
+            for _ in range(tol.AREA_CURVED_EVENT_BISECTIONS):
+                if np.all(far >= (2.0 * radius) ** 2):
+                    break                        # every end outside the emitter
                 half = 0.5 * (good + bad)
-                _, _, h_in = at(kk[out], half[:, None])
-                good, bad = np.where(h_in[:, 0], half, good), np.where(h_in[:, 0], bad, half)
-            end[out] = good
-            ext[out] = False
+                h_far = far_at(ko, half)
+                h_in = h_far <= reach2
+                good, bad = np.where(h_in, half, good), np.where(h_in, bad, half)
+                far = np.where(h_in, h_far, far)
+            ends[out] = good
+            lo, hi = ends[:len(lo)], ends[len(lo):]
+            ext_lo &= ~out[:len(lo)]
+            ext_hi &= ~out[len(lo):]
         pieces.append((kk, lo, hi, ext_lo, ext_hi))
     if not pieces:
         return none
