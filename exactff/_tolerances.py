@@ -577,7 +577,7 @@ AREA_RULE_CHECK_SHARE = 0.1
 #: line through a corner ended 3e-15 inside: a dangle, dropped, and a cell left uncut).
 AREA_CUT_EXTEND_RTOL = 1e-9
 #: Area form factors: a curved visibility event (three skew edges: the images of two
-#: blockers' edges crossing on the receiver's edge, exactff.area.events.curved_event_lines)
+#: blockers' edges crossing on the receiver's edge, exactff.area.curved.curved_event_lines)
 #: is looked for between the points of the receiver's edge where it may start or stop
 #: and this many steps along it (where it leaves the disk around the emitter) ...
 AREA_CURVED_EVENT_SAMPLES = 16

@@ -4,7 +4,7 @@ not cut along, each leaving a kink of the hidden part inside a cell, where two r
 agreed far closer than either was to the integral.
 
 - A curved event: seen from the emitter, the images of two cubes' edges cross on the
-  receiver's edge (three mutually skew edges; :func:`exactff.area.events.curved_event_lines`).
+  receiver's edge (three mutually skew edges; :func:`exactff.area.curved.curved_event_lines`).
   Pair (59, 20): a triangle's degree-4 and degree-8 rules 1.3e-8 off, 2.4e-10 apart.
 - Two parallel coplanar edges of two blockers (a vertical edge of each cube): the
   vertex-edge events on their common plane were culled where the lines of sight through
@@ -23,7 +23,8 @@ import pytest
 import exactff as ef
 from exactff import _tolerances as tol
 from exactff.area import adaptive, area_row
-from exactff.area.events import curved_event_lines, event_lines
+from exactff.area.curved import curved_event_lines
+from exactff.area.events import event_lines
 from exactff.area.hidden import hidden_values
 from exactff.area.rules import GAUSS_RULE, quarter, triangle_rule
 from exactff.geometry import receiver_frame

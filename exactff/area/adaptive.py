@@ -17,7 +17,8 @@ from ..errors import NumericalError, misses_tolerance
 from ..geometry import area_vector, cross, polygon_area, receiver_frame
 from ._pair import adaptive_levels as _compiled_adaptive_levels
 from ._pair import corner_first as _compiled_corner_first
-from .events import curved_event_lines, cut_cells, distinct_lines, event_lines
+from .curved import curved_event_lines
+from .events import cut_cells, distinct_lines, event_lines
 from .hidden import hidden_setup, hidden_values
 from .points import point_values
 from .umbra import outside_umbras, triangle_unoccluded, umbra_cells, umbra_edges, umbras

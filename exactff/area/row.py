@@ -55,7 +55,7 @@ class AreaStats:
     curved_events : int
         Pieces of curved events cut along (not a shortcut): where the images of two
         blockers' edges cross on the receiver's edge
-        (:func:`~exactff.area.events.curved_event_lines`).
+        (:func:`~exactff.area.curved.curved_event_lines`).
     back_faces : int
         Members of such a solid that a point sees from behind, skipped in its hidden
         region as the members it sees from the front cover their images (per point).
