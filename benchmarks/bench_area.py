@@ -77,6 +77,7 @@ sys.path.insert(0, os.path.join(os.path.dirname(__file__), "..", "tests"))
 from scenes_bench import machine  # noqa: E402
 from test_area import howell_parallel, howell_perpendicular, parallel_pair, perpendicular_pair  # noqa: E402,E501
 from test_area import OCCLUDED_REFERENCES, _square  # noqa: E402
+from test_area_curved import box_106  # noqa: E402
 
 
 def gauss_contour(P, Q, n=30):
@@ -363,23 +364,6 @@ def umbra_rows(args):
             print(f"| ({i}, {j}) | {t0:.2f} | {t1:.2f} | {p0:,} | {p1:,} | {u1} "
                   f"| {v1:.3e} ({e1:.1e}) | {abs(v1 - v0) / (e0 + e1):.2f} |")
     tolerances.AREA_UMBRA_MIN_LINES = on
-
-
-def box_106():
-    """Issue 49's 106-surface box: a room of 3 x 4 x 5 (x, y, z) cut into 94 unit squares
-    facing in, with two unit cubes inside (12 faces facing out), floating: one at
-    (0.5, 0.5, 0.5)-(1.5, 1.5, 1.5), one at (1.4, 2.2, 2.8)-(2.4, 3.2, 3.8)."""
-    room = []
-    for F in ef.scenes.box_polygons((0, 0, 0), (3, 4, 5), 1, facing="in"):
-        u, v = F[1] - F[0], F[3] - F[0]
-        nu, nv = int(round(np.linalg.norm(u))), int(round(np.linalg.norm(v)))
-        for a in range(nu):
-            for b in range(nv):
-                room.append(np.array([F[0] + (a + i) / nu * u + (b + j) / nv * v
-                                      for i, j in ((0, 0), (1, 0), (1, 1), (0, 1))]))
-    cubes = (ef.scenes.box_polygons((0.5, 0.5, 0.5), (1.5, 1.5, 1.5), 1, facing="out")
-             + ef.scenes.box_polygons((1.4, 2.2, 2.8), (2.4, 3.2, 3.8), 1, facing="out"))
-    return ef.Scene.from_polygons(room + cubes)
 
 
 #: View3D 4.0's times of issue 49's table (s, gcc -O2, 2026-12-05) and the goals' ratios.
