@@ -101,11 +101,14 @@ def curved_event_lines(S, Qc, nP, dP, R, c, radius, atol=0.0, solid=None, st=Non
     one convex solid (``solid``, as for :func:`~exactff.area.events.event_lines`: their
     images united are the solid's), sharing an end (the curve is then a vertex-edge
     line) or parallel (no crossing of their images) make no curve, an edge two faces
-    share is taken once, and an edge wholly behind P's plane or outside the wedge of
+    share is taken once (and its chords left out where, seen from x, the two faces'
+    images lie either side of its image: it is then inside what they hide), and an edge wholly behind P's plane or outside the wedge of
     the planes through Qc's edge that support the square around the disk (the lines
-    from P to that edge lie in it) makes none with that edge. ``st.curved_events``
-    counts the curves cut along (``st``: an :class:`~exactff.area.row.AreaStats`,
-    optional).
+    from P to that edge lie in it) makes none with that edge. Beyond
+    ``AREA_CURVED_MAX_TRIPLES`` triples of edges left after that, none is traced (a
+    pair behind many blockers: the rules then meet the curves uncut, as before), counted
+    in ``st.curved_skipped``. ``st.curved_events`` counts the curves cut along (``st``:
+    an :class:`~exactff.area.row.AreaStats`, optional).
 
     Returns the chords (m, 2, 2) in P's frame ``R`` about ``c``, as
     :func:`~exactff.area.events.event_lines`.
@@ -145,7 +148,27 @@ def curved_event_lines(S, Qc, nP, dP, R, c, radius, atol=0.0, solid=None, st=Non
             & (np.linalg.norm(cross(de[ia], de[ib]), axis=1)
                > tol.AREA_EVENT_PARALLEL * np.linalg.norm(de[ia], axis=1)
                * np.linalg.norm(de[ib], axis=1)))
+    # an edge two faces share (a box's) once: its copies would trace the same curve;
+    # and of such an edge, a vertex of each face off it (where, seen from x, the two
+    # faces' images lie either side of the edge's, the edge is inside what they hide)
+    d = e1 - e0
+    swap = d[np.arange(len(d)), np.argmax(d != 0, axis=1)] < 0   # from the least end
+    rows = np.where(swap[:, None], np.hstack([e1, e0]), np.hstack([e0, e1]))
+    cid = np.unique(rows, axis=0, return_inverse=True)[1].ravel()
     ia, ib = ia[keep], ib[keep]
+    lo_, hi_ = np.minimum(cid[ia], cid[ib]), np.maximum(cid[ia], cid[ib])
+    first = np.unique(lo_ * (int(cid.max()) + 1) + hi_, return_index=True)[1]
+    first = np.sort(first[lo_[first] != hi_[first]])
+    ia, ib = ia[first], ib[first]
+    count = np.bincount(cid)
+    start = np.concatenate([[0], np.cumsum([len(A) for A in B])[:-1]])
+    nv = np.array([len(A) for A in B])
+    off_edge = e0[start[owner] + (np.arange(len(e0)) - start[owner] + 2) % nv[owner]]
+    order = np.argsort(cid, kind="stable")
+    pos = np.concatenate([[0], np.cumsum(count)[:-1]])
+    shared = count == 2
+    OA = off_edge[order[pos]]
+    OB = off_edge[order[np.minimum(pos + 1, len(order) - 1)]]
     q0, dq = Qc, np.roll(Qc, -1, axis=0) - Qc
     # per edge of Qc, the blocker edges that may meet a line from P to it: not wholly
     # behind P's plane (within its disk), nor outside the wedge of the planes through
@@ -168,6 +191,12 @@ def curved_event_lines(S, Qc, nP, dP, R, c, radius, atol=0.0, solid=None, st=Non
         triples.append((np.full(int(sel.sum()), q), ia[sel], ib[sel]))
     iq, ia, ib = (np.concatenate(v) for v in zip(*triples))
     if not len(iq):
+        return none
+    if len(iq) > tol.AREA_CURVED_MAX_TRIPLES:
+        # too many to trace (their chords would swamp the arrangement): the rules meet
+        # these kinks uncut, as before, counted
+        if st is not None:
+            st.curved_skipped += 1
         return none
     reach2 = (4.0 * radius) ** 2
 
@@ -271,7 +300,8 @@ def curved_event_lines(S, Qc, nP, dP, R, c, radius, atol=0.0, solid=None, st=Non
     # chord (which falls as the square of the step) is within the allowed deviation
     dev_allowed = radius * min(tol.AREA_CURVED_EVENT_RTOL, float(np.sqrt(atol)) or np.inf)
     X3 = at(k, np.stack([lo, 0.5 * (lo + hi), hi], axis=1))[0]
-    X2 = rotate(X3 - c, R)[..., :2]
+    with np.errstate(invalid="ignore", over="ignore"):
+        X2 = rotate(X3 - c, R)[..., :2]
     chord = X2[:, 2] - X2[:, 0]
     off = X2[:, 1] - X2[:, 0]
     length = np.hypot(chord[:, 0], chord[:, 1])
@@ -286,12 +316,20 @@ def curved_event_lines(S, Qc, nP, dP, R, c, radius, atol=0.0, solid=None, st=Non
     s = lo[piece] + (hi[piece] - lo[piece]) * (j / steps[piece])
     s = np.where(j == steps[piece], hi[piece], np.where(j == 0, lo[piece], s))
     X = at(k[piece], s[:, None])[0][:, 0]
-    Y = rotate(X - c, R)[..., :2]
+    with np.errstate(invalid="ignore", over="ignore"):
+        Y = rotate(X - c, R)[..., :2]
     # the chords where the line of sight from x to y crosses no blocker (and within one
     # chord of such a point, so that the curve goes on across the event where it is
     # hidden): with a blocker between, the images' crossing is not on the hidden
     # region's boundary
     seen = _unhidden(X, q0[iq[k[piece]]] + s[:, None] * dq[iq[k[piece]]], B, near)
+    for e in (ia[k[piece]], ib[k[piece]]):
+        # an edge two faces share whose faces' images lie either side of its own
+        n = cross(de[e], X - e0[e])
+        sa, sb = _inner(OA[cid[e]] - e0[e], n), _inner(OB[cid[e]] - e0[e], n)
+        m = near * np.linalg.norm(n, axis=1) * np.linalg.norm(de[e], axis=1)
+        with np.errstate(invalid="ignore"):
+            seen &= ~(shared[cid[e]] & (np.minimum(np.abs(sa), np.abs(sb)) > m) & (sa * sb < 0))
     last = first + steps                     # each piece's last point
     chord = np.ones(len(piece) - 1, dtype=bool)
     chord[last[:-1]] = False                 # no chord from one piece to the next
