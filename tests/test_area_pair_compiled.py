@@ -236,10 +236,10 @@ def test_compiled_cells_are_geos_cells(monkeypatch, name, rows):
         side = (E[None, :, 0] * (V[:, None, 1] - P2[None, :, 1])
                 - E[None, :, 1] * (V[:, None, 0] - P2[None, :, 0]))
         assert side.min() >= -1e-12 * A
-    # (1/25 of the calls: since the parallel coplanar edges' events are kept and the
-    # curved events cut, gunter1 has 7 of 252, where GEOS drops a cut along collinear
-    # overlapping segments that end on P's boundary, lengthened: the compiled noding
-    # keeps it, a genuine event line)
+    # (1/25 of the calls: since the curved events are cut, gunter1 has 7 of 252, 2
+    # without them; in the one examined, call 28, GEOS with the lengthened ends drops a
+    # straight event line whose collinear copies end on P's boundary, next to the
+    # chords, which the compiled noding keeps: not understood further)
     assert split <= max(2, len(out) // 25), split
     assert declined <= len(out) // 10, declined
 
@@ -323,7 +323,7 @@ def test_gunter2_pair_of_many_events_cut_into_cells():
     # the pair of View3D's gunter2 that raised (row 38, the strip under a saw-tooth
     # roof, to the wall 3 behind 151 blockers): 32,000 event segments, cut by the
     # compiled arrangement into cells that tile the emitter, the lines joined to fewer
-    # than 1,700 (1,577 before the parallel coplanar edges' events were kept, 1,609 since)
+    # than 1,600
     from exactff.area._pair import cut_cells as compiled_cut_cells
     from exactff.area.culling import padded_polygons, pair_blockers
     from exactff.area.events import cut_cells
@@ -348,7 +348,7 @@ def test_gunter2_pair_of_many_events_cut_into_cells():
         step=tol.AREA_CUT_EXTEND_RTOL * np.sqrt(abs(A)),
         merge=tol.AREA_HULL_RTOL * float(np.ptp(P2, axis=0).max()),
         sliver=tol.AREA_SLIVER_CELL * abs(A))
-    assert ok and joined < 1700 and len(areas) > 10000, (ok, joined, len(areas))
+    assert ok and joined < 1600 and len(areas) > 10000, (ok, joined, len(areas))
     assert abs(areas.sum() - abs(A)) <= 1e-12 * abs(A)
     T = cut_cells(Pc, nP, lines, R, c)
     assert abs(_tri_area((T - c) @ R[:2].T).sum() - abs(A)) <= 1e-12 * abs(A)
