@@ -586,9 +586,12 @@ AREA_CURVED_EVENT_SAMPLES = 16
 #: lies beyond twice the radius: only that it lies outside the emitter matters) ...
 AREA_CURVED_EVENT_BISECTIONS = 20
 #: ... for a pair with at most this many triples of edges that may trace one (after the
-#: cheap culls; the 106-surface box's pairs have at most 768, View3D's gunter2 pair (38, 3)
-#: behind 151 blockers 700,000, whose 31,000 curves took 22 s and 127,000 chords) ...
-AREA_CURVED_MAX_TRIPLES = 20_000
+#: cheap culls): a cost limit. At 1e-6 the 106-surface box's pairs have at most 230,
+#: gunter1's 938; gunter2's rows 0 and 95 have 15 pairs beyond it (up to 31,788), and its
+#: pair (38, 3) behind 151 blockers 700,000 before the culls, whose 31,000 curves took 22 s
+#: and 127,000 chords; row 38 took 154 s with a limit of 20,000, 53 s with this one (52 s
+#: without curved events).
+AREA_CURVED_MAX_TRIPLES = 2_000
 #: ... and cut along as a polyline whose chords lie within this of the curve (relative to
 #: the emitter's size), or within the square root of the tolerance where that is less:
 #: the kink of the hidden part (a jump of its second derivative) then lies in a strip of
