@@ -2,15 +2,24 @@
 emitter, the images of two blockers' edges cross on an edge of the receiver (three
 mutually skew edges, whose common transversals form a quadric: a conic in the emitter's
 plane), traced and cut along as chords (docs/explanation/area-form-factors.md). The
-straight events are :mod:`exactff.area.events`'.
+straight events are :mod:`exactff.area.events`'. The curves are traced compiled
+(:mod:`exactff.area._pair`, ``_core/curved.cpp``, the GIL released); the numpy path here
+is their reference (``compiled=False``, tests/test_area_pair_compiled.py).
 """
 
 import numpy as np
 
 from .. import _tolerances as tol
 from ..geometry import cross, rotate, unit_normal
+from ._pair import curved_event_lines as _compiled_curved_event_lines
 
 __all__ = ["curved_event_lines"]
+
+#: the tolerances the compiled curves take (_core/curved.cpp)
+_CURVED_TOLERANCES = ("AREA_HULL_RTOL", "AREA_EVENT_PARALLEL", "AREA_CUT_EXTEND_RTOL",
+                      "AREA_CURVED_EVENT_RTOL", "AREA_CURVED_EVENT_SAMPLES",
+                      "AREA_CURVED_EVENT_BISECTIONS", "AREA_CURVED_MAX_TRIPLES",
+                      "AREA_EVENT_ROWS_PER_CALL")
 
 
 def _inner(a, b):
@@ -69,7 +78,8 @@ def _unhidden(X, Y, B, near):
     return free
 
 
-def curved_event_lines(S, Qc, nP, dP, R, c, radius, atol=0.0, solid=None, st=None):
+def curved_event_lines(S, Qc, nP, dP, R, c, radius, atol=0.0, solid=None, st=None,
+                       compiled=True):
     """The curved visibility events of P's plane as polylines: where, seen from x, the
     images of two edges of different blockers cross on an edge of Qc (three mutually
     skew edges: the lines meeting all three form a quadric, which meets P's plane in a
@@ -110,6 +120,11 @@ def curved_event_lines(S, Qc, nP, dP, R, c, radius, atol=0.0, solid=None, st=Non
     in ``st.curved_skipped``. ``st.curved_events`` counts the curves cut along (``st``:
     an :class:`~exactff.area.row.AreaStats`, optional).
 
+    ``compiled`` (default): traced by :mod:`exactff.area._pair` (``_core/curved.cpp``,
+    the same steps in the same order); else by numpy here, the reference the compiled
+    chords are tested against (``tests/test_area_pair_compiled.py``: the same chords to
+    rounding on every occluded pair of gunter1 and the 106-surface box).
+
     Returns the chords (m, 2, 2) in P's frame ``R`` about ``c``, as
     :func:`~exactff.area.events.event_lines`.
 
@@ -126,7 +141,25 @@ def curved_event_lines(S, Qc, nP, dP, R, c, radius, atol=0.0, solid=None, st=Non
     >>> C = curved_event_lines([Q, W, K], Q, nP, 0.0, receiver_frame(nP), np.zeros(3), 2.0)
     >>> len(C) > 10
     True
+    >>> C0 = curved_event_lines([Q, W, K], Q, nP, 0.0, receiver_frame(nP), np.zeros(3), 2.0,
+    ...                         compiled=False)
+    >>> C.shape == C0.shape and bool(np.allclose(C, C0, rtol=0, atol=1e-12))
+    True
     """
+    if compiled:
+        W = np.concatenate([np.asarray(A, dtype=float) for A in S])
+        start = np.concatenate([[0], np.cumsum([len(A) for A in S])])
+        sol = (np.zeros(0, dtype=np.int64) if solid is None
+               else np.asarray(solid, dtype=np.int64))
+        segs, events, skipped = _compiled_curved_event_lines(
+            W=W, start=start, solid=sol, Qc=np.asarray(Qc, dtype=float),
+            nP=np.asarray(nP, dtype=float), dP=float(dP), frame=np.asarray(R, dtype=float),
+            c=np.asarray(c, dtype=float), radius=float(radius), atol=float(atol),
+            tol={k: getattr(tol, k) for k in _CURVED_TOLERANCES})
+        if st is not None:
+            st.curved_events += events
+            st.curved_skipped += int(skipped)
+        return segs
     B = [np.asarray(A, dtype=float) for A in S[1:]]
     Qc = np.asarray(Qc, dtype=float)
     none = np.zeros((0, 2, 2))
