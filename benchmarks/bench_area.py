@@ -52,6 +52,13 @@ Usage: python benchmarks/bench_area.py [--cube-k 8]
    point values (hidden parts evaluated), and every value against a reference at 1e-11
    (the box 1e-10; ``--ref-cache DIR`` keeps them): the worst ``|F - ref| / E``, the
    values beyond their estimates, the estimates against the tolerance.
+10. ``--curved`` alone (issue 49, the curved events' cost): gunter1 and the 106-surface box
+   at ``--tolerances`` (default 1e-6), in one run, with the curved events traced by numpy
+   (``curved_event_lines(compiled=False)``, the reference), compiled
+   (``_core/curved.cpp``) and not at all (``AREA_CURVED_MAX_TRIPLES = -1``: every pair
+   skipped, as before they were traced): process time, points, the curves traced and the
+   pairs skipped, and whether the compiled run's values and estimates are the numpy
+   run's to the bit.
 5. ``--pair-path`` alone: the occluded pairs' compiled path against the numpy and GEOS
    reference it replaces, in one run at tolerance 1e-6 (test4, facet, gunter1; process
    time): the events compiled (``exactff/_core/pair.cpp``) or by numpy
@@ -172,6 +179,8 @@ def main():
     ap.add_argument("--umbras", default="", help="only gunter2's rows (comma-separated) "
                     "without and with the umbras")
     ap.add_argument("--umbra-pairs", default="", help="with --umbras: pairs i:j timed alone")
+    ap.add_argument("--curved", action="store_true",
+                    help="only the curved events traced by numpy, compiled and not at all")
     ap.add_argument("--points", action="store_true",
                     help="only the occluded pairs' points and values against tight references")
     ap.add_argument("--ref-cache", default="",
@@ -191,6 +200,8 @@ def main():
         return umbra_rows(args)
     if args.points:
         return points_table(args)
+    if args.curved:
+        return curved_table(args)
     if args.only_cube:
         return cube_matrix(args)
     if args.only_view3d:
@@ -413,6 +424,45 @@ def points_table(args):
                   f"| {int((ratio > 1).sum())} | {E.max() / tolerance:.3f} "
                   f"| {np.median(E[occ]) / tolerance:.2e} | {ref_tol:g}, {RE.max():.1e} |",
                   flush=True)
+
+
+def curved_table(args):
+    """Part 10: the curved events traced by numpy, compiled and not at all, same run."""
+    import functools
+
+    from exactff import _tolerances as tol
+    from exactff.area import adaptive, curved
+
+    print("Curved events by numpy (the reference), compiled, and none (process time, one "
+          "run each):")
+    print()
+    print("| scene | tolerance | curves | process s | points | curves traced | pairs skipped "
+          "| max E | F, E the numpy run's to the bit |")
+    print("|---|---|---|---|---|---|---|---|---|")
+    scenes = {"gunter1": ef.read_vs3(os.path.join(DATA, "gunter1.vs3")),
+              "106-surface box": box_106()}
+    limit = tol.AREA_CURVED_MAX_TRIPLES
+    for name, scene in scenes.items():
+        for tolerance in (float(t) for t in args.tolerances.split(",")):
+            ref = None
+            for how in ("numpy", "compiled", "none"):
+                adaptive.curved_event_lines = functools.partial(
+                    curved.curved_event_lines, compiled=how != "numpy")
+                tol.AREA_CURVED_MAX_TRIPLES = -1 if how == "none" else limit
+                st = {}
+                try:
+                    t0 = time.process_time()
+                    F, E = ef.area_form_factors(scene, tolerance=tolerance, error=True, stats=st)
+                    dt = time.process_time() - t0
+                finally:
+                    adaptive.curved_event_lines = curved.curved_event_lines
+                    tol.AREA_CURVED_MAX_TRIPLES = limit
+                ref = (F, E) if ref is None else ref
+                same = "-" if how != "compiled" else bool(
+                    np.array_equal(F, ref[0]) and np.array_equal(E, ref[1]))
+                print(f"| {name} | {tolerance:g} | {how} | {dt:.3f} | {st['point_values']:,} "
+                      f"| {st['curved_events']:,} | {st['curved_skipped']:,} | {E.max():.1e} "
+                      f"| {same} |", flush=True)
 
 
 def goals(args):
