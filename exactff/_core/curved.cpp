@@ -18,16 +18,16 @@
 #include <vector>
 
 #include "pair.h"
+#include "pair_vec.h"
 #include "vec.h"
 
 namespace exactff {
 namespace {
 
-using D3 = Vec3<double>;
-
-D3 load(const double* p) { return {p[0], p[1], p[2]}; }
-D3 plus(const D3& a, const D3& b) { return {a.x + b.x, a.y + b.y, a.z + b.z}; }
-D3 times(double s, const D3& a) { return {s * a.x, s * a.y, s * a.z}; }
+using pair_vec::D3;
+using pair_vec::add;
+using pair_vec::scale;
+using pair_vec::at;
 // the reference's a . b (numpy's einsum over the last axis of 3: its two lanes' sums, the
 // first and third products, then the second), so that its decisions (an interval of s
 // empty or not, a point on which side) are taken on the same doubles
@@ -36,13 +36,13 @@ double inner(const D3& a, const D3& b) { return (a.x * b.x + a.z * b.z) + a.y * 
 // geometry.unit_normal: the fan's cross products from the first vertex summed in order,
 // halved, over its length
 D3 unit_normal(const double* P, std::int64_t k) {
-    const D3 p0 = load(P);
+    const D3 p0 = at(P);
     D3 s{0, 0, 0};
     for (std::int64_t i = 1; i + 1 < k; ++i) {
-        const D3 c = cross(sub(load(P + 3 * i), p0), sub(load(P + 3 * (i + 1)), p0));
-        s = i == 1 ? c : plus(s, c);
+        const D3 c = cross(sub(at(P + 3 * i), p0), sub(at(P + 3 * (i + 1)), p0));
+        s = i == 1 ? c : add(s, c);
     }
-    const D3 A = times(0.5, s);
+    const D3 A = scale(0.5, s);
     const double L = norm(A);
     return {A.x / L, A.y / L, A.z / L};
 }
@@ -62,7 +62,7 @@ struct Transversal {
 Transversal transversal(const D3& y, const Edge& a, const Edge& b, const D3& nP, double dP) {
     const D3 d = cross(cross(sub(a.e0, y), a.de), cross(sub(b.e0, y), b.de));
     const double t = (dP - inner(y, nP)) / inner(d, nP);
-    Transversal r{plus(y, times(t, d)), std::isfinite(t)};
+    Transversal r{add(y, scale(t, d)), std::isfinite(t)};
     for (const Edge* e : {&a, &b}) {
         // the points of closest approach of y + u d and e0 + v de (they meet)
         const D3 w = sub(y, e->e0);
@@ -92,9 +92,9 @@ struct Piece {
 // ||x(s) - c||^2 (NaN where x is at infinity: curved.py's far_at)
 double far_at(const Triple& T, const Edge& a, const Edge& b, double s, const D3& nP, double dP,
               const D3& c) {
-    const D3 y = plus(T.q0, times(s, T.dq));
+    const D3 y = add(T.q0, scale(s, T.dq));
     const D3 d = cross(cross(sub(a.e0, y), a.de), cross(sub(b.e0, y), b.de));
-    const D3 x = sub(plus(y, times((dP - inner(y, nP)) / inner(d, nP), d)), c);
+    const D3 x = sub(add(y, scale((dP - inner(y, nP)) / inner(d, nP), d)), c);
     return inner(x, x);
 }
 
@@ -111,8 +111,8 @@ void breaks(const Triple& T, const Edge& A, const Edge& B, const D3& nP, double 
         const Edge& L = o ? B : A;
         const Edge& M = o ? A : B;
         through(L.e0, M.e0, M.de);
-        through(plus(L.e0, L.de), M.e0, M.de);
-        through(plus(L.e0, times((dP - inner(L.e0, nP)) / inner(L.de, nP), L.de)), M.e0, M.de);
+        through(add(L.e0, L.de), M.e0, M.de);
+        through(add(L.e0, scale((dP - inner(L.e0, nP)) / inner(L.de, nP), L.de)), M.e0, M.de);
         out.push_back(inner(cross(sub(M.e0, Q0), M.de), L.de) / inner(cross(DQ, M.de), L.de));
         const D3 w = sub(Q0, L.e0);
         const double a_ = inner(DQ, DQ), b_ = inner(DQ, L.de), c_ = inner(L.de, L.de),
@@ -123,7 +123,7 @@ void breaks(const Triple& T, const Edge& A, const Edge& B, const D3& nP, double 
     const D3 A0v = cross(sub(A.e0, Q0), A.de), A1v = cross(DQ, A.de);
     const D3 B0v = cross(sub(B.e0, Q0), B.de), B1v = cross(DQ, B.de);
     const double c0 = inner(cross(A0v, B0v), nP);
-    const double c1 = -inner(plus(cross(A0v, B1v), cross(A1v, B0v)), nP);
+    const double c1 = -inner(add(cross(A0v, B1v), cross(A1v, B0v)), nP);
     const double c2 = inner(cross(A1v, B1v), nP);
     const double root = std::sqrt(std::max(c1 * c1 - 4 * c2 * c0, 0.0));
     out.push_back((-c1 - root) / (2 * c2));
@@ -138,7 +138,7 @@ CurvedResult curved_event_lines(const CurvedArgs& a) {
     CurvedResult res;
     const std::int64_t nb = a.n - 1;  // the blockers: S[1:]
     if (nb < 2) return res;
-    const D3 nP = load(a.nP), c = load(a.c);
+    const D3 nP = at(a.nP), c = at(a.c);
     const double dP = a.dP, radius = a.radius;
     const double* W = a.W;
     // the blockers' edges, their owners and solids
@@ -147,7 +147,7 @@ CurvedResult curved_event_lines(const CurvedArgs& a) {
     for (std::int64_t p = 1; p <= nb; ++p) {
         const std::int64_t s0 = a.start[p], k = a.start[p + 1] - s0;
         for (std::int64_t i = 0; i < k; ++i) {
-            const D3 e0 = load(W + 3 * (s0 + i)), e1 = load(W + 3 * (s0 + (i + 1) % k));
+            const D3 e0 = at(W + 3 * (s0 + i)), e1 = at(W + 3 * (s0 + (i + 1) % k));
             E.push_back({e0, sub(e1, e0), e1});
             owner.push_back(p - 1);
             group.push_back(a.solid ? a.solid[p] : -1);
@@ -210,12 +210,12 @@ CurvedResult curved_event_lines(const CurvedArgs& a) {
     // per edge of Qc, the blocker edges that may meet a line from P to it: not wholly behind
     // P's plane (within its disk), nor outside the wedge of the planes through the edge that
     // support the disk's square around P (the lines from P to the edge lie in it)
-    const D3 r0 = load(a.frame), r1 = load(a.frame + 3);
+    const D3 r0 = at(a.frame), r1 = at(a.frame + 3);
     D3 Pr[4];
     const double sg[4][2] = {{1, 1}, {1, -1}, {-1, -1}, {-1, 1}};
     for (int k = 0; k < 4; ++k) {
         const double s0 = radius * sg[k][0], s1 = radius * sg[k][1];
-        Pr[k] = plus(c, {s0 * r0.x + s1 * r1.x, s0 * r0.y + s1 * r1.y, s0 * r0.z + s1 * r1.z});
+        Pr[k] = add(c, {s0 * r0.x + s1 * r1.x, s0 * r0.y + s1 * r1.y, s0 * r0.z + s1 * r1.z});
     }
     std::vector<unsigned char> behind(ne);
     for (std::int64_t e = 0; e < ne; ++e)
@@ -223,7 +223,7 @@ CurvedResult curved_event_lines(const CurvedArgs& a) {
     std::vector<Triple> triples;
     std::vector<unsigned char> out(ne);
     for (std::int64_t q = 0; q < a.n_q; ++q) {
-        const D3 q0 = load(a.Qc + 3 * q), dq = sub(load(a.Qc + 3 * ((q + 1) % a.n_q)), q0);
+        const D3 q0 = at(a.Qc + 3 * q), dq = sub(at(a.Qc + 3 * ((q + 1) % a.n_q)), q0);
         for (std::int64_t e = 0; e < ne; ++e) out[e] = behind[e];
         for (int k = 0; k < 4; ++k) {
             D3 N = cross(dq, sub(Pr[k], q0));
@@ -253,9 +253,9 @@ CurvedResult curved_event_lines(const CurvedArgs& a) {
         return res;
     }
     const double reach2 = (4.0 * radius) * (4.0 * radius);
-    const auto at = [&](std::int64_t k, double s) {
+    const auto curve_at = [&](std::int64_t k, double s) {
         const Triple& T = triples[k];
-        return transversal(plus(T.q0, times(s, T.dq)), E[T.a], E[T.b], nP, dP);
+        return transversal(add(T.q0, scale(s, T.dq)), E[T.a], E[T.b], nP, dP);
     };
     const auto inside = [&](const D3& x) {
         const D3 r = sub(x, c);
@@ -293,7 +293,7 @@ CurvedResult curved_event_lines(const CurvedArgs& a) {
             std::vector<double> mid(ni);
             for (std::size_t j = 0; j < ni; ++j) {
                 mid[j] = 0.5 * (s[j] + s[j + 1]);
-                const Transversal tr = at(k, mid[j]);
+                const Transversal tr = curve_at(k, mid[j]);
                 ok[j] = tr.ok && inside(tr.x) && s[j + 1] > s[j];
             }
             // an end shared with the next event interval is a node of the polyline; any
@@ -360,9 +360,9 @@ CurvedResult curved_event_lines(const CurvedArgs& a) {
     for (std::size_t p = 0; p < np_; ++p) {
         const Piece& P = pieces[p];
         double x0, y0, x1, y1, x2, y2;
-        frame2(at(P.k, P.lo).x, x0, y0);
-        frame2(at(P.k, 0.5 * (P.lo + P.hi)).x, x1, y1);
-        frame2(at(P.k, P.hi).x, x2, y2);
+        frame2(curve_at(P.k, P.lo).x, x0, y0);
+        frame2(curve_at(P.k, 0.5 * (P.lo + P.hi)).x, x1, y1);
+        frame2(curve_at(P.k, P.hi).x, x2, y2);
         const double cx = x2 - x0, cy = y2 - y0, ox = x1 - x0, oy = y1 - y0;
         const double length = std::hypot(cx, cy);
         double dev = length > 0 ? std::fabs(cx * oy - cy * ox) / length : std::hypot(ox, oy);
@@ -388,8 +388,8 @@ CurvedResult curved_event_lines(const CurvedArgs& a) {
                                             : P.lo + (P.hi - P.lo) * (static_cast<double>(j) /
                                                                       static_cast<double>(steps[p]));
             const std::int64_t i = first[p] + j;
-            X[i] = at(P.k, sj).x;
-            Yq[i] = plus(T.q0, times(sj, T.dq));
+            X[i] = curve_at(P.k, sj).x;
+            Yq[i] = add(T.q0, scale(sj, T.dq));
             frame2(X[i], Y[2 * i], Y[2 * i + 1]);
             tri[i] = P.k;
         }
@@ -401,7 +401,7 @@ CurvedResult curved_event_lines(const CurvedArgs& a) {
         const std::int64_t s0 = a.start[b], k = a.start[b + 1] - s0;
         const double* A = W + 3 * s0;
         const D3 n = unit_normal(A, k);
-        const D3 a0 = load(A);
+        const D3 a0 = at(A);
         int big = 0;
         for (int ax = 1; ax < 3; ++ax)
             if (std::fabs(n[ax]) > std::fabs(n[big])) big = ax;
@@ -409,7 +409,7 @@ CurvedResult curved_event_lines(const CurvedArgs& a) {
         for (std::int64_t i = 0; i < total; ++i) {
             const double hX = inner(sub(X[i], a0), n), hY = inner(sub(Yq[i], a0), n);
             if (!(hX * hY < 0 && std::min(std::fabs(hX), std::fabs(hY)) > near)) continue;
-            const D3 pt = plus(X[i], times(hX / (hX - hY), sub(Yq[i], X[i])));
+            const D3 pt = add(X[i], scale(hX / (hX - hY), sub(Yq[i], X[i])));
             const double u = pt[k0], v = pt[k1];
             // the crossing number of a ray in +u, and the distance to the nearest edge
             int crossings = 0;
@@ -436,8 +436,8 @@ CurvedResult curved_event_lines(const CurvedArgs& a) {
             const std::int64_t id = cid[e];
             if (count[id] != 2) continue;
             const D3 n = cross(E[e].de, sub(X[i], E[e].e0));
-            const double sa = inner(sub(load(W + 3 * off_vertex[firsts[id]]), E[e].e0), n);
-            const double sb = inner(sub(load(W + 3 * off_vertex[seconds[id]]), E[e].e0), n);
+            const double sa = inner(sub(at(W + 3 * off_vertex[firsts[id]]), E[e].e0), n);
+            const double sb = inner(sub(at(W + 3 * off_vertex[seconds[id]]), E[e].e0), n);
             const double m = near * norm(n) * norm(E[e].de);
             if (std::min(std::fabs(sa), std::fabs(sb)) > m && sa * sb < 0) seen[i] = 0;
         }

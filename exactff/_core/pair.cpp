@@ -20,16 +20,16 @@
 
 #include "expansion.h"
 #include "pair.h"
+#include "pair_vec.h"
 #include "vec.h"
 
 namespace exactff {
 namespace {
 
-using D3 = Vec3<double>;
-
-D3 at(const double* p) { return {p[0], p[1], p[2]}; }
-D3 add(const D3& a, const D3& b) { return {a.x + b.x, a.y + b.y, a.z + b.z}; }
-D3 scale(double s, const D3& a) { return {s * a.x, s * a.y, s * a.z}; }
+using pair_vec::D3;
+using pair_vec::at;
+using pair_vec::add;
+using pair_vec::scale;
 
 // the sign of det(b - a, c - a), the side of c of the line through a and b: a double
 // filter (Shewchuk's bound for orient2d), else exactly (expansion.h)
