@@ -66,8 +66,8 @@ Transversal transversal(const D3& y, const Edge& a, const Edge& b, const D3& nP,
     for (const Edge* e : {&a, &b}) {
         // the points of closest approach of y + u d and e0 + v de (they meet)
         const D3 w = sub(y, e->e0);
-        const double A = inner(d, d), B = inner(d, e->de), C = inner(e->de, e->de), Dd = inner(d, w),
-                     E = inner(e->de, w);
+        const double A = inner(d, d), B = inner(d, e->de), C = inner(e->de, e->de);
+        const double Dd = inner(d, w), E = inner(e->de, w);
         const double den = A * C - B * B;
         const double u = (B * E - C * Dd) / den, v = (A * E - B * Dd) / den;
         r.ok = r.ok && v >= 0 && v <= 1 && u / t > 0 && u / t < 1;
@@ -197,10 +197,12 @@ CurvedResult curved_event_lines(const CurvedArgs& a) {
             for (std::int64_t j = i + 1; j < ne; ++j) {
                 if (owner[i] == owner[j] || (group[i] >= 0 && group[i] == group[j])) continue;
                 const Edge &A = E[i], &B = E[j];
-                const double ends = std::min(std::min(norm(sub(A.e0, B.e0)), norm(sub(A.e0, B.e1))),
-                                             std::min(norm(sub(A.e1, B.e0)), norm(sub(A.e1, B.e1))));
+                const double ends =
+                    std::min(std::min(norm(sub(A.e0, B.e0)), norm(sub(A.e0, B.e1))),
+                             std::min(norm(sub(A.e1, B.e0)), norm(sub(A.e1, B.e1))));
                 if (!(ends > near)) continue;
-                if (!(norm(cross(A.de, B.de)) > a.event_parallel * norm(A.de) * norm(B.de))) continue;
+                if (!(norm(cross(A.de, B.de)) > a.event_parallel * norm(A.de) * norm(B.de)))
+                    continue;
                 const std::int64_t lo = std::min(cid[i], cid[j]), hi = std::max(cid[i], cid[j]);
                 if (!seen.emplace(std::make_pair(lo, hi), true).second || lo == hi) continue;
                 pairs.emplace_back(i, j);
@@ -237,7 +239,8 @@ CurvedResult curved_event_lines(const CurvedArgs& a) {
             if (!(all_le || all_ge)) continue;
             if (all_le) N = neg(N);
             for (std::int64_t e = 0; e < ne; ++e) {
-                const double d0 = inner(N, E[e].e0) - inner(N, q0), d1 = inner(N, E[e].e1) - inner(N, q0);
+                const double d0 = inner(N, E[e].e0) - inner(N, q0);
+                const double d1 = inner(N, E[e].e1) - inner(N, q0);
                 if (d0 < -m && d1 < -m) out[e] = 1;
             }
         }
@@ -383,10 +386,8 @@ CurvedResult curved_event_lines(const CurvedArgs& a) {
         const Piece& P = pieces[p];
         const Triple& T = triples[P.k];
         for (std::int64_t j = 0; j <= steps[p]; ++j) {
-            const double sj = j == steps[p] ? P.hi
-                              : j == 0      ? P.lo
-                                            : P.lo + (P.hi - P.lo) * (static_cast<double>(j) /
-                                                                      static_cast<double>(steps[p]));
+            const double frac = static_cast<double>(j) / static_cast<double>(steps[p]);
+            const double sj = j == steps[p] ? P.hi : j == 0 ? P.lo : P.lo + (P.hi - P.lo) * frac;
             const std::int64_t i = first[p] + j;
             X[i] = curve_at(P.k, sj).x;
             Yq[i] = add(T.q0, scale(sj, T.dq));
