@@ -316,11 +316,10 @@ def test_compiled_cells_are_geos_cells(monkeypatch, name, rows):
         side = (E[None, :, 0] * (V[:, None, 1] - P2[None, :, 1])
                 - E[None, :, 1] * (V[:, None, 0] - P2[None, :, 0]))
         assert side.min() >= -1e-12 * A
-    # (1/25 of the calls: since the curved events are cut, gunter1 has 7 of 252, 2
-    # without them; in the one examined, call 28, GEOS with the lengthened ends drops a
-    # straight event line whose collinear copies end on P's boundary, next to the
-    # chords, which the compiled noding keeps: not understood further)
-    assert split <= max(2, len(out) // 25), split
+    # (gunter1: 2 of 252 calls, the same 2 without any curved event; 7 when curves were
+    # traced for edges whose lines meet: straight chords copying a vertex-edge event,
+    # ending 1e-6 short of P's boundary, along which GEOS dropped a real cut)
+    assert split <= max(2, len(out) // 50), split
     assert declined <= len(out) // 10, declined
 
 

@@ -47,6 +47,14 @@ def _transversal(y, a0, da, b0, db, nP, dP):
     return x, ok
 
 
+def _skew(p0, dp, r0, dr, near):
+    """Whether the lines ``p0 + u dp`` and ``r0 + v dr`` (..., 3) are skew: their
+    distance ``|(r0 - p0) . (dp x dr)| / |dp x dr|`` more than ``near`` (parallel lines:
+    never)."""
+    n = cross(dp, dr)
+    return np.abs(_inner(r0 - p0, n)) > near * np.sqrt(_inner(n, n))
+
+
 def _unhidden(X, Y, B, near):
     """Per point pair, whether the open segment from X to Y (n, 3) crosses none of the
     polygons B in its interior by more than ``near`` (then the two edges the line
@@ -109,12 +117,16 @@ def curved_event_lines(S, Qc, nP, dP, R, c, radius, atol=0.0, solid=None, st=Non
     sight from x to y (within its rounding: the crossing is then inside what is hidden)
     are left out, but for one chord either side of those kept. Edges of one polygon, of
     one convex solid (``solid``, as for :func:`~exactff.area.events.event_lines`: their
-    images united are the solid's), sharing an end (the curve is then a vertex-edge
-    line) or parallel (no crossing of their images) make no curve, an edge two faces
-    share is taken once (and its chords left out where, seen from x, the two faces'
-    images lie either side of its image: it is then inside what they hide), and an edge wholly behind P's plane or outside the wedge of
-    the planes through Qc's edge that support the square around the disk (the lines
-    from P to that edge lie in it) makes none with that edge. Beyond
+    images united are the solid's), whose lines meet or are coplanar (within the
+    scene's rounding: a shared end, a T, a crossing; the transversals then pass through
+    the common point or lie in the common plane, and trace straight lines, the
+    vertex-edge events) or parallel (no crossing of their images) make no curve, an
+    edge two faces share is taken once (and its chords left out where, seen from x, the
+    two faces' images lie either side of its image: it is then inside what they hide),
+    and an edge whose line meets Qc's edge's or is parallel to it, lies wholly behind P's
+    plane or outside the wedge of the planes through Qc's edge that support the square
+    around the disk (the lines from P to that edge lie in it) makes none with that
+    edge. Beyond
     ``AREA_CURVED_MAX_TRIPLES`` triples of edges left after that, none is traced (a
     pair behind many blockers: the rules then meet the curves uncut, as before), counted
     in ``st.curved_skipped``. ``st.curved_events`` counts the curves cut along (``st``:
@@ -174,10 +186,11 @@ def curved_event_lines(S, Qc, nP, dP, R, c, radius, atol=0.0, solid=None, st=Non
     de = e1 - e0
     size = float(np.ptp(np.concatenate([e0, Qc]), axis=0).max())
     near = tol.AREA_HULL_RTOL * size
-    ends = np.linalg.norm(np.stack([e0[ia] - e0[ib], e0[ia] - e1[ib], e1[ia] - e0[ib],
-                                    e1[ia] - e1[ib]]), axis=2).min(axis=0)
+    # two edges' lines skew (farther apart than near), not parallel: lines that meet
+    # (a shared end, a T, a crossing) or are coplanar trace straight lines, the
+    # vertex-edge events of event_lines
     keep = ((owner[ia] != owner[ib]) & ~((group[ia] >= 0) & (group[ia] == group[ib]))
-            & (ends > near)
+            & _skew(e0[ia], de[ia], e0[ib], de[ib], near)
             & (np.linalg.norm(cross(de[ia], de[ib]), axis=1)
                > tol.AREA_EVENT_PARALLEL * np.linalg.norm(de[ia], axis=1)
                * np.linalg.norm(de[ib], axis=1)))
@@ -218,6 +231,9 @@ def curved_event_lines(S, Qc, nP, dP, R, c, radius, atol=0.0, solid=None, st=Non
     d1 = np.einsum("qcd,ed->qce", N, e1) - _inner(N, q0[:, None])[..., None]
     out = behind[None] | np.any(support[..., None] & (d0 < -m[..., None]) & (d1 < -m[..., None]),
                                 axis=1)                                # (q, edges)
+    # and a blocker edge whose line meets Qc's edge's (or is parallel to it) makes no
+    # curve with it: the three lines are to be mutually skew
+    out |= ~_skew(q0[:, None], dq[:, None], e0[None], de[None], near)
     triples = []
     for q in range(len(Qc)):
         sel = ~out[q, ia] & ~out[q, ib]
