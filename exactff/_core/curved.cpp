@@ -33,6 +33,13 @@ using pair_vec::at;
 // empty or not, a point on which side) are taken on the same doubles
 double inner(const D3& a, const D3& b) { return (a.x * b.x + a.z * b.z) + a.y * b.y; }
 
+// whether the lines p0 + u dp and r0 + v dr are skew: |(r0 - p0) . (dp x dr)| more than
+// near |dp x dr| (parallel lines: never), as curved.py's _skew
+bool skew(const D3& p0, const D3& dp, const D3& r0, const D3& dr, double near) {
+    const D3 n = cross(dp, dr);
+    return std::fabs(inner(sub(r0, p0), n)) > near * std::sqrt(inner(n, n));
+}
+
 // geometry.unit_normal: the fan's cross products from the first vertex summed in order,
 // halved, over its length
 D3 unit_normal(const double* P, std::int64_t k) {
@@ -188,7 +195,7 @@ CurvedResult curved_event_lines(const CurvedArgs& a) {
             if (++count[it->second] == 2) seconds[it->second] = i;
         }
     }
-    // the pairs of edges of different polygons (not of one solid), not sharing an end nor
+    // the pairs of edges of different polygons (not of one solid), their lines skew and not
     // parallel, each pair of copies once, in order
     std::vector<std::pair<std::int64_t, std::int64_t>> pairs;
     {
@@ -197,10 +204,8 @@ CurvedResult curved_event_lines(const CurvedArgs& a) {
             for (std::int64_t j = i + 1; j < ne; ++j) {
                 if (owner[i] == owner[j] || (group[i] >= 0 && group[i] == group[j])) continue;
                 const Edge &A = E[i], &B = E[j];
-                const double ends =
-                    std::min(std::min(norm(sub(A.e0, B.e0)), norm(sub(A.e0, B.e1))),
-                             std::min(norm(sub(A.e1, B.e0)), norm(sub(A.e1, B.e1))));
-                if (!(ends > near)) continue;
+                // lines that meet or are coplanar trace straight lines (vertex-edge events)
+                if (!skew(A.e0, A.de, B.e0, B.de, near)) continue;
                 if (!(norm(cross(A.de, B.de)) > a.event_parallel * norm(A.de) * norm(B.de)))
                     continue;
                 const std::int64_t lo = std::min(cid[i], cid[j]), hi = std::max(cid[i], cid[j]);
@@ -244,6 +249,9 @@ CurvedResult curved_event_lines(const CurvedArgs& a) {
                 if (d0 < -m && d1 < -m) out[e] = 1;
             }
         }
+        // a blocker edge whose line meets Qc's edge's (or is parallel to it): no curve
+        for (std::int64_t e = 0; e < ne; ++e)
+            if (!skew(q0, dq, E[e].e0, E[e].de, near)) out[e] = 1;
         for (const auto& p : pairs)
             if (!out[p.first] && !out[p.second]) triples.push_back({q0, dq, p.first, p.second});
     }
