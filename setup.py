@@ -45,7 +45,7 @@ setup(
                                    extra_link_args=QUADMATH),
                  Pybind11Extension("exactff.area._hidden", core("bind_hidden.cpp", "hidden.cpp"),
                                    depends=HEADERS, cxx_std=17, extra_compile_args=CORE_FLAGS),
-                 Pybind11Extension("exactff.area._pair", core("bind_pair.cpp", "pair.cpp", "levels.cpp", "hidden.cpp",
+                 Pybind11Extension("exactff.area._pair", core("bind_pair.cpp", "pair.cpp", "curved.cpp", "levels.cpp", "hidden.cpp",
                                         "hidden_setup.cpp"),
                                    depends=HEADERS, cxx_std=17, extra_compile_args=CORE_FLAGS),
                  Pybind11Extension("exactff.area._closed", core("bind_closed.cpp", "closed_form.cpp"),

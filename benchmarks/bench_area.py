@@ -47,6 +47,18 @@ Usage: python benchmarks/bench_area.py [--cube-k 8]
    process time, point values, umbra cells, the row's sum less 1 against its
    estimates, and the largest difference of a value between the two runs against the
    sum of their estimates; ``--umbra-pairs 38:23,38:3`` the same for single pairs.
+9. ``--points`` alone (issue 49, the adaptive levels' points): test4, facet, gunter1 and
+   the 106-surface box at each of ``--tolerances`` (default 1e-6): process time, the
+   point values (hidden parts evaluated), and every value against a reference at 1e-11
+   (the box 1e-10; ``--ref-cache DIR`` keeps them): the worst ``|F - ref| / E``, the
+   values beyond their estimates, the estimates against the tolerance.
+10. ``--curved`` alone (issue 49, the curved events' cost): gunter1 and the 106-surface box
+   at ``--tolerances`` (default 1e-6), in one run, with the curved events traced by numpy
+   (``curved_event_lines(compiled=False)``, the reference), compiled
+   (``_core/curved.cpp``) and not at all (``AREA_CURVED_MAX_TRIPLES = -1``: every pair
+   skipped, as before they were traced): process time, points, the curves traced and the
+   pairs skipped, and whether the compiled run's values and estimates are the numpy
+   run's to the bit.
 5. ``--pair-path`` alone: the occluded pairs' compiled path against the numpy and GEOS
    reference it replaces, in one run at tolerance 1e-6 (test4, facet, gunter1; process
    time): the events compiled (``exactff/_core/pair.cpp``) or by numpy
@@ -72,6 +84,7 @@ sys.path.insert(0, os.path.join(os.path.dirname(__file__), "..", "tests"))
 from scenes_bench import machine  # noqa: E402
 from test_area import howell_parallel, howell_perpendicular, parallel_pair, perpendicular_pair  # noqa: E402,E501
 from test_area import OCCLUDED_REFERENCES, _square  # noqa: E402
+from test_area_curved import box_106  # noqa: E402
 
 
 def gauss_contour(P, Q, n=30):
@@ -166,6 +179,14 @@ def main():
     ap.add_argument("--umbras", default="", help="only gunter2's rows (comma-separated) "
                     "without and with the umbras")
     ap.add_argument("--umbra-pairs", default="", help="with --umbras: pairs i:j timed alone")
+    ap.add_argument("--curved", action="store_true",
+                    help="only the curved events traced by numpy, compiled and not at all")
+    ap.add_argument("--points", action="store_true",
+                    help="only the occluded pairs' points and values against tight references")
+    ap.add_argument("--ref-cache", default="",
+                    help="--points: a directory for the references (computed once)")
+    ap.add_argument("--tolerances", default="1e-6",
+                    help="--points: the tolerances, comma-separated")
     args = ap.parse_args()
     print(machine())
     print()
@@ -177,6 +198,10 @@ def main():
         return threads(args)
     if args.umbras or args.umbra_pairs:
         return umbra_rows(args)
+    if args.points:
+        return points_table(args)
+    if args.curved:
+        return curved_table(args)
     if args.only_cube:
         return cube_matrix(args)
     if args.only_view3d:
@@ -352,25 +377,92 @@ def umbra_rows(args):
     tolerances.AREA_UMBRA_MIN_LINES = on
 
 
-def box_106():
-    """Issue 49's 106-surface box: a room of 3 x 4 x 5 (x, y, z) cut into 94 unit squares
-    facing in, with two unit cubes inside (12 faces facing out), floating: one at
-    (0.5, 0.5, 0.5)-(1.5, 1.5, 1.5), one at (1.4, 2.2, 2.8)-(2.4, 3.2, 3.8)."""
-    room = []
-    for F in ef.scenes.box_polygons((0, 0, 0), (3, 4, 5), 1, facing="in"):
-        u, v = F[1] - F[0], F[3] - F[0]
-        nu, nv = int(round(np.linalg.norm(u))), int(round(np.linalg.norm(v)))
-        for a in range(nu):
-            for b in range(nv):
-                room.append(np.array([F[0] + (a + i) / nu * u + (b + j) / nv * v
-                                      for i, j in ((0, 0), (1, 0), (1, 1), (0, 1))]))
-    cubes = (ef.scenes.box_polygons((0.5, 0.5, 0.5), (1.5, 1.5, 1.5), 1, facing="out")
-             + ef.scenes.box_polygons((1.4, 2.2, 2.8), (2.4, 3.2, 3.8), 1, facing="out"))
-    return ef.Scene.from_polygons(room + cubes)
-
-
 #: View3D 4.0's times of issue 49's table (s, gcc -O2, 2026-12-05) and the goals' ratios.
 GOALS = (("gunter1", 0.009, 30), ("106-surface box", 0.044, 20), ("gunter2", 0.52, 20))
+
+
+#: --points: the scenes and their references' tolerance (much tighter).
+POINTS_SCENES = (("test4", 1e-11), ("facet", 1e-11), ("gunter1", 1e-11),
+                 ("106-surface box", 1e-10))
+
+
+def points_table(args):
+    """Part 9: the occluded pairs' point values (hidden parts evaluated) and process time
+    of each scene's full matrix at each of ``--tolerances``, and every value against a
+    reference computed at a much tighter tolerance (the same code, ``POINTS_SCENES``;
+    cached in ``--ref-cache`` where given): the worst ``|F - ref| / E`` (E the value's
+    estimate), how many values exceed their estimate, and the largest and median ``E /
+    tolerance`` of the occluded values."""
+    print("Occluded pairs' points, every value against a tighter reference:")
+    print()
+    print("| scene | tolerance | process s | points | occluded values | worst abs(F - ref) "
+          "/ E (pair) | values beyond E | max E / tolerance | median E / tolerance "
+          "(occluded) | reference tolerance, its max E |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
+    for name, ref_tol in POINTS_SCENES:
+        scene = (box_106() if name == "106-surface box"
+                 else ef.read_vs3(os.path.join(DATA, name + ".vs3")))
+        cache = (os.path.join(args.ref_cache, f"{name.replace(' ', '_')}_{ref_tol:g}.npz")
+                 if args.ref_cache else "")
+        if cache and os.path.exists(cache):
+            with np.load(cache) as z:
+                R, RE = z["F"], z["E"]
+        else:
+            R, RE = ef.area_form_factors(scene, tolerance=ref_tol, error=True)
+            if cache:
+                np.savez(cache, F=R, E=RE)
+        for tolerance in (float(t) for t in args.tolerances.split(",")):
+            st = {}
+            t0 = time.process_time()
+            F, E = ef.area_form_factors(scene, tolerance=tolerance, error=True, stats=st)
+            dt = time.process_time() - t0
+            ratio = np.abs(F - R) / np.maximum(E, 1e-300)
+            w = np.unravel_index(np.argmax(ratio), ratio.shape)
+            occ = E > 1e-12             # the unoccluded values' estimates are rounding's
+            print(f"| {name} | {tolerance:g} | {dt:.3f} | {st['point_values']:,} "
+                  f"| {int(occ.sum())} | {ratio.max():.3f} ({w[0]}, {w[1]}) "
+                  f"| {int((ratio > 1).sum())} | {E.max() / tolerance:.3f} "
+                  f"| {np.median(E[occ]) / tolerance:.2e} | {ref_tol:g}, {RE.max():.1e} |",
+                  flush=True)
+
+
+def curved_table(args):
+    """Part 10: the curved events traced by numpy, compiled and not at all, same run."""
+    import functools
+
+    from exactff import _tolerances as tol
+    from exactff.area import adaptive, curved
+
+    print("Curved events by numpy (the reference), compiled, and none (process time, one "
+          "run each):")
+    print()
+    print("| scene | tolerance | curves | process s | points | curves traced | pairs skipped "
+          "| max E | F, E the numpy run's to the bit |")
+    print("|---|---|---|---|---|---|---|---|---|")
+    scenes = {"gunter1": ef.read_vs3(os.path.join(DATA, "gunter1.vs3")),
+              "106-surface box": box_106()}
+    limit = tol.AREA_CURVED_MAX_TRIPLES
+    for name, scene in scenes.items():
+        for tolerance in (float(t) for t in args.tolerances.split(",")):
+            ref = None
+            for how in ("numpy", "compiled", "none"):
+                adaptive.curved_event_lines = functools.partial(
+                    curved.curved_event_lines, compiled=how != "numpy")
+                tol.AREA_CURVED_MAX_TRIPLES = -1 if how == "none" else limit
+                st = {}
+                try:
+                    t0 = time.process_time()
+                    F, E = ef.area_form_factors(scene, tolerance=tolerance, error=True, stats=st)
+                    dt = time.process_time() - t0
+                finally:
+                    adaptive.curved_event_lines = curved.curved_event_lines
+                    tol.AREA_CURVED_MAX_TRIPLES = limit
+                ref = (F, E) if ref is None else ref
+                same = "-" if how != "compiled" else bool(
+                    np.array_equal(F, ref[0]) and np.array_equal(E, ref[1]))
+                print(f"| {name} | {tolerance:g} | {how} | {dt:.3f} | {st['point_values']:,} "
+                      f"| {st['curved_events']:,} | {st['curved_skipped']:,} | {E.max():.1e} "
+                      f"| {same} |", flush=True)
 
 
 def goals(args):
@@ -475,7 +567,8 @@ def gil_share(scene, tolerance=1e-6):
         return g
 
     patched = []
-    for name in ("events", "hidden", "adaptive", "edge_integrals", "culling", "closed_form"):
+    for name in ("events", "curved", "hidden", "adaptive", "edge_integrals", "culling",
+                 "closed_form"):
         mod = importlib.import_module(f"exactff.area.{name}")
         for attr in dir(mod):
             if attr.startswith("_compiled_"):

@@ -123,6 +123,10 @@ __all__ = [
     "AREA_SYMMETRIC_DEGREES",
     "AREA_BACK_FACE_RTOL",
     "AREA_CUT_EXTEND_RTOL",
+    "AREA_CURVED_EVENT_SAMPLES",
+    "AREA_CURVED_EVENT_BISECTIONS",
+    "AREA_CURVED_MAX_TRIPLES",
+    "AREA_CURVED_EVENT_RTOL",
     "AREA_CELL_COVER_RTOL",
     "AREA_UMBRA_MIN_LINES",
     "AREA_UMBRA_MARGIN",
@@ -583,6 +587,27 @@ AREA_RULE_CHECK_SHARE = 0.1
 #: before the lines are noded, so that it crosses the boundary (as GEOS rounds it, a
 #: line through a corner ended 3e-15 inside: a dangle, dropped, and a cell left uncut).
 AREA_CUT_EXTEND_RTOL = 1e-9
+#: Area form factors: a curved visibility event (three skew edges: the images of two
+#: blockers' edges crossing on the receiver's edge, exactff.area.curved.curved_event_lines)
+#: is looked for between the points of the receiver's edge where it may start or stop
+#: and this many steps along it (where it leaves the disk around the emitter) ...
+AREA_CURVED_EVENT_SAMPLES = 16
+#: ... (where it leaves that disk, by at most this many bisections, fewer once every end
+#: lies beyond twice the radius: only that it lies outside the emitter matters) ...
+AREA_CURVED_EVENT_BISECTIONS = 20
+#: ... for a pair with at most this many triples of edges that may trace one (after the
+#: cheap culls): a cost limit. At 1e-6 the 106-surface box's pairs have at most 230,
+#: gunter1's 938; gunter2's rows 0 and 95 have 15 pairs beyond it (up to 31,788), and its
+#: pair (38, 3) behind 151 blockers 700,000 before the culls, whose 31,000 curves took 22 s
+#: and 127,000 chords; row 38 took 154 s with a limit of 20,000, 53 s with this one (52 s
+#: without curved events). Traced compiled, row 38's pairs would trace 401,734 curves as
+#: 4.7 million chords in 18 s without the limit: the chords' cells are what it bounds.
+AREA_CURVED_MAX_TRIPLES = 2_000
+#: ... and cut along as a polyline whose chords lie within this of the curve (relative to
+#: the emitter's size), or within the square root of the tolerance where that is less:
+#: the kink of the hidden part (a jump of its second derivative) then lies in a strip of
+#: that width along a cut, where it moves the rules' values by that width squared.
+AREA_CURVED_EVENT_RTOL = 1e-3
 #: ... and the emitter's cells must cover it to this share of its area, else it is cut
 #: again another way (as cut, then on a grid: the cells that cover most are kept).
 AREA_CELL_COVER_RTOL = 1e-12

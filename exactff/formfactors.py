@@ -712,6 +712,10 @@ def area_form_factors(scene, rows=None, *, tolerance=1e-9, error=False, executor
         from which one blocker hides the whole receiver: their event lines cut away and
         their cells taken by the closed form, ``exactff.area.umbra``; and those cells'
         triangles),
+        ``curved_events`` (curved visibility events cut along: two blockers' edges seen
+        crossing on the receiver's edge, ``exactff.area.curved``; not a shortcut) and
+        ``curved_skipped`` (pairs with too many triples of edges to trace them, left
+        uncut),
         ``cell_fallbacks`` (emitters cut along their visibility events another way,
         where GEOS failed or the cells did not cover the emitter: the lines not
         lengthened across its boundary, or noded on a grid of 1e-12 of its size),

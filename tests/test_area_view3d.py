@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 
 import exactff as ef
+from exactff.area import adaptive
 
 DATA = os.path.join(os.path.dirname(__file__), "data", "view3d")
 
@@ -373,15 +374,37 @@ def test_gunter2_floor_to_a_strip_the_wall_hides_is_0_within_its_estimate():
                                and w[:, 2].max() == 7.0 and w[:, 0].min() == -109.5
                                and w[:, 0].max() == 0.0 for w in walls)
     # the 3- and 5-point collapsed rules on half the floor differed by 7.2e-8 where the
-    # 5-point rule was 2.15e-7 off; the check against the closed form of the unoccluded
-    # part (the rules' errors on H and on F_occ add up to theirs on U) finds the
-    # triangle and refines it
+    # 5-point rule was 2.15e-7 off, and the triangles were refined to their share by
+    # area; with the pair's budget (rules.budget_refined) the pair's estimate is
+    # the sum of the coarser triangles' differences, which holds the error
     st = {}
     F, E = ef.area_form_factors(sub, rows=[0], tolerance=1e-6, error=True, stats=st)
     assert 0.0 <= F[0, 1] <= E[0, 1] <= 1e-6, (F[0, 1], E[0, 1])
-    assert st["checked_triangles"] > 0 and st["refined_triangles"] > 0
     # the unoccluded value it is taken from, 8.27e-6: what the rules subtract
     assert ef.polygon_form_factor(sub.polygons[0], sub.polygons[1]) > 8e-6
+
+
+def test_rules_check_refines_where_the_differences_understate(monkeypatch):
+    # the check of the rules' differences against the closed form of the unoccluded
+    # part (the rules' errors on H and on F_occ add up to theirs on U): on the gunter2
+    # pair above (exact value 0), with every triangle's difference understated 1000
+    # times (planted, in the levels' numpy reference), the sum of U over the triangles
+    # misses the closed form by more than the differences, the triangles are checked one
+    # by one and the one the rules miss is refined; the value stays within its estimate
+    sub, _ = _pair_scene(_gunter2(), 0, 135)
+    evaluated = adaptive._evaluated
+
+    def understated(*a, **k):
+        out, points = evaluated(*a, **k)
+        out["diff"] = out["diff"] * 1e-3
+        return out, points
+
+    monkeypatch.setattr(adaptive, "COMPILED_LEVELS", False)
+    monkeypatch.setattr(adaptive, "_evaluated", understated)
+    st = {}
+    F, E = ef.area_form_factors(sub, rows=[0], tolerance=1e-6, error=True, stats=st)
+    assert st["checked_triangles"] > 0 and st["refined_triangles"] > 0
+    assert 0.0 <= F[0, 1] <= E[0, 1] <= 1e-6, (F[0, 1], E[0, 1])
 
 
 @pytest.mark.parametrize("j", [3, 134])

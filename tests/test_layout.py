@@ -63,6 +63,7 @@ LAYERS = {
     "exactff.area.closed_form": 5.06,
     "exactff.area.culling": 5.07,
     "exactff.area.events": 5.08,
+    "exactff.area.curved": 5.082,
     "exactff.area.umbra": 5.085,
     "exactff.area.hidden": 5.09,
     "exactff.area.adaptive": 5.10,

@@ -59,6 +59,51 @@ py::tuple event_lines(Array<double> W, Array<std::int64_t> start, Array<std::int
                           r.culled_events, r.solid_events);
 }
 
+py::tuple curved_event_lines(Array<double> W, Array<std::int64_t> start,
+                             Array<std::int64_t> solid, Array<double> Qc, Array<double> nP,
+                             double dP, Array<double> frame, Array<double> c, double radius,
+                             double atol, py::dict tol) {
+    const std::int64_t n = start.size() - 1;
+    if (W.ndim() != 2 || W.shape(1) != 3 || n < 1 || nP.size() != 3 || frame.size() != 9 ||
+        c.size() != 3 || Qc.ndim() != 2 || Qc.shape(1) != 3 || Qc.shape(0) < 3 ||
+        (solid.size() != 0 && solid.size() != n))
+        throw std::invalid_argument("curved_event_lines: arrays of the wrong shapes");
+    check_polygon_starts(start, W.shape(0), "curved_event_lines");
+    exactff::CurvedArgs a;
+    a.W = W.data();
+    a.start = start.data();
+    a.n = n;
+    a.solid = solid.size() ? solid.data() : nullptr;
+    a.Qc = Qc.data();
+    a.n_q = Qc.shape(0);
+    a.nP = nP.data();
+    a.frame = frame.data();
+    a.c = c.data();
+    a.dP = dP;
+    a.radius = radius;
+    a.atol = atol;
+    const auto num = [&](const char* k) { return tol[k].cast<double>(); };
+    const auto whole = [&](const char* k) { return tol[k].cast<std::int64_t>(); };
+    a.hull_rtol = num("AREA_HULL_RTOL");
+    a.event_parallel = num("AREA_EVENT_PARALLEL");
+    a.extend_rtol = num("AREA_CUT_EXTEND_RTOL");
+    a.curve_rtol = num("AREA_CURVED_EVENT_RTOL");
+    a.samples = whole("AREA_CURVED_EVENT_SAMPLES");
+    a.bisections = whole("AREA_CURVED_EVENT_BISECTIONS");
+    a.max_triples = whole("AREA_CURVED_MAX_TRIPLES");
+    a.rows_per_call = whole("AREA_EVENT_ROWS_PER_CALL");
+    if (a.samples < 1) throw std::invalid_argument("curved_event_lines: samples < 1");
+    exactff::CurvedResult r;
+    {
+        py::gil_scoped_release release;
+        r = exactff::curved_event_lines(a);
+    }
+    py::array_t<double> seg = as_array(r.segments);
+    return py::make_tuple(seg.reshape({py::ssize_t(r.segments.size() / 4), py::ssize_t(2),
+                                       py::ssize_t(2)}),
+                          r.events, r.skipped);
+}
+
 py::tuple cut_cells(Array<double> P2, Array<double> segments, double step, double merge,
                     double sliver) {
     if (P2.ndim() != 2 || P2.shape(1) != 2 || P2.shape(0) < 3 ||
@@ -244,6 +289,11 @@ PYBIND11_MODULE(_pair, m) {
           py::arg("ray_parallel"), py::arg("event_parallel"),
           "event_lines(...) -> (segments (m, 2, 2), culled_events, solid_events): the pair's "
           "vertex-edge events as segments of the emitter's plane (pair.h)");
+    m.def("curved_event_lines", &curved_event_lines, py::arg("W"), py::arg("start"),
+          py::arg("solid"), py::arg("Qc"), py::arg("nP"), py::arg("dP"), py::arg("frame"),
+          py::arg("c"), py::arg("radius"), py::arg("atol"), py::arg("tol"),
+          "curved_event_lines(...) -> (segments (m, 2, 2), curved_events, skipped): the pair's "
+          "curved events traced as chords of the emitter's plane (pair.h)");
     m.def("cut_cells", &cut_cells, py::arg("P2"), py::arg("segments"), py::arg("step"),
           py::arg("merge"), py::arg("sliver"),
           "cut_cells(P2, segments, step, merge, sliver) -> (triangles (t, 3, 2), areas, lines, ok): "

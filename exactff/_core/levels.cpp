@@ -136,17 +136,57 @@ void unoccluded_chunk(const LevelArgs& a, const double* X, std::int64_t n, doubl
 
 }  // namespace
 
+namespace {
+
+// the triangles evaluated and not yet accepted (adaptive.py's pool), per triangle
+struct Pool {
+    std::vector<double> T, hi, lo, diff, rnd, hiU, loU, rndU, area;
+    std::vector<long long> depth, rung;
+    std::vector<unsigned char> corner;
+    size_t size() const { return diff.size(); }
+};
+
+// rules.py's budget_refined: the pool's triangles to refine, largest difference
+// first, until what is left fits the budget (in the pool's order)
+std::vector<size_t> budget_refined(const Pool& p, double before, double atol,
+                                   double total_area, long long max_depth) {
+    const double target = 0.5 * atol;
+    double stuck = 0.0, room = 0.0, all = 0.0;
+    std::vector<size_t> mine;
+    for (size_t k = 0; k < p.size(); ++k) {
+        if (p.rung[k] == 0 || p.depth[k] < max_depth) mine.push_back(k);
+        else stuck += p.diff[k];
+    }
+    std::vector<size_t> out;
+    if (mine.empty()) return out;
+    for (size_t k : mine) room += p.area[k];
+    for (size_t k : mine) all += p.diff[k];
+    const double budget = std::max(target - before - stuck, target * room / total_area);
+    std::vector<size_t> order = mine;
+    std::stable_sort(order.begin(), order.end(),
+                     [&](size_t x, size_t y) { return -p.diff[x] < -p.diff[y]; });
+    double taken = 0.0;
+    for (size_t k : order) {
+        if (!(all - taken > budget)) break;
+        out.push_back(k);
+        taken += p.diff[k];
+    }
+    std::sort(out.begin(), out.end());
+    return out;
+}
+
+}  // namespace
+
 LevelResult adaptive_levels(const LevelArgs& a) {
     LevelResult out;
     std::vector<double> T = a.T;
     std::vector<long long> depth = a.depth, rung = a.rung;
     std::vector<unsigned char> corner = a.corner;
     const double point_atol = a.budget_share * a.atol;
-    double rules_err = a.rules_err;
+    Pool pool;
     std::vector<double> X, W, H, EH, U, EU, area_t;
     std::vector<size_t> first, nl, nh, nm;
-    std::vector<const TriangleRule*> rl, rh, rm;
-    while (!T.empty()) {
+    while (true) {
         // a sliver (between nearly coincident events) is not evaluated: half its area,
         // within as much
         size_t t = T.size() / 9, kept = 0;
@@ -171,143 +211,124 @@ LevelResult adaptive_levels(const LevelArgs& a) {
         depth.resize(t);
         rung.resize(t);
         corner.resize(t);
-        if (!t) break;
-        // the rules of every triangle, grouped as the reference groups them (rung, then
-        // corner), their nodes in one list
-        X.clear();
-        W.clear();
-        first.assign(t, 0);
-        nl.assign(t, 0);
-        nh.assign(t, 0);
-        nm.assign(t, 0);
-        rl.assign(t, nullptr);
-        rh.assign(t, nullptr);
-        rm.assign(t, nullptr);
-        for (long long r : {0LL, 1LL})
-            for (unsigned char at_corner : {0, 1})
-                for (size_t k = 0; k < t; ++k) {
-                    if (rung[k] != r || (corner[k] != 0) != (at_corner != 0)) continue;
-                    const TriangleRule *lo, *hi, *mid = nullptr;
-                    if (r == 0 && !at_corner && a.symmetric) {
-                        lo = a.rules[0];
-                        hi = a.rules[1];
-                    } else if (r == 0) {
-                        lo = a.rules[2];
-                        hi = a.rules[3];
-                        if (at_corner) mid = a.rules[6];
-                    } else {
-                        lo = a.rules[4];
-                        hi = a.rules[5];
+        if (t) {
+            // the rules of every triangle, grouped as the reference groups them (rung,
+            // then corner), their nodes in one list
+            X.clear();
+            W.clear();
+            first.assign(t, 0);
+            nl.assign(t, 0);
+            nh.assign(t, 0);
+            nm.assign(t, 0);
+            for (long long r : {0LL, 1LL})
+                for (unsigned char at_corner : {0, 1})
+                    for (size_t k = 0; k < t; ++k) {
+                        if (rung[k] != r || (corner[k] != 0) != (at_corner != 0)) continue;
+                        const TriangleRule *lo, *hi, *mid = nullptr;
+                        if (r == 0 && !at_corner && a.symmetric) {
+                            lo = a.rules[0];
+                            hi = a.rules[1];
+                        } else if (r == 0) {
+                            lo = a.rules[2];
+                            hi = a.rules[3];
+                            if (at_corner) mid = a.rules[6];
+                        } else {
+                            lo = a.rules[4];
+                            hi = a.rules[5];
+                        }
+                        const double* v = &T[9 * k];
+                        const Pt3 p0{v[0], v[1], v[2]}, p1{v[3], v[4], v[5]},
+                            p2{v[6], v[7], v[8]};
+                        first[k] = W.size();
+                        rule_nodes(*lo, p0, p1, p2, X, W);
+                        rule_nodes(*hi, p0, p1, p2, X, W);
+                        if (mid) rule_nodes(*mid, p0, p1, p2, X, W);
+                        nl[k] = rule_size(*lo);
+                        nh[k] = rule_size(*hi);
+                        nm[k] = mid ? rule_size(*mid) : 0;
                     }
-                    const double* v = &T[9 * k];
-                    const Pt3 p0{v[0], v[1], v[2]}, p1{v[3], v[4], v[5]}, p2{v[6], v[7], v[8]};
-                    first[k] = W.size();
-                    rule_nodes(*lo, p0, p1, p2, X, W);
-                    rule_nodes(*hi, p0, p1, p2, X, W);
-                    if (mid) rule_nodes(*mid, p0, p1, p2, X, W);
-                    nl[k] = rule_size(*lo);
-                    nh[k] = rule_size(*hi);
-                    nm[k] = mid ? rule_size(*mid) : 0;
+            const std::int64_t np = static_cast<std::int64_t>(W.size());
+            H.resize(np);
+            EH.resize(np);
+            U.resize(np);
+            EU.resize(np);
+            for (std::int64_t s = 0; s < np; s += a.points_per_call) {
+                const std::int64_t m = std::min<std::int64_t>(a.points_per_call, np - s);
+                if (!hidden_chunk(a, &X[3 * s], m, point_atol, &H[s], &EH[s],
+                                  out.back_faces)) {
+                    out.ok = false;
+                    return out;
                 }
-        const std::int64_t np = static_cast<std::int64_t>(W.size());
-        H.resize(np);
-        EH.resize(np);
-        U.resize(np);
-        EU.resize(np);
-        for (std::int64_t s = 0; s < np; s += a.points_per_call) {
-            const std::int64_t m = std::min<std::int64_t>(a.points_per_call, np - s);
-            if (!hidden_chunk(a, &X[3 * s], m, point_atol, &H[s], &EH[s], out.back_faces)) {
-                out.ok = false;
-                return out;
+            }
+            unoccluded_chunk(a, X.data(), np, U.data(), EU.data());
+            out.points += np;
+            // per triangle: the rules' integrals of H and U, the nodes' estimates, per
+            // unit area of P, into the pool
+            for (size_t k = 0; k < t; ++k) {
+                const size_t f = first[k], l = nl[k], hgh = nh[k], md = nm[k];
+                double hi = 0, lo = 0, mid = 0, rnd_h = 0, rnd_l = 0, rnd_m = 0, hiU = 0,
+                       loU = 0, rU_h = 0, rU_l = 0;
+                for (size_t q = f; q < f + l; ++q) {
+                    lo += W[q] * H[q];
+                    rnd_l += W[q] * EH[q];
+                    loU += W[q] * U[q];
+                    rU_l += W[q] * EU[q];
+                }
+                for (size_t q = f + l; q < f + l + hgh; ++q) {
+                    hi += W[q] * H[q];
+                    rnd_h += W[q] * EH[q];
+                    hiU += W[q] * U[q];
+                    rU_h += W[q] * EU[q];
+                }
+                for (size_t q = f + l + hgh; q < f + l + hgh + md; ++q) {
+                    mid += W[q] * H[q];
+                    rnd_m += W[q] * EH[q];
+                }
+                if (!md) mid = lo;
+                const double P = a.area_P;
+                hi /= P;
+                lo /= P;
+                mid /= P;
+                // the high rule's error estimated by the low rule's difference, and at a
+                // corner on the lower pair also by the third rule's
+                pool.T.insert(pool.T.end(), &T[9 * k], &T[9 * k] + 9);
+                pool.depth.push_back(depth[k]);
+                pool.rung.push_back(rung[k]);
+                pool.corner.push_back(corner[k]);
+                pool.area.push_back(area_t[k]);
+                pool.hi.push_back(hi);
+                pool.lo.push_back(lo);
+                pool.diff.push_back(std::max(std::abs(hi - lo), std::abs(hi - mid)));
+                pool.rnd.push_back((rnd_h + rnd_l + rnd_m) / P);
+                pool.hiU.push_back(hiU / P);
+                pool.loU.push_back(loU / P);
+                pool.rndU.push_back((rU_h + rU_l) / P);
             }
         }
-        unoccluded_chunk(a, X.data(), np, U.data(), EU.data());
-        out.points += np;
-        // per triangle: the rules' integrals of H and U, the nodes' estimates, per unit
-        // area of P
-        double area_sum = 0.0;
-        for (size_t k = 0; k < t; ++k) area_sum += area_t[k];
-        double acc_diff = 0.0;
-        std::vector<size_t> again, split;
-        for (size_t k = 0; k < t; ++k) {
-            const size_t f = first[k], l = nl[k], hgh = nh[k], md = nm[k];
-            double hi = 0, lo = 0, mid = 0, rnd_h = 0, rnd_l = 0, rnd_m = 0, hiU = 0, loU = 0,
-                   rU_h = 0, rU_l = 0;
-            for (size_t q = f; q < f + l; ++q) {
-                lo += W[q] * H[q];
-                rnd_l += W[q] * EH[q];
-                loU += W[q] * U[q];
-                rU_l += W[q] * EU[q];
-            }
-            for (size_t q = f + l; q < f + l + hgh; ++q) {
-                hi += W[q] * H[q];
-                rnd_h += W[q] * EH[q];
-                hiU += W[q] * U[q];
-                rU_h += W[q] * EU[q];
-            }
-            for (size_t q = f + l + hgh; q < f + l + hgh + md; ++q) {
-                mid += W[q] * H[q];
-                rnd_m += W[q] * EH[q];
-            }
-            if (!md) mid = lo;
-            const double P = a.area_P;
-            hi /= P;
-            lo /= P;
-            mid /= P;
-            const double rnd = (rnd_h + rnd_l + rnd_m) / P;
-            hiU /= P;
-            loU /= P;
-            const double rndU = (rU_h + rU_l) / P;
-            // the high rule's error estimated by the low rule's difference, and at a
-            // corner on the lower pair also by the third rule's
-            const double diff = std::max(std::abs(hi - lo), std::abs(hi - mid));
-            // half of atol for the rules' differences: what the triangles accepted so far
-            // left of it shared by area, never less than the triangle's share of the
-            // emitter
-            const double left = std::max(0.5 * a.atol - rules_err, 0.0);
-            const double share =
-                std::max(left / area_sum, 0.5 * a.atol / a.total_area) * area_t[k];
-            const bool missed = diff > share;
-            if (missed && rung[k] == 0) {
-                again.push_back(k);
-                continue;
-            }
-            if (missed && rung[k] == 1 && depth[k] < a.max_depth) {
-                split.push_back(k);
-                continue;
-            }
-            out.T.insert(out.T.end(), &T[9 * k], &T[9 * k] + 9);
-            out.depth.push_back(depth[k]);
-            out.rung.push_back(rung[k]);
-            out.corner.push_back(corner[k]);
-            out.hi.push_back(hi);
-            out.lo.push_back(lo);
-            out.diff.push_back(diff);
-            out.rnd.push_back(rnd);
-            out.hiU.push_back(hiU);
-            out.loU.push_back(loU);
-            out.rndU.push_back(rndU);
-            acc_diff += diff;
-        }
-        // (the level's accepted differences count from the next level on, as the
-        // reference's rules_err is taken before the level)
-        rules_err += acc_diff;
+        if (!pool.size()) break;
+        // half of atol for the rules' differences, with those accepted before this
+        // call: the largest refined while what is left exceeds it
+        const std::vector<size_t> sel =
+            budget_refined(pool, a.rules_err, a.atol, a.total_area, a.max_depth);
+        if (sel.empty()) break;
         // the refined: a triangle the low pair missed takes the high pair (rung 1), one
         // the high pair missed is cut in four at its edges' midpoints, one level down, on
         // rung start (rules.py, quarter: (a, ab, ca), (ab, b, bc), (ca, bc, c), (ab, bc,
-        // ca), the first keeping the corner); in the reference's order, the re-ruled
-        // ones first
+        // ca), the first keeping the corner); in the reference's order (_refined), the
+        // re-ruled ones first
         std::vector<double> T2;
         std::vector<long long> d2, r2;
         std::vector<unsigned char> c2;
-        for (size_t k : again) {
-            T2.insert(T2.end(), &T[9 * k], &T[9 * k] + 9);
-            d2.push_back(depth[k]);
+        for (size_t k : sel) {
+            if (pool.rung[k] != 0) continue;
+            T2.insert(T2.end(), &pool.T[9 * k], &pool.T[9 * k] + 9);
+            d2.push_back(pool.depth[k]);
             r2.push_back(1);
-            c2.push_back(corner[k]);
+            c2.push_back(pool.corner[k]);
         }
-        for (size_t k : split) {
-            const double* v = &T[9 * k];
+        for (size_t k : sel) {
+            if (pool.rung[k] == 0) continue;
+            const double* v = &pool.T[9 * k];
             double m[3][3];   // ab, bc, ca
             for (int x = 0; x < 3; ++x) {
                 m[0][x] = (v[x] + v[3 + x]) / 2;
@@ -320,16 +341,50 @@ LevelResult adaptive_levels(const LevelArgs& a) {
                                          {m[0], m[1], m[2]}};
             for (int q = 0; q < 4; ++q) {
                 for (int c = 0; c < 3; ++c) T2.insert(T2.end(), quads[q][c], quads[q][c] + 3);
-                d2.push_back(depth[k] + 1);
+                d2.push_back(pool.depth[k] + 1);
                 r2.push_back(a.start);
-                c2.push_back(q == 0 ? corner[k] : 0);
+                c2.push_back(q == 0 ? pool.corner[k] : 0);
             }
         }
+        // the pool less the refined, in order
+        Pool rest;
+        size_t s = 0;
+        for (size_t k = 0; k < pool.size(); ++k) {
+            if (s < sel.size() && sel[s] == k) {
+                ++s;
+                continue;
+            }
+            rest.T.insert(rest.T.end(), &pool.T[9 * k], &pool.T[9 * k] + 9);
+            rest.depth.push_back(pool.depth[k]);
+            rest.rung.push_back(pool.rung[k]);
+            rest.corner.push_back(pool.corner[k]);
+            rest.area.push_back(pool.area[k]);
+            rest.hi.push_back(pool.hi[k]);
+            rest.lo.push_back(pool.lo[k]);
+            rest.diff.push_back(pool.diff[k]);
+            rest.rnd.push_back(pool.rnd[k]);
+            rest.hiU.push_back(pool.hiU[k]);
+            rest.loU.push_back(pool.loU[k]);
+            rest.rndU.push_back(pool.rndU[k]);
+        }
+        pool = std::move(rest);
         T.swap(T2);
         depth.swap(d2);
         rung.swap(r2);
         corner.swap(c2);
     }
+    // the pool accepted, in order
+    out.T = pool.T;
+    out.depth = pool.depth;
+    out.rung = pool.rung;
+    out.corner = pool.corner;
+    out.hi = pool.hi;
+    out.lo = pool.lo;
+    out.diff = pool.diff;
+    out.rnd = pool.rnd;
+    out.hiU = pool.hiU;
+    out.loU = pool.loU;
+    out.rndU = pool.rndU;
     return out;
 }
 

@@ -3,8 +3,9 @@
 // reference; docs/explanation/area-form-factors.md): level by level, the triangles'
 // pairs of rules (rules.py), the hidden part at their nodes (hidden.h, with hidden.py's
 // estimate), the unoccluded point values there (sector_sums.h, points.py), the rules'
-// differences against each triangle's share of the tolerance, and the triangles that
-// missed it refined, until every triangle is accepted. Where a point's hidden part
+// differences summed over the pair against half of the tolerance, and the triangles of
+// the largest differences refined while the sum exceeds it (a global budget,
+// rules.py's budget_refined), until the rest is accepted. Where a point's hidden part
 // cannot be trusted (lost: hidden.py sends it to the bound or the engine) or a value is
 // below 0 beyond its estimate, nothing is returned but the status, and the caller takes
 // the whole call the reference's way.

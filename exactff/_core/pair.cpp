@@ -20,16 +20,16 @@
 
 #include "expansion.h"
 #include "pair.h"
+#include "pair_vec.h"
 #include "vec.h"
 
 namespace exactff {
 namespace {
 
-using D3 = Vec3<double>;
-
-D3 at(const double* p) { return {p[0], p[1], p[2]}; }
-D3 add(const D3& a, const D3& b) { return {a.x + b.x, a.y + b.y, a.z + b.z}; }
-D3 scale(double s, const D3& a) { return {s * a.x, s * a.y, s * a.z}; }
+using pair_vec::D3;
+using pair_vec::at;
+using pair_vec::add;
+using pair_vec::scale;
 
 // the sign of det(b - a, c - a), the side of c of the line through a and b: a double
 // filter (Shewchuk's bound for orient2d), else exactly (expansion.h)
@@ -141,17 +141,47 @@ EventResult event_lines(const EventArgs& a) {
                     const D3 u0 = sub(e0, v), u1 = sub(e1, v);
                     const D3 m = cross(u0, u1);
                     if (m.x == 0 && m.y == 0 && m.z == 0) continue;
-                    if (a.shortcuts && pa > 0 && pb > 0) {
+                    // an edge (v, w) of pa in the plane (coplanar with the edge): the
+                    // event is the two edges' (their images collinear), its lines of
+                    // sight pass through every point of (v, w): its images of the edge
+                    // from (v, w) sweep the interval between those from v and from w
+                    // (the four segments joining their ends), culled only where all of
+                    // that misses the receiver (unbounded, or both of pa's edges at v in
+                    // the plane: kept)
+                    int n_in = 0;
+                    D3 wv = v;
+                    for (const std::int64_t w : {a.start[pa] + (i + ka - 1) % ka,
+                                                 a.start[pa] + (i + 1) % ka}) {
+                        const D3 vw = sub(at(W + 3 * w), v);
+                        if (std::fabs(dot(m, vw)) <= a.event_parallel * norm(m) * norm(vw)) {
+                            if (++n_in == 1) wv = at(W + 3 * w);
+                        }
+                    }
+                    if (a.shortcuts && pa > 0 && pb > 0 && n_in < 2) {
                         // between two blockers, the lines through v and the points of the
                         // edge meet Q's plane along the edge's central image from v: an
                         // event only where that image meets the receiver (unbounded: kept)
                         const double d0 = dot(u0, nQ), d1 = dot(u1, nQ);
-                        if (d0 * d1 > 0) {
+                        const D3 w0 = sub(e0, wv), w1 = sub(e1, wv);
+                        const double dw0 = dot(w0, nQ), dw1 = dot(w1, nQ);
+                        if (d0 * d1 > 0 && (n_in == 0 || (dw0 * dw1 > 0 && d0 * dw0 > 0))) {
                             const double h = dot(sub(q0, v), nQ);
                             const D3 ia = sub(add(v, scale(h / d0, u0)), q0);
                             const D3 ib = sub(add(v, scale(h / d1, u1)), q0);
-                            if (!segment_meets(a.Q2, a.n_q2, dot(ia, t1), dot(ia, t2),
-                                               dot(ib, t1), dot(ib, t2))) {
+                            const double ax = dot(ia, t1), ay = dot(ia, t2);
+                            const double bx = dot(ib, t1), by = dot(ib, t2);
+                            bool meets = segment_meets(a.Q2, a.n_q2, ax, ay, bx, by);
+                            if (!meets && n_in == 1) {
+                                const double hw = dot(sub(q0, wv), nQ);
+                                const D3 ja = sub(add(wv, scale(hw / dw0, w0)), q0);
+                                const D3 jb = sub(add(wv, scale(hw / dw1, w1)), q0);
+                                const double cx = dot(ja, t1), cy = dot(ja, t2);
+                                const double dx = dot(jb, t1), dy = dot(jb, t2);
+                                meets = segment_meets(a.Q2, a.n_q2, cx, cy, dx, dy) ||
+                                        segment_meets(a.Q2, a.n_q2, ax, ay, cx, cy) ||
+                                        segment_meets(a.Q2, a.n_q2, bx, by, dx, dy);
+                            }
+                            if (!meets) {
                                 ++out.culled_events;
                                 continue;
                             }

@@ -1,7 +1,8 @@
 // One occluded pair of an area row, compiled (the area code's per-pair path,
 // exactff/area/, docs/explanation/area-form-factors.md): the vertex-edge visibility
-// events of the pair cut to segments of the emitter's plane (pair.cpp, event_lines), and
-// the emitter cut along them into cells (cut_cells).
+// events of the pair cut to segments of the emitter's plane (pair.cpp, event_lines), the
+// curved events traced as chords (curved.cpp, curved_event_lines), and the emitter cut
+// along them into cells (cut_cells).
 
 #ifndef EXACTFF_CORE_PAIR_H
 #define EXACTFF_CORE_PAIR_H
@@ -45,6 +46,39 @@ struct EventResult {
 };
 
 EventResult event_lines(const EventArgs& args);
+
+// Arguments of curved_event_lines (exactff/area/curved.py's, the reference: the same steps
+// in the same order). W, start, n, solid: the pair's polygons S as for EventArgs (the
+// receiver's part first, its solid unused); Qc (q, 3) the receiver's part in front of P;
+// nP, dP, frame, c, radius as for EventArgs; atol the pair's absolute tolerance (the
+// chords' deviation within sqrt(atol) of radius where less than curve_rtol of it);
+// hull_rtol (AREA_HULL_RTOL), event_parallel (AREA_EVENT_PARALLEL), extend_rtol
+// (AREA_CUT_EXTEND_RTOL), samples (AREA_CURVED_EVENT_SAMPLES), bisections
+// (AREA_CURVED_EVENT_BISECTIONS), max_triples (AREA_CURVED_MAX_TRIPLES), curve_rtol
+// (AREA_CURVED_EVENT_RTOL), rows_per_call (AREA_EVENT_ROWS_PER_CALL: the reference's
+// batches, over each of which its bisections stop together).
+struct CurvedArgs {
+    const double* W;
+    const std::int64_t* start;
+    std::int64_t n;
+    const std::int64_t* solid;   // null: no solids
+    const double* Qc;
+    std::int64_t n_q;
+    const double *nP, *frame, *c;
+    double dP, radius, atol;
+    double hull_rtol, event_parallel, extend_rtol, curve_rtol;
+    std::int64_t samples, bisections, max_triples, rows_per_call;
+};
+
+// The chords (m, 2, 2) in the frame's first two axes about c, in the reference's order;
+// events: the curves cut along; skipped: more than max_triples triples (none traced).
+struct CurvedResult {
+    std::vector<double> segments;
+    long long events = 0;
+    bool skipped = false;
+};
+
+CurvedResult curved_event_lines(const CurvedArgs& args);
 
 // The emitter cut along the event lines as a 2-D arrangement (no GEOS): P2 (k, 2) the
 // emitter's part, convex and counter-clockwise, in the events' frame; segments (m, 2, 2)

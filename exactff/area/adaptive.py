@@ -1,8 +1,9 @@
 """The adaptive integral of the hidden part over the emitter: an occluded pair's value
 is its unoccluded value (closed form) less the integral of the hidden part, taken over
-the cells between visibility events by pairs of triangle rules, a triangle refined (the
-higher pair, then cut in four) while its rules differ by more than its share of the
-absolute tolerance ``atol``, and the rules' differences checked against the unoccluded
+the cells between visibility events by pairs of triangle rules, the triangles whose
+rules differ most refined (the higher pair, then cut in four) while the pair's sum of
+differences exceeds half of the absolute tolerance ``atol`` (a global budget per pair),
+and the rules' differences checked against the unoccluded
 point values' integral, known exactly (docs/explanation/area-form-factors.md). The
 levels run compiled (:mod:`exactff.area._pair`, ``_core/levels.cpp``, the GIL released);
 :func:`_adaptive_levels` is their numpy reference and takes the pairs they decline.
@@ -16,12 +17,13 @@ from ..errors import NumericalError, misses_tolerance
 from ..geometry import area_vector, cross, polygon_area, receiver_frame
 from ._pair import adaptive_levels as _compiled_adaptive_levels
 from ._pair import corner_first as _compiled_corner_first
+from .curved import curved_event_lines
 from .events import cut_cells, distinct_lines, event_lines
 from .hidden import hidden_setup, hidden_values
 from .points import point_values
 from .umbra import outside_umbras, triangle_unoccluded, umbra_cells, umbra_edges, umbras
-from .rules import (RULE_PAIRS, CORNER_MIDDLE_RULE, SYMMETRIC_RULES, quarter, rule_pair,
-                    triangle_areas, triangle_rule)
+from .rules import (RULE_PAIRS, CORNER_MIDDLE_RULE, SYMMETRIC_RULES, budget_refined, quarter,
+                    refined, rule_pair, triangle_areas, triangle_rule)
 
 __all__ = ["COMPILED_LEVELS", "occluded_pair"]
 
@@ -81,14 +83,15 @@ def occluded_pair(S, Pc, Qc, nP, atol, area_P, whole, shortcuts=True, st=None,
     smooth where the polygons touch (the unoccluded part carries the edge
     singularities), so it is integrated over
     the cells of Pc between visibility events, each cell's triangles by two collapsed
-    Gauss-Legendre rules (6 and 10 points a side), a triangle cut in four where the two
-    differ by more than its share of ``atol``. Where the events cut Pc into more
+    Gauss-Legendre rules (6 and 10 points a side), the triangles whose rules differ most
+    cut in four while the differences' sum exceeds half of ``atol``
+    (:func:`~exactff.area.rules.budget_refined`). Where the events cut Pc into more
     than ``AREA_MANY_CELLS`` triangles (small ones), or the target is at least
     ``AREA_LOW_RULES_TOLERANCE``, each starts with a lower pair (degrees 4 and 8: the
     symmetric rules of 6 and 16 points, or the collapsed ones of 3 and 5 points a side
     where a blocker touches its first vertex;
     :func:`~exactff.area.rules.rule_pair`) and takes the higher
-    pair where that pair misses its share.
+    pair where the budget refines it.
     Returns the value, its error estimate (the contour sum's, the rules' differences,
     the point values' bounds) and the number of point values used.
 
@@ -125,6 +128,9 @@ def _hidden_integral(S, Pc, Qc, nP, atol, area_P, whole, shortcuts, st, solid=No
     dP = float(nP @ Pc[0])
     radius = (1.0 + tol.AREA_HIDDEN_PAD) * float(np.linalg.norm(Pc - c, axis=1).max())
     lines = event_lines(S, nP, dP, R, c, radius, Qc, shortcuts, st, solid)
+    # and the curved events (two blockers' edges seen crossing on Qc's edge), as chords
+    lines = np.concatenate([lines, curved_event_lines(
+        S, Qc, nP, dP, R, c, radius, atol, solid if shortcuts else None, st)])
     # the umbras: regions from every point of which one blocker hides all of Qc (the
     # hidden part there is the unoccluded point value: no event inside changes it), the
     # event lines cut away from them and their edges cut along instead
@@ -257,7 +263,7 @@ def _hidden_integral(S, Pc, Qc, nP, atol, area_P, whole, shortcuts, st, solid=No
         if not again.any():
             break
         # the suspects start again: rung 0 takes the high pair, rung 1 is cut in four
-        T, depth, rung, corner = _refined(Ta[again], a_depth[again], a_rung[again],
+        T, depth, rung, corner = refined(Ta[again], a_depth[again], a_rung[again],
                                           cat["corner"][again].astype(bool), start)
     cat = {k: np.concatenate(v) if v else np.zeros(0) for k, v in acc.items()}
     # the slivers not evaluated: the hidden part is between 0 and the unoccluded point
@@ -334,100 +340,108 @@ def _levels(T, depth, rung, corner, nP, Qc, S, st, setup, atol, area_P, total_ar
                             total_area, start, shortcuts, bound_atol, acc)
 
 
-def _refined(T, depth, rung, corner, start):
-    """Triangles that missed their share: at rung 0 the same triangle at rung 1; at rung 1
-    its four quarters (cut at its edges' midpoints; the first keeps a corner, the first
-    vertex) at the level below, on rung ``start``. Returns ``(T, depth, rung, corner)``."""
-    again, split = rung == 0, rung == 1
-    T = np.concatenate([T[again], quarter(T[split])])
-    depth = np.concatenate([depth[again], np.repeat(depth[split] + 1, 4)])
-    corner = np.concatenate([corner[again], np.stack(
-        [corner[split]] + [np.zeros(int(split.sum()), dtype=bool)] * 3, axis=1).ravel()])
-    rung = np.concatenate([np.ones(int(again.sum()), dtype=int),
-                           np.full(4 * int(split.sum()), start)])
-    return T, depth, rung, corner
-
-
 def _adaptive_levels(T, depth, rung, corner, nP, Qc, S, st, setup, atol, area_P,
                      total_area, start, shortcuts, bound_atol, acc):
-    """:func:`_hidden_integral`'s adaptive rules, level by level until every triangle is
-    accepted: the accepted ones appended to ``acc`` (see there). Returns the (empty)
-    triangles left, the slivers' area (not evaluated) and the points used."""
+    """:func:`_hidden_integral`'s adaptive rules: the triangles evaluated (their pairs
+    of rules) and kept in a pool; while the pool's rules' differences with those accepted
+    before exceed half of ``atol``, those with the largest differences are refined
+    (:func:`~exactff.area.rules.budget_refined`) and their refinements evaluated and added; then the pool
+    is accepted, appended to ``acc`` (see there). Returns the (empty) triangles left, the
+    slivers' area (not evaluated) and the points used."""
     slivers = points = 0
-    while len(T):
+    keys = ("T", "depth", "rung", "corner", "hi", "lo", "diff", "rnd", "hiU", "loU", "rndU",
+            "area")
+    pool = {k: [] for k in keys}
+    # the differences accepted before this call
+    before = float(sum(float(d.sum()) for d in acc["diff"]))
+    while True:
         # a sliver (between nearly coincident events) is not evaluated: the hidden part
         # is between 0 and 1, so its integral is half the sliver's area, within as much
-        area_t = triangle_areas(T)
+        area_t = triangle_areas(T) if len(T) else np.zeros(0)
         sliver = area_t / area_P <= tol.AREA_SLIVER_SHARE * atol
         slivers += float(area_t[sliver].sum())
         T, depth, rung, area_t = T[~sliver], depth[~sliver], rung[~sliver], area_t[~sliver]
         corner = corner[~sliver]
-        if not len(T):
+        if len(T):
+            new, pts = _evaluated(T, rung, corner, nP, Qc, S, st, setup, atol, area_P,
+                                  shortcuts, bound_atol)
+            points += pts
+            for k, v in (("T", T), ("depth", depth), ("rung", rung), ("corner", corner),
+                         ("area", area_t), *new.items()):
+                pool[k].append(v)
+        cat = {k: np.concatenate(v) if v else np.zeros(0) for k, v in pool.items()}
+        if not len(cat["diff"]):
             break
-        # every other triangle of this level together: its rules' nodes, one call
-        X, weights, groups = [], [], []
-        for r, at_corner in ((0, False), (0, True), (1, False), (1, True)):
-            sel = np.flatnonzero((rung == r) & (corner == at_corner))
-            if len(sel):
-                (Xl, Wl), (Xh, Wh) = rule_pair(T[sel], r, at_corner, atol)
-                # at a corner on the lower pair, a third rule between the two
-                Xm, Wm = (triangle_rule(T[sel], CORNER_MIDDLE_RULE) if r == 0 and at_corner
-                          else (np.zeros((len(sel), 0, 3)), np.zeros((len(sel), 0))))
-                X.append(np.concatenate([Xl, Xh, Xm], axis=1).reshape(-1, 3))
-                weights.append(np.concatenate([Wl, Wh, Wm], axis=1).reshape(-1) / area_P)
-                groups.append((sel, Wl, Wh, Wm))
-        X = np.concatenate(X)
-        H, EH = hidden_values(X, nP, Qc, S[1:], st, atol=tol.AREA_IMAGE_BUDGET_SHARE * atol,
-                              setup=setup, shortcuts=shortcuts,
-                              weights=np.concatenate(weights), bound_atol=bound_atol)
-        # the unoccluded point values at the same nodes, for the check of the rules'
-        # differences (_hidden_integral)
-        U, EU = (v[0] for v in point_values(X, nP, [Qc]))
-        points += H.size
-        hi, lo, mid, rnd = (np.empty(len(T)) for _ in range(4))
-        hiU, loU, rndU = np.empty(len(T)), np.empty(len(T)), np.empty(len(T))
-        at = 0
-        for sel, Wl, Wh, Wm in groups:
-            nl, nh = Wl.shape[1], Wl.shape[1] + Wh.shape[1]
-            n = len(sel) * (nh + Wm.shape[1])
-            Hg, EHg = H[at:at + n].reshape(len(sel), -1), EH[at:at + n].reshape(len(sel), -1)
-            Ug, EUg = U[at:at + n].reshape(len(sel), -1), EU[at:at + n].reshape(len(sel), -1)
-            at += n
-            hi[sel], lo[sel] = (Wh * Hg[:, nl:nh]).sum(axis=1), (Wl * Hg[:, :nl]).sum(axis=1)
-            # the third rule's value, where there is one (else the low rule's)
-            mid[sel] = (Wm * Hg[:, nh:]).sum(axis=1) if Wm.shape[1] else lo[sel]
-            hiU[sel], loU[sel] = (Wh * Ug[:, nl:nh]).sum(axis=1), (Wl * Ug[:, :nl]).sum(axis=1)
-            # the rules' nodes' estimates: they bound what the point values' errors can
-            # hide of the rules' differences
-            rnd[sel] = ((Wh * EHg[:, nl:nh]).sum(axis=1) + (Wl * EHg[:, :nl]).sum(axis=1)
-                        + (Wm * EHg[:, nh:]).sum(axis=1))
-            rndU[sel] = (Wh * EUg[:, nl:nh]).sum(axis=1) + (Wl * EUg[:, :nl]).sum(axis=1)
-        hi, lo, mid, rnd, hiU, loU, rndU = (v / area_P for v in (hi, lo, mid, rnd, hiU, loU,
-                                                                 rndU))
-        # the high rule's error estimated by the low rule's difference from it, and at a
-        # corner on the lower pair also by the third rule's (between the two): near a
-        # corner the collapsed rules' errors do not fall monotonically with the order,
-        # so two of them can agree by chance far closer than either is to the integral
-        # (AREA_CORNER_MIDDLE_ORDER; test_gunter1_row_17_without_shortcuts_within_its_estimates)
-        diff = np.maximum(np.abs(hi - lo), np.abs(hi - mid))
-        # half of atol for the rules' differences: what the triangles accepted so
-        # far left of it is shared among the others by area (at the first level, the
-        # triangle's share of the emitter), never less than the triangle's share of the
-        # emitter (triangles accepted at the last level above their share would
-        # otherwise leave none, and every other triangle would be cut to the last level)
-        rules_err = float(sum(float(d.sum()) for d in acc["diff"]))
-        left = max(0.5 * atol - rules_err, 0.0)
-        share = np.maximum(left / area_t.sum(), 0.5 * atol / total_area) * area_t
-        missed = diff > share
-        # a triangle the low pair missed takes the high pair; one the high pair missed
-        # is cut in four at its edges' midpoints (up to AREA_MAX_DEPTH)
-        again = missed & (rung == 0)
-        split = missed & (rung == 1) & (depth < tol.AREA_MAX_DEPTH)
-        done = ~(again | split)
-        for k, v in (("T", T), ("depth", depth), ("rung", rung), ("corner", corner),
-                     ("hi", hi), ("lo", lo), ("diff", diff), ("rnd", rnd), ("hiU", hiU),
-                     ("loU", loU), ("rndU", rndU), ("checked", np.zeros(len(T), dtype=bool))):
-            acc[k].append(v[done])
-        T, depth, rung, corner = _refined(T[again | split], depth[again | split],
-                                          rung[again | split], corner[again | split], start)
-    return T, depth, rung, corner, slivers, points
+        # the refined: a triangle on the low pair takes the high pair, one on the high
+        # pair is cut in four at its edges' midpoints (up to AREA_MAX_DEPTH)
+        sel = budget_refined(cat["diff"], cat["area"], cat["depth"].astype(int),
+                              cat["rung"].astype(int), before, atol, total_area)
+        if not len(sel):
+            break
+        keep = np.ones(len(cat["diff"]), dtype=bool)
+        keep[sel] = False
+        pool = {k: [v[keep]] for k, v in cat.items()}
+        T, depth, rung, corner = refined(cat["T"][sel], cat["depth"][sel].astype(int),
+                                          cat["rung"][sel].astype(int),
+                                          cat["corner"][sel].astype(bool), start)
+    cat = {k: np.concatenate(v) if v else np.zeros(0) for k, v in pool.items()}
+    if len(cat["diff"]):
+        for k in keys[:-1]:
+            acc[k].append(cat[k] if k != "T" else cat[k].reshape(-1, 3, 3))
+        acc["checked"].append(np.zeros(len(cat["diff"]), dtype=bool))
+    empty = np.zeros(0, dtype=int)
+    return np.zeros((0, 3, 3)), empty, empty, np.zeros(0, dtype=bool), slivers, points
+
+
+def _evaluated(T, rung, corner, nP, Qc, S, st, setup, atol, area_P, shortcuts, bound_atol):
+    """The triangles T's rules (their rung's pair, and at a corner on the lower pair the
+    third rule), all nodes in one call: per triangle, per unit area of P, the high rule's
+    integral of the hidden part H, the low rule's, their difference (the high rule's
+    error estimate), the nodes' estimates, and the two rules' integrals of the
+    unoccluded point values U and their estimates. Returns them by name and the points
+    used."""
+    X, weights, groups = [], [], []
+    for r, at_corner in ((0, False), (0, True), (1, False), (1, True)):
+        sel = np.flatnonzero((rung == r) & (corner == at_corner))
+        if len(sel):
+            (Xl, Wl), (Xh, Wh) = rule_pair(T[sel], r, at_corner, atol)
+            # at a corner on the lower pair, a third rule between the two
+            Xm, Wm = (triangle_rule(T[sel], CORNER_MIDDLE_RULE) if r == 0 and at_corner
+                      else (np.zeros((len(sel), 0, 3)), np.zeros((len(sel), 0))))
+            X.append(np.concatenate([Xl, Xh, Xm], axis=1).reshape(-1, 3))
+            weights.append(np.concatenate([Wl, Wh, Wm], axis=1).reshape(-1) / area_P)
+            groups.append((sel, Wl, Wh, Wm))
+    X = np.concatenate(X)
+    H, EH = hidden_values(X, nP, Qc, S[1:], st, atol=tol.AREA_IMAGE_BUDGET_SHARE * atol,
+                          setup=setup, shortcuts=shortcuts,
+                          weights=np.concatenate(weights), bound_atol=bound_atol)
+    # the unoccluded point values at the same nodes, for the check of the rules'
+    # differences (_hidden_integral)
+    U, EU = (v[0] for v in point_values(X, nP, [Qc]))
+    hi, lo, mid, rnd = (np.empty(len(T)) for _ in range(4))
+    hiU, loU, rndU = np.empty(len(T)), np.empty(len(T)), np.empty(len(T))
+    at = 0
+    for sel, Wl, Wh, Wm in groups:
+        nl, nh = Wl.shape[1], Wl.shape[1] + Wh.shape[1]
+        n = len(sel) * (nh + Wm.shape[1])
+        Hg, EHg = H[at:at + n].reshape(len(sel), -1), EH[at:at + n].reshape(len(sel), -1)
+        Ug, EUg = U[at:at + n].reshape(len(sel), -1), EU[at:at + n].reshape(len(sel), -1)
+        at += n
+        hi[sel], lo[sel] = (Wh * Hg[:, nl:nh]).sum(axis=1), (Wl * Hg[:, :nl]).sum(axis=1)
+        # the third rule's value, where there is one (else the low rule's)
+        mid[sel] = (Wm * Hg[:, nh:]).sum(axis=1) if Wm.shape[1] else lo[sel]
+        hiU[sel], loU[sel] = (Wh * Ug[:, nl:nh]).sum(axis=1), (Wl * Ug[:, :nl]).sum(axis=1)
+        # the rules' nodes' estimates: they bound what the point values' errors can
+        # hide of the rules' differences
+        rnd[sel] = ((Wh * EHg[:, nl:nh]).sum(axis=1) + (Wl * EHg[:, :nl]).sum(axis=1)
+                    + (Wm * EHg[:, nh:]).sum(axis=1))
+        rndU[sel] = (Wh * EUg[:, nl:nh]).sum(axis=1) + (Wl * EUg[:, :nl]).sum(axis=1)
+    hi, lo, mid, rnd, hiU, loU, rndU = (v / area_P for v in (hi, lo, mid, rnd, hiU, loU,
+                                                             rndU))
+    # the high rule's error estimated by the low rule's difference from it, and at a
+    # corner on the lower pair also by the third rule's (between the two): near a
+    # corner the collapsed rules' errors do not fall monotonically with the order, so
+    # two of them can agree by chance far closer than either is to the integral
+    # (AREA_CORNER_MIDDLE_ORDER; test_gunter1_row_17_without_shortcuts_within_its_estimates)
+    diff = np.maximum(np.abs(hi - lo), np.abs(hi - mid))
+    return dict(hi=hi, lo=lo, diff=diff, rnd=rnd, hiU=hiU, loU=loU, rndU=rndU), H.size

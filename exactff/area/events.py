@@ -64,20 +64,50 @@ def _vertex_edge_rows(pa, pb, k, start, W, nxt, shortcuts, nQ, q0, RQ, seen, st)
     m = cross(e0 - v, e1 - v)
     keep = np.any(m != 0, axis=1)
     if shortcuts:
+        # an edge (v, w) of pa in the plane (coplanar with the edge, typically parallel):
+        # the event is the two edges' (their images collinear), its lines of sight pass
+        # through every point of (v, w), not through v alone: its images of the edge
+        # from the points of (v, w) lie on one line and sweep the interval between those
+        # from v and from w (the four segments joining their ends), culled only where
+        # all of that misses Qc (unbounded, or both of pa's edges at v in the plane: kept)
+        n_in = np.zeros(len(v), dtype=int)
+        wi = vi.copy()
+        for w in (start[ra] + (vi - start[ra] - 1) % k[ra], nxt[vi]):
+            vw = W[w] - v
+            inplane = (np.abs(_dot(m, vw)) <= tol.AREA_EVENT_PARALLEL * np.sqrt(_dot(m, m))
+                       * np.sqrt(_dot(vw, vw)))
+            n_in += inplane
+            wi = np.where(inplane & (n_in == 1), w, wi)
+        edge_event = n_in > 0
         # between two blockers, the lines through v and the points of the edge meet Qc's
         # plane along the edge's central image from v: does it cross Qc? (unbounded: kept)
         d0, d1 = _dot(e0 - v, nQ), _dot(e1 - v, nQ)
-        bounded = keep & (ra > 0) & (pb[row_pair] > 0) & (d0 * d1 > 0)
-        if bounded.any():
-            vb, h = v[bounded], _dot(q0 - v[bounded], nQ)
-            ia = vb + (h / d0[bounded])[:, None] * (e0[bounded] - vb) - q0
-            ib = vb + (h / d1[bounded])[:, None] * (e1[bounded] - vb) - q0
-            segs = shapely.linestrings(np.stack([rotate(ia, RQ)[:, :2], rotate(ib, RQ)[:, :2]],
-                                                axis=1))
-            miss = ~shapely.intersects(seen, segs)
+        wv = W[wi]
+        dw0, dw1 = _dot(e0 - wv, nQ), _dot(e1 - wv, nQ)
+        both = keep & (ra > 0) & (pb[row_pair] > 0) & (d0 * d1 > 0)
+        bounded = both & ~edge_event
+        swept = both & (n_in == 1) & (dw0 * dw1 > 0) & (d0 * dw0 > 0)
+        test = bounded | swept
+        if test.any():
+            def image(p, d0_, d1_):
+                # the edge's central image from p on Qc's plane, in Qc's frame
+                pb_, h = p[test], _dot(q0 - p[test], nQ)
+                ia = pb_ + (h / d0_[test])[:, None] * (e0[test] - pb_) - q0
+                ib = pb_ + (h / d1_[test])[:, None] * (e1[test] - pb_) - q0
+                return rotate(ia, RQ)[:, :2], rotate(ib, RQ)[:, :2]
+
+            va, vb_ = image(v, d0, d1)
+            miss = ~shapely.intersects(seen, shapely.linestrings(np.stack([va, vb_], axis=1)))
+            sw = swept[test]
+            if sw.any():
+                with np.errstate(divide="ignore", invalid="ignore"):
+                    wa, wb = image(wv, dw0, dw1)
+                for p0, p1 in ((wa, wb), (va, wa), (vb_, wb)):
+                    segs = shapely.linestrings(np.stack([p0[sw], p1[sw]], axis=1))
+                    miss[sw] &= ~shapely.intersects(seen, segs)
             if st is not None:
                 st.culled_events += int(miss.sum())
-            keep[np.flatnonzero(bounded)[miss]] = False
+            keep[np.flatnonzero(test)[miss]] = False
     return v[keep], e0[keep], e1[keep], m[keep], ra[keep]
 
 

@@ -52,6 +52,11 @@ class AreaStats:
         Blocker-blocker events not cut along because their lines of sight miss the
         receiver, and vertex-edge pairs of two faces of one convex solid, whose images
         united change only at the faces' planes.
+    curved_events, curved_skipped : int
+        Curved events cut along (not a shortcut): where the images of two blockers'
+        edges cross on the receiver's edge
+        (:func:`~exactff.area.curved.curved_event_lines`); and pairs with too many
+        triples of edges to trace them (``AREA_CURVED_MAX_TRIPLES``), left uncut.
     back_faces : int
         Members of such a solid that a point sees from behind, skipped in its hidden
         region as the members it sees from the front cover their images (per point).
@@ -94,6 +99,8 @@ class AreaStats:
     escalated_pairs: int = 0
     culled_events: int = 0
     solid_events: int = 0
+    curved_events: int = 0
+    curved_skipped: int = 0
     back_faces: int = 0
     bounded_points: int = 0
     engine_fallbacks: int = 0

@@ -1,6 +1,7 @@
 """Quadrature on triangles: the collapsed Gauss-Legendre rules, the fully symmetric
-rules, a polygon cut into triangles and a triangle cut in four, and the pairs of rules
-the adaptive integration of the hidden part compares (:mod:`exactff.area.adaptive`).
+rules, a polygon cut into triangles and a triangle cut in four, the pairs of rules
+the adaptive integration of the hidden part compares (:mod:`exactff.area.adaptive`), its
+ladder (:func:`refined`) and its global error budget (:func:`budget_refined`).
 """
 
 import numpy as np
@@ -12,7 +13,7 @@ from ..geometry import cross, receiver_frame
 
 __all__ = ["triangle_rule", "symmetric_triangle_rule", "SYMMETRIC_RULES", "GAUSS_RULE",
            "GAUSS_LOW_RULE", "CORNER_MIDDLE_RULE", "RULE_PAIRS", "rule_pair", "quarter",
-           "triangle_areas", "triangulate"]
+           "refined", "budget_refined", "triangle_areas", "triangulate"]
 
 #: Gauss-Legendre nodes and weights on [-1, 1]: the far-field rule's pair (12 and 8
 #: points a side) and the third rule at a corner on the adaptive rules' lower pair.
@@ -164,6 +165,85 @@ def quarter(T):
     return np.stack([np.stack(t, axis=1) for t in
                      ((a_, ab, ca), (ab, b_, bc), (ca, bc, c_), (ab, bc, ca))],
                     axis=1).reshape(-1, 3, 3)
+
+
+def refined(T, depth, rung, corner, start):
+    """The adaptive rules' next step for triangles T (t, 3, 3) at levels ``depth`` and
+    rungs ``rung`` (t,): at rung 0 (the lower pair) the same triangle at rung 1 (the
+    higher pair); at rung 1 its four quarters (:func:`quarter`; the first keeps the
+    ``corner`` flag, the first vertex) one level down, on rung ``start``. The re-ruled
+    ones first. Returns ``(T, depth, rung, corner)``.
+
+    Examples
+    --------
+    >>> T = np.array([[[0, 0, 0], [1, 0, 0], [0, 1, 0]]] * 2, float)
+    >>> T2, d, r, c = refined(T, np.array([0, 2]), np.array([0, 1]),
+    ...                       np.array([True, True]), 0)
+    >>> T2.shape, d.tolist(), r.tolist(), c.tolist()
+    ((5, 3, 3), [0, 3, 3, 3, 3], [1, 0, 0, 0, 0], [True, True, False, False, False])
+    """
+    again, split = rung == 0, rung == 1
+    T = np.concatenate([T[again], quarter(T[split])])
+    depth = np.concatenate([depth[again], np.repeat(depth[split] + 1, 4)])
+    corner = np.concatenate([corner[again], np.stack(
+        [corner[split]] + [np.zeros(int(split.sum()), dtype=bool)] * 3, axis=1).ravel()])
+    rung = np.concatenate([np.ones(int(again.sum()), dtype=int),
+                           np.full(4 * int(split.sum()), start)])
+    return T, depth, rung, corner
+
+
+def budget_refined(diff, area, depth, rung, before, atol, total_area):
+    """Which triangles of an occluded pair to refine so that the rules' differences fit
+    half of ``atol``: the global error budget of adaptive cubature (Genz & Malik 1980;
+    QUADPACK's ``qag``), the largest difference first, as many as bring the others'
+    sum within it.
+
+    A triangle at rung 1 on the last level (``AREA_MAX_DEPTH``) cannot be refined: its
+    difference counts against the budget, and the others share what is left, never
+    less than their share by area (``atol / 2`` of the cells' ``total_area``), so that
+    one such triangle does not send all the others to the last level. Sums are
+    sequential (cumulative, in the given order), as the compiled levels take them
+    (``_core/levels.cpp``).
+
+    Parameters
+    ----------
+    diff, area : ndarray of shape (t,)
+        The triangles' rules' differences (per unit area of the emitter) and areas.
+    depth, rung : ndarray of shape (t,)
+        Their levels and rungs (:func:`refined`).
+    before : float
+        The differences accepted before (an earlier call's triangles).
+    atol : float
+        The pair's absolute tolerance.
+    total_area : float
+        The area of the pair's cells.
+
+    Returns
+    -------
+    ndarray of int
+        The indices to refine, increasing.
+
+    Examples
+    --------
+    Four triangles of equal area, their differences summing to 1.0 against a budget of
+    0.5: the two largest are refined.
+
+    >>> budget_refined(np.array([0.1, 0.4, 0.2, 0.3]), np.ones(4), np.zeros(4, int),
+    ...                np.zeros(4, int), 0.0, 1.0, 4.0).tolist()
+    [1, 3]
+    """
+    target = 0.5 * atol
+    refinable = (rung == 0) | (depth < tol.AREA_MAX_DEPTH)
+    stuck = float(np.cumsum(diff[~refinable])[-1]) if (~refinable).any() else 0.0
+    mine = np.flatnonzero(refinable)
+    if not len(mine):
+        return mine
+    room = float(np.cumsum(area[mine])[-1])
+    budget = max(target - before - stuck, target * room / total_area)
+    # largest first (ties in the given order), while what is left exceeds the budget
+    order = mine[np.argsort(-diff[mine], kind="stable")]
+    left = float(np.cumsum(diff[mine])[-1]) - np.concatenate([[0.0], np.cumsum(diff[order])[:-1]])
+    return np.sort(order[left > budget])
 
 
 def triangle_areas(T):
