@@ -335,7 +335,7 @@ def point_polygon_distance(p: ArrayLike, polygon: ArrayLike) -> float:
     >>> point_polygon_distance([1, 1, 3], sq), point_polygon_distance([5, 1, 0], sq)
     (3.0, 2.999999999998)
     >>> point_polygon_distance([0, 3, 0], [[0, 0, 0], [1, 0, 0], [2, 0, 0]])
-    2.999999999998
+    2.999999999995
     """
     P = np.asarray(polygon, dtype=float)
     x = np.asarray(p, dtype=float)
@@ -348,7 +348,7 @@ def point_polygon_distance(p: ArrayLike, polygon: ArrayLike) -> float:
     size = float(np.linalg.norm(A))
     if not size > 0:
         # no area (a BSP sliver whose vertices rounded onto a line): its edges are all of it
-        return max(0.0, edges - tol.FLOAT_DISTANCE_RTOL * extent)
+        return max(0.0, edges * (1 - tol.FLOAT_DISTANCE_RTOL) - tol.FLOAT_DISTANCE_RTOL * extent)
     n = A / size
     height = float(n @ (x - P[0]))
     axis = int(np.argmax(np.abs(n)))

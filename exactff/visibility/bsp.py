@@ -1,6 +1,7 @@
 """BSP tree (autopartition) of a scene, and its front-to-back traversal from a point."""
 
 import math
+import weakref
 from fractions import Fraction
 
 import numpy as np
@@ -80,7 +81,6 @@ class BSPTree:
         self.node_members = (node, self.source[flat], orient.astype(np.int8),
                               np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64))
         self.node_member_fragments = flat
-        self._misorder_cache = None     # _misordered_slabs, the last point asked
         bounds = np.concatenate([[0], np.cumsum(sizes)]).tolist()
         for facing, dest in ((orient, "node_fragments"), (-orient, "node_fragments_behind")):
             # tie_priority's order (facing away last, then source) within each node,
@@ -700,6 +700,11 @@ def _nearest_fragment(p, tree, cand, lo_box, hi_box):
     return dist * (1 - tol.FLOAT_DISTANCE_RTOL)
 
 
+#: per tree, the last point's _misordered_slabs (node_sides and node_first_charges each
+#: ask for it per row)
+_MISORDER_CACHE = weakref.WeakKeyDictionary()
+
+
 def _misordered_slabs(tree, p, sides):
     """The nodes where one of the node's own fragments may stand between ``p`` and the
     near subtree (``p`` on the far side of that fragment's own plane from the near
@@ -711,8 +716,9 @@ def _misordered_slabs(tree, p, sides):
     (:func:`node_sides` and :func:`node_first_charges` each ask for it per row)."""
     sides = np.asarray(sides, dtype=np.int8)
     key = (p.tobytes(), sides.tobytes())
-    if tree._misorder_cache is not None and tree._misorder_cache[0] == key:
-        return tree._misorder_cache[1]
+    kept = _MISORDER_CACHE.get(tree)
+    if kept is not None and kept[0] == key:
+        return kept[1]
     side = sides_of_point(tree.normals, tree.offsets, p).astype(np.int8)
     node, src, orient, start = tree.node_members
     nodes, width, distance, standing = [], [], [], []
@@ -748,7 +754,7 @@ def _misordered_slabs(tree, p, sides):
                     standing.append(here)
     out = (side, np.array(nodes, dtype=np.int64), np.array(width), np.array(distance),
            standing)
-    tree._misorder_cache = (key, out)
+    _MISORDER_CACHE[tree] = (key, out)
     return out
 
 
