@@ -1308,14 +1308,21 @@ def _room_with_a_window(window_first, block=False):
 def test_window_on_its_wall_follows_the_tie_rule(block):
     # a window given first covers its part of the wall (the tie rule: of coplanar
     # polygons facing the same way, the first in input order is in front), so the wall
-    # receives only around it: against the wall cut around the window by hand (a scene
-    # without overlaps), every row summing to 1. Before, the overlap was counted twice
-    # (the floor's row summed to 1 + F(floor -> window))
+    # receives, and emits, only around it: against the wall cut around the window by
+    # hand (a scene without overlaps), every row but the wall's summing to 1, the
+    # wall's to its uncovered share, and every pair reciprocal. Before, the overlap was
+    # counted twice (the floor's row summed to 1 + F(floor -> window)), and then the
+    # wall emitted from the window's part too (A_i F_ij != A_j F_ji)
     scene, faces, win, pieces, extra = _room_with_a_window(True, block)
     tol = 1e-9
     F, E = ef.area_form_factors(scene, tolerance=tol, error=True)
     assert np.all(E <= tol)
-    assert np.all(np.abs(F.sum(axis=1) - 1.0) <= E.sum(axis=1) + 1e-13), F.sum(axis=1) - 1
+    A = scene.areas
+    full = np.ones(len(scene))
+    full[3] = 1.0 - A[0] / A[3]
+    assert np.all(np.abs(F.sum(axis=1) - full) <= E.sum(axis=1) + 1e-13), F.sum(axis=1) - full
+    AF, AE = A[:, None] * F, A[:, None] * E
+    assert np.all(np.abs(AF - AF.T) <= AE + AE.T + 1e-13)
     # the reference: the wall replaced by its four pieces around the window (scene:
     # window 0, floor 1, ceiling 2, wall 3, faces 4-6, box 7...; cut: window 0, floor 1,
     # ceiling 2, pieces 3-6, faces 7-9, box 10...)
@@ -1325,10 +1332,10 @@ def test_window_on_its_wall_follows_the_tie_rule(block):
     for r in range(len(scene)):
         for c in range(len(scene)):
             if r == 3:
-                # the wall emits as its pieces and the window's part together (by area)
-                A = cut.areas
-                g = (A[3:7] @ G[3:7][:, at[c]].sum(axis=1) + A[0] * G[0, at[c]].sum()) / scene.areas[3]
-                eg = (A[3:7] @ EG[3:7][:, at[c]].sum(axis=1) + A[0] * EG[0, at[c]].sum()) / scene.areas[3]
+                # the wall emits as its pieces (by area), not from under the window
+                Ac = cut.areas
+                g = Ac[3:7] @ G[3:7][:, at[c]].sum(axis=1) / A[3]
+                eg = Ac[3:7] @ EG[3:7][:, at[c]].sum(axis=1) / A[3]
             else:
                 g, eg = G[at[r][0], at[c]].sum(), EG[at[r][0], at[c]].sum()
             assert abs(F[r, c] - g) <= E[r, c] + eg + 1e-14, (r, c, F[r, c], g)
@@ -1341,11 +1348,14 @@ def test_window_on_its_wall_follows_the_tie_rule(block):
 
 
 def test_window_after_its_wall_receives_nothing():
-    # given after the wall, the window is covered whole: 0 from every emitter, and the
-    # wall receives as if the window were not there
+    # given after the wall, the window is covered whole: 0 from every emitter and 0 to
+    # every receiver (it emitted its full unoccluded row before), and the wall
+    # receives as if the window were not there
     scene, faces, win, _, _ = _room_with_a_window(False)
     F, E = ef.area_form_factors(scene, tolerance=1e-9, error=True)
     assert np.all(F[:, 3] == 0.0)
-    assert np.all(np.abs(F.sum(axis=1) - 1.0) <= E.sum(axis=1) + 1e-13)
+    assert np.all(F[3] == 0.0)
+    rest = np.arange(len(scene)) != 3
+    assert np.all(np.abs(F[rest].sum(axis=1) - 1.0) <= E[rest].sum(axis=1) + 1e-13)
     floor = faces[0]
     assert abs(F[0, 2] - ef.polygon_form_factor(floor, faces[2])) <= E[0, 2] + 1e-15

@@ -22,6 +22,7 @@ from .adaptive import occluded_pair
 from .closed_form import ClosedFormCounts, unoccluded_pairs
 from .culling import (closed_solids, convex_solids, front_pairs, padded_polygons,
                       row_blockers, tie_covers, uncovered)
+from .rules import triangle_areas
 
 __all__ = ["AreaStats", "area_row"]
 
@@ -194,8 +195,32 @@ def area_row(scene, i, atol, *, rtol=None, shortcuts=True, stats=None):
     >>> round(float(f[1]), 8), bool(e[1] <= 1e-8)
     (0.03140269, True)
     """
+    covers = prepared(scene).get("area_tie_covers", tie_covers)
+    if i not in covers:
+        return _part_row(scene, i, None, atol, rtol, shortcuts, stats)
+    # an emitter that coplanar polygons earlier in input order partly cover (the tie
+    # rule) emits from its uncovered part only, as triangles T: F(i, j) is the sum of
+    # A_T F(T, j) / A_i, as the receivers' covering counts A_j F(j, i), so that
+    # A_i F(i, j) = A_j F(j, i); each part's estimate is within atol, their weights sum
+    # to at most 1
+    P = np.asarray(scene.polygons[i], dtype=float)
+    parts = uncovered(P, [np.asarray(scene.polygons[k], dtype=float) for k in covers[i]])
+    weights = triangle_areas(parts) / float(np.linalg.norm(area_vector(P)))
+    f, e = np.zeros(len(scene)), np.zeros(len(scene))
+    for T, w in zip(parts, weights):
+        fT, eT = _part_row(scene, i, T, atol, rtol, shortcuts, stats)
+        f += w * fT
+        e += w * eT
+    return f, e
+
+
+def _part_row(scene, i, part, atol, rtol, shortcuts, stats):
+    """Row i of :func:`area_row` from emitter ``part`` (a part of polygon i in its
+    plane; None: the whole polygon), its values per unit area of the part."""
     st = AreaStats()
     polys = [np.asarray(p, dtype=float) for p in scene.polygons]
+    if part is not None:
+        polys[i] = np.asarray(part, dtype=float)
     padded = padded_polygons(polys)
     P = polys[i]
     scale = float(np.ptp(scene.vertices, axis=0).max()) or 1.0
