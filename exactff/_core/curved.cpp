@@ -404,6 +404,18 @@ CurvedResult curved_event_lines(const CurvedArgs& a) {
         }
     }
     std::vector<unsigned char> seen(total, 1);
+    // per point, the polygons whose edges its line touches (each copy's: an edge two faces
+    // share bounds both), which it meets on those edges (a crossing of their interiors is
+    // rounding, as where the line grazes a plane): not tested
+    const auto own = [&](std::int64_t i, std::int64_t b) {
+        const Triple& T = triples[tri[i]];
+        for (const std::int64_t e : {T.a, T.b}) {
+            const std::int64_t id = cid[e];
+            if (owner[firsts[id]] == b || (count[id] > 1 && owner[seconds[id]] == b))
+                return true;
+        }
+        return false;
+    };
     // the blockers' unit normals and their projections on the two axes off the normal's
     // largest component
     for (std::int64_t b = 1; b <= nb; ++b) {
@@ -418,6 +430,7 @@ CurvedResult curved_event_lines(const CurvedArgs& a) {
         for (std::int64_t i = 0; i < total; ++i) {
             const double hX = inner(sub(X[i], a0), n), hY = inner(sub(Yq[i], a0), n);
             if (!(hX * hY < 0 && std::min(std::fabs(hX), std::fabs(hY)) > near)) continue;
+            if (own(i, b - 1)) continue;
             const D3 pt = add(X[i], scale(hX / (hX - hY), sub(Yq[i], X[i])));
             const double u = pt[k0], v = pt[k1];
             // the crossing number of a ray in +u, and the distance to the nearest edge

@@ -55,15 +55,20 @@ def _skew(p0, dp, r0, dr, near):
     return np.abs(_inner(r0 - p0, n)) > near * np.sqrt(_inner(n, n))
 
 
-def _unhidden(X, Y, B, near):
+def _unhidden(X, Y, B, near, own=None):
     """Per point pair, whether the open segment from X to Y (n, 3) crosses none of the
     polygons B in its interior by more than ``near`` (then the two edges the line
-    touches may bound what is hidden there)."""
+    touches may bound what is hidden there), but for each pair's own polygons ``own``
+    (n, k) of indices into B (the polygons whose edges the line touches: it meets their
+    planes on those edges, and any crossing of their interiors is rounding, as where
+    the line grazes a plane)."""
     free = np.ones(len(X), dtype=bool)
-    for A in B:
+    for i, A in enumerate(B):
         n = unit_normal(A)
         hX, hY = _inner(X - A[0], n), _inner(Y - A[0], n)
         hit = (hX * hY < 0) & (np.minimum(np.abs(hX), np.abs(hY)) > near)
+        if own is not None:
+            hit &= np.all(own != i, axis=1)
         if not hit.any():
             continue
         p = X[hit] + (hX[hit] / (hX[hit] - hY[hit]))[:, None] * (Y[hit] - X[hit])
@@ -371,7 +376,12 @@ def curved_event_lines(S, Qc, nP, dP, R, c, radius, atol=0.0, solid=None, st=Non
     # chord of such a point, so that the curve goes on across the event where it is
     # hidden): with a blocker between, the images' crossing is not on the hidden
     # region's boundary
-    seen = _unhidden(X, q0[iq[k[piece]]] + s[:, None] * dq[iq[k[piece]]], B, near)
+    # the polygons whose edges each point's line touches: each copy's (an edge two
+    # faces share bounds both)
+    copies = [owner[order[pos[cid[e]] + np.where(count[cid[e]] > 1, j, 0)]]
+              for e in (ia[k[piece]], ib[k[piece]]) for j in (0, 1)]
+    seen = _unhidden(X, q0[iq[k[piece]]] + s[:, None] * dq[iq[k[piece]]], B, near,
+                     np.stack(copies, axis=1))
     for e in (ia[k[piece]], ib[k[piece]]):
         # an edge two faces share whose faces' images lie either side of its own
         n = cross(de[e], X - e0[e])
