@@ -25,8 +25,9 @@ Usage: python benchmarks/bench_area.py [--cube-k 8]
    ``--skip-slow`` leaves out gunter1 at 1e-9; ``--only-view3d`` runs this part
    alone.
 6. ``--goals`` alone (issue 49's speed goals, at tolerance 1e-6): process time of the
-   full matrix of gunter1, of the 106-surface box (:func:`box_106`: a 3 x 4 x 5 room of
-   unit squares with two unit cubes inside) and of gunter2
+   full matrix of gunter1, of the 106-surface box
+   (:func:`exactff.scenes.unit_squares_room`: a 3 x 4 x 5 room of unit squares with two
+   unit cubes inside) and of gunter2
    (``/work/shared/scenes/view3d/gunter2.vs3``; ``--gunter2-rows 0,19,...``: only those
    rows, each timed, the matrix's time extrapolated from their mean and said so), against
    View3D 4.0's times of issue 49 (0.009, 0.044 and 0.52 s) with the goals (30x, 20x,
@@ -84,7 +85,7 @@ sys.path.insert(0, os.path.join(os.path.dirname(__file__), "..", "tests"))
 from scenes_bench import machine  # noqa: E402
 from test_area import howell_parallel, howell_perpendicular, parallel_pair, perpendicular_pair  # noqa: E402,E501
 from test_area import OCCLUDED_REFERENCES, _square  # noqa: E402
-from test_area_curved import box_106  # noqa: E402
+from exactff.scenes import unit_squares_room  # noqa: E402
 
 
 def gauss_contour(P, Q, n=30):
@@ -400,7 +401,7 @@ def points_table(args):
           "(occluded) | reference tolerance, its max E |")
     print("|---|---|---|---|---|---|---|---|---|---|")
     for name, ref_tol in POINTS_SCENES:
-        scene = (box_106() if name == "106-surface box"
+        scene = (unit_squares_room() if name == "106-surface box"
                  else ef.read_vs3(os.path.join(DATA, name + ".vs3")))
         cache = (os.path.join(args.ref_cache, f"{name.replace(' ', '_')}_{ref_tol:g}.npz")
                  if args.ref_cache else "")
@@ -440,7 +441,7 @@ def curved_table(args):
           "| max E | F, E the numpy run's to the bit |")
     print("|---|---|---|---|---|---|---|---|---|")
     scenes = {"gunter1": ef.read_vs3(os.path.join(DATA, "gunter1.vs3")),
-              "106-surface box": box_106()}
+              "106-surface box": unit_squares_room()}
     limit = tol.AREA_CURVED_MAX_TRIPLES
     for name, scene in scenes.items():
         for tolerance in (float(t) for t in args.tolerances.split(",")):
@@ -476,7 +477,7 @@ def goals(args):
           "| points | max estimate | worst abs(row sum - 1) within estimates |")
     print("|---|---|---|---|---|---|---|---|---|---|")
     g1 = ef.read_vs3(os.path.join(DATA, "gunter1.vs3"))
-    scenes = {"gunter1": g1, "106-surface box": box_106(),
+    scenes = {"gunter1": g1, "106-surface box": unit_squares_room(),
               "gunter2": ef.read_vs3("/work/shared/scenes/view3d/gunter2.vs3")}
     for name, v3d, goal in GOALS:
         scene = scenes[name]
@@ -590,7 +591,7 @@ def threads(args):
 
     scenes = [("gunter1", ef.read_vs3(os.path.join(DATA, "gunter1.vs3")))]
     if args.threads_box:
-        scenes.append(("106-surface box", box_106()))
+        scenes.append(("106-surface box", unit_squares_room()))
     print(f"load average before: {os.getloadavg()[0]:.2f}")
     print()
     print("| scene | threads | runs: wall / process s | best wall s | speed-up | goal |")

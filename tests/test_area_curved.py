@@ -31,20 +31,11 @@ from exactff.geometry import receiver_frame
 
 
 def box_106():
-    """Issue 49's 106-surface box: a room of 3 x 4 x 5 (x, y, z) cut into 94 unit squares
-    facing in, with two unit cubes inside (12 faces facing out), floating: one at
-    (0.5, 0.5, 0.5)-(1.5, 1.5, 1.5), one at (1.4, 2.2, 2.8)-(2.4, 3.2, 3.8)."""
-    room = []
-    for F in ef.scenes.box_polygons((0, 0, 0), (3, 4, 5), 1, facing="in"):
-        u, v = F[1] - F[0], F[3] - F[0]
-        nu, nv = int(round(np.linalg.norm(u))), int(round(np.linalg.norm(v)))
-        for a in range(nu):
-            for b in range(nv):
-                room.append(np.array([F[0] + (a + i) / nu * u + (b + j) / nv * v
-                                      for i, j in ((0, 0), (1, 0), (1, 1), (0, 1))]))
-    cubes = (ef.scenes.box_polygons((0.5, 0.5, 0.5), (1.5, 1.5, 1.5), 1, facing="out")
-             + ef.scenes.box_polygons((1.4, 2.2, 2.8), (2.4, 3.2, 3.8), 1, facing="out"))
-    return ef.Scene.from_polygons(room + cubes)
+    """Issue 49's 106-surface box (:func:`exactff.scenes.unit_squares_room`' defaults): a
+    room of 3 x 4 x 5 (x, y, z) cut into 94 unit squares facing in, with two unit cubes
+    inside (12 faces facing out), floating: one at (0.5, 0.5, 0.5)-(1.5, 1.5, 1.5), one at
+    (1.4, 2.2, 2.8)-(2.4, 3.2, 3.8)."""
+    return ef.scenes.unit_squares_room()
 
 
 @pytest.fixture(scope="module")

@@ -109,14 +109,12 @@ def test_compiled_curves_are_the_reference(monkeypatch, name, rows, shortcuts, m
     for a compiler's rounding). Pairs beyond AREA_CURVED_MAX_TRIPLES (gunter2's row 38
     has some, and the box's with the limit lowered to 50; none of gunter1's since only
     mutually skew edges make curves) are skipped alike (no chords) and counted."""
-    from test_area_curved import box_106
-
     if max_triples is not None:
         monkeypatch.setattr(tol, "AREA_CURVED_MAX_TRIPLES", max_triples)
     path = GUNTER2 if name == "gunter2.vs3" else os.path.join(DATA, name)
     if name != "box" and not os.path.exists(path):
         pytest.skip(f"{path} not here")
-    scene = box_106() if name == "box" else ef.read_vs3(path)
+    scene = ef.scenes.unit_squares_room() if name == "box" else ef.read_vs3(path)
     seen = _curves_of_every_pair(monkeypatch, scene, range(len(scene)) if rows is None else rows,
                                  shortcuts)
     assert len(seen) > 20
