@@ -56,7 +56,9 @@ Usage: python benchmarks/bench_area.py [--cube-k 8]
 10. ``--curved`` alone (issue 49, the curved events' cost): gunter1 and the 106-surface box
    at ``--tolerances`` (default 1e-6), in one run, with the curved events traced by numpy
    (``curved_event_lines(compiled=False)``, the reference), compiled
-   (``_core/curved.cpp``) and not at all (``AREA_CURVED_MAX_TRIPLES = -1``: every pair
+   (``_core/curved.cpp``), compiled with even steps only (``AREA_CURVED_CHORD_HALVINGS =
+   0``: no step halved where its own midpoint lies too far from its chord, the chords
+   before that) and not at all (``AREA_CURVED_MAX_TRIPLES = -1``: every pair
    skipped, as before they were traced): process time, points, the curves traced and the
    pairs skipped, and whether the compiled run's values and estimates are the numpy
    run's to the bit.
@@ -428,28 +430,30 @@ def points_table(args):
 
 
 def curved_table(args):
-    """Part 10: the curved events traced by numpy, compiled and not at all, same run."""
+    """Part 10: the curved events traced by numpy, compiled, compiled with even steps
+    only and not at all, same run."""
     import functools
 
     from exactff import _tolerances as tol
     from exactff.area import adaptive, curved
 
-    print("Curved events by numpy (the reference), compiled, and none (process time, one "
-          "run each):")
+    print("Curved events by numpy (the reference), compiled, compiled with even steps "
+          "only, and none (process time, one run each):")
     print()
     print("| scene | tolerance | curves | process s | points | curves traced | pairs skipped "
           "| max E | F, E the numpy run's to the bit |")
     print("|---|---|---|---|---|---|---|---|---|")
     scenes = {"gunter1": ef.read_vs3(os.path.join(DATA, "gunter1.vs3")),
               "106-surface box": unit_squares_room()}
-    limit = tol.AREA_CURVED_MAX_TRIPLES
+    limit, halvings = tol.AREA_CURVED_MAX_TRIPLES, tol.AREA_CURVED_CHORD_HALVINGS
     for name, scene in scenes.items():
         for tolerance in (float(t) for t in args.tolerances.split(",")):
             ref = None
-            for how in ("numpy", "compiled", "none"):
+            for how in ("numpy", "compiled", "even steps", "none"):
                 adaptive.curved_event_lines = functools.partial(
                     curved.curved_event_lines, compiled=how != "numpy")
                 tol.AREA_CURVED_MAX_TRIPLES = -1 if how == "none" else limit
+                tol.AREA_CURVED_CHORD_HALVINGS = 0 if how == "even steps" else halvings
                 st = {}
                 try:
                     t0 = time.process_time()
@@ -458,6 +462,7 @@ def curved_table(args):
                 finally:
                     adaptive.curved_event_lines = curved.curved_event_lines
                     tol.AREA_CURVED_MAX_TRIPLES = limit
+                    tol.AREA_CURVED_CHORD_HALVINGS = halvings
                 ref = (F, E) if ref is None else ref
                 same = "-" if how != "compiled" else bool(
                     np.array_equal(F, ref[0]) and np.array_equal(E, ref[1]))
