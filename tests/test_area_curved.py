@@ -208,39 +208,71 @@ def _curve_samples(B, Q, ka, kb, ia, ib, kq, n):
     return X
 
 
-@pytest.mark.parametrize("compiled", [True, False])
-def test_curved_chords_within_their_deviation_of_the_curve(compiled):
-    """Every curved event of three blockers between two squares (CHORDS_BLOCKERS),
-    sampled at 4,000 points along each receiver edge by another construction
-    (:func:`_curve_samples`): each sample inside the emitter lies within the allowed
-    deviation (``AREA_CURVED_EVENT_RTOL`` of the disk's radius at 1e-6) of a chord. With
-    the piece's even steps alone (``AREA_CURVED_CHORD_HALVINGS = 0``) one curve's chords
-    lay 3.8 times that from it."""
+def _chords_off_the_curves(B, compiled):
+    """The curved events of the blockers B between a unit square P (z = 0, facing up) and
+    a square Q (z = 3, facing down) at 1e-6, and every curve of them sampled at 4,000
+    points along each receiver edge (:func:`_curve_samples`): the samples inside P, and
+    the largest distance of one from the nearest chord over the allowed deviation
+    (``AREA_CURVED_EVENT_RTOL`` of the disk's radius; ``sqrt(1e-6)`` is as much), with
+    the triple (blockers, edges) where it lies."""
     P = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], float)
     Q = np.array([[-0.5, -0.5, 3], [-0.5, 1.5, 3], [1.5, 1.5, 3], [1.5, -0.5, 3]], float)
     nP = np.array([0, 0, 1.0])
     R, c = receiver_frame(nP), P.mean(axis=0)
     radius = (1 + tol.AREA_HIDDEN_PAD) * float(np.linalg.norm(P - c, axis=1).max())
-    allowed = radius * tol.AREA_CURVED_EVENT_RTOL                  # sqrt(1e-6) is as much
-    C = curved_event_lines([Q, *CHORDS_BLOCKERS], Q, nP, 0.0, R, c, radius, 1e-6,
-                           compiled=compiled)
+    allowed = radius * tol.AREA_CURVED_EVENT_RTOL
+    C = curved_event_lines([Q, *B], Q, nP, 0.0, R, c, radius, 1e-6, compiled=compiled)
     e = C[:, 1] - C[:, 0]
-    samples = 0
+    samples, worst = 0, (0.0, None)
     for ia, ib in ((0, 1), (0, 2), (1, 2)):
         for ka in range(4):
             for kb in range(4):
                 for kq in range(4):
-                    X = _curve_samples(CHORDS_BLOCKERS, Q, ka, kb, ia, ib, kq, 4001)
+                    X = _curve_samples(B, Q, ka, kb, ia, ib, kq, 4001)
                     if not len(X):
                         continue
                     samples += len(X)
+                    if not len(C):
+                        return samples, (np.inf, (ia, ib, ka, kb, kq))
                     p2 = (X - c) @ R[:2].T
                     t = np.clip(np.einsum("mnk,nk->mn", p2[:, None] - C[None, :, 0], e)
                                 / (e * e).sum(axis=1), 0, 1)
                     near = C[None, :, 0] + t[..., None] * e[None] - p2[:, None]
-                    dist = np.sqrt((near * near).sum(axis=2)).min(axis=1)
-                    assert dist.max() <= allowed, (ia, ib, ka, kb, kq, dist.max() / allowed)
+                    far = float(np.sqrt((near * near).sum(axis=2)).min(axis=1).max())
+                    if far / allowed > worst[0]:
+                        worst = (far / allowed, (ia, ib, ka, kb, kq))
+    return samples, worst
+
+
+@pytest.mark.parametrize("compiled", [True, False])
+def test_curved_chords_within_their_deviation_of_the_curve(compiled):
+    """Every curved event of three blockers between two squares (CHORDS_BLOCKERS),
+    sampled densely by another construction (:func:`_chords_off_the_curves`): each
+    sample inside the emitter lies within the allowed deviation of a chord. With the
+    piece's even steps alone (``AREA_CURVED_CHORD_HALVINGS = 0``) one curve's chords
+    lay 3.8 times that from it."""
+    samples, (worst, where) = _chords_off_the_curves(CHORDS_BLOCKERS, compiled)
     assert samples > 5000
+    assert worst <= 1.0, (worst, where)
+
+
+@pytest.mark.parametrize("compiled", [True, False])
+def test_curved_chords_not_hidden_by_their_own_slightly_warped_blocker(compiled):
+    """CHORDS_BLOCKERS with a vertex of the second moved 1e-7 off its plane (a scene
+    takes it: within PLANARITY_RTOL). A chord point's line of sight meets that blocker
+    on its edge, but the plane through its first vertex with its mean normal lies up to
+    1e-7 off that edge, and the line crossed it inside the blocker, far beyond the
+    rounding allowed: the curve counted hidden by its own blocker, 116 of its 287 chords
+    left out. The event's own polygons are not tested (curved.py's ``_unhidden``): the
+    curves are covered as with the blocker flat."""
+    B = CHORDS_BLOCKERS.copy()
+    B[1, 0, 2] += 1e-7
+    P = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], float)
+    Q = np.array([[-0.5, -0.5, 3], [-0.5, 1.5, 3], [1.5, 1.5, 3], [1.5, -0.5, 3]], float)
+    ef.Scene.from_polygons([P, Q[::-1], *B])                      # a valid scene
+    samples, (worst, where) = _chords_off_the_curves(B, compiled)
+    assert samples > 5000
+    assert worst <= 1.0, (worst, where)
 
 
 @pytest.mark.parametrize("compiled", [True, False])
