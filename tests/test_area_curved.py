@@ -38,6 +38,19 @@ def box_106():
     return ef.scenes.unit_squares_room()
 
 
+def test_unit_squares_room():
+    # the box: 2 (3 x 4 + 3 x 5 + 4 x 5) = 94 unit squares, each facing the room's
+    # centre, and 12 unit faces of the cubes; whole numbers only
+    box = box_106()
+    A = np.array([ef.geometry.area_vector(P) for P in box.polygons])
+    assert len(box) == 106 and np.allclose(np.linalg.norm(A, axis=1), 1.0)
+    centre = np.array([1.5, 2.0, 2.5])
+    assert all(float(a @ (centre - P.mean(axis=0))) > 0 for a, P in zip(A[:94], box.polygons))
+    for bad in ((3, 4), (3, 4, 0.5), (3, 4, 0)):
+        with pytest.raises(ValueError, match="size"):
+            ef.scenes.unit_squares_room(bad, [])
+
+
 @pytest.fixture(scope="module")
 def box():
     return box_106()
