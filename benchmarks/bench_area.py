@@ -25,8 +25,9 @@ Usage: python benchmarks/bench_area.py [--cube-k 8]
    ``--skip-slow`` leaves out gunter1 at 1e-9; ``--only-view3d`` runs this part
    alone.
 6. ``--goals`` alone (issue 49's speed goals, at tolerance 1e-6): process time of the
-   full matrix of gunter1, of the 106-surface box (:func:`box_106`: a 3 x 4 x 5 room of
-   unit squares with two unit cubes inside) and of gunter2
+   full matrix of gunter1, of the 106-surface box
+   (:func:`exactff.scenes.unit_squares_room`: a 3 x 4 x 5 room of unit squares with two
+   unit cubes inside) and of gunter2
    (``/work/shared/scenes/view3d/gunter2.vs3``; ``--gunter2-rows 0,19,...``: only those
    rows, each timed, the matrix's time extrapolated from their mean and said so), against
    View3D 4.0's times of issue 49 (0.009, 0.044 and 0.52 s) with the goals (30x, 20x,
@@ -55,7 +56,9 @@ Usage: python benchmarks/bench_area.py [--cube-k 8]
 10. ``--curved`` alone (issue 49, the curved events' cost): gunter1 and the 106-surface box
    at ``--tolerances`` (default 1e-6), in one run, with the curved events traced by numpy
    (``curved_event_lines(compiled=False)``, the reference), compiled
-   (``_core/curved.cpp``) and not at all (``AREA_CURVED_MAX_TRIPLES = -1``: every pair
+   (``_core/curved.cpp``), compiled with even steps only (``AREA_CURVED_CHORD_HALVINGS =
+   0``: no step halved where its own midpoint lies too far from its chord, the chords
+   before that) and not at all (``AREA_CURVED_MAX_TRIPLES = -1``: every pair
    skipped, as before they were traced): process time, points, the curves traced and the
    pairs skipped, and whether the compiled run's values and estimates are the numpy
    run's to the bit.
@@ -84,7 +87,7 @@ sys.path.insert(0, os.path.join(os.path.dirname(__file__), "..", "tests"))
 from scenes_bench import machine  # noqa: E402
 from test_area import howell_parallel, howell_perpendicular, parallel_pair, perpendicular_pair  # noqa: E402,E501
 from test_area import OCCLUDED_REFERENCES, _square  # noqa: E402
-from test_area_curved import box_106  # noqa: E402
+from exactff.scenes import unit_squares_room  # noqa: E402
 
 
 def gauss_contour(P, Q, n=30):
@@ -400,7 +403,7 @@ def points_table(args):
           "(occluded) | reference tolerance, its max E |")
     print("|---|---|---|---|---|---|---|---|---|---|")
     for name, ref_tol in POINTS_SCENES:
-        scene = (box_106() if name == "106-surface box"
+        scene = (unit_squares_room() if name == "106-surface box"
                  else ef.read_vs3(os.path.join(DATA, name + ".vs3")))
         cache = (os.path.join(args.ref_cache, f"{name.replace(' ', '_')}_{ref_tol:g}.npz")
                  if args.ref_cache else "")
@@ -427,28 +430,30 @@ def points_table(args):
 
 
 def curved_table(args):
-    """Part 10: the curved events traced by numpy, compiled and not at all, same run."""
+    """Part 10: the curved events traced by numpy, compiled, compiled with even steps
+    only and not at all, same run."""
     import functools
 
     from exactff import _tolerances as tol
     from exactff.area import adaptive, curved
 
-    print("Curved events by numpy (the reference), compiled, and none (process time, one "
-          "run each):")
+    print("Curved events by numpy (the reference), compiled, compiled with even steps "
+          "only, and none (process time, one run each):")
     print()
     print("| scene | tolerance | curves | process s | points | curves traced | pairs skipped "
           "| max E | F, E the numpy run's to the bit |")
     print("|---|---|---|---|---|---|---|---|---|")
     scenes = {"gunter1": ef.read_vs3(os.path.join(DATA, "gunter1.vs3")),
-              "106-surface box": box_106()}
-    limit = tol.AREA_CURVED_MAX_TRIPLES
+              "106-surface box": unit_squares_room()}
+    limit, halvings = tol.AREA_CURVED_MAX_TRIPLES, tol.AREA_CURVED_CHORD_HALVINGS
     for name, scene in scenes.items():
         for tolerance in (float(t) for t in args.tolerances.split(",")):
             ref = None
-            for how in ("numpy", "compiled", "none"):
+            for how in ("numpy", "compiled", "even steps", "none"):
                 adaptive.curved_event_lines = functools.partial(
                     curved.curved_event_lines, compiled=how != "numpy")
                 tol.AREA_CURVED_MAX_TRIPLES = -1 if how == "none" else limit
+                tol.AREA_CURVED_CHORD_HALVINGS = 0 if how == "even steps" else halvings
                 st = {}
                 try:
                     t0 = time.process_time()
@@ -457,6 +462,7 @@ def curved_table(args):
                 finally:
                     adaptive.curved_event_lines = curved.curved_event_lines
                     tol.AREA_CURVED_MAX_TRIPLES = limit
+                    tol.AREA_CURVED_CHORD_HALVINGS = halvings
                 ref = (F, E) if ref is None else ref
                 same = "-" if how != "compiled" else bool(
                     np.array_equal(F, ref[0]) and np.array_equal(E, ref[1]))
@@ -476,7 +482,7 @@ def goals(args):
           "| points | max estimate | worst abs(row sum - 1) within estimates |")
     print("|---|---|---|---|---|---|---|---|---|---|")
     g1 = ef.read_vs3(os.path.join(DATA, "gunter1.vs3"))
-    scenes = {"gunter1": g1, "106-surface box": box_106(),
+    scenes = {"gunter1": g1, "106-surface box": unit_squares_room(),
               "gunter2": ef.read_vs3("/work/shared/scenes/view3d/gunter2.vs3")}
     for name, v3d, goal in GOALS:
         scene = scenes[name]
@@ -590,7 +596,7 @@ def threads(args):
 
     scenes = [("gunter1", ef.read_vs3(os.path.join(DATA, "gunter1.vs3")))]
     if args.threads_box:
-        scenes.append(("106-surface box", box_106()))
+        scenes.append(("106-surface box", unit_squares_room()))
     print(f"load average before: {os.getloadavg()[0]:.2f}")
     print()
     print("| scene | threads | runs: wall / process s | best wall s | speed-up | goal |")

@@ -127,6 +127,8 @@ __all__ = [
     "AREA_CURVED_EVENT_BISECTIONS",
     "AREA_CURVED_MAX_TRIPLES",
     "AREA_CURVED_EVENT_RTOL",
+    "AREA_CURVED_CHORD_SPLIT",
+    "AREA_CURVED_CHORD_HALVINGS",
     "AREA_CELL_COVER_RTOL",
     "AREA_UMBRA_MIN_LINES",
     "AREA_UMBRA_MARGIN",
@@ -608,6 +610,15 @@ AREA_CURVED_MAX_TRIPLES = 2_000
 #: the kink of the hidden part (a jump of its second derivative) then lies in a strip of
 #: that width along a cut, where it moves the rules' values by that width squared.
 AREA_CURVED_EVENT_RTOL = 1e-3
+#: ... the steps of a piece of curve first even (from the deviation at the piece's
+#: midpoint: up to 2.03 times too far where its curvature is uneven), then each step
+#: whose own midpoint lies farther from its chord than this share of that deviation
+#: halved (the curve's farthest point from a chord is not at the step's midpoint where
+#: its parametrisation is uneven: 1.0004 times the midpoint's on a step of
+#: scratch chords_check's trial 22, seed 0) ...
+AREA_CURVED_CHORD_SPLIT = 0.9
+#: ... at most this many times (each halving cuts the deviation about four times).
+AREA_CURVED_CHORD_HALVINGS = 10
 #: ... and the emitter's cells must cover it to this share of its area, else it is cut
 #: again another way (as cut, then on a grid: the cells that cover most are kept).
 AREA_CELL_COVER_RTOL = 1e-12

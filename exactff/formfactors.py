@@ -674,7 +674,14 @@ def area_form_factors(scene, rows=None, *, tolerance=1e-9, error=False, executor
         which two rules that miss the same feature of the integrand can make too small
         (see Notes). It is checked against what is known exactly (the unoccluded point
         values' integral, in closed form) and has held against independent values on
-        every View3D example the tests have (``tests/test_area_view3d.py``).
+        every View3D example the tests have (``tests/test_area_view3d.py``). It is an
+        estimate above all where the emitter is not cut along a line where the
+        integrand kinks, which the rules then meet inside a triangle: the curved events
+        of a pair with more than ``AREA_CURVED_MAX_TRIPLES`` triples of skew edges (none
+        of its curves traced; ``stats["curved_skipped"]``), the curves where the images
+        of three blockers' edges meet at one point (none of them the receiver's), and
+        the events of the line where two interpenetrating blockers cross (an edge of
+        what they hide that is no polygon's edge).
     executor, jobs, progress, out, sparse, chunk_rows
         As for :func:`form_factor_matrix`: rows in parallel, a progress bar, streamed to
         ``out`` and resumed from it (the estimates to ``STEM.error.SUFFIX`` beside it),
@@ -771,11 +778,15 @@ def area_form_factors(scene, rows=None, *, tolerance=1e-9, error=False, executor
     values, whose integral is known in closed form, per pair and, where the pair's sum
     misses, per triangle; a triangle whose difference that shows too small is refined
     (``stats``: ``checked_triangles``, ``refined_triangles``). The check can only
-    show an estimate too small, never prove one right. Curved events
-    (three skew edges) are not cut along; the adaptive cutting resolves them, and a
-    triangle still unresolved after ``MAX_DEPTH`` cuts keeps its (large) estimate, so
-    that a value whose estimate exceeds ``tolerance`` says so: it raises, or with
-    ``error=True`` comes back with that estimate. Cost grows with the
+    show an estimate too small, never prove one right. Curved events (two blockers'
+    edges seen crossing on the receiver's edge) are cut along where the three edges
+    are mutually skew, traced as chords within ``AREA_CURVED_EVENT_RTOL`` of the
+    emitter's size (or ``sqrt(tolerance)`` of it, where less; ``exactff.area.curved``);
+    the kinks left uncut (``error`` above names them) are left to the adaptive cutting,
+    and a triangle still unresolved after ``MAX_DEPTH`` cuts keeps its (large)
+    estimate, so that a value whose estimate exceeds ``tolerance`` says so: it raises,
+    or with ``error=True`` comes back with that estimate, but two rules that miss the
+    same kink alike can also agree there. Cost grows with the
     events of each occluded pair: meant for scenes of up to a few hundred polygons.
 
     Examples

@@ -12,12 +12,14 @@ import numpy as np
 import pytest
 
 import exactff as ef
+from exactff import NumericalError
 from exactff import _tolerances as tol
 from exactff.area import adaptive
 from exactff.area._pair import event_lines as compiled_event_lines
 from exactff.area.curved import curved_event_lines
 from exactff.area.events import event_lines
 from exactff.area.row import AreaStats, area_row
+from exactff.area.rules import budget_refined
 from exactff.geometry import plane_frame, receiver_frame
 
 DATA = os.path.join(os.path.dirname(__file__), "data", "view3d")
@@ -107,14 +109,12 @@ def test_compiled_curves_are_the_reference(monkeypatch, name, rows, shortcuts, m
     for a compiler's rounding). Pairs beyond AREA_CURVED_MAX_TRIPLES (gunter2's row 38
     has some, and the box's with the limit lowered to 50; none of gunter1's since only
     mutually skew edges make curves) are skipped alike (no chords) and counted."""
-    from test_area_curved import box_106
-
     if max_triples is not None:
         monkeypatch.setattr(tol, "AREA_CURVED_MAX_TRIPLES", max_triples)
     path = GUNTER2 if name == "gunter2.vs3" else os.path.join(DATA, name)
     if name != "box" and not os.path.exists(path):
         pytest.skip(f"{path} not here")
-    scene = box_106() if name == "box" else ef.read_vs3(path)
+    scene = ef.scenes.unit_squares_room() if name == "box" else ef.read_vs3(path)
     seen = _curves_of_every_pair(monkeypatch, scene, range(len(scene)) if rows is None else rows,
                                  shortcuts)
     assert len(seen) > 20
@@ -625,3 +625,37 @@ def test_compiled_corner_first_against_numpy(monkeypatch):
         corners += int(c.sum())
         cut += len(T) > len(a[0])
     assert corners > 1000 and cut > 0
+
+
+def test_levels_raise_where_a_rules_difference_is_not_finite(monkeypatch):
+    # a rules' difference NaN (here every one: the emitter's area NaN divides the rules'
+    # sums) has no place in the largest-first order of the error budget: the compiled
+    # levels (whose sort would be undefined behaviour on it) decline the pair, and
+    # numpy's budget_refined raises, as it does when called directly
+    from test_area import OCCLUDED_REFERENCES, _square
+
+    with pytest.raises(NumericalError, match="triangle 1 is nan: not finite"):
+        budget_refined(np.array([0.1, np.nan, 0.2]), np.ones(3), np.zeros(3, int),
+                       np.zeros(3, int), 0.0, 1.0, 3.0)
+    with pytest.raises(NumericalError, match="triangle 0 is inf: not finite"):
+        budget_refined(np.array([np.inf]), np.ones(1), np.zeros(1, int), np.zeros(1, int),
+                       0.0, 1.0, 1.0)
+    plate, _ = OCCLUDED_REFERENCES[0]
+    scene = ef.Scene.from_polygons([_square(0, True), _square(2, False), plate])
+    calls = _level_calls(monkeypatch, scene, [0], 1e-6)
+    assert calls
+    args, acc = calls[0]
+    args = list(args)
+    args[10] = np.nan                                                   # area_P
+    declined, levels = [], adaptive._compiled_adaptive_levels
+
+    def record(*a, **k):
+        r = levels(*a, **k)
+        declined.append(not r[0])
+        return r
+
+    monkeypatch.setattr(adaptive, "_compiled_adaptive_levels", record)
+    monkeypatch.setattr(adaptive, "COMPILED_LEVELS", True)
+    with pytest.raises(NumericalError, match="not finite"):
+        adaptive._levels(*args, {k: list(v) for k, v in acc.items()})
+    assert declined == [True]

@@ -65,8 +65,7 @@ def accepted_triangles(scene, i, j, tolerance):
 def main(argv):
     name, i, j, tolerance = argv[0], int(argv[1]), int(argv[2]), float(argv[3])
     if name == "box":
-        from test_area_curved import box_106
-        scene = box_106()
+        scene = ef.scenes.unit_squares_room()
     else:
         scene = ef.read_vs3(name)
     value, err, acc, g = accepted_triangles(scene, i, j, tolerance)

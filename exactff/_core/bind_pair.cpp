@@ -91,6 +91,8 @@ py::tuple curved_event_lines(Array<double> W, Array<std::int64_t> start,
     a.samples = whole("AREA_CURVED_EVENT_SAMPLES");
     a.bisections = whole("AREA_CURVED_EVENT_BISECTIONS");
     a.max_triples = whole("AREA_CURVED_MAX_TRIPLES");
+    a.chord_split = num("AREA_CURVED_CHORD_SPLIT");
+    a.chord_halvings = whole("AREA_CURVED_CHORD_HALVINGS");
     a.rows_per_call = whole("AREA_EVENT_ROWS_PER_CALL");
     if (a.samples < 1) throw std::invalid_argument("curved_event_lines: samples < 1");
     exactff::CurvedResult r;

@@ -381,29 +381,93 @@ CurvedResult curved_event_lines(const CurvedArgs& a) {
         if (std::isinf(dev)) dev = std::numeric_limits<double>::max();
         const double st = std::ceil(std::sqrt(dev / dev_allowed));
         steps[p] = static_cast<std::int64_t>(std::min(std::max(st, 1.0), 4096.0));
-        first[p] = total;
-        total += steps[p] + 1;
     }
+    // then each step whose own midpoint lies farther from its chord than chord_split of the
+    // allowed deviation halved, up to chord_halvings times (the piece's midpoint says little
+    // where its curvature is uneven); depth first here, level by level in the reference:
+    // a step's decision rests on its ends alone, so the points are the same
+    const double split_dev = a.chord_split * dev_allowed;
+    std::vector<double> sv;            // every piece's points' s, piece by piece
+    std::vector<std::int64_t> pv;      // and their pieces
+    struct Node {
+        double s, u, v;
+    };
+    const auto node = [&](std::int64_t k, double sj) {
+        Node n{sj, 0.0, 0.0};
+        frame2(curve_at(k, sj).x, n.u, n.v);
+        return n;
+    };
+    for (std::size_t p = 0; p < np_; ++p) {
+        const Piece& P = pieces[p];
+        first[p] = static_cast<std::int64_t>(sv.size());
+        Node left = node(P.k, P.lo);
+        sv.push_back(P.lo);
+        pv.push_back(static_cast<std::int64_t>(p));
+        for (std::int64_t j = 1; j <= steps[p]; ++j) {
+            const double frac = static_cast<double>(j) / static_cast<double>(steps[p]);
+            const double sj = j == steps[p] ? P.hi : P.lo + (P.hi - P.lo) * frac;
+            const Node right = node(P.k, sj);
+            // the step (left, right) and its halves, depth first: the right ends still to
+            // reach, each with the depth of the step it ends
+            std::vector<std::pair<Node, std::int64_t>> todo{{right, 0}};
+            Node at_ = left;
+            while (!todo.empty()) {
+                const Node r = todo.back().first;
+                const std::int64_t depth = todo.back().second;
+                bool halve = false;
+                Node m{};
+                if (depth < a.chord_halvings) {
+                    m = node(P.k, 0.5 * (at_.s + r.s));
+                    const double cx = r.u - at_.u, cy = r.v - at_.v;
+                    const double ox = m.u - at_.u, oy = m.v - at_.v;
+                    const double length = std::hypot(cx, cy);
+                    double d = length > 0 ? std::fabs(cx * oy - cy * ox) / length
+                                          : std::hypot(ox, oy);
+                    if (std::isnan(d)) d = 0.0;
+                    halve = d > split_dev;
+                }
+                if (halve) {
+                    todo.back().second = depth + 1;     // r, after the left half
+                    todo.push_back({m, depth + 1});
+                    continue;
+                }
+                todo.pop_back();
+                sv.push_back(r.s);
+                pv.push_back(static_cast<std::int64_t>(p));
+                at_ = r;
+            }
+            left = right;
+        }
+        steps[p] = static_cast<std::int64_t>(sv.size()) - first[p] - 1;
+    }
+    total = static_cast<std::int64_t>(sv.size());
     // every piece's points, in P's frame (Y) and on Qc's edge (y), and whether each is seen:
     // the line of sight from x to y crosses no blocker (within its rounding) and, for an
     // edge two faces share, the faces' images do not lie either side of the edge's
     std::vector<D3> X(total), Yq(total);
     std::vector<double> Y(2 * total);
     std::vector<std::int64_t> tri(total);
-    for (std::size_t p = 0; p < np_; ++p) {
-        const Piece& P = pieces[p];
+    for (std::int64_t i = 0; i < total; ++i) {
+        const Piece& P = pieces[pv[i]];
         const Triple& T = triples[P.k];
-        for (std::int64_t j = 0; j <= steps[p]; ++j) {
-            const double frac = static_cast<double>(j) / static_cast<double>(steps[p]);
-            const double sj = j == steps[p] ? P.hi : j == 0 ? P.lo : P.lo + (P.hi - P.lo) * frac;
-            const std::int64_t i = first[p] + j;
-            X[i] = curve_at(P.k, sj).x;
-            Yq[i] = add(T.q0, scale(sj, T.dq));
-            frame2(X[i], Y[2 * i], Y[2 * i + 1]);
-            tri[i] = P.k;
-        }
+        X[i] = curve_at(P.k, sv[i]).x;
+        Yq[i] = add(T.q0, scale(sv[i], T.dq));
+        frame2(X[i], Y[2 * i], Y[2 * i + 1]);
+        tri[i] = P.k;
     }
     std::vector<unsigned char> seen(total, 1);
+    // per point, the polygons whose edges its line touches (each copy's: an edge two faces
+    // share bounds both), which it meets on those edges (a crossing of their interiors is
+    // rounding, as where the line grazes a plane): not tested
+    const auto own = [&](std::int64_t i, std::int64_t b) {
+        const Triple& T = triples[tri[i]];
+        for (const std::int64_t e : {T.a, T.b}) {
+            const std::int64_t id = cid[e];
+            if (owner[firsts[id]] == b || (count[id] > 1 && owner[seconds[id]] == b))
+                return true;
+        }
+        return false;
+    };
     // the blockers' unit normals and their projections on the two axes off the normal's
     // largest component
     for (std::int64_t b = 1; b <= nb; ++b) {
@@ -418,6 +482,7 @@ CurvedResult curved_event_lines(const CurvedArgs& a) {
         for (std::int64_t i = 0; i < total; ++i) {
             const double hX = inner(sub(X[i], a0), n), hY = inner(sub(Yq[i], a0), n);
             if (!(hX * hY < 0 && std::min(std::fabs(hX), std::fabs(hY)) > near)) continue;
+            if (own(i, b - 1)) continue;
             const D3 pt = add(X[i], scale(hX / (hX - hY), sub(Yq[i], X[i])));
             const double u = pt[k0], v = pt[k1];
             // the crossing number of a ray in +u, and the distance to the nearest edge

@@ -146,10 +146,15 @@ struct Pool {
     size_t size() const { return diff.size(); }
 };
 
-// rules.py's budget_refined: the pool's triangles to refine, largest difference
-// first, until what is left fits the budget (in the pool's order)
-std::vector<size_t> budget_refined(const Pool& p, double before, double atol,
-                                   double total_area, long long max_depth) {
+// rules.py's budget_refined: the pool's triangles to refine (out), largest difference
+// first, until what is left fits the budget (in the pool's order); false, with nothing
+// chosen, where a difference is not finite (the reference raises there: a NaN would
+// leave the ordering below no strict weak order, undefined behaviour for the sort)
+bool budget_refined(const Pool& p, double before, double atol, double total_area,
+                    long long max_depth, std::vector<size_t>& out) {
+    out.clear();
+    for (size_t k = 0; k < p.size(); ++k)
+        if (!std::isfinite(p.diff[k])) return false;
     const double target = 0.5 * atol;
     double stuck = 0.0, room = 0.0, all = 0.0;
     std::vector<size_t> mine;
@@ -157,8 +162,7 @@ std::vector<size_t> budget_refined(const Pool& p, double before, double atol,
         if (p.rung[k] == 0 || p.depth[k] < max_depth) mine.push_back(k);
         else stuck += p.diff[k];
     }
-    std::vector<size_t> out;
-    if (mine.empty()) return out;
+    if (mine.empty()) return true;
     for (size_t k : mine) room += p.area[k];
     for (size_t k : mine) all += p.diff[k];
     const double budget = std::max(target - before - stuck, target * room / total_area);
@@ -172,7 +176,7 @@ std::vector<size_t> budget_refined(const Pool& p, double before, double atol,
         taken += p.diff[k];
     }
     std::sort(out.begin(), out.end());
-    return out;
+    return true;
 }
 
 }  // namespace
@@ -308,8 +312,11 @@ LevelResult adaptive_levels(const LevelArgs& a) {
         if (!pool.size()) break;
         // half of atol for the rules' differences, with those accepted before this
         // call: the largest refined while what is left exceeds it
-        const std::vector<size_t> sel =
-            budget_refined(pool, a.rules_err, a.atol, a.total_area, a.max_depth);
+        std::vector<size_t> sel;
+        if (!budget_refined(pool, a.rules_err, a.atol, a.total_area, a.max_depth, sel)) {
+            out.ok = false;   // a difference not finite: the reference raises
+            return out;
+        }
         if (sel.empty()) break;
         // the refined: a triangle the low pair missed takes the high pair (rung 1), one
         // the high pair missed is cut in four at its edges' midpoints, one level down, on

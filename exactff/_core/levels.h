@@ -65,8 +65,8 @@ struct LevelArgs {
 // corner, and per unit area of P the high rule's integral of the hidden part, the low
 // rule's, the rules' difference, the nodes' estimates, the two rules' integrals of the
 // unoccluded point values and their estimates), the slivers' area, the points evaluated
-// and the back faces skipped; ok false: a point lost or a value below 0 beyond its
-// estimate (the rest then empty).
+// and the back faces skipped; ok false: a point lost, a value below 0 beyond its
+// estimate or a rules' difference not finite (the rest then empty).
 struct LevelResult {
     bool ok = true;
     std::vector<double> T, hi, lo, diff, rnd, hiU, loU, rndU;

@@ -55,7 +55,8 @@ EventResult event_lines(const EventArgs& args);
 // hull_rtol (AREA_HULL_RTOL), event_parallel (AREA_EVENT_PARALLEL), extend_rtol
 // (AREA_CUT_EXTEND_RTOL), samples (AREA_CURVED_EVENT_SAMPLES), bisections
 // (AREA_CURVED_EVENT_BISECTIONS), max_triples (AREA_CURVED_MAX_TRIPLES), curve_rtol
-// (AREA_CURVED_EVENT_RTOL), rows_per_call (AREA_EVENT_ROWS_PER_CALL: the reference's
+// (AREA_CURVED_EVENT_RTOL), chord_split (AREA_CURVED_CHORD_SPLIT), chord_halvings
+// (AREA_CURVED_CHORD_HALVINGS), rows_per_call (AREA_EVENT_ROWS_PER_CALL: the reference's
 // batches, over each of which its bisections stop together).
 struct CurvedArgs {
     const double* W;
@@ -66,8 +67,8 @@ struct CurvedArgs {
     std::int64_t n_q;
     const double *nP, *frame, *c;
     double dP, radius, atol;
-    double hull_rtol, event_parallel, extend_rtol, curve_rtol;
-    std::int64_t samples, bisections, max_triples, rows_per_call;
+    double hull_rtol, event_parallel, extend_rtol, curve_rtol, chord_split;
+    std::int64_t samples, bisections, max_triples, chord_halvings, rows_per_call;
 };
 
 // The chords (m, 2, 2) in the frame's first two axes about c, in the reference's order;

@@ -19,6 +19,7 @@ __all__ = ["curved_event_lines"]
 _CURVED_TOLERANCES = ("AREA_HULL_RTOL", "AREA_EVENT_PARALLEL", "AREA_CUT_EXTEND_RTOL",
                       "AREA_CURVED_EVENT_RTOL", "AREA_CURVED_EVENT_SAMPLES",
                       "AREA_CURVED_EVENT_BISECTIONS", "AREA_CURVED_MAX_TRIPLES",
+                      "AREA_CURVED_CHORD_SPLIT", "AREA_CURVED_CHORD_HALVINGS",
                       "AREA_EVENT_ROWS_PER_CALL")
 
 
@@ -55,15 +56,20 @@ def _skew(p0, dp, r0, dr, near):
     return np.abs(_inner(r0 - p0, n)) > near * np.sqrt(_inner(n, n))
 
 
-def _unhidden(X, Y, B, near):
+def _unhidden(X, Y, B, near, own=None):
     """Per point pair, whether the open segment from X to Y (n, 3) crosses none of the
     polygons B in its interior by more than ``near`` (then the two edges the line
-    touches may bound what is hidden there)."""
+    touches may bound what is hidden there), but for each pair's own polygons ``own``
+    (n, k) of indices into B (the polygons whose edges the line touches: it meets their
+    planes on those edges, and any crossing of their interiors is rounding, as where
+    the line grazes a plane)."""
     free = np.ones(len(X), dtype=bool)
-    for A in B:
+    for i, A in enumerate(B):
         n = unit_normal(A)
         hX, hY = _inner(X - A[0], n), _inner(Y - A[0], n)
         hit = (hX * hY < 0) & (np.minimum(np.abs(hX), np.abs(hY)) > near)
+        if own is not None:
+            hit &= np.all(own != i, axis=1)
         if not hit.any():
             continue
         p = X[hit] + (hX[hit] / (hX[hit] - hY[hit]))[:, None] * (Y[hit] - X[hit])
@@ -113,7 +119,9 @@ def curved_event_lines(S, Qc, nP, dP, R, c, radius, atol=0.0, solid=None, st=Non
     ``radius`` of c is brought in to the disk's edge by bisection. Each piece is cut
     into chords within ``AREA_CURVED_EVENT_RTOL`` of ``radius`` (or ``sqrt(atol)`` of
     it, where less) of the curve (its midpoint's distance from the chord, which falls as
-    the square of the steps); the chords where another blocker crosses the line of
+    the square of the steps), each step whose own midpoint lies farther from its chord
+    (by more than ``AREA_CURVED_CHORD_SPLIT`` of the allowed deviation) halved, up to
+    ``AREA_CURVED_CHORD_HALVINGS`` times; the chords where another blocker crosses the line of
     sight from x to y (within its rounding: the crossing is then inside what is hidden)
     are left out, but for one chord either side of those kept. Edges of one polygon, of
     one convex solid (``solid``, as for :func:`~exactff.area.events.event_lines`: their
@@ -358,20 +366,58 @@ def curved_event_lines(S, Qc, nP, dP, R, c, radius, atol=0.0, solid=None, st=Non
         dev = np.abs(chord[:, 0] * off[:, 1] - chord[:, 1] * off[:, 0]) / length
     dev = np.nan_to_num(np.where(length > 0, dev, np.hypot(off[:, 0], off[:, 1])), nan=0.0)
     steps = np.clip(np.ceil(np.sqrt(dev / dev_allowed)), 1, 4096).astype(int)
-    # every piece's points in one array: piece i has steps[i] + 1 of them, from first[i]
+    # every piece's points in one array: piece i has steps[i] + 1 of them
     first = np.concatenate([[0], np.cumsum(steps + 1)[:-1]])
     piece = np.repeat(np.arange(len(steps)), steps + 1)
     j = np.arange(len(piece)) - first[piece]
     s = lo[piece] + (hi[piece] - lo[piece]) * (j / steps[piece])
     s = np.where(j == steps[piece], hi[piece], np.where(j == 0, lo[piece], s))
-    X = at(k[piece], s[:, None])[0][:, 0]
-    with np.errstate(invalid="ignore", over="ignore"):
-        Y = rotate(X - c, R)[..., :2]
+
+    def plane_points(kk, ss):
+        """x(s) of the triples kk and, in P's frame about c, its two coordinates."""
+        x = at(kk, ss[:, None])[0][:, 0]
+        with np.errstate(invalid="ignore", over="ignore"):
+            return x, rotate(x - c, R)[..., :2]
+
+    # the steps whose own midpoint lies farther from their chord than
+    # AREA_CURVED_CHORD_SPLIT of the allowed deviation halved, up to
+    # AREA_CURVED_CHORD_HALVINGS times (the piece's midpoint says little where its
+    # curvature is uneven: chords were up to 2.03 times the allowed deviation from the
+    # curve); a step's decision rests on its ends alone, so it is the compiled one's
+    Y = plane_points(k[piece], s)[1]
+    active = np.flatnonzero(piece[:-1] == piece[1:])     # each step by its first point
+    for _ in range(tol.AREA_CURVED_CHORD_HALVINGS):
+        if not len(active):
+            break
+        sm = 0.5 * (s[active] + s[active + 1])
+        Ym = plane_points(k[piece[active]], sm)[1]
+        chord, off = Y[active + 1] - Y[active], Ym - Y[active]
+        length = np.hypot(chord[:, 0], chord[:, 1])
+        with np.errstate(divide="ignore", invalid="ignore"):
+            dev = np.abs(chord[:, 0] * off[:, 1] - chord[:, 1] * off[:, 0]) / length
+        dev = np.nan_to_num(np.where(length > 0, dev, np.hypot(off[:, 0], off[:, 1])),
+                            nan=0.0)
+        split = np.flatnonzero(dev > tol.AREA_CURVED_CHORD_SPLIT * dev_allowed)
+        if not len(split):
+            break
+        at_ = active[split] + 1
+        s, piece = np.insert(s, at_, sm[split]), np.insert(piece, at_, piece[active[split]])
+        Y = np.insert(Y, at_, Ym[split], axis=0)
+        left = active[split] + np.arange(len(split))
+        active = np.sort(np.concatenate([left, left + 1]))
+    steps = np.bincount(piece, minlength=len(steps)) - 1
+    first = np.concatenate([[0], np.cumsum(steps + 1)[:-1]])
+    X, Y = plane_points(k[piece], s)
     # the chords where the line of sight from x to y crosses no blocker (and within one
     # chord of such a point, so that the curve goes on across the event where it is
     # hidden): with a blocker between, the images' crossing is not on the hidden
     # region's boundary
-    seen = _unhidden(X, q0[iq[k[piece]]] + s[:, None] * dq[iq[k[piece]]], B, near)
+    # the polygons whose edges each point's line touches: each copy's (an edge two
+    # faces share bounds both)
+    copies = [owner[order[pos[cid[e]] + np.where(count[cid[e]] > 1, j, 0)]]
+              for e in (ia[k[piece]], ib[k[piece]]) for j in (0, 1)]
+    seen = _unhidden(X, q0[iq[k[piece]]] + s[:, None] * dq[iq[k[piece]]], B, near,
+                     np.stack(copies, axis=1))
     for e in (ia[k[piece]], ib[k[piece]]):
         # an edge two faces share whose faces' images lie either side of its own
         n = cross(de[e], X - e0[e])

@@ -9,6 +9,7 @@ import shapely
 from scipy.special import roots_legendre
 
 from .. import _tolerances as tol
+from ..errors import NumericalError
 from ..geometry import cross, receiver_frame
 
 __all__ = ["triangle_rule", "symmetric_triangle_rule", "SYMMETRIC_RULES", "GAUSS_RULE",
@@ -223,6 +224,13 @@ def budget_refined(diff, area, depth, rung, before, atol, total_area):
     ndarray of int
         The indices to refine, increasing.
 
+    Raises
+    ------
+    NumericalError
+        A difference is not finite (NaN or infinite: no order of the triangles, no
+        budget); the compiled levels decline the pair there (``_core/levels.cpp``), so
+        that it comes here.
+
     Examples
     --------
     Four triangles of equal area, their differences summing to 1.0 against a budget of
@@ -232,6 +240,10 @@ def budget_refined(diff, area, depth, rung, before, atol, total_area):
     ...                np.zeros(4, int), 0.0, 1.0, 4.0).tolist()
     [1, 3]
     """
+    bad = np.flatnonzero(~np.isfinite(diff))
+    if len(bad):
+        raise NumericalError(f"the adaptive rules' difference on triangle {int(bad[0])} "
+                             f"is {diff[bad[0]]}: not finite")
     target = 0.5 * atol
     refinable = (rung == 0) | (depth < tol.AREA_MAX_DEPTH)
     stuck = float(np.cumsum(diff[~refinable])[-1]) if (~refinable).any() else 0.0

@@ -9,7 +9,7 @@ from ..scene import Scene
 from .procedural import OFFICE_REFLECTANCE, cloister, office, office_solids, vaulted_hall
 
 __all__ = ["cornell_box", "cornell_box_data", "subdivided_box", "box_polygons",
-           "furnished_box", "office", "office_solids", "OFFICE_REFLECTANCE", "cloister",
+           "furnished_box", "unit_squares_room", "office", "office_solids", "OFFICE_REFLECTANCE", "cloister",
            "building", "geodesic_sphere", "room_with_sphere", "courtyard", "vaulted_hall"]
 
 
@@ -189,6 +189,49 @@ def furnished_box(k, boxes, size=(1.0, 1.0, 1.0), box_k=1):
         groups += [f"box{i}"] * len(b)
     return Scene.from_polygons(polys, groups=groups)
 
+
+def unit_squares_room(size=(3, 4, 5), boxes=(((0.5, 0.5, 0.5), (1.5, 1.5, 1.5)),
+                                            ((1.4, 2.2, 2.8), (2.4, 3.2, 3.8)))):
+    """A closed room of whole-number edge lengths cut into unit squares facing in, with
+    solid box obstacles inside (their six faces facing out, one polygon each). The
+    defaults are the 106-surface box of the area benchmarks (``benchmarks/bench_area.py``,
+    ``tests/test_area_curved.py``): a 3 x 4 x 5 room (94 squares) with two unit cubes
+    floating inside, at (0.5, 0.5, 0.5)-(1.5, 1.5, 1.5) and (1.4, 2.2, 2.8)-(2.4, 3.2, 3.8).
+
+    Parameters
+    ----------
+    size : tuple of 3 int
+        The room's edge lengths along x, y, z; it spans ``[0, size]``.
+    boxes : sequence of (lo, hi)
+        The obstacles' opposite corners.
+
+    Returns
+    -------
+    Scene
+        The room's squares face by face (the order of :func:`box_polygons`), each face's
+        row by row, then each obstacle's faces; no groups.
+
+    Examples
+    --------
+    >>> len(unit_squares_room())
+    106
+    >>> len(unit_squares_room((1, 1, 2), []))
+    10
+    """
+    sizes = np.asarray(size, dtype=float)
+    if sizes.shape != (3,) or not np.all(sizes >= 1) or not np.all(sizes == np.round(sizes)):
+        raise ValueError(f"size must be three whole numbers >= 1, got {size!r}")
+    room = []
+    for F in box_polygons((0, 0, 0), sizes, 1, facing="in"):
+        u, v = F[1] - F[0], F[3] - F[0]
+        nu, nv = int(round(np.linalg.norm(u))), int(round(np.linalg.norm(v)))
+        for a in range(nu):
+            for b in range(nv):
+                room.append(np.array([F[0] + (a + i) / nu * u + (b + j) / nv * v
+                                      for i, j in ((0, 0), (1, 0), (1, 1), (0, 1))]))
+    for lo, hi in boxes:
+        room += box_polygons(lo, hi, 1, facing="out")
+    return Scene.from_polygons(room)
 
 
 def _axis_rect(axis, c, lo, hi, facing):
