@@ -46,6 +46,21 @@ def test_unit_squares_room():
     assert len(box) == 106 and np.allclose(np.linalg.norm(A, axis=1), 1.0)
     centre = np.array([1.5, 2.0, 2.5])
     assert all(float(a @ (centre - P.mean(axis=0))) > 0 for a, P in zip(A[:94], box.polygons))
+    # the squares tile each face: their centres are the face's lattice of half-integers
+    # (a room of other sizes, no boxes), each once
+    size = (1, 2, 3)
+    room = ef.scenes.unit_squares_room(size, [])
+    got = sorted(tuple(np.round(P.mean(axis=0) * 2).astype(int)) for P in room.polygons)
+    want = []
+    for a in range(3):
+        b, c = [k for k in range(3) if k != a]
+        for side in (0, size[a]):
+            for u in range(size[b]):
+                for v in range(size[c]):
+                    x = [0, 0, 0]
+                    x[a], x[b], x[c] = 2 * side, 2 * u + 1, 2 * v + 1
+                    want.append(tuple(x))
+    assert got == sorted(want)
     for bad in ((3, 4), (3, 4, 0.5), (3, 4, 0)):
         with pytest.raises(ValueError, match="size"):
             ef.scenes.unit_squares_room(bad, [])
