@@ -635,8 +635,12 @@ def area_form_factors(scene, rows=None, *, tolerance=1e-9, error=False, executor
     ``F[i, j] = (1 / A_i) int_{P_i} F_occ(x -> j) dA_x``, with ``F_occ`` the exact
     occluded point form factor from ``x`` (normal of ``P_i``) to polygon ``j`` (as
     :func:`exactff.form_factors`; here built in the receiver's plane from the blockers'
-    projections), one-sided. A pair with nothing that can come
-    between (no other polygon reaches into the convex hull of the two, each clipped to
+    projections), one-sided. Coplanar overlapping polygons facing the same way follow
+    the tie rule (the first in input order is in front, docs/explanation/conventions.md):
+    a polygon they cover receives and emits through its uncovered part only, its row
+    still divided by its whole area ``A_i`` (reciprocal with ``scene.areas``; the row
+    sums to its uncovered share in a closed room, 0 when covered whole). A pair with
+    nothing that can come between (no other polygon reaches into the convex hull of the two, each clipped to
     the front of the other) is computed in closed form (the contour integral with
     dilogarithms, :func:`exactff.area.closed_form.unoccluded_pairs`, all of a row's such
     pairs at once), accepted where its rounding estimate is within ``tolerance`` (else
