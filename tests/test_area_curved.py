@@ -272,6 +272,29 @@ def _chords_off_the_curves(B, compiled):
     return samples, worst
 
 
+def test_curved_chord_halvings_stop_at_their_limit_alike(monkeypatch):
+    # every step asked to halve (AREA_CURVED_CHORD_SPLIT tiny): numpy's levels and the
+    # compiled depth-first halvings both stop at AREA_CURVED_CHORD_HALVINGS, each even
+    # step then 2 ** halvings steps (the chords kept about that many times the even
+    # steps': 7.84 times, some hidden), the same to the bit (no test scene reaches the
+    # limit otherwise: planted, numpy's loop one level short, every other test passed)
+    P = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], float)
+    Q = np.array([[-0.5, -0.5, 3], [-0.5, 1.5, 3], [1.5, 1.5, 3], [1.5, -0.5, 3]], float)
+    nP = np.array([0, 0, 1.0])
+    R, c = receiver_frame(nP), P.mean(axis=0)
+    radius = (1 + tol.AREA_HIDDEN_PAD) * float(np.linalg.norm(P - c, axis=1).max())
+    run = lambda compiled: curved_event_lines([Q, *CHORDS_BLOCKERS], Q, nP, 0.0, R, c,  # noqa: E731
+                                              radius, 1e-6, compiled=compiled)
+    monkeypatch.setattr(tol, "AREA_CURVED_CHORD_HALVINGS", 0)
+    even = run(True)
+    monkeypatch.setattr(tol, "AREA_CURVED_CHORD_HALVINGS", 3)
+    monkeypatch.setattr(tol, "AREA_CURVED_CHORD_SPLIT", 1e-300)
+    numpy, compiled = run(False), run(True)
+    assert len(even) > 100
+    assert np.array_equal(numpy, compiled)
+    assert 7 * len(even) < len(compiled) <= 2 ** 3 * len(even)
+
+
 @pytest.mark.parametrize("compiled", [True, False])
 def test_curved_chords_within_their_deviation_of_the_curve(compiled):
     """Every curved event of three blockers between two squares (CHORDS_BLOCKERS),
