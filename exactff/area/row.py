@@ -31,7 +31,9 @@ __all__ = ["AreaStats", "area_row"]
 class AreaStats:
     """The counters of area rows (each 0 where its shortcut is off or did not apply),
     per call: :func:`area_row` adds a row's to the one it is given, and
-    :func:`exactff.area_form_factors` returns their sums as a dict with these keys.
+    :func:`exactff.area_form_factors` returns their sums as a dict with these keys. An
+    emitter the tie rule covers counts once per triangle of its uncovered part (each
+    is the emitter of its own row).
 
     Attributes
     ----------
@@ -202,13 +204,14 @@ def area_row(scene, i, atol, *, rtol=None, shortcuts=True, stats=None):
     # rule) emits from its uncovered part only, as triangles T: F(i, j) is the sum of
     # A_T F(T, j) / A_i, as the receivers' covering counts A_j F(j, i), so that
     # A_i F(i, j) = A_j F(j, i); each part's estimate is within atol, their weights sum
-    # to at most 1
+    # to at most 1 (the parts are held to atol alone: a weighted sum of
+    # max(atol, rtol F_T) may exceed max(atol, rtol F))
     P = np.asarray(scene.polygons[i], dtype=float)
     parts = uncovered(P, [np.asarray(scene.polygons[k], dtype=float) for k in covers[i]])
     weights = triangle_areas(parts) / float(np.linalg.norm(area_vector(P)))
     f, e = np.zeros(len(scene)), np.zeros(len(scene))
     for T, w in zip(parts, weights):
-        fT, eT = _part_row(scene, i, T, atol, rtol, shortcuts, stats)
+        fT, eT = _part_row(scene, i, T, atol, None, shortcuts, stats)
         f += w * fT
         e += w * eT
     return f, e

@@ -387,7 +387,10 @@ def write_energyplus_view_factors(path, F, *, names, zone, fmt=FULL_PRECISION,
     EnergyPlus's zone enclosure holds every heat-transfer surface and subsurface of
     the zone: the list must name them all. EnergyPlus checks the factors' closure and
     reciprocity and corrects factors that miss them; an exact matrix of a closed zone
-    passes as it is.
+    passes as it is. A window given as its own polygon lying on its wall (the tie rule
+    of :func:`exactff.area_form_factors`, the window first) leaves the wall's row per
+    unit of its whole area, summing to its uncovered share; EnergyPlus takes the wall's
+    net area (without its subsurfaces): divide that row by its uncovered share first.
 
     Examples
     --------
