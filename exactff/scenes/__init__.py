@@ -9,8 +9,9 @@ from ..scene import Scene
 from .procedural import OFFICE_REFLECTANCE, cloister, office, office_solids, vaulted_hall
 
 __all__ = ["cornell_box", "cornell_box_data", "subdivided_box", "box_polygons",
-           "furnished_box", "unit_squares_room", "office", "office_solids", "OFFICE_REFLECTANCE", "cloister",
-           "building", "geodesic_sphere", "room_with_sphere", "courtyard", "vaulted_hall"]
+           "furnished_box", "unit_squares_room", "office", "office_solids",
+           "OFFICE_REFLECTANCE", "cloister", "building", "geodesic_sphere",
+           "room_with_sphere", "courtyard", "vaulted_hall"]
 
 
 def cornell_box_data():
