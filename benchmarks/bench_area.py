@@ -35,8 +35,9 @@ Usage: python benchmarks/bench_area.py [--cube-k 8]
    best of ``--repeat``, against the goal of 1.7x.
 7. ``--threads`` alone (issue 49's thread goal, at tolerance 1e-6): gunter1's full matrix
    (and the 106-surface box's with ``--threads-box``) on 1 and 2 threads
-   (``executor=ThreadPoolExecutor``), alternating, ``--repeat`` rounds: each run's wall
-   and process time (all threads), the best walls' ratio against the goal of 1.7x, and the
+   (``executor=ThreadPoolExecutor``) and in 2 processes (``jobs=2``), alternating,
+   ``--repeat`` rounds: each run's wall and process time (all threads, and the
+   processes'), the best walls' ratio against the goal of 1.7x, and the
    load average before and after (the machine is shared: a process time near its wall
    time on 2 threads means one core was all it got); then one serial run with every
    compiled call of the area code timed (thread time): the share of the matrix's time
@@ -62,6 +63,14 @@ Usage: python benchmarks/bench_area.py [--cube-k 8]
    skipped, as before they were traced): process time, points, the curves traced and the
    pairs skipped, and whether the compiled run's values and estimates are the numpy
    run's to the bit.
+11. ``--gunter2-full`` alone (issue 49, gunter2 completes, every value within its
+   estimate): gunter2's full matrix at tolerance 1e-6 with ``error=True``, on each of
+   ``--gunter2-jobs`` (default ``1,2``; 1: row by row, each row's process time printed,
+   ``--gunter2-cache FILE.npz`` keeping the rows done so that a stopped run resumes;
+   ``jobs=2``: processes, wall time and their CPU time): rows done, time, the slowest
+   rows, the smallest value, values below ``-E``, rows above ``1 + sum E``, the worst
+   row sum and reciprocity against the estimates; ``--gunter2-first K`` the first K
+   rows only (the pairs among them for reciprocity).
 5. ``--pair-path`` alone: the occluded pairs' compiled path against the numpy and GEOS
    reference it replaces, in one run at tolerance 1e-6 (test4, facet, gunter1; process
    time): the events compiled (``exactff/_core/pair.cpp``) or by numpy
@@ -179,6 +188,14 @@ def main():
     ap.add_argument("--gunter2-rows", default="",
                     help="--goals: rows of gunter2 timed, comma-separated (none: the whole "
                          "matrix)")
+    ap.add_argument("--gunter2-full", action="store_true",
+                    help="only gunter2's full matrix at 1e-6: time, values against estimates")
+    ap.add_argument("--gunter2-jobs", default="1,2",
+                    help="--gunter2-full: the jobs to run, comma-separated (1: row by row)")
+    ap.add_argument("--gunter2-cache", default="",
+                    help="--gunter2-full: an .npz keeping the rows done on 1 job (resumed)")
+    ap.add_argument("--gunter2-first", type=int, default=0,
+                    help="--gunter2-full: only the first rows (0: all 398)")
     ap.add_argument("--umbras", default="", help="only gunter2's rows (comma-separated) "
                     "without and with the umbras")
     ap.add_argument("--umbra-pairs", default="", help="with --umbras: pairs i:j timed alone")
@@ -199,6 +216,8 @@ def main():
         return goals(args)
     if args.threads:
         return threads(args)
+    if args.gunter2_full:
+        return gunter2_full(args)
     if args.umbras or args.umbra_pairs:
         return umbra_rows(args)
     if args.points:
@@ -378,6 +397,83 @@ def umbra_rows(args):
             print(f"| ({i}, {j}) | {t0:.2f} | {t1:.2f} | {p0:,} | {p1:,} | {u1} "
                   f"| {v1:.3e} ({e1:.1e}) | {abs(v1 - v0) / (e0 + e1):.2f} |")
     tolerances.AREA_UMBRA_MIN_LINES = on
+
+
+def matrix_against_estimates(scene, F, E, rows):
+    """The invariants of the area rows ``F`` (of the polygons ``rows``) against their
+    estimates ``E``: (the smallest value, values below ``-E``, rows summing above ``1 +
+    sum E``, the worst ``|row sum - 1| / sum E`` of the rows, and over the pairs of two
+    of the rows the worst reciprocity ``|A_i F_ij - A_j F_ji| / (A_i E_ij + A_j E_ji)``
+    and how many pairs exceed 1)."""
+    A = scene.areas
+    s, se = F.sum(axis=1), E.sum(axis=1)
+    AF, AE = (A[rows, None] * F)[:, rows], (A[rows, None] * E)[:, rows]
+    gap = np.abs(AF - AF.T)
+    recip = np.where(gap > 0, gap / np.maximum(AE + AE.T, 1e-300), 0.0)
+    return (float(F.min()), int((F < -E).sum()), int((s > 1 + se).sum()),
+            float(np.max(np.abs(s - 1) / np.maximum(se, 1e-300))), float(recip.max()),
+            int((recip > 1).sum()))
+
+
+def gunter2_full(args):
+    """gunter2's full matrix at tolerance 1e-6 with its estimates, on 1 job (row by row,
+    each row's process time; ``--gunter2-cache`` keeps the rows done) and on 2 processes
+    (``jobs=2``, wall time and the processes' CPU time): whether it completes, the time,
+    and every value against its estimate (none below ``-E``, rows within ``1 + sum E``,
+    reciprocity within the two estimates; with ``--gunter2-first K``, over the first K
+    rows and the pairs among them)."""
+    scene = ef.read_vs3(os.path.join(DATA, "gunter2.vs3"))
+    n = len(scene) if not args.gunter2_first else args.gunter2_first
+    rows = np.arange(n)
+    print(f"gunter2 ({len(scene)} polygons), rows 0-{n - 1} at tolerance 1e-6, error=True:")
+    print()
+    print("| jobs | rows done | process s (all processes) | wall s | slowest rows (s) | points "
+          "| min F | F below -E | rows above 1 + sum E | worst abs(sum - 1) / sum E "
+          "| worst reciprocity / estimates (pairs beyond) | max E |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|")
+    results = {}
+    for jobs in (int(j) for j in args.gunter2_jobs.split(",")):
+        st = {}
+        if jobs == 1:
+            F, E = np.zeros((n, len(scene))), np.zeros((n, len(scene)))
+            T, W, P = np.full(n, np.nan), np.full(n, np.nan), np.zeros(n, dtype=np.int64)
+            cache = args.gunter2_cache
+            if cache and os.path.exists(cache):
+                with np.load(cache) as z:
+                    k = min(len(z["T"]), n)
+                    F[:k], E[:k], T[:k], W[:k], P[:k] = (z["F"][:k], z["E"][:k], z["T"][:k],
+                                                       z["W"][:k], z["P"][:k])
+            for r in rows[np.isnan(T)]:
+                st = {}
+                t0, w0 = time.process_time(), time.perf_counter()
+                f, e = ef.area_form_factors(scene, rows=[r], tolerance=1e-6, error=True,
+                                            stats=st)
+                T[r], W[r] = time.process_time() - t0, time.perf_counter() - w0
+                F[r], E[r], P[r] = f[0], e[0], st["point_values"]
+                print(f"  row {r}: {T[r]:.2f} s, {P[r]:,} points, sum - 1 "
+                      f"{F[r].sum() - 1:.1e} ({E[r].sum():.1e})", flush=True)
+                if cache:
+                    np.savez(cache, F=F, E=E, T=T, W=W, P=P)
+            cpu, wall, points = float(T.sum()), float(W.sum()), int(P.sum())
+            slow = ", ".join(f"{r}: {T[r]:.0f}" for r in np.argsort(-T)[:5])
+        else:
+            c0, w0 = os.times(), time.perf_counter()
+            F, E = ef.area_form_factors(scene, rows=rows, tolerance=1e-6, error=True,
+                                        jobs=jobs, stats=st)
+            c1 = os.times()
+            wall = time.perf_counter() - w0
+            cpu = sum(c1[:4]) - sum(c0[:4])
+            points, slow = st["point_values"], "-"
+        results[jobs] = F, E
+        low, below, above, rowsum, recip, beyond = matrix_against_estimates(scene, F, E, rows)
+        print(f"| {jobs} | {n} | {cpu:.1f} | {wall:.1f} | {slow} | {points:,} | {low:.1e} "
+              f"| {below} | {above} | {rowsum:.2f} | {recip:.2f} ({beyond}) | {E.max():.1e} |",
+              flush=True)
+    if len(results) > 1:
+        (F0, E0), *rest = results.values()
+        for F1, E1 in rest:
+            print(f"jobs against 1 job: largest difference {np.abs(F1 - F0).max():.1e}, "
+                  f"bit for bit {bool(np.array_equal(F0, F1) and np.array_equal(E0, E1))}")
 
 
 #: View3D 4.0's times of issue 49's table (s, gcc -O2, 2026-12-05) and the goals' ratios.
@@ -603,17 +699,22 @@ def threads(args):
     print("|---|---|---|---|---|---|")
     for name, scene in scenes:
         ef.area_form_factors(scene, rows=[0], tolerance=1e-6)        # imports, prepared
-        runs = {1: [], 2: []}
+        runs = {1: [], 2: [], "jobs=2": []}
         for _ in range(args.repeat):
-            for k in (1, 2):
-                c0, t0 = time.process_time(), time.perf_counter()
-                with ThreadPoolExecutor(k) as pool:
-                    ef.area_form_factors(scene, tolerance=1e-6, executor=pool)
-                runs[k].append((time.perf_counter() - t0, time.process_time() - c0))
+            for k in runs:
+                # process time of this process and of its finished children (jobs=2)
+                c0, t0 = sum(os.times()[:4]), time.perf_counter()
+                if k == "jobs=2":
+                    ef.area_form_factors(scene, tolerance=1e-6, jobs=2)
+                else:
+                    with ThreadPoolExecutor(k) as pool:
+                        ef.area_form_factors(scene, tolerance=1e-6, executor=pool)
+                runs[k].append((time.perf_counter() - t0, sum(os.times()[:4]) - c0))
         best = {k: min(w for w, _ in runs[k]) for k in runs}
-        for k in (1, 2):
+        for k in runs:
             each = ", ".join(f"{w:.3f} / {c:.3f}" for w, c in runs[k])
-            print(f"| {name} | {k} | {each} | {best[k]:.3f} | {best[1] / best[k]:.2f} "
+            what = f"{k} (processes)" if k == "jobs=2" else k
+            print(f"| {name} | {what} | {each} | {best[k]:.3f} | {best[1] / best[k]:.2f} "
                   f"| {'-' if k == 1 else 1.7} |", flush=True)
     print()
     print(f"load average after: {os.getloadavg()[0]:.2f}")
