@@ -26,28 +26,38 @@ DATA = os.path.join(os.path.dirname(__file__), "data", "view3d")
 GUNTER2 = "/work/shared/scenes/view3d/gunter2.vs3"
 
 
-def _events_of_every_pair(monkeypatch, scene, rows, shortcuts=True):
-    """For every occluded pair of the rows, the events both ways (the pair's integral
-    itself skipped: its unoccluded value stands in): a list of (numpy, compiled, their
-    counters, the disk's radius)."""
+def _every_occluded_pair(monkeypatch, scene, rows, shortcuts, visit):
+    """``visit(S, Qc, nP, dP, R, c, radius, atol, solid)`` on every occluded pair of the
+    rows at 1e-6, with the arguments the pair's integral forms for its events (the
+    integral itself skipped: the pair's unoccluded value stands in): the list of what
+    it returned."""
     seen = []
 
-    def lines_only(S, Pc, Qc, nP, atol, area_P, whole, shortcuts, st, solid=None, inner=None):
-        # the event lines' arguments as the pair's integral forms them
+    def visit_only(S, Pc, Qc, nP, atol, area_P, whole, shortcuts, st, solid=None,
+                   inner=None):
         R, c = receiver_frame(nP), Pc.mean(axis=0)
         dP = float(nP @ Pc[0])
         radius = (1.0 + tol.AREA_HIDDEN_PAD) * float(np.linalg.norm(Pc - c, axis=1).max())
-        a, b = AreaStats(), AreaStats()
-        ref = event_lines(S, nP, dP, R, c, radius, Qc, shortcuts, a, solid, compiled=False)
-        got = event_lines(S, nP, dP, R, c, radius, Qc, shortcuts, b, solid)
-        seen.append((ref, got, (a.culled_events, a.solid_events),
-                     (b.culled_events, b.solid_events)))
+        seen.append(visit(S, Qc, nP, dP, R, c, radius, atol, solid))
         return whole[0], whole[1], 0
 
-    monkeypatch.setattr(adaptive, "_hidden_integral", lines_only)
+    monkeypatch.setattr(adaptive, "_hidden_integral", visit_only)
     for r in rows:
         area_row(scene, r, 1e-6, shortcuts=shortcuts)
     return seen
+
+
+def _events_of_every_pair(monkeypatch, scene, rows, shortcuts=True):
+    """For every occluded pair of the rows, the events both ways: a list of (numpy,
+    compiled, their counters (culled_events, solid_events) each)."""
+
+    def both(S, Qc, nP, dP, R, c, radius, atol, solid):
+        a, b = AreaStats(), AreaStats()
+        ref = event_lines(S, nP, dP, R, c, radius, Qc, shortcuts, a, solid, compiled=False)
+        got = event_lines(S, nP, dP, R, c, radius, Qc, shortcuts, b, solid)
+        return ref, got, (a.culled_events, a.solid_events), (b.culled_events, b.solid_events)
+
+    return _every_occluded_pair(monkeypatch, scene, rows, shortcuts, both)
 
 
 @pytest.mark.parametrize("name, rows, shortcuts", [
@@ -71,29 +81,19 @@ def test_compiled_events_are_the_reference_to_the_bit(monkeypatch, name, rows, s
 
 
 def _curves_of_every_pair(monkeypatch, scene, rows, shortcuts=True):
-    """For every occluded pair of the rows, the curved events both ways (the pair's
-    integral itself skipped: its unoccluded value stands in), with the arguments the
-    pair's integral gives them: a list of (numpy, compiled, their counters
-    (curved_events, curved_skipped), the disk's radius)."""
-    seen = []
+    """For every occluded pair of the rows, the curved events both ways: a list of
+    (numpy, compiled, their counters (curved_events, curved_skipped) each, the disk's
+    radius)."""
 
-    def curves_only(S, Pc, Qc, nP, atol, area_P, whole, shortcuts, st, solid=None,
-                    inner=None):
-        R, c = receiver_frame(nP), Pc.mean(axis=0)
-        dP = float(nP @ Pc[0])
-        radius = (1.0 + tol.AREA_HIDDEN_PAD) * float(np.linalg.norm(Pc - c, axis=1).max())
+    def both(S, Qc, nP, dP, R, c, radius, atol, solid):
         a, b = AreaStats(), AreaStats()
         sol = solid if shortcuts else None
         ref = curved_event_lines(S, Qc, nP, dP, R, c, radius, atol, sol, a, compiled=False)
         got = curved_event_lines(S, Qc, nP, dP, R, c, radius, atol, sol, b)
-        seen.append((ref, got, (a.curved_events, a.curved_skipped),
-                     (b.curved_events, b.curved_skipped), radius))
-        return whole[0], whole[1], 0
+        return (ref, got, (a.curved_events, a.curved_skipped),
+                (b.curved_events, b.curved_skipped), radius)
 
-    monkeypatch.setattr(adaptive, "_hidden_integral", curves_only)
-    for r in rows:
-        area_row(scene, r, 1e-6, shortcuts=shortcuts)
-    return seen
+    return _every_occluded_pair(monkeypatch, scene, rows, shortcuts, both)
 
 
 @pytest.mark.parametrize("name, rows, shortcuts, max_triples, skips", [

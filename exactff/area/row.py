@@ -199,7 +199,7 @@ def area_row(scene, i, atol, *, rtol=None, shortcuts=True, stats=None):
     """
     covers = prepared(scene).get("area_tie_covers", tie_covers)
     if i not in covers:
-        return _part_row(scene, i, None, atol, rtol, shortcuts, stats)
+        return _part_row(scene, i, None, covers, atol, rtol, shortcuts, stats)
     # an emitter that coplanar polygons earlier in input order partly cover (the tie
     # rule) emits from its uncovered part only, as triangles T: F(i, j) is the sum of
     # A_T F(T, j) / A_i, as the receivers' covering counts A_j F(j, i), so that
@@ -211,15 +211,16 @@ def area_row(scene, i, atol, *, rtol=None, shortcuts=True, stats=None):
     weights = triangle_areas(parts) / float(np.linalg.norm(area_vector(P)))
     f, e = np.zeros(len(scene)), np.zeros(len(scene))
     for T, w in zip(parts, weights):
-        fT, eT = _part_row(scene, i, T, atol, None, shortcuts, stats)
+        fT, eT = _part_row(scene, i, T, covers, atol, None, shortcuts, stats)
         f += w * fT
         e += w * eT
     return f, e
 
 
-def _part_row(scene, i, part, atol, rtol, shortcuts, stats):
+def _part_row(scene, i, part, covers, atol, rtol, shortcuts, stats):
     """Row i of :func:`area_row` from emitter ``part`` (a part of polygon i in its
-    plane; None: the whole polygon), its values per unit area of the part."""
+    plane; None: the whole polygon), its values per unit area of the part; ``covers``
+    the scene's :func:`~exactff.area.culling.tie_covers`."""
     st = AreaStats()
     polys = [np.asarray(p, dtype=float) for p in scene.polygons]
     if part is not None:
@@ -237,7 +238,6 @@ def _part_row(scene, i, part, atol, rtol, shortcuts, stats):
     # a receiver that coplanar polygons earlier in input order partly cover (the tie
     # rule) receives only its uncovered part, as triangles: receivers n, n + 1, ... of
     # the row, each adding to its polygon's value (owner)
-    covers = prepared(scene).get("area_tie_covers", tie_covers)
     owner = list(range(n))
     receivers = list(polys)
     if covers and any(j in covers for j, _, _ in pairs):
