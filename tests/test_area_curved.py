@@ -64,6 +64,10 @@ def test_unit_squares_room():
     for bad in ((3, 4), (3, 4, 0.5), (3, 4, 0)):
         with pytest.raises(ValueError, match="size"):
             ef.scenes.unit_squares_room(bad, [])
+    # an obstacle reaching through a wall, or with a NaN corner, is named
+    for bad in (((2, 2, 2), (4, 3, 3)), ((-1, 1, 1), (0.5, 2, 2)), ((np.nan, 1, 1), (2, 2, 2))):
+        with pytest.raises(ValueError, match=r"boxes\[0\]"):
+            ef.scenes.unit_squares_room((3, 4, 5), [bad])
 
 
 @pytest.fixture(scope="module")

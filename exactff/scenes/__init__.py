@@ -204,7 +204,8 @@ def unit_squares_room(size=(3, 4, 5), boxes=(((0.5, 0.5, 0.5), (1.5, 1.5, 1.5)),
     size : tuple of 3 int
         The room's edge lengths along x, y, z; it spans ``[0, size]``.
     boxes : sequence of (lo, hi)
-        The obstacles' opposite corners.
+        The obstacles' opposite corners, inside the room (``lo < hi`` componentwise);
+        else ValueError.
 
     Returns
     -------
@@ -230,7 +231,11 @@ def unit_squares_room(size=(3, 4, 5), boxes=(((0.5, 0.5, 0.5), (1.5, 1.5, 1.5)),
             for b in range(nv):
                 room.append(np.array([F[0] + (a + i) / nu * u + (b + j) / nv * v
                                       for i, j in ((0, 0), (1, 0), (1, 1), (0, 1))]))
-    for lo, hi in boxes:
+    for k, (lo, hi) in enumerate(boxes):
+        lo_k, hi_k = np.asarray(lo, dtype=float), np.asarray(hi, dtype=float)
+        if not (np.all(lo_k >= 0) and np.all(hi_k <= sizes)):
+            raise ValueError(f"boxes[{k}] must lie inside the room [0, {size!r}], got "
+                             f"lo={lo!r}, hi={hi!r}")
         room += box_polygons(lo, hi, 1, facing="out")
     return Scene.from_polygons(room)
 
