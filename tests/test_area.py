@@ -1042,13 +1042,21 @@ def _shortcut_scene(name):
         return scene, [5], 1e-7, ("hull_unoccluded_pairs", "hull_culled_blockers",
                                   "shaft_culled_blockers", "shaft_unoccluded_pairs",
                                   "solid_events")
+    if name == "window":
+        # the wall a window covers (the tie rule), a closed box floating in front of it:
+        # the wall emits from its uncovered triangles, each through the shortcuts
+        scene = _room_with_a_window(True, block=True)[0]
+        return scene, [3], 1e-7, ("hull_unoccluded_pairs", "hull_culled_blockers",
+                                  "shaft_culled_blockers", "shaft_unoccluded_pairs",
+                                  "solid_events", "back_faces")
     # far squares at a tolerance the closed form's rounding misses (its estimate there
     # is 3e-12): the far rule takes them (off: mpmath)
     return _far_squares(), [0, 1], 1e-13, ("far_pairs", "hull_unoccluded_pairs", "hull_culled_blockers")
 
 
 @pytest.mark.parametrize("name", ["reference0", "reference1", "cube", "room", "box", "far",
-                                  "facet", "floating", "straddling", "hanging", "sliced"])
+                                  "facet", "floating", "straddling", "hanging", "sliced",
+                                  "window"])
 def test_area_shortcuts_are_neutral_and_counted(name):
     # with shortcuts=False (every other polygon a blocker of every pair, the contour
     # integral for far pairs, every blocker-blocker event cut along) the values agree
