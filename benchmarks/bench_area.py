@@ -28,7 +28,7 @@ Usage: python benchmarks/bench_area.py [--cube-k 8]
    full matrix of gunter1, of the 106-surface box
    (:func:`exactff.scenes.unit_squares_room`: a 3 x 4 x 5 room of unit squares with two
    unit cubes inside) and of gunter2
-   (``/work/shared/scenes/view3d/gunter2.vs3``; ``--gunter2-rows 0,19,...``: only those
+   (``tests/data/view3d/gunter2.vs3``; ``--gunter2-rows 0,19,...``: only those
    rows, each timed, the matrix's time extrapolated from their mean and said so), against
    View3D 4.0's times of issue 49 (0.009, 0.044 and 0.52 s) with the goals (30x, 20x,
    20x); then gunter1's wall time on 1 and 2 threads (``executor=ThreadPoolExecutor``),
@@ -344,7 +344,7 @@ def umbra_rows(args):
     from exactff import _tolerances as tolerances
     from exactff.area import AreaStats, area_row
     from exactff.area import adaptive
-    scene = ef.read_vs3("/work/shared/scenes/view3d/gunter2.vs3")
+    scene = ef.read_vs3(os.path.join(DATA, "gunter2.vs3"))
     on = tolerances.AREA_UMBRA_MIN_LINES
 
     def run(i, umbra):
@@ -579,7 +579,7 @@ def goals(args):
     print("|---|---|---|---|---|---|---|---|---|---|")
     g1 = ef.read_vs3(os.path.join(DATA, "gunter1.vs3"))
     scenes = {"gunter1": g1, "106-surface box": unit_squares_room(),
-              "gunter2": ef.read_vs3("/work/shared/scenes/view3d/gunter2.vs3")}
+              "gunter2": ef.read_vs3(os.path.join(DATA, "gunter2.vs3"))}
     for name, v3d, goal in GOALS:
         scene = scenes[name]
         n = len(scene)

@@ -23,7 +23,7 @@ from exactff.area.rules import budget_refined
 from exactff.geometry import plane_frame, receiver_frame
 
 DATA = os.path.join(os.path.dirname(__file__), "data", "view3d")
-GUNTER2 = "/work/shared/scenes/view3d/gunter2.vs3"
+GUNTER2 = os.path.join(DATA, "gunter2.vs3")
 
 
 def _every_occluded_pair(monkeypatch, scene, rows, shortcuts, visit):
