@@ -796,6 +796,34 @@ def test_fragments_in_cells_proven_covered_are_hidden_and_only_they():
     assert np.all(F[len(wall):][far] == 0)
 
 
+def test_fragments_behind_the_tangent_plane_and_back_faces():
+    # a point on a floor (z = 0, facing up): tiles below it (skipped whole, clearly behind
+    # the tangent plane: Core::behind_horizon), tiles just below it within rounding of
+    # the plane, a ceiling seen from behind (it receives nothing, but hides: its pieces'
+    # values are computed only where their shadows are left out, Core::piece_worth), a
+    # tile behind that ceiling (hidden) and a tile beside it (seen); values bit for bit
+    # those of the row without the shortcuts (which skips nothing), bounds at most theirs
+    edges = np.linspace(-2, 2, 9)
+    below = [rect_xy(x0, x1, y0, y1, z, facing_down=False) for z in (-1.0, -2.0)
+             for x0, x1 in zip(edges[:-1], edges[1:]) for y0, y1 in zip(edges[:-1], edges[1:])]
+    grazing = [rect_xy(3.0, 4.0, -1.0, 1.0, -1e-17, facing_down=False),
+               rect_xy(-4.0, -3.0, -1.0, 1.0, -1e-300, facing_down=False)]
+    ceiling = rect_xy(-0.5, 0.5, -0.5, 0.5, 1.0, facing_down=False)   # its back seen
+    hidden = rect_xy(-0.2, 0.2, -0.2, 0.2, 2.0)
+    seen = rect_xy(1.0, 1.5, -0.2, 0.2, 1.0)
+    scene = ef.Scene.from_polygons(below + grazing + [ceiling, hidden, seen])
+    p, n = np.array([0.01, 0.02, 0.0]), np.array([0, 0, 1.0])
+    st = assert_engines_agree(scene, p, n)
+    assert st["fragments_behind"] >= len(below) // 2, st
+    F, E = COMPILED.point_form_factors(scene, p, n, error=True)
+    F0, E0 = ef.Exact(tolerance=None, engine="compiled", shortcuts=False).point_form_factors(
+        scene, p, n, error=True)
+    assert np.array_equal(F, F0) and np.all(E <= E0)
+    c, h, v = len(below) + 2, len(below) + 3, len(below) + 4
+    assert np.all(F[:len(below)] == 0) and F[c] == 0 and F[h] == 0 and F[v] > 0
+    assert F[v] == pytest.approx(unoccluded_form_factor(scene, p, n, v), rel=1e-12)
+
+
 def test_sides_a_mesh_shares_are_one_node():
     # a wall of triangles (two a square, a window of four squares left out) over a floor
     # of tiles: the second triangle at each shared edge finds that edge's plane on the

@@ -67,6 +67,7 @@ py::tuple row(const exactff::Core& core, Array<double> point, Array<double> norm
     d["cover_cells"] = st.cover_cells;
     d["cover_visits"] = st.cover_visits;
     d["fragments_covered"] = st.fragments_covered;
+    d["fragments_behind"] = st.fragments_behind;
     d["subtrees_covered"] = st.subtrees_covered;
     d["covered"] = st.covered;
     d["leaks"] = static_cast<int64_t>(st.leaks.size());

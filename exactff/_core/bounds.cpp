@@ -194,6 +194,31 @@ void Core::refine(const Piece& q, int64_t f, const double* pp, const std::vector
     v.resize(m);
     err.resize(m);
     auto len = [](const Quad* x) { return q_sqrt(x[0] * x[0] + x[1] * x[1] + x[2] * x[2]); };
+    // the plane of each of the piece's edges (edge k: from vertex k to k + 1), its
+    // condition and its normal's length, each computed once where first asked for
+    // (every computed vertex asks for its two edges')
+    struct EdgePlane {
+        Quad m[3], cond, length;
+        bool have = false, have_length = false;
+    };
+    thread_local std::vector<EdgePlane> planes;
+    planes.assign(m, EdgePlane{});
+    auto plane_of = [&](size_t k) -> EdgePlane& {
+        EdgePlane& P = planes[k];
+        if (!P.have) {
+            quad_plane(q[k].edge, f, pp, xp, P.m, &P.cond);
+            P.have = true;
+        }
+        return P;
+    };
+    auto length_of = [&](size_t k) -> Quad {
+        EdgePlane& P = plane_of(k);
+        if (!P.have_length) {
+            P.length = len(P.m);
+            P.have_length = true;
+        }
+        return P.length;
+    };
     for (size_t i = 0; i < m; ++i) {
         const Vertex& u = q[i];
         if (u.id >= 0) {
@@ -205,16 +230,18 @@ void Core::refine(const Piece& q, int64_t f, const double* pp, const std::vector
         err[i] = std::max(u.err, u.err_line);
         const int64_t e1 = q[(i + m - 1) % m].edge, e2 = u.edge;
         if (e1 == e2) continue;
-        Quad d[3];
+        Quad d[3], dl;
         R e;
         const int64_t cut = -1 - u.on_plane;
+        const size_t k1 = (i + m - 1) % m, k2 = i;  // the edges into and out of it
         if (u.on_edge >= 0 && u.on_plane >= 0 &&
             ((e1 == u.on_edge && e2 == cut) || (e2 == u.on_edge && e1 == cut))) {
             // the crossing of input edge a -> b with the exact plane
             const int64_t ia = u.on_edge;
             const int64_t ib = start_[f] + (ia - start_[f] + 1) % count_[f];
-            Quad mp[3], c;
-            quad_plane(cut, f, pp, xp, mp, &c);
+            const EdgePlane& P = plane_of(e2 == cut ? k2 : k1);
+            const Quad* mp = P.m;
+            const Quad c = P.cond;
             Quad A[3], Bm[3];
             for (int k = 0; k < 3; ++k) {
                 A[k] = static_cast<Quad>(V_[3 * ia + k]) - pp[k];
@@ -224,7 +251,7 @@ void Core::refine(const Piece& q, int64_t f, const double* pp, const std::vector
             if (!(den != 0) || !(c < static_cast<Quad>(INFINITY))) continue;
             const Quad sp = -(mp[0] * A[0] + mp[1] * A[1] + mp[2] * A[2]) / den;
             for (int k = 0; k < 3; ++k) d[k] = A[k] + sp * Bm[k];
-            const Quad dl = len(d);
+            dl = len(d);
             if (!(dl > 0)) continue;
             // off the edge's plane: the sum's rounding; off the exact plane, also
             // s's (its two dot products, each within 4 roundoffs of |m| |x|) and the
@@ -232,13 +259,16 @@ void Core::refine(const Piece& q, int64_t f, const double* pp, const std::vector
             const Quad W = len(A) + q_abs(sp) * len(Bm);
             e = static_cast<R>(QUAD_EPS * (16 * W / dl + 8 * c + 4));
         } else {
-            Quad m1[3], m2[3], c1, c2;
-            quad_plane(e1, f, pp, xp, m1, &c1);
-            quad_plane(e2, f, pp, xp, m2, &c2);
+            const EdgePlane& P1 = plane_of(k1);
+            const EdgePlane& P2 = plane_of(k2);
+            const Quad* m1 = P1.m;
+            const Quad* m2 = P2.m;
+            const Quad c1 = P1.cond, c2 = P2.cond;
             d[0] = m1[1] * m2[2] - m1[2] * m2[1];
             d[1] = m1[2] * m2[0] - m1[0] * m2[2];
             d[2] = m1[0] * m2[1] - m1[1] * m2[0];
-            const Quad dl = len(d), l1 = len(m1), l2 = len(m2);
+            dl = len(d);
+            const Quad l1 = length_of(k1), l2 = length_of(k2);
             if (!(dl > 0) || !(l1 > 0) || !(l2 > 0)) continue;
             e = static_cast<R>(8 * QUAD_EPS * (c1 + c2 + 1) * (l1 * l2 / dl));
         }
@@ -246,7 +276,8 @@ void Core::refine(const Piece& q, int64_t f, const double* pp, const std::vector
         if (!(e < err[i])) continue;
         if (d[0] * v[i][0] + d[1] * v[i][1] + d[2] * v[i][2] < 0)
             for (int k = 0; k < 3; ++k) d[k] = -d[k];
-        const Quad s = static_cast<Quad>(u.length) / len(d);
+        // (|d| as above: a flipped sign leaves its squares as they were)
+        const Quad s = static_cast<Quad>(u.length) / dl;
         const V3 dr{static_cast<R>(d[0] * s), static_cast<R>(d[1] * s),
                     static_cast<R>(d[2] * s)};
         // the line must lie within the long double direction's bound of it (with the

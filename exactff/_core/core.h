@@ -229,6 +229,8 @@ struct RowStats {
     std::vector<int32_t> cover_tried;
     int64_t cover_proofs = 0, cover_cells = 0, cover_visits = 0, fragments_covered = 0,
             subtrees_covered = 0;
+    int64_t fragments_behind = 0;  // fragments skipped clearly behind the tangent plane
+                                   // (Core::behind_horizon)
     int64_t collapsed = 0;      // shadow-tree nodes whose two sides were both covered
     int64_t repeated_sides = 0;  // shadows' sides along a plane on their leaf's path
                                  // (Core::drop_repeated_sides)
@@ -279,6 +281,12 @@ struct RowStats {
 struct RowResult {
     std::vector<double> F, E, B, G;
     RowStats stats;
+};
+
+// a visible piece's value plus its bound (Core::piece_worth), once known
+struct PieceWorth {
+    R value;
+    bool known;
 };
 
 // a corner of a piece in the filter's work list: a vertex (an index into the
@@ -385,9 +393,11 @@ class Core {
     bool crossing_on(const ExactPlane& P, const ExactPlane& Q, const double* p, int64_t ia,
                      int64_t ib) const;
     static V3 input_plane(const double* p, const double* a, const double* b);
+    // (`worth`: the piece's value and bound, computed where a shadow left out needs
+    // them if not known, Core::piece_worth; `n` the receiver normal, for that)
     bool insert_shadow(const Piece& q, int64_t f, const double* pp, int plane, bool positive,
                        std::vector<Plane>& sv, std::vector<ExactPlane>& xp, RowStats& st,
-                       R piece_bound) const;
+                       PieceWorth& worth, const V3& n) const;
     static void drop_repeated_sides(int plane, bool positive, const std::vector<Plane>& sv,
                                     const std::vector<ExactPlane>& xp, std::vector<Plane>& chain,
                                     std::vector<size_t>& chain_edge, RowStats& st);
@@ -429,6 +439,11 @@ class Core {
                     Quad m[3], Quad* cond) const;
     void refine(const Piece& q, int64_t f, const double* pp, const std::vector<ExactPlane>& xp,
                 std::vector<std::array<Quad, 3>>& v, std::vector<R>& err) const;
+    bool behind_horizon(int64_t f, const V3& p, const Plane& H) const;
+    void piece_value(const Piece& q, int64_t f, const V3& n, const RowStats& st, R* val,
+                     R* bnd) const;
+    R piece_worth(const Piece& q, int64_t f, const V3& n, const RowStats& st,
+                  PieceWorth& w) const;
     // integrate.cpp
     void integrate(const Piece& q, int64_t f, const V3& n, R* value, R* bound,
                    const RowStats* eq3 = nullptr) const;

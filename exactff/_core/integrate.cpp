@@ -121,6 +121,11 @@ void Core::integrate_quad(const std::vector<std::array<Quad, 3>>& v, const doubl
         e2[2] = un[0] * e1[1] - un[1] * e1[0];
     }
     const auto& a0 = v[0];
+    // each vertex's length, once (every vertex ends two edges)
+    thread_local std::vector<Quad> lengths;
+    lengths.resize(m);
+    for (size_t i = 0; i < m; ++i)
+        lengths[i] = q_sqrt(v[i][0] * v[i][0] + v[i][1] * v[i][1] + v[i][2] * v[i][2]);
     for (size_t i = 0; i < m; ++i) {
         const size_t j = (i + 1) % m;
         Quad ea[3], eb[3], d[3], c[3];
@@ -143,8 +148,7 @@ void Core::integrate_quad(const std::vector<std::array<Quad, 3>>& v, const doubl
             for (int k = 0; k < 3; ++k) Z += q_abs(n[k]) * P[k];
         }
         const Quad cl = q_sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
-        const Quad la = q_sqrt(v[i][0] * v[i][0] + v[i][1] * v[i][1] + v[i][2] * v[i][2]);
-        const Quad lb = q_sqrt(v[j][0] * v[j][0] + v[j][1] * v[j][1] + v[j][2] * v[j][2]);
+        const Quad la = lengths[i], lb = lengths[j];
         const Quad ab = v[i][0] * v[j][0] + v[i][1] * v[j][1] + v[i][2] * v[j][2];
         const Quad theta = q_atan2(cl, ab);
         if (!(cl > 0)) {

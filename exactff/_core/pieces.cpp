@@ -108,6 +108,45 @@ R Core::arc_bound(const Vertex& a, const Vertex& b) {
     return static_cast<R>(theta) * (1 + 16 * u) + 16 * u;
 }
 
+// a visible piece's value (over pi: its cosine-weighted measure, or with the sphere its
+// solid angle) and the bound of its computation
+void Core::piece_value(const Piece& q, int64_t f, const V3& n, const RowStats& st, R* val,
+                       R* bnd) const {
+    if (st.sphere)
+        integrate_solid(q, f, val, bnd);
+    else
+        integrate(q, f, n, val, bnd, st.eq3 ? &st : nullptr);
+}
+
+// what a piece is worth at most (its value and bound), computed where first asked for
+R Core::piece_worth(const Piece& q, int64_t f, const V3& n, const RowStats& st,
+                    PieceWorth& w) const {
+    if (!w.known) {
+        R val, bnd;
+        piece_value(q, f, n, st, &val, &bnd);
+        w.value = val + bnd;
+        w.known = true;
+    }
+    return w.value;
+}
+
+// whether every vertex of fragment f lies clearly behind the horizon H (the shadow
+// tree's root, its negative side covered): beyond the widest width Core::process would
+// test a vertex with there (the band, the plane's tilt and slack, and a vertex's own
+// error, at most 2 roundoffs; the distance and the length in long double from the same
+// differences, within a few roundoffs of theirs). Core::process would send such a
+// fragment whole to the covered side, with no near test, no slack and no charge: the
+// row's values are the same without it. (What it no longer does: prove the cells of its
+// footprint covered, Core::prove_cells, which only culls later hidden fragments.)
+bool Core::behind_horizon(int64_t f, const V3& p, const Plane& H) const {
+    const R w = (K_.band + H.err + H.slack + 4 * K_.eps) * H.mnorm * (1 + 64 * K_.eps);
+    for (int64_t i = start_[f]; i < start_[f] + count_[f]; ++i) {
+        const V3 v{V_[3 * i] - p.x, V_[3 * i + 1] - p.y, V_[3 * i + 2] - p.z};
+        if (!(dot(H.m, v) < -w * norm(v))) return false;
+    }
+    return true;
+}
+
 void Core::run(const double* pp, const double* pn, const int8_t* node_side,
                const int8_t* source_side, bool two_sided, bool cull, int64_t budget,
                int64_t tiles, std::vector<R>& F, std::vector<R>& E, std::vector<R>& B,
@@ -167,6 +206,12 @@ void Core::run(const double* pp, const double* pn, const int8_t* node_side,
             const auto& list = near_front ? here_front_ : here_behind_;
             for (int64_t j = here_start_[k]; j < here_start_[k + 1]; ++j) {
                 const int64_t f = list[j];
+                // a fragment clearly behind the tangent plane is hidden by the root:
+                // skipped before its footprint (Core::behind_horizon)
+                if (cull && !st.sphere && behind_horizon(f, p, sv[0])) {
+                    ++st.fragments_behind;
+                    continue;
+                }
                 // a fragment in cells proven covered is hidden (Core::cell_covered)
                 Footprint fp;
                 const bool mapped = cull && fragment_footprint(f, pp, &fp);
@@ -309,11 +354,11 @@ void Core::process(int64_t f, const double* pp, const V3& p, const V3& n,
                 q[i] = pool[static_cast<size_t>(cur[i].v)];
                 q[i].edge = cur[i].edge;
             }
-            R val, bnd;
-            if (st.sphere)
-                integrate_solid(q, f, &val, &bnd);
-            else
-                integrate(q, f, n, &val, &bnd, st.eq3 ? &st : nullptr);
+            // its value and bound: a piece whose polygon receives nothing (seen from
+            // behind, one-sided) needs them only where its shadow is left out
+            // (Core::insert_shadow asks for them there, Core::piece_worth)
+            R val = 0, bnd = 0;
+            if (receives) piece_value(q, f, n, st, &val, &bnd);
             bool held = false;
             arcs.clear();
             if (receives && st.rtol > 0) {
@@ -333,7 +378,8 @@ void Core::process(int64_t f, const double* pp, const V3& p, const V3& n,
             // a piece whose shadow is left out is an image folded or flat along a side
             // (seen from within the band of a plane it is not planar in): its own value
             // is charged it too, as the band's slivers are
-            if (!insert_shadow(q, f, pp, plane, positive, sv, xp, st, val + bnd) && receives)
+            PieceWorth worth{receives ? val + bnd : 0, receives};
+            if (!insert_shadow(q, f, pp, plane, positive, sv, xp, st, worth, n) && receives)
                 B[src] += val + bnd;
             if (held) {
                 ++st.pieces_held;

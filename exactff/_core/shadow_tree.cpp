@@ -328,7 +328,9 @@ V3 Core::input_plane(const double* p, const double* a, const double* b) {
 // (false: the shadow is left out)
 bool Core::insert_shadow(const Piece& q, int64_t f, const double* pp, int plane,
                          bool positive, std::vector<Plane>& sv, std::vector<ExactPlane>& xp,
-                         RowStats& st, R piece_bound) const {
+                         RowStats& st, PieceWorth& worth, const V3& n) const {
+    // the piece's value and bound, where a shadow left out charges them
+    auto piece_bound = [&]() { return piece_worth(q, f, n, st, worth); };
     constexpr R PI = 3.14159265358979323846264338327950288L;
     const size_t m = q.size();
     const V3 c = direction_sum(q);
@@ -360,7 +362,7 @@ bool Core::insert_shadow(const Piece& q, int64_t f, const double* pp, int plane,
         L[k] = q[k].lengthd;
     }
     if (m < 3) {
-        leave_out(q, piece_bound, 0, st);
+        leave_out(q, piece_bound(), 0, st);
         return false;
     }
     for (size_t i = 0; i < m; ++i) {
@@ -498,8 +500,9 @@ bool Core::insert_shadow(const Piece& q, int64_t f, const double* pp, int plane,
     }
     // a sliver (a side it straddles, fewer than three sides) or a kernel that leaves
     // out more than the piece is worth: no shadow at all
-    if (straddled || sides < 3 || kernel_charge + omit_charge > piece_bound) {
-        leave_out(q, piece_bound, straddled ? 1 : (sides < 3 ? 3 : 2), st);
+    if (straddled || sides < 3 ||
+        (kernel_charge + omit_charge > 0 && kernel_charge + omit_charge > piece_bound())) {
+        leave_out(q, piece_bound(), straddled ? 1 : (sides < 3 ? 3 : 2), st);
         return false;
     }
     leave_out(q, kernel_charge, -1, st);

@@ -419,6 +419,8 @@ def compiled_form_factors(scene, point, normal, *, two_sided=False, stats=None,
         subtrees skipped because their directions lie in cells of the cube map about the
         point proven covered), ``cover_proofs``, ``cover_cells`` and ``cover_visits``
         (the proofs tried, the cells proven, the shadow-tree visits they took),
+        ``fragments_behind`` (fragments skipped because every vertex lies clearly
+        behind the point's tangent plane, 0 without the shortcuts or with the sphere),
         ``working_bytes`` (the row's own containers at their largest: its
         shadow tree, exact planes, work list, edge charges and cache, beyond the
         n-long results), ``max_error_estimate``, ``max_band_bound`` and
