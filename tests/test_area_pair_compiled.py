@@ -666,14 +666,14 @@ def test_levels_raise_where_a_rules_difference_is_not_finite(monkeypatch):
 
 def _pair_statuses(monkeypatch):
     """The compiled pair's statuses, as they come (0: taken; else declined)."""
-    statuses, pair = [], adaptive._compiled_hidden_integral
+    statuses, pair = [], adaptive._hidden_integral_in_one_call
 
     def record(*a, **k):
         r = pair(*a, **k)
         statuses.append(r[0])
         return r
 
-    monkeypatch.setattr(adaptive, "_compiled_hidden_integral", record)
+    monkeypatch.setattr(adaptive, "_hidden_integral_in_one_call", record)
     return statuses
 
 

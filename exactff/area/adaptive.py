@@ -130,10 +130,10 @@ def _hidden_integral(S, Pc, Qc, nP, atol, area_P, whole, shortcuts, st, solid=No
     """The adaptive integral of :func:`occluded_pair` to the absolute error ``atol``,
     with ``whole`` the pair's unoccluded value and estimate (per unit area
     of P). With :data:`COMPILED_PAIR`, the whole pair in one compiled call
-    (:func:`_compiled_hidden_integral`) where it takes it; else, and for the pairs it
+    (:func:`_hidden_integral_in_one_call`) where it takes it; else, and for the pairs it
     declines, the steps below, the reference."""
     if COMPILED_PAIR and COMPILED_LEVELS:
-        r = _compiled_hidden_integral(S, Pc, Qc, nP, atol, area_P, whole, shortcuts, solid,
+        r = _hidden_integral_in_one_call(S, Pc, Qc, nP, atol, area_P, whole, shortcuts, solid,
                                       inner)
         if r[0] == 0:
             (value, err, points, culled, same, curved, skipped, back) = r[1:]
@@ -325,7 +325,7 @@ def _pair_constants():
     return _pair_constants_cache["value"]
 
 
-def _compiled_hidden_integral(S, Pc, Qc, nP, atol, area_P, whole, shortcuts, solid, inner):
+def _hidden_integral_in_one_call(S, Pc, Qc, nP, atol, area_P, whole, shortcuts, solid, inner):
     """:func:`_hidden_integral` in one compiled call (``_core/occluded_pair.cpp``, the GIL
     released): the same steps, numpy's roundings kept (the values are the reference's to
     the bit). Returns ``(0, value, err, points, culled_events, solid_events,
