@@ -224,7 +224,8 @@ py::tuple adaptive_levels(Array<double> T, Array<long long> depth, Array<long lo
                           r.back_faces);
 }
 
-std::shared_ptr<exactff::PairConstants> pair_constants(py::dict tol, py::sequence rules) {
+std::shared_ptr<exactff::PairConstants> pair_constants(py::dict tol, py::sequence rules,
+                                                        py::sequence fused) {
     if (py::len(rules) != 7) throw std::invalid_argument("pair_constants: 7 rules expected");
     auto k = std::make_shared<exactff::PairConstants>();
     const auto num = [&](const char* name) { return tol[name].cast<double>(); };
@@ -273,6 +274,10 @@ std::shared_ptr<exactff::PairConstants> pair_constants(py::dict tol, py::sequenc
     if (k->samples < 1 || k->points_per_call < 1)
         throw std::invalid_argument("pair_constants: samples or points_per_call < 1");
     for (size_t r = 0; r < 7; ++r) k->rules[r] = as_rule(rules[r]);
+    if (py::len(fused) != 3) throw std::invalid_argument("pair_constants: 3 flags in fused");
+    k->fused_dot = fused[0].cast<bool>();
+    k->fused_matmul = fused[1].cast<bool>();
+    k->fused_stacked = fused[2].cast<bool>();
     return k;
 }
 
@@ -379,9 +384,10 @@ PYBIND11_MODULE(_pair, m) {
     m.doc() = "An occluded pair of an area row, compiled (exactff.area).";
     py::class_<exactff::PairConstants, std::shared_ptr<exactff::PairConstants>>(
         m, "PairConstants", "The tolerances and rules occluded_pair reads (occluded_pair.h).");
-    m.def("pair_constants", &pair_constants, py::arg("tol"), py::arg("rules"),
-          "pair_constants(tol, rules) -> PairConstants: the tolerances by name and the "
-          "levels' seven rules, for occluded_pair");
+    m.def("pair_constants", &pair_constants, py::arg("tol"), py::arg("rules"), py::arg("fused"),
+          "pair_constants(tol, rules, fused) -> PairConstants: the tolerances by name, the "
+          "levels' seven rules and whether numpy's BLAS fuses the multiply-adds of a dot, a "
+          "matrix and a stacked product (numpy_ops.h), for occluded_pair");
     m.def("occluded_pair", &occluded_pair, py::arg("W"), py::arg("start"), py::arg("solid"),
           py::arg("inner"), py::arg("Pc"), py::arg("Qc"), py::arg("nP"), py::arg("atol"),
           py::arg("area_P"), py::arg("whole_value"), py::arg("whole_err"),

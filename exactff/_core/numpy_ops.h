@@ -3,9 +3,10 @@
 // np.sum over a contiguous array, and the products numpy hands to the BLAS (a @ b of
 // float arrays; np.linalg.norm of a vector is sqrt(x @ x)), which the x86-64 OpenBLAS
 // kernels compute as a chain of fused multiply-adds in order of the inner index
-// (fma(a2, b2, fma(a1, b1, a0 b0))). -ffp-contract=off keeps the rest of the
-// expressions as written. Where the BLAS rounds otherwise (another library or machine),
-// the compiled pair differs from the reference by those roundings, no more.
+// (fma(a2, b2, fma(a1, b1, a0 b0))) and others without fusing: the caller says which
+// (adaptive.py probes numpy once). -ffp-contract=off keeps the rest of the expressions
+// as written. Where the BLAS rounds yet otherwise, the compiled pair differs from the
+// reference by those roundings, no more.
 
 #ifndef EXACTFF_CORE_NUMPY_OPS_H
 #define EXACTFF_CORE_NUMPY_OPS_H
@@ -39,14 +40,17 @@ inline double pairwise_sum(const double* p, std::ptrdiff_t n, std::ptrdiff_t s =
     return pairwise_sum(p, n2, s) + pairwise_sum(p + n2 * s, n - n2, s);
 }
 
-// a @ b of two 3-vectors by the BLAS (ddot; a row of a (k, 3) @ (3, m) product)
-inline double blas_dot3(const double* a, const double* b, std::ptrdiff_t sb = 1) {
-    return std::fma(a[2], b[2 * sb], std::fma(a[1], b[sb], a[0] * b[0]));
+// a @ b of two 3-vectors by the BLAS (ddot; a row of a (k, 3) @ (3, m) product): with
+// fused multiply-adds in order of the inner index, as x86-64 OpenBLAS, or without (fused
+// false: the products rounded and summed in order)
+inline double blas_dot3(const double* a, const double* b, bool fused, std::ptrdiff_t sb = 1) {
+    return fused ? std::fma(a[2], b[2 * sb], std::fma(a[1], b[sb], a[0] * b[0]))
+                 : (a[0] * b[0] + a[1] * b[sb]) + a[2] * b[2 * sb];
 }
 
 // an element of a (k, 2) @ (2, m) product by the BLAS
-inline double blas_dot2(const double* a, const double* b, std::ptrdiff_t sb = 1) {
-    return std::fma(a[1], b[sb], a[0] * b[0]);
+inline double blas_dot2(const double* a, const double* b, bool fused, std::ptrdiff_t sb = 1) {
+    return fused ? std::fma(a[1], b[sb], a[0] * b[0]) : a[0] * b[0] + a[1] * b[sb];
 }
 
 // the sum of three in order, as numpy reduces a row of 3 ((x0 + x1) + x2)

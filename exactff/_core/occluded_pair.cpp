@@ -50,7 +50,7 @@ void area_vector(const double* P, std::int64_t k, double* A) {
 }
 
 // np.linalg.norm of a 3-vector (sqrt of its BLAS dot with itself)
-double norm3(const double* a) { return std::sqrt(blas_dot3(a, a)); }
+double norm3(const double* a, bool fused) { return std::sqrt(blas_dot3(a, a, fused)); }
 
 // rules.py's triangle_areas of T (t, 3, 3)
 std::vector<double> triangle_areas(const std::vector<double>& T) {
@@ -72,12 +72,12 @@ double sum(const std::vector<double>& v) {
 
 // (X - o) @ R[:2].T for X (k, 3): the points in a frame's first two axes about o
 std::vector<double> in_frame(const double* X, std::int64_t k, const double* o,
-                             const double* R) {
+                             const double* R, bool fused) {
     std::vector<double> out(2 * k);
     for (std::int64_t i = 0; i < k; ++i) {
         const double d[3] = {X[3 * i] - o[0], X[3 * i + 1] - o[1], X[3 * i + 2] - o[2]};
-        out[2 * i] = blas_dot3(d, R);
-        out[2 * i + 1] = blas_dot3(d, R + 3);
+        out[2 * i] = blas_dot3(d, R, fused);
+        out[2 * i + 1] = blas_dot3(d, R + 3, fused);
     }
     return out;
 }
@@ -138,15 +138,15 @@ long long distinct_lines(const std::vector<double>& S, double size, const std::v
 // predicates.py's coplanar_band_sides(K, nQ[None], [d]) all 0: every vertex of K within
 // the near-coplanar band of the plane nQ . x = d
 bool in_plane(const double* K, std::int64_t k, const double* nQ, double d, double ulps,
-              double eps) {
+              double eps, bool fused) {
     double big[3] = {0, 0, 0};
     for (std::int64_t i = 0; i < k; ++i)
         for (int j = 0; j < 3; ++j) big[j] = std::max(big[j], std::fabs(K[3 * i + j]));
     const double aN[3] = {std::fabs(nQ[0]), std::fabs(nQ[1]), std::fabs(nQ[2])};
-    const double widest = ulps * eps * (blas_dot3(big, aN) + std::fabs(d));
+    const double widest = ulps * eps * (blas_dot3(big, aN, fused) + std::fabs(d));
     for (std::int64_t i = 0; i < k; ++i) {
         const double* v = K + 3 * i;
-        const double s = blas_dot3(v, nQ) - d;
+        const double s = blas_dot3(v, nQ, fused) - d;
         if (s == 0) continue;
         if (!(std::fabs(s) <= widest)) return false;
         const double mag = sum3(std::fabs(v[0]) * aN[0], std::fabs(v[1]) * aN[1],
@@ -158,7 +158,8 @@ bool in_plane(const double* K, std::int64_t k, const double* nQ, double d, doubl
 }
 
 // adaptive.py's _unoccluded_bound(Pc, Qc)
-double unoccluded_bound(const double* Pc, std::int64_t n_p, const double* Qc, std::int64_t n_q) {
+double unoccluded_bound(const double* Pc, std::int64_t n_p, const double* Qc, std::int64_t n_q,
+                        bool fused) {
     double gap[3];
     for (int j = 0; j < 3; ++j) {
         double pmin = Pc[j], pmax = Pc[j], qmin = Qc[j], qmax = Qc[j];
@@ -172,10 +173,10 @@ double unoccluded_bound(const double* Pc, std::int64_t n_p, const double* Qc, st
         }
         gap[j] = std::max(0.0, std::max(pmin - qmax, qmin - pmax));
     }
-    const double d2 = blas_dot3(gap, gap);
+    const double d2 = blas_dot3(gap, gap, fused);
     double AQ[3];
     area_vector(Qc, n_q, AQ);
-    const double area_Q = norm3(AQ);
+    const double area_Q = norm3(AQ, fused);
     return !(d2 > 0) ? 1.0 : std::min(1.0, area_Q / (3.141592653589793 * d2));
 }
 
@@ -194,7 +195,7 @@ PairResult occluded_pair(const PairArgs& a) {
         for (std::int64_t i = 1; i < n_p; ++i) s += a.Pc[3 * i + j];
         c[j] = s / static_cast<double>(n_p);
     }
-    const double dP = blas_dot3(a.nP, a.Pc);
+    const double dP = blas_dot3(a.nP, a.Pc, k.fused_dot);
     double far = 0;
     for (std::int64_t i = 0; i < n_p; ++i) {
         const double* p = a.Pc + 3 * i;
@@ -205,10 +206,10 @@ PairResult occluded_pair(const PairArgs& a) {
     // the receiver's part's frame (geometry.py's plane_frame)
     double AQ[3], nQ[3], RQ[9];
     area_vector(a.Qc, n_q, AQ);
-    const double lenQ = norm3(AQ);
+    const double lenQ = norm3(AQ, k.fused_dot);
     for (int j = 0; j < 3; ++j) nQ[j] = AQ[j] / lenQ;
     receiver_frame(nQ, RQ);
-    const std::vector<double> Q2 = in_frame(a.Qc, n_q, a.Qc, RQ);
+    const std::vector<double> Q2 = in_frame(a.Qc, n_q, a.Qc, RQ, k.fused_matmul);
     // the vertex-edge events and the curved ones
     EventArgs e;
     e.W = a.W;
@@ -262,7 +263,7 @@ PairResult occluded_pair(const PairArgs& a) {
         return out;
     }
     // the arrangement's distinct lines: too many, the reference raises
-    const std::vector<double> P2 = in_frame(a.Pc, n_p, c, R);
+    const std::vector<double> P2 = in_frame(a.Pc, n_p, c, R, k.fused_matmul);
     if (distinct_lines(lines, 2.0 * radius, P2, k.event_line_key) > k.max_event_lines) {
         out.status = 2;
         return out;
@@ -270,7 +271,7 @@ PairResult occluded_pair(const PairArgs& a) {
     // the emitter cut along the events (events.py's cut_cells, compiled), covering P
     double AP[3];
     area_vector(a.Pc, n_p, AP);
-    double area_Pc = norm3(AP);
+    double area_Pc = norm3(AP, k.fused_dot);
     std::vector<double> terms(n_p);
     for (std::int64_t i = 0; i < n_p; ++i) {
         const std::int64_t j = (i + 1) % n_p;
@@ -303,7 +304,7 @@ PairResult occluded_pair(const PairArgs& a) {
     std::vector<double> T(9 * t);
     for (size_t i = 0; i < 3 * t; ++i)
         for (int j = 0; j < 3; ++j)
-            T[3 * i + j] = c[j] + blas_dot2(&cells.triangles[2 * i], R + j, 3);
+            T[3 * i + j] = c[j] + blas_dot2(&cells.triangles[2 * i], R + j, k.fused_stacked, 3);
     if (!(sum(triangle_areas(T)) >= (1 - k.cell_cover_rtol) * area_Pc)) {
         out.status = 3;
         return out;
@@ -319,14 +320,14 @@ PairResult occluded_pair(const PairArgs& a) {
                             a.atol < k.low_rules_tolerance;
     // the hidden set-up (hidden.py's hidden_setup) of the blockers not in Qc's plane
     // (which hide nothing; with solids, the reference's)
-    const double off = blas_dot3(nQ, a.Qc);
+    const double off = blas_dot3(nQ, a.Qc, k.fused_dot);
     std::vector<double> Wk;
     std::vector<std::int64_t> bstart{0};
     const bool solids = a.solid && a.inner;
     for (std::int64_t b = 1; b < a.n; ++b) {
         const double* K = a.W + 3 * a.start[b];
         const std::int64_t kb = a.start[b + 1] - a.start[b];
-        if (in_plane(K, kb, nQ, off, k.coplanar_ulps, k.eps)) {
+        if (in_plane(K, kb, nQ, off, k.coplanar_ulps, k.eps, k.fused_matmul)) {
             if (a.solid) {
                 out.status = 4;
                 return out;
@@ -443,7 +444,7 @@ PairResult occluded_pair(const PairArgs& a) {
         return out;
     }
     // the value: the unoccluded one less the hidden part, the slivers at half their bound
-    const double half = 0.5 * unoccluded_bound(a.Pc, n_p, a.Qc, n_q) * slivers / a.area_P;
+    const double half = 0.5 * unoccluded_bound(a.Pc, n_p, a.Qc, n_q, k.fused_dot) * slivers / a.area_P;
     std::vector<double> err_terms(m);
     for (size_t i = 0; i < m; ++i) err_terms[i] = r.diff[i] + r.rnd[i];
     const double hidden = half + sum(r.hi);

@@ -34,6 +34,9 @@ struct PairConstants {
         back_face_rtol, edge_on_rtol, precise_share, boolean_ulps, image_rtol, offset_ulps;
     long long max_pieces, max_depth, points_per_call;
     TriangleRule rules[7];
+    // whether numpy's BLAS fuses the multiply-adds of a vector's dot product, of a
+    // (k, 3) @ (3, m) product and of a (t, 3, 2) @ (2, 3) one (numpy_ops.h)
+    bool fused_dot, fused_matmul, fused_stacked;
 };
 
 // One pair: S the receiver's whole polygon and the blockers, their vertices in W (N, 3)

@@ -313,6 +313,22 @@ _PAIR_TOLERANCES = (
 _pair_constants_cache = {}
 
 
+def _blas_fuses():
+    """Whether numpy's products of float arrays fuse their multiply-adds (x86-64 OpenBLAS
+    does: ``fma(a2, b2, fma(a1, b1, a0 b0))``), for a vector's dot, a (k, 3) @ (3, m)
+    product and a (t, 3, 2) @ (2, 3) one: the compiled pair rounds as they do
+    (``_core/numpy_ops.h``). Each probe has ``a1 b1`` inexact and ``a0 b0 = -1``: fused,
+    the result keeps the product's rounding error (2**-60)."""
+    e = 1.0 + 2.0 ** -30
+    fused = 2.0 ** -29 + 2.0 ** -60
+    a, b = np.array([1.0, e, 0.0]), np.array([-1.0, e, 0.0])
+    A = np.array([[1.0, e, 0.0]] * 4)
+    T = np.array([[[1.0, e]] * 3] * 2)
+    R = np.array([[-1.0, 0.0, 0.0], [e, 0.0, 0.0]])
+    return (float(a @ b) == fused, float((A @ np.stack([b, b]).T)[0, 0]) == fused,
+            float((T @ R)[0, 0, 0]) == fused)
+
+
 def _pair_constants():
     """The compiled pair's tolerances and rules (:func:`exactff.area._pair.pair_constants`),
     built again only where a tolerance changed since the last call."""
@@ -321,7 +337,8 @@ def _pair_constants():
     if _pair_constants_cache.get("key") != values:
         _pair_constants_cache["key"] = values
         _pair_constants_cache["value"] = _compiled_pair_constants(
-            dict(zip(names, values)) | {"NORMAL_FLOOR": NORMAL_FLOOR}, _LEVEL_RULES)
+            dict(zip(names, values)) | {"NORMAL_FLOOR": NORMAL_FLOOR}, _LEVEL_RULES,
+            _BLAS_FUSES)
     return _pair_constants_cache["value"]
 
 
@@ -344,6 +361,7 @@ def _hidden_integral_in_one_call(S, Pc, Qc, nP, atol, area_P, whole, shortcuts, 
     return r
 
 
+_BLAS_FUSES = _blas_fuses()
 _NO_SOLID = np.zeros(0, dtype=np.int64)
 _NO_INNER = np.zeros((0, 3))
 
