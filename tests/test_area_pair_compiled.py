@@ -722,3 +722,24 @@ def test_compiled_pair_declines_what_the_reference_takes(monkeypatch):
     with pytest.raises(NumericalError, match="distinct lines"):
         ef.area_form_factors(scene, tolerance=1e-6)
     assert statuses == [2]
+
+
+def test_compiled_pair_of_many_sided_polygons_is_the_reference_to_the_bit(monkeypatch):
+    # a 13-gon emitter and an 11-gon receiver (sums over more than 8 vertices: numpy's
+    # pairwise sums and its reductions along the vertices) with a plate and a tilted
+    # square between them, at 1e-6 and 1e-9: the one call and the steps alike, to the bit
+    def ngon(k, r, z, up, tilt=0.0):
+        t = 2 * np.pi * np.arange(k) / k + 0.1
+        P = np.stack([r * np.cos(t) + 0.05, r * np.sin(t) - 0.03, z + tilt * np.cos(t)], axis=1)
+        return P if up else P[::-1]
+
+    scene = ef.Scene.from_polygons([ngon(13, 1.0, 0.0, True), ngon(11, 0.9, 2.0, False),
+                                    ngon(4, 0.35, 1.0, True), ngon(4, 0.3, 1.4, False, 0.1)])
+    statuses = _pair_statuses(monkeypatch)
+    for tolerance in (1e-6, 1e-9):
+        out = []
+        for compiled in (True, False):
+            monkeypatch.setattr(adaptive, "COMPILED_PAIR", compiled)
+            out.append(ef.area_form_factors(scene, tolerance=tolerance, error=True))
+        assert np.array_equal(out[0][0], out[1][0]) and np.array_equal(out[0][1], out[1][1])
+    assert statuses and not any(statuses)

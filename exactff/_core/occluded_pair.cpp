@@ -444,7 +444,8 @@ PairResult occluded_pair(const PairArgs& a) {
         return out;
     }
     // the value: the unoccluded one less the hidden part, the slivers at half their bound
-    const double half = 0.5 * unoccluded_bound(a.Pc, n_p, a.Qc, n_q, k.fused_dot) * slivers / a.area_P;
+    const double bound = unoccluded_bound(a.Pc, n_p, a.Qc, n_q, k.fused_dot);
+    const double half = 0.5 * bound * slivers / a.area_P;
     std::vector<double> err_terms(m);
     for (size_t i = 0; i < m; ++i) err_terms[i] = r.diff[i] + r.rnd[i];
     const double hidden = half + sum(r.hi);

@@ -133,8 +133,8 @@ def _hidden_integral(S, Pc, Qc, nP, atol, area_P, whole, shortcuts, st, solid=No
     (:func:`_hidden_integral_in_one_call`) where it takes it; else, and for the pairs it
     declines, the steps below, the reference."""
     if COMPILED_PAIR and COMPILED_LEVELS:
-        r = _hidden_integral_in_one_call(S, Pc, Qc, nP, atol, area_P, whole, shortcuts, solid,
-                                      inner)
+        r = _hidden_integral_in_one_call(S, Pc, Qc, nP, atol, area_P, whole, shortcuts,
+                                         solid, inner)
         if r[0] == 0:
             (value, err, points, culled, same, curved, skipped, back) = r[1:]
             if st is not None:
@@ -342,7 +342,8 @@ def _pair_constants():
     return _pair_constants_cache["value"]
 
 
-def _hidden_integral_in_one_call(S, Pc, Qc, nP, atol, area_P, whole, shortcuts, solid, inner):
+def _hidden_integral_in_one_call(S, Pc, Qc, nP, atol, area_P, whole, shortcuts, solid,
+                                 inner):
     """:func:`_hidden_integral` in one compiled call (``_core/occluded_pair.cpp``, the GIL
     released): the same steps, numpy's roundings kept (the values are the reference's to
     the bit). Returns ``(0, value, err, points, culled_events, solid_events,
@@ -354,11 +355,10 @@ def _hidden_integral_in_one_call(S, Pc, Qc, nP, atol, area_P, whole, shortcuts, 
     start = np.zeros(len(S) + 1, dtype=np.int64)
     np.cumsum([len(A) for A in S], out=start[1:])
     with_solids = solid is not None
-    r = _compiled_occluded_pair(
+    return _compiled_occluded_pair(
         W, start, solid if with_solids else _NO_SOLID,
         inner if with_solids and inner is not None else _NO_INNER, Pc, Qc, nP, atol, area_P,
         whole[0], whole[1], shortcuts, _pair_constants())
-    return r
 
 
 _BLAS_FUSES = _blas_fuses()
