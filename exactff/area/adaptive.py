@@ -6,11 +6,8 @@ differences exceeds half of the absolute tolerance ``atol`` (a global budget per
 and the rules' differences checked against the unoccluded
 point values' integral, known exactly (docs/explanation/area-form-factors.md). The
 levels run compiled (:mod:`exactff.area._pair`, ``_core/levels.cpp``, the GIL released);
-:func:`_adaptive_levels` is their numpy reference and takes the pairs they decline. The
-whole pair, from its frames to its value, runs in one compiled call
-(``_core/occluded_pair.cpp``, the GIL released) where it can, with the reference's
-values to the bit; :func:`_hidden_integral`'s steps are its reference and take the
-pairs it declines.
+:func:`_adaptive_levels` is their numpy reference and takes the pairs they decline; so
+is :func:`_hidden_integral` to the whole pair in one call (:mod:`.compiled_pair`).
 """
 
 import numpy as np
@@ -19,18 +16,17 @@ import shapely
 from .. import _tolerances as tol
 from ..errors import NumericalError, misses_tolerance
 from ..geometry import area_vector, cross, polygon_area, receiver_frame
-from ..halfspace import NORMAL_FLOOR
 from ._pair import adaptive_levels as _compiled_adaptive_levels
 from ._pair import corner_first as _compiled_corner_first
-from ._pair import occluded_pair as _compiled_occluded_pair
-from ._pair import pair_constants as _compiled_pair_constants
+from .compiled_pair import LEVEL_RULES, LEVEL_TOLERANCES
+from .compiled_pair import hidden_integral_in_one_call as _hidden_integral_in_one_call
 from .curved import curved_event_lines
 from .events import cut_cells, distinct_lines, event_lines
 from .hidden import hidden_setup, hidden_values
 from .points import point_values
 from .umbra import outside_umbras, triangle_unoccluded, umbra_cells, umbra_edges, umbras
-from .rules import (RULE_PAIRS, CORNER_MIDDLE_RULE, SYMMETRIC_RULES, budget_refined, quarter,
-                    refined, rule_pair, triangle_areas, triangle_rule)
+from .rules import (CORNER_MIDDLE_RULE, budget_refined, quarter, refined, rule_pair,
+                    triangle_areas, triangle_rule)
 
 __all__ = ["COMPILED_LEVELS", "COMPILED_PAIR", "occluded_pair"]
 
@@ -129,21 +125,16 @@ def _hidden_integral(S, Pc, Qc, nP, atol, area_P, whole, shortcuts, st, solid=No
                      inner=None):
     """The adaptive integral of :func:`occluded_pair` to the absolute error ``atol``,
     with ``whole`` the pair's unoccluded value and estimate (per unit area
-    of P). With :data:`COMPILED_PAIR`, the whole pair in one compiled call
-    (:func:`_hidden_integral_in_one_call`) where it takes it; else, and for the pairs it
-    declines, the steps below, the reference."""
+    of P): in one compiled call (:mod:`.compiled_pair`) where it takes the pair, else
+    (or without :data:`COMPILED_PAIR`) by the steps below, its reference."""
     if COMPILED_PAIR and COMPILED_LEVELS:
         r = _hidden_integral_in_one_call(S, Pc, Qc, nP, atol, area_P, whole, shortcuts,
                                          solid, inner)
         if r[0] == 0:
-            (value, err, points, culled, same, curved, skipped, back) = r[1:]
-            if st is not None:
-                st.culled_events += culled
-                st.solid_events += same
-                st.curved_events += curved
-                st.curved_skipped += skipped
-                st.back_faces += back
-            return value, err, points
+            for k, v in zip(("culled_events", "solid_events", "curved_events",
+                             "curved_skipped", "back_faces"), r[4:] if st is not None else ()):
+                setattr(st, k, getattr(st, k) + v)
+            return r[1:4]
     R = receiver_frame(nP)
     c = Pc.mean(axis=0)
     dP = float(nP @ Pc[0])
@@ -301,71 +292,6 @@ def _hidden_integral(S, Pc, Qc, nP, atol, area_P, whole, shortcuts, st, solid=No
     return value, err + whole[1], points
 
 
-#: The tolerances the compiled pair reads, by name (``_core/occluded_pair.h``).
-_PAIR_TOLERANCES = (
-    "AREA_HIDDEN_PAD", "AREA_RAY_PARALLEL", "AREA_EVENT_PARALLEL", "AREA_HULL_RTOL",
-    "AREA_CUT_EXTEND_RTOL", "AREA_CURVED_EVENT_RTOL", "AREA_CURVED_CHORD_SPLIT",
-    "AREA_EVENT_LINE_KEY", "AREA_SLIVER_CELL", "AREA_CELL_COVER_RTOL",
-    "AREA_LOW_RULES_TOLERANCE", "BSP_COPLANAR_ULPS", "EPS", "AREA_CURVED_EVENT_SAMPLES",
-    "AREA_CURVED_EVENT_BISECTIONS", "AREA_CURVED_MAX_TRIPLES", "AREA_CURVED_CHORD_HALVINGS",
-    "AREA_EVENT_ROWS_PER_CALL", "AREA_UMBRA_MIN_LINES", "AREA_MAX_EVENT_LINES",
-    "AREA_MANY_CELLS", "CONVEX_TURN_ULPS", "CLIP_MEET_ULPS", "AREA_STRICT_TURN")
-_pair_constants_cache = {}
-
-
-def _blas_fuses():
-    """Whether numpy's products of float arrays fuse their multiply-adds (x86-64 OpenBLAS
-    does: ``fma(a2, b2, fma(a1, b1, a0 b0))``), for a vector's dot, a (k, 3) @ (3, m)
-    product and a (t, 3, 2) @ (2, 3) one: the compiled pair rounds as they do
-    (``_core/numpy_ops.h``). Each probe has ``a1 b1`` inexact and ``a0 b0 = -1``: fused,
-    the result keeps the product's rounding error (2**-60)."""
-    e = 1.0 + 2.0 ** -30
-    fused = 2.0 ** -29 + 2.0 ** -60
-    a, b = np.array([1.0, e, 0.0]), np.array([-1.0, e, 0.0])
-    A = np.array([[1.0, e, 0.0]] * 4)
-    T = np.array([[[1.0, e]] * 3] * 2)
-    R = np.array([[-1.0, 0.0, 0.0], [e, 0.0, 0.0]])
-    return (float(a @ b) == fused, float((A @ np.stack([b, b]).T)[0, 0]) == fused,
-            float((T @ R)[0, 0, 0]) == fused)
-
-
-def _pair_constants():
-    """The compiled pair's tolerances and rules (:func:`exactff.area._pair.pair_constants`),
-    built again only where a tolerance changed since the last call."""
-    names = _PAIR_TOLERANCES + _LEVEL_TOLERANCES
-    values = tuple(getattr(tol, k) for k in names) + (NORMAL_FLOOR,)
-    if _pair_constants_cache.get("key") != values:
-        _pair_constants_cache["key"] = values
-        _pair_constants_cache["value"] = _compiled_pair_constants(
-            dict(zip(names, values)) | {"NORMAL_FLOOR": NORMAL_FLOOR}, _LEVEL_RULES,
-            _BLAS_FUSES)
-    return _pair_constants_cache["value"]
-
-
-def _hidden_integral_in_one_call(S, Pc, Qc, nP, atol, area_P, whole, shortcuts, solid,
-                                 inner):
-    """:func:`_hidden_integral` in one compiled call (``_core/occluded_pair.cpp``, the GIL
-    released): the same steps, numpy's roundings kept (the values are the reference's to
-    the bit). Returns ``(0, value, err, points, culled_events, solid_events,
-    curved_events, curved_skipped, back_faces)``, or ``(status,)`` with status > 0 where
-    it declines the pair for the reference's steps (an umbra to look for, too many
-    distinct lines, GEOS's cells, a blocker in the receiver's plane, no compiled hidden
-    set-up or levels, the rules' sum to check triangle by triangle)."""
-    W = np.concatenate(S)
-    start = np.zeros(len(S) + 1, dtype=np.int64)
-    np.cumsum([len(A) for A in S], out=start[1:])
-    with_solids = solid is not None
-    return _compiled_occluded_pair(
-        W, start, solid if with_solids else _NO_SOLID,
-        inner if with_solids and inner is not None else _NO_INNER, Pc, Qc, nP, atol, area_P,
-        whole[0], whole[1], shortcuts, _pair_constants())
-
-
-_BLAS_FUSES = _blas_fuses()
-_NO_SOLID = np.zeros(0, dtype=np.int64)
-_NO_INNER = np.zeros((0, 3))
-
-
 def _unoccluded_bound(Pc, Qc):
     """An upper bound on the point form factor F(x -> Qc) at every point x of Pc: 1, and
     ``A_Q / (pi d^2)`` with d the distance between the two polygons' bounding boxes (the
@@ -377,22 +303,10 @@ def _unoccluded_bound(Pc, Qc):
     return 1.0 if not d2 > 0 else min(1.0, area_Q / (np.pi * d2))
 
 
-#: The compiled levels' rules, in levels.h's order: the symmetric pair (degrees 4 and 8),
-#: the collapsed pairs of rung 0 and rung 1, and the third rule at a corner.
-_LEVEL_RULES = (SYMMETRIC_RULES[tol.AREA_SYMMETRIC_DEGREES[0]],
-                SYMMETRIC_RULES[tol.AREA_SYMMETRIC_DEGREES[1]],
-                *RULE_PAIRS[0], *RULE_PAIRS[1], CORNER_MIDDLE_RULE)
-#: The tolerances the compiled levels read, by name (read at each call).
-_LEVEL_TOLERANCES = (
-    "AREA_IMAGE_ULPS", "AREA_SLIVER_ULPS", "AREA_MAX_PIECES", "AREA_IMAGE_PRECISE_RTOL", "C1",
-    "C2", "EPS", "AREA_SLIVER_SHARE", "AREA_IMAGE_BUDGET_SHARE", "AREA_BACK_FACE_RTOL",
-    "AREA_EDGE_ON_RTOL", "AREA_IMAGE_PRECISE_SHARE", "AREA_BOOLEAN_ULPS", "AREA_IMAGE_RTOL",
-    "OFFSET_ROUNDING_ULPS", "AREA_MAX_DEPTH", "AREA_POINTS_PER_CALL")
 #: False: the levels by numpy (:func:`_adaptive_levels`), the reference the compiled
 #: ones are tested against (tests/test_area_pair_compiled.py).
 COMPILED_LEVELS = True
-#: False: the pair's steps one by one (:func:`_hidden_integral`, each step compiled or
-#: not by its own switch), the reference the one compiled call is tested against.
+#: False: every pair by :func:`_hidden_integral`'s steps, :mod:`.compiled_pair`'s reference.
 COMPILED_PAIR = True
 
 
@@ -408,11 +322,11 @@ def _levels(T, depth, rung, corner, nP, Qc, S, st, setup, atol, area_P, total_ar
         rules_err = float(sum(float(d.sum()) for d in acc["diff"]))
         r = _compiled_adaptive_levels(
             T, depth.astype(np.int64), rung.astype(np.int64), corner.astype(bool), nP,
-            receiver_frame(nP), area_P, total_area, atol, rules_err, start, _LEVEL_RULES,
+            receiver_frame(nP), area_P, total_area, atol, rules_err, start, LEVEL_RULES,
             symmetric, Qc, setup.corners, setup.q0, setup.nQ, setup.RQ, setup.V,
             setup.counts, setup.NK, setup.group, setup.extent, setup.parts,
             setup.part_counts, setup.lo, setup.hi,
-            {k: getattr(tol, k) for k in _LEVEL_TOLERANCES})
+            {k: getattr(tol, k) for k in LEVEL_TOLERANCES})
         if r[0]:
             (Ta, da, ra, ca, hi, lo, diff, rnd, hiU, loU, rndU, slivers, points,
              back) = r[1:]
