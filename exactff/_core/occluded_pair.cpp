@@ -9,6 +9,7 @@
 #include <utility>
 #include <vector>
 
+#include "frame.h"
 #include "hidden_setup.h"
 #include "numpy_ops.h"
 #include "pair.h"
@@ -21,19 +22,6 @@ using numpy_ops::blas_dot2;
 using numpy_ops::blas_dot3;
 using numpy_ops::pairwise_sum;
 using numpy_ops::sum3;
-
-// geometry.py's receiver_frame of a normal (rows t1, t2, n; Duff et al. 2017)
-void receiver_frame(const double* nv, double* R) {
-    const double s = std::sqrt(sum3(nv[0] * nv[0], nv[1] * nv[1], nv[2] * nv[2]));
-    const double x = nv[0] / s, y = nv[1] / s, z = nv[2] / s;
-    const double sign = z >= 0 ? 1.0 : -1.0;
-    const double a = -1.0 / (sign + z);
-    const double b = x * y * a;
-    const double out[9] = {1.0 + sign * x * x * a, sign * b, -sign * x,
-                           b, sign + y * y * a, -y,
-                           x, y, z};
-    std::copy(out, out + 9, R);
-}
 
 // geometry.py's area_vector of a polygon (k, 3): half the sum of the fan's cross
 // products about its first vertex, summed in order
