@@ -46,7 +46,7 @@ setup(
                  Pybind11Extension("exactff.area._hidden", core("bind_hidden.cpp", "hidden.cpp"),
                                    depends=HEADERS, cxx_std=17, extra_compile_args=CORE_FLAGS),
                  Pybind11Extension("exactff.area._pair", core("bind_pair.cpp", "pair.cpp", "curved.cpp", "levels.cpp", "hidden.cpp",
-                                        "hidden_setup.cpp"),
+                                        "hidden_setup.cpp", "occluded_pair.cpp"),
                                    depends=HEADERS, cxx_std=17, extra_compile_args=CORE_FLAGS),
                  Pybind11Extension("exactff.area._closed", core("bind_closed.cpp", "closed_form.cpp"),
                                    depends=HEADERS, cxx_std=17, extra_compile_args=CORE_FLAGS),

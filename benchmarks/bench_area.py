@@ -673,8 +673,8 @@ def gil_share(scene, tolerance=1e-6):
         return g
 
     patched = []
-    for name in ("events", "curved", "hidden", "adaptive", "edge_integrals", "culling",
-                 "closed_form"):
+    for name in ("events", "curved", "hidden", "adaptive", "compiled_pair", "edge_integrals",
+                 "culling", "closed_form"):
         mod = importlib.import_module(f"exactff.area.{name}")
         for attr in dir(mod):
             if attr.startswith("_compiled_"):

@@ -122,6 +122,9 @@ def test_box_pair_triangles_within_their_rules_difference(box, monkeypatch):
     import exactff.area.row as row
     occluded = row.occluded_pair
     monkeypatch.setattr(row, "occluded_pair", pair)
+    # the pair's steps one by one, to see its triangles (the one compiled call gives the
+    # same value to the bit: test_area_pair_compiled.py)
+    monkeypatch.setattr(adaptive, "COMPILED_PAIR", False)
     area_row(box, 59, 1e-6)
     acc = {k: np.concatenate(v) for k, v in grab["acc"].items() if v}
     T = acc["T"]

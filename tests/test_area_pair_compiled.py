@@ -236,6 +236,7 @@ def _cut_calls(monkeypatch, scene, rows):
         return cut(Pc, nP, lines, R, c, grid, lengthen)
 
     monkeypatch.setattr(adaptive, "cut_cells", record)
+    monkeypatch.setattr(adaptive, "COMPILED_PAIR", False)   # the steps one by one
     for r in rows:
         area_row(scene, r, 1e-6)
     monkeypatch.undo()
@@ -524,6 +525,7 @@ def test_compiled_hidden_setup_against_numpy(monkeypatch, name, rows):
         return setup(*a, **k)
 
     monkeypatch.setattr(adaptive, "hidden_setup", record)
+    monkeypatch.setattr(adaptive, "COMPILED_PAIR", False)   # the steps one by one
     ef.area_form_factors(scene, rows=rows, tolerance=1e-6)
     monkeypatch.undo()
     assert len(calls) > 5
@@ -615,6 +617,7 @@ def test_compiled_corner_first_against_numpy(monkeypatch):
         return corner_first(*a, **k)
 
     monkeypatch.setattr(adaptive, "_corner_first", record)
+    monkeypatch.setattr(adaptive, "COMPILED_PAIR", False)   # the steps one by one
     for name in ("test4.vs3", "l_room_f3a.vs3", "gunter1.vs3"):
         ef.area_form_factors(ef.read_vs3(os.path.join(DATA, name)), tolerance=1e-6)
     monkeypatch.undo()
@@ -659,3 +662,84 @@ def test_levels_raise_where_a_rules_difference_is_not_finite(monkeypatch):
     with pytest.raises(NumericalError, match="not finite"):
         adaptive._levels(*args, {k: list(v) for k, v in acc.items()})
     assert declined == [True]
+
+
+def _pair_statuses(monkeypatch):
+    """The compiled pair's statuses, as they come (0: taken; else declined)."""
+    statuses, pair = [], adaptive._hidden_integral_in_one_call
+
+    def record(*a, **k):
+        r = pair(*a, **k)
+        statuses.append(r[0])
+        return r
+
+    monkeypatch.setattr(adaptive, "_hidden_integral_in_one_call", record)
+    return statuses
+
+
+@pytest.mark.parametrize("name, rows, tolerance, shortcuts", [
+    ("gunter1.vs3", None, 1e-6, True), ("gunter1.vs3", [8, 17], 1e-9, True),
+    ("test4.vs3", None, 1e-9, True), ("test4.vs3", None, 1e-6, False),
+    ("facet.vs3", None, 1e-9, True), ("box", range(0, 106, 9), 1e-6, True)])
+def test_compiled_pair_is_the_reference_to_the_bit(monkeypatch, name, rows, tolerance,
+                                                   shortcuts):
+    # the whole pair in one call (_core/occluded_pair.cpp) and its steps one by one
+    # (_hidden_integral, the reference): every value and estimate the same to the bit
+    # (numpy's pairwise sums and the BLAS's fused products kept), the same counts, and
+    # every occluded pair taken by the one call
+    scene = (ef.scenes.unit_squares_room() if name == "box"
+             else ef.read_vs3(os.path.join(DATA, name)))
+    statuses = _pair_statuses(monkeypatch)
+    out = []
+    for compiled in (True, False):
+        monkeypatch.setattr(adaptive, "COMPILED_PAIR", compiled)
+        st = {}
+        out.append(ef.area_form_factors(scene, rows=rows, tolerance=tolerance, error=True,
+                                        shortcuts=shortcuts, stats=st) + (st,))
+    (F, E, st), (G, EG, sg) = out
+    assert st == sg and st["occluded_pairs"] > 5
+    assert len(statuses) == st["occluded_pairs"] and not any(statuses)
+    assert np.array_equal(F, G) and np.array_equal(E, EG)
+
+
+def test_compiled_pair_declines_what_the_reference_takes(monkeypatch):
+    # an umbra to look for (AREA_UMBRA_MIN_LINES 0: every pair with an event) and too
+    # many distinct lines (AREA_MAX_EVENT_LINES 1: the reference raises, naming the pair):
+    # the one call declines (status 1, 2), the reference's steps give the values
+    scene = ef.read_vs3(os.path.join(DATA, "test4.vs3"))
+    statuses = _pair_statuses(monkeypatch)
+    monkeypatch.setattr(tol, "AREA_UMBRA_MIN_LINES", 0)
+    out = []
+    for compiled in (True, False):
+        monkeypatch.setattr(adaptive, "COMPILED_PAIR", compiled)
+        out.append(ef.area_form_factors(scene, tolerance=1e-6, error=True))
+    assert statuses and set(statuses) == {1}
+    assert np.array_equal(out[0][0], out[1][0]) and np.array_equal(out[0][1], out[1][1])
+    statuses.clear()
+    monkeypatch.setattr(tol, "AREA_UMBRA_MIN_LINES", 1000)
+    monkeypatch.setattr(tol, "AREA_MAX_EVENT_LINES", 1)
+    monkeypatch.setattr(adaptive, "COMPILED_PAIR", True)
+    with pytest.raises(NumericalError, match="distinct lines"):
+        ef.area_form_factors(scene, tolerance=1e-6)
+    assert statuses == [2]
+
+
+def test_compiled_pair_of_many_sided_polygons_is_the_reference_to_the_bit(monkeypatch):
+    # a 13-gon emitter and an 11-gon receiver (sums over more than 8 vertices: numpy's
+    # pairwise sums and its reductions along the vertices) with a plate and a tilted
+    # square between them, at 1e-6 and 1e-9: the one call and the steps alike, to the bit
+    def ngon(k, r, z, up, tilt=0.0):
+        t = 2 * np.pi * np.arange(k) / k + 0.1
+        P = np.stack([r * np.cos(t) + 0.05, r * np.sin(t) - 0.03, z + tilt * np.cos(t)], axis=1)
+        return P if up else P[::-1]
+
+    scene = ef.Scene.from_polygons([ngon(13, 1.0, 0.0, True), ngon(11, 0.9, 2.0, False),
+                                    ngon(4, 0.35, 1.0, True), ngon(4, 0.3, 1.4, False, 0.1)])
+    statuses = _pair_statuses(monkeypatch)
+    for tolerance in (1e-6, 1e-9):
+        out = []
+        for compiled in (True, False):
+            monkeypatch.setattr(adaptive, "COMPILED_PAIR", compiled)
+            out.append(ef.area_form_factors(scene, tolerance=tolerance, error=True))
+        assert np.array_equal(out[0][0], out[1][0]) and np.array_equal(out[0][1], out[1][1])
+    assert statuses and not any(statuses)

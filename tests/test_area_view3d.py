@@ -155,6 +155,7 @@ def test_every_occluded_pair_of_gunter1_cut_into_cells_that_cover_the_emitter(mo
         return T
 
     monkeypatch.setattr(adaptive, "cut_cells", cells)
+    monkeypatch.setattr(adaptive, "COMPILED_PAIR", False)   # the steps one by one
     scene = _read("gunter1.vs3")
     st = {}
     ef.area_form_factors(scene, tolerance=1e-6, error=True, stats=st)
@@ -183,6 +184,7 @@ def test_emitter_cut_on_a_grid_where_geos_fails_to_cut_it(monkeypatch, failures)
     area_row(scene, 0, 1e-6, stats=st)
     assert st.cell_fallbacks == 0
     # the compiled arrangement declines (as where P is not convex): GEOS cuts first
+    monkeypatch.setattr(adaptive, "COMPILED_PAIR", False)   # the steps one by one
     monkeypatch.setattr(events, "_compiled_cut_cells",
                         lambda **k: (np.zeros((0, 3, 2)), np.zeros(0), 0, False))
     polygonize, calls = shapely.polygonize, []

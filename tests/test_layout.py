@@ -66,6 +66,7 @@ LAYERS = {
     "exactff.area.curved": 5.082,
     "exactff.area.umbra": 5.085,
     "exactff.area.hidden": 5.09,
+    "exactff.area.compiled_pair": 5.095,
     "exactff.area.adaptive": 5.10,
     "exactff.area.row": 5.11,
     "exactff.area": 5.5,                      # the package: re-exports its modules

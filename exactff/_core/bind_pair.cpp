@@ -2,6 +2,7 @@
 // and out, the GIL released around the computation; no math.
 
 #include <cstdint>
+#include <memory>
 #include <stdexcept>
 
 #include "bind_arrays.h"
@@ -9,6 +10,7 @@
 #include "hidden.h"
 #include "hidden_setup.h"
 #include "levels.h"
+#include "occluded_pair.h"
 #include "pair.h"
 
 namespace py = pybind11;
@@ -222,6 +224,101 @@ py::tuple adaptive_levels(Array<double> T, Array<long long> depth, Array<long lo
                           r.back_faces);
 }
 
+std::shared_ptr<exactff::PairConstants> pair_constants(py::dict tol, py::sequence rules,
+                                                        py::sequence fused) {
+    if (py::len(rules) != 7) throw std::invalid_argument("pair_constants: 7 rules expected");
+    auto k = std::make_shared<exactff::PairConstants>();
+    const auto num = [&](const char* name) { return tol[name].cast<double>(); };
+    const auto whole = [&](const char* name) { return tol[name].cast<long long>(); };
+    k->hidden_pad = num("AREA_HIDDEN_PAD");
+    k->ray_parallel = num("AREA_RAY_PARALLEL");
+    k->event_parallel = num("AREA_EVENT_PARALLEL");
+    k->hull_rtol = num("AREA_HULL_RTOL");
+    k->extend_rtol = num("AREA_CUT_EXTEND_RTOL");
+    k->curve_rtol = num("AREA_CURVED_EVENT_RTOL");
+    k->chord_split = num("AREA_CURVED_CHORD_SPLIT");
+    k->event_line_key = num("AREA_EVENT_LINE_KEY");
+    k->sliver_cell = num("AREA_SLIVER_CELL");
+    k->cell_cover_rtol = num("AREA_CELL_COVER_RTOL");
+    k->low_rules_tolerance = num("AREA_LOW_RULES_TOLERANCE");
+    k->coplanar_ulps = num("BSP_COPLANAR_ULPS");
+    k->eps = num("EPS");
+    k->samples = whole("AREA_CURVED_EVENT_SAMPLES");
+    k->bisections = whole("AREA_CURVED_EVENT_BISECTIONS");
+    k->max_triples = whole("AREA_CURVED_MAX_TRIPLES");
+    k->chord_halvings = whole("AREA_CURVED_CHORD_HALVINGS");
+    k->rows_per_call = whole("AREA_EVENT_ROWS_PER_CALL");
+    k->umbra_min_lines = whole("AREA_UMBRA_MIN_LINES");
+    k->max_event_lines = whole("AREA_MAX_EVENT_LINES");
+    k->many_cells = whole("AREA_MANY_CELLS");
+    k->convex_ulps = num("CONVEX_TURN_ULPS");
+    k->meet_ulps = num("CLIP_MEET_ULPS");
+    k->normal_floor = num("NORMAL_FLOOR");
+    k->strict_turn = num("AREA_STRICT_TURN");
+    k->vertex_ulps = num("AREA_IMAGE_ULPS");
+    k->sliver_ulps = num("AREA_SLIVER_ULPS");
+    k->precise_rtol = num("AREA_IMAGE_PRECISE_RTOL");
+    k->c1 = num("C1");
+    k->c2 = num("C2");
+    k->sliver_share = num("AREA_SLIVER_SHARE");
+    k->budget_share = num("AREA_IMAGE_BUDGET_SHARE");
+    k->back_face_rtol = num("AREA_BACK_FACE_RTOL");
+    k->edge_on_rtol = num("AREA_EDGE_ON_RTOL");
+    k->precise_share = num("AREA_IMAGE_PRECISE_SHARE");
+    k->boolean_ulps = num("AREA_BOOLEAN_ULPS");
+    k->image_rtol = num("AREA_IMAGE_RTOL");
+    k->offset_ulps = num("OFFSET_ROUNDING_ULPS");
+    k->max_pieces = whole("AREA_MAX_PIECES");
+    k->max_depth = whole("AREA_MAX_DEPTH");
+    k->points_per_call = whole("AREA_POINTS_PER_CALL");
+    if (k->samples < 1 || k->points_per_call < 1)
+        throw std::invalid_argument("pair_constants: samples or points_per_call < 1");
+    for (size_t r = 0; r < 7; ++r) k->rules[r] = as_rule(rules[r]);
+    if (py::len(fused) != 3) throw std::invalid_argument("pair_constants: 3 flags in fused");
+    k->fused_dot = fused[0].cast<bool>();
+    k->fused_matmul = fused[1].cast<bool>();
+    k->fused_stacked = fused[2].cast<bool>();
+    return k;
+}
+
+py::tuple occluded_pair(Array<double> W, Array<std::int64_t> start, Array<std::int64_t> solid,
+                        Array<double> inner, Array<double> Pc, Array<double> Qc,
+                        Array<double> nP, double atol, double area_P, double whole_value,
+                        double whole_err, bool shortcuts,
+                        std::shared_ptr<exactff::PairConstants> constants) {
+    const std::int64_t n = start.size() - 1;
+    if (W.ndim() != 2 || W.shape(1) != 3 || n < 2 || nP.size() != 3 || Pc.ndim() != 2 ||
+        Pc.shape(1) != 3 || Pc.shape(0) < 3 || Qc.ndim() != 2 || Qc.shape(1) != 3 ||
+        Qc.shape(0) < 3 || (solid.size() != 0 && solid.size() != n) ||
+        (inner.size() != 0 && inner.size() != 3 * n) || !constants)
+        throw std::invalid_argument("occluded_pair: arrays of the wrong shapes");
+    check_polygon_starts(start, W.shape(0), "occluded_pair");
+    exactff::PairArgs a;
+    a.W = W.data();
+    a.start = start.data();
+    a.n = n;
+    a.solid = solid.size() ? solid.data() : nullptr;
+    a.inner = inner.size() ? inner.data() : nullptr;
+    a.Pc = Pc.data();
+    a.n_p = Pc.shape(0);
+    a.Qc = Qc.data();
+    a.n_q = Qc.shape(0);
+    a.nP = nP.data();
+    a.atol = atol;
+    a.area_P = area_P;
+    a.whole_value = whole_value;
+    a.whole_err = whole_err;
+    a.shortcuts = shortcuts;
+    a.k = constants.get();
+    exactff::PairResult r;
+    {
+        py::gil_scoped_release release;
+        r = exactff::occluded_pair(a);
+    }
+    return py::make_tuple(r.status, r.value, r.err, r.points, r.culled_events, r.solid_events,
+                          r.curved_events, r.curved_skipped, r.back_faces);
+}
+
 py::tuple corner_first(Array<double> T, Array<double> Vb, Array<double> n, double dP,
                        double reach, double hull_rtol) {
     if (T.size() % 9 || (Vb.size() && (Vb.ndim() != 2 || Vb.shape(1) != 3)) || n.size() != 3)
@@ -285,6 +382,19 @@ py::tuple hidden_setup(Array<double> Qc, Array<double> W, Array<std::int64_t> st
 
 PYBIND11_MODULE(_pair, m) {
     m.doc() = "An occluded pair of an area row, compiled (exactff.area).";
+    py::class_<exactff::PairConstants, std::shared_ptr<exactff::PairConstants>>(
+        m, "PairConstants", "The tolerances and rules occluded_pair reads (occluded_pair.h).");
+    m.def("pair_constants", &pair_constants, py::arg("tol"), py::arg("rules"), py::arg("fused"),
+          "pair_constants(tol, rules, fused) -> PairConstants: the tolerances by name, the "
+          "levels' seven rules and whether numpy's BLAS fuses the multiply-adds of a dot, a "
+          "matrix and a stacked product (numpy_ops.h), for occluded_pair");
+    m.def("occluded_pair", &occluded_pair, py::arg("W"), py::arg("start"), py::arg("solid"),
+          py::arg("inner"), py::arg("Pc"), py::arg("Qc"), py::arg("nP"), py::arg("atol"),
+          py::arg("area_P"), py::arg("whole_value"), py::arg("whole_err"),
+          py::arg("shortcuts"), py::arg("constants"),
+          "occluded_pair(...) -> (status, value, err, points, culled_events, solid_events, "
+          "curved_events, curved_skipped, back_faces): adaptive.py's _hidden_integral in one "
+          "call, status 0, or declined (status > 0, the rest 0; occluded_pair.h)");
     m.def("event_lines", &event_lines, py::arg("W"), py::arg("start"), py::arg("solid"),
           py::arg("nP"), py::arg("dP"), py::arg("frame"), py::arg("c"), py::arg("radius"),
           py::arg("nQ"), py::arg("q0"), py::arg("RQ"), py::arg("Q2"), py::arg("shortcuts"),

@@ -13,6 +13,8 @@
 #include <map>
 #include <vector>
 
+#include "frame.h"
+
 namespace exactff {
 namespace {
 
@@ -40,18 +42,6 @@ D3 unit_normal(const std::vector<D3>& P) {
     const D3 A{0.5 * s.x, 0.5 * s.y, 0.5 * s.z};
     const double L = std::sqrt(A.x * A.x + A.y * A.y + A.z * A.z);
     return {A.x / L, A.y / L, A.z / L};
-}
-
-// geometry.receiver_frame (Duff et al., JCGT 2017): rows t1, t2, n
-void receiver_frame(const D3& nv, double* R) {
-    const double L = std::sqrt(nv.x * nv.x + nv.y * nv.y + nv.z * nv.z);
-    const double x = nv.x / L, y = nv.y / L, z = nv.z / L;
-    const double sign = z >= 0 ? 1.0 : -1.0;
-    const double a = -1.0 / (sign + z);
-    const double b = x * y * a;
-    const double r[9] = {1.0 + sign * x * x * a, sign * b, -sign * x, b, sign + y * y * a, -y,
-                         x, y, z};
-    std::copy(r, r + 9, R);
 }
 
 // halfspace.clip_front of P about c: P itself (wholly in front, one vertex strictly),
@@ -131,7 +121,8 @@ SetupResult hidden_setup(const SetupArgs& a) {
     for (std::int64_t k = 0; k < a.n_q; ++k) Q[k] = {a.Qc[3 * k], a.Qc[3 * k + 1], a.Qc[3 * k + 2]};
     // plane_frame: Qc's unit normal, origin, frame and 2-D coordinates
     const D3 nQ = unit_normal(Q), q0 = Q[0];
-    receiver_frame(nQ, r.RQ);
+    const double n3[3] = {nQ.x, nQ.y, nQ.z};
+    receiver_frame(n3, r.RQ);
     const D3 t1{r.RQ[0], r.RQ[1], r.RQ[2]}, t2{r.RQ[3], r.RQ[4], r.RQ[5]};
     std::vector<double> u(Q.size()), v(Q.size());
     for (size_t k = 0; k < Q.size(); ++k) {

@@ -6,7 +6,8 @@ differences exceeds half of the absolute tolerance ``atol`` (a global budget per
 and the rules' differences checked against the unoccluded
 point values' integral, known exactly (docs/explanation/area-form-factors.md). The
 levels run compiled (:mod:`exactff.area._pair`, ``_core/levels.cpp``, the GIL released);
-:func:`_adaptive_levels` is their numpy reference and takes the pairs they decline.
+:func:`_adaptive_levels` is their numpy reference and takes the pairs they decline; so
+is :func:`_hidden_integral` to the whole pair in one call (:mod:`.compiled_pair`).
 """
 
 import numpy as np
@@ -17,15 +18,17 @@ from ..errors import NumericalError, misses_tolerance
 from ..geometry import area_vector, cross, polygon_area, receiver_frame
 from ._pair import adaptive_levels as _compiled_adaptive_levels
 from ._pair import corner_first as _compiled_corner_first
+from .compiled_pair import LEVEL_RULES, LEVEL_TOLERANCES
+from .compiled_pair import hidden_integral_in_one_call as _hidden_integral_in_one_call
 from .curved import curved_event_lines
 from .events import cut_cells, distinct_lines, event_lines
 from .hidden import hidden_setup, hidden_values
 from .points import point_values
 from .umbra import outside_umbras, triangle_unoccluded, umbra_cells, umbra_edges, umbras
-from .rules import (RULE_PAIRS, CORNER_MIDDLE_RULE, SYMMETRIC_RULES, budget_refined, quarter,
-                    refined, rule_pair, triangle_areas, triangle_rule)
+from .rules import (CORNER_MIDDLE_RULE, budget_refined, quarter, refined, rule_pair,
+                    triangle_areas, triangle_rule)
 
-__all__ = ["COMPILED_LEVELS", "occluded_pair"]
+__all__ = ["COMPILED_LEVELS", "COMPILED_PAIR", "occluded_pair"]
 
 
 def _corner_first(T, blockers, nP, dP, reach=0.0, compiled=True):
@@ -122,7 +125,16 @@ def _hidden_integral(S, Pc, Qc, nP, atol, area_P, whole, shortcuts, st, solid=No
                      inner=None):
     """The adaptive integral of :func:`occluded_pair` to the absolute error ``atol``,
     with ``whole`` the pair's unoccluded value and estimate (per unit area
-    of P)."""
+    of P): in one compiled call (:mod:`.compiled_pair`) where it takes the pair, else
+    (or without :data:`COMPILED_PAIR`) by the steps below, its reference."""
+    if COMPILED_PAIR and COMPILED_LEVELS:
+        r = _hidden_integral_in_one_call(S, Pc, Qc, nP, atol, area_P, whole, shortcuts,
+                                         solid, inner)
+        if r[0] == 0:
+            for k, v in zip(("culled_events", "solid_events", "curved_events",
+                             "curved_skipped", "back_faces"), r[4:] if st is not None else ()):
+                setattr(st, k, getattr(st, k) + v)
+            return r[1:4]
     R = receiver_frame(nP)
     c = Pc.mean(axis=0)
     dP = float(nP @ Pc[0])
@@ -291,20 +303,11 @@ def _unoccluded_bound(Pc, Qc):
     return 1.0 if not d2 > 0 else min(1.0, area_Q / (np.pi * d2))
 
 
-#: The compiled levels' rules, in levels.h's order: the symmetric pair (degrees 4 and 8),
-#: the collapsed pairs of rung 0 and rung 1, and the third rule at a corner.
-_LEVEL_RULES = (SYMMETRIC_RULES[tol.AREA_SYMMETRIC_DEGREES[0]],
-                SYMMETRIC_RULES[tol.AREA_SYMMETRIC_DEGREES[1]],
-                *RULE_PAIRS[0], *RULE_PAIRS[1], CORNER_MIDDLE_RULE)
-#: The tolerances the compiled levels read, by name (read at each call).
-_LEVEL_TOLERANCES = (
-    "AREA_IMAGE_ULPS", "AREA_SLIVER_ULPS", "AREA_MAX_PIECES", "AREA_IMAGE_PRECISE_RTOL", "C1",
-    "C2", "EPS", "AREA_SLIVER_SHARE", "AREA_IMAGE_BUDGET_SHARE", "AREA_BACK_FACE_RTOL",
-    "AREA_EDGE_ON_RTOL", "AREA_IMAGE_PRECISE_SHARE", "AREA_BOOLEAN_ULPS", "AREA_IMAGE_RTOL",
-    "OFFSET_ROUNDING_ULPS", "AREA_MAX_DEPTH", "AREA_POINTS_PER_CALL")
 #: False: the levels by numpy (:func:`_adaptive_levels`), the reference the compiled
 #: ones are tested against (tests/test_area_pair_compiled.py).
 COMPILED_LEVELS = True
+#: False: every pair by :func:`_hidden_integral`'s steps, :mod:`.compiled_pair`'s reference.
+COMPILED_PAIR = True
 
 
 def _levels(T, depth, rung, corner, nP, Qc, S, st, setup, atol, area_P, total_area, start,
@@ -319,11 +322,11 @@ def _levels(T, depth, rung, corner, nP, Qc, S, st, setup, atol, area_P, total_ar
         rules_err = float(sum(float(d.sum()) for d in acc["diff"]))
         r = _compiled_adaptive_levels(
             T, depth.astype(np.int64), rung.astype(np.int64), corner.astype(bool), nP,
-            receiver_frame(nP), area_P, total_area, atol, rules_err, start, _LEVEL_RULES,
+            receiver_frame(nP), area_P, total_area, atol, rules_err, start, LEVEL_RULES,
             symmetric, Qc, setup.corners, setup.q0, setup.nQ, setup.RQ, setup.V,
             setup.counts, setup.NK, setup.group, setup.extent, setup.parts,
             setup.part_counts, setup.lo, setup.hi,
-            {k: getattr(tol, k) for k in _LEVEL_TOLERANCES})
+            {k: getattr(tol, k) for k in LEVEL_TOLERANCES})
         if r[0]:
             (Ta, da, ra, ca, hi, lo, diff, rnd, hiU, loU, rndU, slivers, points,
              back) = r[1:]
