@@ -14,7 +14,7 @@ import pytest
 import exactff as ef
 from exactff import NumericalError
 from exactff import _tolerances as tol
-from exactff.area import adaptive
+from exactff.area import adaptive, compiled_pair
 from exactff.area._pair import event_lines as compiled_event_lines
 from exactff.area.curved import curved_event_lines
 from exactff.area.events import event_lines
@@ -743,3 +743,24 @@ def test_compiled_pair_of_many_sided_polygons_is_the_reference_to_the_bit(monkey
             out.append(ef.area_form_factors(scene, tolerance=tolerance, error=True))
         assert np.array_equal(out[0][0], out[1][0]) and np.array_equal(out[0][1], out[1][1])
     assert statuses and not any(statuses)
+
+
+def test_pair_constants_never_read_half_stored(monkeypatch):
+    # rows in threads (executor=ThreadPoolExecutor) ask for the pair's constants while
+    # one of them builds them for changed tolerances: a thread switched to during that
+    # build (here the build asks for them itself, as that thread would) gets constants
+    # of the tolerances now set, never the old ones (nor, at first use, none: KeyError)
+    old = compiled_pair.pair_constants()
+    build, inner = compiled_pair._compiled_pair_constants, []
+
+    def build_asking_again(*a):
+        if not inner:
+            inner.append(None)
+            inner[0] = compiled_pair.pair_constants()
+        return build(*a)
+
+    monkeypatch.setattr(compiled_pair, "_compiled_pair_constants", build_asking_again)
+    monkeypatch.setattr(tol, "AREA_HULL_RTOL", 2 * tol.AREA_HULL_RTOL)
+    new = compiled_pair.pair_constants()
+    assert inner and inner[0] is not old and new is not old
+    assert compiled_pair.pair_constants() is new        # built once per change

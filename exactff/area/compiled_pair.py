@@ -62,12 +62,16 @@ def pair_constants():
     built again only where a tolerance changed since the last call."""
     names = PAIR_TOLERANCES + LEVEL_TOLERANCES
     values = tuple(getattr(tol, k) for k in names) + (NORMAL_FLOOR,)
-    if _pair_constants_cache.get("key") != values:
-        _pair_constants_cache["key"] = values
-        _pair_constants_cache["value"] = _compiled_pair_constants(
+    # the tolerances and their constants stored as one entry: rows in threads read them
+    # while another stores them (two entries, one stored before the other, let a thread
+    # read the new tolerances with the old constants, or with none yet)
+    cached = _pair_constants_cache.get("entry")
+    if cached is None or cached[0] != values:
+        cached = (values, _compiled_pair_constants(
             dict(zip(names, values)) | {"NORMAL_FLOOR": NORMAL_FLOOR}, LEVEL_RULES,
-            _BLAS_FUSES)
-    return _pair_constants_cache["value"]
+            _BLAS_FUSES))
+        _pair_constants_cache["entry"] = cached
+    return cached[1]
 
 
 def hidden_integral_in_one_call(S, Pc, Qc, nP, atol, area_P, whole, shortcuts, solid,
