@@ -42,11 +42,18 @@ _pair_constants_cache = {}
 
 
 def blas_fuses():
-    """Whether numpy's products of float arrays fuse their multiply-adds (x86-64 OpenBLAS
-    does: ``fma(a2, b2, fma(a1, b1, a0 b0))``), for a vector's dot, a (k, 3) @ (3, m)
-    product and a (t, 3, 2) @ (2, 3) one: the compiled pair rounds as they do
-    (``_core/numpy_ops.h``). Each probe has ``a1 b1`` inexact and ``a0 b0 = -1``: fused,
-    the result keeps the product's rounding error (2**-60)."""
+    """Whether numpy's products of float arrays fuse their multiply-adds (as x86-64
+    OpenBLAS's kernels may: ``fma(a2, b2, fma(a1, b1, a0 b0))``), for a vector's dot, a
+    (k, 3) @ (3, m) product and a (t, 3, 2) @ (2, 3) one: the compiled pair rounds as
+    they do (``_core/numpy_ops.h``, which says what it does not imitate). Each probe has
+    ``a1 b1`` inexact and ``a0 b0 = -1``: fused, the result keeps the product's rounding
+    error (2**-60).
+
+    Examples
+    --------
+    >>> len(blas_fuses()), all(isinstance(f, bool) for f in blas_fuses())
+    (3, True)
+    """
     e = 1.0 + 2.0 ** -30
     fused = 2.0 ** -29 + 2.0 ** -60
     a, b = np.array([1.0, e, 0.0]), np.array([-1.0, e, 0.0])
