@@ -14,7 +14,7 @@ import pytest
 import exactff as ef
 from exactff import NumericalError
 from exactff import _tolerances as tol
-from exactff.area import adaptive
+from exactff.area import adaptive, compiled_pair
 from exactff.area._pair import event_lines as compiled_event_lines
 from exactff.area.curved import curved_event_lines
 from exactff.area.events import event_lines
@@ -743,3 +743,53 @@ def test_compiled_pair_of_many_sided_polygons_is_the_reference_to_the_bit(monkey
             out.append(ef.area_form_factors(scene, tolerance=tolerance, error=True))
         assert np.array_equal(out[0][0], out[1][0]) and np.array_equal(out[0][1], out[1][1])
     assert statuses and not any(statuses)
+
+
+def test_pair_constants_never_read_half_stored(monkeypatch):
+    # rows in threads (executor=ThreadPoolExecutor) ask for the pair's constants while
+    # one of them builds them for changed tolerances: a thread switched to during that
+    # build (here the build asks for them itself, as that thread would) gets constants
+    # of the tolerances now set, never the old ones (nor, at first use, none: KeyError)
+    old = compiled_pair.pair_constants()
+    build, inner = compiled_pair._compiled_pair_constants, []
+
+    def build_asking_again(*a):
+        if not inner:
+            inner.append(None)
+            inner[0] = compiled_pair.pair_constants()
+        return build(*a)
+
+    monkeypatch.setattr(compiled_pair, "_compiled_pair_constants", build_asking_again)
+    monkeypatch.setattr(tol, "AREA_HULL_RTOL", 2 * tol.AREA_HULL_RTOL)
+    new = compiled_pair.pair_constants()
+    assert inner and inner[0] is not old and new is not old
+    assert compiled_pair.pair_constants() is new        # built once per change
+
+
+def test_compiled_pair_declines_where_the_rules_miss_the_closed_form(monkeypatch):
+    # the rules' integral of the unoccluded point values against the pair's closed form
+    # (missed_U): given a closed form 1e-3 off (far beyond the rules' differences), the
+    # one call declines (status 7) and the reference's steps check the triangles one by
+    # one; given the pair's own, the one call takes every pair of test4
+    calls, pair = [], adaptive._hidden_integral_in_one_call
+
+    def record(*a):
+        calls.append(a)
+        return pair(*a)
+
+    monkeypatch.setattr(adaptive, "_hidden_integral_in_one_call", record)
+    ef.area_form_factors(ef.read_vs3(os.path.join(DATA, "test4.vs3")), tolerance=1e-6)
+    monkeypatch.undo()
+    assert len(calls) > 5
+    for S, Pc, Qc, nP, atol, area_P, whole, shortcuts, solid, inner in calls:
+        off = (whole[0] + 1e-3, whole[1])
+        assert compiled_pair.hidden_integral_in_one_call(
+            S, Pc, Qc, nP, atol, area_P, whole, shortcuts, solid, inner)[0] == 0
+        assert compiled_pair.hidden_integral_in_one_call(
+            S, Pc, Qc, nP, atol, area_P, off, shortcuts, solid, inner)[0] == 7
+    S, Pc, Qc, nP, atol, area_P, whole, shortcuts, solid, inner = calls[0]
+    st = AreaStats()
+    monkeypatch.setattr(adaptive, "COMPILED_PAIR", False)
+    adaptive.occluded_pair(S, Pc, Qc, nP, atol, area_P, (whole[0] + 1e-3, whole[1]),
+                           shortcuts, st, solid=solid, inner=inner)
+    assert st.checked_triangles > 0

@@ -1,12 +1,21 @@
 // numpy's roundings, for compiled code that must give the values of a numpy reference to
 // the bit (occluded_pair.cpp against exactff/area/adaptive.py): the pairwise sum of
 // np.sum over a contiguous array, and the products numpy hands to the BLAS (a @ b of
-// float arrays; np.linalg.norm of a vector is sqrt(x @ x)), which the x86-64 OpenBLAS
+// float arrays; np.linalg.norm of a vector is sqrt(x @ x)), which some x86-64 OpenBLAS
 // kernels compute as a chain of fused multiply-adds in order of the inner index
-// (fma(a2, b2, fma(a1, b1, a0 b0))) and others without fusing: the caller says which
-// (adaptive.py probes numpy once). -ffp-contract=off keeps the rest of the expressions
-// as written. Where the BLAS rounds yet otherwise, the compiled pair differs from the
-// reference by those roundings, no more.
+// (fma(a2, b2, fma(a1, b1, a0 b0))) and others without fusing: the caller says which,
+// per kind of product (compiled_pair.py probes numpy once: a vector's dot, a matrix
+// product, a stacked one; OpenBLAS 0.3.31's SkylakeX kernels fuse all three, its
+// Haswell and Zen ones the products but not the dot, its Sandybridge ones none).
+// -ffp-contract=off keeps the rest of the expressions as written. Not imitated: a
+// matrix times one column (gemv, (k, 3) @ (3, 1), as predicates.coplanar_band_sides
+// takes a plane's sides), which those kernels round in an order of their own (a third
+// of 3,000 random rows neither chain); occluded_pair.cpp's in_plane, a decision, may
+// then differ from the reference's for a vertex within an ulp of the band's edge.
+// Where the BLAS rounds otherwise than the caller says, the roundings may turn a
+// decision (the cells' cuts), so that values differ beyond them, within the
+// estimates: every flag wrong, the closed Cornell box at 1e-6 differed by up to 4.5e-11
+// (2e-10 of the value) on 8 values, gunter1 by 7e-18.
 
 #ifndef EXACTFF_CORE_NUMPY_OPS_H
 #define EXACTFF_CORE_NUMPY_OPS_H

@@ -124,7 +124,9 @@ long long distinct_lines(const std::vector<double>& S, double size, const std::v
 }
 
 // predicates.py's coplanar_band_sides(K, nQ[None], [d]) all 0: every vertex of K within
-// the near-coplanar band of the plane nQ . x = d
+// the near-coplanar band of the plane nQ . x = d (its sides rounded as a matrix product,
+// not as numpy's gemv: a vertex within an ulp of the band's edge may be taken otherwise
+// than by the reference, numpy_ops.h)
 bool in_plane(const double* K, std::int64_t k, const double* nQ, double d, double ulps,
               double eps, bool fused) {
     double big[3] = {0, 0, 0};

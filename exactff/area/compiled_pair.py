@@ -42,11 +42,18 @@ _pair_constants_cache = {}
 
 
 def blas_fuses():
-    """Whether numpy's products of float arrays fuse their multiply-adds (x86-64 OpenBLAS
-    does: ``fma(a2, b2, fma(a1, b1, a0 b0))``), for a vector's dot, a (k, 3) @ (3, m)
-    product and a (t, 3, 2) @ (2, 3) one: the compiled pair rounds as they do
-    (``_core/numpy_ops.h``). Each probe has ``a1 b1`` inexact and ``a0 b0 = -1``: fused,
-    the result keeps the product's rounding error (2**-60)."""
+    """Whether numpy's products of float arrays fuse their multiply-adds (as x86-64
+    OpenBLAS's kernels may: ``fma(a2, b2, fma(a1, b1, a0 b0))``), for a vector's dot, a
+    (k, 3) @ (3, m) product and a (t, 3, 2) @ (2, 3) one: the compiled pair rounds as
+    they do (``_core/numpy_ops.h``, which says what it does not imitate). Each probe has
+    ``a1 b1`` inexact and ``a0 b0 = -1``: fused, the result keeps the product's rounding
+    error (2**-60).
+
+    Examples
+    --------
+    >>> len(blas_fuses()), all(isinstance(f, bool) for f in blas_fuses())
+    (3, True)
+    """
     e = 1.0 + 2.0 ** -30
     fused = 2.0 ** -29 + 2.0 ** -60
     a, b = np.array([1.0, e, 0.0]), np.array([-1.0, e, 0.0])
@@ -62,12 +69,16 @@ def pair_constants():
     built again only where a tolerance changed since the last call."""
     names = PAIR_TOLERANCES + LEVEL_TOLERANCES
     values = tuple(getattr(tol, k) for k in names) + (NORMAL_FLOOR,)
-    if _pair_constants_cache.get("key") != values:
-        _pair_constants_cache["key"] = values
-        _pair_constants_cache["value"] = _compiled_pair_constants(
+    # the tolerances and their constants stored as one entry: rows in threads read them
+    # while another stores them (two entries, one stored before the other, let a thread
+    # read the new tolerances with the old constants, or with none yet)
+    cached = _pair_constants_cache.get("entry")
+    if cached is None or cached[0] != values:
+        cached = (values, _compiled_pair_constants(
             dict(zip(names, values)) | {"NORMAL_FLOOR": NORMAL_FLOOR}, LEVEL_RULES,
-            _BLAS_FUSES)
-    return _pair_constants_cache["value"]
+            _BLAS_FUSES))
+        _pair_constants_cache["entry"] = cached
+    return cached[1]
 
 
 def hidden_integral_in_one_call(S, Pc, Qc, nP, atol, area_P, whole, shortcuts, solid,
