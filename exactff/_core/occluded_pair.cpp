@@ -147,7 +147,7 @@ bool in_plane(const double* K, std::int64_t k, const double* nQ, double d, doubl
     return true;
 }
 
-// adaptive.py's _unoccluded_bound(Pc, Qc)
+// points.py's unoccluded_bound(Pc, Qc)
 double unoccluded_bound(const double* Pc, std::int64_t n_p, const double* Qc, std::int64_t n_q,
                         bool fused) {
     double gap[3];

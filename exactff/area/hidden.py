@@ -12,7 +12,7 @@ import numpy as np
 
 from .. import _tolerances as tol
 from ..errors import nonnegative
-from ..geometry import plane_frame, receiver_frame, unit_normal
+from ..geometry import area_vector, plane_frame, receiver_frame, unit_normal
 from ..halfspace import NORMAL_FLOOR, clip_front
 from ..methods import Exact
 from ..predicates import coplanar_band_sides
@@ -55,6 +55,11 @@ class HiddenSetup(NamedTuple):
     hi: np.ndarray
     #: Qc's size in its plane (the pieces lie within Qc or its box).
     extent: float
+    #: The area of Qc's convex parts left out as slivers of rounding (width within
+    #: ``CONVEX_TURN_ULPS`` ulps of their length: their sides' half-planes are
+    #: rounding's, and may keep what lies outside them): the caller bounds their hidden
+    #: part by their unoccluded one.
+    sliver_area: float = 0.0
 
 
 def hidden_setup(Qc, blockers, solid=None, inner=None, compiled=True):
@@ -121,6 +126,7 @@ def hidden_setup(Qc, blockers, solid=None, inner=None, compiled=True):
         return None
     # the pyramid's base: Qc itself where it is strictly convex (the images then lie in
     # it), else a rectangle around it (the pieces then cut by Qc's convex parts)
+    sliver_area = 0.0
     if _strictly_convex(Q2):
         corners, parts = np.asarray(Qc, dtype=float), np.zeros((0, 3, 2))
         part_counts = np.zeros(0, dtype=np.int64)
@@ -130,7 +136,18 @@ def hidden_setup(Qc, blockers, solid=None, inner=None, compiled=True):
         lo, hi = lo - pad, hi + pad
         corners = q0 + np.array([[lo[0], lo[1]], [hi[0], lo[1]], [hi[0], hi[1]],
                                  [lo[0], hi[1]]]) @ RQ[:2]
-        Qparts = [(Qp - q0) @ RQ.T for Qp in convex_pieces(np.asarray(Qc, float), nQ)]
+        # (a part a clip left within rounding of a segment, as where Q's edge lies in
+        # P's plane: its sides' half-planes may keep the whole base, so it is left out
+        # and its area counted instead)
+        Qparts = []
+        for Qp in convex_pieces(np.asarray(Qc, float), nQ):
+            P2 = ((Qp - q0) @ RQ.T)[:, :2]
+            e = np.roll(P2, -1, axis=0) - P2
+            twice = float(np.sum(P2[:, 0] * np.roll(P2[:, 1], -1) - np.roll(P2[:, 0], -1) * P2[:, 1]))
+            if twice > 2 * tol.CONVEX_TURN_ULPS * tol.EPS * float((e * e).sum(axis=1).max()):
+                Qparts.append((Qp - q0) @ RQ.T)
+            else:
+                sliver_area += float(np.linalg.norm(area_vector(Qp)))
         parts, part_counts = padded(Qparts)
         parts = parts[:, :, :2]
     # the blockers' convex pieces: a convex one (all tested at once) is its own piece,
@@ -162,7 +179,7 @@ def hidden_setup(Qc, blockers, solid=None, inner=None, compiled=True):
     allv = np.vstack(Kc + [Qc])
     extent = float(np.ptp(Q2, axis=0).max())          # the pieces lie within Qc (or its box)
     return HiddenSetup(nQ, q0, RQ, Kc, corners, parts, part_counts, V, counts, NK, group,
-                       allv.min(axis=0), allv.max(axis=0), extent)
+                       allv.min(axis=0), allv.max(axis=0), extent, sliver_area)
 
 
 def hidden_values(X, nP, Qc, blockers, st=None, atol=0.0, setup=None, shortcuts=True,
@@ -237,7 +254,7 @@ def hidden_values(X, nP, Qc, blockers, st=None, atol=0.0, setup=None, shortcuts=
                                 weights[k:k + tol.AREA_POINTS_PER_CALL], bound_atol)
                   for k in range(0, nX, tol.AREA_POINTS_PER_CALL)]
         return np.concatenate([h for h, _ in parts_]), np.concatenate([e for _, e in parts_])
-    nQ, q0, RQ, Kc, corners, parts, part_counts, V, counts, NK, group, lo, hi, extent = setup
+    nQ, q0, RQ, Kc, corners, parts, part_counts, V, counts, NK, group, lo, hi, extent, _ = setup
     # the scene's size here: the box of the blockers, Qc and the points
     size = float((np.maximum(hi, X.max(axis=0)) - np.minimum(lo, X.min(axis=0))).max())
     # the pieces, and their point form factors by the sector sums (Eq. 3's kernel) with

@@ -6,10 +6,10 @@ bound and the check of the adaptive rules' differences).
 import numpy as np
 
 from .. import _tolerances as tol
-from ..geometry import receiver_frame
+from ..geometry import area_vector, receiver_frame
 from ..kernel._sector import row_sums
 
-__all__ = ["point_values"]
+__all__ = ["point_values", "unoccluded_bound"]
 
 
 def point_values(X, nP, Qs):
@@ -56,3 +56,22 @@ def point_values(X, nP, Qs):
     # the sector sums' own error model (C1 is calibrated for the unit roundoff 2**-53)
     return (np.abs(S).reshape(m, nX) / (2.0 * np.pi),
             ((tol.C1 * tol.EPS * mags + errs) / (2.0 * np.pi)).reshape(m, nX))
+
+
+def unoccluded_bound(Pc, Qc, area=None):
+    """An upper bound on the point form factor F(x -> Qc) at every point x of Pc: 1, and
+    ``A_Q / (pi d^2)`` with d the distance between the two polygons' bounding boxes (the
+    kernel ``cos cos / (pi r^2)`` is at most ``1 / (pi d^2)`` there); with ``area``,
+    the same for a part of Qc of that area.
+
+    Examples
+    --------
+    >>> P = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], float)
+    >>> round(unoccluded_bound(P, P[::-1] + [0, 0, 2]), 6)        # 1 / (4 pi)
+    0.079577
+    """
+    gap = np.maximum(0.0, np.maximum(Pc.min(axis=0) - Qc.max(axis=0),
+                                     Qc.min(axis=0) - Pc.max(axis=0)))
+    d2 = float(gap @ gap)
+    area_Q = float(np.linalg.norm(area_vector(Qc))) if area is None else float(area)
+    return 1.0 if not d2 > 0 else min(1.0, area_Q / (np.pi * d2))
