@@ -66,7 +66,13 @@ def blas_fuses():
 
 def pair_constants():
     """The compiled pair's tolerances and rules (:func:`exactff.area._pair.pair_constants`),
-    built again only where a tolerance changed since the last call."""
+    built again only where a tolerance changed since the last call.
+
+    Examples
+    --------
+    >>> pair_constants() is pair_constants()          # kept while no tolerance changes
+    True
+    """
     names = PAIR_TOLERANCES + LEVEL_TOLERANCES
     values = tuple(getattr(tol, k) for k in names) + (NORMAL_FLOOR,)
     # the tolerances and their constants stored as one entry: rows in threads read them
@@ -90,7 +96,23 @@ def hidden_integral_in_one_call(S, Pc, Qc, nP, atol, area_P, whole, shortcuts, s
     ``(status,)`` with status > 0 where it declines the pair for the reference's steps
     (an umbra to look for, too many distinct lines, GEOS's cells, a blocker in the
     receiver's plane with solids, no compiled hidden set-up or levels, the rules' sum to
-    check triangle by triangle)."""
+    check triangle by triangle).
+
+    Examples
+    --------
+    Two unit squares 2 apart, a 0.5 x 0.5 plate halfway between (the unoccluded value
+    ``whole`` by the closed form, per unit area of P):
+
+    >>> import exactff as ef
+    >>> P = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], float)
+    >>> Q = P[::-1] + [0, 0, 2]
+    >>> plate = np.array([[.25, .75, 1], [.75, .75, 1], [.75, .25, 1], [.25, .25, 1]])
+    >>> whole = (ef.polygon_form_factor(P, Q), 0.0)
+    >>> r = hidden_integral_in_one_call([Q, plate], P, Q, np.array([0, 0, 1.0]), 1e-8,
+    ...                                 1.0, whole, True, None, None)
+    >>> r[0], round(r[1], 8), bool(r[2] <= 1e-8)
+    (0, 0.03140269, True)
+    """
     W = np.concatenate(S)
     start = np.zeros(len(S) + 1, dtype=np.int64)
     np.cumsum([len(A) for A in S], out=start[1:])

@@ -12,7 +12,7 @@ import numpy as np
 
 from .. import _tolerances as tol
 from ..errors import nonnegative
-from ..geometry import area_vector, plane_frame, receiver_frame, unit_normal
+from ..geometry import area_vector, plane_frame, polygon_area, receiver_frame, unit_normal
 from ..halfspace import NORMAL_FLOOR, clip_front
 from ..methods import Exact
 from ..predicates import coplanar_band_sides
@@ -141,13 +141,14 @@ def hidden_setup(Qc, blockers, solid=None, inner=None, compiled=True):
         # and its area counted instead)
         Qparts = []
         for Qp in convex_pieces(np.asarray(Qc, float), nQ):
-            P2 = ((Qp - q0) @ RQ.T)[:, :2]
-            e = np.roll(P2, -1, axis=0) - P2
-            twice = float(np.sum(P2[:, 0] * np.roll(P2[:, 1], -1) - np.roll(P2[:, 0], -1) * P2[:, 1]))
-            if twice > 2 * tol.CONVEX_TURN_ULPS * tol.EPS * float((e * e).sum(axis=1).max()):
-                Qparts.append((Qp - q0) @ RQ.T)
+            F = (Qp - q0) @ RQ.T
+            e = np.roll(F, -1, axis=0) - F
+            # its signed area in the frame against its longest side's square
+            if area_vector(F)[2] > (tol.CONVEX_TURN_ULPS * tol.EPS
+                                    * float((e * e).sum(axis=1).max())):
+                Qparts.append(F)
             else:
-                sliver_area += float(np.linalg.norm(area_vector(Qp)))
+                sliver_area += polygon_area(Qp)
         parts, part_counts = padded(Qparts)
         parts = parts[:, :, :2]
     # the blockers' convex pieces: a convex one (all tested at once) is its own piece,
