@@ -90,7 +90,13 @@ def clip_halfspace(V, counts, h):
             # the meet where it is the same point as the interpolated one within the
             # latter's error, the crossing is well conditioned and no product underflows
             # (not so where the planes' rounding dominates: subnormal heights, say)
+            # and the meet on the edge's line to rounding, |(meet - a) x e| within the
+            # interpolated point's u (|a| + |e|) |e| (an edge in the plane but for
+            # rounding, cond 1e14: the meet's error, u |a| cond, left the line by a
+            # third of the edge, the interpolated point's stays along it)
             use = ((np.abs(meet - x).sum(axis=1) <= tol.CLIP_MEET_ULPS * tol.EPS * (la + le) * cond)
+                   & (np.abs(cross(meet - a, e)).sum(axis=1)
+                      <= tol.CLIP_MEET_ULPS * tol.EPS * (la + le) * le)
                    & (cond * tol.CLIP_MEET_ULPS * tol.EPS < 1.0)
                    & (np.abs(m).sum(axis=1) > tol.CLIP_MEET_ULPS * tol.EPS * la * le)
                    & (np.abs(d) > NORMAL_FLOOR) & (la * le > NORMAL_FLOOR))

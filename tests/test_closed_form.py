@@ -9,6 +9,8 @@ path before, with its own estimate) where it is accurate; reciprocity, splitting
 closed cube's row sums.
 """
 
+import os
+
 import mpmath as mp
 import numpy as np
 import pytest
@@ -552,6 +554,41 @@ def test_half_hexagon_facing_a_triangle_vs_the_tanh_sinh_oracle():
     g, eg = _contour_tanh_sinh(H, T)
     assert abs(f - g) <= e + eg
     assert abs(f - 0.07630919639206139) <= 1e-13
+
+
+def test_clip_crossing_stays_on_its_edge_line():
+    # an edge in the plane but for rounding, far from the origin (gunter1 turned and
+    # moved by 1000: a wall's edge in the receiver's plane, its ends 9e-14 behind and
+    # 4e-16 in front): the crossing's meet form (cond 1e14) left the edge's line by 0.36;
+    # every vertex of the part lies on a line of an edge of the polygon, to rounding,
+    # in the Python clip and the compiled hidden set-up's
+    from exactff.area.hidden import hidden_setup
+    from exactff.geometry import area_vector, plane_frame
+    from exactff.halfspace import clip_front
+
+    scene = ef.read_vs3(os.path.join(os.path.dirname(__file__), "data", "view3d", "gunter1.vs3"))
+    Q, _ = np.linalg.qr(np.random.default_rng(0).normal(size=(3, 3)))
+    Q[:, 0] *= np.sign(np.linalg.det(Q))
+    floor, wall, receiver = (np.asarray(scene.polygons[k], float) @ Q.T + 1e3
+                             for k in (4, 14, 19))
+    # the receiver's part in front of the emitter's plane (pair (4, 19)), and its plane
+    nP = area_vector(floor) / np.linalg.norm(area_vector(floor))
+    nR = area_vector(receiver)[None] / np.linalg.norm(area_vector(receiver))
+    _, (part,) = closed_form.front_parts(floor, nP, [receiver], nR,
+                                         *closed_form.front_distances(floor, nP, receiver[None], nR))
+    n, q0 = plane_frame(part)[:2]
+    d = (wall - q0) @ n
+    assert abs(d[:2]).max() < 1e-13 and d[:2].min() < 0 < d[:2].max()  # the edge as recorded
+
+    def off_lines(part):
+        e = np.roll(wall, -1, axis=0) - wall
+        gap = [np.linalg.norm(np.cross(x - wall, e), axis=1) / np.linalg.norm(e, axis=1)
+               for x in part]
+        return max(min(g) for g in gap)
+
+    assert off_lines(clip_front(wall, n, q0)) < 1e-9
+    for compiled in (True, False):
+        assert off_lines(hidden_setup(part, [wall], compiled=compiled).Kc[0]) < 1e-9
 
 
 def test_clip_leaves_no_copy_of_a_vertex_within_rounding():

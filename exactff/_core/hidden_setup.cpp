@@ -83,7 +83,10 @@ std::vector<D3> clip_front(const std::vector<D3>& P, const D3& n, const D3& c,
         const D3 meet{mh.x / dd, mh.y / dd, mh.z / dd};
         const double cond = 1.0 + hl1 * le / std::abs(dd);
         const double u = a.meet_ulps * a.eps;
-        if (l1(sub3(meet, X)) <= u * (la + le) * cond && cond * u < 1.0 && l1(m) > u * la * le &&
+        // (and on the edge's line to rounding: halfspace.clip_halfspace)
+        if (l1(sub3(meet, X)) <= u * (la + le) * cond &&
+            l1(cross3(sub3(meet, A), e)) <= u * (la + le) * le && cond * u < 1.0 &&
+            l1(m) > u * la * le &&
             std::abs(dd) > a.normal_floor && la * le > a.normal_floor)
             X = {meet.x + 0.0, meet.y + 0.0, meet.z + 0.0};
         out.push_back(X);

@@ -110,9 +110,13 @@ static void clip_halfspace(const std::vector<double>& V, i64 M, i64 K,
                                     (mm[2] * h[0] - mm[0] * h[2]) / d,
                                     (mm[0] * h[1] - mm[1] * h[0]) / d};
             const double cond = 1.0 + hsum * le / std::fabs(d);
+            // (and on the edge's line to rounding: halfspace.clip_halfspace)
+            const double r[3] = {meet[0] - A[0], meet[1] - A[1], meet[2] - A[2]};
             const bool use =
                 (sum_abs3(meet[0] - X[0], meet[1] - X[1], meet[2] - X[2]) <=
                  C * EPS * (la + le) * cond) &&
+                (sum_abs3(r[1] * e[2] - r[2] * e[1], r[2] * e[0] - r[0] * e[2],
+                          r[0] * e[1] - r[1] * e[0]) <= C * EPS * (la + le) * le) &&
                 (cond * C * EPS < 1.0) &&
                 (sum_abs3(mm[0], mm[1], mm[2]) > C * EPS * la * le) &&
                 (std::fabs(d) > floor_) && (la * le > floor_);
