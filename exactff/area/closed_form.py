@@ -40,13 +40,14 @@ from .. import _tolerances as tol
 from ..errors import check_finite, nonnegative
 from ..geometry import area_vector, cross
 from ..halfspace import clip_fronts
+from ..predicates import coplanar_band
 from ..rings import concatenated, padded, successors
 from ..scene import validate_polygon
 from .contour_rule import contour_tanh_sinh
 from .edge_integrals import edge_pair_sums, mp_edge_log_integral
 from .far_field import emitter_nodes, far_values, is_far
 
-__all__ = ["polygon_form_factor", "unoccluded_pair", "unoccluded_pairs", "front_parts",
+__all__ = ["polygon_form_factor", "unoccluded_pair", "unoccluded_pairs", "front_parts", "front_distances",
            "ClosedFormCounts"]
 
 
@@ -189,13 +190,60 @@ def front_parts(P, nP, Qs, nQs, dP, dQ):
     return Pcs, Qcs
 
 
+def front_distances(P, nP, V, N):
+    """The signed distances :func:`front_parts` decides from, for all receivers at
+    once, with the conventions' near-coplanar band (:func:`exactff.predicates.coplanar_band`):
+    a distance within the band of the plane it is measured from counts as 0 (the vertex
+    is in the plane). A receiver within the band of P's plane, or P within the band of
+    the receiver's, is coplanar with it (no part in front: F = 0); one vertex within the
+    band and the others in front keep the polygon whole, not clipped to a sliver that
+    rounding tilted across the plane.
+
+    Parameters
+    ----------
+    P : ndarray of shape (K, 3)
+        The emitter.
+    nP : ndarray of shape (3,)
+        Its unit normal.
+    V : ndarray of shape (m, K', 3)
+        The receivers, padded by repeats (:func:`exactff.rings.padded`).
+    N : ndarray of shape (m, 3)
+        Their unit normals.
+
+    Returns
+    -------
+    (ndarray of shape (m, K), ndarray of shape (m, K'))
+        ``dP[j] = (P - V[j, 0]) @ N[j]`` and ``dQ[j] = (V[j] - P[0]) @ nP``, each 0
+        within the band.
+
+    Examples
+    --------
+    Squares facing the unit square at z = 15 from 1e-13 above (within the band there,
+    2.1e-13) and from 1e-3 above:
+
+    >>> P = np.array([[0, 0, 15], [1, 0, 15], [1, 1, 15], [0, 1, 15]], float)
+    >>> V = np.stack([P[::-1] + [0, 0, 1e-13], P[::-1] + [0, 0, 1e-3]])
+    >>> dP, dQ = front_distances(P, np.array([0, 0, 1.0]), V, np.array([[0, 0, -1.0]] * 2))
+    >>> dQ[:, 0].round(12).tolist(), dP[:, 0].round(12).tolist()
+    ([0.0, 0.001], [0.0, 0.001])
+    """
+    dQ = (V - P[0]) @ nP                                    # (m, K')
+    dP = np.einsum("mkj,mj->mk", P[None] - V[:, :1], N)     # (m, K)
+    # the band of P's plane at each receiver's vertices, and of each receiver's plane
+    # at P's: u BSP_COPLANAR_ULPS (|n| . |x| + |n . x0|) (coplanar_band)
+    bandQ = coplanar_band(V.reshape(-1, 3), nP[None], np.array([nP @ P[0]])).reshape(dQ.shape)
+    DQ = np.einsum("mj,mj->m", V[:, 0], N)
+    bandP = coplanar_band(P, N, DQ)                         # (K, m)
+    dQ[np.abs(dQ) <= bandQ] = 0.0
+    dP[np.abs(dP) <= bandP.T] = 0.0
+    return dP, dQ
+
+
 def _front_parts(P, nP, Qs, nQs):
     """:func:`front_parts` of one emitter and its receivers, the distances computed
     here."""
     V, _ = padded(Qs)
-    dQ = (V - P[0]) @ nP
-    dP = np.einsum("mkj,mj->mk", P[None] - V[:, :1], nQs)
-    return front_parts(P, nP, Qs, nQs, dP, dQ)
+    return front_parts(P, nP, Qs, nQs, *front_distances(P, nP, V, nQs))
 
 
 def _mp_vector(x):
@@ -368,7 +416,7 @@ def unoccluded_pairs(P, Qs, shortcuts=True, rtol=None, atol=0.0, parts=None, cou
     # mpmath
     for k in (list(miss) if atol > 0 else []):
         j = live[k]
-        fv, fe = contour_tanh_sinh(P, Qs[j])
+        fv, fe = contour_tanh_sinh(P, Qs[j], (Pcs[j], Qcs[j]))
         if fe < est[j]:
             values[j], est[j] = fv, fe
             if counts is not None:

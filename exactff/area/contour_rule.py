@@ -56,10 +56,16 @@ def _segment_log_integral(W, E):
 
 
 
-def contour_tanh_sinh(P, Q):
+def contour_tanh_sinh(P, Q, parts=None):
     """F(P -> Q) of two validated polygons, unoccluded, by the tanh-sinh contour rule, and
     its estimate: the rounding of the contour sum (``AREA_ROUNDING_ULPS`` units of its
     absolute terms) plus the difference from the tanh-sinh rule one level coarser.
+
+    ``parts``, optional: the pair's parts in front of each other's planes, ``(Pc, Qc)``,
+    as the caller decided them (:func:`~exactff.area.closed_form.front_parts`, with the
+    near-coplanar band); None: each polygon clipped here to the front of the other's
+    plane, by the distances' signs alone (a vertex that rounding put 1e-18 behind a
+    plane it lies in is cut off, leaving a copy of itself 1e-16 away).
 
     Examples
     --------
@@ -75,8 +81,7 @@ def contour_tanh_sinh(P, Q):
     nP, nQ = AP / area_P, AQ / np.linalg.norm(AQ)
     cP, cQ = P.mean(axis=0), Q.mean(axis=0)
     # one-sided: each polygon's part in front of the other's plane
-    Pc = clip_front(P, nQ, Q[0])
-    Qc = clip_front(Q, nP, P[0])
+    Pc, Qc = (clip_front(P, nQ, Q[0]), clip_front(Q, nP, P[0])) if parts is None else parts
     if Pc is None or Qc is None:
         return 0.0, 0.0
     r0 = float(np.linalg.norm(cQ - cP)) or 1.0

@@ -16,7 +16,7 @@ from ..geometry import cross, hull_blockers, plane_frame
 from ..predicates import coplanar_band_sides, coplanar_pairs
 from ..rings import concatenated, padded
 from ._row_culling import row_blockers as _compiled_row_blockers
-from .closed_form import front_parts
+from .closed_form import front_distances, front_parts
 from .rules import triangle_areas
 
 __all__ = ["ConvexSolids", "padded_polygons", "front_pairs", "hull_blockers", "pair_blockers",
@@ -318,11 +318,11 @@ def closed_solids(solids, blockers, planes):
 def front_pairs(polys, i, nP, padded):
     """The receivers j of row i with each polygon's part in front of the other's plane,
     and those parts, as a list of ``(j, Pc, Qc)``: the distances for all receivers at
-    once, the decision by :func:`~exactff.area.closed_form.front_parts`."""
+    once (:func:`~exactff.area.closed_form.front_distances`, with the near-coplanar
+    band), the decision by :func:`~exactff.area.closed_form.front_parts`."""
     V, _, _, N = padded
     P = polys[i]
-    dQ = (V - P[0]) @ nP                                    # (n, kmax)
-    dP = np.einsum("njx,nx->nj", P[None] - V[:, :1], N)     # (n, kP)
+    dP, dQ = front_distances(P, nP, V, N)                   # (n, kP), (n, kmax)
     live = (dQ.max(axis=1) > 0) & (dP.max(axis=1) > 0)
     live[i] = False
     J = np.flatnonzero(live)

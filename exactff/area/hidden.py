@@ -98,7 +98,9 @@ def hidden_setup(Qc, blockers, solid=None, inner=None, compiled=True):
             return None
         blockers = [blockers[k] for k in keep]
         if solid is not None:
-            solid = np.asarray(solid)[keep]    # (inner is per solid, not per blocker)
+            solid = np.asarray(solid)[keep]
+        if inner is not None:
+            inner = np.asarray(inner)[keep]    # (a point per blocker, as solid)
     if compiled:
         W = np.concatenate([np.asarray(K, dtype=float) for K in blockers])
         start = np.concatenate([[0], np.cumsum([len(K) for K in blockers])])
