@@ -240,6 +240,7 @@ std::shared_ptr<exactff::PairConstants> pair_constants(py::dict tol, py::sequenc
     k->event_line_key = num("AREA_EVENT_LINE_KEY");
     k->sliver_cell = num("AREA_SLIVER_CELL");
     k->cell_cover_rtol = num("AREA_CELL_COVER_RTOL");
+    k->cell_cover_atol_share = num("AREA_CELL_COVER_ATOL_SHARE");
     k->low_rules_tolerance = num("AREA_LOW_RULES_TOLERANCE");
     k->coplanar_ulps = num("BSP_COPLANAR_ULPS");
     k->eps = num("EPS");

@@ -295,7 +295,11 @@ PairResult occluded_pair(const PairArgs& a) {
     for (size_t i = 0; i < 3 * t; ++i)
         for (int j = 0; j < 3; ++j)
             T[3 * i + j] = c[j] + blas_dot2(&cells.triangles[2 * i], R + j, k.fused_stacked, 3);
-    if (!(sum(triangle_areas(T)) >= (1 - k.cell_cover_rtol) * area_Pc)) {
+    // (covering P to cell_cover_rtol of its area, or missing no more than the estimate's
+    // charge for it keeps within cell_cover_atol_share of atol: adaptive.py's rule)
+    const double cover_slack =
+        std::max(k.cell_cover_rtol * area_Pc, k.cell_cover_atol_share * a.atol * a.area_P);
+    if (!(sum(triangle_areas(T)) >= area_Pc - cover_slack)) {
         out.status = 3;
         return out;
     }

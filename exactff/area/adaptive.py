@@ -176,11 +176,15 @@ def _hidden_integral(S, Pc, Qc, nP, atol, area_P, whole, shortcuts, st, solid=No
     # the emitter cut along the events: in floating point with the lines lengthened
     # across its boundary, else as cut, else noded on a grid of AREA_HULL_RTOL of P's
     # size (the cuts move by that much), each way with and without lengthening; the
-    # first whose cells cover P (to AREA_CELL_COVER_RTOL) is taken, else the one that
-    # covers most (the area missing is in the estimate). GEOS may give up noding, or
-    # polygonizing drop a ring of nearly coincident lines it finds invalid and the cell
-    # inside it: counted (test_closed_cornell_box_wall_cut_into_cells_that_cover_it)
+    # first whose cells cover P (to AREA_CELL_COVER_RTOL, or missing no more than the
+    # estimate's charge for it keeps within AREA_CELL_COVER_ATOL_SHARE of atol) is
+    # taken, else the one that covers most (the area missing is in the estimate). GEOS
+    # may give up noding, or polygonizing drop a ring of nearly coincident lines it
+    # finds invalid and the cell inside it: counted
+    # (test_closed_cornell_box_wall_cut_into_cells_that_cover_it)
     area_Pc = float(np.linalg.norm(area_vector(Pc)))
+    cover_slack = max(tol.AREA_CELL_COVER_RTOL * area_Pc,
+                      tol.AREA_CELL_COVER_ATOL_SHARE * atol * area_P)
     cells, failure = None, None
     for k, (grid, lengthen) in enumerate(((None, True), (None, False),
                                           (tol.AREA_HULL_RTOL * radius, True),
@@ -192,7 +196,7 @@ def _hidden_integral(S, Pc, Qc, nP, atol, area_P, whole, shortcuts, st, solid=No
             continue
         if cells is None or len(T) and triangle_areas(T).sum() > triangle_areas(cells).sum():
             cells = T
-        if triangle_areas(cells).sum() >= (1 - tol.AREA_CELL_COVER_RTOL) * area_Pc:
+        if triangle_areas(cells).sum() >= area_Pc - cover_slack:
             break
     if k and st is not None:
         st.cell_fallbacks += 1
