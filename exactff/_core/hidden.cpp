@@ -18,7 +18,12 @@
 #include <algorithm>
 #include <cfloat>
 #include <cmath>
+#include <cstdlib>
+#include <cstring>
 #include <limits>
+#include <new>
+#include <type_traits>
+#include <utility>
 #include <vector>
 
 #include "hidden.h"
@@ -31,6 +36,69 @@ namespace {
 struct P2 {
     double x, y;
 };
+// A vector of a trivially copyable T for the vertices rewritten at every point: its
+// storage grows and is kept (clear and a copy into it allocate nothing once it is large
+// enough), and resize leaves the new elements unset for the caller to write by index.
+template <typename T>
+class Pod {
+    static_assert(std::is_trivially_copyable<T>::value, "Pod holds plain values");
+    T* p_ = nullptr;
+    size_t n_ = 0, cap_ = 0;
+
+  public:
+    Pod() = default;
+    Pod(const Pod& o) { *this = o; }
+    Pod(Pod&& o) noexcept : p_(o.p_), n_(o.n_), cap_(o.cap_) {
+        o.p_ = nullptr;
+        o.n_ = o.cap_ = 0;
+    }
+    Pod& operator=(const Pod& o) {
+        if (this != &o) {
+            resize(o.n_);
+            if (o.n_) std::memcpy(p_, o.p_, o.n_ * sizeof(T));
+        }
+        return *this;
+    }
+    Pod& operator=(Pod&& o) noexcept {
+        swap(o);
+        return *this;
+    }
+    ~Pod() { std::free(p_); }
+    void swap(Pod& o) noexcept {
+        std::swap(p_, o.p_);
+        std::swap(n_, o.n_);
+        std::swap(cap_, o.cap_);
+    }
+    size_t size() const { return n_; }
+    size_t capacity() const { return cap_; }
+    bool empty() const { return n_ == 0; }
+    void clear() { n_ = 0; }
+    void reserve(size_t c) {
+        if (c <= cap_) return;
+        c = std::max(c, std::max<size_t>(8, 2 * cap_));
+        T* q = static_cast<T*>(std::malloc(c * sizeof(T)));
+        if (!q) throw std::bad_alloc();
+        if (n_) std::memcpy(q, p_, n_ * sizeof(T));
+        std::free(p_);
+        p_ = q;
+        cap_ = c;
+    }
+    void resize(size_t n) {
+        reserve(n);
+        n_ = n;
+    }
+    void push_back(const T& x) {
+        if (n_ == cap_) reserve(n_ + 1);
+        p_[n_++] = x;
+    }
+    T& operator[](size_t i) { return p_[i]; }
+    const T& operator[](size_t i) const { return p_[i]; }
+    T& back() { return p_[n_ - 1]; }
+    T* begin() { return p_; }
+    T* end() { return p_ + n_; }
+    const T* begin() const { return p_; }
+    const T* end() const { return p_ + n_; }
+};
 // 3-D work in R (Vec3<R>, vec.h): double first, long double (on x86 64 bits of mantissa)
 // for a point where what the vertices' rounding can move is too much (a crossing near x of
 // an edge whose ends are far from it loses the ends' size in absolute terms, and the
@@ -42,33 +110,35 @@ struct Line {
 };
 // a convex polygon, counter-clockwise, and the line of each edge (v[i], v[i + 1])
 struct Piece {
-    std::vector<P2> v;
-    std::vector<Line> l;
+    Pod<P2> v;
+    Pod<Line> l;
     void clear() {
         v.clear();
         l.clear();
     }
     size_t size() const { return v.size(); }
 };
-// a polygon in 3-D (offsets from x), the plane through x of each edge (inside >= 0) and a
-// bound on each vertex's rounding
+// a polygon in 3-D (offsets from x), the plane through x of each edge (inside >= 0), a
+// bound on each vertex's rounding and each vertex's distance from x
 template <typename R>
 struct Poly3 {
-    std::vector<Vec3<R>> v;
-    std::vector<Vec3<R>> m;
-    std::vector<R> e;
+    Pod<Vec3<R>> v;
+    Pod<Vec3<R>> m;
+    Pod<R> e, len;
     void clear() {
         v.clear();
         m.clear();
         e.clear();
+        len.clear();
     }
 };
 
-double twice_area(const std::vector<P2>& p) {
+template <typename C>
+double twice_area(const C& p) {
     double s = 0.0;
     for (size_t i = 0, n = p.size(); i < n; ++i) {
         const P2& a = p[i];
-        const P2& b = p[(i + 1) % n];
+        const P2& b = p[i + 1 == n ? 0 : i + 1];
         s += (a.x - p[0].x) * (b.y - p[0].y) - (a.y - p[0].y) * (b.x - p[0].x);
     }
     return s;
@@ -79,49 +149,77 @@ double twice_area(const std::vector<P2>& p) {
 // rounding: its ends' larger one plus ulps units of the larger end's length.
 template <typename R>
 void clip3(const Poly3<R>& V, const Vec3<R>& m, R ulps, Poly3<R>& out) {
-    out.clear();
+    // written by index into room for 2 n vertices (each edge gives at most its start
+    // and a crossing), each vertex's side taken once
     const size_t n = V.v.size();
+    out.v.resize(2 * n);
+    out.m.resize(2 * n);
+    out.e.resize(2 * n);
+    out.len.resize(2 * n);
+    size_t o = 0;
+    R sb = n ? dot(m, V.v[0]) : R(0);
+    const R s0 = sb;
     for (size_t i = 0; i < n; ++i) {
+        const size_t j = i + 1 == n ? 0 : i + 1;
         const Vec3<R>& a = V.v[i];
-        const Vec3<R>& b = V.v[(i + 1) % n];
-        const R sa = dot(m, a), sb = dot(m, b);
+        const Vec3<R>& b = V.v[j];
+        const R sa = sb;
+        sb = j ? dot(m, b) : s0;
         if (sa >= 0) {
-            out.v.push_back(a);
-            out.m.push_back(V.m[i]);
-            out.e.push_back(V.e[i]);
+            out.v[o] = a;
+            out.m[o] = V.m[i];
+            out.e[o] = V.e[i];
+            out.len[o] = V.len[i];
+            ++o;
         }
         if ((sa >= 0) != (sb >= 0)) {
             const Vec3<R>& p = sa >= 0 ? a : b;
             const Vec3<R>& q = sa >= 0 ? b : a;
             const R sp = sa >= 0 ? sa : sb, sq = sa >= 0 ? sb : sa;
             const R t = sp / (sp - sq);
-            out.v.push_back({p.x + t * (q.x - p.x), p.y + t * (q.y - p.y), p.z + t * (q.z - p.z)});
+            const Vec3<R> c{p.x + t * (q.x - p.x), p.y + t * (q.y - p.y), p.z + t * (q.z - p.z)};
+            out.v[o] = c;
             // leaving: the edge from the crossing runs along m; entering: along V's edge
-            out.m.push_back(sa >= 0 ? m : V.m[i]);
-            out.e.push_back(std::max(V.e[i], V.e[(i + 1) % n]) +
-                            ulps * std::sqrt(std::max(dot(a, a), dot(b, b))));
+            out.m[o] = sa >= 0 ? m : V.m[i];
+            // (the larger end's length: sqrt of the larger squared length, as sqrt is
+            // monotone and correctly rounded)
+            out.e[o] = std::max(V.e[i], V.e[j]) + ulps * std::max(V.len[i], V.len[j]);
+            out.len[o] = std::sqrt(dot(c, c));
+            ++o;
         }
     }
+    out.v.resize(o);
+    out.m.resize(o);
+    out.e.resize(o);
+    out.len.resize(o);
 }
 
 // Split F by the line L: its part on the inside (L >= 0) and on the outside (L < 0, the
-// cut edge on the reversed line), the crossings shared by both halves.
+// cut edge on the reversed line), the crossings shared by both halves (written by index
+// into room for 2 n vertices each, each vertex's side taken once).
 void split(const Piece& F, const Line& L, Piece& in, Piece& out) {
-    in.clear();
-    out.clear();
     const Line rev{-L.a, -L.b, -L.c};
     const size_t n = F.size();
+    in.v.resize(2 * n);
+    in.l.resize(2 * n);
+    out.v.resize(2 * n);
+    out.l.resize(2 * n);
+    size_t ni = 0, no = 0;
+    double sq = n ? L.at(F.v[0]) : 0.0;
+    const double s0 = sq;
     for (size_t i = 0; i < n; ++i) {
+        const size_t j = i + 1 == n ? 0 : i + 1;
         const P2& p = F.v[i];
-        const P2& q = F.v[(i + 1) % n];
-        const double sp = L.at(p), sq = L.at(q);
+        const P2& q = F.v[j];
+        const double sp = sq;
+        sq = j ? L.at(q) : s0;
         const bool pin = sp >= 0, qin = sq >= 0;
         if (pin) {
-            in.v.push_back(p);
-            in.l.push_back(F.l[i]);
+            in.v[ni] = p;
+            in.l[ni++] = F.l[i];
         } else {
-            out.v.push_back(p);
-            out.l.push_back(F.l[i]);
+            out.v[no] = p;
+            out.l[no++] = F.l[i];
         }
         if (pin != qin) {
             // from the end inside, so that the same edge gives the same point
@@ -130,12 +228,16 @@ void split(const Piece& F, const Line& L, Piece& in, Piece& out) {
             const double su = pin ? sp : sq, sw = pin ? sq : sp;
             const double t = su / (su - sw);
             const P2 c{u.x + t * (w.x - u.x), u.y + t * (w.y - u.y)};
-            in.v.push_back(c);
-            in.l.push_back(pin ? L : F.l[i]);
-            out.v.push_back(c);
-            out.l.push_back(pin ? F.l[i] : rev);
+            in.v[ni] = c;
+            in.l[ni++] = pin ? L : F.l[i];
+            out.v[no] = c;
+            out.l[no++] = pin ? F.l[i] : rev;
         }
     }
+    in.v.resize(ni);
+    in.l.resize(ni);
+    out.v.resize(no);
+    out.l.resize(no);
 }
 
 struct Box {
@@ -192,13 +294,34 @@ struct Slivers {
     }
 };
 
-// F less the convex E: F's parts outside each of E's lines in turn.
-void difference(const Piece& F, const Piece& E, std::vector<Piece>& out, Piece& in,
-                Piece& outside, Slivers& slivers) {
-    Piece rest = F;
+// Pieces whose storage is kept from point to point (a point's pieces are a few dozen
+// short vectors: taken from here and given back, not allocated and freed each time).
+// fresh: an empty piece, with storage where one is spare; recycle: v's pieces given
+// back, v left empty.
+Piece fresh(std::vector<Piece>& spare) {
+    if (spare.empty()) return Piece();
+    Piece p = std::move(spare.back());
+    spare.pop_back();
+    p.clear();
+    return p;
+}
+void recycle(std::vector<Piece>& v, std::vector<Piece>& spare) {
+    for (Piece& p : v)
+        if (p.v.capacity()) spare.push_back(std::move(p));
+    v.clear();
+}
+
+// F less the convex E: F's parts outside each of E's lines in turn (rest, in, outside:
+// scratch pieces).
+void difference(const Piece& F, const Piece& E, std::vector<Piece>& out, Piece& rest,
+                Piece& in, Piece& outside, Slivers& slivers, std::vector<Piece>& spare) {
+    rest = F;
     for (size_t i = 0, n = E.size(); i < n && rest.size() >= 3; ++i) {
         split(rest, E.l[i], in, outside);
-        if (slivers.keep(outside)) out.push_back(outside);
+        if (slivers.keep(outside)) {
+            out.push_back(std::move(outside));
+            outside = fresh(spare);
+        }
         rest.v.swap(in.v);
         rest.l.swap(in.l);
     }
@@ -251,8 +374,8 @@ struct Work {
     std::vector<Vec3<R>> M;
     std::vector<unsigned char> off_hull;       // per solid: p is outside its hull
     Poly3<R> W, T;
-    Piece img, in, outside, cut;
-    std::vector<Piece> incoming, next, images;
+    Piece img, in, outside, cut, rest;
+    std::vector<Piece> incoming, next, images, spare;
     std::vector<std::pair<double, size_t>> order;
     size_t last_cover = 0;                     // the blocker that covered the base last
 };
@@ -261,13 +384,15 @@ struct Work {
 template <typename R>
 void over_parts(const Inputs& in, Region& out, Work<R>& w) {
     if (in.Qparts.empty()) return;
-    w.next.clear();
+    recycle(w.next, w.spare);
     for (const Piece& F : out.pieces) {
         const Box bf = box_of(F);
         for (size_t q = 0; q < in.Qparts.size(); ++q)
             if (!boxes_apart(bf, in.Qbox[q]) &&
-                intersect(F, in.Qparts[q], w.cut, w.in, w.outside, out.slivers))
-                w.next.push_back(w.cut);
+                intersect(F, in.Qparts[q], w.cut, w.in, w.outside, out.slivers)) {
+                w.next.push_back(std::move(w.cut));
+                w.cut = fresh(w.spare);
+            }
     }
     out.pieces.swap(w.next);
 }
@@ -275,7 +400,7 @@ void over_parts(const Inputs& in, Region& out, Work<R>& w) {
 // The hidden region of Q from the point p, in precision R.
 template <typename R>
 void region_at(const Inputs& in, const Vec3<double>& pd, Region& out, Work<R>& w) {
-    out.pieces.clear();
+    recycle(out.pieces, w.spare);
     out.slivers = Slivers();
     out.reach = out.moved = 0.0;
     out.back_faces = 0;
@@ -293,7 +418,7 @@ void region_at(const Inputs& in, const Vec3<double>& pd, Region& out, Work<R>& w
     w.M.resize(nc);
     for (size_t a = 0; a < nc; ++a) {
         const Vec3<double>& a0 = in.base[a];
-        const Vec3<double>& a1 = in.base[(a + 1) % nc];
+        const Vec3<double>& a1 = in.base[a + 1 == nc ? 0 : a + 1];
         w.M[a] = cross(sub(to<R>(a0), p), to<R>(sub(a1, a0)));
         if (dot(w.M[a], sub(to<R>(in.base_centroid), p)) < 0) w.M[a] = neg(w.M[a]);
     }
@@ -315,14 +440,13 @@ void region_at(const Inputs& in, const Vec3<double>& pd, Region& out, Work<R>& w
     const size_t nk = in.K.size(), first = w.last_cover < nk ? w.last_cover : 0;
     for (size_t t = 0; t < nk; ++t) {
         const size_t b = t == 0 ? first : (t <= first ? t - 1 : t);
-        // the offsets, each rounded once (within vertex_error of its length)
+        // the offsets, each rounded once (within vertex_error of its length: W.e, with
+        // the edges' planes, once the blocker is not culled below)
+        const std::vector<Vec3<double>>& Kb = in.K[b];
+        const size_t kb = Kb.size();
         W.clear();
-        Vec3<R> g{0, 0, 0};
-        for (const Vec3<double>& v : in.K[b]) {
-            W.v.push_back(sub(to<R>(v), p));
-            W.e.push_back(vertex_error * std::sqrt(dot(W.v.back(), W.v.back())));
-            g = {g.x + W.v.back().x, g.y + W.v.back().y, g.z + W.v.back().z};
-        }
+        W.v.resize(kb);
+        for (size_t k = 0; k < kb; ++k) W.v[k] = sub(to<R>(Kb[k]), p);
         if (std::fabs(dot(W.v[0], to<R>(in.KN[b]))) <= R(in.edge_on)) continue;   // edge-on
         // wholly outside one of the pyramid's planes: clipped away, as clip3 would
         bool outside_pyramid = false;
@@ -341,11 +465,21 @@ void region_at(const Inputs& in, const Vec3<double>& pd, Region& out, Work<R>& w
             ++out.back_faces;
             continue;
         }
-        // each edge's plane through p (as the pyramid's, from the edge's own vector),
-        // inside towards the blocker's centroid
-        for (size_t k = 0, m = W.v.size(); k < m; ++k) {
-            Vec3<R> e = cross(W.v[k], to<R>(sub(in.K[b][(k + 1) % m], in.K[b][k])));
-            W.m.push_back(dot(e, g) < 0 ? neg(e) : e);
+        // each vertex's rounding, and each edge's plane through p (as the pyramid's, from
+        // the edge's own vector), inside towards the blocker's centroid
+        W.e.resize(kb);
+        W.len.resize(kb);
+        W.m.resize(kb);
+        Vec3<R> g{0, 0, 0};
+        for (size_t k = 0; k < kb; ++k) {
+            const Vec3<R>& v = W.v[k];
+            W.len[k] = std::sqrt(dot(v, v));
+            W.e[k] = vertex_error * W.len[k];
+            g = {g.x + v.x, g.y + v.y, g.z + v.z};
+        }
+        for (size_t k = 0; k < kb; ++k) {
+            Vec3<R> e = cross(W.v[k], to<R>(sub(Kb[k + 1 == kb ? 0 : k + 1], Kb[k])));
+            W.m[k] = dot(e, g) < 0 ? neg(e) : e;
         }
         for (size_t a = 0; a < nc && W.v.size() >= 3; ++a) {
             bool inside = true;          // wholly inside this plane: nothing to cut
@@ -363,15 +497,18 @@ void region_at(const Inputs& in, const Vec3<double>& pd, Region& out, Work<R>& w
         // plane m traced on it: (ax . m) u + (ay . m) v + (q0 - p) . m
         if (w.images.size() <= images) w.images.resize(images + 1);
         Piece& img = w.images[images++];
-        img.clear();
-        for (size_t k = 0; k < W.v.size(); ++k) {
+        if (!img.v.capacity()) img = fresh(w.spare);
+        const size_t nw = W.v.size();
+        img.v.resize(nw);
+        img.l.resize(nw);
+        for (size_t k = 0; k < nw; ++k) {
             const Vec3<R>& v = W.v[k];
             const R down = -dot(v, nq);
             const R s = h / down;
             // where the vertex's rounding e takes the image: |s| e (1 + |v| / |v . nQ|),
             // large for a crossing close to p
             out.moved = std::max(out.moved, static_cast<double>(
-                std::fabs(s) * W.e[k] * (1 + std::sqrt(dot(v, v)) / std::fabs(down))));
+                std::fabs(s) * W.e[k] * (1 + W.len[k] / std::fabs(down))));
             const Vec3<R> q{v.x * s + foot.x, v.y * s + foot.y, v.z * s + foot.z};
             const P2 u{static_cast<double>(dot(q, ax)), static_cast<double>(dot(q, ay))};
             if (!std::isfinite(u.x) || !std::isfinite(u.y)) {
@@ -379,10 +516,10 @@ void region_at(const Inputs& in, const Vec3<double>& pd, Region& out, Work<R>& w
                 return;
             }
             out.reach = std::max({out.reach, std::fabs(u.x), std::fabs(u.y)});
-            img.v.push_back(u);
+            img.v[k] = u;
             const Vec3<R>& m = W.m[k];
-            img.l.push_back({static_cast<double>(dot(ax, m)), static_cast<double>(dot(ay, m)),
-                             static_cast<double>(-dot(foot, m))});
+            img.l[k] = {static_cast<double>(dot(ax, m)), static_cast<double>(dot(ay, m)),
+                        static_cast<double>(-dot(foot, m))};
         }
         // an image that covers the base alone (its area within the slivers' rounding of
         // the base's) is the region: the other blockers hide nothing more, and what is
@@ -418,18 +555,18 @@ void region_at(const Inputs& in, const Vec3<double>& pd, Region& out, Work<R>& w
     for (const auto& [neg_area, k] : w.order) {
         Piece& img = w.images[k];
         if (!out.slivers.keep(img)) continue;
-        w.incoming.clear();
+        recycle(w.incoming, w.spare);
         w.incoming.push_back(std::move(img));
         const size_t have = out.pieces.size();
         for (size_t e = 0; e < have && !w.incoming.empty(); ++e) {
             const Piece& E = out.pieces[e];
             const Box be = box_of(E);
-            w.next.clear();
+            recycle(w.next, w.spare);
             for (Piece& F : w.incoming) {
                 if (boxes_apart(box_of(F), be) || separated_by(E, F) || separated_by(F, E))
                     w.next.push_back(std::move(F));
                 else
-                    difference(F, E, w.next, w.in, w.outside, out.slivers);
+                    difference(F, E, w.next, w.rest, w.in, w.outside, out.slivers, w.spare);
             }
             w.incoming.swap(w.next);
         }
@@ -495,7 +632,7 @@ void sector_sum(const Piece& F, const Vec3<double>& w, const double frame[3][3],
     k.crossing_enters.clear();
     double errs = 0.0;
     for (size_t i = 0; i < m; ++i) {
-        Vec3<double> Ea = k.E[i], Eb = k.E[(i + 1) % m];
+        Vec3<double> Ea = k.E[i], Eb = k.E[i + 1 == m ? 0 : i + 1];
         const double za = A.z + Ea.z, zb = A.z + Eb.z;
         const bool above_a = za > 0, above_b = zb > 0;
         if (!above_a && !above_b) continue;
@@ -586,7 +723,7 @@ HiddenResult hidden_pieces(const HiddenArgs& args) {
     }
     if (nc >= 3) {
         Piece B;
-        B.v = in.base2;
+        for (const P2& b : in.base2) B.v.push_back(b);
         in.base_box = box_of(B);
         in.base_area2 = std::fabs(twice_area(in.base2));
     }
@@ -656,7 +793,7 @@ HiddenResult hidden_pieces(const HiddenArgs& args) {
                 for (const Piece& F : region.pieces)
                     for (size_t k = 0, m = F.size(); k < m; ++k) {
                         const P2& u = F.v[k];
-                        const P2& v = F.v[(k + 1) % m];
+                        const P2& v = F.v[k + 1 == m ? 0 : k + 1];
                         len += std::hypot(v.x - u.x, v.y - u.y);
                         bb.x0 = std::min(bb.x0, u.x);
                         bb.y0 = std::min(bb.y0, u.y);
@@ -686,7 +823,7 @@ HiddenResult hidden_pieces(const HiddenArgs& args) {
             for (const Piece& F : region.pieces) {
                 for (size_t k = 0, m = F.size(); k < m; ++k) {
                     const P2& u = F.v[k];
-                    const P2& v = F.v[(k + 1) % m];
+                    const P2& v = F.v[k + 1 == m ? 0 : k + 1];
                     if (rings) {
                         xy.push_back(u.x);
                         xy.push_back(u.y);
