@@ -131,6 +131,12 @@ struct Poly3 {
         e.clear();
         len.clear();
     }
+    void swap(Poly3& o) noexcept {
+        v.swap(o.v);
+        m.swap(o.m);
+        e.swap(o.e);
+        len.swap(o.len);
+    }
 };
 
 template <typename C>
@@ -148,23 +154,20 @@ double twice_area(const C& p) {
 // inside end, as exactff.halfspace.clip_halfspace); the cut edge lies on m. A crossing's
 // rounding: its ends' larger one plus ulps units of the larger end's length.
 template <typename R>
-void clip3(const Poly3<R>& V, const Vec3<R>& m, R ulps, Poly3<R>& out) {
+void clip3(const Poly3<R>& V, const Vec3<R>& m, const R* side, R ulps, Poly3<R>& out) {
     // written by index into room for 2 n vertices (each edge gives at most its start
-    // and a crossing), each vertex's side taken once
+    // and a crossing); side: dot(m, v) of each vertex v, taken once by the caller
     const size_t n = V.v.size();
     out.v.resize(2 * n);
     out.m.resize(2 * n);
     out.e.resize(2 * n);
     out.len.resize(2 * n);
     size_t o = 0;
-    R sb = n ? dot(m, V.v[0]) : R(0);
-    const R s0 = sb;
     for (size_t i = 0; i < n; ++i) {
         const size_t j = i + 1 == n ? 0 : i + 1;
         const Vec3<R>& a = V.v[i];
         const Vec3<R>& b = V.v[j];
-        const R sa = sb;
-        sb = j ? dot(m, b) : s0;
+        const R sa = side[i], sb = side[j];
         if (sa >= 0) {
             out.v[o] = a;
             out.m[o] = V.m[i];
@@ -280,9 +283,10 @@ struct Slivers {
     double min_area = 0.0;   // twice the area below which a piece is a sliver
     double dropped = 0.0;    // the slivers' area, for the estimate
     Box box{INFINITY, INFINITY, -INFINITY, -INFINITY};
-    bool keep(const Piece& p) {
+    bool keep(const Piece& p) { return p.size() >= 3 && keep(p, std::fabs(twice_area(p.v))); }
+    // ... given a, the piece's twice_area's magnitude
+    bool keep(const Piece& p, double a) {
         if (p.size() < 3) return false;
-        const double a = std::fabs(twice_area(p.v));
         if (a > min_area) return true;
         if (a > 0) {
             dropped += 0.5 * a;
@@ -345,6 +349,7 @@ struct Inputs {
     std::vector<Vec3<double>> base;              // the pyramid's base
     Vec3<double> base_centroid;
     std::vector<std::vector<Vec3<double>>> K;    // the blockers
+    std::vector<std::vector<Vec3<double>>> KE;   // their edges' vectors, K[k + 1] - K[k]
     std::vector<Vec3<double>> KN;                // their unit normals (outward for a solid's)
     std::vector<long long> group;              // each one's convex solid, -1: none
     long long groups = 0;                      // 1 + the largest solid's label
@@ -374,9 +379,11 @@ struct Work {
     std::vector<Vec3<R>> M;
     std::vector<unsigned char> off_hull;       // per solid: p is outside its hull
     Poly3<R> W, T;
+    Pod<R> side;
     Piece img, in, outside, cut, rest;
     std::vector<Piece> incoming, next, images, spare;
     std::vector<std::pair<double, size_t>> order;
+    std::vector<double> area2;                 // each image's twice area, its magnitude
     size_t last_cover = 0;                     // the blocker that covered the base last
 };
 
@@ -478,19 +485,21 @@ void region_at(const Inputs& in, const Vec3<double>& pd, Region& out, Work<R>& w
             g = {g.x + v.x, g.y + v.y, g.z + v.z};
         }
         for (size_t k = 0; k < kb; ++k) {
-            Vec3<R> e = cross(W.v[k], to<R>(sub(Kb[k + 1 == kb ? 0 : k + 1], Kb[k])));
+            Vec3<R> e = cross(W.v[k], to<R>(in.KE[b][k]));
             W.m[k] = dot(e, g) < 0 ? neg(e) : e;
         }
         for (size_t a = 0; a < nc && W.v.size() >= 3; ++a) {
-            bool inside = true;          // wholly inside this plane: nothing to cut
-            for (const Vec3<R>& v : W.v)
-                if (dot(w.M[a], v) < 0) {
-                    inside = false;
-                    break;
-                }
+            // each vertex's side of the plane; wholly inside it: nothing to cut
+            const size_t nw = W.v.size();
+            w.side.resize(nw);
+            bool inside = true;
+            for (size_t k = 0; k < nw; ++k) {
+                w.side[k] = dot(w.M[a], W.v[k]);
+                inside &= w.side[k] >= 0;
+            }
             if (inside) continue;
-            clip3(W, w.M[a], vertex_error, w.T);
-            std::swap(W, w.T);
+            clip3(W, w.M[a], w.side.begin(), vertex_error, w.T);
+            W.swap(w.T);
         }
         if (W.v.size() < 3) continue;
         // central projection from p onto Q's plane, in the plane's frame; each edge's
@@ -525,7 +534,9 @@ void region_at(const Inputs& in, const Vec3<double>& pd, Region& out, Work<R>& w
         // the base's) is the region: the other blockers hide nothing more, and what is
         // left of the base uncovered is counted with the slivers (in the estimate)
         const double min_area = in.sliver_ulps * DBL_EPSILON * out.reach * out.reach;
-        const double left2 = in.base_area2 - std::fabs(twice_area(img.v));
+        if (w.area2.size() < images) w.area2.resize(images);
+        const double area2 = w.area2[images - 1] = std::fabs(twice_area(img.v));
+        const double left2 = in.base_area2 - area2;
         if (in.base_area2 > 0 && img.size() >= 3 && left2 <= 2.0 * min_area) {
             out.slivers.min_area = min_area;
             out.slivers.dropped += 0.5 * std::max(left2, 0.0);
@@ -549,12 +560,12 @@ void region_at(const Inputs& in, const Vec3<double>& pd, Region& out, Work<R>& w
     w.order.clear();
     for (size_t k = 0; k < images; ++k)
         if (w.images[k].size() >= 3)
-            w.order.push_back({-std::fabs(twice_area(w.images[k].v)), k});
+            w.order.push_back({-w.area2[k], k});
     std::sort(w.order.begin(), w.order.end());
     double covered2 = 0.0;
     for (const auto& [neg_area, k] : w.order) {
         Piece& img = w.images[k];
-        if (!out.slivers.keep(img)) continue;
+        if (!out.slivers.keep(img, -neg_area)) continue;
         recycle(w.incoming, w.spare);
         w.incoming.push_back(std::move(img));
         const size_t have = out.pieces.size();
@@ -728,9 +739,12 @@ HiddenResult hidden_pieces(const HiddenArgs& args) {
         in.base_area2 = std::fabs(twice_area(in.base2));
     }
     in.K.resize(nb);
+    in.KE.resize(nb);
     for (std::ptrdiff_t b = 0; b < nb; ++b) {
         for (std::ptrdiff_t k = 0; k < bc(b); ++k)
             in.K[b].push_back({bl(b, k, 0), bl(b, k, 1), bl(b, k, 2)});
+        for (size_t k = 0, m = in.K[b].size(); k < m; ++k)
+            in.KE[b].push_back(sub(in.K[b][k + 1 == m ? 0 : k + 1], in.K[b][k]));
         in.KN.push_back({bn(b, 0), bn(b, 1), bn(b, 2)});
         in.group.push_back(bg(b));
         in.groups = std::max(in.groups, bg(b) + 1);
@@ -784,6 +798,9 @@ HiddenResult hidden_pieces(const HiddenArgs& args) {
             // vertices' rounding can move it by more than precise_rtol of its extent
             region_at(in, p, region, fast);
             bool again = !region.ok || region.moved > precise_rtol * std::max(region.reach, extent);
+            // the pieces' perimeter where taken here, for the doubles' pieces kept
+            double perimeter = 0.0;
+            bool have_perimeter = false;
             if (again && region.ok && precise_atol >= 0 && !region.pieces.empty()) {
                 // what the doubles' rounding moves of the value, the estimate's term
                 // moved * length * h / (pi r^3) (r: the distance from p to the region's
@@ -807,8 +824,13 @@ HiddenResult hidden_pieces(const HiddenArgs& args) {
                 const double r = std::sqrt(h * h + dx * dx + dy * dy);
                 const double bound = r > 0 && h > 0 ? h / (3.141592653589793 * r * r * r) : 0.0;
                 again = !(region.moved * len * bound <= precise_atol);
+                perimeter = len;
+                have_perimeter = true;
             }
-            if (again) region_at(in, p, region, precise);
+            if (again) {
+                region_at(in, p, region, precise);
+                have_perimeter = false;
+            }
             reach[i] = region.reach;
             moved[i] = region.moved;
             back_faces += region.back_faces;
@@ -828,7 +850,7 @@ HiddenResult hidden_pieces(const HiddenArgs& args) {
                         xy.push_back(u.x);
                         xy.push_back(u.y);
                     }
-                    len += std::hypot(v.x - u.x, v.y - u.y);
+                    if (!have_perimeter) len += std::hypot(v.x - u.x, v.y - u.y);
                     bb.x0 = std::min(bb.x0, u.x);
                     bb.y0 = std::min(bb.y0, u.y);
                     bb.x1 = std::max(bb.x1, u.x);
@@ -840,7 +862,7 @@ HiddenResult hidden_pieces(const HiddenArgs& args) {
                     ring_point.push_back(i);
                 }
             }
-            length[i] = len;
+            length[i] = have_perimeter ? perimeter : len;
             hidden[i] = value / two_pi;
             rounding[i] = rnd / two_pi;
             if (bb.x0 <= bb.x1) {
