@@ -316,10 +316,11 @@ void recycle(std::vector<Piece>& v, std::vector<Piece>& spare) {
 }
 
 // F less the convex E: F's parts outside each of E's lines in turn (rest, in, outside:
-// scratch pieces).
-void difference(const Piece& F, const Piece& E, std::vector<Piece>& out, Piece& rest,
+// scratch pieces; F is used up, its storage swapped with rest's).
+void difference(Piece& F, const Piece& E, std::vector<Piece>& out, Piece& rest,
                 Piece& in, Piece& outside, Slivers& slivers, std::vector<Piece>& spare) {
-    rest = F;
+    rest.v.swap(F.v);
+    rest.l.swap(F.l);
     for (size_t i = 0, n = E.size(); i < n && rest.size() >= 3; ++i) {
         split(rest, E.l[i], in, outside);
         if (slivers.keep(outside)) {
