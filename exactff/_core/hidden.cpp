@@ -18,7 +18,12 @@
 #include <algorithm>
 #include <cfloat>
 #include <cmath>
+#include <cstdlib>
+#include <cstring>
 #include <limits>
+#include <new>
+#include <type_traits>
+#include <utility>
 #include <vector>
 
 #include "hidden.h"
@@ -31,6 +36,69 @@ namespace {
 struct P2 {
     double x, y;
 };
+// A vector of a trivially copyable T for the vertices rewritten at every point: its
+// storage grows and is kept (clear and a copy into it allocate nothing once it is large
+// enough), and resize leaves the new elements unset for the caller to write by index.
+template <typename T>
+class Pod {
+    static_assert(std::is_trivially_copyable<T>::value, "Pod holds plain values");
+    T* p_ = nullptr;
+    size_t n_ = 0, cap_ = 0;
+
+  public:
+    Pod() = default;
+    Pod(const Pod& o) { *this = o; }
+    Pod(Pod&& o) noexcept : p_(o.p_), n_(o.n_), cap_(o.cap_) {
+        o.p_ = nullptr;
+        o.n_ = o.cap_ = 0;
+    }
+    Pod& operator=(const Pod& o) {
+        if (this != &o) {
+            resize(o.n_);
+            if (o.n_) std::memcpy(p_, o.p_, o.n_ * sizeof(T));
+        }
+        return *this;
+    }
+    Pod& operator=(Pod&& o) noexcept {
+        swap(o);
+        return *this;
+    }
+    ~Pod() { std::free(p_); }
+    void swap(Pod& o) noexcept {
+        std::swap(p_, o.p_);
+        std::swap(n_, o.n_);
+        std::swap(cap_, o.cap_);
+    }
+    size_t size() const { return n_; }
+    size_t capacity() const { return cap_; }
+    bool empty() const { return n_ == 0; }
+    void clear() { n_ = 0; }
+    void reserve(size_t c) {
+        if (c <= cap_) return;
+        c = std::max(c, std::max<size_t>(8, 2 * cap_));
+        T* q = static_cast<T*>(std::malloc(c * sizeof(T)));
+        if (!q) throw std::bad_alloc();
+        if (n_) std::memcpy(q, p_, n_ * sizeof(T));
+        std::free(p_);
+        p_ = q;
+        cap_ = c;
+    }
+    void resize(size_t n) {
+        reserve(n);
+        n_ = n;
+    }
+    void push_back(const T& x) {
+        if (n_ == cap_) reserve(n_ + 1);
+        p_[n_++] = x;
+    }
+    T& operator[](size_t i) { return p_[i]; }
+    const T& operator[](size_t i) const { return p_[i]; }
+    T& back() { return p_[n_ - 1]; }
+    T* begin() { return p_; }
+    T* end() { return p_ + n_; }
+    const T* begin() const { return p_; }
+    const T* end() const { return p_ + n_; }
+};
 // 3-D work in R (Vec3<R>, vec.h): double first, long double (on x86 64 bits of mantissa)
 // for a point where what the vertices' rounding can move is too much (a crossing near x of
 // an edge whose ends are far from it loses the ends' size in absolute terms, and the
@@ -42,33 +110,41 @@ struct Line {
 };
 // a convex polygon, counter-clockwise, and the line of each edge (v[i], v[i + 1])
 struct Piece {
-    std::vector<P2> v;
-    std::vector<Line> l;
+    Pod<P2> v;
+    Pod<Line> l;
     void clear() {
         v.clear();
         l.clear();
     }
     size_t size() const { return v.size(); }
 };
-// a polygon in 3-D (offsets from x), the plane through x of each edge (inside >= 0) and a
-// bound on each vertex's rounding
+// a polygon in 3-D (offsets from x), the plane through x of each edge (inside >= 0), a
+// bound on each vertex's rounding and each vertex's distance from x
 template <typename R>
 struct Poly3 {
-    std::vector<Vec3<R>> v;
-    std::vector<Vec3<R>> m;
-    std::vector<R> e;
+    Pod<Vec3<R>> v;
+    Pod<Vec3<R>> m;
+    Pod<R> e, len;
     void clear() {
         v.clear();
         m.clear();
         e.clear();
+        len.clear();
+    }
+    void swap(Poly3& o) noexcept {
+        v.swap(o.v);
+        m.swap(o.m);
+        e.swap(o.e);
+        len.swap(o.len);
     }
 };
 
-double twice_area(const std::vector<P2>& p) {
+template <typename C>
+double twice_area(const C& p) {
     double s = 0.0;
     for (size_t i = 0, n = p.size(); i < n; ++i) {
         const P2& a = p[i];
-        const P2& b = p[(i + 1) % n];
+        const P2& b = p[i + 1 == n ? 0 : i + 1];
         s += (a.x - p[0].x) * (b.y - p[0].y) - (a.y - p[0].y) * (b.x - p[0].x);
     }
     return s;
@@ -78,50 +154,75 @@ double twice_area(const std::vector<P2>& p) {
 // inside end, as exactff.halfspace.clip_halfspace); the cut edge lies on m. A crossing's
 // rounding: its ends' larger one plus ulps units of the larger end's length.
 template <typename R>
-void clip3(const Poly3<R>& V, const Vec3<R>& m, R ulps, Poly3<R>& out) {
-    out.clear();
+void clip3(const Poly3<R>& V, const Vec3<R>& m, const R* side, R ulps, Poly3<R>& out) {
+    // written by index into room for 2 n vertices (each edge gives at most its start
+    // and a crossing); side: dot(m, v) of each vertex v, taken once by the caller
     const size_t n = V.v.size();
+    out.v.resize(2 * n);
+    out.m.resize(2 * n);
+    out.e.resize(2 * n);
+    out.len.resize(2 * n);
+    size_t o = 0;
     for (size_t i = 0; i < n; ++i) {
+        const size_t j = i + 1 == n ? 0 : i + 1;
         const Vec3<R>& a = V.v[i];
-        const Vec3<R>& b = V.v[(i + 1) % n];
-        const R sa = dot(m, a), sb = dot(m, b);
+        const Vec3<R>& b = V.v[j];
+        const R sa = side[i], sb = side[j];
         if (sa >= 0) {
-            out.v.push_back(a);
-            out.m.push_back(V.m[i]);
-            out.e.push_back(V.e[i]);
+            out.v[o] = a;
+            out.m[o] = V.m[i];
+            out.e[o] = V.e[i];
+            out.len[o] = V.len[i];
+            ++o;
         }
         if ((sa >= 0) != (sb >= 0)) {
             const Vec3<R>& p = sa >= 0 ? a : b;
             const Vec3<R>& q = sa >= 0 ? b : a;
             const R sp = sa >= 0 ? sa : sb, sq = sa >= 0 ? sb : sa;
             const R t = sp / (sp - sq);
-            out.v.push_back({p.x + t * (q.x - p.x), p.y + t * (q.y - p.y), p.z + t * (q.z - p.z)});
+            const Vec3<R> c{p.x + t * (q.x - p.x), p.y + t * (q.y - p.y), p.z + t * (q.z - p.z)};
+            out.v[o] = c;
             // leaving: the edge from the crossing runs along m; entering: along V's edge
-            out.m.push_back(sa >= 0 ? m : V.m[i]);
-            out.e.push_back(std::max(V.e[i], V.e[(i + 1) % n]) +
-                            ulps * std::sqrt(std::max(dot(a, a), dot(b, b))));
+            out.m[o] = sa >= 0 ? m : V.m[i];
+            // (the larger end's length: sqrt of the larger squared length, as sqrt is
+            // monotone and correctly rounded)
+            out.e[o] = std::max(V.e[i], V.e[j]) + ulps * std::max(V.len[i], V.len[j]);
+            out.len[o] = std::sqrt(dot(c, c));
+            ++o;
         }
     }
+    out.v.resize(o);
+    out.m.resize(o);
+    out.e.resize(o);
+    out.len.resize(o);
 }
 
 // Split F by the line L: its part on the inside (L >= 0) and on the outside (L < 0, the
-// cut edge on the reversed line), the crossings shared by both halves.
+// cut edge on the reversed line), the crossings shared by both halves (written by index
+// into room for 2 n vertices each, each vertex's side taken once).
 void split(const Piece& F, const Line& L, Piece& in, Piece& out) {
-    in.clear();
-    out.clear();
     const Line rev{-L.a, -L.b, -L.c};
     const size_t n = F.size();
+    in.v.resize(2 * n);
+    in.l.resize(2 * n);
+    out.v.resize(2 * n);
+    out.l.resize(2 * n);
+    size_t ni = 0, no = 0;
+    double sq = n ? L.at(F.v[0]) : 0.0;
+    const double s0 = sq;
     for (size_t i = 0; i < n; ++i) {
+        const size_t j = i + 1 == n ? 0 : i + 1;
         const P2& p = F.v[i];
-        const P2& q = F.v[(i + 1) % n];
-        const double sp = L.at(p), sq = L.at(q);
+        const P2& q = F.v[j];
+        const double sp = sq;
+        sq = j ? L.at(q) : s0;
         const bool pin = sp >= 0, qin = sq >= 0;
         if (pin) {
-            in.v.push_back(p);
-            in.l.push_back(F.l[i]);
+            in.v[ni] = p;
+            in.l[ni++] = F.l[i];
         } else {
-            out.v.push_back(p);
-            out.l.push_back(F.l[i]);
+            out.v[no] = p;
+            out.l[no++] = F.l[i];
         }
         if (pin != qin) {
             // from the end inside, so that the same edge gives the same point
@@ -130,12 +231,16 @@ void split(const Piece& F, const Line& L, Piece& in, Piece& out) {
             const double su = pin ? sp : sq, sw = pin ? sq : sp;
             const double t = su / (su - sw);
             const P2 c{u.x + t * (w.x - u.x), u.y + t * (w.y - u.y)};
-            in.v.push_back(c);
-            in.l.push_back(pin ? L : F.l[i]);
-            out.v.push_back(c);
-            out.l.push_back(pin ? F.l[i] : rev);
+            in.v[ni] = c;
+            in.l[ni++] = pin ? L : F.l[i];
+            out.v[no] = c;
+            out.l[no++] = pin ? F.l[i] : rev;
         }
     }
+    in.v.resize(ni);
+    in.l.resize(ni);
+    out.v.resize(no);
+    out.l.resize(no);
 }
 
 struct Box {
@@ -178,9 +283,10 @@ struct Slivers {
     double min_area = 0.0;   // twice the area below which a piece is a sliver
     double dropped = 0.0;    // the slivers' area, for the estimate
     Box box{INFINITY, INFINITY, -INFINITY, -INFINITY};
-    bool keep(const Piece& p) {
+    bool keep(const Piece& p) { return p.size() >= 3 && keep(p, std::fabs(twice_area(p.v))); }
+    // ... given a, the piece's twice_area's magnitude
+    bool keep(const Piece& p, double a) {
         if (p.size() < 3) return false;
-        const double a = std::fabs(twice_area(p.v));
         if (a > min_area) return true;
         if (a > 0) {
             dropped += 0.5 * a;
@@ -192,13 +298,35 @@ struct Slivers {
     }
 };
 
-// F less the convex E: F's parts outside each of E's lines in turn.
-void difference(const Piece& F, const Piece& E, std::vector<Piece>& out, Piece& in,
-                Piece& outside, Slivers& slivers) {
-    Piece rest = F;
+// Pieces whose storage is kept from point to point (a point's pieces are a few dozen
+// short vectors: taken from here and given back, not allocated and freed each time).
+// fresh: an empty piece, with storage where one is spare; recycle: v's pieces given
+// back, v left empty.
+Piece fresh(std::vector<Piece>& spare) {
+    if (spare.empty()) return Piece();
+    Piece p = std::move(spare.back());
+    spare.pop_back();
+    p.clear();
+    return p;
+}
+void recycle(std::vector<Piece>& v, std::vector<Piece>& spare) {
+    for (Piece& p : v)
+        if (p.v.capacity()) spare.push_back(std::move(p));
+    v.clear();
+}
+
+// F less the convex E: F's parts outside each of E's lines in turn (rest, in, outside:
+// scratch pieces; F is used up, its storage swapped with rest's).
+void difference(Piece& F, const Piece& E, std::vector<Piece>& out, Piece& rest,
+                Piece& in, Piece& outside, Slivers& slivers, std::vector<Piece>& spare) {
+    rest.v.swap(F.v);
+    rest.l.swap(F.l);
     for (size_t i = 0, n = E.size(); i < n && rest.size() >= 3; ++i) {
         split(rest, E.l[i], in, outside);
-        if (slivers.keep(outside)) out.push_back(outside);
+        if (slivers.keep(outside)) {
+            out.push_back(std::move(outside));
+            outside = fresh(spare);
+        }
         rest.v.swap(in.v);
         rest.l.swap(in.l);
     }
@@ -222,6 +350,7 @@ struct Inputs {
     std::vector<Vec3<double>> base;              // the pyramid's base
     Vec3<double> base_centroid;
     std::vector<std::vector<Vec3<double>>> K;    // the blockers
+    std::vector<std::vector<Vec3<double>>> KE;   // their edges' vectors, K[k + 1] - K[k]
     std::vector<Vec3<double>> KN;                // their unit normals (outward for a solid's)
     std::vector<long long> group;              // each one's convex solid, -1: none
     long long groups = 0;                      // 1 + the largest solid's label
@@ -251,9 +380,11 @@ struct Work {
     std::vector<Vec3<R>> M;
     std::vector<unsigned char> off_hull;       // per solid: p is outside its hull
     Poly3<R> W, T;
-    Piece img, in, outside, cut;
-    std::vector<Piece> incoming, next, images;
+    Pod<R> side;
+    Piece img, in, outside, cut, rest;
+    std::vector<Piece> incoming, next, images, spare;
     std::vector<std::pair<double, size_t>> order;
+    std::vector<double> area2;                 // each image's twice area, its magnitude
     size_t last_cover = 0;                     // the blocker that covered the base last
 };
 
@@ -261,13 +392,15 @@ struct Work {
 template <typename R>
 void over_parts(const Inputs& in, Region& out, Work<R>& w) {
     if (in.Qparts.empty()) return;
-    w.next.clear();
+    recycle(w.next, w.spare);
     for (const Piece& F : out.pieces) {
         const Box bf = box_of(F);
         for (size_t q = 0; q < in.Qparts.size(); ++q)
             if (!boxes_apart(bf, in.Qbox[q]) &&
-                intersect(F, in.Qparts[q], w.cut, w.in, w.outside, out.slivers))
-                w.next.push_back(w.cut);
+                intersect(F, in.Qparts[q], w.cut, w.in, w.outside, out.slivers)) {
+                w.next.push_back(std::move(w.cut));
+                w.cut = fresh(w.spare);
+            }
     }
     out.pieces.swap(w.next);
 }
@@ -275,7 +408,7 @@ void over_parts(const Inputs& in, Region& out, Work<R>& w) {
 // The hidden region of Q from the point p, in precision R.
 template <typename R>
 void region_at(const Inputs& in, const Vec3<double>& pd, Region& out, Work<R>& w) {
-    out.pieces.clear();
+    recycle(out.pieces, w.spare);
     out.slivers = Slivers();
     out.reach = out.moved = 0.0;
     out.back_faces = 0;
@@ -293,7 +426,7 @@ void region_at(const Inputs& in, const Vec3<double>& pd, Region& out, Work<R>& w
     w.M.resize(nc);
     for (size_t a = 0; a < nc; ++a) {
         const Vec3<double>& a0 = in.base[a];
-        const Vec3<double>& a1 = in.base[(a + 1) % nc];
+        const Vec3<double>& a1 = in.base[a + 1 == nc ? 0 : a + 1];
         w.M[a] = cross(sub(to<R>(a0), p), to<R>(sub(a1, a0)));
         if (dot(w.M[a], sub(to<R>(in.base_centroid), p)) < 0) w.M[a] = neg(w.M[a]);
     }
@@ -315,14 +448,13 @@ void region_at(const Inputs& in, const Vec3<double>& pd, Region& out, Work<R>& w
     const size_t nk = in.K.size(), first = w.last_cover < nk ? w.last_cover : 0;
     for (size_t t = 0; t < nk; ++t) {
         const size_t b = t == 0 ? first : (t <= first ? t - 1 : t);
-        // the offsets, each rounded once (within vertex_error of its length)
+        // the offsets, each rounded once (within vertex_error of its length: W.e, with
+        // the edges' planes, once the blocker is not culled below)
+        const std::vector<Vec3<double>>& Kb = in.K[b];
+        const size_t kb = Kb.size();
         W.clear();
-        Vec3<R> g{0, 0, 0};
-        for (const Vec3<double>& v : in.K[b]) {
-            W.v.push_back(sub(to<R>(v), p));
-            W.e.push_back(vertex_error * std::sqrt(dot(W.v.back(), W.v.back())));
-            g = {g.x + W.v.back().x, g.y + W.v.back().y, g.z + W.v.back().z};
-        }
+        W.v.resize(kb);
+        for (size_t k = 0; k < kb; ++k) W.v[k] = sub(to<R>(Kb[k]), p);
         if (std::fabs(dot(W.v[0], to<R>(in.KN[b]))) <= R(in.edge_on)) continue;   // edge-on
         // wholly outside one of the pyramid's planes: clipped away, as clip3 would
         bool outside_pyramid = false;
@@ -341,37 +473,52 @@ void region_at(const Inputs& in, const Vec3<double>& pd, Region& out, Work<R>& w
             ++out.back_faces;
             continue;
         }
-        // each edge's plane through p (as the pyramid's, from the edge's own vector),
-        // inside towards the blocker's centroid
-        for (size_t k = 0, m = W.v.size(); k < m; ++k) {
-            Vec3<R> e = cross(W.v[k], to<R>(sub(in.K[b][(k + 1) % m], in.K[b][k])));
-            W.m.push_back(dot(e, g) < 0 ? neg(e) : e);
+        // each vertex's rounding, and each edge's plane through p (as the pyramid's, from
+        // the edge's own vector), inside towards the blocker's centroid
+        W.e.resize(kb);
+        W.len.resize(kb);
+        W.m.resize(kb);
+        Vec3<R> g{0, 0, 0};
+        for (size_t k = 0; k < kb; ++k) {
+            const Vec3<R>& v = W.v[k];
+            W.len[k] = std::sqrt(dot(v, v));
+            W.e[k] = vertex_error * W.len[k];
+            g = {g.x + v.x, g.y + v.y, g.z + v.z};
+        }
+        for (size_t k = 0; k < kb; ++k) {
+            Vec3<R> e = cross(W.v[k], to<R>(in.KE[b][k]));
+            W.m[k] = dot(e, g) < 0 ? neg(e) : e;
         }
         for (size_t a = 0; a < nc && W.v.size() >= 3; ++a) {
-            bool inside = true;          // wholly inside this plane: nothing to cut
-            for (const Vec3<R>& v : W.v)
-                if (dot(w.M[a], v) < 0) {
-                    inside = false;
-                    break;
-                }
+            // each vertex's side of the plane; wholly inside it: nothing to cut
+            const size_t nw = W.v.size();
+            w.side.resize(nw);
+            bool inside = true;
+            for (size_t k = 0; k < nw; ++k) {
+                w.side[k] = dot(w.M[a], W.v[k]);
+                inside &= w.side[k] >= 0;
+            }
             if (inside) continue;
-            clip3(W, w.M[a], vertex_error, w.T);
-            std::swap(W, w.T);
+            clip3(W, w.M[a], w.side.begin(), vertex_error, w.T);
+            W.swap(w.T);
         }
         if (W.v.size() < 3) continue;
         // central projection from p onto Q's plane, in the plane's frame; each edge's
         // plane m traced on it: (ax . m) u + (ay . m) v + (q0 - p) . m
         if (w.images.size() <= images) w.images.resize(images + 1);
         Piece& img = w.images[images++];
-        img.clear();
-        for (size_t k = 0; k < W.v.size(); ++k) {
+        if (!img.v.capacity()) img = fresh(w.spare);
+        const size_t nw = W.v.size();
+        img.v.resize(nw);
+        img.l.resize(nw);
+        for (size_t k = 0; k < nw; ++k) {
             const Vec3<R>& v = W.v[k];
             const R down = -dot(v, nq);
             const R s = h / down;
             // where the vertex's rounding e takes the image: |s| e (1 + |v| / |v . nQ|),
             // large for a crossing close to p
             out.moved = std::max(out.moved, static_cast<double>(
-                std::fabs(s) * W.e[k] * (1 + std::sqrt(dot(v, v)) / std::fabs(down))));
+                std::fabs(s) * W.e[k] * (1 + W.len[k] / std::fabs(down))));
             const Vec3<R> q{v.x * s + foot.x, v.y * s + foot.y, v.z * s + foot.z};
             const P2 u{static_cast<double>(dot(q, ax)), static_cast<double>(dot(q, ay))};
             if (!std::isfinite(u.x) || !std::isfinite(u.y)) {
@@ -379,16 +526,18 @@ void region_at(const Inputs& in, const Vec3<double>& pd, Region& out, Work<R>& w
                 return;
             }
             out.reach = std::max({out.reach, std::fabs(u.x), std::fabs(u.y)});
-            img.v.push_back(u);
+            img.v[k] = u;
             const Vec3<R>& m = W.m[k];
-            img.l.push_back({static_cast<double>(dot(ax, m)), static_cast<double>(dot(ay, m)),
-                             static_cast<double>(-dot(foot, m))});
+            img.l[k] = {static_cast<double>(dot(ax, m)), static_cast<double>(dot(ay, m)),
+                        static_cast<double>(-dot(foot, m))};
         }
         // an image that covers the base alone (its area within the slivers' rounding of
         // the base's) is the region: the other blockers hide nothing more, and what is
         // left of the base uncovered is counted with the slivers (in the estimate)
         const double min_area = in.sliver_ulps * DBL_EPSILON * out.reach * out.reach;
-        const double left2 = in.base_area2 - std::fabs(twice_area(img.v));
+        if (w.area2.size() < images) w.area2.resize(images);
+        const double area2 = w.area2[images - 1] = std::fabs(twice_area(img.v));
+        const double left2 = in.base_area2 - area2;
         if (in.base_area2 > 0 && img.size() >= 3 && left2 <= 2.0 * min_area) {
             out.slivers.min_area = min_area;
             out.slivers.dropped += 0.5 * std::max(left2, 0.0);
@@ -412,24 +561,24 @@ void region_at(const Inputs& in, const Vec3<double>& pd, Region& out, Work<R>& w
     w.order.clear();
     for (size_t k = 0; k < images; ++k)
         if (w.images[k].size() >= 3)
-            w.order.push_back({-std::fabs(twice_area(w.images[k].v)), k});
+            w.order.push_back({-w.area2[k], k});
     std::sort(w.order.begin(), w.order.end());
     double covered2 = 0.0;
     for (const auto& [neg_area, k] : w.order) {
         Piece& img = w.images[k];
-        if (!out.slivers.keep(img)) continue;
-        w.incoming.clear();
+        if (!out.slivers.keep(img, -neg_area)) continue;
+        recycle(w.incoming, w.spare);
         w.incoming.push_back(std::move(img));
         const size_t have = out.pieces.size();
         for (size_t e = 0; e < have && !w.incoming.empty(); ++e) {
             const Piece& E = out.pieces[e];
             const Box be = box_of(E);
-            w.next.clear();
+            recycle(w.next, w.spare);
             for (Piece& F : w.incoming) {
                 if (boxes_apart(box_of(F), be) || separated_by(E, F) || separated_by(F, E))
                     w.next.push_back(std::move(F));
                 else
-                    difference(F, E, w.next, w.in, w.outside, out.slivers);
+                    difference(F, E, w.next, w.rest, w.in, w.outside, out.slivers, w.spare);
             }
             w.incoming.swap(w.next);
         }
@@ -495,7 +644,7 @@ void sector_sum(const Piece& F, const Vec3<double>& w, const double frame[3][3],
     k.crossing_enters.clear();
     double errs = 0.0;
     for (size_t i = 0; i < m; ++i) {
-        Vec3<double> Ea = k.E[i], Eb = k.E[(i + 1) % m];
+        Vec3<double> Ea = k.E[i], Eb = k.E[i + 1 == m ? 0 : i + 1];
         const double za = A.z + Ea.z, zb = A.z + Eb.z;
         const bool above_a = za > 0, above_b = zb > 0;
         if (!above_a && !above_b) continue;
@@ -586,14 +735,17 @@ HiddenResult hidden_pieces(const HiddenArgs& args) {
     }
     if (nc >= 3) {
         Piece B;
-        B.v = in.base2;
+        for (const P2& b : in.base2) B.v.push_back(b);
         in.base_box = box_of(B);
         in.base_area2 = std::fabs(twice_area(in.base2));
     }
     in.K.resize(nb);
+    in.KE.resize(nb);
     for (std::ptrdiff_t b = 0; b < nb; ++b) {
         for (std::ptrdiff_t k = 0; k < bc(b); ++k)
             in.K[b].push_back({bl(b, k, 0), bl(b, k, 1), bl(b, k, 2)});
+        for (size_t k = 0, m = in.K[b].size(); k < m; ++k)
+            in.KE[b].push_back(sub(in.K[b][k + 1 == m ? 0 : k + 1], in.K[b][k]));
         in.KN.push_back({bn(b, 0), bn(b, 1), bn(b, 2)});
         in.group.push_back(bg(b));
         in.groups = std::max(in.groups, bg(b) + 1);
@@ -647,6 +799,9 @@ HiddenResult hidden_pieces(const HiddenArgs& args) {
             // vertices' rounding can move it by more than precise_rtol of its extent
             region_at(in, p, region, fast);
             bool again = !region.ok || region.moved > precise_rtol * std::max(region.reach, extent);
+            // the pieces' perimeter where taken here, for the doubles' pieces kept
+            double perimeter = 0.0;
+            bool have_perimeter = false;
             if (again && region.ok && precise_atol >= 0 && !region.pieces.empty()) {
                 // what the doubles' rounding moves of the value, the estimate's term
                 // moved * length * h / (pi r^3) (r: the distance from p to the region's
@@ -656,7 +811,7 @@ HiddenResult hidden_pieces(const HiddenArgs& args) {
                 for (const Piece& F : region.pieces)
                     for (size_t k = 0, m = F.size(); k < m; ++k) {
                         const P2& u = F.v[k];
-                        const P2& v = F.v[(k + 1) % m];
+                        const P2& v = F.v[k + 1 == m ? 0 : k + 1];
                         len += std::hypot(v.x - u.x, v.y - u.y);
                         bb.x0 = std::min(bb.x0, u.x);
                         bb.y0 = std::min(bb.y0, u.y);
@@ -670,8 +825,13 @@ HiddenResult hidden_pieces(const HiddenArgs& args) {
                 const double r = std::sqrt(h * h + dx * dx + dy * dy);
                 const double bound = r > 0 && h > 0 ? h / (3.141592653589793 * r * r * r) : 0.0;
                 again = !(region.moved * len * bound <= precise_atol);
+                perimeter = len;
+                have_perimeter = true;
             }
-            if (again) region_at(in, p, region, precise);
+            if (again) {
+                region_at(in, p, region, precise);
+                have_perimeter = false;
+            }
             reach[i] = region.reach;
             moved[i] = region.moved;
             back_faces += region.back_faces;
@@ -686,12 +846,12 @@ HiddenResult hidden_pieces(const HiddenArgs& args) {
             for (const Piece& F : region.pieces) {
                 for (size_t k = 0, m = F.size(); k < m; ++k) {
                     const P2& u = F.v[k];
-                    const P2& v = F.v[(k + 1) % m];
+                    const P2& v = F.v[k + 1 == m ? 0 : k + 1];
                     if (rings) {
                         xy.push_back(u.x);
                         xy.push_back(u.y);
                     }
-                    len += std::hypot(v.x - u.x, v.y - u.y);
+                    if (!have_perimeter) len += std::hypot(v.x - u.x, v.y - u.y);
                     bb.x0 = std::min(bb.x0, u.x);
                     bb.y0 = std::min(bb.y0, u.y);
                     bb.x1 = std::max(bb.x1, u.x);
@@ -703,7 +863,7 @@ HiddenResult hidden_pieces(const HiddenArgs& args) {
                     ring_point.push_back(i);
                 }
             }
-            length[i] = len;
+            length[i] = have_perimeter ? perimeter : len;
             hidden[i] = value / two_pi;
             rounding[i] = rnd / two_pi;
             if (bb.x0 <= bb.x1) {

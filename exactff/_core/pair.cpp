@@ -37,7 +37,11 @@ int orient2(double ax, double ay, double bx, double by, double cx, double cy) {
     const double l = (bx - ax) * (cy - ay), r = (by - ay) * (cx - ax), det = l - r;
     const double bound = 3.3306690738754716e-16 * (std::fabs(l) + std::fabs(r));
     if (det > bound || -det > bound) return det > 0 ? 1 : -1;
-    const Expansion e = add(mul(diff(bx, ax), diff(cy, ay)), neg(mul(diff(by, ay), diff(cx, ax))));
+    // the two products grown in place into one expansion (exact: the same sign as any
+    // other exact evaluation, without copying the expansions' storage)
+    Expansion e;
+    mul_into(e, diff(bx, ax), diff(cy, ay), 1.0);
+    mul_into(e, diff(by, ay), diff(cx, ax), -1.0);
     return sign(e);
 }
 
