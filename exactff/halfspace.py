@@ -225,14 +225,16 @@ def clip_above_horizon(Q, zero=0.0):
 def _front_part(C, c):
     """A clipped ring (about c) moved back by c, without the repeat a cut through a vertex
     leaves (no edge of zero length), nor a vertex the cut put within ``CLIP_MEET_ULPS``
-    roundoffs of the one before it (a cut along an edge that lies in the plane but for
-    rounding: the copy would leave a sliver 1e-14 wide, on which the area rules' closed
-    forms and half-planes are rounding's); None with fewer than 3 vertices."""
+    roundoffs (of the ring's largest coordinates) of the one before it (a cut along an
+    edge that lies in the plane but for rounding: the copy would leave a sliver 1e-14
+    wide, on which the area rules' closed forms and half-planes are rounding's); None
+    with fewer than 3 vertices."""
     C = C + c
     C = C[np.any(C != np.roll(C, 1, axis=0), axis=1)]
     step = np.abs(C - np.roll(C, 1, axis=0)).sum(axis=1)
-    near = step <= tol.CLIP_MEET_ULPS * tol.EPS * (np.abs(C).sum(axis=1)
-                                                   + np.abs(np.roll(C, 1, axis=0)).sum(axis=1))
+    # (roundoffs of the ring's largest coordinates: the cut rounds at the scale of the
+    # edge's ends and the plane's point, not of the vertex, which may be at the origin)
+    near = step <= 2 * tol.CLIP_MEET_ULPS * tol.EPS * np.abs(C).sum(axis=1).max(initial=0.0)
     if near.any() and len(C) > 3:
         C = C[~near]
     return C if len(C) >= 3 else None

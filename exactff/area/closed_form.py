@@ -192,12 +192,9 @@ def front_parts(P, nP, Qs, nQs, dP, dQ):
 
 def front_distances(P, nP, V, N):
     """The signed distances :func:`front_parts` decides from, for all receivers at
-    once, with the conventions' near-coplanar band (:func:`exactff.predicates.coplanar_band`):
-    a distance within the band of the plane it is measured from counts as 0 (the vertex
-    is in the plane). A receiver within the band of P's plane, or P within the band of
-    the receiver's, is coplanar with it (no part in front: F = 0); one vertex within the
-    band and the others in front keep the polygon whole, not clipped to a sliver that
-    rounding tilted across the plane.
+    once, 0 within the near-coplanar band (:func:`exactff.predicates.coplanar_band`):
+    a polygon within the band of the other's plane is coplanar with it (F = 0), one
+    with vertices within it and the rest in front is whole, not clipped to a sliver.
 
     Parameters
     ----------
@@ -230,10 +227,13 @@ def front_distances(P, nP, V, N):
     dQ = (V - P[0]) @ nP                                    # (m, K')
     dP = np.einsum("mkj,mj->mk", P[None] - V[:, :1], N)     # (m, K)
     # the band of P's plane at each receiver's vertices, and of each receiver's plane
-    # at P's: u BSP_COPLANAR_ULPS (|n| . |x| + |n . x0|) (coplanar_band)
-    bandQ = coplanar_band(V.reshape(-1, 3), nP[None], np.array([nP @ P[0]])).reshape(dQ.shape)
-    DQ = np.einsum("mj,mj->m", V[:, 0], N)
-    bandP = coplanar_band(P, N, DQ)                         # (K, m)
+    # at P's: u BSP_COPLANAR_ULPS (|n| . |x| + |n| . |x0|) (coplanar_band with the
+    # anchor's magnitude for |n . x0|, which cancels to 0 for a plane through the
+    # origin while the distances, (x - x0) . n, still round at u |x0|: test4 turned
+    # and scaled 1000, a wall's corner at the origin 1.9e-14 behind a floor through it)
+    bandQ = coplanar_band(V.reshape(-1, 3), nP[None], np.abs(nP[None]) @ np.abs(P[0])
+                          ).reshape(dQ.shape)
+    bandP = coplanar_band(P, N, np.einsum("mj,mj->m", np.abs(V[:, 0]), np.abs(N)))  # (K, m)
     dQ[np.abs(dQ) <= bandQ] = 0.0
     dP[np.abs(dP) <= bandP.T] = 0.0
     return dP, dQ

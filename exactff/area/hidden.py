@@ -17,7 +17,7 @@ from ..halfspace import NORMAL_FLOOR, clip_front
 from ..methods import Exact
 from ..predicates import coplanar_band_sides
 from ..rings import padded
-from ..scene import Scene
+from ..scene import build_scene
 from ..visibility import convex_pieces, convex_rings
 from ._hidden import hidden_pieces
 from ._pair import hidden_setup as _compiled_hidden_setup
@@ -325,8 +325,9 @@ def _strictly_convex(Q2):
 def hidden_values_by_engine(X, nP, Qc, blockers):
     """:func:`hidden_values` by the engine instead (exact occluded point values on the
     sub-scene of Qc and the blockers, subtracted from the unoccluded ones): about a
-    thousand times slower, used where a point's images cannot be trusted."""
-    sub = Scene.from_polygons([Qc] + list(blockers))
+    thousand times slower, used where a point's images cannot be trusted. A blocker's
+    part of no area (a clip's sliver of rounding) hides nothing and is left out."""
+    sub = build_scene([Qc] + list(blockers), degenerate="drop")
     exact = Exact()
     FE = [exact.point_form_factors(sub, x, nP, error=True) for x in np.atleast_2d(X)]
     F = np.array([f for f, _ in FE])
