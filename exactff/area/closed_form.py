@@ -226,11 +226,9 @@ def front_distances(P, nP, V, N):
     """
     dQ = (V - P[0]) @ nP                                    # (m, K')
     dP = np.einsum("mkj,mj->mk", P[None] - V[:, :1], N)     # (m, K)
-    # the band of P's plane at each receiver's vertices, and of each receiver's plane
-    # at P's: u BSP_COPLANAR_ULPS (|n| . |x| + |n| . |x0|) (coplanar_band with the
-    # anchor's magnitude for |n . x0|, which cancels to 0 for a plane through the
-    # origin while the distances, (x - x0) . n, still round at u |x0|: test4 turned
-    # and scaled 1000, a wall's corner at the origin 1.9e-14 behind a floor through it)
+    # the band of P's plane at the receivers' vertices and theirs at P's: coplanar_band
+    # with |n| . |x0| for |n . x0| (0 for a plane through the origin, where (x - x0) . n
+    # still rounds at u |x0|: test4 turned, a corner at the origin 1.9e-14 behind)
     bandQ = coplanar_band(V.reshape(-1, 3), nP[None], np.abs(nP[None]) @ np.abs(P[0])
                           ).reshape(dQ.shape)
     bandP = coplanar_band(P, N, np.einsum("mj,mj->m", np.abs(V[:, 0]), np.abs(N)))  # (K, m)
