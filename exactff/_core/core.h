@@ -429,6 +429,7 @@ class Core {
     static R turn_bound(R ratio);
     R input_error(int64_t i, R length) const;
     R input_tilt(int64_t ia, int64_t ib, const double* pp) const;
+    static R measured_off(const Quad m[3], Quad ml, Quad cond, const std::array<Quad, 3>& x);
     // (without `record`, `keyed` receives the edges it would key, with their charges;
     // `arcs`, the edges' arc lengths: computed into it where it is short, else read)
     R charge_edges(const Piece& q, int64_t src, std::vector<R>& E, RowStats& st,
