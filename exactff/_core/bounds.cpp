@@ -56,10 +56,12 @@ R Core::input_tilt(int64_t ia, int64_t ib, const double* pp) const {
 // larger of their bounds, over pi (the area swept by moving the edge that far); with
 // `refined`, the bounds of the directions Core::refine gave the piece instead
 // (the computation's part: the one returned and added to E; the input's own errors'
-// part, arc length times the larger of the ends' gerr over pi, goes to st.crossing)
+// part, arc length times the larger of the ends' gerr over pi, or times the turn of
+// the edge's own plane where that is known (Core::edge_tilt), goes to st.crossing)
 R Core::charge_edges(const Piece& q, int64_t src, std::vector<R>& E, RowStats& st,
                      const std::vector<R>* refined, bool record,
-                     std::vector<std::pair<EdgeKey, R>>* keyed, std::vector<R>* arcs) const {
+                     std::vector<std::pair<EdgeKey, R>>* keyed, std::vector<R>* arcs,
+                     int64_t f) const {
     const R pi = 3.14159265358979323846264338327950288L;
     const size_t m = q.size();
     R total = 0;
@@ -104,6 +106,12 @@ R Core::charge_edges(const Piece& q, int64_t src, std::vector<R>& E, RowStats& s
             const R turn = a.gerr + b.gerr;
             if (length <= pi / 2 && turn <= static_cast<R>(0.1))
                 geo = std::min(geo, static_cast<R>(1.01) * turn * std::tan(length / 2) / pi);
+            // where the edge's plane through p is one the input's errors turn by a known
+            // angle over the edge (Core::edge_tilt), its points move off that plane by at
+            // most that: their slides along it (its ends where other edges' planes cross
+            // it) sweep nothing of this edge (the next edges' charges hold them)
+            const R own = edge_tilt(a.edge, f, st);
+            if (own >= 0) geo = std::min(geo, length * own / pi);
         }
         // a cut edge, or one a BSP split made (two fragments of one polygon share
         // it): keyed by its ends, in a fixed order
@@ -131,6 +139,23 @@ R Core::charge_edges(const Piece& q, int64_t src, std::vector<R>& E, RowStats& s
         }
     }
     return total;
+}
+
+// a bound on the angle by which the input's own errors turn the plane through p that a
+// piece's edge lies on (edge code as Vertex::edge), over that edge, or -1 where none is
+// known: 0 for an exact plane given by its normal (the horizon and the tiles: no input
+// point makes it); Core::input_tilt for an input edge of fragment f (the piece's edge
+// lies on that edge, so within the wedge of its two input points, where input_tilt
+// holds); -1 for an exact plane through two input points (a piece may be cut by it
+// outside their wedge) or without the fragment
+R Core::edge_tilt(int64_t code, int64_t f, const RowStats& st) const {
+    if (code >= 0) {
+        if (f < 0 || st.point == nullptr) return -1;
+        const int64_t ib = start_[f] + (code - start_[f] + 1) % count_[f];
+        return input_tilt(code, ib, st.point);
+    }
+    if (st.xp == nullptr) return -1;
+    return (*st.xp)[static_cast<size_t>(-1 - code)].kind == 1 ? 0 : -1;
 }
 
 // the normal of the plane through p that a piece's edge lies on (edge code as
