@@ -191,10 +191,18 @@ void Core::quad_plane(int64_t code, int64_t f, const double* pp, const std::vect
     m[0] = A[1] * B[2] - A[2] * B[1];
     m[1] = A[2] * B[0] - A[0] * B[2];
     m[2] = A[0] * B[1] - A[1] * B[0];
-    const Quad ml = q_sqrt(m[0] * m[0] + m[1] * m[1] + m[2] * m[2]);
-    const Quad al = q_sqrt(A[0] * A[0] + A[1] * A[1] + A[2] * A[2]);
-    const Quad bl = q_sqrt(B[0] * B[0] + B[1] * B[1] + B[2] * B[2]);
-    *cond = ml > 0 ? al * bl / ml : static_cast<Quad>(INFINITY);
+    // (a bound's factor: in long double, raised by its few roundoffs)
+    const R ml = rough_length(m), al = rough_length(A), bl = rough_length(B);
+    *cond = ml > 0 ? static_cast<Quad>(al * bl / ml * (1 + 16 * K_.eps))
+                   : static_cast<Quad>(INFINITY);
+}
+
+// the length of a quadruple vector, in long double from its coordinates rounded to long
+// double: within a few roundoffs of long double (the same exponent range: a nonzero
+// vector's is nonzero); for bounds' factors and scales, not for values
+R Core::rough_length(const Quad x[3]) {
+    const R a = static_cast<R>(x[0]), b = static_cast<R>(x[1]), c = static_cast<R>(x[2]);
+    return std::sqrt(a * a + b * b + c * c);
 }
 
 // a piece's vertex directions in quadruple precision, for integrate_quad, each with
@@ -221,7 +229,8 @@ void Core::refine(const Piece& q, int64_t f, const double* pp, const std::vector
     const size_t m = q.size();
     v.resize(m);
     err.resize(m);
-    auto len = [](const Quad* x) { return q_sqrt(x[0] * x[0] + x[1] * x[1] + x[2] * x[2]); };
+    // (lengths for bounds and scales: Core::rough_length)
+    auto len = [](const Quad* x) { return static_cast<Quad>(rough_length(x)); };
     // the plane of each of the piece's edges (edge k: from vertex k to k + 1), its
     // condition and its normal's length, each computed once where first asked for
     // (every computed vertex asks for its two edges')
@@ -279,7 +288,7 @@ void Core::refine(const Piece& q, int64_t f, const double* pp, const std::vector
             // s's (its two dot products, each within 4 roundoffs of |m| |x|) and the
             // normal's tilt
             const Quad W = len(A) + q_abs(sp) * len(Bm);
-            e = static_cast<R>(QUAD_EPS * (16 * W / dl + 8 * c + 4));
+            e = static_cast<R>(QUAD_EPS * (16 * W / dl + 8 * c + 4)) * (1 + 16 * K_.eps);
         } else {
             const EdgePlane& P1 = plane_of(k1);
             const EdgePlane& P2 = plane_of(k2);
@@ -292,7 +301,7 @@ void Core::refine(const Piece& q, int64_t f, const double* pp, const std::vector
             dl = len(d);
             const Quad l1 = length_of(k1), l2 = length_of(k2);
             if (!(dl > 0) || !(l1 > 0) || !(l2 > 0)) return false;
-            e = static_cast<R>(8 * QUAD_EPS * (c1 + c2 + 1) * (l1 * l2 / dl));
+            e = static_cast<R>(8 * QUAD_EPS * (c1 + c2 + 1) * (l1 * l2 / dl)) * (1 + 16 * K_.eps);
         }
         e += 2 * static_cast<R>(QUAD_EPS);  // and the scaling below
         if (!(e < err[i])) return false;
@@ -337,11 +346,13 @@ void Core::refine(const Piece& q, int64_t f, const double* pp, const std::vector
 // exact normal (8 cond roundoffs, as Core::refine charges a crossing), as an angle
 // (asin(s) <= 1.01 s for s <= 0.1; else any angle, pi)
 R Core::measured_off(const Quad m[3], Quad ml, Quad cond, const std::array<Quad, 3>& x) {
-    const Quad xl = q_sqrt(x[0] * x[0] + x[1] * x[1] + x[2] * x[2]);
+    const Quad xl = static_cast<Quad>(rough_length(x.data()));
     if (!(ml > 0) || !(xl > 0) || !(cond < static_cast<Quad>(INFINITY)))
         return static_cast<R>(HUGE_VAL);
     const Quad s = q_abs(m[0] * x[0] + m[1] * x[1] + m[2] * x[2]) / (ml * xl);
-    const Quad sin_off = s * (1 + 16 * QUAD_EPS) + QUAD_EPS * (8 * cond + 8);
+    // (the lengths within a few roundoffs of long double: Core::rough_length)
+    const Quad sin_off = s * (1 + 16 * static_cast<Quad>(std::numeric_limits<R>::epsilon())) +
+                         QUAD_EPS * (8 * cond + 8);
     // (rounded up to long double)
     return turn_bound(static_cast<R>(sin_off) * (1 + 4 * std::numeric_limits<R>::epsilon()));
 }

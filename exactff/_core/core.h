@@ -432,6 +432,7 @@ class Core {
     R input_error(int64_t i, R length) const;
     R input_tilt(int64_t ia, int64_t ib, const double* pp) const;
     static R measured_off(const Quad m[3], Quad ml, Quad cond, const std::array<Quad, 3>& x);
+    static R rough_length(const Quad x[3]);
     // (without `record`, `keyed` receives the edges it would key, with their charges;
     // `arcs`, the edges' arc lengths: computed into it where it is short, else read;
     // `f`, the piece's fragment, where its edges' planes' input tilts may be asked for)
