@@ -136,17 +136,19 @@ void Core::integrate_quad(const std::vector<std::array<Quad, 3>>& v, const doubl
         if (eq3) lengths[i] = q_sqrt(v[i][0] * v[i][0] + v[i][1] * v[i][1] + v[i][2] * v[i][2]);
     }
     const R nr = static_cast<R>(nl);
-    const R n1 = std::fabs(static_cast<R>(n[0])) + std::fabs(static_cast<R>(n[1])) +
-                 std::fabs(static_cast<R>(n[2]));
-    // each vertex's offset from the first's, and its length in long double (Z below)
+    const R nr3[3] = {std::fabs(static_cast<R>(n[0])), std::fabs(static_cast<R>(n[1])),
+                      std::fabs(static_cast<R>(n[2]))};
+    // each vertex's offset from the first's, and rounded to long double (Z below)
     thread_local std::vector<std::array<Quad, 3>> offs;
-    thread_local std::vector<R> off;
+    thread_local std::vector<std::array<R, 3>> offr;
     offs.resize(m);
-    off.resize(m);
-    for (size_t i = 0; i < m; ++i) {
-        for (int k = 0; k < 3; ++k) offs[i][k] = v[i][k] - v[0][k];
-        off[i] = Core::rough_length(offs[i].data());
-    }
+    offr.resize(m);
+    for (size_t i = 0; i < m; ++i)
+        for (int k = 0; k < 3; ++k) {
+            offs[i][k] = v[i][k] - v[0][k];
+            offr[i][k] = static_cast<R>(offs[i][k]);
+        }
+    const R a0r[3] = {static_cast<R>(a0[0]), static_cast<R>(a0[1]), static_cast<R>(a0[2])};
     const R c2eps = static_cast<R>(K_.c2) * static_cast<R>(QUAD_EPS);
     for (size_t i = 0; i < m; ++i) {
         const size_t j = (i + 1) % m;
@@ -168,11 +170,24 @@ void Core::integrate_quad(const std::vector<std::array<Quad, 3>>& v, const doubl
         const Quad t = theta * (n[0] * c[0] + n[1] * c[1] + n[2] * c[2]) / (cl * nl);
         S += t;
         mag += q_abs(t);
-        // the term's rounding estimate, in long double: the magnitudes Z of n . c's
-        // products bounded by |n|_1 (|a0| |d| + |ea| |eb|) (each coordinate's pair of
-        // products by the lengths, Cauchy-Schwarz), from lengths within a few roundoffs
-        // of long double, raised by 64 of them
-        const R Z = n1 * (rough[0] * Core::rough_length(d) + off[i] * off[j]);
+        // the term's rounding estimate, in long double from the quadruple operands
+        // rounded to it (the magnitudes Z of n . c's products, as the long double sum
+        // forms them), raised by 64 roundoffs of long double to hold the quadruple
+        // one's
+        R Z;
+        {
+            const R* A = a0r;
+            const R* Ea = offr[i].data();
+            const R* Eb = offr[j].data();
+            const R Dd[3] = {static_cast<R>(d[0]), static_cast<R>(d[1]), static_cast<R>(d[2])};
+            const R P[3] = {std::fabs(A[1] * Dd[2]) + std::fabs(A[2] * Dd[1]) +
+                                std::fabs(Ea[1] * Eb[2]) + std::fabs(Ea[2] * Eb[1]),
+                            std::fabs(A[2] * Dd[0]) + std::fabs(A[0] * Dd[2]) +
+                                std::fabs(Ea[2] * Eb[0]) + std::fabs(Ea[0] * Eb[2]),
+                            std::fabs(A[0] * Dd[1]) + std::fabs(A[1] * Dd[0]) +
+                                std::fabs(Ea[0] * Eb[1]) + std::fabs(Ea[1] * Eb[0])};
+            Z = nr3[0] * P[0] + nr3[1] * P[1] + nr3[2] * P[2];
+        }
         const R th = static_cast<R>(theta);
         const R rel = term_rel(c2eps, Z / nr, th * th * rla * rlb, static_cast<R>(cl)) *
                       (1 + 64 * K_.eps);
