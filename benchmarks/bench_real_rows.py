@@ -34,11 +34,13 @@ in one run:
   the tests).
 
 ``--uniform K`` instead draws ``K`` rows per file uniformly over all its polygons
-(``default_rng(1)``; small polygons included, whose centroids lie close to many split
-lines) and prints, per file: the rows whose default call raised, split by cause (the
-BSP's rounded crossings, or the bound of the pieces), the rows with values settled on
-their shafts (``stats["shaft_polygons"]``), the largest crossings' part of a bound, and
-the median and slowest row.
+(``default_rng(1)``, or ``--seed``; small polygons included, whose centroids lie close
+to many split lines) and prints, per file: the rows whose default call raised, split
+by cause (the BSP's rounded crossings, or the bound of the pieces), the rows with values
+settled on their shafts (``stats["shaft_polygons"]``), the largest crossings' part of a
+bound, and the median and slowest row; ``--bounds`` adds, from each row again with
+``error=True`` (untimed), the values, those whose whole bound exceeds 1e-12 relative,
+and the worst bound over max(|F|, floor).
 """
 
 import argparse
@@ -136,16 +138,19 @@ def measure(path, rows, engines):
     return len(scene), out
 
 
-def uniform(path, k):
-    """``k`` uniformly drawn default rows of one file: raised (by cause), settled on
-    shafts, the largest crossings' part, the times."""
+def uniform(path, k, seed=1, bounds=False):
+    """``k`` uniformly drawn default rows of one file (``default_rng(seed)``): raised (by
+    cause), settled on shafts, the largest crossings' part, the times; with ``bounds``,
+    also the rows' whole bounds (``error=True``): the values, those over 1e-12 relative
+    and the worst bound over max(|F|, floor)."""
     scene = load(path)
-    rows = np.random.default_rng(1).choice(len(scene), min(k, len(scene)), replace=False)
+    rows = np.random.default_rng(seed).choice(len(scene), min(k, len(scene)), replace=False)
     exact = ef.Exact()
     c, n = scene.centroids, scene.normals
     # the set-up, untimed (error=True: the row is drawn again below, where it may raise)
     exact.point_form_factors(scene, c[rows[0]], n[rows[0]], error=True)
-    out = {"crossing": 0, "bound": 0, "shaft": 0, "worst": 0.0, "times": [], "notes": []}
+    out = {"crossing": 0, "bound": 0, "shaft": 0, "worst": 0.0, "times": [], "notes": [],
+           "values": 0, "misses": 0, "worst_bound": 0.0}
     for r in rows.tolist():
         st = {}
         t = time.perf_counter()
@@ -157,20 +162,36 @@ def uniform(path, k):
         out["times"].append(time.perf_counter() - t)
         out["shaft"] += bool(st.get("shaft_polygons"))
         out["worst"] = max(out["worst"], st.get("max_crossing_bound", 0.0))
+        if bounds:
+            # the whole bounds (the band's slivers and the crossings' part included),
+            # untimed: as the seeded rows' table counts them
+            F, E = exact.point_form_factors(scene, c[r], n[r], error=True)
+            live = (F > 0) | (E > 0)
+            scale = np.maximum(np.abs(F), tol.VALUE_FLOOR)
+            out["values"] += int(live.sum())
+            out["misses"] += int((E > tol.DEFAULT_RTOL * scale).sum())
+            out["worst_bound"] = max(out["worst_bound"], float((E / scale).max(initial=0.0)))
     return len(scene), len(rows), out
 
 
-def main_uniform(files, k):
-    print(f"exactff {ef.__version__}; {k} rows per file drawn uniformly (default_rng(1))")
+def main_uniform(files, k, seed=1, bounds=False):
+    print(f"exactff {ef.__version__}; {k} rows per file drawn uniformly (default_rng({seed}))")
+    extra = (" values | bounds over 1e-12 (share met) | worst bound / max(F, floor) |"
+             if bounds else "")
     print("| file | polygons | rows | raised: crossings | raised: bound | rows with values settled on "
-          "shafts | largest crossings' part | median row (s) | slowest row (s) |")
-    print("|---" * 9 + "|")
+          "shafts | largest crossings' part | median row (s) | slowest row (s) |" + extra)
+    print("|---" * (12 if bounds else 9) + "|")
     notes = []
     for path in files:
-        size, rows, o = uniform(path, k)
+        size, rows, o = uniform(path, k, seed, bounds)
+        more = ""
+        if bounds:
+            met = 100 * (1 - o["misses"] / max(o["values"], 1))
+            more = (f" {o['values']:,} | {o['misses']} ({met:.4f}%) | "
+                    f"{o['worst_bound']:.2g} |")
         print(f"| {os.path.basename(path)} | {size:,} | {rows} | {o['crossing']} | "
               f"{o['bound']} | {o['shaft']} | {o['worst']:.3g} | "
-              f"{np.median(o['times']):.3f} | {max(o['times']):.2f} |", flush=True)
+              f"{np.median(o['times']):.3f} | {max(o['times']):.2f} |" + more, flush=True)
         notes += [f"{os.path.basename(path)}: {t}" for t in o["notes"]]
     for t in notes:
         print("-", t)
@@ -186,6 +207,10 @@ def main():
                     help="more rows: the file's base name and a 0-based polygon index")
     ap.add_argument("--uniform", type=int, default=0, metavar="K",
                     help="instead, K rows per file drawn uniformly: which raise, and why")
+    ap.add_argument("--seed", type=int, default=1,
+                    help="with --uniform, the seed of the draw (default 1)")
+    ap.add_argument("--bounds", action="store_true",
+                    help="with --uniform, also each row's whole bounds (error=True, untimed)")
     args = ap.parse_args()
     files = args.files or [os.path.join(REAL, f) for f in DEFAULT_FILES
                            if os.path.exists(os.path.join(REAL, f))]
@@ -193,7 +218,7 @@ def main():
         sys.exit(f"no scene files given and none found in {REAL}")
     print(machine())
     if args.uniform:
-        return main_uniform(files, args.uniform)
+        return main_uniform(files, args.uniform, args.seed, args.bounds)
     print(f"exactff {ef.__version__}; rows per file: {args.rows} seeded + the README's flush rows")
     head = ("| file | polygons | rows | raised | python rows | values | bounds over 1e-12 (share met) "
             "| worst bound / max(F, floor) | exact / hemicube-256, median (max) [numpy] | < 50 seen "

@@ -598,6 +598,18 @@ def polygon_form_factor_mp(point, normal, polygon, dps=60):
         return abs(total) / (2 * mpmath.pi)
 
 
+def front_part_form_factor(point, normal, polygon, dps=60):
+    """The unoccluded form factor from ``point`` (``normal``) to the part of a convex
+    planar polygon (float vertices, taken as exact) in front of the point's plane,
+    whichever way the polygon faces: the measure of its image on the disk, so at most
+    what it can hide of anything behind it."""
+    P, n = _rational(point), _rational(normal)
+    piece = _clip([_rational(v) for v in polygon], lambda v: _dot(n, _sub(v, P)))
+    if len(piece) < 3:
+        return mpmath.mpf(0)
+    return polygon_form_factor_mp(point, normal, piece, dps)
+
+
 def visible_form_factor(scene, point, normal, target, two_sided=False, exclude=(), dps=60):
     """The form factor from ``point`` to the visible part of polygon ``target``, as an
     mpmath number, or None if undecided; ``two_sided`` as in exactff (else the target

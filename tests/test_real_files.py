@@ -701,3 +701,64 @@ def test_coplanar_fan_beside_the_point_keeps_the_usual_order():
             scene.subset(keep), p, n, error=True)
         assert abs(F[j] - Fp[at]) <= E[j] + Ep[at], (j, F[j], Fp[at], E[j], Ep[at])
         assert E[j] <= 1e-4 * F[j]     # (the band's charge: 4 w / d = 1.2e-10)
+
+
+def test_vertex_where_nearly_parallel_shadow_planes_meet_is_settled_in_the_core():
+    # SampleHouse4 row 21782 (of 800 uniform rows, the one that raised at 9cd90eb, after
+    # 3.9 s): polygon 23287, a wall 6.8 mm in front of the point, behind triangles
+    # flush with the receiver's plane to 3e-15..1.8e-14 (seen from either side by
+    # their exact sides). Their shadows' planes through the point nearly coincide, and
+    # the long double cut put the vertex where two of them meet 5e-6 rad along their
+    # line from where quadruple precision does; refining kept that vertex and its bound
+    # of 1.9e-13 rad, whose 1.4 rad edge made the bound 8.6e-14 against the 1.4e-14
+    # needed (2.5e-14 against 1e-14 on the cut below, which the Python engine does
+    # not settle either). The vertex's bound is now measured off its two edges' planes
+    # in quadruple precision. The file: the wall and the 12 triangles that keep the
+    # trait (the rest of its shaft cut away); the value against the mpmath contour
+    # form of the whole wall, which the triangles hide at most their own images of
+    # (all within 1.5e-12 rad of the horizon: 1.1e-26 together)
+    import exact_visibility as xv
+
+    scene = ef.load_scene(os.path.join(REAL_DATA, "ifc-SampleHouse4-row21782-cut.obj"))
+    p = np.array([-2.276708951996939, 3.7222208672931294, 0.37793671024316267])
+    n = np.array([0.5704343246184117, 0.8146646436810732, -0.10452846326779479])
+    j = len(scene) - 1
+    st = {}
+    F = ef.Exact().point_form_factors(scene, p, n, stats=st)     # the default call
+    assert st["path"] == "compiled" and "compiled_missed" not in st
+    # the reference: the wall unoccluded (every other polygon left out), less at most
+    # what each triangle's part in front of the point covers on the disk
+    others = list(range(j))
+    U = xv.visible_form_factor(scene, p, n, j, exclude=others, dps=40)
+    hidden = sum(xv.front_part_form_factor(p, n, scene.polygons[k], 40) for k in others)
+    assert hidden < 1e-20
+    # F <= U, and F >= U - hidden, each within the row's tolerance
+    gap = max(F[j] - float(U), float(U) - float(hidden) - F[j], 0.0)
+    assert not misses_tolerance(F[j:j + 1], np.array([gap]), ef.Exact().tolerance), (F[j], U)
+
+
+def test_crossings_part_of_an_edge_counts_only_its_own_planes_turn():
+    # SampleHouse4 row 14841 (of 200 more uniform rows, one of two that raised at
+    # 9cd90eb): polygon 13502 (F = 0.398) lies 6e-5 from the point, so the BSP's
+    # rounded crossings (2e-16 m) turn its pieces' vertices by up to 8e-12 rad, and
+    # each edge was charged its arc times its ends' larger turn: 4e-11 in all, beyond
+    # the accuracy target of occluded values (1e-11), on the whole scene and on the
+    # shaft. An edge on the horizon or a tile plane (given by their normals) or on an
+    # input edge moves only as far as its own plane turns (0, or Core::input_tilt); its
+    # ends' slides along it sweep nothing of it. The file: the polygon and the two
+    # triangles that keep the trait (2.1e-11 at 9cd90eb; 3.6e-14 now); the value
+    # against the rational construction (tests/exact_visibility.py), within its bound
+    import exact_visibility as xv
+
+    scene = ef.load_scene(os.path.join(REAL_DATA, "ifc-SampleHouse4-row14841-cut.obj"))
+    p = np.array([-5.579628382288749, 4.230643288936638, 0.39440179397264535])
+    n = np.array([0.9209176725245198, -0.16465266228573303, 0.3532706345484174])
+    st = {}
+    F = ef.Exact().point_form_factors(scene, p, n, stats=st)     # the default call
+    assert st["path"] == "compiled" and st["max_crossing_bound"] <= 1e-11
+    Fe, E = ef.Exact().point_form_factors(scene, p, n, error=True)
+    np.testing.assert_array_equal(F, Fe)
+    reference = xv.visible_form_factor(scene, p, n, 0, dps=40)
+    assert reference is not None and reference > 0.398
+    assert abs(F[0] - float(reference)) <= E[0], (F[0], reference, E[0])
+    assert not misses_tolerance(F[:1], E[:1], ef.Exact().tolerance)

@@ -56,10 +56,12 @@ R Core::input_tilt(int64_t ia, int64_t ib, const double* pp) const {
 // larger of their bounds, over pi (the area swept by moving the edge that far); with
 // `refined`, the bounds of the directions Core::refine gave the piece instead
 // (the computation's part: the one returned and added to E; the input's own errors'
-// part, arc length times the larger of the ends' gerr over pi, goes to st.crossing)
+// part, arc length times the larger of the ends' gerr over pi, or times the turn of
+// the edge's own plane where that is known (Core::edge_tilt), goes to st.crossing)
 R Core::charge_edges(const Piece& q, int64_t src, std::vector<R>& E, RowStats& st,
                      const std::vector<R>* refined, bool record,
-                     std::vector<std::pair<EdgeKey, R>>* keyed, std::vector<R>* arcs) const {
+                     std::vector<std::pair<EdgeKey, R>>* keyed, std::vector<R>* arcs,
+                     int64_t f) const {
     const R pi = 3.14159265358979323846264338327950288L;
     const size_t m = q.size();
     R total = 0;
@@ -104,6 +106,12 @@ R Core::charge_edges(const Piece& q, int64_t src, std::vector<R>& E, RowStats& s
             const R turn = a.gerr + b.gerr;
             if (length <= pi / 2 && turn <= static_cast<R>(0.1))
                 geo = std::min(geo, static_cast<R>(1.01) * turn * std::tan(length / 2) / pi);
+            // where the edge's plane through p is one the input's errors turn by a known
+            // angle over the edge (Core::edge_tilt), its points move off that plane by at
+            // most that: their slides along it (its ends where other edges' planes cross
+            // it) sweep nothing of this edge (the next edges' charges hold them)
+            const R own = edge_tilt(a.edge, f, st);
+            if (own >= 0) geo = std::min(geo, length * own / pi);
         }
         // a cut edge, or one a BSP split made (two fragments of one polygon share
         // it): keyed by its ends, in a fixed order
@@ -131,6 +139,23 @@ R Core::charge_edges(const Piece& q, int64_t src, std::vector<R>& E, RowStats& s
         }
     }
     return total;
+}
+
+// a bound on the angle by which the input's own errors turn the plane through p that a
+// piece's edge lies on (edge code as Vertex::edge), over that edge, or -1 where none is
+// known: 0 for an exact plane given by its normal (the horizon and the tiles: no input
+// point makes it); Core::input_tilt for an input edge of fragment f (the piece's edge
+// lies on that edge, so within the wedge of its two input points, where input_tilt
+// holds); -1 for an exact plane through two input points (a piece may be cut by it
+// outside their wedge) or without the fragment
+R Core::edge_tilt(int64_t code, int64_t f, const RowStats& st) const {
+    if (code >= 0) {
+        if (f < 0 || st.point == nullptr) return -1;
+        const int64_t ib = start_[f] + (code - start_[f] + 1) % count_[f];
+        return input_tilt(code, ib, st.point);
+    }
+    if (st.xp == nullptr) return -1;
+    return (*st.xp)[static_cast<size_t>(-1 - code)].kind == 1 ? 0 : -1;
 }
 
 // the normal of the plane through p that a piece's edge lies on (edge code as
@@ -166,10 +191,18 @@ void Core::quad_plane(int64_t code, int64_t f, const double* pp, const std::vect
     m[0] = A[1] * B[2] - A[2] * B[1];
     m[1] = A[2] * B[0] - A[0] * B[2];
     m[2] = A[0] * B[1] - A[1] * B[0];
-    const Quad ml = q_sqrt(m[0] * m[0] + m[1] * m[1] + m[2] * m[2]);
-    const Quad al = q_sqrt(A[0] * A[0] + A[1] * A[1] + A[2] * A[2]);
-    const Quad bl = q_sqrt(B[0] * B[0] + B[1] * B[1] + B[2] * B[2]);
-    *cond = ml > 0 ? al * bl / ml : static_cast<Quad>(INFINITY);
+    // (a bound's factor: in long double, raised by its few roundoffs)
+    const R ml = rough_length(m), al = rough_length(A), bl = rough_length(B);
+    *cond = ml > 0 ? static_cast<Quad>(al * bl / ml * (1 + 16 * K_.eps))
+                   : static_cast<Quad>(INFINITY);
+}
+
+// the length of a quadruple vector, in long double from its coordinates rounded to long
+// double: within a few roundoffs of long double (the same exponent range: a nonzero
+// vector's is nonzero); for bounds' factors and scales, not for values
+R Core::rough_length(const Quad x[3]) {
+    const R a = static_cast<R>(x[0]), b = static_cast<R>(x[1]), c = static_cast<R>(x[2]);
+    return std::sqrt(a * a + b * b + c * c);
 }
 
 // a piece's vertex directions in quadruple precision, for integrate_quad, each with
@@ -184,16 +217,20 @@ void Core::quad_plane(int64_t code, int64_t f, const double* pp, const std::vect
 // The line is the true vertex wherever the piece's edges are the true ones (the
 // topology's errors are the band's, apart), so its bound no longer carries the long
 // double cuts' rounding, which on a sliver is absolute (about 1e-18), not relative
-// to its value. A vertex keeps its long double direction and bound where its two
-// edges are one plane, where the planes are too close to tell, or where the line is
-// farther from the long double direction than that direction's bound (a vertex taken
-// as on a plane within the band, whose sliver the band's bound holds)
+// to its value. A vertex keeps its long double direction where its two edges are one
+// plane, where the planes are too close to tell, or where the line is farther from
+// the long double direction than that direction's bound (a vertex taken as on a plane
+// within the band, whose sliver the band's bound holds; or one where two nearly
+// parallel planes meet, whose line the long double cut may place far along them):
+// there its bound is what it measures off its two edges' planes in quadruple
+// precision (Core::measured_off), where that is smaller than the long double one
 void Core::refine(const Piece& q, int64_t f, const double* pp, const std::vector<ExactPlane>& xp,
                   std::vector<std::array<Quad, 3>>& v, std::vector<R>& err) const {
     const size_t m = q.size();
     v.resize(m);
     err.resize(m);
-    auto len = [](const Quad* x) { return q_sqrt(x[0] * x[0] + x[1] * x[1] + x[2] * x[2]); };
+    // (lengths for bounds and scales: Core::rough_length)
+    auto len = [](const Quad* x) { return static_cast<Quad>(rough_length(x)); };
     // the plane of each of the piece's edges (edge k: from vertex k to k + 1), its
     // condition and its normal's length, each computed once where first asked for
     // (every computed vertex asks for its two edges')
@@ -219,21 +256,15 @@ void Core::refine(const Piece& q, int64_t f, const double* pp, const std::vector
         }
         return P.length;
     };
-    for (size_t i = 0; i < m; ++i) {
+    // the line where vertex i's two edges' planes meet (edges k1 into it, k2 out of it),
+    // as its direction and bound, where it is within the long double direction's bound
+    // of it: whether it is
+    auto line = [&](size_t i, size_t k1, size_t k2) -> bool {
         const Vertex& u = q[i];
-        if (u.id >= 0) {
-            for (int k = 0; k < 3; ++k) v[i][k] = static_cast<Quad>(V_[3 * u.id + k]) - pp[k];
-            err[i] = 4 * static_cast<R>(QUAD_EPS);  // the differences' rounding, if any
-            continue;
-        }
-        v[i] = {static_cast<Quad>(u.v.x), static_cast<Quad>(u.v.y), static_cast<Quad>(u.v.z)};
-        err[i] = std::max(u.err, u.err_line);
-        const int64_t e1 = q[(i + m - 1) % m].edge, e2 = u.edge;
-        if (e1 == e2) continue;
+        const int64_t e1 = q[k1].edge, e2 = q[k2].edge;
         Quad d[3], dl;
         R e;
         const int64_t cut = -1 - u.on_plane;
-        const size_t k1 = (i + m - 1) % m, k2 = i;  // the edges into and out of it
         if (u.on_edge >= 0 && u.on_plane >= 0 &&
             ((e1 == u.on_edge && e2 == cut) || (e2 == u.on_edge && e1 == cut))) {
             // the crossing of input edge a -> b with the exact plane
@@ -248,16 +279,16 @@ void Core::refine(const Piece& q, int64_t f, const double* pp, const std::vector
                 Bm[k] = static_cast<Quad>(V_[3 * ib + k]) - V_[3 * ia + k];
             }
             const Quad den = mp[0] * Bm[0] + mp[1] * Bm[1] + mp[2] * Bm[2];
-            if (!(den != 0) || !(c < static_cast<Quad>(INFINITY))) continue;
+            if (!(den != 0) || !(c < static_cast<Quad>(INFINITY))) return false;
             const Quad sp = -(mp[0] * A[0] + mp[1] * A[1] + mp[2] * A[2]) / den;
             for (int k = 0; k < 3; ++k) d[k] = A[k] + sp * Bm[k];
             dl = len(d);
-            if (!(dl > 0)) continue;
+            if (!(dl > 0)) return false;
             // off the edge's plane: the sum's rounding; off the exact plane, also
             // s's (its two dot products, each within 4 roundoffs of |m| |x|) and the
             // normal's tilt
             const Quad W = len(A) + q_abs(sp) * len(Bm);
-            e = static_cast<R>(QUAD_EPS * (16 * W / dl + 8 * c + 4));
+            e = static_cast<R>(QUAD_EPS * (16 * W / dl + 8 * c + 4)) * (1 + 16 * K_.eps);
         } else {
             const EdgePlane& P1 = plane_of(k1);
             const EdgePlane& P2 = plane_of(k2);
@@ -269,11 +300,11 @@ void Core::refine(const Piece& q, int64_t f, const double* pp, const std::vector
             d[2] = m1[0] * m2[1] - m1[1] * m2[0];
             dl = len(d);
             const Quad l1 = length_of(k1), l2 = length_of(k2);
-            if (!(dl > 0) || !(l1 > 0) || !(l2 > 0)) continue;
-            e = static_cast<R>(8 * QUAD_EPS * (c1 + c2 + 1) * (l1 * l2 / dl));
+            if (!(dl > 0) || !(l1 > 0) || !(l2 > 0)) return false;
+            e = static_cast<R>(8 * QUAD_EPS * (c1 + c2 + 1) * (l1 * l2 / dl)) * (1 + 16 * K_.eps);
         }
         e += 2 * static_cast<R>(QUAD_EPS);  // and the scaling below
-        if (!(e < err[i])) continue;
+        if (!(e < err[i])) return false;
         if (d[0] * v[i][0] + d[1] * v[i][1] + d[2] * v[i][2] < 0)
             for (int k = 0; k < 3; ++k) d[k] = -d[k];
         // (|d| as above: a flipped sign leaves its squares as they were)
@@ -283,10 +314,47 @@ void Core::refine(const Piece& q, int64_t f, const double* pp, const std::vector
         // the line must lie within the long double direction's bound of it (with the
         // rounding of this test: the angle, and dr's rounding to long double)
         const R apart = std::atan2(norm(cross(dr, u.v)), dot(dr, u.v));
-        if (!(apart <= err[i] + e + 16 * K_.eps)) continue;
+        if (!(apart <= err[i] + e + 16 * K_.eps)) return false;
         for (int k = 0; k < 3; ++k) v[i][k] = d[k] * s;
         err[i] = e;
+        return true;
+    };
+    for (size_t i = 0; i < m; ++i) {
+        const Vertex& u = q[i];
+        if (u.id >= 0) {
+            for (int k = 0; k < 3; ++k) v[i][k] = static_cast<Quad>(V_[3 * u.id + k]) - pp[k];
+            err[i] = 4 * static_cast<R>(QUAD_EPS);  // the differences' rounding, if any
+            continue;
+        }
+        v[i] = {static_cast<Quad>(u.v.x), static_cast<Quad>(u.v.y), static_cast<Quad>(u.v.z)};
+        err[i] = std::max(u.err, u.err_line);
+        const size_t k1 = (i + m - 1) % m, k2 = i;  // the edges into and out of it
+        if (q[k1].edge == u.edge || line(i, k1, k2)) continue;
+        // the long double direction kept: its bound measured off the two planes
+        const EdgePlane& P1 = plane_of(k1);
+        const EdgePlane& P2 = plane_of(k2);
+        const R off = std::max(measured_off(P1.m, length_of(k1), P1.cond, v[i]),
+                               measured_off(P2.m, length_of(k2), P2.cond, v[i]));
+        if (off < err[i]) err[i] = off;
     }
+}
+
+// the angle by which direction x (exact in quadruple precision) is off the plane
+// through p of normal m (quadruple precision, of length ml and condition cond, as
+// Core::quad_plane gives them), bounded from above: |m . x| / (|m| |x|) within a few
+// roundoffs (relative, and of |m| |x| for the dot product), plus m's tilt off the
+// exact normal (8 cond roundoffs, as Core::refine charges a crossing), as an angle
+// (asin(s) <= 1.01 s for s <= 0.1; else any angle, pi)
+R Core::measured_off(const Quad m[3], Quad ml, Quad cond, const std::array<Quad, 3>& x) {
+    const Quad xl = static_cast<Quad>(rough_length(x.data()));
+    if (!(ml > 0) || !(xl > 0) || !(cond < static_cast<Quad>(INFINITY)))
+        return static_cast<R>(HUGE_VAL);
+    const Quad s = q_abs(m[0] * x[0] + m[1] * x[1] + m[2] * x[2]) / (ml * xl);
+    // (the lengths within a few roundoffs of long double: Core::rough_length)
+    const Quad sin_off = s * (1 + 16 * static_cast<Quad>(std::numeric_limits<R>::epsilon())) +
+                         QUAD_EPS * (8 * cond + 8);
+    // (rounded up to long double)
+    return turn_bound(static_cast<R>(sin_off) * (1 + 4 * std::numeric_limits<R>::epsilon()));
 }
 
 }  // namespace exactff

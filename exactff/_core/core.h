@@ -246,6 +246,8 @@ struct RowStats {
     R rtol = 0;          // pieces whose bound exceeds this times their value are
                          // integrated again in quadruple precision (0: never)
     const double* normal = nullptr;  // the receiver normal as given
+    const double* point = nullptr;   // the point as given
+    const std::vector<ExactPlane>* xp = nullptr;  // the row's exact planes (Core::run)
     // integrate with Eq. 3's stable form instead of the sector form, in the frame
     // (e1, e2, n) (Core::integrate)
     bool eq3 = false;
@@ -429,12 +431,16 @@ class Core {
     static R turn_bound(R ratio);
     R input_error(int64_t i, R length) const;
     R input_tilt(int64_t ia, int64_t ib, const double* pp) const;
+    static R measured_off(const Quad m[3], Quad ml, Quad cond, const std::array<Quad, 3>& x);
+    static R rough_length(const Quad x[3]);
     // (without `record`, `keyed` receives the edges it would key, with their charges;
-    // `arcs`, the edges' arc lengths: computed into it where it is short, else read)
+    // `arcs`, the edges' arc lengths: computed into it where it is short, else read;
+    // `f`, the piece's fragment, where its edges' planes' input tilts may be asked for)
     R charge_edges(const Piece& q, int64_t src, std::vector<R>& E, RowStats& st,
                    const std::vector<R>* refined = nullptr, bool record = true,
                    std::vector<std::pair<EdgeKey, R>>* keyed = nullptr,
-                   std::vector<R>* arcs = nullptr) const;
+                   std::vector<R>* arcs = nullptr, int64_t f = -1) const;
+    R edge_tilt(int64_t code, int64_t f, const RowStats& st) const;
     void quad_plane(int64_t code, int64_t f, const double* pp, const std::vector<ExactPlane>& xp,
                     Quad m[3], Quad* cond) const;
     void refine(const Piece& q, int64_t f, const double* pp, const std::vector<ExactPlane>& xp,

@@ -121,47 +121,79 @@ void Core::integrate_quad(const std::vector<std::array<Quad, 3>>& v, const doubl
         e2[2] = un[0] * e1[1] - un[1] * e1[0];
     }
     const auto& a0 = v[0];
-    // each vertex's length, once (every vertex ends two edges)
+    // each vertex's length, once (every vertex ends two edges): in long double from
+    // the directions rounded to it, for the terms' rounding estimates (within a few
+    // roundoffs of long double: nothing next to the estimates' own slack); in quadruple
+    // precision for Eq. 3's midpoints, which enter the value
     thread_local std::vector<Quad> lengths;
+    thread_local std::vector<R> rough;
     lengths.resize(m);
+    rough.resize(m);
+    for (size_t i = 0; i < m; ++i) {
+        const R x = static_cast<R>(v[i][0]), y = static_cast<R>(v[i][1]),
+                z = static_cast<R>(v[i][2]);
+        rough[i] = std::sqrt(x * x + y * y + z * z);
+        if (eq3) lengths[i] = q_sqrt(v[i][0] * v[i][0] + v[i][1] * v[i][1] + v[i][2] * v[i][2]);
+    }
+    const R nr = static_cast<R>(nl);
+    const R nr3[3] = {std::fabs(static_cast<R>(n[0])), std::fabs(static_cast<R>(n[1])),
+                      std::fabs(static_cast<R>(n[2]))};
+    // each vertex's offset from the first's, and rounded to long double (Z below)
+    thread_local std::vector<std::array<Quad, 3>> offs;
+    thread_local std::vector<std::array<R, 3>> offr;
+    offs.resize(m);
+    offr.resize(m);
     for (size_t i = 0; i < m; ++i)
-        lengths[i] = q_sqrt(v[i][0] * v[i][0] + v[i][1] * v[i][1] + v[i][2] * v[i][2]);
+        for (int k = 0; k < 3; ++k) {
+            offs[i][k] = v[i][k] - v[0][k];
+            offr[i][k] = static_cast<R>(offs[i][k]);
+        }
+    const R a0r[3] = {static_cast<R>(a0[0]), static_cast<R>(a0[1]), static_cast<R>(a0[2])};
+    const R c2eps = static_cast<R>(K_.c2) * static_cast<R>(QUAD_EPS);
     for (size_t i = 0; i < m; ++i) {
         const size_t j = (i + 1) % m;
-        Quad ea[3], eb[3], d[3], c[3];
-        for (int k = 0; k < 3; ++k) {
-            ea[k] = v[i][k] - a0[k];
-            eb[k] = v[j][k] - a0[k];
-            d[k] = eb[k] - ea[k];
-        }
+        const Quad* ea = offs[i].data();
+        const Quad* eb = offs[j].data();
+        Quad d[3], c[3];
+        for (int k = 0; k < 3; ++k) d[k] = eb[k] - ea[k];
         c[0] = (a0[1] * d[2] - a0[2] * d[1]) + (ea[1] * eb[2] - ea[2] * eb[1]);
         c[1] = (a0[2] * d[0] - a0[0] * d[2]) + (ea[2] * eb[0] - ea[0] * eb[2]);
         c[2] = (a0[0] * d[1] - a0[1] * d[0]) + (ea[0] * eb[1] - ea[1] * eb[0]);
-        Quad Z = 0;
-        {
-            const Quad P[3] = {q_abs(a0[1] * d[2]) + q_abs(a0[2] * d[1]) +
-                                   q_abs(ea[1] * eb[2]) + q_abs(ea[2] * eb[1]),
-                               q_abs(a0[2] * d[0]) + q_abs(a0[0] * d[2]) +
-                                   q_abs(ea[2] * eb[0]) + q_abs(ea[0] * eb[2]),
-                               q_abs(a0[0] * d[1]) + q_abs(a0[1] * d[0]) +
-                                   q_abs(ea[0] * eb[1]) + q_abs(ea[1] * eb[0])};
-            for (int k = 0; k < 3; ++k) Z += q_abs(n[k]) * P[k];
-        }
         const Quad cl = q_sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
-        const Quad la = lengths[i], lb = lengths[j];
-        const Quad ab = v[i][0] * v[j][0] + v[i][1] * v[j][1] + v[i][2] * v[j][2];
-        const Quad theta = q_atan2(cl, ab);
+        const R rla = rough[i], rlb = rough[j];
         if (!(cl > 0)) {
-            if (la * lb > 0) errs += 2 * QUAD_EPS;
+            if (rla * rlb > 0) errs += 2 * QUAD_EPS;
             continue;
         }
+        const Quad ab = v[i][0] * v[j][0] + v[i][1] * v[j][1] + v[i][2] * v[j][2];
+        const Quad theta = q_atan2(cl, ab);
         const Quad t = theta * (n[0] * c[0] + n[1] * c[1] + n[2] * c[2]) / (cl * nl);
         S += t;
         mag += q_abs(t);
-        const Quad rel = term_rel(static_cast<Quad>(K_.c2) * QUAD_EPS, Z / nl,
-                                  theta * theta * la * lb, cl);
-        errs += term_err(theta, rel);
+        // the term's rounding estimate, in long double from the quadruple operands
+        // rounded to it (the magnitudes Z of n . c's products, as the long double sum
+        // forms them), raised by 64 roundoffs of long double to hold the quadruple
+        // one's
+        R Z;
+        {
+            const R* A = a0r;
+            const R* Ea = offr[i].data();
+            const R* Eb = offr[j].data();
+            const R Dd[3] = {static_cast<R>(d[0]), static_cast<R>(d[1]), static_cast<R>(d[2])};
+            const R P[3] = {std::fabs(A[1] * Dd[2]) + std::fabs(A[2] * Dd[1]) +
+                                std::fabs(Ea[1] * Eb[2]) + std::fabs(Ea[2] * Eb[1]),
+                            std::fabs(A[2] * Dd[0]) + std::fabs(A[0] * Dd[2]) +
+                                std::fabs(Ea[2] * Eb[0]) + std::fabs(Ea[0] * Eb[2]),
+                            std::fabs(A[0] * Dd[1]) + std::fabs(A[1] * Dd[0]) +
+                                std::fabs(Ea[0] * Eb[1]) + std::fabs(Ea[1] * Eb[0])};
+            Z = nr3[0] * P[0] + nr3[1] * P[1] + nr3[2] * P[2];
+        }
+        const R th = static_cast<R>(theta);
+        const R rel = term_rel(c2eps, Z / nr, th * th * rla * rlb, static_cast<R>(cl)) *
+                      (1 + 64 * K_.eps);
+        errs += static_cast<Quad>(term_err(th, rel) * (1 + 4 * K_.eps));
         if (eq3) {
+            const Quad la = lengths[i], lb = lengths[j];
             const Quad sin_t = cl / (la * lb);
             Quad u[3];
             for (int k = 0; k < 3; ++k) u[k] = v[i][k] / la + v[j][k] / lb;
@@ -179,7 +211,7 @@ void Core::integrate_quad(const std::vector<std::array<Quad, 3>>& v, const doubl
             } else {
                 errs += sin_t;
             }
-            errs += term_err(theta, rel) +
+            errs += static_cast<Quad>(term_err(th, rel) * (1 + 4 * K_.eps)) +
                     EQ3_FACTOR_ULPS * QUAD_EPS * 2 * q_sin(theta / 2);
         }
     }

@@ -163,6 +163,8 @@ void Core::run(const double* pp, const double* pn, const int8_t* node_side,
     Filter& work = scratch.work;  // the filter's work list, reused by every fragment
     sv.clear();
     xp.clear();
+    st.point = pp;
+    st.xp = &xp;
     work.pool_peak = 0;
     std::swap(st.edges, scratch.edges);
     std::swap(st.on_plane, scratch.on_plane);
@@ -372,7 +374,7 @@ void Core::process(int64_t f, const double* pp, const V3& p, const V3& n,
             if (receives && !held) {
                 F[src] += val;
                 E[src] += bnd;
-                charge_edges(q, src, E, st, nullptr, true, nullptr, &arcs);
+                charge_edges(q, src, E, st, nullptr, true, nullptr, &arcs, f);
             }
             if (receives) B[src] += leaked(q, val + bnd, st);
             // a piece whose shadow is left out is an image folded or flat along a side
@@ -613,7 +615,7 @@ void Core::settle(const double* pp, const std::vector<ExactPlane>& xp, std::vect
         }
         F[src] += val;
         E[src] += bnd;
-        charge_edges(h.q, src, E, st, placed, true, nullptr, &h.arcs);
+        charge_edges(h.q, src, E, st, placed, true, nullptr, &h.arcs, h.f);
     }
 
     st.held_pieces.clear();
