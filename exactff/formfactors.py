@@ -685,7 +685,10 @@ def area_form_factors(scene, rows=None, *, tolerance=1e-9, error=False, executor
         of its curves traced; ``stats["curved_skipped"]``), the curves where the images
         of three blockers' edges meet at one point (none of them the receiver's), and
         the events of the line where two interpenetrating blockers cross (an edge of
-        what they hide that is no polygon's edge).
+        what they hide that is no polygon's edge); and, at a coarse ``tolerance``,
+        files turned off the axes, whose events equal in exact arithmetic rounding
+        pulls apart into other cells (test4 turned, scaled 1e-3 and moved: one value
+        at 1e-6 3.3 times its estimate; docs/explanation/area-form-factors.md).
     executor, jobs, progress, out, sparse, chunk_rows
         As for :func:`form_factor_matrix`: rows in parallel, a progress bar, streamed to
         ``out`` and resumed from it (the estimates to ``STEM.error.SUFFIX`` beside it),

@@ -50,7 +50,9 @@ def _segment_log_integral(W, E):
     def prim(u):
         with np.errstate(divide="ignore", invalid="ignore"):
             at = np.where(k > 0, k * np.arctan2(u, k), 0.0)
-        return xlogy(u, u * u + k * k) - 2.0 * u + 2.0 * at
+        # u ln(u^2 + k^2) as 2 u ln hypot(u, k): u^2 + k^2 underflows to 0 where u and k
+        # are 1e-160 (faces tilted by 1e-150), and u ln 0 is -inf
+        return 2.0 * xlogy(u, np.hypot(u, k)) - 2.0 * u + 2.0 * at
 
     return 0.5 * np.log(a) + 0.5 * (prim(u1) - prim(u0))
 
