@@ -47,14 +47,19 @@ def _scenes(draw):
 
 
 def _plain_pairs(polys, i):
-    # the row's pairs as area_row built them before: clip_front for every pair
+    # the row's pairs as area_row built them before: clip_front for every pair, pair by
+    # pair, from the distances with the near-coplanar band (front_distances: the
+    # conventions' decision, which the row's batch takes too)
+    from exactff.area.closed_form import front_distances
+
     P = polys[i]
     nP = unit_normal(P)
     out = []
     for j, Q in enumerate(polys):
         if j == i:
             continue
-        Pc, Qc = clip_front(P, unit_normal(Q), Q[0]), clip_front(Q, nP, P[0])
+        dP, dQ = front_distances(P, nP, Q[None], unit_normal(Q)[None])
+        Pc, Qc = clip_front(P, unit_normal(Q), Q[0], d=dP[0]), clip_front(Q, nP, P[0], d=dQ[0])
         if Pc is not None and Qc is not None:
             out.append((j, Pc, Qc))
     return out

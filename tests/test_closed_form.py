@@ -375,8 +375,9 @@ def test_random_pairs_against_the_tanh_sinh_oracle(pair):
     g, eg = contour_rule.contour_tanh_sinh(P, Q)
     # the oracle carries its own estimate (rounding and the step to the coarser rule):
     # the two agree within the sum of the estimates, and within 1e-13 but for the
-    # oracle's share
-    assert eg < 1e-11 * max(g, 1e-3)
+    # oracle's share; a draw where the oracle is not that sharp is no test of 1e-13
+    # (a thin triangle: 2.9e-14 on 2.5e-3, the same at 9cd90eb) and is skipped
+    assume(eg < 1e-11 * max(g, 1e-3))
     assert abs(f - g) <= e + eg
     assert abs(f - g) <= 1e-13 * max(g, 1e-3) + eg
     # after the fallbacks, every estimate meets the target
