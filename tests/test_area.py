@@ -447,6 +447,10 @@ def test_hidden_part_by_the_engine_leaves_out_a_blocker_part_of_no_area():
     # square: the hidden part is the plate's own point value there
     F, E = ef.form_factors(ef.Scene.from_polygons([plate[::-1]]), X[:1], nP, error=True)
     assert abs(H[0] - F[0, 0]) <= EH[0] + E[0, 0] + 1e-15
+    # the receiver itself is never left out: a receiver of no area raises, where
+    # dropping it would make the first blocker column 0 (a silent wrong value)
+    with pytest.raises(ef.SceneError):
+        hidden_values_by_engine(X, nP, flat, [plate])
 
 
 def test_hidden_part_of_a_receiver_with_a_sliver_of_rounding_against_the_engine():

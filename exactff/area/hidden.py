@@ -326,7 +326,10 @@ def hidden_values_by_engine(X, nP, Qc, blockers):
     """:func:`hidden_values` by the engine instead (exact occluded point values on the
     sub-scene of Qc and the blockers, subtracted from the unoccluded ones): about a
     thousand times slower, used where a point's images cannot be trusted. A blocker's
-    part of no area (a clip's sliver of rounding) hides nothing and is left out."""
+    part of no area (a clip's sliver of rounding) hides nothing and is left out; Qc is
+    always kept (a degenerate Qc raises :class:`~exactff.SceneError`), so column 0 is
+    Qc's."""
+    build_scene([Qc])
     sub = build_scene([Qc] + list(blockers), degenerate="drop")
     exact = Exact()
     FE = [exact.point_form_factors(sub, x, nP, error=True) for x in np.atleast_2d(X)]
