@@ -793,3 +793,52 @@ def test_compiled_pair_declines_where_the_rules_miss_the_closed_form(monkeypatch
     adaptive.occluded_pair(S, Pc, Qc, nP, atol, area_P, (whole[0] + 1e-3, whole[1]),
                            shortcuts, st, solid=solid, inner=inner)
     assert st.checked_triangles > 0
+
+
+def _box_pair_with_solids():
+    """A recorded occluded pair of the 106-surface box's row 0 whose blockers carry
+    solids (the two cubes): ``(S, Pc, Qc, nP, atol, area_P, whole, shortcuts, solid,
+    inner)``."""
+    calls, pair = [], adaptive._hidden_integral_in_one_call
+
+    def record(*a):
+        calls.append(a)
+        return pair(*a)
+
+    adaptive._hidden_integral_in_one_call = record
+    try:
+        ef.area_form_factors(ef.scenes.unit_squares_room(), rows=[0], tolerance=1e-6)
+    finally:
+        adaptive._hidden_integral_in_one_call = pair
+    return next(a for a in calls if a[8] is not None and np.any(a[8] >= 0))
+
+
+def test_compiled_pair_declines_a_blocker_in_the_receivers_plane_with_solids():
+    # a triangle inside Qc and in its plane, added to a pair with solids: the one call
+    # declines it (status 4: the reference's solids decide its events), and the
+    # reference's value is the pair's without it within the two estimates (a blocker in
+    # the receiver's plane hides nothing of it)
+    S, Pc, Qc, nP, atol, area_P, whole, shortcuts, solid, inner = _box_pair_with_solids()
+    c = Qc.mean(axis=0)
+    flat = c + 0.3 * (Qc[:3] - c)
+    S2, solid2 = list(S) + [flat], np.append(solid, -1)
+    inner2 = np.vstack([inner, np.full((1, 3), np.nan)])
+    call = compiled_pair.hidden_integral_in_one_call
+    assert call(S2, Pc, Qc, nP, atol, area_P, whole, shortcuts, solid2, inner2)[0] == 4
+    r = call(S, Pc, Qc, nP, atol, area_P, whole, shortcuts, solid, inner)
+    assert r[0] == 0 and r[1] > 1e-3
+    v, e, _ = adaptive._hidden_integral(S2, Pc, Qc, nP, atol, area_P, whole, shortcuts, None,
+                                        solid2, inner2)
+    assert abs(v - r[1]) <= e + r[2]
+
+
+def test_compiled_pair_declines_where_a_points_image_is_not_to_be_trusted(monkeypatch):
+    # with AREA_IMAGE_RTOL below 0, every image counts as moved beyond it: where what
+    # that moves exceeds the pair's atol, the points go to the engine in the reference
+    # (hidden.hidden_values), and the one call declines the pair (status 6) instead of
+    # using those points' values
+    S, Pc, Qc, nP, atol, area_P, whole, shortcuts, solid, inner = _box_pair_with_solids()
+    call = compiled_pair.hidden_integral_in_one_call
+    assert call(S, Pc, Qc, nP, atol, area_P, whole, shortcuts, solid, inner)[0] == 0
+    monkeypatch.setattr(tol, "AREA_IMAGE_RTOL", -1.0)
+    assert call(S, Pc, Qc, nP, atol, area_P, whole, shortcuts, solid, inner)[0] == 6
