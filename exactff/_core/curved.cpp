@@ -40,16 +40,9 @@ bool skew(const D3& p0, const D3& dp, const D3& r0, const D3& dr, double near) {
     return std::fabs(inner(sub(r0, p0), n)) > near * std::sqrt(inner(n, n));
 }
 
-// geometry.unit_normal: the fan's cross products from the first vertex summed in order,
-// halved, over its length
+// geometry.unit_normal: the area vector over its length
 D3 unit_normal(const double* P, std::int64_t k) {
-    const D3 p0 = at(P);
-    D3 s{0, 0, 0};
-    for (std::int64_t i = 1; i + 1 < k; ++i) {
-        const D3 c = cross(sub(at(P + 3 * i), p0), sub(at(P + 3 * (i + 1)), p0));
-        s = i == 1 ? c : add(s, c);
-    }
-    const D3 A = scale(0.5, s);
+    const D3 A = fan_area_vector<double>(k, [&](std::int64_t i) { return at(P + 3 * i); });
     const double L = norm(A);
     return {A.x / L, A.y / L, A.z / L};
 }

@@ -14,32 +14,18 @@
 #include <vector>
 
 #include "frame.h"
+#include "vec.h"
 
 namespace exactff {
 namespace {
 
-struct D3 {
-    double x, y, z;
-};
-D3 sub3(const D3& a, const D3& b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
-D3 cross3(const D3& a, const D3& b) {
-    return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
-}
-double dot3(const D3& a, const D3& b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+using D3 = Vec3<double>;
 double l1(const D3& a) { return std::abs(a.x) + std::abs(a.y) + std::abs(a.z); }
 
-// geometry.unit_normal: the area vector (the fan's cross products from the first vertex,
-// summed in order, halved) over its length
+// geometry.unit_normal: the area vector over its length
 D3 unit_normal(const std::vector<D3>& P) {
-    D3 s{0, 0, 0};
-    for (size_t i = 1; i + 1 < P.size(); ++i) {
-        const D3 c = cross3(sub3(P[i], P[0]), sub3(P[i + 1], P[0]));
-        if (i == 1)
-            s = c;
-        else
-            s = {s.x + c.x, s.y + c.y, s.z + c.z};
-    }
-    const D3 A{0.5 * s.x, 0.5 * s.y, 0.5 * s.z};
+    const D3 A = fan_area_vector<double>(static_cast<std::int64_t>(P.size()),
+                                         [&](std::int64_t i) { return P[i]; });
     const double L = std::sqrt(A.x * A.x + A.y * A.y + A.z * A.z);
     return {A.x / L, A.y / L, A.z / L};
 }
@@ -54,7 +40,7 @@ std::vector<D3> clip_front(const std::vector<D3>& P, const D3& n, const D3& c,
     bool all_ge = true, any_gt = false, all_le = true;
     std::vector<D3> V(K);
     for (size_t k = 0; k < K; ++k) {
-        V[k] = sub3(P[k], c);
+        V[k] = sub(P[k], c);
         d[k] = V[k].x * n.x + V[k].y * n.y + V[k].z * n.z;
         all_ge &= d[k] >= 0;
         any_gt |= d[k] > 0;
@@ -72,20 +58,20 @@ std::vector<D3> clip_front(const std::vector<D3>& P, const D3& n, const D3& c,
         const D3 A = in_k ? V[k] : V[j], B = in_k ? V[j] : V[k];
         const double sa = in_k ? d[k] : d[j], sb = in_k ? d[j] : d[k];
         const double t = sa / (sa - sb);
-        const D3 e = sub3(B, A);
+        const D3 e = sub(B, A);
         D3 X{A.x + t * e.x, A.y + t * e.y, A.z + t * e.z};
         // the meet of the edge's plane through the origin with the clipping plane,
         // ((A x e) x h) / (sa - sb), where it is the same point within the
         // interpolation's error and well conditioned
-        const D3 m = cross3(A, e);
+        const D3 m = cross(A, e);
         const double dd = sa - sb, la = l1(A), le = l1(e);
-        const D3 mh = cross3(m, n);
+        const D3 mh = cross(m, n);
         const D3 meet{mh.x / dd, mh.y / dd, mh.z / dd};
         const double cond = 1.0 + hl1 * le / std::abs(dd);
         const double u = a.meet_ulps * a.eps;
         // (and on the edge's line to rounding: halfspace.clip_halfspace)
-        if (l1(sub3(meet, X)) <= u * (la + le) * cond &&
-            l1(cross3(sub3(meet, A), e)) <= u * (la + le) * le && cond * u < 1.0 &&
+        if (l1(sub(meet, X)) <= u * (la + le) * cond &&
+            l1(cross(sub(meet, A), e)) <= u * (la + le) * le && cond * u < 1.0 &&
             l1(m) > u * la * le &&
             std::abs(dd) > a.normal_floor && la * le > a.normal_floor)
             X = {meet.x + 0.0, meet.y + 0.0, meet.z + 0.0};
@@ -108,9 +94,9 @@ std::vector<D3> clip_front(const std::vector<D3>& P, const D3& n, const D3& c,
 bool convex(const std::vector<D3>& P, const D3& n, const SetupArgs& a) {
     const size_t K = P.size();
     for (size_t k = 0; k < K; ++k) {
-        const D3 e = sub3(P[(k + 1) % K], P[k]), f = sub3(P[(k + 2) % K], P[(k + 1) % K]);
-        const double turn = dot3(cross3(e, f), n);
-        const double scale = std::sqrt(dot3(e, e) * dot3(f, f));
+        const D3 e = sub(P[(k + 1) % K], P[k]), f = sub(P[(k + 2) % K], P[(k + 1) % K]);
+        const double turn = dot(cross(e, f), n);
+        const double scale = std::sqrt(dot(e, e) * dot(f, f));
         if (!(turn >= -a.convex_ulps * a.eps * scale)) return false;
     }
     return true;
@@ -129,9 +115,9 @@ SetupResult hidden_setup(const SetupArgs& a) {
     const D3 t1{r.RQ[0], r.RQ[1], r.RQ[2]}, t2{r.RQ[3], r.RQ[4], r.RQ[5]};
     std::vector<double> u(Q.size()), v(Q.size());
     for (size_t k = 0; k < Q.size(); ++k) {
-        const D3 w = sub3(Q[k], q0);
-        u[k] = dot3(w, t1);
-        v[k] = dot3(w, t2);
+        const D3 w = sub(Q[k], q0);
+        u[k] = dot(w, t1);
+        v[k] = dot(w, t2);
     }
     r.nQ[0] = nQ.x, r.nQ[1] = nQ.y, r.nQ[2] = nQ.z;
     r.q0[0] = q0.x, r.q0[1] = q0.y, r.q0[2] = q0.z;
@@ -193,7 +179,7 @@ SetupResult hidden_setup(const SetupArgs& a) {
             if (std::isnan(c[0]) || std::isnan(c[1]) || std::isnan(c[2])) continue;
             r.group[i] = a.solid[b];
             if (r.group[i] < 0) continue;
-            const D3 w = sub3({c[0], c[1], c[2]}, Kc[i][0]);
+            const D3 w = sub({c[0], c[1], c[2]}, Kc[i][0]);
             const double depth = w.x * NK[i].x + w.y * NK[i].y + w.z * NK[i].z;
             if (depth > 0) NK[i] = {-NK[i].x, -NK[i].y, -NK[i].z};
             if (std::abs(depth) <= a.hull_rtol * size) unsure.push_back(r.group[i]);

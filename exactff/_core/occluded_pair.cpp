@@ -13,6 +13,7 @@
 #include "hidden_setup.h"
 #include "numpy_ops.h"
 #include "pair.h"
+#include "vec.h"
 
 namespace exactff {
 
@@ -23,18 +24,14 @@ using numpy_ops::blas_dot3;
 using numpy_ops::pairwise_sum;
 using numpy_ops::sum3;
 
-// geometry.py's area_vector of a polygon (k, 3): half the sum of the fan's cross
-// products about its first vertex, summed in order
+// geometry.py's area_vector of a polygon (k, 3) (vec.h's fan_area_vector)
 void area_vector(const double* P, std::int64_t k, double* A) {
-    double s[3] = {0, 0, 0};
-    for (std::int64_t i = 1; i + 1 < k; ++i) {
-        const double a0 = P[3 * i] - P[0], a1 = P[3 * i + 1] - P[1], a2 = P[3 * i + 2] - P[2];
-        const double* q = P + 3 * (i + 1);
-        const double b0 = q[0] - P[0], b1 = q[1] - P[1], b2 = q[2] - P[2];
-        const double c[3] = {a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0};
-        for (int j = 0; j < 3; ++j) s[j] = i == 1 ? c[j] : s[j] + c[j];
-    }
-    for (int j = 0; j < 3; ++j) A[j] = 0.5 * s[j];
+    const Vec3<double> s = fan_area_vector<double>(k, [&](std::int64_t i) {
+        return Vec3<double>{P[3 * i], P[3 * i + 1], P[3 * i + 2]};
+    });
+    A[0] = s.x;
+    A[1] = s.y;
+    A[2] = s.z;
 }
 
 // np.linalg.norm of a 3-vector (sqrt of its BLAS dot with itself)

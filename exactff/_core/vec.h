@@ -7,6 +7,7 @@
 #define EXACTFF_CORE_VEC_H
 
 #include <cmath>
+#include <cstdint>
 
 #include "precision.h"
 
@@ -31,6 +32,20 @@ template <typename T>
 inline Vec3<T> sub(const Vec3<T>& a, const Vec3<T>& b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
 template <typename T>
 inline Vec3<T> neg(const Vec3<T>& a) { return {-a.x, -a.y, -a.z}; }
+// geometry.py's area_vector of a polygon of k vertices vertex(0), ..., vertex(k - 1):
+// half the sum of the fan's cross products about its first vertex, summed in order (the
+// first product taken as it is: numpy's sum of the fan), written once for the compiled
+// steps that give its values to the bit (occluded_pair.cpp, hidden_setup.cpp, curved.cpp)
+template <typename T, typename Vertex>
+inline Vec3<T> fan_area_vector(std::int64_t k, Vertex vertex) {
+    const Vec3<T> p0 = vertex(0);
+    Vec3<T> s{0, 0, 0};
+    for (std::int64_t i = 1; i + 1 < k; ++i) {
+        const Vec3<T> c = cross(sub(vertex(i), p0), sub(vertex(i + 1), p0));
+        s = i == 1 ? c : Vec3<T>{s.x + c.x, s.y + c.y, s.z + c.z};
+    }
+    return {T(0.5) * s.x, T(0.5) * s.y, T(0.5) * s.z};
+}
 // a double vector in another precision
 template <typename T>
 inline Vec3<T> to(const Vec3<double>& a) { return {T(a.x), T(a.y), T(a.z)}; }
