@@ -78,6 +78,14 @@ Usage: python benchmarks/bench_area.py [--cube-k 8]
    (``cut_cells(compiled=False)``); then gunter1's wall time on 1 and 2 threads
    (``executor=ThreadPoolExecutor``: the GIL released in the compiled calls) and in 2
    processes (``jobs=2``), best of ``--repeat``.
+12. ``--pair-calls DIR`` alone (issue 49, the occluded pairs' cost per point): every
+   compiled pair call (``_core/occluded_pair.cpp``) of gunter1's matrix at 1e-6 and 1e-9
+   and of the 106-surface box's at 1e-6, recorded once into DIR (kept there, so that
+   another build replays the same calls), replayed best of ``--repeat``: calls, points,
+   process time, microseconds a point and a digest of the results (status, value,
+   estimate, points and counts: equal digests, equal bits); then the serial matrices
+   (process time) of gunter1, test4, facet and cube at 1e-6 and 1e-9 and of the box at
+   1e-6, their F and E saved to ``DIR/matrices-TAG.npz`` (``--tag``) to compare builds.
 """
 
 import argparse
@@ -209,11 +217,17 @@ def main():
                     help="--points: a directory for the references (computed once)")
     ap.add_argument("--tolerances", default="1e-6",
                     help="--points: the tolerances, comma-separated")
+    ap.add_argument("--pair-calls", default="",
+                    help="only the occluded pairs' calls recorded into (or read from) this "
+                         "directory and replayed, and the serial matrices")
+    ap.add_argument("--tag", default="run", help="--pair-calls: the matrices' file's tag")
     args = ap.parse_args()
     print(machine())
     print()
     if args.pair_path:
         return pair_path(args)
+    if args.pair_calls:
+        return pair_calls(args)
     if args.goals:
         return goals(args)
     if args.threads:
@@ -341,6 +355,69 @@ def pair_path(args):
             best = min(best, time.perf_counter() - t0)
         base = base or best
         print(f"| {how} | {best:.3f} | {base / best:.2f} |", flush=True)
+
+
+def pair_calls(args):
+    """Part 12: the occluded pairs' compiled calls recorded, replayed and timed, and the
+    serial matrices."""
+    import hashlib
+    import pickle
+
+    from exactff.area import compiled_pair
+
+    os.makedirs(args.pair_calls, exist_ok=True)
+    scenes = {"gunter1": lambda: ef.read_vs3(os.path.join(DATA, "gunter1.vs3")),
+              "106-surface box": unit_squares_room}
+    print("The occluded pairs' calls replayed (process time, best of %d):" % args.repeat)
+    print()
+    print("| scene | tolerance | calls | points | s | us a point | digest |")
+    print("|---|---|---|---|---|---|---|")
+    call = compiled_pair._compiled_occluded_pair
+    for name, tolerance in (("gunter1", 1e-6), ("gunter1", 1e-9), ("106-surface box", 1e-6)):
+        path = os.path.join(args.pair_calls, f"{name.split('-')[0]}-{tolerance:g}.pickle")
+        if not os.path.exists(path):
+            calls = []
+
+            def record(*a):
+                calls.append(tuple(x.copy() if isinstance(x, np.ndarray) else x
+                                   for x in a[:-1]))
+                return call(*a)
+
+            compiled_pair._compiled_occluded_pair = record
+            try:
+                ef.area_form_factors(scenes[name](), tolerance=tolerance, error=True)
+            finally:
+                compiled_pair._compiled_occluded_pair = call
+            with open(path, "wb") as f:
+                pickle.dump(calls, f)
+        with open(path, "rb") as f:
+            calls = pickle.load(f)
+        constants = compiled_pair.pair_constants()
+        best = np.inf
+        for _ in range(args.repeat):
+            t0 = time.process_time()
+            out = [call(*c, constants) for c in calls]
+            best = min(best, time.process_time() - t0)
+        points = sum(o[3] for o in out)
+        digest = hashlib.md5(np.array([o[:9] for o in out], dtype=float).tobytes()).hexdigest()
+        print(f"| {name} | {tolerance:g} | {len(calls)} | {points:,} | {best:.3f} "
+              f"| {1e6 * best / points:.3f} | {digest[:12]} |", flush=True)
+    print()
+    print("Serial matrices (process time, one run):")
+    print()
+    print("| scene | tolerance | s |")
+    print("|---|---|---|")
+    saved = {}
+    for name in ("gunter1", "test4", "facet", "cube", "106-surface box"):
+        for tolerance in (1e-6,) if name == "106-surface box" else (1e-6, 1e-9):
+            scene = (unit_squares_room() if name == "106-surface box"
+                     else ef.read_vs3(os.path.join(DATA, name + ".vs3")))
+            t0 = time.process_time()
+            F, E = ef.area_form_factors(scene, tolerance=tolerance, error=True)
+            print(f"| {name} | {tolerance:g} | {time.process_time() - t0:.3f} |", flush=True)
+            key = f"{name.split('-')[0]}_{tolerance:g}"
+            saved[key + "_F"], saved[key + "_E"] = F, E
+    np.savez(os.path.join(args.pair_calls, f"matrices-{args.tag}.npz"), **saved)
 
 
 def umbra_rows(args):

@@ -21,7 +21,8 @@ py::tuple hidden_pieces(Array<double> X, Array<double> corners, Array<double> q0
                         double back_face, double edge_on, double vertex_ulps, double sliver_ulps,
                         long long max_pieces, double precise_rtol, double extent,
                         Array<double> parts, Array<long long> part_counts, Array<double> frame,
-                        double c1, double c2, double eps, bool rings, double precise_atol) {
+                        double c1, double c2, double eps, bool rings, double precise_atol,
+                        py::object cells) {
     if (X.ndim() != 2 || X.shape(1) != 3)
         throw std::invalid_argument("hidden_pieces: arrays of the wrong shapes");
     exactff::HiddenArgs a;
@@ -41,6 +42,14 @@ py::tuple hidden_pieces(Array<double> X, Array<double> corners, Array<double> q0
     a.c2 = c2;
     a.eps = eps;
     a.rings = rings;
+    // each point's cell (hidden.h), or point by point
+    Array<long long> cell_ids;
+    if (!cells.is_none()) {
+        cell_ids = cells.cast<Array<long long>>();
+        if (cell_ids.ndim() != 1 || cell_ids.shape(0) != X.shape(0))
+            throw std::invalid_argument("hidden_pieces: cells must hold one cell per point");
+        a.cells = cell_ids.data();
+    }
     exactff::HiddenResult r;
     {
         py::gil_scoped_release release;
@@ -65,5 +74,5 @@ PYBIND11_MODULE(_hidden, m) {
           py::arg("vertex_ulps"), py::arg("sliver_ulps"), py::arg("max_pieces"),
           py::arg("precise_rtol"), py::arg("extent"), py::arg("parts"), py::arg("part_counts"),
           py::arg("frame"), py::arg("c1"), py::arg("c2"), py::arg("eps"), py::arg("rings"),
-          py::arg("precise_atol"));
+          py::arg("precise_atol"), py::arg("cells") = py::none());
 }

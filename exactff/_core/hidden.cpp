@@ -27,6 +27,7 @@
 #include <vector>
 
 #include "hidden.h"
+#include "predicates.h"
 #include "sector.h"
 #include "vec.h"
 
@@ -388,6 +389,206 @@ struct Work {
     size_t last_cover = 0;                     // the blocker that covered the base last
 };
 
+// The side of the input point x of the plane through p and the input points a, b:
+// orient(p, a, b, x) = det(a - p, b - a, x - p) = (a - p) . n, n = (b - a) x (x - a), an
+// affine function of p. Over the box lo <= p <= hi: 0 where it is 0 for every p there
+// (a, b, x on a line along an axis, x an end of the edge, or the four in one plane of
+// the axes), +1 or -1 where its least or largest value over the box's corners is beyond
+// the rounding of n and of the sum (32 units of roundoff of sum(|n_i| permanents) max
+// |a - p|, a loose bound of some 4), else 2 (not settled).
+int box_side(const Vec3<double>& a, const Vec3<double>& b, const Vec3<double>& x,
+             const double* lo, const double* hi) {
+    const bool sx = a.x == b.x && x.x == a.x, sy = a.y == b.y && x.y == a.y,
+               sz = a.z == b.z && x.z == a.z;
+    if ((sx && sy) || (sy && sz) || (sz && sx) || (x.x == a.x && x.y == a.y && x.z == a.z) ||
+        (x.x == b.x && x.y == b.y && x.z == b.z) || (sx && lo[0] == a.x && hi[0] == a.x) ||
+        (sy && lo[1] == a.y && hi[1] == a.y) || (sz && lo[2] == a.z && hi[2] == a.z))
+        return 0;
+    const double e[3] = {b.x - a.x, b.y - a.y, b.z - a.z}, d[3] = {x.x - a.x, x.y - a.y, x.z - a.z};
+    const double A[3] = {a.x, a.y, a.z};
+    double fmin = 0.0, fmax = 0.0, perm = 0.0, far = 0.0;
+    for (int i = 0; i < 3; ++i) {
+        const int j = i == 2 ? 0 : i + 1, k = j == 2 ? 0 : j + 1;
+        const double n = e[j] * d[k] - e[k] * d[j];
+        perm += std::fabs(e[j] * d[k]) + std::fabs(e[k] * d[j]);
+        const double t0 = n * (A[i] - lo[i]), t1 = n * (A[i] - hi[i]);
+        fmin += std::min(t0, t1);
+        fmax += std::max(t0, t1);
+        far = std::max(far, std::max(std::fabs(A[i] - lo[i]), std::fabs(A[i] - hi[i])));
+    }
+    const double bound = 32 * DBL_EPSILON * perm * far;
+    if (fmin > bound) return 1;
+    if (fmax < -bound) return -1;
+    return 2;
+}
+
+// The same side at one point p, exactly where box_side does not settle it (predicates.h:
+// a long double filter, then expansions).
+int point_side(const Vec3<double>& a, const Vec3<double>& b, const Vec3<double>& x,
+               const Vec3<double>& p) {
+    const double P[3] = {p.x, p.y, p.z};
+    const int s = box_side(a, b, x, P, P);
+    if (s != 2) return s;
+    const double A[3] = {a.x, a.y, a.z}, B[3] = {b.x, b.y, b.z}, X[3] = {x.x, x.y, x.z};
+    exactff::R value, error;
+    filtered(0, P, A, B, X, &value, &error);
+    if (std::fabs(value) > error) return value > 0 ? 1 : -1;
+    return sign(orient_exact(P, A, B, X));
+}
+
+// A blocker whose part in the pyramid lies in the cone from p over another blocker, the
+// hint, hides nothing more than the hint: its image is in the hint's (both cones and the
+// pyramid have their apex at p). The hint is the first blocker projected at p, where it
+// is strictly convex seen from p (every other vertex strictly inside each of its edge
+// planes: the cone is the planes' intersection, sigma each plane's inner side); a
+// blocker is inside it where each of its vertices is inside (or on) each of the hint's
+// planes that cuts the pyramid (a corner of the base strictly outside it; a plane that
+// does not holds the whole pyramid). Each test is the exact side of an input point of a
+// plane through p and two input points (box_side, point_side): the decision is exact,
+// the same whichever way it is taken. It is taken once for the points of a cell (their
+// box: an affine function's sign at its corners holds inside), and point by point where
+// the cell's box does not settle it.
+struct Hints {
+    const Inputs* in = nullptr;
+    // the cell: its box, the hint it was settled for, whether the hint is strictly
+    // convex over it, each plane's side and whether it may cut the pyramid there, and
+    // per blocker whether it is inside (1), outside (2), not settled (0) or not yet
+    // looked at (-1)
+    double lo[3], hi[3];
+    size_t cell_hint = SIZE_MAX;
+    bool cell_sure = false;
+    std::vector<signed char> cell_sigma, cell_in;
+    std::vector<unsigned char> cell_cut;
+    // the point: p, its hint, and the hint's sides and cuts there (point_done)
+    Vec3<double> p;
+    size_t hint = SIZE_MAX;
+    bool have = false, point_done = false;
+    std::vector<signed char> sigma;
+    std::vector<unsigned char> cut;
+
+    void new_cell(const double* l, const double* h) {
+        std::copy(l, l + 3, lo);
+        std::copy(h, h + 3, hi);
+        cell_hint = SIZE_MAX;
+    }
+    void new_point(const Vec3<double>& x) {
+        p = x;
+        have = point_done = false;
+    }
+    // the hint's planes' sides (over the box or at p): false where not strictly convex
+    template <typename Side>
+    bool sides(size_t b, std::vector<signed char>& sg, Side side) const {
+        const std::vector<Vec3<double>>& K = in->K[b];
+        const size_t kb = K.size();
+        if (kb < 3) return false;
+        sg.assign(kb, 0);
+        for (size_t k = 0; k < kb; ++k) {
+            const size_t k1 = k + 1 == kb ? 0 : k + 1;
+            for (size_t j = 0; j < kb; ++j) {
+                if (j == k || j == k1) continue;
+                const int s = side(K[k], K[k1], K[j]);
+                if (!(s == 1 || s == -1) || (sg[k] && s != sg[k])) return false;
+                sg[k] = static_cast<signed char>(s);
+            }
+        }
+        return true;
+    }
+    // the blocker b offered as the hint at p (the first projected there): taken where
+    // strictly convex
+    void offer(size_t b) {
+        if (cell_hint != b) {
+            cell_hint = b;
+            cell_sure = sides(b, cell_sigma, [&](const Vec3<double>& a, const Vec3<double>& e,
+                                                 const Vec3<double>& x) {
+                return box_side(a, e, x, lo, hi);
+            });
+            if (cell_sure) {
+                // 0: the plane holds the whole pyramid at every point, 1: a corner of the
+                // base is strictly outside it at every point, 2: not settled
+                const std::vector<Vec3<double>>& K = in->K[b];
+                const size_t kb = K.size();
+                cell_cut.assign(kb, 0);
+                for (size_t k = 0; k < kb; ++k)
+                    for (const Vec3<double>& c : in->base) {
+                        const int s = box_side(K[k], K[k + 1 == kb ? 0 : k + 1], c, lo, hi);
+                        if (s == -cell_sigma[k]) {
+                            cell_cut[k] = 1;
+                            break;
+                        }
+                        if (s == 2) cell_cut[k] = 2;
+                    }
+            }
+            cell_in.assign(in->K.size(), -1);
+        }
+        if (cell_sure) {
+            hint = b;
+            have = true;
+            return;
+        }
+        if (sides(b, sigma, [&](const Vec3<double>& a, const Vec3<double>& e,
+                                const Vec3<double>& x) { return point_side(a, e, x, p); })) {
+            hint = b;
+            have = point_done = true;
+            set_cuts();
+        }
+    }
+    // the hint's planes that cut the pyramid at p, given sigma
+    void set_cuts() {
+        const std::vector<Vec3<double>>& K = in->K[hint];
+        const size_t kb = K.size();
+        cut.assign(kb, 0);
+        for (size_t k = 0; k < kb; ++k)
+            for (const Vec3<double>& c : in->base) {
+                const int s = point_side(K[k], K[k + 1 == kb ? 0 : k + 1], c, p);
+                if (s != 0 && s != sigma[k]) {
+                    cut[k] = 1;
+                    break;
+                }
+            }
+    }
+    // whether the blocker c is inside the hint's cone where that cone meets the pyramid
+    bool contains(size_t c) {
+        const std::vector<Vec3<double>>& K = in->K[hint];
+        const std::vector<Vec3<double>>& C = in->K[c];
+        const size_t kb = K.size();
+        if (cell_hint == hint && cell_sure) {
+            // 1: inside at every point, 2: outside at every point (a vertex strictly
+            // outside a plane that cuts the pyramid everywhere), 0: not settled
+            if (cell_in[c] < 0) {
+                bool yes = true, no = false;
+                for (size_t k = 0; k < kb && !no; ++k) {
+                    if (!cell_cut[k]) continue;
+                    for (const Vec3<double>& x : C) {
+                        const int s = box_side(K[k], K[k + 1 == kb ? 0 : k + 1], x, lo, hi);
+                        if (s == 0 || s == cell_sigma[k]) continue;
+                        yes = false;
+                        if (s == -cell_sigma[k] && cell_cut[k] == 1) {
+                            no = true;
+                            break;
+                        }
+                    }
+                }
+                cell_in[c] = yes ? 1 : no ? 2 : 0;
+            }
+            if (cell_in[c] == 2) return false;
+            if (cell_in[c]) return true;
+            if (!point_done) {
+                sigma = cell_sigma;
+                set_cuts();
+                point_done = true;
+            }
+        }
+        for (size_t k = 0; k < kb; ++k) {
+            if (!cut[k]) continue;
+            for (const Vec3<double>& x : C) {
+                const int s = point_side(K[k], K[k + 1 == kb ? 0 : k + 1], x, p);
+                if (s != 0 && s != sigma[k]) return false;
+            }
+        }
+        return true;
+    }
+};
+
 // Over a base other than Q, the region's pieces cut by Q's convex parts.
 template <typename R>
 void over_parts(const Inputs& in, Region& out, Work<R>& w) {
@@ -407,7 +608,8 @@ void over_parts(const Inputs& in, Region& out, Work<R>& w) {
 
 // The hidden region of Q from the point p, in precision R.
 template <typename R>
-void region_at(const Inputs& in, const Vec3<double>& pd, Region& out, Work<R>& w) {
+void region_at(const Inputs& in, const Vec3<double>& pd, Region& out, Work<R>& w,
+               Hints& hints) {
     recycle(out.pieces, w.spare);
     out.slivers = Slivers();
     out.reach = out.moved = 0.0;
@@ -446,6 +648,7 @@ void region_at(const Inputs& in, const Vec3<double>& pd, Region& out, Work<R>& w
     // points are mostly hidden by the same one: a wall between the emitter and the
     // receiver), then the others in order
     const size_t nk = in.K.size(), first = w.last_cover < nk ? w.last_cover : 0;
+    hints.new_point(pd);
     for (size_t t = 0; t < nk; ++t) {
         const size_t b = t == 0 ? first : (t <= first ? t - 1 : t);
         // the offsets, each rounded once (within vertex_error of its length: W.e, with
@@ -473,6 +676,8 @@ void region_at(const Inputs& in, const Vec3<double>& pd, Region& out, Work<R>& w
             ++out.back_faces;
             continue;
         }
+        // inside the hint's cone where it meets the pyramid: its image is in the hint's
+        if (hints.have && hints.contains(b)) continue;
         // each vertex's rounding, and each edge's plane through p (as the pyramid's, from
         // the edge's own vector), inside towards the blocker's centroid
         W.e.resize(kb);
@@ -505,6 +710,7 @@ void region_at(const Inputs& in, const Vec3<double>& pd, Region& out, Work<R>& w
         if (W.v.size() < 3) continue;
         // central projection from p onto Q's plane, in the plane's frame; each edge's
         // plane m traced on it: (ax . m) u + (ay . m) v + (q0 - p) . m
+        if (!hints.have) hints.offer(b);
         if (w.images.size() <= images) w.images.resize(images + 1);
         Piece& img = w.images[images++];
         if (!img.v.capacity()) img = fresh(w.spare);
@@ -792,12 +998,27 @@ HiddenResult hidden_pieces(const HiddenArgs& args) {
         Work<double> fast;
         Work<long double> precise;
         SectorWork sectors;
+        Hints hints;
+        hints.in = &in;
         const double two_pi = 6.283185307179586;
-        for (std::ptrdiff_t i = 0; i < n; ++i) {
+        for (std::ptrdiff_t i = 0, cell_end = 0; i < n; ++i) {
             const Vec3<double> p{x(i, 0), x(i, 1), x(i, 2)};
+            // a new cell: the box of its points (each point its own without cells)
+            if (i == cell_end) {
+                cell_end = i + 1;
+                if (args.cells)
+                    while (cell_end < n && args.cells[cell_end] == args.cells[i]) ++cell_end;
+                double lo[3] = {p.x, p.y, p.z}, hi[3] = {p.x, p.y, p.z};
+                for (std::ptrdiff_t j = i + 1; j < cell_end; ++j)
+                    for (int k = 0; k < 3; ++k) {
+                        lo[k] = std::min(lo[k], x(j, k));
+                        hi[k] = std::max(hi[k], x(j, k));
+                    }
+                hints.new_cell(lo, hi);
+            }
             // in doubles first; in long double where an image is not finite or the
             // vertices' rounding can move it by more than precise_rtol of its extent
-            region_at(in, p, region, fast);
+            region_at(in, p, region, fast, hints);
             bool again = !region.ok || region.moved > precise_rtol * std::max(region.reach, extent);
             // the pieces' perimeter where taken here, for the doubles' pieces kept
             double perimeter = 0.0;
@@ -829,7 +1050,7 @@ HiddenResult hidden_pieces(const HiddenArgs& args) {
                 have_perimeter = true;
             }
             if (again) {
-                region_at(in, p, region, precise);
+                region_at(in, p, region, precise, hints);
                 have_perimeter = false;
             }
             reach[i] = region.reach;

@@ -60,6 +60,10 @@ struct HiddenArgs {
     const double* frame;
     double c1, c2, eps;
     bool rings;
+    // per point, the cell it lies in (a cell's points consecutive): the blockers that
+    // add nothing to a region are settled once for a cell's box where they can be
+    // (hidden.cpp's Hints; the same decisions as point by point); null: point by point
+    const long long* cells = nullptr;
 };
 
 struct HiddenResult {

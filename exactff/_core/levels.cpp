@@ -71,8 +71,8 @@ size_t rule_size(const TriangleRule& r) {
 // hidden.py's hidden_values at the points X (n, 3) of one chunk, where none is lost:
 // the hidden parts H and their estimates EH; false where a point is lost or a value
 // lies below 0 beyond its estimate (the caller's reference path then takes over)
-bool hidden_chunk(const LevelArgs& a, const double* X, std::int64_t n, double atol,
-                  double* H, double* EH, long long& back_faces) {
+bool hidden_chunk(const LevelArgs& a, const double* X, const long long* cells, std::int64_t n,
+                  double atol, double* H, double* EH, long long& back_faces) {
     // the scene's size here: the box of the blockers, Qc and the points
     double lo[3] = {a.lo[0], a.lo[1], a.lo[2]}, hi[3] = {a.hi[0], a.hi[1], a.hi[2]};
     for (std::int64_t p = 0; p < n; ++p)
@@ -88,6 +88,7 @@ bool hidden_chunk(const LevelArgs& a, const double* X, std::int64_t n, double at
     h.edge_on = a.edge_on_rtol * size;
     h.precise_atol = a.precise_share * atol;
     h.rings = false;
+    h.cells = cells;
     const HiddenResult r = hidden_pieces(h);
     back_faces += r.back_faces;
     const double pi = 3.14159265358979323846;
@@ -197,6 +198,7 @@ LevelResult adaptive_levels(const LevelArgs& a) {
     const double point_atol = a.budget_share * a.atol;
     Pool pool;
     std::vector<double> X, W, H, EH, U, EU, area_t;
+    std::vector<long long> cell;   // each node's triangle (hidden.h's cells)
     std::vector<size_t> first, nl, nh, nm;
     while (true) {
         // a sliver (between nearly coincident events) is not evaluated: half its area,
@@ -228,6 +230,7 @@ LevelResult adaptive_levels(const LevelArgs& a) {
             // then corner), their nodes in one list
             X.clear();
             W.clear();
+            cell.clear();
             first.assign(t, 0);
             nl.assign(t, 0);
             nh.assign(t, 0);
@@ -255,6 +258,7 @@ LevelResult adaptive_levels(const LevelArgs& a) {
                         rule_nodes(*lo, p0, p1, p2, X, W);
                         rule_nodes(*hi, p0, p1, p2, X, W);
                         if (mid) rule_nodes(*mid, p0, p1, p2, X, W);
+                        cell.resize(W.size(), static_cast<long long>(k));
                         nl[k] = rule_size(*lo);
                         nh[k] = rule_size(*hi);
                         nm[k] = mid ? rule_size(*mid) : 0;
@@ -266,7 +270,7 @@ LevelResult adaptive_levels(const LevelArgs& a) {
             EU.resize(np);
             for (std::int64_t s = 0; s < np; s += a.points_per_call) {
                 const std::int64_t m = std::min<std::int64_t>(a.points_per_call, np - s);
-                if (!hidden_chunk(a, &X[3 * s], m, point_atol, &H[s], &EH[s],
+                if (!hidden_chunk(a, &X[3 * s], &cell[s], m, point_atol, &H[s], &EH[s],
                                   out.back_faces)) {
                     out.ok = false;
                     return out;
