@@ -492,6 +492,12 @@ void Core::process(int64_t f, const double* pp, const V3& p, const V3& n,
         // it was on, or the cut along this plane
         const int64_t cut_edge = -1 - static_cast<int64_t>(P.exact);
         for (int sigma : {-1, 1}) {
+            // a part whose side of the plane is a covered leaf is hidden there: counted,
+            // not formed (its corners would only be taken off the work list again)
+            if ((sigma > 0 ? P.pos : P.neg) == IN) {
+                ++st.hidden;
+                continue;
+            }
             const size_t begin = corners.size();
             for (size_t i = 0; i < m; ++i) {
                 const size_t j = (i + 1) % m;
