@@ -52,6 +52,8 @@ the hemicube's (the least of both sides) and the exact rows in hemicube rows; th
 largest ``|F_new - F_base| / (E_new + E_base)`` (``error=True``, untimed; 0: the same
 values). Per file: the medians, the largest ratio over rows that see fewer than 50
 polygons, and each side's bounds over 1e-12 relative to max(|F|, floor) and the worst.
+``--cpu`` times both methods in the calling thread's CPU time (``time.thread_time``: both
+compute in it) instead of wall time, steadier where other jobs load the machine.
 """
 
 import argparse
@@ -211,7 +213,7 @@ def main_uniform(files, k, seed=1, bounds=False):
         print("-", t)
 
 
-def serve():
+def serve(clock=time.perf_counter):
     """One side of ``--against``: reads ``[path, row, calls, out]`` lines on stdin and
     answers each with a JSON line (the least exact and hemicube times, polygons seen,
     quadruple pieces), the row's F and E (``error=True``) saved to ``out``."""
@@ -229,29 +231,31 @@ def serve():
         t_exact, t_hc, st = [], [], {}
         for _ in range(calls):
             st = {}
-            t = time.perf_counter()
+            t = clock()
             exact.point_form_factors(scene, c, n, stats=st)
-            t_exact.append(time.perf_counter() - t)
-            t = time.perf_counter()
+            t_exact.append(clock() - t)
+            t = clock()
             hemicube.point_form_factors(scene, c, n)
-            t_hc.append(time.perf_counter() - t)
+            t_hc.append(clock() - t)
         F, E = exact.point_form_factors(scene, c, n, error=True)
         np.save(out, np.stack([F, E]))
         print(json.dumps({"exact": min(t_exact), "hc": min(t_hc), "seen": int((F > 0).sum()),
                           "quad": st.get("quad_pieces", 0)}), flush=True)
 
 
-def main_against(files, rows, root, calls, rounds):
-    """``--against``: this checkout ("new") and ``root`` ("base"), row by row."""
+def main_against(files, rows, root, calls, rounds, cpu=False):
+    """``--against``: this checkout ("new") and ``root`` ("base"), row by row (times in
+    CPU time with ``cpu``)."""
     here = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
     sides = {}
     for name, tree in (("base", os.path.abspath(root)), ("new", here)):
         env = dict(os.environ, PYTHONPATH=tree)
-        sides[name] = subprocess.Popen([sys.executable, os.path.abspath(__file__), "--serve"],
+        sides[name] = subprocess.Popen([sys.executable, os.path.abspath(__file__), "--serve"] +
+                                       (["--cpu"] if cpu else []),
                                        stdin=subprocess.PIPE, stdout=subprocess.PIPE,
                                        text=True, env=env, cwd=tree)
     print(f"base: {os.path.abspath(root)}; new: {here}; per row the least of {calls} calls "
-          f"a round, {rounds} round(s)")
+          f"a round, {rounds} round(s); {'CPU' if cpu else 'wall'} time")
     tmp = tempfile.mkdtemp(prefix="bench_real_rows_")
     k = 0
     for path in files:
@@ -312,6 +316,8 @@ def main_against(files, rows, root, calls, rounds):
 def main():
     if sys.argv[1:] == ["--serve"]:
         return serve()
+    if sys.argv[1:] == ["--serve", "--cpu"]:
+        return serve(time.thread_time)
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("files", nargs="*", help="scene files (default: the real files beside the clone)")
     ap.add_argument("--rows", type=int, default=8, help="seeded rows per file")
@@ -331,6 +337,9 @@ def main():
     ap.add_argument("--calls", type=int, default=5,
                     help="with --against, calls a row and side per round (the least kept)")
     ap.add_argument("--rounds", type=int, default=2, help="with --against, rounds")
+    ap.add_argument("--cpu", action="store_true",
+                    help="with --against, CPU time (the thread's) instead of wall time: "
+                         "steadier on a machine other jobs load")
     args = ap.parse_args()
     files = args.files or [os.path.join(REAL, f) for f in DEFAULT_FILES
                            if os.path.exists(os.path.join(REAL, f))]
@@ -340,7 +349,8 @@ def main():
     if args.uniform:
         return main_uniform(files, args.uniform, args.seed, args.bounds)
     if args.against:
-        return main_against(files, args.rows, args.against, args.calls, args.rounds)
+        return main_against(files, args.rows, args.against, args.calls, args.rounds,
+                            args.cpu)
     print(f"exactff {ef.__version__}; rows per file: {args.rows} seeded + the README's flush rows")
     head = ("| file | polygons | rows | raised | python rows | values | bounds over 1e-12 (share met) "
             "| worst bound / max(F, floor) | exact / hemicube-256, median (max) [numpy] | < 50 seen "
