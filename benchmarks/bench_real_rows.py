@@ -2,7 +2,7 @@
 bounded, at hemicube speed.
 
 Usage: python benchmarks/bench_real_rows.py [FILE ...] [--rows 8] [--engines]
-       [--extra FILE:ROW ...] [--uniform K]
+       [--extra FILE:ROW ...] [--uniform K] [--against ROOT [--calls 5] [--rounds 2]]
 
 Files: by default the real files beside the clone (``../shared/scenes/real``: the three
 IFC building models and the others), each loaded with ``degenerate="drop"`` (and
@@ -41,11 +41,27 @@ settled on their shafts (``stats["shaft_polygons"]``), the largest crossings' pa
 bound, and the median and slowest row; ``--bounds`` adds, from each row again with
 ``error=True`` (untimed), the values, those whose whole bound exceeds 1e-12 relative,
 and the worst bound over max(|F|, floor).
+
+``--against ROOT`` instead times the same seeded rows before and after a change: this
+checkout (its package, with its compiled extensions built in place) and the one at
+``ROOT``, each in its own process, row by row, which of the two goes first alternating;
+per row and side the least of ``--calls`` default calls (``Exact()``) and of as many
+``Hemicube(256)`` calls, over ``--rounds`` rounds. Per row: polygons seen (F > 0),
+quadruple-precision pieces (``stats["quad_pieces"]``), the exact times, their ratio,
+the hemicube's (the least of both sides) and the exact rows in hemicube rows; the
+largest ``|F_new - F_base| / (E_new + E_base)`` (``error=True``, untimed; 0: the same
+values). Per file: the medians, the largest ratio over rows that see fewer than 50
+polygons, and each side's bounds over 1e-12 relative to max(|F|, floor) and the worst.
+``--cpu`` times both methods in the calling thread's CPU time (``time.thread_time``: both
+compute in it) instead of wall time, steadier where other jobs load the machine.
 """
 
 import argparse
+import json
 import os
+import subprocess
 import sys
+import tempfile
 import time
 
 import numpy as np
@@ -197,7 +213,111 @@ def main_uniform(files, k, seed=1, bounds=False):
         print("-", t)
 
 
+def serve(clock=time.perf_counter):
+    """One side of ``--against``: reads ``[path, row, calls, out]`` lines on stdin and
+    answers each with a JSON line (the least exact and hemicube times, polygons seen,
+    quadruple pieces), the row's F and E (``error=True``) saved to ``out``."""
+    scenes = {}
+    exact = ef.Exact()
+    hemicube = ef.methods.Hemicube(resolution=256)
+    for line in sys.stdin:
+        path, r, calls, out = json.loads(line)
+        first = path not in scenes
+        scene = scenes[path] = scenes[path] if not first else load(path)
+        c, n = scene.centroids[r], scene.normals[r]
+        if first:     # the set-up, untimed
+            exact.point_form_factors(scene, c, n)
+            hemicube.point_form_factors(scene, c, n)
+        t_exact, t_hc, st = [], [], {}
+        for _ in range(calls):
+            st = {}
+            t = clock()
+            exact.point_form_factors(scene, c, n, stats=st)
+            t_exact.append(clock() - t)
+            t = clock()
+            hemicube.point_form_factors(scene, c, n)
+            t_hc.append(clock() - t)
+        F, E = exact.point_form_factors(scene, c, n, error=True)
+        np.save(out, np.stack([F, E]))
+        print(json.dumps({"exact": min(t_exact), "hc": min(t_hc), "seen": int((F > 0).sum()),
+                          "quad": st.get("quad_pieces", 0)}), flush=True)
+
+
+def main_against(files, rows, root, calls, rounds, cpu=False):
+    """``--against``: this checkout ("new") and ``root`` ("base"), row by row (times in
+    CPU time with ``cpu``)."""
+    here = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    sides = {}
+    for name, tree in (("base", os.path.abspath(root)), ("new", here)):
+        env = dict(os.environ, PYTHONPATH=tree)
+        sides[name] = subprocess.Popen([sys.executable, os.path.abspath(__file__), "--serve"] +
+                                       (["--cpu"] if cpu else []),
+                                       stdin=subprocess.PIPE, stdout=subprocess.PIPE,
+                                       text=True, env=env, cwd=tree)
+    print(f"base: {os.path.abspath(root)}; new: {here}; per row the least of {calls} calls "
+          f"a round, {rounds} round(s); {'CPU' if cpu else 'wall'} time")
+    tmp = tempfile.mkdtemp(prefix="bench_real_rows_")
+    k = 0
+    for path in files:
+        name = os.path.basename(path)
+        picked = list(dict.fromkeys(seeded_rows(load(path), rows) + README_ROWS.get(name, [])))
+        best = {}
+        for _ in range(rounds):
+            for r in picked:
+                for side in (("base", "new") if k % 2 == 0 else ("new", "base")):
+                    out = os.path.join(tmp, f"{side}_{r}.npy")
+                    sides[side].stdin.write(json.dumps([path, r, calls, out]) + "\n")
+                    sides[side].stdin.flush()
+                    o = json.loads(sides[side].stdout.readline())
+                    if (side, r) in best:
+                        o["exact"] = min(o["exact"], best[side, r]["exact"])
+                        o["hc"] = min(o["hc"], best[side, r]["hc"])
+                    best[side, r] = o
+                k += 1
+        print(f"\n{name}\n")
+        print("| row | seen | quadruple pieces | exact (ms) | new / base | hemicube (ms) "
+              "| hemicube rows | max dF / (E_base + E_new) |")
+        print("|---" * 8 + "|")
+        ratios = {"base": [], "new": []}
+        few = {"base": 0.0, "new": 0.0}
+        bounds = {"base": [0, 0.0], "new": [0, 0.0]}
+        worst = 0.0
+        for r in picked:
+            b, a = best["base", r], best["new", r]
+            hc = min(b["hc"], a["hc"])
+            FE = {side: np.load(os.path.join(tmp, f"{side}_{r}.npy")) for side in sides}
+            gap = np.abs(FE["new"][0] - FE["base"][0])
+            with np.errstate(divide="ignore", invalid="ignore"):
+                w = float(np.where(gap > 0, gap / (FE["new"][1] + FE["base"][1]), 0.0).max())
+            worst = max(worst, w)
+            for side, o in (("base", b), ("new", a)):
+                ratios[side].append(o["exact"] / hc)
+                if o["seen"] < 50:
+                    few[side] = max(few[side], o["exact"] / hc)
+                F, E = FE[side]
+                scale = np.maximum(np.abs(F), tol.VALUE_FLOOR)
+                bounds[side][0] += int((E > tol.DEFAULT_RTOL * scale).sum())
+                bounds[side][1] = max(bounds[side][1], float((E / scale).max(initial=0.0)))
+            print(f"| {r} | {a['seen']} | {b['quad']} -> {a['quad']} | {1e3 * b['exact']:.2f} -> "
+                  f"{1e3 * a['exact']:.2f} | {a['exact'] / b['exact']:.3f} | {1e3 * hc:.2f} | "
+                  f"{ratios['base'][-1]:.2f} -> {ratios['new'][-1]:.2f} | {w:.2g} |")
+        total = {side: sum(best[side, r]["exact"] for r in picked) for side in sides}
+        print(f"\nmedian hemicube rows {np.median(ratios['base']):.2f} -> "
+              f"{np.median(ratios['new']):.2f}; < 50 seen {few['base']:.2f} -> {few['new']:.2f}; "
+              f"total exact {1e3 * total['base']:.0f} -> {1e3 * total['new']:.0f} ms; "
+              f"bounds over 1e-12 (worst / max(F, floor)) {bounds['base'][0]} "
+              f"({bounds['base'][1]:.2g}) -> {bounds['new'][0]} ({bounds['new'][1]:.2g}); "
+              f"max dF / (E_base + E_new) {worst:.2g}", flush=True)
+    for proc in sides.values():
+        proc.stdin.close()
+        proc.wait()
+
+
 def main():
+    if sys.argv[1:] == ["--serve"]:
+        return serve()
+    if sys.argv[1:] == ["--serve", "--cpu"]:
+        return serve(time.thread_time)
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("files", nargs="*", help="scene files (default: the real files beside the clone)")
     ap.add_argument("--rows", type=int, default=8, help="seeded rows per file")
@@ -211,6 +331,15 @@ def main():
                     help="with --uniform, the seed of the draw (default 1)")
     ap.add_argument("--bounds", action="store_true",
                     help="with --uniform, also each row's whole bounds (error=True, untimed)")
+    ap.add_argument("--against", metavar="ROOT",
+                    help="instead, before (the checkout at ROOT) and after (this one), "
+                         "alternating row by row")
+    ap.add_argument("--calls", type=int, default=5,
+                    help="with --against, calls a row and side per round (the least kept)")
+    ap.add_argument("--rounds", type=int, default=2, help="with --against, rounds")
+    ap.add_argument("--cpu", action="store_true",
+                    help="with --against, CPU time (the thread's) instead of wall time: "
+                         "steadier on a machine other jobs load")
     args = ap.parse_args()
     files = args.files or [os.path.join(REAL, f) for f in DEFAULT_FILES
                            if os.path.exists(os.path.join(REAL, f))]
@@ -219,6 +348,9 @@ def main():
     print(machine())
     if args.uniform:
         return main_uniform(files, args.uniform, args.seed, args.bounds)
+    if args.against:
+        return main_against(files, args.rows, args.against, args.calls, args.rounds,
+                            args.cpu)
     print(f"exactff {ef.__version__}; rows per file: {args.rows} seeded + the README's flush rows")
     head = ("| file | polygons | rows | raised | python rows | values | bounds over 1e-12 (share met) "
             "| worst bound / max(F, floor) | exact / hemicube-256, median (max) [numpy] | < 50 seen "

@@ -646,10 +646,15 @@ def test_core_refuses_inconsistent_arrays():
     tree, core = compiled_core(scene)
     side = np.ones(len(scene), dtype=np.int8)
     with pytest.raises(ValueError, match="node_side"):
-        core.row(np.zeros(3), np.array([0, 0, 1.0]), np.zeros(3, np.int8), side, False, True, 8, 0, 0.0)
+        core.row(np.zeros(3), np.array([0, 0, 1.0]), np.zeros(3, np.int8), side, False, True, 8, 0,
+                 0.0, 0.0)
     with pytest.raises(ValueError, match="source_side"):
         core.row(np.zeros(3), np.array([0, 0, 1.0]), np.zeros(len(tree), np.int8),
-                 side[:2], False, True, 8, 0, 0.0)
+                 side[:2], False, True, 8, 0, 0.0, 0.0)
+    for rtol, floor in ((1e-12, -1e-2), (1e-12, np.inf), (-1e-12, 1e-2), (np.nan, 1e-2)):
+        with pytest.raises(ValueError, match="rtol and floor"):
+            core.row(np.zeros(3), np.array([0, 0, 1.0]), np.zeros(len(tree), np.int8),
+                     side, False, True, 8, 0, rtol, floor)
 
 
 def test_engine_argument():

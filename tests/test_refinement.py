@@ -262,8 +262,11 @@ def test_compiled_sliver_bound_holds_without_the_fallback(gap):
     # a tolerance (no second tier) it is absolute: the long double cuts' directions,
     # about 1e-18 (measured 2026-12-02: errors 8e-23 to 8e-21 under bounds of 1.6e-18).
     # With one, the pieces that miss it are integrated again in quadruple precision from
-    # vertices recomputed where their edges' planes meet (Core::refine): the bound is
-    # then relative and the row needs no fallback to the Python engine
+    # vertices recomputed where their edges' planes meet (Core::refine), where the
+    # polygon's bound misses the tolerance times the larger of its value and half the
+    # floor: by default (the floor VALUE_FLOOR) the bound then meets the contract,
+    # tolerance times max(F, VALUE_FLOOR); with floor=0 it is relative. Either way the
+    # row needs no fallback to the Python engine
     from exactff.visibility.compiled import compiled_form_factors
 
     for seed in range(3):
@@ -273,8 +276,44 @@ def test_compiled_sliver_bound_holds_without_the_fallback(gap):
         ref = sliver_reference(polys, p, n)
         assert abs(F[0] - ref) <= E[0] + tol.EPS * ref
         assert E[0] <= 1e-16
-        st = {}
-        F, E = compiled_form_factors(scene, p, n, tolerance=1e-12, error=True, stats=st)
-        assert st["path"] == "compiled"
-        assert abs(F[0] - ref) <= E[0] + tol.EPS * ref
-        assert E[0] <= 1e-12 * F[0]
+        for floor in (tol.VALUE_FLOOR, 0.0):
+            st = {}
+            F, E = compiled_form_factors(scene, p, n, tolerance=1e-12, error=True, stats=st,
+                                         floor=floor)
+            assert st["path"] == "compiled"
+            assert abs(F[0] - ref) <= E[0] + tol.EPS * ref
+            assert E[0] <= 1e-12 * max(F[0], floor)
+
+
+def test_floor_spends_the_quadruple_tier_only_where_the_contract_needs_it():
+    # a sliver of about 1e-10 (below VALUE_FLOOR) through a 1e-9 gap: the default call
+    # (Exact(), floor VALUE_FLOOR) keeps its long double pieces, whose bound (about
+    # 1e-18) meets tolerance * max(F, VALUE_FLOOR), and spends no quadruple precision;
+    # Exact(floor=0) (what ground_truth asks) integrates them again in quadruple
+    # precision, and its bound meets tolerance * F. Both against the 50-digit reference,
+    # each value within both bounds of the other
+    for seed in range(3):
+        polys, p, n = sliver_scene(1e-9, seed, tilt=0.8)
+        scene = ef.Scene.from_polygons(polys)
+        ref = sliver_reference(polys, p, n)
+        assert ref < 1e-3 * tol.VALUE_FLOOR
+        rows = {}
+        for floor in (tol.VALUE_FLOOR, 0.0):
+            st = {}
+            F, E = ef.Exact(floor=floor).point_form_factors(scene, p, n, error=True, stats=st)
+            assert st["path"] == "compiled"
+            assert abs(F[0] - ref) <= E[0] + tol.EPS * ref
+            rows[floor] = F, E, st["quad_pieces"]
+        (Fd, Ed, qd), (Fr, Er, qr) = rows[tol.VALUE_FLOOR], rows[0.0]
+        assert np.all(Ed <= tol.DEFAULT_RTOL * np.maximum(Fd, tol.VALUE_FLOOR))
+        assert qd == 0
+        assert Er[0] <= tol.DEFAULT_RTOL * Fr[0]
+        assert qr > 0
+        assert np.all(np.abs(Fd - Fr) <= Ed + Er)
+
+
+def test_floor_is_checked():
+    for bad in (-1e-3, 2 * tol.VALUE_FLOOR, float("nan"), "0"):
+        with pytest.raises(ValueError, match="floor"):
+            ef.Exact(floor=bad)
+    assert repr(ef.Exact(floor=0)) == "Exact(tolerance=1e-12, shortcuts=True, floor=0.0)"

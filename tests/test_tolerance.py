@@ -14,6 +14,7 @@ import pytest
 from hypothesis import example, given, settings
 
 import exactff as ef
+from exactff import _tolerances as tol
 from exactff.errors import misses_tolerance
 from exactff.testing.mp_reference import boundary_form_factor, solid_angle
 from exactff.testing.strategies import convex_polygons, points
@@ -214,13 +215,19 @@ def test_eq3_escalates_to_the_tolerance(shortcuts, engine):
     assert abs(F0[0] - ref) <= E0[0]
     if engine == "python" or shortcuts:
         assert misses_tolerance(F0[0], E0[0], 1e-15)
-    # escalated: Eq. 3 meets it, as the sector form does
+    # escalated: Eq. 3 meets it, as the sector form does; by default to the contract
+    # (1e-15 times VALUE_FLOOR: F is below it), with floor=0 relative to F (the compiled
+    # core's quadruple-precision tier spent below the floor too)
     for integrator in ("eq3", "sector"):
-        method = ef.Exact(integrator=integrator, shortcuts=shortcuts, engine=engine,
-                          tolerance=1e-15)
-        F, E = method.point_form_factors(scene, p, n, error=True)
-        assert abs(F[0] - ref) <= 1e-14 * ref and not misses_tolerance(F[0], E[0], 1e-15)
-        assert method.point_form_factors(scene, p, n)[0] == F[0]
+        for floor in (tol.VALUE_FLOOR, 0.0):
+            method = ef.Exact(integrator=integrator, shortcuts=shortcuts, engine=engine,
+                              tolerance=1e-15, floor=floor)
+            F, E = method.point_form_factors(scene, p, n, error=True)
+            assert not misses_tolerance(F[0], E[0], 1e-15)
+            assert abs(F[0] - ref) <= E[0]
+            if floor == 0:
+                assert abs(F[0] - ref) <= 1e-14 * ref
+            assert method.point_form_factors(scene, p, n)[0] == F[0]
 
 
 # ---------------------------------------------------------------------------------------

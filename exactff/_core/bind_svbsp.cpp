@@ -1,6 +1,7 @@
 // Python module exactff.visibility._svbsp: the visibility core (core.h) and the BSP build
 // (bsp_build.h). Arrays in and out, the GIL released around the computation; no math.
 
+#include <cmath>
 #include <cstdint>
 #include <stdexcept>
 #include <vector>
@@ -29,18 +30,21 @@ exactff::Core make_core(Array<double> vertices, Array<int64_t> start, Array<int6
 
 py::tuple row(const exactff::Core& core, Array<double> point, Array<double> normal,
               Array<int8_t> node_side, Array<int8_t> source_side, bool two_sided, bool cull,
-              int64_t box_budget, int64_t tiles, double rtol, bool eq3, bool sphere) {
+              int64_t box_budget, int64_t tiles, double rtol, double floor, bool eq3,
+              bool sphere) {
     if (point.size() != 3 || normal.size() != 3)
         throw std::invalid_argument("point and normal must have 3 coordinates");
     if (node_side.size() != core.nodes())
         throw std::invalid_argument("node_side must have one entry per BSP node");
     if (source_side.size() != core.n_sources())
         throw std::invalid_argument("source_side must have one entry per polygon");
+    if (!(rtol >= 0) || !(floor >= 0) || !std::isfinite(floor))
+        throw std::invalid_argument("rtol and floor must be finite and >= 0");
     exactff::RowResult r;
     {
         py::gil_scoped_release release;
         r = core.row(point.data(), normal.data(), node_side.data(), source_side.data(),
-                     two_sided, cull, box_budget, tiles, rtol, eq3, sphere);
+                     two_sided, cull, box_budget, tiles, rtol, floor, eq3, sphere);
     }
     const exactff::RowStats& st = r.stats;
     py::dict d;
@@ -114,7 +118,8 @@ PYBIND11_MODULE(_svbsp, m) {
              py::arg("vertex_errors"))
         .def("row", &row, py::arg("point"), py::arg("normal"), py::arg("node_side"),
              py::arg("source_side"), py::arg("two_sided"), py::arg("cull"),
-             py::arg("box_budget"), py::arg("tiles"), py::arg("rtol"), py::arg("eq3") = false,
+             py::arg("box_budget"), py::arg("tiles"), py::arg("rtol"), py::arg("floor"),
+             py::arg("eq3") = false,
              py::arg("sphere") = false)
         .def_property_readonly("nodes", &exactff::Core::nodes)
         .def_property_readonly("pieces", &exactff::Core::pieces)

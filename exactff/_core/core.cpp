@@ -62,7 +62,7 @@ Core::Core(std::vector<double> vertices, std::vector<int64_t> start, std::vector
 
 RowResult Core::row(const double* pp, const double* pn, const int8_t* ns, const int8_t* ss,
                     bool two_sided, bool cull, int64_t box_budget, int64_t tiles, double rtol,
-                    bool eq3, bool sphere) const {
+                    double floor, bool eq3, bool sphere) const {
     RowResult out;
     RowStats& st = out.stats;
     out.F.assign(n_sources_, 0);
@@ -72,6 +72,7 @@ RowResult Core::row(const double* pp, const double* pn, const int8_t* ns, const 
     st.crossing.assign(static_cast<size_t>(n_sources_), 0);
     // the sphere's pieces have no second tier (their measure has no quadruple form)
     st.rtol = sphere ? 0 : rtol;
+    st.floor = floor;
     st.leak_budget = SVBSP_LEAK_BUDGET_SHARE * (rtol > 0 ? rtol : 1e-12);
     st.normal = pn;
     st.eq3 = eq3 && !sphere;

@@ -244,7 +244,10 @@ struct RowStats {
     std::vector<Leak> leaks;
     R leak_budget = 0;
     R rtol = 0;          // pieces whose bound exceeds this times their value are
-                         // integrated again in quadruple precision (0: never)
+                         // integrated again in quadruple precision (0: never), unless
+                         // their polygon's bound is within half rtol times floor
+    R floor = 0;         // the value below which a bound is held to rtol times it, not
+                         // to rtol times the value (Core::settle; 0: relative throughout)
     const double* normal = nullptr;  // the receiver normal as given
     const double* point = nullptr;   // the point as given
     const std::vector<ExactPlane>* xp = nullptr;  // the row's exact planes (Core::run)
@@ -348,7 +351,8 @@ class Core {
     // and each polygon's (+1 front, -1 back, 0 on)
     RowResult row(const double* point, const double* normal, const int8_t* node_side,
                   const int8_t* source_side, bool two_sided, bool cull, int64_t box_budget,
-                  int64_t tiles, double rtol, bool eq3, bool sphere = false) const;
+                  int64_t tiles, double rtol, double floor, bool eq3,
+                  bool sphere = false) const;
     int64_t n_sources() const { return n_sources_; }
     int64_t nodes() const { return static_cast<int64_t>(front_.size()); }
     int64_t pieces() const { return static_cast<int64_t>(start_.size()); }

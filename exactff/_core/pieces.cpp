@@ -492,6 +492,12 @@ void Core::process(int64_t f, const double* pp, const V3& p, const V3& n,
         // it was on, or the cut along this plane
         const int64_t cut_edge = -1 - static_cast<int64_t>(P.exact);
         for (int sigma : {-1, 1}) {
+            // a part whose side of the plane is a covered leaf is hidden there: counted,
+            // not formed (its corners would only be taken off the work list again)
+            if ((sigma > 0 ? P.pos : P.neg) == IN) {
+                ++st.hidden;
+                continue;
+            }
             const size_t begin = corners.size();
             for (size_t i = 0; i < m; ++i) {
                 const size_t j = (i + 1) % m;
@@ -514,9 +520,13 @@ namespace exactff {
 
 // the pieces Core::process held (their bound above rtol times their value), per
 // polygon: where the polygon's bound with all of them as integrated in long double is
-// within rtol times its value, they stay so; else each is refined and integrated in
-// quadruple precision (Core::refine, Core::integrate_quad), the better of the two kept,
-// a piece at a time as before. That bound is the row's so far (E, and the edge charges
+// within its target, they stay so; else each is refined and integrated in quadruple
+// precision (Core::refine, Core::integrate_quad), the better of the two kept, a piece
+// at a time as before. The target is rtol times the larger of the polygon's value and
+// half the floor (RowStats::floor: the default call's VALUE_FLOOR, which
+// exactff.errors.misses_tolerance accepts on every path; the half so that the row's
+// remaining roundings keep it there; 0 for a bound relative to the value however small,
+// exactff.testing.ground_truth). That bound is the row's so far (E, and the edge charges
 // still pending, RowStats::edges with one piece), plus the held pieces' own bounds and
 // edge charges, less the charges of the edges two pieces of the polygon share (which
 // Core::charge_edges cancels: exactly two pieces, one polygon, neither refined)
@@ -560,6 +570,9 @@ void Core::settle(const double* pp, const std::vector<ExactPlane>& xp, std::vect
     }
     std::vector<int64_t> count(F.size(), 0);
     for (const auto& h : st.held_pieces) ++count[static_cast<size_t>(source_[h.f])];
+    // a polygon's target, from its value summed (the floor's half: see above)
+    const R half_floor = st.floor / 2;
+    auto target = [&](size_t s) { return st.rtol * std::max(total[s], half_floor); };
     std::vector<std::array<Quad, 3>> qdirs;
     std::vector<R> qerrs, lerrs;
     Piece r;
@@ -572,7 +585,7 @@ void Core::settle(const double* pp, const std::vector<ExactPlane>& xp, std::vect
         R val = h.val, bnd = h.bnd;
         const std::vector<R>* placed = nullptr;  // the vertices' bounds charged, if refined
         // (the subtractions above within a few roundoffs of the sums: 64 kept)
-        if (!(keep[s] * (1 + 64 * K_.eps) <= st.rtol * total[s])) {
+        if (!(keep[s] * (1 + 64 * K_.eps) <= target(s))) {
             const R charges = charge_edges(h.q, src, E, st, nullptr, false, nullptr, &h.arcs);
             refine(h.q, h.f, pp, xp, qdirs, qerrs);
             // first the refined directions rounded to long double, summed in long double
@@ -597,7 +610,7 @@ void Core::settle(const double* pp, const std::vector<ExactPlane>& xp, std::vect
             integrate(r, h.f, un, &lv, &lb, st.eq3 ? &st : nullptr);
             const R lcharges = charge_edges(h.q, src, E, st, &lerrs, false, nullptr, &h.arcs);
             if (lb + lcharges < bnd + charges &&
-                lb + lcharges <= st.rtol * total[s] / (2 * static_cast<R>(count[s]))) {
+                lb + lcharges <= target(s) / (2 * static_cast<R>(count[s]))) {
                 val = lv;
                 bnd = lb;
                 placed = &lerrs;

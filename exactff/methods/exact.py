@@ -4,7 +4,7 @@ import math
 
 import numpy as np
 
-from .._tolerances import DEFAULT_RTOL, EPS
+from .._tolerances import DEFAULT_RTOL, EPS, VALUE_FLOOR
 from ..checks import as_point, as_receiver, as_receivers
 from ..errors import NumericalError, check_finite
 from ..kernel import flat_polygons, mp_solid_angle, offset_error, solid_angle_sums
@@ -52,6 +52,17 @@ class Exact(FormFactorMethod):
         engine and either integrator), unless the row is asked for with
         ``error=True``, which returns it with its bound. None: no refinement,
         escalation or check.
+    floor : float, default VALUE_FLOOR
+        Where the compiled engine's quadruple-precision tier stops: a polygon whose
+        long double bound is within half ``tolerance`` times ``floor`` keeps it, one
+        whose value is above ``floor`` is held to ``tolerance`` times its value. The
+        default, ``VALUE_FLOOR``, spends no quadruple precision below the contract's
+        floor (what a value under it is asked: the bound of a grazing value of 1e-9 is
+        about 1e-18, absolute); 0 holds every value's bound to ``tolerance`` times the
+        value as far as that tier reaches (:func:`exactff.testing.ground_truth`), at
+        the cost of that tier on slivers and grazing values. Between 0 and
+        ``VALUE_FLOOR``; the check (above) is the same whatever the floor. The Python
+        engine refines relative to each value whatever the floor.
     shortcuts : bool, default True
         Leave out what a row does not need: the convex-scene shortcut, the tiled
         clipper (fragments hidden by full tiles or decided by exact predicates instead
@@ -84,9 +95,13 @@ class Exact(FormFactorMethod):
     name = "exact"
 
     def __init__(self, *, tolerance=DEFAULT_RTOL, shortcuts=True, integrator="sector",
-                 engine=None):
+                 engine=None, floor=VALUE_FLOOR):
         if tolerance is not None and not (np.isfinite(tolerance) and tolerance > 0):
             raise ValueError(f"tolerance must be a positive number or None, got {tolerance!r}")
+        if not (isinstance(floor, (int, float, np.floating, np.integer))
+                and 0 <= floor <= VALUE_FLOOR):
+            raise ValueError(f"floor must be a number between 0 and VALUE_FLOOR "
+                             f"({VALUE_FLOOR:g}), got {floor!r}")
         if integrator not in INTEGRATORS:
             raise ValueError(f"integrator must be one of {INTEGRATORS}, got {integrator!r}")
         if engine is None:
@@ -97,6 +112,7 @@ class Exact(FormFactorMethod):
         self.shortcuts = bool(shortcuts)
         self.integrator = integrator
         self.engine = engine
+        self.floor = float(floor)
 
     def point_form_factors(self, scene, point, normal, *, two_sided=False, stats=None,
                            error=False):
@@ -108,7 +124,7 @@ class Exact(FormFactorMethod):
             return compiled_form_factors(scene, point, normal, two_sided=two_sided,
                                          stats=stats, shortcuts=self.shortcuts,
                                          tolerance=self.tolerance, error=error,
-                                         integrator=self.integrator)
+                                         integrator=self.integrator, floor=self.floor)
         return visible_form_factors(scene, point, normal, two_sided=two_sided, stats=stats,
                                     shortcuts=self.shortcuts, tolerance=self.tolerance,
                                     integrator=self.integrator, error=error)
@@ -143,7 +159,7 @@ class Exact(FormFactorMethod):
         if self.engine == "compiled" and type(self).point_form_factors is _OWN_ROW:
             return compiled_form_factor_rows(scene, P, N, two_sided=two_sided,
                                              shortcuts=self.shortcuts,
-                                             tolerance=self.tolerance)
+                                             tolerance=self.tolerance, floor=self.floor)
         out = np.zeros((len(P), len(scene)))
         for r in range(len(P)):
             out[r] = self.point_form_factors(scene, P[r], N[r], two_sided=two_sided)
@@ -192,6 +208,8 @@ class Exact(FormFactorMethod):
         extra = "" if self.integrator == "sector" else f", integrator={self.integrator!r}"
         if self.engine != "compiled":
             extra += f", engine={self.engine!r}"
+        if self.floor != VALUE_FLOOR:
+            extra += f", floor={self.floor!r}"
         return f"Exact(tolerance={self.tolerance}, shortcuts={self.shortcuts}{extra})"
 
 

@@ -116,8 +116,16 @@ def ground_truth(scene, points, normals, *, two_sided=False, tolerance=1e-12):
     two_sided : bool, default False
         Let polygons receive on their back side too.
     tolerance : float, default 1e-12
-        Relative accuracy requested of every value (visible pieces refined from the
-        input and escalated to long double and mpmath where the error bound misses it).
+        Relative accuracy requested of every value, however small (visible pieces
+        refined from the input and escalated to long double and mpmath, or in the
+        compiled core to quadruple precision, where the error bound misses it): unlike
+        the default call (:class:`exactff.Exact`), whose bounds are held to
+        ``tolerance`` times the larger of the value and ``VALUE_FLOOR`` and which spends
+        no quadruple precision below that floor, this asks ``Exact(floor=0)``: a
+        sliver of 1.1e-10 seen through a 1e-9 gap gets a bound of 1.2e-26, where the
+        default call's is 1.7e-18. What is checked stays the default's
+        (:func:`exactff.errors.misses_tolerance`): where a tier cannot make the bound of
+        a value below the floor relative, the bound it reaches is returned.
 
     Returns
     -------
@@ -141,5 +149,5 @@ def ground_truth(scene, points, normals, *, two_sided=False, tolerance=1e-12):
     from ..methods import Exact
 
     as_receivers(points, normals, ("points", "normals"))   # names the arguments
-    return form_factors(scene, points, normals, method=Exact(tolerance=tolerance),
+    return form_factors(scene, points, normals, method=Exact(tolerance=tolerance, floor=0.0),
                         two_sided=two_sided, error=True)

@@ -222,18 +222,20 @@ def _shaft(scene, p, j):
     return None if kept is None else np.sort(np.append(cand[kept], j).astype(np.int64))
 
 
-def _core_row(scene, p, normal, side, *, two_sided, shortcuts, tolerance, integrator):
+def _core_row(scene, p, normal, side, *, two_sided, shortcuts, tolerance, integrator, floor):
     """The compiled core's row from ``p`` (``side``: the polygons' exact sides of it):
     values, bounds (the pieces' rounding and geometry, after the quadruple-precision
-    tier where ``tolerance`` asks for it), the band's slivers with the node-first
-    order's charge (a bound on the topology), the BSP crossings' part, and counters."""
+    tier where ``tolerance`` times the larger of the value and half ``floor`` asks for
+    it), the band's slivers with the node-first order's charge (a bound on the
+    topology), the BSP crossings' part, and counters."""
     tree, core = compiled_core(scene)
     node_side = node_sides(tree, p, side)
     F, E, band, crossing, counters = core.row(
         point=p, normal=np.asarray(normal, dtype=float), node_side=node_side,
         source_side=side.astype(np.int8), two_sided=bool(two_sided), cull=bool(shortcuts),
         box_budget=tol.SVBSP_BOX_BUDGET, tiles=_shadow_tiles(len(scene)),
-        rtol=0.0 if tolerance is None else float(tolerance), eq3=integrator == "eq3")
+        rtol=0.0 if tolerance is None else float(tolerance), floor=float(floor),
+        eq3=integrator == "eq3")
     check_finite(F, E)
     check_finite(band)
     check_finite(crossing)
@@ -253,7 +255,7 @@ def _settled(F, E, crossing, tolerance):
 
 
 def _settle_in_shafts(scene, p, normal, missed, *, two_sided, shortcuts, tolerance,
-                      integrator, stats):
+                      integrator, floor, stats):
     """The values of polygons ``missed`` from ``p``, each recomputed on its shaft
     (:func:`_shaft`, the polygons that may hide part of it: the same exact value), whose
     BSP splits along other lines than the scene's, and only where its polygons meet:
@@ -280,7 +282,7 @@ def _settle_in_shafts(scene, p, normal, missed, *, two_sided, shortcuts, toleran
             side, _ = engine_sides(flat_polygons(sub), p)
             G, H, topology, moved, _ = _core_row(
                 sub, p, normal, side, two_sided=two_sided, shortcuts=shortcuts,
-                tolerance=tolerance, integrator=integrator)
+                tolerance=tolerance, integrator=integrator, floor=floor)
             if _settled(G[at], H[at], moved[at], tolerance):
                 settled[j] = float(G[at]), float(H[at] + moved[at]), float(topology[at])
                 stats["shaft_compiled"] += 1
@@ -354,7 +356,8 @@ def _shadow_tiles(n):
 
 
 def compiled_form_factors(scene, point, normal, *, two_sided=False, stats=None,
-                          shortcuts=True, tolerance=None, error=False, integrator="sector"):
+                          shortcuts=True, tolerance=None, error=False, integrator="sector",
+                          floor=tol.VALUE_FLOOR):
     """Exact form factors with occlusion from one point to every polygon of a scene, by
     the compiled core.
 
@@ -369,8 +372,13 @@ def compiled_form_factors(scene, point, normal, *, two_sided=False, stats=None,
     exceed it times its value is integrated again in quadruple precision, its computed
     vertices recomputed where its edges' planes meet (``stats["quad_pieces"]``): on a
     sliver the long double cuts leave an absolute bound of about 1e-18, which this makes
-    relative. Where a value's bound still misses the tolerance by the criterion of
-    every path (:func:`exactff.errors.misses_tolerance`: ``tolerance`` times the larger
+    relative. The tier is decided per polygon: it is spent only where the polygon's
+    bound exceeds the tolerance times the larger of its value and half ``floor``. By
+    default ``floor`` is ``VALUE_FLOOR``, the floor of the contract below: a value
+    under it keeps the long double bound where that meets the contract (about 1e-18 on
+    the IFC files' grazing values, within the 1e-14 allowed at the default tolerance);
+    ``floor=0`` makes every bound relative (:func:`exactff.testing.ground_truth`).
+    Where a value's bound still misses the tolerance by the criterion of every path (:func:`exactff.errors.misses_tolerance`: ``tolerance`` times the larger
     of the value and ``VALUE_FLOOR``), or its BSP crossings' part exceeds the accuracy
     target of occluded values, those values (and only those) are taken from the Python
     engine, which refines and escalates, on scenes of at most
@@ -445,6 +453,12 @@ def compiled_form_factors(scene, point, normal, *, two_sided=False, stats=None,
         (:func:`exactff.kernel.eq3_ring_sums`); the pieces, the vertices' and edges'
         charges and the quadruple-precision tier are the same. The paths that leave
         the core (the convex-scene shortcut, the fallback) use the same integrator.
+    floor : float, default VALUE_FLOOR
+        The value below which the quadruple-precision tier holds a polygon's bound to
+        half the tolerance times ``floor`` instead of the tolerance times its value,
+        between 0 (every bound relative, as far as that tier reaches) and
+        ``VALUE_FLOOR``. The check stays :func:`exactff.errors.misses_tolerance`'s,
+        whatever the floor.
 
     Returns
     -------
@@ -476,7 +490,7 @@ def compiled_form_factors(scene, point, normal, *, two_sided=False, stats=None,
                               sides=(side, band), return_error=error, strict=not error)
     F, E, band, crossing, counters = _core_row(
         scene, p, normal, side, two_sided=two_sided, shortcuts=shortcuts,
-        tolerance=tolerance, integrator=integrator)
+        tolerance=tolerance, integrator=integrator, floor=floor)
     st["max_crossing_bound"] = float(crossing.max(initial=0.0))
     path = "compiled"
     if tolerance is not None:
@@ -496,7 +510,7 @@ def compiled_form_factors(scene, point, normal, *, two_sided=False, stats=None,
                 settled = _settle_in_shafts(scene, p, normal, missed.tolist(),
                                             two_sided=two_sided, shortcuts=shortcuts,
                                             tolerance=tolerance, integrator=integrator,
-                                            stats=st)
+                                            floor=floor, stats=st)
                 F, E, band, crossing = F.copy(), E.copy(), band.copy(), crossing.copy()
                 for j, (value, bound, topology) in settled.items():
                     # its bound is the shaft's row's whole bound (its own band and
@@ -612,7 +626,7 @@ def compiled_solid_angles(scene, point, *, two_sided=True, stats=None, shortcuts
     F, E, band, crossing, counters = core.row(
         point=p, normal=SPHERE_HORIZON, node_side=node_side, source_side=side.astype(np.int8),
         two_sided=bool(two_sided), cull=bool(shortcuts), box_budget=tol.SVBSP_BOX_BUDGET,
-        tiles=_shadow_tiles(len(scene)), rtol=0.0, eq3=False, sphere=True)
+        tiles=_shadow_tiles(len(scene)), rtol=0.0, floor=0.0, eq3=False, sphere=True)
     check_finite(F, E)
     check_finite(band)
     check_finite(crossing)
@@ -629,7 +643,7 @@ def compiled_solid_angles(scene, point, *, two_sided=True, stats=None, shortcuts
 
 
 def compiled_form_factor_rows(scene, points, normals, *, two_sided=False, shortcuts=True,
-                              tolerance=None):
+                              tolerance=None, floor=tol.VALUE_FLOOR):
     """Rows of :func:`compiled_form_factors` from many receivers, value for value: the
     rows a convex enclosure leaves unoccluded (with ``shortcuts``, the point in front of
     or in every polygon's plane) computed together, their sector sums in one compiled
@@ -640,7 +654,7 @@ def compiled_form_factor_rows(scene, points, normals, *, two_sided=False, shortc
     scene : Scene
     points, normals : ndarray of shape (R, 3)
         The receivers (unit normals, or normalised here).
-    two_sided, shortcuts, tolerance
+    two_sided, shortcuts, tolerance, floor
         As for :func:`compiled_form_factors`.
 
     Returns
@@ -674,5 +688,5 @@ def compiled_form_factor_rows(scene, points, normals, *, two_sided=False, shortc
             two_sided=two_sided, tolerance=tolerance)[0]
     for r in sorted(set(range(len(P))) - set(together)):
         out[r] = compiled_form_factors(scene, P[r], N[r], two_sided=two_sided,
-                                       shortcuts=shortcuts, tolerance=tolerance)
+                                       shortcuts=shortcuts, tolerance=tolerance, floor=floor)
     return out
