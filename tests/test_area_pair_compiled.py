@@ -176,7 +176,8 @@ def test_compiled_events_check_their_arrays():
     ok = dict(W=Q, start=np.array([0, 4]), solid=np.zeros(0, np.int64), nP=[0, 0, 1.0],
               dP=0.0, frame=np.eye(3), c=[0, 0, 0.0], radius=1.0, nQ=nQ, q0=q0, RQ=RQ[:2],
               Q2=Q2, shortcuts=True, ray_parallel=tol.AREA_RAY_PARALLEL,
-              event_parallel=tol.AREA_EVENT_PARALLEL)
+              event_parallel=tol.AREA_EVENT_PARALLEL, line_ulps=tol.AREA_EVENT_LINE_ULPS,
+              eps=tol.EPS)
     assert compiled_event_lines(**ok)[0].shape[1:] == (2, 2)
     with pytest.raises(ValueError, match="wrong shapes"):
         compiled_event_lines(**{**ok, "nP": [0, 1.0]})
