@@ -47,6 +47,7 @@ __all__ = [
     "SPLIT_FLATNESS_TIE",
     "AREA_HULL_RTOL",
     "AREA_EVENT_PARALLEL",
+    "AREA_EVENT_LINE_ULPS",
     "AREA_RAY_PARALLEL",
     "AREA_SLIVER_CELL",
     "AREA_SLIVER_SHARE",
@@ -404,6 +405,12 @@ AREA_HULL_RTOL = 1e-12
 #: Area form factors: an event plane whose line with the emitter's plane has a direction
 #: below this (relative to the plane's normal) is parallel to it (no event line).
 AREA_EVENT_PARALLEL = 1e-12
+
+#: Area form factors: a vertex within this many units of rounding (of the largest
+#: coordinate of it and an edge's ends, times the edge's length and the shorter of its
+#: ends' distances from the vertex) of the edge's line makes no event: the plane
+#: through them is rounding's (exactff.area.events; _core/pair.cpp).
+AREA_EVENT_LINE_ULPS = 64.0
 
 #: Area form factors: a ray from a vertex through an edge's end point rising less than
 #: this (relative to its length) towards the emitter's plane never meets it.

@@ -10,6 +10,7 @@ import os
 
 import numpy as np
 import pytest
+import shapely
 
 import exactff as ef
 from exactff import NumericalError
@@ -21,6 +22,8 @@ from exactff.area.events import event_lines
 from exactff.area.row import AreaStats, area_row
 from exactff.area.rules import budget_refined
 from exactff.geometry import plane_frame, receiver_frame
+
+from common import rotation
 
 DATA = os.path.join(os.path.dirname(__file__), "data", "view3d")
 GUNTER2 = os.path.join(DATA, "gunter2.vs3")
@@ -170,13 +173,48 @@ def test_events_of_a_blocker_between_two_squares():
     assert np.array_equal(lines, event_lines([Q, K], nP, 0.0, R, c, 2.0, Q, compiled=False))
 
 
+@pytest.mark.parametrize("draw", range(5))
+def test_a_vertex_on_an_edge_line_makes_no_event_turned(draw):
+    # a blocker's vertex (0, 0, 1) above the emitter's corner and another blocker's edge
+    # from that corner up to (0, 0, 2): on one line, whose plane with the vertex is m =
+    # 0 as built (no event); turned and moved by up to 1000, m is rounding's, a plane
+    # through the line at random, and its event line passed near the corner but not
+    # through it (gunter1 turned: 1.4e-4 off, cutting the corner from its cell; 4 of these
+    # 5 draws before). Compiled and numpy alike: no line meets P within 1e-2 of its
+    # corner but misses the corner by more than 1e-9
+    P = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], float)
+    Q = np.array([[2, -1, 3], [2, 2, 3], [-1, 2, 3], [-1, -1, 3]], float)     # facing P
+    A = np.array([[0, 0, 1], [0.5, -0.5, 1], [0.5, -1, 1.5]], float)
+    B = np.array([[0, 0, 0], [0, 0, 2], [-0.5, -0.5, 2], [-0.5, -0.5, 0]], float)
+    rng = np.random.default_rng(5)
+    for _ in range(draw + 1):
+        axis, angle, move = rng.normal(size=3), rng.uniform(0, 2 * np.pi), rng.uniform(-1e3, 1e3, 3)
+    turn = rotation(axis, angle)
+    S = [X @ turn.T + move for X in (Q, A, B)]
+    Pt = P @ turn.T + move
+    nP = turn[:, 2]
+    R, c = receiver_frame(nP), Pt.mean(axis=0)
+    lines = event_lines(S, nP, float(nP @ Pt[0]), R, c, 1.0, S[0])
+    assert np.array_equal(lines, event_lines(S, nP, float(nP @ Pt[0]), R, c, 1.0, S[0],
+                                             compiled=False))
+    # each segment's distance from the corner (segments of no length: none)
+    corner = (Pt[0] - c) @ R[:2].T
+    lines = lines[np.any(lines[:, 1] != lines[:, 0], axis=1)]
+    d = lines[:, 1] - lines[:, 0]
+    off = np.abs(d[:, 0] * (corner[1] - lines[:, 0, 1])
+                 - d[:, 1] * (corner[0] - lines[:, 0, 0])) / np.linalg.norm(d, axis=1)
+    meets = shapely.intersects(shapely.linestrings(lines), shapely.Polygon((Pt - c) @ R[:2].T))
+    assert meets.sum() >= 10 and not np.any(meets & (off > 1e-9) & (off < 1e-2)), off[meets]
+
+
 def test_compiled_events_check_their_arrays():
     Q = np.array([[0, 0, 2], [0, 1, 2], [1, 1, 2], [1, 0, 2]], float)
     nQ, q0, RQ, Q2 = plane_frame(Q)
     ok = dict(W=Q, start=np.array([0, 4]), solid=np.zeros(0, np.int64), nP=[0, 0, 1.0],
               dP=0.0, frame=np.eye(3), c=[0, 0, 0.0], radius=1.0, nQ=nQ, q0=q0, RQ=RQ[:2],
               Q2=Q2, shortcuts=True, ray_parallel=tol.AREA_RAY_PARALLEL,
-              event_parallel=tol.AREA_EVENT_PARALLEL)
+              event_parallel=tol.AREA_EVENT_PARALLEL, line_ulps=tol.AREA_EVENT_LINE_ULPS,
+              eps=tol.EPS)
     assert compiled_event_lines(**ok)[0].shape[1:] == (2, 2)
     with pytest.raises(ValueError, match="wrong shapes"):
         compiled_event_lines(**{**ok, "nP": [0, 1.0]})

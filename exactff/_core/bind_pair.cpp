@@ -24,7 +24,7 @@ py::tuple event_lines(Array<double> W, Array<std::int64_t> start, Array<std::int
                       Array<double> nP, double dP, Array<double> frame, Array<double> c,
                       double radius, Array<double> nQ, Array<double> q0, Array<double> RQ,
                       Array<double> Q2, bool shortcuts, double ray_parallel,
-                      double event_parallel) {
+                      double event_parallel, double line_ulps, double eps) {
     const std::int64_t n = start.size() - 1;
     if (W.ndim() != 2 || W.shape(1) != 3 || n < 1 || nP.size() != 3 || frame.size() != 9 ||
         c.size() != 3 || nQ.size() != 3 || q0.size() != 3 || RQ.size() != 6 ||
@@ -50,6 +50,8 @@ py::tuple event_lines(Array<double> W, Array<std::int64_t> start, Array<std::int
     a.shortcuts = shortcuts;
     a.ray_parallel = ray_parallel;
     a.event_parallel = event_parallel;
+    a.line_ulps = line_ulps;
+    a.eps = eps;
     exactff::EventResult r;
     {
         py::gil_scoped_release release;
@@ -233,6 +235,7 @@ std::shared_ptr<exactff::PairConstants> pair_constants(py::dict tol, py::sequenc
     k->hidden_pad = num("AREA_HIDDEN_PAD");
     k->ray_parallel = num("AREA_RAY_PARALLEL");
     k->event_parallel = num("AREA_EVENT_PARALLEL");
+    k->event_line_ulps = num("AREA_EVENT_LINE_ULPS");
     k->hull_rtol = num("AREA_HULL_RTOL");
     k->extend_rtol = num("AREA_CUT_EXTEND_RTOL");
     k->curve_rtol = num("AREA_CURVED_EVENT_RTOL");
@@ -399,7 +402,8 @@ PYBIND11_MODULE(_pair, m) {
     m.def("event_lines", &event_lines, py::arg("W"), py::arg("start"), py::arg("solid"),
           py::arg("nP"), py::arg("dP"), py::arg("frame"), py::arg("c"), py::arg("radius"),
           py::arg("nQ"), py::arg("q0"), py::arg("RQ"), py::arg("Q2"), py::arg("shortcuts"),
-          py::arg("ray_parallel"), py::arg("event_parallel"),
+          py::arg("ray_parallel"), py::arg("event_parallel"), py::arg("line_ulps"),
+          py::arg("eps"),
           "event_lines(...) -> (segments (m, 2, 2), culled_events, solid_events): the pair's "
           "vertex-edge events as segments of the emitter's plane (pair.h)");
     m.def("curved_event_lines", &curved_event_lines, py::arg("W"), py::arg("start"),

@@ -216,6 +216,8 @@ PairResult occluded_pair(const PairArgs& a) {
     e.shortcuts = a.shortcuts;
     e.ray_parallel = k.ray_parallel;
     e.event_parallel = k.event_parallel;
+    e.line_ulps = k.event_line_ulps;
+    e.eps = k.eps;
     EventResult events = event_lines(e);
     CurvedArgs cv;
     cv.W = a.W;

@@ -22,9 +22,9 @@ namespace exactff {
 // The tolerances the pair reads (exactff/_tolerances.py, by the same names) and the
 // levels' rules (levels.h's order), set once for many pairs.
 struct PairConstants {
-    double hidden_pad, ray_parallel, event_parallel, hull_rtol, extend_rtol, curve_rtol,
-        chord_split, event_line_key, sliver_cell, cell_cover_rtol, cell_cover_atol_share,
-        low_rules_tolerance,
+    double hidden_pad, ray_parallel, event_parallel, event_line_ulps, hull_rtol, extend_rtol,
+        curve_rtol, chord_split, event_line_key, sliver_cell, cell_cover_rtol,
+        cell_cover_atol_share, low_rules_tolerance,
         coplanar_ulps, eps;
     std::int64_t samples, bisections, max_triples, chord_halvings, rows_per_call,
         umbra_min_lines, max_event_lines, many_cells;

@@ -104,6 +104,20 @@ D3 solve3(std::array<std::array<double, 3>, 3> A, std::array<double, 3> r) {
     return {x[0], x[1], x[2]};
 }
 
+// the largest of |a.x|, |a.y|, |a.z|
+double max_abs(const D3& a) { return std::max({std::fabs(a.x), std::fabs(a.y), std::fabs(a.z)}); }
+
+// whether v lies on the line of the edge (e0, e1) to rounding, or the edge is a point
+// (u0 = e0 - v, u1 = e1 - v, m = u0 x u1; rel: AREA_EVENT_LINE_ULPS units of rounding):
+// m within rel X (|e1 - e0| + min(|u0|, |u1|)), X the three points' largest coordinate
+// and each length its largest component (events.py's _on_edge_line, the same roundings)
+bool on_edge_line(const D3& v, const D3& e0, const D3& e1, const D3& u0, const D3& u1,
+                  const D3& m, double rel) {
+    const double X = std::max(std::max(max_abs(v), max_abs(e0)), max_abs(e1));
+    return max_abs(m) <=
+           rel * X * (max_abs(sub(e1, e0)) + std::min(max_abs(u0), max_abs(u1)));
+}
+
 // an event before it is cut to the disk: its plane's normal m, a point v of the plane,
 // and where spanned, the ends of its segment in P's plane
 struct Event {
@@ -144,7 +158,9 @@ EventResult event_lines(const EventArgs& a) {
                     const D3 e0 = at(W + 3 * ei), e1 = at(W + 3 * en);
                     const D3 u0 = sub(e0, v), u1 = sub(e1, v);
                     const D3 m = cross(u0, u1);
-                    if (m.x == 0 && m.y == 0 && m.z == 0) continue;
+                    // v on the edge's line to rounding (or the edge a point): the plane
+                    // is rounding's, no event (events.py's _on_edge_line)
+                    if (on_edge_line(v, e0, e1, u0, u1, m, a.line_ulps * a.eps)) continue;
                     // an edge (v, w) of pa in the plane (coplanar with the edge): the
                     // event is the two edges' (their images collinear), its lines of
                     // sight pass through every point of (v, w): its images of the edge

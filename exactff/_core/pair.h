@@ -22,7 +22,9 @@ namespace exactff {
 // the lines of sight of a blocker-blocker event must meet); shortcuts: cull the
 // blocker-blocker events whose lines of sight miss Q2 and the vertex-edge pairs within one
 // solid; ray_parallel (AREA_RAY_PARALLEL) and event_parallel (AREA_EVENT_PARALLEL): a ray
-// or a plane that close to parallel to P's plane has no image there.
+// or a plane that close to parallel to P's plane has no image there; line_ulps
+// (AREA_EVENT_LINE_ULPS) and eps (EPS): a vertex that close to an edge's line makes no
+// event with it.
 struct EventArgs {
     const double* W;
     const std::int64_t* start;
@@ -33,7 +35,7 @@ struct EventArgs {
     const double *nQ, *q0, *RQ, *Q2;
     std::int64_t n_q2;
     bool shortcuts;
-    double ray_parallel, event_parallel;
+    double ray_parallel, event_parallel, line_ulps, eps;
 };
 
 // The segments (m, 2, 2) in the frame's first two axes about c, each with its ends in

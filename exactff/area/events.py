@@ -48,6 +48,25 @@ def _solve3(A, r):
     return x
 
 
+def _on_edge_line(v, e0, e1, m):
+    """Per row, whether the vertex v lies on the line of the edge (e0, e1) to rounding
+    (or the edge is a point): its plane's normal ``m = (e0 - v) x (e1 - v)`` within what
+    moving the three points by ``AREA_EVENT_LINE_ULPS`` units of rounding of their
+    largest coordinate X moves it, ``u X (|e1 - e0| + min(|e0 - v|, |e1 - v|))`` (each
+    length its largest component: nothing squared underflows). There the plane is only
+    rounding's, any plane through the line, and so is its event line: exactly collinear,
+    m is 0 and every line of sight from v meets the edge's line, no event (View3D's
+    gunter1 turned and moved by 1000: a blocker's vertex and another's edge both above
+    the emitter's corner drew a line 1.4e-4 off that corner, which cut the corner away
+    from the cell whose collapsed rule took it; 1.25e-6 off, 4 times the estimate).
+    ``_core/pair.cpp`` takes the same rows."""
+    big = lambda a: np.abs(a).max(axis=1)                            # noqa: E731
+    X = np.maximum(np.maximum(big(v), big(e0)), big(e1))
+    band = (tol.AREA_EVENT_LINE_ULPS * tol.EPS * X
+            * (big(e1 - e0) + np.minimum(big(e0 - v), big(e1 - v))))
+    return big(m) <= band
+
+
 def _vertex_edge_rows(pa, pb, k, start, W, nxt, shortcuts, nQ, q0, RQ, seen, st):
     """:func:`event_lines`' rows for the ordered polygon pairs (pa, pb): every vertex v
     of polygon pa against every edge (e0, e1) of pb, its plane's normal m (rows of no
@@ -62,7 +81,7 @@ def _vertex_edge_rows(pa, pb, k, start, W, nxt, shortcuts, nQ, q0, RQ, seen, st)
     ei = start[pb[row_pair]] + off % kb
     v, e0, e1 = W[vi], W[ei], W[nxt[ei]]
     m = cross(e0 - v, e1 - v)
-    keep = np.any(m != 0, axis=1)
+    keep = ~_on_edge_line(v, e0, e1, m)
     if shortcuts:
         # an edge (v, w) of pa in the plane (coplanar with the edge, typically parallel):
         # the event is the two edges' (their images collinear), its lines of sight pass
@@ -161,7 +180,8 @@ def event_lines(S, nP, dP, R, c, radius, Qc, shortcuts=True, st=None, solid=None
         segments, culled, same = _compiled_event_lines(
             W=W, start=start, solid=sol, nP=nP, dP=float(dP), frame=R, c=c,
             radius=float(radius), nQ=nQ, q0=q0, RQ=RQ[:2], Q2=Q2, shortcuts=shortcuts,
-            ray_parallel=tol.AREA_RAY_PARALLEL, event_parallel=tol.AREA_EVENT_PARALLEL)
+            ray_parallel=tol.AREA_RAY_PARALLEL, event_parallel=tol.AREA_EVENT_PARALLEL,
+            line_ulps=tol.AREA_EVENT_LINE_ULPS, eps=tol.EPS)
         if st is not None:
             st.culled_events += culled
             st.solid_events += same
