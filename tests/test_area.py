@@ -538,21 +538,25 @@ def test_gunter1_turned_vertex_on_an_edge_line_makes_no_event(turn, move, row, c
 
 @settings(max_examples=examples(10), deadline=None)
 @example(name="test4", turn=rotation(np.array([0.0, 0, 1]), 4.822649006614105), scale=1e-3,
-         shift=(0.0, 890.6462656609042, 0.0))     # cells whose cut missed a kink (below)
+         shift=(0.0, 0.0, 0.0), far=(0.0, 890.6462656609042, 0.0))   # cells whose cut
+#                                                   missed a kink (below)
 @example(name="test4", turn=rotation(np.array([0.98702147, 0, 0.1605883182144936]) / np.linalg.norm(
     [0.98702147, 0, 0.1605883182144936]), 4.822649006614105),
-         scale=1e-3, shift=(0.0, 0.0, 258.0))     # a blocker in the receiver's plane dropped
+         scale=1e-3, shift=(0.0, 0.0, 0.0), far=(0.0, 0.0, 258.0))   # a blocker in the
+#                                                   receiver's plane dropped
 @example(name="test4", turn=[[0.5768409918312185, -0.7043584731095915, -0.4136829843030784],
                              [-0.7904334475391779, -0.3535429216523971, -0.5002223181354635],
                              [0.2060811373088422, 0.6155376056003499, -0.7606865457843213]],
-         scale=1e3, shift=(0.0, 0.0, 0.0))        # a corner at the origin (below)
+         scale=1e3, shift=(0.0, 0.0, 0.0), far=(0.0, 0.0, 0.0))   # a corner at the
+#                                                   origin (below)
 @example(name="test4", turn=rotation(np.array([0.0, 0, 1]), 1.6196483541149253e-147),
-         scale=1e-3, shift=(0.0, 0.0, 0.0))       # faces tilted 1e-150: the contour rule's
+         scale=1e-3, shift=(0.0, 0.0, 0.0), far=(0.0, 0.0, 0.0))   # faces tilted 1e-150: the contour rule's
 #                                                   u ln(u^2 + k^2) underflowed to -inf
 @given(name=st.sampled_from(["test4", "facet", "cube"]), turn=rotations(),
        scale=st.sampled_from([1e-3, 1.0, 1e3]),
-       shift=st.tuples(*[st.floats(-100, 100)] * 3))
-def test_view3d_files_turned_scaled_and_moved_within_the_estimates(name, turn, scale, shift):
+       shift=st.tuples(*[st.floats(-100, 100)] * 3), far=st.just((0.0, 0.0, 0.0)))
+def test_view3d_files_turned_scaled_and_moved_within_the_estimates(name, turn, scale, shift,
+                                                                   far):
     # the whole matrix of a View3D file under a rotation, a scale and a move, against
     # the file as read: within the two estimates (the faces that share edges and planes
     # there share them only to rounding here: coplanar by the band, clips that stay on
@@ -570,10 +574,10 @@ def test_view3d_files_turned_scaled_and_moved_within_the_estimates(name, turn, s
     # away (not one of its own roundoffs, 0 at the origin): pair (10, 0) 0.1093
     # against 0.0894 (front_distances' band, clip_front's copies)
     scene = ef.read_vs3(os.path.join(os.path.dirname(__file__), "data", "view3d", name + ".vs3"))
-    # (a drawn shift, at most 100, is the move in units of the scale: the coordinates
-    # up to about 100 times the scene's size; the examples give larger moves, absolute,
-    # 1e5 times the size, where a value at 1e-8 can take minutes to settle)
-    move = np.array(shift) * (scale if max(map(abs, shift)) <= 100 else 1.0)
+    # (the drawn shift, at most 100, is the move in units of the scale: the coordinates
+    # up to about 100 times the scene's size; ``far``, only in the examples, is a move
+    # in absolute units, 1e5 times the size there, where a value can take minutes)
+    move = np.array(shift) * scale + np.array(far)
     moved = ef.Scene.from_polygons([scale * (np.asarray(P) @ np.asarray(turn).T) + move
                                     for P in scene.polygons])
     # (at 1e-6, where the rules stop soonest: a misplaced event line there puts a value
