@@ -59,8 +59,10 @@ def check_finite(F, E=None, what="form factor"):
     E_ = None if E is None else np.asarray(E, dtype=float)
     # at once where all is well: a sum is finite only if every term is (one NaN or
     # infinity makes it NaN or infinite), and is not NaN if no term is; a sum that
-    # overflows only sends it to the test entry by entry below
-    if np.isfinite(F_.sum()) and (E_ is None or not np.isnan(E_.sum())):
+    # overflows only sends it to the test entry by entry below (quietly)
+    with np.errstate(over="ignore", invalid="ignore"):
+        fine = np.isfinite(F_.sum()) and (E_ is None or not np.isnan(E_.sum()))
+    if fine:
         return F if E is None else (F, E)
     bad = ~np.isfinite(F_)
     if E is not None:

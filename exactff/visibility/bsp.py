@@ -837,11 +837,13 @@ def node_sides(tree, point, sides=None):
     if sides is None:
         side = sides_of_point(tree.normals, tree.offsets, p, offsets=point_plane_offsets(
             tree.normals, tree.offsets, p, tree.plane_magnitudes())).astype(np.int8)
-        return np.where(side == 0, 1, side).astype(np.int8)
+        return side + (side == 0)             # 0 (on the plane) as +1
     side, nodes, width, distance, _ = _misordered_slabs(tree, p, sides)
-    first = np.zeros(len(tree), dtype=bool)
-    first[nodes[distance <= 2 * width]] = True
-    return np.where(first, 2 * side, np.where(side == 0, 1, side)).astype(np.int8)
+    # the side, 0 as +1; doubled (0 kept) at the nodes whose fragments come first
+    code = side + (side == 0)
+    first = nodes[distance <= 2 * width]
+    code[first] = 2 * side[first]
+    return code
 
 
 def node_first_charges(tree, point, code, receives, sides=None):
