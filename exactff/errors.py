@@ -56,15 +56,22 @@ def check_finite(F, E=None, what="form factor"):
     exactff.NumericalError: form factor [0, 1] is nan (error estimate None): not finite, never returned
     """
     F_ = np.asarray(F, dtype=float)
+    E_ = None if E is None else np.asarray(E, dtype=float)
+    # at once where all is well: a sum is finite only if every term is (one NaN or
+    # infinity makes it NaN or infinite), and is not NaN if no term is; a sum that
+    # overflows only sends it to the test entry by entry below (quietly)
+    with np.errstate(over="ignore", invalid="ignore"):
+        fine = np.isfinite(F_.sum()) and (E_ is None or not np.isnan(E_.sum()))
+    if fine:
+        return F if E is None else (F, E)
     bad = ~np.isfinite(F_)
     if E is not None:
-        bad = bad | np.isnan(np.asarray(E, dtype=float))
+        bad = bad | np.isnan(E_)
     if np.any(bad):
         k = int(np.flatnonzero(bad.ravel())[0])
         idx = list(np.unravel_index(k, bad.shape)) if bad.ndim else []
         where = f" {[int(i) for i in idx]}" if len(idx) > 1 else (f" {int(idx[0])}" if idx else "")
-        est = None if E is None else float(np.broadcast_to(np.asarray(E, dtype=float),
-                                                           bad.shape).ravel()[k])
+        est = None if E is None else float(np.broadcast_to(E_, bad.shape).ravel()[k])
         raise NumericalError(f"{what}{where} is {float(F_.ravel()[k])!r} (error estimate "
                              f"{est!r}): not finite, never returned")
     return F if E is None else (F, E)

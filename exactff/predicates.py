@@ -10,7 +10,7 @@ import numpy as np
 from ._tolerances import BSP_COPLANAR_ULPS, EPS, ON_PLANE_ULPS, PLANE_SIDE_ULPS
 
 __all__ = ["side_of_plane", "gamma", "tie_priority", "exact_side", "polygon_side",
-           "plane_distances", "plane_sides", "sides_of_point", "coplanar_band",
+           "plane_distances", "plane_sides", "point_plane_offsets", "sides_of_point", "coplanar_band",
            "polygon_coplanar_bands", "coplanar_pairs", "coplanar_band_sides",
            "engine_sides", "collinear", "in_plane_band", "orient2d", "polygons_apart"]
 
@@ -100,8 +100,13 @@ def tie_priority(facing, index=None):
 def plane_distances(flat, p):
     """Signed distances of ``p`` from each polygon's plane (> 0: in front), and the
     tolerance below which their float value cannot decide the side."""
-    rel = flat.centroids - p
-    d = -np.einsum("ij,ij->i", flat.normals, rel)
+    p = np.asarray(p, dtype=float)
+    # -n . (c - p) over the coordinates (FlatPolygons' by-coordinate copies: three
+    # whole-array steps, not a 3-long sum per polygon), summed in the order of numpy's
+    # einsum("ij,ij->i") that computed it before, (x + z) + y, so that the side and the
+    # band come out the same to the bit
+    t = flat.normals_t * (flat.centroids_t - p[:, None])
+    d = -((t[0] + t[2]) + t[1])
     scale = np.abs(p).max() + flat.vmax
     return d, PLANE_SIDE_ULPS * EPS * scale
 
@@ -164,12 +169,42 @@ def polygon_side(P, p, normal):
     return 1 if d < 0 else -1
 
 
-def sides_of_point(N, D, p):
+def point_plane_offsets(N, D, p, magnitudes=None):
+    """The float offsets ``N[k] @ p - D[k]`` of one point ``p`` from many planes, and
+    their rounding's scale ``abs(N[k]) @ abs(p) + abs(D[k])`` (times ``gamma(4)``, a
+    bound on the offset's error).
+
+    Parameters
+    ----------
+    N, D : ndarray of shape (K, 3) and (K,)
+        The planes ``dot(N[k], x) = D[k]``.
+    p : ndarray of shape (3,)
+    magnitudes : (ndarray of shape (K, 3), ndarray of shape (K,)), optional
+        ``abs(N)`` and ``abs(D)``, where the caller keeps them (a BSP tree's planes:
+        :meth:`exactff.visibility.BSPTree.plane_magnitudes`); the same values.
+
+    Returns
+    -------
+    (ndarray of shape (K,), ndarray of shape (K,))
+
+    Examples
+    --------
+    >>> v, scale = point_plane_offsets(np.array([[1.0, 0, 0]]), np.array([-0.5]),
+    ...                                np.array([2.0, 1, 1]))
+    >>> v.tolist(), scale.tolist()
+    ([2.5], [2.5])
+    """
+    absN, absD = (np.abs(N), np.abs(D)) if magnitudes is None else magnitudes
+    return N @ p - D, absN @ np.abs(p) + absD
+
+
+def sides_of_point(N, D, p, offsets=None):
     """Exact side of one point ``p`` for many planes ``dot(N[k], x) = D[k]``: +1 in
     front, -1 behind, 0 exactly on the plane.
 
     Floats decide beyond the bound ``gamma(4) * (dot(abs(N[k]), abs(p)) + abs(D[k]))``;
-    :func:`side_of_plane` decides within it.
+    :func:`side_of_plane` decides within it. ``offsets``: :func:`point_plane_offsets`
+    of ``p``, when the caller has them.
 
     Examples
     --------
@@ -177,8 +212,8 @@ def sides_of_point(N, D, p):
     ...                np.array([0.1 + 0.2, 0, 0])).tolist()
     [1, 0]
     """
-    v = N @ p - D
-    bound = gamma(4) * (np.abs(N) @ np.abs(p) + np.abs(D))
+    v, scale = point_plane_offsets(N, D, p) if offsets is None else offsets
+    bound = gamma(4) * scale
     side = np.sign(v).astype(np.int8)
     unsure = np.flatnonzero(np.abs(v) <= bound)
     if len(unsure):

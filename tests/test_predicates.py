@@ -78,3 +78,56 @@ def test_coplanar_pairs_repeated_and_long_polygons():
     b = np.array([1, 2, 0, 3, 2, 1, 3, 0, 1, 2] * 30)
     expected = [True, False, True, True, False, True, False, True, True, False] * 30
     assert coplanar_pairs(V, offsets, N, D, a, b).tolist() == expected
+
+
+def _far_room(shift):
+    """A box of 2 x 2 quads per face, moved by ``shift`` and turned about a slanted
+    axis (no coordinate plane holds a face)."""
+    import exactff as ef
+    box = ef.scenes.subdivided_box(2)
+    a = np.array([1.0, 2.0, 2.0]) / 3.0
+    c, s = np.cos(0.7), np.sin(0.7)
+    R = c * np.eye(3) + s * np.cross(np.eye(3), a) + (1 - c) * np.outer(a, a)
+    return ef.Scene.from_polygons([np.asarray(P) @ R.T + shift for P in box.polygons])
+
+
+def test_tree_planes_sides_follow_the_tree_and_the_point():
+    # the BSP tree's kept plane magnitudes (BSPTree.plane_magnitudes, asked every row)
+    # are each tree's own, asked in turn with another tree's: |n| and |d| of its own
+    # planes, and the sides of points on the nodes' planes (the centroids) of a box
+    # near the origin, then of one 1e4 away, then of the first again, against the
+    # rational signs
+    from exactff.predicates import point_plane_offsets
+    from exactff.visibility import build_bsp
+    trees = []
+    for shift in (0.0, 1e4, 0.0):
+        scene = _far_room(np.array([shift, -shift, 0.5 * shift]))
+        tree = build_bsp(scene)
+        trees.append(tree)
+        for t in trees[::-1]:
+            absN, absD = t.plane_magnitudes()
+            assert np.array_equal(absN, np.abs(t.normals))
+            assert np.array_equal(absD, np.abs(t.offsets))
+        for p in scene.centroids[::3]:
+            got = sides_of_point(tree.normals, tree.offsets, p, offsets=point_plane_offsets(
+                tree.normals, tree.offsets, p, tree.plane_magnitudes()))
+            assert got.tolist() == rational_sides(tree.normals, tree.offsets, p)
+
+
+def test_plane_distances_follow_the_scene_and_the_point():
+    # the signed distances from FlatPolygons' by-coordinate copies, scene after scene
+    # and point after point, against -n . (c - p) in rational arithmetic from the same
+    # floats: within the rounding of its three products and two sums (and of c - p)
+    from exactff.kernel import flat_polygons
+    from exactff.predicates import gamma, plane_distances
+    rng = np.random.default_rng(4)
+    for shift in (0.0, 1e4, 3.0):
+        scene = _far_room(np.array([shift, -shift, 0.5 * shift]))
+        flat = flat_polygons(scene)
+        for p in [scene.centroids[1], scene.centroids[7] + rng.normal(size=3)]:
+            d, _ = plane_distances(flat, p)
+            for k, (n, c) in enumerate(zip(scene.normals, scene.centroids)):
+                exact = -sum(Fraction(float(a)) * (Fraction(float(b)) - Fraction(float(q)))
+                             for a, b, q in zip(n, c, p))
+                room = gamma(4) * float(np.abs(n) @ (np.abs(c) + np.abs(p)))
+                assert abs(Fraction(float(d[k])) - exact) <= Fraction(room), (shift, k)

@@ -15,7 +15,7 @@ from hypothesis import example, given, settings
 
 import exactff as ef
 from exactff import _tolerances as tol
-from exactff.errors import misses_tolerance
+from exactff.errors import NumericalError, check_finite, misses_tolerance
 from exactff.testing.mp_reference import boundary_form_factor, solid_angle
 from exactff.testing.strategies import convex_polygons, points
 from exactff.visibility import visible_form_factors
@@ -356,3 +356,19 @@ def test_point_estimates_cover_the_value_at_every_tier(P, p):
                    ef.Exact(tolerance=TIGHT, shortcuts=False)):
         F, E = ef.form_factors(scene, p, n, error=True, method=method)
         assert abs(mpmath.mpf(F[0]) - ref) <= E[0], (method, F[0], E[0])
+
+
+def test_check_finite_decides_entry_by_entry_where_its_sums_cannot():
+    # its sums first: finite values whose sum overflows pass; an infinite estimate
+    # passes, NaN among infinities of both signs does not; an infinite value or a NaN
+    # estimate anywhere raises, naming the entry
+    big = np.array([1e308, 1e308, 0.5])
+    assert check_finite(big) is big
+    F, E = np.array([0.25, 0.5, 0.25]), np.array([np.inf, -np.inf, 0.0])
+    assert check_finite(F, E)[1] is E
+    for F, E, where in ((np.array([0.25, np.inf, 1e308]), None, "form factor 1 "),
+                        (big, np.array([np.inf, -np.inf, np.nan]), "form factor 2 "),
+                        (F, np.array([0.0, np.nan, 0.0]), "form factor 1 "),
+                        (np.array([0.5, -np.inf]), np.array([0.0, 0.0]), "form factor 1 ")):
+        with pytest.raises(NumericalError, match=where):
+            check_finite(F, E)

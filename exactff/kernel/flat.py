@@ -12,7 +12,7 @@ class FlatPolygons:
     """Flat (ragged) polygon arrays of a scene, shared by the vectorised kernels."""
 
     __slots__ = ("V", "nxt", "owner", "normals", "centroids", "counts", "offsets", "vmax",
-                 "first", "E")
+                 "first", "E", "normals_t", "centroids_t")
 
     def __init__(self, scene):
         self.V = scene.vertices
@@ -27,6 +27,10 @@ class FlatPolygons:
         # offset form: each polygon's first vertex, and every vertex relative to it
         self.first = self.V[scene.offsets[:-1]]
         self.E = self.V - self.first[self.owner]
+        # the normals and centroids by coordinate, each row contiguous: every row's
+        # distances to the planes (exactff.predicates.plane_distances) in whole-array steps
+        self.normals_t = np.ascontiguousarray(self.normals.T)
+        self.centroids_t = np.ascontiguousarray(self.centroids.T)
 
 
 def flat_polygons(scene):

@@ -10,8 +10,8 @@ import shapely
 from .. import _tolerances as tol
 from ..geometry import point_polygon_distance
 from ..halfspace import split_polygon
-from ..predicates import (coplanar_band_sides, coplanar_pairs, gamma, sides_of_point,
-                          tie_priority)
+from ..predicates import (coplanar_band_sides, coplanar_pairs, gamma, point_plane_offsets,
+                          sides_of_point, tie_priority)
 from ..prepared import prepared
 from ..rings import padded_buckets
 
@@ -60,6 +60,7 @@ class BSPTree:
         self.vertex_errors = vertex_errors
         self._offsets_cache = None      # fragment_offsets, once asked
         self._subtrees_cache = None     # subtree_fragments, once asked
+        self._magnitudes_cache = None   # plane_magnitudes, once asked
         self.whole = (np.ones(len(fragments), dtype=bool) if whole is None
                       else np.asarray(whole, dtype=bool))
         self.offsets = offsets
@@ -128,6 +129,19 @@ class BSPTree:
             np.minimum.at(lo, node, off + r)
         self._offsets_cache = (hi, lo)
         return hi, lo
+
+    def plane_magnitudes(self):
+        """``abs(normals)`` and ``abs(offsets)``: the scale of the rounding of a point's
+        offsets from the nodes' planes (:func:`exactff.predicates.point_plane_offsets`),
+        asked every row. Computed once (cached).
+
+        Returns
+        -------
+        (ndarray of shape (len(self), 3), ndarray of shape (len(self),))
+        """
+        if self._magnitudes_cache is None:
+            self._magnitudes_cache = (np.abs(self.normals), np.abs(self.offsets))
+        return self._magnitudes_cache
 
     def subtree_fragments(self):
         """The tree's nodes in preorder (each subtree a run), its fragments by node in that
@@ -719,15 +733,17 @@ def _misordered_slabs(tree, p, sides):
     kept = _MISORDER_CACHE.get(tree)
     if kept is not None and kept[0] == key:
         return kept[1]
-    side = sides_of_point(tree.normals, tree.offsets, p).astype(np.int8)
+    # the point's offsets from the nodes' planes and their rounding's scale, once for
+    # the sides and the slabs below
+    o, scale = point_plane_offsets(tree.normals, tree.offsets, p, tree.plane_magnitudes())
+    side = sides_of_point(tree.normals, tree.offsets, p, offsets=(o, scale)).astype(np.int8)
     node, src, orient, start = tree.node_members
     nodes, width, distance, standing = [], [], [], []
     if len(node):
         # only where the point lies within the node's fragments' offsets (beyond them
         # all, the point is in front of every fragment's plane on its side)
         hi, lo = tree.fragment_offsets()
-        o = tree.normals @ p - tree.offsets
-        r = 2 * gamma(4) * (np.abs(tree.normals) @ np.abs(p) + np.abs(tree.offsets))
+        r = 2 * gamma(4) * scale
         near = np.flatnonzero((o >= lo - 2 * r) & (o <= hi + 2 * r))
         if len(near):
             # each fragment's polygon: which side of its own plane the point lies on,
@@ -819,12 +835,15 @@ def node_sides(tree, point, sides=None):
     """
     p = np.asarray(point, dtype=float)
     if sides is None:
-        side = sides_of_point(tree.normals, tree.offsets, p).astype(np.int8)
-        return np.where(side == 0, 1, side).astype(np.int8)
+        side = sides_of_point(tree.normals, tree.offsets, p, offsets=point_plane_offsets(
+            tree.normals, tree.offsets, p, tree.plane_magnitudes())).astype(np.int8)
+        return side + (side == 0)             # 0 (on the plane) as +1
     side, nodes, width, distance, _ = _misordered_slabs(tree, p, sides)
-    first = np.zeros(len(tree), dtype=bool)
-    first[nodes[distance <= 2 * width]] = True
-    return np.where(first, 2 * side, np.where(side == 0, 1, side)).astype(np.int8)
+    # the side, 0 as +1; doubled (0 kept) at the nodes whose fragments come first
+    code = side + (side == 0)
+    first = nodes[distance <= 2 * width]
+    code[first] = 2 * side[first]
+    return code
 
 
 def node_first_charges(tree, point, code, receives, sides=None):
@@ -896,7 +915,8 @@ def node_first_charges(tree, point, code, receives, sides=None):
         usual = [(int(k), w, d, frags) for k, w, d, frags in
                  zip(nodes.tolist(), width.tolist(), distance.tolist(), standing)
                  if code[k] % 2 != 0]
-    nodes = np.flatnonzero(code % 2 == 0)
+    # the even codes (the low bit: % 2 on int8 costs ten times as much)
+    nodes = np.flatnonzero((code & 1) == 0)
     if len(nodes) == 0 and not usual:
         return charge
     pre, end, by_pre, start, lo_box, hi_box = tree.subtree_fragments()

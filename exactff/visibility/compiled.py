@@ -241,9 +241,14 @@ def _core_row(scene, p, normal, side, *, two_sided, shortcuts, tolerance, integr
     check_finite(crossing)
     # what visiting a node's fragments before its near subtree may misplace: with the
     # band's slivers (a bound on the topology, not checked)
-    band = band + 4 * node_first_charges(tree, p, node_side, (side > 0) | (two_sided & (side != 0)),
-                                      side)
+    band = band + 4 * node_first_charges(tree, p, node_side, _receives(side, two_sided), side)
     return F, E, band, crossing, counters
+
+
+def _receives(side, two_sided):
+    """Which polygons receive from a point on their sides ``side``: those it is in front
+    of, and with ``two_sided`` those it is behind too."""
+    return side != 0 if two_sided else side > 0
 
 
 def _settled(F, E, crossing, tolerance):
@@ -630,8 +635,7 @@ def compiled_solid_angles(scene, point, *, two_sided=True, stats=None, shortcuts
     check_finite(F, E)
     check_finite(band)
     check_finite(crossing)
-    band = band + 4 * node_first_charges(tree, p, node_side, (side > 0) | (two_sided & (side != 0)),
-                                      side)
+    band = band + 4 * node_first_charges(tree, p, node_side, _receives(side, two_sided), side)
     # the core's unit is the solid angle over pi (the cosine-weighted rows' unit)
     W = F * math.pi
     # (and the products' rounding)
