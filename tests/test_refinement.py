@@ -319,7 +319,7 @@ def test_floor_spends_the_quadruple_tier_only_where_the_contract_needs_it():
 
 
 def test_floor_is_checked():
-    for bad in (-1e-3, 2 * tol.VALUE_FLOOR, float("nan"), "0"):
+    for bad in (-1e-3, 2 * tol.VALUE_FLOOR, float("nan"), "0", False):
         with pytest.raises(ValueError, match="floor"):
             ef.Exact(floor=bad)
     assert repr(ef.Exact(floor=0)) == "Exact(tolerance=1e-12, shortcuts=True, floor=0.0)"

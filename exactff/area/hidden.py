@@ -17,7 +17,7 @@ from ..halfspace import NORMAL_FLOOR, clip_front
 from ..methods import Exact
 from ..predicates import coplanar_band_sides
 from ..rings import padded
-from ..scene import build_scene
+from ..scene import build_scene, validate_polygon
 from ..visibility import convex_pieces, convex_rings
 from ._hidden import hidden_pieces
 from ._pair import hidden_setup as _compiled_hidden_setup
@@ -329,7 +329,7 @@ def hidden_values_by_engine(X, nP, Qc, blockers):
     part of no area (a clip's sliver of rounding) hides nothing and is left out; Qc is
     always kept (a degenerate Qc raises :class:`~exactff.SceneError`), so column 0 is
     Qc's."""
-    build_scene([Qc])
+    validate_polygon(Qc)
     sub = build_scene([Qc] + list(blockers), degenerate="drop")
     exact = Exact()
     FE = [exact.point_form_factors(sub, x, nP, error=True) for x in np.atleast_2d(X)]

@@ -98,8 +98,8 @@ class Exact(FormFactorMethod):
                  engine=None, floor=VALUE_FLOOR):
         if tolerance is not None and not (np.isfinite(tolerance) and tolerance > 0):
             raise ValueError(f"tolerance must be a positive number or None, got {tolerance!r}")
-        if not (isinstance(floor, (int, float, np.floating, np.integer))
-                and 0 <= floor <= VALUE_FLOOR):
+        number = isinstance(floor, (int, float, np.floating, np.integer))
+        if isinstance(floor, bool) or not number or not 0 <= floor <= VALUE_FLOOR:
             raise ValueError(f"floor must be a number between 0 and VALUE_FLOOR "
                              f"({VALUE_FLOOR:g}), got {floor!r}")
         if integrator not in INTEGRATORS:

@@ -383,8 +383,9 @@ def compiled_form_factors(scene, point, normal, *, two_sided=False, stats=None,
     under it keeps the long double bound where that meets the contract (about 1e-18 on
     the IFC files' grazing values, within the 1e-14 allowed at the default tolerance);
     ``floor=0`` makes every bound relative (:func:`exactff.testing.ground_truth`).
-    Where a value's bound still misses the tolerance by the criterion of every path (:func:`exactff.errors.misses_tolerance`: ``tolerance`` times the larger
-    of the value and ``VALUE_FLOOR``), or its BSP crossings' part exceeds the accuracy
+    Where a value's bound still misses the tolerance by the criterion of every path
+    (:func:`exactff.errors.misses_tolerance`: ``tolerance`` times the larger of the
+    value and ``VALUE_FLOOR``), or its BSP crossings' part exceeds the accuracy
     target of occluded values, those values (and only those) are taken from the Python
     engine, which refines and escalates, on scenes of at most
     ``COMPILED_FALLBACK_MAX_POLYGONS`` polygons (``stats["path"]`` then says
