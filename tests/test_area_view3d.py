@@ -286,10 +286,13 @@ def test_gunter1_points_given_the_bound_against_the_engine(monkeypatch):
     fine = {}
     G, EG = ef.area_form_factors(_read("gunter1.vs3"), rows=[17], tolerance=1e-11, error=True,
                                  stats=fine)
-    # (the same points: with the blocker that covered the point before tried first, a
-    # few of them, 8 of 1,096, fit the smaller budget at 1e-11 too)
-    assert fine["engine_fallback_points"] + fine["bounded_points"] == st["bounded_points"]
-    assert fine["bounded_points"] <= 0.01 * st["bounded_points"], fine["bounded_points"]
+    # (at 1e-11 the budget is too small for the bound: the points not to be trusted go
+    # to the engine, all but a few. Which points those are is not the same set as at
+    # 1e-9: a point is lost where the rounding its projected blockers' vertices can move
+    # exceeds what the tolerance allows, smaller at 1e-11, and which blockers a point
+    # projects follows the blocker tried first, the previous point's largest image)
+    lost = fine["engine_fallback_points"] + fine["bounded_points"]
+    assert lost > 100 and fine["bounded_points"] <= 0.01 * lost, (lost, fine["bounded_points"])
     assert np.all(EG <= 1e-11) and np.all(np.abs(F - G) <= E + EG)
 
 

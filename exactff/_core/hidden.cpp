@@ -386,7 +386,8 @@ struct Work {
     std::vector<Piece> incoming, next, images, spare;
     std::vector<std::pair<double, size_t>> order;
     std::vector<double> area2;                 // each image's twice area, its magnitude
-    size_t last_cover = 0;                     // the blocker that covered the base last
+    std::vector<size_t> image_blocker;         // each image's blocker
+    size_t last_cover = 0;                     // the blocker tried first at the next point
 };
 
 // The side of the input point x of the plane through p and the input points a, b:
@@ -712,6 +713,8 @@ void region_at(const Inputs& in, const Vec3<double>& pd, Region& out, Work<R>& w
         // plane m traced on it: (ax . m) u + (ay . m) v + (q0 - p) . m
         if (!hints.have) hints.offer(b);
         if (w.images.size() <= images) w.images.resize(images + 1);
+        if (w.image_blocker.size() < images + 1) w.image_blocker.resize(images + 1);
+        w.image_blocker[images] = b;
         Piece& img = w.images[images++];
         if (!img.v.capacity()) img = fresh(w.spare);
         const size_t nw = W.v.size();
@@ -769,6 +772,7 @@ void region_at(const Inputs& in, const Vec3<double>& pd, Region& out, Work<R>& w
         if (w.images[k].size() >= 3)
             w.order.push_back({-w.area2[k], k});
     std::sort(w.order.begin(), w.order.end());
+    if (!w.order.empty()) w.last_cover = w.image_blocker[w.order[0].second];
     double covered2 = 0.0;
     for (const auto& [neg_area, k] : w.order) {
         Piece& img = w.images[k];
