@@ -533,12 +533,17 @@ struct Hints {
             set_cuts();
         }
     }
-    // the hint's planes that cut the pyramid at p, given sigma
-    void set_cuts() {
+    // the hint's planes that cut the pyramid at p, given sigma; with from_cell, a plane
+    // the cell settled (cell_cut 0 or 1: so at every point of it) as the cell has it
+    void set_cuts(bool from_cell = false) {
         const std::vector<Vec3<double>>& K = in->K[hint];
         const size_t kb = K.size();
         cut.assign(kb, 0);
-        for (size_t k = 0; k < kb; ++k)
+        for (size_t k = 0; k < kb; ++k) {
+            if (from_cell && cell_cut[k] != 2) {
+                cut[k] = cell_cut[k];
+                continue;
+            }
             for (const Vec3<double>& c : in->base) {
                 const int s = point_side(K[k], K[k + 1 == kb ? 0 : k + 1], c, p);
                 if (s != 0 && s != sigma[k]) {
@@ -546,6 +551,7 @@ struct Hints {
                     break;
                 }
             }
+        }
     }
     // whether the blocker c is inside the hint's cone where that cone meets the pyramid
     bool contains(size_t c) {
@@ -575,7 +581,7 @@ struct Hints {
             if (cell_in[c]) return true;
             if (!point_done) {
                 sigma = cell_sigma;
-                set_cuts();
+                set_cuts(true);
                 point_done = true;
             }
         }
