@@ -122,21 +122,18 @@ bool hidden_chunk(const LevelArgs& a, const double* X, const long long* cells, s
 }
 
 // points.py's point_values to the receiver Qc alone: U and its estimate at each point
-// (the points in one call of the sector sums, each with its copy of the frame)
+// (the points in one call of the sector sums, all in the one frame)
 void unoccluded_chunk(const LevelArgs& a, const double* X, std::int64_t n, double* U,
                       double* EU) {
     const double pi = 3.14159265358979323846;
     const std::int64_t off[2] = {0, a.n_q};
     std::vector<std::int64_t> ids(n, 0), rows(n);
-    std::vector<double> frames(9 * n), S(n), M(n), E(n);
+    std::vector<double> S(n), M(n), E(n);
     std::unique_ptr<bool[]> up(new bool[n]);
-    for (std::int64_t p = 0; p < n; ++p) {
-        rows[p] = p;
-        std::copy(a.frame, a.frame + 9, &frames[9 * p]);
-    }
-    kernel::row_sums<double>(a.Qc, off, ids.data(), rows.data(), n, X, frames.data(), a.eps,
+    for (std::int64_t p = 0; p < n; ++p) rows[p] = p;
+    kernel::row_sums<double>(a.Qc, off, ids.data(), rows.data(), n, X, a.frame, a.eps,
                              a.offset_ulps, a.c2 * a.eps, S.data(), M.data(), E.data(),
-                             up.get());
+                             up.get(), 0);
     for (std::int64_t p = 0; p < n; ++p) {
         U[p] = std::abs(S[p]) / (2.0 * pi);
         EU[p] = (a.c1 * a.eps * M[p] + E[p]) / (2.0 * pi);

@@ -121,15 +121,16 @@ inline void polygon_sums(const Vec3<R>& A, const std::vector<Vx<R>>& E, double e
 // the pairs of one row or of many: its sum S[k], the sum of its terms' magnitudes M[k],
 // their rounding and the offsets' Er[k], and up[k], whether any vertex is above the
 // horizon (else the caller culls it). The arrays are checked by the caller.
+// frame_stride: 9, a frame per point; 0, one frame for all of them.
 template <typename R>
 void row_sums(const double* V, const int64_t* off, const int64_t* ids, const int64_t* rows,
               int64_t n, const double* Pd, const R* frames, double eps_, double ulps_,
-              double c2eps_, R* S, R* M, R* Er, bool* up) {
+              double c2eps_, R* S, R* M, R* Er, bool* up, int64_t frame_stride = 9) {
     std::vector<Vx<R>> E;
     for (int64_t k = 0; k < n; ++k) {
         const int64_t i = ids[k];
         const double* pd = Pd + 3 * rows[k];
-        const R* Rm = frames + 9 * rows[k];
+        const R* Rm = frames + frame_stride * rows[k];
         const R p[3] = {static_cast<R>(pd[0]), static_cast<R>(pd[1]), static_cast<R>(pd[2])};
         const int64_t a = off[i], b = off[i + 1];
         const double* f = V + 3 * a;
