@@ -138,6 +138,15 @@ __all__ = [
     "AREA_UMBRA_MIN_SHARE",
     "AREA_UMBRA_LIMIT",
     "AREA_UMBRA_CLOSED_SHARE",
+    "AREA_UMBRA_SPLIT_DEPTH",
+    "AREA_UMBRA_COVER_DEPTH",
+    "AREA_UMBRA_SPLIT_LEFT",
+    "AREA_UMBRA_ROW_MARGIN",
+    "AREA_UMBRA_COVER_PAIRS",
+    "AREA_UMBRA_MAX_LEFT",
+    "AREA_UMBRA_MAX_SQUARES",
+    "AREA_UMBRA_COVER_STALL",
+    "AREA_UMBRA_FIRST_LEFT",
     "AREA_MAX_EVENT_LINES",
     "AREA_EVENT_LINE_KEY",
     "AREA_MAX_DEPTH",
@@ -659,6 +668,30 @@ AREA_UMBRA_LIMIT = 8
 #: ... and their cells take the closed form where its estimate (summed over them) is
 #: within this share of the pair's tolerance, else the rules as before.
 AREA_UMBRA_CLOSED_SHARE = 0.1
+#: ... and first, the umbras of several blockers (exactff.area.umbra.hidden_pieces): the
+#: emitter cut into squares, each cut in four down to AREA_UMBRA_SPLIT_DEPTH levels where
+#: the receiver's part left uncovered is at most AREA_UMBRA_SPLIT_LEFT of it; the
+#: receiver cut into triangles down to AREA_UMBRA_COVER_DEPTH levels (while at most
+#: AREA_UMBRA_COVER_PAIRS pairs of a triangle and a blocker are candidates, and while
+#: the area left falls below AREA_UMBRA_COVER_STALL of the last level's) to cover it by
+#: the parts each blocker hides from all of a square. A pair none of whose first squares
+#: is taken or has at most AREA_UMBRA_FIRST_LEFT of the receiver uncovered, or with more than
+#: AREA_UMBRA_MAX_LEFT squares left (each a pair of its own), or more than
+#: AREA_UMBRA_MAX_SQUARES squares to test on a level, is integrated whole instead.
+AREA_UMBRA_SPLIT_DEPTH = 3
+AREA_UMBRA_COVER_DEPTH = 8
+AREA_UMBRA_SPLIT_LEFT = 0.5
+AREA_UMBRA_FIRST_LEFT = 0.1
+AREA_UMBRA_COVER_PAIRS = 4096
+AREA_UMBRA_MAX_LEFT = 64
+AREA_UMBRA_MAX_SQUARES = 1024
+AREA_UMBRA_COVER_STALL = 0.75
+#: ... each proven with the blocker's plane AREA_UMBRA_MARGIN of the coordinates' size
+#: away, and inside each plane through a corner of the square and an edge of the
+#: blocker by AREA_UMBRA_ROW_MARGIN of its terms' size (some 450 units of rounding; the
+#: computed value is within some ten of them), on the square less a strip of
+#: AREA_UMBRA_SHRINK of the emitter's size along its boundary (bounded instead).
+AREA_UMBRA_ROW_MARGIN = 1e-13
 #: Area form factors: an occluded pair whose events lie on more distinct lines than this
 #: (after the umbras; exactff.area.events.distinct_lines, angle and offset rounded to
 #: AREA_EVENT_LINE_KEY) raises NumericalError instead of noding them: the arrangement's

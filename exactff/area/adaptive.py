@@ -24,7 +24,8 @@ from .curved import curved_event_lines
 from .events import cut_cells, distinct_lines, event_lines
 from .hidden import hidden_setup, hidden_values
 from .points import point_values, unoccluded_bound
-from .umbra import outside_umbras, triangle_unoccluded, umbra_cells, umbra_edges, umbras
+from .umbra import (_umbra_unoccluded, hidden_pieces, outside_umbras, triangle_unoccluded, umbra_cells, umbra_edges,
+                    umbras)
 from .rules import (CORNER_MIDDLE_RULE, budget_refined, quarter, refined, rule_pair,
                     triangle_areas, triangle_rule)
 
@@ -122,11 +123,13 @@ def occluded_pair(S, Pc, Qc, nP, atol, area_P, whole, shortcuts=True, st=None,
 
 
 def _hidden_integral(S, Pc, Qc, nP, atol, area_P, whole, shortcuts, st, solid=None,
-                     inner=None):
+                     inner=None, split=True):
     """The adaptive integral of :func:`occluded_pair` to the absolute error ``atol``,
     with ``whole`` the pair's unoccluded value and estimate (per unit area
     of P): in one compiled call (:mod:`.compiled_pair`) where it takes the pair, else
-    (or without :data:`COMPILED_PAIR`) by the steps below, its reference."""
+    (or without :data:`COMPILED_PAIR`) by the steps below, its reference. Where the
+    pair has umbras to look for, first those of several blockers (:func:`_split`;
+    ``split=False``: not)."""
     if COMPILED_PAIR and COMPILED_LEVELS:
         r = _hidden_integral_in_one_call(S, Pc, Qc, nP, atol, area_P, whole, shortcuts,
                                          solid, inner)
@@ -135,6 +138,11 @@ def _hidden_integral(S, Pc, Qc, nP, atol, area_P, whole, shortcuts, st, solid=No
                              "curved_skipped", "back_faces"), r[4:] if st is not None else ()):
                 setattr(st, k, getattr(st, k) + v)
             return r[1:4]
+        if r[0] == 1 and split:
+            done = _split(S, Pc, Qc, nP, atol, area_P, shortcuts, st, solid, inner)
+            if done is not None:
+                return done
+            split = False
     R = receiver_frame(nP)
     c = Pc.mean(axis=0)
     dP = float(nP @ Pc[0])
@@ -143,6 +151,10 @@ def _hidden_integral(S, Pc, Qc, nP, atol, area_P, whole, shortcuts, st, solid=No
     # and the curved events (two blockers' edges seen crossing on Qc's edge), as chords
     lines = np.concatenate([lines, curved_event_lines(
         S, Qc, nP, dP, R, c, radius, atol, solid if shortcuts else None, st)])
+    if split and shortcuts and len(lines) > tol.AREA_UMBRA_MIN_LINES:
+        done = _split(S, Pc, Qc, nP, atol, area_P, shortcuts, st, solid, inner)
+        if done is not None:
+            return done
     # the umbras: regions from every point of which one blocker hides all of Qc (the
     # hidden part there is the unoccluded point value: no event inside changes it), the
     # event lines cut away from them and their edges cut along instead
@@ -298,6 +310,41 @@ def _hidden_integral(S, Pc, Qc, nP, atol, area_P, whole, shortcuts, st, solid=No
         # is between 0 and their unoccluded point values
         err += unoccluded_bound(Pc, Qc, setup.sliver_area)
     return value, err + whole[1], points
+
+
+def _split(S, Pc, Qc, nP, atol, area_P, shortcuts, st, solid, inner):
+    """The umbras of several blockers (:func:`~exactff.area.umbra.hidden_pieces`): the
+    pieces of Pc from which the blockers together hide Qc contribute 0 (or half their
+    bound, within as much), each piece left is a pair of its own (its unoccluded value
+    by the closed form, its hidden part by :func:`_hidden_integral` without this step)
+    to its share by area of the rest of ``atol``. Returns the value, estimate and
+    points, or None where no piece is hidden."""
+    found = hidden_pieces(Pc, Qc, S[1:], receiver_frame(nP), Pc.mean(axis=0), nP, atol,
+                          area_P)
+    if found is None:
+        return None
+    left, value, err, count, _ = found
+    if st is not None:
+        st.umbra_pairs += 1
+        st.umbra_pieces += count
+    points = 0
+    if left:
+        areas = np.array([polygon_area(L) for L in left])
+        # each piece a pair of its own, per unit area of the piece, to what the pieces
+        # taken leave of atol per unit area of those left (at least atol: the rules and
+        # their thresholds as the pair's)
+        piece_atol = ((1.0 - tol.AREA_UMBRA_CLOSED_SHARE) * atol * area_P
+                      / float(areas.sum()))
+        for L, a in zip(left, areas):
+            T = np.stack([np.broadcast_to(L[0], (len(L) - 2, 3)), L[1:-1], L[2:]], axis=1)
+            # the piece's unoccluded value: the closed form, or where its terms cancel
+            # (a small piece far from Qc) the Gauss rules on the point values
+            U, E, _ = _umbra_unoccluded(T, nP, Qc, np.zeros(len(T)))
+            v, e, p = _hidden_integral(S, L, Qc, nP, piece_atol, a,
+                                       (float(U.sum()) / a, float(E.sum()) / a),
+                                       shortcuts, st, solid, inner, split=False)
+            value, err, points = value + v * a / area_P, err + e * a / area_P, points + p
+    return value, err, points
 
 
 #: False: the levels by numpy (:func:`_adaptive_levels`), the reference the compiled
