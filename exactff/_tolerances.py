@@ -146,7 +146,7 @@ __all__ = [
     "AREA_UMBRA_MAX_LEFT",
     "AREA_UMBRA_MAX_SQUARES",
     "AREA_UMBRA_COVER_STALL",
-    "AREA_UMBRA_FIRST_LEFT",
+    "AREA_UMBRA_PROBE",
     "AREA_MAX_EVENT_LINES",
     "AREA_EVENT_LINE_KEY",
     "AREA_MAX_DEPTH",
@@ -674,18 +674,19 @@ AREA_UMBRA_CLOSED_SHARE = 0.1
 #: receiver cut into triangles down to AREA_UMBRA_COVER_DEPTH levels (while at most
 #: AREA_UMBRA_COVER_PAIRS pairs of a triangle and a blocker are candidates, and while
 #: the area left falls below AREA_UMBRA_COVER_STALL of the last level's) to cover it by
-#: the parts each blocker hides from all of a square. A pair none of whose first squares
-#: is taken or has at most AREA_UMBRA_FIRST_LEFT of the receiver uncovered, or with more than
+#: the parts each blocker hides from all of a square. A pair none of whose first
+#: AREA_UMBRA_PROBE squares (spread over the emitter) has its bound within its share, or
+#: with more than
 #: AREA_UMBRA_MAX_LEFT squares left (each a pair of its own), or more than
 #: AREA_UMBRA_MAX_SQUARES squares to test on a level, is integrated whole instead.
 AREA_UMBRA_SPLIT_DEPTH = 3
 AREA_UMBRA_COVER_DEPTH = 8
 AREA_UMBRA_SPLIT_LEFT = 0.5
-AREA_UMBRA_FIRST_LEFT = 0.1
 AREA_UMBRA_COVER_PAIRS = 4096
 AREA_UMBRA_MAX_LEFT = 64
 AREA_UMBRA_MAX_SQUARES = 1024
 AREA_UMBRA_COVER_STALL = 0.75
+AREA_UMBRA_PROBE = 16
 #: ... each proven with the blocker's plane AREA_UMBRA_MARGIN of the coordinates' size
 #: away, and inside each plane through a corner of the square and an edge of the
 #: blocker by AREA_UMBRA_ROW_MARGIN of its terms' size (some 450 units of rounding; the

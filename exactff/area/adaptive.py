@@ -24,7 +24,7 @@ from .curved import curved_event_lines
 from .events import cut_cells, distinct_lines, event_lines
 from .hidden import hidden_setup, hidden_values
 from .points import point_values, unoccluded_bound
-from .umbra import (_umbra_unoccluded, hidden_pieces, outside_umbras, triangle_unoccluded, umbra_cells, umbra_edges,
+from .umbra import (unoccluded_parts, hidden_pieces, outside_umbras, triangle_unoccluded, umbra_cells, umbra_edges,
                     umbras)
 from .rules import (CORNER_MIDDLE_RULE, budget_refined, quarter, refined, rule_pair,
                     triangle_areas, triangle_rule)
@@ -339,7 +339,7 @@ def _split(S, Pc, Qc, nP, atol, area_P, shortcuts, st, solid, inner):
             T = np.stack([np.broadcast_to(L[0], (len(L) - 2, 3)), L[1:-1], L[2:]], axis=1)
             # the piece's unoccluded value: the closed form, or where its terms cancel
             # (a small piece far from Qc) the Gauss rules on the point values
-            U, E, _ = _umbra_unoccluded(T, nP, Qc, np.zeros(len(T)))
+            U, E, _ = unoccluded_parts(T, nP, Qc, np.zeros(len(T)))
             v, e, p = _hidden_integral(S, L, Qc, nP, piece_atol, a,
                                        (float(U.sum()) / a, float(E.sum()) / a),
                                        shortcuts, st, solid, inner, split=False)

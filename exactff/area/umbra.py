@@ -24,7 +24,7 @@ from .rules import GAUSS_LOW_RULE, GAUSS_RULE, triangle_areas, triangle_rule
 
 __all__ = ["merged_blockers", "sees_through", "umbras", "outside_umbras", "in_umbra", "umbra_edges",
            "triangle_unoccluded", "umbra_cells", "hiding_rows", "uncovered_area",
-           "hidden_pieces"]
+           "hidden_pieces", "blocker_frames", "unoccluded_parts"]
 
 
 def _blocker_frame(K):
@@ -386,14 +386,27 @@ def triangle_unoccluded(T, nP, Qc):
     return area_Q * f, area_Q * e
 
 
-def _umbra_unoccluded(T, nP, Qc, share):
+def unoccluded_parts(T, nP, Qc, share):
     """``int_T F(x -> Qc) dA_x`` for triangles T (t, 3, 3) of an umbra (where the hidden
     part is the unoccluded value) and its estimate: the closed form
     (:func:`triangle_unoccluded`), and where its estimate misses ``share`` (t,) (its
     terms cancel: a triangle with an edge of rounding's length) the 12- and 8-point
     collapsed Gauss rules of the far-field rule on the point values, their difference
     and the nodes' estimates the estimate. Returns the values, the estimates, and per
-    triangle whether it is within its share."""
+    triangle whether it is within its share.
+
+    Examples
+    --------
+    A unit square (two triangles) and a unit square 2 above it, facing it: the sum is
+    ``A_P F(P -> Q)``.
+
+    >>> P = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], float)
+    >>> Q = P[::-1] + [0, 0, 2]
+    >>> U, E, ok = unoccluded_parts(np.stack([P[[0, 1, 2]], P[[0, 2, 3]]]),
+    ...                             np.array([0, 0, 1.0]), Q, np.full(2, 1e-12))
+    >>> round(float(U.sum()), 6), bool(ok.all())
+    (0.068636, True)
+    """
     U, E = triangle_unoccluded(T, nP, Qc)
     miss = np.flatnonzero(~(E <= share))
     if len(miss):
@@ -414,7 +427,7 @@ def umbra_cells(cells, regions, R, c, nP, Qc, area_P, area_Pc, atol, bound):
     """The cells (t, 3, 3) of an emitter cut along the umbras' edges as well as its
     events, sorted: those in an umbra (every corner within ``AREA_UMBRA_SHRINK`` of its
     size of one region, where the proof holds) take the unoccluded value for their
-    hidden part (:func:`_umbra_unoccluded`, each within its share by area of
+    hidden part (:func:`unoccluded_parts`, each within its share by area of
     ``AREA_UMBRA_CLOSED_SHARE`` of ``atol``, else left to the rules); the strips between
     the regions and P's boundary or the regions as computed (AREA_UMBRA_SHRINK wide:
     where a blocker shares an edge with P, the rules' nodes would lie at that edge, where
@@ -432,7 +445,7 @@ def umbra_cells(cells, regions, R, c, nP, Qc, area_P, area_Pc, atol, bound):
     if inside.any():
         at = np.flatnonzero(inside)
         share = tol.AREA_UMBRA_CLOSED_SHARE * atol * area_P / area_Pc * triangle_areas(cells[at])
-        exU, exE, ok = _umbra_unoccluded(cells[at], nP, Qc, share)
+        exU, exE, ok = unoccluded_parts(cells[at], nP, Qc, share)
         inside[at[~ok]] = False
         U, E = float(exU[ok].sum()) / area_P, float(exE[ok].sum()) / area_P
         area, n = float(triangle_areas(cells[inside]).sum()), int(ok.sum())
@@ -444,11 +457,20 @@ def umbra_cells(cells, regions, R, c, nP, Qc, area_P, area_Pc, atol, bound):
     return cells[~inside & ~strip], U, E, area, strip_area, n
 
 
-def _padded_frames(blockers):
+def blocker_frames(blockers):
     """The blockers (joined as :func:`merged_blockers` does) that are strictly convex,
     padded: vertices (b, k, 3) and each vertex's successor (b, k, 3) (a padded vertex's
     edge is of no length, its row always holds, :func:`hiding_rows`), unit normals
-    (b, 3), offsets (b,), distances from the mean plane (b,) and vertex counts (b,)."""
+    (b, 3), offsets (b,), distances from the mean plane (b,) and vertex counts (b,);
+    None where none is.
+
+    Examples
+    --------
+    >>> K = np.array([[0, 0, 1], [1, 0, 1], [1, 1, 1], [0, 1, 1]], float)
+    >>> V, W, n, d, flat, counts = blocker_frames([K, K[:3] + [3, 0, 0]])
+    >>> V.shape, n[0].tolist(), d.tolist(), counts.tolist()
+    ((2, 4, 3), [0.0, 0.0, 1.0], [1.0, 1.0], [4, 3])
+    """
     Ks, frames = [], []
     for K in merged_blockers(blockers):
         f = _blocker_frame(K)
@@ -578,8 +600,8 @@ def hidden_pieces(Pc, Qc, blockers, R, c, nP, atol, area_P):
     contributes half of it within as much. Returns the pieces left to integrate (a list
     of (k, 3) arrays, whose union with the pieces taken is Pc), the pieces' value and
     estimate per unit area of P, the number of pieces taken, and the area taken; None
-    where Qc or Pc is not strictly convex, none of the first squares is taken or
-    has at most ``AREA_UMBRA_FIRST_LEFT`` of Qc uncovered, more than
+    where Qc or Pc is not strictly convex, none of the first squares has its bound within its
+    share, more than
     ``AREA_UMBRA_MAX_LEFT`` are left (each would be a pair of its own), or a level has
     more than ``AREA_UMBRA_MAX_SQUARES`` squares to test.
 
@@ -600,7 +622,7 @@ def hidden_pieces(Pc, Qc, blockers, R, c, nP, atol, area_P):
     >>> 0.8 < taken < 1.0, value == err == 0.0
     (True, True)
     """
-    frames = _padded_frames(blockers)
+    frames = blocker_frames(blockers)
     if frames is None or _blocker_frame(Qc) is None or _blocker_frame(Pc) is None:
         return None
     RQ = receiver_frame(_blocker_frame(Qc)[0])[:2]
@@ -633,11 +655,19 @@ def hidden_pieces(Pc, Qc, blockers, R, c, nP, atol, area_P):
         if (near[i] & near[(i + 1) % len(P2)]).any():
             a = np.array([-(q - p)[1], (q - p)[0]]) / np.linalg.norm(q - p)
             inward.append((a, -float(a @ p) - eps))
-    nodes, fractions = [], []
+    nodes, within = [], False
     value, err, taken, count = 0.0, 0.0, 0.0, 0
+    # the first squares in an order that spreads the first AREA_UMBRA_PROBE of them over
+    # P: where none of those is within its share, the pair is integrated whole
+    step = max(1, len(squares) // tol.AREA_UMBRA_PROBE)
+    probe = list(range(0, len(squares), step))[:tol.AREA_UMBRA_PROBE]
+    squares = ([squares[i] for i in probe]
+               + [sq for i, sq in enumerate(squares) if i not in set(probe)])
     for level in range(tol.AREA_UMBRA_SPLIT_DEPTH + 1):
         todo = []
-        for corner, s, parent in squares:
+        for k, (corner, s, parent) in enumerate(squares):
+            if level == 0 and k == len(probe) and not within:
+                return None
             piece = P2
             for a, b in (([1.0, 0.0], -corner[0]), ([-1.0, 0.0], corner[0] + s[0]),
                          ([0.0, 1.0], -corner[1]), ([0.0, -1.0], corner[1] + s[1])):
@@ -671,7 +701,7 @@ def hidden_pieces(Pc, Qc, blockers, R, c, nP, atol, area_P):
             bound = ((a_inner * unoccluded_bound(Cv, Qc, a_left) if a_left > 0 else 0.0)
                      + (a_piece - a_inner) * unoccluded_bound(Cv, Qc)) / area_P
             nodes.append([Cv, parent, False])
-            fractions.append(a_left / area_Q)
+            within = within or bound <= share
             if _DEBUG is not None:
                 _DEBUG.append((level, a_piece, a_left / area_Q, bound / share, len(rows)))
             # taken where proven, or bounded by a hundredth of its share; else cut in
@@ -691,10 +721,9 @@ def hidden_pieces(Pc, Qc, blockers, R, c, nP, atol, area_P):
             else:
                 nodes[-1][2] = True
         squares = todo
-        # none of the first squares taken, too many squares to test, or left already:
-        # the pair is integrated whole
-        first = level == 0 and not any(f <= tol.AREA_UMBRA_FIRST_LEFT for f in fractions)
-        if ((first and not count) or len(squares) > tol.AREA_UMBRA_MAX_SQUARES
+        # none of the first squares within its share, too many squares to test, or left
+        # already: the pair is integrated whole
+        if ((level == 0 and not within) or len(squares) > tol.AREA_UMBRA_MAX_SQUARES
                 or sum(1 for node in nodes if node[2]) > tol.AREA_UMBRA_MAX_LEFT):
             return None
     # a square cut in four none of whose quarters was taken is left whole (fewer,
