@@ -12,8 +12,8 @@ from exactff import _tolerances as tol
 from exactff.area import AreaStats, area_row
 from exactff.area.events import distinct_lines
 from exactff.area.points import unoccluded_bound
-from exactff.area.umbra import (blocker_frames, hidden_pieces, hiding_rows, in_umbra,
-                                merged_blockers, outside_umbras, sees_through, umbras)
+from exactff.area.joint_umbra import blocker_frames, hidden_pieces, hiding_rows
+from exactff.area.umbra import in_umbra, merged_blockers, outside_umbras, sees_through, umbras
 from exactff.geometry import receiver_frame
 
 

@@ -15,7 +15,7 @@ import shapely
 
 from .. import _tolerances as tol
 from ..errors import NumericalError, misses_tolerance
-from ..geometry import area_vector, cross, polygon_area, receiver_frame
+from ..geometry import area_vector, cross, receiver_frame
 from ._pair import adaptive_levels as _compiled_adaptive_levels
 from ._pair import corner_first as _compiled_corner_first
 from .compiled_pair import LEVEL_RULES, LEVEL_TOLERANCES
@@ -24,12 +24,18 @@ from .curved import curved_event_lines
 from .events import cut_cells, distinct_lines, event_lines
 from .hidden import hidden_setup, hidden_values
 from .points import point_values, unoccluded_bound
-from .umbra import (unoccluded_parts, hidden_pieces, outside_umbras, triangle_unoccluded, umbra_cells, umbra_edges,
-                    umbras)
+from .joint_umbra import pair_umbras, split_pair
+from .umbra import triangle_unoccluded, umbra_cells
 from .rules import (CORNER_MIDDLE_RULE, budget_refined, quarter, refined, rule_pair,
                     triangle_areas, triangle_rule)
 
 __all__ = ["COMPILED_LEVELS", "COMPILED_PAIR", "occluded_pair"]
+
+
+def _split(S, Pc, Qc, nP, atol, area_P, st, solid, inner):
+    """:func:`~exactff.area.joint_umbra.split_pair`, the pieces left by these steps."""
+    return split_pair(S, Pc, Qc, nP, atol, area_P, st, lambda L, a, A, w: _hidden_integral(
+        S, L, Qc, nP, a, A, w, True, st, solid, inner, split=False))
 
 
 def _corner_first(T, blockers, nP, dP, reach=0.0, compiled=True):
@@ -127,9 +133,8 @@ def _hidden_integral(S, Pc, Qc, nP, atol, area_P, whole, shortcuts, st, solid=No
     """The adaptive integral of :func:`occluded_pair` to the absolute error ``atol``,
     with ``whole`` the pair's unoccluded value and estimate (per unit area
     of P): in one compiled call (:mod:`.compiled_pair`) where it takes the pair, else
-    (or without :data:`COMPILED_PAIR`) by the steps below, its reference. Where the
-    pair has umbras to look for, first those of several blockers (:func:`_split`;
-    ``split=False``: not)."""
+    (or without :data:`COMPILED_PAIR`) by the steps below, its reference; where it has
+    umbras to look for, first several blockers' (``split``, :func:`_split`)."""
     if COMPILED_PAIR and COMPILED_LEVELS:
         r = _hidden_integral_in_one_call(S, Pc, Qc, nP, atol, area_P, whole, shortcuts,
                                          solid, inner)
@@ -138,11 +143,9 @@ def _hidden_integral(S, Pc, Qc, nP, atol, area_P, whole, shortcuts, st, solid=No
                              "curved_skipped", "back_faces"), r[4:] if st is not None else ()):
                 setattr(st, k, getattr(st, k) + v)
             return r[1:4]
-        if r[0] == 1 and split:
-            done = _split(S, Pc, Qc, nP, atol, area_P, shortcuts, st, solid, inner)
-            if done is not None:
-                return done
-            split = False
+        split = split and r[0] == 1          # the umbras to look for: first several blockers'
+        if split and (done := _split(S, Pc, Qc, nP, atol, area_P, st, solid, inner)):
+            return done
     R = receiver_frame(nP)
     c = Pc.mean(axis=0)
     dP = float(nP @ Pc[0])
@@ -151,30 +154,14 @@ def _hidden_integral(S, Pc, Qc, nP, atol, area_P, whole, shortcuts, st, solid=No
     # and the curved events (two blockers' edges seen crossing on Qc's edge), as chords
     lines = np.concatenate([lines, curved_event_lines(
         S, Qc, nP, dP, R, c, radius, atol, solid if shortcuts else None, st)])
-    if split and shortcuts and len(lines) > tol.AREA_UMBRA_MIN_LINES:
-        done = _split(S, Pc, Qc, nP, atol, area_P, shortcuts, st, solid, inner)
-        if done is not None:
-            return done
-    # the umbras: regions from every point of which one blocker hides all of Qc (the
-    # hidden part there is the unoccluded point value: no event inside changes it), the
-    # event lines cut away from them and their edges cut along instead
-    regions = []
-    if shortcuts and len(lines) > tol.AREA_UMBRA_MIN_LINES:
-        regions = umbras(Pc, Qc, S[1:], R, c)
-        # one region holding all of P but strips along its boundary (the proof's
-        # margin): the pair's value is that of the strips, between 0 and their area
-        # times the point values' bound
-        area_Pc = float(np.linalg.norm(area_vector(Pc)))
-        left = area_Pc - max((polygon_area(c + r @ R[:2]) for r, _ in regions), default=0.0)
-        half = 0.5 * unoccluded_bound(Pc, Qc) * max(left, 0.0) / area_P
-        if regions and half <= tol.AREA_UMBRA_CLOSED_SHARE * atol:
-            if st is not None:
-                st.umbra_pairs += 1
-            return half, half, 0
-        if regions:
-            P2 = (Pc - c) @ R[:2].T
-            lines = np.concatenate([outside_umbras(lines, regions), umbra_edges(
-                regions, P2, tol.AREA_HULL_RTOL * float(np.ptp(P2, axis=0).max()))])
+    if (split and not (COMPILED_PAIR and COMPILED_LEVELS) and shortcuts
+            and len(lines) > tol.AREA_UMBRA_MIN_LINES
+            and (done := _split(S, Pc, Qc, nP, atol, area_P, st, solid, inner))):
+        return done
+    # the umbras of one blocker: regions whose event lines are cut away (pair_umbras)
+    regions, lines, done = pair_umbras(lines, S, Pc, Qc, R, c, atol, area_P, shortcuts, st)
+    if done is not None:
+        return done
     # the arrangement's cost and cells grow with the square of its distinct lines: too
     # many raise (the row names the pair)
     many = distinct_lines(lines, 2.0 * radius, (Pc - c) @ R[:2].T)
@@ -310,41 +297,6 @@ def _hidden_integral(S, Pc, Qc, nP, atol, area_P, whole, shortcuts, st, solid=No
         # is between 0 and their unoccluded point values
         err += unoccluded_bound(Pc, Qc, setup.sliver_area)
     return value, err + whole[1], points
-
-
-def _split(S, Pc, Qc, nP, atol, area_P, shortcuts, st, solid, inner):
-    """The umbras of several blockers (:func:`~exactff.area.umbra.hidden_pieces`): the
-    pieces of Pc from which the blockers together hide Qc contribute 0 (or half their
-    bound, within as much), each piece left is a pair of its own (its unoccluded value
-    by the closed form, its hidden part by :func:`_hidden_integral` without this step)
-    to its share by area of the rest of ``atol``. Returns the value, estimate and
-    points, or None where no piece is hidden."""
-    found = hidden_pieces(Pc, Qc, S[1:], receiver_frame(nP), Pc.mean(axis=0), nP, atol,
-                          area_P)
-    if found is None:
-        return None
-    left, value, err, count, _ = found
-    if st is not None:
-        st.umbra_pairs += 1
-        st.umbra_pieces += count
-    points = 0
-    if left:
-        areas = np.array([polygon_area(L) for L in left])
-        # each piece a pair of its own, per unit area of the piece, to what the pieces
-        # taken leave of atol per unit area of those left (at least atol: the rules and
-        # their thresholds as the pair's)
-        piece_atol = ((1.0 - tol.AREA_UMBRA_CLOSED_SHARE) * atol * area_P
-                      / float(areas.sum()))
-        for L, a in zip(left, areas):
-            T = np.stack([np.broadcast_to(L[0], (len(L) - 2, 3)), L[1:-1], L[2:]], axis=1)
-            # the piece's unoccluded value: the closed form, or where its terms cancel
-            # (a small piece far from Qc) the Gauss rules on the point values
-            U, E, _ = unoccluded_parts(T, nP, Qc, np.zeros(len(T)))
-            v, e, p = _hidden_integral(S, L, Qc, nP, piece_atol, a,
-                                       (float(U.sum()) / a, float(E.sum()) / a),
-                                       shortcuts, st, solid, inner, split=False)
-            value, err, points = value + v * a / area_P, err + e * a / area_P, points + p
-    return value, err, points
 
 
 #: False: the levels by numpy (:func:`_adaptive_levels`), the reference the compiled

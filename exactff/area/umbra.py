@@ -23,11 +23,11 @@ from .points import point_values, unoccluded_bound
 from .rules import GAUSS_LOW_RULE, GAUSS_RULE, triangle_areas, triangle_rule
 
 __all__ = ["merged_blockers", "sees_through", "umbras", "outside_umbras", "in_umbra", "umbra_edges",
-           "triangle_unoccluded", "umbra_cells", "hiding_rows", "uncovered_area",
-           "hidden_pieces", "blocker_frames", "unoccluded_parts"]
+           "triangle_unoccluded", "umbra_cells", "unoccluded_parts", "blocker_frame",
+           "clip_half_plane", "signed_area"]
 
 
-def _blocker_frame(K):
+def blocker_frame(K):
     """A polygon's unit normal (Newell's, its vertices counter-clockwise about it), its
     plane's offset (the mean over its vertices) and their largest distance from it; None
     where it is not strictly convex about that normal (every turn positive)."""
@@ -78,7 +78,7 @@ def merged_blockers(blockers):
     [[[0.0, 1.0, 0.0], [0.0, 0.0, 0.0], [2.0, 0.0, 0.0], [2.0, 1.0, 0.0]]]
     """
     Ks = [np.asarray(K, dtype=float) for K in blockers]
-    frames = [_blocker_frame(K) for K in Ks]
+    frames = [blocker_frame(K) for K in Ks]
     out, groups = [], {}
     scale = 1.0 + max((float(np.abs(K).max()) for K in Ks), default=0.0)
     for K, f in zip(Ks, frames):
@@ -98,7 +98,7 @@ def merged_blockers(blockers):
                             or abs(fa[1] - fb[1]) > tol.AREA_HULL_RTOL * scale):
                         continue
                     M = _merge_two(A, B, fa[0])
-                    f = None if M is None else _blocker_frame(M)
+                    f = None if M is None else blocker_frame(M)
                     if f is None:
                         continue
                     members[a] = (M, f)
@@ -137,7 +137,7 @@ def sees_through(X, Qv, K, margin=None):
     [True, False]
     """
     X, Qv, K = (np.atleast_2d(np.asarray(a, dtype=float)) for a in (X, Qv, K))
-    frame = _blocker_frame(K)
+    frame = blocker_frame(K)
     if frame is None:
         return np.zeros(len(X), dtype=bool)
     nK, dK, flat = frame
@@ -163,7 +163,7 @@ def sees_through(X, Qv, K, margin=None):
     return ok.all(axis=1)
 
 
-def _clip(poly, a, b):
+def clip_half_plane(poly, a, b):
     """The convex polygon poly (k, 2) where ``a . u + b >= 0`` (Sutherland-Hodgman, one
     half-plane)."""
     if not len(poly):
@@ -180,7 +180,7 @@ def _clip(poly, a, b):
     return np.array(out).reshape(-1, 2)
 
 
-def _area2(poly):
+def signed_area(poly):
     """The signed area of a 2-D polygon (k, 2)."""
     if len(poly) < 3:
         return 0.0
@@ -194,7 +194,7 @@ def _image_half_planes(K, Qv, R, c):
     points that see every vertex of Qv through the convex polygon K (the central images
     of K from each vertex: beyond K's plane and inside the planes through the vertex and
     each edge). None where K is not strictly convex."""
-    frame = _blocker_frame(K)
+    frame = blocker_frame(K)
     if frame is None:
         return None
     nK, dK, _ = frame
@@ -250,9 +250,9 @@ def umbras(Pc, Qc, blockers, R, c, limit=None):
     limit = tol.AREA_UMBRA_LIMIT if limit is None else limit
     blockers = [np.asarray(K, dtype=float) for K in blockers]
     P2 = (Pc - c) @ R[:2].T
-    if _area2(P2) < 0:
+    if signed_area(P2) < 0:
         P2 = P2[::-1]
-    area = _area2(P2)
+    area = signed_area(P2)
     size = float(np.ptp(P2, axis=0).max())
     eps = tol.AREA_UMBRA_SHRINK * size
     # sample points of Pc: its corners, its centroid and the midpoints between them
@@ -281,16 +281,16 @@ def umbras(Pc, Qc, blockers, R, c, limit=None):
         # the region shrunk by 2 eps (returned) and by eps (proven, P grown by eps)
         region = P2
         for a, b in H:
-            region = _clip(region, a, b - 2 * eps)
-        if _area2(region) < tol.AREA_UMBRA_MIN_SHARE * area:
+            region = clip_half_plane(region, a, b - 2 * eps)
+        if signed_area(region) < tol.AREA_UMBRA_MIN_SHARE * area:
             continue
         grown = P2
         for p, q in zip(P2, np.roll(P2, -1, 0)):
             e = q - p
             a = np.array([-e[1], e[0]]) / np.linalg.norm(e)      # inward normal
-            grown = _clip(grown, a, -float(a @ p) + eps)
+            grown = clip_half_plane(grown, a, -float(a @ p) + eps)
         for a, b in H:
-            grown = _clip(grown, a, b - eps)
+            grown = clip_half_plane(grown, a, b - eps)
         if len(grown) < 3 or not sees_through(c + grown @ R[:2], Qc, K).all():
             continue
         rows = np.array([[a[0], a[1], b - 2 * eps] for a, b in H]
@@ -299,7 +299,7 @@ def umbras(Pc, Qc, blockers, R, c, limit=None):
         for r, (p, q) in zip(rows[len(H):], zip(P2, np.roll(P2, -1, 0))):
             r[:2] /= np.linalg.norm(r[:2])
             r[2] = -float(r[:2] @ p)
-        found.append((_area2(region), region, rows))
+        found.append((signed_area(region), region, rows))
     found.sort(key=lambda f: -f[0])
     kept = []
     for _, r, h in found:
@@ -393,20 +393,7 @@ def unoccluded_parts(T, nP, Qc, share):
     terms cancel: a triangle with an edge of rounding's length) the 12- and 8-point
     collapsed Gauss rules of the far-field rule on the point values, their difference
     and the nodes' estimates the estimate. Returns the values, the estimates, and per
-    triangle whether it is within its share.
-
-    Examples
-    --------
-    A unit square (two triangles) and a unit square 2 above it, facing it: the sum is
-    ``A_P F(P -> Q)``.
-
-    >>> P = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], float)
-    >>> Q = P[::-1] + [0, 0, 2]
-    >>> U, E, ok = unoccluded_parts(np.stack([P[[0, 1, 2]], P[[0, 2, 3]]]),
-    ...                             np.array([0, 0, 1.0]), Q, np.full(2, 1e-12))
-    >>> round(float(U.sum()), 6), bool(ok.all())
-    (0.068636, True)
-    """
+    triangle whether it is within its share."""
     U, E = triangle_unoccluded(T, nP, Qc)
     miss = np.flatnonzero(~(E <= share))
     if len(miss):
@@ -455,290 +442,3 @@ def umbra_cells(cells, regions, R, c, nP, Qc, area_P, area_Pc, atol, bound):
         if not 0.5 * bound * strip_area / area_P <= tol.AREA_UMBRA_CLOSED_SHARE * atol:
             strip[:], strip_area = False, 0.0
     return cells[~inside & ~strip], U, E, area, strip_area, n
-
-
-def blocker_frames(blockers):
-    """The blockers (joined as :func:`merged_blockers` does) that are strictly convex,
-    padded: vertices (b, k, 3) and each vertex's successor (b, k, 3) (a padded vertex's
-    edge is of no length, its row always holds, :func:`hiding_rows`), unit normals
-    (b, 3), offsets (b,), distances from the mean plane (b,) and vertex counts (b,);
-    None where none is.
-
-    Examples
-    --------
-    >>> K = np.array([[0, 0, 1], [1, 0, 1], [1, 1, 1], [0, 1, 1]], float)
-    >>> V, W, n, d, flat, counts = blocker_frames([K, K[:3] + [3, 0, 0]])
-    >>> V.shape, n[0].tolist(), d.tolist(), counts.tolist()
-    ((2, 4, 3), [0.0, 0.0, 1.0], [1.0, 1.0], [4, 3])
-    """
-    Ks, frames = [], []
-    for K in merged_blockers(blockers):
-        f = _blocker_frame(K)
-        if f is not None:
-            Ks.append(K)
-            frames.append(f)
-    if not Ks:
-        return None
-    V, counts = padded(Ks)
-    k = np.arange(V.shape[1])
-    nxt = np.where(k[None, :] + 1 < counts[:, None], k[None, :] + 1, 0)
-    nxt = np.where(k[None, :] < counts[:, None], nxt, k[None, :])
-    W = np.take_along_axis(V, nxt[:, :, None], axis=1)
-    return (V, W, np.array([f[0] for f in frames]), np.array([f[1] for f in frames]),
-            np.array([f[2] for f in frames]), counts)
-
-
-def hiding_rows(Cv, frames, q0, RQ, reach, margin, row_margin):
-    """For a convex region of the emitter with corners Cv (m, 3), the half-planes of the
-    receiver's plane (2-D coordinates u in the frame RQ (2, 3) about q0, ``y = q0 + u
-    RQ``) whose intersection, per blocker K, is the set of points y that K hides from
-    every corner, by margins: rows (a0, a1, b) with ``a . u + b >= 0`` inside, as an
-    array (b', h, 3) over the blockers b' that have all of Cv strictly on one side of
-    their plane. Per corner v: y beyond K's plane (``sigma (n_K . y - d_K)``, sigma
-    the side away from v), and for each edge (p, q) of K (counter-clockwise about n_K)
-    ``sigma ((p - v) x (q - v)) . (y - v)``, which is positive where y is on K's side
-    of the plane through v and the edge. The plane's row is less ``margin`` times the
-    coordinates' size ``reach`` and K's distance from its mean plane (as Cv's distances
-    from it, on their side); each edge's row less ``row_margin`` times the size of its
-    terms (``|p - v| |q - v| |y - v|``, and ``reach (|p - v| + |q - v|) |y - v|`` for
-    the rounding of v and y: the computed value is within some ten roundings of that).
-
-    Each row is affine in y for a fixed v and affine in v for a fixed y (``((p - v) x
-    (q - v)) . (y - v) = (p - y) . ((q - p) x (v - p))``), so where it holds at every
-    corner of a convex region of the emitter and every vertex of a convex piece of the
-    receiver, it holds on all of both: every segment from the region to the piece
-    meets K (its line meets K's plane inside K's edges, beyond v, before y)."""
-    V, W, nK, dK, flat, counts = frames
-    sv = Cv @ nK.T - dK                                       # (m, b)
-    mu1 = margin * reach + flat
-    side = ((sv > mu1).all(axis=0) | (sv < -mu1).all(axis=0))
-    if not side.any():
-        return np.zeros((0, 0, 3))
-    V, W, nK, dK, flat, sv = V[side], W[side], nK[side], dK[side], flat[side], sv[:, side]
-    sig = -np.sign(sv[0])                                      # (b,), the side away from C
-    plane = np.empty((len(sig), 1, 3))
-    plane[:, 0, :2] = sig[:, None] * (nK @ RQ.T)
-    plane[:, 0, 2] = sig * (nK @ q0 - dK) - (margin * reach + flat)
-    D1 = V[None] - Cv[:, None, None]                          # (m, b, k, 3)
-    D2 = W[None] - Cv[:, None, None]
-    M = cross(D1, D2)
-    a = sig[None, :, None, None] * (M @ RQ.T)                 # (m, b, k, 2)
-    b = sig[None, :, None] * np.einsum("mbkx,mx->mbk", M, q0[None] - Cv)
-    n1, n2 = np.linalg.norm(D1, axis=3), np.linalg.norm(D2, axis=3)
-    far = np.linalg.norm(q0[None] - Cv, axis=1)[:, None, None] + reach
-    b = b - row_margin * (n1 * n2 + reach * (n1 + n2)) * far
-    edges = np.concatenate([a, b[..., None]], axis=3)           # (m, b, k, 3)
-    # a padded vertex's edge (p = q) gives a zero row: made to hold
-    edges[..., 2] = np.where((M == 0).all(axis=3), 1.0, edges[..., 2])
-    edges = np.moveaxis(edges, 1, 0).reshape(len(sig), -1, 3)
-    return np.concatenate([plane, edges], axis=1)
-
-
-def uncovered_area(rows, Q2, depth, enough=None):
-    """The area of the convex polygon Q2 (k, 2) not proven hidden: Q2 fanned into
-    triangles, a triangle covered where one blocker's rows (:func:`hiding_rows`) hold at
-    its three vertices, an uncovered one cut in four (at its edges' midpoints) down to
-    ``depth`` levels (while the pairs of a triangle and a blocker whose region may meet
-    it are at most ``AREA_UMBRA_COVER_PAIRS``, and from the third level on while the
-    uncovered area falls below ``AREA_UMBRA_COVER_STALL`` of the last level's); returns
-    the area of the uncovered triangles (0.0 where every point of Q2 is proven hidden),
-    early where that is at most ``enough``. A blocker one of
-    whose rows fails at all three vertices of a triangle (its region misses the
-    triangle) is no candidate for the triangle's quarters."""
-    T = np.stack([np.broadcast_to(Q2[0], (len(Q2) - 2, 2)), Q2[1:-1], Q2[2:]], axis=1)
-    # the candidate (blocker, triangle) pairs
-    bi = np.repeat(np.arange(len(rows)), len(T))
-    ti = np.tile(np.arange(len(T)), len(rows))
-    left = 0.0
-    for level in range(depth + 1):
-        area = 0.5 * np.abs((T[:, 1, 0] - T[:, 0, 0]) * (T[:, 2, 1] - T[:, 0, 1])
-                            - (T[:, 2, 0] - T[:, 0, 0]) * (T[:, 1, 1] - T[:, 0, 1]))
-        ok = (np.einsum("phc,pvc->pvh", rows[bi, :, :2], T[ti])
-              + rows[bi, None, :, 2]) >= 0                                 # (p, 3, h)
-        covered = np.zeros(len(T), dtype=bool)
-        covered[ti[ok.all(axis=(1, 2))]] = True
-        before, left = left, float(area[~covered].sum())
-        # stopped where done, or where the uncovered area no longer halves (a part of
-        # the receiver seen, not a thin seam between blockers)
-        if (level == depth or left == 0.0 or (enough is not None and left <= enough)
-                or (level >= 2 and left > tol.AREA_UMBRA_COVER_STALL * before)):
-            return left
-        # the pairs left: uncovered triangles, blockers whose region may meet them
-        keep = ~covered[ti] & ok.any(axis=1).all(axis=1)
-        bi, ti = bi[keep], ti[keep]
-        if 4 * len(bi) > tol.AREA_UMBRA_COVER_PAIRS:
-            return left
-        # the uncovered triangles cut in four, the pairs with them
-        new = np.cumsum(~covered) - 1
-        T = T[~covered]
-        m = 0.5 * (T + np.roll(T, -1, axis=1))
-        T = np.concatenate([np.stack([T[:, 0], m[:, 0], m[:, 2]], 1),
-                            np.stack([m[:, 0], T[:, 1], m[:, 1]], 1),
-                            np.stack([m[:, 2], m[:, 1], T[:, 2]], 1),
-                            np.stack([m[:, 0], m[:, 1], m[:, 2]], 1)])
-        n = len(T) // 4
-        ti = np.concatenate([new[ti] + k * n for k in range(4)])
-        bi = np.tile(bi, 4)
-        if not len(bi):
-            return float(area[~covered].sum())
-    return left
-
-
-_DEBUG = None
-
-
-def hidden_pieces(Pc, Qc, blockers, R, c, nP, atol, area_P):
-    """The emitter Pc cut into convex pieces (squares of its frame R about c, clipped to
-    it, cut in four down to ``AREA_UMBRA_SPLIT_DEPTH`` levels) from each of which
-    several blockers together hide all of Qc, or all but a part of it small enough:
-    per piece, the receiver's points proven hidden from every corner of the piece by
-    one blocker (:func:`hiding_rows`, :func:`uncovered_area`: the receiver cut into
-    triangles down to ``AREA_UMBRA_COVER_DEPTH`` levels) cover Qc, so that the piece
-    contributes exactly 0; or they leave uncovered an area ``a`` of Qc whose unoccluded
-    bound over the piece, ``A_piece * unoccluded_bound(piece, Qc, a) / area_P``, is
-    within its share (by area) of ``AREA_UMBRA_CLOSED_SHARE`` of ``atol``: the piece
-    contributes half of it within as much. Returns the pieces left to integrate (a list
-    of (k, 3) arrays, whose union with the pieces taken is Pc), the pieces' value and
-    estimate per unit area of P, the number of pieces taken, and the area taken; None
-    where Qc or Pc is not strictly convex, none of the first squares has its bound within its
-    share, more than
-    ``AREA_UMBRA_MAX_LEFT`` are left (each would be a pair of its own), or a level has
-    more than ``AREA_UMBRA_MAX_SQUARES`` squares to test.
-
-    Examples
-    --------
-    Unit squares two apart, and between them two plates side by side, a gap between
-    them: neither plate hides the receiver alone, together they hide it from the
-    emitter but a band below the gap.
-
-    >>> from exactff.geometry import receiver_frame
-    >>> P = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], float)
-    >>> Q = P[::-1] + [0, 0, 2]
-    >>> K1 = np.array([[-2, -2, 1], [0.5, -2, 1], [0.5, 3, 1], [-2, 3, 1]], float)
-    >>> K2 = K1 + [2.5 + 1e-3, 0, 0]
-    >>> nP = np.array([0, 0, 1.0])
-    >>> left, value, err, n, taken = hidden_pieces(P, Q, [K1, K2], receiver_frame(nP),
-    ...                                            P.mean(axis=0), nP, 1e-9, 1.0)
-    >>> 0.8 < taken < 1.0, value == err == 0.0
-    (True, True)
-    """
-    frames = blocker_frames(blockers)
-    if frames is None or _blocker_frame(Qc) is None or _blocker_frame(Pc) is None:
-        return None
-    RQ = receiver_frame(_blocker_frame(Qc)[0])[:2]
-    q0 = Qc.mean(axis=0)
-    Q2 = (Qc - q0) @ RQ.T
-    if _area2(Q2) < 0:
-        Q2 = Q2[::-1]
-    area_Q = _area2(Q2)
-    P2 = (Pc - c) @ R[:2].T
-    if _area2(P2) < 0:
-        P2 = P2[::-1]
-    area_Pc = _area2(P2)
-    reach = max(float(np.abs(Pc).max()), float(np.abs(Qc).max()),
-                float(np.abs(frames[0]).max()))
-    lo, hi = P2.min(axis=0), P2.max(axis=0)
-    side = float(np.ptp(P2, axis=0).min())
-    n = np.maximum(1, np.ceil((hi - lo) / side - 1e-9).astype(int))
-    side = (hi - lo) / n
-    # the squares: (lower corner, sides, parent's index); per square its piece and
-    # whether it is left to integrate (None: cut in four)
-    squares = [(lo + side * [i, j], side, -1) for i in range(n[0]) for j in range(n[1])]
-    # the edges of P in a blocker's plane (both ends within AREA_HULL_RTOL of the
-    # coordinates' size of it) as half-planes a . u + b >= 0, moved in by
-    # AREA_UMBRA_SHRINK of P's size
-    eps = tol.AREA_UMBRA_SHRINK * float(np.ptp(P2, axis=0).max())
-    off = np.abs((c + P2 @ R[:2]) @ frames[2].T - frames[3])     # (k, b), P2's order
-    near = off <= tol.AREA_HULL_RTOL * reach + frames[4]
-    inward = []
-    for i, (p, q) in enumerate(zip(P2, np.roll(P2, -1, 0))):
-        if (near[i] & near[(i + 1) % len(P2)]).any():
-            a = np.array([-(q - p)[1], (q - p)[0]]) / np.linalg.norm(q - p)
-            inward.append((a, -float(a @ p) - eps))
-    nodes, within = [], False
-    value, err, taken, count = 0.0, 0.0, 0.0, 0
-    # the first squares in an order that spreads the first AREA_UMBRA_PROBE of them over
-    # P: where none of those is within its share, the pair is integrated whole
-    step = max(1, len(squares) // tol.AREA_UMBRA_PROBE)
-    probe = list(range(0, len(squares), step))[:tol.AREA_UMBRA_PROBE]
-    squares = ([squares[i] for i in probe]
-               + [sq for i, sq in enumerate(squares) if i not in set(probe)])
-    for level in range(tol.AREA_UMBRA_SPLIT_DEPTH + 1):
-        todo = []
-        for k, (corner, s, parent) in enumerate(squares):
-            if level == 0 and k == len(probe) and not within:
-                return None
-            piece = P2
-            for a, b in (([1.0, 0.0], -corner[0]), ([-1.0, 0.0], corner[0] + s[0]),
-                         ([0.0, 1.0], -corner[1]), ([0.0, -1.0], corner[1] + s[1])):
-                piece = _clip(piece, np.array(a), b)
-            a_piece = _area2(piece)
-            if len(piece) < 3 or not a_piece > 0:
-                continue
-            Cv = c + piece @ R[:2]
-            # proven on the piece less a strip along P's edges in a blocker's plane (the
-            # blocker seen edge-on there), the strip bounded below
-            inner = piece
-            for a, b in inward:
-                inner = _clip(inner, a, b)
-            a_inner = _area2(inner)
-            if len(inner) < 3 or not a_inner > 0:
-                inner, a_inner = piece, 0.0
-            rows = hiding_rows(c + inner @ R[:2], frames, q0, RQ, reach, tol.AREA_UMBRA_MARGIN,
-                               tol.AREA_UMBRA_ROW_MARGIN)
-            share = tol.AREA_UMBRA_CLOSED_SHARE * atol * a_piece / area_Pc
-            # the area of Qc whose unoccluded bound over the piece is a hundredth of its
-            # share (the receiver is cut no finer than that)
-            per_area = a_piece * unoccluded_bound(Cv, Qc, 1.0) / area_P
-            enough = 1e-2 * share / per_area if per_area > 0 else np.inf
-            if len(rows):
-                # only blockers that may hide part of Qc: no row outside all of it
-                some = ((rows[:, :, None, :2] @ Q2.T[None, None]).squeeze(2)
-                        + rows[:, :, 2:] >= 0).any(axis=2).all(axis=1)
-                rows = rows[some]
-            a_left = (uncovered_area(rows, Q2, tol.AREA_UMBRA_COVER_DEPTH, enough)
-                      if len(rows) else area_Q)
-            bound = ((a_inner * unoccluded_bound(Cv, Qc, a_left) if a_left > 0 else 0.0)
-                     + (a_piece - a_inner) * unoccluded_bound(Cv, Qc)) / area_P
-            nodes.append([Cv, parent, False])
-            within = within or bound <= share
-            if _DEBUG is not None:
-                _DEBUG.append((level, a_piece, a_left / area_Q, bound / share, len(rows)))
-            # taken where proven, or bounded by a hundredth of its share; else cut in
-            # four where the receiver is mostly covered; else taken where bounded by its
-            # share, else left
-            split = (level < tol.AREA_UMBRA_SPLIT_DEPTH
-                     and a_left <= tol.AREA_UMBRA_SPLIT_LEFT * area_Q)
-            if bound <= 1e-2 * share or ((a_left == 0.0 or not split) and bound <= share):
-                value += 0.5 * bound
-                err += 0.5 * bound
-                taken += a_piece
-                count += 1
-            elif split:
-                nodes[-1][2] = None
-                todo.extend((corner + 0.5 * s * [i, j], 0.5 * s, len(nodes) - 1)
-                            for i in (0, 1) for j in (0, 1))
-            else:
-                nodes[-1][2] = True
-        squares = todo
-        # none of the first squares within its share, too many squares to test, or left
-        # already: the pair is integrated whole
-        if ((level == 0 and not within) or len(squares) > tol.AREA_UMBRA_MAX_SQUARES
-                or sum(1 for node in nodes if node[2]) > tol.AREA_UMBRA_MAX_LEFT):
-            return None
-    # a square cut in four none of whose quarters was taken is left whole (fewer,
-    # larger pieces to integrate): the latest squares first, so that it goes up
-    children = {}
-    for k, (_, parent, _) in enumerate(nodes):
-        children.setdefault(parent, []).append(k)
-    for k in range(len(nodes) - 1, -1, -1):
-        if nodes[k][2] is None and all(nodes[i][2] for i in children.get(k, [])):
-            nodes[k][2] = True
-            for i in children.get(k, []):
-                nodes[i][2] = False
-    left = [Cv for Cv, parent, is_left in nodes if is_left]
-    if len(left) > tol.AREA_UMBRA_MAX_LEFT:
-        return None
-    if not count:
-        return None
-    return left, value, err, count, taken
