@@ -76,7 +76,7 @@ class AreaStats:
     umbra_pieces : int
         Pieces of emitters from which several blockers together hide the whole receiver
         (or all but a part whose bound is within the tolerance's share),
-        :func:`~exactff.area.umbra.hidden_pieces` (their pairs count in ``umbra_pairs``).
+        :func:`~exactff.area.joint_umbra.hidden_pieces` (their pairs count in ``umbra_pairs``).
     cell_fallbacks : int
         Pairs whose emitter was cut along the events another way (GEOS failed, or the
         cells did not cover it: the lines as cut, or on a fine grid).
