@@ -147,6 +147,7 @@ __all__ = [
     "AREA_UMBRA_MAX_SQUARES",
     "AREA_UMBRA_COVER_STALL",
     "AREA_UMBRA_PROBE",
+    "AREA_UMBRA_SPLIT_MIN_BLOCKERS",
     "AREA_MAX_EVENT_LINES",
     "AREA_EVENT_LINE_KEY",
     "AREA_MAX_DEPTH",
@@ -688,6 +689,11 @@ AREA_UMBRA_MAX_LEFT = 0
 AREA_UMBRA_MAX_SQUARES = 1024
 AREA_UMBRA_COVER_STALL = 0.75
 AREA_UMBRA_PROBE = 4
+#: ... tried only on pairs of at least this many blockers: on gunter2's row 38 the pairs
+#: of about 40 blockers (over AREA_UMBRA_MIN_LINES segments, but a few thousand points)
+#: cost 0.3-2.5 s of squares each, more than they saved (the row 71.2 s instead of 42.7
+#: s); pair (3, 27), of 135, 300 s without them.
+AREA_UMBRA_SPLIT_MIN_BLOCKERS = 100
 #: ... each proven with the blocker's plane AREA_UMBRA_MARGIN of the coordinates' size
 #: away, and inside each plane through a corner of the square and an edge of the
 #: blocker by AREA_UMBRA_ROW_MARGIN of its terms' size (some 450 units of rounding; the

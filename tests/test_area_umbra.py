@@ -285,6 +285,7 @@ def test_two_blockers_together_hide_the_receiver(monkeypatch):
         alone = hidden_pieces(P, Q, [K], *args)
         assert alone is None or alone[0]
     monkeypatch.setattr(tol, "AREA_UMBRA_MIN_LINES", 0)
+    monkeypatch.setattr(tol, "AREA_UMBRA_SPLIT_MIN_BLOCKERS", 0)
     st = AreaStats()
     f, e = area_row(scene, 0, 1e-9, stats=st)
     assert st.umbra_pieces > 0 and st.point_values == 0
@@ -302,6 +303,7 @@ def test_two_blockers_with_a_gap_keep_the_value(monkeypatch):
     caught."""
     scene = _two_plates(0.02)
     monkeypatch.setattr(tol, "AREA_UMBRA_MIN_LINES", 0)
+    monkeypatch.setattr(tol, "AREA_UMBRA_SPLIT_MIN_BLOCKERS", 0)
     # every square left (where Q is seen) integrated as a pair of its own
     monkeypatch.setattr(tol, "AREA_UMBRA_MAX_LEFT", 10 ** 6)
     st = AreaStats()

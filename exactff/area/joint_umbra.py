@@ -325,8 +325,11 @@ def split_pair(S, Pc, Qc, nP, atol, area_P, st, integrate):
     rules, :func:`~exactff.area.umbra.unoccluded_parts`) to what the pieces taken leave
     of ``atol`` per unit area of those left (at least ``atol``: the rules and their
     thresholds as the pair's). Returns the value per unit area of P, its estimate and the
-    points, or None where no piece is taken (counted in ``st``: ``umbra_pairs``,
+    points, or None where no piece is taken or the pair has fewer than
+    ``AREA_UMBRA_SPLIT_MIN_BLOCKERS`` blockers (counted in ``st``: ``umbra_pairs``,
     ``umbra_pieces``)."""
+    if len(S) - 1 < tol.AREA_UMBRA_SPLIT_MIN_BLOCKERS:
+        return None
     found = hidden_pieces(Pc, Qc, S[1:], receiver_frame(nP), Pc.mean(axis=0), nP, atol,
                           area_P)
     if found is None:
