@@ -48,7 +48,9 @@ Usage: python benchmarks/bench_area.py [--cube-k 8]
    (``exactff.area.umbra``; off: ``AREA_UMBRA_MIN_LINES`` beyond any pair), in one run:
    process time, point values, umbra cells, the row's sum less 1 against its
    estimates, and the largest difference of a value between the two runs against the
-   sum of their estimates; ``--umbra-pairs 38:23,38:3`` the same for single pairs.
+   sum of their estimates; ``--umbra-pairs 38:23,38:3`` the same for single pairs;
+   ``--umbra-split``: "without" is the umbras of one blocker alone, "with" adds those of
+   several blockers (``exactff.area.umbra.hidden_pieces``).
 9. ``--points`` alone (issue 49, the adaptive levels' points): test4, facet, gunter1 and
    the 106-surface box at each of ``--tolerances`` (default 1e-6): process time, the
    point values (hidden parts evaluated), and every value against a reference at 1e-11
@@ -209,6 +211,8 @@ def main():
     ap.add_argument("--umbras", default="", help="only gunter2's rows (comma-separated) "
                     "without and with the umbras")
     ap.add_argument("--umbra-pairs", default="", help="with --umbras: pairs i:j timed alone")
+    ap.add_argument("--umbra-split", action="store_true", help="with --umbras: without = "
+                    "the umbras of one blocker alone, with = those of several too")
     ap.add_argument("--curved", action="store_true",
                     help="only the curved events traced by numpy, compiled and not at all")
     ap.add_argument("--points", action="store_true",
@@ -428,8 +432,12 @@ def umbra_rows(args):
     scene = ef.read_vs3(os.path.join(DATA, "gunter2.vs3"))
     on = tolerances.AREA_UMBRA_MIN_LINES
 
+    split = tolerances.AREA_UMBRA_SPLIT_DEPTH
+
     def run(i, umbra):
-        tolerances.AREA_UMBRA_MIN_LINES = on if umbra else 2 ** 62
+        # --umbra-split: without = the umbras of one blocker alone (no pieces)
+        tolerances.AREA_UMBRA_MIN_LINES = on if umbra or args.umbra_split else 2 ** 62
+        tolerances.AREA_UMBRA_SPLIT_DEPTH = split if umbra or not args.umbra_split else -1
         st = AreaStats()
         t0 = time.process_time()
         f, e = area_row(scene, i, 1e-6, stats=st)
@@ -437,14 +445,15 @@ def umbra_rows(args):
 
     if args.umbras:
         print("| gunter2 row | s without | s with | ratio | points without | points with "
-              "| umbra cells | sum - 1 (est.) with | largest difference / estimates |")
+              "| umbra cells / pieces | sum - 1 (est.) with | largest difference / estimates |")
         print("|---|---|---|---|---|---|---|---|---|")
         for i in (int(r) for r in args.umbras.split(",")):
             f0, e0, t0, s0 = run(i, False)
             f1, e1, t1, s1 = run(i, True)
             worst = float(np.max(np.abs(f1 - f0) / np.maximum(e0 + e1, 1e-300)))
             print(f"| {i} | {t0:.2f} | {t1:.2f} | {t0 / t1:.2f}x | {s0.point_values:,} "
-                  f"| {s1.point_values:,} | {s1.umbra_cells} | {f1.sum() - 1:.1e} "
+                  f"| {s1.point_values:,} | {s1.umbra_cells} / {s1.umbra_pieces} "
+                  f"| {f1.sum() - 1:.1e} "
                   f"({e1.sum():.1e}) | {worst:.2f} |")
     if args.umbra_pairs:
         # a pair alone: its row's blockers and unoccluded value, captured from the row
@@ -463,21 +472,25 @@ def umbra_rows(args):
         finally:
             row_module.occluded_pair = original
         print("| gunter2 pair | s without | s with | points without | points with "
-              "| umbra cells | value with (est.) | difference / estimates |")
+              "| umbra cells / pieces | value with (est.) | difference / estimates |")
         print("|---|---|---|---|---|---|---|---|")
         for i, j in pairs:
             S, Pc, Qc, a, k = captured[np.asarray(scene.polygons[j], float).tobytes()]
             out = []
             for umbra in (False, True):
-                tolerances.AREA_UMBRA_MIN_LINES = on if umbra else 2 ** 62
+                tolerances.AREA_UMBRA_MIN_LINES = on if umbra or args.umbra_split else 2 ** 62
+                tolerances.AREA_UMBRA_SPLIT_DEPTH = (split if umbra or not args.umbra_split
+                                                     else -1)
                 st = AreaStats()
                 t0 = time.process_time()
                 v, e, pts = original(S, Pc, Qc, *a[:5], st, *a[6:], **k)
-                out.append((v, e, pts, time.process_time() - t0, st.umbra_cells))
+                out.append((v, e, pts, time.process_time() - t0,
+                            f"{st.umbra_cells} / {st.umbra_pieces}"))
             (v0, e0, p0, t0, _), (v1, e1, p1, t1, u1) = out
             print(f"| ({i}, {j}) | {t0:.2f} | {t1:.2f} | {p0:,} | {p1:,} | {u1} "
                   f"| {v1:.3e} ({e1:.1e}) | {abs(v1 - v0) / (e0 + e1):.2f} |")
     tolerances.AREA_UMBRA_MIN_LINES = on
+    tolerances.AREA_UMBRA_SPLIT_DEPTH = split
 
 
 def matrix_against_estimates(scene, F, E, rows):

@@ -138,6 +138,16 @@ __all__ = [
     "AREA_UMBRA_MIN_SHARE",
     "AREA_UMBRA_LIMIT",
     "AREA_UMBRA_CLOSED_SHARE",
+    "AREA_UMBRA_SPLIT_DEPTH",
+    "AREA_UMBRA_COVER_DEPTH",
+    "AREA_UMBRA_SPLIT_LEFT",
+    "AREA_UMBRA_ROW_MARGIN",
+    "AREA_UMBRA_COVER_PAIRS",
+    "AREA_UMBRA_MAX_LEFT",
+    "AREA_UMBRA_MAX_SQUARES",
+    "AREA_UMBRA_COVER_STALL",
+    "AREA_UMBRA_PROBE",
+    "AREA_UMBRA_SPLIT_MIN_BLOCKERS",
     "AREA_MAX_EVENT_LINES",
     "AREA_EVENT_LINE_KEY",
     "AREA_MAX_DEPTH",
@@ -659,6 +669,37 @@ AREA_UMBRA_LIMIT = 8
 #: ... and their cells take the closed form where its estimate (summed over them) is
 #: within this share of the pair's tolerance, else the rules as before.
 AREA_UMBRA_CLOSED_SHARE = 0.1
+#: ... and first, the umbras of several blockers (exactff.area.joint_umbra): the
+#: emitter cut into squares, each cut in four down to AREA_UMBRA_SPLIT_DEPTH levels where
+#: the receiver's part left uncovered is at most AREA_UMBRA_SPLIT_LEFT of it; the
+#: receiver cut into triangles down to AREA_UMBRA_COVER_DEPTH levels (while at most
+#: AREA_UMBRA_COVER_PAIRS pairs of a triangle and a blocker are candidates, and while
+#: the area left falls below AREA_UMBRA_COVER_STALL of the last level's) to cover it by
+#: the parts each blocker hides from all of a square. A pair none of whose first
+#: AREA_UMBRA_PROBE squares (spread over the emitter) has its bound within its share, with
+#: more than AREA_UMBRA_MAX_LEFT squares left (each would be a pair of its own: 0, as on
+#: gunter2 the squares left, where the receiver is seen past the seams, cost more than
+#: the pair whole, row 38 98.5 s instead of 47.2 s at 64), or more than
+#: AREA_UMBRA_MAX_SQUARES squares to test on a level, is integrated whole instead.
+AREA_UMBRA_SPLIT_DEPTH = 3
+AREA_UMBRA_COVER_DEPTH = 8
+AREA_UMBRA_SPLIT_LEFT = 0.5
+AREA_UMBRA_COVER_PAIRS = 4096
+AREA_UMBRA_MAX_LEFT = 0
+AREA_UMBRA_MAX_SQUARES = 1024
+AREA_UMBRA_COVER_STALL = 0.75
+AREA_UMBRA_PROBE = 4
+#: ... tried only on pairs of at least this many blockers: on gunter2's row 38 the pairs
+#: of about 40 blockers (over AREA_UMBRA_MIN_LINES segments, but a few thousand points)
+#: cost 0.3-2.5 s of squares each, more than they saved (the row 71.2 s instead of 42.7
+#: s); pair (3, 27), of 135, 300 s without them.
+AREA_UMBRA_SPLIT_MIN_BLOCKERS = 100
+#: ... each proven with the blocker's plane AREA_UMBRA_MARGIN of the coordinates' size
+#: away, and inside each plane through a corner of the square and an edge of the
+#: blocker by AREA_UMBRA_ROW_MARGIN of its terms' size (some 450 units of rounding; the
+#: computed value is within some ten of them), on the square less a strip of
+#: AREA_UMBRA_SHRINK of the emitter's size along its boundary (bounded instead).
+AREA_UMBRA_ROW_MARGIN = 1e-13
 #: Area form factors: an occluded pair whose events lie on more distinct lines than this
 #: (after the umbras; exactff.area.events.distinct_lines, angle and offset rounded to
 #: AREA_EVENT_LINE_KEY) raises NumericalError instead of noding them: the arrangement's

@@ -727,7 +727,8 @@ def area_form_factors(scene, rows=None, *, tolerance=1e-9, error=False, executor
         ``umbra_pairs`` and ``umbra_cells`` (pairs with umbras, regions of the emitter
         from which one blocker hides the whole receiver: their event lines cut away and
         their cells taken by the closed form, ``exactff.area.umbra``; and those cells'
-        triangles),
+        triangles), ``umbra_pieces`` (squares of emitters from which several blockers
+        together hide the whole receiver, ``exactff.area.joint_umbra``),
         ``curved_events`` (curved visibility events cut along: two blockers' edges seen
         crossing on the receiver's edge, ``exactff.area.curved``; not a shortcut) and
         ``curved_skipped`` (pairs with too many triples of edges to trace them, left

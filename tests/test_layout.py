@@ -65,6 +65,7 @@ LAYERS = {
     "exactff.area.events": 5.08,
     "exactff.area.curved": 5.082,
     "exactff.area.umbra": 5.085,
+    "exactff.area.joint_umbra": 5.087,
     "exactff.area.hidden": 5.09,
     "exactff.area.compiled_pair": 5.095,
     "exactff.area.adaptive": 5.10,

@@ -15,7 +15,7 @@ import shapely
 
 from .. import _tolerances as tol
 from ..errors import NumericalError, misses_tolerance
-from ..geometry import area_vector, cross, polygon_area, receiver_frame
+from ..geometry import area_vector, cross, receiver_frame
 from ._pair import adaptive_levels as _compiled_adaptive_levels
 from ._pair import corner_first as _compiled_corner_first
 from .compiled_pair import LEVEL_RULES, LEVEL_TOLERANCES
@@ -24,11 +24,18 @@ from .curved import curved_event_lines
 from .events import cut_cells, distinct_lines, event_lines
 from .hidden import hidden_setup, hidden_values
 from .points import point_values, unoccluded_bound
-from .umbra import outside_umbras, triangle_unoccluded, umbra_cells, umbra_edges, umbras
+from .joint_umbra import pair_umbras, split_pair
+from .umbra import triangle_unoccluded, umbra_cells
 from .rules import (CORNER_MIDDLE_RULE, budget_refined, quarter, refined, rule_pair,
                     triangle_areas, triangle_rule)
 
 __all__ = ["COMPILED_LEVELS", "COMPILED_PAIR", "occluded_pair"]
+
+
+def _split(S, Pc, Qc, nP, atol, area_P, st, solid, inner):
+    """:func:`~exactff.area.joint_umbra.split_pair`, the pieces left by these steps."""
+    return split_pair(S, Pc, Qc, nP, atol, area_P, st, lambda L, a, A, w: _hidden_integral(
+        S, L, Qc, nP, a, A, w, True, st, solid, inner, split=False))
 
 
 def _corner_first(T, blockers, nP, dP, reach=0.0, compiled=True):
@@ -122,11 +129,12 @@ def occluded_pair(S, Pc, Qc, nP, atol, area_P, whole, shortcuts=True, st=None,
 
 
 def _hidden_integral(S, Pc, Qc, nP, atol, area_P, whole, shortcuts, st, solid=None,
-                     inner=None):
+                     inner=None, split=True):
     """The adaptive integral of :func:`occluded_pair` to the absolute error ``atol``,
     with ``whole`` the pair's unoccluded value and estimate (per unit area
     of P): in one compiled call (:mod:`.compiled_pair`) where it takes the pair, else
-    (or without :data:`COMPILED_PAIR`) by the steps below, its reference."""
+    (or without :data:`COMPILED_PAIR`) by the steps below, its reference; where it has
+    umbras to look for, first several blockers' (``split``, :func:`_split`)."""
     if COMPILED_PAIR and COMPILED_LEVELS:
         r = _hidden_integral_in_one_call(S, Pc, Qc, nP, atol, area_P, whole, shortcuts,
                                          solid, inner)
@@ -135,6 +143,9 @@ def _hidden_integral(S, Pc, Qc, nP, atol, area_P, whole, shortcuts, st, solid=No
                              "curved_skipped", "back_faces"), r[4:] if st is not None else ()):
                 setattr(st, k, getattr(st, k) + v)
             return r[1:4]
+        split = split and r[0] == 1          # the umbras to look for: first several blockers'
+        if split and (done := _split(S, Pc, Qc, nP, atol, area_P, st, solid, inner)):
+            return done
     R = receiver_frame(nP)
     c = Pc.mean(axis=0)
     dP = float(nP @ Pc[0])
@@ -143,26 +154,14 @@ def _hidden_integral(S, Pc, Qc, nP, atol, area_P, whole, shortcuts, st, solid=No
     # and the curved events (two blockers' edges seen crossing on Qc's edge), as chords
     lines = np.concatenate([lines, curved_event_lines(
         S, Qc, nP, dP, R, c, radius, atol, solid if shortcuts else None, st)])
-    # the umbras: regions from every point of which one blocker hides all of Qc (the
-    # hidden part there is the unoccluded point value: no event inside changes it), the
-    # event lines cut away from them and their edges cut along instead
-    regions = []
-    if shortcuts and len(lines) > tol.AREA_UMBRA_MIN_LINES:
-        regions = umbras(Pc, Qc, S[1:], R, c)
-        # one region holding all of P but strips along its boundary (the proof's
-        # margin): the pair's value is that of the strips, between 0 and their area
-        # times the point values' bound
-        area_Pc = float(np.linalg.norm(area_vector(Pc)))
-        left = area_Pc - max((polygon_area(c + r @ R[:2]) for r, _ in regions), default=0.0)
-        half = 0.5 * unoccluded_bound(Pc, Qc) * max(left, 0.0) / area_P
-        if regions and half <= tol.AREA_UMBRA_CLOSED_SHARE * atol:
-            if st is not None:
-                st.umbra_pairs += 1
-            return half, half, 0
-        if regions:
-            P2 = (Pc - c) @ R[:2].T
-            lines = np.concatenate([outside_umbras(lines, regions), umbra_edges(
-                regions, P2, tol.AREA_HULL_RTOL * float(np.ptp(P2, axis=0).max()))])
+    if (split and not (COMPILED_PAIR and COMPILED_LEVELS) and shortcuts
+            and len(lines) > tol.AREA_UMBRA_MIN_LINES
+            and (done := _split(S, Pc, Qc, nP, atol, area_P, st, solid, inner))):
+        return done
+    # the umbras of one blocker: regions whose event lines are cut away (pair_umbras)
+    regions, lines, done = pair_umbras(lines, S, Pc, Qc, R, c, atol, area_P, shortcuts, st)
+    if done is not None:
+        return done
     # the arrangement's cost and cells grow with the square of its distinct lines: too
     # many raise (the row names the pair)
     many = distinct_lines(lines, 2.0 * radius, (Pc - c) @ R[:2].T)

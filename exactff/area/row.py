@@ -73,6 +73,10 @@ class AreaStats:
         Pairs with umbras (regions of the emitter from which one blocker hides the whole
         receiver, :func:`~exactff.area.umbra.umbras`: their event lines cut away, their
         cells taken by the closed form), and those cells' triangles.
+    umbra_pieces : int
+        Pieces of emitters from which several blockers together hide the whole receiver
+        (or all but a part whose bound is within the tolerance's share),
+        :func:`~exactff.area.joint_umbra.hidden_pieces` (their pairs count in ``umbra_pairs``).
     cell_fallbacks : int
         Pairs whose emitter was cut along the events another way (GEOS failed, or the
         cells did not cover it: the lines as cut, or on a fine grid).
@@ -110,6 +114,7 @@ class AreaStats:
     engine_fallback_points: int = 0
     umbra_pairs: int = 0
     umbra_cells: int = 0
+    umbra_pieces: int = 0
     cell_fallbacks: int = 0
     occluded_pairs: int = 0
     point_values: int = 0

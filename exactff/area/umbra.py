@@ -16,17 +16,18 @@ whole of it.
 import numpy as np
 
 from .. import _tolerances as tol
-from ..geometry import area_vector, cross
+from ..geometry import area_vector, cross, receiver_frame
 from ..rings import padded
 from .closed_form import unoccluded_pairs
-from .points import point_values
+from .points import point_values, unoccluded_bound
 from .rules import GAUSS_LOW_RULE, GAUSS_RULE, triangle_areas, triangle_rule
 
 __all__ = ["merged_blockers", "sees_through", "umbras", "outside_umbras", "in_umbra", "umbra_edges",
-           "triangle_unoccluded", "umbra_cells"]
+           "triangle_unoccluded", "umbra_cells", "unoccluded_parts", "blocker_frame",
+           "clip_half_plane", "signed_area"]
 
 
-def _blocker_frame(K):
+def blocker_frame(K):
     """A polygon's unit normal (Newell's, its vertices counter-clockwise about it), its
     plane's offset (the mean over its vertices) and their largest distance from it; None
     where it is not strictly convex about that normal (every turn positive)."""
@@ -77,7 +78,7 @@ def merged_blockers(blockers):
     [[[0.0, 1.0, 0.0], [0.0, 0.0, 0.0], [2.0, 0.0, 0.0], [2.0, 1.0, 0.0]]]
     """
     Ks = [np.asarray(K, dtype=float) for K in blockers]
-    frames = [_blocker_frame(K) for K in Ks]
+    frames = [blocker_frame(K) for K in Ks]
     out, groups = [], {}
     scale = 1.0 + max((float(np.abs(K).max()) for K in Ks), default=0.0)
     for K, f in zip(Ks, frames):
@@ -97,7 +98,7 @@ def merged_blockers(blockers):
                             or abs(fa[1] - fb[1]) > tol.AREA_HULL_RTOL * scale):
                         continue
                     M = _merge_two(A, B, fa[0])
-                    f = None if M is None else _blocker_frame(M)
+                    f = None if M is None else blocker_frame(M)
                     if f is None:
                         continue
                     members[a] = (M, f)
@@ -136,7 +137,7 @@ def sees_through(X, Qv, K, margin=None):
     [True, False]
     """
     X, Qv, K = (np.atleast_2d(np.asarray(a, dtype=float)) for a in (X, Qv, K))
-    frame = _blocker_frame(K)
+    frame = blocker_frame(K)
     if frame is None:
         return np.zeros(len(X), dtype=bool)
     nK, dK, flat = frame
@@ -162,7 +163,7 @@ def sees_through(X, Qv, K, margin=None):
     return ok.all(axis=1)
 
 
-def _clip(poly, a, b):
+def clip_half_plane(poly, a, b):
     """The convex polygon poly (k, 2) where ``a . u + b >= 0`` (Sutherland-Hodgman, one
     half-plane)."""
     if not len(poly):
@@ -179,7 +180,7 @@ def _clip(poly, a, b):
     return np.array(out).reshape(-1, 2)
 
 
-def _area2(poly):
+def signed_area(poly):
     """The signed area of a 2-D polygon (k, 2)."""
     if len(poly) < 3:
         return 0.0
@@ -193,7 +194,7 @@ def _image_half_planes(K, Qv, R, c):
     points that see every vertex of Qv through the convex polygon K (the central images
     of K from each vertex: beyond K's plane and inside the planes through the vertex and
     each edge). None where K is not strictly convex."""
-    frame = _blocker_frame(K)
+    frame = blocker_frame(K)
     if frame is None:
         return None
     nK, dK, _ = frame
@@ -249,9 +250,9 @@ def umbras(Pc, Qc, blockers, R, c, limit=None):
     limit = tol.AREA_UMBRA_LIMIT if limit is None else limit
     blockers = [np.asarray(K, dtype=float) for K in blockers]
     P2 = (Pc - c) @ R[:2].T
-    if _area2(P2) < 0:
+    if signed_area(P2) < 0:
         P2 = P2[::-1]
-    area = _area2(P2)
+    area = signed_area(P2)
     size = float(np.ptp(P2, axis=0).max())
     eps = tol.AREA_UMBRA_SHRINK * size
     # sample points of Pc: its corners, its centroid and the midpoints between them
@@ -280,16 +281,16 @@ def umbras(Pc, Qc, blockers, R, c, limit=None):
         # the region shrunk by 2 eps (returned) and by eps (proven, P grown by eps)
         region = P2
         for a, b in H:
-            region = _clip(region, a, b - 2 * eps)
-        if _area2(region) < tol.AREA_UMBRA_MIN_SHARE * area:
+            region = clip_half_plane(region, a, b - 2 * eps)
+        if signed_area(region) < tol.AREA_UMBRA_MIN_SHARE * area:
             continue
         grown = P2
         for p, q in zip(P2, np.roll(P2, -1, 0)):
             e = q - p
             a = np.array([-e[1], e[0]]) / np.linalg.norm(e)      # inward normal
-            grown = _clip(grown, a, -float(a @ p) + eps)
+            grown = clip_half_plane(grown, a, -float(a @ p) + eps)
         for a, b in H:
-            grown = _clip(grown, a, b - eps)
+            grown = clip_half_plane(grown, a, b - eps)
         if len(grown) < 3 or not sees_through(c + grown @ R[:2], Qc, K).all():
             continue
         rows = np.array([[a[0], a[1], b - 2 * eps] for a, b in H]
@@ -298,7 +299,7 @@ def umbras(Pc, Qc, blockers, R, c, limit=None):
         for r, (p, q) in zip(rows[len(H):], zip(P2, np.roll(P2, -1, 0))):
             r[:2] /= np.linalg.norm(r[:2])
             r[2] = -float(r[:2] @ p)
-        found.append((_area2(region), region, rows))
+        found.append((signed_area(region), region, rows))
     found.sort(key=lambda f: -f[0])
     kept = []
     for _, r, h in found:
@@ -385,7 +386,7 @@ def triangle_unoccluded(T, nP, Qc):
     return area_Q * f, area_Q * e
 
 
-def _umbra_unoccluded(T, nP, Qc, share):
+def unoccluded_parts(T, nP, Qc, share):
     """``int_T F(x -> Qc) dA_x`` for triangles T (t, 3, 3) of an umbra (where the hidden
     part is the unoccluded value) and its estimate: the closed form
     (:func:`triangle_unoccluded`), and where its estimate misses ``share`` (t,) (its
@@ -413,7 +414,7 @@ def umbra_cells(cells, regions, R, c, nP, Qc, area_P, area_Pc, atol, bound):
     """The cells (t, 3, 3) of an emitter cut along the umbras' edges as well as its
     events, sorted: those in an umbra (every corner within ``AREA_UMBRA_SHRINK`` of its
     size of one region, where the proof holds) take the unoccluded value for their
-    hidden part (:func:`_umbra_unoccluded`, each within its share by area of
+    hidden part (:func:`unoccluded_parts`, each within its share by area of
     ``AREA_UMBRA_CLOSED_SHARE`` of ``atol``, else left to the rules); the strips between
     the regions and P's boundary or the regions as computed (AREA_UMBRA_SHRINK wide:
     where a blocker shares an edge with P, the rules' nodes would lie at that edge, where
@@ -431,7 +432,7 @@ def umbra_cells(cells, regions, R, c, nP, Qc, area_P, area_Pc, atol, bound):
     if inside.any():
         at = np.flatnonzero(inside)
         share = tol.AREA_UMBRA_CLOSED_SHARE * atol * area_P / area_Pc * triangle_areas(cells[at])
-        exU, exE, ok = _umbra_unoccluded(cells[at], nP, Qc, share)
+        exU, exE, ok = unoccluded_parts(cells[at], nP, Qc, share)
         inside[at[~ok]] = False
         U, E = float(exU[ok].sum()) / area_P, float(exE[ok].sum()) / area_P
         area, n = float(triangle_areas(cells[inside]).sum()), int(ok.sum())
