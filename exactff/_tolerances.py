@@ -148,6 +148,8 @@ __all__ = [
     "AREA_UMBRA_COVER_STALL",
     "AREA_UMBRA_PROBE",
     "AREA_UMBRA_SPLIT_MIN_BLOCKERS",
+    "AREA_UMBRA_TAKE_SHARE",
+    "AREA_UMBRA_SQUARE_SLACK",
     "AREA_MAX_EVENT_LINES",
     "AREA_EVENT_LINE_KEY",
     "AREA_MAX_DEPTH",
@@ -694,6 +696,13 @@ AREA_UMBRA_PROBE = 4
 #: cost 0.3-2.5 s of squares each, more than they saved (the row 71.2 s instead of 42.7
 #: s); pair (3, 27), of 135, 300 s without them.
 AREA_UMBRA_SPLIT_MIN_BLOCKERS = 100
+#: ... a square is taken (half its bound, within as much) without being cut further
+#: where that bound is within this share of its share of the tolerance, and the receiver
+#: is cut no finer than the area whose bound is this share of it.
+AREA_UMBRA_TAKE_SHARE = 1e-2
+#: ... the emitter's first squares: its extent over its shorter side rounded up, less
+#: this (an extent of 1 with a rounding above it is one square, not two).
+AREA_UMBRA_SQUARE_SLACK = 1e-9
 #: ... each proven with the blocker's plane AREA_UMBRA_MARGIN of the coordinates' size
 #: away, and inside each plane through a corner of the square and an edge of the
 #: blocker by AREA_UMBRA_ROW_MARGIN of its terms' size (some 450 units of rounding; the

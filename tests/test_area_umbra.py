@@ -322,3 +322,25 @@ def test_two_blockers_with_a_gap_keep_the_value(monkeypatch):
          for a in gx for b in gy]
     assert f1[1] > 1e-6
     assert abs(float(W @ np.array(F)) / 12 - f1[1]) <= 1e-3 * f1[1], (float(W @ np.array(F)) / 12, f1[1])
+
+
+@pytest.mark.parametrize("compiled", [True, False])
+def test_umbras_of_several_blockers_are_off_without_shortcuts(monkeypatch, compiled):
+    """The umbras of several blockers are a shortcut: with ``shortcuts=False`` the two
+    plates that together hide Q (_two_plates) take no piece, and the row is within the
+    two estimates of the row with them (0: no segment from P to Q misses both plates);
+    on the compiled pair and on its numpy reference (``COMPILED_PAIR`` off). Planted:
+    the reference's split tried whatever ``shortcuts`` (its guard removed): pieces
+    taken without shortcuts, caught."""
+    from exactff.area import adaptive
+    monkeypatch.setattr(adaptive, "COMPILED_PAIR", compiled)
+    monkeypatch.setattr(tol, "AREA_UMBRA_MIN_LINES", 0)
+    monkeypatch.setattr(tol, "AREA_UMBRA_SPLIT_MIN_BLOCKERS", 0)
+    scene = _two_plates(-0.2)
+    on, off = AreaStats(), AreaStats()
+    f1, e1 = area_row(scene, 0, 1e-9, stats=on)
+    f0, e0 = area_row(scene, 0, 1e-9, shortcuts=False, stats=off)
+    assert on.umbra_pieces > 0 and off.umbra_pieces == 0 and off.umbra_pairs == 0
+    assert off.point_values > 0
+    assert np.all(np.abs(f1 - f0) <= e0 + e1), (f1, f0, e0 + e1)
+    assert abs(f0[1]) <= e0[1]

@@ -32,10 +32,10 @@ from .rules import (CORNER_MIDDLE_RULE, budget_refined, quarter, refined, rule_p
 __all__ = ["COMPILED_LEVELS", "COMPILED_PAIR", "occluded_pair"]
 
 
-def _split(S, Pc, Qc, nP, atol, area_P, st, solid, inner):
+def _split(S, Pc, Qc, nP, atol, area_P, shortcuts, st, solid, inner):
     """:func:`~exactff.area.joint_umbra.split_pair`, the pieces left by these steps."""
     return split_pair(S, Pc, Qc, nP, atol, area_P, st, lambda L, a, A, w: _hidden_integral(
-        S, L, Qc, nP, a, A, w, True, st, solid, inner, split=False))
+        S, L, Qc, nP, a, A, w, shortcuts, st, solid, inner, split=False))
 
 
 def _corner_first(T, blockers, nP, dP, reach=0.0, compiled=True):
@@ -144,7 +144,7 @@ def _hidden_integral(S, Pc, Qc, nP, atol, area_P, whole, shortcuts, st, solid=No
                 setattr(st, k, getattr(st, k) + v)
             return r[1:4]
         split = split and r[0] == 1          # the umbras to look for: first several blockers'
-        if split and (done := _split(S, Pc, Qc, nP, atol, area_P, st, solid, inner)):
+        if split and (done := _split(S, Pc, Qc, nP, atol, area_P, shortcuts, st, solid, inner)):
             return done
     R = receiver_frame(nP)
     c = Pc.mean(axis=0)
@@ -156,7 +156,7 @@ def _hidden_integral(S, Pc, Qc, nP, atol, area_P, whole, shortcuts, st, solid=No
         S, Qc, nP, dP, R, c, radius, atol, solid if shortcuts else None, st)])
     if (split and not (COMPILED_PAIR and COMPILED_LEVELS) and shortcuts
             and len(lines) > tol.AREA_UMBRA_MIN_LINES
-            and (done := _split(S, Pc, Qc, nP, atol, area_P, st, solid, inner))):
+            and (done := _split(S, Pc, Qc, nP, atol, area_P, shortcuts, st, solid, inner))):
         return done
     # the umbras of one blocker: regions whose event lines are cut away (pair_umbras)
     regions, lines, done = pair_umbras(lines, S, Pc, Qc, R, c, atol, area_P, shortcuts, st)

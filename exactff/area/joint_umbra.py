@@ -209,7 +209,7 @@ def hidden_pieces(Pc, Qc, blockers, R, c, nP, atol, area_P):
                 float(np.abs(frames[0]).max()))
     lo, hi = P2.min(axis=0), P2.max(axis=0)
     side = float(np.ptp(P2, axis=0).min())
-    n = np.maximum(1, np.ceil((hi - lo) / side - 1e-9).astype(int))
+    n = np.maximum(1, np.ceil((hi - lo) / side - tol.AREA_UMBRA_SQUARE_SLACK).astype(int))
     side = (hi - lo) / n
     # the squares: (lower corner, sides, parent's index); per square its piece and
     # whether it is left to integrate (None: cut in four)
@@ -231,8 +231,9 @@ def hidden_pieces(Pc, Qc, blockers, R, c, nP, atol, area_P):
     # P: where none of those is within its share, the pair is integrated whole
     step = max(1, len(squares) // tol.AREA_UMBRA_PROBE)
     probe = list(range(0, len(squares), step))[:tol.AREA_UMBRA_PROBE]
+    probed = set(probe)
     squares = ([squares[i] for i in probe]
-               + [sq for i, sq in enumerate(squares) if i not in set(probe)])
+               + [sq for i, sq in enumerate(squares) if i not in probed])
     for level in range(tol.AREA_UMBRA_SPLIT_DEPTH + 1):
         todo = []
         for k, (corner, s, parent) in enumerate(squares):
@@ -257,10 +258,11 @@ def hidden_pieces(Pc, Qc, blockers, R, c, nP, atol, area_P):
             rows = hiding_rows(c + inner @ R[:2], frames, q0, RQ, reach, tol.AREA_UMBRA_MARGIN,
                                tol.AREA_UMBRA_ROW_MARGIN)
             share = tol.AREA_UMBRA_CLOSED_SHARE * atol * a_piece / area_Pc
-            # the area of Qc whose unoccluded bound over the piece is a hundredth of its
-            # share (the receiver is cut no finer than that)
+            # the area of Qc whose unoccluded bound over the piece is AREA_UMBRA_TAKE_SHARE
+            # of its share (the receiver is cut no finer than that)
             per_area = a_piece * unoccluded_bound(Cv, Qc, 1.0) / area_P
-            enough = 1e-2 * share / per_area if per_area > 0 else np.inf
+            enough = (tol.AREA_UMBRA_TAKE_SHARE * share / per_area if per_area > 0
+                      else np.inf)
             if len(rows):
                 # only blockers that may hide part of Qc: no row outside all of it
                 some = ((rows[:, :, None, :2] @ Q2.T[None, None]).squeeze(2)
@@ -272,12 +274,13 @@ def hidden_pieces(Pc, Qc, blockers, R, c, nP, atol, area_P):
                      + (a_piece - a_inner) * unoccluded_bound(Cv, Qc)) / area_P
             nodes.append([Cv, parent, False])
             within = within or bound <= share
-            # taken where proven, or bounded by a hundredth of its share; else cut in
+            # taken where proven, or bounded by AREA_UMBRA_TAKE_SHARE of its share; else cut in
             # four where the receiver is mostly covered; else taken where bounded by its
             # share, else left
             split = (level < tol.AREA_UMBRA_SPLIT_DEPTH
                      and a_left <= tol.AREA_UMBRA_SPLIT_LEFT * area_Q)
-            if bound <= 1e-2 * share or ((a_left == 0.0 or not split) and bound <= share):
+            if (bound <= tol.AREA_UMBRA_TAKE_SHARE * share
+                    or ((a_left == 0.0 or not split) and bound <= share)):
                 value += 0.5 * bound
                 err += 0.5 * bound
                 taken += a_piece
