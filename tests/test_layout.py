@@ -61,6 +61,7 @@ LAYERS = {
     "exactff.area.contour_rule": 5.04,
     "exactff.area.far_field": 5.05,
     "exactff.area.closed_form": 5.06,
+    "exactff.area.rule_check": 5.065,
     "exactff.area.culling": 5.07,
     "exactff.area.events": 5.08,
     "exactff.area.curved": 5.082,

@@ -18,12 +18,12 @@ import numpy as np
 from .. import _tolerances as tol
 from ..geometry import area_vector, cross, receiver_frame
 from ..rings import padded
-from .closed_form import unoccluded_pairs
 from .points import point_values, unoccluded_bound
+from .rule_check import triangle_unoccluded
 from .rules import GAUSS_LOW_RULE, GAUSS_RULE, triangle_areas, triangle_rule
 
 __all__ = ["merged_blockers", "sees_through", "umbras", "outside_umbras", "in_umbra", "umbra_edges",
-           "triangle_unoccluded", "umbra_cells", "unoccluded_parts", "blocker_frame",
+           "umbra_cells", "unoccluded_parts", "blocker_frame",
            "clip_half_plane", "signed_area"]
 
 
@@ -369,27 +369,10 @@ def outside_umbras(lines, regions):
     return S
 
 
-def triangle_unoccluded(T, nP, Qc):
-    """``int_T F(x -> Qc) dA_x`` for each triangle T (t, 3, 3) in the plane of normal nP,
-    unoccluded (Qc wholly in front of that plane, each T in front of Qc's), and its
-    rounding estimate: by reciprocity ``A_Qc F(Qc -> T)``, the closed form
-    (:func:`~exactff.area.closed_form.unoccluded_pairs`, no fallback: where its terms cancel
-    the estimate says so)."""
-    if not len(T):
-        return np.zeros(0), np.zeros(0)
-    # counter-clockwise seen from nP's side
-    flip = np.einsum("tx,x->t", cross(T[:, 1] - T[:, 0], T[:, 2] - T[:, 0]), nP) < 0
-    T = np.where(flip[:, None, None], T[:, ::-1], T)
-    f, e = unoccluded_pairs(Qc, list(T), shortcuts=False, atol=np.inf,
-                            parts=[(Qc, t) for t in T])
-    area_Q = float(np.linalg.norm(area_vector(Qc)))
-    return area_Q * f, area_Q * e
-
-
 def unoccluded_parts(T, nP, Qc, share):
     """``int_T F(x -> Qc) dA_x`` for triangles T (t, 3, 3) of an umbra (where the hidden
     part is the unoccluded value) and its estimate: the closed form
-    (:func:`triangle_unoccluded`), and where its estimate misses ``share`` (t,) (its
+    (:func:`~exactff.area.rule_check.triangle_unoccluded`), and where its estimate misses ``share`` (t,) (its
     terms cancel: a triangle with an edge of rounding's length) the 12- and 8-point
     collapsed Gauss rules of the far-field rule on the point values, their difference
     and the nodes' estimates the estimate. Returns the values, the estimates, and per
