@@ -912,8 +912,9 @@ AREA_CLOSED_ULPS = 4.0
 #: bound of that turn, 4 q (1 + ln(1 + 1 / 2 q)) for q = |e x f| / max(|e|, |f|)^2
 #: (``exactff/_core/closed_form.cpp``), and the form of the smaller estimate kept: the
 #: skew form's terms grow as 1 / sin (edges parallel but for their vertices' rounding,
-#: a sine of 3e-17: terms of 1e18), the bound as sin ln(1 / sin); they cross near a
-#: sine of 1e-9, well inside this.
+#: a sine of 3e-17: terms of 1e18), the bound as sin ln(1 / sin); for edges of about
+#: unit length and distance they cross near a sine of 3e-8 (estimates of 5e-7 there),
+#: well inside this.
 AREA_CLOSED_NEAR_PARALLEL = 1e-6
 
 #: Area form factors, the closed form: the relative target of its estimate, and the
