@@ -362,7 +362,10 @@ def test_nearly_parallel_edge_pairs_within_their_estimates(sin):
     for across in (1.0, 0.01):
         for _ in range(4):
             a = rng.uniform(-1, 1, 3) * 0.5
-            b = a + across * np.cross(e, n) / np.linalg.norm(e) + rng.uniform(-1, 1) * e
+            # across, out of the plane of the turn too (in it, the turn's first order
+            # cancels)
+            b = a + across * (0.8 * np.cross(e, n) / np.linalg.norm(e) + 0.6 * n) \
+                + rng.uniform(-1, 1) * e
             J, M = edge_integrals.edge_log_integrals(*(x[None] for x in (a, e, b, f)))
             args = [_mp_vec(x) for x in (a, e, b, f)]
             with mp.workdps(60):
