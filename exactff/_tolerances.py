@@ -111,6 +111,7 @@ __all__ = [
     "TANH_SINH_LEVEL",
     "TANH_SINH_T_MAX",
     "AREA_CLOSED_ULPS",
+    "AREA_CLOSED_NEAR_PARALLEL",
     "AREA_CLOSED_RTOL",
     "AREA_CLOSED_FLOOR",
     "AREA_CLOSED_MP_DPS",
@@ -905,6 +906,16 @@ VIEW3D_ZERO_COORDINATE = 1e-14
 #: on 700 random edge pairs of every kind (skew, crossing, sharing a vertex, collinear,
 #: parallel, 1e-8 from parallel), 0.2 on Howell's catalogue cases; 4 leaves a margin of 4.
 AREA_CLOSED_ULPS = 4.0
+
+#: Area form factors, the closed form: edges within this sine of parallel are also taken
+#: by the parallel form, the shorter edge turned onto the longer's direction, with the
+#: bound of that turn, 4 q (1 + ln(1 + 1 / 2 q)) for q = |e x f| / max(|e|, |f|)^2
+#: (``exactff/_core/closed_form.cpp``), and the form of the smaller estimate kept: the
+#: skew form's terms grow as 1 / sin (edges parallel but for their vertices' rounding,
+#: a sine of 3e-17: terms of 1e18), the bound as sin ln(1 / sin); for edges of about
+#: unit length and distance they cross near a sine of 3e-8 (estimates of 5e-7 there),
+#: well inside this.
+AREA_CLOSED_NEAR_PARALLEL = 1e-6
 
 #: Area form factors, the closed form: the relative target of its estimate, and the
 #: floor of the values it is relative to (a share of the emitter's hemisphere); where the

@@ -115,7 +115,7 @@ def _edge_cases(rng, n):
 def test_edge_integrals_against_mpmath():
     # each edge pair's J within its estimate, AREA_CLOSED_ULPS units of EPS of its terms'
     # magnitudes, of mpmath's at 30 digits more than its own terms' magnitudes (edges
-    # parallel in floats are not quite in mpmath: their skew form's terms reach 1e19)
+    # parallel in floats are not quite in mpmath: its skew form's terms reach 1e19)
     a, e, b, f = _edge_cases(np.random.default_rng(51), 60)
     J, M = edge_log_integrals(a, e, b, f)
     for k in range(len(J)):
@@ -173,10 +173,10 @@ def test_row_sums_are_the_edge_integrals_summed():
 def test_compiled_arguments_are_checked():
     with pytest.raises(ValueError, match="row_pairs"):
         _closed.row_pairs(np.zeros((4, 3)), np.array([0, 4]), np.zeros((3, 3)), np.array([0, 3]),
-                          np.ones(2), np.ones(2), 0.0, 0.0, 0.0, 0.0)
+                          np.ones(2), np.ones(2), 0.0, 0.0, 0.0, 0.0, 0.0)
     with pytest.raises(IndexError, match="row_pairs"):
         _closed.row_pairs(np.zeros((4, 3)), np.array([0, 5]), np.zeros((3, 3)), np.array([0, 3]),
-                          np.ones(1), np.ones(1), 0.0, 0.0, 0.0, 0.0)
+                          np.ones(1), np.ones(1), 0.0, 0.0, 0.0, 0.0, 0.0)
     with pytest.raises(ValueError, match="edge_log_integrals"):
         _closed.edge_log_integrals(np.zeros((2, 3)), np.zeros((1, 3)), np.zeros((2, 3)),
-                                   np.zeros((2, 3)), 0.0, 0.0)
+                                   np.zeros((2, 3)), 0.0, 0.0, 0.0, 0.0, 0.0)

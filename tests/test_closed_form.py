@@ -315,6 +315,67 @@ def test_nearly_parallel_edges_against_mpmath():
     assert abs(f - ref) <= e + UNIT * ref
 
 
+# gunter2 (View3D): a wall piece of surface 15, facing +y, and the triangles of the
+# ceiling strip 42 above it, facing down, their vertices as read (24.600000000000005,
+# 15.399999999999999): edges parallel to the wall's but for that rounding, sines of
+# 3.4e-17 to 7.1e-16. The skew form's terms reached 1e18 there: values of -3.2 for 0.07,
+# estimates of 6.6e5 (in both directions), every pair sent to mpmath
+GUNTER2_WALL = np.array([[-109.5, 0, 0], [-122, 0, 0], [-122, 0, 5], [-109.5, 0, 5]], float)
+GUNTER2_STRIP = [np.array(t, float) for t in [
+    [[-109.5, 15.4, 7], [-109.5, 24.6, 7], [-104.5, 24.600000000000005, 7]],
+    [[-104.5, 24.600000000000005, 7], [-104.5, 15.399999999999999, 7], [-109.5, 15.4, 7]],
+    [[-104.5, 24.600000000000005, 7], [0, 24.6, 7], [0, 15.4, 7]],
+    [[0, 15.4, 7], [-52.25, 15.399999999999999, 7], [-52.25, 20.000000000000004, 7]],
+    [[-52.25, 15.399999999999999, 7], [-104.5, 15.399999999999999, 7], [-104.5, 20, 7]],
+    [[-52.25, 20.000000000000004, 7], [-104.5, 20, 7], [-104.5, 24.600000000000005, 7]],
+    [[-52.25, 15.399999999999999, 7], [-104.5, 20, 7], [-52.25, 20.000000000000004, 7]]]]
+
+
+@pytest.mark.parametrize("k", range(len(GUNTER2_STRIP)))
+def test_edges_parallel_but_for_rounding_in_closed_form_both_ways(k):
+    # the closed form alone (atol infinite: no fallback), each way, against the double
+    # contour integral in mpmath; the estimates within 1e-7 of the value (1e-11 to
+    # 6e-8: the contour sum cancels for these long thin triangles, and their long edges
+    # 5 degrees from the wall's have skew terms of 1e3)
+    T = GUNTER2_STRIP[k]
+    for P, Q in ((GUNTER2_WALL, T), (T, GUNTER2_WALL)):
+        ref = mp_contour_form_factor(P, Q)
+        assert ref > 1e-5
+        f, e = unoccluded_pairs(P, [Q], shortcuts=False, atol=np.inf)
+        assert abs(f[0] - ref) <= e[0] + UNIT * ref, (k, f[0], ref, e[0])
+        assert e[0] <= 1e-7 * ref, (k, f[0], ref, e[0])
+
+
+@pytest.mark.parametrize("sin", [0.0, 3e-17, 1e-16, 1e-15, 1e-13, 1e-11, 1e-9, 1e-8, 1e-7,
+                                 1e-6, 2e-6])
+def test_nearly_parallel_edge_pairs_within_their_estimates(sin):
+    # edges along a direction of no axis, the second 0.7 as long, reversed and turned
+    # by the given sine (0: f = -0.7 e as rounded, parallel but for that rounding), at
+    # 1 and at 0.01 across: J within its estimate of mpmath's (the same closed form at
+    # enough digits that its terms of 1 / sin lose none that count); the estimate
+    # small where the sine is of rounding
+    rng = np.random.default_rng(68)
+    e = np.array([0.6, -0.35, 0.71])
+    n = np.cross(e, [0.2, 0.9, 0.1])
+    n /= np.linalg.norm(n)
+    f = -0.7 * e + sin * 0.7 * np.linalg.norm(e) * n
+    for across in (1.0, 0.01):
+        for _ in range(4):
+            a = rng.uniform(-1, 1, 3) * 0.5
+            # across, out of the plane of the turn too (in it, the turn's first order
+            # cancels)
+            b = a + across * (0.8 * np.cross(e, n) / np.linalg.norm(e) + 0.6 * n) \
+                + rng.uniform(-1, 1) * e
+            J, M = edge_integrals.edge_log_integrals(*(x[None] for x in (a, e, b, f)))
+            args = [_mp_vec(x) for x in (a, e, b, f)]
+            with mp.workdps(60):
+                ref = float(edge_integrals.mp_edge_log_integral(*args)[0])
+            bound = tol.AREA_CLOSED_ULPS * tol.EPS * M[0]
+            assert abs(J[0] - ref) <= bound + UNIT * abs(ref), (sin, J[0], ref, bound)
+            if sin <= 1e-15:
+                assert bound <= 1e-12 * max(1.0, abs(ref)), (sin, bound)
+
+
 # ---------------------------------------------------------------------------------------
 # random pairs: the oracle, reciprocity
 # ---------------------------------------------------------------------------------------
@@ -511,22 +572,27 @@ def test_never_negative_nor_nan():
     assert F.tolist() == [0.0, 0.0, 0.0] and E.tolist() == [0.0, 0.0, 0.0]
 
 
-def test_rotated_box_area_rows_take_the_contour_rule_and_sum_to_one():
-    # a rotated box: its parallel edges are parallel only to rounding, so the closed
-    # form's skew terms carry large estimates; area rows (an absolute target) take the
-    # tanh-sinh rule there instead of mpmath, counted; the closed enclosure's rows sum
-    # to 1 within their estimates, and reciprocity holds (an independent invariant)
+@pytest.mark.parametrize("k,j,tolerance", [(2, 9, 1e-9), (4, 37, 1e-13)])
+def test_rotated_box_area_rows_take_the_contour_rule_and_sum_to_one(k, j, tolerance):
+    # a rotated box: its parallel edges are parallel only to rounding, taken by the
+    # closed form's parallel form with the bound of their turn (the skew form's terms
+    # were of 1e18: every pair of the 2 x 2 box's rows went to the tanh-sinh rule);
+    # at 1e-13 some pairs of the 4 x 4 box's rows miss it (far or thin, the contour
+    # sum's cancellation) and take the tanh-sinh rule instead of mpmath, counted; the
+    # closed enclosure's rows sum to 1 within their estimates, and reciprocity holds
+    # (an independent invariant)
     th = 0.3
     R = (np.array([[np.cos(th), -np.sin(th), 0], [np.sin(th), np.cos(th), 0], [0, 0, 1]])
          @ np.array([[1, 0, 0], [0, np.cos(th), -np.sin(th)], [0, np.sin(th), np.cos(th)]]))
-    scene = ef.Scene.from_polygons([P @ R.T for P in ef.scenes.subdivided_box(2).polygons])
+    scene = ef.Scene.from_polygons([P @ R.T for P in ef.scenes.subdivided_box(k).polygons])
     st = {}
-    F, E = ef.area_form_factors(scene, rows=[0, 9], tolerance=1e-9, error=True, stats=st)
-    assert st["contour_rule_pairs"] > 0 and st["escalated_pairs"] == 0
+    F, E = ef.area_form_factors(scene, rows=[0, j], tolerance=tolerance, error=True, stats=st)
+    assert st["escalated_pairs"] == 0
+    assert (st["contour_rule_pairs"] > 0) == (k == 4), st["contour_rule_pairs"]
     assert np.all(np.abs(F.sum(axis=1) - 1.0) <= E.sum(axis=1) + 1e-14)
-    assert F[0, 9] > 0 and F[1, 0] > 0
+    assert F[0, j] > 0 and F[1, 0] > 0
     A = np.linalg.norm([ef.area_vector(P) for P in scene.polygons], axis=1)
-    assert abs(A[0] * F[0, 9] - A[9] * F[1, 0]) <= A[0] * E[0, 9] + A[9] * E[1, 0] + 1e-16
+    assert abs(A[0] * F[0, j] - A[j] * F[1, 0]) <= A[0] * E[0, j] + A[j] * E[1, 0] + 1e-16
 
 
 def test_dilogarithm_near_the_real_axis_vs_mpmath():

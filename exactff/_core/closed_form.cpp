@@ -137,14 +137,62 @@ void parallel(const V& a, const V& e, const V& b, const V& f, double& J, double&
     M = Ms / std::fabs(X * Y);
 }
 
+// x y' - x' y to within 1.5 units of its own rounding (Kahan's 2 x 2 determinant, with
+// fused multiply-adds): 0 only where it is 0, however near parallel the rows
+inline double det2(double x, double y, double xp, double yp) {
+    const double w = xp * y;
+    const double err = std::fma(-xp, y, w);      // w - x' y, exactly
+    return std::fma(x, yp, -w) + err;
+}
+
+// |e x f|, each component to within 1.5 units of its rounding
+inline double accurate_cross_norm(const V& e, const V& f) {
+    const double cx = det2(e.y, e.z, f.y, f.z), cy = det2(e.z, e.x, f.z, f.x),
+                 cz = det2(e.x, e.y, f.x, f.y);
+    return std::sqrt(cx * cx + cy * cy + cz * cz);
+}
+
 void edge_log_integral(const V& a, const V& e, const V& b, const V& f,
                        const ClosedFormConstants& k, double& J, double& M) {
     const V c = cross(e, f);
-    if (dot(c, c) == 0)   // (a cross product below 1e-154 is 0)
-        parallel(a, e, b, f, J, M);
-    else
+    const double cc = dot(c, c), ee = dot(e, e), ff = dot(f, f);
+    if (!(cc <= k.near * k.near * ee * ff)) {
         skew(a, e, b, f, k, J, M);
-    M = std::max(M, std::fabs(J));
+        M = std::max(M, std::fabs(J));
+        return;
+    }
+    // within a sine of k.near of parallel (or parallel): the skew form's terms grow as
+    // 1 / sin (the lines' nearest points recede as 1 / sin, its triangles with them: at
+    // a sine of 3e-17, edges parallel but for their vertices' rounding, terms of 1e18
+    // and no digit left). The parallel form about the longer edge (J is symmetric in
+    // the two edges) takes the shorter turned onto its direction, each point of it
+    // moved by at most delta = |e x f| / F (F the longer's length); ln r then moves by
+    // at most ln(1 + delta / min(r, r')), and as the (s, t) where r < x measure at most
+    // 2 x / F (a chord of a ball of radius x along either edge), its integral, twice
+    // (r and r'), is at most 4 (delta / F) (1 + ln(1 + F / (2 delta))): added to the
+    // parallel form's magnitude (in units of its rounding), and the smaller of the two
+    // forms' estimates kept
+    const double cn = accurate_cross_norm(e, f);
+    double Jp, Mp;
+    if (ee >= ff)
+        parallel(a, e, b, f, Jp, Mp);
+    else
+        parallel(b, f, a, e, Jp, Mp);
+    Mp = std::max(Mp, std::fabs(Jp));
+    if (cn > 0) {
+        // delta / F, rounded up by its few roundings (cn, the square root, the division)
+        const double q = (1.0 + 8.0 * k.eps) * cn / std::max(ee, ff);
+        Mp += 4.0 * q * (1.0 + std::log1p(0.5 / q)) / (k.ulps * k.eps);
+    }
+    // the skew form where both cross products are nonzero (the plain one, which it
+    // divides by, may round to 0 for edges not quite parallel)
+    if (cn > 0 && cc > 0) {
+        skew(a, e, b, f, k, J, M);
+        M = std::max(M, std::fabs(J));
+        if (M <= Mp) return;
+    }
+    J = Jp;
+    M = Mp;
 }
 
 }  // namespace

@@ -21,6 +21,8 @@ struct ClosedFormConstants {
     double tiny;   // DOUBLE_TINY: the smallest normal double (|1 + z| floored there)
     double ulps;   // AREA_CLOSED_ULPS: the rounding, in units of eps of the magnitudes
     double eps;    // EPS, the unit roundoff of doubles
+    double near;   // AREA_CLOSED_NEAR_PARALLEL: edges within this sine of parallel also
+                   // take the parallel form, with the bound of the turn
 };
 
 // J and its terms' magnitude M (at least |J|) of n edge pairs (a, e, b, f: (n, 3) each)

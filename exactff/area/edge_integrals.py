@@ -44,6 +44,16 @@ __all__ = ["edge_log_integrals", "edge_pair_sums", "mp_edge_log_integral"]
 # + delta z atan(z / delta), and
 #     J = [G2(w + X) - G2(w) - G2(w + X - Y) + G2(w - Y)] / (X Y),  X = |e|, Y = sigma |f|,
 # w the offset of a from b along the direction.
+#
+# Nearly parallel edges (a sine of at most AREA_CLOSED_NEAR_PARALLEL): the skew form's
+# terms grow as 1 / sin (the lines' nearest points, the origin of its triangles, recede
+# as 1 / sin), so the parallel form is also taken, about the longer edge with the shorter
+# turned onto its direction: each point of the shorter moves by at most
+# delta = |e x f| / F (F the longer's length), ln r by at most ln(1 + delta / min(r, r')),
+# and the (s, t) where r < x measure at most 2 x / F (a chord of a ball of radius x, along
+# the longer edge), so J moves by at most 4 (delta / F) (1 + ln(1 + F / (2 delta))),
+# added to its magnitude (in units of its rounding). The form of the smaller estimate is
+# kept. (mp_edge_log_integral keeps the skew form: its digits cover the 1 / sin.)
 
 
 def edge_log_integrals(a, e, b, f):
@@ -73,7 +83,9 @@ def edge_log_integrals(a, e, b, f):
     (0.07507018996445, True)
     """
     a, e, b, f = (np.ascontiguousarray(x, dtype=float).reshape(-1, 3) for x in (a, e, b, f))
-    return _compiled_edge_log_integrals(a, e, b, f, tol.AREA_CLOSED_THIN, tol.DOUBLE_TINY)
+    return _compiled_edge_log_integrals(a, e, b, f, tol.AREA_CLOSED_THIN, tol.DOUBLE_TINY,
+                                        tol.AREA_CLOSED_ULPS, tol.EPS,
+                                        tol.AREA_CLOSED_NEAR_PARALLEL)
 
 
 def edge_pair_sums(VP, po, VQ, qo, inv, scale):
@@ -115,7 +127,7 @@ def edge_pair_sums(VP, po, VQ, qo, inv, scale):
     as_int = lambda x: np.ascontiguousarray(x, dtype=np.int64)      # noqa: E731
     return _compiled_row_pairs(as_float(VP), as_int(po), as_float(VQ), as_int(qo), as_float(inv),
                              as_float(scale), tol.AREA_CLOSED_THIN, tol.DOUBLE_TINY,
-                             tol.AREA_CLOSED_ULPS, tol.EPS)
+                             tol.AREA_CLOSED_ULPS, tol.EPS, tol.AREA_CLOSED_NEAR_PARALLEL)
 
 
 def mp_edge_log_integral(a, e, b, f):
