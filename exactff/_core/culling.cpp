@@ -320,7 +320,8 @@ bool Core::cell_covered(const std::vector<Plane>& sv, const std::vector<ExactPla
             const Vertex& x = w.q[k];
             const Vertex& y = w.q[l];
             R t;
-            Vertex cut = crossing(P, x, y, dist[k], dist[l], &t);
+            Vertex cut;
+            crossing(P, x, y, dist[k], dist[l], &t, cut);
             cut.on_plane = P.exact;
             parts[0].push_back(cut);
             parts[1].push_back(cut);

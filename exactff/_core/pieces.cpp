@@ -67,8 +67,10 @@ V3 Core::between(const Vertex& a, const Vertex& b, int64_t f, R* scale) const {
 // where edge x -> y crosses plane P, x and y at distances dx and dy from it (of
 // opposite signs): the new vertex (computed: no input id), within K.split ulps of its
 // ends' interpolated distance (and its own), plus its ends' and the plane's errors
-// carried over; `t` receives its parameter from x
-Vertex Core::crossing(const Plane& P, const Vertex& x, const Vertex& y, R dx, R dy, R* t) const {
+// carried over, written into c (every field: in place where it is kept, so that no
+// vertex is copied); `t` receives its parameter from x. (c must not be x or y.)
+void Core::crossing(const Plane& P, const Vertex& x, const Vertex& y, R dx, R dy, R* t,
+                    Vertex& c) const {
     *t = dx / (dx - dy);
     const V3 v{x.v.x + *t * (y.v.x - x.v.x), x.v.y + *t * (y.v.y - x.v.y),
                x.v.z + *t * (y.v.z - x.v.z)};
@@ -76,9 +78,14 @@ Vertex Core::crossing(const Plane& P, const Vertex& x, const Vertex& y, R dx, R 
     const R err = P.err + P.slack +
                   K_.split * K_.eps * ((1 - *t) * x.length + *t * y.length + l) / l +
                   std::max(x.err * x.length, y.err * y.length) / l;
-    Vertex c{v, l, err, -1, -1, -1, -1};
+    c.v = v;
+    c.length = l;
+    c.err = err;
+    c.id = c.on_edge = c.on_plane = c.edge = -1;
+    c.t = 0;
+    c.err_line = 0;
+    c.gerr = 0;
     set_double(c);
-    return c;
 }
 
 bool Core::lex_less(const V3& x, const V3& y) {
@@ -289,7 +296,7 @@ void Core::process(int64_t f, const double* pp, const V3& p, const V3& n,
     // the fragment's vertices, then the crossings its pieces make; a piece is a run of
     // (vertex, edge to the next) on the work list's stack of corners, so that cutting
     // a piece copies no vertex
-    std::vector<Vertex>& pool = work.pool;
+    auto& pool = work.pool;
     std::vector<Corner>& corners = work.corners;
     std::vector<Filter::Item>& items = work.items;
     pool.clear();
@@ -423,7 +430,7 @@ void Core::process(int64_t f, const double* pp, const V3& p, const V3& n,
             if (!(std::fabs(d[i]) <= width * scale)) continue;
             ++st.near_tests;
             if (!exactly_on(xp, P.exact, pp, f, u, st)) {
-                R adjacent = arc(at((i + m - 1) % m), u) + arc(u, at((i + 1) % m));
+                R adjacent = arc(at(i == 0 ? m - 1 : i - 1), u) + arc(u, at(i + 1 == m ? 0 : i + 1));
                 if (receives)
                     B[src] += adjacent * width / 3.14159265358979323846264338327950288L;
                 // the sliver, on whichever side it truly is, also hides or uncovers
@@ -443,8 +450,12 @@ void Core::process(int64_t f, const double* pp, const V3& p, const V3& n,
         for (size_t i = 0; i < m; ++i)
             if (std::isnan(d[i])) d[i] = dot(P.m, at(i).v);
         cut.assign(m, -1);
+        // room for the crossings (at most one an edge) made before any is taken: each is
+        // built in its place at the pool's end, its ends still read from the pool
+        if (pool.size() + m > pool.capacity())
+            pool.reserve(std::max(pool.size() + m, 2 * pool.capacity()));
         for (size_t i = 0; i < m; ++i) {
-            const size_t j = (i + 1) % m;
+            const size_t j = i + 1 == m ? 0 : i + 1;
             if ((sg[i] > 0 && sg[j] < 0) || (sg[i] < 0 && sg[j] > 0)) {
                 // the crossing computed from the edge's ends in a fixed order, so
                 // that the piece across the edge gets the same point bit for bit
@@ -453,7 +464,10 @@ void Core::process(int64_t f, const double* pp, const V3& p, const V3& n,
                 const Vertex& y = swap ? at(i) : at(j);
                 const R dx = swap ? d[j] : d[i], dy = swap ? d[i] : d[j];
                 R t;
-                Vertex c = crossing(P, x, y, dx, dy, &t);
+                cut[i] = static_cast<int32_t>(pool.size());
+                pool.emplace_back();
+                Vertex& c = pool.back();
+                crossing(P, x, y, dx, dy, &t, c);
                 const R l = c.length;
                 // off the true plane by its tilt; off the true edge's by its ends'
                 // world errors over its distance (as the computation's, above)
@@ -465,7 +479,7 @@ void Core::process(int64_t f, const double* pp, const V3& p, const V3& n,
                 const R ti = swap ? 1 - t : t;
                 if (cur[i].edge >= 0) {  // on an input edge: exactly known
                     const int64_t ia = cur[i].edge;
-                    const int64_t ib = start_[f] + (ia - start_[f] + 1) % count_[f];
+                    const int64_t ib = ia + 1 == start_[f] + count_[f] ? start_[f] : ia + 1;
                     R tx = -1, ty = -1;  // the ends' parameters along it
                     if (xi.id == ia) tx = 0;
                     else if (xi.on_edge == ia) tx = xi.t;
@@ -484,13 +498,17 @@ void Core::process(int64_t f, const double* pp, const V3& p, const V3& n,
                             4 * K_.eps + std::max(off(xi) * xi.length, off(yj) * yj.length) / l;
                     }
                 }
-                cut[i] = static_cast<int32_t>(pool.size());
-                pool.push_back(c);  // (x, y, xi, yj are not used past this point)
             }
         }
         // the two parts, each vertex with the edge to its successor: the input edge
-        // it was on, or the cut along this plane
+        // it was on, or the cut along this plane (each corner written in its place: a
+        // braced temporary would be stored in halves and read back whole)
         const int64_t cut_edge = -1 - static_cast<int64_t>(P.exact);
+        auto add_corner = [&](int32_t v, int64_t edge) {
+            Corner& c = corners.emplace_back();
+            c.v = v;
+            c.edge = edge;
+        };
         for (int sigma : {-1, 1}) {
             // a part whose side of the plane is a covered leaf is hidden there: counted,
             // not formed (its corners would only be taken off the work list again)
@@ -500,13 +518,16 @@ void Core::process(int64_t f, const double* pp, const V3& p, const V3& n,
             }
             const size_t begin = corners.size();
             for (size_t i = 0; i < m; ++i) {
-                const size_t j = (i + 1) % m;
+                const size_t j = i + 1 == m ? 0 : i + 1;
                 const int si = sigma * sg[i], sj = sigma * sg[j];
-                if (si >= 0) corners.push_back({cur[i].v, si == 0 && sj < 0 ? cut_edge : cur[i].edge});
+                if (si >= 0) add_corner(cur[i].v, si == 0 && sj < 0 ? cut_edge : cur[i].edge);
                 if ((si > 0 && sj < 0) || (si < 0 && sj > 0))
-                    corners.push_back({cut[i], si > 0 ? cut_edge : cur[i].edge});
+                    add_corner(cut[i], si > 0 ? cut_edge : cur[i].edge);
             }
-            items.push_back({begin, node, sigma > 0});
+            Filter::Item& it = items.emplace_back();
+            it.begin = begin;
+            it.plane = node;
+            it.positive = sigma > 0;
             st.held += static_cast<int64_t>(corners.size() - begin);
         }
         sv[node].slack = slack;
