@@ -145,9 +145,29 @@ R Core::piece_worth(const Piece& q, int64_t f, const V3& n, const RowStats& st,
 // fragment whole to the covered side, with no near test, no slack and no charge: the
 // row's values are the same without it. (What it no longer does: prove the cells of its
 // footprint covered, Core::prove_cells, which only culls later hidden fragments.)
+//
+// Each vertex is first decided in double where that is sure (the usual case: the band
+// is far below double's roundoff): its difference from p, H's rounded normal, their
+// dot product and the difference's length in double are within SVBSP_FILTER_ROUNDOFFS
+// double roundoffs of |m| |v| of the long double ones (as filtered_side's), so a dot
+// product beyond the long double width plus those roundoffs has the long double test's
+// outcome; else the long double test decides, as before.
 bool Core::behind_horizon(int64_t f, const V3& p, const Plane& H) const {
     const R w = (K_.band + H.err + H.slack + 4 * K_.eps) * H.mnorm * (1 + 64 * K_.eps);
+    const double pd[3] = {static_cast<double>(p.x), static_cast<double>(p.y),
+                          static_cast<double>(p.z)};
+    // the width relative to |m| (rounded up), plus the roundoffs
+    const double width = static_cast<double>(w / H.mnorm) * (1 + 4 * DBL_EPSILON) +
+                         SVBSP_FILTER_ROUNDOFFS * DBL_EPSILON;
     for (int64_t i = start_[f]; i < start_[f] + count_[f]; ++i) {
+        const double vd[3] = {V_[3 * i] - pd[0], V_[3 * i + 1] - pd[1], V_[3 * i + 2] - pd[2]};
+        const double dd = H.md[0] * vd[0] + H.md[1] * vd[1] + H.md[2] * vd[2];
+        const double ld = std::sqrt(vd[0] * vd[0] + vd[1] * vd[1] + vd[2] * vd[2]);
+        const double reach = width * (H.mnormd * ld) * (1 + 16 * DBL_EPSILON);
+        if (ld > 1e-140 && ld < 1e140) {  // (no underflow nor overflow in the filter)
+            if (dd < -reach) continue;    // behind in long double too
+            if (dd > reach) return false;  // in front in long double too
+        }
         const V3 v{V_[3 * i] - p.x, V_[3 * i + 1] - p.y, V_[3 * i + 2] - p.z};
         if (!(dot(H.m, v) < -w * norm(v))) return false;
     }
