@@ -218,12 +218,15 @@ def sides_of_point(N, D, p, offsets=None):
     unsure = np.flatnonzero(np.abs(v) <= bound)
     if len(unsure):
         # each distinct plane decided once: a point in a floor sees the planes of its
-        # coplanar fragments, one plane repeated at every node that holds one
-        planes, which = np.unique(np.column_stack([N[unsure], D[unsure]]), axis=0,
-                                  return_inverse=True)
-        decided = np.array([side_of_plane(p[None, :], q[:3], q[3])[0] for q in planes],
-                           dtype=np.int8)
-        side[unsure] = decided[which.ravel()]
+        # coplanar fragments, one plane repeated at every node that holds one (by the
+        # plane's bits: a few, where numpy's unique rows cost a sort's set-up)
+        planes = np.column_stack([N[unsure], D[unsure]])
+        decided = {}
+        for k, q in enumerate(planes):
+            key = q.tobytes()
+            if key not in decided:
+                decided[key] = side_of_plane(p[None, :], q[:3], q[3])[0]
+            side[unsure[k]] = decided[key]
     return side
 
 
