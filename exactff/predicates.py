@@ -56,11 +56,16 @@ def side_of_plane(points, normal, offset):
         nf = [Fraction(float(c)) for c in nv]
         of = Fraction(float(offset))
         for i in unsure:
-            x = X[i]
-            e = (nf[0] * Fraction(float(x[0])) + nf[1] * Fraction(float(x[1]))
-                 + nf[2] * Fraction(float(x[2])) - of)
-            out[i] = (e > 0) - (e < 0)
+            out[i] = _rational_sign(X[i], nf, of)
     return out
+
+
+def _rational_sign(x, nf, of):
+    """The exact sign of ``nf . x - of`` for one point ``x`` (floats, exact as
+    rationals), ``nf`` and ``of`` the plane's normal and offset as Fractions."""
+    e = (nf[0] * Fraction(float(x[0])) + nf[1] * Fraction(float(x[1]))
+         + nf[2] * Fraction(float(x[2])) - of)
+    return (e > 0) - (e < 0)
 
 
 def tie_priority(facing, index=None):
@@ -203,8 +208,8 @@ def sides_of_point(N, D, p, offsets=None):
     front, -1 behind, 0 exactly on the plane.
 
     Floats decide beyond the bound ``gamma(4) * (dot(abs(N[k]), abs(p)) + abs(D[k]))``;
-    :func:`side_of_plane` decides within it. ``offsets``: :func:`point_plane_offsets`
-    of ``p``, when the caller has them.
+    rational arithmetic within it (as :func:`side_of_plane`'s). ``offsets``:
+    :func:`point_plane_offsets` of ``p``, when the caller has them.
 
     Examples
     --------
@@ -218,12 +223,17 @@ def sides_of_point(N, D, p, offsets=None):
     unsure = np.flatnonzero(np.abs(v) <= bound)
     if len(unsure):
         # each distinct plane decided once: a point in a floor sees the planes of its
-        # coplanar fragments, one plane repeated at every node that holds one
-        planes, which = np.unique(np.column_stack([N[unsure], D[unsure]]), axis=0,
-                                  return_inverse=True)
-        decided = np.array([side_of_plane(p[None, :], q[:3], q[3])[0] for q in planes],
-                           dtype=np.int8)
-        side[unsure] = decided[which.ravel()]
+        # coplanar fragments, one plane repeated at every node that holds one (by the
+        # plane's bits: a few, where numpy's unique rows cost a sort's set-up), in
+        # rationals (the floats could not decide it)
+        planes = np.column_stack([N[unsure], D[unsure]])
+        decided = {}
+        for k, q in enumerate(planes):
+            key = q.tobytes()
+            if key not in decided:
+                decided[key] = _rational_sign(p, [Fraction(float(c)) for c in q[:3]],
+                                              Fraction(float(q[3])))
+            side[unsure[k]] = decided[key]
     return side
 
 

@@ -66,8 +66,9 @@ R Core::charge_edges(const Piece& q, int64_t src, std::vector<R>& E, RowStats& s
     const size_t m = q.size();
     R total = 0;
     for (size_t i = 0; i < m; ++i) {
+        const size_t j = i + 1 == m ? 0 : i + 1;
         const Vertex& a = q[i];
-        const Vertex& b = q[(i + 1) % m];
+        const Vertex& b = q[j];
         // off the plane the edge lies on: for an input edge, its ends' distances
         // from that edge's plane (a crossing slides along it, which moves nothing)
         auto off = [&](const Vertex& u, size_t k) {
@@ -78,7 +79,7 @@ R Core::charge_edges(const Piece& q, int64_t src, std::vector<R>& E, RowStats& s
         // (the arcs of a piece charged more than once are computed once: `arcs`)
         if (arcs != nullptr && arcs->size() < m) arcs->push_back(arc_bound(a, b));
         const R length = arcs != nullptr ? (*arcs)[i] : arc_bound(a, b);
-        const R charge = length * std::max(off(a, i), off(b, (i + 1) % m)) / pi;
+        const R charge = length * std::max(off(a, i), off(b, j)) / pi;
         total += charge;
         if (!record && keyed == nullptr) continue;
         if (a.id >= 0 && b.id >= 0 && a.gerr == 0 && b.gerr == 0) {

@@ -36,6 +36,8 @@
 #include <array>
 #include <cstdint>
 #include <cstring>
+#include <memory>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
@@ -301,6 +303,28 @@ struct Corner {
     int64_t edge;
 };
 
+// an allocator whose emplace_back() with no arguments default-initialises (a vertex
+// made in place, Core::crossing, writes every field: its value-initialisation would
+// first clear its 200 bytes)
+template <class T>
+struct DefaultInit : std::allocator<T> {
+    template <class U>
+    struct rebind {
+        using other = DefaultInit<U>;
+    };
+    DefaultInit() = default;
+    template <class U>
+    DefaultInit(const DefaultInit<U>&) noexcept {}
+    template <class U>
+    void construct(U* p) noexcept(std::is_nothrow_default_constructible<U>::value) {
+        ::new (static_cast<void*>(p)) U;
+    }
+    template <class U, class... A>
+    void construct(U* p, A&&... a) {
+        ::new (static_cast<void*>(p)) U(std::forward<A>(a)...);
+    }
+};
+
 // the filter's work list (Core::process): the fragment's vertices and the crossings
 // made so far, the pieces waiting (each a run of corners on one stack, with the link,
 // plane and branch, it arrived by) and each step's scratch, reused by every fragment
@@ -310,7 +334,7 @@ struct Filter {
         int plane;
         bool positive;
     };
-    std::vector<Vertex> pool;
+    std::vector<Vertex, DefaultInit<Vertex>> pool;
     Piece piece;  // a visible piece, its corners' vertices with their edges
     std::vector<Corner> corners, cur;
     std::vector<Item> items;
@@ -419,7 +443,8 @@ class Core {
                     std::vector<ExactPlane>& xp, RowStats& st) const;
     // pieces.cpp
     V3 between(const Vertex& a, const Vertex& b, int64_t f, R* scale) const;
-    Vertex crossing(const Plane& P, const Vertex& x, const Vertex& y, R dx, R dy, R* t) const;
+    void crossing(const Plane& P, const Vertex& x, const Vertex& y, R dx, R dy, R* t,
+                  Vertex& c) const;
     static bool lex_less(const V3& x, const V3& y);
     static R arc(const Vertex& a, const Vertex& b);
     static R arc_bound(const Vertex& a, const Vertex& b);

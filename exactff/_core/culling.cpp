@@ -112,9 +112,10 @@ bool Core::box_hidden(const std::vector<Plane>& sv, int64_t k, const V3& p,
         const Plane& P = sv[node];
         bool pos = false, neg = false;
         const double width = static_cast<double>(K_.band + P.err);
-        for (int i = 0; i < 8; ++i) {
+        for (int i = 0; i < 8 && !(pos && neg); ++i) {
             // a corner clearly beyond Core::side's band by the double filter is on that
-            // side; else its side in long double, 0 where unsure (both sides then)
+            // side; else its side in long double, 0 where unsure (both sides then); once
+            // the corners are on both sides, the rest change nothing
             if (const int s = filtered_side(P, c[i], width)) {
                 pos |= s > 0;
                 neg |= s < 0;
@@ -320,7 +321,8 @@ bool Core::cell_covered(const std::vector<Plane>& sv, const std::vector<ExactPla
             const Vertex& x = w.q[k];
             const Vertex& y = w.q[l];
             R t;
-            Vertex cut = crossing(P, x, y, dist[k], dist[l], &t);
+            Vertex cut;
+            crossing(P, x, y, dist[k], dist[l], &t, cut);
             cut.on_plane = P.exact;
             parts[0].push_back(cut);
             parts[1].push_back(cut);

@@ -37,10 +37,15 @@ void Core::integrate(const Piece& q, int64_t f, const V3& n, R* value, R* bound,
     const V3 a0 = q[0].v;
     R unused;
     auto offset = [&](const Vertex& u) { return between(q[0], u, f, &unused); };
+    // each vertex's offset formed once: an edge's end is the next edge's start
+    const V3 first = offset(q[0]);
+    V3 next = first;
     for (size_t i = 0; i < m; ++i) {
+        const size_t j = i + 1 == m ? 0 : i + 1;
         const Vertex& a = q[i];
-        const Vertex& b = q[(i + 1) % m];
-        const V3 ea = offset(a), eb = offset(b);
+        const Vertex& b = q[j];
+        const V3 ea = next, eb = j == 0 ? first : offset(b);
+        next = eb;
         const V3 d{eb.x - ea.x, eb.y - ea.y, eb.z - ea.z};
         const V3 c1 = cross(a0, d), c2 = cross(ea, eb);
         const V3 c{c1.x + c2.x, c1.y + c2.y, c1.z + c2.z};
@@ -151,7 +156,7 @@ void Core::integrate_quad(const std::vector<std::array<Quad, 3>>& v, const doubl
     const R a0r[3] = {static_cast<R>(a0[0]), static_cast<R>(a0[1]), static_cast<R>(a0[2])};
     const R c2eps = static_cast<R>(K_.c2) * static_cast<R>(QUAD_EPS);
     for (size_t i = 0; i < m; ++i) {
-        const size_t j = (i + 1) % m;
+        const size_t j = i + 1 == m ? 0 : i + 1;
         const Quad* ea = offs[i].data();
         const Quad* eb = offs[j].data();
         Quad d[3], c[3];

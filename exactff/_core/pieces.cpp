@@ -67,8 +67,10 @@ V3 Core::between(const Vertex& a, const Vertex& b, int64_t f, R* scale) const {
 // where edge x -> y crosses plane P, x and y at distances dx and dy from it (of
 // opposite signs): the new vertex (computed: no input id), within K.split ulps of its
 // ends' interpolated distance (and its own), plus its ends' and the plane's errors
-// carried over; `t` receives its parameter from x
-Vertex Core::crossing(const Plane& P, const Vertex& x, const Vertex& y, R dx, R dy, R* t) const {
+// carried over, written into c (every field: in place where it is kept, so that no
+// vertex is copied); `t` receives its parameter from x. (c must not be x or y.)
+void Core::crossing(const Plane& P, const Vertex& x, const Vertex& y, R dx, R dy, R* t,
+                    Vertex& c) const {
     *t = dx / (dx - dy);
     const V3 v{x.v.x + *t * (y.v.x - x.v.x), x.v.y + *t * (y.v.y - x.v.y),
                x.v.z + *t * (y.v.z - x.v.z)};
@@ -76,9 +78,14 @@ Vertex Core::crossing(const Plane& P, const Vertex& x, const Vertex& y, R dx, R 
     const R err = P.err + P.slack +
                   K_.split * K_.eps * ((1 - *t) * x.length + *t * y.length + l) / l +
                   std::max(x.err * x.length, y.err * y.length) / l;
-    Vertex c{v, l, err, -1, -1, -1, -1};
+    c.v = v;
+    c.length = l;
+    c.err = err;
+    c.id = c.on_edge = c.on_plane = c.edge = -1;
+    c.t = 0;
+    c.err_line = 0;
+    c.gerr = 0;
     set_double(c);
-    return c;
 }
 
 bool Core::lex_less(const V3& x, const V3& y) {
@@ -138,9 +145,29 @@ R Core::piece_worth(const Piece& q, int64_t f, const V3& n, const RowStats& st,
 // fragment whole to the covered side, with no near test, no slack and no charge: the
 // row's values are the same without it. (What it no longer does: prove the cells of its
 // footprint covered, Core::prove_cells, which only culls later hidden fragments.)
+//
+// Each vertex is first decided in double where that is sure (the usual case: the band
+// is far below double's roundoff): its difference from p, H's rounded normal, their
+// dot product and the difference's length in double are within SVBSP_FILTER_ROUNDOFFS
+// double roundoffs of |m| |v| of the long double ones (as filtered_side's), so a dot
+// product beyond the long double width plus those roundoffs has the long double test's
+// outcome; else the long double test decides, as before.
 bool Core::behind_horizon(int64_t f, const V3& p, const Plane& H) const {
     const R w = (K_.band + H.err + H.slack + 4 * K_.eps) * H.mnorm * (1 + 64 * K_.eps);
+    const double pd[3] = {static_cast<double>(p.x), static_cast<double>(p.y),
+                          static_cast<double>(p.z)};
+    // the width relative to |m| (rounded up), plus the roundoffs
+    const double width = static_cast<double>(w / H.mnorm) * (1 + 4 * DBL_EPSILON) +
+                         SVBSP_FILTER_ROUNDOFFS * DBL_EPSILON;
     for (int64_t i = start_[f]; i < start_[f] + count_[f]; ++i) {
+        const double vd[3] = {V_[3 * i] - pd[0], V_[3 * i + 1] - pd[1], V_[3 * i + 2] - pd[2]};
+        const double dd = H.md[0] * vd[0] + H.md[1] * vd[1] + H.md[2] * vd[2];
+        const double ld = std::sqrt(vd[0] * vd[0] + vd[1] * vd[1] + vd[2] * vd[2]);
+        const double reach = width * (H.mnormd * ld) * (1 + 16 * DBL_EPSILON);
+        if (ld > 1e-140 && ld < 1e140) {  // (no underflow nor overflow in the filter)
+            if (dd < -reach) continue;    // behind in long double too
+            if (dd > reach) return false;  // in front in long double too
+        }
         const V3 v{V_[3 * i] - p.x, V_[3 * i + 1] - p.y, V_[3 * i + 2] - p.z};
         if (!(dot(H.m, v) < -w * norm(v))) return false;
     }
@@ -289,7 +316,7 @@ void Core::process(int64_t f, const double* pp, const V3& p, const V3& n,
     // the fragment's vertices, then the crossings its pieces make; a piece is a run of
     // (vertex, edge to the next) on the work list's stack of corners, so that cutting
     // a piece copies no vertex
-    std::vector<Vertex>& pool = work.pool;
+    auto& pool = work.pool;
     std::vector<Corner>& corners = work.corners;
     std::vector<Filter::Item>& items = work.items;
     pool.clear();
@@ -423,7 +450,7 @@ void Core::process(int64_t f, const double* pp, const V3& p, const V3& n,
             if (!(std::fabs(d[i]) <= width * scale)) continue;
             ++st.near_tests;
             if (!exactly_on(xp, P.exact, pp, f, u, st)) {
-                R adjacent = arc(at((i + m - 1) % m), u) + arc(u, at((i + 1) % m));
+                R adjacent = arc(at(i == 0 ? m - 1 : i - 1), u) + arc(u, at(i + 1 == m ? 0 : i + 1));
                 if (receives)
                     B[src] += adjacent * width / 3.14159265358979323846264338327950288L;
                 // the sliver, on whichever side it truly is, also hides or uncovers
@@ -443,8 +470,12 @@ void Core::process(int64_t f, const double* pp, const V3& p, const V3& n,
         for (size_t i = 0; i < m; ++i)
             if (std::isnan(d[i])) d[i] = dot(P.m, at(i).v);
         cut.assign(m, -1);
+        // room for the crossings (at most one an edge) made before any is taken: each is
+        // built in its place at the pool's end, its ends still read from the pool
+        if (pool.size() + m > pool.capacity())
+            pool.reserve(std::max(pool.size() + m, 2 * pool.capacity()));
         for (size_t i = 0; i < m; ++i) {
-            const size_t j = (i + 1) % m;
+            const size_t j = i + 1 == m ? 0 : i + 1;
             if ((sg[i] > 0 && sg[j] < 0) || (sg[i] < 0 && sg[j] > 0)) {
                 // the crossing computed from the edge's ends in a fixed order, so
                 // that the piece across the edge gets the same point bit for bit
@@ -453,7 +484,10 @@ void Core::process(int64_t f, const double* pp, const V3& p, const V3& n,
                 const Vertex& y = swap ? at(i) : at(j);
                 const R dx = swap ? d[j] : d[i], dy = swap ? d[i] : d[j];
                 R t;
-                Vertex c = crossing(P, x, y, dx, dy, &t);
+                cut[i] = static_cast<int32_t>(pool.size());
+                pool.emplace_back();
+                Vertex& c = pool.back();
+                crossing(P, x, y, dx, dy, &t, c);
                 const R l = c.length;
                 // off the true plane by its tilt; off the true edge's by its ends'
                 // world errors over its distance (as the computation's, above)
@@ -465,7 +499,7 @@ void Core::process(int64_t f, const double* pp, const V3& p, const V3& n,
                 const R ti = swap ? 1 - t : t;
                 if (cur[i].edge >= 0) {  // on an input edge: exactly known
                     const int64_t ia = cur[i].edge;
-                    const int64_t ib = start_[f] + (ia - start_[f] + 1) % count_[f];
+                    const int64_t ib = ia + 1 == start_[f] + count_[f] ? start_[f] : ia + 1;
                     R tx = -1, ty = -1;  // the ends' parameters along it
                     if (xi.id == ia) tx = 0;
                     else if (xi.on_edge == ia) tx = xi.t;
@@ -484,13 +518,17 @@ void Core::process(int64_t f, const double* pp, const V3& p, const V3& n,
                             4 * K_.eps + std::max(off(xi) * xi.length, off(yj) * yj.length) / l;
                     }
                 }
-                cut[i] = static_cast<int32_t>(pool.size());
-                pool.push_back(c);  // (x, y, xi, yj are not used past this point)
             }
         }
         // the two parts, each vertex with the edge to its successor: the input edge
-        // it was on, or the cut along this plane
+        // it was on, or the cut along this plane (each corner written in its place: a
+        // braced temporary would be stored in halves and read back whole)
         const int64_t cut_edge = -1 - static_cast<int64_t>(P.exact);
+        auto add_corner = [&](int32_t v, int64_t edge) {
+            Corner& c = corners.emplace_back();
+            c.v = v;
+            c.edge = edge;
+        };
         for (int sigma : {-1, 1}) {
             // a part whose side of the plane is a covered leaf is hidden there: counted,
             // not formed (its corners would only be taken off the work list again)
@@ -500,13 +538,16 @@ void Core::process(int64_t f, const double* pp, const V3& p, const V3& n,
             }
             const size_t begin = corners.size();
             for (size_t i = 0; i < m; ++i) {
-                const size_t j = (i + 1) % m;
+                const size_t j = i + 1 == m ? 0 : i + 1;
                 const int si = sigma * sg[i], sj = sigma * sg[j];
-                if (si >= 0) corners.push_back({cur[i].v, si == 0 && sj < 0 ? cut_edge : cur[i].edge});
+                if (si >= 0) add_corner(cur[i].v, si == 0 && sj < 0 ? cut_edge : cur[i].edge);
                 if ((si > 0 && sj < 0) || (si < 0 && sj > 0))
-                    corners.push_back({cut[i], si > 0 ? cut_edge : cur[i].edge});
+                    add_corner(cut[i], si > 0 ? cut_edge : cur[i].edge);
             }
-            items.push_back({begin, node, sigma > 0});
+            Filter::Item& it = items.emplace_back();
+            it.begin = begin;
+            it.plane = node;
+            it.positive = sigma > 0;
             st.held += static_cast<int64_t>(corners.size() - begin);
         }
         sv[node].slack = slack;

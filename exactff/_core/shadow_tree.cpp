@@ -346,8 +346,9 @@ bool Core::insert_shadow(const Piece& q, int64_t f, const double* pp, int plane,
         bool on_cut, omit;
     };
     // (the scratch is kept per thread: no allocation per piece)
+    // (each side's every field is set below before it is read: no fill)
     thread_local std::vector<Side> e;
-    e.assign(m, Side{});
+    e.resize(m);
     // the vertices' double directions and lengths, contiguous (the filter below reads
     // them m times each)
     thread_local std::vector<double> X, Y, Z, L;
@@ -370,7 +371,7 @@ bool Core::insert_shadow(const Piece& q, int64_t f, const double* pp, int plane,
         Side& s = e[i];
         if (a.edge >= 0) {
             const int64_t ia = a.edge;
-            const int64_t ib = start_[f] + (ia - start_[f] + 1) % count_[f];
+            const int64_t ib = ia + 1 == start_[f] + count_[f] ? start_[f] : ia + 1;
             s.mm = input_plane(pp, &V_[3 * ia], &V_[3 * ib]);
             // its rounding; the input points' own errors (BSP crossings) apart
             const R tilt = input_tilt(ia, ib, pp);
