@@ -5,6 +5,7 @@ sum to 1, the fallback where a bound misses the tolerance, and the convex pieces
 import math
 from fractions import Fraction
 
+import mpmath
 import numpy as np
 import pytest
 import shapely
@@ -12,6 +13,7 @@ from hypothesis import assume, given
 from hypothesis import strategies as hst
 
 import exactff as ef
+from exactff import _tolerances as tol
 from exactff.kernel import flat_polygons
 from exactff.predicates import engine_sides
 from exactff.visibility import compiled_core, compiled_form_factors, convex_pieces
@@ -827,6 +829,68 @@ def test_fragments_behind_the_tangent_plane_and_back_faces():
     c, h, v = len(below) + 2, len(below) + 3, len(below) + 4
     assert np.all(F[:len(below)] == 0) and F[c] == 0 and F[h] == 0 and F[v] > 0
     assert F[v] == pytest.approx(unoccluded_form_factor(scene, p, n, v), rel=1e-12)
+
+
+def test_vertices_just_above_the_tangent_plane_are_not_behind_it():
+    # a triangle's tip just above the tangent plane through the point, its other corners
+    # well below (the plane tilted: its dot products round in double, unlike an axis's).
+    # The tip is above the widest width Core::behind_horizon's long double test allows
+    # (W: the band, the root's tilt bound of 2 roundoffs and a vertex's error of 4, in
+    # long double's roundoffs) by more than 3 W, far beyond that test's rounding, but
+    # below 2^-55 |v| (a quarter of a double roundoff); and its dot product in double (the
+    # core's unit normal rounded to double, the double difference) is below -2 W |v|: a
+    # double filter with no margin for its own roundoff would call every vertex behind
+    # and skip the triangle (with the margin planted to 0, each of these is skipped:
+    # 0 +- 0 against about 1e-52). The triangle is not behind (no fragment skipped so),
+    # and its sliver above the plane has its value within its bound (the value from
+    # rationals and 60 digits). A square across the point from the triangle, turned away
+    # from it (it hides and receives nothing), makes the scene non-convex: the row goes
+    # through the core
+    u = np.array([1.0, 2.0, 3.0]) / math.sqrt(14.0)
+    p = np.array([0.1, 0.2, 0.3])
+    e1 = np.cross(u, [1.0, 0.0, 0.0])
+    e1 /= np.linalg.norm(e1)
+    e2 = np.cross(u, e1)
+    W = Fraction(tol.SVBSP_BAND) + 6 * Fraction(tol.LONGDOUBLE_EPS)
+    low, high = 4 * W, Fraction(2.0 ** -55)
+    with mpmath.workdps(40):
+        unit = [float(mpmath.mpf(c) / mpmath.sqrt(sum(mpmath.mpf(d) ** 2 for d in u)))
+                for c in u]
+    U2 = sum(Fraction(c) ** 2 for c in u)
+
+    def tip_case(C):
+        v = [Fraction(c) - Fraction(q) for c, q in zip(C, p)]
+        h, v2 = sum(Fraction(a) * b for a, b in zip(u, v)), sum(c * c for c in v)
+        # exactly: low |u| |v| < h < high |u| |v|
+        if not (h > 0 and low ** 2 * U2 * v2 < h * h < high ** 2 * U2 * v2):
+            return False
+        vd = C - p
+        dd = (unit[0] * vd[0] + unit[1] * vd[1]) + unit[2] * vd[2]
+        return dd < -2 * float(W) * math.sqrt((vd[0] * vd[0] + vd[1] * vd[1]) + vd[2] * vd[2])
+
+    # such tips on a grid about the point's plane (whether a tip's double dot product
+    # errs that way depends on its direction: some grid rows have none), six of them
+    tips = [C for C in (p + a * e1 + b * e2 for b in np.linspace(-0.2, 0.2, 9)
+                        for a in np.linspace(0.8, 1.2, 401)) if tip_case(C)]
+    assert len(tips) >= 6
+    tips = tips[::len(tips) // 6][:6]
+    square = np.array([p - e1 + s * e2 + t * u for s, t in
+                       ((-0.3, 0.1), (-0.3, 0.4), (0.3, 0.4), (0.3, 0.1))])
+    if np.cross(square[1] - square[0], square[2] - square[0]) @ e1 > 0:
+        square = square[::-1].copy()                    # facing away from the point
+    for C in tips:
+        A, B = C + 0.2 * e1 + 0.3 * e2 - 0.2 * u, C + 0.2 * e1 - 0.3 * e2 - 0.2 * u
+        triangle = np.array([A, B, C])
+        if np.cross(B - A, C - A) @ (p - A) < 0:
+            triangle = triangle[::-1].copy()            # facing the point
+        scene = ef.Scene.from_polygons([triangle, square])
+        st = {}
+        F, E = COMPILED.point_form_factors(scene, p, u, error=True, stats=st)
+        U = unoccluded_form_factor(scene, p, u, 0)
+        assert U is not None and U > 0
+        assert abs(F[0] - U) <= E[0], (C.tolist(), F[0], float(U), E[0])
+        assert F[1] == 0
+        assert st["path"] == "compiled" and st["fragments_behind"] == 0, st
 
 
 def test_sides_a_mesh_shares_are_one_node():
