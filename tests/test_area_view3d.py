@@ -554,3 +554,38 @@ def test_what_the_check_leaves_unexplained_is_in_the_estimate(monkeypatch):
     F, E = ef.area_form_factors(sub, rows=[0], tolerance=1e-6, error=True, stats=st)
     assert st["checked_triangles"] > 0 and st["refined_triangles"] == 0
     assert 0.0 <= F[0, 1] <= E[0, 1], (F[0, 1], E[0, 1])
+
+
+def test_rules_check_takes_the_triangles_closed_forms_to_its_target(monkeypatch):
+    # the check (rule_check.checked_rules) asks each triangle's closed form for its own
+    # target, so that a blind one falls back (the contour rule, mpmath) and can still
+    # show a triangle wrong. The strip's triangles against the wall piece, their
+    # closed forms blinded (every edge pair's estimate taken as 1); the rules' integrals
+    # of U exact but for one triangle's, off by 1e-6 (per unit area of the strip, 40
+    # times its limit), the sum met (so no triangle is refined for not telling). The
+    # exact values: each triangle's closed form the other way (T -> Qc), unblinded
+    # (its estimate asserted small); with no target passed on, the blind estimates
+    # (6e-2 per unit area) hide the 1e-6 and nothing is refined
+    from exactff.area import closed_form, rule_check
+    T, Qc = _strip_triangles()
+    nP = np.array([0.0, 0.0, -1.0])
+    down = np.einsum("tx,x->t", np.cross(T[:, 1] - T[:, 0], T[:, 2] - T[:, 0]), nP) > 0
+    T = np.where(down[:, None, None], T, T[:, ::-1])            # facing the wall
+    areas = 0.5 * np.linalg.norm(np.cross(T[:, 1] - T[:, 0], T[:, 2] - T[:, 0]), axis=1)
+    exact = []
+    for t, a in zip(T, areas):
+        f, e = ef.polygon_form_factor(t, Qc, error=True)
+        assert e <= 1e-9 * f, (f, e)
+        exact.append(a * f)
+    area_P, atol, n, k = 109.5 * 9.2, 1e-6, len(T), 2
+    hiU = np.array(exact) / area_P
+    hiU[k] += 1e-6
+    cat = {"hiU": hiU, "diff": np.zeros(n), "rndU": np.zeros(n),
+           "checked": np.zeros(n, dtype=bool), "rung": np.ones(n), "depth": np.zeros(n)}
+    sums = closed_form.edge_pair_sums
+    monkeypatch.setattr(closed_form, "edge_pair_sums",
+                        lambda *a: (lambda r: (r[0], np.ones_like(r[1])) + r[2:])(sums(*a)))
+    again = rule_check.checked_rules(T, cat, np.arange(n), -1.0, np.zeros(n), nP, Qc, area_P,
+                                     atol, area_P)
+    assert again.tolist() == [i == k for i in range(n)], again
+    assert 0.9e-6 <= cat["diff"][k] <= 1.1e-6, cat["diff"]
