@@ -602,7 +602,7 @@ AREA_SYMMETRIC_DEGREES = (4, 8)
 #: test4 and facet take the higher pair in the end, and starting low cost them 15 %.
 AREA_LOW_RULES_TOLERANCE = 1e-7
 #: Area form factors: a triangle whose rules' difference the closed form of the
-#: unoccluded part shows to be too small (``exactff.area.adaptive``) is refined,
+#: unoccluded part shows to be too small (``exactff.area.rule_check``) is refined,
 #: where what it shows exceeds this share of the triangle's share of the tolerance.
 AREA_RULE_CHECK_SHARE = 0.1
 #: Area form factors: an end of an event line cut to the emitter this close to its

@@ -24,7 +24,7 @@ inline V add3(const V& a, const V& b) { return {a.x + b.x, a.y + b.y, a.z + b.z}
 inline V scaled(const V& a, double s) { return {a.x * s, a.y * s, a.z * s}; }
 inline V over(const V& a, double s) { return {a.x / s, a.y / s, a.z / s}; }
 
-// skew edges (e x f != 0): J and M as _skew_edge_integrals. The parallelogram
+// skew edges (e x f != 0; exactff/area/edge_integrals.py's notes). The parallelogram
 // w + s e - t f (w: the part of a - b in the plane of e and f, at distance d from it),
 // cut into triangles from the origin to its edges, each of height h over its edge and
 // positions t along it: T = (1/4) [h Phi(t) - h t + d^2 K(phi)] between the ends, with
@@ -107,7 +107,8 @@ void skew(const V& a, const V& e, const V& b, const V& f, const ClosedFormConsta
     M = 0.25 * Mag / cn;
 }
 
-// parallel edges (e x f = 0): J and M as _parallel_edge_integrals, the double
+// parallel edges (e x f = 0, or nearly: edge_log_integral takes this form too within
+// AREA_CLOSED_NEAR_PARALLEL, with the turn's bound), the double
 // antiderivative G2(z) = (1/4) (z^2 - delta^2) ln(z^2 + delta^2) - (3/4) z^2
 // + delta z atan(z / delta) at the four corners
 void parallel(const V& a, const V& e, const V& b, const V& f, double& J, double& M) {
@@ -180,8 +181,10 @@ void edge_log_integral(const V& a, const V& e, const V& b, const V& f,
         parallel(b, f, a, e, Jp, Mp);
     Mp = std::max(Mp, std::fabs(Jp));
     if (cn > 0) {
-        // delta / F, rounded up by its few roundings (cn, the square root, the division)
-        const double q = (1.0 + 8.0 * k.eps) * cn / std::max(ee, ff);
+        // delta / F, rounded up by its few roundings (cn within 2 of them: Kahan's
+        // determinants with an FMA; the squared lengths within 3; the square root and
+        // the division; 16 covers them all with room)
+        const double q = (1.0 + 16.0 * k.eps) * cn / std::max(ee, ff);
         Mp += 4.0 * q * (1.0 + std::log1p(0.5 / q)) / (k.ulps * k.eps);
     }
     // the skew form where both cross products are nonzero (the plain one, which it

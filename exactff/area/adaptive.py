@@ -274,7 +274,8 @@ def _hidden_integral(S, Pc, Qc, nP, atol, area_P, whole, shortcuts, st, solid=No
                                           cat["corner"][again].astype(bool), start)
     cat = {k: np.concatenate(v) if v else np.zeros(0) for k, v in acc.items()}
     # what the checks leave unexplained (triangles at the last level): at least that much
-    # of the rules' error is not in their differences (gunter2, pair (42, 15))
+    # of the rules' error is not in their differences, so it is added (a correction by
+    # what is shown, not a bound: gunter2, pair (42, 15))
     missed_U = missed_unoccluded(cat, whole, (slivers + max(area_Pc - total_area, 0.0))
                                  / area_P)[0] if len(cat["hi"]) else 0.0
     # the slivers not evaluated: the hidden part is between 0 and the unoccluded point
