@@ -59,6 +59,7 @@ __all__ = [
     "AREA_IMAGE_PRECISE_RTOL",
     "AREA_IMAGE_PRECISE_SHARE",
     "AREA_IMAGE_BUDGET_SHARE",
+    "AREA_BOUND_COS_SLACK",
     "AREA_SLIVER_ULPS",
     "AREA_MAX_PIECES",
     "AREA_POINTS_PER_CALL",
@@ -473,6 +474,13 @@ AREA_IMAGE_PRECISE_RTOL = 1e-13
 #: gunter1 at 1e-6, 58 % of the points went to long double by AREA_IMAGE_PRECISE_RTOL
 #: alone, each costing both passes.
 AREA_IMAGE_PRECISE_SHARE = 0.01
+
+#: Area form factors: what the bound on the unoccluded point value
+#: (``exactff.area.points.unoccluded_bound``) adds to each cosine's bound for the
+#: polygon's normal against the one the kernel takes (the scene's, from the whole
+#: polygon): a polygon planar within PLANARITY_RTOL of its diameter turns its parts'
+#: normals by a few 1e-6; with room.
+AREA_BOUND_COS_SLACK = 1e-4
 
 #: Area form factors, occluded pairs: the share of the tolerance that a point value's
 #: estimate may hold for its images' rounding before the point goes to the engine (the

@@ -5,9 +5,11 @@ rectangles with a common edge), evaluated here in mpmath at 40 digits (the doubl
 closed forms cancel badly for small or far rectangles); reciprocity; splitting.
 """
 
+import math
 import os
 
 import mpmath as mp
+
 import numpy as np
 import pytest
 from hypothesis import example, given, settings, strategies as st
@@ -591,12 +593,17 @@ def test_view3d_files_turned_scaled_and_moved_within_the_estimates(name, turn, s
     assert np.all(gap <= rounding), (gap.max(), rounding)
 
 
-@pytest.mark.parametrize("case", ["facing", "far", "touching", "corner"])
+@pytest.mark.parametrize("case", ["facing", "far", "touching", "corner", "aside", "tilted"])
 def test_unoccluded_bound_holds_at_points_of_the_emitter(case):
     # the bound the slivers' estimate takes for the hidden part (at most the unoccluded
-    # point value): A_Q / (pi d^2) with d the distance between the bounding boxes, and
-    # 1; against the point values (the kernel) at random points and the corners of P,
-    # and not far above the largest of them where the receiver is far
+    # point value): A_Q c_P c_Q / (pi d^2) with d the distance between the bounding
+    # boxes and c_P, c_Q the cosines' bounds, and 1; against the point values (the
+    # kernel) at random points and the corners of P, and not far above the largest of
+    # them where the receiver is far. Aside (a square 1 above and 2 beyond P's edge, as
+    # gunter2's annex floor and the hall's ceiling strips) the cosines are at most
+    # 1 / sqrt(5) each: the bound is a fifth of A_Q / (pi d^2); tilted (a wall beside
+    # P facing it, its normal across P's), P's cosine is at most 1.5 / sqrt(4.25), the
+    # wall's 1
     from exactff.area.points import unoccluded_bound as _unoccluded_bound
     from exactff.area.points import point_values as _point_values
 
@@ -605,7 +612,9 @@ def test_unoccluded_bound_holds_at_points_of_the_emitter(case):
          "far": 0.2 * np.array(_square(0, False), float) + [0.4, 0.4, 6.0],
          "touching": np.array([[0, 0, 0], [0, 0, 1], [1, 0, 1], [1, 0, 0]], float),
          # over P's corner only, close: P's corner sees about a quarter of it
-         "corner": np.array(_square(0.05, False), float) + [0.9, 0.9, 0]}[case]
+         "corner": np.array(_square(0.05, False), float) + [0.9, 0.9, 0],
+         "aside": np.array(_square(1.0, False), float) + [3, 0, 0],
+         "tilted": np.array([[3, 0, 1.5], [3, 1, 1.5], [3, 1, 0.5], [3, 0, 0.5]], float)}[case]
     nP = np.array([0, 0, 1.0])
     a, b = np.random.default_rng(7).random((2, 400))
     X = np.vstack([P, P[0] + np.outer(a, P[1] - P[0]) + np.outer(b, P[3] - P[0])])
@@ -614,6 +623,10 @@ def test_unoccluded_bound_holds_at_points_of_the_emitter(case):
     assert np.all(U - EU <= bound) and bound <= 1.0
     if case == "far":
         assert bound <= 1.2 * U.max(), (bound, U.max())
+    if case in ("aside", "tilted"):
+        d2 = {"aside": 5.0, "tilted": 4.25}[case]
+        cosines = {"aside": 1 / 5, "tilted": 1.5 / math.sqrt(d2)}[case]
+        assert bound == pytest.approx(cosines / (np.pi * d2), rel=1e-3), bound
 
 
 @pytest.mark.parametrize("cover", ["whole", "all but a strip", "none"])

@@ -247,6 +247,7 @@ std::shared_ptr<exactff::PairConstants> pair_constants(py::dict tol, py::sequenc
     k->low_rules_tolerance = num("AREA_LOW_RULES_TOLERANCE");
     k->coplanar_ulps = num("BSP_COPLANAR_ULPS");
     k->eps = num("EPS");
+    k->bound_cos_slack = num("AREA_BOUND_COS_SLACK");
     k->samples = whole("AREA_CURVED_EVENT_SAMPLES");
     k->bisections = whole("AREA_CURVED_EVENT_BISECTIONS");
     k->max_triples = whole("AREA_CURVED_MAX_TRIPLES");

@@ -144,9 +144,11 @@ bool in_plane(const double* K, std::int64_t k, const double* nQ, double d, doubl
     return true;
 }
 
-// points.py's unoccluded_bound(Pc, Qc)
+// points.py's unoccluded_bound(Pc, Qc): 1, and A_Q c_P c_Q / (pi d^2), d the distance
+// between the bounding boxes, c_P and c_Q the cosines' bounds (each polygon's unit
+// normal against the other's vertices), in points.py's order of operations
 double unoccluded_bound(const double* Pc, std::int64_t n_p, const double* Qc, std::int64_t n_q,
-                        bool fused) {
+                        double eps, double cos_slack, bool fused) {
     double gap[3];
     for (int j = 0; j < 3; ++j) {
         double pmin = Pc[j], pmax = Pc[j], qmin = Qc[j], qmax = Qc[j];
@@ -161,10 +163,45 @@ double unoccluded_bound(const double* Pc, std::int64_t n_p, const double* Qc, st
         gap[j] = std::max(0.0, std::max(pmin - qmax, qmin - pmax));
     }
     const double d2 = blas_dot3(gap, gap, fused);
-    double AQ[3];
+    double AQ[3], AP[3];
     area_vector(Qc, n_q, AQ);
     const double area_Q = norm3(AQ, fused);
-    return !(d2 > 0) ? 1.0 : std::min(1.0, area_Q / (3.141592653589793 * d2));
+    if (!(d2 > 0)) return 1.0;
+    const double d = std::sqrt(d2);
+    // the vertices' coordinates' size: the largest sum of a vertex's absolute coordinates
+    double scale_p = -INFINITY, scale_q = -INFINITY;
+    for (std::int64_t i = 0; i < n_p; ++i)
+        scale_p = std::max(scale_p, sum3(std::fabs(Pc[3 * i]), std::fabs(Pc[3 * i + 1]),
+                                         std::fabs(Pc[3 * i + 2])));
+    for (std::int64_t i = 0; i < n_q; ++i)
+        scale_q = std::max(scale_q, sum3(std::fabs(Qc[3 * i]), std::fabs(Qc[3 * i + 1]),
+                                         std::fabs(Qc[3 * i + 2])));
+    const double scale = std::max(scale_p, scale_q);
+    area_vector(Pc, n_p, AP);
+    // each cosine: |n . (y - x)| / r <= h / d, h the widest spread of n . v between the
+    // two polygons' vertices
+    const auto cosine = [&](const double* A, const double* X, std::int64_t nx, const double* Y,
+                            std::int64_t ny) {
+        const double norm = norm3(A, fused);
+        const double n[3] = {A[0] / norm, A[1] / norm, A[2] / norm};
+        const auto spread = [&](const double* V, std::int64_t k, double& lo, double& hi) {
+            lo = INFINITY;
+            hi = -INFINITY;
+            for (std::int64_t i = 0; i < k; ++i) {
+                const double s = (V[3 * i] * n[0] + V[3 * i + 1] * n[1]) + V[3 * i + 2] * n[2];
+                lo = std::min(lo, s);
+                hi = std::max(hi, s);
+            }
+        };
+        double xlo, xhi, ylo, yhi;
+        spread(X, nx, xlo, xhi);
+        spread(Y, ny, ylo, yhi);
+        const double h = std::max(yhi - xlo, xhi - ylo);
+        return std::min(1.0, (h + 64.0 * eps * scale) / d + cos_slack);
+    };
+    const double c_p = cosine(AP, Pc, n_p, Qc, n_q);
+    const double c_q = cosine(AQ, Qc, n_q, Pc, n_p);
+    return std::min(1.0, area_Q * c_p * c_q / (3.141592653589793 * d2));
 }
 
 }  // namespace
@@ -437,7 +474,8 @@ PairResult occluded_pair(const PairArgs& a) {
         return out;
     }
     // the value: the unoccluded one less the hidden part, the slivers at half their bound
-    const double bound = unoccluded_bound(a.Pc, n_p, a.Qc, n_q, k.fused_dot);
+    const double bound =
+        unoccluded_bound(a.Pc, n_p, a.Qc, n_q, k.eps, k.bound_cos_slack, k.fused_dot);
     const double half = 0.5 * bound * slivers / a.area_P;
     std::vector<double> err_terms(m);
     for (size_t i = 0; i < m; ++i) err_terms[i] = r.diff[i] + r.rnd[i];

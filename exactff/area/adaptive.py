@@ -279,11 +279,11 @@ def _hidden_integral(S, Pc, Qc, nP, atol, area_P, whole, shortcuts, st, solid=No
     missed_U = missed_unoccluded(cat, whole, (slivers + max(area_Pc - total_area, 0.0))
                                  / area_P)[0] if len(cat["hi"]) else 0.0
     # the slivers not evaluated: the hidden part is between 0 and the unoccluded point
-    # value, at most A_Q / (pi d^2) for d the distance between P's and Qc's bounding
-    # boxes (cos cos <= 1), and at most 1; so its integral over them is half that bound
-    # times their area, within as much (on View3D's gunter2, row 38, a pair of 472,008
-    # cells left 3.3e-6 of the emitter in slivers: an estimate of 1.66e-6 at 1, above
-    # the tolerance of 1e-6)
+    # value, at most A_Q c_P c_Q / (pi d^2) for d the distance between P's and Qc's
+    # bounding boxes and c_P, c_Q the cosines' bounds (points.unoccluded_bound), and at
+    # most 1; so its integral over them is half that bound times their area, within as
+    # much (on View3D's gunter2, row 38, a pair of 472,008 cells left 3.3e-6 of the
+    # emitter in slivers: an estimate of 1.66e-6 at 1, above the tolerance of 1e-6)
     half = 0.5 * unoccluded_bound(Pc, Qc) * slivers / area_P
     hidden = half + float(cat["hi"].sum())
     err = half + float((cat["diff"] + cat["rnd"]).sum())
