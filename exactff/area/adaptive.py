@@ -276,8 +276,7 @@ def _hidden_integral(S, Pc, Qc, nP, atol, area_P, whole, shortcuts, st, solid=No
     # what the checks leave unexplained (triangles at the last level): at least that much
     # of the rules' error is not in their differences, so it is added (a correction by
     # what is shown, not a bound: gunter2, pair (42, 15))
-    missed_U = missed_unoccluded(cat, whole, (slivers + max(area_Pc - total_area, 0.0))
-                                 / area_P)[0] if len(cat["hi"]) else 0.0
+    missed_U = missed_unoccluded(cat, whole, lost)[0] if len(cat["hi"]) else 0.0
     # the slivers not evaluated: the hidden part is between 0 and the unoccluded point
     # value, at most A_Q c_P c_Q / (pi d^2) for d the distance between P's and Qc's
     # bounding boxes and c_P, c_Q the cosines' bounds (points.unoccluded_bound), and at
