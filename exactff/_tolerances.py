@@ -150,6 +150,10 @@ __all__ = [
     "AREA_UMBRA_COVER_STALL",
     "AREA_UMBRA_PROBE",
     "AREA_UMBRA_SPLIT_MIN_BLOCKERS",
+    "AREA_WALL_PLANES",
+    "AREA_WALL_TRIES",
+    "AREA_WALL_PIECES",
+    "AREA_WALL_NODES",
     "AREA_UMBRA_TAKE_SHARE",
     "AREA_UMBRA_SQUARE_SLACK",
     "AREA_MAX_EVENT_LINES",
@@ -705,6 +709,17 @@ AREA_UMBRA_PROBE = 4
 #: cost 0.3-2.5 s of squares each, more than they saved (the row 71.2 s instead of 42.7
 #: s); pair (3, 27), of 135, 300 s without them.
 AREA_UMBRA_SPLIT_MIN_BLOCKERS = 100
+#: Area form factors: walls between a pair (exactff.area.walls), proven in rationals to
+#: hide all of the receiver from all of the emitter, across up to AREA_WALL_PLANES
+#: planes one behind the other (the pieces of a plane's slice its blockers leave
+#: uncovered tried against the next); at each step the AREA_WALL_TRIES planes whose
+#: slices GEOS finds least uncovered are tried, a plane that leaves more than
+#: AREA_WALL_PIECES pieces goes no further, and a pair stops after AREA_WALL_NODES exact
+#: tests (each a few ms: a pair not hidden costs no more than that).
+AREA_WALL_PLANES = 3
+AREA_WALL_TRIES = 3
+AREA_WALL_PIECES = 8
+AREA_WALL_NODES = 24
 #: ... a square is taken (half its bound, within as much) without being cut further
 #: where that bound is within this share of its share of the tolerance, and the receiver
 #: is cut no finer than the area whose bound is this share of it.

@@ -697,8 +697,8 @@ def area_form_factors(scene, rows=None, *, tolerance=1e-9, error=False, executor
         sparse results.
     shortcuts : bool, default True
         False disables every shortcut, for testing that they never change a result
-        beyond the estimates: the convex-enclosure test, the walls in one plane
-        between a pair (``exactff.area.plane_cover``), shaft culling and the hull
+        beyond the estimates: the convex-enclosure test, the walls between a
+        pair (``exactff.area.walls``), shaft culling and the hull
         test (every other polygon is then taken as a possible blocker of every pair,
         and the pair goes through the occluded path),
         the far-field rule (mpmath instead where the closed form misses) and the cull
@@ -730,9 +730,9 @@ def area_form_factors(scene, rows=None, *, tolerance=1e-9, error=False, executor
         their cells taken by the closed form, ``exactff.area.umbra``; and those cells'
         triangles), ``umbra_pieces`` (squares of emitters from which several blockers
         together hide the whole receiver, ``exactff.area.joint_umbra``),
-        ``plane_hidden_pairs`` (pairs that blockers in one plane between them hide
-        whole, proven in rationals: exactly 0, not integrated;
-        ``exactff.area.plane_cover``),
+        ``wall_hidden_pairs`` (pairs that walls between them hide whole, blockers in
+        one plane or in a few one behind the other, proven in rationals: exactly 0,
+        not integrated; ``exactff.area.walls``),
         ``curved_events`` (curved visibility events cut along: two blockers' edges seen
         crossing on the receiver's edge, ``exactff.area.curved``; not a shortcut) and
         ``curved_skipped`` (pairs with too many triples of edges to trace them, left

@@ -1161,7 +1161,7 @@ def test_cli_matrix_area_sparse_jobs_and_a_killed_run_resumed(tmp_path, capsys, 
 SHORTCUT_COUNTERS = ("enclosure_unoccluded_pairs", "hull_unoccluded_pairs", "hull_culled_blockers", "shaft_culled_blockers",
                      "shaft_unoccluded_pairs", "far_pairs",
                      "culled_events", "solid_events", "back_faces", "bounded_points",
-                     "plane_hidden_pairs")
+                     "wall_hidden_pairs")
 
 
 def _far_squares():
@@ -1225,7 +1225,8 @@ def _shortcut_scene(name):
                                                                          [.6, .7, 1])[-1]])
         fire = ("hull_unoccluded_pairs", "hull_culled_blockers", "solid_events", "back_faces")
         return (ef.Scene.from_polygons([floor, ceiling] + box), [0], 1e-7,
-                fire + (("shaft_culled_blockers",) if name == "hanging" else ()))
+                fire + (("shaft_culled_blockers", "wall_hidden_pairs") if name == "hanging"
+                        else ()))
     if name == "walled":
         # a floor and a wall piece on either side of a two-sided wall in two pieces,
         # both with an edge in its plane: the wall hides one from the other whole
@@ -1234,7 +1235,7 @@ def _shortcut_scene(name):
         low = np.array([[0, 0, 0], [0, 1, 0], [0, 1, .5], [0, 0, .5]], float)
         high = low + [0, 0, .5]
         return (ef.Scene.from_polygons([floor, piece, low, high, low[::-1], high[::-1]]),
-                [0, 1], 1e-6, ("plane_hidden_pairs", "hull_unoccluded_pairs",
+                [0, 1], 1e-6, ("wall_hidden_pairs", "hull_unoccluded_pairs",
                                "hull_culled_blockers"))
     if name == "sliced":
         # a closed box the emitter's plane cuts through: the points of the floor inside

@@ -32,9 +32,10 @@ GUNTER2 = os.path.join(DATA, "gunter2.vs3")
 
 def _every_occluded_pair(monkeypatch, scene, rows, shortcuts, visit):
     """``visit(S, Qc, nP, dP, R, c, radius, atol, solid)`` on every occluded pair of the
-    rows at 1e-6, with the arguments the pair's integral forms for its events (the
-    integral itself skipped: the pair's unoccluded value stands in): the list of what
-    it returned."""
+    rows at 1e-6 (those that walls hide whole too: exactff.area.walls off), with the
+    arguments the pair's integral forms for its events (the integral itself skipped:
+    the pair's unoccluded value stands in): the list of what it returned."""
+    monkeypatch.setattr(row_module, "hidden_by_walls", lambda *a: False)
     seen = []
 
     def visit_only(S, Pc, Qc, nP, atol, area_P, whole, shortcuts, st, solid=None,
@@ -328,9 +329,9 @@ def test_compiled_cells_are_geos_cells(monkeypatch, name, rows):
         if not os.path.exists(path):
             pytest.skip(f"{path} not here")
         scene = ef.read_vs3(path)
-    # (the pairs that a wall in one plane hides whole cut all the same:
-    # exactff.area.plane_cover takes most of gunter2's rows 150 and 397)
-    monkeypatch.setattr(row_module, "hidden_by_a_plane", lambda *a: False)
+    # (the pairs that walls hide whole cut all the same:
+    # exactff.area.walls takes most of gunter2's rows 150 and 397)
+    monkeypatch.setattr(row_module, "hidden_by_walls", lambda *a: False)
     out = _cut_calls(monkeypatch, scene, range(len(scene)) if rows is None else rows)
     assert len(out) > 5
     split = 0

@@ -10,6 +10,7 @@ import shapely
 import exactff as ef
 from exactff import _tolerances as tol
 from exactff.area import AreaStats, area_row
+from exactff.area import row as row_module
 from exactff.area.events import distinct_lines
 from exactff.area.points import unoccluded_bound
 from exactff.area.joint_umbra import blocker_frames, hidden_pieces, hiding_rows
@@ -284,6 +285,12 @@ def test_two_blockers_together_hide_the_receiver(monkeypatch):
     for K in (K1, K2):
         alone = hidden_pieces(P, Q, [K], *args)
         assert alone is None or alone[0]
+    # the two plates' planes, one behind the other, prove it too (exactff.area.walls):
+    # exactly 0
+    st = AreaStats()
+    f, e = area_row(scene, 0, 1e-9, stats=st)
+    assert st.wall_hidden_pairs == 1 and f[1] == e[1] == 0.0
+    monkeypatch.setattr(row_module, "hidden_by_walls", lambda *a: False)
     monkeypatch.setattr(tol, "AREA_UMBRA_MIN_LINES", 0)
     monkeypatch.setattr(tol, "AREA_UMBRA_SPLIT_MIN_BLOCKERS", 0)
     st = AreaStats()
@@ -334,6 +341,7 @@ def test_umbras_of_several_blockers_are_off_without_shortcuts(monkeypatch, compi
     taken without shortcuts, caught."""
     from exactff.area import adaptive
     monkeypatch.setattr(adaptive, "COMPILED_PAIR", compiled)
+    monkeypatch.setattr(row_module, "hidden_by_walls", lambda *a: False)
     monkeypatch.setattr(tol, "AREA_UMBRA_MIN_LINES", 0)
     monkeypatch.setattr(tol, "AREA_UMBRA_SPLIT_MIN_BLOCKERS", 0)
     scene = _two_plates(-0.2)

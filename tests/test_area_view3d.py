@@ -354,10 +354,10 @@ def _gunter2():
 
 @pytest.fixture
 def integrated(monkeypatch):
-    """Pairs that a wall in one plane hides whole integrated all the same, not proven
-    0 (exactff.area.plane_cover): the tests of the integration on such pairs, whose
+    """Pairs that walls hide whole integrated all the same, not proven
+    0 (exactff.area.walls): the tests of the integration on such pairs, whose
     exact value the wall gives."""
-    monkeypatch.setattr(area_row, "hidden_by_a_plane", lambda *a: False)
+    monkeypatch.setattr(area_row, "hidden_by_walls", lambda *a: False)
 
 
 def _pair_scene(scene, i, j):
@@ -493,18 +493,18 @@ def test_gunter2_pairs_a_wall_hides_whole_are_exactly_0(i, j, monkeypatch):
     # piece 18, y = 330, x in [-122, -109.5], to the hall's floor, each with an edge in
     # the plane x = -109.5 of the wall between them, 5.2e-10 within 1.3e-6 at 1e-6,
     # the one estimate of gunter2's matrix above the tolerance). A wall in one plane
-    # between the two hides all of one from the other (exactff.area.plane_cover): each
+    # between the two hides all of one from the other (exactff.area.walls): each
     # is exactly 0 with an estimate of 0, and not integrated
     sub, _ = _pair_scene(_gunter2(), i, j)
     st = {}
     F, E = ef.area_form_factors(sub, rows=[0], tolerance=1e-6, error=True, stats=st)
     assert F[0, 1] == E[0, 1] == 0.0
-    assert st["plane_hidden_pairs"] == 1 and st["point_values"] == 0, st
+    assert st["wall_hidden_pairs"] == 1 and st["point_values"] == 0, st
     # and integrated, within its estimate of 0
-    monkeypatch.setattr(area_row, "hidden_by_a_plane", lambda *a: False)
+    monkeypatch.setattr(area_row, "hidden_by_walls", lambda *a: False)
     st = {}
     F, E = ef.area_form_factors(sub, rows=[0], tolerance=1e-6, error=True, stats=st)
-    assert st["plane_hidden_pairs"] == 0 and st["point_values"] > 0
+    assert st["wall_hidden_pairs"] == 0 and st["point_values"] > 0
     assert abs(F[0, 1]) <= E[0, 1], (F[0, 1], E[0, 1])
 
 

@@ -22,7 +22,7 @@ from .adaptive import occluded_pair
 from .closed_form import ClosedFormCounts, unoccluded_pairs
 from .culling import (closed_solids, convex_solids, front_pairs, padded_polygons,
                       row_blockers, tie_covers, uncovered)
-from .plane_cover import hidden_by_a_plane
+from .walls import hidden_by_walls
 from .rules import triangle_areas
 
 __all__ = ["AreaStats", "area_row"]
@@ -78,9 +78,10 @@ class AreaStats:
         Pieces of emitters from which several blockers together hide the whole receiver
         (or all but a part whose bound is within the tolerance's share),
         :func:`~exactff.area.joint_umbra.hidden_pieces` (their pairs count in ``umbra_pairs``).
-    plane_hidden_pairs : int
-        Pairs that blockers in one plane between them hide whole, proven in rationals
-        (:func:`~exactff.area.plane_cover.hidden_by_a_plane`): exactly 0, not
+    wall_hidden_pairs : int
+        Pairs that walls between them (blockers in one plane, or in up to
+        ``AREA_WALL_PLANES`` planes one behind the other) hide whole, proven in
+        rationals (:func:`~exactff.area.walls.hidden_by_walls`): exactly 0, not
         integrated (a shortcut).
     cell_fallbacks : int
         Pairs whose emitter was cut along the events another way (GEOS failed, or the
@@ -120,7 +121,7 @@ class AreaStats:
     umbra_pairs: int = 0
     umbra_cells: int = 0
     umbra_pieces: int = 0
-    plane_hidden_pairs: int = 0
+    wall_hidden_pairs: int = 0
     cell_fallbacks: int = 0
     occluded_pairs: int = 0
     point_values: int = 0
@@ -300,10 +301,10 @@ def _part_row(scene, i, part, covers, atol, rtol, shortcuts, stats):
         else:
             B = [k for k in range(len(polys)) if k not in (i, owner[j])]
         if B:
-            # a wall between the two, in one plane, hiding all of one from the other:
-            # exactly 0 (fx, ex stay 0)
-            if shortcuts and hidden_by_a_plane(Pc, Qc, [polys[k] for k in B], scale):
-                st.plane_hidden_pairs += 1
+            # walls between the two hiding all of one from the other (blockers in one
+            # plane, or in a few one behind the other): exactly 0 (fx, ex stay 0)
+            if shortcuts and hidden_by_walls(Pc, Qc, [polys[k] for k in B], scale):
+                st.wall_hidden_pairs += 1
                 continue
             st.occluded_pairs += 1
             solid = inner = None

@@ -1,0 +1,377 @@
+"""Pairs of an area row that walls between them hide whole, proven exactly
+(docs/explanation/area-form-factors.md, "Walls between the pair").
+
+Where the emitter P and the receiver Q lie on opposite closed sides of a plane H, every
+segment from a point of P to a point of Q meets H inside the slice ``conv(P u Q) n H``,
+which is the convex hull of the points where the segments between vertices of P and
+of Q on strictly opposite sides cross H, and of the vertices on H (the slice of a
+polytope is the hull of its edges' crossings, and every edge of ``conv(P u Q)`` joins
+two of those vertices). Where the (closed) blockers lying in H cover that slice but for
+a set of no area, the pair's form factor is exactly 0: the segments that cross H
+elsewhere join points of P and Q of which at least one lies in H, or cross it in a set
+of no area, whose preimage under the central projection ``x -> crossing`` from a point
+of Q off H is of no area in P either.
+
+Where they leave convex pieces U of the slice uncovered, every segment they let through
+passes through one: its part from P to U is a segment from P to U, and its part from U
+to Q one from U to Q, so the pair is hidden where, for each piece, (P, U) or (U, Q) is
+hidden in turn (by another plane: an annex's ceiling, then the wall between it and the
+hall), down to ``AREA_WALL_PLANES`` planes in all.
+
+The test is decided in rational arithmetic from the input's doubles (the blockers'
+coplanarity, the sides, the crossings, the hull, the cover and the pieces), so that it
+holds for walls assembled from pieces that share edges, and for P and Q with an edge in
+H (a floor against the wall that stands on it). Only blockers whose vertices lie exactly
+in one plane, and are convex there, take part: scenes turned off the axes, where the
+pieces are coplanar only to rounding, are left to the integration. A prefilter in
+doubles picks the planes (within 1e-9 of the coordinates' size) and skips those whose
+slice GEOS finds not covered.
+"""
+
+from fractions import Fraction
+
+import numpy as np
+import shapely
+
+from .. import _tolerances as tol
+
+__all__ = ["hidden_by_walls"]
+
+
+def hidden_by_walls(Pc, Qc, blockers, reach):
+    """Whether walls (blockers in one plane, or in a few planes one behind the other)
+    hide all of Qc from all of Pc: the pair's form factor is then exactly 0 (module
+    docstring).
+
+    Parameters
+    ----------
+    Pc, Qc : ndarray of shape (k, 3)
+        The emitter and the receiver (convex, each clipped to the front of the other).
+    blockers : list of ndarray of shape (m, 3)
+        The pair's possible blockers.
+    reach : float
+        The size of the coordinates (the prefilter's band for "on the plane" is
+        1e-9 of it; the decision itself is exact).
+
+    Returns
+    -------
+    bool
+
+    Examples
+    --------
+    A floor and a wall piece on either side of a wall made of two pieces, each touching
+    the wall's plane along an edge:
+
+    >>> floor = np.array([[0, 0, 0], [2, 0, 0], [2, 1, 0], [0, 1, 0]], float)
+    >>> piece = np.array([[0, 1, 0], [0, 1, 1], [-1, 1, 1], [-1, 1, 0]], float)
+    >>> low = np.array([[0, 0, 0], [0, 1, 0], [0, 1, 0.5], [0, 0, 0.5]], float)
+    >>> high = np.array([[0, 0, 0.5], [0, 1, 0.5], [0, 1, 1], [0, 0, 1]], float)
+    >>> hidden_by_walls(floor, piece, [low, high], 2.0)
+    True
+    >>> hidden_by_walls(floor, piece, [low], 2.0)
+    False
+    """
+    walls = _walls(blockers, reach)
+    if not walls:
+        return False
+    budget = [tol.AREA_WALL_NODES]
+    return _hidden(_rational(Pc), _rational(Qc), walls, 1e-9 * reach,
+                   tol.AREA_WALL_PLANES - 1, budget)
+
+
+class _Wall:
+    """The blockers in one plane (to the prefilter's rounding): unit normal n, offset
+    d, the blockers (doubles), their union in the plane's projection (GEOS, made when
+    first asked) and the exact plane and convex covers (rationals, likewise)."""
+
+    def __init__(self, n, d, Ks):
+        self.n, self.d, self.Ks = n, d, Ks
+        self.keep = [a for a in range(3) if a != int(np.argmax(np.abs(n)))]
+        V = np.vstack(Ks)[:, self.keep]
+        self.lo, self.hi = V.min(axis=0), V.max(axis=0)
+        self._union = self._exact = None
+
+    def union(self):
+        if self._union is None:
+            self._union = shapely.union_all([shapely.Polygon(K[:, self.keep])
+                                             for K in self.Ks])
+        return self._union
+
+    def exact(self):
+        """(normal, offset, projection axis, the two axes kept, covers): the plane
+        through Ks[0]'s first vertex and the next two not collinear with it, and the
+        blockers exactly in it, convex, projected along the axis of the normal's
+        largest component (counter-clockwise); None where none is."""
+        if self._exact is None:
+            K0 = _rational(self.Ks[0])
+            nf = _exact_normal(K0)
+            self._exact = False
+            if nf is not None:
+                d = sum(x * y for x, y in zip(nf, K0[0]))
+                axis = max(range(3), key=lambda a: abs(nf[a]))
+                keep = [a for a in range(3) if a != axis]
+                covers = []
+                for K in _rational_list(self.Ks):
+                    if any(sum(x * y for x, y in zip(nf, v)) != d for v in K):
+                        continue
+                    K2 = _ccw([(v[keep[0]], v[keep[1]]) for v in K])
+                    if K2 is not None:
+                        box = np.array([[float(x), float(y)] for x, y in K2])
+                        covers.append((K2, (box.min(axis=0), box.max(axis=0))))
+                if covers:
+                    self._exact = (nf, d, axis, keep, covers)
+        return self._exact or None
+
+
+def _walls(blockers, reach):
+    """The blockers grouped by plane (normal and offset rounded to 1e-9, the normal's
+    sign made that of its first nonzero component)."""
+    groups = {}
+    for K in blockers:
+        K = np.asarray(K, dtype=float)
+        n = _normal(K)
+        norm = np.linalg.norm(n)
+        if not norm > 0:
+            continue
+        n = n / norm
+        if n[np.flatnonzero(np.abs(n) > 1e-12)[0]] < 0:
+            n = -n
+        d = float(np.mean(K @ n))
+        key = (tuple(np.round(n, 9)), round(d / reach, 9))
+        if key not in groups:
+            groups[key] = (n, d, [])
+        groups[key][2].append(K)
+    return [_Wall(*g) for g in groups.values()]
+
+
+def _rational(V):
+    return [tuple(Fraction(float(c)) for c in v) for v in np.asarray(V, dtype=float)]
+
+
+def _rational_list(Ks):
+    return [_rational(K) for K in Ks]
+
+
+def _floats(V):
+    return np.array([[float(c) for c in v] for v in V])
+
+
+def _normal(K):
+    """Newell's normal of polygon K (doubles; twice its area along its normal)."""
+    return np.cross(K, np.roll(K, -1, axis=0)).sum(axis=0)
+
+
+def _exact_normal(K):
+    """The normal (rationals) of K's first vertex and the next two not collinear with
+    it; None where all are."""
+    a = K[0]
+    for j in range(2, len(K)):
+        u = [K[1][i] - a[i] for i in range(3)]
+        v = [K[j][i] - a[i] for i in range(3)]
+        n = [u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]]
+        if any(n):
+            return n
+    return None
+
+
+def _hidden(P, Q, walls, band, depth, budget):
+    """Whether the walls hide all of Q from all of P (both convex, rationals), with up
+    to ``depth`` more planes behind the first; ``budget``: exact tests left."""
+    Pf, Qf = _floats(P), _floats(Q)
+    # the walls whose plane has P on one closed side and Q on the other, neither in it,
+    # by the share of the slice GEOS finds uncovered
+    scored = []
+    for w in walls:
+        sP, sQ = Pf @ w.n - w.d, Qf @ w.n - w.d
+        if sP.min() < -band:
+            sP, sQ = -sP, -sQ
+        if sP.min() < -band or sQ.max() > band or sP.max() <= band or sQ.min() >= -band:
+            continue
+        left = _float_uncovered(Pf, Qf, sP, sQ, w, band)
+        if left < 1.0 - 1e-9:
+            scored.append((left, len(scored), w))
+    scored.sort()
+    for left, _, w in scored[:tol.AREA_WALL_TRIES]:
+        if depth == 0 and left > 1e-9:
+            break
+        budget[0] -= 1
+        if budget[0] < 0:
+            return False
+        pieces = _uncovered_exactly(P, Q, w)
+        if pieces is None:
+            continue
+        if not pieces:
+            return True
+        if depth == 0 or len(pieces) > tol.AREA_WALL_PIECES:
+            continue
+        if all(_hidden(P, U, walls, band, depth - 1, budget)
+               or _hidden(U, Q, walls, band, depth - 1, budget) for U in pieces):
+            return True
+    return False
+
+
+def _float_uncovered(Pf, Qf, sP, sQ, w, band):
+    """The share of the slice's area (doubles, GEOS) that w's blockers leave
+    uncovered; 1 where the slice has no area. ``sP``, ``sQ``: the vertices' distances
+    from the plane, P's positive."""
+    a, b = sP[sP > band], sQ[sQ < -band]
+    p, q = Pf[sP > band], Qf[sQ < -band]
+    t = (a[:, None] / (a[:, None] - b[None, :]))[..., None]
+    pts = (p[:, None] + t * (q[None, :] - p[:, None])).reshape(-1, 3)
+    pts = np.vstack([pts, Pf[np.abs(sP) <= band], Qf[np.abs(sQ) <= band]])
+    lo, hi = pts[:, w.keep].min(axis=0), pts[:, w.keep].max(axis=0)
+    if np.any(lo > w.hi) or np.any(hi < w.lo):
+        return 1.0
+    hull = shapely.MultiPoint(pts[:, w.keep]).convex_hull
+    if not hull.area > 0:
+        return 1.0
+    return hull.difference(w.union()).area / hull.area
+
+
+def _uncovered_exactly(P, Q, w):
+    """The slice of (P, Q) in w's exact plane less w's exact covers, in rationals: its
+    convex pieces of positive area, lifted back into the plane (an empty list where it
+    is covered but for a set of no area); None where w has no exact plane, or P and Q
+    are not on opposite closed sides of it with neither in it."""
+    exact = w.exact()
+    if exact is None:
+        return None
+    nf, d, axis, keep, covers = exact
+
+    def side(v):
+        return sum(x * y for x, y in zip(nf, v)) - d
+
+    sP, sQ = [side(v) for v in P], [side(v) for v in Q]
+    sign = 1 if max(sP) > 0 else -1
+    sP, sQ = [sign * s for s in sP], [sign * s for s in sQ]
+    if min(sP) < 0 or max(sQ) > 0 or max(sP) == 0 or min(sQ) == 0:
+        return None
+    # the slice: the crossings of the vertex pairs on strictly opposite sides, and the
+    # vertices in the plane, projected on the two axes kept
+    pts = [(v[keep[0]], v[keep[1]]) for v, s in zip(P + Q, sP + sQ) if s == 0]
+    for p, a in zip(P, sP):
+        for q, b in zip(Q, sQ):
+            if a > 0 > b:
+                t = a / (a - b)
+                pts.append(tuple(p[i] + t * (q[i] - p[i]) for i in keep))
+    pieces = [_hull(pts)]
+    if len(pieces[0]) < 3 or _area2(pieces[0]) == 0:
+        return None
+    # each cover taken from the pieces whose boxes (doubles) overlap its own: skipping
+    # a cover only leaves more uncovered, so the boxes need no proof
+    for K2, (klo, khi) in covers:
+        out = []
+        for piece in pieces:
+            box = np.array([[float(x), float(y)] for x, y in piece])
+            if np.any(box.min(axis=0) >= khi) or np.any(box.max(axis=0) <= klo):
+                out.append(piece)
+            else:
+                out.extend(_minus_convex(piece, K2))
+        pieces = out
+        if not pieces:
+            return []
+    pieces = _joined(pieces)
+    # lifted back into the plane: the axis dropped from nf . x = d
+    lifted = []
+    for piece in pieces:
+        U = []
+        for u in piece:
+            x = [None] * 3
+            x[keep[0]], x[keep[1]] = u
+            x[axis] = (d - nf[keep[0]] * u[0] - nf[keep[1]] * u[1]) / nf[axis]
+            U.append(tuple(x))
+        lifted.append(U)
+    return lifted
+
+
+def _joined(pieces):
+    """The convex hulls of the pieces that touch one another (grouped by GEOS in
+    doubles: any grouping gives hulls that hold every piece, so the grouping needs no
+    proof), the fewer pieces to try further."""
+    if len(pieces) == 1:
+        return pieces
+    shapes = [shapely.Polygon([(float(x), float(y)) for x, y in piece]) for piece in pieces]
+    merged = shapely.union_all([s.buffer(0) for s in shapes])
+    parts = list(getattr(merged, "geoms", [merged]))
+    groups = {}
+    for piece, shape in zip(pieces, shapes):
+        point = shape.representative_point()
+        k = min(range(len(parts)), key=lambda i: parts[i].distance(point))
+        groups.setdefault(k, []).extend(piece)
+    return [_hull(pts) for pts in groups.values()]
+
+
+def _cross2(o, a, b):
+    return (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0])
+
+
+def _ccw(poly):
+    """The polygon counter-clockwise, its repeated and collinear vertices dropped;
+    None where it is not convex or of no area."""
+    pts = []
+    for v in poly:
+        if not pts or v != pts[-1]:
+            pts.append(v)
+    while len(pts) > 1 and pts[0] == pts[-1]:
+        pts.pop()
+    turns = [_cross2(pts[i - 1], pts[i], pts[(i + 1) % len(pts)]) for i in range(len(pts))]
+    if any(t > 0 for t in turns) and any(t < 0 for t in turns):
+        return None
+    pts = [v for v, t in zip(pts, turns) if t != 0]
+    if len(pts) < 3:
+        return None
+    return pts if any(t > 0 for t in turns) else pts[::-1]
+
+
+def _hull(pts):
+    """Convex hull (Andrew's monotone chain), counter-clockwise, exact."""
+    pts = sorted(set(pts))
+    if len(pts) < 3:
+        return pts
+    lower, upper = [], []
+    for p in pts:
+        while len(lower) >= 2 and _cross2(lower[-2], lower[-1], p) <= 0:
+            lower.pop()
+        lower.append(p)
+    for p in reversed(pts):
+        while len(upper) >= 2 and _cross2(upper[-2], upper[-1], p) <= 0:
+            upper.pop()
+        upper.append(p)
+    return lower[:-1] + upper[:-1]
+
+
+def _clip(poly, a, b, keep_left):
+    """Convex polygon ``poly`` clipped to the closed left (or right) of the line a -> b."""
+    out = []
+    for i, p in enumerate(poly):
+        q = poly[(i + 1) % len(poly)]
+        sp, sq = _cross2(a, b, p), _cross2(a, b, q)
+        if not keep_left:
+            sp, sq = -sp, -sq
+        if sp >= 0:
+            out.append(p)
+        if (sp > 0 > sq) or (sp < 0 < sq):
+            t = sp / (sp - sq)
+            out.append((p[0] + t * (q[0] - p[0]), p[1] + t * (q[1] - p[1])))
+    return out
+
+
+def _area2(poly):
+    return sum(p[0] * q[1] - q[0] * p[1] for p, q in zip(poly, poly[1:] + poly[:1]))
+
+
+def _minus_convex(piece, K):
+    """The convex pieces of positive area of ``piece`` less the convex polygon K
+    (both counter-clockwise): the parts beyond each edge of K and within the ones
+    before it."""
+    out = []
+    rest = piece
+    for i, a in enumerate(K):
+        b = K[(i + 1) % len(K)]
+        beyond = _clip(rest, a, b, keep_left=False)
+        if len(beyond) >= 3 and _area2(beyond) != 0:
+            out.append(beyond)
+        rest = _clip(rest, a, b, keep_left=True)
+        if len(rest) < 3 or _area2(rest) == 0:
+            break
+    return out
