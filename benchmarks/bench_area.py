@@ -73,6 +73,11 @@ Usage: python benchmarks/bench_area.py [--cube-k 8]
    rows, the smallest value, values below ``-E``, rows above ``1 + sum E``, the worst
    row sum and reciprocity against the estimates; ``--gunter2-first K`` the first K
    rows only (the pairs among them for reciprocity).
+12. ``--walls ROWS`` alone (issue 49, the walls between a pair): View3D's examples,
+   the 106-surface box and gunter2's rows ROWS at tolerance 1e-6 with the walls' proof
+   (``exactff.area.walls``) off and on, alternating, best of ``--repeat``: process time,
+   the pairs the walls take, the pairs integrated, and the largest difference of a value
+   between the two runs against the sum of their estimates.
 5. ``--pair-path`` alone: the occluded pairs' compiled path against the numpy and GEOS
    reference it replaces, in one run at tolerance 1e-6 (test4, facet, gunter1; process
    time): the events compiled (``exactff/_core/pair.cpp``) or by numpy
@@ -225,6 +230,10 @@ def main():
                     help="only the occluded pairs' calls recorded into (or read from) this "
                          "directory and replayed, and the serial matrices")
     ap.add_argument("--tag", default="run", help="--pair-calls: the matrices' file's tag")
+    ap.add_argument("--walls", default="",
+                    help="only the walls between a pair (exactff.area.walls) off and on, in "
+                         "one run: View3D's examples, the 106-surface box and these gunter2 "
+                         "rows (comma-separated)")
     args = ap.parse_args()
     print(machine())
     print()
@@ -240,6 +249,8 @@ def main():
         return gunter2_full(args)
     if args.umbras or args.umbra_pairs:
         return umbra_rows(args)
+    if args.walls:
+        return walls_table(args)
     if args.points:
         return points_table(args)
     if args.curved:
@@ -491,6 +502,41 @@ def umbra_rows(args):
                   f"| {v1:.3e} ({e1:.1e}) | {abs(v1 - v0) / (e0 + e1):.2f} |")
     tolerances.AREA_UMBRA_MIN_LINES = on
     tolerances.AREA_UMBRA_SPLIT_DEPTH = split
+
+
+def walls_table(args):
+    """The walls between a pair (``exactff.area.walls``) off and on, alternating in one
+    run, at tolerance 1e-6: process time (best of ``--repeat``), the pairs the walls take
+    and those integrated, and the largest difference of a value between the two runs
+    against the sum of their estimates."""
+    import exactff.area.row as row_module
+    proof = row_module.hidden_by_walls
+    cases = [(name, ef.read_vs3(os.path.join(DATA, name)), None)
+             for name in ("cube.vs3", "test4.vs3", "facet.vs3", "gunter1.vs3")]
+    cases.append(("106-surface box", ef.scenes.unit_squares_room(), None))
+    g2 = ef.read_vs3(os.path.join(DATA, "gunter2.vs3"))
+    cases += [(f"gunter2 row {r}", g2, [int(r)]) for r in args.walls.split(",") if r != "all"]
+    print("| case | s off | s on | off / on | pairs the walls take | pairs integrated off / on "
+          "| largest difference / estimates | max E off / on |")
+    print("|---|---|---|---|---|---|---|---|")
+    for name, scene, rows in cases:
+        out = {}
+        for _ in range(args.repeat):
+            for on in (False, True):
+                row_module.hidden_by_walls = proof if on else (lambda *a: False)
+                st = {}
+                t0 = time.process_time()
+                f, e = ef.area_form_factors(scene, rows=rows, tolerance=1e-6, error=True,
+                                            stats=st)
+                t = time.process_time() - t0
+                if on not in out or t < out[on][2]:
+                    out[on] = (f, e, t, st)
+        row_module.hidden_by_walls = proof
+        (f0, e0, t0, s0), (f1, e1, t1, s1) = out[False], out[True]
+        worst = float(np.max(np.abs(f1 - f0) / np.maximum(e0 + e1, 1e-300)))
+        print(f"| {name} | {t0:.3f} | {t1:.3f} | {t0 / t1:.2f}x | {s1['wall_hidden_pairs']} "
+              f"| {s0['occluded_pairs']} / {s1['occluded_pairs']} | {worst:.2f} "
+              f"| {e0.max():.1e} / {e1.max():.1e} |")
 
 
 def matrix_against_estimates(scene, F, E, rows):

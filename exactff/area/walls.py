@@ -98,20 +98,25 @@ class _Wall:
         return self._union
 
     def exact(self):
-        """(normal, offset, projection axis, the two axes kept, covers): the plane
-        through Ks[0]'s first vertex and the next two not collinear with it, and the
-        blockers exactly in it, convex, projected along the axis of the normal's
-        largest component (counter-clockwise); None where none is."""
+        """(normal, offset, projection axis, the two axes kept, covers): the plane of
+        the first blocker whose vertices lie exactly in one plane (the normal of its
+        first vertex and the next two not collinear with it), and the blockers exactly
+        in it, convex, projected along the axis of the normal's largest component
+        (counter-clockwise); None where none is."""
         if self._exact is None:
-            K0 = _rational(self.Ks[0])
-            nf = _exact_normal(K0)
             self._exact = False
-            if nf is not None:
+            Ks = _rational_list(self.Ks)
+            for K0 in Ks:
+                nf = _exact_normal(K0)
+                if nf is None:
+                    continue
                 d = sum(x * y for x, y in zip(nf, K0[0]))
+                if any(sum(x * y for x, y in zip(nf, v)) != d for v in K0):
+                    continue
                 axis = max(range(3), key=lambda a: abs(nf[a]))
                 keep = [a for a in range(3) if a != axis]
                 covers = []
-                for K in _rational_list(self.Ks):
+                for K in Ks:
                     if any(sum(x * y for x, y in zip(nf, v)) != d for v in K):
                         continue
                     K2 = _ccw([(v[keep[0]], v[keep[1]]) for v in K])
@@ -120,6 +125,7 @@ class _Wall:
                         covers.append((K2, (box.min(axis=0), box.max(axis=0))))
                 if covers:
                     self._exact = (nf, d, axis, keep, covers)
+                break
         return self._exact or None
 
 
@@ -287,17 +293,21 @@ def _uncovered_exactly(P, Q, w):
 def _joined(pieces):
     """The convex hulls of the pieces that touch one another (grouped by GEOS in
     doubles: any grouping gives hulls that hold every piece, so the grouping needs no
-    proof), the fewer pieces to try further."""
+    proof), the fewer pieces to try further; a piece of no area in doubles (a sliver
+    of rationals) stays a group of its own."""
     if len(pieces) == 1:
         return pieces
     shapes = [shapely.Polygon([(float(x), float(y)) for x, y in piece]) for piece in pieces]
-    merged = shapely.union_all([s.buffer(0) for s in shapes])
-    parts = list(getattr(merged, "geoms", [merged]))
+    merged = shapely.union_all([s.buffer(0) for s in shapes if s.area > 0])
+    parts = [g for g in getattr(merged, "geoms", [merged]) if not g.is_empty]
     groups = {}
-    for piece, shape in zip(pieces, shapes):
-        point = shape.representative_point()
-        k = min(range(len(parts)), key=lambda i: parts[i].distance(point))
-        groups.setdefault(k, []).extend(piece)
+    for k, (piece, shape) in enumerate(zip(pieces, shapes)):
+        point = shape.representative_point() if shape.area > 0 else None
+        if point is None or point.is_empty or not parts:
+            groups[-1 - k] = list(piece)
+            continue
+        i = min(range(len(parts)), key=lambda i: parts[i].distance(point))
+        groups.setdefault(i, []).extend(piece)
     return [_hull(pts) for pts in groups.values()]
 
 
