@@ -493,9 +493,11 @@ def test_gunter2_pairs_a_wall_hides_whole_are_exactly_0(i, j, monkeypatch):
     # piece 18, y = 330, x in [-122, -109.5], to the hall's floor, each with an edge in
     # the plane x = -109.5 of the wall between them, 5.2e-10 within 1.3e-6 at 1e-6,
     # the one estimate of gunter2's matrix above the tolerance). A wall in one plane
-    # between the two hides all of one from the other (exactff.area.walls): each
-    # is exactly 0 with an estimate of 0, and not integrated
+    # between the two hides all of one from the other (exactff.area.walls): with the
+    # proof first (whatever the blockers), each is exactly 0 with an estimate of 0, and
+    # not integrated
     sub, _ = _pair_scene(_gunter2(), i, j)
+    monkeypatch.setattr(ef._tolerances, "AREA_WALL_MIN_BLOCKERS", 0)
     st = {}
     F, E = ef.area_form_factors(sub, rows=[0], tolerance=1e-6, error=True, stats=st)
     assert F[0, 1] == E[0, 1] == 0.0
@@ -506,6 +508,21 @@ def test_gunter2_pairs_a_wall_hides_whole_are_exactly_0(i, j, monkeypatch):
     F, E = ef.area_form_factors(sub, rows=[0], tolerance=1e-6, error=True, stats=st)
     assert st["wall_hidden_pairs"] == 0 and st["point_values"] > 0
     assert abs(F[0, 1]) <= E[0, 1], (F[0, 1], E[0, 1])
+
+
+def test_gunter2_wall_piece_to_the_floor_is_proven_where_its_integral_misses():
+    # (18, 1) has two blockers, too few for the walls' proof to go first
+    # (AREA_WALL_MIN_BLOCKERS): integrated, its estimate 1.3e-6 misses the tolerance of
+    # 1e-6, so the proof is tried after, and the pair is exactly 0 (without error=True
+    # the row raised); the pairs of (0, 135), integrated within their tolerance, keep
+    # their integral
+    for (i, j), proven in (((18, 1), True), ((0, 135), False)):
+        sub, B = _pair_scene(_gunter2(), i, j)
+        assert len(B) < ef._tolerances.AREA_WALL_MIN_BLOCKERS
+        st = {}
+        F, E = ef.area_form_factors(sub, rows=[0], tolerance=1e-6, stats=st, error=True)
+        assert st["point_values"] > 0 and st["wall_hidden_pairs"] == int(proven)
+        assert (F[0, 1] == E[0, 1] == 0.0) == proven and E[0, 1] <= 1e-6
 
 
 def _strip_triangles():

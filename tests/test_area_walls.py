@@ -9,6 +9,7 @@ from hypothesis import assume, given
 from hypothesis import strategies as st
 
 import exactff as ef
+from exactff import _tolerances as tol
 import exactff.area.row as area_row_module
 from exactff.area.walls import hidden_by_walls
 
@@ -137,6 +138,8 @@ def _walled_scene():
 
 
 def test_a_row_takes_the_proof_and_the_integration_agrees(monkeypatch):
+    # (the proof first, whatever the blockers: AREA_WALL_MIN_BLOCKERS 0)
+    monkeypatch.setattr(tol, "AREA_WALL_MIN_BLOCKERS", 0)
     scene = _walled_scene()
     assert scene.normals[0] @ [0, 0, 1] > 0 and scene.normals[1] @ [0, 1, 0] < 0
     st = {}
@@ -204,6 +207,7 @@ def test_a_wall_and_a_ceiling_together_hide_what_neither_hides_alone():
 
 
 def test_a_row_takes_the_annex_and_the_slot_is_seen(monkeypatch):
+    monkeypatch.setattr(tol, "AREA_WALL_MIN_BLOCKERS", 0)
     P, Q, wall, ceiling = _annex()
     scene = ef.Scene.from_polygons([P, Q, wall, wall[::-1], ceiling, ceiling[::-1]])
     st = {}
@@ -212,7 +216,7 @@ def test_a_row_takes_the_annex_and_the_slot_is_seen(monkeypatch):
     monkeypatch.setattr(area_row_module, "hidden_by_walls", lambda *a: False)
     F, E = ef.area_form_factors(scene, rows=[0], tolerance=1e-7, error=True)
     assert abs(F[0, 1]) <= E[0, 1] <= 1e-7, (F[0, 1], E[0, 1])
-    monkeypatch.undo()
+    monkeypatch.setattr(area_row_module, "hidden_by_walls", hidden_by_walls)
     # with the slot, integrated: a value beyond its estimate
     P, Q, wall, ceiling = _annex(gap=0.25)
     scene = ef.Scene.from_polygons([P, Q, wall, wall[::-1], ceiling, ceiling[::-1]])

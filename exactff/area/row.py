@@ -14,7 +14,7 @@ from dataclasses import asdict, dataclass, fields
 import numpy as np
 
 from .. import _tolerances as tol
-from ..errors import NumericalError, nonnegative
+from ..errors import NumericalError, misses_tolerance, nonnegative
 from ..geometry import area_vector
 from ..prepared import prepared
 from ..visibility import is_convex_enclosure
@@ -81,8 +81,11 @@ class AreaStats:
     wall_hidden_pairs : int
         Pairs that walls between them (blockers in one plane, or in up to
         ``AREA_WALL_PLANES`` planes one behind the other) hide whole, proven in
-        rationals (:func:`~exactff.area.walls.hidden_by_walls`): exactly 0, not
-        integrated (a shortcut).
+        rationals (:func:`~exactff.area.walls.hidden_by_walls`): exactly 0 (a
+        shortcut). Tried before the integral on pairs of at least
+        ``AREA_WALL_MIN_BLOCKERS`` blockers (not integrated), after it on the others
+        where its estimate misses the tolerance (those count in ``occluded_pairs``
+        too).
     cell_fallbacks : int
         Pairs whose emitter was cut along the events another way (GEOS failed, or the
         cells did not cover it: the lines as cut, or on a fine grid).
@@ -302,8 +305,11 @@ def _part_row(scene, i, part, covers, atol, rtol, shortcuts, stats):
             B = [k for k in range(len(polys)) if k not in (i, owner[j])]
         if B:
             # walls between the two hiding all of one from the other (blockers in one
-            # plane, or in a few one behind the other): exactly 0 (fx, ex stay 0)
-            if shortcuts and hidden_by_walls(Pc, Qc, [polys[k] for k in B], scale):
+            # plane, or in a few one behind the other): exactly 0 (fx, ex stay 0); tried
+            # first on pairs of many blockers, whose integral costs more than the proof
+            # (on fewer, where the integral's estimate misses the tolerance)
+            if (shortcuts and len(B) >= tol.AREA_WALL_MIN_BLOCKERS
+                    and hidden_by_walls(Pc, Qc, [polys[k] for k in B], scale)):
                 st.wall_hidden_pairs += 1
                 continue
             st.occluded_pairs += 1
@@ -348,6 +354,11 @@ def _part_row(scene, i, part, covers, atol, rtol, shortcuts, stats):
         except NumericalError as exc:
             raise NumericalError(f"area form factor ({i}, {owner[j]}): {exc}") from exc
         st.point_values += points
+        if (shortcuts and len(B) < tol.AREA_WALL_MIN_BLOCKERS
+                and misses_tolerance(fx[j], ex[j], rtol, atol=atol * share[j])
+                and hidden_by_walls(Pc, Qc, [polys[k] for k in B], scale)):
+            fx[j] = ex[j] = 0.0
+            st.wall_hidden_pairs += 1
     if occluded:
         # the occluded values clamped at 0 within their estimates, together
         done = np.zeros(len(fx), dtype=bool)

@@ -34,6 +34,8 @@ import numpy as np
 import shapely
 
 from .. import _tolerances as tol
+from ..geometry import cross
+from ..rings import padded
 
 __all__ = ["hidden_by_walls"]
 
@@ -71,12 +73,23 @@ def hidden_by_walls(Pc, Qc, blockers, reach):
     >>> hidden_by_walls(floor, piece, [low], 2.0)
     False
     """
-    walls = _walls(blockers, reach)
-    if not walls:
+    band, depth = 1e-9 * reach, tol.AREA_WALL_PLANES - 1
+    V, _ = padded([np.asarray(K, dtype=float) for K in blockers])
+    N = cross(V, np.roll(V, -1, axis=1)).sum(axis=1)
+    norm = np.linalg.norm(N, axis=1)
+    keep = norm > 0
+    V, N = V[keep], N[keep] / norm[keep, None]
+    D = np.einsum("bx,bx->b", N, V[:, 0])
+    # a segment between inner points of the two that misses every blocker (by more
+    # than the band): not hidden, nothing else tried
+    if not len(V) or _a_segment_passes(Pc, Qc, V, N, D, band):
         return False
-    budget = [tol.AREA_WALL_NODES]
-    return _hidden(_rational(Pc), _rational(Qc), walls, 1e-9 * reach,
-                   tol.AREA_WALL_PLANES - 1, budget)
+    walls = _walls([np.asarray(blockers[k], dtype=float) for k in np.flatnonzero(keep)],
+                   N, D, reach)
+    # a plan in doubles first; only where it finds the pair hidden, the proof
+    return (_hidden(Pc, Qc, walls, band, depth, [tol.AREA_WALL_NODES], False)
+            and _hidden(_rational(Pc), _rational(Qc), walls, band, depth,
+                        [tol.AREA_WALL_NODES], True))
 
 
 class _Wall:
@@ -129,25 +142,39 @@ class _Wall:
         return self._exact or None
 
 
-def _walls(blockers, reach):
-    """The blockers grouped by plane (normal and offset rounded to 1e-9, the normal's
-    sign made that of its first nonzero component)."""
+def _walls(blockers, N, D, reach):
+    """The blockers grouped by plane (unit normals N, offsets D; normal and offset
+    rounded to 1e-9, the normal's sign made that of its first nonzero component)."""
+    first = np.argmax(np.abs(N) > 1e-12, axis=1)
+    flip = np.where(N[np.arange(len(N)), first] < 0, -1.0, 1.0)
+    N, D = N * flip[:, None], D * flip
     groups = {}
-    for K in blockers:
-        K = np.asarray(K, dtype=float)
-        n = _normal(K)
-        norm = np.linalg.norm(n)
-        if not norm > 0:
-            continue
-        n = n / norm
-        if n[np.flatnonzero(np.abs(n) > 1e-12)[0]] < 0:
-            n = -n
-        d = float(np.mean(K @ n))
+    for K, n, d in zip(blockers, N, D):
         key = (tuple(np.round(n, 9)), round(d / reach, 9))
         if key not in groups:
             groups[key] = (n, d, [])
         groups[key][2].append(K)
     return [_Wall(*g) for g in groups.values()]
+
+
+def _a_segment_passes(Pc, Qc, V, N, D, band):
+    """Whether one of the segments between inner points of Pc and Qc (the centroids and
+    the points halfway from them to the vertices) misses every blocker (padded
+    vertices V, unit normals N, offsets D) by more than ``band``: a cheap refusal, in
+    doubles (it may only refuse a pair that walls hide, never take one)."""
+    def inner(X):
+        c = X.mean(axis=0)
+        return np.vstack([c, 0.5 * (X + c)])
+    x, y = inner(Pc), inner(Qc)
+    x, y = np.repeat(x, len(y), axis=0), np.tile(y, (len(x), 1))           # (m, 3)
+    sx, sy = x @ N.T - D, y @ N.T - D                                        # (m, b)
+    crosses = (sx * sy <= 0) & (sx != sy)
+    t = np.where(crosses, sx, 0.0) / np.where(crosses, sx - sy, 1.0)
+    z = x[:, None] + t[..., None] * (y - x)[:, None]                         # (m, b, 3)
+    E = np.roll(V, -1, axis=1) - V                                           # (b, k, 3)
+    side = np.einsum("mbkx,bx->mbk", cross(E[None], z[:, :, None] - V[None]), N)
+    inside = (side >= -band * np.linalg.norm(E, axis=2)[None]).all(axis=2)
+    return bool((~(crosses & inside)).all(axis=1).any())
 
 
 def _rational(V):
@@ -160,11 +187,6 @@ def _rational_list(Ks):
 
 def _floats(V):
     return np.array([[float(c) for c in v] for v in V])
-
-
-def _normal(K):
-    """Newell's normal of polygon K (doubles; twice its area along its normal)."""
-    return np.cross(K, np.roll(K, -1, axis=0)).sum(axis=0)
 
 
 def _exact_normal(K):
@@ -180,10 +202,12 @@ def _exact_normal(K):
     return None
 
 
-def _hidden(P, Q, walls, band, depth, budget):
-    """Whether the walls hide all of Q from all of P (both convex, rationals), with up
-    to ``depth`` more planes behind the first; ``budget``: exact tests left."""
-    Pf, Qf = _floats(P), _floats(Q)
+def _hidden(P, Q, walls, band, depth, budget, exact):
+    """Whether the walls hide all of Q from all of P (both convex), with up to
+    ``depth`` more planes behind the first; ``budget``: tests left. ``exact``: P, Q and
+    the pieces in rationals, decided exactly; else in doubles, by GEOS (a plan: only
+    where it finds the pair hidden is the exact search run)."""
+    Pf, Qf = (_floats(P), _floats(Q)) if exact else (P, Q)
     # the walls whose plane has P on one closed side and Q on the other, neither in it,
     # by the share of the slice GEOS finds uncovered
     scored = []
@@ -193,33 +217,33 @@ def _hidden(P, Q, walls, band, depth, budget):
             sP, sQ = -sP, -sQ
         if sP.min() < -band or sQ.max() > band or sP.max() <= band or sQ.min() >= -band:
             continue
-        left = _float_uncovered(Pf, Qf, sP, sQ, w, band)
-        if left < 1.0 - 1e-9:
-            scored.append((left, len(scored), w))
-    scored.sort()
-    for left, _, w in scored[:tol.AREA_WALL_TRIES]:
-        if depth == 0 and left > 1e-9:
+        hull, left = _float_uncovered(Pf, Qf, sP, sQ, w, band)
+        if hull is not None and left.area < (1.0 - 1e-9) * hull.area:
+            scored.append((left.area / hull.area, len(scored), w, hull, left))
+    scored.sort(key=lambda c: c[:2])
+    for share, _, w, hull, left in scored[:tol.AREA_WALL_TRIES]:
+        if depth == 0 and share > 1e-9:
             break
         budget[0] -= 1
         if budget[0] < 0:
             return False
-        pieces = _uncovered_exactly(P, Q, w)
+        pieces = _uncovered_exactly(P, Q, w) if exact else _float_pieces(hull, left, w)
         if pieces is None:
             continue
         if not pieces:
             return True
         if depth == 0 or len(pieces) > tol.AREA_WALL_PIECES:
             continue
-        if all(_hidden(P, U, walls, band, depth - 1, budget)
-               or _hidden(U, Q, walls, band, depth - 1, budget) for U in pieces):
+        if all(_hidden(P, U, walls, band, depth - 1, budget, exact)
+               or _hidden(U, Q, walls, band, depth - 1, budget, exact) for U in pieces):
             return True
     return False
 
 
 def _float_uncovered(Pf, Qf, sP, sQ, w, band):
-    """The share of the slice's area (doubles, GEOS) that w's blockers leave
-    uncovered; 1 where the slice has no area. ``sP``, ``sQ``: the vertices' distances
-    from the plane, P's positive."""
+    """The slice (doubles, GEOS: the hull of the crossings) and its part that w's
+    blockers leave uncovered; (None, None) where the slice misses their box or has no
+    area. ``sP``, ``sQ``: the vertices' distances from the plane, P's positive."""
     a, b = sP[sP > band], sQ[sQ < -band]
     p, q = Pf[sP > band], Qf[sQ < -band]
     t = (a[:, None] / (a[:, None] - b[None, :]))[..., None]
@@ -227,11 +251,28 @@ def _float_uncovered(Pf, Qf, sP, sQ, w, band):
     pts = np.vstack([pts, Pf[np.abs(sP) <= band], Qf[np.abs(sQ) <= band]])
     lo, hi = pts[:, w.keep].min(axis=0), pts[:, w.keep].max(axis=0)
     if np.any(lo > w.hi) or np.any(hi < w.lo):
-        return 1.0
+        return None, None
     hull = shapely.MultiPoint(pts[:, w.keep]).convex_hull
     if not hull.area > 0:
-        return 1.0
-    return hull.difference(w.union()).area / hull.area
+        return None, None
+    return hull, hull.difference(w.union())
+
+
+def _float_pieces(hull, left, w):
+    """The plan's pieces: the convex hulls of the uncovered part's components (doubles)
+    lifted into w's plane; none where it is within 1e-9 of the slice's area."""
+    if left.area <= 1e-9 * hull.area:
+        return []
+    axis = [a for a in range(3) if a not in w.keep][0]
+    pieces = []
+    for g in getattr(left, "geoms", [left]):
+        if g.area > 1e-12 * hull.area:
+            uv = np.asarray(g.convex_hull.exterior.coords)[:-1]
+            X = np.empty((len(uv), 3))
+            X[:, w.keep] = uv
+            X[:, axis] = (w.d - uv @ w.n[w.keep]) / w.n[axis]
+            pieces.append(X)
+    return pieces
 
 
 def _uncovered_exactly(P, Q, w):
