@@ -23,9 +23,10 @@ coplanarity, the sides, the crossings, the hull, the cover and the pieces), so t
 holds for walls assembled from pieces that share edges, and for P and Q with an edge in
 H (a floor against the wall that stands on it). Only blockers whose vertices lie exactly
 in one plane, and are convex there, take part: scenes turned off the axes, where the
-pieces are coplanar only to rounding, are left to the integration. A prefilter in
-doubles picks the planes (within 1e-9 of the coordinates' size) and skips those whose
-slice GEOS finds not covered.
+pieces are coplanar only to rounding, are left to the integration. Doubles only choose
+what to try: a pair is refused where a segment between inner points of the two misses
+every blocker; the planes are grouped within 1e-9 of the coordinates' size; the search
+runs first in doubles (GEOS), and only where it finds the pair hidden in rationals.
 """
 
 from fractions import Fraction
@@ -73,9 +74,13 @@ def hidden_by_walls(Pc, Qc, blockers, reach):
     >>> hidden_by_walls(floor, piece, [low], 2.0)
     False
     """
+    if not len(blockers):
+        return False
     band, depth = 1e-9 * reach, tol.AREA_WALL_PLANES - 1
     V, _ = padded([np.asarray(K, dtype=float) for K in blockers])
-    N = cross(V, np.roll(V, -1, axis=1)).sum(axis=1)
+    # Newell's normals, about each blocker's first vertex
+    W = V - V[:, :1]
+    N = cross(W, np.roll(W, -1, axis=1)).sum(axis=1)
     norm = np.linalg.norm(N, axis=1)
     keep = norm > 0
     V, N = V[keep], N[keep] / norm[keep, None]
