@@ -155,6 +155,8 @@ __all__ = [
     "AREA_WALL_PIECES",
     "AREA_WALL_NODES",
     "AREA_WALL_MIN_BLOCKERS",
+    "AREA_WALL_BAND",
+    "AREA_WALL_SLIVER",
     "AREA_UMBRA_TAKE_SHARE",
     "AREA_UMBRA_SQUARE_SLACK",
     "AREA_MAX_EVENT_LINES",
@@ -726,6 +728,13 @@ AREA_WALL_NODES = 24
 #: 18, 42, 150 and 300 the proofs of the pairs of 1-15 blockers cost 3.4 s against 1.3
 #: s for integrating those they take, those of 16 or more 2.6 s against 7.3 s.
 AREA_WALL_MIN_BLOCKERS = 16
+#: ... what doubles choose there (the proof is exact whatever they are): within this of
+#: the coordinates' size a vertex counts as in a plane, and the blockers' planes are
+#: grouped (normals and offsets rounded to it); a slice with this share of its area left
+#: counts as covered in the plan, one with all but this share as not covered at all;
+#: the plan drops uncovered parts below AREA_WALL_SLIVER of the slice's area.
+AREA_WALL_BAND = 1e-9
+AREA_WALL_SLIVER = 1e-12
 #: ... a square is taken (half its bound, within as much) without being cut further
 #: where that bound is within this share of its share of the tolerance, and the receiver
 #: is cut no finer than the area whose bound is this share of it.

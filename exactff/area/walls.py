@@ -25,7 +25,7 @@ H (a floor against the wall that stands on it). Only blockers whose vertices lie
 in one plane, and are convex there, take part: scenes turned off the axes, where the
 pieces are coplanar only to rounding, are left to the integration. Doubles only choose
 what to try: a pair is refused where a segment between inner points of the two misses
-every blocker; the planes are grouped within 1e-9 of the coordinates' size; the search
+every blocker; the planes are grouped within AREA_WALL_BAND; the search
 runs first in doubles (GEOS), and only where it finds the pair hidden in rationals.
 """
 
@@ -36,7 +36,7 @@ import shapely
 
 from .. import _tolerances as tol
 from ..geometry import cross
-from ..rings import padded
+from .culling import padded_polygons
 
 __all__ = ["hidden_by_walls"]
 
@@ -54,7 +54,7 @@ def hidden_by_walls(Pc, Qc, blockers, reach):
         The pair's possible blockers.
     reach : float
         The size of the coordinates (the prefilter's band for "on the plane" is
-        1e-9 of it; the decision itself is exact).
+        ``AREA_WALL_BAND`` of it; the decision itself is exact).
 
     Returns
     -------
@@ -76,21 +76,18 @@ def hidden_by_walls(Pc, Qc, blockers, reach):
     """
     if not len(blockers):
         return False
-    band, depth = 1e-9 * reach, tol.AREA_WALL_PLANES - 1
-    V, _ = padded([np.asarray(K, dtype=float) for K in blockers])
-    # Newell's normals, about each blocker's first vertex
-    W = V - V[:, :1]
-    N = cross(W, np.roll(W, -1, axis=1)).sum(axis=1)
-    norm = np.linalg.norm(N, axis=1)
-    keep = norm > 0
-    V, N = V[keep], N[keep] / norm[keep, None]
+    band, depth = tol.AREA_WALL_BAND * reach, tol.AREA_WALL_PLANES - 1
+    blockers = [np.asarray(K, dtype=float) for K in blockers]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        V, _, _, N = padded_polygons(blockers)
+    keep = np.isfinite(N).all(axis=1)
+    V, N = V[keep], N[keep]
     D = np.einsum("bx,bx->b", N, V[:, 0])
     # a segment between inner points of the two that misses every blocker (by more
     # than the band): not hidden, nothing else tried
     if not len(V) or _a_segment_passes(Pc, Qc, V, N, D, band):
         return False
-    walls = _walls([np.asarray(blockers[k], dtype=float) for k in np.flatnonzero(keep)],
-                   N, D, reach)
+    walls = _walls([blockers[k] for k in np.flatnonzero(keep)], N, D, reach)
     # a plan in doubles first; only where it finds the pair hidden, the proof
     return (_hidden(Pc, Qc, walls, band, depth, [tol.AREA_WALL_NODES], False)
             and _hidden(_rational(Pc), _rational(Qc), walls, band, depth,
@@ -123,7 +120,7 @@ class _Wall:
         (counter-clockwise); None where none is."""
         if self._exact is None:
             self._exact = False
-            Ks = _rational_list(self.Ks)
+            Ks = [_rational(K) for K in self.Ks]
             for K0 in Ks:
                 nf = _exact_normal(K0)
                 if nf is None:
@@ -149,13 +146,14 @@ class _Wall:
 
 def _walls(blockers, N, D, reach):
     """The blockers grouped by plane (unit normals N, offsets D; normal and offset
-    rounded to 1e-9, the normal's sign made that of its first nonzero component)."""
-    first = np.argmax(np.abs(N) > 1e-12, axis=1)
+    rounded to AREA_WALL_BAND, the normal's sign made that of its first component
+    above AREA_WALL_SLIVER)."""
+    first = np.argmax(np.abs(N) > tol.AREA_WALL_SLIVER, axis=1)
     flip = np.where(N[np.arange(len(N)), first] < 0, -1.0, 1.0)
     N, D = N * flip[:, None], D * flip
     groups = {}
     for K, n, d in zip(blockers, N, D):
-        key = (tuple(np.round(n, 9)), round(d / reach, 9))
+        key = (tuple(np.round(n / tol.AREA_WALL_BAND)), round(d / reach / tol.AREA_WALL_BAND))
         if key not in groups:
             groups[key] = (n, d, [])
         groups[key][2].append(K)
@@ -184,10 +182,6 @@ def _a_segment_passes(Pc, Qc, V, N, D, band):
 
 def _rational(V):
     return [tuple(Fraction(float(c)) for c in v) for v in np.asarray(V, dtype=float)]
-
-
-def _rational_list(Ks):
-    return [_rational(K) for K in Ks]
 
 
 def _floats(V):
@@ -223,11 +217,11 @@ def _hidden(P, Q, walls, band, depth, budget, exact):
         if sP.min() < -band or sQ.max() > band or sP.max() <= band or sQ.min() >= -band:
             continue
         hull, left = _float_uncovered(Pf, Qf, sP, sQ, w, band)
-        if hull is not None and left.area < (1.0 - 1e-9) * hull.area:
+        if hull is not None and left.area < (1.0 - tol.AREA_WALL_BAND) * hull.area:
             scored.append((left.area / hull.area, len(scored), w, hull, left))
     scored.sort(key=lambda c: c[:2])
     for share, _, w, hull, left in scored[:tol.AREA_WALL_TRIES]:
-        if depth == 0 and share > 1e-9:
+        if depth == 0 and share > tol.AREA_WALL_BAND:
             break
         budget[0] -= 1
         if budget[0] < 0:
@@ -265,13 +259,14 @@ def _float_uncovered(Pf, Qf, sP, sQ, w, band):
 
 def _float_pieces(hull, left, w):
     """The plan's pieces: the convex hulls of the uncovered part's components (doubles)
-    lifted into w's plane; none where it is within 1e-9 of the slice's area."""
-    if left.area <= 1e-9 * hull.area:
+    lifted into w's plane (those above AREA_WALL_SLIVER of the slice's area); none where
+    it is within AREA_WALL_BAND of that area."""
+    if left.area <= tol.AREA_WALL_BAND * hull.area:
         return []
     axis = [a for a in range(3) if a not in w.keep][0]
     pieces = []
     for g in getattr(left, "geoms", [left]):
-        if g.area > 1e-12 * hull.area:
+        if g.area > tol.AREA_WALL_SLIVER * hull.area:
             uv = np.asarray(g.convex_hull.exterior.coords)[:-1]
             X = np.empty((len(uv), 3))
             X[:, w.keep] = uv
