@@ -98,6 +98,7 @@ __all__ = [
     "EQ3_FACTOR_ULPS",
     "SVBSP_TILES",
     "SVBSP_TILES_MAX",
+    "SVBSP_TILES_EAGER",
     "SVBSP_POLYGONS_PER_CELL",
     "VIEW3D_REGION_RTOL",
     "VIEW3D_IN_PLANE_RTOL",
@@ -865,16 +866,26 @@ SVBSP_COVER_OFFSET = 0.0123456789
 #: A ring is convex where every corner turns the normal's way or is collinear within
 #: this many ulps of its edges' cross product (``exactff.visibility.compiled.convex_rings``).
 CONVEX_TURN_ULPS = 8.0
-#: Compiled core: planes per axis of the grid the upper hemisphere is cut into before
-#: any shadow (``(tiles + 1)^2`` cells, each growing its own shadows), at least this
-#: many and at most SVBSP_TILES_MAX, about SVBSP_POLYGONS_PER_CELL polygons of the
-#: scene per cell (``exactff.visibility.compiled._shadow_tiles``). Measured on six
-#: cloister rows (80,461 polygons, core alone, process time): 7 tiles 4.2-4.5 s, 15
-#: 4.1 s, 31 3.6-3.8 s, 63 4.0 s, 127 5.1 s; on six office rows (4,424): 7 or 15 tiles
-#: 0.15 s, 31 0.21 s (the bigger tree built each row).
+#: Compiled core: planes per axis of the grid the upper hemisphere is cut into
+#: (``(tiles + 1)^2`` cells, each growing its own shadows; at once only in coarse
+#: blocks, SVBSP_TILES_EAGER), at least this many and at most SVBSP_TILES_MAX (63: the
+#: core's blocks hold 6 bits per axis), about SVBSP_POLYGONS_PER_CELL polygons of the
+#: scene per cell (``exactff.visibility.compiled._shadow_tiles``). Measured with the
+#: whole grid cut at once, on six cloister rows (80,461 polygons, core alone, process
+#: time): 7 tiles 4.2-4.5 s, 15 4.1 s, 31 3.6-3.8 s, 63 4.0 s, 127 5.1 s; on six office
+#: rows (4,424): 7 or 15 tiles 0.15 s, 31 0.21 s (the bigger tree built each row).
 SVBSP_TILES = 7
 SVBSP_TILES_MAX = 63
 SVBSP_POLYGONS_PER_CELL = 64
+#: Compiled core (constants.h): the tiles' grid is cut at once only into blocks of fewer
+#: than this many planes along each axis (a coarse balanced tree: 2 x 2 blocks for 19
+#: tiles, 4 x 4 for 34); a block is cut further where a visible piece arriving in it lies
+#: clearly on one side of its middle plane (``Core::grow_tile``), so that no piece is cut
+#: along the finer planes. Measured (issue 48, one run each, alternating, medians of 8
+#: seeded rows in hemicube-256 rows): tested_sample_project 4.63-4.80 -> 4.04, Duplex
+#: 0.94 -> 0.82, SampleHouse4 5.07-5.18 -> 4.82; the office (7 tiles, all cut where
+#: needed) and the cloister's totals the same within 4 %.
+SVBSP_TILES_EAGER = 10
 #: Open scenes (exactff.remainder): the horizontal splits of one scene kept in its
 #: cache, the latest used, up to this many polygons in all (rows at one height, a floor
 #: grid, share one; the office's 42 heights all fit, the cloister's 80,000-polygon

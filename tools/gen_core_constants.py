@@ -33,6 +33,7 @@ CONSTANTS = [
     ("SVBSP_COVER_MAX_CELLS", "int"),
     ("SVBSP_COVER_BUDGET", "int"),
     ("SVBSP_COVER_OFFSET", "double"),
+    ("SVBSP_TILES_EAGER", "int"),
 ]
 
 

@@ -66,6 +66,7 @@ py::tuple row(const exactff::Core& core, Array<double> point, Array<double> norm
     d["kernel_shadows"] = st.kernels;
     d["omitted_sides"] = st.omitted_sides;
     d["collapsed"] = st.collapsed;
+    d["tiles_cut"] = st.tiles_cut;
     d["repeated_sides"] = st.repeated_sides;
     d["cover_proofs"] = st.cover_proofs;
     d["cover_cells"] = st.cover_cells;

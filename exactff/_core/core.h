@@ -48,6 +48,8 @@
 
 namespace exactff {
 
+using TileNormals = std::vector<std::array<double, 3>>;
+
 struct EdgeKey {
     R c[6];
     bool operator==(const EdgeKey& o) const {
@@ -233,6 +235,10 @@ struct RowStats {
             subtrees_covered = 0;
     int64_t fragments_behind = 0;  // fragments skipped clearly behind the tangent plane
                                    // (Core::behind_horizon)
+    // the normals of the tiles' planes along each axis, above the horizon and below it
+    // (Core::tile_normals), and the grid's planes placed (Core::grow_tile)
+    TileNormals tiles[2][2];
+    int64_t tiles_cut = 0;
     int64_t collapsed = 0;      // shadow-tree nodes whose two sides were both covered
     int64_t repeated_sides = 0;  // shadows' sides along a plane on their leaf's path
                                  // (Core::drop_repeated_sides)
@@ -411,8 +417,13 @@ class Core {
                     int64_t budget) const;
     // shadow_tree.cpp
     static int side(const Plane& P, const Vertex& x, const Constants& K, R* d_out);
-    int tile_tree(const double* pn, int64_t tiles, std::vector<Plane>& sv,
-                  std::vector<ExactPlane>& xp) const;
+    static void tile_normals(const double* pn, int64_t tiles, TileNormals& xs, TileNormals& ys);
+    Plane tile_plane(const TileBlock& b, bool along_x, const RowStats& st) const;
+    int place_tile(Plane P, std::vector<Plane>& sv, std::vector<ExactPlane>& xp) const;
+    int cut_tiles(int leaf, std::vector<Plane>& sv, std::vector<ExactPlane>& xp,
+                  const RowStats& st) const;
+    int grow_tile(int leaf, int plane, bool positive, const Filter& work, std::vector<Plane>& sv,
+                  std::vector<ExactPlane>& xp, RowStats& st) const;
     static Expansion exact_value(const ExactPlane& X, const double* p, const double* x);
     static bool same_plane(const ExactPlane& P, const ExactPlane& Q);
     bool point_on_plane(const ExactPlane& Q, const double* p, const double* x, int64_t ux,
@@ -439,7 +450,7 @@ class Core {
     Leak cone(const Piece& q) const;
     R leaked(const Piece& q, R worth, const RowStats& st) const;
     int long_shadow(const Piece& q, const double* pp, const std::vector<Plane>& chain,
-                    const std::vector<size_t>& chain_edge, std::vector<Plane>& sv,
+                    const std::vector<size_t>& chain_edge, int leaf, std::vector<Plane>& sv,
                     std::vector<ExactPlane>& xp, RowStats& st) const;
     // pieces.cpp
     V3 between(const Vertex& a, const Vertex& b, int64_t f, R* scale) const;

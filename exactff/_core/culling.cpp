@@ -108,7 +108,7 @@ bool Core::box_hidden(const std::vector<Plane>& sv, int64_t k, const V3& p,
         int node = stack.back();
         stack.pop_back();
         if (node == IN) continue;
-        if (node == OUT || ++visits > budget) return false;
+        if (is_free(node) || ++visits > budget) return false;
         const Plane& P = sv[node];
         bool pos = false, neg = false;
         const double width = static_cast<double>(K_.band + P.err);
@@ -283,7 +283,7 @@ bool Core::cell_covered(const std::vector<Plane>& sv, const std::vector<ExactPla
         Item w = std::move(work.back());
         work.pop_back();
         if (w.node == IN) continue;
-        if (w.node == OUT || ++visits > SVBSP_COVER_BUDGET) return fail();
+        if (is_free(w.node) || ++visits > SVBSP_COVER_BUDGET) return fail();
         const Plane& P = sv[static_cast<size_t>(w.node)];
         const size_t m = w.q.size();
         sg.resize(m);

@@ -9,6 +9,7 @@
 #include <cmath>
 #include <functional>
 #include <limits>
+#include <stdexcept>
 #include <utility>
 #include <vector>
 
@@ -213,11 +214,21 @@ void Core::run(const double* pp, const double* pn, const int8_t* node_side,
     sv.push_back({n, 1, 2 * K_.eps, OUT, IN, 0, 1});
     set_double(sv.back());
     xp.push_back({1, {pn[0], pn[1], pn[2]}, {0, 0, 0}, n, 2 * K_.eps, -1, -1});
-    if (tiles > 0) sv[0].pos = tile_tree(pn, tiles, sv, xp);
+    // the tiles: the grid cut at once into blocks of fewer than SVBSP_TILES_EAGER planes
+    // along each axis, and those cut further where pieces need it (Core::grow_tile)
+    if (tiles > 63) throw std::invalid_argument("tiles: at most 63");
+    const int all = static_cast<int>(tiles);
+    if (tiles > 0) {
+        tile_normals(pn, tiles, st.tiles[0][0], st.tiles[0][1]);
+        sv[0].pos = cut_tiles(tile_leaf({0, all, 0, all, 0}), sv, xp, st);
+    }
     if (st.sphere) {  // below the horizon free too, cut into cells about -n
         sv[0].neg = OUT;
         const double below[3] = {-pn[0], -pn[1], -pn[2]};
-        if (tiles > 0) sv[0].neg = tile_tree(below, tiles, sv, xp);
+        if (tiles > 0) {
+            tile_normals(below, tiles, st.tiles[1][0], st.tiles[1][1]);
+            sv[0].neg = cut_tiles(tile_leaf({0, all, 0, all, 1}), sv, xp, st);
+        }
     }
     adopt(sv, 0);  // the tiles' parents (Core::attach)
     if (nodes() == 0) return;
@@ -371,11 +382,15 @@ void Core::process(int64_t f, const double* pp, const V3& p, const V3& n,
         } else {
             node = positive ? sv[plane].pos : sv[plane].neg;
         }
+        if (node <= LAZY) {  // a block of tiles: cut where the piece lies on one side
+            const int cut = grow_tile(node, plane, positive, work, sv, xp, st);
+            if (cut >= 0) node = cut;
+        }
         if (node == IN) {
             ++st.hidden;
             continue;
         }
-        if (node == OUT) {
+        if (is_free(node)) {
             ++st.visible;
             Piece& q = work.piece;
             q.resize(cur.size());

@@ -105,12 +105,10 @@ int Core::side(const Plane& P, const Vertex& x, const Constants& K, R* d_out) {
     return 0;
 }
 
-// the upper hemisphere cut into (tiles + 1)^2 cells by planes through p with double
-// normals cos t u - sin t n and cos t v - sin t n (t evenly spaced in angle; u, v, n
-// a frame), as balanced trees: each cell's shadows grow on their own, so a piece
-// is filtered down the shadows of its own part of the sky only
-int Core::tile_tree(const double* pn, int64_t tiles, std::vector<Plane>& sv,
-                    std::vector<ExactPlane>& xp) const {
+// the normals of the planes that cut the upper hemisphere (about pn) into (tiles + 1)^2
+// cells, along each axis: cos t u - sin t n and cos t v - sin t n (t evenly spaced in
+// angle; u, v, n a frame). The grid is cut where pieces need it (Core::grow_tile)
+void Core::tile_normals(const double* pn, int64_t tiles, TileNormals& xs, TileNormals& ys) {
     double n[3] = {pn[0], pn[1], pn[2]};
     const double nl = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
     for (double& c : n) c /= nl;
@@ -126,40 +124,95 @@ int Core::tile_tree(const double* pn, int64_t tiles, std::vector<Plane>& sv,
     double v[3] = {n[1] * u[2] - n[2] * u[1], n[2] * u[0] - n[0] * u[2],
                    n[0] * u[1] - n[1] * u[0]};
     const double pi = 3.14159265358979323846;
-    auto planes = [&](const double* w) {
-        std::vector<std::array<double, 3>> out;
+    auto planes = [&](const double* w, TileNormals& out) {
+        out.clear();
         for (int64_t k = 0; k < tiles; ++k) {
             double t = -pi / 2 + pi * static_cast<double>(k + 1) / (tiles + 1);
             out.push_back({std::cos(t) * w[0] - std::sin(t) * n[0],
                            std::cos(t) * w[1] - std::sin(t) * n[1],
                            std::cos(t) * w[2] - std::sin(t) * n[2]});
         }
-        return out;
     };
-    const auto xs = planes(u), ys = planes(v);
-    using Normals = std::vector<std::array<double, 3>>;
-    std::function<int(const Normals&, int64_t, int64_t, const std::function<int()>&)>
-        build = [&](const Normals& ms, int64_t lo, int64_t hi,
-                    const std::function<int()>& inner) -> int {
-        if (lo >= hi) return inner();
-        const int64_t mid = (lo + hi) / 2;
-        const auto& m = ms[mid];
-        V3 mm{m[0], m[1], m[2]};
-        const int node = static_cast<int>(sv.size());
-        const int exact = static_cast<int>(xp.size());
-        xp.push_back({1, {m[0], m[1], m[2]}, {0, 0, 0}, mm, 2 * K_.eps,
-                      -1 - exact, -1 - exact});
-        sv.push_back({mm, norm(mm), 2 * K_.eps, OUT, OUT, exact, 1});
-        set_double(sv.back());
-        const int neg = build(ms, lo, mid, inner);
-        const int pos = build(ms, mid + 1, hi, inner);
-        sv[node].neg = neg;
-        sv[node].pos = pos;
+    planes(u, xs);
+    planes(v, ys);
+}
+
+// block b's middle plane along an axis, its sides the block's halves: a node not yet
+// in the tree (Core::place_tile)
+Plane Core::tile_plane(const TileBlock& b, bool along_x, const RowStats& st) const {
+    const int mid = ((along_x ? b.x0 : b.y0) + (along_x ? b.x1 : b.y1)) / 2;
+    const auto& w = st.tiles[b.below][along_x ? 0 : 1][static_cast<size_t>(mid)];
+    const V3 mm{w[0], w[1], w[2]};
+    TileBlock neg = b, pos = b;
+    (along_x ? neg.x1 : neg.y1) = mid;
+    (along_x ? pos.x0 : pos.y0) = mid + 1;
+    Plane P{mm, norm(mm), 2 * K_.eps, tile_leaf(pos), tile_leaf(neg), -1, 1};
+    set_double(P);
+    return P;
+}
+
+// a tile's plane into the tree, with its exact plane (its double normal): its index
+int Core::place_tile(Plane P, std::vector<Plane>& sv, std::vector<ExactPlane>& xp) const {
+    P.exact = static_cast<int>(xp.size());
+    xp.push_back({1, {P.md[0], P.md[1], P.md[2]}, {0, 0, 0}, P.m, 2 * K_.eps, -1 - P.exact,
+                  -1 - P.exact});
+    sv.push_back(P);
+    return static_cast<int>(sv.size()) - 1;
+}
+
+// a block of the tiles' grid cut at once, by middle planes along the axis with more
+// planes left, into blocks of fewer than SVBSP_TILES_EAGER planes along each axis: the
+// coarse grid every row gets (a balanced tree), finer blocks left to Core::grow_tile
+int Core::cut_tiles(int leaf, std::vector<Plane>& sv, std::vector<ExactPlane>& xp,
+                    const RowStats& st) const {
+    if (leaf > LAZY) return leaf;
+    const TileBlock b = tile_block(leaf);
+    const bool along_x = b.x1 - b.x0 >= b.y1 - b.y0;
+    if ((along_x ? b.x1 - b.x0 : b.y1 - b.y0) < SVBSP_TILES_EAGER) return leaf;
+    const int node = place_tile(tile_plane(b, along_x, st), sv, xp);
+    const int pos = cut_tiles(sv[static_cast<size_t>(node)].pos, sv, xp, st);
+    sv[static_cast<size_t>(node)].pos = pos;
+    const int neg = cut_tiles(sv[static_cast<size_t>(node)].neg, sv, xp, st);
+    sv[static_cast<size_t>(node)].neg = neg;
+    return node;
+}
+
+// a block of the tiles' grid not yet cut (free leaf `leaf`, reached by side `positive`
+// of node `plane`) cut by its middle plane along an axis (the one with more planes left
+// first) where the piece arriving there (the work list's current corners) lies clearly
+// on one side of it: the new node, its two sides the block's halves; -1 where the piece
+// lies across both axes' middle planes (its shadow then takes the whole block: its
+// free leaves are the block, cut later where smaller pieces need it). So the shadows of
+// small pieces grow in small cells, as in a grid cut at once, but no piece is cut
+// along the grid's finer planes: the pieces of a row that sees a few large polygons
+// stay whole
+int Core::grow_tile(int leaf, int plane, bool positive, const Filter& work,
+                    std::vector<Plane>& sv, std::vector<ExactPlane>& xp, RowStats& st) const {
+    const TileBlock b = tile_block(leaf);
+    const bool x_first = b.x1 - b.x0 >= b.y1 - b.y0;
+    for (const bool along_x : {x_first, !x_first}) {
+        if ((along_x ? b.x0 : b.y0) >= (along_x ? b.x1 : b.y1)) continue;
+        const Plane P = tile_plane(b, along_x, st);
+        // the piece's side by the double filter the node's classification starts with
+        // (Core::process, where its slack is 0): a piece clearly on one side goes there
+        // whole
+        const double width = static_cast<double>(K_.band + P.err);
+        int side = 0;
+        for (const Corner& c : work.cur) {
+            const int s = filtered_side(P, work.pool[static_cast<size_t>(c.v)], width);
+            if (s == 0 || s == -side) {
+                side = 0;
+                break;
+            }
+            side = s;
+        }
+        if (side == 0) continue;
+        const int node = place_tile(P, sv, xp);
+        attach(sv, plane, positive, node, static_cast<size_t>(node), st);
+        ++st.tiles_cut;
         return node;
-    };
-    std::function<int()> out_leaf = []() { return OUT; };
-    std::function<int()> cells = [&]() { return build(ys, 0, tiles, out_leaf); };
-    return build(xs, 0, tiles, cells);
+    }
+    return -1;
 }
 
 // whether two exact planes are one by construction: the same kind, through p and the
@@ -494,7 +547,7 @@ bool Core::insert_shadow(const Piece& q, int64_t f, const double* pp, int plane,
         // the leaf, whose whole cell already lies on the piece's side of it, so the
         // shadow needs no plane there
         if (!s.on_cut && s.state == 1) {
-            chain.push_back({s.mm, s.ml, s.err, OUT, OUT, s.exact, s.orient});
+            chain.push_back({s.mm, s.ml, s.err, IN, IN, s.exact, s.orient});
             set_double(chain.back());
             chain_edge.push_back(i);
         }
@@ -512,6 +565,9 @@ bool Core::insert_shadow(const Piece& q, int64_t f, const double* pp, int plane,
     st.omitted_sides += omit_charge > 0;
     st.kernels += kernel_charge > 0;
     if (st.cull) drop_repeated_sides(plane, positive, sv, xp, chain, chain_edge, st);
+    // the shadow's free leaves: the leaf it replaces (a block of tiles not yet cut stays
+    // one, Core::grow_tile)
+    const int leaf = positive ? sv[plane].pos : sv[plane].neg;
     const size_t first = sv.size();
     if (chain.empty()) {  // the piece fills its leaf's cell: the cell is covered
         attach(sv, plane, positive, IN, first, st);
@@ -519,14 +575,14 @@ bool Core::insert_shadow(const Piece& q, int64_t f, const double* pp, int plane,
     }
     // a long piece whose image is convex (no side left out, no kernel): a tree of chords
     if (chain.size() > LONG_SHADOW_EDGES && kernel_charge == 0 && omit_charge == 0) {
-        const int root = long_shadow(q, pp, chain, chain_edge, sv, xp, st);
+        const int root = long_shadow(q, pp, chain, chain_edge, leaf, sv, xp, st);
         attach(sv, plane, positive, root, first, st);
         return true;
     }
     const int base = static_cast<int>(sv.size());
     for (size_t i = 0; i < chain.size(); ++i) {
         chain[i].pos = i + 1 < chain.size() ? base + static_cast<int>(i) + 1 : IN;
-        chain[i].neg = OUT;
+        chain[i].neg = leaf;
         sv.push_back(chain[i]);
     }
     attach(sv, plane, positive, base, first, st);
@@ -674,7 +730,7 @@ R Core::leaked(const Piece& q, R worth, const RowStats& st) const {
 // side of its own half (as insert_shadow asks of a chain's planes), else that part gets
 // the chain of its rim's planes.
 int Core::long_shadow(const Piece& q, const double* pp, const std::vector<Plane>& chain,
-                      const std::vector<size_t>& chain_edge, std::vector<Plane>& sv,
+                      const std::vector<size_t>& chain_edge, int leaf, std::vector<Plane>& sv,
                       std::vector<ExactPlane>& xp, RowStats& st) const {
     const size_t m = q.size();
     std::vector<int> plane_of(m, -1);  // the chain's plane of each edge of the piece
@@ -688,7 +744,7 @@ int Core::long_shadow(const Piece& q, const double* pp, const std::vector<Plane>
             const int node = static_cast<int>(sv.size());
             sv.push_back(chain[static_cast<size_t>(e)]);
             sv.back().pos = IN;
-            sv.back().neg = OUT;
+            sv.back().neg = leaf;
             if (prev >= 0) sv[static_cast<size_t>(prev)].pos = node;
             else first = node;
             prev = node;

@@ -2,7 +2,7 @@
 // planes through the point p whose leaves are covered (IN) or free (OUT); its root is
 // the horizon plane. Its nodes (Plane), the vertices of the convex pieces filtered down
 // it (Vertex, Piece), each with its error bound, and the core's rounding constants
-// (Constants). The tree's operations are Core's (shadow_tree.cpp: side, tile_tree,
+// (Constants). The tree's operations are Core's (shadow_tree.cpp: side, the tiles,
 // insert_shadow and the exact tests of a vertex against a plane).
 
 #ifndef EXACTFF_CORE_SHADOW_TREE_H
@@ -21,6 +21,23 @@ namespace exactff {
 
 constexpr int OUT = -1;  // a free leaf of the shadow tree
 constexpr int IN = -2;   // a covered leaf
+// a free leaf that is a block of the tiles' grid not yet cut (Core::grow_tile): LAZY
+// less its code, the grid's planes still to place along each axis, [x0, x1) and
+// [y0, y1) (6 bits each: at most 63 tiles), and whether it is below the horizon
+constexpr int LAZY = -3;
+struct TileBlock {
+    int x0, x1, y0, y1, below;
+};
+inline int tile_leaf(const TileBlock& b) {
+    if (b.x0 >= b.x1 && b.y0 >= b.y1) return OUT;  // one cell: nothing left to cut
+    return LAZY - (b.x0 | b.x1 << 6 | b.y0 << 12 | b.y1 << 18 | b.below << 24);
+}
+inline TileBlock tile_block(int leaf) {
+    const int c = LAZY - leaf;
+    return {c & 63, (c >> 6) & 63, (c >> 12) & 63, (c >> 18) & 63, (c >> 24) & 1};
+}
+// a free leaf, cut or not
+inline bool is_free(int node) { return node == OUT || node <= LAZY; }
 
 struct Vertex {
     V3 v;       // its direction from p (not normalised): an input vertex's position less

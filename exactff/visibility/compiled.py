@@ -345,11 +345,13 @@ def _piece_vertex_errors(P, errors, parts, normal):
 
 
 def _shadow_tiles(n):
-    """Planes per axis of the grid the compiled core cuts the upper hemisphere into
-    before any shadow, for a scene of ``n`` polygons: about ``SVBSP_POLYGONS_PER_CELL``
-    polygons per cell, within ``SVBSP_TILES`` and ``SVBSP_TILES_MAX`` (each cell's
-    shadows grow on their own chain; more cells, shorter chains, but a bigger tree to
-    build each row).
+    """Planes per axis of the grid the compiled core cuts the upper hemisphere into,
+    for a scene of ``n`` polygons: about ``SVBSP_POLYGONS_PER_CELL`` polygons per cell,
+    within ``SVBSP_TILES`` and ``SVBSP_TILES_MAX`` (each cell's shadows grow on their
+    own chain; more cells, shorter chains). The core cuts it at once only into blocks
+    of fewer than ``SVBSP_TILES_EAGER`` planes per axis, and a block further where a
+    visible piece lies on one side of its middle plane, so that the finer planes cut no
+    large piece.
 
     Examples
     --------
@@ -426,7 +428,9 @@ def compiled_form_factors(scene, point, normal, *, two_sided=False, stats=None,
         parts too large for that, charged only to the visible pieces whose cones meet
         theirs), ``collapsed`` (shadow-tree nodes merged into a covered leaf, their
         two sides covered) and ``covered`` (every direction the row sees covered: the
-        walk stopped), ``repeated_sides`` (shadows' sides left out because the same
+        walk stopped), ``tiles_cut`` (the tiles' planes placed where a visible piece
+        lay on one side of a block's middle plane, beyond the coarse grid every row
+        starts from), ``repeated_sides`` (shadows' sides left out because the same
         plane, through the same two input points, is already on the path to their
         leaf: the edges adjacent polygons share; 0 without the shortcuts),
         ``fragments_covered`` and ``subtrees_covered`` (fragments and
