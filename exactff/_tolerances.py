@@ -882,9 +882,10 @@ SVBSP_POLYGONS_PER_CELL = 64
 #: tiles, 4 x 4 for 34); a block is cut further where a visible piece arriving in it lies
 #: clearly on one side of its middle plane (``Core::grow_tile``), so that no piece is cut
 #: along the finer planes. Measured (issue 48, one run each, alternating, medians of 8
-#: seeded rows in hemicube-256 rows): tested_sample_project 4.63-4.80 -> 4.04, Duplex
-#: 0.94 -> 0.82, SampleHouse4 5.07-5.18 -> 4.82; the office (7 tiles, all cut where
-#: needed) and the cloister's totals the same within 4 %.
+#: seeded and README rows, in hemicube-256 rows; docs/benchmarks.md, bench_real_rows):
+#: tested_sample_project 7.37 -> 6.73, SampleHouse4 5.07 -> 4.85, Duplex 0.82 -> 0.81,
+#: every row 0.72 to 1.02 but one of 6 polygons seen (1.36); the cloister's and the
+#: office's 6 rows each 0.96 to 1.03, their totals the same.
 SVBSP_TILES_EAGER = 10
 #: Open scenes (exactff.remainder): the horizontal splits of one scene kept in its
 #: cache, the latest used, up to this many polygons in all (rows at one height, a floor
