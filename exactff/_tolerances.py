@@ -60,6 +60,7 @@ __all__ = [
     "AREA_IMAGE_PRECISE_SHARE",
     "AREA_IMAGE_BUDGET_SHARE",
     "AREA_BOUND_COS_SLACK",
+    "AREA_BOUND_SPREAD_ULPS",
     "AREA_SLIVER_ULPS",
     "AREA_MAX_PIECES",
     "AREA_POINTS_PER_CALL",
@@ -489,6 +490,12 @@ AREA_IMAGE_PRECISE_SHARE = 0.01
 #: polygon): a polygon planar within PLANARITY_RTOL of its diameter turns its parts'
 #: normals by a few 1e-6; with room.
 AREA_BOUND_COS_SLACK = 1e-4
+#: Area form factors: the rounding that bound adds to the spread h of ``n . v`` over the
+#: two polygons' vertices, in units of EPS times the coordinates' largest 1-norm: each
+#: ``n . v`` is a sum of three products of a unit normal's component (itself rounded,
+#: its norm's division included) and a coordinate, within a few roundoffs of that norm,
+#: and h is a difference of two of them; with room.
+AREA_BOUND_SPREAD_ULPS = 64.0
 
 #: Area form factors, occluded pairs: the share of the tolerance that a point value's
 #: estimate may hold for its images' rounding before the point goes to the engine (the

@@ -248,6 +248,7 @@ std::shared_ptr<exactff::PairConstants> pair_constants(py::dict tol, py::sequenc
     k->coplanar_ulps = num("BSP_COPLANAR_ULPS");
     k->eps = num("EPS");
     k->bound_cos_slack = num("AREA_BOUND_COS_SLACK");
+    k->bound_spread_ulps = num("AREA_BOUND_SPREAD_ULPS");
     k->samples = whole("AREA_CURVED_EVENT_SAMPLES");
     k->bisections = whole("AREA_CURVED_EVENT_BISECTIONS");
     k->max_triples = whole("AREA_CURVED_MAX_TRIPLES");

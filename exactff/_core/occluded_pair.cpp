@@ -148,7 +148,7 @@ bool in_plane(const double* K, std::int64_t k, const double* nQ, double d, doubl
 // between the bounding boxes, c_P and c_Q the cosines' bounds (each polygon's unit
 // normal against the other's vertices), in points.py's order of operations
 double unoccluded_bound(const double* Pc, std::int64_t n_p, const double* Qc, std::int64_t n_q,
-                        double eps, double cos_slack, bool fused) {
+                        double eps, double spread_ulps, double cos_slack, bool fused) {
     double gap[3];
     for (int j = 0; j < 3; ++j) {
         double pmin = Pc[j], pmax = Pc[j], qmin = Qc[j], qmax = Qc[j];
@@ -197,7 +197,7 @@ double unoccluded_bound(const double* Pc, std::int64_t n_p, const double* Qc, st
         spread(X, nx, xlo, xhi);
         spread(Y, ny, ylo, yhi);
         const double h = std::max(yhi - xlo, xhi - ylo);
-        return std::min(1.0, (h + 64.0 * eps * scale) / d + cos_slack);
+        return std::min(1.0, (h + spread_ulps * eps * scale) / d + cos_slack);
     };
     const double c_p = cosine(AP, Pc, n_p, Qc, n_q);
     const double c_q = cosine(AQ, Qc, n_q, Pc, n_p);
@@ -475,7 +475,8 @@ PairResult occluded_pair(const PairArgs& a) {
     }
     // the value: the unoccluded one less the hidden part, the slivers at half their bound
     const double bound =
-        unoccluded_bound(a.Pc, n_p, a.Qc, n_q, k.eps, k.bound_cos_slack, k.fused_dot);
+        unoccluded_bound(a.Pc, n_p, a.Qc, n_q, k.eps, k.bound_spread_ulps, k.bound_cos_slack,
+                         k.fused_dot);
     const double half = 0.5 * bound * slivers / a.area_P;
     std::vector<double> err_terms(m);
     for (size_t i = 0; i < m; ++i) err_terms[i] = r.diff[i] + r.rnd[i];

@@ -69,7 +69,8 @@ def unoccluded_bound(Pc, Qc, area=None):
     Each cosine is ``|n . (y - x)| / r`` for n the unit normal of its polygon (either
     side), so at most ``h / d`` (and 1), h the largest of ``|n . (y - x)|`` over the
     two polygons' vertices (a linear function: its extremes over a polygon are at
-    vertices; the products' rounding added), and ``AREA_BOUND_COS_SLACK`` more for a
+    vertices; the products' rounding added, ``AREA_BOUND_SPREAD_ULPS``), and
+    ``AREA_BOUND_COS_SLACK`` more for a
     normal that the kernel takes from the whole polygon. Two parallel polygons far apart
     sideways (View3D's gunter2: a floor and a ceiling strip 7 above it and 12.5 aside,
     cosines at most 0.49) get 0.24 of ``A_Q / (pi d^2)``.
@@ -100,5 +101,6 @@ def unoccluded_bound(Pc, Qc, area=None):
         sX = (X[:, 0] * n[0] + X[:, 1] * n[1]) + X[:, 2] * n[2]
         sY = (Y[:, 0] * n[0] + Y[:, 1] * n[1]) + Y[:, 2] * n[2]
         h = max(float(sY.max() - sX.min()), float(sX.max() - sY.min()))
-        cosines.append(min(1.0, (h + 64 * tol.EPS * scale) / d + tol.AREA_BOUND_COS_SLACK))
+        cosines.append(min(1.0, (h + tol.AREA_BOUND_SPREAD_ULPS * tol.EPS * scale) / d
+                               + tol.AREA_BOUND_COS_SLACK))
     return min(1.0, area_Q * cosines[0] * cosines[1] / (np.pi * d2))
