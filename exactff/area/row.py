@@ -22,8 +22,8 @@ from .adaptive import occluded_pair
 from .closed_form import ClosedFormCounts, unoccluded_pairs
 from .culling import (closed_solids, convex_solids, front_pairs, padded_polygons,
                       row_blockers, tie_covers, uncovered)
-from .walls import hidden_by_walls
 from .rules import triangle_areas
+from .walls import hidden_by_walls
 
 __all__ = ["AreaStats", "area_row"]
 
