@@ -100,6 +100,7 @@ __all__ = [
     "SVBSP_TILES",
     "SVBSP_TILES_MAX",
     "SVBSP_TILES_EAGER",
+    "SVBSP_THIN_IMAGE",
     "SVBSP_POLYGONS_PER_CELL",
     "VIEW3D_REGION_RTOL",
     "VIEW3D_IN_PLANE_RTOL",
@@ -887,13 +888,22 @@ SVBSP_POLYGONS_PER_CELL = 64
 #: Compiled core (constants.h): the tiles' grid is cut at once only into blocks of fewer
 #: than this many planes along each axis (a coarse balanced tree: 2 x 2 blocks for 19
 #: tiles, 4 x 4 for 34); a block is cut further where a visible piece arriving in it lies
-#: clearly on one side of its middle plane (``Core::grow_tile``), so that no piece is cut
-#: along the finer planes. Measured (issue 48, one run each, alternating, medians of 8
+#: clearly on one side of its middle plane (``Core::grow_tile``), so that a finer plane
+#: never cuts the piece it is placed for. Measured (issue 48, one run each, alternating, medians of 8
 #: seeded and README rows, in hemicube-256 rows; docs/benchmarks.md, bench_real_rows):
 #: tested_sample_project 7.37 -> 6.73, SampleHouse4 5.07 -> 4.85, Duplex 0.82 -> 0.81,
 #: every row 0.72 to 1.02 but one of 6 polygons seen (1.36); the cloister's and the
 #: office's 6 rows each 0.96 to 1.03, their totals the same.
 SVBSP_TILES_EAGER = 10
+#: Compiled core (constants.h): a visible piece reaching a block of the tiles' grid not
+#: yet cut is cut along its middle planes as the whole grid would cut it, not kept
+#: whole, where the plane through three of its vertices passes within this sine of the
+#: point (relative to its farthest vertex): its image is thin, and for a polygon planar
+#: only within the validation tolerance may not be convex, its shadow then the image's
+#: kernel, charged by its perimeter (a bent quad seen from 1e-8 above its plane, a
+#: zigzag disc seen from 1e-6 above: ``tests/test_near_planar.py``,
+#: ``tests/test_long_polygons.py``).
+SVBSP_THIN_IMAGE = 1e-3
 #: Open scenes (exactff.remainder): the horizontal splits of one scene kept in its
 #: cache, the latest used, up to this many polygons in all (rows at one height, a floor
 #: grid, share one; the office's 42 heights all fit, the cloister's 80,000-polygon

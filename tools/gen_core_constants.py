@@ -34,6 +34,7 @@ CONSTANTS = [
     ("SVBSP_COVER_BUDGET", "int"),
     ("SVBSP_COVER_OFFSET", "double"),
     ("SVBSP_TILES_EAGER", "int"),
+    ("SVBSP_THIN_IMAGE", "double"),
 ]
 
 

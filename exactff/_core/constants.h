@@ -24,6 +24,7 @@ constexpr int SVBSP_COVER_MAX_CELLS = 16;
 constexpr int SVBSP_COVER_BUDGET = 2048;
 constexpr double SVBSP_COVER_OFFSET = 0.0123456789;
 constexpr int SVBSP_TILES_EAGER = 10;
+constexpr double SVBSP_THIN_IMAGE = 0.001;
 
 }  // namespace exactff
 

@@ -235,8 +235,9 @@ struct RowStats {
             subtrees_covered = 0;
     int64_t fragments_behind = 0;  // fragments skipped clearly behind the tangent plane
                                    // (Core::behind_horizon)
-    // the normals of the tiles' planes along each axis, above the horizon and below it
-    // (Core::tile_normals), and the grid's planes placed (Core::grow_tile)
+    // the normals of the tiles' planes, tiles[below][axis] (above the horizon or below
+    // it; along u or v: Core::tile_normals), and the grid's planes placed where pieces
+    // needed them (Core::grow_tile)
     TileNormals tiles[2][2];
     int64_t tiles_cut = 0;
     int64_t collapsed = 0;      // shadow-tree nodes whose two sides were both covered
@@ -422,6 +423,7 @@ class Core {
     int place_tile(Plane P, std::vector<Plane>& sv, std::vector<ExactPlane>& xp) const;
     int cut_tiles(int leaf, std::vector<Plane>& sv, std::vector<ExactPlane>& xp,
                   const RowStats& st) const;
+    static bool thin_image(const Filter& work);
     int grow_tile(int leaf, int plane, bool positive, const Filter& work, std::vector<Plane>& sv,
                   std::vector<ExactPlane>& xp, RowStats& st) const;
     static Expansion exact_value(const ExactPlane& X, const double* p, const double* x);
@@ -450,7 +452,7 @@ class Core {
     Leak cone(const Piece& q) const;
     R leaked(const Piece& q, R worth, const RowStats& st) const;
     int long_shadow(const Piece& q, const double* pp, const std::vector<Plane>& chain,
-                    const std::vector<size_t>& chain_edge, int leaf, std::vector<Plane>& sv,
+                    const std::vector<size_t>& chain_edge, std::vector<Plane>& sv,
                     std::vector<ExactPlane>& xp, RowStats& st) const;
     // pieces.cpp
     V3 between(const Vertex& a, const Vertex& b, int64_t f, R* scale) const;

@@ -216,7 +216,7 @@ void Core::run(const double* pp, const double* pn, const int8_t* node_side,
     xp.push_back({1, {pn[0], pn[1], pn[2]}, {0, 0, 0}, n, 2 * K_.eps, -1, -1});
     // the tiles: the grid cut at once into blocks of fewer than SVBSP_TILES_EAGER planes
     // along each axis, and those cut further where pieces need it (Core::grow_tile)
-    if (tiles > 63) throw std::invalid_argument("tiles: at most 63");
+    if (tiles >= (1 << TILE_BITS)) throw std::invalid_argument("tiles: at most 63");
     const int all = static_cast<int>(tiles);
     if (tiles > 0) {
         tile_normals(pn, tiles, st.tiles[0][0], st.tiles[0][1]);

@@ -177,25 +177,55 @@ int Core::cut_tiles(int leaf, std::vector<Plane>& sv, std::vector<ExactPlane>& x
     return node;
 }
 
+// whether a piece (the work list's current corners) is seen from nearly in its plane:
+// the plane through three of its vertices passes within SVBSP_THIN_IMAGE (a sine) of
+// the point, relative to its farthest vertex (in double: a choice of how to cut, not a
+// decision of what is seen)
+bool Core::thin_image(const Filter& work) {
+    const size_t m = work.cur.size();
+    if (m < 3) return true;
+    const auto at = [&](size_t i) -> const double* {
+        return work.pool[static_cast<size_t>(work.cur[i].v)].vd;
+    };
+    const double *a = at(0), *b = at(m / 3), *c = at(2 * m / 3);
+    const double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+    const double v[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+    const double nn[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2],
+                          u[0] * v[1] - u[1] * v[0]};
+    const double nl = std::sqrt(nn[0] * nn[0] + nn[1] * nn[1] + nn[2] * nn[2]);
+    double far = 0;
+    for (size_t i = 0; i < m; ++i)
+        far = std::max(far, work.pool[static_cast<size_t>(work.cur[i].v)].lengthd);
+    const double h = std::fabs(nn[0] * a[0] + nn[1] * a[1] + nn[2] * a[2]);
+    return !(h > SVBSP_THIN_IMAGE * nl * far);
+}
+
 // a block of the tiles' grid not yet cut (free leaf `leaf`, reached by side `positive`
 // of node `plane`) cut by its middle plane along an axis (the one with more planes left
 // first) where the piece arriving there (the work list's current corners) lies clearly
 // on one side of it: the new node, its two sides the block's halves; -1 where the piece
 // lies across both axes' middle planes (its shadow then takes the whole block: its
-// free leaves are the block, cut later where smaller pieces need it). So the shadows of
-// small pieces grow in small cells, as in a grid cut at once, but no piece is cut
-// along the grid's finer planes: the pieces of a row that sees a few large polygons
-// stay whole
+// free leaves are the block, cut later where smaller pieces need it). A finer plane is
+// placed only where a piece lies wholly on one side of it, so it never cuts that piece
+// (later pieces in its region are cut by it, as by a grid cut at once): the shadows of
+// small pieces grow in small cells, and the pieces of a row that sees a few large
+// polygons stay whole. A piece seen from nearly in its own plane (thin_image) is cut as
+// the whole grid would cut it
 int Core::grow_tile(int leaf, int plane, bool positive, const Filter& work,
                     std::vector<Plane>& sv, std::vector<ExactPlane>& xp, RowStats& st) const {
     const TileBlock b = tile_block(leaf);
     const bool x_first = b.x1 - b.x0 >= b.y1 - b.y0;
+    // a piece seen from nearly in its plane is cut as a grid cut at once cuts it: its
+    // image is thin, and for a polygon planar only within the validation tolerance not
+    // convex, its shadow then the image's kernel, charged by its perimeter (smaller
+    // pieces, smaller charges)
+    const bool thin = thin_image(work);
     for (const bool along_x : {x_first, !x_first}) {
         if ((along_x ? b.x0 : b.y0) >= (along_x ? b.x1 : b.y1)) continue;
         const Plane P = tile_plane(b, along_x, st);
         // the piece's side by the double filter the node's classification starts with
-        // (Core::process, where its slack is 0): a piece clearly on one side goes there
-        // whole
+        // (Core::process's plane_width at a node of slack 0: keep the two equal), so
+        // that a piece clearly on one side goes there whole
         const double width = static_cast<double>(K_.band + P.err);
         int side = 0;
         for (const Corner& c : work.cur) {
@@ -206,7 +236,7 @@ int Core::grow_tile(int leaf, int plane, bool positive, const Filter& work,
             }
             side = s;
         }
-        if (side == 0) continue;
+        if (side == 0 && !thin) continue;
         const int node = place_tile(P, sv, xp);
         attach(sv, plane, positive, node, static_cast<size_t>(node), st);
         ++st.tiles_cut;
@@ -547,7 +577,7 @@ bool Core::insert_shadow(const Piece& q, int64_t f, const double* pp, int plane,
         // the leaf, whose whole cell already lies on the piece's side of it, so the
         // shadow needs no plane there
         if (!s.on_cut && s.state == 1) {
-            chain.push_back({s.mm, s.ml, s.err, IN, IN, s.exact, s.orient});
+            chain.push_back({s.mm, s.ml, s.err, OUT, OUT, s.exact, s.orient});
             set_double(chain.back());
             chain_edge.push_back(i);
         }
@@ -566,7 +596,9 @@ bool Core::insert_shadow(const Piece& q, int64_t f, const double* pp, int plane,
     st.kernels += kernel_charge > 0;
     if (st.cull) drop_repeated_sides(plane, positive, sv, xp, chain, chain_edge, st);
     // the shadow's free leaves: the leaf it replaces (a block of tiles not yet cut stays
-    // one, Core::grow_tile)
+    // one, Core::grow_tile); a long shadow's (a tree of chords: a free leaf per edge of
+    // its rim) are plain free leaves, since a copy of the block in each would have the
+    // grid cut again in each (3,541 tile planes for a 1,500-gon disc)
     const int leaf = positive ? sv[plane].pos : sv[plane].neg;
     const size_t first = sv.size();
     if (chain.empty()) {  // the piece fills its leaf's cell: the cell is covered
@@ -575,7 +607,7 @@ bool Core::insert_shadow(const Piece& q, int64_t f, const double* pp, int plane,
     }
     // a long piece whose image is convex (no side left out, no kernel): a tree of chords
     if (chain.size() > LONG_SHADOW_EDGES && kernel_charge == 0 && omit_charge == 0) {
-        const int root = long_shadow(q, pp, chain, chain_edge, leaf, sv, xp, st);
+        const int root = long_shadow(q, pp, chain, chain_edge, sv, xp, st);
         attach(sv, plane, positive, root, first, st);
         return true;
     }
@@ -631,7 +663,7 @@ void Core::adopt(std::vector<Plane>& sv, size_t first) {
             if (c >= 0) sv[static_cast<size_t>(c)].parent = static_cast<int>(k);
 }
 
-// hang `child` (a node, IN or OUT) on the side `positive` of node `plane`, where the
+// hang `child` (a node, IN, OUT or a block of tiles) on the side `positive` of node `plane`, where the
 // nodes from `first` on are new (their parents set from their links). A node whose
 // two sides are then both covered is covered itself (its region is the union of
 // theirs): it becomes a covered leaf of its parent, and so on up, so that later
@@ -730,7 +762,7 @@ R Core::leaked(const Piece& q, R worth, const RowStats& st) const {
 // side of its own half (as insert_shadow asks of a chain's planes), else that part gets
 // the chain of its rim's planes.
 int Core::long_shadow(const Piece& q, const double* pp, const std::vector<Plane>& chain,
-                      const std::vector<size_t>& chain_edge, int leaf, std::vector<Plane>& sv,
+                      const std::vector<size_t>& chain_edge, std::vector<Plane>& sv,
                       std::vector<ExactPlane>& xp, RowStats& st) const {
     const size_t m = q.size();
     std::vector<int> plane_of(m, -1);  // the chain's plane of each edge of the piece
@@ -744,7 +776,7 @@ int Core::long_shadow(const Piece& q, const double* pp, const std::vector<Plane>
             const int node = static_cast<int>(sv.size());
             sv.push_back(chain[static_cast<size_t>(e)]);
             sv.back().pos = IN;
-            sv.back().neg = leaf;
+            sv.back().neg = OUT;
             if (prev >= 0) sv[static_cast<size_t>(prev)].pos = node;
             else first = node;
             prev = node;

@@ -1,5 +1,6 @@
 // The shadow-volume BSP tree of the visibility core (Chin & Feiner 1989): a BSP tree of
-// planes through the point p whose leaves are covered (IN) or free (OUT); its root is
+// planes through the point p whose leaves are covered (IN) or free (OUT, or a block of
+// the tiles' grid not yet cut, <= LAZY: free too); its root is
 // the horizon plane. Its nodes (Plane), the vertices of the convex pieces filtered down
 // it (Vertex, Piece), each with its error bound, and the core's rounding constants
 // (Constants). The tree's operations are Core's (shadow_tree.cpp: side, the tiles,
@@ -23,18 +24,21 @@ constexpr int OUT = -1;  // a free leaf of the shadow tree
 constexpr int IN = -2;   // a covered leaf
 // a free leaf that is a block of the tiles' grid not yet cut (Core::grow_tile): LAZY
 // less its code, the grid's planes still to place along each axis, [x0, x1) and
-// [y0, y1) (6 bits each: at most 63 tiles), and whether it is below the horizon
+// [y0, y1) (TILE_BITS each: at most 63 tiles), and whether it is below the horizon
 constexpr int LAZY = -3;
+constexpr int TILE_BITS = 6;
 struct TileBlock {
     int x0, x1, y0, y1, below;
 };
 inline int tile_leaf(const TileBlock& b) {
     if (b.x0 >= b.x1 && b.y0 >= b.y1) return OUT;  // one cell: nothing left to cut
-    return LAZY - (b.x0 | b.x1 << 6 | b.y0 << 12 | b.y1 << 18 | b.below << 24);
+    return LAZY - (b.x0 | b.x1 << TILE_BITS | b.y0 << 2 * TILE_BITS | b.y1 << 3 * TILE_BITS |
+                   b.below << 4 * TILE_BITS);
 }
 inline TileBlock tile_block(int leaf) {
-    const int c = LAZY - leaf;
-    return {c & 63, (c >> 6) & 63, (c >> 12) & 63, (c >> 18) & 63, (c >> 24) & 1};
+    const int c = LAZY - leaf, mask = (1 << TILE_BITS) - 1;
+    return {c & mask, (c >> TILE_BITS) & mask, (c >> 2 * TILE_BITS) & mask,
+            (c >> 3 * TILE_BITS) & mask, (c >> 4 * TILE_BITS) & 1};
 }
 // a free leaf, cut or not
 inline bool is_free(int node) { return node == OUT || node <= LAZY; }

@@ -350,8 +350,8 @@ def _shadow_tiles(n):
     within ``SVBSP_TILES`` and ``SVBSP_TILES_MAX`` (each cell's shadows grow on their
     own chain; more cells, shorter chains). The core cuts it at once only into blocks
     of fewer than ``SVBSP_TILES_EAGER`` planes per axis, and a block further where a
-    visible piece lies on one side of its middle plane, so that the finer planes cut no
-    large piece.
+    visible piece lies on one side of its middle plane, so that a finer plane never cuts
+    the piece it is placed for.
 
     Examples
     --------
