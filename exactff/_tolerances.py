@@ -891,9 +891,9 @@ SVBSP_POLYGONS_PER_CELL = 64
 #: clearly on one side of its middle plane (``Core::grow_tile``), so that a finer plane
 #: never cuts the piece it is placed for. Measured (issue 48, one run each, alternating, medians of 8
 #: seeded and README rows, in hemicube-256 rows; docs/benchmarks.md, bench_real_rows):
-#: tested_sample_project 7.37 -> 6.73, SampleHouse4 5.07 -> 4.85, Duplex 0.82 -> 0.81,
-#: every row 0.72 to 1.02 but one of 6 polygons seen (1.36); the cloister's and the
-#: office's 6 rows each 0.96 to 1.03, their totals the same.
+#: tested_sample_project 7.47 -> 6.82, SampleHouse4 5.11 -> 4.89, Duplex 0.83 -> 0.81,
+#: every row 0.54 to 1.01 but one of 6 polygons seen (1.36); the cloister's and the
+#: office's 8 rows each 0.97 to 1.01, their totals the same.
 SVBSP_TILES_EAGER = 10
 #: Compiled core (constants.h): a visible piece reaching a block of the tiles' grid not
 #: yet cut is cut along its middle planes as the whole grid would cut it, not kept
