@@ -15,8 +15,7 @@ from hypothesis import strategies as hst
 
 import exactff as ef
 from exactff import _tolerances as tol
-from exactff.visibility import compiled
-from exactff.visibility import compiled_core
+from exactff.visibility import compiled, compiled_core
 
 from common import examples, rect_xy
 from exact_visibility import unoccluded_form_factor
@@ -116,7 +115,8 @@ def _cell_squares(n, tiles, scale=0.25):
             e1 = np.cross(d, u if abs(d @ u) < 0.9 else v)
             e1 /= np.linalg.norm(e1)
             e2 = np.cross(d, e1)   # (e1, e2, d) right-handed: the square faces -d
-            squares.append([d + r * (x * e1 + y * e2) for x, y in ((-1, -1), (-1, 1), (1, 1), (1, -1))])
+            squares.append([d + r * (x * e1 + y * e2)
+                            for x, y in ((-1, -1), (-1, 1), (1, 1), (1, -1))])
     return squares
 
 

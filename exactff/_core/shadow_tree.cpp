@@ -215,11 +215,10 @@ int Core::grow_tile(int leaf, int plane, bool positive, const Filter& work,
                     std::vector<Plane>& sv, std::vector<ExactPlane>& xp, RowStats& st) const {
     const TileBlock b = tile_block(leaf);
     const bool x_first = b.x1 - b.x0 >= b.y1 - b.y0;
-    // a piece seen from nearly in its plane is cut as a grid cut at once cuts it: its
-    // image is thin, and for a polygon planar only within the validation tolerance not
-    // convex, its shadow then the image's kernel, charged by its perimeter (smaller
-    // pieces, smaller charges)
-    const bool thin = thin_image(work);
+    // a thin image (thin_image) asked for only where the piece lies across a plane:
+    // -1 not yet, else whether; a thin image's kernel is charged by its perimeter, so it
+    // is cut as a grid cut at once cuts it (smaller pieces, smaller charges)
+    int thin = -1;
     for (const bool along_x : {x_first, !x_first}) {
         if ((along_x ? b.x0 : b.y0) >= (along_x ? b.x1 : b.y1)) continue;
         const Plane P = tile_plane(b, along_x, st);
@@ -236,7 +235,10 @@ int Core::grow_tile(int leaf, int plane, bool positive, const Filter& work,
             }
             side = s;
         }
-        if (side == 0 && !thin) continue;
+        if (side == 0) {
+            if (thin < 0) thin = thin_image(work);
+            if (!thin) continue;
+        }
         const int node = place_tile(P, sv, xp);
         attach(sv, plane, positive, node, static_cast<size_t>(node), st);
         ++st.tiles_cut;
@@ -663,12 +665,12 @@ void Core::adopt(std::vector<Plane>& sv, size_t first) {
             if (c >= 0) sv[static_cast<size_t>(c)].parent = static_cast<int>(k);
 }
 
-// hang `child` (a node, IN, OUT or a block of tiles) on the side `positive` of node `plane`, where the
-// nodes from `first` on are new (their parents set from their links). A node whose
-// two sides are then both covered is covered itself (its region is the union of
-// theirs): it becomes a covered leaf of its parent, and so on up, so that later
-// pieces behind it are hidden at the first node whose region is wholly covered
-// instead of being cut along every shadow inside it. Where the root goes, every
+// hang `child` (a node, IN, OUT or a block of tiles) on the side `positive` of node
+// `plane`, where the nodes from `first` on are new (their parents set from their
+// links). A node whose two sides are then both covered is covered itself (its region
+// is the union of theirs): it becomes a covered leaf of its parent, and so on up, so
+// that later pieces behind it are hidden at the first node whose region is wholly
+// covered instead of being cut along every shadow inside it. Where the root goes, every
 // direction the row sees is covered (RowStats::covered)
 void Core::attach(std::vector<Plane>& sv, int plane, bool positive, int child, size_t first,
                   RowStats& st) {
