@@ -77,6 +77,10 @@ def check_finite(F, E=None, what="form factor"):
     return F if E is None else (F, E)
 
 
+#: The scalar types misses_tolerance tests without numpy.
+_SCALARS = (float, np.float64)
+
+
 def misses_tolerance(F, E, tolerance, atol=None):
     """Where a value's bound misses the accuracy asked of it.
 
@@ -100,6 +104,15 @@ def misses_tolerance(F, E, tolerance, atol=None):
     >>> bool(misses_tolerance(1e-3, 2e-9, 1e-9, atol=1e-9))    # max(1e-9, 1e-12)
     True
     """
+    if type(F) in _SCALARS and type(E) in _SCALARS:
+        # one value (an area pair's): the same test in Python floats, NaN as numpy
+        # takes it (np.maximum keeps a NaN, and E > NaN is False)
+        F, E = float(F), float(E)
+        def larger(a, b):  # np.maximum's: NaN where either is
+            return a if a > b or a != a else b
+        if atol is None:
+            return E > tolerance * larger(abs(F), tol.VALUE_FLOOR)
+        return E > larger(float(atol), 0.0 if tolerance is None else tolerance * abs(F))
     F, E = np.asarray(F, dtype=float), np.asarray(E, dtype=float)
     if atol is None:
         return E > tolerance * np.maximum(np.abs(F), tol.VALUE_FLOOR)

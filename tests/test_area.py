@@ -1335,6 +1335,35 @@ def test_convex_solids_are_the_closed_convex_groups_of_faces():
     assert solid(_box_faces([.3, .3, 0], [.6, .7, 1])[1:], [floor, ceiling]) == [-1] * 4
 
 
+@pytest.mark.parametrize("which", ["room", "cornell"])
+def test_closed_solids_from_the_scene_table_are_the_pairs_own(which):
+    # closed_solids with keys (each group's facts against every plane of the scene, built
+    # once) against the facts evaluated for the pair's two planes alone, for every
+    # ordered pair with every other polygon a blocker, the table filled as the pairs ask;
+    # planted: the emitter's column for both planes fails (the room's pairs with the
+    # cubes' bottoms on the floor)
+    from exactff.area.culling import (closed_solids as _closed_solids,
+                                      convex_solids as _convex_solids)
+
+    scene = (ef.scenes.unit_squares_room() if which == "room"
+             else ef.scenes.cornell_box(closed=True))
+    solids, fresh = _convex_solids(scene), _convex_solids(scene)
+    N, D = scene.normals, scene.plane_offsets
+    n = len(scene)
+    found = set()
+    for i in range(n):
+        for j in range(n):
+            if i == j:
+                continue
+            B = np.array([k for k in range(n) if k not in (i, j)])
+            planes = (N[[i, j]], D[[i, j]])
+            got = _closed_solids(fresh, B, planes, keys=[i, j])
+            assert got.tolist() == _closed_solids(solids, B, planes).tolist(), (i, j)
+            found.add(bool(np.any(got >= 0)))
+    assert found == {True, False}          # pairs with solids and pairs without
+    assert set(fresh.facts) == {g for g in solids.members}
+
+
 def test_closed_box_in_a_room_rows_sum_to_one():
     # the vertex-edge events between the floating box's faces are not cut along (its
     # faces' images united are its hull's): every row of the closed scene still sums to 1

@@ -11,7 +11,7 @@ fallback is its escalation, and its band's slivers are in its bound, not in the 
 import mpmath
 import numpy as np
 import pytest
-from hypothesis import example, given, settings
+from hypothesis import example, given, settings, strategies as st
 
 import exactff as ef
 from exactff import _tolerances as tol
@@ -39,6 +39,24 @@ def test_one_acceptance_criterion():
                                                                  False]
     assert not misses_tolerance(0.1, 1e-9, 1e-12, atol=1e-9)
     assert misses_tolerance(1e-3, 2e-9, 1e-9, atol=1e-9)
+
+
+_VALUES = st.floats(allow_nan=True, allow_infinity=True) | st.sampled_from(
+    [0.0, -0.0, 1e-2, 1e-9, 1e-12, 1e-15, 0.5])
+
+
+@given(F=_VALUES, E=_VALUES, tolerance=st.none() | _VALUES, atol=st.none() | _VALUES)
+@example(F=0.0, E=1e-3, tolerance=1e-9, atol=float("nan"))
+@example(F=float("nan"), E=1.0, tolerance=1e-9, atol=1e-9)
+def test_one_value_decided_as_an_array_of_it(F, E, tolerance, atol):
+    # the criterion on one value (an area pair's, without numpy) is the array's, NaN
+    # and infinities included; planted: a Python max in place of np.maximum (a NaN
+    # second operand then loses to the first) fails at the second example
+    if tolerance is None and atol is None:
+        return
+    array = bool(misses_tolerance(np.array([F]), np.array([E]), tolerance, atol=atol)[0])
+    assert misses_tolerance(F, E, tolerance, atol=atol) == array
+    assert misses_tolerance(np.float64(F), np.float64(E), tolerance, atol=atol) == array
 
 
 # ---------------------------------------------------------------------------------------

@@ -6,6 +6,9 @@ its value, with numpy's roundings kept (np.sum's pairwise sums, the BLAS's produ
 tolerances and rules the compiled levels read.
 """
 
+import itertools
+import operator
+
 import numpy as np
 
 from .. import _tolerances as tol
@@ -41,6 +44,9 @@ PAIR_TOLERANCES = (
     "AREA_MANY_CELLS", "CONVEX_TURN_ULPS", "CLIP_MEET_ULPS", "AREA_STRICT_TURN",
     "AREA_BOUND_COS_SLACK", "AREA_BOUND_SPREAD_ULPS")
 _pair_constants_cache = {}
+#: The tolerances' values read at each call (one lookup of them all, in the module's
+#: namespace: the call is made once a pair).
+_TOLERANCE_VALUES = operator.itemgetter(*(PAIR_TOLERANCES + LEVEL_TOLERANCES))
 
 
 def blas_fuses():
@@ -75,13 +81,13 @@ def pair_constants():
     >>> pair_constants() is pair_constants()          # kept while no tolerance changes
     True
     """
-    names = PAIR_TOLERANCES + LEVEL_TOLERANCES
-    values = tuple(getattr(tol, k) for k in names) + (NORMAL_FLOOR,)
+    values = _TOLERANCE_VALUES(vars(tol)) + (NORMAL_FLOOR,)
     # the tolerances and their constants stored as one entry: rows in threads read them
     # while another stores them (two entries, one stored before the other, let a thread
     # read the new tolerances with the old constants, or with none yet)
     cached = _pair_constants_cache.get("entry")
     if cached is None or cached[0] != values:
+        names = PAIR_TOLERANCES + LEVEL_TOLERANCES
         cached = (values, _compiled_pair_constants(
             dict(zip(names, values)) | {"NORMAL_FLOOR": NORMAL_FLOOR}, LEVEL_RULES,
             _BLAS_FUSES))
@@ -116,8 +122,7 @@ def hidden_integral_in_one_call(S, Pc, Qc, nP, atol, area_P, whole, shortcuts, s
     (0, 0.03140269, True)
     """
     W = np.concatenate(S)
-    start = np.zeros(len(S) + 1, dtype=np.int64)
-    np.cumsum([len(A) for A in S], out=start[1:])
+    start = np.array([0, *itertools.accumulate(map(len, S))], dtype=np.int64)
     with_solids = solid is not None
     return _compiled_occluded_pair(
         W, start, solid if with_solids else _NO_SOLID,

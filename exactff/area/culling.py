@@ -199,8 +199,10 @@ def row_blockers(padded, i, J, parts, nP, p0, near, st):
         return []
     VP, po = concatenated([Pc for Pc, _ in parts])
     VQ, qo = concatenated([Qc for _, Qc in parts])
-    boxes = np.array([(Pc.min(axis=0), Pc.max(axis=0), Qc.min(axis=0), Qc.max(axis=0))
-                      for Pc, Qc in parts])
+    # each pair's boxes (m, 4, 3): P's least and greatest corners, then Q's
+    boxes = np.stack([np.minimum.reduceat(VP, po[:-1]), np.maximum.reduceat(VP, po[:-1]),
+                      np.minimum.reduceat(VQ, qo[:-1]), np.maximum.reduceat(VQ, qo[:-1])],
+                     axis=1)
     blockers, start, boxed, left = _compiled_row_blockers(
         V, lo_k, hi_k, N, int(i), np.asarray(nP, dtype=float), np.asarray(p0, dtype=float), J,
         boxes, VP, po, VQ, qo, float(near), tol.EPS, tol.AREA_HULL_MAX_POINTS)
@@ -222,6 +224,12 @@ class ConvexSolids(NamedTuple):
     members: dict
     #: Per group: the mean of its vertices, a point inside its hull.
     centres: dict
+    #: The scene's planes ``(normals (n, 3), offsets (n,))``, for :func:`closed_solids`'
+    #: ``keys``.
+    planes: tuple = None
+    #: Per group: its facts against every plane of the scene (:func:`_plane_facts`),
+    #: filled where a pair first asks for them.
+    facts: dict = None
 
 
 def convex_solids(scene):
@@ -273,10 +281,23 @@ def convex_solids(scene):
         members_[int(g)] = members
     label = np.where(np.isin(label, list(open_edges)), label, -1)
     return ConvexSolids(label, open_edges, vertices, members_,
-                        {g: V.mean(axis=0) for g, V in vertices.items()})
+                        {g: V.mean(axis=0) for g, V in vertices.items()}, (N, D), {})
 
 
-def closed_solids(solids, blockers, planes):
+def _plane_facts(vertices, open_edges, N, D):
+    """A group's facts against each plane ``N[k] . x = D[k]`` (:func:`closed_solids`):
+    whether the plane supports it (its vertices on one side, the coplanar band's), whether
+    it then meets the group's hull in no area (fewer than three vertices in it), and
+    which of its open edges lie in it, both ends; shapes (K,), (K,) and (m, K)."""
+    sign, _ = coplanar_band_sides(vertices, N, D)
+    supports = ~((sign > 0).any(axis=0) & (sign < 0).any(axis=0))
+    no_area = supports & ((sign == 0).sum(axis=0) < 3)
+    on, _ = coplanar_band_sides(open_edges.reshape(-1, 3), N, D)
+    on = (on == 0).reshape(len(open_edges), 2, len(D)).all(axis=1)
+    return supports, no_area, on
+
+
+def closed_solids(solids, blockers, planes, keys=None):
     """The group (:func:`convex_solids`) of each blocker where the group is a solid for
     the pair, -1 elsewhere. ``planes`` are the emitter's and the receiver's, as
     ``(normals (2, 3), offsets (2,))``. A group is a solid for the pair where two or
@@ -291,7 +312,12 @@ def closed_solids(solids, blockers, planes):
     out (up to points of no area). So from x the members' images united are the hull's
     image, whose outline changes only where x crosses a member's plane: a vertex-edge
     event between two members is no event. The emitter and the receiver may be members
-    (their faces lie in the planes)."""
+    (their faces lie in the planes).
+
+    ``keys``: the polygons whose planes ``planes`` are (the emitter and the receiver, as
+    ``solids.planes`` holds them): the facts are then taken from each group's table
+    against every plane of the scene, built once for the scene where a pair first asks
+    (``solids.facts``), instead of again for each pair."""
     label, open_edges, vertices = solids.label, solids.open_edges, solids.vertices
     ids = label[blockers]
     out = np.full(len(blockers), -1)
@@ -299,17 +325,18 @@ def closed_solids(solids, blockers, planes):
     for g in set(ids[ids >= 0].tolist()):
         if np.count_nonzero(ids == g) < 2:
             continue
-        sign, _ = coplanar_band_sides(vertices[g], N, D)
-        supports = ~((sign > 0).any(axis=0) & (sign < 0).any(axis=0))        # (2,)
-        no_area = supports & ((sign == 0).sum(axis=0) < 3)
+        if keys is None:
+            supports, no_area, on = _plane_facts(vertices[g], open_edges[g], N, D)
+        else:
+            table = solids.facts.get(g)
+            if table is None:    # (threads may build it twice: the same table)
+                table = solids.facts[g] = _plane_facts(vertices[g], open_edges[g],
+                                                       *solids.planes)
+            supports, no_area, on = table[0][keys], table[1][keys], table[2][:, keys]
         if not no_area.any():
             continue
-        E = open_edges[g]
-        if len(E):
-            on, _ = coplanar_band_sides(E.reshape(-1, 3), N, D)
-            on = (on == 0).reshape(len(E), 2, len(D)).all(axis=1) & supports
-            if not on.any(axis=1).all():
-                continue
+        if len(on) and not (on & supports).any(axis=1).all():
+            continue
         out[ids == g] = g
     return out
 

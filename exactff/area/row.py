@@ -232,6 +232,15 @@ def area_row(scene, i, atol, *, rtol=None, shortcuts=True, stats=None):
     return f, e
 
 
+def _scene_padded(scene):
+    """The scene's polygons padded (:func:`~exactff.area.culling.padded_polygons`),
+    read-only (kept for the scene's rows)."""
+    arrays = padded_polygons([np.asarray(p, dtype=float) for p in scene.polygons])
+    for a in arrays:
+        a.flags.writeable = False
+    return arrays
+
+
 def _part_row(scene, i, part, covers, atol, rtol, shortcuts, stats):
     """Row i of :func:`area_row` from emitter ``part`` (a part of polygon i in its
     plane; None: the whole polygon), its values per unit area of the part; ``covers``
@@ -240,7 +249,9 @@ def _part_row(scene, i, part, covers, atol, rtol, shortcuts, stats):
     polys = [np.asarray(p, dtype=float) for p in scene.polygons]
     if part is not None:
         polys[i] = np.asarray(part, dtype=float)
-    padded = padded_polygons(polys)
+        padded = padded_polygons(polys)
+    else:               # the scene's own, built once for it
+        padded = prepared(scene).get("area_padded", _scene_padded)
     P = polys[i]
     scale = float(np.ptp(scene.vertices, axis=0).max()) or 1.0
     near = tol.AREA_HULL_RTOL * scale
@@ -295,6 +306,10 @@ def _part_row(scene, i, part, covers, atol, rtol, shortcuts, stats):
         blockers = row_blockers(padded, i, owner[[j for j, _, _ in pairs]],
                                 [(Pc, Qc) for _, Pc, Qc in pairs], nP, P[0], near, st)
         solids = prepared(scene).get("area_convex_solids", convex_solids)
+        N, D = scene.normals, scene.plane_offsets
+        # whether polygon k is on or behind P's plane, as the solids' inner points ask
+        # (each member's once a row)
+        behind_P = {}
     unoccluded = []               # (j, Pc, Qc): computed together at the end
     occluded = []                 # ((j, Pc, Qc), blockers, solid, inner): one by one
     for a, (j, Pc, Qc) in enumerate(pairs):
@@ -317,7 +332,7 @@ def _part_row(scene, i, part, covers, atol, rtol, shortcuts, stats):
             if shortcuts:
                 jj = owner[j]
                 solid = np.concatenate([[-1], closed_solids(
-                    solids, np.array(B), (scene.normals[[i, jj]], scene.plane_offsets[[i, jj]]))])
+                    solids, np.array(B), (N[[i, jj]], D[[i, jj]]), keys=[i, jj])])
                 # a point inside each solid's hull, the mean of its vertices, where every
                 # member is a blocker, the emitter, the receiver, or on or behind one's
                 # plane (no line of sight meets it): one culled otherwise, as within
@@ -325,13 +340,17 @@ def _part_row(scene, i, part, covers, atol, rtol, shortcuts, stats):
                 # from behind hide, and they are skipped
                 inner = np.full((len(solid), 3), np.nan)
                 kept = set(B) | {i, jj}
-                N, D = scene.normals, scene.plane_offsets
                 # (each solid's members and centre stored once for the scene:
                 # ConvexSolids; no scan of the scene per pair)
                 for g in set(solid[solid >= 0].tolist()):
-                    if all(k in kept or (polys[k] @ N[i] - D[i]).max() <= 0
-                           or (polys[k] @ N[jj] - D[jj]).max() <= 0
-                           for k in solids.members[g].tolist()):
+                    for k in solids.members[g].tolist():
+                        if k in kept:
+                            continue
+                        if k not in behind_P:
+                            behind_P[k] = (polys[k] @ N[i] - D[i]).max() <= 0
+                        if not (behind_P[k] or (polys[k] @ N[jj] - D[jj]).max() <= 0):
+                            break
+                    else:
                         inner[solid == g] = solids.centres[g]
             occluded.append(((j, Pc, Qc), B, solid, inner))
             continue
