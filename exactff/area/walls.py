@@ -157,7 +157,20 @@ def _walls(blockers, N, D, reach):
         if key not in groups:
             groups[key] = (n, d, [])
         groups[key][2].append(K)
-    return [_Wall(*g) for g in groups.values()]
+    return _Walls([_Wall(*g) for g in groups.values()])
+
+
+class _Walls(list):
+    """The walls (a list of :class:`_Wall`) with their planes, axes kept and boxes as
+    arrays, so that a pair's walls are scored together (:func:`_float_scores`)."""
+
+    def __init__(self, walls):
+        super().__init__(walls)
+        self.normals = np.array([w.n for w in walls], dtype=float).reshape(-1, 3)
+        self.offsets = np.array([w.d for w in walls], dtype=float)
+        self.keep = np.array([w.keep for w in walls], dtype=np.intp).reshape(-1, 2)
+        self.lo = np.array([w.lo for w in walls], dtype=float).reshape(-1, 2)
+        self.hi = np.array([w.hi for w in walls], dtype=float).reshape(-1, 2)
 
 
 def _a_segment_passes(Pc, Qc, V, N, D, band):
@@ -207,19 +220,7 @@ def _hidden(P, Q, walls, band, depth, budget, exact):
     the pieces in rationals, decided exactly; else in doubles, by GEOS (a plan: only
     where it finds the pair hidden is the exact search run)."""
     Pf, Qf = (_floats(P), _floats(Q)) if exact else (P, Q)
-    # the walls whose plane has P on one closed side and Q on the other, neither in it,
-    # by the share of the slice GEOS finds uncovered
-    scored = []
-    for w in walls:
-        sP, sQ = Pf @ w.n - w.d, Qf @ w.n - w.d
-        if sP.min() < -band:
-            sP, sQ = -sP, -sQ
-        if sP.min() < -band or sQ.max() > band or sP.max() <= band or sQ.min() >= -band:
-            continue
-        hull, left = _float_uncovered(Pf, Qf, sP, sQ, w, band)
-        if hull is not None and left.area < (1.0 - tol.AREA_WALL_BAND) * hull.area:
-            scored.append((left.area / hull.area, len(scored), w, hull, left))
-    scored.sort(key=lambda c: c[:2])
+    scored = _float_scores(Pf, Qf, walls, band)
     for share, _, w, hull, left in scored[:tol.AREA_WALL_TRIES]:
         if depth == 0 and share > tol.AREA_WALL_BAND:
             break
@@ -239,22 +240,58 @@ def _hidden(P, Q, walls, band, depth, budget, exact):
     return False
 
 
-def _float_uncovered(Pf, Qf, sP, sQ, w, band):
-    """The slice (doubles, GEOS: the hull of the crossings) and its part that w's
-    blockers leave uncovered; (None, None) where the slice misses their box or has no
-    area. ``sP``, ``sQ``: the vertices' distances from the plane, P's positive."""
-    a, b = sP[sP > band], sQ[sQ < -band]
-    p, q = Pf[sP > band], Qf[sQ < -band]
-    t = (a[:, None] / (a[:, None] - b[None, :]))[..., None]
-    pts = (p[:, None] + t * (q[None, :] - p[:, None])).reshape(-1, 3)
-    pts = np.vstack([pts, Pf[np.abs(sP) <= band], Qf[np.abs(sQ) <= band]])
-    lo, hi = pts[:, w.keep].min(axis=0), pts[:, w.keep].max(axis=0)
-    if np.any(lo > w.hi) or np.any(hi < w.lo):
-        return None, None
-    hull = shapely.MultiPoint(pts[:, w.keep]).convex_hull
-    if not hull.area > 0:
-        return None, None
-    return hull, hull.difference(w.union())
+def _float_scores(Pf, Qf, walls, band):
+    """The walls whose plane has P on one closed side and Q on the other, neither in it,
+    that cover part of the slice (doubles, GEOS: the hull of the crossings, less the
+    wall's union), sorted by the share GEOS finds uncovered (then by the walls' order):
+    a list of ``(share, position, wall, hull, uncovered part)``. All the walls are
+    scored together: their sides, the crossings and the slices' boxes in arrays, the
+    hulls and their differences in one vectorized GEOS call each."""
+    if not len(walls):
+        return []
+    N, D = walls.normals, walls.offsets
+    # each vertex's distance from each wall's plane, P's side made positive
+    sP = Pf[:, 0, None] * N[:, 0] + Pf[:, 1, None] * N[:, 1] + Pf[:, 2, None] * N[:, 2] - D
+    sQ = Qf[:, 0, None] * N[:, 0] + Qf[:, 1, None] * N[:, 1] + Qf[:, 2, None] * N[:, 2] - D
+    flip = sP.min(axis=0) < -band
+    sP[:, flip], sQ[:, flip] = -sP[:, flip], -sQ[:, flip]
+    c = np.flatnonzero(~(sP.min(axis=0) < -band) & ~(sQ.max(axis=0) > band)
+                       & (sP.max(axis=0) > band) & (sQ.min(axis=0) < -band))
+    if not len(c):
+        return []
+    a, b = sP[:, c], sQ[:, c]                                          # (kP, C), (kQ, C)
+    # the crossings of the vertex pairs on strictly opposite sides, (kP, kQ, C, 3), and
+    # the vertices in the plane
+    crosses = (a > band)[:, None] & (b < -band)[None]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = (a[:, None] / (a[:, None] - b[None]))[..., None]
+        pts = Pf[:, None, None] + t * (Qf[None, :, None] - Pf[:, None, None])
+    keep = walls.keep[c]                                               # (C, 2)
+    cols = np.arange(len(c))
+    X = np.concatenate([pts.reshape(-1, len(c), 3), np.broadcast_to(Pf[:, None], (len(Pf), len(c), 3)),
+                        np.broadcast_to(Qf[:, None], (len(Qf), len(c), 3))])   # (m, C, 3)
+    valid = np.concatenate([crosses.reshape(-1, len(c)), np.abs(a) <= band, np.abs(b) <= band])
+    uv = np.stack([X[:, cols, keep[:, 0]], X[:, cols, keep[:, 1]]], axis=-1)      # (m, C, 2)
+    lo = np.where(valid[..., None], uv, np.inf).min(axis=0)
+    hi = np.where(valid[..., None], uv, -np.inf).max(axis=0)
+    near = ~(np.any(lo > walls.hi[c], axis=1) | np.any(hi < walls.lo[c], axis=1))
+    if not near.any():
+        return []
+    c, uv, valid = c[near], uv[:, near], valid[:, near]
+    row, col = np.nonzero(valid.T)                     # points grouped by wall, in order
+    hulls = shapely.convex_hull(shapely.multipoints(uv[col, row], indices=row))
+    areas = shapely.area(hulls)
+    live = np.flatnonzero(areas > 0)
+    unions = np.empty(len(live), dtype=object)
+    unions[:] = [walls[int(c[k])].union() for k in live]
+    lefts = shapely.difference(hulls[live], unions)
+    shares = shapely.area(lefts) / areas[live]
+    scored = []
+    for k, left, share in zip(live.tolist(), lefts, shares.tolist()):
+        if share < 1.0 - tol.AREA_WALL_BAND:
+            scored.append((share, len(scored), walls[int(c[k])], hulls[k], left))
+    scored.sort(key=lambda s: s[:2])
+    return scored
 
 
 def _float_pieces(hull, left, w):
@@ -391,20 +428,25 @@ def _hull(pts):
     return lower[:-1] + upper[:-1]
 
 
-def _clip(poly, a, b, keep_left):
-    """Convex polygon ``poly`` clipped to the closed left (or right) of the line a -> b."""
-    out = []
+def _split(poly, a, b):
+    """Convex polygon ``poly`` split by the line a -> b: its parts on the closed left
+    and on the closed right (each vertex's side computed once, exactly)."""
+    s = [_cross2(a, b, p) for p in poly]
+    left, right = [], []
     for i, p in enumerate(poly):
-        q = poly[(i + 1) % len(poly)]
-        sp, sq = _cross2(a, b, p), _cross2(a, b, q)
-        if not keep_left:
-            sp, sq = -sp, -sq
+        j = (i + 1) % len(poly)
+        sp, sq = s[i], s[j]
         if sp >= 0:
-            out.append(p)
+            left.append(p)
+        if sp <= 0:
+            right.append(p)
         if (sp > 0 > sq) or (sp < 0 < sq):
+            q = poly[j]
             t = sp / (sp - sq)
-            out.append((p[0] + t * (q[0] - p[0]), p[1] + t * (q[1] - p[1])))
-    return out
+            x = (p[0] + t * (q[0] - p[0]), p[1] + t * (q[1] - p[1]))
+            left.append(x)
+            right.append(x)
+    return left, right
 
 
 def _area2(poly):
@@ -418,11 +460,9 @@ def _minus_convex(piece, K):
     out = []
     rest = piece
     for i, a in enumerate(K):
-        b = K[(i + 1) % len(K)]
-        beyond = _clip(rest, a, b, keep_left=False)
+        rest, beyond = _split(rest, a, K[(i + 1) % len(K)])
         if len(beyond) >= 3 and _area2(beyond) != 0:
             out.append(beyond)
-        rest = _clip(rest, a, b, keep_left=True)
         if len(rest) < 3 or _area2(rest) == 0:
             break
     return out
