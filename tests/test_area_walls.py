@@ -263,3 +263,16 @@ def test_slivers_of_rationals_past_a_wall_are_not_hidden():
     F, E = ef.area_form_factors(ef.Scene.from_polygons([P, Q, wall]), rows=[0], tolerance=1e-8,
                                 error=True, stats=st)
     assert st["wall_hidden_pairs"] == 0 and abs(F[0, 1]) <= E[0, 1] <= 1e-8
+
+
+@given(st.lists(st.tuples(st.fractions(max_denominator=2**60), st.fractions(max_denominator=2**60)),
+                min_size=3, max_size=3))
+def test_the_integer_cross_product_is_the_fractions(pts):
+    # the walls' turns and cross products, taken in integers from the numerators and
+    # denominators, against the same product in Fractions; planted: one factor of a
+    # denominator dropped fails
+    from exactff.area.rational_polygons import cross2, turn
+    o, a, b = pts
+    direct = (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0])
+    assert cross2(o, a, b) == direct
+    assert turn(o, a, b) == (direct > 0) - (direct < 0)

@@ -63,6 +63,7 @@ LAYERS = {
     "exactff.area.closed_form": 5.06,
     "exactff.area.rule_check": 5.065,
     "exactff.area.culling": 5.07,
+    "exactff.area.rational_polygons": 5.072,
     "exactff.area.walls": 5.075,
     "exactff.area.events": 5.08,
     "exactff.area.curved": 5.082,

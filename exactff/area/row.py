@@ -310,6 +310,7 @@ def _part_row(scene, i, part, covers, atol, rtol, shortcuts, stats):
         # whether polygon k is on or behind P's plane, as the solids' inner points ask
         # (each member's once a row)
         behind_P = {}
+    walls = {}                    # the walls' proofs' walls, kept for the row's pairs
     unoccluded = []               # (j, Pc, Qc): computed together at the end
     occluded = []                 # ((j, Pc, Qc), blockers, solid, inner): one by one
     for a, (j, Pc, Qc) in enumerate(pairs):
@@ -324,7 +325,7 @@ def _part_row(scene, i, part, covers, atol, rtol, shortcuts, stats):
             # first on pairs of many blockers, whose integral costs more than the proof
             # (on fewer, where the integral's estimate misses the tolerance)
             if (shortcuts and len(B) >= tol.AREA_WALL_MIN_BLOCKERS
-                    and hidden_by_walls(Pc, Qc, [polys[k] for k in B], scale)):
+                    and hidden_by_walls(Pc, Qc, [polys[k] for k in B], scale, walls)):
                 st.wall_hidden_pairs += 1
                 continue
             st.occluded_pairs += 1
@@ -375,7 +376,7 @@ def _part_row(scene, i, part, covers, atol, rtol, shortcuts, stats):
         st.point_values += points
         if (shortcuts and len(B) < tol.AREA_WALL_MIN_BLOCKERS
                 and misses_tolerance(fx[j], ex[j], rtol, atol=atol * share[j])
-                and hidden_by_walls(Pc, Qc, [polys[k] for k in B], scale)):
+                and hidden_by_walls(Pc, Qc, [polys[k] for k in B], scale, walls)):
             fx[j] = ex[j] = 0.0
             st.wall_hidden_pairs += 1
     if occluded:

@@ -37,11 +37,12 @@ import shapely
 from .. import _tolerances as tol
 from ..geometry import cross
 from .culling import padded_polygons
+from .rational_polygons import area2, ccw, hull, minus_convex
 
 __all__ = ["hidden_by_walls"]
 
 
-def hidden_by_walls(Pc, Qc, blockers, reach):
+def hidden_by_walls(Pc, Qc, blockers, reach, cache=None):
     """Whether walls (blockers in one plane, or in a few planes one behind the other)
     hide all of Qc from all of Pc: the pair's form factor is then exactly 0 (module
     docstring).
@@ -55,6 +56,11 @@ def hidden_by_walls(Pc, Qc, blockers, reach):
     reach : float
         The size of the coordinates (the prefilter's band for "on the plane" is
         ``AREA_WALL_BAND`` of it; the decision itself is exact).
+    cache : dict, optional
+        Walls kept between calls whose blockers are the same arrays (a row's pairs: its
+        polygons), keyed by their plane and the blockers' identities, with what each
+        has computed (its union, its exact covers). The caller keeps the arrays alive
+        while the cache lives.
 
     Returns
     -------
@@ -87,7 +93,7 @@ def hidden_by_walls(Pc, Qc, blockers, reach):
     # than the band): not hidden, nothing else tried
     if not len(V) or _a_segment_passes(Pc, Qc, V, N, D, band):
         return False
-    walls = _walls([blockers[k] for k in np.flatnonzero(keep)], N, D, reach)
+    walls = _walls([blockers[k] for k in np.flatnonzero(keep)], N, D, reach, cache)
     # a plan in doubles first; only where it finds the pair hidden, the proof
     return (_hidden(Pc, Qc, walls, band, depth, [tol.AREA_WALL_NODES], False)
             and _hidden(_rational(Pc), _rational(Qc), walls, band, depth,
@@ -134,7 +140,7 @@ class _Wall:
                 for K in Ks:
                     if any(sum(x * y for x, y in zip(nf, v)) != d for v in K):
                         continue
-                    K2 = _ccw([(v[keep[0]], v[keep[1]]) for v in K])
+                    K2 = ccw([(v[keep[0]], v[keep[1]]) for v in K])
                     if K2 is not None:
                         box = np.array([[float(x), float(y)] for x, y in K2])
                         covers.append((K2, (box.min(axis=0), box.max(axis=0))))
@@ -144,10 +150,11 @@ class _Wall:
         return self._exact or None
 
 
-def _walls(blockers, N, D, reach):
+def _walls(blockers, N, D, reach, cache=None):
     """The blockers grouped by plane (unit normals N, offsets D; normal and offset
     rounded to AREA_WALL_BAND, the normal's sign made that of its first component
-    above AREA_WALL_SLIVER)."""
+    above AREA_WALL_SLIVER); with ``cache``, a wall of the same plane and the same
+    blocker arrays as one made before is that one."""
     first = np.argmax(np.abs(N) > tol.AREA_WALL_SLIVER, axis=1)
     flip = np.where(N[np.arange(len(N)), first] < 0, -1.0, 1.0)
     N, D = N * flip[:, None], D * flip
@@ -157,7 +164,15 @@ def _walls(blockers, N, D, reach):
         if key not in groups:
             groups[key] = (n, d, [])
         groups[key][2].append(K)
-    return _Walls([_Wall(*g) for g in groups.values()])
+    if cache is None:
+        return _Walls([_Wall(*g) for g in groups.values()])
+    out = []
+    for key, (n, d, Ks) in groups.items():
+        ident = (key, tuple(id(K) for K in Ks))
+        if ident not in cache:
+            cache[ident] = _Wall(n, d, Ks)
+        out.append(cache[ident])
+    return _Walls(out)
 
 
 class _Walls(list):
@@ -338,8 +353,8 @@ def _uncovered_exactly(P, Q, w):
             if a > 0 > b:
                 t = a / (a - b)
                 pts.append(tuple(p[i] + t * (q[i] - p[i]) for i in keep))
-    pieces = [_hull(pts)]
-    if len(pieces[0]) < 3 or _area2(pieces[0]) == 0:
+    pieces = [hull(pts)]
+    if len(pieces[0]) < 3 or area2(pieces[0]) == 0:
         return None
     # each cover taken from the pieces whose boxes (doubles) overlap its own: skipping
     # a cover only leaves more uncovered, so the boxes need no proof
@@ -350,7 +365,7 @@ def _uncovered_exactly(P, Q, w):
             if np.any(box.min(axis=0) >= khi) or np.any(box.max(axis=0) <= klo):
                 out.append(piece)
             else:
-                out.extend(_minus_convex(piece, K2))
+                out.extend(minus_convex(piece, K2))
         pieces = out
         if not pieces:
             return []
@@ -386,83 +401,4 @@ def _joined(pieces):
             continue
         i = min(range(len(parts)), key=lambda i: parts[i].distance(point))
         groups.setdefault(i, []).extend(piece)
-    return [_hull(pts) for pts in groups.values()]
-
-
-def _cross2(o, a, b):
-    return (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0])
-
-
-def _ccw(poly):
-    """The polygon counter-clockwise, its repeated and collinear vertices dropped;
-    None where it is not convex or of no area."""
-    pts = []
-    for v in poly:
-        if not pts or v != pts[-1]:
-            pts.append(v)
-    while len(pts) > 1 and pts[0] == pts[-1]:
-        pts.pop()
-    turns = [_cross2(pts[i - 1], pts[i], pts[(i + 1) % len(pts)]) for i in range(len(pts))]
-    if any(t > 0 for t in turns) and any(t < 0 for t in turns):
-        return None
-    pts = [v for v, t in zip(pts, turns) if t != 0]
-    if len(pts) < 3:
-        return None
-    return pts if any(t > 0 for t in turns) else pts[::-1]
-
-
-def _hull(pts):
-    """Convex hull (Andrew's monotone chain), counter-clockwise, exact."""
-    pts = sorted(set(pts))
-    if len(pts) < 3:
-        return pts
-    lower, upper = [], []
-    for p in pts:
-        while len(lower) >= 2 and _cross2(lower[-2], lower[-1], p) <= 0:
-            lower.pop()
-        lower.append(p)
-    for p in reversed(pts):
-        while len(upper) >= 2 and _cross2(upper[-2], upper[-1], p) <= 0:
-            upper.pop()
-        upper.append(p)
-    return lower[:-1] + upper[:-1]
-
-
-def _split(poly, a, b):
-    """Convex polygon ``poly`` split by the line a -> b: its parts on the closed left
-    and on the closed right (each vertex's side computed once, exactly)."""
-    s = [_cross2(a, b, p) for p in poly]
-    left, right = [], []
-    for i, p in enumerate(poly):
-        j = (i + 1) % len(poly)
-        sp, sq = s[i], s[j]
-        if sp >= 0:
-            left.append(p)
-        if sp <= 0:
-            right.append(p)
-        if (sp > 0 > sq) or (sp < 0 < sq):
-            q = poly[j]
-            t = sp / (sp - sq)
-            x = (p[0] + t * (q[0] - p[0]), p[1] + t * (q[1] - p[1]))
-            left.append(x)
-            right.append(x)
-    return left, right
-
-
-def _area2(poly):
-    return sum(p[0] * q[1] - q[0] * p[1] for p, q in zip(poly, poly[1:] + poly[:1]))
-
-
-def _minus_convex(piece, K):
-    """The convex pieces of positive area of ``piece`` less the convex polygon K
-    (both counter-clockwise): the parts beyond each edge of K and within the ones
-    before it."""
-    out = []
-    rest = piece
-    for i, a in enumerate(K):
-        rest, beyond = _split(rest, a, K[(i + 1) % len(K)])
-        if len(beyond) >= 3 and _area2(beyond) != 0:
-            out.append(beyond)
-        if len(rest) < 3 or _area2(rest) == 0:
-            break
-    return out
+    return [hull(pts) for pts in groups.values()]
