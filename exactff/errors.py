@@ -108,11 +108,12 @@ def misses_tolerance(F, E, tolerance, atol=None):
         # one value (an area pair's): the same test in Python floats, NaN as numpy
         # takes it (np.maximum keeps a NaN, and E > NaN is False)
         F, E = float(F), float(E)
+        # (numpy's bool, as the array path gives: callers negate it with ~)
         def larger(a, b):  # np.maximum's: NaN where either is
             return a if a > b or a != a else b
         if atol is None:
-            return E > tolerance * larger(abs(F), tol.VALUE_FLOOR)
-        return E > larger(float(atol), 0.0 if tolerance is None else tolerance * abs(F))
+            return np.bool_(E > tolerance * larger(abs(F), tol.VALUE_FLOOR))
+        return np.bool_(E > larger(float(atol), 0.0 if tolerance is None else tolerance * abs(F)))
     F, E = np.asarray(F, dtype=float), np.asarray(E, dtype=float)
     if atol is None:
         return E > tolerance * np.maximum(np.abs(F), tol.VALUE_FLOOR)

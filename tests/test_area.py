@@ -1338,16 +1338,37 @@ def test_convex_solids_are_the_closed_convex_groups_of_faces():
 @pytest.mark.parametrize("which", ["room", "cornell"])
 def test_closed_solids_from_the_scene_table_are_the_pairs_own(which):
     # closed_solids with keys (each group's facts against every plane of the scene, built
-    # once) against the facts evaluated for the pair's two planes alone, for every
-    # ordered pair with every other polygon a blocker, the table filled as the pairs ask;
-    # planted: the emitter's column for both planes fails (the room's pairs with the
-    # cubes' bottoms on the floor)
+    # once) against the rule evaluated here for the pair's two planes alone (the per-pair
+    # code it replaced), for every ordered pair with every other polygon a blocker, the
+    # table filled as the pairs ask; planted: the emitter's column for both planes
+    # fails
     from exactff.area.culling import (closed_solids as _closed_solids,
                                       convex_solids as _convex_solids)
+    from exactff.predicates import coplanar_band_sides
+
+    def pair_own(solids, B, N2, D2):
+        # the rule as closed_solids' docstring states it, for the pair's two planes
+        out = np.full(len(B), -1)
+        ids = solids.label[B]
+        for g in set(ids[ids >= 0].tolist()):
+            if np.count_nonzero(ids == g) < 2:
+                continue
+            sign, _ = coplanar_band_sides(solids.vertices[g], N2, D2)
+            supports = ~((sign > 0).any(axis=0) & (sign < 0).any(axis=0))
+            if not (supports & ((sign == 0).sum(axis=0) < 3)).any():
+                continue                   # no plane meets the hull in no area
+            E = solids.open_edges[g]
+            if len(E):
+                on, _ = coplanar_band_sides(E.reshape(-1, 3), N2, D2)
+                on = (on == 0).reshape(len(E), 2, 2).all(axis=1) & supports
+                if not on.any(axis=1).all():
+                    continue               # an open edge in neither supporting plane
+            out[ids == g] = g
+        return out
 
     scene = (ef.scenes.unit_squares_room() if which == "room"
              else ef.scenes.cornell_box(closed=True))
-    solids, fresh = _convex_solids(scene), _convex_solids(scene)
+    solids = _convex_solids(scene)
     N, D = scene.normals, scene.plane_offsets
     n = len(scene)
     found = set()
@@ -1356,12 +1377,11 @@ def test_closed_solids_from_the_scene_table_are_the_pairs_own(which):
             if i == j:
                 continue
             B = np.array([k for k in range(n) if k not in (i, j)])
-            planes = (N[[i, j]], D[[i, j]])
-            got = _closed_solids(fresh, B, planes, keys=[i, j])
-            assert got.tolist() == _closed_solids(solids, B, planes).tolist(), (i, j)
+            got = _closed_solids(solids, B, (N[[i, j]], D[[i, j]]), keys=[i, j])
+            assert got.tolist() == pair_own(solids, B, N[[i, j]], D[[i, j]]).tolist(), (i, j)
             found.add(bool(np.any(got >= 0)))
     assert found == {True, False}          # pairs with solids and pairs without
-    assert set(fresh.facts) == {g for g in solids.members}
+    assert set(solids.facts) == {g for g in solids.members}
 
 
 def test_closed_box_in_a_room_rows_sum_to_one():

@@ -276,3 +276,110 @@ def test_the_integer_cross_product_is_the_fractions(pts):
     direct = (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0])
     assert cross2(o, a, b) == direct
     assert turn(o, a, b) == (direct > 0) - (direct < 0)
+
+
+def _wall_rect(axis, off, lo, hi):
+    """A rectangle in the plane ``x[axis] = off``, the other two coordinates in the box
+    [lo, hi]."""
+    u, v = [a for a in range(3) if a != axis]
+    R = np.zeros((4, 3))
+    R[:, axis] = off
+    for k, (x, y) in enumerate([(lo[0], lo[1]), (hi[0], lo[1]), (hi[0], hi[1]), (lo[0], hi[1])]):
+        R[k, u], R[k, v] = x, y
+    return R
+
+
+def _scores_wall_by_wall(Pf, Qf, walls, band):
+    """The plan's scores one wall at a time (the loop `_float_scores` replaced): the
+    reference it is held to, bit for bit."""
+    import shapely
+    scored = []
+    for w in walls:
+        sP, sQ = Pf @ w.n - w.d, Qf @ w.n - w.d
+        if sP.min() < -band:
+            sP, sQ = -sP, -sQ
+        if sP.min() < -band or sQ.max() > band or sP.max() <= band or sQ.min() >= -band:
+            continue
+        a, b = sP[sP > band], sQ[sQ < -band]
+        p, q = Pf[sP > band], Qf[sQ < -band]
+        t = (a[:, None] / (a[:, None] - b[None, :]))[..., None]
+        pts = np.vstack([(p[:, None] + t * (q[None, :] - p[:, None])).reshape(-1, 3),
+                         Pf[np.abs(sP) <= band], Qf[np.abs(sQ) <= band]])
+        lo, hi = pts[:, w.keep].min(axis=0), pts[:, w.keep].max(axis=0)
+        if np.any(lo > w.hi) or np.any(hi < w.lo):
+            continue
+        hull = shapely.MultiPoint(pts[:, w.keep]).convex_hull
+        if not hull.area > 0:
+            continue
+        left = hull.difference(w.union())
+        if left.area < (1.0 - tol.AREA_WALL_BAND) * hull.area:
+            scored.append((left.area / hull.area, len(scored), w))
+    scored.sort(key=lambda c: c[:2])
+    return [(share, w) for share, _, w in scored]
+
+
+def test_the_plan_scores_the_walls_as_one_at_a_time():
+    # the walls scored together (arrays, vectorized GEOS) against one at a time, on
+    # floors and ceilings with tiled walls between them, turned off the axes half the
+    # time: the same shares to the bit and the same order; planted: the sides as an
+    # explicit sum of products (not each wall's own product, which may fuse
+    # differently) differ in the last bits on turned walls
+    from exactff.area.culling import padded_polygons
+    from exactff.area.walls import _float_scores, _walls
+
+    rng = np.random.default_rng(7)
+    compared = 0
+    for trial in range(300):
+        M = np.linalg.qr(rng.normal(size=(3, 3)))[0] if trial % 2 else np.eye(3)
+        scale = 10 ** rng.uniform(-1, 3)
+        P = _wall_rect(2, 0.0, rng.uniform(0, 1, 2), rng.uniform(1, 2, 2)) * scale
+        Q = _wall_rect(2, 3.0, rng.uniform(0, 1, 2), rng.uniform(1, 2, 2))[::-1] * scale
+        blockers = []
+        for h in rng.uniform(0.5, 2.5, size=rng.integers(1, 4)):
+            xs = np.r_[-1.0, np.sort(rng.choice([0.0, 0.5, 1.0, 1.5, 2.0, rng.uniform(0, 2)], 3,
+                                                replace=False)), 3.0]
+            blockers += [_wall_rect(2, h, (a, -1.0), (b, 3.0)) * scale
+                         for a, b in zip(xs[:-1], xs[1:]) if rng.random() < 0.85]
+        if not blockers:
+            continue
+        P, Q, blockers = P @ M.T, Q @ M.T, [K @ M.T for K in blockers]
+        band = tol.AREA_WALL_BAND * 3.0 * scale
+        V, _, _, N = padded_polygons(blockers)
+        walls = _walls(blockers, N, np.einsum("bx,bx->b", N, V[:, 0]), 3.0 * scale)
+        got = [(share, w) for share, _, w, _, _ in _float_scores(P, Q, walls, band)]
+        assert got == _scores_wall_by_wall(P, Q, walls, band), trial
+        compared += len(got)
+    assert compared > 300
+
+
+def _rect_in(c, s0, s1, z0, z1):
+    """A rectangle in the plane x + y = c (off the axes): (c/2 + s, c/2 - s, z)."""
+    return np.array([[c / 2 + s, c / 2 - s, z] for s, z in [(s0, z0), (s1, z0), (s1, z1), (s0, z1)]])
+
+
+def _holed_wall(c, h0, h1, lo=-2.0, hi=6.0):
+    """A wall in the plane x + y = c over [lo, hi]^2 but the hole [h0, h1]^2, in four pieces."""
+    return [_rect_in(c, lo, h0, lo, hi), _rect_in(c, h1, hi, lo, hi),
+            _rect_in(c, h0, h1, lo, h0), _rect_in(c, h0, h1, h1, hi)]
+
+
+def test_a_row_s_pairs_sharing_walls_decide_as_each_alone():
+    # the walls a row's pairs share (hidden_by_walls' cache, keyed by the plane and the
+    # blocker arrays) give each pair the decision it has alone, pairs drawing different
+    # subsets of the row's blockers in the same planes; planted: the cache keyed by the
+    # plane alone fails (from the review)
+    P = _rect_in(0, 0, 4, 0, 4)
+    blockers = (_holed_wall(12, 1.75, 2.25) + [_rect_in(6, 0.5, 3.5, 0.5, 3.5)]
+                + _holed_wall(9, 0.25, 0.75) + _holed_wall(13, 0.25, 0.75))
+    rng = np.random.default_rng(2)
+    cache, decided = {}, set()
+    for _ in range(40):
+        Q = _rect_in(16, 0, 4, 0, 4)[::-1] + rng.integers(-2, 3, size=3) * [0.25, -0.25, 0.25]
+        keep = np.sort(rng.choice(len(blockers), rng.integers(1, len(blockers) + 1),
+                                  replace=False))
+        B = [blockers[k] for k in keep]
+        alone = hidden_by_walls(P, Q, B, 40.0)
+        assert hidden_by_walls(P, Q, B, 40.0, cache) == alone
+        decided.add(alone)
+    assert decided == {True, False}
+    assert len(cache) > 4

@@ -56,8 +56,21 @@ def test_one_value_decided_as_an_array_of_it(F, E, tolerance, atol):
         return
     with np.errstate(all="ignore"):     # (a product past the largest float: inf, as Python's)
         array = bool(misses_tolerance(np.array([F]), np.array([E]), tolerance, atol=atol)[0])
-    assert misses_tolerance(F, E, tolerance, atol=atol) == array
-    assert misses_tolerance(np.float64(F), np.float64(E), tolerance, atol=atol) == array
+    for f, e in ((F, E), (np.float64(F), np.float64(E))):
+        got = misses_tolerance(f, e, tolerance, atol=atol)
+        # numpy's bool, as from an array: callers negate it with ~ (a Python bool
+        # negated is -1 or -2, both true: a missed value taken as settled)
+        assert type(got) is np.bool_ and got == array
+
+
+def test_a_missed_value_in_the_shaft_is_not_settled():
+    # the settling of a value on its shaft (visibility.compiled._settled) negates the
+    # criterion: with one value and a Python float crossing part (the engine's
+    # unoccluded path leaves none), a missed value must not count as settled (found by
+    # review: the scalar path returned a Python bool, ~True == -2)
+    from exactff.visibility.compiled import _settled
+    assert not _settled(np.float64(0.5), np.float64(1e-3), 0.0, 1e-9)
+    assert _settled(np.float64(0.5), np.float64(1e-15), 0.0, 1e-9)
 
 
 # ---------------------------------------------------------------------------------------

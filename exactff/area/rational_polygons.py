@@ -1,7 +1,8 @@
 """Convex polygons in the plane in exact rational arithmetic, for the walls' proof
-(:mod:`exactff.area.walls`): points are pairs of Fractions (or ints); turns and cross
-products are taken from their numerators and denominators in integers, one Fraction made
-at the end or none (each Fraction operation would normalise by a gcd).
+(:mod:`exactff.area.walls`): points are pairs of Fractions or ints (not floats: convert
+them with ``Fraction(x)``, which is exact); turns and cross products are taken from their
+numerators and denominators in integers, one Fraction made at the end or none (each
+Fraction operation would normalise by a gcd). Polygons are lists of points.
 """
 
 from fractions import Fraction
@@ -22,8 +23,16 @@ def _cross_parts(o, a, b):
 
 
 def cross2(o, a, b):
-    """The cross product ``(a - o) x (b - o)`` of three rational points, a Fraction
-    (twice the signed area of the triangle o, a, b: positive counter-clockwise).
+    """The cross product ``(a - o) x (b - o)`` of three rational points.
+
+    Parameters
+    ----------
+    o, a, b : pair of Fraction or int
+
+    Returns
+    -------
+    Fraction
+        Twice the signed area of the triangle o, a, b: positive counter-clockwise.
 
     Examples
     --------
@@ -35,7 +44,16 @@ def cross2(o, a, b):
 
 
 def turn(o, a, b):
-    """The sign of :func:`cross2`: +1 where o, a, b turn left, -1 right, 0 collinear.
+    """The sign of :func:`cross2`, without making a Fraction.
+
+    Parameters
+    ----------
+    o, a, b : pair of Fraction or int
+
+    Returns
+    -------
+    int
+        +1 where o, a, b turn left (counter-clockwise), -1 right, 0 collinear.
 
     Examples
     --------
@@ -47,8 +65,16 @@ def turn(o, a, b):
 
 
 def ccw(poly):
-    """The polygon counter-clockwise, its repeated and collinear vertices dropped; None
-    where it is not convex or of no area.
+    """A convex polygon counter-clockwise, its repeated and collinear vertices dropped.
+
+    Parameters
+    ----------
+    poly : list of pairs of Fraction or int
+
+    Returns
+    -------
+    list of pairs, or None
+        None where the polygon is not convex (turns both ways) or has no area.
 
     Examples
     --------
@@ -73,8 +99,18 @@ def ccw(poly):
 
 
 def hull(pts):
-    """The convex hull of rational points (Andrew's monotone chain), counter-clockwise,
-    exact; fewer than three points as given (sorted, each once).
+    """The convex hull of rational points (Andrew's monotone chain), exact.
+
+    Parameters
+    ----------
+    pts : iterable of pairs of Fraction or int
+
+    Returns
+    -------
+    list of pairs
+        The hull's vertices counter-clockwise, from the least point (lexicographic),
+        collinear points dropped: fewer than three points come back sorted, each once,
+        and collinear ones as the two ends of their segment.
 
     Examples
     --------
@@ -97,8 +133,22 @@ def hull(pts):
 
 
 def split(poly, a, b):
-    """A convex polygon split by the line a -> b: its parts on the closed left and on
-    the closed right (each vertex's side computed once, exactly).
+    """A convex polygon split by the line a -> b, each vertex's side computed once.
+
+    Parameters
+    ----------
+    poly : list of pairs of Fraction or int
+        Convex, in either orientation (the parts keep it).
+    a, b : pair of Fraction or int
+        Two distinct points of the line.
+
+    Returns
+    -------
+    (list, list)
+        The parts on the closed left and on the closed right: the polygon's vertices on
+        that side (those on the line in both) and the edges' crossings with the line. A
+        part may be empty, or of fewer than three points or no area (the polygon touches
+        the line); the caller tests it (:func:`area2`).
 
     Examples
     --------
@@ -129,6 +179,15 @@ def split(poly, a, b):
 def area2(poly):
     """Twice the signed area of a polygon (the shoelace sum), exact.
 
+    Parameters
+    ----------
+    poly : list of pairs of Fraction or int
+
+    Returns
+    -------
+    Fraction or int
+        Positive for a counter-clockwise polygon, 0 for one of no area.
+
     Examples
     --------
     >>> area2([(0, 0), (2, 0), (2, 2), (0, 2)])
@@ -138,8 +197,19 @@ def area2(poly):
 
 
 def minus_convex(piece, K):
-    """The convex pieces of positive area of ``piece`` less the convex polygon K (both
-    counter-clockwise): the parts beyond each edge of K and within the ones before it.
+    """A convex polygon less another, as convex pieces.
+
+    Parameters
+    ----------
+    piece, K : list of pairs of Fraction or int
+        Convex, counter-clockwise.
+
+    Returns
+    -------
+    list of lists of pairs
+        The pieces of positive area of ``piece`` outside K: for each edge of K in turn,
+        the part beyond it and within the edges before it (empty where K covers
+        ``piece`` but for a set of no area).
 
     Examples
     --------

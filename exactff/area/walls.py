@@ -176,13 +176,11 @@ def _walls(blockers, N, D, reach, cache=None):
 
 
 class _Walls(list):
-    """The walls (a list of :class:`_Wall`) with their planes, axes kept and boxes as
-    arrays, so that a pair's walls are scored together (:func:`_float_scores`)."""
+    """The walls (a list of :class:`_Wall`) with their axes kept and boxes as arrays, so
+    that a pair's walls are scored together (:func:`_float_scores`)."""
 
     def __init__(self, walls):
         super().__init__(walls)
-        self.normals = np.array([w.n for w in walls], dtype=float).reshape(-1, 3)
-        self.offsets = np.array([w.d for w in walls], dtype=float)
         self.keep = np.array([w.keep for w in walls], dtype=np.intp).reshape(-1, 2)
         self.lo = np.array([w.lo for w in walls], dtype=float).reshape(-1, 2)
         self.hi = np.array([w.hi for w in walls], dtype=float).reshape(-1, 2)
@@ -264,10 +262,10 @@ def _float_scores(Pf, Qf, walls, band):
     hulls and their differences in one vectorized GEOS call each."""
     if not len(walls):
         return []
-    N, D = walls.normals, walls.offsets
-    # each vertex's distance from each wall's plane, P's side made positive
-    sP = Pf[:, 0, None] * N[:, 0] + Pf[:, 1, None] * N[:, 1] + Pf[:, 2, None] * N[:, 2] - D
-    sQ = Qf[:, 0, None] * N[:, 0] + Qf[:, 1, None] * N[:, 1] + Qf[:, 2, None] * N[:, 2] - D
+    # each vertex's distance from each wall's plane, P's side made positive (each wall's
+    # product as its own, `P @ n - d`: a matrix product may fuse other roundings)
+    sP = np.stack([Pf @ w.n - w.d for w in walls], axis=1)
+    sQ = np.stack([Qf @ w.n - w.d for w in walls], axis=1)
     flip = sP.min(axis=0) < -band
     sP[:, flip], sQ[:, flip] = -sP[:, flip], -sQ[:, flip]
     c = np.flatnonzero(~(sP.min(axis=0) < -band) & ~(sQ.max(axis=0) > band)
@@ -300,11 +298,10 @@ def _float_scores(Pf, Qf, walls, band):
     unions = np.empty(len(live), dtype=object)
     unions[:] = [walls[int(c[k])].union() for k in live]
     lefts = shapely.difference(hulls[live], unions)
-    shares = shapely.area(lefts) / areas[live]
     scored = []
-    for k, left, share in zip(live.tolist(), lefts, shares.tolist()):
-        if share < 1.0 - tol.AREA_WALL_BAND:
-            scored.append((share, len(scored), walls[int(c[k])], hulls[k], left))
+    for k, left, left_area in zip(live.tolist(), lefts, shapely.area(lefts).tolist()):
+        if left_area < (1.0 - tol.AREA_WALL_BAND) * areas[k]:
+            scored.append((left_area / areas[k], len(scored), walls[int(c[k])], hulls[k], left))
     scored.sort(key=lambda s: s[:2])
     return scored
 
