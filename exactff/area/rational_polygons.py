@@ -44,16 +44,8 @@ def cross2(o, a, b):
 
 
 def turn(o, a, b):
-    """The sign of :func:`cross2`, without making a Fraction.
-
-    Parameters
-    ----------
-    o, a, b : pair of Fraction or int
-
-    Returns
-    -------
-    int
-        +1 where o, a, b turn left (counter-clockwise), -1 right, 0 collinear.
+    """The sign of :func:`cross2` (the same arguments), without making a Fraction: +1
+    where o, a, b turn left (counter-clockwise), -1 right, 0 where they are collinear.
 
     Examples
     --------
