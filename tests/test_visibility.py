@@ -216,6 +216,23 @@ def test_occluded_rows_invariant_under_rigid_motion(axis, angle, shift):
         assert_form_factors_close(F1, F0, rtol=0, atol=1e-11)
 
 
+def test_a_scene_turned_by_a_subnormal_angle_keeps_its_rows():
+    # the furnished box turned by 2.2e-313 about z (found by the clean-clone CI's draw of
+    # the test above): coordinates that were 0 become subnormal, the point lies a
+    # subnormal distance off its floor; the compiled core's band slivers reached 1e307
+    # and its row from the floor summed to 0.607 with them unchecked. A value whose
+    # slivers exceed its own scale is now recomputed (the Python engine here); planted:
+    # the slivers left unchecked again fails
+    boxes = FURNITURE[1]
+    scene = ef.scenes.furnished_box(2, boxes)
+    Rm = rotation([0.0, 0.0, 1.0], 2.2250738585e-313)
+    moved = ef.Scene.from_polygons([P @ Rm.T for P in scene.polygons])
+    for i in (0, 9, 20):
+        F0 = ef.form_factors(scene, scene.centroids[i], scene.normals[i])
+        F1 = ef.form_factors(moved, scene.centroids[i] @ Rm.T, Rm @ scene.normals[i])
+        assert_form_factors_close(F1, F0, rtol=0, atol=1e-11)
+
+
 def test_splitting_polygons_keeps_occluded_totals():
     boxes = FURNITURE[1]
     coarse = ef.scenes.furnished_box(1, boxes, box_k=1)
