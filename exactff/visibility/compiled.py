@@ -402,7 +402,9 @@ def compiled_form_factors(scene, point, normal, *, two_sided=False, stats=None,
     tolerance, as the Python engine's topology has the same decisions and its bound
     leaves them out. No precision tier narrows them (they come from the decisions, not
     from the arithmetic), so checking them would only send to the Python engine values
-    that its own check accepts.
+    that its own check accepts. Only where they exceed the value's own scale,
+    ``max(|F|, VALUE_FLOOR)``, a bound that says nothing of it (a scene with subnormal
+    coordinates), is the value taken as missed, as above.
 
     Parameters
     ----------
@@ -452,8 +454,9 @@ def compiled_form_factors(scene, point, normal, *, two_sided=False, stats=None,
     tolerance : float or None
         Relative accuracy requested of every value; None: no check, no fallback. The
         parts of the bound no precision tier narrows are checked apart: the band's
-        slivers not at all, the BSP crossings' rounding against the accuracy target of
-        occluded values (``OCCLUDED_ATOL``, 1e-11, absolute); a value whose bound misses
+        slivers only against the value's own scale, the BSP crossings' rounding against
+        the accuracy target of occluded values (``OCCLUDED_ATOL``, 1e-11, absolute); a
+        value whose bound misses
         the tolerance by those parts alone is returned with that bound, unchecked.
     error : bool, default False
         Also return each value's bound.
