@@ -3,6 +3,7 @@ whether that scene already held the BSP tree of the engine that computes the row
 compiled core's, or the Python engine's); importable by worker processes."""
 
 import os
+import time
 
 from exactff.methods import Exact
 from exactff.prepared import prepared
@@ -16,6 +17,10 @@ class RecordingExact(Exact):
         self.log = log
 
     def point_form_factors(self, scene, point, normal, two_sided=False, **kw):
+        # a run to be killed part-way takes this long a row at least (seconds,
+        # EXACTFF_TEST_ROW_DELAY in its environment), so that the kill falls mid-run
+        # however fast the rows are
+        time.sleep(float(os.environ.get("EXACTFF_TEST_ROW_DELAY", "0")))
         # the accelerator each engine builds once per scene: the compiled core (its BSP
         # tree and subtree bounds) or the Python engine's BSP tree and buckets
         had = ("compiled_core" if self.engine == "compiled" else "bsp") in prepared(scene)

@@ -244,7 +244,10 @@ def _done_rows(path, suffix):
 def test_sigkill_then_resume_gives_the_identical_matrix(tmp_path, serial, suffix, sparse):
     out, log = str(tmp_path / ("m" + suffix)), str(tmp_path / "killed.log")
     code = KILLED.format(tests=str(ROOT / "tests"), log=log, out=out, sparse=sparse)
-    proc = subprocess.Popen([sys.executable, "-c", code], cwd=tmp_path, env=checkout_env())
+    # (its rows 20 ms each at least: 36 of them outlast the polls that see 8 done, which
+    # rows of about 1 ms could all finish between; the clean-clone CI saw that once)
+    env = checkout_env() | {"EXACTFF_TEST_ROW_DELAY": "0.02"}
+    proc = subprocess.Popen([sys.executable, "-c", code], cwd=tmp_path, env=env)
     deadline = time.time() + 120
     while len(_done_rows(out, suffix)) < 8 and time.time() < deadline and proc.poll() is None:
         time.sleep(0.02)
