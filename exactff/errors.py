@@ -81,6 +81,11 @@ def check_finite(F, E=None, what="form factor"):
 _SCALARS = (float, np.float64)
 
 
+def _larger(a, b):
+    """The larger of two floats as np.maximum takes it: NaN where either is."""
+    return a if a > b or a != a else b
+
+
 def misses_tolerance(F, E, tolerance, atol=None):
     """Where a value's bound misses the accuracy asked of it.
 
@@ -107,13 +112,11 @@ def misses_tolerance(F, E, tolerance, atol=None):
     if type(F) in _SCALARS and type(E) in _SCALARS:
         # one value (an area pair's): the same test in Python floats, NaN as numpy
         # takes it (np.maximum keeps a NaN, and E > NaN is False)
-        F, E = float(F), float(E)
         # (numpy's bool, as the array path gives: callers negate it with ~)
-        def larger(a, b):  # np.maximum's: NaN where either is
-            return a if a > b or a != a else b
+        F, E = float(F), float(E)
         if atol is None:
-            return np.bool_(E > tolerance * larger(abs(F), tol.VALUE_FLOOR))
-        return np.bool_(E > larger(float(atol), 0.0 if tolerance is None else tolerance * abs(F)))
+            return np.bool_(E > tolerance * _larger(abs(F), tol.VALUE_FLOOR))
+        return np.bool_(E > _larger(float(atol), 0.0 if tolerance is None else tolerance * abs(F)))
     F, E = np.asarray(F, dtype=float), np.asarray(E, dtype=float)
     if atol is None:
         return E > tolerance * np.maximum(np.abs(F), tol.VALUE_FLOOR)

@@ -164,8 +164,7 @@ def _walls(blockers, N, D, reach, cache=None):
         if key not in groups:
             groups[key] = (n, d, [])
         groups[key][2].append(K)
-    if cache is None:
-        return _Walls([_Wall(*g) for g in groups.values()])
+    cache = {} if cache is None else cache
     out = []
     for key, (n, d, Ks) in groups.items():
         ident = (key, tuple(id(K) for K in Ks))
@@ -281,18 +280,20 @@ def _float_scores(Pf, Qf, walls, band):
         pts = Pf[:, None, None] + t * (Qf[None, :, None] - Pf[:, None, None])
     keep = walls.keep[c]                                               # (C, 2)
     cols = np.arange(len(c))
-    X = np.concatenate([pts.reshape(-1, len(c), 3), np.broadcast_to(Pf[:, None], (len(Pf), len(c), 3)),
-                        np.broadcast_to(Qf[:, None], (len(Qf), len(c), 3))])   # (m, C, 3)
-    valid = np.concatenate([crosses.reshape(-1, len(c)), np.abs(a) <= band, np.abs(b) <= band])
-    uv = np.stack([X[:, cols, keep[:, 0]], X[:, cols, keep[:, 1]]], axis=-1)      # (m, C, 2)
+    X = np.concatenate([pts.reshape(-1, len(c), 3),                    # (m, C, 3)
+                        np.broadcast_to(Pf[:, None], (len(Pf), len(c), 3)),
+                        np.broadcast_to(Qf[:, None], (len(Qf), len(c), 3))])
+    valid = np.concatenate([crosses.reshape(-1, len(c)), np.abs(a) <= band,
+                            np.abs(b) <= band])
+    uv = np.stack([X[:, cols, keep[:, 0]], X[:, cols, keep[:, 1]]], axis=-1)  # (m, C, 2)
     lo = np.where(valid[..., None], uv, np.inf).min(axis=0)
     hi = np.where(valid[..., None], uv, -np.inf).max(axis=0)
     near = ~(np.any(lo > walls.hi[c], axis=1) | np.any(hi < walls.lo[c], axis=1))
     if not near.any():
         return []
     c, uv, valid = c[near], uv[:, near], valid[:, near]
-    row, col = np.nonzero(valid.T)                     # points grouped by wall, in order
-    hulls = shapely.convex_hull(shapely.multipoints(uv[col, row], indices=row))
+    wall, point = np.nonzero(valid.T)                 # points grouped by wall, in order
+    hulls = shapely.convex_hull(shapely.multipoints(uv[point, wall], indices=wall))
     areas = shapely.area(hulls)
     live = np.flatnonzero(areas > 0)
     unions = np.empty(len(live), dtype=object)
@@ -301,7 +302,8 @@ def _float_scores(Pf, Qf, walls, band):
     scored = []
     for k, left, left_area in zip(live.tolist(), lefts, shapely.area(lefts).tolist()):
         if left_area < (1.0 - tol.AREA_WALL_BAND) * areas[k]:
-            scored.append((left_area / areas[k], len(scored), walls[int(c[k])], hulls[k], left))
+            scored.append((left_area / areas[k], len(scored), walls[int(c[k])], hulls[k],
+                           left))
     scored.sort(key=lambda s: s[:2])
     return scored
 

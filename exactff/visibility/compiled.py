@@ -314,14 +314,17 @@ def _settle_in_shafts(scene, p, normal, missed, *, two_sided, shortcuts, toleran
     return settled
 
 
-def _missed_message(j, F, E, crossing, tolerance, count, python=False):
-    """The error of a row whose value ``j`` (one of ``count``) missed the tolerance."""
+def _missed_message(j, F, E, crossing, tolerance, count, python=False, band=None):
+    """The error of a row whose value ``j`` (one of ``count``) missed the tolerance
+    (``band``: the band's slivers, named where they exceed the value's scale)."""
     j = int(j)
     where = ("after the Python engine's refinement" if python else
              "in the compiled core (nor by the Python engine on the polygons that may hide "
              "part of it, where they are few enough)")
     part = ("" if python or not crossing[j] > tol.OCCLUDED_ATOL else
             f"; {crossing[j]:.3g} of it from the BSP's rounded crossings")
+    if band is not None and misses_tolerance(F[j], band[j], 1.0):
+        part += f"; the band's slivers {band[j]:.3g}, beyond the value's scale"
     return (f"polygon {j}: the form factor {F[j]!r} misses the tolerance {tolerance:g} "
             f"relative (times the larger of |F| and {tol.VALUE_FLOOR:g}) {where}: "
             f"error bound {E[j]:.3g}{part} ({count} value(s) of the row miss it); ask "
@@ -456,8 +459,8 @@ def compiled_form_factors(scene, point, normal, *, two_sided=False, stats=None,
         parts of the bound no precision tier narrows are checked apart: the band's
         slivers only against the value's own scale, the BSP crossings' rounding against
         the accuracy target of occluded values (``OCCLUDED_ATOL``, 1e-11, absolute); a
-        value whose bound misses
-        the tolerance by those parts alone is returned with that bound, unchecked.
+        value whose bound misses the tolerance by those parts alone is returned with that
+        bound, unchecked.
     error : bool, default False
         Also return each value's bound.
     integrator : {"sector", "eq3"}, default "sector"
@@ -520,7 +523,7 @@ def compiled_form_factors(scene, point, normal, *, two_sided=False, stats=None,
         # most 6e-11)
         missed = np.flatnonzero(misses_tolerance(F, E, tolerance) |
                                 (crossing > tol.OCCLUDED_ATOL) |
-                                (band > np.maximum(np.abs(F), tol.VALUE_FLOOR)))
+                                misses_tolerance(F, band, 1.0))
         if len(missed):
             st.update(counters)
             st["compiled_missed"] = int(len(missed))
@@ -543,7 +546,7 @@ def compiled_form_factors(scene, point, normal, *, two_sided=False, stats=None,
                     path = "compiled, shaft for some polygons"
                 if len(missed) and not error:
                     raise NumericalError(_missed_message(missed[0], F, E, crossing, tolerance,
-                                                         len(missed)))
+                                                         len(missed), band=band))
             else:
                 # the Python engine (it refines and escalates) for these values only
                 G, H = visible_form_factors(scene, p, normal, two_sided=two_sided, stats={},
