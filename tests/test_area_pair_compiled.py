@@ -491,27 +491,34 @@ def _level_calls(monkeypatch, scene, rows, tolerance):
     monkeypatch.setattr(adaptive, "COMPILED_LEVELS", False)
     monkeypatch.setattr(adaptive, "_adaptive_levels", record)
     ef.area_form_factors(scene, rows=rows, tolerance=tolerance)
-    monkeypatch.undo()
+    monkeypatch.setattr(adaptive, "COMPILED_LEVELS", True)
+    monkeypatch.setattr(adaptive, "_adaptive_levels", levels)
     return calls
 
 
-@pytest.mark.parametrize("name, rows, tolerance", [("test4.vs3", None, 1e-9),
-                                                   ("facet.vs3", None, 1e-9),
-                                                   ("gunter1.vs3", [8, 17], 1e-6)])
-def test_compiled_levels_against_numpy(monkeypatch, name, rows, tolerance):
+@pytest.mark.parametrize("name, rows, tolerance, small", [("test4.vs3", None, 1e-9, None),
+                                                          ("facet.vs3", None, 1e-9, None),
+                                                          ("gunter1.vs3", [8, 17], 1e-6, None),
+                                                          ("gunter1.vs3", [8, 17], 1e-6, 1.0)])
+def test_compiled_levels_against_numpy(monkeypatch, name, rows, tolerance, small):
     # every call of the adaptive levels (_core/levels.cpp) that the rows make, compiled
     # and by numpy (adaptive._adaptive_levels, the reference) from the same triangles:
     # the same triangles accepted in the same order, at the same level, rung and corner,
     # the same slivers and points, and the rules' sums equal to rounding (the nodes' sums
-    # are taken in another order), far within the nodes' estimates
+    # are taken in another order), far within the nodes' estimates. At 1e-6 the small
+    # triangles take the symmetric pairs of degrees 2 and 4, then 4 and 8 (rules.rule_pair;
+    # ``small`` 1: every triangle off a corner, so that both rungs of both kinds are met)
+    if small is not None:
+        monkeypatch.setattr(tol, "AREA_SMALL_TRIANGLE_SHARE", small)
     calls = _level_calls(monkeypatch, ef.read_vs3(os.path.join(DATA, name)), rows, tolerance)
     assert len(calls) > 10
+    reference = adaptive._adaptive_levels
     for args, acc in calls:
         got, ref = ({k: list(v) for k, v in acc.items()} for _ in range(2))
         monkeypatch.setattr(adaptive, "COMPILED_LEVELS", True)
         monkeypatch.setattr(adaptive, "_adaptive_levels", None)      # no fallback taken
         r_got = adaptive._levels(*args, got)
-        monkeypatch.undo()
+        monkeypatch.setattr(adaptive, "_adaptive_levels", reference)
         r_ref = adaptive._adaptive_levels(*args, ref)
         assert not len(r_got[0]) and not len(r_ref[0])
         assert r_got[4] == pytest.approx(r_ref[4], rel=1e-12, abs=1e-300)   # slivers

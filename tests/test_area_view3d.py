@@ -325,6 +325,24 @@ def test_view3d_values_within_their_estimates_of_values_at_1e_11(name):
     _within_estimates_of_tighter(_read(name), name, [1e-6])
 
 
+def test_small_triangles_rules_take_fewer_points_within_the_estimates(monkeypatch):
+    # the small triangles' rules (rules.rule_pair: the symmetric pairs of degrees 2 and
+    # 4, then 4 and 8, on triangles of at most AREA_SMALL_TRIANGLE_SHARE of the emitter)
+    # against none (share 0: the pair of 4 and 8, then the collapsed 6 and 10): gunter1
+    # at 1e-6 takes fewer points, and every value stays within its estimate of the
+    # values at 1e-9 (where the collapsed rules alone are used)
+    scene = _read("gunter1.vs3")
+    R, ER = ef.area_form_factors(scene, tolerance=1e-9, error=True)
+    points = []
+    for share in (0.0, ef._tolerances.AREA_SMALL_TRIANGLE_SHARE):
+        monkeypatch.setattr(ef._tolerances, "AREA_SMALL_TRIANGLE_SHARE", share)
+        st = {}
+        F, E = ef.area_form_factors(scene, tolerance=1e-6, error=True, stats=st)
+        assert np.all(np.abs(F - R) <= E + ER), (share, (np.abs(F - R) / (E + ER)).max())
+        points.append(st["point_values"])
+    assert points[1] < 0.9 * points[0], points
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("name", _SMALL + ["gunter1.vs3"])
 def test_view3d_values_at_1e_9_within_their_estimates_of_values_at_1e_11(name):

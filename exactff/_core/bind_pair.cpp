@@ -154,13 +154,14 @@ py::tuple adaptive_levels(Array<double> T, Array<long long> depth, Array<long lo
     const std::int64_t t = T.size() / 9;
     if (T.size() != 9 * t || depth.size() != t || rung.size() != t || corner.size() != t ||
         nP.size() != 3 || frame.size() != 9 || Qc.ndim() != 2 || Qc.shape(1) != 3 ||
-        Qc.shape(0) < 3 || lo.size() != 3 || hi.size() != 3 || py::len(rules) != 7)
+        Qc.shape(0) < 3 || lo.size() != 3 || hi.size() != 3 ||
+        py::len(rules) != exactff::kLevelRules)
         throw std::invalid_argument("adaptive_levels: arrays of the wrong shapes");
     for (std::int64_t k = 0; k < t; ++k)
         if (rung.data()[k] != 0 && rung.data()[k] != 1)
             throw std::invalid_argument("adaptive_levels: a rung not 0 or 1");
-    std::vector<exactff::TriangleRule> rule(7);
-    for (size_t k = 0; k < 7; ++k) rule[k] = as_rule(rules[k]);
+    std::vector<exactff::TriangleRule> rule(exactff::kLevelRules);
+    for (int k = 0; k < exactff::kLevelRules; ++k) rule[k] = as_rule(rules[k]);
     exactff::LevelArgs a;
     a.T = exactff::bind::to_vector(T);
     a.depth = exactff::bind::to_vector(depth);
@@ -173,7 +174,7 @@ py::tuple adaptive_levels(Array<double> T, Array<long long> depth, Array<long lo
     a.atol = atol;
     a.rules_err = rules_err;
     a.start = start;
-    for (size_t k = 0; k < 7; ++k) a.rules[k] = &rule[k];
+    for (int k = 0; k < exactff::kLevelRules; ++k) a.rules[k] = &rule[k];
     a.symmetric = symmetric;
     a.Qc = Qc.data();
     a.n_q = Qc.shape(0);
@@ -196,6 +197,7 @@ py::tuple adaptive_levels(Array<double> T, Array<long long> depth, Array<long lo
     for (std::int64_t k = 0; k < part_counts.size(); ++k) lines += part_counts.data()[k];
     a.lines = static_cast<double>(lines);
     a.sliver_share = num("AREA_SLIVER_SHARE");
+    a.small_share = num("AREA_SMALL_TRIANGLE_SHARE");
     a.budget_share = num("AREA_IMAGE_BUDGET_SHARE");
     a.back_face_rtol = num("AREA_BACK_FACE_RTOL");
     a.edge_on_rtol = num("AREA_EDGE_ON_RTOL");
@@ -228,7 +230,8 @@ py::tuple adaptive_levels(Array<double> T, Array<long long> depth, Array<long lo
 
 std::shared_ptr<exactff::PairConstants> pair_constants(py::dict tol, py::sequence rules,
                                                         py::sequence fused) {
-    if (py::len(rules) != 7) throw std::invalid_argument("pair_constants: 7 rules expected");
+    if (py::len(rules) != exactff::kLevelRules)
+        throw std::invalid_argument("pair_constants: 9 rules expected (levels.h)");
     auto k = std::make_shared<exactff::PairConstants>();
     const auto num = [&](const char* name) { return tol[name].cast<double>(); };
     const auto whole = [&](const char* name) { return tol[name].cast<long long>(); };
@@ -267,6 +270,7 @@ std::shared_ptr<exactff::PairConstants> pair_constants(py::dict tol, py::sequenc
     k->c1 = num("C1");
     k->c2 = num("C2");
     k->sliver_share = num("AREA_SLIVER_SHARE");
+    k->small_share = num("AREA_SMALL_TRIANGLE_SHARE");
     k->budget_share = num("AREA_IMAGE_BUDGET_SHARE");
     k->back_face_rtol = num("AREA_BACK_FACE_RTOL");
     k->edge_on_rtol = num("AREA_EDGE_ON_RTOL");
@@ -279,7 +283,7 @@ std::shared_ptr<exactff::PairConstants> pair_constants(py::dict tol, py::sequenc
     k->points_per_call = whole("AREA_POINTS_PER_CALL");
     if (k->samples < 1 || k->points_per_call < 1)
         throw std::invalid_argument("pair_constants: samples or points_per_call < 1");
-    for (size_t r = 0; r < 7; ++r) k->rules[r] = as_rule(rules[r]);
+    for (int r = 0; r < exactff::kLevelRules; ++r) k->rules[r] = as_rule(rules[r]);
     if (py::len(fused) != 3) throw std::invalid_argument("pair_constants: 3 flags in fused");
     k->fused_dot = fused[0].cast<bool>();
     k->fused_matmul = fused[1].cast<bool>();
@@ -392,7 +396,7 @@ PYBIND11_MODULE(_pair, m) {
         m, "PairConstants", "The tolerances and rules occluded_pair reads (occluded_pair.h).");
     m.def("pair_constants", &pair_constants, py::arg("tol"), py::arg("rules"), py::arg("fused"),
           "pair_constants(tol, rules, fused) -> PairConstants: the tolerances by name, the "
-          "levels' seven rules and whether numpy's BLAS fuses the multiply-adds of a dot, a "
+          "levels' nine rules and whether numpy's BLAS fuses the multiply-adds of a dot, a "
           "matrix and a stacked product (numpy_ops.h), for occluded_pair");
     m.def("occluded_pair", &occluded_pair, py::arg("W"), py::arg("start"), py::arg("solid"),
           py::arg("inner"), py::arg("Pc"), py::arg("Qc"), py::arg("nP"), py::arg("atol"),

@@ -224,7 +224,7 @@ LevelResult adaptive_levels(const LevelArgs& a) {
         corner.resize(t);
         if (t) {
             // the rules of every triangle, grouped as the reference groups them (rung,
-            // then corner), their nodes in one list
+            // then corner, then small), their nodes in one list
             X.clear();
             W.clear();
             cell.clear();
@@ -234,32 +234,41 @@ LevelResult adaptive_levels(const LevelArgs& a) {
             nm.assign(t, 0);
             for (long long r : {0LL, 1LL})
                 for (unsigned char at_corner : {0, 1})
-                    for (size_t k = 0; k < t; ++k) {
-                        if (rung[k] != r || (corner[k] != 0) != (at_corner != 0)) continue;
-                        const TriangleRule *lo, *hi, *mid = nullptr;
-                        if (r == 0 && !at_corner && a.symmetric) {
-                            lo = a.rules[0];
-                            hi = a.rules[1];
-                        } else if (r == 0) {
-                            lo = a.rules[2];
-                            hi = a.rules[3];
-                            if (at_corner) mid = a.rules[6];
-                        } else {
-                            lo = a.rules[4];
-                            hi = a.rules[5];
+                    for (bool in_small : {false, true})
+                        for (size_t k = 0; k < t; ++k) {
+                            if (rung[k] != r || (corner[k] != 0) != (at_corner != 0)) continue;
+                            // a small triangle off a corner: the symmetric pair of degrees 2
+                            // and 4 on rung 0, of 4 and 8 on rung 1
+                            const bool small = !at_corner && a.symmetric &&
+                                               area_t[k] / a.area_P <= a.small_share;
+                            if (small != in_small) continue;
+                            const TriangleRule *lo, *hi, *mid = nullptr;
+                            if (small) {
+                                lo = a.rules[r == 0 ? 7 : 0];
+                                hi = a.rules[r == 0 ? 8 : 1];
+                            } else if (r == 0 && !at_corner && a.symmetric) {
+                                lo = a.rules[0];
+                                hi = a.rules[1];
+                            } else if (r == 0) {
+                                lo = a.rules[2];
+                                hi = a.rules[3];
+                                if (at_corner) mid = a.rules[6];
+                            } else {
+                                lo = a.rules[4];
+                                hi = a.rules[5];
+                            }
+                            const double* v = &T[9 * k];
+                            const Pt3 p0{v[0], v[1], v[2]}, p1{v[3], v[4], v[5]},
+                                p2{v[6], v[7], v[8]};
+                            first[k] = W.size();
+                            rule_nodes(*lo, p0, p1, p2, X, W);
+                            rule_nodes(*hi, p0, p1, p2, X, W);
+                            if (mid) rule_nodes(*mid, p0, p1, p2, X, W);
+                            cell.resize(W.size(), static_cast<long long>(k));
+                            nl[k] = rule_size(*lo);
+                            nh[k] = rule_size(*hi);
+                            nm[k] = mid ? rule_size(*mid) : 0;
                         }
-                        const double* v = &T[9 * k];
-                        const Pt3 p0{v[0], v[1], v[2]}, p1{v[3], v[4], v[5]},
-                            p2{v[6], v[7], v[8]};
-                        first[k] = W.size();
-                        rule_nodes(*lo, p0, p1, p2, X, W);
-                        rule_nodes(*hi, p0, p1, p2, X, W);
-                        if (mid) rule_nodes(*mid, p0, p1, p2, X, W);
-                        cell.resize(W.size(), static_cast<long long>(k));
-                        nl[k] = rule_size(*lo);
-                        nh[k] = rule_size(*hi);
-                        nm[k] = mid ? rule_size(*mid) : 0;
-                    }
             const std::int64_t np = static_cast<std::int64_t>(W.size());
             H.resize(np);
             EH.resize(np);

@@ -20,6 +20,9 @@
 
 namespace exactff {
 
+// The levels' rules, in LevelArgs::rules' order (compiled_pair.py's LEVEL_RULES).
+constexpr int kLevelRules = 9;
+
 // A quadrature rule on the triangle: collapsed (Duffy) Gauss-Legendre with n points a side
 // (nodes and weights on [-1, 1]), or fully symmetric (barycentric points (m, 3) and
 // weights summing to 1).
@@ -34,8 +37,11 @@ struct TriangleRule {
 // cells), atol the pair's absolute tolerance, start the rung a quarter starts on,
 // rules_err the rules' differences accepted before this call; rules: symmetric degree 4
 // and 8, collapsed 3 and 5 (rung 0 at a corner or at a fine tolerance), 6 and 10 (rung
-// 1), and 4 (the third rule at a corner on rung 0); symmetric: rung 0 off a corner takes
-// the symmetric pair (atol >= AREA_LOW_RULES_TOLERANCE). Qc (q, 3) the receiver's part;
+// 1), 4 (the third rule at a corner on rung 0), and symmetric degree 2 and 4; symmetric:
+// rung 0 off a corner takes the symmetric pair of degrees 4 and 8 (atol >=
+// AREA_LOW_RULES_TOLERANCE), and a small triangle off a corner (at most small_share of
+// P's area) the pair of degrees 2 and 4 on rung 0 and of 4 and 8 on rung 1 (rules.py's
+// rule_pair). Qc (q, 3) the receiver's part;
 // the hidden set-up (hidden.py's HiddenSetup) in hidden (its X and n unset, its
 // back_face, edge_on and precise_atol set per chunk from the factors here), lo, hi (3,)
 // its box, and lines, the clipping lines' count of the estimate; the tolerances by name.
@@ -46,7 +52,8 @@ struct LevelArgs {
     const double *nP, *frame;
     double area_P, total_area, atol, rules_err;
     long long start;
-    const TriangleRule* rules[7];   // sym4, sym8, gl3, gl5, gl6, gl10, gl4
+    // sym4, sym8, gl3, gl5, gl6, gl10, gl4, sym2, sym4
+    const TriangleRule* rules[kLevelRules];
     bool symmetric;
     const double* Qc;
     std::int64_t n_q;
@@ -55,9 +62,9 @@ struct LevelArgs {
     double lines;
     // AREA_SLIVER_SHARE, AREA_IMAGE_BUDGET_SHARE, AREA_BACK_FACE_RTOL, AREA_EDGE_ON_RTOL,
     // AREA_IMAGE_PRECISE_SHARE, AREA_BOOLEAN_ULPS, AREA_IMAGE_RTOL, EPS, C1, C2,
-    // OFFSET_ROUNDING_ULPS, AREA_MAX_DEPTH, AREA_POINTS_PER_CALL
+    // OFFSET_ROUNDING_ULPS, AREA_SMALL_TRIANGLE_SHARE, AREA_MAX_DEPTH, AREA_POINTS_PER_CALL
     double sliver_share, budget_share, back_face_rtol, edge_on_rtol, precise_share,
-        boolean_ulps, image_rtol, eps, c1, c2, offset_ulps;
+        boolean_ulps, image_rtol, eps, c1, c2, offset_ulps, small_share;
     long long max_depth, points_per_call;
 };
 

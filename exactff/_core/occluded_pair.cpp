@@ -405,7 +405,7 @@ PairResult occluded_pair(const PairArgs& a) {
     la.atol = a.atol;
     la.rules_err = 0.0;
     la.start = start;
-    for (int r = 0; r < 7; ++r) la.rules[r] = &k.rules[r];
+    for (int r = 0; r < kLevelRules; ++r) la.rules[r] = &k.rules[r];
     la.symmetric = a.atol >= k.low_rules_tolerance;
     la.Qc = a.Qc;
     la.n_q = n_q;
@@ -440,6 +440,7 @@ PairResult occluded_pair(const PairArgs& a) {
     for (long long m : setup.counts) count += m;
     la.lines = static_cast<double>(count);
     la.sliver_share = k.sliver_share;
+    la.small_share = k.small_share;
     la.budget_share = k.budget_share;
     la.back_face_rtol = k.back_face_rtol;
     la.edge_on_rtol = k.edge_on_rtol;

@@ -32,9 +32,10 @@ struct PairConstants {
     double convex_ulps, meet_ulps, normal_floor, strict_turn;
     // levels.h's (LevelArgs and its HiddenArgs)
     double vertex_ulps, sliver_ulps, precise_rtol, c1, c2, sliver_share, budget_share,
-        back_face_rtol, edge_on_rtol, precise_share, boolean_ulps, image_rtol, offset_ulps;
+        back_face_rtol, edge_on_rtol, precise_share, boolean_ulps, image_rtol, offset_ulps,
+        small_share;
     long long max_pieces, max_depth, points_per_call;
-    TriangleRule rules[7];
+    TriangleRule rules[kLevelRules];
     // whether numpy's BLAS fuses the multiply-adds of a vector's dot product, of a
     // (k, 3) @ (3, m) product and of a (t, 3, 2) @ (2, 3) one (numpy_ops.h)
     bool fused_dot, fused_matmul, fused_stacked;

@@ -10,6 +10,8 @@ levels run compiled (:mod:`exactff.area._pair`, ``_core/levels.cpp``, the GIL re
 is :func:`_hidden_integral` to the whole pair in one call (:mod:`.compiled_pair`).
 """
 
+import itertools
+
 import numpy as np
 import shapely
 
@@ -102,7 +104,9 @@ def occluded_pair(S, Pc, Qc, nP, atol, area_P, whole, shortcuts=True, st=None,
     symmetric rules of 6 and 16 points, or the collapsed ones of 3 and 5 points a side
     where a blocker touches its first vertex;
     :func:`~exactff.area.rules.rule_pair`) and takes the higher
-    pair where the budget refines it.
+    pair where the budget refines it. At such a coarse target a small triangle (at most
+    ``AREA_SMALL_TRIANGLE_SHARE`` of P) off a corner starts on the symmetric pair of
+    degrees 2 and 4 (3 and 6 points) and takes that of 4 and 8 where refined.
     Returns the value, its error estimate (the contour sum's, the rules' differences,
     the point values' bounds) and the number of point values used.
 
@@ -396,10 +400,13 @@ def _evaluated(T, rung, corner, nP, Qc, S, st, setup, atol, area_P, shortcuts, b
     unoccluded point values U and their estimates. Returns them by name and the points
     used."""
     X, weights, groups = [], [], []
-    for r, at_corner in ((0, False), (0, True), (1, False), (1, True)):
-        sel = np.flatnonzero((rung == r) & (corner == at_corner))
+    # the small triangles off a corner (rules.rule_pair)
+    small = (~corner & (triangle_areas(T) / area_P <= tol.AREA_SMALL_TRIANGLE_SHARE)
+             & (atol >= tol.AREA_LOW_RULES_TOLERANCE))
+    for r, at_corner, in_small in itertools.product((0, 1), (False, True), (False, True)):
+        sel = np.flatnonzero((rung == r) & (corner == at_corner) & (small == in_small))
         if len(sel):
-            (Xl, Wl), (Xh, Wh) = rule_pair(T[sel], r, at_corner, atol)
+            (Xl, Wl), (Xh, Wh) = rule_pair(T[sel], r, at_corner, atol, in_small)
             # at a corner on the lower pair, a third rule between the two
             Xm, Wm = (triangle_rule(T[sel], CORNER_MIDDLE_RULE) if r == 0 and at_corner
                       else (np.zeros((len(sel), 0, 3)), np.zeros((len(sel), 0))))

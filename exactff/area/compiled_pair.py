@@ -21,16 +21,17 @@ __all__ = ["LEVEL_RULES", "LEVEL_TOLERANCES", "PAIR_TOLERANCES", "blas_fuses",
            "hidden_integral_in_one_call", "pair_constants"]
 
 #: The compiled levels' rules, in levels.h's order: the symmetric pair (degrees 4 and 8),
-#: the collapsed pairs of rung 0 and rung 1, and the third rule at a corner.
-LEVEL_RULES = (SYMMETRIC_RULES[tol.AREA_SYMMETRIC_DEGREES[0]],
-               SYMMETRIC_RULES[tol.AREA_SYMMETRIC_DEGREES[1]],
-               *RULE_PAIRS[0], *RULE_PAIRS[1], CORNER_MIDDLE_RULE)
+#: the collapsed pairs of rung 0 and rung 1, the third rule at a corner, and the small
+#: triangles' pair on rung 0 (degrees 2 and 4).
+LEVEL_RULES = (*(SYMMETRIC_RULES[d] for d in tol.AREA_SYMMETRIC_DEGREES),
+               *RULE_PAIRS[0], *RULE_PAIRS[1], CORNER_MIDDLE_RULE,
+               *(SYMMETRIC_RULES[d] for d in tol.AREA_SMALL_SYMMETRIC_DEGREES))
 #: The tolerances the compiled levels read, by name (read at each call).
 LEVEL_TOLERANCES = (
     "AREA_IMAGE_ULPS", "AREA_SLIVER_ULPS", "AREA_MAX_PIECES", "AREA_IMAGE_PRECISE_RTOL", "C1",
     "C2", "EPS", "AREA_SLIVER_SHARE", "AREA_IMAGE_BUDGET_SHARE", "AREA_BACK_FACE_RTOL",
     "AREA_EDGE_ON_RTOL", "AREA_IMAGE_PRECISE_SHARE", "AREA_BOOLEAN_ULPS", "AREA_IMAGE_RTOL",
-    "OFFSET_ROUNDING_ULPS", "AREA_MAX_DEPTH", "AREA_POINTS_PER_CALL")
+    "OFFSET_ROUNDING_ULPS", "AREA_SMALL_TRIANGLE_SHARE", "AREA_MAX_DEPTH", "AREA_POINTS_PER_CALL")
 
 #: The tolerances the compiled pair reads, by name (``_core/occluded_pair.h``).
 PAIR_TOLERANCES = (
