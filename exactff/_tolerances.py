@@ -129,6 +129,7 @@ __all__ = [
     "AREA_SYMMETRIC_DEGREES",
     "AREA_SMALL_SYMMETRIC_DEGREES",
     "AREA_SMALL_TRIANGLE_SHARE",
+    "AREA_SMALL_TRIANGLE_REACH",
     "AREA_BACK_FACE_RTOL",
     "AREA_CUT_EXTEND_RTOL",
     "AREA_CURVED_EVENT_SAMPLES",
@@ -621,19 +622,22 @@ AREA_CORNER_MIDDLE_ORDER = 4
 #: (exactff.area.rules.SYMMETRIC_RULES), on every triangle but those whose first vertex
 #: a blocker touches (they keep the collapsed rule, whose collapsed vertex it is).
 AREA_SYMMETRIC_DEGREES = (4, 8)
-#: ... and a small triangle (at most AREA_SMALL_TRIANGLE_SHARE of the emitter's area)
-#: off a corner, at those targets, the symmetric rules of degrees 2 and 4 (3 and 6 points)
-#: instead, and where refined those of degrees 4 and 8 (exactff.area.rules.rule_pair):
-#: 9 points where 22 were, 22 where 136 were. At 1e-6, gunter2's row 22 (pairs behind a
-#: hundred blockers cut into 70,000 to 115,000 triangles) took 9.2 million points and
-#: 96 s, now 3.8 million and 44 s; gunter1 179,396 points, now 145,227; the 106-surface
-#: box 1.50 million, now 1.20 million; no value's error against values 100 to 100,000
-#: times tighter grew (gunter1 0.31 of its estimate at most, the box 0.22). At 3e-2,
-#: gunter1 reached 0.52 and facet at 1e-7 took more points; on every triangle (a share of
-#: 1), a value of the box came out at 22 times its estimate, the two rules agreeing by
-#: chance on a large cell (docs/benchmarks.md).
+#: ... and a small triangle (at most AREA_SMALL_TRIANGLE_SHARE of the emitter's area, its
+#: box's diagonal at most AREA_SMALL_TRIANGLE_REACH times the distance from its box to
+#: every box of the receiver's part and the blockers' pieces) off a corner, at those
+#: targets, the symmetric rules of degrees 2 and 4 (3 and 6 points) instead, and where
+#: refined those of degrees 4 and 8 (exactff.area.rules.rule_pair): 9 points where 22
+#: were, 22 where 136 were. At 1e-6: gunter1 179,396 points, now 163,797; the 106-surface
+#: box 1.50 million, now 1.20 million; gunter2's rows 100, 200, 300 and 50 573,202, now
+#: 489,013; no value's error against values 100 to 100,000 times tighter grew (gunter1
+#: 0.31 of its estimate at most, the box 0.22). The distance: without it, two triangles
+#: of gunter2's pair (285, 20), 0.05 from a gable that meets the emitter along an edge,
+#: had rules agreeing to 8.4e-9 while 4.1e-7 off (a value at 1.6 times its estimate);
+#: at a share of 3e-2, gunter1's worst rose to 0.52; on every triangle, a value of the
+#: box came out at 22 times its estimate (docs/benchmarks.md).
 AREA_SMALL_SYMMETRIC_DEGREES = (2, 4)
 AREA_SMALL_TRIANGLE_SHARE = 1e-2
+AREA_SMALL_TRIANGLE_REACH = 1.0
 #: ... and every pair's triangles start with the lower pair where the target (absolute)
 #: is at least this: at 1e-6 the lower pair converges on most cells, large or not
 #: (gunter1: 266,288 points instead of 450,466, 2.74 -> 2.24 s; the closed Cornell box

@@ -327,7 +327,8 @@ def test_view3d_values_within_their_estimates_of_values_at_1e_11(name):
 
 def test_small_triangles_rules_take_fewer_points_within_the_estimates(monkeypatch):
     # the small triangles' rules (rules.rule_pair: the symmetric pairs of degrees 2 and
-    # 4, then 4 and 8, on triangles of at most AREA_SMALL_TRIANGLE_SHARE of the emitter)
+    # 4, then 4 and 8, on triangles of at most AREA_SMALL_TRIANGLE_SHARE of the emitter,
+    # far from the blockers: _far)
     # against none (share 0: the pair of 4 and 8, then the collapsed 6 and 10): gunter1
     # at 1e-6 takes fewer points, and every value stays within its estimate of the
     # values at 1e-9 (where the collapsed rules alone are used)
@@ -340,7 +341,26 @@ def test_small_triangles_rules_take_fewer_points_within_the_estimates(monkeypatc
         F, E = ef.area_form_factors(scene, tolerance=1e-6, error=True, stats=st)
         assert np.all(np.abs(F - R) <= E + ER), (share, (np.abs(F - R) / (E + ER)).max())
         points.append(st["point_values"])
-    assert points[1] < 0.9 * points[0], points
+    assert points[1] < points[0], points
+
+
+def test_small_triangles_near_a_blocker_keep_the_higher_rules(monkeypatch):
+    # gunter2's roof light 285 to the floor 20, 13 blockers: the gable 288 meets the
+    # light along its edge. Near where that edge's events meet, the hidden part is a cone
+    # (it grows as the distance, at a rate that depends on the direction) on the scale
+    # of the gable's distance, and two triangles of 0.3 % of the emitter, 0.05 from the
+    # gable, had rules of degrees 2 and 4 agreeing to 8.4e-9 while 4.1e-7 off: the value
+    # came out at 1.6 times its estimate. Small triangles take those rules only as far
+    # from every blocker's box (and the receiver's) as they are large
+    # (AREA_SMALL_TRIANGLE_REACH): within its estimate of the value at 1e-10
+    sub, _ = _pair_scene(_gunter2(), 285, 20)
+    R, ER = ef.area_form_factors(sub, rows=[0], tolerance=1e-10, error=True)
+    F, E = ef.area_form_factors(sub, rows=[0], tolerance=1e-6, error=True)
+    assert abs(F[0, 1] - R[0, 1]) <= E[0, 1] + ER[0, 1], (F[0, 1], R[0, 1], E[0, 1])
+    # with any distance enough (but none), beyond it
+    monkeypatch.setattr(ef._tolerances, "AREA_SMALL_TRIANGLE_REACH", np.inf)
+    F, E = ef.area_form_factors(sub, rows=[0], tolerance=1e-6, error=True)
+    assert abs(F[0, 1] - R[0, 1]) > E[0, 1] + ER[0, 1], (F[0, 1], R[0, 1], E[0, 1])
 
 
 @pytest.mark.slow

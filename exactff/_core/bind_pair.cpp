@@ -198,6 +198,7 @@ py::tuple adaptive_levels(Array<double> T, Array<long long> depth, Array<long lo
     a.lines = static_cast<double>(lines);
     a.sliver_share = num("AREA_SLIVER_SHARE");
     a.small_share = num("AREA_SMALL_TRIANGLE_SHARE");
+    a.small_reach = num("AREA_SMALL_TRIANGLE_REACH");
     a.budget_share = num("AREA_IMAGE_BUDGET_SHARE");
     a.back_face_rtol = num("AREA_BACK_FACE_RTOL");
     a.edge_on_rtol = num("AREA_EDGE_ON_RTOL");
@@ -271,6 +272,7 @@ std::shared_ptr<exactff::PairConstants> pair_constants(py::dict tol, py::sequenc
     k->c2 = num("C2");
     k->sliver_share = num("AREA_SLIVER_SHARE");
     k->small_share = num("AREA_SMALL_TRIANGLE_SHARE");
+    k->small_reach = num("AREA_SMALL_TRIANGLE_REACH");
     k->budget_share = num("AREA_IMAGE_BUDGET_SHARE");
     k->back_face_rtol = num("AREA_BACK_FACE_RTOL");
     k->edge_on_rtol = num("AREA_EDGE_ON_RTOL");

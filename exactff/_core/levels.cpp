@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <vector>
 
@@ -185,10 +186,54 @@ bool budget_refined(const Pool& p, double before, double atol, double total_area
     return true;
 }
 
+// the boxes of the receiver's part and of the blockers' pieces, (lo, hi) in turn
+std::vector<double> piece_boxes(const LevelArgs& a) {
+    std::vector<double> boxes;
+    const auto add = [&boxes](const double* v, std::int64_t m) {
+        double lo[3] = {v[0], v[1], v[2]}, hi[3] = {v[0], v[1], v[2]};
+        for (std::int64_t j = 1; j < m; ++j)
+            for (int k = 0; k < 3; ++k) {
+                lo[k] = std::min(lo[k], v[3 * j + k]);
+                hi[k] = std::max(hi[k], v[3 * j + k]);
+            }
+        boxes.insert(boxes.end(), lo, lo + 3);
+        boxes.insert(boxes.end(), hi, hi + 3);
+    };
+    add(a.Qc, a.n_q);
+    const HiddenArgs& h = a.hidden;
+    for (std::int64_t b = 0; b < h.n_blockers; ++b)
+        add(h.blockers + 3 * h.blocker_stride * b, h.counts[b]);
+    return boxes;
+}
+
+// adaptive.py's _far: whether the triangle v's box's diagonal is at most small_reach
+// times the distance from its box to the nearest of the boxes (the same sums in the
+// same order)
+bool far_from(const double* v, const std::vector<double>& boxes, double reach) {
+    double lo[3], hi[3], h2[3];
+    for (int k = 0; k < 3; ++k) {
+        lo[k] = std::min({v[k], v[3 + k], v[6 + k]});
+        hi[k] = std::max({v[k], v[3 + k], v[6 + k]});
+        h2[k] = (hi[k] - lo[k]) * (hi[k] - lo[k]);
+    }
+    double d2 = std::numeric_limits<double>::infinity();
+    for (size_t b = 0; b < boxes.size(); b += 6) {
+        double g[3];
+        for (int k = 0; k < 3; ++k) {
+            const double gap =
+                std::max(std::max(boxes[b + k] - hi[k], lo[k] - boxes[b + 3 + k]), 0.0);
+            g[k] = gap * gap;
+        }
+        d2 = std::min(d2, (g[0] + g[1]) + g[2]);
+    }
+    return (h2[0] + h2[1]) + h2[2] <= (reach * reach) * d2;
+}
+
 }  // namespace
 
 LevelResult adaptive_levels(const LevelArgs& a) {
     LevelResult out;
+    const std::vector<double> boxes = piece_boxes(a);
     std::vector<double> T = a.T;
     std::vector<long long> depth = a.depth, rung = a.rung;
     std::vector<unsigned char> corner = a.corner;
@@ -240,7 +285,8 @@ LevelResult adaptive_levels(const LevelArgs& a) {
                             // a small triangle off a corner: the symmetric pair of degrees 2
                             // and 4 on rung 0, of 4 and 8 on rung 1
                             const bool small = !at_corner && a.symmetric &&
-                                               area_t[k] / a.area_P <= a.small_share;
+                                               area_t[k] / a.area_P <= a.small_share &&
+                                               far_from(&T[9 * k], boxes, a.small_reach);
                             if (small != in_small) continue;
                             const TriangleRule *lo, *hi, *mid = nullptr;
                             if (small) {

@@ -62,9 +62,10 @@ struct LevelArgs {
     double lines;
     // AREA_SLIVER_SHARE, AREA_IMAGE_BUDGET_SHARE, AREA_BACK_FACE_RTOL, AREA_EDGE_ON_RTOL,
     // AREA_IMAGE_PRECISE_SHARE, AREA_BOOLEAN_ULPS, AREA_IMAGE_RTOL, EPS, C1, C2,
-    // OFFSET_ROUNDING_ULPS, AREA_SMALL_TRIANGLE_SHARE, AREA_MAX_DEPTH, AREA_POINTS_PER_CALL
+    // OFFSET_ROUNDING_ULPS, AREA_SMALL_TRIANGLE_SHARE, AREA_SMALL_TRIANGLE_REACH,
+    // AREA_MAX_DEPTH, AREA_POINTS_PER_CALL
     double sliver_share, budget_share, back_face_rtol, edge_on_rtol, precise_share,
-        boolean_ulps, image_rtol, eps, c1, c2, offset_ulps, small_share;
+        boolean_ulps, image_rtol, eps, c1, c2, offset_ulps, small_share, small_reach;
     long long max_depth, points_per_call;
 };
 

@@ -148,11 +148,12 @@ def rule_pair(T, rung, corner, atol, small=False):
     difference can fall below the degree-8 rule's error, and the triangles would rest
     on the check against the closed form alone.
 
-    ``small`` triangles (each at most ``AREA_SMALL_TRIANGLE_SHARE`` of the emitter's area)
-    off a corner take, at such a tolerance, the symmetric rules of degrees 2 and 4 (3 and
-    6 nodes) on rung 0 and those of degrees 4 and 8 on rung 1: on a small cell the
-    lower degrees' difference still bounds the error of the higher, for 9 nodes instead
-    of 22, and 22 instead of 136 where refined."""
+    ``small`` triangles (each at most ``AREA_SMALL_TRIANGLE_SHARE`` of the emitter's area
+    and as far from the blockers as ``AREA_SMALL_TRIANGLE_REACH`` asks) off a corner take,
+    at such a tolerance, the symmetric rules of degrees 2 and 4 (3 and 6 nodes) on rung 0
+    and those of degrees 4 and 8 on rung 1: where the hidden part is smooth on the
+    triangle's scale the lower degrees' difference still bounds the error of the higher,
+    for 9 nodes instead of 22, and 22 instead of 136 where refined."""
     if not corner and atol >= tol.AREA_LOW_RULES_TOLERANCE and (rung == 0 or small):
         degrees = (tol.AREA_SMALL_SYMMETRIC_DEGREES if small and rung == 0
                    else tol.AREA_SYMMETRIC_DEGREES)
