@@ -10,8 +10,6 @@ levels run compiled (:mod:`exactff.area._pair`, ``_core/levels.cpp``, the GIL re
 is :func:`_hidden_integral` to the whole pair in one call (:mod:`.compiled_pair`).
 """
 
-import itertools
-
 import numpy as np
 import shapely
 
@@ -29,8 +27,8 @@ from .points import point_values, unoccluded_bound
 from .joint_umbra import pair_umbras, split_pair
 from .rule_check import checked_rules, missed_unoccluded
 from .umbra import umbra_cells
-from .rules import (CORNER_MIDDLE_RULE, budget_refined, quarter, refined, rule_pair,
-                    triangle_areas, triangle_rule)
+from .rules import (CORNER_MIDDLE_RULE, budget_refined, far_triangles, quarter, refined,
+                    rule_pair, triangle_areas, triangle_rule)
 
 __all__ = ["COMPILED_LEVELS", "COMPILED_PAIR", "occluded_pair"]
 
@@ -104,10 +102,8 @@ def occluded_pair(S, Pc, Qc, nP, atol, area_P, whole, shortcuts=True, st=None,
     symmetric rules of 6 and 16 points, or the collapsed ones of 3 and 5 points a side
     where a blocker touches its first vertex;
     :func:`~exactff.area.rules.rule_pair`) and takes the higher
-    pair where the budget refines it. At such a coarse target a small triangle (at most
-    ``AREA_SMALL_TRIANGLE_SHARE`` of P, and no larger than its distance to the blockers
-    and Qc, :func:`_far`) off a corner starts on the symmetric pair of degrees 2 and 4
-    (3 and 6 points) and takes that of 4 and 8 where refined.
+    pair where the budget refines it (small triangles far from the blockers a pair lower,
+    degrees 2 and 4: :func:`~exactff.area.rules.rule_pair`).
     Returns the value, its error estimate (the contour sum's, the rules' differences,
     the point values' bounds) and the number of point values used.
 
@@ -393,26 +389,6 @@ def _adaptive_levels(T, depth, rung, corner, nP, Qc, S, st, setup, atol, area_P,
     return np.zeros((0, 3, 3)), empty, empty, np.zeros(0, dtype=bool), slivers, points
 
 
-def _far(T, setup, Qc):
-    """Per triangle of T (t, 3, 3): whether its box's diagonal is at most
-    ``AREA_SMALL_TRIANGLE_REACH`` times the distance from its box to the nearest box of
-    the receiver's part Qc and the blockers' pieces of the hidden set-up (none where
-    there is no set-up): the hidden part is smooth on the triangle's scale there. The
-    sums and squares in the order of ``_core/levels.cpp``'s, the same decisions."""
-    if setup is None:
-        return np.zeros(len(T), dtype=bool)
-    lo, hi = T.min(axis=1), T.max(axis=1)                              # (t, 3)
-    pieces = [Qc, *(V[:c] for V, c in zip(setup.V, setup.counts))]
-    blo = np.array([K.min(axis=0) for K in pieces])                    # (b, 3)
-    bhi = np.array([K.max(axis=0) for K in pieces])
-    gap = np.maximum(np.maximum(blo[None] - hi[:, None], lo[:, None] - bhi[None]), 0.0)
-    gap = gap * gap
-    d2 = ((gap[..., 0] + gap[..., 1]) + gap[..., 2]).min(axis=1)
-    h = (hi - lo) * (hi - lo)
-    reach = tol.AREA_SMALL_TRIANGLE_REACH
-    return (h[:, 0] + h[:, 1]) + h[:, 2] <= (reach * reach) * d2
-
-
 def _evaluated(T, rung, corner, nP, Qc, S, st, setup, atol, area_P, shortcuts, bound_atol):
     """The triangles T's rules (their rung's pair, and at a corner on the lower pair the
     third rule), all nodes in one call: per triangle, per unit area of P, the high rule's
@@ -421,10 +397,14 @@ def _evaluated(T, rung, corner, nP, Qc, S, st, setup, atol, area_P, shortcuts, b
     unoccluded point values U and their estimates. Returns them by name and the points
     used."""
     X, weights, groups = [], [], []
-    # the small triangles off a corner (rules.rule_pair)
-    small = (~corner & (triangle_areas(T) / area_P <= tol.AREA_SMALL_TRIANGLE_SHARE)
-             & (atol >= tol.AREA_LOW_RULES_TOLERANCE) & _far(T, setup, Qc))
-    for r, at_corner, in_small in itertools.product((0, 1), (False, True), (False, True)):
+    # the small triangles off a corner, far from Qc and the blockers (rules.rule_pair)
+    small = ~corner & (triangle_areas(T) / area_P <= tol.AREA_SMALL_TRIANGLE_SHARE)
+    if setup is None or atol < tol.AREA_LOW_RULES_TOLERANCE:
+        small[:] = False
+    else:
+        small &= far_triangles(T, [Qc, *(V[:c] for V, c in zip(setup.V, setup.counts))])
+    for r, at_corner, in_small in ((r, c, m) for r in (0, 1) for c in (False, True)
+                                   for m in (False, True)):
         sel = np.flatnonzero((rung == r) & (corner == at_corner) & (small == in_small))
         if len(sel):
             (Xl, Wl), (Xh, Wh) = rule_pair(T[sel], r, at_corner, atol, in_small)

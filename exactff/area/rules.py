@@ -14,7 +14,7 @@ from ..geometry import cross, receiver_frame
 
 __all__ = ["triangle_rule", "symmetric_triangle_rule", "SYMMETRIC_RULES", "GAUSS_RULE",
            "GAUSS_LOW_RULE", "CORNER_MIDDLE_RULE", "RULE_PAIRS", "rule_pair", "quarter",
-           "refined", "budget_refined", "triangle_areas", "triangulate"]
+           "refined", "budget_refined", "far_triangles", "triangle_areas", "triangulate"]
 
 #: Gauss-Legendre nodes and weights on [-1, 1]: the far-field rule's pair (12 and 8
 #: points a side) and the third rule at a corner on the adaptive rules' lower pair.
@@ -159,6 +159,33 @@ def rule_pair(T, rung, corner, atol, small=False):
                    else tol.AREA_SYMMETRIC_DEGREES)
         return tuple(symmetric_triangle_rule(T, d) for d in degrees)
     return tuple(triangle_rule(T, rule) for rule in RULE_PAIRS[rung])
+
+
+def far_triangles(T, pieces):
+    """Per triangle of T (t, 3, 3): whether its box's diagonal is at most
+    ``AREA_SMALL_TRIANGLE_REACH`` times the distance from its box to the nearest box of
+    the ``pieces`` (arrays (k, 3): the receiver's part and the blockers' pieces), where
+    the hidden part is smooth on the triangle's scale (:func:`rule_pair`'s small
+    triangles). The sums and squares in the order of ``_core/levels.cpp``'s
+    ``far_from``: the same decisions.
+
+    Examples
+    --------
+    >>> T = np.array([[[0, 0, 0], [1, 0, 0], [0, 1, 0]]], float)
+    >>> far_triangles(T, [T[0] + [0, 0, 2]]).tolist()      # 2 away, the diagonal sqrt(2)
+    [True]
+    >>> far_triangles(T, [T[0] + [0, 0, 1]]).tolist()
+    [False]
+    """
+    lo, hi = T.min(axis=1), T.max(axis=1)                              # (t, 3)
+    blo = np.array([K.min(axis=0) for K in pieces])                    # (b, 3)
+    bhi = np.array([K.max(axis=0) for K in pieces])
+    gap = np.maximum(np.maximum(blo[None] - hi[:, None], lo[:, None] - bhi[None]), 0.0)
+    gap = gap * gap
+    d2 = ((gap[..., 0] + gap[..., 1]) + gap[..., 2]).min(axis=1)
+    h = (hi - lo) * (hi - lo)
+    reach = tol.AREA_SMALL_TRIANGLE_REACH
+    return (h[:, 0] + h[:, 1]) + h[:, 2] <= (reach * reach) * d2
 
 
 def quarter(T):
