@@ -507,12 +507,19 @@ def test_compiled_levels_against_numpy(monkeypatch, name, rows, tolerance, small
     # the same slivers and points, and the rules' sums equal to rounding (the nodes' sums
     # are taken in another order), far within the nodes' estimates. At 1e-6 the small
     # triangles take the symmetric pairs of degrees 2 and 4, then 4 and 8 (rules.rule_pair;
-    # ``small`` 1: every triangle off a corner, so that both rungs of both kinds are met)
+    # ``small`` 1: the share of every triangle, so that the distance alone decides, and
+    # small triangles are met on both rungs: counted below)
     if small is not None:
         monkeypatch.setattr(tol, "AREA_SMALL_TRIANGLE_SHARE", small)
     calls = _level_calls(monkeypatch, ef.read_vs3(os.path.join(DATA, name)), rows, tolerance)
     assert len(calls) > 10
-    reference = adaptive._adaptive_levels
+    reference, pair, met = adaptive._adaptive_levels, adaptive.rule_pair, {}
+
+    def counted(T, rung, corner, atol, small=False):
+        met[rung, small] = met.get((rung, small), 0) + len(T)
+        return pair(T, rung, corner, atol, small)
+
+    monkeypatch.setattr(adaptive, "rule_pair", counted)
     for args, acc in calls:
         got, ref = ({k: list(v) for k, v in acc.items()} for _ in range(2))
         monkeypatch.setattr(adaptive, "COMPILED_LEVELS", True)
@@ -532,6 +539,8 @@ def test_compiled_levels_against_numpy(monkeypatch, name, rows, tolerance, small
             assert np.all(np.abs(got[k] - ref[k]) <= 1e-12 * np.abs(ref[k]) + 1e-3 * scale), k
         for k in ("rnd", "rndU"):
             assert np.allclose(got[k], ref[k], rtol=1e-12, atol=0), k
+    if small:
+        assert met.get((0, True)) and met.get((1, True)) and met.get((0, False)), met
 
 
 def test_compiled_levels_matrix_against_numpy(monkeypatch):

@@ -328,7 +328,7 @@ def test_view3d_values_within_their_estimates_of_values_at_1e_11(name):
 def test_small_triangles_rules_take_fewer_points_within_the_estimates(monkeypatch):
     # the small triangles' rules (rules.rule_pair: the symmetric pairs of degrees 2 and
     # 4, then 4 and 8, on triangles of at most AREA_SMALL_TRIANGLE_SHARE of the emitter,
-    # far from the blockers: _far)
+    # far from the blockers: rules.far_triangles)
     # against none (share 0: the pair of 4 and 8, then the collapsed 6 and 10): gunter1
     # at 1e-6 takes fewer points, and every value stays within its estimate of the
     # values at 1e-9 (where the collapsed rules alone are used)
@@ -357,7 +357,8 @@ def test_small_triangles_near_a_blocker_keep_the_higher_rules(monkeypatch):
     R, ER = ef.area_form_factors(sub, rows=[0], tolerance=1e-10, error=True)
     F, E = ef.area_form_factors(sub, rows=[0], tolerance=1e-6, error=True)
     assert abs(F[0, 1] - R[0, 1]) <= E[0, 1] + ER[0, 1], (F[0, 1], R[0, 1], E[0, 1])
-    # with any distance enough (but none), beyond it
+    # with the reach infinite (every small triangle whose box is off every piece's box),
+    # beyond it: what the distance guards
     monkeypatch.setattr(ef._tolerances, "AREA_SMALL_TRIANGLE_REACH", np.inf)
     F, E = ef.area_form_factors(sub, rows=[0], tolerance=1e-6, error=True)
     assert abs(F[0, 1] - R[0, 1]) > E[0, 1] + ER[0, 1], (F[0, 1], R[0, 1], E[0, 1])

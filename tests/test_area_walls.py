@@ -422,13 +422,13 @@ def _segments_all_meet(P, Q, blockers, count=2000):
     return bool(met.all())
 
 
-def test_gunter2_roof_strip_behind_a_ceiling_of_51_pieces_and_three_walls(monkeypatch):
+def test_gunter2_roof_strip_behind_walls_of_four_planes(monkeypatch):
     # gunter2's end wall 22 (x = -322, z in [0, 5]) and the roof strip 165 (z in [7,
-    # 7.7]) across 127 blockers: every segment crosses the ceiling's plane z = 5 (51
-    # pieces), and what the ceiling leaves open, the walls y = 207.3 and y = 222.7
-    # close, four planes in all (AREA_WALL_PLANES). The integration took 1.3 million
-    # points to find 0 (estimate 2.3e-10); the proof is exact, and random segments
-    # between the two all meet a blocker (a construction by other means)
+    # 7.7]) across 127 blockers: every segment crosses the annex's ceiling plane z = 5
+    # (51 pieces), and what the ceiling leaves open, walls of other planes close, four
+    # planes in all (AREA_WALL_PLANES). The integration took about a million points to
+    # find 0 (estimate 2.3e-10); the proof is exact, and random segments between the
+    # two all meet a blocker (a construction by other means)
     if not os.path.exists(GUNTER2):
         pytest.skip(f"{GUNTER2} not here")
     Pc, Qc, blockers, scale = _pair_and_blockers(ef.read_vs3(GUNTER2), 22, 165)

@@ -206,7 +206,7 @@ std::vector<double> piece_boxes(const LevelArgs& a) {
     return boxes;
 }
 
-// adaptive.py's _far: whether the triangle v's box's diagonal is at most small_reach
+// rules.py's far_triangles: whether the triangle v's box's diagonal is at most small_reach
 // times the distance from its box to the nearest of the boxes (the same sums in the
 // same order)
 bool far_from(const double* v, const std::vector<double>& boxes, double reach) {

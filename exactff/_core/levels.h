@@ -40,8 +40,9 @@ struct TriangleRule {
 // 1), 4 (the third rule at a corner on rung 0), and symmetric degree 2 and 4; symmetric:
 // rung 0 off a corner takes the symmetric pair of degrees 4 and 8 (atol >=
 // AREA_LOW_RULES_TOLERANCE), and a small triangle off a corner (at most small_share of
-// P's area) the pair of degrees 2 and 4 on rung 0 and of 4 and 8 on rung 1 (rules.py's
-// rule_pair). Qc (q, 3) the receiver's part;
+// P's area, its box's diagonal at most small_reach times its box's distance to the
+// boxes of Qc and the blockers' pieces) the pair of degrees 2 and 4 on rung 0 and of 4
+// and 8 on rung 1 (rules.py's rule_pair, far_triangles). Qc (q, 3) the receiver's part;
 // the hidden set-up (hidden.py's HiddenSetup) in hidden (its X and n unset, its
 // back_face, edge_on and precise_atol set per chunk from the factors here), lo, hi (3,)
 // its box, and lines, the clipping lines' count of the estimate; the tolerances by name.

@@ -149,7 +149,8 @@ def rule_pair(T, rung, corner, atol, small=False):
     on the check against the closed form alone.
 
     ``small`` triangles (each at most ``AREA_SMALL_TRIANGLE_SHARE`` of the emitter's area
-    and as far from the blockers as ``AREA_SMALL_TRIANGLE_REACH`` asks) off a corner take,
+    and as far from the receiver's part and the blockers as ``AREA_SMALL_TRIANGLE_REACH``
+    asks: :func:`far_triangles`) off a corner take,
     at such a tolerance, the symmetric rules of degrees 2 and 4 (3 and 6 nodes) on rung 0
     and those of degrees 4 and 8 on rung 1: where the hidden part is smooth on the
     triangle's scale the lower degrees' difference still bounds the error of the higher,
@@ -178,11 +179,12 @@ def far_triangles(T, pieces):
     [False]
     """
     lo, hi = T.min(axis=1), T.max(axis=1)                              # (t, 3)
-    blo = np.array([K.min(axis=0) for K in pieces])                    # (b, 3)
-    bhi = np.array([K.max(axis=0) for K in pieces])
-    gap = np.maximum(np.maximum(blo[None] - hi[:, None], lo[:, None] - bhi[None]), 0.0)
-    gap = gap * gap
-    d2 = ((gap[..., 0] + gap[..., 1]) + gap[..., 2]).min(axis=1)
+    d2 = np.full(len(T), np.inf)
+    # piece by piece (memory in the triangles alone: a pair may have 100,000 of them)
+    for K in pieces:
+        gap = np.maximum(np.maximum(K.min(axis=0) - hi, lo - K.max(axis=0)), 0.0)
+        gap = gap * gap
+        d2 = np.minimum(d2, (gap[:, 0] + gap[:, 1]) + gap[:, 2])
     h = (hi - lo) * (hi - lo)
     reach = tol.AREA_SMALL_TRIANGLE_REACH
     return (h[:, 0] + h[:, 1]) + h[:, 2] <= (reach * reach) * d2
