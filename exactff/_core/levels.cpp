@@ -233,7 +233,10 @@ bool far_from(const double* v, const std::vector<double>& boxes, double reach) {
 
 LevelResult adaptive_levels(const LevelArgs& a) {
     LevelResult out;
-    const std::vector<double> boxes = piece_boxes(a);
+    // the pieces' boxes where the small triangles' rules may be taken (rules.py's
+    // rule_pair: at the symmetric pairs' tolerances only)
+    const std::vector<double> boxes = a.symmetric ? piece_boxes(a) : std::vector<double>();
+    std::vector<unsigned char> small;   // per triangle, for the rules below
     std::vector<double> T = a.T;
     std::vector<long long> depth = a.depth, rung = a.rung;
     std::vector<unsigned char> corner = a.corner;
@@ -277,19 +280,22 @@ LevelResult adaptive_levels(const LevelArgs& a) {
             nl.assign(t, 0);
             nh.assign(t, 0);
             nm.assign(t, 0);
+            // a small triangle off a corner: the symmetric pair of degrees 2 and 4 on
+            // rung 0, of 4 and 8 on rung 1
+            small.assign(t, 0);
+            for (size_t k = 0; k < t; ++k)
+                small[k] = !corner[k] && a.symmetric &&
+                           area_t[k] / a.area_P <= a.small_share &&
+                           far_from(&T[9 * k], boxes, a.small_reach);
             for (long long r : {0LL, 1LL})
                 for (unsigned char at_corner : {0, 1})
                     for (bool in_small : {false, true})
                         for (size_t k = 0; k < t; ++k) {
-                            if (rung[k] != r || (corner[k] != 0) != (at_corner != 0)) continue;
-                            // a small triangle off a corner: the symmetric pair of degrees 2
-                            // and 4 on rung 0, of 4 and 8 on rung 1
-                            const bool small = !at_corner && a.symmetric &&
-                                               area_t[k] / a.area_P <= a.small_share &&
-                                               far_from(&T[9 * k], boxes, a.small_reach);
-                            if (small != in_small) continue;
+                            if (rung[k] != r || (corner[k] != 0) != (at_corner != 0) ||
+                                (small[k] != 0) != in_small)
+                                continue;
                             const TriangleRule *lo, *hi, *mid = nullptr;
-                            if (small) {
+                            if (small[k]) {
                                 lo = a.rules[r == 0 ? 7 : 0];
                                 hi = a.rules[r == 0 ? 8 : 1];
                             } else if (r == 0 && !at_corner && a.symmetric) {

@@ -399,10 +399,10 @@ def _evaluated(T, rung, corner, nP, Qc, S, st, setup, atol, area_P, shortcuts, b
     X, weights, groups = [], [], []
     # the small triangles off a corner, far from Qc and the blockers (rules.rule_pair)
     small = ~corner & (triangle_areas(T) / area_P <= tol.AREA_SMALL_TRIANGLE_SHARE)
-    if setup is None or atol < tol.AREA_LOW_RULES_TOLERANCE:
-        small[:] = False
-    else:
-        small &= far_triangles(T, [Qc, *(V[:c] for V, c in zip(setup.V, setup.counts))])
+    small &= setup is not None and atol >= tol.AREA_LOW_RULES_TOLERANCE
+    if small.any():
+        pieces = [Qc, *(V[:c] for V, c in zip(setup.V, setup.counts))]
+        small[small] = far_triangles(T[small], pieces)
     for r, at_corner, in_small in ((r, c, m) for r in (0, 1) for c in (False, True)
                                    for m in (False, True)):
         sel = np.flatnonzero((rung == r) & (corner == at_corner) & (small == in_small))
