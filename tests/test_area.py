@@ -371,6 +371,35 @@ def test_triangle_rules_integrate_their_degree_exactly(rule, degree, seed):
             assert abs(got - float(want)) / float(scale) <= 1e-13, k
 
 
+@given(seed=st.integers(0, 2**32 - 1))
+def test_symmetric_null_rules_give_zero_to_degree_5(seed):
+    # the null rules on the nodes of the symmetric rules of degree 4 and 8 (built from
+    # the S3-invariant polynomials alone) on L^k, L a random linear function on a random
+    # triangle (not symmetric): 0 up to degree 5, against the scale of L^k, and at degree
+    # 6 not 0 (what their spread sees: at least 0.002 of the scale where L is 0 at the
+    # centroid, over 20,000 random triangles and L); each as long as the degree-8 rule,
+    # orthogonal
+    from exactff.area.rules import (SYMMETRIC_NULL_RULES, SYMMETRIC_RULES,
+                                    symmetric_null_spread, symmetric_triangle_rule)
+
+    rng = np.random.default_rng(seed)
+    T = rng.normal(size=(3, 3))
+    u, c = rng.normal(size=3), rng.normal()
+    X = np.concatenate([symmetric_triangle_rule(T, d)[0] for d in (4, 8)])
+    A = np.linalg.norm(np.cross(T[1] - T[0], T[2] - T[0])) / 2
+    def spread(L, scale, k):
+        return float(symmetric_null_spread((L ** k)[None], np.array([A]))[0]) / (A * scale ** k)
+
+    ups = [spread(X @ u + c, np.abs(T @ u + c).max(), k) for k in range(6)]
+    assert max(ups) <= 1e-13, ups
+    m = T.mean(axis=0)
+    assert spread((X - m) @ u, np.abs((T - m) @ u).max(), 6) >= 1e-3
+    N = SYMMETRIC_NULL_RULES
+    assert np.allclose(N @ N.T, np.eye(2) * (SYMMETRIC_RULES[8][1] ** 2).sum(), rtol=0,
+                       atol=1e-15)
+    assert np.allclose(N.sum(axis=1), 0, atol=1e-15)
+
+
 def _hidden_cases():
     sq0, sq2 = np.array(_square(0, True), float), np.array(_square(2, False), float)
     for plate, _ in OCCLUDED_REFERENCES:

@@ -364,6 +364,23 @@ def test_small_triangles_near_a_blocker_keep_the_higher_rules(monkeypatch):
     assert abs(F[0, 1] - R[0, 1]) > E[0, 1] + ER[0, 1], (F[0, 1], R[0, 1], E[0, 1])
 
 
+def test_needle_triangle_takes_the_null_rules(monkeypatch):
+    # gunter2's wall 186 to the roof light 8, 14 blockers: a cell 89 long and 0.1 wide,
+    # whose hidden part grows 15-fold along it towards one end. Its one triangle's
+    # symmetric rules of degrees 4 and 8 agreed to 3.2e-8 while the degree-8 rule was
+    # 7.7e-7 off: the value came out at 1.55 times its estimate. Their null rules of
+    # degree 5 (rules.symmetric_null_spread, AREA_NULL_RULE_FACTOR) see it: within the
+    # estimate of the value at 1e-10 (which takes the collapsed rules alone), and beyond
+    # it without them
+    sub, _ = _pair_scene(_gunter2(), 186, 8)
+    R, ER = ef.area_form_factors(sub, rows=[0], tolerance=1e-10, error=True)
+    F, E = ef.area_form_factors(sub, rows=[0], tolerance=1e-6, error=True)
+    assert abs(F[0, 1] - R[0, 1]) <= E[0, 1] + ER[0, 1], (F[0, 1], R[0, 1], E[0, 1])
+    monkeypatch.setattr(ef._tolerances, "AREA_NULL_RULE_FACTOR", 0.0)
+    F, E = ef.area_form_factors(sub, rows=[0], tolerance=1e-6, error=True)
+    assert abs(F[0, 1] - R[0, 1]) > E[0, 1] + ER[0, 1], (F[0, 1], R[0, 1], E[0, 1])
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("name", _SMALL + ["gunter1.vs3"])
 def test_view3d_values_at_1e_9_within_their_estimates_of_values_at_1e_11(name):
@@ -508,7 +525,8 @@ def test_gunter2_rows_that_took_minutes_are_complete_and_sum_to_one(row):
     _row_is_complete(F[0], E[0], 1e-6)
 
 
-def test_gunter2_ceiling_strip_to_a_wall_piece_behind_the_wall_is_0_within_its_estimate(integrated):
+def test_gunter2_ceiling_strip_to_a_wall_piece_behind_the_wall_is_0_within_its_estimate(
+        integrated, monkeypatch):
     # gunter2's row 42 raised: the ceiling strip 42 (z = 7, x in [-109.5, 0], y in
     # [15.4, 24.6]) to the wall piece 15 (y = 0, x in [-122, -109.5], z in [0, 5]) came
     # out -2.63e-7 against an estimate of 9.98e-8. The wall x = -109.5 (y in [0, 140], z in
@@ -518,11 +536,15 @@ def test_gunter2_ceiling_strip_to_a_wall_piece_behind_the_wall_is_0_within_its_e
     # rules' integrals of U missed the pair's closed form by 1.6e-7 beyond their
     # differences, and the triangles' own closed forms, which should have shown which
     # one, had estimates of 10^3 to 10^5 (an edge pair parallel but for rounding taken
-    # by the skew form), so none was refined
+    # by the skew form), so none was refined. The symmetric rules' null rules
+    # (AREA_NULL_RULE_FACTOR) now refine that triangle first; without them, the check of
+    # the rules' sum against the closed form does
     sub, _ = _pair_scene(_gunter2(), 42, 15)
-    st = {}
-    F, E = ef.area_form_factors(sub, rows=[0], tolerance=1e-6, error=True, stats=st)
-    assert 0.0 <= F[0, 1] <= E[0, 1] <= 1e-6, (F[0, 1], E[0, 1])
+    for factor in (ef._tolerances.AREA_NULL_RULE_FACTOR, 0.0):
+        monkeypatch.setattr(ef._tolerances, "AREA_NULL_RULE_FACTOR", factor)
+        st = {}
+        F, E = ef.area_form_factors(sub, rows=[0], tolerance=1e-6, error=True, stats=st)
+        assert 0.0 <= F[0, 1] <= E[0, 1] <= 1e-6, (F[0, 1], E[0, 1])
     assert st["refined_triangles"] > 0
 
 
@@ -629,8 +651,10 @@ def test_what_the_check_leaves_unexplained_is_in_the_estimate(monkeypatch, integ
     # pair (42, 15) with its triangles' checks blinded (their closed forms' estimates
     # taken as 1) and none refined (as at the last level): the rules' excess on U,
     # 1.6e-7, stays unexplained and is added to the estimate, which then holds the
-    # value's error (the exact value is 0, above)
+    # value's error (the exact value is 0, above). Without the symmetric rules' null
+    # rules, which refine the triangle whose rules were fooled before any check
     from exactff.area import adaptive, rule_check
+    monkeypatch.setattr(ef._tolerances, "AREA_NULL_RULE_FACTOR", 0.0)
     sub, _ = _pair_scene(_gunter2(), 42, 15)
     monkeypatch.setattr(rule_check, "triangle_unoccluded",
                         lambda T, *a: (np.zeros(len(T)), np.ones(len(T))))

@@ -142,6 +142,14 @@ exactff::TriangleRule as_rule(py::handle r) {
     return out;
 }
 
+// the null rules (the last two) weigh the nodes of the symmetric pair (the first two)
+void check_null_rules(const exactff::TriangleRule* rule) {
+    const size_t nodes = rule[0].w.size() + rule[1].w.size();
+    if (rule[0].collapsed || rule[1].collapsed || rule[9].w.size() != nodes ||
+        rule[10].w.size() != nodes)
+        throw std::invalid_argument("adaptive_levels: null rules not on the symmetric pair");
+}
+
 py::tuple adaptive_levels(Array<double> T, Array<long long> depth, Array<long long> rung,
                           Array<bool> corner, Array<double> nP, Array<double> frame,
                           double area_P, double total_area, double atol, double rules_err,
@@ -162,6 +170,7 @@ py::tuple adaptive_levels(Array<double> T, Array<long long> depth, Array<long lo
             throw std::invalid_argument("adaptive_levels: a rung not 0 or 1");
     std::vector<exactff::TriangleRule> rule(exactff::kLevelRules);
     for (int k = 0; k < exactff::kLevelRules; ++k) rule[k] = as_rule(rules[k]);
+    check_null_rules(rule.data());
     exactff::LevelArgs a;
     a.T = exactff::bind::to_vector(T);
     a.depth = exactff::bind::to_vector(depth);
@@ -199,6 +208,7 @@ py::tuple adaptive_levels(Array<double> T, Array<long long> depth, Array<long lo
     a.sliver_share = num("AREA_SLIVER_SHARE");
     a.small_share = num("AREA_SMALL_TRIANGLE_SHARE");
     a.small_reach = num("AREA_SMALL_TRIANGLE_REACH");
+    a.null_factor = num("AREA_NULL_RULE_FACTOR");
     a.budget_share = num("AREA_IMAGE_BUDGET_SHARE");
     a.back_face_rtol = num("AREA_BACK_FACE_RTOL");
     a.edge_on_rtol = num("AREA_EDGE_ON_RTOL");
@@ -232,7 +242,7 @@ py::tuple adaptive_levels(Array<double> T, Array<long long> depth, Array<long lo
 std::shared_ptr<exactff::PairConstants> pair_constants(py::dict tol, py::sequence rules,
                                                         py::sequence fused) {
     if (py::len(rules) != exactff::kLevelRules)
-        throw std::invalid_argument("pair_constants: 9 rules expected (levels.h)");
+        throw std::invalid_argument("pair_constants: 11 rules expected (levels.h)");
     auto k = std::make_shared<exactff::PairConstants>();
     const auto num = [&](const char* name) { return tol[name].cast<double>(); };
     const auto whole = [&](const char* name) { return tol[name].cast<long long>(); };
@@ -273,6 +283,7 @@ std::shared_ptr<exactff::PairConstants> pair_constants(py::dict tol, py::sequenc
     k->sliver_share = num("AREA_SLIVER_SHARE");
     k->small_share = num("AREA_SMALL_TRIANGLE_SHARE");
     k->small_reach = num("AREA_SMALL_TRIANGLE_REACH");
+    k->null_factor = num("AREA_NULL_RULE_FACTOR");
     k->budget_share = num("AREA_IMAGE_BUDGET_SHARE");
     k->back_face_rtol = num("AREA_BACK_FACE_RTOL");
     k->edge_on_rtol = num("AREA_EDGE_ON_RTOL");
@@ -286,6 +297,7 @@ std::shared_ptr<exactff::PairConstants> pair_constants(py::dict tol, py::sequenc
     if (k->samples < 1 || k->points_per_call < 1)
         throw std::invalid_argument("pair_constants: samples or points_per_call < 1");
     for (int r = 0; r < exactff::kLevelRules; ++r) k->rules[r] = as_rule(rules[r]);
+    check_null_rules(k->rules);
     if (py::len(fused) != 3) throw std::invalid_argument("pair_constants: 3 flags in fused");
     k->fused_dot = fused[0].cast<bool>();
     k->fused_matmul = fused[1].cast<bool>();
@@ -398,7 +410,7 @@ PYBIND11_MODULE(_pair, m) {
         m, "PairConstants", "The tolerances and rules occluded_pair reads (occluded_pair.h).");
     m.def("pair_constants", &pair_constants, py::arg("tol"), py::arg("rules"), py::arg("fused"),
           "pair_constants(tol, rules, fused) -> PairConstants: the tolerances by name, the "
-          "levels' nine rules and whether numpy's BLAS fuses the multiply-adds of a dot, a "
+          "levels' eleven rules and whether numpy's BLAS fuses the multiply-adds of a dot, a "
           "matrix and a stacked product (numpy_ops.h), for occluded_pair");
     m.def("occluded_pair", &occluded_pair, py::arg("W"), py::arg("start"), py::arg("solid"),
           py::arg("inner"), py::arg("Pc"), py::arg("Qc"), py::arg("nP"), py::arg("atol"),

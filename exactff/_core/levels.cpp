@@ -245,6 +245,7 @@ LevelResult adaptive_levels(const LevelArgs& a) {
     std::vector<double> X, W, H, EH, U, EU, area_t;
     std::vector<long long> cell;   // each node's triangle (hidden.h's cells)
     std::vector<size_t> first, nl, nh, nm;
+    std::vector<unsigned char> null;   // per triangle: the symmetric pair of degrees 4 and 8
     while (true) {
         // a sliver (between nearly coincident events) is not evaluated: half its area,
         // within as much
@@ -280,6 +281,7 @@ LevelResult adaptive_levels(const LevelArgs& a) {
             nl.assign(t, 0);
             nh.assign(t, 0);
             nm.assign(t, 0);
+            null.assign(t, 0);
             // a small triangle off a corner: the symmetric pair of degrees 2 and 4 on
             // rung 0, of 4 and 8 on rung 1
             small.assign(t, 0);
@@ -298,9 +300,11 @@ LevelResult adaptive_levels(const LevelArgs& a) {
                             if (small[k]) {
                                 lo = a.rules[r == 0 ? 7 : 0];
                                 hi = a.rules[r == 0 ? 8 : 1];
+                                null[k] = r != 0;
                             } else if (r == 0 && !at_corner && a.symmetric) {
                                 lo = a.rules[0];
                                 hi = a.rules[1];
+                                null[k] = 1;
                             } else if (r == 0) {
                                 lo = a.rules[2];
                                 hi = a.rules[3];
@@ -359,12 +363,25 @@ LevelResult adaptive_levels(const LevelArgs& a) {
                     rnd_m += W[q] * EH[q];
                 }
                 if (!md) mid = lo;
+                // the symmetric pair's null rules of degree 5 on its 22 nodes (rules.py's
+                // symmetric_null_spread)
+                double spread = 0;
+                if (null[k]) {
+                    double n1 = 0, n2 = 0;
+                    for (size_t q = f; q < f + l + hgh; ++q) {
+                        n1 += H[q] * a.rules[9]->w[q - f];
+                        n2 += H[q] * a.rules[10]->w[q - f];
+                    }
+                    spread = std::sqrt(n1 * n1 + n2 * n2) * area_t[k];
+                }
                 const double P = a.area_P;
                 hi /= P;
                 lo /= P;
                 mid /= P;
-                // the high rule's error estimated by the low rule's difference, and at a
-                // corner on the lower pair also by the third rule's
+                spread /= P;
+                // the high rule's error estimated by the low rule's difference, at a
+                // corner on the lower pair also by the third rule's, and on the symmetric
+                // pair of degrees 4 and 8 also by its null rules' spread
                 pool.T.insert(pool.T.end(), &T[9 * k], &T[9 * k] + 9);
                 pool.depth.push_back(depth[k]);
                 pool.rung.push_back(rung[k]);
@@ -372,7 +389,8 @@ LevelResult adaptive_levels(const LevelArgs& a) {
                 pool.area.push_back(area_t[k]);
                 pool.hi.push_back(hi);
                 pool.lo.push_back(lo);
-                pool.diff.push_back(std::max(std::abs(hi - lo), std::abs(hi - mid)));
+                pool.diff.push_back(std::max(std::max(std::abs(hi - lo), std::abs(hi - mid)),
+                                             a.null_factor * spread));
                 pool.rnd.push_back((rnd_h + rnd_l + rnd_m) / P);
                 pool.hiU.push_back(hiU / P);
                 pool.loU.push_back(loU / P);

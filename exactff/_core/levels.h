@@ -21,7 +21,7 @@
 namespace exactff {
 
 // The levels' rules, in LevelArgs::rules' order (compiled_pair.py's LEVEL_RULES).
-constexpr int kLevelRules = 9;
+constexpr int kLevelRules = 11;
 
 // A quadrature rule on the triangle: collapsed (Duffy) Gauss-Legendre with n points a side
 // (nodes and weights on [-1, 1]), or fully symmetric (barycentric points (m, 3) and
@@ -42,10 +42,14 @@ struct TriangleRule {
 // AREA_LOW_RULES_TOLERANCE), and a small triangle off a corner (at most small_share of
 // P's area, its box's diagonal at most small_reach times its box's distance to the
 // boxes of Qc and the blockers' pieces) the pair of degrees 2 and 4 on rung 0 and of 4
-// and 8 on rung 1 (rules.py's rule_pair, far_triangles). Qc (q, 3) the receiver's part;
-// the hidden set-up (hidden.py's HiddenSetup) in hidden (its X and n unset, its
-// back_face, edge_on and precise_atol set per chunk from the factors here), lo, hi (3,)
-// its box, and lines, the clipping lines' count of the estimate; the tolerances by name.
+// and 8 on rung 1 (rules.py's rule_pair, far_triangles); the last two rules, weights on
+// the 22 nodes of the symmetric rules of degree 4 and 8 together, the null rules of
+// degree 5 whose spread, times null_factor, the symmetric pair of degree 4 and 8 takes
+// as its difference where larger (rules.py's symmetric_null_spread). Qc (q, 3) the
+// receiver's part; the hidden set-up (hidden.py's HiddenSetup) in hidden (its X and n
+// unset, its back_face, edge_on and precise_atol set per chunk from the factors here),
+// lo, hi (3,) its box, and lines, the clipping lines' count of the estimate; the
+// tolerances by name.
 struct LevelArgs {
     std::vector<double> T;
     std::vector<long long> depth, rung;
@@ -53,7 +57,7 @@ struct LevelArgs {
     const double *nP, *frame;
     double area_P, total_area, atol, rules_err;
     long long start;
-    // sym4, sym8, gl3, gl5, gl6, gl10, gl4, sym2, sym4
+    // sym4, sym8, gl3, gl5, gl6, gl10, gl4, sym2, sym4, and the two null rules
     const TriangleRule* rules[kLevelRules];
     bool symmetric;
     const double* Qc;
@@ -64,9 +68,10 @@ struct LevelArgs {
     // AREA_SLIVER_SHARE, AREA_IMAGE_BUDGET_SHARE, AREA_BACK_FACE_RTOL, AREA_EDGE_ON_RTOL,
     // AREA_IMAGE_PRECISE_SHARE, AREA_BOOLEAN_ULPS, AREA_IMAGE_RTOL, EPS, C1, C2,
     // OFFSET_ROUNDING_ULPS, AREA_SMALL_TRIANGLE_SHARE, AREA_SMALL_TRIANGLE_REACH,
-    // AREA_MAX_DEPTH, AREA_POINTS_PER_CALL
+    // AREA_NULL_RULE_FACTOR, AREA_MAX_DEPTH, AREA_POINTS_PER_CALL
     double sliver_share, budget_share, back_face_rtol, edge_on_rtol, precise_share,
-        boolean_ulps, image_rtol, eps, c1, c2, offset_ulps, small_share, small_reach;
+        boolean_ulps, image_rtol, eps, c1, c2, offset_ulps, small_share, small_reach,
+        null_factor;
     long long max_depth, points_per_call;
 };
 

@@ -442,6 +442,7 @@ PairResult occluded_pair(const PairArgs& a) {
     la.sliver_share = k.sliver_share;
     la.small_share = k.small_share;
     la.small_reach = k.small_reach;
+    la.null_factor = k.null_factor;
     la.budget_share = k.budget_share;
     la.back_face_rtol = k.back_face_rtol;
     la.edge_on_rtol = k.edge_on_rtol;

@@ -33,7 +33,7 @@ struct PairConstants {
     // levels.h's (LevelArgs and its HiddenArgs)
     double vertex_ulps, sliver_ulps, precise_rtol, c1, c2, sliver_share, budget_share,
         back_face_rtol, edge_on_rtol, precise_share, boolean_ulps, image_rtol, offset_ulps,
-        small_share, small_reach;
+        small_share, small_reach, null_factor;
     long long max_pieces, max_depth, points_per_call;
     TriangleRule rules[kLevelRules];
     // whether numpy's BLAS fuses the multiply-adds of a vector's dot product, of a

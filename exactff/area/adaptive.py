@@ -28,7 +28,7 @@ from .joint_umbra import pair_umbras, split_pair
 from .rule_check import checked_rules, missed_unoccluded
 from .umbra import umbra_cells
 from .rules import (CORNER_MIDDLE_RULE, budget_refined, far_triangles, quarter, refined,
-                    rule_pair, triangle_areas, triangle_rule)
+                    rule_pair, symmetric_null_spread, triangle_areas, triangle_rule)
 
 __all__ = ["COMPILED_LEVELS", "COMPILED_PAIR", "occluded_pair"]
 
@@ -89,21 +89,19 @@ def occluded_pair(S, Pc, Qc, nP, atol, area_P, whole, shortcuts=True, st=None,
                   rtol=None, solid=None, inner=None):
     """``(1 / A_P) int_Pc F_occ(x -> S[0]) dA`` with S = [receiver, blockers...], as the
     unoccluded value (the contour integral, exact) less the integral of the hidden part
-    ``F(x -> Qc) - F_occ(x -> S[0])`` (exact point values of the hidden region, built
-    in Qc's plane: :func:`~exactff.area.hidden.hidden_values`). The hidden part is
-    smooth where the polygons touch (the unoccluded part carries the edge
-    singularities), so it is integrated over
-    the cells of Pc between visibility events, each cell's triangles by two collapsed
-    Gauss-Legendre rules (6 and 10 points a side), the triangles whose rules differ most
-    cut in four while the differences' sum exceeds half of ``atol``
-    (:func:`~exactff.area.rules.budget_refined`). Where the events cut Pc into more
-    than ``AREA_MANY_CELLS`` triangles (small ones), or the target is at least
+    ``F(x -> Qc) - F_occ(x -> S[0])`` (exact point values of the hidden region, built in
+    Qc's plane: :func:`~exactff.area.hidden.hidden_values`). The hidden part is smooth
+    where the polygons touch (the unoccluded part carries the edge singularities), so it
+    is integrated over the cells of Pc between visibility events, each cell's triangles
+    by two collapsed Gauss-Legendre rules (6 and 10 points a side), the triangles whose
+    rules differ most cut in four while the differences' sum exceeds half of ``atol``
+    (:func:`~exactff.area.rules.budget_refined`). Where the events cut Pc into more than
+    ``AREA_MANY_CELLS`` triangles (small ones), or the target is at least
     ``AREA_LOW_RULES_TOLERANCE``, each starts with a lower pair (degrees 4 and 8: the
-    symmetric rules of 6 and 16 points, or the collapsed ones of 3 and 5 points a side
-    where a blocker touches its first vertex;
-    :func:`~exactff.area.rules.rule_pair`) and takes the higher
-    pair where the budget refines it (small triangles far from the blockers a pair lower,
-    degrees 2 and 4: :func:`~exactff.area.rules.rule_pair`).
+    symmetric rules of 6 and 16 points, with their null rules of degree 5, or the
+    collapsed ones of 3 and 5 points a side where a blocker touches its first vertex;
+    :func:`~exactff.area.rules.rule_pair`) and takes the higher pair where the budget
+    refines it (small triangles far from the blockers a pair lower, degrees 2 and 4).
     Returns the value, its error estimate (the contour sum's, the rules' differences,
     the point values' bounds) and the number of point values used.
 
@@ -413,7 +411,8 @@ def _evaluated(T, rung, corner, nP, Qc, S, st, setup, atol, area_P, shortcuts, b
                       else (np.zeros((len(sel), 0, 3)), np.zeros((len(sel), 0))))
             X.append(np.concatenate([Xl, Xh, Xm], axis=1).reshape(-1, 3))
             weights.append(np.concatenate([Wl, Wh, Wm], axis=1).reshape(-1) / area_P)
-            groups.append((sel, Wl, Wh, Wm))
+            groups.append((sel, Wl, Wh, Wm, not at_corner and (r == 1) == in_small
+                           and atol >= tol.AREA_LOW_RULES_TOLERANCE))   # degrees 4 and 8
     X = np.concatenate(X)
     H, EH = hidden_values(X, nP, Qc, S[1:], st, atol=tol.AREA_IMAGE_BUDGET_SHARE * atol,
                           setup=setup, shortcuts=shortcuts,
@@ -421,10 +420,9 @@ def _evaluated(T, rung, corner, nP, Qc, S, st, setup, atol, area_P, shortcuts, b
     # the unoccluded point values at the same nodes, for the check of the rules'
     # differences (_hidden_integral)
     U, EU = (v[0] for v in point_values(X, nP, [Qc]))
-    hi, lo, mid, rnd = (np.empty(len(T)) for _ in range(4))
-    hiU, loU, rndU = np.empty(len(T)), np.empty(len(T)), np.empty(len(T))
-    at = 0
-    for sel, Wl, Wh, Wm in groups:
+    hi, lo, mid, rnd, hiU, loU, rndU = (np.empty(len(T)) for _ in range(7))
+    spread, at = np.zeros(len(T)), 0
+    for sel, Wl, Wh, Wm, null in groups:
         nl, nh = Wl.shape[1], Wl.shape[1] + Wh.shape[1]
         n = len(sel) * (nh + Wm.shape[1])
         Hg, EHg = H[at:at + n].reshape(len(sel), -1), EH[at:at + n].reshape(len(sel), -1)
@@ -433,18 +431,20 @@ def _evaluated(T, rung, corner, nP, Qc, S, st, setup, atol, area_P, shortcuts, b
         hi[sel], lo[sel] = (Wh * Hg[:, nl:nh]).sum(axis=1), (Wl * Hg[:, :nl]).sum(axis=1)
         # the third rule's value, where there is one (else the low rule's)
         mid[sel] = (Wm * Hg[:, nh:]).sum(axis=1) if Wm.shape[1] else lo[sel]
+        spread[sel] = symmetric_null_spread(Hg[:, :nh], triangle_areas(T[sel])) if null else 0
         hiU[sel], loU[sel] = (Wh * Ug[:, nl:nh]).sum(axis=1), (Wl * Ug[:, :nl]).sum(axis=1)
         # the rules' nodes' estimates: they bound what the point values' errors can
         # hide of the rules' differences
         rnd[sel] = ((Wh * EHg[:, nl:nh]).sum(axis=1) + (Wl * EHg[:, :nl]).sum(axis=1)
                     + (Wm * EHg[:, nh:]).sum(axis=1))
         rndU[sel] = (Wh * EUg[:, nl:nh]).sum(axis=1) + (Wl * EUg[:, :nl]).sum(axis=1)
-    hi, lo, mid, rnd, hiU, loU, rndU = (v / area_P for v in (hi, lo, mid, rnd, hiU, loU,
-                                                             rndU))
-    # the high rule's error estimated by the low rule's difference from it, and at a
-    # corner on the lower pair also by the third rule's (between the two): near a
-    # corner the collapsed rules' errors do not fall monotonically with the order, so
-    # two of them can agree by chance far closer than either is to the integral
-    # (AREA_CORNER_MIDDLE_ORDER; test_gunter1_row_17_without_shortcuts_within_its_estimates)
-    diff = np.maximum(np.abs(hi - lo), np.abs(hi - mid))
+    hi, lo, mid, rnd, hiU, loU, rndU, spread = (
+        v / area_P for v in (hi, lo, mid, rnd, hiU, loU, rndU, spread))
+    # the high rule's error: the low rule's difference from it, at a corner on the lower
+    # pair also the third rule's, on the symmetric pair of degrees 4 and 8 also its null
+    # rules' spread: two rules can agree by chance far closer than either is to the
+    # integral (AREA_CORNER_MIDDLE_ORDER, AREA_NULL_RULE_FACTOR;
+    # test_gunter1_row_17_without_shortcuts_within_its_estimates)
+    diff = np.maximum(np.maximum(np.abs(hi - lo), np.abs(hi - mid)),
+                      tol.AREA_NULL_RULE_FACTOR * spread)
     return dict(hi=hi, lo=lo, diff=diff, rnd=rnd, hiU=hiU, loU=loU, rndU=rndU), H.size

@@ -15,24 +15,28 @@ from .. import _tolerances as tol
 from ..halfspace import NORMAL_FLOOR
 from ._pair import occluded_pair as _compiled_occluded_pair
 from ._pair import pair_constants as _compiled_pair_constants
-from .rules import CORNER_MIDDLE_RULE, RULE_PAIRS, SYMMETRIC_RULES
+from .rules import CORNER_MIDDLE_RULE, RULE_PAIRS, SYMMETRIC_NULL_RULES, SYMMETRIC_RULES
 
 __all__ = ["LEVEL_RULES", "LEVEL_TOLERANCES", "PAIR_TOLERANCES", "blas_fuses",
            "hidden_integral_in_one_call", "pair_constants"]
 
 #: The compiled levels' rules, in levels.h's order: the symmetric pair (degrees 4 and 8),
 #: the collapsed pairs of rung 0 and rung 1, the third rule at a corner, and the small
-#: triangles' pair on rung 0 (degrees 2 and 4).
+#: triangles' pair on rung 0 (degrees 2 and 4), and the symmetric pair's two null rules
+#: of degree 5 (weights on the 22 nodes of the degree-4 rule, then the degree-8 rule's).
 LEVEL_RULES = (*(SYMMETRIC_RULES[d] for d in tol.AREA_SYMMETRIC_DEGREES),
                *RULE_PAIRS[0], *RULE_PAIRS[1], CORNER_MIDDLE_RULE,
-               *(SYMMETRIC_RULES[d] for d in tol.AREA_SMALL_SYMMETRIC_DEGREES))
+               *(SYMMETRIC_RULES[d] for d in tol.AREA_SMALL_SYMMETRIC_DEGREES),
+               *((np.concatenate([SYMMETRIC_RULES[d][0] for d in tol.AREA_SYMMETRIC_DEGREES]),
+                  w) for w in SYMMETRIC_NULL_RULES))
 #: The tolerances the compiled levels read, by name (read at each call).
 LEVEL_TOLERANCES = (
     "AREA_IMAGE_ULPS", "AREA_SLIVER_ULPS", "AREA_MAX_PIECES", "AREA_IMAGE_PRECISE_RTOL", "C1",
     "C2", "EPS", "AREA_SLIVER_SHARE", "AREA_IMAGE_BUDGET_SHARE", "AREA_BACK_FACE_RTOL",
     "AREA_EDGE_ON_RTOL", "AREA_IMAGE_PRECISE_SHARE", "AREA_BOOLEAN_ULPS", "AREA_IMAGE_RTOL",
     "OFFSET_ROUNDING_ULPS", "AREA_SMALL_TRIANGLE_SHARE",
-    "AREA_SMALL_TRIANGLE_REACH", "AREA_MAX_DEPTH", "AREA_POINTS_PER_CALL")
+    "AREA_SMALL_TRIANGLE_REACH", "AREA_NULL_RULE_FACTOR", "AREA_MAX_DEPTH",
+    "AREA_POINTS_PER_CALL")
 
 #: The tolerances the compiled pair reads, by name (``_core/occluded_pair.h``).
 PAIR_TOLERANCES = (
