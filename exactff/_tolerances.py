@@ -639,23 +639,24 @@ AREA_SYMMETRIC_DEGREES = (4, 8)
 AREA_SMALL_SYMMETRIC_DEGREES = (2, 4)
 AREA_SMALL_TRIANGLE_SHARE = 1e-2
 AREA_SMALL_TRIANGLE_REACH = 1.0
-#: ... and where the symmetric pair of degrees 4 and 8 is taken, the high rule's error is
-#: estimated by at least this many times the spread of its null rules of degree 5
-#: (exactff.area.rules.symmetric_null_spread), not by the rules' difference alone: a
-#: needle cell of gunter2 (pair (186, 8)) had rules agreeing 24 times closer than the
-#: degree-8 rule's error. Of 101 triangles of random gunter2 pairs whose error was at
-#: least 2 % of their pair's estimate, 28 were beyond their difference, and with the
-#: spread times 1, 2 and 3, 3, 1 and 0. At 1e-6: 3 to 14 % more points (test4 15,968 ->
-#: 16,784, facet 29,424 -> 33,640, gunter1 163,797 -> 170,599, the 106-surface box
-#: 1,204,703 -> 1,237,949), and 800 random gunter2 pairs of at most 40 blockers all
-#: within their estimates of their values at 1e-9 (before: 4 beyond, up to 1.54 times).
-AREA_NULL_RULE_FACTOR = 3.0
 #: ... and every pair's triangles start with the lower pair where the target (absolute)
 #: is at least this: at 1e-6 the lower pair converges on most cells, large or not
 #: (gunter1: 266,288 points instead of 450,466, 2.74 -> 2.24 s; the closed Cornell box
 #: 5 % fewer points; test4 and facet 6 to 10 % faster); at 1e-9 the large cells of
 #: test4 and facet take the higher pair in the end, and starting low cost them 15 %.
 AREA_LOW_RULES_TOLERANCE = 1e-7
+#: Area form factors: where the symmetric pair of degrees 4 and 8 is taken, its high
+#: rule's error is estimated by at least this many times the spread of its null rules
+#: of degree 5 (exactff.area.rules.symmetric_null_spread), not by the rules' difference
+#: alone: a needle cell of gunter2 (pair (186, 8)) had rules agreeing 24 times closer
+#: than the degree-8 rule's error. Of 101 triangles of random gunter2 pairs whose error
+#: was at least 2 % of their pair's estimate, 28 were beyond their difference, and with
+#: the spread times 1, 2 and 3, 3, 1 and 0. At 1e-6: 4 to 14 % more points on View3D's
+#: examples (test4 15,968 -> 16,784, facet 29,424 -> 33,640, gunter1 163,797 ->
+#: 170,599), 2.8 % on the 106-surface box (1,204,703 -> 1,237,949); (186, 8) and (187,
+#: 8), 1.54 and 1.16 times their estimates of their values at 1e-9 before, now within,
+#: as are 298 random gunter2 pairs (benchmarks/bench_area_pairs.py, docs/benchmarks.md).
+AREA_NULL_RULE_FACTOR = 3.0
 #: Area form factors: a triangle whose rules' difference the closed form of the
 #: unoccluded part shows to be too small (``exactff.area.rule_check``) is refined,
 #: where what it shows exceeds this share of the triangle's share of the tolerance.

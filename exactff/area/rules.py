@@ -121,6 +121,8 @@ def _symmetric_null_rules():
     A = np.stack([moments[:, orbit == o].sum(axis=1) for o in range(orbit.max() + 1)], axis=1)
     _, s, Vt = np.linalg.svd(A)
     null = Vt[int((s > 1e-12 * s[0]).sum()):]            # (2, orbits): the solutions
+    if len(null) != 2:
+        raise RuntimeError(f"the symmetric pair's null rules: {len(null)} solutions, not 2")
     # per node, orthonormal in the nodes' weights, each as long as the degree-8 rule's
     N, _ = np.linalg.qr(null[:, orbit].T)
     return N.T * np.linalg.norm(SYMMETRIC_RULES[high][1])
@@ -130,8 +132,8 @@ def _symmetric_null_rules():
 #: exactly to 0, per unit area) on the 22 nodes of the symmetric rules of degree 4 and
 #: 8, in that order: the directions of degree 5 and above that the two rules' difference
 #: alone can miss. Fully symmetric, orthonormal in the weights and scaled to the
-#: degree-8 rule's weights, as Berntsen & Espelid's null rules for DCUTRI (ACM TOMS 18
-#: (1992) 329-342): their root sum of squares does not depend on the basis. Shape (2, 22).
+#: degree-8 rule's weights, as Berntsen & Espelid's null rules (Algorithm 706: DCUTRI, ACM
+#: TOMS 18 (1992) 329-342): their root sum of squares does not depend on the basis. Shape (2, 22).
 SYMMETRIC_NULL_RULES = _symmetric_null_rules()
 
 
