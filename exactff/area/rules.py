@@ -107,9 +107,10 @@ def _symmetric_null_rules():
     pair's rules (``AREA_SYMMETRIC_DEGREES``: degrees 4 and 8, 22 nodes, degree 5)
     together (:data:`SYMMETRIC_NULL_RULES`)."""
     low, high = tol.AREA_SYMMETRIC_DEGREES
-    B = np.concatenate([SYMMETRIC_RULES[low][0], SYMMETRIC_RULES[high][0]])
-    # the nodes' orbits (the same barycentric coordinates in any order)
-    keys = [tuple(sorted(np.round(b, 12))) for b in B]
+    (B_low, w_low), (B_high, w_high) = SYMMETRIC_RULES[low], SYMMETRIC_RULES[high]
+    B = np.concatenate([B_low, B_high])
+    # the nodes' orbits: _orbits gives every node of an orbit its orbit's weight
+    keys = [(0, w) for w in w_low] + [(1, w) for w in w_high]
     orbit = np.array([sorted(set(keys), key=keys.index).index(k) for k in keys])
     # a symmetric rule integrates f as it does f's mean over the triangle's symmetries,
     # so that the moment equations are those of the S3-invariant polynomials of degree
@@ -119,13 +120,13 @@ def _symmetric_null_rules():
     moments = np.stack([e2 ** p * e3 ** q for p in range(low) for q in range(low)
                         if 2 * p + 3 * q <= low + 1])
     A = np.stack([moments[:, orbit == o].sum(axis=1) for o in range(orbit.max() + 1)], axis=1)
-    _, s, Vt = np.linalg.svd(A)
-    null = Vt[int((s > 1e-12 * s[0]).sum()):]            # (2, orbits): the solutions
+    # the solutions: the right singular vectors past the moments' count
+    null = np.linalg.svd(A)[2][len(A):]                    # (2, orbits)
     if len(null) != 2:
         raise RuntimeError(f"the symmetric pair's null rules: {len(null)} solutions, not 2")
     # per node, orthonormal in the nodes' weights, each as long as the degree-8 rule's
     N, _ = np.linalg.qr(null[:, orbit].T)
-    return N.T * np.linalg.norm(SYMMETRIC_RULES[high][1])
+    return N.T * np.linalg.norm(w_high)
 
 
 #: Two null rules (weights summing to 0 that integrate every polynomial of degree 5
