@@ -192,3 +192,16 @@ def small_discrete_methods():
             "tetra": lambda **k: ef.CubicTetrahedron(resolution=30, **k),
             "plane": lambda **k: ef.SinglePlane(resolution=30, cells="uniform_refined", **k),
             "polar": lambda **k: ef.PolarPlane(rings=20, sectors=40, **k)}
+
+
+def pair_parts(scene, i, j):
+    """The area row's own culling for the pair (i, j) of a scene: the emitter i and the
+    receiver j, each clipped to the front of the other (Pc, Qc), the indices of the
+    polygons that may come between them, and the scene's scale."""
+    from exactff.area.culling import front_pairs, padded_polygons, pair_blockers
+
+    polys = [np.asarray(p, float) for p in scene.polygons]
+    pad = padded_polygons(polys)
+    (_, Pc, Qc), = [p for p in front_pairs(polys, i, scene.normals[i], pad) if p[0] == j]
+    scale = float(np.ptp(scene.vertices, axis=0).max())
+    return Pc, Qc, pair_blockers(pad, i, j, Pc, Qc, scale), scale

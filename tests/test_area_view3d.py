@@ -18,6 +18,8 @@ import exactff as ef
 from exactff.area import adaptive
 from exactff.area import row as area_row
 
+from common import pair_parts
+
 DATA = os.path.join(os.path.dirname(__file__), "data", "view3d")
 
 
@@ -460,13 +462,8 @@ def _pair_scene(scene, i, j):
     """The emitter i, the receiver j and the polygons that may come between them (the
     hull test on the whole scene) as a scene of their own: its row 0, column 1 is the
     pair's value (nothing else can hide anything of j from i)."""
-    from exactff.area.culling import front_pairs, padded_polygons, pair_blockers
-
     polys = [np.asarray(p, float) for p in scene.polygons]
-    pad = padded_polygons(polys)
-    (_, Pc, Qc), = [p for p in front_pairs(polys, i, scene.normals[i], pad) if p[0] == j]
-    scale = float(np.ptp(scene.vertices, axis=0).max())
-    B = pair_blockers(pad, i, j, Pc, Qc, scale)
+    B = pair_parts(scene, i, j)[2]
     return ef.Scene.from_polygons([polys[i], polys[j]] + [polys[k] for k in B]), B
 
 

@@ -14,6 +14,8 @@ from exactff import _tolerances as tol
 import exactff.area.row as area_row_module
 from exactff.area.walls import hidden_by_walls
 
+from common import pair_parts
+
 
 def _rect_x(x, y0, y1, z0, z1):
     """The rectangle in the plane x = const, y in [y0, y1], z in [z0, z1]."""
@@ -389,18 +391,6 @@ def test_a_row_s_pairs_sharing_walls_decide_as_each_alone():
 GUNTER2 = os.path.join(os.path.dirname(__file__), "data", "view3d", "gunter2.vs3")
 
 
-def _pair_and_blockers(scene, i, j):
-    """The emitter i and the receiver j, each clipped to the front of the other, and the
-    polygons that may come between them (the row's own culling)."""
-    from exactff.area.culling import front_pairs, padded_polygons, pair_blockers
-
-    polys = [np.asarray(p, float) for p in scene.polygons]
-    pad = padded_polygons(polys)
-    (_, Pc, Qc), = [p for p in front_pairs(polys, i, scene.normals[i], pad) if p[0] == j]
-    scale = float(np.ptp(scene.vertices, axis=0).max())
-    return Pc, Qc, [polys[k] for k in pair_blockers(pad, i, j, Pc, Qc, scale)], scale
-
-
 def _segments_all_meet(P, Q, blockers, count=2000):
     """Whether random segments between points of the convex polygons P and Q (each
     point a random convex combination of the vertices) each cross one of the convex
@@ -429,9 +419,9 @@ def test_gunter2_roof_strip_behind_walls_of_four_planes(monkeypatch):
     # planes in all (AREA_WALL_PLANES). The integration took about a million points to
     # find 0 (estimate 2.3e-10); the proof is exact, and random segments between the
     # two all meet a blocker (a construction by other means)
-    if not os.path.exists(GUNTER2):
-        pytest.skip(f"{GUNTER2} not here")
-    Pc, Qc, blockers, scale = _pair_and_blockers(ef.read_vs3(GUNTER2), 22, 165)
+    scene = ef.read_vs3(GUNTER2)
+    Pc, Qc, B, scale = pair_parts(scene, 22, 165)
+    blockers = [np.asarray(scene.polygons[k], float) for k in B]
     assert len(blockers) == 127
     assert hidden_by_walls(Pc, Qc, blockers, scale)
     assert _segments_all_meet(Pc, Qc, blockers)
