@@ -93,6 +93,12 @@ Usage: python benchmarks/bench_area.py [--cube-k 8]
    estimate, points and counts: equal digests, equal bits); then the serial matrices
    (process time) of gunter1, test4, facet and cube at 1e-6 and 1e-9 and of the box at
    1e-6, their F and E saved to ``DIR/matrices-TAG.npz`` (``--tag``) to compare builds.
+13. ``--constant NAME=V1,V2,...`` alone (a tolerance constant's trade of time against
+   points and estimates): test4, facet, gunter1 and the 106-surface box
+   (``--constant-scenes``) at ``--constant-tolerances`` with the constant at each value,
+   alternating in one run, best of ``--repeat``: process time and its ratio to the first
+   value's, points, the estimates' sum and largest, and the largest difference of a
+   value from the first value's against the two estimates.
 """
 
 import argparse
@@ -234,6 +240,14 @@ def main():
                     help="only the walls between a pair (exactff.area.walls) off and on, in "
                          "one run: View3D's examples, the 106-surface box and these gunter2 "
                          "rows (comma-separated)")
+    ap.add_argument("--constant", default="",
+                    help="only a tolerance constant at several values, NAME=V1,V2,..., "
+                         "alternating in one run on View3D's examples and the 106-surface "
+                         "box (the first value the baseline)")
+    ap.add_argument("--constant-tolerances", default="1e-6,1e-9",
+                    help="--constant: the tolerances, comma-separated")
+    ap.add_argument("--constant-scenes", default="test4,facet,gunter1,box",
+                    help="--constant: the scenes, comma-separated")
     args = ap.parse_args()
     print(machine())
     print()
@@ -251,6 +265,8 @@ def main():
         return umbra_rows(args)
     if args.walls:
         return walls_table(args)
+    if args.constant:
+        return constant_table(args)
     if args.points:
         return points_table(args)
     if args.curved:
@@ -537,6 +553,50 @@ def walls_table(args):
         print(f"| {name} | {t0:.3f} | {t1:.3f} | {t0 / t1:.2f}x | {s1['wall_hidden_pairs']} "
               f"| {s0['occluded_pairs']} / {s1['occluded_pairs']} | {worst:.2f} "
               f"| {e0.max():.1e} / {e1.max():.1e} |")
+
+
+def constant_table(args):
+    """A tolerance constant (``exactff._tolerances``) at several values, alternating in one
+    run (``--constant NAME=V1,V2,...``): per scene and tolerance, the full matrix's process
+    time (best of ``--repeat``) and its ratio to the first value's, the points, the sum
+    and largest of the estimates, and the largest difference of a value from the first
+    value's against the sum of the two estimates."""
+    from exactff import _tolerances as tol
+    name, values = args.constant.split("=")
+    values = [float(v) for v in values.split(",")]
+    kept = getattr(tol, name)
+    files = {"test4": "test4.vs3", "facet": "facet.vs3", "gunter1": "gunter1.vs3"}
+    print(f"`{name}` at {', '.join(f'{v:g}' for v in values)} (the first the baseline; "
+          f"{kept:g} as shipped), best of {args.repeat}:")
+    print()
+    print("| scene | tolerance | value | s | / first | points | sum E | max E "
+          "| max abs(dF) / (E + E first) |")
+    print("|---|---|---|---|---|---|---|---|---|")
+    try:
+        for scene_name in args.constant_scenes.split(","):
+            scene = (ef.scenes.unit_squares_room() if scene_name == "box"
+                     else ef.read_vs3(os.path.join(DATA, files[scene_name])))
+            for tolerance in (float(t) for t in args.constant_tolerances.split(",")):
+                out = {}
+                for _ in range(args.repeat):
+                    for v in values:
+                        setattr(tol, name, v)
+                        st = {}
+                        t0 = time.process_time()
+                        f, e = ef.area_form_factors(scene, tolerance=tolerance, error=True,
+                                                    stats=st)
+                        t = time.process_time() - t0
+                        if v not in out or t < out[v][2]:
+                            out[v] = (f, e, t, st["point_values"])
+                f0, e0, t0, _ = out[values[0]]
+                for v in values:
+                    f, e, t, points = out[v]
+                    gap = float(np.max(np.abs(f - f0) / np.maximum(e + e0, 1e-300)))
+                    print(f"| {scene_name} | {tolerance:g} | {v:g} | {t:.3f} | {t / t0:.3f} "
+                          f"| {points:,} | {e.sum():.4e} | {e.max():.2e} | {gap:.2g} |",
+                          flush=True)
+    finally:
+        setattr(tol, name, kept)
 
 
 def matrix_against_estimates(scene, F, E, rows):

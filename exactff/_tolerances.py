@@ -484,10 +484,12 @@ AREA_IMAGE_PRECISE_RTOL = 1e-13
 #: where what the doubles' rounding moves of the point's value (the estimate's term for
 #: it, which then holds the doubles' figure) is more than this share of the caller's
 #: budget for it (``atol`` of ``hidden_values``, AREA_IMAGE_BUDGET_SHARE of the pair's):
-#: the rules integrate the estimates, so at most this share of that budget a rule. On
-#: gunter1 at 1e-6, 58 % of the points went to long double by AREA_IMAGE_PRECISE_RTOL
-#: alone, each costing both passes.
-AREA_IMAGE_PRECISE_SHARE = 0.01
+#: the rules integrate the estimates, so at most this share of that budget a rule, a
+#: quarter of 1 % of the tolerance. On gunter1 at 1e-6, 58 % of the points went to long
+#: double by AREA_IMAGE_PRECISE_RTOL alone, each costing both passes. 0.25 rather than
+#: 0.01: at 1e-9, gunter1's matrix 21 % and test4's 22 % faster, the same points and
+#: values within 7e-18, the sum of the estimates 0.05 % larger (docs/benchmarks.md).
+AREA_IMAGE_PRECISE_SHARE = 0.25
 
 #: Area form factors: what the bound on the unoccluded point value
 #: (``exactff.area.points.unoccluded_bound``) adds to each cosine's bound for the
