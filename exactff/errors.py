@@ -57,12 +57,8 @@ def check_finite(F, E=None, what="form factor"):
     """
     F_ = np.asarray(F, dtype=float)
     E_ = None if E is None else np.asarray(E, dtype=float)
-    # at once where all is well: a sum is finite only if every term is (one NaN or
-    # infinity makes it NaN or infinite), and is not NaN if no term is; a sum that
-    # overflows only sends it to the test entry by entry below (quietly)
-    with np.errstate(over="ignore", invalid="ignore"):
-        fine = np.isfinite(F_.sum()) and (E_ is None or not np.isnan(E_.sum()))
-    if fine:
+    # at once where all is well (two whole-array tests, no floating-point state to set)
+    if np.isfinite(F_).all() and (E_ is None or not np.isnan(E_).any()):
         return F if E is None else (F, E)
     bad = ~np.isfinite(F_)
     if E is not None:

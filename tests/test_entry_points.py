@@ -102,3 +102,29 @@ def test_last_tier_values_are_checked_against_the_tolerance(monkeypatch):
     assert F[0] > 0 and E[0] > 1e-40 * F[0]
     with pytest.raises(ef.NumericalError, match="misses the tolerance"):
         ef.point_polygon_form_factors([0, 0, 0], [0, 0, 1], [sq], tolerance=1e-40)
+
+
+@pytest.mark.parametrize("point, normal", [
+    ([0.5, 0.5, 0.5], [0, 0, 2]), ([np.nan, 0.5, 0.5], [0, 0, 1]), ([0.5, -np.inf, 0], [0, 0, 1]),
+    ([0, 0, 0], [0, 0, 0]), ([0, 0, 0], [np.inf, 0, 0]), ([0, 0, 0], [0, np.nan, 1]),
+    ([0, 0, 0], [1e-200, 0, 0]), ([0, 0, 0], [0, 1e200, 0]), ([1, 2, 3], [1e-160, 1e-160, 0]),
+    ([1e300, -1e300, 0], [3, 4, 0])])
+def test_one_receiver_is_checked_as_the_broadcast_receivers(point, normal):
+    # as_receiver takes one point and one normal of shape (3,) in Python floats (a
+    # row's call); as_receivers, numpy's whole-array checks, is the reference: the same
+    # arrays, or the same ValueError, for finite, infinite and NaN coordinates and for
+    # normals whose squared length underflows to 0 (refused) or overflows (refused)
+    from exactff.checks import as_receiver, as_receivers
+    point, normal = np.array(point, dtype=float), np.array(normal, dtype=float)
+    try:
+        with np.errstate(over="ignore"):       # (numpy's norm squares 1e200)
+            P, N, shape = as_receivers(point, normal)
+        expected = (P[0].tolist(), N[0].tolist())
+    except ValueError as e:
+        expected = str(e)
+    try:
+        p, n = as_receiver(point, normal)
+        got = (p.tolist(), n.tolist())
+    except ValueError as e:
+        got = str(e)
+    assert got == expected

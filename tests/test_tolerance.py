@@ -390,10 +390,10 @@ def test_point_estimates_cover_the_value_at_every_tier(P, p):
         assert abs(mpmath.mpf(F[0]) - ref) <= E[0], (method, F[0], E[0])
 
 
-def test_check_finite_decides_entry_by_entry_where_its_sums_cannot():
-    # its sums first: finite values whose sum overflows pass; an infinite estimate
-    # passes, NaN among infinities of both signs does not; an infinite value or a NaN
-    # estimate anywhere raises, naming the entry
+def test_check_finite_decides_every_entry():
+    # finite values whose sum would overflow pass; an infinite estimate passes, NaN
+    # among infinities of both signs does not; an infinite value or a NaN estimate
+    # anywhere raises, naming the entry
     big = np.array([1e308, 1e308, 0.5])
     assert check_finite(big) is big
     F, E = np.array([0.25, 0.5, 0.25]), np.array([np.inf, -np.inf, 0.0])

@@ -20,7 +20,6 @@ from .. import _tolerances as tol
 from ..errors import NumericalError, check_finite, misses_tolerance
 from ..geometry import cross, hull_blockers
 from ..kernel import engine_sides_rows, flat_polygons, unoccluded_row, unoccluded_rows
-from ..predicates import engine_sides
 from ..rings import owners, padded, successors
 from ..prepared import prepared
 from ._svbsp import Core
@@ -222,6 +221,15 @@ def _shaft(scene, p, j):
     return None if kept is None else np.sort(np.append(cand[kept], j).astype(np.int64))
 
 
+def _sides(flat, p):
+    """The side of ``p`` for every polygon as the engines take it, and the band
+    (:func:`exactff.predicates.engine_sides`), by the compiled pass that takes a matrix's
+    points at once (:func:`exactff.kernel.engine_sides_rows`, the same sides: tested
+    against it), so that a row and the same row of a matrix start from one pass."""
+    side, band = engine_sides_rows(flat, p[None])
+    return side[0], band[0]
+
+
 def _core_row(scene, p, normal, side, *, two_sided, shortcuts, tolerance, integrator, floor):
     """The compiled core's row from ``p`` (``side``: the polygons' exact sides of it):
     values, bounds (the pieces' rounding and geometry, after the quadruple-precision
@@ -284,7 +292,7 @@ def _settle_in_shafts(scene, p, normal, missed, *, two_sided, shortcuts, toleran
             sizes.append(len(keep))
             sub = scene.subset(keep)
             at = int(np.searchsorted(keep, j))
-            side, _ = engine_sides(flat_polygons(sub), p)
+            side, _ = _sides(flat_polygons(sub), p)
             G, H, topology, moved, _ = _core_row(
                 sub, p, normal, side, two_sided=two_sided, shortcuts=shortcuts,
                 tolerance=tolerance, integrator=integrator, floor=floor)
@@ -491,7 +499,7 @@ def compiled_form_factors(scene, point, normal, *, two_sided=False, stats=None,
     st = stats if stats is not None else {}
     p = np.asarray(point, dtype=float)
     flat = flat_polygons(scene)
-    side, band = engine_sides(flat, p)
+    side, band = _sides(flat, p)
     if shortcuts and is_convex_enclosure(scene) and np.all(side >= 0):
         if integrator == "eq3":
             # no occlusion, Eq. 3: the Python engine's convex-scene path, which
@@ -587,7 +595,7 @@ def _capped_by_unoccluded(scene, p, normal, F, E, two_sided):
     if len(big) == 0:
         return E
     sub = flat_polygons(scene.subset(big))
-    side, band = engine_sides(sub, p)
+    side, band = _sides(sub, p)
     U, eU = unoccluded_rows(sub, p[None], np.asarray(normal, dtype=float)[None], side[None],
                             band[None], two_sided=two_sided, tolerance=tol.DEFAULT_RTOL,
                             strict=False)
@@ -644,7 +652,7 @@ def compiled_solid_angles(scene, point, *, two_sided=True, stats=None, shortcuts
     st = stats if stats is not None else {}
     p = np.asarray(point, dtype=float)
     flat = flat_polygons(scene)
-    side, _ = engine_sides(flat, p)
+    side, _ = _sides(flat, p)
     tree, core = compiled_core(scene)
     node_side = node_sides(tree, p, side)
     F, E, band, crossing, counters = core.row(
