@@ -406,15 +406,21 @@ class Core {
     static bool footprint(const double (*dirs)[3], const double* margin, size_t n,
                           Footprint* out);
     bool fragment_footprint(int64_t f, const double* pp, Footprint* out) const;
-    bool box_footprint(int64_t k, const double* pp, Footprint* out) const;
+    struct BoxCorners {
+        double c[8][3];  // the corners (input doubles)
+        R v[8][3];       // their differences from p
+        R length[8];     // and those differences' lengths
+    };
+    void box_corners(int64_t k, const double* pp, BoxCorners* out) const;
+    bool box_footprint(const BoxCorners& b, const double* pp, Footprint* out) const;
     static bool all_covered(const Footprint& fp, const RowStats& st);
     bool cell_covered(const std::vector<Plane>& sv, const std::vector<ExactPlane>& xp,
                       int face, int i, int j, RowStats& st) const;
     void prove_cells(const Footprint& fp, const std::vector<Plane>& sv,
                      const std::vector<ExactPlane>& xp, RowStats& st) const;
     void build_boxes();
-    bool box_behind(int64_t k, const double* pp, const double* pn) const;
-    bool box_hidden(const std::vector<Plane>& sv, int64_t k, const V3& p,
+    bool box_behind(const BoxCorners& b, const double* pp, const double* pn) const;
+    bool box_hidden(const std::vector<Plane>& sv, int64_t k, const BoxCorners& b, const V3& p,
                     int64_t budget) const;
     // shadow_tree.cpp
     static int side(const Plane& P, const Vertex& x, const Constants& K, R* d_out);

@@ -61,14 +61,11 @@ void Core::build_boxes() {
 // and it hides nothing in front: a part in the tangent plane has no image of area
 // (the box test below cannot say so for a box that touches the plane, as every
 // subtree under a floor point's own floor does)
-bool Core::box_behind(int64_t k, const double* pp, const double* pn) const {
+bool Core::box_behind(const BoxCorners& b, const double* pp, const double* pn) const {
     for (int i = 0; i < 8; ++i) {
-        const double c[3] = {i & 1 ? hi_[3 * k] : lo_[3 * k],
-                             i & 2 ? hi_[3 * k + 1] : lo_[3 * k + 1],
-                             i & 4 ? hi_[3 * k + 2] : lo_[3 * k + 2]};
         R d = 0, mag = 0;
         for (int a = 0; a < 3; ++a) {
-            const R t = (static_cast<R>(c[a]) - pp[a]) * pn[a];
+            const R t = b.v[i][a] * pn[a];
             d += t;
             mag += std::fabs(t);
         }
@@ -76,22 +73,14 @@ bool Core::box_behind(int64_t k, const double* pp, const double* pn) const {
         // sum within 3 of the magnitudes), then the exact sign
         if (d < -8 * K_.eps * mag) continue;
         if (d > 8 * K_.eps * mag) return false;
-        if (sign(dot_exact(pn, pp, c)) > 0) return false;
+        if (sign(dot_exact(pn, pp, b.c[i])) > 0) return false;
     }
     return true;
 }
 
 // is the conic hull (from p) of the box's corners wholly in covered leaves?
-bool Core::box_hidden(const std::vector<Plane>& sv, int64_t k, const V3& p,
-                      int64_t budget) const {
-    Vertex c[8];
-    for (int i = 0; i < 8; ++i) {
-        V3 v{(i & 1 ? hi_[3 * k] : lo_[3 * k]) - p.x,
-             (i & 2 ? hi_[3 * k + 1] : lo_[3 * k + 1]) - p.y,
-             (i & 4 ? hi_[3 * k + 2] : lo_[3 * k + 2]) - p.z};
-        c[i] = {v, norm(v), 4 * K_.eps, -1, -1, -1, -1};
-        set_double(c[i]);
-    }
+bool Core::box_hidden(const std::vector<Plane>& sv, int64_t k, const BoxCorners& b,
+                      const V3& p, int64_t budget) const {
     // p must be outside the box (with a margin): the hull is then a pointed cone
     bool inside = true;
     for (int a = 0; a < 3; ++a) {
@@ -101,6 +90,11 @@ bool Core::box_hidden(const std::vector<Plane>& sv, int64_t k, const V3& p,
         if (pa < lo_[3 * k + a] - margin || pa > hi_[3 * k + a] + margin) inside = false;
     }
     if (inside) return false;
+    Vertex c[8];
+    for (int i = 0; i < 8; ++i) {
+        c[i] = {V3{b.v[i][0], b.v[i][1], b.v[i][2]}, b.length[i], 4 * K_.eps, -1, -1, -1, -1};
+        set_double(c[i]);
+    }
     thread_local std::vector<int> stack;  // (kept per thread: no allocation per box)
     stack.assign(1, 0);
     int64_t visits = 0;
@@ -217,19 +211,31 @@ bool Core::fragment_footprint(int64_t f, const double* pp, Footprint* out) const
     return footprint(reinterpret_cast<const double(*)[3]>(dirs.data()), margin.data(), m, out);
 }
 
+// the corners of subtree k's box and their directions from p (the long double
+// differences, exact where they fit) with their lengths: what the box's three tests
+// (Core::box_footprint, Core::box_behind, Core::box_hidden) each take, formed once
+void Core::box_corners(int64_t k, const double* pp, BoxCorners* out) const {
+    for (int i = 0; i < 8; ++i) {
+        double* c = out->c[i];
+        c[0] = i & 1 ? hi_[3 * k] : lo_[3 * k];
+        c[1] = i & 2 ? hi_[3 * k + 1] : lo_[3 * k + 1];
+        c[2] = i & 4 ? hi_[3 * k + 2] : lo_[3 * k + 2];
+        R* v = out->v[i];
+        for (int a = 0; a < 3; ++a) v[a] = static_cast<R>(c[a]) - pp[a];
+        out->length[i] = std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+    }
+}
+
 // the directions of subtree k's box corners from p (Core::box_hidden's cone)
-bool Core::box_footprint(int64_t k, const double* pp, Footprint* out) const {
+bool Core::box_footprint(const BoxCorners& b, const double* pp, Footprint* out) const {
     double dirs[8][3], margin[8];
     for (int i = 0; i < 8; ++i) {
-        const double c[3] = {i & 1 ? hi_[3 * k] : lo_[3 * k], i & 2 ? hi_[3 * k + 1] : lo_[3 * k + 1],
-                             i & 4 ? hi_[3 * k + 2] : lo_[3 * k + 2]};
-        R big = 0, v[3];
+        R big = 0;
         for (int a = 0; a < 3; ++a) {
-            v[a] = static_cast<R>(c[a]) - pp[a];
-            dirs[i][a] = static_cast<double>(v[a]);
-            big = std::max(big, std::fabs(static_cast<R>(c[a])) + std::fabs(pp[a]));
+            dirs[i][a] = static_cast<double>(b.v[i][a]);
+            big = std::max(big, std::fabs(static_cast<R>(b.c[i][a])) + std::fabs(pp[a]));
         }
-        const R length = std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+        const R length = b.length[i];
         if (!(length > 0)) return false;
         margin[i] = static_cast<double>(4 * K_.eps * big / length) + 2 * DBL_EPSILON;
     }

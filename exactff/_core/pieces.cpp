@@ -267,14 +267,18 @@ void Core::run(const double* pp, const double* pn, const int8_t* node_side,
         }
         if (cull && size_[k] >= 4) {
             ++st.box_tests;
+            // (the footprint only once cells are proven covered: Core::all_covered)
+            BoxCorners corners;
+            box_corners(k, pp, &corners);
             Footprint fp;
-            if (box_footprint(k, pp, &fp) && all_covered(fp, st)) {
+            if (!st.cover.empty() && box_footprint(corners, pp, &fp) && all_covered(fp, st)) {
                 ++st.subtrees_covered;
                 ++st.subtrees_culled;
                 st.fragments_culled += size_[k];
                 continue;
             }
-            if ((!st.sphere && box_behind(k, pp, pn)) || box_hidden(sv, k, p, budget)) {
+            if ((!st.sphere && box_behind(corners, pp, pn)) ||
+                box_hidden(sv, k, corners, p, budget)) {
                 ++st.subtrees_culled;
                 st.fragments_culled += size_[k];
                 continue;
