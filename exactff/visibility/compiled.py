@@ -529,9 +529,16 @@ def compiled_form_factors(scene, point, normal, *, two_sided=False, stats=None,
         # of 2e-313, left a closed room's row summing to 0.607 with slivers of 1e307,
         # where the Python engine's sums to 1; on the real files' rows that ratio is at
         # most 6e-11)
-        missed = np.flatnonzero(misses_tolerance(F, E, tolerance) |
-                                (crossing > tol.OCCLUDED_ATOL) |
-                                misses_tolerance(F, band, 1.0))
+        # (none of the three can hold where the row's largest bound of each is within
+        # its test's least allowance: the tolerance times VALUE_FLOOR, OCCLUDED_ATOL,
+        # VALUE_FLOOR; the usual row, tested in three maxima)
+        missed = np.zeros(0, dtype=np.intp)
+        if (float(E.max(initial=0.0)) > tolerance * tol.VALUE_FLOOR
+                or st["max_crossing_bound"] > tol.OCCLUDED_ATOL
+                or float(band.max(initial=0.0)) > tol.VALUE_FLOOR):
+            missed = np.flatnonzero(misses_tolerance(F, E, tolerance) |
+                                    (crossing > tol.OCCLUDED_ATOL) |
+                                    misses_tolerance(F, band, 1.0))
         if len(missed):
             st.update(counters)
             st["compiled_missed"] = int(len(missed))
@@ -591,6 +598,8 @@ def _capped_by_unoccluded(scene, p, normal, F, E, two_sided):
     ``BOUND_CAP_FROM``: the band's slivers of a vertex whose direction is computed from
     nearly parallel planes can reach 1e7 on a value of 3e-6 (SampleHouse4), a bound that
     says nothing."""
+    if not E.max(initial=0.0) > tol.BOUND_CAP_FROM:
+        return E
     big = np.flatnonzero((E > F) & (E > tol.BOUND_CAP_FROM))
     if len(big) == 0:
         return E
