@@ -488,7 +488,7 @@ AREA_IMAGE_PRECISE_RTOL = 1e-13
 #: quarter of 1 % of the tolerance. On gunter1 at 1e-6, 58 % of the points went to long
 #: double by AREA_IMAGE_PRECISE_RTOL alone, each costing both passes. 0.25 rather than
 #: 0.01: at 1e-9, gunter1's matrix 21 % and test4's 22 % faster, the same points and
-#: values within 7e-18, the sum of the estimates 0.05 % larger (docs/benchmarks.md).
+#: values within 3e-17, the sum of the estimates 0.05 % larger (docs/benchmarks.md).
 AREA_IMAGE_PRECISE_SHARE = 0.25
 
 #: Area form factors: what the bound on the unoccluded point value
