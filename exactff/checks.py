@@ -69,22 +69,24 @@ def as_receiver(point, normal):
     ValueError: point must be finite, got [0, nan, 0]
     """
     p = np.asarray(point, dtype=float)
-    n = np.asarray(normal, dtype=float)
-    if p.shape == n.shape == (3,):
+    if p.shape == (3,):
         # one point and one normal, each of shape (3,) (a row's call: the checks of
-        # as_receivers on three floats each, without numpy's whole-array steps)
+        # as_receivers on three floats each, in its order, without numpy's whole-array
+        # steps)
         x = p.tolist()
         if not (math.isfinite(x[0]) and math.isfinite(x[1]) and math.isfinite(x[2])):
             raise ValueError(f"point must be finite, got {point!r}")
-        m = n.tolist()
-        if not (math.isfinite(m[0]) and math.isfinite(m[1]) and math.isfinite(m[2])):
-            raise ValueError(f"normal must be finite, got {normal!r}")
-        # (the squared length as np.linalg.norm forms it: zero where every square
-        # underflows, infinite where one overflows, as as_normal refuses them)
-        squared = m[0] * m[0] + m[1] * m[1] + m[2] * m[2]
-        if squared == 0 or not math.isfinite(squared):
-            raise ValueError(f"normal must be a non-zero finite vector, got {normal!r}")
-        return p, n
+        n = np.asarray(normal, dtype=float)
+        if n.shape == (3,):
+            m = n.tolist()
+            if not (math.isfinite(m[0]) and math.isfinite(m[1]) and math.isfinite(m[2])):
+                raise ValueError(f"normal must be finite, got {normal!r}")
+            # (the squared length as np.linalg.norm forms it: zero where every square
+            # underflows, infinite where one overflows, as as_normal refuses them)
+            squared = m[0] * m[0] + m[1] * m[1] + m[2] * m[2]
+            if squared == 0 or not math.isfinite(squared):
+                raise ValueError(f"normal must be a non-zero finite vector, got {normal!r}")
+            return p, n
     P, N, shape = as_receivers(point, normal)
     if shape != ():
         raise ValueError(f"point and normal must have shape (3,), got {np.shape(point)} and "

@@ -124,7 +124,23 @@ def test_one_receiver_is_checked_as_the_broadcast_receivers(point, normal):
         expected = str(e)
     try:
         p, n = as_receiver(point, normal)
+        assert p.shape == n.shape == (3,) and p.dtype == n.dtype == np.float64
         got = (p.tolist(), n.tolist())
     except ValueError as e:
         got = str(e)
     assert got == expected
+
+
+@pytest.mark.parametrize("point, normal", [([1, 2], "abc"), ([1, 2, np.nan], "abc"),
+                                           ([1, 2, 3], [0, 0]), ((0.5, 0.5, 0.5), (0, 0, 1))])
+def test_one_receiver_checks_the_point_first(point, normal):
+    # the point is checked before the normal is read, as as_receivers does: a bad point
+    # is named even where the normal is not a vector at all
+    from exactff.checks import as_receiver, as_receivers
+
+    def outcome(f):
+        try:
+            return [a.tolist() for a in f(point, normal)[:2]]
+        except ValueError as e:
+            return str(e)
+    assert outcome(as_receiver) == outcome(lambda a, b: [x[0] for x in as_receivers(a, b)[:2]])

@@ -167,7 +167,7 @@ def test_unoccluded_path_returns_the_bound_when_asked(monkeypatch):
 # ---------------------------------------------------------------------------------------
 # (a') the compiled core: the same criterion decides its fallback, and its band's slivers
 # ---------------------------------------------------------------------------------------
-def _fake_core(monkeypatch, F0, E0, band0):
+def _fake_core(monkeypatch, F0, E0, band0, crossing0=0.0):
     # the compiled core's row with given values for polygon 0 (the C++ is not changed)
     import exactff.visibility.compiled as compiled
 
@@ -177,8 +177,9 @@ def _fake_core(monkeypatch, F0, E0, band0):
         def row(self, **options):
             m = 2
             F, E, band = np.zeros(m), np.zeros(m), np.zeros(m)
-            F[0], E[0], band[0] = F0, E0, band0
-            return F, E, band, np.zeros(m), {}
+            crossing = np.zeros(m)
+            F[0], E[0], band[0], crossing[0] = F0, E0, band0, crossing0
+            return F, E, band, crossing, {}
 
     monkeypatch.setattr(compiled, "compiled_core", lambda scene: (real(scene)[0], Core()))
     return compiled.compiled_form_factors
@@ -211,6 +212,30 @@ def test_compiled_value_within_the_criterion_is_returned(monkeypatch, F0, E0):
     F, E = row(scene, p, n, tolerance=1e-12, stats=st, error=True)
     assert st["path"] == "compiled"
     assert F[0] == F0 and E[0] == E0
+
+
+def _above(x):
+    return float(np.nextafter(x, np.inf))
+
+
+@pytest.mark.parametrize("tolerance", [1e-12, np.float32(5.0179336e-11)])
+def test_compiled_values_missed_at_each_tests_least_allowance(monkeypatch, tolerance):
+    # the row looks for missed values only where a largest bound exceeds its test's least
+    # allowance (the tolerance times VALUE_FLOOR, OCCLUDED_ATOL, VALUE_FLOOR): a bound
+    # one ulp above each is a value missed, one at it is not; a float32 tolerance (whose
+    # product with VALUE_FLOOR rounds above the float64 one) is taken as misses_tolerance
+    # takes it
+    scene, p, n = _occluded_pair()
+    least = float(tolerance) * tol.VALUE_FLOOR
+    for F0, E0, band0, crossing0, missed in (
+            (1e-3, least, 0.0, 0.0, 0), (1e-3, _above(least), 0.0, 0.0, 1),
+            (1e-3, 0.0, 0.0, tol.OCCLUDED_ATOL, 0), (1e-3, 0.0, 0.0, _above(tol.OCCLUDED_ATOL), 1),
+            (1e-3, 0.0, tol.VALUE_FLOOR, 0.0, 0), (1e-3, 0.0, _above(tol.VALUE_FLOOR), 0.0, 1)):
+        row = _fake_core(monkeypatch, F0, E0, band0, crossing0)
+        st = {}
+        row(scene, p, n, tolerance=tolerance, stats=st, error=True)
+        assert st.get("compiled_missed", 0) == missed, (F0, E0, band0, crossing0)
+        monkeypatch.undo()
 
 
 def test_compiled_band_slivers_are_in_the_bound_not_in_the_check(monkeypatch):

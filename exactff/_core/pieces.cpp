@@ -267,7 +267,7 @@ void Core::run(const double* pp, const double* pn, const int8_t* node_side,
         }
         if (cull && size_[k] >= 4) {
             ++st.box_tests;
-            // (the footprint only once cells are proven covered: Core::all_covered)
+            // (the footprint only once the cover grid exists: Core::all_covered)
             BoxCorners corners;
             box_corners(k, pp, &corners);
             Footprint fp;

@@ -224,8 +224,10 @@ def _shaft(scene, p, j):
 def _sides(flat, p):
     """The side of ``p`` for every polygon as the engines take it, and the band
     (:func:`exactff.predicates.engine_sides`), by the compiled pass that takes a matrix's
-    points at once (:func:`exactff.kernel.engine_sides_rows`, the same sides: tested
-    against it), so that a row and the same row of a matrix start from one pass."""
+    points at once (:func:`exactff.kernel.engine_sides_rows`: the same sides up to an ulp
+    of the in-plane test's threshold, where BLAS may sum ``|n| . |p|`` in another order;
+    tested against it), so that a row and the same row of a matrix start from one
+    pass."""
     side, band = engine_sides_rows(flat, p[None])
     return side[0], band[0]
 
@@ -533,7 +535,7 @@ def compiled_form_factors(scene, point, normal, *, two_sided=False, stats=None,
         # its test's least allowance: the tolerance times VALUE_FLOOR, OCCLUDED_ATOL,
         # VALUE_FLOOR; the usual row, tested in three maxima)
         missed = np.zeros(0, dtype=np.intp)
-        if (float(E.max(initial=0.0)) > tolerance * tol.VALUE_FLOOR
+        if (float(E.max(initial=0.0)) > float(tolerance) * tol.VALUE_FLOOR
                 or st["max_crossing_bound"] > tol.OCCLUDED_ATOL
                 or float(band.max(initial=0.0)) > tol.VALUE_FLOOR):
             missed = np.flatnonzero(misses_tolerance(F, E, tolerance) |
