@@ -27,8 +27,8 @@ from .points import point_values, unoccluded_bound
 from .joint_umbra import pair_umbras, split_pair
 from .rule_check import checked_rules, missed_unoccluded
 from .umbra import umbra_cells
-from .rules import (CORNER_MIDDLE_RULE, budget_refined, far_triangles, quarter, refined,
-                    rule_pair, symmetric_null_spread, triangle_areas, triangle_rule)
+from .rules import (CORNER_MIDDLE_RULE, budget_refined, far_triangles, quarter, refined, rule_pair,
+                    symmetric_degrees, symmetric_null_spread, triangle_areas, triangle_rule)
 
 __all__ = ["COMPILED_LEVELS", "COMPILED_PAIR", "occluded_pair"]
 
@@ -411,8 +411,8 @@ def _evaluated(T, rung, corner, nP, Qc, S, st, setup, atol, area_P, shortcuts, b
                       else (np.zeros((len(sel), 0, 3)), np.zeros((len(sel), 0))))
             X.append(np.concatenate([Xl, Xh, Xm], axis=1).reshape(-1, 3))
             weights.append(np.concatenate([Wl, Wh, Wm], axis=1).reshape(-1) / area_P)
-            groups.append((sel, Wl, Wh, Wm, not at_corner and (r == 1) == in_small
-                           and atol >= tol.AREA_LOW_RULES_TOLERANCE))   # degrees 4 and 8
+            groups.append((sel, Wl, Wh, Wm, symmetric_degrees(r, at_corner, atol, in_small)
+                           == tol.AREA_SYMMETRIC_DEGREES))   # the null rules' nodes
     X = np.concatenate(X)
     H, EH = hidden_values(X, nP, Qc, S[1:], st, atol=tol.AREA_IMAGE_BUDGET_SHARE * atol,
                           setup=setup, shortcuts=shortcuts,

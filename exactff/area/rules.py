@@ -15,7 +15,8 @@ from ..geometry import cross, receiver_frame
 __all__ = ["triangle_rule", "symmetric_triangle_rule", "SYMMETRIC_RULES",
            "SYMMETRIC_NULL_RULES", "symmetric_null_spread", "GAUSS_RULE",
            "GAUSS_LOW_RULE", "CORNER_MIDDLE_RULE", "RULE_PAIRS", "rule_pair", "quarter",
-           "refined", "budget_refined", "far_triangles", "triangle_areas", "triangulate"]
+           "refined", "budget_refined", "far_triangles", "symmetric_degrees", "triangle_areas",
+           "triangulate"]
 
 #: Gauss-Legendre nodes and weights on [-1, 1]: the far-field rule's pair (12 and 8
 #: points a side) and the third rule at a corner on the adaptive rules' lower pair.
@@ -227,11 +228,28 @@ def rule_pair(T, rung, corner, atol, small=False):
     and those of degrees 4 and 8 on rung 1: where the hidden part is smooth on the
     triangle's scale the lower degrees' difference still bounds the error of the higher,
     for 9 nodes instead of 22, and 22 instead of 136 where refined."""
-    if not corner and atol >= tol.AREA_LOW_RULES_TOLERANCE and (rung == 0 or small):
-        degrees = (tol.AREA_SMALL_SYMMETRIC_DEGREES if small and rung == 0
-                   else tol.AREA_SYMMETRIC_DEGREES)
+    degrees = symmetric_degrees(rung, corner, atol, small)
+    if degrees is not None:
         return tuple(symmetric_triangle_rule(T, d) for d in degrees)
     return tuple(triangle_rule(T, rule) for rule in RULE_PAIRS[rung])
+
+
+def symmetric_degrees(rung, corner, atol, small=False):
+    """The degrees of the symmetric pair :func:`rule_pair` takes on triangles of rung
+    ``rung`` (``corner``, ``small`` as there) at the target ``atol``, or None where it
+    takes the collapsed rules.
+
+    Examples
+    --------
+    >>> symmetric_degrees(0, False, 1e-6), symmetric_degrees(0, False, 1e-6, small=True)
+    ((4, 8), (2, 4))
+    >>> symmetric_degrees(1, False, 1e-6) is None, symmetric_degrees(0, True, 1e-6) is None
+    (True, True)
+    """
+    if corner or atol < tol.AREA_LOW_RULES_TOLERANCE or not (rung == 0 or small):
+        return None
+    return (tol.AREA_SMALL_SYMMETRIC_DEGREES if small and rung == 0
+            else tol.AREA_SYMMETRIC_DEGREES)
 
 
 def far_triangles(T, pieces):
