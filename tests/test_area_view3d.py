@@ -15,6 +15,7 @@ import numpy as np
 import pytest
 
 import exactff as ef
+from exactff import _tolerances as tol
 from exactff.area import adaptive
 from exactff.area import row as area_row
 
@@ -261,9 +262,11 @@ def test_gunter1_points_given_the_bound_against_the_engine(monkeypatch):
         return H, EH
 
     # the levels by numpy, which call hidden_values (the compiled ones do its
-    # work inside: test_compiled_levels_against_numpy)
+    # work inside: test_compiled_levels_against_numpy); the strip's triangles evaluated
+    # (else they are small enough to be left out: AREA_UNEVALUATED_SHARE)
     monkeypatch.setattr(adaptive, "COMPILED_LEVELS", False)
     monkeypatch.setattr(adaptive, "hidden_values", record)
+    monkeypatch.setattr(tol, "AREA_UNEVALUATED_SHARE", 0.0)
     st = {}
     F, E = ef.area_form_factors(_read("gunter1.vs3"), rows=[17], tolerance=1e-9, error=True,
                                 stats=st)
@@ -374,14 +377,43 @@ def test_needle_triangle_takes_the_null_rules(monkeypatch):
     # 7.7e-7 off: the value came out at 1.55 times its estimate. Their null rules of
     # degree 5 (rules.symmetric_null_spread, AREA_NULL_RULE_FACTOR) see it: within the
     # estimate of the value at 1e-10 (which takes the collapsed rules alone), and beyond
-    # it without them
+    # it without them (with every cell evaluated: the unevaluated cells' share of the
+    # estimate, AREA_UNEVALUATED_SHARE, covers it too)
     sub, _ = _pair_scene(_gunter2(), 186, 8)
     R, ER = ef.area_form_factors(sub, rows=[0], tolerance=1e-10, error=True)
-    F, E = ef.area_form_factors(sub, rows=[0], tolerance=1e-6, error=True)
-    assert abs(F[0, 1] - R[0, 1]) <= E[0, 1] + ER[0, 1], (F[0, 1], R[0, 1], E[0, 1])
-    monkeypatch.setattr(ef._tolerances, "AREA_NULL_RULE_FACTOR", 0.0)
+    for share in (tol.AREA_UNEVALUATED_SHARE, 0.0):
+        monkeypatch.setattr(tol, "AREA_UNEVALUATED_SHARE", share)
+        F, E = ef.area_form_factors(sub, rows=[0], tolerance=1e-6, error=True)
+        assert abs(F[0, 1] - R[0, 1]) <= E[0, 1] + ER[0, 1], (share, F[0, 1], R[0, 1], E[0, 1])
+    monkeypatch.setattr(tol, "AREA_NULL_RULE_FACTOR", 0.0)
     F, E = ef.area_form_factors(sub, rows=[0], tolerance=1e-6, error=True)
     assert abs(F[0, 1] - R[0, 1]) > E[0, 1] + ER[0, 1], (F[0, 1], R[0, 1], E[0, 1])
+
+
+def test_gunter2_wall_cells_left_unevaluated_within_their_share(monkeypatch):
+    # gunter2's wall 7 (190 x 2) to the gable triangle 251 (0.28) some 100 away, 93
+    # blockers between: the events cut the wall into 52,067 triangles, most far smaller
+    # than the tolerance needs (the value 3.4e-7, the unoccluded bound 8.3e-6). The
+    # smallest, left unevaluated within a quarter of the tolerance (rules.unevaluated),
+    # against every cell evaluated (an estimate of 8e-10): within the two estimates, for
+    # half the points (the pair has umbras to look for: the reference's steps take it;
+    # the compiled pair's skips, test_compiled_pair_is_the_reference_to_the_bit)
+    from exactff.area.row import AreaStats
+
+    scene = _gunter2()
+    polys = [np.asarray(p, float) for p in scene.polygons]
+    Pc, Qc, B, _ = pair_parts(scene, 7, 251)
+    assert len(B) > 90 and np.array_equal(Pc, polys[7])
+    args = ([polys[251]] + [polys[k] for k in B], Pc, Qc, scene.normals[7], 1e-6,
+            float(np.linalg.norm(ef.area_vector(Pc))), (ef.polygon_form_factor(Pc, Qc), 0.0))
+    runs = []
+    for share in (tol.AREA_UNEVALUATED_SHARE, 0.0):
+        monkeypatch.setattr(tol, "AREA_UNEVALUATED_SHARE", share)
+        st = AreaStats()
+        runs.append((*adaptive.occluded_pair(*args, st=st), st.unevaluated_triangles))
+    (F, E, n, skipped), (R, ER, n0, skipped0) = runs
+    assert skipped > 20000 and skipped0 == 0 and n < 0.6 * n0, (skipped, n, n0)
+    assert E <= 1e-6 and ER < 1e-8 and abs(F - R) <= E + ER, (F, R, E, ER)
 
 
 @pytest.mark.slow

@@ -263,6 +263,7 @@ std::shared_ptr<exactff::PairConstants> pair_constants(py::dict tol, py::sequenc
     k->eps = num("EPS");
     k->bound_cos_slack = num("AREA_BOUND_COS_SLACK");
     k->bound_spread_ulps = num("AREA_BOUND_SPREAD_ULPS");
+    k->unevaluated_share = num("AREA_UNEVALUATED_SHARE");
     k->samples = whole("AREA_CURVED_EVENT_SAMPLES");
     k->bisections = whole("AREA_CURVED_EVENT_BISECTIONS");
     k->max_triples = whole("AREA_CURVED_MAX_TRIPLES");
@@ -340,7 +341,7 @@ py::tuple occluded_pair(Array<double> W, Array<std::int64_t> start, Array<std::i
         r = exactff::occluded_pair(a);
     }
     return py::make_tuple(r.status, r.value, r.err, r.points, r.culled_events, r.solid_events,
-                          r.curved_events, r.curved_skipped, r.back_faces);
+                          r.curved_events, r.curved_skipped, r.back_faces, r.unevaluated);
 }
 
 py::tuple corner_first(Array<double> T, Array<double> Vb, Array<double> n, double dP,
@@ -417,7 +418,8 @@ PYBIND11_MODULE(_pair, m) {
           py::arg("area_P"), py::arg("whole_value"), py::arg("whole_err"),
           py::arg("shortcuts"), py::arg("constants"),
           "occluded_pair(...) -> (status, value, err, points, culled_events, solid_events, "
-          "curved_events, curved_skipped, back_faces): adaptive.py's _hidden_integral in one "
+          "curved_events, curved_skipped, back_faces, unevaluated): adaptive.py's "
+          "_hidden_integral in one "
           "call, status 0, or declined (status > 0, the rest 0; occluded_pair.h)");
     m.def("event_lines", &event_lines, py::arg("W"), py::arg("start"), py::arg("solid"),
           py::arg("nP"), py::arg("dP"), py::arg("frame"), py::arg("c"), py::arg("radius"),

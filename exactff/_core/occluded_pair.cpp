@@ -144,6 +144,38 @@ bool in_plane(const double* K, std::int64_t k, const double* nQ, double d, doubl
     return true;
 }
 
+// rules.py's unevaluated: the smallest triangles of T (t, 3, 3) and their corner flags
+// dropped (ties in their order; never the largest), while half the unoccluded bound times
+// their running area, per unit area of P, stays within allowed; returns that area and
+// adds the triangles dropped to count
+double drop_unevaluated(std::vector<double>& T, std::vector<unsigned char>& corner,
+                        double bound, double area_P, double allowed, long long& count) {
+    const std::vector<double> area = triangle_areas(T);
+    const size_t t = area.size();
+    std::vector<size_t> order(t);
+    for (size_t i = 0; i < t; ++i) order[i] = i;
+    std::stable_sort(order.begin(), order.end(),
+                     [&](size_t i, size_t j) { return area[i] < area[j]; });
+    std::vector<unsigned char> drop(t, 0);
+    double running = 0.0, skipped = 0.0;
+    for (size_t i = 0; i + 1 < t; ++i) {
+        running += area[order[i]];
+        if (!(0.5 * bound * running / area_P <= allowed)) break;
+        drop[order[i]] = 1;
+        skipped = running;
+    }
+    size_t kept = 0;
+    for (size_t i = 0; i < t; ++i) {
+        if (drop[i]) continue;
+        for (int j = 0; j < 9; ++j) T[9 * kept + j] = T[9 * i + j];
+        corner[kept++] = corner[i];
+    }
+    count += static_cast<long long>(t - kept);
+    T.resize(9 * kept);
+    corner.resize(kept);
+    return skipped;
+}
+
 // points.py's unoccluded_bound(Pc, Qc): 1, and A_Q c_P c_Q / (pi d^2), d the distance
 // between the bounding boxes, c_P and c_Q the cosines' bounds (each polygon's unit
 // normal against the other's vertices), in points.py's order of operations
@@ -345,9 +377,19 @@ PairResult occluded_pair(const PairArgs& a) {
     std::vector<unsigned char> corner;
     corner_first(T, Vb, a.start[a.n] - b0, a.nP, dP, 2.0 * k.extend_rtol * std::sqrt(area_Pc),
                  k.hull_rtol, corner);
-    const size_t tc = T.size() / 9;
-    const long long start = tc <= static_cast<size_t>(k.many_cells) &&
+    const long long start = T.size() / 9 <= static_cast<size_t>(k.many_cells) &&
                             a.atol < k.low_rules_tolerance;
+    // the smallest triangles left unevaluated within a share of atol, at half the
+    // unoccluded bound times their area (rules.py's unevaluated)
+    const double bound =
+        unoccluded_bound(a.Pc, n_p, a.Qc, n_q, k.eps, k.bound_spread_ulps, k.bound_cos_slack,
+                         k.fused_dot);
+    double skipped = 0.0;
+    if (a.shortcuts && !T.empty())
+        skipped = drop_unevaluated(T, corner, bound, a.area_P, k.unevaluated_share * a.atol,
+                                   out.unevaluated);
+    area_Pc -= skipped;
+    const size_t tc = T.size() / 9;
     // the hidden set-up (hidden.py's hidden_setup) of the blockers not in Qc's plane
     // (which hide nothing; with solids, the reference's)
     const double off = blas_dot3(nQ, a.Qc, k.fused_dot);
@@ -469,7 +511,8 @@ PairResult occluded_pair(const PairArgs& a) {
         both[i] = r.diff[i] + dF[i];
     }
     const double slivers = 0.0 + r.slivers;
-    const double lost = (slivers + std::max(area_Pc - total_area, 0.0)) / a.area_P;
+    const double lost = (slivers + std::max(area_Pc - total_area, 0.0)) / a.area_P +
+                        bound * skipped / a.area_P;
     const double missed_U = std::fabs(sum(r.hiU) - a.whole_value) - sum(both) - sum(r.rndU) -
                             a.whole_err - lost;
     if (!(missed_U <= 0) && m) {
@@ -477,10 +520,7 @@ PairResult occluded_pair(const PairArgs& a) {
         return out;
     }
     // the value: the unoccluded one less the hidden part, the slivers at half their bound
-    const double bound =
-        unoccluded_bound(a.Pc, n_p, a.Qc, n_q, k.eps, k.bound_spread_ulps, k.bound_cos_slack,
-                         k.fused_dot);
-    const double half = 0.5 * bound * slivers / a.area_P;
+    const double half = 0.5 * bound * (slivers + skipped) / a.area_P;
     std::vector<double> err_terms(m);
     for (size_t i = 0; i < m; ++i) err_terms[i] = r.diff[i] + r.rnd[i];
     const double hidden = half + sum(r.hi);

@@ -25,7 +25,7 @@ struct PairConstants {
     double hidden_pad, ray_parallel, event_parallel, event_line_ulps, hull_rtol, extend_rtol,
         curve_rtol, chord_split, event_line_key, sliver_cell, cell_cover_rtol,
         cell_cover_atol_share, low_rules_tolerance,
-        coplanar_ulps, eps, bound_cos_slack, bound_spread_ulps;
+        coplanar_ulps, eps, bound_cos_slack, bound_spread_ulps, unevaluated_share;
     std::int64_t samples, bisections, max_triples, chord_halvings, rows_per_call,
         umbra_min_lines, max_event_lines, many_cells;
     // hidden_setup.h's
@@ -74,7 +74,7 @@ struct PairResult {
     int status = 0;
     double value = 0, err = 0;
     long long points = 0, culled_events = 0, solid_events = 0, curved_events = 0,
-              curved_skipped = 0, back_faces = 0;
+              curved_skipped = 0, back_faces = 0, unevaluated = 0;
 };
 
 PairResult occluded_pair(const PairArgs& args);

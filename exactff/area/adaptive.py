@@ -3,8 +3,7 @@ is its unoccluded value (closed form) less the integral of the hidden part, take
 the cells between visibility events by pairs of triangle rules, the triangles whose
 rules differ most refined (the higher pair, then cut in four) while the pair's sum of
 differences exceeds half of the absolute tolerance ``atol`` (a global budget per pair),
-and the rules' differences checked against the unoccluded
-point values' integral, known exactly (docs/explanation/area-form-factors.md). The
+and checked against the unoccluded point values' integral, known exactly (docs/explanation/area-form-factors.md). The
 levels run compiled (:mod:`exactff.area._pair`, ``_core/levels.cpp``, the GIL released);
 :func:`_adaptive_levels` is their numpy reference and takes the pairs they decline; so
 is :func:`_hidden_integral` to the whole pair in one call (:mod:`.compiled_pair`).
@@ -18,8 +17,7 @@ from ..errors import NumericalError, misses_tolerance
 from ..geometry import area_vector, cross, receiver_frame
 from ._pair import adaptive_levels as _compiled_adaptive_levels
 from ._pair import corner_first as _compiled_corner_first
-from .compiled_pair import LEVEL_RULES, LEVEL_TOLERANCES
-from .compiled_pair import hidden_integral_in_one_call as _hidden_integral_in_one_call
+from .compiled_pair import LEVEL_RULES, LEVEL_TOLERANCES, hidden_integral_in_one_call as _hidden_integral_in_one_call
 from .curved import curved_event_lines
 from .events import cut_cells, distinct_lines, event_lines
 from .hidden import hidden_setup, hidden_values
@@ -28,7 +26,7 @@ from .joint_umbra import pair_umbras, split_pair
 from .rule_check import checked_rules, missed_unoccluded
 from .umbra import umbra_cells
 from .rules import (CORNER_MIDDLE_RULE, budget_refined, far_triangles, quarter, refined, rule_pair,
-                    symmetric_degrees, symmetric_null_spread, triangle_areas, triangle_rule)
+                    symmetric_degrees, symmetric_null_spread, triangle_areas, triangle_rule, unevaluated)
 
 __all__ = ["COMPILED_LEVELS", "COMPILED_PAIR", "occluded_pair"]
 
@@ -139,8 +137,8 @@ def _hidden_integral(S, Pc, Qc, nP, atol, area_P, whole, shortcuts, st, solid=No
         r = _hidden_integral_in_one_call(S, Pc, Qc, nP, atol, area_P, whole, shortcuts,
                                          solid, inner)
         if r[0] == 0:
-            for k, v in zip(("culled_events", "solid_events", "curved_events",
-                             "curved_skipped", "back_faces"), r[4:] if st is not None else ()):
+            for k, v in zip(("culled_events", "solid_events", "curved_events", "curved_skipped",
+                             "back_faces", "unevaluated_triangles"), r[4:] if st is not None else ()):
                 setattr(st, k, getattr(st, k) + v)
             return r[1:4]
         split = split and r[0] == 1          # the umbras to look for: first several blockers'
@@ -211,21 +209,25 @@ def _hidden_integral(S, Pc, Qc, nP, atol, area_P, whole, shortcuts, st, solid=No
     # the cells in an umbra take the unoccluded value for their hidden part, the strips
     # along them the bound (umbra_cells)
     umbra_U = umbra_E = umbra_area = strip_slivers = 0.0
+    bound = unoccluded_bound(Pc, Qc)
     if regions:
         cells, umbra_U, umbra_E, umbra_area, strip_slivers, n_umbra = umbra_cells(
-            cells, regions, R, c, nP, Qc, area_P, area_Pc, atol, unoccluded_bound(Pc, Qc))
+            cells, regions, R, c, nP, Qc, area_P, area_Pc, atol, bound)
         if st is not None and n_umbra:
             st.umbra_pairs += 1
             st.umbra_cells += n_umbra
     # the value is then the unoccluded one over the rest of P less the rest's hidden part
     whole = (whole[0] - umbra_U, whole[1] + umbra_E)
-    T, corner = _corner_first(cells, S[1:], nP, dP,
-                              2.0 * tol.AREA_CUT_EXTEND_RTOL * np.sqrt(area_Pc))
-    area_Pc -= umbra_area + strip_slivers
-    depth = np.zeros(len(T), dtype=int)
+    T, corner = _corner_first(cells, S[1:], nP, dP, 2.0 * tol.AREA_CUT_EXTEND_RTOL * np.sqrt(area_Pc))
     # many cells (small ones) start with the low pair of rules, few with the high pair
     # (and so do the triangles they are cut into); at a coarse target, all start low
     start = int(len(T) <= tol.AREA_MANY_CELLS and atol < tol.AREA_LOW_RULES_TOLERANCE)
+    # the smallest triangles left unevaluated within a share of atol (rules.unevaluated)
+    skip, skipped = (unevaluated(triangle_areas(T), bound, area_P, atol) if shortcuts and len(T)
+                     else (np.zeros(len(T), dtype=bool), 0.0))
+    T, corner = T[~skip], corner[~skip]
+    area_Pc -= umbra_area + strip_slivers + skipped
+    depth = np.zeros(len(T), dtype=int)
     rung = np.full(len(T), start)
     setup = (hidden_setup(Qc, S[1:]) if solid is None or inner is None
              else hidden_setup(Qc, S[1:], solid[1:], inner[1:]))
@@ -233,6 +235,8 @@ def _hidden_integral(S, Pc, Qc, nP, atol, area_P, whole, shortcuts, st, solid=No
     bound_atol = [tol.AREA_IMAGE_BUDGET_SHARE * atol]
     total_area = float(triangle_areas(T).sum())
     slivers, points = strip_slivers, 0
+    if st is not None:
+        st.unevaluated_triangles += int(skip.sum())
     # the triangles accepted: vertices, level, rung; per unit area of P, the high rule's
     # integral of the hidden part H, the rules' difference on H, the point values'
     # estimates, and the same two rules' integrals of U (the unoccluded point values)
@@ -252,7 +256,7 @@ def _hidden_integral(S, Pc, Qc, nP, atol, area_P, whole, shortcuts, st, solid=No
         # those whose differences prove too small (or, while the sum still misses,
         # whose check cannot tell) are refined (rule_check.checked_rules)
         cat = {k: np.concatenate(v) if v else np.zeros(0) for k, v in acc.items()}
-        lost = (slivers + max(area_Pc - total_area, 0.0)) / area_P
+        lost = (slivers + max(area_Pc - total_area, 0.0)) / area_P + bound * skipped / area_P
         missed_U, dF = missed_unoccluded(cat, whole, lost)
         todo = np.flatnonzero(~cat["checked"].astype(bool))
         if missed_U <= 0 or not len(todo):
@@ -276,13 +280,11 @@ def _hidden_integral(S, Pc, Qc, nP, atol, area_P, whole, shortcuts, st, solid=No
     # of the rules' error is not in their differences, so it is added (a correction by
     # what is shown, not a bound: gunter2, pair (42, 15))
     missed_U = missed_unoccluded(cat, whole, lost)[0] if len(cat["hi"]) else 0.0
-    # the slivers not evaluated: the hidden part is between 0 and the unoccluded point
-    # value, at most A_Q c_P c_Q / (pi d^2) for d the distance between P's and Qc's
-    # bounding boxes and c_P, c_Q the cosines' bounds (points.unoccluded_bound), and at
-    # most 1; so its integral over them is half that bound times their area, within as
-    # much (on View3D's gunter2, row 38, a pair of 472,008 cells left 3.3e-6 of the
-    # emitter in slivers: an estimate of 1.66e-6 at 1, above the tolerance of 1e-6)
-    half = 0.5 * unoccluded_bound(Pc, Qc) * slivers / area_P
+    # the slivers and the triangles unevaluated: the hidden part is between 0 and the
+    # unoccluded point value, at most its bound (points.unoccluded_bound), so that its
+    # integral over them is half that bound times their area, within as much (at 1, a
+    # gunter2 pair's slivers took 1.66e-6, above the tolerance of 1e-6)
+    half = 0.5 * bound * (slivers + skipped) / area_P
     hidden = half + float(cat["hi"].sum())
     err = half + float((cat["diff"] + cat["rnd"]).sum())
     value = whole[0] - hidden
@@ -319,14 +321,12 @@ def _levels(T, depth, rung, corner, nP, Qc, S, st, setup, atol, area_P, total_ar
             setup.part_counts, setup.lo, setup.hi,
             {k: getattr(tol, k) for k in LEVEL_TOLERANCES})
         if r[0]:
-            (Ta, da, ra, ca, hi, lo, diff, rnd, hiU, loU, rndU, slivers, points,
-             back) = r[1:]
+            Ta, da, ra, ca, hi, lo, diff, rnd, hiU, loU, rndU, slivers, points, back = r[1:]
             if st is not None and back:
                 st.back_faces += int(back)
             for k, v in (("T", Ta), ("depth", da), ("rung", ra), ("corner", ca), ("hi", hi),
-                         ("lo", lo), ("diff", diff), ("rnd", rnd), ("hiU", hiU),
-                         ("loU", loU), ("rndU", rndU),
-                         ("checked", np.zeros(len(hi), dtype=bool))):
+                         ("lo", lo), ("diff", diff), ("rnd", rnd), ("hiU", hiU), ("loU", loU),
+                         ("rndU", rndU), ("checked", np.zeros(len(hi), dtype=bool))):
                 acc[k].append(v)
             empty = np.zeros(0, dtype=int)
             return np.zeros((0, 3, 3)), empty, empty, np.zeros(0, dtype=bool), slivers, points

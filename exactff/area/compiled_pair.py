@@ -48,7 +48,7 @@ PAIR_TOLERANCES = (
     "AREA_CURVED_EVENT_BISECTIONS", "AREA_CURVED_MAX_TRIPLES", "AREA_CURVED_CHORD_HALVINGS",
     "AREA_EVENT_ROWS_PER_CALL", "AREA_UMBRA_MIN_LINES", "AREA_MAX_EVENT_LINES",
     "AREA_MANY_CELLS", "CONVEX_TURN_ULPS", "CLIP_MEET_ULPS", "AREA_STRICT_TURN",
-    "AREA_BOUND_COS_SLACK", "AREA_BOUND_SPREAD_ULPS")
+    "AREA_BOUND_COS_SLACK", "AREA_BOUND_SPREAD_ULPS", "AREA_UNEVALUATED_SHARE")
 _pair_constants_cache = {}
 #: The tolerances' values read at each call (one lookup of them all, in the module's
 #: namespace: the call is made once a pair).
@@ -106,7 +106,8 @@ def hidden_integral_in_one_call(S, Pc, Qc, nP, atol, area_P, whole, shortcuts, s
     """:func:`~exactff.area.adaptive._hidden_integral` in one compiled call
     (``_core/occluded_pair.cpp``, the GIL released): the same steps, numpy's roundings
     kept (the values are the reference's to the bit). Returns ``(0, value, err, points,
-    culled_events, solid_events, curved_events, curved_skipped, back_faces)``, or
+    culled_events, solid_events, curved_events, curved_skipped, back_faces,
+    unevaluated)``, or
     ``(status,)`` with status > 0 where it declines the pair for the reference's steps
     (an umbra to look for, too many distinct lines, GEOS's cells, a blocker in the
     receiver's plane with solids, no compiled hidden set-up or levels, the rules' sum to

@@ -78,6 +78,11 @@ class AreaStats:
         Pieces of emitters from which several blockers together hide the whole receiver
         (or all but a part whose bound is within the tolerance's share),
         :func:`~exactff.area.joint_umbra.hidden_pieces` (their pairs count in ``umbra_pairs``).
+    unevaluated_triangles : int
+        A pair's smallest triangles (cells) left unevaluated, each at half the
+        unoccluded bound times its area within as much, while they take at most
+        ``AREA_UNEVALUATED_SHARE`` of the pair's tolerance
+        (:func:`~exactff.area.rules.unevaluated`).
     wall_hidden_pairs : int
         Pairs that walls between them (blockers in one plane, or in up to
         ``AREA_WALL_PLANES`` planes one behind the other) hide whole, proven in
@@ -124,6 +129,7 @@ class AreaStats:
     umbra_pairs: int = 0
     umbra_cells: int = 0
     umbra_pieces: int = 0
+    unevaluated_triangles: int = 0
     wall_hidden_pairs: int = 0
     cell_fallbacks: int = 0
     occluded_pairs: int = 0

@@ -15,7 +15,7 @@ from ..geometry import cross, receiver_frame
 __all__ = ["triangle_rule", "symmetric_triangle_rule", "SYMMETRIC_RULES",
            "SYMMETRIC_NULL_RULES", "symmetric_null_spread", "GAUSS_RULE",
            "GAUSS_LOW_RULE", "CORNER_MIDDLE_RULE", "RULE_PAIRS", "rule_pair", "quarter",
-           "refined", "budget_refined", "far_triangles", "symmetric_degrees", "triangle_areas",
+           "refined", "budget_refined", "far_triangles", "unevaluated", "symmetric_degrees", "triangle_areas",
            "triangulate"]
 
 #: Gauss-Legendre nodes and weights on [-1, 1]: the far-field rule's pair (12 and 8
@@ -386,6 +386,34 @@ def budget_refined(diff, area, depth, rung, before, atol, total_area):
     order = mine[np.argsort(-diff[mine], kind="stable")]
     left = float(np.cumsum(diff[mine])[-1]) - np.concatenate([[0.0], np.cumsum(diff[order])[:-1]])
     return np.sort(order[left > budget])
+
+
+def unevaluated(area, bound, area_P, atol):
+    """Which of a pair's triangles (areas ``area`` (t,)) go unevaluated, and their area: the smallest
+    first (ties in the given order), while half the unoccluded point values' bound
+    ``bound`` (:func:`~exactff.area.points.unoccluded_bound`) times their summed area,
+    per unit area of P, stays within ``AREA_UNEVALUATED_SHARE`` of ``atol``; the largest
+    is always evaluated. The hidden part of each is between 0 and that bound, so that
+    its integral over them is half the bound times their area, within as much.
+
+    Examples
+    --------
+    Four triangles, an unoccluded bound of 1e-5 and a target of 1e-6: the two smallest
+    take 0.5e-5 * (10 + 20) / 1000 = 1.5e-7 (at most a quarter of the target), the
+    third would take 4e-7 in all:
+
+    >>> skip, skipped = unevaluated(np.array([50.0, 10.0, 20.0, 920.0]), 1e-5, 1000.0, 1e-6)
+    >>> skip.tolist(), skipped
+    ([False, True, True, False], 30.0)
+    """
+    order = np.argsort(area, kind="stable")[:-1]
+    # their running area, summed in order (numpy's cumsum, as _core/occluded_pair.cpp adds)
+    running = np.cumsum(area[order])
+    k = int(np.count_nonzero(0.5 * bound * running / area_P
+                             <= tol.AREA_UNEVALUATED_SHARE * atol))
+    out = np.zeros(len(area), dtype=bool)
+    out[order[:k]] = True
+    return out, float(running[k - 1]) if k else 0.0
 
 
 def triangle_areas(T):
