@@ -453,12 +453,13 @@ AREA_SLIVER_CELL = 1e-14
 #: the tolerance is integrated once, not cut, and carries its area as its estimate.
 AREA_SLIVER_SHARE = 1e-3
 
-#: Area form factors: the share of a pair's absolute tolerance that its smallest
-#: triangles (cells) may take unevaluated, each at half the unoccluded point values'
-#: bound times its area, within as much (exactff.area.rules.unevaluated): where many
-#: events cut an emitter far from a small receiver, most cells are slivers whose hidden
-#: part matters less than the tolerance (View3D's gunter2, row 7: a wall of 380 cut into
-#: 52,067 triangles for a receiver of 0.28 some 100 away, the unoccluded bound 8.3e-6).
+#: Area form factors: the share of a pair's absolute tolerance that its triangles (cells)
+#: of least bound times area may take unevaluated, each at half its bound on the
+#: unoccluded point values times its area, within as much (exactff.area.rules.unevaluated,
+#: exactff.area.points.unoccluded_bounds): where many events cut an emitter far from a
+#: small receiver, most cells matter less than the tolerance (View3D's gunter2, wall 7
+#: of 380 to a gable triangle of 0.28 some 100 away: 52,067 triangles, the bound 8.3e-6
+#: near the gable and 4.8e-7 at the wall's far end).
 AREA_UNEVALUATED_SHARE = 0.25
 
 #: Area form factors: the rounding of a contour sum or an area rule, in units of

@@ -730,9 +730,10 @@ def area_form_factors(scene, rows=None, *, tolerance=1e-9, error=False, executor
         their cells taken by the closed form, ``exactff.area.umbra``; and those cells'
         triangles), ``umbra_pieces`` (squares of emitters from which several blockers
         together hide the whole receiver, ``exactff.area.joint_umbra``),
-        ``unevaluated_triangles`` (a pair's smallest cells, left unevaluated at half
-        the unoccluded bound times their area while they take at most a quarter of the
-        pair's tolerance, ``exactff.area.rules.unevaluated``),
+        ``unevaluated_triangles`` (a pair's cells of least bound times area, left
+        unevaluated at half their bounds on the unoccluded point values times their
+        areas while they take at most a quarter of the pair's tolerance,
+        ``exactff.area.rules.unevaluated``),
         ``wall_hidden_pairs`` (pairs that walls between them hide whole, blockers in
         one plane or in a few one behind the other, proven in rationals: exactly 0,
         not integrated; ``exactff.area.walls``),

@@ -657,6 +657,23 @@ def test_unoccluded_bound_holds_at_points_of_the_emitter(case):
         d2 = {"aside": 5.0, "tilted": 4.25}[case]
         cosines = {"aside": 1 / 5, "tilted": 1.5 / math.sqrt(d2)}[case]
         assert bound == pytest.approx(cosines / (np.pi * d2), rel=1e-3), bound
+    # each triangle's bound (unoccluded_bounds: the distance from its own box): P cut
+    # into 32 triangles, 60 random points in each and its corners against the kernel;
+    # none above P's bound, and where Q is away from part of P, some below it
+    from exactff.area.points import unoccluded_bounds as _unoccluded_bounds
+
+    g = np.linspace(0.0, 1.0, 5)
+    T = np.array([[[x0, y0, 0], [x1, y0, 0], [x1, y1, 0]] for x0, x1 in zip(g, g[1:])
+                  for y0, y1 in zip(g, g[1:])] + [[[x0, y0, 0], [x1, y1, 0], [x0, y1, 0]]
+                                                  for x0, x1 in zip(g, g[1:])
+                                                  for y0, y1 in zip(g, g[1:])])
+    bounds = _unoccluded_bounds(T, P, Q)
+    assert bounds.shape == (32,) and np.all(bounds <= bound)
+    assert (bounds.min() < 0.9 * bound) == (case in ("touching", "corner", "aside", "tilted"))
+    w = np.random.default_rng(8).dirichlet(np.ones(3), size=60)
+    for t, b in zip(T, bounds):
+        U, EU = (v[0] for v in _point_values(np.vstack([t, w @ t]), nP, [Q]))
+        assert np.all(U - EU <= b), (t, (U - EU).max(), b)
 
 
 @pytest.mark.parametrize("cover", ["whole", "all but a strip", "none"])

@@ -746,7 +746,7 @@ def test_compiled_pair_is_the_reference_to_the_bit(monkeypatch, name, rows, tole
     # (_hidden_integral, the reference): every value and estimate the same to the bit
     # (numpy's pairwise sums and the BLAS's fused products kept), the same counts, and
     # every occluded pair taken by the one call; at 1e-6 some cells left unevaluated
-    # (rules.unevaluated: 72 of gunter1's, 27 of the box's rows)
+    # (rules.unevaluated: 103 of gunter1's, 33 of the box's rows)
     scene = (ef.scenes.unit_squares_room() if name == "box"
              else ef.read_vs3(os.path.join(DATA, name)))
     statuses = _pair_statuses(monkeypatch)

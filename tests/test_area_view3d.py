@@ -393,11 +393,12 @@ def test_needle_triangle_takes_the_null_rules(monkeypatch):
 def test_gunter2_wall_cells_left_unevaluated_within_their_share(monkeypatch):
     # gunter2's wall 7 (190 x 2) to the gable triangle 251 (0.28) some 100 away, 93
     # blockers between: the events cut the wall into 52,067 triangles, most far smaller
-    # than the tolerance needs (the value 3.4e-7, the unoccluded bound 8.3e-6). The
-    # smallest, left unevaluated within a quarter of the tolerance (rules.unevaluated),
-    # against every cell evaluated (an estimate of 8e-10): within the two estimates, for
-    # half the points (the pair has umbras to look for: the reference's steps take it;
-    # the compiled pair's skips, test_compiled_pair_is_the_reference_to_the_bit)
+    # than the tolerance needs (the value 3.4e-7, the unoccluded bound 8.3e-6 over the
+    # wall, 4.8e-7 at its far end). Those of least bound times area, left unevaluated
+    # within a quarter of the tolerance (rules.unevaluated), against every cell
+    # evaluated (an estimate of 8e-10): within the two estimates (0.91 of them), for a
+    # quarter of the points (the pair has umbras to look for: the reference's steps take
+    # it; the compiled pair's, test_compiled_pair_is_the_reference_to_the_bit)
     from exactff.area.row import AreaStats
 
     scene = _gunter2()
@@ -412,7 +413,7 @@ def test_gunter2_wall_cells_left_unevaluated_within_their_share(monkeypatch):
         st = AreaStats()
         runs.append((*adaptive.occluded_pair(*args, st=st), st.unevaluated_triangles))
     (F, E, n, skipped), (R, ER, n0, skipped0) = runs
-    assert skipped > 20000 and skipped0 == 0 and n < 0.6 * n0, (skipped, n, n0)
+    assert skipped > 30000 and skipped0 == 0 and n < 0.3 * n0, (skipped, n, n0)
     assert E <= 1e-6 and ER < 1e-8 and abs(F - R) <= E + ER, (F, R, E, ER)
 
 

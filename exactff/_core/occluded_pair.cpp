@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <set>
+#include <tuple>
 #include <utility>
 #include <vector>
 
@@ -144,25 +145,31 @@ bool in_plane(const double* K, std::int64_t k, const double* nQ, double d, doubl
     return true;
 }
 
-// rules.py's unevaluated: the smallest triangles of T (t, 3, 3) and their corner flags
-// dropped (ties in their order; never the largest), while half the unoccluded bound times
-// their running area, per unit area of P, stays within allowed; returns that area and
-// adds the triangles dropped to count
-double drop_unevaluated(std::vector<double>& T, std::vector<unsigned char>& corner,
-                        double bound, double area_P, double allowed, long long& count) {
+// rules.py's unevaluated: the triangles of T (t, 3, 3) of least bound times area and their
+// corner flags dropped (ties in their order; never the last in that order), while half
+// their running sum, per unit area of P, stays within allowed; returns their area and
+// that sum, and adds the triangles dropped to count
+std::pair<double, double> drop_unevaluated(std::vector<double>& T,
+                                           std::vector<unsigned char>& corner,
+                                           const std::vector<double>& bound, double area_P,
+                                           double allowed, long long& count) {
     const std::vector<double> area = triangle_areas(T);
     const size_t t = area.size();
+    std::vector<double> weight(t);
+    for (size_t i = 0; i < t; ++i) weight[i] = bound[i] * area[i];
     std::vector<size_t> order(t);
     for (size_t i = 0; i < t; ++i) order[i] = i;
     std::stable_sort(order.begin(), order.end(),
-                     [&](size_t i, size_t j) { return area[i] < area[j]; });
+                     [&](size_t i, size_t j) { return weight[i] < weight[j]; });
     std::vector<unsigned char> drop(t, 0);
-    double running = 0.0, skipped = 0.0;
+    double running = 0.0, running_area = 0.0, skipped = 0.0, skipped_area = 0.0;
     for (size_t i = 0; i + 1 < t; ++i) {
-        running += area[order[i]];
-        if (!(0.5 * bound * running / area_P <= allowed)) break;
+        running += weight[order[i]];
+        running_area += area[order[i]];
+        if (!(0.5 * running / area_P <= allowed)) break;
         drop[order[i]] = 1;
         skipped = running;
+        skipped_area = running_area;
     }
     size_t kept = 0;
     for (size_t i = 0; i < t; ++i) {
@@ -173,14 +180,20 @@ double drop_unevaluated(std::vector<double>& T, std::vector<unsigned char>& corn
     count += static_cast<long long>(t - kept);
     T.resize(9 * kept);
     corner.resize(kept);
-    return skipped;
+    return {skipped_area, skipped};
 }
 
-// points.py's unoccluded_bound(Pc, Qc): 1, and A_Q c_P c_Q / (pi d^2), d the distance
-// between the bounding boxes, c_P and c_Q the cosines' bounds (each polygon's unit
-// normal against the other's vertices), in points.py's order of operations
-double unoccluded_bound(const double* Pc, std::int64_t n_p, const double* Qc, std::int64_t n_q,
-                        double eps, double spread_ulps, double cos_slack, bool fused) {
+// points.py's unoccluded_bound(Pc, Qc) and unoccluded_bounds, in points.py's order of
+// operations: the bounding boxes' gap's square d2, Q's area and the cosines' spreads
+// (each polygon's unit normal against the two polygons' vertices, h the widest spread of
+// n . v between them, the products' rounding added)
+struct BoundParts {
+    double d2, area_Q, spread_p, spread_q;
+};
+
+BoundParts bound_parts(const double* Pc, std::int64_t n_p, const double* Qc, std::int64_t n_q,
+                       double eps, double spread_ulps, bool fused) {
+    BoundParts b;
     double gap[3];
     for (int j = 0; j < 3; ++j) {
         double pmin = Pc[j], pmax = Pc[j], qmin = Qc[j], qmax = Qc[j];
@@ -194,12 +207,10 @@ double unoccluded_bound(const double* Pc, std::int64_t n_p, const double* Qc, st
         }
         gap[j] = std::max(0.0, std::max(pmin - qmax, qmin - pmax));
     }
-    const double d2 = blas_dot3(gap, gap, fused);
+    b.d2 = blas_dot3(gap, gap, fused);
     double AQ[3], AP[3];
     area_vector(Qc, n_q, AQ);
-    const double area_Q = norm3(AQ, fused);
-    if (!(d2 > 0)) return 1.0;
-    const double d = std::sqrt(d2);
+    b.area_Q = norm3(AQ, fused);
     // the vertices' coordinates' size: the largest sum of a vertex's absolute coordinates
     double scale_p = -INFINITY, scale_q = -INFINITY;
     for (std::int64_t i = 0; i < n_p; ++i)
@@ -210,13 +221,12 @@ double unoccluded_bound(const double* Pc, std::int64_t n_p, const double* Qc, st
                                          std::fabs(Qc[3 * i + 2])));
     const double scale = std::max(scale_p, scale_q);
     area_vector(Pc, n_p, AP);
-    // each cosine: |n . (y - x)| / r <= h / d, h the widest spread of n . v between the
-    // two polygons' vertices
-    const auto cosine = [&](const double* A, const double* X, std::int64_t nx, const double* Y,
+    // each cosine: |n . (y - x)| / r <= h / d
+    const auto spread = [&](const double* A, const double* X, std::int64_t nx, const double* Y,
                             std::int64_t ny) {
         const double norm = norm3(A, fused);
         const double n[3] = {A[0] / norm, A[1] / norm, A[2] / norm};
-        const auto spread = [&](const double* V, std::int64_t k, double& lo, double& hi) {
+        const auto extremes = [&](const double* V, std::int64_t k, double& lo, double& hi) {
             lo = INFINITY;
             hi = -INFINITY;
             for (std::int64_t i = 0; i < k; ++i) {
@@ -226,14 +236,60 @@ double unoccluded_bound(const double* Pc, std::int64_t n_p, const double* Qc, st
             }
         };
         double xlo, xhi, ylo, yhi;
-        spread(X, nx, xlo, xhi);
-        spread(Y, ny, ylo, yhi);
-        const double h = std::max(yhi - xlo, xhi - ylo);
-        return std::min(1.0, (h + spread_ulps * eps * scale) / d + cos_slack);
+        extremes(X, nx, xlo, xhi);
+        extremes(Y, ny, ylo, yhi);
+        return std::max(yhi - xlo, xhi - ylo) + spread_ulps * eps * scale;
     };
-    const double c_p = cosine(AP, Pc, n_p, Qc, n_q);
-    const double c_q = cosine(AQ, Qc, n_q, Pc, n_p);
-    return std::min(1.0, area_Q * c_p * c_q / (3.141592653589793 * d2));
+    b.spread_p = spread(AP, Pc, n_p, Qc, n_q);
+    b.spread_q = spread(AQ, Qc, n_q, Pc, n_p);
+    return b;
+}
+
+// points.py's _cosine: a cosine's bound at the distance d
+double cosine_bound(double spread, double d, double cos_slack) {
+    return std::min(1.0, spread / d + cos_slack);
+}
+
+// points.py's unoccluded_bound(Pc, Qc): 1, and A_Q c_P c_Q / (pi d^2)
+double unoccluded_bound(const BoundParts& b, double cos_slack) {
+    if (!(b.d2 > 0)) return 1.0;
+    const double d = std::sqrt(b.d2);
+    const double c_p = cosine_bound(b.spread_p, d, cos_slack);
+    const double c_q = cosine_bound(b.spread_q, d, cos_slack);
+    return std::min(1.0, b.area_Q * c_p * c_q / (3.141592653589793 * b.d2));
+}
+
+// points.py's unoccluded_bounds: the bound of each triangle of T (t, 3, 3), its box's
+// gap to Qc's box for d, at most Pc's bound whole
+std::vector<double> unoccluded_bounds(const std::vector<double>& T, const double* Qc,
+                                      std::int64_t n_q, const BoundParts& b, double whole,
+                                      double cos_slack) {
+    double qmin[3], qmax[3];
+    for (int j = 0; j < 3; ++j) {
+        qmin[j] = qmax[j] = Qc[j];
+        for (std::int64_t i = 1; i < n_q; ++i) {
+            qmin[j] = std::min(qmin[j], Qc[3 * i + j]);
+            qmax[j] = std::max(qmax[j], Qc[3 * i + j]);
+        }
+    }
+    const size_t t = T.size() / 9;
+    std::vector<double> out(t, whole);
+    for (size_t k = 0; k < t; ++k) {
+        const double* V = T.data() + 9 * k;
+        double g[3];
+        for (int j = 0; j < 3; ++j) {
+            const double lo = std::min(std::min(V[j], V[3 + j]), V[6 + j]);
+            const double hi = std::max(std::max(V[j], V[3 + j]), V[6 + j]);
+            g[j] = std::max(0.0, std::max(lo - qmax[j], qmin[j] - hi));
+        }
+        const double d2 = (g[0] * g[0] + g[1] * g[1]) + g[2] * g[2];
+        if (!(d2 > 0)) continue;
+        const double d = std::sqrt(d2);
+        out[k] = std::min(whole, b.area_Q * cosine_bound(b.spread_p, d, cos_slack) *
+                                     cosine_bound(b.spread_q, d, cos_slack) /
+                                     (3.141592653589793 * d2));
+    }
+    return out;
 }
 
 }  // namespace
@@ -381,13 +437,14 @@ PairResult occluded_pair(const PairArgs& a) {
                             a.atol < k.low_rules_tolerance;
     // the smallest triangles left unevaluated within a share of atol, at half the
     // unoccluded bound times their area (rules.py's unevaluated)
-    const double bound =
-        unoccluded_bound(a.Pc, n_p, a.Qc, n_q, k.eps, k.bound_spread_ulps, k.bound_cos_slack,
-                         k.fused_dot);
-    double skipped = 0.0;
+    const BoundParts parts =
+        bound_parts(a.Pc, n_p, a.Qc, n_q, k.eps, k.bound_spread_ulps, k.fused_dot);
+    const double bound = unoccluded_bound(parts, k.bound_cos_slack);
+    double skipped = 0.0, weight = 0.0;
     if (a.shortcuts && !T.empty())
-        skipped = drop_unevaluated(T, corner, bound, a.area_P, k.unevaluated_share * a.atol,
-                                   out.unevaluated);
+        std::tie(skipped, weight) = drop_unevaluated(
+            T, corner, unoccluded_bounds(T, a.Qc, n_q, parts, bound, k.bound_cos_slack),
+            a.area_P, k.unevaluated_share * a.atol, out.unevaluated);
     area_Pc -= skipped;
     const size_t tc = T.size() / 9;
     // the hidden set-up (hidden.py's hidden_setup) of the blockers not in Qc's plane
@@ -512,7 +569,7 @@ PairResult occluded_pair(const PairArgs& a) {
     }
     const double slivers = 0.0 + r.slivers;
     const double lost = (slivers + std::max(area_Pc - total_area, 0.0)) / a.area_P +
-                        bound * skipped / a.area_P;
+                        weight / a.area_P;
     const double missed_U = std::fabs(sum(r.hiU) - a.whole_value) - sum(both) - sum(r.rndU) -
                             a.whole_err - lost;
     if (!(missed_U <= 0) && m) {
@@ -520,7 +577,7 @@ PairResult occluded_pair(const PairArgs& a) {
         return out;
     }
     // the value: the unoccluded one less the hidden part, the slivers at half their bound
-    const double half = 0.5 * bound * (slivers + skipped) / a.area_P;
+    const double half = 0.5 * (bound * slivers + weight) / a.area_P;
     std::vector<double> err_terms(m);
     for (size_t i = 0; i < m; ++i) err_terms[i] = r.diff[i] + r.rnd[i];
     const double hidden = half + sum(r.hi);

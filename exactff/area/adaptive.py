@@ -21,7 +21,7 @@ from .compiled_pair import LEVEL_RULES, LEVEL_TOLERANCES, hidden_integral_in_one
 from .curved import curved_event_lines
 from .events import cut_cells, distinct_lines, event_lines
 from .hidden import hidden_setup, hidden_values
-from .points import point_values, unoccluded_bound
+from .points import point_values, unoccluded_bound, unoccluded_bounds
 from .joint_umbra import pair_umbras, split_pair
 from .rule_check import checked_rules, missed_unoccluded
 from .umbra import umbra_cells
@@ -222,9 +222,9 @@ def _hidden_integral(S, Pc, Qc, nP, atol, area_P, whole, shortcuts, st, solid=No
     # many cells (small ones) start with the low pair of rules, few with the high pair
     # (and so do the triangles they are cut into); at a coarse target, all start low
     start = int(len(T) <= tol.AREA_MANY_CELLS and atol < tol.AREA_LOW_RULES_TOLERANCE)
-    # the smallest triangles left unevaluated within a share of atol (rules.unevaluated)
-    skip, skipped = (unevaluated(triangle_areas(T), bound, area_P, atol) if shortcuts and len(T)
-                     else (np.zeros(len(T), dtype=bool), 0.0))
+    # the least triangles left unevaluated within a share of atol (rules.unevaluated)
+    skip, skipped, weight = (unevaluated(triangle_areas(T), unoccluded_bounds(T, Pc, Qc), area_P, atol)
+                             if shortcuts and len(T) else (np.zeros(len(T), dtype=bool), 0.0, 0.0))
     T, corner = T[~skip], corner[~skip]
     area_Pc -= umbra_area + strip_slivers + skipped
     depth = np.zeros(len(T), dtype=int)
@@ -256,7 +256,7 @@ def _hidden_integral(S, Pc, Qc, nP, atol, area_P, whole, shortcuts, st, solid=No
         # those whose differences prove too small (or, while the sum still misses,
         # whose check cannot tell) are refined (rule_check.checked_rules)
         cat = {k: np.concatenate(v) if v else np.zeros(0) for k, v in acc.items()}
-        lost = (slivers + max(area_Pc - total_area, 0.0)) / area_P + bound * skipped / area_P
+        lost = (slivers + max(area_Pc - total_area, 0.0)) / area_P + weight / area_P
         missed_U, dF = missed_unoccluded(cat, whole, lost)
         todo = np.flatnonzero(~cat["checked"].astype(bool))
         if missed_U <= 0 or not len(todo):
@@ -284,7 +284,7 @@ def _hidden_integral(S, Pc, Qc, nP, atol, area_P, whole, shortcuts, st, solid=No
     # unoccluded point value, at most its bound (points.unoccluded_bound), so that its
     # integral over them is half that bound times their area, within as much (at 1, a
     # gunter2 pair's slivers took 1.66e-6, above the tolerance of 1e-6)
-    half = 0.5 * bound * (slivers + skipped) / area_P
+    half = 0.5 * (bound * slivers + weight) / area_P
     hidden = half + float(cat["hi"].sum())
     err = half + float((cat["diff"] + cat["rnd"]).sum())
     value = whole[0] - hidden

@@ -11,7 +11,7 @@ from .. import _tolerances as tol
 from ..geometry import area_vector, receiver_frame
 from ..kernel._sector import row_sums
 
-__all__ = ["point_values", "unoccluded_bound"]
+__all__ = ["point_values", "unoccluded_bound", "unoccluded_bounds"]
 
 
 def point_values(X, nP, Qs):
@@ -91,16 +91,59 @@ def unoccluded_bound(Pc, Qc, area=None):
     area_Q = norm_Q if area is None else float(area)
     if not d2 > 0:
         return 1.0
-    d = math.sqrt(d2)
-    # the cosines' bounds: each polygon's unit normal against the other's vertices
-    # (products summed in one order, as occluded_pair.cpp's mirror sums them)
+    c_P, c_Q = (float(_cosine(s, math.sqrt(d2))) for s in _spreads(Pc, Qc, aQ))
+    return min(1.0, area_Q * c_P * c_Q / (np.pi * d2))
+
+
+def _spreads(Pc, Qc, aQ):
+    """The cosines' spreads: for each polygon's unit normal n, the largest of
+    ``|n . (y - x)|`` over the two polygons' vertices, its products' rounding added
+    (:func:`unoccluded_bound`; products summed in one order, as occluded_pair.cpp's
+    mirror sums them)."""
     scale = float(max(np.abs(Pc).sum(axis=1).max(), np.abs(Qc).sum(axis=1).max()))
-    cosines = []
+    out = []
     for a, X, Y in ((area_vector(Pc), Pc, Qc), (aQ, Qc, Pc)):
         n = a / float(np.linalg.norm(a))
         sX = (X[:, 0] * n[0] + X[:, 1] * n[1]) + X[:, 2] * n[2]
         sY = (Y[:, 0] * n[0] + Y[:, 1] * n[1]) + Y[:, 2] * n[2]
         h = max(float(sY.max() - sX.min()), float(sX.max() - sY.min()))
-        cosines.append(min(1.0, (h + tol.AREA_BOUND_SPREAD_ULPS * tol.EPS * scale) / d
-                               + tol.AREA_BOUND_COS_SLACK))
-    return min(1.0, area_Q * cosines[0] * cosines[1] / (np.pi * d2))
+        out.append(h + tol.AREA_BOUND_SPREAD_ULPS * tol.EPS * scale)
+    return out
+
+
+def _cosine(spread, d):
+    """A cosine's bound at distances ``d`` (> 0): ``spread / d`` and
+    ``AREA_BOUND_COS_SLACK`` more, at most 1."""
+    return np.minimum(1.0, spread / d + tol.AREA_BOUND_COS_SLACK)
+
+
+def unoccluded_bounds(T, Pc, Qc):
+    """:func:`unoccluded_bound` for each triangle of T (t, 3, 3), parts of Pc: with d the
+    distance from each triangle's bounding box to Qc's (at least Pc's), the cosines'
+    spreads those of Pc and Qc; shape (t,), each at most Pc's bound.
+
+    Examples
+    --------
+    A unit square and a 0.1 square 2 above its corner (1, 1): a triangle whose box
+    reaches that corner takes the square's bound; one of the corner (0, 0) whose box
+    ends at (0.5, 0.5) is sqrt(4.5) from it, its cosines' bounds 2 / sqrt(4.5) each
+    (the spreads are 2), its bound (4 / 4.5)^2 of the square's:
+
+    >>> P = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], float)
+    >>> Q = 0.1 * P[::-1] + [1, 1, 2]
+    >>> b = unoccluded_bounds(np.array([P[[0, 1, 2]], 0.5 * P[[0, 1, 3]]]), P, Q)
+    >>> bool(b[0] == unoccluded_bound(P, Q)), round(float(b[1] / b[0]), 3)
+    (True, 0.79)
+    """
+    whole = unoccluded_bound(Pc, Qc)
+    gap = np.maximum(0.0, np.maximum(T.min(axis=1) - Qc.max(axis=0), Qc.min(axis=0) - T.max(axis=1)))
+    # the squares summed in one order (occluded_pair.cpp's unoccluded_bounds)
+    d2 = (gap[:, 0] * gap[:, 0] + gap[:, 1] * gap[:, 1]) + gap[:, 2] * gap[:, 2]
+    out = np.full(len(T), whole)
+    far = d2 > 0
+    if far.any():
+        aQ = area_vector(Qc)
+        spreads, d = _spreads(Pc, Qc, aQ), np.sqrt(d2[far])
+        out[far] = np.minimum(whole, float(np.linalg.norm(aQ)) * _cosine(spreads[0], d)
+                              * _cosine(spreads[1], d) / (np.pi * d2[far]))
+    return out

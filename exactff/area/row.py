@@ -79,9 +79,9 @@ class AreaStats:
         (or all but a part whose bound is within the tolerance's share),
         :func:`~exactff.area.joint_umbra.hidden_pieces` (their pairs count in ``umbra_pairs``).
     unevaluated_triangles : int
-        A pair's smallest triangles (cells) left unevaluated, each at half the
-        unoccluded bound times its area within as much, while they take at most
-        ``AREA_UNEVALUATED_SHARE`` of the pair's tolerance
+        A pair's triangles (cells) of least bound times area left unevaluated, each at
+        half its bound on the unoccluded point values times its area, within as much,
+        while they take at most ``AREA_UNEVALUATED_SHARE`` of the pair's tolerance
         (:func:`~exactff.area.rules.unevaluated`).
     wall_hidden_pairs : int
         Pairs that walls between them (blockers in one plane, or in up to

@@ -389,31 +389,35 @@ def budget_refined(diff, area, depth, rung, before, atol, total_area):
 
 
 def unevaluated(area, bound, area_P, atol):
-    """Which of a pair's triangles (areas ``area`` (t,)) go unevaluated, and their area: the smallest
-    first (ties in the given order), while half the unoccluded point values' bound
-    ``bound`` (:func:`~exactff.area.points.unoccluded_bound`) times their summed area,
-    per unit area of P, stays within ``AREA_UNEVALUATED_SHARE`` of ``atol``; the largest
-    is always evaluated. The hidden part of each is between 0 and that bound, so that
-    its integral over them is half the bound times their area, within as much.
+    """Which of a pair's triangles go unevaluated, their area, and their bounds times
+    their areas summed: the least ``bound * area`` first (ties in the given order), while
+    half that sum, per unit area of P, stays within ``AREA_UNEVALUATED_SHARE`` of
+    ``atol``; the last in that order is always evaluated. ``area`` (t,) the triangles'
+    areas, ``bound`` (t,) a bound on the unoccluded point values over each
+    (:func:`~exactff.area.points.unoccluded_bounds`). The hidden part of each is between 0
+    and its bound, so that its integral over them is half that sum, within as much.
 
     Examples
     --------
-    Four triangles, an unoccluded bound of 1e-5 and a target of 1e-6: the two smallest
-    take 0.5e-5 * (10 + 20) / 1000 = 1.5e-7 (at most a quarter of the target), the
-    third would take 4e-7 in all:
+    Four triangles under bounds of 1e-5 (the last 2e-5) and a target of 1e-6: the two
+    least take 0.5 * 1e-5 * (10 + 20) / 1000 = 1.5e-7 (at most a quarter of the
+    target); with the third, 4e-7 in all:
 
-    >>> skip, skipped = unevaluated(np.array([50.0, 10.0, 20.0, 920.0]), 1e-5, 1000.0, 1e-6)
-    >>> skip.tolist(), skipped
-    ([False, True, True, False], 30.0)
+    >>> skip, area, weight = unevaluated(np.array([50.0, 10.0, 20.0, 30.0]),
+    ...                                  np.array([1e-5, 1e-5, 1e-5, 2e-5]), 1000.0, 1e-6)
+    >>> skip.tolist(), area, round(weight, 12)
+    ([False, True, True, False], 30.0, 0.0003)
     """
-    order = np.argsort(area, kind="stable")[:-1]
-    # their running area, summed in order (numpy's cumsum, as _core/occluded_pair.cpp adds)
-    running = np.cumsum(area[order])
-    k = int(np.count_nonzero(0.5 * bound * running / area_P
-                             <= tol.AREA_UNEVALUATED_SHARE * atol))
+    weight = bound * area
+    order = np.argsort(weight, kind="stable")[:-1]
+    # their running sums, in order (numpy's cumsum, as _core/occluded_pair.cpp adds)
+    running, running_area = np.cumsum(weight[order]), np.cumsum(area[order])
+    k = int(np.count_nonzero(0.5 * running / area_P <= tol.AREA_UNEVALUATED_SHARE * atol))
     out = np.zeros(len(area), dtype=bool)
     out[order[:k]] = True
-    return out, float(running[k - 1]) if k else 0.0
+    if not k:
+        return out, 0.0, 0.0
+    return out, float(running_area[k - 1]), float(running[k - 1])
 
 
 def triangle_areas(T):
