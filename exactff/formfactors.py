@@ -786,8 +786,10 @@ def area_form_factors(scene, rows=None, *, tolerance=1e-9, error=False, executor
     occluded pairs, that on a triangle between visibility events the integrand is
     smooth, so that the difference between a triangle's two rules (6 and 10 points a
     side, or a lower pair first) estimates the finer rule's error, plus the point
-    values' own bounds and the area of any cell the cutting lost (counted at the largest
-    value the hidden part can take). The rules' difference is an estimate, not a bound:
+    values' own bounds, the area of any cell the cutting lost (counted at the largest
+    value the hidden part can take), and the cells left unevaluated (each at half its
+    bound on the unoccluded point values, within as much: a bound, not an estimate).
+    The rules' difference is an estimate, not a bound:
     on View3D's gunter2 two collapsed rules on half a floor differed by 7.2e-8 where
     the finer one was 2.1e-7 off (both missed the kernel's peak near a corner), and
     the value came out -2.1e-7 (pinned: ``tests/test_area_view3d.py``, gunter2's floor

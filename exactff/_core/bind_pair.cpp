@@ -264,6 +264,7 @@ std::shared_ptr<exactff::PairConstants> pair_constants(py::dict tol, py::sequenc
     k->bound_cos_slack = num("AREA_BOUND_COS_SLACK");
     k->bound_spread_ulps = num("AREA_BOUND_SPREAD_ULPS");
     k->unevaluated_share = num("AREA_UNEVALUATED_SHARE");
+    k->unevaluated_least = num("AREA_UNEVALUATED_LEAST");
     k->samples = whole("AREA_CURVED_EVENT_SAMPLES");
     k->bisections = whole("AREA_CURVED_EVENT_BISECTIONS");
     k->max_triples = whole("AREA_CURVED_MAX_TRIPLES");

@@ -147,12 +147,13 @@ bool in_plane(const double* K, std::int64_t k, const double* nQ, double d, doubl
 
 // rules.py's unevaluated: the triangles of T (t, 3, 3) of least bound times area and their
 // corner flags dropped (ties in their order; never the last in that order), while half
-// their running sum, per unit area of P, stays within allowed; returns their area and
-// that sum, and adds the triangles dropped to count
+// their running sum, per unit area of P, stays within allowed, where they are at least
+// the share least of the triangles; returns their area and that sum, and adds the
+// triangles dropped to count
 std::pair<double, double> drop_unevaluated(std::vector<double>& T,
                                            std::vector<unsigned char>& corner,
                                            const std::vector<double>& bound, double area_P,
-                                           double allowed, long long& count) {
+                                           double allowed, double least, long long& count) {
     const std::vector<double> area = triangle_areas(T);
     const size_t t = area.size();
     std::vector<double> weight(t);
@@ -161,16 +162,18 @@ std::pair<double, double> drop_unevaluated(std::vector<double>& T,
     for (size_t i = 0; i < t; ++i) order[i] = i;
     std::stable_sort(order.begin(), order.end(),
                      [&](size_t i, size_t j) { return weight[i] < weight[j]; });
-    std::vector<unsigned char> drop(t, 0);
     double running = 0.0, running_area = 0.0, skipped = 0.0, skipped_area = 0.0;
-    for (size_t i = 0; i + 1 < t; ++i) {
-        running += weight[order[i]];
-        running_area += area[order[i]];
+    size_t k = 0;
+    for (; k + 1 < t; ++k) {
+        running += weight[order[k]];
+        running_area += area[order[k]];
         if (!(0.5 * running / area_P <= allowed)) break;
-        drop[order[i]] = 1;
         skipped = running;
         skipped_area = running_area;
     }
+    if (static_cast<double>(k) < least * static_cast<double>(t)) return {0.0, 0.0};
+    std::vector<unsigned char> drop(t, 0);
+    for (size_t i = 0; i < k; ++i) drop[order[i]] = 1;
     size_t kept = 0;
     for (size_t i = 0; i < t; ++i) {
         if (drop[i]) continue;
@@ -444,7 +447,7 @@ PairResult occluded_pair(const PairArgs& a) {
     if (a.shortcuts && !T.empty())
         std::tie(skipped, weight) = drop_unevaluated(
             T, corner, unoccluded_bounds(T, a.Qc, n_q, parts, bound, k.bound_cos_slack),
-            a.area_P, k.unevaluated_share * a.atol, out.unevaluated);
+            a.area_P, k.unevaluated_share * a.atol, k.unevaluated_least, out.unevaluated);
     area_Pc -= skipped;
     const size_t tc = T.size() / 9;
     // the hidden set-up (hidden.py's hidden_setup) of the blockers not in Qc's plane

@@ -25,7 +25,8 @@ struct PairConstants {
     double hidden_pad, ray_parallel, event_parallel, event_line_ulps, hull_rtol, extend_rtol,
         curve_rtol, chord_split, event_line_key, sliver_cell, cell_cover_rtol,
         cell_cover_atol_share, low_rules_tolerance,
-        coplanar_ulps, eps, bound_cos_slack, bound_spread_ulps, unevaluated_share;
+        coplanar_ulps, eps, bound_cos_slack, bound_spread_ulps, unevaluated_share,
+        unevaluated_least;
     std::int64_t samples, bisections, max_triples, chord_halvings, rows_per_call,
         umbra_min_lines, max_event_lines, many_cells;
     // hidden_setup.h's

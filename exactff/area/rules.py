@@ -392,7 +392,8 @@ def unevaluated(area, bound, area_P, atol):
     """Which of a pair's triangles go unevaluated, their area, and their bounds times
     their areas summed: the least ``bound * area`` first (ties in the given order), while
     half that sum, per unit area of P, stays within ``AREA_UNEVALUATED_SHARE`` of
-    ``atol``; the last in that order is always evaluated. ``area`` (t,) the triangles'
+    ``atol``; the last in that order is always evaluated, and none is left out unless
+    ``AREA_UNEVALUATED_LEAST`` of them (a fifth) are. ``area`` (t,) the triangles'
     areas, ``bound`` (t,) a bound on the unoccluded point values over each
     (:func:`~exactff.area.points.unoccluded_bounds`). The hidden part of each is between 0
     and its bound, so that its integral over them is half that sum, within as much.
@@ -413,6 +414,8 @@ def unevaluated(area, bound, area_P, atol):
     # their running sums, in order (numpy's cumsum, as _core/occluded_pair.cpp adds)
     running, running_area = np.cumsum(weight[order]), np.cumsum(area[order])
     k = int(np.count_nonzero(0.5 * running / area_P <= tol.AREA_UNEVALUATED_SHARE * atol))
+    if k < tol.AREA_UNEVALUATED_LEAST * len(area):
+        k = 0
     out = np.zeros(len(area), dtype=bool)
     out[order[:k]] = True
     if not k:
