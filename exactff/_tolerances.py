@@ -456,7 +456,7 @@ AREA_SLIVER_SHARE = 1e-3
 
 #: Area form factors: the share of a pair's absolute tolerance that its triangles (cells)
 #: of least bound times area may take unevaluated, each at half its bound on the
-#: unoccluded point values times its area, within as much (exactff.area.rules.unevaluated,
+#: unoccluded point values times its area, within as much (exactff.area.points.unevaluated,
 #: exactff.area.points.unoccluded_bounds): where many events cut an emitter far from a
 #: small receiver, most cells matter less than the tolerance (View3D's gunter2, wall 7
 #: of 380 to a gable triangle of 0.28 some 100 away: 52,067 triangles, the bound 8.3e-6

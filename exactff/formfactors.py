@@ -733,7 +733,7 @@ def area_form_factors(scene, rows=None, *, tolerance=1e-9, error=False, executor
         ``unevaluated_triangles`` (a pair's cells of least bound times area, left
         unevaluated at half their bounds on the unoccluded point values times their
         areas while they take at most a quarter of the pair's tolerance,
-        ``exactff.area.rules.unevaluated``),
+        ``exactff.area.points.unevaluated``),
         ``wall_hidden_pairs`` (pairs that walls between them hide whole, blockers in
         one plane or in a few one behind the other, proven in rationals: exactly 0,
         not integrated; ``exactff.area.walls``),

@@ -746,7 +746,7 @@ def test_compiled_pair_is_the_reference_to_the_bit(monkeypatch, name, rows, tole
     # (_hidden_integral, the reference): every value and estimate the same to the bit
     # (numpy's pairwise sums and the BLAS's fused products kept), the same counts, and
     # every occluded pair taken by the one call (gunter1 at 1e-6 leaves 6 triangles
-    # unevaluated, rules.unevaluated)
+    # unevaluated, points.unevaluated)
     scene = (ef.scenes.unit_squares_room() if name == "box"
              else ef.read_vs3(os.path.join(DATA, name)))
     st = _compiled_against_reference(monkeypatch, scene, rows, tolerance, shortcuts)
@@ -772,7 +772,7 @@ def _compiled_against_reference(monkeypatch, scene, rows, tolerance, shortcuts):
 
 @pytest.mark.parametrize("name", ["gunter1.vs3", "box"])
 def test_compiled_pair_leaves_out_the_reference_triangles(monkeypatch, name):
-    # the triangles left unevaluated (rules.unevaluated, the compiled drop_unevaluated)
+    # the triangles left unevaluated (points.unevaluated, the compiled drop_unevaluated)
     # wherever their share of the tolerance allows, however few (AREA_UNEVALUATED_LEAST
     # 0: 103 of gunter1's at 1e-6, 33 of the box's rows): the one call as the
     # reference's steps, to the bit

@@ -395,7 +395,7 @@ def test_gunter2_wall_cells_left_unevaluated_within_their_share(monkeypatch):
     # blockers between: the events cut the wall into 52,067 triangles, most far smaller
     # than the tolerance needs (the value 3.4e-7, the unoccluded bound 8.3e-6 over the
     # wall, 4.8e-7 at its far end). Those of least bound times area, left unevaluated
-    # within a quarter of the tolerance (rules.unevaluated), against every cell
+    # within a quarter of the tolerance (points.unevaluated), against every cell
     # evaluated (an estimate of 8e-10): within the two estimates (0.91 of them), for a
     # quarter of the points (the pair has umbras to look for: the reference's steps take
     # it; the compiled pair's, test_compiled_pair_is_the_reference_to_the_bit)

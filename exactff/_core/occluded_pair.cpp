@@ -145,7 +145,7 @@ bool in_plane(const double* K, std::int64_t k, const double* nQ, double d, doubl
     return true;
 }
 
-// rules.py's unevaluated: the triangles of T (t, 3, 3) of least bound times area and their
+// points.py's unevaluated: the triangles of T (t, 3, 3) of least bound times area and their
 // corner flags dropped (ties in their order; never the last in that order), while half
 // their running sum, per unit area of P, stays within allowed, where they are at least
 // the share least of the triangles; returns their area and that sum, and adds the
@@ -438,8 +438,9 @@ PairResult occluded_pair(const PairArgs& a) {
                  k.hull_rtol, corner);
     const long long start = T.size() / 9 <= static_cast<size_t>(k.many_cells) &&
                             a.atol < k.low_rules_tolerance;
-    // the smallest triangles left unevaluated within a share of atol, at half the
-    // unoccluded bound times their area (rules.py's unevaluated)
+    // the triangles of least bound times area left unevaluated within a share of atol,
+    // each at half its bound on the unoccluded point values times its area (points.py's
+    // unoccluded_bounds and unevaluated)
     const BoundParts parts =
         bound_parts(a.Pc, n_p, a.Qc, n_q, k.eps, k.bound_spread_ulps, k.fused_dot);
     const double bound = unoccluded_bound(parts, k.bound_cos_slack);

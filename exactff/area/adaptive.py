@@ -1,12 +1,12 @@
 """The adaptive integral of the hidden part over the emitter: an occluded pair's value
-is its unoccluded value (closed form) less the integral of the hidden part, taken over
-the cells between visibility events by pairs of triangle rules, the triangles whose
-rules differ most refined (the higher pair, then cut in four) while the pair's sum of
-differences exceeds half of the absolute tolerance ``atol`` (a global budget per pair),
-and checked against the unoccluded point values' integral, known exactly (docs/explanation/area-form-factors.md). The
-levels run compiled (:mod:`exactff.area._pair`, ``_core/levels.cpp``, the GIL released);
-:func:`_adaptive_levels` is their numpy reference and takes the pairs they decline; so
-is :func:`_hidden_integral` to the whole pair in one call (:mod:`.compiled_pair`).
+is its unoccluded value (closed form) less the integral of the hidden part over the
+cells between visibility events, by pairs of triangle rules; the triangles whose rules
+differ most are refined (the higher pair, then cut in four) while the pair's sum of
+differences exceeds half of the absolute tolerance ``atol``, and the sum is checked
+against the unoccluded values' integral, known exactly (see
+docs/explanation/area-form-factors.md). The levels run compiled (:mod:`exactff.area._pair`,
+``_core/levels.cpp``, the GIL released); :func:`_adaptive_levels` is their numpy
+reference, :func:`_hidden_integral` that of the whole pair in one call (:mod:`.compiled_pair`).
 """
 
 import numpy as np
@@ -17,16 +17,17 @@ from ..errors import NumericalError, misses_tolerance
 from ..geometry import area_vector, cross, receiver_frame
 from ._pair import adaptive_levels as _compiled_adaptive_levels
 from ._pair import corner_first as _compiled_corner_first
-from .compiled_pair import LEVEL_RULES, LEVEL_TOLERANCES, hidden_integral_in_one_call as _hidden_integral_in_one_call
+from .compiled_pair import LEVEL_RULES, LEVEL_TOLERANCES
+from .compiled_pair import hidden_integral_in_one_call as _hidden_integral_in_one_call
 from .curved import curved_event_lines
 from .events import cut_cells, distinct_lines, event_lines
 from .hidden import hidden_setup, hidden_values
-from .points import point_values, unoccluded_bound, unoccluded_bounds
+from .points import point_values, unevaluated, unoccluded_bound, unoccluded_bounds
 from .joint_umbra import pair_umbras, split_pair
 from .rule_check import checked_rules, missed_unoccluded
 from .umbra import umbra_cells
 from .rules import (CORNER_MIDDLE_RULE, budget_refined, far_triangles, quarter, refined, rule_pair,
-                    symmetric_degrees, symmetric_null_spread, triangle_areas, triangle_rule, unevaluated)
+                    symmetric_degrees, symmetric_null_spread, triangle_areas, triangle_rule)
 
 __all__ = ["COMPILED_LEVELS", "COMPILED_PAIR", "occluded_pair"]
 
@@ -222,9 +223,10 @@ def _hidden_integral(S, Pc, Qc, nP, atol, area_P, whole, shortcuts, st, solid=No
     # many cells (small ones) start with the low pair of rules, few with the high pair
     # (and so do the triangles they are cut into); at a coarse target, all start low
     start = int(len(T) <= tol.AREA_MANY_CELLS and atol < tol.AREA_LOW_RULES_TOLERANCE)
-    # the least triangles left unevaluated within a share of atol (rules.unevaluated)
-    skip, skipped, weight = (unevaluated(triangle_areas(T), unoccluded_bounds(T, Pc, Qc), area_P, atol)
-                             if shortcuts and len(T) else (np.zeros(len(T), dtype=bool), 0.0, 0.0))
+    # the least triangles left unevaluated within a share of atol (points.unevaluated)
+    skip, skipped, weight = (
+        unevaluated(triangle_areas(T), unoccluded_bounds(T, Pc, Qc), area_P, atol, st)
+        if shortcuts and len(T) else (np.zeros(len(T), dtype=bool), 0.0, 0.0))
     T, corner = T[~skip], corner[~skip]
     area_Pc -= umbra_area + strip_slivers + skipped
     depth = np.zeros(len(T), dtype=int)
@@ -235,8 +237,6 @@ def _hidden_integral(S, Pc, Qc, nP, atol, area_P, whole, shortcuts, st, solid=No
     bound_atol = [tol.AREA_IMAGE_BUDGET_SHARE * atol]
     total_area = float(triangle_areas(T).sum())
     slivers, points = strip_slivers, 0
-    if st is not None:
-        st.unevaluated_triangles += int(skip.sum())
     # the triangles accepted: vertices, level, rung; per unit area of P, the high rule's
     # integral of the hidden part H, the rules' difference on H, the point values'
     # estimates, and the same two rules' integrals of U (the unoccluded point values)

@@ -11,7 +11,7 @@ from .. import _tolerances as tol
 from ..geometry import area_vector, receiver_frame
 from ..kernel._sector import row_sums
 
-__all__ = ["point_values", "unoccluded_bound", "unoccluded_bounds"]
+__all__ = ["point_values", "unoccluded_bound", "unoccluded_bounds", "unevaluated"]
 
 
 def point_values(X, nP, Qs):
@@ -147,3 +147,42 @@ def unoccluded_bounds(T, Pc, Qc):
         out[far] = np.minimum(whole, float(np.linalg.norm(aQ)) * _cosine(spreads[0], d)
                               * _cosine(spreads[1], d) / (np.pi * d2[far]))
     return out
+
+
+def unevaluated(area, bound, area_P, atol, st=None):
+    """Which of a pair's triangles go unevaluated, their area, and their bounds times
+    their areas summed: the least ``bound * area`` first (ties in the given order), while
+    half that sum, per unit area of P, stays within ``AREA_UNEVALUATED_SHARE`` of
+    ``atol``; the last in that order is always evaluated, and none is left out unless
+    ``AREA_UNEVALUATED_LEAST`` of them (a fifth) are. ``area`` (t,) the triangles'
+    areas, ``bound`` (t,) a bound on the unoccluded point values over each
+    (:func:`unoccluded_bounds`). The hidden part of each is between 0
+    and its bound, so that its integral over them is half that sum, within as much.
+    ``st`` (an :class:`~exactff.area.row.AreaStats`) counts them in
+    ``unevaluated_triangles``.
+
+    Examples
+    --------
+    Four triangles under bounds of 1e-5 (the last 2e-5) and a target of 1e-6: the two
+    least take 0.5 * 1e-5 * (10 + 20) / 1000 = 1.5e-7 (at most a quarter of the
+    target); with the third, 4e-7 in all:
+
+    >>> skip, area, weight = unevaluated(np.array([50.0, 10.0, 20.0, 30.0]),
+    ...                                  np.array([1e-5, 1e-5, 1e-5, 2e-5]), 1000.0, 1e-6)
+    >>> skip.tolist(), area, round(weight, 12)
+    ([False, True, True, False], 30.0, 0.0003)
+    """
+    weight = bound * area
+    order = np.argsort(weight, kind="stable")[:-1]
+    # their running sums, in order (numpy's cumsum, as _core/occluded_pair.cpp adds)
+    running, running_area = np.cumsum(weight[order]), np.cumsum(area[order])
+    k = int(np.count_nonzero(0.5 * running / area_P <= tol.AREA_UNEVALUATED_SHARE * atol))
+    if k < tol.AREA_UNEVALUATED_LEAST * len(area):
+        k = 0
+    out = np.zeros(len(area), dtype=bool)
+    out[order[:k]] = True
+    if st is not None:
+        st.unevaluated_triangles += k
+    if not k:
+        return out, 0.0, 0.0
+    return out, float(running_area[k - 1]), float(running[k - 1])

@@ -82,7 +82,7 @@ class AreaStats:
         A pair's triangles (cells) of least bound times area left unevaluated, each at
         half its bound on the unoccluded point values times its area, within as much,
         while they take at most ``AREA_UNEVALUATED_SHARE`` of the pair's tolerance
-        (:func:`~exactff.area.rules.unevaluated`).
+        (:func:`~exactff.area.points.unevaluated`).
     wall_hidden_pairs : int
         Pairs that walls between them (blockers in one plane, or in up to
         ``AREA_WALL_PLANES`` planes one behind the other) hide whole, proven in

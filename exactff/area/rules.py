@@ -15,7 +15,7 @@ from ..geometry import cross, receiver_frame
 __all__ = ["triangle_rule", "symmetric_triangle_rule", "SYMMETRIC_RULES",
            "SYMMETRIC_NULL_RULES", "symmetric_null_spread", "GAUSS_RULE",
            "GAUSS_LOW_RULE", "CORNER_MIDDLE_RULE", "RULE_PAIRS", "rule_pair", "quarter",
-           "refined", "budget_refined", "far_triangles", "unevaluated", "symmetric_degrees", "triangle_areas",
+           "refined", "budget_refined", "far_triangles", "symmetric_degrees", "triangle_areas",
            "triangulate"]
 
 #: Gauss-Legendre nodes and weights on [-1, 1]: the far-field rule's pair (12 and 8
@@ -386,41 +386,6 @@ def budget_refined(diff, area, depth, rung, before, atol, total_area):
     order = mine[np.argsort(-diff[mine], kind="stable")]
     left = float(np.cumsum(diff[mine])[-1]) - np.concatenate([[0.0], np.cumsum(diff[order])[:-1]])
     return np.sort(order[left > budget])
-
-
-def unevaluated(area, bound, area_P, atol):
-    """Which of a pair's triangles go unevaluated, their area, and their bounds times
-    their areas summed: the least ``bound * area`` first (ties in the given order), while
-    half that sum, per unit area of P, stays within ``AREA_UNEVALUATED_SHARE`` of
-    ``atol``; the last in that order is always evaluated, and none is left out unless
-    ``AREA_UNEVALUATED_LEAST`` of them (a fifth) are. ``area`` (t,) the triangles'
-    areas, ``bound`` (t,) a bound on the unoccluded point values over each
-    (:func:`~exactff.area.points.unoccluded_bounds`). The hidden part of each is between 0
-    and its bound, so that its integral over them is half that sum, within as much.
-
-    Examples
-    --------
-    Four triangles under bounds of 1e-5 (the last 2e-5) and a target of 1e-6: the two
-    least take 0.5 * 1e-5 * (10 + 20) / 1000 = 1.5e-7 (at most a quarter of the
-    target); with the third, 4e-7 in all:
-
-    >>> skip, area, weight = unevaluated(np.array([50.0, 10.0, 20.0, 30.0]),
-    ...                                  np.array([1e-5, 1e-5, 1e-5, 2e-5]), 1000.0, 1e-6)
-    >>> skip.tolist(), area, round(weight, 12)
-    ([False, True, True, False], 30.0, 0.0003)
-    """
-    weight = bound * area
-    order = np.argsort(weight, kind="stable")[:-1]
-    # their running sums, in order (numpy's cumsum, as _core/occluded_pair.cpp adds)
-    running, running_area = np.cumsum(weight[order]), np.cumsum(area[order])
-    k = int(np.count_nonzero(0.5 * running / area_P <= tol.AREA_UNEVALUATED_SHARE * atol))
-    if k < tol.AREA_UNEVALUATED_LEAST * len(area):
-        k = 0
-    out = np.zeros(len(area), dtype=bool)
-    out[order[:k]] = True
-    if not k:
-        return out, 0.0, 0.0
-    return out, float(running_area[k - 1]), float(running[k - 1])
 
 
 def triangle_areas(T):
