@@ -431,3 +431,85 @@ def test_gunter2_roof_strip_behind_walls_of_four_planes(monkeypatch):
         with monkeypatch.context() as m:
             m.setattr(tol, name, value)
             assert not hidden_by_walls(Pc, Qc, blockers, scale), name
+
+
+def _count_searches(m):
+    """Wrap the walls' search and scoring (on the monkeypatch context ``m``) to count
+    the nodes of each search and the walls' scorings: a dict of counts."""
+    from exactff.area import walls as walls_module
+
+    counts = {"plan nodes": 0, "proof nodes": 0, "scorings": 0}
+    search, scores = walls_module._hidden, walls_module._float_scores
+
+    def counted_search(P, Q, walls, band, depth, budget, exact, plan):
+        counts["proof nodes" if exact else "plan nodes"] += 1
+        return search(P, Q, walls, band, depth, budget, exact, plan)
+
+    def counted_scores(*args):
+        counts["scorings"] += 1
+        return scores(*args)
+
+    m.setattr(walls_module, "_hidden", counted_search)
+    m.setattr(walls_module, "_float_scores", counted_scores)
+    return counts
+
+
+def test_the_proof_follows_the_plan_and_scores_no_wall_again():
+    # gunter2's (22, 165) behind walls of four planes, and the annex's window closed
+    # behind: the exact search meets the plan's nodes, so the walls are scored only by
+    # the plan (the proof scored them again at each of its nodes before), and its
+    # first try at each node is the wall that hid it in doubles (fewer nodes); the
+    # decisions are those without the plan. Planted: a plan that matches no node
+    # (``_Plan.find`` None) fails the counts
+    from exactff.area.walls import _Plan
+
+    scene = ef.read_vs3(GUNTER2)
+    Pc, Qc, B, scale = pair_parts(scene, 22, 165)
+    cases = [(Pc, Qc, [np.asarray(scene.polygons[k], float) for k in B], scale),
+             _windowed(True, True) + (4.0,)]
+    for P, Q, blockers, reach in cases:
+        with pytest.MonkeyPatch.context() as m:
+            followed = _count_searches(m)
+            assert hidden_by_walls(P, Q, blockers, reach)
+        with pytest.MonkeyPatch.context() as m:
+            alone = _count_searches(m)
+            m.setattr(_Plan, "find", lambda self, Pf, Qf, band: None)
+            assert hidden_by_walls(P, Q, blockers, reach)
+        assert followed["proof nodes"] > 1
+        assert followed["scorings"] == followed["plan nodes"] == alone["plan nodes"]
+        assert alone["scorings"] == alone["plan nodes"] + alone["proof nodes"]
+        assert followed["proof nodes"] <= alone["proof nodes"]
+
+
+@given(walls_and_pairs(), st.randoms(use_true_random=False))
+def test_a_wrong_plan_costs_tries_never_a_wrong_proof(case, rnd):
+    # the plan in doubles made to find every pair hidden (no piece left) and to hand
+    # the proof every wall, a decoy's plane among them, in a random order: the proof
+    # decides by the rationals alone, so a pair it finds hidden is hidden by the
+    # construction (the crossings within the wall's rectangle)
+    from exactff.area import walls as walls_module
+
+    P, Q, pieces, _, axis, sign = case
+    assume(np.linalg.matrix_rank(np.vstack([P, Q]) - P[0]) == 3)
+    others = [a for a in range(3) if a != axis]
+    pts = _crossings(P * sign, Q * sign, axis)
+    if sign < 0:
+        pts = [[-c for c in v] for v in pts]
+    lo = np.min(np.vstack([K[:, others] for K in pieces]), axis=0)
+    hi = np.max(np.vstack([K[:, others] for K in pieces]), axis=0)
+    inside = all(Fraction(float(lo[i])) <= v[others[i]] <= Fraction(float(hi[i]))
+                 for v in pts for i in range(2))
+    decoy = pieces[0].copy()
+    decoy[:, axis] -= sign * 0.125
+
+    def shuffled(self, Pf, Qf, band):
+        walls = list({id(n[2][k][2]): n[2][k][2] for n in self for k in range(len(n[2]))}
+                     .values())
+        rnd.shuffle(walls)
+        return [(0.0, k, w, None, None) for k, w in enumerate(walls)]
+
+    with pytest.MonkeyPatch.context() as m:
+        m.setattr(walls_module, "_float_pieces", lambda hull, left, w: [])
+        m.setattr(walls_module._Plan, "find", shuffled)
+        hidden = hidden_by_walls(P, Q, pieces + [decoy], 10.0)
+    assert inside or not hidden

@@ -26,7 +26,8 @@ in one plane, and are convex there, take part: scenes turned off the axes, where
 pieces are coplanar only to rounding, are left to the integration. Doubles only choose
 what to try: a pair is refused where a segment between inner points of the two misses
 every blocker; the planes are grouped within AREA_WALL_BAND; the search
-runs first in doubles (GEOS), and only where it finds the pair hidden in rationals.
+runs first in doubles (GEOS), and only where it finds the pair hidden in rationals,
+which takes the order of its tries from the search in doubles (:class:`_Plan`).
 """
 
 from fractions import Fraction
@@ -94,10 +95,13 @@ def hidden_by_walls(Pc, Qc, blockers, reach, cache=None):
     if not len(V) or _a_segment_passes(Pc, Qc, V, N, D, band):
         return False
     walls = _walls([blockers[k] for k in np.flatnonzero(keep)], N, D, reach, cache)
-    # a plan in doubles first; only where it finds the pair hidden, the proof
-    return (_hidden(Pc, Qc, walls, band, depth, [tol.AREA_WALL_NODES], False)
+    # a plan in doubles first; only where it finds the pair hidden, the proof, which
+    # follows the plan: its walls scored at the plan's nodes, the plane that hid each
+    # node first
+    plan = _Plan()
+    return (_hidden(Pc, Qc, walls, band, depth, [tol.AREA_WALL_NODES], False, plan)
             and _hidden(_rational(Pc), _rational(Qc), walls, band, depth,
-                        [tol.AREA_WALL_NODES], True))
+                        [tol.AREA_WALL_NODES], True, plan))
 
 
 class _Wall:
@@ -226,13 +230,51 @@ def _exact_normal(K):
     return None
 
 
-def _hidden(P, Q, walls, band, depth, budget, exact):
+class _Plan(list):
+    """The nodes of the search in doubles, for the exact search to follow: each node's
+    pair as boxes, its walls scored (:func:`_float_scores`) and the wall that hid it
+    (None where none did)."""
+
+    def add(self, Pf, Qf, scored):
+        node = [_box(Pf), _box(Qf), scored, None]
+        self.append(node)
+        return node
+
+    def find(self, Pf, Qf, band):
+        """The scored walls of a node whose pair's boxes are within ``band`` of those of
+        (Pf, Qf), the wall that hid it first; None where no node is. Only the order of
+        the exact search's tries comes from here, so a node matched wrongly costs tries,
+        never a wrong proof."""
+        boxes = _box(Pf), _box(Qf)
+        found = None
+        for Pbox, Qbox, scored, proved_by in self:
+            if (np.abs(Pbox - boxes[0]).max() <= band
+                    and np.abs(Qbox - boxes[1]).max() <= band):
+                found = scored, proved_by
+                if proved_by is not None:
+                    break
+        if found is None:
+            return None
+        scored, proved_by = found
+        return sorted(scored, key=lambda s: (s[2] is not proved_by,) + s[:2])
+
+
+def _box(X):
+    return np.concatenate([X.min(axis=0), X.max(axis=0)])
+
+
+def _hidden(P, Q, walls, band, depth, budget, exact, plan):
     """Whether the walls hide all of Q from all of P (both convex), with up to
     ``depth`` more planes behind the first; ``budget``: tests left. ``exact``: P, Q and
     the pieces in rationals, decided exactly; else in doubles, by GEOS (a plan: only
-    where it finds the pair hidden is the exact search run)."""
+    where it finds the pair hidden is the exact search run). ``plan``: the search in
+    doubles records its nodes there (:class:`_Plan`), and the exact search takes the
+    order of its tries from them where it meets the same pair."""
     Pf, Qf = (_floats(P), _floats(Q)) if exact else (P, Q)
-    scored = _float_scores(Pf, Qf, walls, band)
+    scored = plan.find(Pf, Qf, band) if exact else None
+    if scored is None:
+        scored = _float_scores(Pf, Qf, walls, band)
+    node = None if exact else plan.add(Pf, Qf, scored)
     for share, _, w, hull, left in scored[:tol.AREA_WALL_TRIES]:
         if depth == 0 and share > tol.AREA_WALL_BAND:
             break
@@ -242,12 +284,13 @@ def _hidden(P, Q, walls, band, depth, budget, exact):
         pieces = _uncovered_exactly(P, Q, w) if exact else _float_pieces(hull, left, w)
         if pieces is None:
             continue
-        if not pieces:
-            return True
-        if depth == 0 or len(pieces) > tol.AREA_WALL_PIECES:
+        if pieces and (depth == 0 or len(pieces) > tol.AREA_WALL_PIECES):
             continue
-        if all(_hidden(P, U, walls, band, depth - 1, budget, exact)
-               or _hidden(U, Q, walls, band, depth - 1, budget, exact) for U in pieces):
+        if all(_hidden(P, U, walls, band, depth - 1, budget, exact, plan)
+               or _hidden(U, Q, walls, band, depth - 1, budget, exact, plan)
+               for U in pieces):
+            if node is not None:
+                node[3] = w
             return True
     return False
 
