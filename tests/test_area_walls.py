@@ -513,3 +513,49 @@ def test_a_wrong_plan_costs_tries_never_a_wrong_proof(case, rnd):
         m.setattr(walls_module._Plan, "find", shuffled)
         hidden = hidden_by_walls(P, Q, pieces + [decoy], 10.0)
     assert inside or not hidden
+
+
+def _split_in_fractions(poly, a, b):
+    """The split of a convex polygon by the line a -> b with each side a Fraction (the
+    cross product made whole), the reference for ``split``'s integer sides."""
+    from exactff.area.rational_polygons import cross2
+    s = [cross2(a, b, p) for p in poly]
+    left, right = [], []
+    for i, p in enumerate(poly):
+        j = (i + 1) % len(poly)
+        if s[i] >= 0:
+            left.append(p)
+        if s[i] <= 0:
+            right.append(p)
+        if (s[i] > 0 > s[j]) or (s[i] < 0 < s[j]):
+            t = s[i] / (s[i] - s[j])
+            q = poly[j]
+            x = (p[0] + t * (q[0] - p[0]), p[1] + t * (q[1] - p[1]))
+            left.append(x)
+            right.append(x)
+    return left, right
+
+
+_small_rationals = st.fractions(min_value=-3, max_value=3, max_denominator=4)
+
+
+@given(st.lists(st.tuples(_small_rationals, _small_rationals), min_size=3, max_size=8),
+       st.tuples(_small_rationals, _small_rationals), st.tuples(_small_rationals, _small_rationals))
+def test_split_parts_and_their_area_against_the_fractions(pts, a, b):
+    # a convex polygon of small rationals split by a line through two such points
+    # (lines through vertices and along edges often): the parts as the split with
+    # Fraction sides makes them, and each part of positive area exactly where its
+    # shoelace sum is not 0, the polygon too with a vertex added halfway along its
+    # first edge (its first triangle flat), and that edge's points alone (no area;
+    # the split's parts have area or at most two points). Planted: has_area testing
+    # the first triangle only, or the vertices' count only, fails
+    from exactff.area.rational_polygons import area2, has_area, hull, split
+    assume(a != b)
+    poly = hull(pts)
+    assume(len(poly) >= 3)
+    parts = split(poly, a, b)
+    assert parts == _split_in_fractions(poly, a, b)
+    halfway = tuple((u + v) / 2 for u, v in zip(poly[0], poly[1]))
+    flat = [poly[0], halfway, poly[1], halfway]
+    for part in parts + (poly, poly[::-1], poly + poly[:1], [poly[0], halfway] + poly[1:], flat):
+        assert has_area(part) == (len(part) >= 3 and area2(part) != 0), part

@@ -7,7 +7,7 @@ Fraction operation would normalise by a gcd). Polygons are lists of points.
 
 from fractions import Fraction
 
-__all__ = ["cross2", "turn", "ccw", "hull", "split", "area2", "minus_convex"]
+__all__ = ["cross2", "turn", "ccw", "hull", "split", "area2", "has_area", "minus_convex"]
 
 
 def _cross_parts(o, a, b):
@@ -150,18 +150,21 @@ def split(poly, a, b):
     >>> area2(right)
     Fraction(4, 1)
     """
-    s = [cross2(a, b, p) for p in poly]
+    # each vertex's cross product as an integer numerator and a positive denominator:
+    # its side is the numerator's sign; a Fraction is made only for the crossings
+    s = [_cross_parts(a, b, p) for p in poly]
     left, right = [], []
     for i, p in enumerate(poly):
         j = (i + 1) % len(poly)
-        sp, sq = s[i], s[j]
-        if sp >= 0:
+        (np_, dp), (nq, dq) = s[i], s[j]
+        if np_ >= 0:
             left.append(p)
-        if sp <= 0:
+        if np_ <= 0:
             right.append(p)
-        if (sp > 0 > sq) or (sp < 0 < sq):
+        if (np_ > 0 > nq) or (np_ < 0 < nq):
             q = poly[j]
-            t = sp / (sp - sq)
+            # t = sp / (sp - sq), with sp = np_ / dp and sq = nq / dq
+            t = Fraction(np_ * dq, np_ * dq - nq * dp)
             x = (p[0] + t * (q[0] - p[0]), p[1] + t * (q[1] - p[1]))
             left.append(x)
             right.append(x)
@@ -213,8 +216,22 @@ def minus_convex(piece, K):
     rest = piece
     for i, a in enumerate(K):
         rest, beyond = split(rest, a, K[(i + 1) % len(K)])
-        if len(beyond) >= 3 and area2(beyond) != 0:
+        if has_area(beyond):
             out.append(beyond)
-        if len(rest) < 3 or area2(rest) == 0:
+        if not has_area(rest):
             break
     return out
+
+
+def has_area(poly):
+    """Whether a convex polygon (either orientation, collinear or repeated vertices
+    allowed: the parts :func:`split` makes) has positive area, exactly: the triangles
+    of its fan from the first vertex all turn one way or not at all, so its area is 0
+    only where every one of them is flat (integer turns, no Fraction made).
+
+    Examples
+    --------
+    >>> has_area([(0, 0), (1, 0), (1, 1)]), has_area([(0, 0), (1, 1), (2, 2), (3, 3)])
+    (True, False)
+    """
+    return any(turn(poly[0], poly[i], poly[i + 1]) for i in range(1, len(poly) - 1))

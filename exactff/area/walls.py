@@ -38,7 +38,7 @@ import shapely
 from .. import _tolerances as tol
 from ..geometry import cross
 from .culling import padded_polygons
-from .rational_polygons import area2, ccw, hull, minus_convex
+from .rational_polygons import ccw, has_area, hull, minus_convex
 
 __all__ = ["hidden_by_walls"]
 
@@ -395,23 +395,25 @@ def _uncovered_exactly(P, Q, w):
             if a > 0 > b:
                 t = a / (a - b)
                 pts.append(tuple(p[i] + t * (q[i] - p[i]) for i in keep))
-    pieces = [hull(pts)]
-    if len(pieces[0]) < 3 or area2(pieces[0]) == 0:
+    piece = hull(pts)
+    if not has_area(piece):
         return None
-    # each cover taken from the pieces whose boxes (doubles) overlap its own: skipping
-    # a cover only leaves more uncovered, so the boxes need no proof
+    # each cover taken from the pieces whose boxes (doubles, made once a piece) overlap
+    # its own: skipping a cover only leaves more uncovered, so the boxes need no proof
+    boxed = [(piece, _float_box(piece))]
     for K2, (klo, khi) in covers:
+        (kx0, ky0), (kx1, ky1) = klo.tolist(), khi.tolist()
         out = []
-        for piece in pieces:
-            box = np.array([[float(x), float(y)] for x, y in piece])
-            if np.any(box.min(axis=0) >= khi) or np.any(box.max(axis=0) <= klo):
-                out.append(piece)
+        for piece, box in boxed:
+            x0, y0, x1, y1 = box
+            if x0 >= kx1 or y0 >= ky1 or x1 <= kx0 or y1 <= ky0:
+                out.append((piece, box))
             else:
-                out.extend(minus_convex(piece, K2))
-        pieces = out
-        if not pieces:
+                out.extend((p, _float_box(p)) for p in minus_convex(piece, K2))
+        boxed = out
+        if not boxed:
             return []
-    pieces = _joined(pieces)
+    pieces = _joined([piece for piece, _ in boxed])
     # lifted back into the plane: the axis dropped from nf . x = d
     lifted = []
     for piece in pieces:
@@ -423,6 +425,12 @@ def _uncovered_exactly(P, Q, w):
             U.append(tuple(x))
         lifted.append(U)
     return lifted
+
+
+def _float_box(piece):
+    """The box of a polygon of rationals in doubles: (x min, y min, x max, y max)."""
+    xs, ys = [float(x) for x, _ in piece], [float(y) for _, y in piece]
+    return min(xs), min(ys), max(xs), max(ys)
 
 
 def _joined(pieces):
