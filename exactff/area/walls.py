@@ -233,7 +233,12 @@ def _exact_normal(K):
 class _Plan(list):
     """The nodes of the search in doubles, for the exact search to follow: each node's
     pair as boxes, its walls scored (:func:`_float_scores`) and the wall that hid it
-    (None where none did)."""
+    (None where none did); and the sides of the polygons it met, by identity (P and Q
+    come down to their pieces' nodes as they are)."""
+
+    def __init__(self):
+        super().__init__()
+        self.sides = {}
 
     def add(self, Pf, Qf, scored):
         node = [_box(Pf), _box(Qf), scored, None]
@@ -273,7 +278,7 @@ def _hidden(P, Q, walls, band, depth, budget, exact, plan):
     Pf, Qf = (_floats(P), _floats(Q)) if exact else (P, Q)
     scored = plan.find(Pf, Qf, band) if exact else None
     if scored is None:
-        scored = _float_scores(Pf, Qf, walls, band)
+        scored = _float_scores(Pf, Qf, walls, band, plan.sides)
     node = None if exact else plan.add(Pf, Qf, scored)
     for share, _, w, hull, left in scored[:tol.AREA_WALL_TRIES]:
         if depth == 0 and share > tol.AREA_WALL_BAND:
@@ -295,21 +300,21 @@ def _hidden(P, Q, walls, band, depth, budget, exact, plan):
     return False
 
 
-def _float_scores(Pf, Qf, walls, band):
+def _float_scores(Pf, Qf, walls, band, sides=None):
     """The walls whose plane has P on one closed side and Q on the other, neither in it,
     that cover part of the slice (doubles, GEOS: the hull of the crossings, less the
     wall's union), sorted by the share GEOS finds uncovered (then by the walls' order):
     a list of ``(share, position, wall, hull, uncovered part)``. All the walls are
     scored together: their sides, the crossings and the slices' boxes in arrays, the
-    hulls and their differences in one vectorized GEOS call each."""
+    hulls and their differences in one vectorized GEOS call each. ``sides``: a dict
+    keeping each polygon's sides by its identity, for calls on the same walls."""
     if not len(walls):
         return []
     # each vertex's distance from each wall's plane, P's side made positive (each wall's
     # product as its own, `P @ n - d`: a matrix product may fuse other roundings)
-    sP = np.stack([Pf @ w.n - w.d for w in walls], axis=1)
-    sQ = np.stack([Qf @ w.n - w.d for w in walls], axis=1)
-    flip = sP.min(axis=0) < -band
-    sP[:, flip], sQ[:, flip] = -sP[:, flip], -sQ[:, flip]
+    sP, sQ = _sides(Pf, walls, sides), _sides(Qf, walls, sides)
+    flip = np.where(sP.min(axis=0) < -band, -1.0, 1.0)
+    sP, sQ = sP * flip, sQ * flip
     c = np.flatnonzero(~(sP.min(axis=0) < -band) & ~(sQ.max(axis=0) > band)
                        & (sP.max(axis=0) > band) & (sQ.min(axis=0) < -band))
     if not len(c):
@@ -349,6 +354,18 @@ def _float_scores(Pf, Qf, walls, band):
                            left))
     scored.sort(key=lambda s: s[:2])
     return scored
+
+
+def _sides(X, walls, memo=None):
+    """Each vertex's distance from each wall's plane, (k, walls): kept in ``memo`` by
+    the identity of X (with X, so that the identity stays its own)."""
+    kept = memo.get(id(X)) if memo is not None else None
+    if kept is not None and kept[0] is X:
+        return kept[1]
+    S = np.stack([X @ w.n - w.d for w in walls], axis=1)
+    if memo is not None:
+        memo[id(X)] = X, S
+    return S
 
 
 def _float_pieces(hull, left, w):
