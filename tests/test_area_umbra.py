@@ -6,6 +6,8 @@ distinct event lines."""
 import numpy as np
 import pytest
 import shapely
+from hypothesis import given
+from hypothesis import strategies as st
 
 import exactff as ef
 from exactff import _tolerances as tol
@@ -127,6 +129,35 @@ def test_merged_blockers_join_coplanar_pieces_only_where_convex():
     # a quad on A's right edge reaching below and above it: the union has a reflex corner
     B = np.array([[1, 0, 0], [2, -1, 0], [2, 2, 0], [1, 1, 0]], float)
     assert len(merged_blockers([A, B])) == 2
+
+
+@given(st.lists(st.integers(1, 3), min_size=1, max_size=4),
+       st.lists(st.integers(1, 3), min_size=1, max_size=4), st.randoms(use_true_random=False),
+       st.sampled_from([0.0, 0.5, 1e3]))
+def test_merged_blockers_tile_the_wall_they_came_from(widths, heights, rnd, z):
+    # a wall in the plane z tiled by a grid of rectangles (some cut into two triangles),
+    # given in a random order, each tile's vertices turned to start anywhere: the
+    # merged blockers are strictly convex, do not overlap and cover the wall (their
+    # areas sum to its area, and their union is it), and where two tiles share an edge
+    # at least one pair is joined. Planted: the shared-edge prefilter taking A's edges
+    # the same way round (no pair ever joined) fails
+    from exactff.area.umbra import blocker_frame
+    xs, ys = np.cumsum([0] + widths, dtype=float), np.cumsum([0] + heights, dtype=float)
+    tiles = []
+    for x0, x1 in zip(xs, xs[1:]):
+        for y0, y1 in zip(ys, ys[1:]):
+            R = np.array([[x0, y0, z], [x1, y0, z], [x1, y1, z], [x0, y1, z]])
+            tiles += [R[[0, 1, 2]], R[[0, 2, 3]]] if rnd.random() < 0.3 else [R]
+    tiles = [np.roll(K, rnd.randrange(len(K)), axis=0) for K in tiles]
+    rnd.shuffle(tiles)
+    merged = merged_blockers(tiles)
+    assert all(blocker_frame(K) is not None for K in merged)
+    wall = shapely.box(0, 0, xs[-1], ys[-1])
+    shapes = [shapely.Polygon(K[:, :2]) for K in merged]
+    assert sum(S.area for S in shapes) == pytest.approx(wall.area, rel=1e-12)
+    assert shapely.union_all(shapes).symmetric_difference(wall).area <= 1e-9 * wall.area
+    if len(tiles) > 1:
+        assert len(merged) < len(tiles)
 
 
 def test_outside_umbras_keeps_the_parts_outside():

@@ -36,7 +36,8 @@ def blocker_frame(K):
     if not norm > 0:
         return None
     nK = a / norm
-    turns = cross(np.roll(K, -1, 0) - K, np.roll(K, -2, 0) - np.roll(K, -1, 0)) @ nK
+    K1, K2 = np.concatenate([K[1:], K[:1]]), np.concatenate([K[2:], K[:2]])  # K rolled
+    turns = cross(K1 - K, K2 - K1) @ nK
     if not (turns > 0).all():
         return None
     h = K @ nK
@@ -44,13 +45,21 @@ def blocker_frame(K):
     return nK, dK, float(np.abs(h - dK).max())
 
 
-def _merge_two(A, B, nK):
+def _edges(K):
+    """K's edges, each the bytes of its two vertices (bit for bit), in K's order."""
+    data = np.ascontiguousarray(K, dtype=float).tobytes()
+    w = 8 * K.shape[1]
+    rows = [data[i:i + w] for i in range(0, len(data), w)]
+    return list(zip(rows, rows[1:] + rows[:1]))
+
+
+def _merge_two(A, B, nK, edges_A=None, edges_B=None):
     """A and B (coplanar, normal nK) joined along an edge they share (the same two
     vertices, bit for bit, run the other way), its straight vertices dropped; None where
-    they share no edge."""
-    ends = {(a.tobytes(), b.tobytes()): i for i, (a, b) in enumerate(zip(A, np.roll(A, -1, 0)))}
-    for j, (a, b) in enumerate(zip(B, np.roll(B, -1, 0))):
-        i = ends.get((b.tobytes(), a.tobytes()))
+    they share no edge. ``edges_A``, ``edges_B``: their :func:`_edges`, where known."""
+    ends = {e: i for i, e in enumerate(_edges(A) if edges_A is None else edges_A)}
+    for j, (a, b) in enumerate(_edges(B) if edges_B is None else edges_B):
+        i = ends.get((b, a))
         if i is None:
             continue
         # A from the shared edge's far end round to its near end, then B's other vertices
@@ -86,28 +95,32 @@ def merged_blockers(blockers):
             out.append(K)
             continue
         # the plane, coarsely, as a key; neighbours in the key are compared exactly below
-        groups.setdefault(tuple(np.round(np.append(f[0], f[1] / scale), 6)), []).append((K, f))
+        groups.setdefault(tuple(np.round(np.append(f[0], f[1] / scale), 6)), []).append(
+            (K, f, _edges(K)))
     for members in groups.values():
         merged = True
         while merged and len(members) > 1:
             merged = False
             for a in range(len(members)):
+                A, fa, edges_A = members[a]
+                shared = set((v, u) for u, v in edges_A)     # A's edges run the other way
                 for b in range(a + 1, len(members)):
-                    (A, fa), (B, fb) = members[a], members[b]
-                    if (np.abs(fa[0] - fb[0]).max() > tol.AREA_HULL_RTOL
+                    B, fb, edges_B = members[b]
+                    if (shared.isdisjoint(edges_B)
+                            or np.abs(fa[0] - fb[0]).max() > tol.AREA_HULL_RTOL
                             or abs(fa[1] - fb[1]) > tol.AREA_HULL_RTOL * scale):
                         continue
-                    M = _merge_two(A, B, fa[0])
+                    M = _merge_two(A, B, fa[0], edges_A, edges_B)
                     f = None if M is None else blocker_frame(M)
                     if f is None:
                         continue
-                    members[a] = (M, f)
+                    members[a] = (M, f, _edges(M))
                     del members[b]
                     merged = True
                     break
                 if merged:
                     break
-        out.extend(K for K, _ in members)
+        out.extend(K for K, _, _ in members)
     return out
 
 
