@@ -293,7 +293,7 @@ def _wall_rect(axis, off, lo, hi):
 
 
 def _scores_wall_by_wall(Pf, Qf, walls, band):
-    """The plan's scores one wall at a time (the loop `_float_scores` replaced): the
+    """The plan's scores one wall at a time (the loop `float_scores` replaced): the
     reference it is held to, bit for bit."""
     import shapely
     scored = []
@@ -328,7 +328,8 @@ def test_the_plan_scores_the_walls_as_one_at_a_time():
     # explicit sum of products (not each wall's own product, which may fuse
     # differently) differ in the last bits on turned walls
     from exactff.area.culling import padded_polygons
-    from exactff.area.walls import _float_scores, _walls
+    from exactff.area.wall_plan import float_scores
+    from exactff.area.walls import _walls
 
     rng = np.random.default_rng(7)
     compared = 0
@@ -349,7 +350,7 @@ def test_the_plan_scores_the_walls_as_one_at_a_time():
         band = tol.AREA_WALL_BAND * 3.0 * scale
         V, _, _, N = padded_polygons(blockers)
         walls = _walls(blockers, N, np.einsum("bx,bx->b", N, V[:, 0]), 3.0 * scale)
-        got = [(share, w) for share, _, w, _, _ in _float_scores(P, Q, walls, band)]
+        got = [(share, w) for share, _, w, _, _ in float_scores(P, Q, walls, band)]
         assert got == _scores_wall_by_wall(P, Q, walls, band), trial
         compared += len(got)
     assert compared > 300
@@ -439,7 +440,7 @@ def _count_searches(m):
     from exactff.area import walls as walls_module
 
     counts = {"plan nodes": 0, "proof nodes": 0, "scorings": 0}
-    search, scores = walls_module._hidden, walls_module._float_scores
+    search, scores = walls_module._hidden, walls_module.float_scores
 
     def counted_search(P, Q, walls, band, depth, budget, exact, plan):
         counts["proof nodes" if exact else "plan nodes"] += 1
@@ -450,7 +451,7 @@ def _count_searches(m):
         return scores(*args)
 
     m.setattr(walls_module, "_hidden", counted_search)
-    m.setattr(walls_module, "_float_scores", counted_scores)
+    m.setattr(walls_module, "float_scores", counted_scores)
     return counts
 
 
@@ -460,8 +461,8 @@ def test_the_proof_follows_the_plan_and_scores_no_wall_again():
     # the plan (the proof scored them again at each of its nodes before), and its
     # first try at each node is the wall that hid it in doubles (fewer nodes); the
     # decisions are those without the plan. Planted: a plan that matches no node
-    # (``_Plan.find`` None) fails the counts
-    from exactff.area.walls import _Plan
+    # (``Plan.find`` None) fails the counts
+    from exactff.area.wall_plan import Plan
 
     scene = ef.read_vs3(GUNTER2)
     Pc, Qc, B, scale = pair_parts(scene, 22, 165)
@@ -473,7 +474,7 @@ def test_the_proof_follows_the_plan_and_scores_no_wall_again():
             assert hidden_by_walls(P, Q, blockers, reach)
         with pytest.MonkeyPatch.context() as m:
             alone = _count_searches(m)
-            m.setattr(_Plan, "find", lambda self, Pf, Qf, band: None)
+            m.setattr(Plan, "find", lambda self, Pf, Qf, band: None)
             assert hidden_by_walls(P, Q, blockers, reach)
         assert followed["proof nodes"] > 1
         assert followed["scorings"] == followed["plan nodes"] == alone["plan nodes"]
@@ -509,8 +510,8 @@ def test_a_wrong_plan_costs_tries_never_a_wrong_proof(case, rnd):
         return [(0.0, k, w, None, None) for k, w in enumerate(walls)]
 
     with pytest.MonkeyPatch.context() as m:
-        m.setattr(walls_module, "_float_pieces", lambda hull, left, w: [])
-        m.setattr(walls_module._Plan, "find", shuffled)
+        m.setattr(walls_module, "float_pieces", lambda hull, left, w: [])
+        m.setattr(walls_module.Plan, "find", shuffled)
         hidden = hidden_by_walls(P, Q, pieces + [decoy], 10.0)
     assert inside or not hidden
 

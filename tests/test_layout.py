@@ -64,6 +64,7 @@ LAYERS = {
     "exactff.area.rule_check": 5.065,
     "exactff.area.culling": 5.07,
     "exactff.area.rational_polygons": 5.072,
+    "exactff.area.wall_plan": 5.074,
     "exactff.area.walls": 5.075,
     "exactff.area.events": 5.08,
     "exactff.area.curved": 5.082,

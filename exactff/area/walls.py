@@ -25,9 +25,9 @@ H (a floor against the wall that stands on it). Only blockers whose vertices lie
 in one plane, and are convex there, take part: scenes turned off the axes, where the
 pieces are coplanar only to rounding, are left to the integration. Doubles only choose
 what to try: a pair is refused where a segment between inner points of the two misses
-every blocker; the planes are grouped within AREA_WALL_BAND; the search
-runs first in doubles (GEOS), and only where it finds the pair hidden in rationals,
-which takes the order of its tries from the search in doubles (:class:`_Plan`).
+every blocker; the planes are grouped within AREA_WALL_BAND; the search runs first in
+doubles (GEOS, :mod:`exactff.area.wall_plan`), and only where it finds the pair hidden
+in rationals, which takes the order of its tries from the search in doubles.
 """
 
 from fractions import Fraction
@@ -39,6 +39,7 @@ from .. import _tolerances as tol
 from ..geometry import cross
 from .culling import padded_polygons
 from .rational_polygons import ccw, has_area, hull, minus_convex
+from .wall_plan import Plan, float_pieces, float_scores
 
 __all__ = ["hidden_by_walls"]
 
@@ -98,7 +99,7 @@ def hidden_by_walls(Pc, Qc, blockers, reach, cache=None):
     # a plan in doubles first; only where it finds the pair hidden, the proof, which
     # follows the plan: its walls scored at the plan's nodes, the plane that hid each
     # node first
-    plan = _Plan()
+    plan = Plan()
     return (_hidden(Pc, Qc, walls, band, depth, [tol.AREA_WALL_NODES], False, plan)
             and _hidden(_rational(Pc), _rational(Qc), walls, band, depth,
                         [tol.AREA_WALL_NODES], True, plan))
@@ -180,7 +181,7 @@ def _walls(blockers, N, D, reach, cache=None):
 
 class _Walls(list):
     """The walls (a list of :class:`_Wall`) with their axes kept and boxes as arrays, so
-    that a pair's walls are scored together (:func:`_float_scores`)."""
+    that a pair's walls are scored together (:func:`~exactff.area.wall_plan.float_scores`)."""
 
     def __init__(self, walls):
         super().__init__(walls)
@@ -230,55 +231,17 @@ def _exact_normal(K):
     return None
 
 
-class _Plan(list):
-    """The nodes of the search in doubles, for the exact search to follow: each node's
-    pair as boxes, its walls scored (:func:`_float_scores`) and the wall that hid it
-    (None where none did); and the sides of the polygons it met, by identity (P and Q
-    come down to their pieces' nodes as they are)."""
-
-    def __init__(self):
-        super().__init__()
-        self.sides = {}
-
-    def add(self, Pf, Qf, scored):
-        node = [_box(Pf), _box(Qf), scored, None]
-        self.append(node)
-        return node
-
-    def find(self, Pf, Qf, band):
-        """The scored walls of a node whose pair's boxes are within ``band`` of those of
-        (Pf, Qf), the wall that hid it first; None where no node is. Only the order of
-        the exact search's tries comes from here, so a node matched wrongly costs tries,
-        never a wrong proof."""
-        boxes = _box(Pf), _box(Qf)
-        found = None
-        for Pbox, Qbox, scored, proved_by in self:
-            if (np.abs(Pbox - boxes[0]).max() <= band
-                    and np.abs(Qbox - boxes[1]).max() <= band):
-                found = scored, proved_by
-                if proved_by is not None:
-                    break
-        if found is None:
-            return None
-        scored, proved_by = found
-        return sorted(scored, key=lambda s: (s[2] is not proved_by,) + s[:2])
-
-
-def _box(X):
-    return np.concatenate([X.min(axis=0), X.max(axis=0)])
-
-
 def _hidden(P, Q, walls, band, depth, budget, exact, plan):
     """Whether the walls hide all of Q from all of P (both convex), with up to
     ``depth`` more planes behind the first; ``budget``: tests left. ``exact``: P, Q and
     the pieces in rationals, decided exactly; else in doubles, by GEOS (a plan: only
     where it finds the pair hidden is the exact search run). ``plan``: the search in
-    doubles records its nodes there (:class:`_Plan`), and the exact search takes the
-    order of its tries from them where it meets the same pair."""
+    doubles records its nodes there (:class:`~exactff.area.wall_plan.Plan`), and the
+    exact search takes the order of its tries from them where it meets the same pair."""
     Pf, Qf = (_floats(P), _floats(Q)) if exact else (P, Q)
     scored = plan.find(Pf, Qf, band) if exact else None
     if scored is None:
-        scored = _float_scores(Pf, Qf, walls, band, plan.sides)
+        scored = float_scores(Pf, Qf, walls, band, plan.sides)
     node = None if exact else plan.add(Pf, Qf, scored)
     for share, _, w, hull, left in scored[:tol.AREA_WALL_TRIES]:
         if depth == 0 and share > tol.AREA_WALL_BAND:
@@ -286,7 +249,7 @@ def _hidden(P, Q, walls, band, depth, budget, exact, plan):
         budget[0] -= 1
         if budget[0] < 0:
             return False
-        pieces = _uncovered_exactly(P, Q, w) if exact else _float_pieces(hull, left, w)
+        pieces = _uncovered_exactly(P, Q, w) if exact else float_pieces(hull, left, w)
         if pieces is None:
             continue
         if pieces and (depth == 0 or len(pieces) > tol.AREA_WALL_PIECES):
@@ -298,92 +261,6 @@ def _hidden(P, Q, walls, band, depth, budget, exact, plan):
                 node[3] = w
             return True
     return False
-
-
-def _float_scores(Pf, Qf, walls, band, sides=None):
-    """The walls whose plane has P on one closed side and Q on the other, neither in it,
-    that cover part of the slice (doubles, GEOS: the hull of the crossings, less the
-    wall's union), sorted by the share GEOS finds uncovered (then by the walls' order):
-    a list of ``(share, position, wall, hull, uncovered part)``. All the walls are
-    scored together: their sides, the crossings and the slices' boxes in arrays, the
-    hulls and their differences in one vectorized GEOS call each. ``sides``: a dict
-    keeping each polygon's sides by its identity, for calls on the same walls."""
-    if not len(walls):
-        return []
-    # each vertex's distance from each wall's plane, P's side made positive (each wall's
-    # product as its own, `P @ n - d`: a matrix product may fuse other roundings)
-    sP, sQ = _sides(Pf, walls, sides), _sides(Qf, walls, sides)
-    flip = np.where(sP.min(axis=0) < -band, -1.0, 1.0)
-    sP, sQ = sP * flip, sQ * flip
-    c = np.flatnonzero(~(sP.min(axis=0) < -band) & ~(sQ.max(axis=0) > band)
-                       & (sP.max(axis=0) > band) & (sQ.min(axis=0) < -band))
-    if not len(c):
-        return []
-    a, b = sP[:, c], sQ[:, c]                                          # (kP, C), (kQ, C)
-    # the crossings of the vertex pairs on strictly opposite sides, (kP, kQ, C, 3), and
-    # the vertices in the plane
-    crosses = (a > band)[:, None] & (b < -band)[None]
-    with np.errstate(divide="ignore", invalid="ignore"):
-        t = (a[:, None] / (a[:, None] - b[None]))[..., None]
-        pts = Pf[:, None, None] + t * (Qf[None, :, None] - Pf[:, None, None])
-    keep = walls.keep[c]                                               # (C, 2)
-    cols = np.arange(len(c))
-    X = np.concatenate([pts.reshape(-1, len(c), 3),                    # (m, C, 3)
-                        np.broadcast_to(Pf[:, None], (len(Pf), len(c), 3)),
-                        np.broadcast_to(Qf[:, None], (len(Qf), len(c), 3))])
-    valid = np.concatenate([crosses.reshape(-1, len(c)), np.abs(a) <= band,
-                            np.abs(b) <= band])
-    uv = np.stack([X[:, cols, keep[:, 0]], X[:, cols, keep[:, 1]]], axis=-1)  # (m, C, 2)
-    lo = np.where(valid[..., None], uv, np.inf).min(axis=0)
-    hi = np.where(valid[..., None], uv, -np.inf).max(axis=0)
-    near = ~(np.any(lo > walls.hi[c], axis=1) | np.any(hi < walls.lo[c], axis=1))
-    if not near.any():
-        return []
-    c, uv, valid = c[near], uv[:, near], valid[:, near]
-    wall, point = np.nonzero(valid.T)                 # points grouped by wall, in order
-    hulls = shapely.convex_hull(shapely.multipoints(uv[point, wall], indices=wall))
-    areas = shapely.area(hulls)
-    live = np.flatnonzero(areas > 0)
-    unions = np.empty(len(live), dtype=object)
-    unions[:] = [walls[int(c[k])].union() for k in live]
-    lefts = shapely.difference(hulls[live], unions)
-    scored = []
-    for k, left, left_area in zip(live.tolist(), lefts, shapely.area(lefts).tolist()):
-        if left_area < (1.0 - tol.AREA_WALL_BAND) * areas[k]:
-            scored.append((left_area / areas[k], len(scored), walls[int(c[k])], hulls[k],
-                           left))
-    scored.sort(key=lambda s: s[:2])
-    return scored
-
-
-def _sides(X, walls, memo=None):
-    """Each vertex's distance from each wall's plane, (k, walls): kept in ``memo`` by
-    the identity of X (with X, so that the identity stays its own)."""
-    kept = memo.get(id(X)) if memo is not None else None
-    if kept is not None and kept[0] is X:
-        return kept[1]
-    S = np.stack([X @ w.n - w.d for w in walls], axis=1)
-    if memo is not None:
-        memo[id(X)] = X, S
-    return S
-
-
-def _float_pieces(hull, left, w):
-    """The plan's pieces: the convex hulls of the uncovered part's components (doubles)
-    lifted into w's plane (those above AREA_WALL_SLIVER of the slice's area); none where
-    it is within AREA_WALL_BAND of that area."""
-    if left.area <= tol.AREA_WALL_BAND * hull.area:
-        return []
-    axis = [a for a in range(3) if a not in w.keep][0]
-    pieces = []
-    for g in getattr(left, "geoms", [left]):
-        if g.area > tol.AREA_WALL_SLIVER * hull.area:
-            uv = np.asarray(g.convex_hull.exterior.coords)[:-1]
-            X = np.empty((len(uv), 3))
-            X[:, w.keep] = uv
-            X[:, axis] = (w.d - uv @ w.n[w.keep]) / w.n[axis]
-            pieces.append(X)
-    return pieces
 
 
 def _uncovered_exactly(P, Q, w):
