@@ -102,14 +102,11 @@ def walls_and_pairs(draw):
     return turn(P), turn(Q), [turn(K) for K in pieces], wall, perm.index(0), signs[perm.index(0)]
 
 
-@given(walls_and_pairs())
-def test_the_proof_is_the_crossings_within_the_wall(case):
-    # the pieces tile a rectangle, which is convex: the pair is hidden whole exactly
-    # where every crossing of a vertex pair (and every vertex on the plane) lies in the
-    # rectangle (the construction, in rationals, without the module's hull and cover)
+def _crossings_within_the_wall(case):
+    """The box of a case's tiled wall (``walls_and_pairs``) in its plane's two axes, and
+    whether every crossing of a vertex pair (and every vertex on the plane) lies in it
+    (the construction, in rationals, without the module's hull and cover)."""
     P, Q, pieces, _, axis, sign = case
-    # P and Q in one plane (no pair of a row: neither is in front of the other)
-    assume(np.linalg.matrix_rank(np.vstack([P, Q]) - P[0]) == 3)
     others = [a for a in range(3) if a != axis]
     pts = _crossings(P * sign, Q * sign, axis)       # P on the positive side
     if sign < 0:
@@ -119,6 +116,19 @@ def test_the_proof_is_the_crossings_within_the_wall(case):
     hi = np.max(np.vstack([K[:, others] for K in pieces]), axis=0)
     inside = all(Fraction(float(lo[i])) <= v[others[i]] <= Fraction(float(hi[i]))
                  for v in pts for i in range(2))
+    return lo, hi, inside
+
+
+@given(walls_and_pairs())
+def test_the_proof_is_the_crossings_within_the_wall(case):
+    # the pieces tile a rectangle, which is convex: the pair is hidden whole exactly
+    # where every crossing of a vertex pair (and every vertex on the plane) lies in the
+    # rectangle (the construction, in rationals, without the module's hull and cover)
+    P, Q, pieces, _, axis, sign = case
+    # P and Q in one plane (no pair of a row: neither is in front of the other)
+    assume(np.linalg.matrix_rank(np.vstack([P, Q]) - P[0]) == 3)
+    others = [a for a in range(3) if a != axis]
+    lo, hi, inside = _crossings_within_the_wall(case)
     assert hidden_by_walls(P, Q, pieces, 10.0) == inside
     if inside:
         # and random segments between the two all meet a piece (floats, with a margin)
@@ -492,14 +502,7 @@ def test_a_wrong_plan_costs_tries_never_a_wrong_proof(case, rnd):
 
     P, Q, pieces, _, axis, sign = case
     assume(np.linalg.matrix_rank(np.vstack([P, Q]) - P[0]) == 3)
-    others = [a for a in range(3) if a != axis]
-    pts = _crossings(P * sign, Q * sign, axis)
-    if sign < 0:
-        pts = [[-c for c in v] for v in pts]
-    lo = np.min(np.vstack([K[:, others] for K in pieces]), axis=0)
-    hi = np.max(np.vstack([K[:, others] for K in pieces]), axis=0)
-    inside = all(Fraction(float(lo[i])) <= v[others[i]] <= Fraction(float(hi[i]))
-                 for v in pts for i in range(2))
+    inside = _crossings_within_the_wall(case)[2]
     decoy = pieces[0].copy()
     decoy[:, axis] -= sign * 0.125
 
