@@ -563,3 +563,43 @@ def test_split_parts_and_their_area_against_the_fractions(pts, a, b):
     flat = [poly[0], halfway, poly[1], halfway]
     for part in parts + (poly, poly[::-1], poly + poly[:1], [poly[0], halfway] + poly[1:], flat):
         assert has_area(part) == (len(part) >= 3 and area2(part) != 0), part
+
+
+def _hull_in_fractions(pts):
+    """Andrew's monotone chain over the points sorted as Fractions (set, then sorted),
+    each turn a Fraction: the reference for ``hull``'s order by doubles first."""
+    from exactff.area.rational_polygons import cross2
+    pts = sorted(set(pts))
+    if len(pts) < 3:
+        return pts
+    lower, upper = [], []
+    for p in pts:
+        while len(lower) >= 2 and cross2(lower[-2], lower[-1], p) <= 0:
+            lower.pop()
+        lower.append(p)
+    for p in reversed(pts):
+        while len(upper) >= 2 and cross2(upper[-2], upper[-1], p) <= 0:
+            upper.pop()
+        upper.append(p)
+    return lower[:-1] + upper[:-1]
+
+
+_near_ties = st.one_of(_small_rationals, _small_rationals.map(lambda x: x + Fraction(1, 2**60)),
+                       _small_rationals.map(lambda x: x - Fraction(1, 3 * 2**58)))
+
+
+@given(st.lists(st.tuples(_near_ties, _near_ties), min_size=1, max_size=12),
+       st.tuples(_near_ties, _near_ties, _near_ties), st.tuples(_near_ties, _near_ties, _near_ties),
+       st.fractions(min_value=Fraction(1, 2**70), max_value=5),
+       st.fractions(min_value=-5, max_value=Fraction(-1, 2**70)))
+def test_hull_and_crossing_against_the_fractions(pts, p, q, a, b):
+    # points of small rationals, some moved by less than a double's ulp (ties among the
+    # doubles that only the rationals break, and repeats): the hull as the chain over
+    # the points sorted as Fractions makes it; and the crossing of a segment in 3-D where
+    # an affine function goes from a > 0 to b < 0, as p + a / (a - b) (q - p) in
+    # Fractions. Planted: the sort by doubles alone fails
+    from exactff.area.rational_polygons import crossing, hull
+    assert hull(pts) == _hull_in_fractions(pts)
+    t = a / (a - b)
+    expected = tuple(u + t * (v - u) for u, v in zip(p, q))
+    assert crossing(p, q, (a.numerator, a.denominator), (b.numerator, b.denominator)) == expected

@@ -7,7 +7,8 @@ Fraction operation would normalise by a gcd). Polygons are lists of points.
 
 from fractions import Fraction
 
-__all__ = ["cross2", "turn", "ccw", "hull", "split", "area2", "has_area", "minus_convex"]
+__all__ = ["cross2", "turn", "ccw", "hull", "split", "crossing", "area2", "has_area",
+           "minus_convex"]
 
 
 def _cross_parts(o, a, b):
@@ -109,7 +110,10 @@ def hull(pts):
     >>> hull([(0, 0), (2, 0), (1, 1), (2, 2), (0, 2), (1, 0)])
     [(0, 0), (2, 0), (2, 2), (0, 2)]
     """
-    pts = sorted(set(pts))
+    # sorted by (x, y) with the doubles' order first (rounding to double keeps order, so
+    # that only ties among the doubles are compared in rationals), each point once
+    ordered = sorted(pts, key=lambda p: (float(p[0]), p[0], float(p[1]), p[1]))
+    pts = [p for i, p in enumerate(ordered) if i == 0 or p != ordered[i - 1]]
     if len(pts) < 3:
         return pts
     lower, upper = [], []
@@ -162,13 +166,38 @@ def split(poly, a, b):
         if np_ <= 0:
             right.append(p)
         if (np_ > 0 > nq) or (np_ < 0 < nq):
-            q = poly[j]
-            # t = sp / (sp - sq), with sp = np_ / dp and sq = nq / dq
-            t = Fraction(np_ * dq, np_ * dq - nq * dp)
-            x = (p[0] + t * (q[0] - p[0]), p[1] + t * (q[1] - p[1]))
+            x = crossing(p, poly[j], s[i], s[j])
             left.append(x)
             right.append(x)
     return left, right
+
+
+def crossing(p, q, sp, sq):
+    """Where the segment p -> q meets the zero of an affine function that is sp at p and
+    sq at q (of opposite signs), exactly: ``p + sp / (sp - sq) (q - p)``.
+
+    Parameters
+    ----------
+    p, q : tuple of Fraction or int
+        Points of any dimension.
+    sp, sq : pair of int
+        The function's values as (numerator, positive denominator).
+
+    Returns
+    -------
+    tuple of Fraction
+        One Fraction made a coordinate: ``(sp q - sq p) / (sp - sq)`` from the integers.
+
+    Examples
+    --------
+    >>> crossing((0, Fraction(1, 3)), (1, 1), (1, 4), (-3, 4))
+    (Fraction(1, 4), Fraction(1, 2))
+    """
+    (n1, d1), (n2, d2) = sp, sq
+    w1, w2 = n1 * d2, n2 * d1             # sp and sq times d1 d2
+    den = w1 - w2
+    return tuple(Fraction(v.numerator * u.denominator * w1 - u.numerator * v.denominator * w2,
+                          u.denominator * v.denominator * den) for u, v in zip(p, q))
 
 
 def area2(poly):

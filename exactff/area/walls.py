@@ -38,7 +38,7 @@ import shapely
 from .. import _tolerances as tol
 from ..geometry import cross
 from .culling import padded_polygons
-from .rational_polygons import ccw, has_area, hull, minus_convex
+from .rational_polygons import ccw, crossing, has_area, hull, minus_convex
 from .wall_plan import Plan, float_pieces, float_scores
 
 __all__ = ["hidden_by_walls"]
@@ -284,11 +284,13 @@ def _uncovered_exactly(P, Q, w):
     # the slice: the crossings of the vertex pairs on strictly opposite sides, and the
     # vertices in the plane, projected on the two axes kept
     pts = [(v[keep[0]], v[keep[1]]) for v, s in zip(P + Q, sP + sQ) if s == 0]
-    for p, a in zip(P, sP):
-        for q, b in zip(Q, sQ):
+    Pk = [(p[keep[0]], p[keep[1]]) for p in P]
+    Qk = [(q[keep[0]], q[keep[1]]) for q in Q]
+    for p, a in zip(Pk, sP):
+        for q, b in zip(Qk, sQ):
             if a > 0 > b:
-                t = a / (a - b)
-                pts.append(tuple(p[i] + t * (q[i] - p[i]) for i in keep))
+                pts.append(crossing(p, q, (a.numerator, a.denominator),
+                                    (b.numerator, b.denominator)))
     piece = hull(pts)
     if not has_area(piece):
         return None
