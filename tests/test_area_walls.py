@@ -484,7 +484,7 @@ def test_the_proof_follows_the_plan_and_scores_no_wall_again():
             assert hidden_by_walls(P, Q, blockers, reach)
         with pytest.MonkeyPatch.context() as m:
             alone = _count_searches(m)
-            m.setattr(Plan, "find", lambda self, Pf, Qf, band: None)
+            m.setattr(Plan, "find", lambda self, depth, Pf, Qf, band: None)
             assert hidden_by_walls(P, Q, blockers, reach)
         assert followed["proof nodes"] > 1
         assert followed["scorings"] == followed["plan nodes"] == alone["plan nodes"]
@@ -495,7 +495,8 @@ def test_the_proof_follows_the_plan_and_scores_no_wall_again():
 @given(walls_and_pairs(), st.randoms(use_true_random=False))
 def test_a_wrong_plan_costs_tries_never_a_wrong_proof(case, rnd):
     # the plan in doubles made to find every pair hidden (no piece left) and to hand
-    # the proof every wall, a decoy's plane among them, in a random order: the proof
+    # the proof the walls it scored (a decoy's plane among them, where the decoy meets
+    # the slice) in a random order, at every depth: the proof
     # decides by the rationals alone, so a pair it finds hidden is hidden by the
     # construction (the crossings within the wall's rectangle)
     from exactff.area import walls as walls_module
@@ -506,9 +507,8 @@ def test_a_wrong_plan_costs_tries_never_a_wrong_proof(case, rnd):
     decoy = pieces[0].copy()
     decoy[:, axis] -= sign * 0.125
 
-    def shuffled(self, Pf, Qf, band):
-        walls = list({id(n[2][k][2]): n[2][k][2] for n in self for k in range(len(n[2]))}
-                     .values())
+    def shuffled(self, depth, Pf, Qf, band):
+        walls = list({id(s[2]): s[2] for n in self for s in n[3]}.values())
         rnd.shuffle(walls)
         return [(0.0, k, w, None, None) for k, w in enumerate(walls)]
 
@@ -551,8 +551,9 @@ def test_split_parts_and_their_area_against_the_fractions(pts, a, b):
     # Fraction sides makes them, and each part of positive area exactly where its
     # shoelace sum is not 0, the polygon too with a vertex added halfway along its
     # first edge (its first triangle flat), and that edge's points alone (no area;
-    # the split's parts have area or at most two points). Planted: has_area testing
-    # the first triangle only, or the vertices' count only, fails
+    # the split's parts have area or at most two points), and a vertex given twice in
+    # a row. Planted: has_area testing the first triangle only, the vertices' count
+    # only, or consecutive triples (flat at the repeat), fails
     from exactff.area.rational_polygons import area2, has_area, hull, split
     assume(a != b)
     poly = hull(pts)
@@ -561,7 +562,9 @@ def test_split_parts_and_their_area_against_the_fractions(pts, a, b):
     assert parts == _split_in_fractions(poly, a, b)
     halfway = tuple((u + v) / 2 for u, v in zip(poly[0], poly[1]))
     flat = [poly[0], halfway, poly[1], halfway]
-    for part in parts + (poly, poly[::-1], poly + poly[:1], [poly[0], halfway] + poly[1:], flat):
+    repeated = [poly[0], poly[1], poly[1]] + poly[2:]
+    for part in parts + (poly, poly[::-1], poly + poly[:1], [poly[0], halfway] + poly[1:], flat,
+                         repeated, repeated[::-1]):
         assert has_area(part) == (len(part) >= 3 and area2(part) != 0), part
 
 

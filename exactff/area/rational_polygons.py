@@ -144,7 +144,7 @@ def split(poly, a, b):
         The parts on the closed left and on the closed right: the polygon's vertices on
         that side (those on the line in both) and the edges' crossings with the line. A
         part may be empty, or of fewer than three points or no area (the polygon touches
-        the line); the caller tests it (:func:`area2`).
+        the line); the caller tests it (:func:`has_area`).
 
     Examples
     --------

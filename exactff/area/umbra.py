@@ -53,12 +53,12 @@ def _edges(K):
     return list(zip(rows, rows[1:] + rows[:1]))
 
 
-def _merge_two(A, B, nK, edges_A=None, edges_B=None):
+def _merge_two(A, B, nK, edges_A, edges_B):
     """A and B (coplanar, normal nK) joined along an edge they share (the same two
     vertices, bit for bit, run the other way), its straight vertices dropped; None where
-    they share no edge. ``edges_A``, ``edges_B``: their :func:`_edges`, where known."""
-    ends = {e: i for i, e in enumerate(_edges(A) if edges_A is None else edges_A)}
-    for j, (a, b) in enumerate(_edges(B) if edges_B is None else edges_B):
+    they share no edge. ``edges_A``, ``edges_B``: their :func:`_edges`."""
+    ends = {e: i for i, e in enumerate(edges_A)}
+    for j, (a, b) in enumerate(edges_B):
         i = ends.get((b, a))
         if i is None:
             continue

@@ -10,15 +10,16 @@ import shapely
 
 from .. import _tolerances as tol
 
-__all__ = ["Plan", "float_scores", "float_pieces", "plane_sides"]
+__all__ = ["Plan", "float_scores", "float_pieces", "wall_sides"]
 
 
 class Plan(list):
     """The nodes of the search in doubles, for the exact search to follow.
 
-    Each node is ``[box of P, box of Q, scored walls, wall that hid it or None]``,
-    the boxes as ``(x min, y min, z min, x max, y max, z max)``; ``sides`` keeps the
-    polygons' sides on the walls by identity (:func:`plane_sides`: P and Q come down to
+    Each node is ``[depth, box of P, box of Q, scored walls, wall that hid it or
+    None]``, the depth the planes left behind it, the boxes as ``(x min, y min, z min,
+    x max, y max, z max)``; ``sides`` keeps the
+    polygons' sides on the walls by identity (:func:`wall_sides`: P and Q come down to
     their pieces' nodes as they are).
 
     Examples
@@ -27,33 +28,36 @@ class Plan(list):
     >>> P = np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0]])
     >>> Q = P + [0, 0, 2]
     >>> a, b = "wall a", "wall b"
-    >>> node = plan.add(P, Q, [(0.0, 0, a, None, None), (0.5, 1, b, None, None)])
-    >>> node[3] = b                             # the plan found b hid the pair
-    >>> [s[2] for s in plan.find(P + 1e-12, Q, 1e-9)], plan.find(P + 1e-6, Q, 1e-9)
+    >>> node = plan.add(2, P, Q, [(0.0, 0, a, None, None), (0.5, 1, b, None, None)])
+    >>> node[-1] = b                            # the plan found b hid the pair
+    >>> [s[2] for s in plan.find(2, P + 1e-12, Q, 1e-9)], plan.find(2, P + 1e-6, Q, 1e-9)
     (['wall b', 'wall a'], None)
+    >>> plan.find(1, P, Q, 1e-9) is None        # another depth
+    True
     """
 
     def __init__(self):
         super().__init__()
         self.sides = {}
 
-    def add(self, Pf, Qf, scored):
-        """Record a node of the search in doubles: the pair (Pf, Qf), (k, 3) arrays,
-        and its scored walls (:func:`float_scores`); returns the node, whose last item
-        the search sets to the wall that hid it."""
-        node = [_box(Pf), _box(Qf), scored, None]
+    def add(self, depth, Pf, Qf, scored):
+        """Record a node of the search in doubles: its depth, the pair (Pf, Qf), (k, 3)
+        arrays, and its scored walls (:func:`float_scores`); returns the node, whose
+        last item the search sets to the wall that hid it."""
+        node = [depth, _box(Pf), _box(Qf), scored, None]
         self.append(node)
         return node
 
-    def find(self, Pf, Qf, band):
-        """The scored walls of a node whose pair's boxes are within ``band`` of those of
-        (Pf, Qf), the wall that hid it first (a node that was hidden before one that
-        was not); None where no node is. Only the order of the exact search's tries
-        comes from here, so a node matched wrongly costs tries, never a wrong proof."""
+    def find(self, depth, Pf, Qf, band):
+        """The scored walls of a node of that depth whose pair's boxes are within
+        ``band`` of those of (Pf, Qf), the wall that hid it first (a node that was hidden
+        before one that was not); None where no node is. The exact search takes from
+        here which walls it tries and in what order (each decided in rationals), so a
+        node matched wrongly costs tries, never a wrong proof."""
         boxes = _box(Pf), _box(Qf)
         found = None
-        for Pbox, Qbox, scored, proved_by in self:
-            if (np.abs(Pbox - boxes[0]).max() <= band
+        for at, Pbox, Qbox, scored, proved_by in self:
+            if (at == depth and np.abs(Pbox - boxes[0]).max() <= band
                     and np.abs(Qbox - boxes[1]).max() <= band):
                 found = scored, proved_by
                 if proved_by is not None:
@@ -88,7 +92,7 @@ def float_scores(Pf, Qf, walls, band, sides=None):
     band : float
         Within it of a plane is in the plane.
     sides : dict, optional
-        :func:`plane_sides`' memo for calls on the same walls.
+        :func:`wall_sides`' for calls on the same walls.
 
     Returns
     -------
@@ -114,7 +118,7 @@ def float_scores(Pf, Qf, walls, band, sides=None):
         return []
     # each vertex's distance from each wall's plane, P's side made positive (each wall's
     # product as its own, `P @ n - d`: a matrix product may fuse other roundings)
-    sP, sQ = plane_sides(Pf, walls, sides), plane_sides(Qf, walls, sides)
+    sP, sQ = wall_sides(Pf, walls, sides), wall_sides(Qf, walls, sides)
     flip = np.where(sP.min(axis=0) < -band, -1.0, 1.0)
     sP, sQ = sP * flip, sQ * flip
     c = np.flatnonzero(~(sP.min(axis=0) < -band) & ~(sQ.max(axis=0) > band)
@@ -158,7 +162,7 @@ def float_scores(Pf, Qf, walls, band, sides=None):
     return scored
 
 
-def plane_sides(X, walls, memo=None):
+def wall_sides(X, walls, sides=None):
     """Each vertex's signed distance from each wall's plane, ``X @ n - d``.
 
     Each wall's product is its own (a matrix product of all the walls at once may fuse
@@ -168,8 +172,9 @@ def plane_sides(X, walls, memo=None):
     ----------
     X : ndarray of shape (k, 3)
     walls : list of walls (each with ``n`` and ``d``)
-    memo : dict, optional
-        Kept by the identity of X, with X (so that the identity stays its own).
+    sides : dict, optional
+        The sides kept by the identity of X, with X (so that the identity stays its
+        own).
 
     Returns
     -------
@@ -179,15 +184,15 @@ def plane_sides(X, walls, memo=None):
     --------
     >>> from types import SimpleNamespace
     >>> walls = [SimpleNamespace(n=np.array([1.0, 0, 0]), d=0.5)]
-    >>> plane_sides(np.array([[0.0, 0, 0], [2, 0, 0]]), walls).tolist()
+    >>> wall_sides(np.array([[0.0, 0, 0], [2, 0, 0]]), walls).tolist()
     [[-0.5], [1.5]]
     """
-    kept = memo.get(id(X)) if memo is not None else None
-    if kept is not None and kept[0] is X:
+    kept = sides.get(id(X)) if sides is not None else None
+    if kept is not None:
         return kept[1]
     S = np.stack([X @ w.n - w.d for w in walls], axis=1)
-    if memo is not None:
-        memo[id(X)] = X, S
+    if sides is not None:
+        sides[id(X)] = X, S
     return S
 
 

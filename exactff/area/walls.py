@@ -239,10 +239,10 @@ def _hidden(P, Q, walls, band, depth, budget, exact, plan):
     doubles records its nodes there (:class:`~exactff.area.wall_plan.Plan`), and the
     exact search takes the order of its tries from them where it meets the same pair."""
     Pf, Qf = (_floats(P), _floats(Q)) if exact else (P, Q)
-    scored = plan.find(Pf, Qf, band) if exact else None
+    scored = plan.find(depth, Pf, Qf, band) if exact else None
     if scored is None:
         scored = float_scores(Pf, Qf, walls, band, plan.sides)
-    node = None if exact else plan.add(Pf, Qf, scored)
+    node = None if exact else plan.add(depth, Pf, Qf, scored)
     for share, _, w, hull, left in scored[:tol.AREA_WALL_TRIES]:
         if depth == 0 and share > tol.AREA_WALL_BAND:
             break
@@ -258,7 +258,7 @@ def _hidden(P, Q, walls, band, depth, budget, exact, plan):
                or _hidden(U, Q, walls, band, depth - 1, budget, exact, plan)
                for U in pieces):
             if node is not None:
-                node[3] = w
+                node[-1] = w
             return True
     return False
 
