@@ -606,3 +606,19 @@ def test_hull_and_crossing_against_the_fractions(pts, p, q, a, b):
     t = a / (a - b)
     expected = tuple(u + t * (v - u) for u, v in zip(p, q))
     assert crossing(p, q, (a.numerator, a.denominator), (b.numerator, b.denominator)) == expected
+
+
+_rationals_of_doubles = st.floats(-1e6, 1e6, allow_nan=False).map(Fraction)
+
+
+@given(st.lists(_rationals_of_doubles, min_size=3, max_size=3),
+       st.lists(_rationals_of_doubles, min_size=3, max_size=3),
+       st.one_of(_rationals_of_doubles, st.integers(-10, 10)))
+def test_the_integer_side_is_the_fractions(nf, v, d):
+    # the walls' sides, nf . v - d, from the integers (a numerator and a positive
+    # denominator) against the sum in Fractions, on rationals of doubles and an integer
+    # offset; planted: the offset added instead of taken fails
+    from exactff.area.walls import _side
+    num, den = _side(nf, d, v)
+    assert den > 0
+    assert Fraction(num, den) == sum(x * y for x, y in zip(nf, v)) - d

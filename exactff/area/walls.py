@@ -137,13 +137,13 @@ class _Wall:
                 if nf is None:
                     continue
                 d = sum(x * y for x, y in zip(nf, K0[0]))
-                if any(sum(x * y for x, y in zip(nf, v)) != d for v in K0):
+                if any(_side(nf, d, v)[0] for v in K0):
                     continue
                 axis = max(range(3), key=lambda a: abs(nf[a]))
                 keep = [a for a in range(3) if a != axis]
                 covers = []
                 for K in Ks:
-                    if any(sum(x * y for x, y in zip(nf, v)) != d for v in K):
+                    if any(_side(nf, d, v)[0] for v in K):
                         continue
                     K2 = ccw([(v[keep[0]], v[keep[1]]) for v in K])
                     if K2 is not None:
@@ -218,6 +218,16 @@ def _floats(V):
     return np.array([[float(c) for c in v] for v in V])
 
 
+def _side(nf, d, v):
+    """``nf . v - d`` for rationals (Fraction or int) as an integer numerator and a
+    positive denominator, no Fraction made (its sign is the numerator's)."""
+    num, den = -d.numerator, d.denominator
+    for x, y in zip(nf, v):
+        term, per = x.numerator * y.numerator, x.denominator * y.denominator
+        num, den = num * per + term * den, den * per
+    return num, den
+
+
 def _exact_normal(K):
     """The normal (rationals) of K's first vertex and the next two not collinear with
     it; None where all are."""
@@ -273,24 +283,23 @@ def _uncovered_exactly(P, Q, w):
         return None
     nf, d, axis, keep, covers = exact
 
-    def side(v):
-        return sum(x * y for x, y in zip(nf, v)) - d
-
-    sP, sQ = [side(v) for v in P], [side(v) for v in Q]
-    sign = 1 if max(sP) > 0 else -1
-    sP, sQ = [sign * s for s in sP], [sign * s for s in sQ]
-    if min(sP) < 0 or max(sQ) > 0 or max(sP) == 0 or min(sQ) == 0:
+    # each vertex's side, nf . v - d, as (numerator, positive denominator), P's made
+    # positive
+    sP, sQ = [_side(nf, d, v) for v in P], [_side(nf, d, v) for v in Q]
+    if not any(n > 0 for n, _ in sP):
+        sP, sQ = [(-n, m) for n, m in sP], [(-n, m) for n, m in sQ]
+    if (any(n < 0 for n, _ in sP) or any(n > 0 for n, _ in sQ)
+            or not any(n > 0 for n, _ in sP) or not any(n < 0 for n, _ in sQ)):
         return None
     # the slice: the crossings of the vertex pairs on strictly opposite sides, and the
     # vertices in the plane, projected on the two axes kept
-    pts = [(v[keep[0]], v[keep[1]]) for v, s in zip(P + Q, sP + sQ) if s == 0]
+    pts = [(v[keep[0]], v[keep[1]]) for v, s in zip(P + Q, sP + sQ) if s[0] == 0]
     Pk = [(p[keep[0]], p[keep[1]]) for p in P]
     Qk = [(q[keep[0]], q[keep[1]]) for q in Q]
     for p, a in zip(Pk, sP):
         for q, b in zip(Qk, sQ):
-            if a > 0 > b:
-                pts.append(crossing(p, q, (a.numerator, a.denominator),
-                                    (b.numerator, b.denominator)))
+            if a[0] > 0 > b[0]:
+                pts.append(crossing(p, q, a, b))
     piece = hull(pts)
     if not has_area(piece):
         return None
