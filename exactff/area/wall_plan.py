@@ -143,11 +143,16 @@ def float_scores(Pf, Qf, walls, band, sides=None):
     lo = np.where(valid[..., None], uv, np.inf).min(axis=0)
     hi = np.where(valid[..., None], uv, -np.inf).max(axis=0)
     near = ~(np.any(lo > walls.hi[c], axis=1) | np.any(hi < walls.lo[c], axis=1))
+    # (a slice of fewer than three points has no area)
+    near &= valid.sum(axis=0) >= 3
     if not near.any():
         return []
     c, uv, valid = c[near], uv[:, near], valid[:, near]
     wall, point = np.nonzero(valid.T)                 # points grouped by wall, in order
-    hulls = shapely.convex_hull(shapely.multipoints(uv[point, wall], indices=wall))
+    # each slice's hull: GEOS's hull of a line string through the points is that of the
+    # points (the same coordinates in the same order), and is made without a geometry
+    # a point
+    hulls = shapely.convex_hull(shapely.linestrings(uv[point, wall], indices=wall))
     areas = shapely.area(hulls)
     live = np.flatnonzero(areas > 0)
     unions = np.empty(len(live), dtype=object)
