@@ -608,15 +608,17 @@ def test_hull_and_crossing_against_the_fractions(pts, p, q, a, b):
     assert crossing(p, q, (a.numerator, a.denominator), (b.numerator, b.denominator)) == expected
 
 
-_rationals_of_doubles = st.floats(-1e6, 1e6, allow_nan=False).map(Fraction)
+_side_rationals = st.one_of(st.floats(-1e6, 1e6, allow_nan=False).map(Fraction),
+                                  st.fractions(max_denominator=10**6))
 
 
-@given(st.lists(_rationals_of_doubles, min_size=3, max_size=3),
-       st.lists(_rationals_of_doubles, min_size=3, max_size=3),
-       st.one_of(_rationals_of_doubles, st.integers(-10, 10)))
+@given(st.lists(_side_rationals, min_size=3, max_size=3),
+       st.lists(_side_rationals, min_size=3, max_size=3),
+       st.one_of(_side_rationals, st.integers(-10, 10)))
 def test_the_integer_side_is_the_fractions(nf, v, d):
     # the walls' sides, nf . v - d, from the integers (a numerator and a positive
-    # denominator) against the sum in Fractions, on rationals of doubles and an integer
+    # denominator) against the sum in Fractions, on rationals of doubles or of any
+    # denominator and an integer
     # offset; planted: the offset added instead of taken fails
     from exactff.area.walls import _side
     num, den = _side(nf, d, v)

@@ -92,7 +92,7 @@ def float_scores(Pf, Qf, walls, band, sides=None):
     band : float
         Within it of a plane is in the plane.
     sides : dict, optional
-        :func:`wall_sides`' for calls on the same walls.
+        :func:`wall_sides`' kept sides, for calls on the same walls.
 
     Returns
     -------
@@ -143,7 +143,8 @@ def float_scores(Pf, Qf, walls, band, sides=None):
     lo = np.where(valid[..., None], uv, np.inf).min(axis=0)
     hi = np.where(valid[..., None], uv, -np.inf).max(axis=0)
     near = ~(np.any(lo > walls.hi[c], axis=1) | np.any(hi < walls.lo[c], axis=1))
-    # (a slice of fewer than three points has no area)
+    # (a slice of fewer than three points has no area, and GEOS makes no line string of
+    # one point)
     near &= valid.sum(axis=0) >= 3
     if not near.any():
         return []
