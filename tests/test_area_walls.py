@@ -618,8 +618,8 @@ _side_rationals = st.one_of(st.floats(-1e6, 1e6, allow_nan=False).map(Fraction),
 def test_the_integer_side_is_the_fractions(nf, v, d):
     # the walls' sides, nf . v - d, from the integers (a numerator and a positive
     # denominator) against the sum in Fractions, on rationals of doubles or of any
-    # denominator and an integer
-    # offset; planted: the offset added instead of taken fails
+    # denominator and an integer offset; planted: the offset added instead of taken,
+    # or one denominator's power of two taken for the product's, fails
     from exactff.area.walls import _side
     num, den = _side(nf, d, v)
     assert den > 0
